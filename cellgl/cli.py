@@ -1,0 +1,99 @@
+"""Command line interface: ``cellgl <command> ...`` (also ``python -m cellgl``).
+
+Each subcommand is a pair of small functions: ``_add_<name>(subparsers)`` declares its arguments
+and ``_cmd_<name>(args) -> int`` runs it. Register new ones in ``_COMMANDS``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+
+__all__ = ["main", "build_parser"]
+
+PROG = "cellgl"
+
+
+# --------------------------------------------------------------------------------------------
+# info
+# --------------------------------------------------------------------------------------------
+
+
+def _add_info(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("info", help="show the OpenGL context: renderer, version, compute limits")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--backend", choices=("egl", "glx", "osmesa"), default=None,
+                   help="force a context backend (default: $CELLGL_BACKEND, else egl, glx, osmesa)")
+    return p
+
+
+def _fmt(value: object) -> str:
+    if isinstance(value, (tuple, list)):
+        return " ".join(str(v) for v in value)
+    return "unknown" if value is None else str(value)
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    from . import context
+
+    ctx = context.get_context(args.backend)
+    info = context.context_info(ctx)
+    if args.json:
+        print(json.dumps(info, indent=2))
+    else:
+        for key, value in info.items():
+            print(f"{key}: {_fmt(value)}")
+    return 0
+
+
+# --------------------------------------------------------------------------------------------
+# registry and entry point
+# --------------------------------------------------------------------------------------------
+
+#: name -> (add arguments, run). Add bake, presets, export, view here.
+_COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
+    "info": (_add_info, _cmd_info),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog=PROG, description="Cellular texture basis functions on the GPU."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name, (add, run) in _COMMANDS.items():
+        add(sub).set_defaults(_run=run)
+    return parser
+
+
+def _user_errors() -> tuple[type[BaseException], ...]:
+    from .context import ContextError
+    from .glsl import ShaderError
+
+    return (ValueError, ContextError, ShaderError)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 ok, 2 usage or user error)."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args) or 0)
+    except _user_errors() as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        # Output piped into e.g. `head`: stop quietly, as other command line tools do.
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
