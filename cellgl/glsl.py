@@ -103,7 +103,7 @@ def format_define(key: str, value: object) -> str:
         raise ValueError(f"invalid #define name {key!r}: expected a C identifier")
     if value is None:
         return f"#define {key}"
-    if isinstance(value, bool) or type(value).__name__ == "bool_":
+    if isinstance(value, bool) or getattr(getattr(value, "dtype", None), "kind", "") == "b":
         text = "1" if value else "0"
     elif isinstance(value, numbers.Integral):
         text = str(int(value))

@@ -1,0 +1,54 @@
+"""The one place the test suite makes an OpenGL context.
+
+``ctx`` is session-scoped. Where no GL 4.3 context can be made the GPU tests skip, unless
+``CELLGL_REQUIRE_GPU=1`` (set by ``.ci/run``), which turns the skip into a failure. Every test
+that uses ``ctx`` has the GL error state checked before and after it.
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "gpu: needs an OpenGL 4.3 context (the ctx fixture)")
+    config.addinivalue_line("markers", "slow: slow test (builds or installs things); runs by default")
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if "ctx" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.gpu)
+
+
+def _require_gpu() -> bool:
+    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+
+
+@pytest.fixture(scope="session")
+def ctx():
+    """The process-wide cellgl context (cellgl.context.get_context())."""
+    from cellgl import context
+
+    try:
+        return context.get_context()
+    except (context.ContextError, ValueError) as exc:
+        if _require_gpu():
+            pytest.fail(f"CELLGL_REQUIRE_GPU=1 but no OpenGL 4.3 context: {exc}", pytrace=False)
+        pytest.skip(f"no OpenGL 4.3 context: {exc}")
+
+
+@pytest.fixture(autouse=True)
+def _gl_error_check(request):
+    """Around every test that uses ``ctx``: no GL error before, none after."""
+    if "ctx" not in request.fixturenames:
+        yield
+        return
+    gl = request.getfixturevalue("ctx")
+    before = gl.error
+    assert before == "GL_NO_ERROR", f"GL error pending before the test: {before}"
+    yield
+    after = gl.error
+    assert after == "GL_NO_ERROR", f"test left a GL error behind: {after}"

@@ -1,0 +1,207 @@
+"""Context creation, limits, compute program cache, compile error mapping, `cellgl info`."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import uuid
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cellgl import context, glsl
+
+REPO = Path(__file__).resolve().parent.parent
+
+TINY = """#version 430
+layout(local_size_x = 64) in;
+layout(std430, binding = 0) buffer Out { uint values[]; };
+#include "lib/tiny.glsl"
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    values[i] = tiny_square(i) + uint(CELL_OFFSET);
+}
+"""
+
+TINY_LIB = """// a library file: no #version, no main
+uint tiny_square(uint x) {
+    return x * x;
+}
+"""
+
+BROKEN_LIB = """// line 1
+float broken() {
+    return undeclared_thing;
+}
+"""
+
+
+@pytest.fixture
+def shader_root(tmp_path, monkeypatch):
+    """A temporary shader dir in place of shaders/; entry names are unique (cache keys)."""
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "lib" / "tiny.glsl").write_text(TINY_LIB)
+    (tmp_path / "lib" / "broken.glsl").write_text(BROKEN_LIB)
+    monkeypatch.setattr(glsl, "shader_dir", lambda: tmp_path)
+    return tmp_path
+
+
+def _unique(root: Path, suffix: str, text: str) -> str:
+    name = f"t_{uuid.uuid4().hex[:8]}{suffix}"
+    (root / name).write_text(text)
+    return name
+
+
+def test_context_is_gl43(ctx):
+    assert ctx.version_code >= 430
+    assert context.get_context() is ctx
+
+
+def test_context_info_keys(ctx):
+    info = context.context_info(ctx)
+    for key in ("backend", "GL_VENDOR", "GL_RENDERER", "GL_VERSION", "gl_version_code",
+                "GL_MAX_COMPUTE_WORK_GROUP_COUNT", "GL_MAX_COMPUTE_WORK_GROUP_SIZE",
+                "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS", "GL_MAX_SHADER_STORAGE_BLOCK_SIZE",
+                "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE"):
+        assert key in info, key
+    assert info["backend"] in context.BACKENDS
+    assert len(info["GL_MAX_COMPUTE_WORK_GROUP_COUNT"]) == 3
+    assert min(info["GL_MAX_COMPUTE_WORK_GROUP_SIZE"]) >= 64  # GL 4.3 minimum
+    assert info["GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS"] >= 1024
+    assert info["GL_MAX_SHADER_STORAGE_BLOCK_SIZE"] >= 1 << 24
+    shared = info["GL_MAX_COMPUTE_SHARED_MEMORY_SIZE"]
+    assert shared is None or shared >= 32768
+
+
+def test_compute_program_runs_and_is_cached(ctx, shader_root):
+    name = _unique(shader_root, ".comp", TINY)
+    prog = context.compute_program(name, {"CELL_OFFSET": 7})
+    assert context.compute_program(name, {"CELL_OFFSET": 7}) is prog
+    other = context.compute_program(name, {"CELL_OFFSET": 1})
+    assert other is not prog
+
+    n = 256
+    buf = ctx.buffer(reserve=n * 4)
+    try:
+        buf.bind_to_storage_buffer(0)
+        prog.run(n // 64)
+        got = np.frombuffer(buf.read(), dtype=np.uint32)
+    finally:
+        buf.release()
+    expect = np.arange(n, dtype=np.uint32) ** 2 + 7
+    np.testing.assert_array_equal(got, expect)
+    context.check_gl_error(ctx)
+
+
+def test_compile_error_maps_to_file_and_line(ctx, shader_root):
+    name = _unique(shader_root, ".comp",
+                   '#version 430\nlayout(local_size_x = 1) in;\n#include "lib/broken.glsl"\n'
+                   "void main() {}\n")
+    with pytest.raises(glsl.ShaderError) as info:
+        context.compute_program(name)
+    msg = str(info.value)
+    assert name in msg
+    # Mesa says "lib/broken.glsl:3(12): error: ..."; other drivers use other shapes, but the
+    # mapped reference always reads file:line.
+    assert "lib/broken.glsl:3" in msg, msg
+
+
+def test_program_vertex_fragment(ctx, shader_root):
+    vs = _unique(shader_root, ".vert",
+                 "#version 430\nin vec2 pos;\nvoid main() { gl_Position = vec4(pos, 0.0, 1.0); }\n")
+    fs = _unique(shader_root, ".frag",
+                 "#version 430\nout vec4 color;\nvoid main() { color = vec4(CELL_RED, 0.0, 0.0, 1.0); }\n")
+    prog = context.program(vs, fs, {"CELL_RED": 0.5})
+    assert context.program(vs, fs, {"CELL_RED": 0.5}) is prog
+    bad = _unique(shader_root, ".frag",
+                  '#version 430\nout vec4 color;\n#include "lib/broken.glsl"\nvoid main() {}\n')
+    with pytest.raises(glsl.ShaderError, match=r"lib/broken\.glsl:3"):
+        context.program(vs, bad)
+
+
+def test_check_gl_error_raises(ctx):
+    import ctypes
+
+    context.check_gl_error(ctx)
+    addr = context._get_proc(context.backend_name(ctx), "glEnable")
+    assert addr, "glEnable not found"
+    ctypes.CFUNCTYPE(None, ctypes.c_uint)(addr)(0xFFFF)  # GL_INVALID_ENUM
+    with pytest.raises(RuntimeError, match="GL_INVALID_ENUM"):
+        context.check_gl_error(ctx)
+    context.check_gl_error(ctx)  # reading the error cleared it
+
+
+def test_unknown_backend_is_a_value_error():
+    with pytest.raises(ValueError, match=r"'vulkan'.*egl, glx, osmesa"):
+        context.get_context("vulkan")
+
+
+def test_unknown_backend_from_env(monkeypatch):
+    monkeypatch.setenv("CELLGL_BACKEND", "metal")
+    with pytest.raises(ValueError, match=r"CELLGL_BACKEND.*egl, glx, osmesa"):
+        context.get_context()
+
+
+def _python(code: str, **env) -> subprocess.CompletedProcess:
+    full_env = dict(os.environ, PYTHONPATH=str(REPO), **env)
+    return subprocess.run([sys.executable, "-c", code], cwd=REPO, env=full_env,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_glx_without_display_is_a_clear_context_error():
+    # In a fresh process so the session context is untouched.
+    r = _python("import cellgl.context as c; c.get_context('glx')", DISPLAY="")
+    assert r.returncode != 0
+    assert "ContextError" in r.stderr and "DISPLAY" in r.stderr
+    assert "libegl-mesa0" in r.stderr and "4.3" in r.stderr
+
+
+@pytest.mark.skipif(not __import__("ctypes.util").util.find_library("OSMesa"),
+                    reason="libOSMesa not installed")
+def test_osmesa_backend_runs_compute():
+    # OSMesa makes its own context current: keep it out of the test process.
+    code = (
+        "import json, numpy as np, cellgl.context as c\n"
+        "ctx = c.get_context()\n"
+        "cs = ctx.compute_shader('#version 430\\nlayout(local_size_x=8) in;\\n"
+        "layout(std430, binding=0) buffer B { uint v[]; };\\n"
+        "void main() { v[gl_GlobalInvocationID.x] = gl_GlobalInvocationID.x * 3u; }')\n"
+        "buf = ctx.buffer(reserve=64 * 4); buf.bind_to_storage_buffer(0); cs.run(8)\n"
+        "ok = bool((np.frombuffer(buf.read(), np.uint32) == np.arange(64) * 3).all())\n"
+        "print(json.dumps(dict(c.context_info(ctx), ok=ok, error=ctx.error)))\n"
+    )
+    r = _python(code, CELLGL_BACKEND="osmesa")
+    assert r.returncode == 0, r.stderr
+    info = json.loads(r.stdout)
+    assert info["backend"] == "osmesa"
+    assert info["gl_version_code"] >= 430
+    assert info["ok"] and info["error"] == "GL_NO_ERROR"
+
+
+def test_cli_info_prints_renderer(ctx):
+    expected = context.context_info(ctx)
+    env = dict(os.environ, PYTHONPATH=str(REPO), CELLGL_BACKEND=expected["backend"])
+    r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=REPO, env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    lines = dict(line.split(": ", 1) for line in r.stdout.splitlines())
+    assert lines["GL_RENDERER"] == expected["GL_RENDERER"]
+    assert lines["GL_VERSION"] == expected["GL_VERSION"]
+    assert lines["backend"] == expected["backend"]
+
+    r = subprocess.run([sys.executable, "-m", "cellgl", "info", "--json"], cwd=REPO, env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["GL_RENDERER"] == expected["GL_RENDERER"]
+
+
+def test_cli_error_is_one_line_exit_2():
+    env = dict(os.environ, PYTHONPATH=str(REPO), CELLGL_BACKEND="nonsense")
+    r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=REPO, env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert r.stderr.startswith("cellgl: error: ")
+    assert "Traceback" not in r.stderr
