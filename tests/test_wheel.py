@@ -1,0 +1,99 @@
+"""The wheel ships the shaders: build it, install it in a clean venv, resolve shaders from there."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parent.parent
+SHADER_SUFFIXES = (".comp", ".frag", ".vert", ".glsl")
+
+pytestmark = pytest.mark.slow
+
+
+def _run(cmd, cwd, timeout=600, env=None, check=True):
+    r = subprocess.run([str(c) for c in cmd], cwd=cwd, capture_output=True, text=True,
+                       timeout=timeout, env=env)
+    if check and r.returncode != 0:
+        pytest.fail(f"{' '.join(map(str, cmd))} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}")
+    return r
+
+
+def _source_shaders() -> list[str]:
+    root = REPO / "shaders"
+    return sorted(p.relative_to(root).as_posix() for p in root.rglob("*")
+                  if p.is_file() and p.suffix in SHADER_SUFFIXES)
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory) -> Path:
+    tmp = tmp_path_factory.mktemp("wheel")
+    # Build from a copy: an in-tree build writes build/ and *.egg-info into the shared checkout.
+    src = tmp / "src"
+    shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(
+        ".git", ".venv", "build", "dist", "*.egg-info", "__pycache__", ".pytest_cache", "out"))
+    dist = tmp / "dist"
+    _run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q",
+          "-w", dist, src], cwd=tmp)
+    wheels = list(dist.glob("cellgl-*.whl"))
+    assert len(wheels) == 1, wheels
+    return wheels[0]
+
+
+def test_wheel_contains_shaders(wheel):
+    names = set(zipfile.ZipFile(wheel).namelist())
+    assert "cellgl/glsl.py" in names and "cellgl/context.py" in names
+    expected = _source_shaders()
+    missing = [rel for rel in expected if f"cellgl/shaders/{rel}" not in names]
+    assert not missing, f"shader files missing from the wheel: {missing}"
+    if any(rel.startswith("lib/") for rel in expected):
+        assert any(n.startswith("cellgl/shaders/lib/") and n.endswith(".glsl") for n in names)
+    if any(rel.endswith(".comp") for rel in expected):
+        assert any(n.startswith("cellgl/shaders/") and n.endswith(".comp") for n in names)
+
+
+def test_installed_wheel_resolves_shaders(wheel, tmp_path):
+    venv = tmp_path / "venv"
+    _run([sys.executable, "-m", "venv", venv], cwd=tmp_path, timeout=300)
+    py = venv / "bin" / "python"
+    _run([py, "-m", "pip", "install", "-q", "--disable-pip-version-check", wheel],
+         cwd=tmp_path, timeout=600)
+
+    # Run from outside the repo with a clean environment, so only site-packages can answer.
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    code = (
+        "import cellgl.glsl as g\n"
+        "print(g.shader_dir())\n"
+        "for p in sorted(g.shader_dir().glob('*.comp')):\n"
+        "    src = g.load(p.name)\n"
+        "    assert '#include' not in src.text, p\n"
+        "    print('resolved', p.name, len(src.files))\n"
+    )
+    r = _run([py, "-c", code], cwd=outside, env=env)
+    lines = r.stdout.splitlines()
+    shader_dir = Path(lines[0])
+    assert "site-packages" in shader_dir.parts, shader_dir
+    assert REPO not in shader_dir.parents
+    assert shader_dir.is_dir()
+    expected = _source_shaders()
+    found = sorted(p.relative_to(shader_dir).as_posix() for p in shader_dir.rglob("*")
+                   if p.is_file() and p.suffix in SHADER_SUFFIXES)
+    assert found == expected
+    assert len([x for x in lines if x.startswith("resolved ")]) == \
+        len([x for x in expected if "/" not in x and x.endswith(".comp")])
+
+    # The console script works from the installed wheel too (needs a GL 4.3 context).
+    r = _run([venv / "bin" / "cellgl", "info"], cwd=outside, env=env, check=False)
+    if r.returncode != 0:
+        if os.environ.get("CELLGL_REQUIRE_GPU") == "1":
+            pytest.fail(f"cellgl info failed from the installed wheel:\n{r.stderr}")
+        pytest.skip(f"no GL context for `cellgl info`: {r.stderr.strip()}")
+    assert "GL_RENDERER: " in r.stdout
