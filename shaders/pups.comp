@@ -1,0 +1,82 @@
+#version 430
+// cellgl: PUPs texture evaluation over a pixel grid (bake and Python API).
+// Thin entry: read the buffers, call shaders/lib/pups.glsl, write.
+//
+// Defines (set by cellgl/pups.py):
+//   CELL_PUPS_CHANNELS  1 or 3 floats written per pixel
+//   CELL_PUPS_MODE      0: the interpolated value (3); 1: the heaviest point's
+//                       value and label; 2: the sum of value * weight
+//                       (cellgl.pups.PupsMode)
+
+#ifndef CELL_PUPS_CHANNELS
+#define CELL_PUPS_CHANNELS 1
+#endif
+#ifndef CELL_PUPS_MODE
+#define CELL_PUPS_MODE 0
+#endif
+#define CELL_PUPS_FETCH 1
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+struct PupsPoint {
+    vec2 pos;
+    vec2 orient;
+    uint axis_begin;
+    uint axis_count;
+    int label;
+    uint pad;
+    vec4 value;
+};
+
+layout(std430, binding = 0) readonly buffer PupsPoints { PupsPoint points[]; };
+layout(std430, binding = 1) readonly buffer PupsAxes { vec2 axes[]; };
+layout(std430, binding = 2) readonly buffer PupsCells { uint cell_offsets[]; };
+layout(std430, binding = 3) readonly buffer PupsItems { uvec2 cell_items[]; };  // (point, axis mask)
+layout(std430, binding = 4) writeonly buffer PupsValues { float out_values[]; };
+layout(std430, binding = 5) writeonly buffer PupsLabels { int out_labels[]; };
+
+uniform ivec2 u_size;      // image width, height in pixels
+uniform vec2 u_origin;     // domain position of the centre of pixel (0, 0)
+uniform vec2 u_pixel;      // domain size of one pixel
+uniform int u_tile;        // candidate-grid cell size in pixels
+uniform int u_grid_w;      // candidate-grid cells per row
+uniform float u_epsilon;   // orientation strength, [0, 1)
+
+uvec2 cell_pups_fetch_candidate(uint k) { return cell_items[k]; }
+void cell_pups_fetch_point(uint i, out vec2 pos, out vec2 orient, out uint axis_begin,
+                           out uint axis_count, out int label, out vec4 value)
+{
+    PupsPoint p = points[i];
+    pos = p.pos; orient = p.orient; axis_begin = p.axis_begin; axis_count = p.axis_count;
+    label = p.label; value = p.value;
+}
+vec2 cell_pups_fetch_axis(uint a) { return axes[a]; }
+
+#include "lib/pups.glsl"
+
+void main()
+{
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= u_size.x || px.y >= u_size.y) {
+        return;
+    }
+    vec2 u = u_origin + vec2(px) * u_pixel;
+    int cell = (px.y / u_tile) * u_grid_w + px.x / u_tile;
+    CellPupsAcc acc = cell_pups_eval(u, cell_offsets[cell], cell_offsets[cell + 1], u_epsilon);
+    int o = px.y * u_size.x + px.x;
+#if CELL_PUPS_MODE == 1
+    vec4 v = acc.best;
+    out_labels[o] = acc.label;
+#elif CELL_PUPS_MODE == 2
+    vec4 v = acc.sum;
+#else
+    vec4 v = cell_pups_acc_value(acc);
+#endif
+#if CELL_PUPS_CHANNELS == 1
+    out_values[o] = v.x;
+#else
+    out_values[3 * o] = v.x;
+    out_values[3 * o + 1] = v.y;
+    out_values[3 * o + 2] = v.z;
+#endif
+}
