@@ -968,6 +968,7 @@ assert _POINT_DTYPE.itemsize == 48
 _LOCAL = (8, 8)
 _local_ctx = None
 _local_programs = {}
+_fragment_target = {}
 
 
 def _context():
@@ -1050,6 +1051,45 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     t4 = time.perf_counter()
     timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
     return vals, labs
+
+
+def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
+    """The viewer's path: ``shaders/pups.frag`` into an RGBA32F target.
+
+    Returns float32 (H, W, 4): rgb value, alpha the label as a float.
+    """
+    from .context import program
+    ctx = _context()
+    prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
+    w, h = packed.width, packed.height
+    bufs = [ctx.buffer(d) for d in _gpu_buffers(packed)]
+    for binding, b in enumerate(bufs):
+        b.bind_to_storage_buffer(binding)
+    # One render target, kept while the size stays: deleting the bound framebuffer would
+    # leave moderngl restoring a dead binding (GL_INVALID_OPERATION) on the next one.
+    key = (id(ctx), w, h)
+    if _fragment_target.get("key") != key:
+        tex = ctx.texture((w, h), 4, dtype="f4")
+        fbo = ctx.framebuffer(color_attachments=[tex])
+        fbo.use()
+        old = _fragment_target.get("objects", ())
+        for o in old:
+            o.release()
+        _fragment_target.update(key=key, objects=(fbo, tex))
+    fbo, tex = _fragment_target["objects"]
+    vao = ctx.vertex_array(prog, [])
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
+                    ("u_epsilon", epsilon)):
+        if name in prog:
+            prog[name] = v
+    fbo.use()
+    fbo.viewport = (0, 0, w, h)
+    vao.render(mode=ctx.TRIANGLES, vertices=3)
+    out = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(h, w, 4)
+    for o in bufs + [vao]:
+        o.release()
+    return out.copy()
 
 
 # --------------------------------------------------------------------------------------------
