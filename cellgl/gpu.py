@@ -1,0 +1,148 @@
+"""GPU evaluation of the cellular basis: compute shader over sample lists and grids.
+
+Only :mod:`cellgl.core` calls this; it receives validated parameters. Work is
+split into chunks so that no storage buffer exceeds a few tens of MB, and only
+the outputs that were asked for are computed (compile-time switches) and read
+back.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import context
+from .enums import glsl_defines
+from .reference import MAX_POINTS, Params, max_ring_default
+
+LOCAL_SIZE = 64
+_CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
+_MAX_GROUPS = 65535
+
+
+def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
+    """The compile-time macros of ``shaders/cellular.comp`` for these parameters."""
+    d = glsl_defines()
+    d.update(
+        CELL_DIM=p.dim,
+        CELL_N=n,
+        CELL_METRIC=int(p.metric),
+        CELL_DIST=int(p.distribution),
+        CELL_MAX_POINTS=MAX_POINTS,
+        CELL_MAX_RING=max_ring_default(p.dim),
+        CELL_GRID=int(grid),
+        CELL_PERIODIC=int(any(p.period)),
+        CELL_OUT_F=int("F" in outputs),
+        CELL_OUT_DELTA=int("delta" in outputs),
+        CELL_OUT_ID=int("id" in outputs),
+        CELL_OUT_GRAD=int("grad" in outputs),
+        CELL_LOCAL_SIZE=LOCAL_SIZE,
+    )
+    return d
+
+
+def _set(prog, name, value):
+    if name in prog:
+        prog[name].value = value
+
+
+def _set_params(prog, p: Params):
+    _set(prog, "u_seed", int(p.seed))
+    _set(prog, "u_jitter", float(p.jitter))
+    _set(prog, "u_min_points", int(p.min_points))
+    _set(prog, "u_max_points", int(p.max_points))
+    if "u_thresholds" in prog:
+        prog["u_thresholds"].write(p.thresholds.astype(np.uint32).tobytes())
+    _set(prog, "u_period", tuple(int(v) for v in p.period))
+    _set(prog, "u_minkowski_p", float(p.minkowski_p))
+    _set(prog, "u_out_scale", float(1.0 / p.scale))
+
+
+def _chunk_size(n: int, dim: int, outputs) -> int:
+    per = 4 * n * (dim if ("delta" in outputs or "grad" in outputs) else 1)
+    return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
+
+
+def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray):
+    """Dispatch one chunk of ``count`` samples and copy results into ``out``."""
+    bufs = {}
+    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim}
+    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5}
+    for name in outputs:
+        bufs[name] = ctx.buffer(reserve=max(4, count * sizes[name]))
+        bufs[name].bind_to_storage_buffer(binding[name])
+    flags = ctx.buffer(reserve=4 * (count + 1))
+    flags.clear()
+    flags.bind_to_storage_buffer(6)
+    _set(prog, "u_count", count)
+    prog.run(group_x=(count + LOCAL_SIZE - 1) // LOCAL_SIZE)
+    ctx.memory_barrier()
+    for name, buf in bufs.items():
+        dtype = np.uint32 if name == "id" else np.float32
+        arr = np.frombuffer(buf.read(), dtype=dtype)[: count * sizes[name] // 4]
+        out[name][start:start + count] = arr.reshape(out[name][start:start + count].shape)
+        buf.release()
+    nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
+    if nbad:
+        f = np.frombuffer(flags.read(), dtype=np.uint32)[1:count + 1]
+        inexact[start:start + count] = f != 0
+    flags.release()
+
+
+def _alloc(N: int, n: int, dim: int, outputs) -> dict:
+    out = {}
+    for name in outputs:
+        if name in ("delta", "grad"):
+            out[name] = np.empty((N, n, dim), dtype=np.float32)
+        else:
+            out[name] = np.empty((N, n), dtype=np.uint32 if name == "id" else np.float32)
+    return out
+
+
+def search_points(cells: np.ndarray, fracs: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+    """Cellular basis at split sample positions.
+
+    cells (N, 4) int32, fracs (N, 4) float32 (already scaled). Returns
+    ({output name: array}, exact (N,) bool).
+    """
+    ctx = context.get_context()
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
+    _set_params(prog, p)
+    _set(prog, "u_first", 0)
+    N = len(cells)
+    out = _alloc(N, n, p.dim, outputs)
+    inexact = np.zeros(N, dtype=bool)
+    step = _chunk_size(n, p.dim, outputs)
+    for start in range(0, N, step):
+        count = min(step, N - start)
+        cb = ctx.buffer(np.ascontiguousarray(cells[start:start + count], dtype=np.int32).tobytes())
+        fb = ctx.buffer(np.ascontiguousarray(fracs[start:start + count], dtype=np.float32).tobytes())
+        cb.bind_to_storage_buffer(0)
+        fb.bind_to_storage_buffer(1)
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
+        cb.release()
+        fb.release()
+    return out, ~inexact
+
+
+def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+    """Cellular basis on a regular grid generated on the GPU.
+
+    shape_xyzw: samples along x, y, z, w (unused axes 1); origin split into
+    int cell (4,) and float fraction (4,); spacing (4,) (all already scaled).
+    Returns flat arrays in x-fastest order, as :func:`search_points`.
+    """
+    ctx = context.get_context()
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
+    _set_params(prog, p)
+    _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
+    _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))
+    _set(prog, "u_spacing", tuple(float(v) for v in spacing))
+    _set(prog, "u_shape", tuple(int(v) for v in shape_xyzw))
+    N = int(np.prod(shape_xyzw))
+    out = _alloc(N, n, p.dim, outputs)
+    inexact = np.zeros(N, dtype=bool)
+    step = _chunk_size(n, p.dim, outputs)
+    for start in range(0, N, step):
+        count = min(step, N - start)
+        _set(prog, "u_first", start)
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
+    return out, ~inexact

@@ -1,0 +1,100 @@
+#version 430
+// cellgl compute entry: the cellular basis at a list of samples or on a grid.
+// Thin: read the sample, call cell_search(), write what was asked for.
+// Macros (from cellgl/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
+// CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE.
+
+layout(local_size_x = CELL_LOCAL_SIZE) in;
+
+#include "lib/cellular.glsl"
+
+uniform uint u_seed;
+uniform float u_jitter;
+uniform int u_min_points;
+uniform int u_max_points;
+uniform uint u_thresholds[CELL_MAX_POINTS];
+uniform ivec4 u_period;
+uniform float u_minkowski_p;
+uniform float u_out_scale;     // distances and deltas are multiplied by this
+uniform uint u_count;          // number of samples in this chunk
+uniform uint u_first;          // grid index of the chunk's first sample
+
+#if CELL_GRID
+uniform ivec4 u_origin_cell;   // grid origin, split into cell + fraction
+uniform vec4 u_origin_frac;
+uniform vec4 u_spacing;
+uniform ivec4 u_shape;         // samples along x, y, z, w
+#else
+layout(std430, binding = 0) readonly buffer SampleCells { ivec4 sample_cell[]; };
+layout(std430, binding = 1) readonly buffer SampleFracs { vec4 sample_frac[]; };
+#endif
+layout(std430, binding = 2) writeonly buffer OutF { float out_F[]; };
+layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
+layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
+layout(std430, binding = 5) writeonly buffer OutGrad { float out_grad[]; };
+layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_flag[]; };
+
+void main()
+{
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= u_count) {
+        return;
+    }
+    ivec4 cell;
+    vec4 frac;
+#if CELL_GRID
+    // x fastest: s = ((w * Z + z) * Y + y) * X + x
+    ivec4 idx;
+    uint rest = u_first + i;
+    idx.x = int(rest % uint(u_shape.x)); rest /= uint(u_shape.x);
+    idx.y = int(rest % uint(u_shape.y)); rest /= uint(u_shape.y);
+    idx.z = int(rest % uint(u_shape.z)); rest /= uint(u_shape.z);
+    idx.w = int(rest);
+    vec4 pos = u_origin_frac + u_spacing * vec4(idx);
+    vec4 fl = floor(pos);
+    cell = u_origin_cell + ivec4(fl);
+    frac = pos - fl;
+#else
+    cell = sample_cell[i];
+    frac = sample_frac[i];
+#endif
+
+    CellParams p;
+    p.seed = u_seed;
+    p.jitter = u_jitter;
+    p.min_points = u_min_points;
+    p.max_points = u_max_points;
+    for (int k = 0; k < CELL_MAX_POINTS; k++) {
+        p.thresholds[k] = u_thresholds[k];
+    }
+    p.period = u_period;
+    p.minkowski_p = u_minkowski_p;
+
+    CellResult r = cell_search(cell, frac, p);
+
+    for (int k = 0; k < CELL_N; k++) {
+        uint o = i * uint(CELL_N) + uint(k);
+#if CELL_OUT_F
+        out_F[o] = r.F[k] * u_out_scale;
+#endif
+#if CELL_OUT_DELTA
+        for (int a = 0; a < CELL_DIM; a++) {
+            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] * u_out_scale;
+        }
+#endif
+#if CELL_OUT_ID
+        out_id[o] = r.id[k];
+#endif
+#if CELL_OUT_GRAD
+        vec4 g = cell_metric_gradient(r.delta[k], r.F[k], u_minkowski_p);
+        for (int a = 0; a < CELL_DIM; a++) {
+            out_grad[o * uint(CELL_DIM) + uint(a)] = g[a];
+        }
+#endif
+    }
+    if (!r.exact) {
+        atomicAdd(inexact_count, 1u);
+        inexact_flag[i] = 1u;
+    }
+}

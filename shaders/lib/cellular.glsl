@@ -1,0 +1,162 @@
+// cellgl: the cellular basis F1..Fn (Worley 1996), exact.
+//
+// cell_search() returns the CELL_N nearest feature points to a sample, in
+// ascending distance, with the delta vector (feature - sample) and the ID of
+// each. The answer equals a brute-force search over all cells: cells are
+// visited ring by ring (Chebyshev rings of cells around the sample's cell), and
+//   * a cell is skipped when its nearest possible point is no closer than the
+//     current F_n (Worley's pruning);
+//   * the search stops before ring r once (r - 1) + m >= F_n, where m is the
+//     sample's distance to the nearest face of its own cell: no point in ring r
+//     or beyond can then be closer than F_n;
+//   * if ring CELL_MAX_RING is finished without that guarantee, the result is
+//     marked inexact (CellResult.exact = false) instead of being silently wrong.
+//
+// The sample is given as an integer cell plus a float fraction in [0, 1), so
+// precision does not depend on the distance from the origin.
+//
+// Requires: hash.glsl, metric.glsl, points.glsl.
+// Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
+//         CELL_MAX_POINTS, CELL_MAX_RING.
+
+#include "hash.glsl"
+#include "metric.glsl"
+#include "points.glsl"
+
+struct CellResult {
+    float F[CELL_N];      // distances, ascending (true distances after cell_search)
+    vec4 delta[CELL_N];   // feature point - sample (components past CELL_DIM are 0)
+    uint id[CELL_N];      // feature point IDs
+    bool exact;           // false only if the search cap was reached
+};
+
+// Internal-unit distance from the sample (fraction f of its cell) to the
+// nearest point of the cell at offset o.
+float _cell_box_distance(ivec4 o, vec4 f, float p)
+{
+    vec4 g = vec4(0.0);
+    for (int a = 0; a < CELL_DIM; a++) {
+        if (o[a] > 0) {
+            g[a] = float(o[a]) - f[a];
+        } else if (o[a] < 0) {
+            g[a] = float(-o[a] - 1) + f[a];
+        }
+    }
+    return cell_metric_length(g, p);
+}
+
+// Insert one candidate (internal-unit distance d) into the sorted lists.
+// Strict comparisons: of two equal distances the one found first stays first.
+// Only constant array indices (after unrolling), so the lists stay in
+// registers instead of spilling to memory.
+void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
+{
+    for (int k = CELL_N - 1; k > 0; k--) {
+        if (d < r.F[k - 1]) {
+            r.F[k] = r.F[k - 1];
+            r.delta[k] = r.delta[k - 1];
+            r.id[k] = r.id[k - 1];
+        } else if (d < r.F[k]) {
+            r.F[k] = d;
+            r.delta[k] = delta;
+            r.id[k] = id;
+        }
+    }
+    if (d < r.F[0]) {
+        r.F[0] = d;
+        r.delta[0] = delta;
+        r.id[0] = id;
+    }
+}
+
+// Test every feature point of the cell at offset o from the sample's cell.
+void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+{
+    uint state = cell_cell_seed(cell_wrap(cell + o, p.period), p.seed);
+    int count = cell_point_count(state, p);
+    vec4 base = vec4(o) - f;
+    for (int k = 0; k < count; k++) {
+        uint id;
+        vec4 q = cell_next_point(state, p, id);
+        vec4 delta = base + q;
+        _cell_insert(r, cell_metric_length(delta, p.minkowski_p), delta, id);
+    }
+}
+
+CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
+{
+    CellResult r;
+    for (int k = 0; k < CELL_N; k++) {
+        r.F[k] = 3.0e38;
+        r.delta[k] = vec4(0.0);
+        r.id[k] = 0u;
+    }
+
+    // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block.
+    // Constant loop bounds, so the compiler unrolls the block into
+    // straight-line SIMD code; a cell is skipped when its nearest possible
+    // point is no closer than the current F_n.
+    _cell_visit(r, cell, f, ivec4(0), p);
+    for (int x = -1; x <= 1; x++)
+    for (int y = -1; y <= 1; y++)
+#if CELL_DIM >= 3
+    for (int z = -1; z <= 1; z++)
+#else
+    for (int z = 0; z <= 0; z++)
+#endif
+#if CELL_DIM >= 4
+    for (int w = -1; w <= 1; w++)
+#else
+    for (int w = 0; w <= 0; w++)
+#endif
+    {
+        ivec4 o = ivec4(x, y, z, w);
+        if (o != ivec4(0) && _cell_box_distance(o, f, p.minkowski_p) < r.F[CELL_N - 1]) {
+            _cell_visit(r, cell, f, o, p);
+        }
+    }
+
+    // Distance from the sample to the nearest face of its own cell.
+    float m = 1.0;
+    for (int a = 0; a < CELL_DIM; a++) {
+        m = min(m, min(f[a], 1.0 - f[a]));
+    }
+
+    // Rings 2, 3, ...: only while a point in the ring could still be closer
+    // than F_n; inside a ring only the window of cells that can reach, each
+    // pruned by its nearest possible distance.
+    r.exact = false;
+    int ring = 2;
+    for (; ring <= CELL_MAX_RING; ring++) {
+        if (cell_metric_term(float(ring - 1) + m, p.minkowski_p) >= r.F[CELL_N - 1]) {
+            r.exact = true;
+            break;
+        }
+        float reach = r.F[CELL_N - 1] < 3.0e38
+            ? cell_metric_finish(r.F[CELL_N - 1], p.minkowski_p) * 1.000001 + 1e-6
+            : float(ring + 2);
+        ivec4 lo = ivec4(0), hi = ivec4(0);
+        for (int a = 0; a < CELL_DIM; a++) {
+            hi[a] = min(ring, int(ceil(reach + f[a])) - 1);
+            lo[a] = -min(ring, int(ceil(reach + 1.0 - f[a])) - 1);
+        }
+        for (int x = lo.x; x <= hi.x; x++)
+        for (int y = lo.y; y <= hi.y; y++)
+        for (int z = lo.z; z <= hi.z; z++)
+        for (int w = lo.w; w <= hi.w; w++) {
+            ivec4 o = ivec4(x, y, z, w);
+            ivec4 ao = abs(o);
+            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                && _cell_box_distance(o, f, p.minkowski_p) < r.F[CELL_N - 1]) {
+                _cell_visit(r, cell, f, o, p);
+            }
+        }
+    }
+    if (ring > CELL_MAX_RING) {
+        r.exact = cell_metric_term(float(CELL_MAX_RING) + m, p.minkowski_p) >= r.F[CELL_N - 1];
+    }
+    for (int k = 0; k < CELL_N; k++) {
+        r.F[k] = cell_metric_finish(r.F[k], p.minkowski_p);
+    }
+    return r;
+}
