@@ -653,19 +653,29 @@ def _delaunay_edges(points: PupsPoints):
         x0, y0, x1, y1 = points.domain
         period = np.array([x1 - x0, y1 - y0])
         tiled = (pos[None, :, :] + (_SHIFTS * period)[:, None, :]).reshape(-1, 2)
-        tri = Delaunay(tiled)
-        indptr, indices = tri.vertex_neighbor_vertices
-        owner = np.repeat(np.arange(n), np.diff(indptr[:n + 1]))
-        nbt = indices[indptr[0]:indptr[n]]
-        nb = nbt % n
-        axes = tiled[nbt] - pos[owner]
-        # Every edge must appear in both directions with opposite vectors; a point set too
-        # sparse for one ring of copies breaks this.
-        key_a = np.round(np.c_[owner, nb, axes * 1e9]).astype(np.int64)
-        key_b = np.round(np.c_[nb, owner, -axes * 1e9]).astype(np.int64)
-        sa = key_a[np.lexsort(key_a.T[::-1])]
-        sb = key_b[np.lexsort(key_b.T[::-1])]
-        if sa.shape != sb.shape or not np.array_equal(sa, sb):
+        ids = np.arange(tiled.shape[0])
+        # First try with only the copies in a margin of a few mean spacings around the domain
+        # (much smaller triangulation); fall back to the full ring of 8 copies when the
+        # result is not consistent.
+        spacing = math.sqrt(period[0] * period[1] / n)
+        for margin in (4.0 * spacing, np.inf):
+            keep = ids[(tiled[:, 0] >= x0 - margin) & (tiled[:, 0] <= x1 + margin)
+                       & (tiled[:, 1] >= y0 - margin) & (tiled[:, 1] <= y1 + margin)]
+            tri = Delaunay(tiled[keep])
+            indptr, indices = tri.vertex_neighbor_vertices
+            owner = np.repeat(np.arange(n), np.diff(indptr[:n + 1]))
+            nbt = keep[indices[indptr[0]:indptr[n]]]
+            nb = nbt % n
+            axes = tiled[nbt] - pos[owner]
+            # Every edge must appear in both directions with opposite vectors, and a copy
+            # must never be its own original's neighbour at a zero offset.
+            key_a = np.round(np.c_[owner, nb, axes * 1e9]).astype(np.int64)
+            key_b = np.round(np.c_[nb, owner, -axes * 1e9]).astype(np.int64)
+            sa = key_a[np.lexsort(key_a.T[::-1])]
+            sb = key_b[np.lexsort(key_b.T[::-1])]
+            if sa.shape == sb.shape and np.array_equal(sa, sb):
+                break
+        else:
             raise ValueError(f"periodic Delaunay graph is inconsistent for {n} points; use more "
                              "points (about 10 or more per domain)")
     else:
@@ -871,8 +881,10 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
     j1 = np.clip(np.floor((ibox[:, 3] - oy) / py) + 1, -1, height - 1).astype(np.int64)
     pixel_box = np.c_[i0, j0, i1, j1]
     if tile is None:
+        # about half the mean spacing, a multiple of the 8 x 8 workgroup so that a workgroup
+        # shares one candidate list
         spacing = math.sqrt(width * height / max(n, 1))
-        tile = int(min(64, max(4, round(spacing / 2))))
+        tile = int(min(64, max(8, 8 * round(spacing / 16))))
     else:
         if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or not 1 <= tile <= 1024:
             raise ValueError(f"tile must be an integer in [1, 1024], got {tile!r}")

@@ -43,12 +43,13 @@ uniform int u_grid_w;      // candidate-grid cells per row
 uniform float u_epsilon;   // orientation strength, [0, 1)
 
 uvec2 cell_pups_fetch_candidate(uint k) { return cell_items[k]; }
-void cell_pups_fetch_point(uint i, out vec2 pos, out vec2 orient, out uint axis_begin,
-                           out uint axis_count, out int label, out vec4 value)
+void cell_pups_fetch_geometry(uint i, out vec2 pos, out uint axis_begin, out uint axis_count)
 {
-    PupsPoint p = points[i];
-    pos = p.pos; orient = p.orient; axis_begin = p.axis_begin; axis_count = p.axis_count;
-    label = p.label; value = p.value;
+    pos = points[i].pos; axis_begin = points[i].axis_begin; axis_count = points[i].axis_count;
+}
+void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value)
+{
+    orient = points[i].orient; label = points[i].label; value = points[i].value;
 }
 vec2 cell_pups_fetch_axis(uint a) { return axes[a]; }
 

@@ -27,7 +27,7 @@
 //
 // Optional: define CELL_PUPS_FETCH before including this file to get
 // cell_pups_eval(), which walks a candidate list. The including shader must
-// then define the three fetch functions declared below (they read its
+// then define the four fetch functions declared below (they read its
 // buffers); this file itself declares no buffers, uniforms or bindings.
 
 // Axial weight (1): the cubic Hermite falloff from 1 at p = 0 to 0 at p = 1,
@@ -108,8 +108,8 @@ vec4 cell_pups_acc_value(CellPupsAcc acc)
 // when axis r may project above 0 somewhere in the grid cell (the others give exactly 1
 // there); a point with more than 32 axes has every bit set and all its axes are visited.
 uvec2 cell_pups_fetch_candidate(uint k);
-void cell_pups_fetch_point(uint i, out vec2 pos, out vec2 orient, out uint axis_begin,
-                           out uint axis_count, out int label, out vec4 value);
+void cell_pups_fetch_geometry(uint i, out vec2 pos, out uint axis_begin, out uint axis_count);
+void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value);
 vec2 cell_pups_fetch_axis(uint a);
 
 // Weight and accumulate every candidate k in [begin, end) at position u.
@@ -118,11 +118,9 @@ CellPupsAcc cell_pups_eval(vec2 u, uint begin, uint end, float epsilon)
     CellPupsAcc acc = cell_pups_acc_init();
     for (uint k = begin; k < end; ++k) {
         uvec2 cand = cell_pups_fetch_candidate(k);
-        vec2 pos, orient;
+        vec2 pos;
         uint a0, na;
-        int label;
-        vec4 value;
-        cell_pups_fetch_point(cand.x, pos, orient, a0, na, label, value);
+        cell_pups_fetch_geometry(cand.x, pos, a0, na);
         vec2 d = u - pos;
         float w = 1.0;
         if (na > 32u) {
@@ -142,6 +140,11 @@ CellPupsAcc cell_pups_eval(vec2 u, uint begin, uint end, float epsilon)
             }
         }
         if (w > 0.0) {
+            // attributes only for the few candidates that carry weight here
+            vec2 orient;
+            int label;
+            vec4 value;
+            cell_pups_fetch_attributes(cand.x, orient, label, value);
             cell_pups_acc_add(acc, cell_pups_orient(w, d, orient, epsilon), value, label);
         }
     }
