@@ -972,10 +972,9 @@ def _cull(inst, cell, gw, tile, width, height, positions, axis_begin, axis_count
 # GPU driver
 # --------------------------------------------------------------------------------------------
 
-_POINT_DTYPE = np.dtype([("pos", "<f4", 2), ("orient", "<f4", 2), ("axis_begin", "<u4"),
-                         ("axis_count", "<u4"), ("label", "<i4"), ("pad", "<u4"),
+_POINT_DTYPE = np.dtype([("orient", "<f4", 2), ("label", "<i4"), ("pad", "<u4"),
                          ("value", "<f4", 4)])
-assert _POINT_DTYPE.itemsize == 48
+assert _POINT_DTYPE.itemsize == 32
 
 _LOCAL = (8, 8)
 _local_ctx = None
@@ -1014,22 +1013,32 @@ def _compute_program(defines):
 
 
 def _gpu_buffers(packed: PupsPacked):
-    """Pack the arrays in their std430 layouts (bytes)."""
+    """Pack the arrays in their std430 layouts (bytes) and return the axis stride.
+
+    Buffers: per instance (orientation, label, value); axes in blocks of ``stride`` per
+    instance (zero-padded: factor 1); cell offsets; per listed candidate (instance, axis mask,
+    position bits), so the candidate loop needs one load before the axes.
+    """
     k = packed.positions.shape[0]
+    stride = int(max(packed.axis_count.max() if k else 1, 1))
     pts = np.zeros(max(k, 1), dtype=_POINT_DTYPE)
-    pts["pos"][:k] = packed.positions
     pts["orient"][:k] = packed.orient
-    pts["axis_begin"][:k] = packed.axis_begin
-    pts["axis_count"][:k] = packed.axis_count
     pts["label"][:k] = packed.labels
     pts["value"][:k, :packed.values.shape[1]] = packed.values
-    axes = np.zeros((max(packed.axes_scaled.shape[0], 1), 2), dtype="<f4")
-    axes[:packed.axes_scaled.shape[0]] = packed.axes_scaled
-    items = np.zeros((max(packed.cell_items.size, 1), 2), dtype="<u4")
-    items[:packed.cell_items.size, 0] = packed.cell_items
-    items[:packed.cell_items.size, 1] = packed.cell_masks
+    axes = np.zeros((max(k, 1) * stride, 2), dtype="<f4")
+    if k:
+        slot = np.arange(stride)
+        src = packed.axis_begin[:, None] + slot[None, :]
+        valid = slot[None, :] < packed.axis_count[:, None]
+        blk = axes.reshape(-1, stride, 2)
+        blk[valid] = packed.axes_scaled[src[valid]]
+    n = packed.cell_items.size
+    items = np.zeros((max(n, 1), 4), dtype="<u4")
+    items[:n, 0] = packed.cell_items
+    items[:n, 1] = packed.cell_masks
+    items[:n, 2:] = packed.positions[packed.cell_items].astype("<f4").view("<u4")
     return [pts.tobytes(), axes.tobytes(), packed.cell_offsets.astype("<u4").tobytes(),
-            items.tobytes()]
+            items.tobytes()], stride
 
 
 def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
@@ -1038,7 +1047,7 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     c = packed.values.shape[1]
     labels = mode == PupsMode.LABEL
     prog = _compute_program({"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)})
-    data = _gpu_buffers(packed)
+    data, stride = _gpu_buffers(packed)
     t1 = time.perf_counter()
     w, h = packed.width, packed.height
     bufs = [ctx.buffer(d) for d in data]
@@ -1052,6 +1061,7 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     prog["u_pixel"] = packed.pixel
     prog["u_tile"] = packed.tile
     prog["u_grid_w"] = packed.grid_shape[1]
+    prog["u_axis_stride"] = stride
     prog["u_epsilon"] = epsilon
     prog.run(-(-w // _LOCAL[0]), -(-h // _LOCAL[1]), 1)
     ctx.finish()
@@ -1074,7 +1084,8 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     ctx = _context()
     prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
     w, h = packed.width, packed.height
-    bufs = [ctx.buffer(d) for d in _gpu_buffers(packed)]
+    data, stride = _gpu_buffers(packed)
+    bufs = [ctx.buffer(d) for d in data]
     for binding, b in enumerate(bufs):
         b.bind_to_storage_buffer(binding)
     # One render target, kept while the size stays: deleting the bound framebuffer would
@@ -1092,7 +1103,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     vao = ctx.vertex_array(prog, [])
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
                     ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
-                    ("u_epsilon", epsilon)):
+                    ("u_axis_stride", stride), ("u_epsilon", epsilon)):
         if name in prog:
             prog[name] = v
     fbo.use()

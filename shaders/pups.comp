@@ -19,19 +19,16 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 struct PupsPoint {
-    vec2 pos;
     vec2 orient;
-    uint axis_begin;
-    uint axis_count;
     int label;
     uint pad;
     vec4 value;
 };
 
 layout(std430, binding = 0) readonly buffer PupsPoints { PupsPoint points[]; };
-layout(std430, binding = 1) readonly buffer PupsAxes { vec2 axes[]; };
+layout(std430, binding = 1) readonly buffer PupsAxes { vec2 axes[]; };  // u_axis_stride per point
 layout(std430, binding = 2) readonly buffer PupsCells { uint cell_offsets[]; };
-layout(std430, binding = 3) readonly buffer PupsItems { uvec2 cell_items[]; };  // (point, axis mask)
+layout(std430, binding = 3) readonly buffer PupsItems { uvec4 cell_items[]; };  // (point, axis mask, pos bits)
 layout(std430, binding = 4) writeonly buffer PupsValues { float out_values[]; };
 layout(std430, binding = 5) writeonly buffer PupsLabels { int out_labels[]; };
 
@@ -40,18 +37,15 @@ uniform vec2 u_origin;     // domain position of the centre of pixel (0, 0)
 uniform vec2 u_pixel;      // domain size of one pixel
 uniform int u_tile;        // candidate-grid cell size in pixels
 uniform int u_grid_w;      // candidate-grid cells per row
+uniform uint u_axis_stride; // axes per point (padded)
 uniform float u_epsilon;   // orientation strength, [0, 1)
 
-uvec2 cell_pups_fetch_candidate(uint k) { return cell_items[k]; }
-void cell_pups_fetch_geometry(uint i, out vec2 pos, out uint axis_begin, out uint axis_count)
-{
-    pos = points[i].pos; axis_begin = points[i].axis_begin; axis_count = points[i].axis_count;
-}
+uvec4 cell_pups_fetch_candidate(uint k) { return cell_items[k]; }
+vec2 cell_pups_fetch_axis(uint a) { return axes[a]; }
 void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value)
 {
     orient = points[i].orient; label = points[i].label; value = points[i].value;
 }
-vec2 cell_pups_fetch_axis(uint a) { return axes[a]; }
 
 #include "lib/pups.glsl"
 
@@ -63,7 +57,8 @@ void main()
     }
     vec2 u = u_origin + vec2(px) * u_pixel;
     int cell = (px.y / u_tile) * u_grid_w + px.x / u_tile;
-    CellPupsAcc acc = cell_pups_eval(u, cell_offsets[cell], cell_offsets[cell + 1], u_epsilon);
+    CellPupsAcc acc = cell_pups_eval(u, cell_offsets[cell], cell_offsets[cell + 1], u_axis_stride,
+                                     u_epsilon);
     int o = px.y * u_size.x + px.x;
 #if CELL_PUPS_MODE == 1
     vec4 v = acc.best;

@@ -27,7 +27,7 @@
 //
 // Optional: define CELL_PUPS_FETCH before including this file to get
 // cell_pups_eval(), which walks a candidate list. The including shader must
-// then define the four fetch functions declared below (they read its
+// then define the three fetch functions declared below (they read its
 // buffers); this file itself declares no buffers, uniforms or bindings.
 
 // Axial weight (1): the cubic Hermite falloff from 1 at p = 0 to 0 at p = 1,
@@ -104,27 +104,29 @@ vec4 cell_pups_acc_value(CellPupsAcc acc)
 }
 
 #ifdef CELL_PUPS_FETCH
-// Provided by the including shader. A candidate is (point index, axis mask): bit r set
-// when axis r may project above 0 somewhere in the grid cell (the others give exactly 1
-// there); a point with more than 32 axes has every bit set and all its axes are visited.
-uvec2 cell_pups_fetch_candidate(uint k);
-void cell_pups_fetch_geometry(uint i, out vec2 pos, out uint axis_begin, out uint axis_count);
-void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value);
+// Provided by the including shader (it owns the buffers):
+//   cell_pups_fetch_candidate(k): (point index, axis mask, floatBitsToUint(pos.x),
+//       floatBitsToUint(pos.y)) of candidate k. Bit r of the mask is set when axis r may
+//       project above 0 somewhere in the grid cell (the others give exactly 1 there).
+//   cell_pups_fetch_axis(a): pre-scaled axis a; point i owns axes [i * stride, i * stride +
+//       stride), padded with zero axes (factor 1).
+//   cell_pups_fetch_attributes(i, ...): orientation, label, value of point i.
+uvec4 cell_pups_fetch_candidate(uint k);
 vec2 cell_pups_fetch_axis(uint a);
+void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value);
 
-// Weight and accumulate every candidate k in [begin, end) at position u.
-CellPupsAcc cell_pups_eval(vec2 u, uint begin, uint end, float epsilon)
+// Weight and accumulate every candidate k in [begin, end) at position u. With more than
+// 32 axes per point (stride > 32) the masks cannot hold them and every axis is visited.
+CellPupsAcc cell_pups_eval(vec2 u, uint begin, uint end, uint stride, float epsilon)
 {
     CellPupsAcc acc = cell_pups_acc_init();
     for (uint k = begin; k < end; ++k) {
-        uvec2 cand = cell_pups_fetch_candidate(k);
-        vec2 pos;
-        uint a0, na;
-        cell_pups_fetch_geometry(cand.x, pos, a0, na);
-        vec2 d = u - pos;
+        uvec4 cand = cell_pups_fetch_candidate(k);
+        vec2 d = u - uintBitsToFloat(cand.zw);
+        uint a0 = cand.x * stride;
         float w = 1.0;
-        if (na > 32u) {
-            for (uint a = a0; a < a0 + na; ++a) {
+        if (stride > 32u) {
+            for (uint a = a0; a < a0 + stride; ++a) {
                 if (!cell_pups_axis_step(w, d, cell_pups_fetch_axis(a))) {
                     break;
                 }
