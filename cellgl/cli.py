@@ -49,12 +49,31 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# view (the interactive viewer lives in the viewer package; see docs/viewer.md)
+# --------------------------------------------------------------------------------------------
+
+
+def _add_view(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    from viewer.cli import add_arguments
+
+    return add_arguments(sub.add_parser(
+        "view", help="interactive viewer (GLFW + Dear ImGui); --screenshot FILE for a headless capture"))
+
+
+def _cmd_view(args: argparse.Namespace) -> int:
+    from viewer.cli import run
+
+    return run(args)
+
+
+# --------------------------------------------------------------------------------------------
 # registry and entry point
 # --------------------------------------------------------------------------------------------
 
 #: name -> (add arguments, run). Add bake, presets, export, view here.
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
+    "view": (_add_view, _cmd_view),
 }
 
 

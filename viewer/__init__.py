@@ -1,0 +1,13 @@
+"""cellgl's interactive viewer: a GLFW window, Dear ImGui panel, live texture preview.
+
+``cellgl view [PRESET_OR_RECIPE]`` or ``python -m viewer``. See docs/viewer.md.
+GUI libraries (imgui-bundle, glfw) are imported lazily, by :mod:`viewer.app`.
+"""
+
+__all__ = ["main"]
+
+
+def main(argv=None) -> int:
+    from .cli import main as _main
+
+    return _main(argv)

@@ -1,0 +1,5 @@
+import sys
+
+from viewer import main
+
+sys.exit(main())
