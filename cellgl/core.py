@@ -135,22 +135,28 @@ def _points(points) -> np.ndarray:
         raise ValueError(f"points must have shape (N, d) with d in 2..4, got shape {pts.shape}")
     if pts.shape[0] == 0:
         raise ValueError("points is empty (shape (0, d)); pass at least one sample")
-    bad = ~np.isfinite(pts)
-    if bad.any():
-        i, j = np.argwhere(bad)[0]
-        raise ValueError(f"points must be finite; points[{i}, {j}] is {pts[i, j]}")
     return pts
 
 
+def _check_coords(pos: np.ndarray, scaled: np.ndarray) -> None:
+    """Raise for NaN, infinite or too large coordinates (two reductions in the common case).
+    ``scaled`` is ``pos`` in cells (after the distribution's scale)."""
+    if scaled.min() > -COORD_LIMIT and scaled.max() < COORD_LIMIT:     # False for NaN too
+        return
+    bad = ~np.isfinite(pos)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"points must be finite; points[{i}, {j}] is {pos[i, j]}")
+    i, j = np.argwhere(np.abs(scaled) >= COORD_LIMIT)[0]
+    raise ValueError(f"coordinates must lie within +-2^30 cells; got {pos[i, j]!r} at [{i}, {j}]")
+
+
 def split(pos: np.ndarray):
-    """Split float64 positions (N, d) into int64 cells (N, 4) and float fractions (N, 4)
-    in [0, 1): the fraction is exact to float32 whatever the distance from the origin."""
-    big = np.abs(pos) >= COORD_LIMIT
-    if big.any():
-        i, j = np.argwhere(big)[0]
-        raise ValueError(f"coordinates must lie within +-2^30 cells; got {pos[i, j]!r} at [{i}, {j}]")
-    N, d = pos.shape
+    """Split float64 positions (N, d) into int64 cells (N, 4) and float64 fractions (N, 4)
+    in [0, 1) (unused axes 0), as the NumPy reference takes them."""
+    _check_coords(pos, pos)
     fl = np.floor(pos)
+    N, d = pos.shape
     cells = np.zeros((N, 4), dtype=np.int64)
     cells[:, :d] = fl.astype(np.int64)
     fr = np.zeros((N, 4), dtype=np.float64)
@@ -224,19 +230,14 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     p = make_params(pts.shape[1], metric=metric, distribution=distribution, density=density,
                     jitter=jitter, min_points=min_points, max_points=max_points,
                     minkowski_p=minkowski_p, seed=seed, period=period)
-    cells, fr = split(pts * p.scale)
     if backend == "numpy":
+        cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs)
     else:
         from . import gpu
 
-        f32 = fr.astype(np.float32)
-        # A fraction just below 1 can round up to 1.0 in float32: move it to the next cell.
-        up = f32 >= 1.0
-        if up.any():
-            cells = cells + up
-            f32[up] = 0.0
-        out, exact = gpu.search_points(cells.astype(np.int32), f32, p, n, outs)
+        _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
+        out, exact = gpu.search_points(pts, p, n, outs)
     return _finish(out, exact, (len(pts),), p, n)
 
 

@@ -97,29 +97,29 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
     return out
 
 
-def search_points(cells: np.ndarray, fracs: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
-    """Cellular basis at split sample positions.
+def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+    """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
-    cells (N, 4) int32, fracs (N, 4) float32 (already scaled). Returns
-    ({output name: array}, exact (N,) bool).
+    The shader scales them by ``p.scale`` and splits them into an integer cell
+    and a float32 fraction in double precision. Returns ({output name: array},
+    exact (N,) bool).
     """
     ctx = context.get_context()
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
     _set_params(prog, p)
     _set(prog, "u_first", 0)
-    N = len(cells)
+    _set(prog, "u_scale", float(p.scale))
+    N = len(pts)
     out = _alloc(N, n, p.dim, outputs)
     inexact = np.zeros(N, dtype=bool)
     step = _chunk_size(n, p.dim, outputs)
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
         count = min(step, N - start)
-        cb = ctx.buffer(np.ascontiguousarray(cells[start:start + count], dtype=np.int32).tobytes())
-        fb = ctx.buffer(np.ascontiguousarray(fracs[start:start + count], dtype=np.float32).tobytes())
-        cb.bind_to_storage_buffer(0)
-        fb.bind_to_storage_buffer(1)
+        pb = ctx.buffer(pts[start:start + count])
+        pb.bind_to_storage_buffer(0)
         _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
-        cb.release()
-        fb.release()
+        pb.release()
     return out, ~inexact
 
 

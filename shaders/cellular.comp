@@ -26,8 +26,11 @@ uniform vec4 u_origin_frac;
 uniform vec4 u_spacing;
 uniform ivec4 u_shape;         // samples along x, y, z, w
 #else
-layout(std430, binding = 0) readonly buffer SampleCells { ivec4 sample_cell[]; };
-layout(std430, binding = 1) readonly buffer SampleFracs { vec4 sample_frac[]; };
+uniform double u_scale;        // positions are multiplied by this first
+// Sample positions, float64, tightly packed (CELL_DIM values per sample).
+// They are split into an integer cell and a float32 fraction in double
+// precision, so a sample 10^6 cells from the origin is as exact as one at it.
+layout(std430, binding = 0) readonly buffer Samples { double sample_pos[]; };
 #endif
 layout(std430, binding = 2) writeonly buffer OutF { float out_F[]; };
 layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
@@ -56,8 +59,16 @@ void main()
     cell = u_origin_cell + ivec4(fl);
     frac = pos - fl;
 #else
-    cell = sample_cell[i];
-    frac = sample_frac[i];
+    cell = ivec4(0);
+    frac = vec4(0.0);
+    for (int a = 0; a < CELL_DIM; a++) {
+        double x = sample_pos[i * uint(CELL_DIM) + uint(a)] * u_scale;
+        double fl = floor(x);
+        float fr = float(x - fl);
+        // A fraction just below 1 can round up to 1.0 in float32.
+        cell[a] = int(fl) + (fr >= 1.0 ? 1 : 0);
+        frac[a] = fr >= 1.0 ? 0.0 : fr;
+    }
 #endif
 
     CellParams p;
