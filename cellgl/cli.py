@@ -67,12 +67,30 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# bake (cellgl/bake.py; see docs/bake.md)
+# --------------------------------------------------------------------------------------------
+
+
+def _add_bake(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    from .bake import add_parser
+
+    return add_parser(sub)
+
+
+def _cmd_bake(args: argparse.Namespace) -> int:
+    from .bake import run_cli
+
+    return run_cli(args)
+
+
+# --------------------------------------------------------------------------------------------
 # registry and entry point
 # --------------------------------------------------------------------------------------------
 
 #: name -> (add arguments, run). Add bake, presets, export, view here.
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
+    "bake": (_add_bake, _cmd_bake),
     "view": (_add_view, _cmd_view),
 }
 

@@ -32,6 +32,7 @@ import numpy as np
 
 __all__ = [
     "atomic_path",
+    "scratch_path",
     "write_png",
     "write_exr",
     "write_tiff",
@@ -92,6 +93,18 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
         with contextlib.suppress(OSError):
             tmp_path.unlink()
         raise
+
+
+@contextlib.contextmanager
+def scratch_path(directory: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
+    """Yield a fresh hidden temporary file in ``directory``; it is deleted on leaving, always."""
+    fd, tmp = tempfile.mkstemp(prefix=".cellgl.", suffix=suffix, dir=directory)
+    os.close(fd)
+    try:
+        yield Path(tmp)
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
 
 
 # --------------------------------------------------------------------------------------------
