@@ -111,7 +111,7 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 #endif
     {
         ivec4 o = ivec4(x, y, z, w);
-        if (o != ivec4(0) && _cell_box_distance(o, f, p.minkowski_p) < r.F[CELL_N - 1]) {
+        if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p.minkowski_p) < r.F[CELL_N - 1]) {
             _cell_visit(r, cell, f, o, p);
         }
     }
