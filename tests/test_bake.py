@@ -1,0 +1,323 @@
+"""cellgl bake: tiling equals one pass, every format and depth, volumes, errors, atomicity.
+
+Most tests run the bake machinery against a stand-in for ``cellgl.texture.render`` (a cheap
+deterministic function of the pixel coordinates), so they need no GL and check the tiling,
+streaming and writing exactly. The tests at the end bake real presets on the GPU.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import types
+
+import numpy as np
+import pytest
+
+import cellgl
+from cellgl import bake as B
+from cellgl import cli
+
+# --------------------------------------------------------------------------------------------
+# stand-in recipe module and renderer
+# --------------------------------------------------------------------------------------------
+
+
+class FakeRecipe:
+    def __init__(self, name="fake", values=None):
+        self.name, self.values = name, dict(values or {"seed": 0, "tileable": False})
+
+    def set_from_strings(self, items):
+        vals = dict(self.values)
+        for item in items:
+            k, _, v = item.partition("=")
+            if k not in vals:
+                raise ValueError(f"--set {k}: unknown parameter; accepted {', '.join(vals)}")
+            vals[k] = int(v) if k == "seed" else v
+        return FakeRecipe(self.name, vals)
+
+    def replace(self, **kw):
+        return FakeRecipe(self.name, {**self.values, **kw})
+
+    def to_dict(self):
+        return {"name": self.name, **self.values}
+
+
+def _fake_render(calls):
+    def render(recipe, width, height, *, channels=("color",), x0=0, y0=0, tile_w=None,
+               tile_h=None, depth=None, backend="gpu"):
+        tw = width - x0 if tile_w is None else tile_w
+        th = height - y0 if tile_h is None else tile_h
+        calls.append((x0, y0, tw, th, depth))
+        y, x = np.mgrid[y0:y0 + th, x0:x0 + tw].astype(np.float64)
+        u, v = (x + 0.5) / width, (y + 0.5) / height
+        seed = recipe.values.get("seed", 0)
+        zs = [0.5] if depth is None else [(z + 0.5) / depth for z in range(depth)]
+        out = {}
+        for c in channels:
+            per_z = []
+            for w in zs:
+                f = np.sin(u * 7.1 + v * 3.3 + w * 5 + seed) * 0.6 + 0.5  # spills out of [0, 1]
+                if c == "color":
+                    a = np.stack([u, v, f, np.ones_like(u)], -1)
+                elif c == "normal":
+                    a = np.stack([f, 1 - f, u], -1)
+                elif c == "id":
+                    a = ((x // 5).astype(np.uint32) * 7919 + (y // 3).astype(np.uint32) * 104729
+                         + int(w * 1000))
+                else:
+                    a = f * (1 + int(c[1:]) if c.startswith("F") else 1)
+                per_z.append(a)
+            a = per_z[0] if depth is None else np.stack(per_z)
+            out[c] = a if c == "id" else a.astype(np.float32)
+        return out
+
+    return render
+
+
+@pytest.fixture
+def fake(monkeypatch):
+    """Replace cellgl.recipe / cellgl.texture by stand-ins; yields the list of render calls."""
+    calls: list = []
+    tex = types.ModuleType("cellgl.texture")
+    tex.render = _fake_render(calls)
+    rec = types.ModuleType("cellgl.recipe")
+
+    class RecipeError(ValueError):
+        pass
+
+    def load_recipe(name):
+        if name not in ("flagstone", "fake"):
+            raise RecipeError(f"unknown preset {name!r}; accepted flagstone, fake")
+        return FakeRecipe(name)
+
+    rec.RecipeError, rec.load_recipe = RecipeError, load_recipe
+    for name, mod in (("texture", tex), ("recipe", rec)):
+        monkeypatch.setitem(sys.modules, f"cellgl.{name}", mod)
+        monkeypatch.setattr(cellgl, name, mod, raising=False)
+    return calls
+
+
+def _read(path):
+    ext = os.path.splitext(str(path))[1]
+    if ext == ".npy":
+        return np.load(path)
+    if ext in (".tif", ".tiff"):
+        import tifffile
+
+        return tifffile.imread(path)
+    if ext == ".exr":
+        import OpenEXR
+
+        f = OpenEXR.File(str(path), separate_channels=True)
+        return {k: c.pixels for k, c in f.channels().items()}
+    from test_io import _read_png_raw
+
+    return _read_png_raw(path)[0]
+
+
+def _same(a, b):
+    if isinstance(a, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    return a.dtype == b.dtype and a.shape == b.shape and np.array_equal(a, b)
+
+
+# --------------------------------------------------------------------------------------------
+# parsing
+# --------------------------------------------------------------------------------------------
+
+
+def test_parse_size():
+    assert B.parse_size("512") == (512, 512, None)
+    assert B.parse_size("640x480") == (640, 480, None)
+    assert B.parse_size("64X32x16") == (64, 32, 16)
+    for bad, words in [("0x5", "width 0"), ("5x0", "height 0"), ("70000x5", "1..65536"),
+                       ("abc", "expected W"), ("1x2x3x4", "expected W"), ("8x8x0", "depth 0"),
+                       ("65536x65536x2", "too many"), ("", "expected W")]:
+        with pytest.raises(B.BakeError, match=words):
+            B.parse_size(bad)
+
+
+def test_parse_channels():
+    assert B.parse_channels(["color,height", "f1", "F1"]) == ("color", "height", "F1")
+    with pytest.raises(B.BakeError, match="'rgb'.*accepted color, height, normal, id, F1"):
+        B.parse_channels("rgb")
+
+
+# --------------------------------------------------------------------------------------------
+# tiled == one pass, every format and depth
+# --------------------------------------------------------------------------------------------
+
+CASES = [(".png", 8, "color"), (".png", 16, "color"), (".png", 16, "height"),
+         (".png", 8, "id"), (".png", 8, "normal"), (".exr", 16, "color"),
+         (".exr", 32, "id"), (".tif", 8, "height"), (".tif", 16, "color"),
+         (".tif", 32, "F2"), (".tif", 32, "id"), (".npy", 32, "normal"), (".npy", 32, "id")]
+
+
+@pytest.mark.parametrize("ext,bits,channel", CASES)
+def test_tiled_equals_one_pass(fake, tmp_path, ext, bits, channel):
+    if ext == ".exr":
+        pytest.importorskip("OpenEXR")
+    if ext == ".tif":
+        pytest.importorskip("tifffile")
+    size = (70, 37)  # not a multiple of the tile
+    one = B.bake("fake", tmp_path / f"one{ext}", size=size, channels=[channel], bit_depth=bits,
+                 progress=False)
+    assert len(fake) == 1
+    tiled = B.bake("fake", tmp_path / f"tiled{ext}", size=size, channels=[channel],
+                   bit_depth=bits, tile=16, progress=False)
+    assert len(fake) == 1 + 5 * 3
+    a, b = _read(one[0]), _read(tiled[0])
+    assert _same(a, b)
+    assert sorted(os.listdir(tmp_path)) == sorted([f"one{ext}", f"tiled{ext}"])
+
+
+def test_values_and_quantization(fake, tmp_path):
+    ref = _fake_render([])(FakeRecipe(), 33, 20, channels=("color", "height", "id"))
+    (p,) = B.bake("fake", tmp_path / "c.npy", size=(33, 20), progress=False)
+    assert _same(np.load(p), ref["color"])
+    (p,) = B.bake("fake", tmp_path / "h.png", size="33x20", channels="height", bit_depth=16,
+                  progress=False)
+    h = np.clip(ref["height"], 0, 1)
+    assert np.array_equal(_read(p), np.floor(h * 65535 + 0.5).astype(np.uint16))
+    (p,) = B.bake("fake", tmp_path / "id.png", size=(33, 20), channels="id", progress=False)
+    assert np.array_equal(_read(p), B.id_colors(ref["id"]))
+    (p,) = B.bake("fake", tmp_path / "id.tif", size=(33, 20), channels="id", progress=False)
+    assert _same(_read(p), ref["id"].astype(np.uint32))
+
+
+def test_exr_holds_every_channel(fake, tmp_path):
+    pytest.importorskip("OpenEXR")
+    (p,) = B.bake("fake", tmp_path / "a.exr", size=(24, 18),
+                  channels=["color", "height", "normal", "id", "F1"], bit_depth=16, tile=16,
+                  progress=False)
+    got = _read(p)
+    assert set(got) == {"R", "G", "B", "A", "height", "normal.R", "normal.G", "normal.B", "id",
+                        "F1"}
+    assert got["R"].dtype == np.float16 and got["id"].dtype == np.uint32
+    ref = _fake_render([])(FakeRecipe(), 24, 18, channels=("normal",))["normal"]
+    assert np.array_equal(got["normal.G"], ref[..., 1].astype(np.float16))
+
+
+def test_one_file_per_channel_elsewhere(fake, tmp_path):
+    paths = B.bake("fake", tmp_path / "t.png", size=16, channels="color,height,F3",
+                   progress=False)
+    assert [p.name for p in paths] == ["t_color.png", "t_height.png", "t_F3.png"]
+    assert sorted(os.listdir(tmp_path)) == sorted(p.name for p in paths)
+
+
+@pytest.mark.parametrize("ext", [".npy", ".tif"])
+def test_volume_tiled_equals_one_pass(fake, tmp_path, ext):
+    if ext == ".tif":
+        pytest.importorskip("tifffile")
+    one = B.bake("fake", tmp_path / f"one{ext}", size="40x20x3", channels="color",
+                 progress=False)
+    tiled = B.bake("fake", tmp_path / f"tiled{ext}", size="40x20x3", channels="color",
+                   tile=16, progress=False)
+    a, b = _read(one[0]), _read(tiled[0])
+    assert a.shape == (3, 20, 40, 4) and _same(a, b)
+    assert all(c[4] == 3 for c in fake)
+    ref = _fake_render([])(FakeRecipe(), 40, 20, channels=("color",), depth=3)["color"]
+    assert _same(a, ref)
+    assert sorted(os.listdir(tmp_path)) == sorted([f"one{ext}", f"tiled{ext}"])  # no spool left
+
+
+def test_memory_budget_bounds_tiles(fake, tmp_path):
+    budget = 16 * 16 * 16 * 4  # four 16x16 RGBA float32 tiles
+    B.bake("fake", tmp_path / "a.npy", size=(100, 60), memory_budget=budget, progress=False)
+    assert len(fake) > 1 and all(tw * th * 16 <= budget for _, _, tw, th, _ in fake)
+    fake.clear()
+    B.bake("fake", tmp_path / "a.png", size=(100, 60), memory_budget=budget, progress=False)
+    rows = {th for _, _, _, th, _ in fake}
+    assert all(r * 100 * 16 <= budget for r in rows)  # a whole band of rows fits
+
+
+def test_progress_bar(fake, tmp_path, capsys):
+    assert cli.main(["bake", "fake", "-o", str(tmp_path / "a.png"), "--size", "40x40",
+                     "--tile", "16"]) == 0
+    err = capsys.readouterr().err
+    assert "9/9 tiles" in err and "wrote" in err
+    assert cli.main(["bake", "fake", "-o", str(tmp_path / "b.png"), "--size", "40x40",
+                     "--tile", "16", "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
+    seen = []
+    render = sys.modules["cellgl.texture"].render
+
+    def spy(recipe, *a, **kw):
+        seen.append(recipe.values)
+        return render(recipe, *a, **kw)
+
+    monkeypatch.setattr(sys.modules["cellgl.texture"], "render", spy)
+    assert cli.main(["bake", "fake", "-o", str(tmp_path / "a.npy"), "--size", "8",
+                     "--set", "seed=3", "--tileable", "-q"]) == 0
+    assert seen[-1]["seed"] == 3 and seen[-1]["tileable"] is True
+
+
+# --------------------------------------------------------------------------------------------
+# errors: one line, exit 2, nothing written
+# --------------------------------------------------------------------------------------------
+
+ERRORS = [
+    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy"),
+    (["-o", "{d}/a"], "unknown extension '(none)'"),
+    (["-o", "{d}/a.png", "--channels", "albedo"], "'albedo': unknown channel; accepted color"),
+    (["-o", "{d}/a.png", "--size", "0x5"], "width 0 is out of range; accepted 1..65536"),
+    (["-o", "{d}/a.png", "--size", "100000"], "width 100000 is out of range; accepted 1..65536"),
+    (["-o", "{d}/a.png", "--size", "big"], "--size 'big': expected W, WxH or WxHxD"),
+    (["-o", "{d}/a.png", "--depth", "12"], "--depth 12: .png accepts 8, 16 bits"),
+    (["-o", "{d}/a.exr", "--depth", "8"], "--depth 8: .exr accepts 16, 32 bits"),
+    (["-o", "{d}/a.npy", "--depth", "16"], "--depth 16: .npy accepts 32 bits"),
+    (["-o", "{d}/a.png", "--depth", "x"], "--depth x: .png accepts 8, 16 bits"),
+    (["-o", "{d}/a.png", "--set", "seed"], "--set 'seed': expected NAME=VALUE"),
+    (["-o", "{d}/a.png", "--set", "=3"], "--set '=3': expected NAME=VALUE"),
+    (["-o", "{d}/a.png", "--set", "nope=3"], "nope: unknown parameter"),
+    (["-o", "{d}/a.png", "--channels", "id", "--depth", "16"], "8-bit false-colour"),
+    (["-o", "{d}/a.tif", "--channels", "id", "--depth", "16"], "ids are uint32"),
+    (["-o", "{d}/a.png", "--size", "8x8x8"], "volumes are written to .npy or .tif only"),
+    (["-o", "{d}/a.tif", "--tile", "50"], "--tile 50: accepted multiples of 16 in 16..8192"),
+    (["-o", "{d}/a.tif", "--tile", "lots"], "--tile 'lots': expected a whole number"),
+    (["-o", "{d}/nodir/a.png"], "does not exist"),
+    (["-o", "{d}"], "unknown extension"),
+]
+
+
+@pytest.mark.parametrize("argv,message", ERRORS)
+def test_cli_errors(fake, tmp_path, capsys, argv, message):
+    argv = ["bake", "fake"] + [a.format(d=tmp_path) for a in argv]
+    assert cli.main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.startswith("cellgl: error: ") and err.count("\n") == 1, err
+    assert message in err, err
+    assert "Traceback" not in err
+    assert os.listdir(tmp_path) == []
+    assert fake == []  # rejected before rendering anything
+
+
+def test_unknown_preset(fake, tmp_path, capsys):
+    assert cli.main(["bake", "nosuch", "-o", str(tmp_path / "a.png")]) == 2
+    err = capsys.readouterr().err
+    assert "unknown preset 'nosuch'" in err and err.count("\n") == 1
+
+
+def test_interrupt_leaves_nothing_behind(fake, tmp_path, monkeypatch, capsys):
+    dest = tmp_path / "keep.tif"
+    dest.write_bytes(b"previous")
+    render = sys.modules["cellgl.texture"].render
+
+    def flaky(*a, **kw):
+        if len(fake) == 3:
+            raise KeyboardInterrupt
+        return render(*a, **kw)
+
+    monkeypatch.setattr(sys.modules["cellgl.texture"], "render", flaky)
+    for name in ("keep.tif", "new.png", "vol.tif", "vol.npy"):
+        fake.clear()
+        size = "48x48x2" if name.startswith("vol") else "48x48"
+        argv = ["bake", "fake", "-o", str(tmp_path / name), "--size", size, "--tile", "16", "-q"]
+        assert cli.main(argv) == 130
+        assert sorted(os.listdir(tmp_path)) == ["keep.tif"], name
+        assert dest.read_bytes() == b"previous"
