@@ -1,0 +1,335 @@
+"""The viewer window: GLFW + moderngl + Dear ImGui (imgui-bundle).
+
+One :class:`Viewer` owns a GLFW window, a moderngl context made current on it, the ImGui
+context and its GLFW/OpenGL3 backends, and the renderers of :mod:`viewer.render`. A frame:
+
+1. poll GLFW, start an ImGui frame (scripted mouse events, if any, are fed to ImGui's IO here:
+   the tests drag sliders through exactly the path real mouse input takes);
+2. the panel (:mod:`viewer.panel`) edits the :class:`viewer.model.Model`;
+3. view input (pan / zoom / orbit) from ImGui's IO when the mouse is not over the panel;
+4. the view is rendered into an offscreen framebuffer only when something it depends on
+   changed, at reduced resolution while a slider or the view is being dragged (refined once
+   input stops); the ImGui draw data goes on top; the frame is copied to the window.
+
+Screenshots read that offscreen framebuffer, so a hidden window (``--screenshot``) gives the
+same pixels as a visible one.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+# imgui_bundle first: it points the glfw package at its own GLFW library, so the Python glfw
+# calls and ImGui's C++ GLFW backend share one GLFW (one window list, one set of callbacks).
+import imgui_bundle  # noqa: F401  (import order matters)
+from imgui_bundle import imgui
+
+import glfw  # noqa: E402
+import moderngl  # noqa: E402
+
+from . import camera, render
+from .model import Model
+
+__all__ = ["Viewer", "ViewerOptions", "MODES"]
+
+MODES = ("2d", "3d", "tiled", "anim")
+MODE_LABELS = {"2d": "2D texture", "3d": "3D object", "tiled": "3x3 tiled", "anim": "4D animation"}
+PANEL_WIDTH = 360
+
+
+@dataclass
+class ViewerOptions:
+    recipe: str | None = None
+    mode: str = "2d"
+    shape: str = "sphere"
+    size: tuple[int, int] = (1280, 800)
+    sets: list = field(default_factory=list)
+    panel: bool = True
+    time: float | None = None
+    hidden: bool = False
+    vsync: bool = True
+
+
+class Viewer:
+    """The interactive viewer. ``Viewer(opts).run()``, or drive it frame by frame (tests)."""
+
+    def __init__(self, opts: ViewerOptions | None = None):
+        self.opts = opts = opts or ViewerOptions()
+        if opts.mode not in MODES:
+            raise ValueError(f"unknown view mode {opts.mode!r}; expected one of: {', '.join(MODES)}")
+        self.model = Model.load(opts.recipe)
+        for name, value in opts.sets:
+            self.model.set_text(name, value)
+        self._init_window(*opts.size, hidden=opts.hidden, vsync=opts.vsync)
+        self._init_imgui()
+        self.renderer = render.Renderer(self.ctx, self.model)
+        self.mode = opts.mode
+        self.shape = opts.shape
+        self.panel_visible = opts.panel
+        self.panzoom = camera.PanZoom()
+        self.orbit = camera.Orbit()
+        self.playing = opts.mode == "anim" and opts.time is None
+        self.speed = 0.5  # cells per second
+        if opts.time is not None:
+            self.model.set("time", float(opts.time))
+        if self.mode == "anim":
+            self._ensure_4d()
+        self.tile_borders = False
+        self.bump_view = 1.0
+        self.status = ""
+        self.frame_ms = 0.0
+        self.render_ms = 0.0
+        self.readout: dict | None = None
+        self.widget_rects: dict[str, tuple[float, float, float, float]] = {}
+        self._script: list = []
+        self._view_drag = False
+        self._last_time = time.perf_counter()
+        self._should_close = False
+
+    # ----------------------------------------------------------------------------------------
+    # setup / teardown
+
+    def _init_window(self, w: int, h: int, hidden: bool, vsync: bool) -> None:
+        if not glfw.init():
+            raise RuntimeError("GLFW could not initialise (no display? run under xvfb-run, or "
+                               "use `cellgl bake` for headless output)")
+        glfw.default_window_hints()
+        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 4)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
+        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+        glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
+        glfw.window_hint(glfw.VISIBLE, not hidden)
+        glfw.window_hint(glfw.SCALE_TO_MONITOR, False)
+        self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
+        if not self.window:
+            glfw.terminate()
+            raise RuntimeError("GLFW could not create an OpenGL 4.3 core window")
+        glfw.make_context_current(self.window)
+        glfw.swap_interval(1 if vsync and not hidden else 0)
+        self.ctx = moderngl.create_context(require=430)
+        self.hidden = hidden
+
+    def _init_imgui(self) -> None:
+        self.imgui_ctx = imgui.create_context()
+        io = imgui.get_io()
+        io.set_ini_filename("")  # no imgui.ini next to the user's files
+        io.config_flags |= imgui.ConfigFlags_.nav_enable_keyboard.value
+        imgui.style_colors_dark()
+        addr = ctypes.cast(self.window, ctypes.c_void_p).value
+        imgui.backends.glfw_init_for_opengl(addr, True)
+        imgui.backends.opengl3_init("#version 330")
+
+    def close(self) -> None:
+        if getattr(self, "window", None) is None:
+            return
+        glfw.make_context_current(self.window)
+        self.renderer.release()
+        imgui.backends.opengl3_shutdown()
+        imgui.backends.glfw_shutdown()
+        imgui.destroy_context(self.imgui_ctx)
+        self.ctx.release()
+        glfw.destroy_window(self.window)
+        self.window = None
+        glfw.terminate()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    # ----------------------------------------------------------------------------------------
+    # geometry
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """Framebuffer size (pixels)."""
+        return glfw.get_framebuffer_size(self.window)
+
+    @property
+    def view_rect(self) -> tuple[int, int, int, int]:
+        """(x, y, w, h) of the view area in window pixels, top-left origin."""
+        w, h = self.size
+        px = PANEL_WIDTH if self.panel_visible else 0
+        px = min(px, w - 64)
+        return px, 0, w - px, h
+
+    def unit_square_rect(self) -> tuple[int, int, int, int]:
+        """(x, y, w, h), window pixels from the top left, of texture [0, 1]^2 in the 2D view."""
+        vx, vy, vw, vh = self.view_rect
+        u = self.panzoom.unit(vw, vh)
+        ox, oy = self.panzoom.origin
+        x0 = vx + ox
+        y0 = vy + vh - (oy + u)
+        return int(round(x0)), int(round(y0)), int(round(u)), int(round(u))
+
+    # ----------------------------------------------------------------------------------------
+    # frames
+
+    def run(self) -> None:
+        """Interactive loop until the window is closed (Esc or the close button)."""
+        while not glfw.window_should_close(self.window) and not self._should_close:
+            self.frame()
+            if not self._busy():
+                glfw.wait_events_timeout(0.05)
+
+    def _busy(self) -> bool:
+        return self.playing or self.renderer.needs_refine or bool(self._script)
+
+    def script_mouse(self, events) -> None:
+        """Queue mouse input for the next frames: one ``(x, y, down)`` per frame, window pixels.
+
+        Each is fed to ImGui's IO (``add_mouse_pos_event``, ``add_mouse_button_event``) after
+        the GLFW backend's own events, so it is what ImGui sees in that frame.
+        """
+        self._script.extend(events)
+
+    def frame(self) -> None:
+        """Run one frame."""
+        t0 = time.perf_counter()
+        dt = max(1e-4, t0 - self._last_time)
+        self._last_time = t0
+        glfw.make_context_current(self.window)
+        glfw.poll_events()
+        imgui.backends.opengl3_new_frame()
+        imgui.backends.glfw_new_frame()
+        io = imgui.get_io()
+        if self._script:
+            x, y, down = self._script.pop(0)
+            io.add_mouse_pos_event(float(x), float(y))
+            io.add_mouse_button_event(0, bool(down))
+        imgui.new_frame()
+
+        if self.mode == "anim" and self.playing:
+            self.model.set("time", self.model.get("time") + self.speed * min(dt, 0.1))
+
+        if self.panel_visible:
+            from .panel import draw_panel
+
+            draw_panel(self)
+        self._view_input(io)
+        imgui.render()
+
+        w, h = self.size
+        vx, vy, vw, vh = self.view_rect
+        if not self.panzoom.fitted:
+            self.panzoom.fit(vw, vh)
+        interacting = imgui.is_any_item_active() or self._view_drag or (self.mode == "anim" and self.playing)
+        self.renderer.draw(self, (vx, h - vy - vh, vw, vh), (w, h), interacting)
+        self.renderer.frame_fbo.use()
+        imgui.backends.opengl3_render_draw_data(imgui.get_draw_data())
+        self.renderer.present((w, h))
+        glfw.swap_buffers(self.window)
+        if glfw.window_should_close(self.window):
+            self._should_close = True
+        self.frame_ms = 1000.0 * (time.perf_counter() - t0)
+
+    # ----------------------------------------------------------------------------------------
+    # view input (through ImGui's IO, so scripted and real input behave the same)
+
+    def _view_input(self, io) -> None:
+        vx, vy, vw, vh = self.view_rect
+        mx, my = io.mouse_pos.x, io.mouse_pos.y
+        inside = vx <= mx < vx + vw and vy <= my < vy + vh
+        over_ui = io.want_capture_mouse
+        if imgui.is_mouse_clicked(0) and inside and not over_ui:
+            self._view_drag = True
+        if not io.mouse_down[0]:
+            self._view_drag = False
+        if self._view_drag:
+            dx, dy = io.mouse_delta.x, io.mouse_delta.y
+            if dx or dy:
+                if self.mode == "3d":
+                    self.orbit.rotate(dx, -dy)
+                elif self.mode != "tiled":  # the tiled view always shows whole tiles
+                    self.panzoom.pan(dx, -dy)
+        if inside and not over_ui and io.mouse_wheel:
+            if self.mode == "3d":
+                self.orbit.dolly(io.mouse_wheel)
+            elif self.mode != "tiled":
+                self.panzoom.zoom_at(1.15 ** io.mouse_wheel, mx - vx, vy + vh - my)
+        if not over_ui and imgui.is_key_pressed(imgui.Key.escape):
+            self._should_close = True
+        self._update_readout(mx, my, inside and not over_ui)
+
+    def _update_readout(self, mx: float, my: float, inside: bool) -> None:
+        if not inside:
+            self.readout = None
+            return
+        vx, vy, vw, vh = self.view_rect
+        x, y = mx - vx, vy + vh - my  # view pixels, y up
+        if self.mode == "3d":
+            pos = self.renderer.object_position_at(int(x), int(y))
+            if pos is None:
+                self.readout = None
+                return
+            key = ("3d", tuple(np.round(pos, 6)), self.model.version)
+        elif self.mode == "tiled":
+            u, v = x / vw * 3.0, y / vh * 3.0
+            key = ("uv", (u % 1.0, v % 1.0), self.model.version)
+        else:
+            key = ("uv", self.panzoom.to_uv(x, y, vw, vh), self.model.version)
+        if self.readout is not None and self.readout.get("_key") == key:
+            return
+        try:
+            if key[0] == "3d":
+                out = self.model.readout_object(key[1])
+            else:
+                out = self.model.readout_uv(*key[1])
+        except Exception as exc:  # never let a readout kill the frame
+            out = {"error": str(exc)}
+        out["_key"] = key
+        self.readout = out
+
+    # ----------------------------------------------------------------------------------------
+    # actions
+
+    def set_mode(self, mode: str) -> None:
+        if mode not in MODES:
+            raise ValueError(f"unknown view mode {mode!r}; expected one of: {', '.join(MODES)}")
+        self.mode = mode
+        if mode == "anim":
+            self._ensure_4d()
+
+    def load(self, name_or_path: str) -> None:
+        """Replace the recipe (preset picker)."""
+        self.model.load_into(name_or_path)
+        if self.mode == "anim":
+            self._ensure_4d()
+        glfw.set_window_title(self.window, f"cellgl view: {self.model.name}")
+
+    def _ensure_4d(self) -> None:
+        if int(self.model.get("dimension")) < 4:
+            self.model.set("dimension", 4)
+            self.status = "4D animation: dimension set to 4 (time is the 4th coordinate)"
+
+    def grab(self) -> np.ndarray:
+        """The last frame as uint8 (H, W, 3), top row first."""
+        fbo = self.renderer.frame_fbo
+        w, h = fbo.size
+        data = fbo.read(components=3, alignment=1)
+        return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+
+    def screenshot(self, path: str) -> str:
+        from PIL import Image
+
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        Image.fromarray(self.grab()).save(path)
+        self.status = f"saved screenshot {path}"
+        return path
+
+    def capture(self, path: str, frames: int = 3) -> str:
+        """Render ``frames`` frames at full resolution and save the window to ``path`` (PNG)."""
+        for _ in range(max(1, frames)):
+            self.frame()
+        while self.renderer.needs_refine:
+            self.frame()
+        return self.screenshot(path)
+
+    def request_close(self) -> None:
+        self._should_close = True

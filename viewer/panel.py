@@ -1,0 +1,255 @@
+"""The ImGui panel: generated from the parameter table (:data:`cellgl.params.PARAMS`).
+
+Every parameter gets a widget from its type: a slider per float / int (its ``lo`` / ``hi``; a
+logarithmic slider where the range spans decades), a checkbox per bool, a combo per enum, a
+colour editor per colour. The combination coefficients are shown as structured editors (the
+c_i row and the 4 x 4 c_ij matrix) and the colour ramp as a list of keys with colour pickers;
+they are still one widget per table entry. Each widget's rectangle is recorded in
+``viewer.widget_rects[name]`` (window pixels: x0, y0, x1, y1) so the tests can aim simulated
+mouse drags at it.
+"""
+
+from __future__ import annotations
+
+from imgui_bundle import imgui
+
+from cellgl.params import GROUPS, LINEAR, N_LINEAR, PRODUCTS
+
+__all__ = ["draw_panel", "param_widget"]
+
+_STRUCTURED = set(LINEAR) | set(PRODUCTS)
+_GROUP_TITLES = {
+    "basis": "Basis", "combination": "Combination", "fractal": "Fractal", "domain": "Domain",
+    "noise": "Noise", "mapping": "Mapping (height, bump)", "color": "Colour",
+}
+
+
+def _record(viewer, name: str) -> None:
+    a, b = imgui.get_item_rect_min(), imgui.get_item_rect_max()
+    viewer.widget_rects[name] = (a.x, a.y, b.x, b.y)
+
+
+def _is_log(p) -> bool:
+    return p.type == "float" and p.lo is not None and p.lo > 0 and p.hi / p.lo >= 100
+
+
+def param_widget(viewer, p, label: str | None = None, width: float | None = None) -> bool:
+    """One widget for table entry ``p``; returns True if the value changed this frame."""
+    model = viewer.model
+    value = model.get(p.name)
+    label = label if label is not None else p.name
+    wid = f"{label}##{p.name}"
+    if width is not None:
+        imgui.set_next_item_width(width)
+    changed = False
+    if p.type == "float":
+        lo, hi = float(p.lo), float(p.hi)
+        if hi - lo > 1000 and not _is_log(p):
+            changed, new = imgui.drag_float(wid, float(value), max(1e-3, abs(float(value)) * 0.01 + 0.01),
+                                            lo, hi, "%.4g")
+        else:
+            flags = imgui.SliderFlags_.logarithmic.value if _is_log(p) else 0
+            changed, new = imgui.slider_float(wid, float(value), lo, hi, "%.4g", flags)
+    elif p.type == "int":
+        lo, hi = int(p.lo), int(p.hi)
+        if hi - lo > 100000:
+            changed, new = imgui.input_int(wid, int(value))
+            new = max(lo, min(hi, new))
+        else:
+            changed, new = imgui.slider_int(wid, int(value), lo, hi)
+    elif p.type == "bool":
+        changed, new = imgui.checkbox(wid, bool(value))
+    elif p.type == "enum":
+        choices = list(p.choices)
+        idx = choices.index(value) if value in choices else 0
+        changed, idx = imgui.combo(wid, idx, choices)
+        new = choices[idx]
+    elif p.type == "color":
+        changed, new = imgui.color_edit3(wid, list(value))
+        new = tuple(float(v) for v in new)
+    else:  # pragma: no cover - the table's types are closed
+        imgui.text(f"{p.name}: {value!r}")
+        return False
+    _record(viewer, p.name)
+    if imgui.is_item_hovered() and p.doc:
+        imgui.set_item_tooltip(f"{p.name}: {p.doc}\n{p.range_text()}"
+                               + ("\n(compile-time: recompiles the shader)" if p.compile_time else ""))
+    if changed:
+        try:
+            model.set(p.name, new)
+        except ValueError as exc:
+            viewer.status = str(exc)
+            return False
+    return changed
+
+
+def _coefficients(viewer) -> None:
+    by_name = {p.name: p for p in viewer.model.params}
+    imgui.text("c_i (value += c_i F_i)")
+    w = (imgui.get_content_region_avail().x - 3 * imgui.get_style().item_spacing.x) / 4
+    for i, name in enumerate(LINEAR):
+        if i % 4:
+            imgui.same_line()
+        _drag_coef(viewer, by_name[name], f"##{name}", w, f"{name} %.3g")
+    imgui.text("c_ij (value += c_ij F_i F_j)")
+    for i in range(4):
+        for j in range(4):
+            if j:
+                imgui.same_line()
+            name = PRODUCTS[i * 4 + j]
+            _drag_coef(viewer, by_name[name], f"##{name}", w, f"{name} %.3g")
+    for name in ("c_noise", "range_lo", "range_hi"):
+        if name in by_name:
+            param_widget(viewer, by_name[name])
+    if hasattr(viewer.model, "measure_range") and imgui.button("measure range"):
+        viewer.model.measure_range()
+
+
+def _drag_coef(viewer, p, wid, width, fmt) -> None:
+    imgui.set_next_item_width(width)
+    changed, new = imgui.drag_float(wid, float(viewer.model.get(p.name)), 0.01, float(p.lo), float(p.hi), fmt)
+    _record(viewer, p.name)
+    if imgui.is_item_hovered():
+        imgui.set_item_tooltip(p.doc)
+    if changed:
+        viewer.model.set(p.name, new)
+
+
+def _ramp(viewer) -> None:
+    model = viewer.model
+    keys = [list(k) for k in model.ramp]
+    changed = False
+    remove = None
+    for k, key in enumerate(keys):
+        imgui.push_id(k)
+        imgui.set_next_item_width(70)
+        c1, t = imgui.drag_float("##t", key[0], 0.005, 0.0, 1.0, "t %.3f")
+        imgui.same_line()
+        c2, rgb = imgui.color_edit3("##rgb", key[1:4], imgui.ColorEditFlags_.no_inputs.value)
+        imgui.same_line()
+        if len(keys) > 1 and imgui.small_button("x"):
+            remove = k
+        imgui.pop_id()
+        if c1 or c2:
+            keys[k] = [t, *rgb]
+            changed = True
+    if remove is not None:
+        keys.pop(remove)
+        changed = True
+    if len(keys) < getattr(model, "max_ramp_keys", 16) and imgui.small_button("+ key"):
+        a, b = keys[-2] if len(keys) > 1 else keys[-1], keys[-1]
+        keys.append([min(1.0, (a[0] + b[0]) / 2 + 0.5 * (1 - b[0])), *b[1:4]])
+        changed = True
+    if changed:
+        model.set_ramp(keys)
+
+
+def _group(viewer, group: str) -> None:
+    params = [p for p in viewer.model.params if p.group == group]
+    if not params:
+        return
+    flags = imgui.TreeNodeFlags_.default_open.value if group in ("basis", "combination", "fractal") else 0
+    if not imgui.collapsing_header(_GROUP_TITLES.get(group, group), flags):
+        return
+    if group == "combination":
+        _coefficients(viewer)
+        return
+    for p in params:
+        param_widget(viewer, p)
+    if group == "color" and hasattr(viewer.model, "ramp"):
+        imgui.separator_text("ramp")
+        _ramp(viewer)
+
+
+def _view_section(viewer) -> None:
+    from .app import MODE_LABELS, MODES
+
+    for i, m in enumerate(MODES):
+        if i:
+            imgui.same_line()
+        if imgui.radio_button(MODE_LABELS[m], viewer.mode == m):
+            viewer.set_mode(m)
+        _record(viewer, f"mode:{m}")
+    if viewer.mode == "3d":
+        from .meshes import SHAPES
+
+        names = list(SHAPES)
+        changed, idx = imgui.combo("object", names.index(viewer.shape), names)
+        if changed:
+            viewer.shape = names[idx]
+        _, viewer.bump_view = imgui.slider_float("bump (view)", viewer.bump_view, 0.0, 4.0)
+        imgui.text_disabled("drag: orbit   wheel: distance")
+    elif viewer.mode == "tiled":
+        _, viewer.tile_borders = imgui.checkbox("show tile borders", viewer.tile_borders)
+    else:
+        if imgui.button("fit"):
+            viewer.panzoom.fitted = False
+        imgui.same_line()
+        imgui.text_disabled("drag: pan   wheel: zoom")
+    if viewer.mode == "anim":
+        if imgui.button("pause" if viewer.playing else "play"):
+            viewer.playing = not viewer.playing
+        _record(viewer, "play")
+        imgui.same_line()
+        imgui.set_next_item_width(150)
+        _, viewer.speed = imgui.slider_float("speed", viewer.speed, 0.0, 4.0, "%.2f cells/s")
+
+
+def _readouts(viewer) -> None:
+    imgui.text(f"frame {viewer.frame_ms:5.1f} ms   render {viewer.render_ms:6.1f} ms  "
+               f"(1/{viewer.renderer.last_scale})")
+    r = viewer.readout
+    if not r:
+        imgui.text_disabled("F1..F4, ID: hover the view")
+    elif "error" in r:
+        imgui.text_colored(imgui.ImVec4(1, 0.4, 0.3, 1), r["error"][:80])
+    else:
+        F = r.get("F", [])
+        imgui.text("  ".join(f"F{i + 1} {v:.4f}" for i, v in enumerate(F[:4])))
+        imgui.text(f"ID {r.get('id', '?')}   at {', '.join(f'{v:.3f}' for v in r.get('pos', ()))}")
+
+
+def _actions(viewer) -> None:
+    from . import actions
+
+    actions.draw(viewer)
+
+
+def draw_panel(viewer) -> None:
+    """The whole panel, docked to the left edge."""
+    w, h = viewer.size
+    from .app import PANEL_WIDTH
+
+    imgui.set_next_window_pos(imgui.ImVec2(0, 0))
+    imgui.set_next_window_size(imgui.ImVec2(min(PANEL_WIDTH, w - 64), h))
+    flags = (imgui.WindowFlags_.no_move.value | imgui.WindowFlags_.no_resize.value
+             | imgui.WindowFlags_.no_collapse.value | imgui.WindowFlags_.no_title_bar.value)
+    imgui.begin("cellgl", None, flags)
+    imgui.push_item_width(-110)
+    _preset_picker(viewer)
+    _view_section(viewer)
+    _readouts(viewer)
+    _actions(viewer)
+    if viewer.status:
+        imgui.text_wrapped(viewer.status)
+    imgui.separator()
+    for g in GROUPS:
+        _group(viewer, g)
+    imgui.pop_item_width()
+    imgui.end()
+
+
+def _preset_picker(viewer) -> None:
+    presets = viewer.model.presets()
+    name = viewer.model.name
+    if presets:
+        idx = presets.index(name) if name in presets else -1
+        imgui.set_next_item_width(-1)
+        if imgui.begin_combo("##preset", name if idx < 0 else presets[idx]):
+            for i, pname in enumerate(presets):
+                if imgui.selectable(pname, i == idx)[0]:
+                    viewer.load(pname)
+            imgui.end_combo()
+        _record(viewer, "preset")
+    else:
+        imgui.text(name)
