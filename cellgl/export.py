@@ -1,0 +1,304 @@
+"""Self-contained shader snippets of a recipe for game engines: ``cellgl export``.
+
+A snippet is the ``shaders/lib`` code a bake runs, specialised for one recipe (compile-time
+choices resolved, no directive or macro left), with every top-level name prefixed ``cellgl_``
+(structs ``Cellgl``), the recipe's values baked in as constants (or declared as uniforms), and
+the entry points
+
+* ``vec4 cellgl_texture(vec2 uv)``: the RGBA ``cellgl bake`` writes for the pixel whose centre
+  is ``uv`` in [0, 1]^2;
+* ``vec4 cellgl_texture3(vec3 p)``: solid recipes only, object-space texturing.
+
+GLSL ES, Godot, HLSL and WGSL are generated mechanically from the same specialised GLSL
+(:mod:`cellgl.translate`), never from a second copy of the maths.
+"""
+from __future__ import annotations
+
+import json
+import textwrap
+from dataclasses import dataclass, field
+
+from . import __version__, glsl, translate
+
+__all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
+
+
+class ExportError(ValueError):
+    """A recipe cannot be exported to the requested target."""
+
+
+@dataclass(frozen=True)
+class Target:
+    name: str
+    dialect: str          # glsl | gles | godot | hlsl | wgsl
+    title: str
+    suffix: str           # file name suffix suggested in the header
+    how: str              # one paragraph: where to paste, how to call
+
+
+TARGETS: dict[str, Target] = {t.name: t for t in (
+    Target("glsl", "glsl", "GLSL 3.30 core / 4.x", ".glsl",
+           "Paste after your #version line (330 or later) and call cellgl_texture(uv)."),
+    Target("gles", "gles", "GLSL ES 3.00 (WebGL2, three.js)", ".glsl",
+           "Paste after '#version 300 es' and your precision lines (three.js: into the "
+           "fragmentShader of a ShaderMaterial/RawShaderMaterial) and call cellgl_texture(uv). "
+           "Every declaration is highp: the hashes need 32-bit integers."),
+    Target("shadertoy", "gles", "Shadertoy (GLSL ES 3.00 with mainImage)", ".glsl",
+           "Paste the whole file into a Shadertoy 'Image' tab; mainImage shows the texture "
+           "stretched over the viewport."),
+    Target("godot", "godot", "Godot 4 shader (.gdshader)", ".gdshader",
+           "Save as cellgl.gdshader and assign it to a ShaderMaterial (canvas_item: a Sprite2D / "
+           "TextureRect shows the texture on its UV)."),
+    Target("godotinc", "godot", "Godot 4 shader include (.gdshaderinc)", ".gdshaderinc",
+           "Save as res://cellgl.gdshaderinc, then in any shader: #include \"res://cellgl.gdshaderinc\" "
+           "and call cellgl_texture(UV)."),
+    Target("hlsl", "hlsl", "HLSL (Unity Custom Function node, DirectX)", ".hlsl",
+           "Unity Shader Graph: Custom Function node, Type File, Source this file, Name "
+           "cellgl_texture (the node calls cellgl_texture_float(UV, out Out)). Elsewhere: "
+           "include or paste and call cellgl_texture(uv)."),
+    Target("unreal", "hlsl", "HLSL for Unreal (.ush, Custom node)", ".ush",
+           "Save under your project's Shaders/ directory as cellgl.ush (mapped with "
+           "AddShaderSourceDirectoryMapping), then in a Material Custom node: Include File Paths "
+           "/Project/cellgl.ush, Code 'return cellgl_texture(UV);', input UV, output Float 4."),
+    Target("wgsl", "wgsl", "WGSL (WebGPU)", ".wgsl",
+           "Paste into your WGSL module and call cellgl_texture(uv) (f32 vectors)."),
+)}
+
+#: target names that are refused, with the reason
+REFUSED: dict[str, str] = {
+    "gles100": "GLSL ES 1.00 (WebGL1) has no 32-bit unsigned integers or bit operations, which "
+               "cellgl's integer hashes need; it is refused rather than emitted in a form that "
+               "cannot compile. Use --target gles (WebGL2 / GLSL ES 3.00).",
+}
+REFUSED["webgl1"] = REFUSED["gles100"]
+REFUSED["webgl"] = REFUSED["gles100"]
+
+
+@dataclass
+class Program:
+    """What a snippet is made of, before specialisation (GLSL text using library names).
+
+    files : library files (relative to the shader root) to resolve, dependencies first
+    defines : the compile-time macros of the recipe
+    params : GLSL declarations of the recipe's run-time values (constants or uniforms)
+    entry : GLSL of the entry functions (``cell_texture`` ...), calling the library
+    title : the recipe's name; recipe: its JSON-able dict (for the header)
+    solid : whether ``cell_texture3`` exists
+    uniforms : ``[(glsl type, name, value)]`` of the uniforms when ``params`` declares them
+    """
+
+    files: list[str]
+    defines: dict
+    params: str
+    entry: str
+    title: str = "recipe"
+    recipe: dict | None = None
+    solid: bool = False
+    uniforms: list[tuple[str, str, object]] = field(default_factory=list)
+
+
+def check_target(target: str) -> Target:
+    """Return the :class:`Target` named ``target``; clear errors for refused or unknown ones."""
+    key = str(target).strip().lower()
+    if key in REFUSED:
+        raise ExportError(f"target {target!r} is not supported: {REFUSED[key]}")
+    if key not in TARGETS:
+        raise ExportError(f"unknown target {target!r}; expected one of: {', '.join(TARGETS)}")
+    return TARGETS[key]
+
+
+# --------------------------------------------------------------------------------------------
+# pipeline
+# --------------------------------------------------------------------------------------------
+
+
+def library_code(prog: Program) -> str:
+    """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left."""
+    src = glsl.resolve_library(prog.files)
+    text = src.text + "\n" + prog.params + "\n" + prog.entry
+    text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
+    text = translate.specialise(text, prog.defines, name="snippet")
+    text, _ = translate.prefix_names(text)
+    return _tidy(text)
+
+
+def _tidy(text: str) -> str:
+    lines = [ln.rstrip() for ln in text.split("\n")]
+    out: list[str] = []
+    for ln in lines:
+        if not ln and (not out or not out[-1]):
+            continue
+        out.append(ln)
+    return "\n".join(out).strip("\n") + "\n"
+
+
+def _comment(text: str, mark: str = "//") -> str:
+    return "\n".join(f"{mark} {ln}".rstrip() for ln in text.split("\n"))
+
+
+def _header(prog: Program, target: Target, uniforms: bool) -> str:
+    recipe = json.dumps(prog.recipe, indent=1, sort_keys=False) if prog.recipe is not None else "{}"
+    entry = [
+        "vec4 cellgl_texture(vec2 uv)   uv in [0,1]^2 -> the RGBA `cellgl bake` writes for the "
+        "pixel centred at uv",
+    ]
+    if prog.solid:
+        entry.append("vec4 cellgl_texture3(vec3 p)   object-space position (texture cells) -> RGBA")
+    if target.dialect == "hlsl":
+        entry = [e.replace("vec4", "float4").replace("vec3", "float3").replace("vec2", "float2") for e in entry]
+    if target.dialect == "wgsl":
+        entry = [e.replace("vec4 cellgl_texture(vec2 uv)", "fn cellgl_texture(uv: vec2<f32>) -> vec4<f32>")
+                  .replace("vec4 cellgl_texture3(vec3 p)", "fn cellgl_texture3(p: vec3<f32>) -> vec4<f32>")
+                 for e in entry]
+    lines = [
+        f"cellgl {__version__}: cellular texture '{prog.title}' for {target.title}.",
+        f"Generated by `cellgl export {prog.title} --target {target.name}"
+        f"{' --uniforms' if uniforms else ''}` from cellgl's shaders/lib; re-export instead of editing.",
+        "",
+        "Entry points:",
+        *("  " + e for e in entry),
+        "",
+        *textwrap.wrap(target.how, 94),
+    ]
+    if uniforms and prog.uniforms:
+        lines += ["", "Uniforms (set them to these values to reproduce the recipe):"]
+        for typ, name, value in prog.uniforms:
+            lines.append(f"  {typ} cellgl_{name} = {_fmt_value(value)}")
+    lines += ["", "Recipe:", *recipe.split("\n")]
+    return _comment("\n".join(lines)) + "\n"
+
+
+def _fmt_value(v) -> str:
+    if isinstance(v, (list, tuple)):
+        return "(" + ", ".join(_fmt_value(x) for x in v) + ")"
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
+
+
+def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False) -> str:
+    """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`)."""
+    tgt = check_target(target)
+    code = library_code(prog)
+    head = _header(prog, tgt, uniforms)
+    d = tgt.dialect
+    if d == "glsl":
+        body = code
+    elif d == "gles":
+        body = translate.add_highp(code)
+        if tgt.name == "shadertoy":
+            body += _SHADERTOY_MAIN
+    elif d == "godot":
+        body = _godot(code, tgt.name)
+    elif d == "hlsl":
+        body = translate.to_hlsl(code) + _UNITY_WRAPPER
+        if tgt.name == "unreal":
+            body = "#pragma once\n\n" + body
+    elif d == "wgsl":
+        body = translate.to_wgsl(code)
+    else:  # pragma: no cover
+        raise AssertionError(d)
+    return head + "\n" + body
+
+
+_SHADERTOY_MAIN = """
+// Shadertoy entry: the texture stretched over the viewport, image row 0 at the top.
+void mainImage(out vec4 fragColor, in vec2 fragCoord)
+{
+    vec2 uv = fragCoord / iResolution.xy;
+    fragColor = cellgl_texture(vec2(uv.x, 1.0 - uv.y));
+}
+"""
+
+_UNITY_WRAPPER = """
+// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_texture).
+void cellgl_texture_float(float2 UV, out float4 Out)
+{
+    Out = cellgl_texture(UV);
+}
+"""
+
+
+def _godot(code: str, name: str) -> str:
+    body = translate.add_highp(code)
+    if name == "godotinc":
+        return body
+    return (
+        "shader_type canvas_item;\n\n" + body +
+        "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# public API
+# --------------------------------------------------------------------------------------------
+
+
+def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
+    """Export ``recipe`` as a self-contained shader snippet.
+
+    Parameters
+    ----------
+    recipe : cellgl.recipe.Recipe, str or path
+        A recipe, a preset name or a recipe JSON file.
+    target : str
+        One of :data:`TARGETS` (``glsl``, ``gles``, ``shadertoy``, ``godot``, ``godotinc``,
+        ``hlsl``, ``unreal``, ``wgsl``). ``gles100``/``webgl1`` are refused with the reason.
+    uniforms : bool
+        Declare the recipe's run-time values as ``cellgl_<name>`` uniforms instead of baking
+        them in as constants.
+
+    Returns
+    -------
+    str
+        The snippet text.
+
+    Raises
+    ------
+    ExportError
+        Unknown or refused target, or a recipe the target cannot express.
+    """
+    check_target(target)
+    from . import texture_program
+
+    prog = texture_program.program(recipe, uniforms=uniforms)
+    return export_program(prog, target, uniforms=uniforms)
+
+
+# --------------------------------------------------------------------------------------------
+# the bare cellular basis (F1..F4 as RGBA): the machinery's own test program
+# --------------------------------------------------------------------------------------------
+
+
+def _glsl_float(v: float) -> str:
+    r = repr(float(v))
+    return r if ("." in r or "e" in r or "n" in r) else r + ".0"
+
+
+def basis_program(p, n: int = 4, frequency: float = 8.0) -> Program:
+    """A program whose ``cellgl_texture(uv)`` returns ``(F1, F2, F3, F4)`` of the basis ``p``
+    (a :class:`cellgl.reference.Params`, 2D) at ``uv * frequency``."""
+    from .gpu import defines_for
+
+    d = defines_for(p, n)
+    thresholds = ", ".join(f"{int(t)}u" for t in p.thresholds)
+    params = (
+        "// The basis parameters of the recipe.\n"
+        f"const CellParams cell_params = CellParams({int(p.seed)}u, {_glsl_float(p.jitter)}, "
+        f"{int(p.min_points)}, {int(p.max_points)},\n"
+        f"    uint[CELL_MAX_POINTS]({thresholds}),\n"
+        f"    ivec4({', '.join(str(int(v)) for v in p.period)}), {_glsl_float(p.minkowski_p)});\n"
+        f"const float cell_frequency = {_glsl_float(frequency)};\n"
+    )
+    entry = (
+        "// F1..F4 of the basis at uv * cell_frequency.\n"
+        "vec4 cell_texture(vec2 uv)\n"
+        "{\n"
+        "    vec2 pos = uv * cell_frequency;\n"
+        "    vec2 fl = floor(pos);\n"
+        "    CellResult r = cell_search(ivec4(ivec2(fl), 0, 0), vec4(pos - fl, 0.0, 0.0), cell_params);\n"
+        "    return vec4(r.F[0], r.F[1], r.F[2], r.F[3]);\n"
+        "}\n"
+    )
+    return Program(files=["lib/cellular.glsl"], defines=d, params=params, entry=entry,
+                   title="basis", recipe={"basis": "F1..F4", "frequency": frequency})
