@@ -5,14 +5,22 @@ __version__ = "0.1.0"
 
 from .core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
 from .enums import Distribution, Metric
+from .recipe import Recipe, RecipeError, list_presets, load_recipe
+from .texture import evaluate, render
 
 __all__ = [
     "CellularResult",
     "Distribution",
     "FeaturePoints",
     "Metric",
+    "Recipe",
+    "RecipeError",
     "__version__",
     "cellular",
     "cellular_grid",
+    "evaluate",
     "feature_points",
+    "list_presets",
+    "load_recipe",
+    "render",
 ]

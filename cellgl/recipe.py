@@ -1,0 +1,506 @@
+"""Texture recipes: one JSON-serialisable description of a texture.
+
+A recipe holds a value for every parameter of the table in :mod:`cellgl.params` (basis,
+combination, fractal, domain, noise, mapping, colour), the colour ramp, and a name and
+one-line doc. On disk it is JSON, one section per parameter group::
+
+    {
+      "cellgl_recipe": 1,
+      "name": "veins", "doc": "F2 - F1 ...",
+      "basis": {"dimension": 2, "distribution": "poisson", ...},
+      "combination": {"linear": [-1, 1, 0, 0, 0, 0, 0, 0], "products": [[0, 0, 0, 0], ...],
+                      "c_noise": 0.0, "range_lo": 0.0, "range_hi": 0.6},
+      "fractal": {...}, "domain": {...}, "noise": {...}, "mapping": {...},
+      "color": {"ramp_mode": "linear", "cell_mix": 0.0, "shade": 0.0,
+                "ramp": [[0.0, 0, 0, 0], [1.0, 1, 1, 1]]},
+      "outputs": ["color"]
+    }
+
+Sections and keys may be left out (the table's defaults apply). Coefficients may also be given
+one by one (``"c12": 1.0``). Reading is strict: an unknown key, a wrong type or a value out of
+range raises :class:`RecipeError` naming the field path, the bad value and what is accepted.
+
+A preset file may also hold ``"variants"``: a list of partial recipes (each with a ``name``)
+applied over the base; ``load_recipe("worley-gallery:7")`` picks one.
+"""
+from __future__ import annotations
+
+import difflib
+import json
+import math
+import numbers
+import os
+import tempfile
+from pathlib import Path
+from types import MappingProxyType
+
+from .params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
+                     PRODUCTS, Param)
+
+__all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS"]
+
+VERSION = 1
+#: channels a recipe can produce (``outputs``; ``cellgl.texture.render(channels=...)``)
+CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")
+_TOP_KEYS = ("cellgl_recipe", "name", "doc", "outputs", "variants") + GROUPS
+_EXTRA = {"combination": ("linear", "products"), "color": ("ramp",)}
+
+
+class RecipeError(ValueError):
+    """A recipe (or a ``--set``) is invalid; the message names the field and what is accepted."""
+
+
+def _err(path: str, value, accepted: str, problem: str = "") -> RecipeError:
+    problem = problem or "invalid value"
+    return RecipeError(f"{path}: {problem} {value!r}; accepted: {accepted}")
+
+
+def _suggest(name: str, names) -> str:
+    close = difflib.get_close_matches(name, list(names), n=3)
+    return f" (did you mean {', '.join(close)}?)" if close else ""
+
+
+def _coerce(p: Param, value, path: str):
+    """Validate one parameter value (already parsed from JSON) and return it normalised."""
+    if p.type == "float":
+        if isinstance(value, bool) or not isinstance(value, numbers.Real):
+            raise _err(path, value, p.range_text(), "expected a number, got")
+        v = float(value)
+        if not math.isfinite(v) or v < p.lo or v > p.hi:
+            raise _err(path, value, p.range_text(), "out of range:")
+        return v
+    if p.type == "int":
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise _err(path, value, "an integer in " + p.range_text(), "expected an integer, got")
+        if value < p.lo or value > p.hi:
+            raise _err(path, value, "an integer in " + p.range_text(), "out of range:")
+        return int(value)
+    if p.type == "bool":
+        if not isinstance(value, bool):
+            raise _err(path, value, p.range_text(), "expected true or false, got")
+        return value
+    if p.type == "enum":
+        key = value.strip().lower().replace("-", "_") if isinstance(value, str) else None
+        if key not in p.choices:
+            raise _err(path, value, p.range_text(), "unknown choice")
+        return key
+    if p.type == "color":
+        ok = isinstance(value, (list, tuple)) and len(value) == 3 and all(
+            isinstance(c, numbers.Real) and not isinstance(c, bool) and 0.0 <= c <= 1.0 for c in value)
+        if not ok:
+            raise _err(path, value, p.range_text(), "expected a colour, got")
+        return tuple(float(c) for c in value)
+    raise AssertionError(p.type)
+
+
+def _ramp(value, path: str) -> tuple:
+    accepted = f"a list of 1..{MAX_RAMP_KEYS} keys [t, r, g, b], t ascending in [0, 1], r, g, b in [0, 1]"
+    if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= MAX_RAMP_KEYS:
+        raise _err(path, value, accepted, "expected a colour ramp, got")
+    keys = []
+    for k, key in enumerate(value):
+        ok = isinstance(key, (list, tuple)) and len(key) == 4 and all(
+            isinstance(c, numbers.Real) and not isinstance(c, bool) and math.isfinite(c) and 0.0 <= c <= 1.0
+            for c in key)
+        if not ok:
+            raise _err(f"{path}[{k}]", key, accepted, "bad ramp key")
+        if keys and key[0] < keys[-1][0]:
+            raise _err(f"{path}[{k}]", key, accepted, "ramp positions must not decrease; key")
+        keys.append(tuple(float(c) for c in key))
+    return tuple(keys)
+
+
+def _outputs(value, path: str) -> tuple:
+    accepted = "a list of: " + ", ".join(CHANNELS)
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, (list, tuple)) or not value:
+        raise _err(path, value, accepted, "expected a list of channels, got")
+    for v in value:
+        if v not in CHANNELS:
+            raise _err(path, v, accepted, "unknown channel")
+    return tuple(value)
+
+
+def _defaults() -> dict:
+    return {p.name: p.default for p in PARAMS}
+
+
+class Recipe:
+    """A validated texture recipe (treat as immutable: :meth:`replace` returns a new one).
+
+    Attributes
+    ----------
+    name, doc : str
+    values : mapping of parameter name -> value (every name in :data:`cellgl.params.PARAMS`)
+    ramp : tuple of (t, r, g, b) keys
+    outputs : tuple of channel names (the default channels of a bake)
+    variants : tuple of Recipe (preset variants; usually empty)
+    """
+
+    __slots__ = ("name", "doc", "_values", "ramp", "outputs", "_variants")
+
+    def __init__(self, values: dict | None = None, ramp=DEFAULT_RAMP, name: str = "custom", doc: str = "",
+                 outputs=("color",), variants=()):
+        vals = _defaults()
+        for k, v in (values or {}).items():
+            if k not in PARAMS_BY_NAME:
+                raise RecipeError(f"{k}: unknown parameter{_suggest(k, PARAMS_BY_NAME)}")
+            vals[k] = _coerce(PARAMS_BY_NAME[k], v, f"{PARAMS_BY_NAME[k].group}.{k}")
+        self.name = str(name)
+        self.doc = str(doc)
+        self._values = vals
+        self.ramp = _ramp(ramp, "color.ramp")
+        self.outputs = _outputs(outputs, "outputs")
+        self._variants = tuple(variants)
+        _check(self)
+
+    # ------------------------------------------------------------------ access
+    @property
+    def values(self):
+        return MappingProxyType(self._values)
+
+    @property
+    def variants(self) -> tuple:
+        return self._variants
+
+    def get(self, name: str):
+        """The value of parameter ``name`` (or ``"ramp"``, ``"linear"``, ``"products"``)."""
+        if name == "ramp":
+            return self.ramp
+        if name == "linear":
+            return [self._values[c] for c in LINEAR]
+        if name == "products":
+            return [[self._values[f"c{i}{j}"] for j in range(1, 5)] for i in range(1, 5)]
+        if name not in self._values:
+            raise RecipeError(f"{name}: unknown parameter{_suggest(name, PARAMS_BY_NAME)}")
+        return self._values[name]
+
+    def __getitem__(self, name):
+        return self.get(name)
+
+    def replace(self, **values) -> "Recipe":
+        """A copy with some parameters changed (also ``ramp=``, ``name=``, ``doc=``, ``outputs=``,
+        ``linear=``, ``products=``); validated like :meth:`from_dict`."""
+        vals = dict(self._values)
+        ramp, name, doc, outputs = self.ramp, self.name, self.doc, self.outputs
+        for k, v in values.items():
+            if k == "ramp":
+                ramp = v
+            elif k == "name":
+                name = v
+            elif k == "doc":
+                doc = v
+            elif k == "outputs":
+                outputs = v
+            elif k in ("linear", "products"):
+                vals.update(_coefficients(k, v, f"combination.{k}"))
+            else:
+                vals[k] = v
+        return Recipe(vals, ramp, name, doc, outputs)
+
+    def set_from_strings(self, items) -> "Recipe":
+        """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe.
+
+        Values are parsed by the parameter's type: numbers, ``true``/``false``, enum names,
+        colours as ``r,g,b``; ``ramp``, ``linear`` and ``products`` take JSON lists.
+        """
+        changes = {}
+        for item in items:
+            if not isinstance(item, str) or "=" not in item:
+                raise RecipeError(f"--set {item!r}: expected name=value")
+            name, text = (s.strip() for s in item.split("=", 1))
+            changes[name] = _parse(name, text)
+        try:
+            return self.replace(**changes)
+        except RecipeError as exc:
+            raise RecipeError(f"--set {exc}") from None
+
+    # ------------------------------------------------------------------ JSON
+    def to_dict(self) -> dict:
+        """The JSON form (every parameter written out)."""
+        d: dict = {"cellgl_recipe": VERSION, "name": self.name, "doc": self.doc}
+        for group in GROUPS:
+            g: dict = {}
+            if group == "combination":
+                g["linear"] = self.get("linear")
+                g["products"] = self.get("products")
+            for p in PARAMS:
+                if p.group != group or p.name in LINEAR or p.name in PRODUCTS:
+                    continue
+                v = self._values[p.name]
+                g[p.name] = list(v) if isinstance(v, tuple) else v
+            if group == "color":
+                g["ramp"] = [list(k) for k in self.ramp]
+            d[group] = g
+        d["outputs"] = list(self.outputs)
+        return d
+
+    @classmethod
+    def from_dict(cls, d, *, where: str = "recipe") -> "Recipe":
+        """Validate a JSON-like dict (see the module doc); raises :class:`RecipeError`."""
+        if not isinstance(d, dict):
+            raise RecipeError(f"{where}: expected a JSON object, got {type(d).__name__}")
+        for k in d:
+            if k not in _TOP_KEYS:
+                raise RecipeError(f"{where}: unknown key {k!r}{_suggest(str(k), _TOP_KEYS)}; "
+                                  f"accepted: {', '.join(_TOP_KEYS)}")
+        version = d.get("cellgl_recipe", VERSION)
+        if version != VERSION:
+            raise _err("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+        values, ramp = _read_groups(d)
+        for k in ("name", "doc"):
+            if k in d and not isinstance(d[k], str):
+                raise _err(k, d[k], "a string", "expected a string, got")
+        base = cls(values, ramp if ramp is not None else DEFAULT_RAMP, d.get("name", "custom"),
+                   d.get("doc", ""), _outputs(d.get("outputs", ["color"]), "outputs"))
+        variants = d.get("variants", [])
+        if not isinstance(variants, list):
+            raise _err("variants", variants, "a list of partial recipes", "expected a list, got")
+        out = []
+        for k, v in enumerate(variants):
+            if not isinstance(v, dict):
+                raise _err(f"variants[{k}]", v, "a partial recipe object", "expected an object, got")
+            bad = [key for key in v if key not in ("name", "doc") + GROUPS]
+            if bad:
+                raise RecipeError(f"variants[{k}]: unknown key {bad[0]!r}; accepted: name, doc, "
+                                  + ", ".join(GROUPS))
+            try:
+                vals, vramp = _read_groups(v)
+                merged = dict(base._values)
+                merged.update(vals)
+                out.append(cls(merged, vramp if vramp is not None else base.ramp,
+                               v.get("name", f"{base.name}:{k}"), v.get("doc", base.doc), base.outputs))
+            except RecipeError as exc:
+                raise RecipeError(f"variants[{k}].{exc}") from None
+        base._variants = tuple(out)
+        return base
+
+    def to_json(self) -> str:
+        d = self.to_dict()
+        if self._variants:
+            d["variants"] = [_variant_dict(self, v) for v in self._variants]
+        return json.dumps(d, indent=2) + "\n"
+
+    @classmethod
+    def load(cls, path) -> "Recipe":
+        """Read a recipe JSON file."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise RecipeError(f"cannot read recipe {str(path)!r}: {exc.strerror or exc}") from None
+        try:
+            d = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise RecipeError(f"{path}: not valid JSON: {exc}") from None
+        try:
+            return cls.from_dict(d)
+        except RecipeError as exc:
+            raise RecipeError(f"{path}: {exc}") from None
+
+    def save(self, path) -> None:
+        """Write the recipe as JSON, atomically (temp file + os.replace)."""
+        path = Path(path)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+        try:
+            with os.fdopen(fd, "w") as f:
+                f.write(self.to_json())
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+
+    def __eq__(self, other):
+        return isinstance(other, Recipe) and self.to_dict() == other.to_dict()
+
+    def __hash__(self):
+        return hash(json.dumps(self.to_dict(), sort_keys=True))
+
+    def __repr__(self):
+        return f"Recipe(name={self.name!r})"
+
+
+def _variant_dict(base: Recipe, v: Recipe) -> dict:
+    """The partial dict of variant v: the groups' values that differ from base."""
+    full, ref = v.to_dict(), base.to_dict()
+    out = {"name": v.name, "doc": v.doc}
+    for group in GROUPS:
+        diff = {k: val for k, val in full[group].items() if ref[group].get(k) != val}
+        if diff:
+            out[group] = diff
+    return out
+
+
+def _coefficients(key: str, value, path: str) -> dict:
+    out = {}
+    if key == "linear":
+        if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= N_LINEAR:
+            raise _err(path, value, f"a list of 1..{N_LINEAR} numbers (weights of F1..F{N_LINEAR})",
+                       "expected a list, got")
+        for i, c in enumerate(value):
+            out[LINEAR[i]] = _coerce(PARAMS_BY_NAME[LINEAR[i]], c, f"{path}[{i}]")
+        for name in LINEAR[len(value):]:
+            out[name] = 0.0
+        return out
+    accepted = "a 4 x 4 list of numbers (weights of F_i F_j)"
+    if not isinstance(value, (list, tuple)) or len(value) != 4:
+        raise _err(path, value, accepted, "expected 4 rows, got")
+    for i, row in enumerate(value):
+        if not isinstance(row, (list, tuple)) or len(row) != 4:
+            raise _err(f"{path}[{i}]", row, accepted, "expected 4 numbers, got")
+        for j, c in enumerate(row):
+            name = f"c{i + 1}{j + 1}"
+            out[name] = _coerce(PARAMS_BY_NAME[name], c, f"{path}[{i}][{j}]")
+    return out
+
+
+def _read_groups(d: dict):
+    values: dict = {}
+    ramp = None
+    for group in GROUPS:
+        if group not in d:
+            continue
+        g = d[group]
+        if not isinstance(g, dict):
+            raise _err(group, g, "a JSON object", "expected an object, got")
+        names = [p.name for p in PARAMS if p.group == group] + list(_EXTRA.get(group, ()))
+        for k, v in g.items():
+            path = f"{group}.{k}"
+            if k in _EXTRA.get(group, ()):
+                if k == "ramp":
+                    ramp = _ramp(v, path)
+                else:
+                    coefs = _coefficients(k, v, path)
+                    clash = [c for c in coefs if c in g]
+                    if clash:
+                        raise RecipeError(f"{path}: {clash[0]} is given twice (here and as {group}.{clash[0]})")
+                    values.update(coefs)
+                continue
+            p = PARAMS_BY_NAME.get(k)
+            if p is None or p.group != group:
+                where = f" (it belongs in '{p.group}')" if p is not None else _suggest(str(k), names)
+                raise RecipeError(f"{path}: unknown key{where}; accepted in {group}: "
+                                  + ", ".join(n for n in names if n not in PRODUCTS[1:] and n not in LINEAR[1:])
+                                  .replace("c1,", "c1..c8,").replace("c11,", "c11..c44,"))
+            values[k] = _coerce(p, v, path)
+    return values, ramp
+
+
+def _parse(name: str, text: str):
+    """Parse a ``--set`` value for parameter ``name``."""
+    if name in ("ramp", "linear", "products", "outputs"):
+        try:
+            return json.loads(text)
+        except json.JSONDecodeError:
+            if name == "outputs":
+                return [s.strip() for s in text.split(",")]
+            raise RecipeError(f"--set {name}={text}: expected a JSON list") from None
+    p = PARAMS_BY_NAME.get(name)
+    if p is None:
+        raise RecipeError(f"--set {name}={text}: unknown parameter{_suggest(name, PARAMS_BY_NAME)}; "
+                          "see docs/textures.md or `cellgl presets --params`")
+    try:
+        if p.type == "float":
+            return float(text)
+        if p.type == "int":
+            return int(text, 0)
+        if p.type == "bool":
+            low = text.lower()
+            if low in ("1", "true", "yes", "on"):
+                return True
+            if low in ("0", "false", "no", "off"):
+                return False
+            raise ValueError
+        if p.type == "color":
+            return [float(c) for c in text.strip("[]() ").split(",")]
+        return text
+    except ValueError:
+        raise RecipeError(f"--set {name}={text}: cannot parse {text!r}; accepted: "
+                          + ("an integer in " if p.type == "int" else "") + p.range_text()) from None
+
+
+def _check(r: Recipe) -> None:
+    """Constraints between fields."""
+    v = r._values
+    if v["min_points"] > v["max_points"]:
+        raise RecipeError(f"basis.min_points: {v['min_points']} exceeds basis.max_points "
+                          f"({v['max_points']}); accepted: min_points <= max_points")
+    if v["distribution"] == "worley1996" and v["dimension"] != 3:
+        raise RecipeError(f"basis.distribution: 'worley1996' needs basis.dimension 3, got "
+                          f"{v['dimension']}; accepted: poisson, jitter for dimension 2 and 4")
+    if not v["range_hi"] > v["range_lo"]:
+        raise RecipeError(f"combination.range_hi: {v['range_hi']} must exceed combination.range_lo "
+                          f"({v['range_lo']})")
+    if not v["level_hi"] > v["level_lo"]:
+        raise RecipeError(f"mapping.level_hi: {v['level_hi']} must exceed mapping.level_lo ({v['level_lo']})")
+    if v["ramp_mode"] == "spline" and len(r.ramp) < 4:
+        raise RecipeError(f"color.ramp: spline mode needs at least 4 keys, got {len(r.ramp)}; "
+                          "accepted: 4..16 keys, or color.ramp_mode 'linear'")
+    if v["tileable"]:
+        if v["distribution"] == "worley1996":
+            raise RecipeError("domain.tileable: not available with basis.distribution 'worley1996' "
+                              "(its lattice is scaled); accepted: poisson, jitter")
+
+        def integral(path, x):
+            if abs(x - round(x)) > 1e-6 or round(x) < 1:
+                raise RecipeError(f"{path}: {x!r} must be a positive integer when domain.tileable is true "
+                                  "(the texture repeats every that many cells)")
+        integral("domain.frequency", v["frequency"])
+        integral("domain.frequency * domain.aspect", v["frequency"] * v["aspect"])
+        if v["fractal"] != "none":
+            integral("fractal.lacunarity", v["lacunarity"])
+        if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
+            integral("noise.noise_frequency", v["noise_frequency"])
+
+
+# ---------------------------------------------------------------------- presets
+
+def preset_dir() -> Path:
+    """The folder holding the preset JSON files (package data ``cellgl/presets``)."""
+    return Path(__file__).resolve().parent / "presets"
+
+
+def list_presets() -> list[tuple[str, str]]:
+    """``[(name, one-line doc), ...]`` of every preset, sorted by name."""
+    out = []
+    for path in sorted(preset_dir().glob("*.json")):
+        try:
+            doc = json.loads(path.read_text()).get("doc", "")
+        except (OSError, json.JSONDecodeError):
+            doc = "(unreadable)"
+        out.append((path.stem, doc))
+    return out
+
+
+def load_recipe(preset_or_path) -> Recipe:
+    """A preset by name (``"veins"``, ``"worley-gallery:3"`` for a variant) or a recipe JSON file.
+
+    Raises :class:`RecipeError` naming the known presets if neither matches.
+    """
+    if isinstance(preset_or_path, Recipe):
+        return preset_or_path
+    text = str(preset_or_path)
+    path = Path(text)
+    if path.suffix == ".json" or os.sep in text or path.is_file():
+        return Recipe.load(path)
+    name, _, variant = text.partition(":")
+    file = preset_dir() / f"{name}.json"
+    if not file.is_file():
+        names = [n for n, _ in list_presets()]
+        raise RecipeError(f"unknown preset {text!r}{_suggest(name, names)}; accepted: a recipe .json file or "
+                          "one of: " + ", ".join(names))
+    recipe = Recipe.load(file)
+    if not variant:
+        return recipe
+    vs = recipe.variants
+    for k, v in enumerate(vs):
+        if variant == str(k) or variant == v.name or f"{name}:{variant}" == v.name:
+            return v
+    raise RecipeError(f"preset {name!r} has no variant {variant!r}; accepted: 0..{len(vs) - 1}"
+                      + (" or " + ", ".join(v.name for v in vs) if vs else ""))

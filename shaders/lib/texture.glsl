@@ -1,0 +1,275 @@
+// cellgl: textures from the cellular basis (Worley 1996, Qin 2000).
+//
+// One recipe (cellgl/recipe.py) evaluated at a point of basis space:
+//
+//   value  v(x) = sum_i c_i F_i(x) + sum_{i,j<=4} c_ij F_i(x) F_j(x) + c_noise n(x)
+//                 (Worley's linear combinations, Qin's generalized basis, the book's
+//                 F1 F2 and F3^2 - F2^2, and gradient noise for comparison)
+//   basis  b(x) = clamp((v(x) - range_lo) / (range_hi - range_lo), 0, 1)
+//                 (range measured once, empirically, as Worley did)
+//   fractal G(x) = sum_i w_i b(L^i x) / sum_i w_i          (sum: Worley's G_n)
+//              or sum_i w_i |0.5 - b(L^i x)| / (0.5 sum w_i)  (qin, Qin's eq. 6)
+//              or the cube of that                          (qin_cube: Qin's wrinkle bump)
+//                 with w_i = gain^i, L = lacunarity, i < octaves (the last octave
+//                 weighted by the fractional part of octaves); octave i uses seed + 1013 i
+//   height h(x) = clamp(((invert ? 1 - G : G) - level_lo) / (level_hi - level_lo), 0, 1)
+//   colour      = ramp(mix(h, cell value of the F1 ID, cell_mix) + noise_color * fbm(x))
+//                 * mix(1, h, shade) * mix(1, lambert(normal), light)
+//
+// The gradient of h is analytic: dF_n/dx is the unit vector from the n-th feature
+// point towards x (cell_metric_gradient), carried through the combination, the
+// normalisation, the fractal sum and the window by the chain rule (zero where a
+// clamp is active). The normal is normalize(-bump dh/dx, -bump dh/dy, 1) with x, y
+// in basis units (cells); y follows the image rows (down), and the OpenGL
+// convention flips it to +Y up.
+//
+// Texture space -> basis space: p = (u, v, z) with u, v in [0, 1] (v = 0 is the
+// image's top row), x = (u f + offset_x, v f aspect + offset_y, z f + offset_z, time)
+// with f = frequency. A W x H bake shows pixel (i, j) (row j from the top) at
+// uv = ((i + 0.5) / W, (j + 0.5) / H).
+//
+// Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
+// parameter table: struct CellTextureParams, CELL_TEX_* enums).
+// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes.
+
+#include "cellular.glsl"
+#include "noise.glsl"
+#include "texture_params.glsl"
+
+struct CellTexel {
+    float height;   // h in [0, 1]
+    vec4 grad;      // dh / d(basis position), per cell (components past CELL_DIM are 0)
+    vec3 normal;    // unit tangent-space normal: x right, y up (opengl) or down (directx), z out
+    vec4 color;     // rgba in [0, 1] (a = 1)
+    uint id;        // ID of the nearest feature point (octave 0)
+    vec4 F;         // F1..F4 at octave 0 (0 past CELL_N)
+    float value;    // the combination v at octave 0, before normalisation
+};
+
+// Texture space (u, v, z) -> basis space.
+vec4 cell_texture_position(vec3 p, CellTextureParams t)
+{
+    return vec4(p.x * t.frequency + t.offset_x,
+                p.y * t.frequency * t.aspect + t.offset_y,
+                p.z * t.frequency + t.offset_z,
+                t.time);
+}
+
+// Lattice period of octave `octave` (cells per texture repeat), 0 where not tileable.
+ivec4 cell_texture_period(CellTextureParams t, int octave)
+{
+#if CELL_PERIODIC
+    int m = 1;
+    for (int i = 0; i < octave; i++) {
+        m *= int(round(t.lacunarity));
+    }
+    return ivec4(int(round(t.frequency)) * m, int(round(t.frequency * t.aspect)) * m, 0, 0);
+#else
+    return ivec4(0);
+#endif
+}
+
+// The basis parameters of one octave.
+CellParams _cell_tex_basis(CellTextureParams t, int octave)
+{
+    CellParams p;
+    p.seed = t.seed + uint(octave) * 1013u;
+    p.jitter = t.jitter;
+    p.min_points = t.min_points;
+    p.max_points = t.max_points;
+    for (int k = 0; k < CELL_MAX_POINTS; k++) {
+        p.thresholds[k] = t.thresholds[k];
+    }
+    p.period = cell_texture_period(t, octave);
+    p.minkowski_p = t.minkowski_p;
+    return p;
+}
+
+// The combination v at basis position x for one octave (x already scaled by
+// lacunarity^octave), its gradient dv/dx, the nearest ID and F1..F4.
+float cell_texture_combination(vec4 x, CellTextureParams t, int octave, out vec4 grad,
+                               out uint id, out vec4 F4)
+{
+#if CELL_DIM < 4
+    x.w = 0.0;
+#endif
+#if CELL_DIM < 3
+    x.z = 0.0;
+#endif
+    CellParams p = _cell_tex_basis(t, octave);
+    vec4 xs = x * t.dist_scale;
+    vec4 fl = floor(xs);
+    CellResult r = cell_search(ivec4(fl), xs - fl, p);
+
+    float lin[8] = float[8](t.c1, t.c2, t.c3, t.c4, t.c5, t.c6, t.c7, t.c8);
+    float prod[16] = float[16](t.c11, t.c12, t.c13, t.c14, t.c21, t.c22, t.c23, t.c24,
+                               t.c31, t.c32, t.c33, t.c34, t.c41, t.c42, t.c43, t.c44);
+    float F[CELL_N];
+    vec4 dF[CELL_N];
+    float v = 0.0;
+    grad = vec4(0.0);
+    F4 = vec4(0.0);
+    for (int k = 0; k < CELL_N; k++) {
+        F[k] = r.F[k] / t.dist_scale;
+        dF[k] = cell_metric_gradient(r.delta[k], r.F[k], t.minkowski_p);
+        v += lin[k] * F[k];
+        grad += lin[k] * dF[k];
+        if (k < 4) {
+            F4[k] = F[k];
+        }
+    }
+#define CELL_TEX_NP (CELL_N < 4 ? CELL_N : 4)
+    for (int i = 0; i < CELL_TEX_NP; i++)
+    for (int j = 0; j < CELL_TEX_NP; j++) {
+        float c = prod[i * 4 + j];
+        v += c * F[i] * F[j];
+        grad += c * (F[i] * dF[j] + F[j] * dF[i]);
+    }
+#undef CELL_TEX_NP
+    if (t.c_noise != 0.0) {
+        vec4 gn;
+        ivec4 per = cell_texture_period(t, octave) * int(round(t.noise_frequency));
+        v += t.c_noise * cell_noise(x * t.noise_frequency, per, t.seed + 7919u + uint(octave), gn);
+        grad += t.c_noise * t.noise_frequency * gn;
+    }
+    id = r.id[0];
+    return v;
+}
+
+// The colour ramp at x in [0, 1]: linear between keys at their positions
+// (ramp[k].w), or Qin's RenderMan spline (uniform Catmull-Rom; the first and
+// last keys only steer the ends).
+vec3 cell_texture_ramp(float x, CellTextureParams t)
+{
+    int n = t.ramp_count;
+    if (t.ramp_mode == CELL_TEX_RAMP_SPLINE && n >= 4) {
+        int spans = n - 3;
+        float s = clamp(x, 0.0, 1.0) * float(spans);
+        int k = min(int(s), spans - 1);
+        s -= float(k);
+        vec3 p0 = t.ramp[k].rgb, p1 = t.ramp[k + 1].rgb, p2 = t.ramp[k + 2].rgb, p3 = t.ramp[k + 3].rgb;
+        return 0.5 * ((((-p0 + 3.0 * p1 - 3.0 * p2 + p3) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3)) * s
+                       + (p2 - p0)) * s + 2.0 * p1);
+    }
+    if (x <= t.ramp[0].w) {
+        return t.ramp[0].rgb;
+    }
+    for (int k = 1; k < CELL_TEX_RAMP_KEYS; k++) {
+        if (k < n && x <= t.ramp[k].w) {
+            float w = t.ramp[k].w - t.ramp[k - 1].w;
+            float f = w > 0.0 ? (x - t.ramp[k - 1].w) / w : 1.0;
+            return mix(t.ramp[k - 1].rgb, t.ramp[k].rgb, f);
+        }
+    }
+    return t.ramp[n - 1].rgb;
+}
+
+// A value in [0, 1) constant over the Voronoi cell of feature point `id`.
+float cell_texture_cell_value(uint id)
+{
+    return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
+}
+
+// The texture at basis position x.
+CellTexel cell_texture(vec4 x, CellTextureParams t)
+{
+    CellTexel o;
+    int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
+    bool qin = t.fractal == CELL_TEX_FRACTAL_QIN || t.fractal == CELL_TEX_FRACTAL_QIN_CUBE;
+    float inv_range = 1.0 / (t.range_hi - t.range_lo);
+    float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
+    vec4 dG = vec4(0.0);
+    for (int i = 0; i < 8; i++) {
+        if (i >= octaves) {
+            break;
+        }
+        float w = amp;
+        if (t.fractal != CELL_TEX_FRACTAL_NONE) {
+            w *= min(t.octaves - float(i), 1.0);
+        }
+        vec4 g, F4;
+        uint id;
+        float v = cell_texture_combination(x * scale, t, i, g, id, F4);
+        if (i == 0) {
+            o.value = v;
+            o.id = id;
+            o.F = F4;
+        }
+        float b = (v - t.range_lo) * inv_range;
+        vec4 db = g * (inv_range * scale);
+        if (b < 0.0 || b > 1.0) {
+            b = clamp(b, 0.0, 1.0);
+            db = vec4(0.0);
+        }
+        if (qin) {
+            float s = 0.5 - b;
+            G += w * abs(s);
+            dG -= w * sign(s) * db;
+            total += 0.5 * w;
+        } else {
+            G += w * b;
+            dG += w * db;
+            total += w;
+        }
+        amp *= t.gain;
+        scale *= t.lacunarity;
+    }
+    G /= total;
+    dG /= total;
+    if (t.fractal == CELL_TEX_FRACTAL_QIN_CUBE) {
+        dG *= 3.0 * G * G;
+        G = G * G * G;
+    }
+    if (t.invert != 0) {
+        G = 1.0 - G;
+        dG = -dG;
+    }
+    float lw = 1.0 / (t.level_hi - t.level_lo);
+    float h = (G - t.level_lo) * lw;
+    vec4 dh = dG * lw;
+    if (h < 0.0 || h > 1.0) {
+        h = clamp(h, 0.0, 1.0);
+        dh = vec4(0.0);
+    }
+    o.height = h;
+    o.grad = dh;
+
+    // Normal, y down (image rows) first.
+    vec3 n = normalize(vec3(-t.bump * dh.x, -t.bump * dh.y, 1.0));
+
+    float index = mix(h, cell_texture_cell_value(o.id), t.cell_mix);
+    if (t.noise_color != 0.0) {
+        vec4 gn;
+        ivec4 per = cell_texture_period(t, 0) * int(round(t.noise_frequency));
+        index += t.noise_color * cell_noise_fractal(x * t.noise_frequency, per, t.seed + 104729u,
+                                                    t.noise_octaves, gn);
+    }
+    vec3 rgb = cell_texture_ramp(clamp(index, 0.0, 1.0), t);
+    rgb *= mix(1.0, h, t.shade);
+    // Preview lighting from the top left, normalised so that a flat surface keeps its colour.
+    vec3 L = normalize(vec3(-1.0, -1.0, 1.5));
+    float lambert = clamp(dot(n, L) / L.z, 0.0, 2.0);
+    rgb *= mix(1.0, lambert, t.light);
+    o.color = vec4(clamp(rgb, 0.0, 1.0), 1.0);
+    o.normal = t.normal_convention == CELL_TEX_NORMAL_OPENGL ? vec3(n.x, -n.y, n.z) : n;
+    return o;
+}
+
+// The texture at texture-space point p = (u, v, z): uv on the image plane, or
+// object-space (x, y, z) for solid recipes.
+CellTexel cell_texture_at(vec3 p, CellTextureParams t)
+{
+    return cell_texture(cell_texture_position(p, t), t);
+}
+
+// The RGBA a bake writes for the pixel whose centre is uv (v = 0: top row).
+vec4 cell_texture_uv(vec2 uv, CellTextureParams t)
+{
+    return cell_texture_at(vec3(uv, 0.0), t).color;
+}
+
+// dh/d(u, v, z): the height gradient in texture space.
+vec3 cell_texture_grad_uvz(CellTexel x, CellTextureParams t)
+{
+    return x.grad.xyz * vec3(t.frequency, t.frequency * t.aspect, t.frequency);
+}
