@@ -81,6 +81,7 @@ class Viewer:
             self._ensure_4d()
         self.tile_borders = False
         self.bump_view = 1.0
+        self.channel = "color"   # 2D / tiled / anim: which channel of the texture to show
         self.status = ""
         self.frame_ms = 0.0
         self.render_ms = 0.0
@@ -164,9 +165,7 @@ class Viewer:
         vx, vy, vw, vh = self.view_rect
         u = self.panzoom.unit(vw, vh)
         ox, oy = self.panzoom.origin
-        x0 = vx + ox
-        y0 = vy + vh - (oy + u)
-        return int(round(x0)), int(round(y0)), int(round(u)), int(round(u))
+        return int(round(vx + ox)), int(round(vy + oy)), int(round(u)), int(round(u))
 
     # ----------------------------------------------------------------------------------------
     # frames
@@ -247,12 +246,12 @@ class Viewer:
                 if self.mode == "3d":
                     self.orbit.rotate(dx, -dy)
                 elif self.mode != "tiled":  # the tiled view always shows whole tiles
-                    self.panzoom.pan(dx, -dy)
+                    self.panzoom.pan(dx, dy)
         if inside and not over_ui and io.mouse_wheel:
             if self.mode == "3d":
                 self.orbit.dolly(io.mouse_wheel)
             elif self.mode != "tiled":
-                self.panzoom.zoom_at(1.15 ** io.mouse_wheel, mx - vx, vy + vh - my)
+                self.panzoom.zoom_at(1.15 ** io.mouse_wheel, mx - vx, my - vy)
         if not over_ui and imgui.is_key_pressed(imgui.Key.escape):
             self._should_close = True
         self._update_readout(mx, my, inside and not over_ui)
@@ -262,16 +261,16 @@ class Viewer:
             self.readout = None
             return
         vx, vy, vw, vh = self.view_rect
-        x, y = mx - vx, vy + vh - my  # view pixels, y up
+        x, y = mx - vx, my - vy  # view pixels from the top left, y down
         if self.mode == "3d":
-            pos = self.renderer.object_position_at(int(x), int(y))
+            pos = self.renderer.object_position_at(int(x), int(vh - 1 - y))
             if pos is None:
                 self.readout = None
                 return
             key = ("3d", tuple(np.round(pos, 6)), self.model.version)
         elif self.mode == "tiled":
-            u, v = x / vw * 3.0, y / vh * 3.0
-            key = ("uv", (u % 1.0, v % 1.0), self.model.version)
+            side = min(vw, vh) / 3.0  # tiles start at the view's top-left corner
+            key = ("uv", ((x / side) % 1.0, (y / side) % 1.0), self.model.version)
         else:
             key = ("uv", self.panzoom.to_uv(x, y, vw, vh), self.model.version)
         if self.readout is not None and self.readout.get("_key") == key:

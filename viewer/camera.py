@@ -14,10 +14,11 @@ __all__ = ["PanZoom", "Orbit", "perspective", "look_at"]
 class PanZoom:
     """Pixel <-> texture-coordinate mapping of the 2D view.
 
-    ``origin`` is where texture coordinate (0, 0) lies, in view pixels from the lower-left corner;
-    one texture unit spans ``zoom * base`` pixels, ``base`` being the shorter side of the view.
-    At zoom 1 with an integer origin, the unit square [0, 1]^2 covers exactly ``base x base``
-    pixels, so it matches an offscreen render of ``base x base`` pixel for pixel.
+    View pixels are counted from the view's top-left corner, y down, like image rows: texture
+    v = 0 is the top row of a bake. ``origin`` is where texture coordinate (0, 0) lies; one
+    texture unit spans ``zoom * base`` pixels, ``base`` being the shorter side of the view. At
+    zoom 1 with an integer origin, the unit square [0, 1]^2 covers exactly ``base x base``
+    pixels and matches a ``base x base`` bake pixel for pixel.
     """
 
     origin: tuple[float, float] = (0.0, 0.0)
@@ -36,12 +37,12 @@ class PanZoom:
         return self.zoom * min(w, h)
 
     def window(self, w: int, h: int) -> tuple[tuple[float, float], tuple[float, float]]:
-        """(uv at the lower-left corner, uv extent) of a ``w x h`` view."""
+        """(uv at the view's top-left corner, uv extent) of a ``w x h`` view."""
         u = self.unit(w, h)
         return (-self.origin[0] / u, -self.origin[1] / u), (w / u, h / u)
 
     def to_uv(self, x: float, y: float, w: int, h: int) -> tuple[float, float]:
-        """Texture coordinate at view pixel position (x, y) (lower-left origin, pixel units)."""
+        """Texture coordinate at view position (x, y) (top-left origin, y down, pixels)."""
         u = self.unit(w, h)
         return (x - self.origin[0]) / u, (y - self.origin[1]) / u
 
@@ -49,7 +50,7 @@ class PanZoom:
         self.origin = (self.origin[0] + dx, self.origin[1] + dy)
 
     def zoom_at(self, factor: float, x: float, y: float) -> None:
-        """Zoom by ``factor`` keeping the texture point under view pixel (x, y) fixed."""
+        """Zoom by ``factor`` keeping the texture point under view position (x, y) fixed."""
         factor = max(1e-3 / self.zoom, min(factor, 1e4 / self.zoom))
         ox, oy = self.origin
         self.origin = (x - (x - ox) * factor, y - (y - oy) * factor)
@@ -86,7 +87,7 @@ class Orbit:
 
     yaw: float = 30.0
     pitch: float = 20.0
-    distance: float = 3.2
+    distance: float = 3.6
     fovy: float = 40.0
 
     def eye(self) -> np.ndarray:
@@ -103,4 +104,7 @@ class Orbit:
 
     def matrices(self, aspect: float) -> tuple[np.ndarray, np.ndarray]:
         """(view, projection), float64 4x4, column vectors."""
-        return look_at(self.eye(), (0.0, 0.0, 0.0)), perspective(self.fovy, aspect, 0.05, 100.0)
+        fovy = self.fovy
+        if aspect < 1.0:  # narrow view: keep the horizontal field of view
+            fovy = math.degrees(2.0 * math.atan(math.tan(math.radians(fovy) / 2.0) / aspect))
+        return look_at(self.eye(), (0.0, 0.0, 0.0)), perspective(fovy, aspect, 0.05, 100.0)

@@ -1,7 +1,13 @@
-"""The viewer's document: one recipe, edited in place, with a version counter for redraws.
+"""The viewer's document: one recipe (:class:`cellgl.recipe.Recipe`), edited in place.
 
-INTERIM: until cellgl.recipe / cellgl.texture land this renders the plain basis (F1 grey)
-through shaders/viewer_basis.frag; values live in a dict keyed by the parameter table.
+Edits go through :meth:`Recipe.replace`, so every value the panel sets is validated exactly as
+a recipe file is; a rejected value leaves the recipe unchanged and the error is shown. Each
+accepted change bumps :attr:`Model.version`, which the renderer uses to decide when to redraw.
+
+Rendering uses the shared texture library only: the 2D program is ``fullscreen.vert`` +
+``texture.frag`` (the texture engine's own viewer entry, panned and zoomed by its ``u_view``) and the 3D program ``viewer_object.*``, which
+includes ``lib/texture.glsl``; compile-time macros and uniforms come from
+:func:`cellgl.texture.defines` and :func:`cellgl.texture.set_uniforms`.
 """
 
 from __future__ import annotations
@@ -9,79 +15,158 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl import context
-from cellgl.gpu import defines_for
-from cellgl.core import make_params
-from cellgl.params import PARAMS, PARAMS_BY_NAME
+from cellgl.params import PARAMS
+from cellgl.recipe import Recipe, list_presets, load_recipe
 
-__all__ = ["Model"]
+__all__ = ["Model", "DEFAULT_PRESET"]
+
+DEFAULT_PRESET = "flagstone"
+#: texture-space position of object point q (objects span [-1, 1]^3): p = q * OBJECT_SCALE + 0.5
+OBJECT_SCALE = 0.5
 
 
 class Model:
-    def __init__(self, values: dict, name: str = "untitled"):
-        self.values = values
-        self.name = name
-        self.version = 0
-        self.params = PARAMS
-        self.ramp = [[0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]]
+    """A recipe being edited, with a version counter."""
 
-    @classmethod
-    def load(cls, name_or_path=None) -> "Model":
-        return cls({p.name: p.default for p in PARAMS}, name_or_path or "default")
+    params = PARAMS
+
+    def __init__(self, recipe: Recipe):
+        self.recipe = recipe
+        self.version = 0
+
+    # ----------------------------------------------------------------------------------------
+    # loading / saving
 
     @staticmethod
     def presets() -> list[str]:
-        return []
+        return [name for name, _ in list_presets()]
+
+    @classmethod
+    def load(cls, name_or_path=None) -> "Model":
+        return cls(cls._read(name_or_path))
+
+    @classmethod
+    def _read(cls, name_or_path) -> Recipe:
+        if name_or_path is None:
+            names = cls.presets()
+            if DEFAULT_PRESET in names:
+                name_or_path = DEFAULT_PRESET
+            elif names:
+                name_or_path = names[0]
+            else:
+                return Recipe(name="default")
+        return load_recipe(name_or_path)
+
+    def load_into(self, name_or_path) -> None:
+        self.recipe = self._read(name_or_path)
+        self.version += 1
+
+    def save(self, path) -> None:
+        self.recipe.save(path)
+
+    @property
+    def name(self) -> str:
+        return self.recipe.name
+
+    # ----------------------------------------------------------------------------------------
+    # values
 
     def get(self, name):
-        return self.values[name]
+        return self.recipe.get(name)
 
     def set(self, name, value) -> bool:
-        if self.values.get(name) == value:
+        """Set one parameter; raises ValueError (RecipeError) naming the accepted values."""
+        if self.recipe.get(name) == value:
             return False
-        self.values[name] = value
+        self.recipe = self.recipe.replace(**{name: value})
         self.version += 1
         return True
 
-    def set_text(self, name, text) -> bool:
-        p = PARAMS_BY_NAME[name]
-        v = {"float": float, "int": int, "bool": lambda t: t.lower() in ("1", "true", "yes"),
-             "enum": str}.get(p.type, str)(text)
-        return self.set(name, v)
+    def set_text(self, name: str, text: str) -> bool:
+        """``--set name=value`` (parsed as the CLI parses it)."""
+        new = self.recipe.set_from_strings([f"{name}={text}"])
+        if new == self.recipe:
+            return False
+        self.recipe = new
+        self.version += 1
+        return True
 
-    def _basis(self, dim=2):
-        v = self.values
-        return make_params(dim, metric=v["metric"], distribution=v["distribution"], density=v["density"],
-                           jitter=v["jitter"], min_points=v["min_points"], max_points=v["max_points"],
-                           minkowski_p=v["minkowski_p"], seed=v["seed"])
+    @property
+    def ramp(self):
+        return self.recipe.ramp
 
-    def defines(self) -> dict:
-        dim = int(self.values["dimension"])
-        return defines_for(self._basis(4), 4)
+    def set_ramp(self, keys) -> bool:
+        keys = sorted((tuple(float(v) for v in k) for k in keys), key=lambda k: k[0])
+        return self.set("ramp", tuple(keys))
 
-    def program_2d(self, ctx):
-        return context.program("viewer_2d.vert", "viewer_basis.frag", self.defines(), ctx=ctx)
+    def measure_range(self) -> None:
+        """Set range_lo / range_hi from the current combination (cellgl.texture.measure_range)."""
+        from cellgl import texture
+
+        lo, hi = texture.measure_range(self.recipe)
+        self.recipe = self.recipe.replace(range_lo=float(lo), range_hi=float(hi))
+        self.version += 1
+
+    # ----------------------------------------------------------------------------------------
+    # GL
+
+    def _object_recipe(self) -> Recipe:
+        """The recipe as the 3D view evaluates it: a solid texture needs at least 3 dimensions."""
+        if int(self.recipe.get("dimension")) < 3:
+            return self.recipe.replace(dimension=3)
+        return self.recipe
+
+    def program_2d(self, ctx, channel: str = "color"):
+        """``fullscreen.vert`` + ``texture.frag``: the texture engine's own viewer entry."""
+        from cellgl import texture
+
+        return context.program("fullscreen.vert", "texture.frag", texture.defines(self.recipe, (channel,)),
+                               ctx=ctx)
 
     def program_object(self, ctx):
-        raise NotImplementedError
+        from cellgl import texture
 
-    def set_uniforms(self, prog):
-        p = self._basis(4)
-        for k, val in (("u_seed", int(p.seed)), ("u_jitter", float(p.jitter)),
-                       ("u_min_points", int(p.min_points)), ("u_max_points", int(p.max_points)),
-                       ("u_minkowski_p", float(p.minkowski_p)), ("u_scale", float(self.values["frequency"])),
-                       ("u_time", float(self.values["time"]))):
-            if k in prog:
-                prog[k].value = val
-        if "u_thresholds" in prog:
-            prog["u_thresholds"].write(p.thresholds.astype(np.uint32).tobytes())
+        return context.program("viewer_object.vert", "viewer_object.frag",
+                               texture.defines(self._object_recipe()), ctx=ctx)
 
-    def readout_uv(self, u, v):
+    def set_uniforms(self, prog, object_view: bool = False) -> None:
+        from cellgl import texture
+
+        texture.set_uniforms(prog, self._object_recipe() if object_view else self.recipe)
+
+    # ----------------------------------------------------------------------------------------
+    # readouts: the basis at the point under the cursor, from the same parameters
+
+    def basis_position(self, p, dim: int | None = None) -> np.ndarray:
+        """Texture-space (u, v, z) -> basis-space position (``cell_texture_position``), (dim,)."""
+        v = self.recipe.values
+        f = float(v["frequency"])
+        x = np.array([p[0] * f + v["offset_x"], p[1] * f * v["aspect"] + v["offset_y"],
+                      p[2] * f + v["offset_z"], v["time"]], dtype=np.float64)
+        d = int(dim or v["dimension"])
+        return x[:d]
+
+    def _cellular(self, x: np.ndarray) -> dict:
         import cellgl
 
-        f = float(self.values["frequency"])
-        r = cellgl.cellular(np.array([[u * f, v * f, 0.0, self.values["time"]]]), 4,
-                            seed=int(self.values["seed"]), density=self.values["density"])
-        return {"uv": (u, v), "F": r.F[0].tolist(), "id": int(r.id[0, 0])}
+        v = self.recipe.values
+        period = None
+        if v["tileable"]:
+            period = [int(round(v["frequency"])), int(round(v["frequency"] * v["aspect"]))] + [0] * (len(x) - 2)
+        r = cellgl.cellular(x[None, :], 4, metric=v["metric"], distribution=v["distribution"],
+                            density=v["density"], jitter=v["jitter"], min_points=v["min_points"],
+                            max_points=v["max_points"], minkowski_p=v["minkowski_p"], seed=v["seed"],
+                            period=period, outputs=("F", "id"))
+        return {"F": [float(f) for f in r.F[0]], "id": int(r.id[0, 0]), "pos": tuple(float(c) for c in x)}
 
-    def readout_object(self, pos):
-        return {"pos": tuple(pos)}
+    def readout_uv(self, u: float, v: float) -> dict:
+        """F1..F4 and the F1 feature ID at texture coordinate (u, v) (v down, as image rows)."""
+        out = self._cellular(self.basis_position((u, v, 0.0)))
+        out["uv"] = (u, v)
+        return out
+
+    def readout_object(self, q) -> dict:
+        """The same at object-space point ``q`` of the 3D view."""
+        p = np.asarray(q, float) * OBJECT_SCALE + 0.5
+        dim = max(3, int(self.recipe.get("dimension")))
+        return self._cellular(self.basis_position(p, dim))

@@ -165,8 +165,8 @@ def _view_section(viewer) -> None:
     from .app import MODE_LABELS, MODES
 
     for i, m in enumerate(MODES):
-        if i:
-            imgui.same_line()
+        if i % 2:
+            imgui.same_line(170)
         if imgui.radio_button(MODE_LABELS[m], viewer.mode == m):
             viewer.set_mode(m)
         _record(viewer, f"mode:{m}")
@@ -181,7 +181,15 @@ def _view_section(viewer) -> None:
         imgui.text_disabled("drag: orbit   wheel: distance")
     elif viewer.mode == "tiled":
         _, viewer.tile_borders = imgui.checkbox("show tile borders", viewer.tile_borders)
-    else:
+    if viewer.mode != "3d":
+        from cellgl.recipe import CHANNELS
+
+        chans = list(CHANNELS)
+        imgui.set_next_item_width(120)
+        changed, idx = imgui.combo("channel", chans.index(viewer.channel), chans)
+        if changed:
+            viewer.channel = chans[idx]
+    if viewer.mode in ("2d", "anim"):
         if imgui.button("fit"):
             viewer.panzoom.fitted = False
         imgui.same_line()

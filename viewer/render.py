@@ -24,6 +24,7 @@ __all__ = ["Renderer"]
 
 #: target frame time while interacting (seconds); the preview scale is chosen to meet it
 INTERACTIVE_BUDGET = 0.05
+
 SCALES = (1, 2, 4)
 
 
@@ -141,6 +142,8 @@ class Renderer:
             key += ()
         else:
             key += (viewer.panzoom.origin, viewer.panzoom.zoom)
+        if mode != "3d":
+            key += (viewer.channel,)
         rendered = False
         if key != self._key:
             t0 = time.perf_counter()
@@ -168,19 +171,23 @@ class Renderer:
             if w != full_w:
                 side = max(8, side * w // full_w)
             tex, fbo = self._target("tile", (side, side))[:2]
-            self._render_texture(fbo, (0.0, 0.0), (1.0, 1.0))
+            self._render_texture(fbo, (0.0, 0.0), (1.0, 1.0), viewer.channel)
         else:
             tex, fbo = self._target("view", (w, h))[:2]
             # Same pixel -> uv mapping as the full-resolution view (pixel centres scale along).
             uv0, ext = viewer.panzoom.window(full_w, full_h)
-            self._render_texture(fbo, uv0, ext)
+            self._render_texture(fbo, uv0, ext, viewer.channel)
 
-    def _render_texture(self, fbo, uv0, ext) -> None:
-        prog = self.model.program_2d(self.ctx)
+    def _render_texture(self, fbo, uv0, ext, channel: str = "color") -> None:
+        from cellgl.recipe import CHANNELS
+
+        prog = self.model.program_2d(self.ctx, channel)
         self._note_program(prog)
         self.model.set_uniforms(prog)
-        prog["u_uv0"].value = tuple(float(v) for v in uv0)
-        prog["u_uv_size"].value = tuple(float(v) for v in ext)
+        # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top.
+        prog["u_view"].value = (float(uv0[0]), float(uv0[1]), float(ext[0]), float(ext[1]))
+        if "u_channel" in prog:
+            prog["u_channel"].value = CHANNELS.index(channel)
         fbo.use()
         fbo.clear(0.0, 0.0, 0.0, 1.0)
         self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND | self.ctx.CULL_FACE)
@@ -192,8 +199,11 @@ class Renderer:
         tex, fbo, pos, depth = self._target("object", (w, h), position=True)
         prog = self.model.program_object(self.ctx)
         self._note_program(prog)
-        self.model.set_uniforms(prog)
+        self.model.set_uniforms(prog, object_view=True)
         view, proj = viewer.orbit.matrices(w / h)
+        from .model import OBJECT_SCALE
+
+        prog["u_object_scale"].value = OBJECT_SCALE
         model = np.eye(4)
         prog["u_model"].write(_mat(model))
         prog["u_view"].write(_mat(view))
@@ -239,8 +249,10 @@ class Renderer:
             tex.repeat_x = tex.repeat_y = True
             # 3 tiles along the shorter side, square tiles.
             side = min(vw, vh) / 3.0
-            self.blit["u_scale"].value = (vw / side, vh / side)
-            self.blit["u_offset"].value = (0.0, 0.0)
+            sx, sy = vw / side, vh / side
+            self.blit["u_scale"].value = (sx, sy)
+            # A tile corner at the view's top-left corner (texture rows run top down).
+            self.blit["u_offset"].value = (0.0, float(np.ceil(sy) - sy))
             self.blit["u_grid"].value = 0.004 if viewer.tile_borders else 0.0
             tex.filter = (0x2601, 0x2601) if abs(side - tex.size[0]) > 0.5 else (0x2600, 0x2600)
         else:
