@@ -1,0 +1,291 @@
+"""NumPy float64 twin of ``shaders/lib/texture.glsl`` and ``shaders/lib/noise.glsl``.
+
+Function for function, the same names without the ``cell_`` prefix (``cell_texture`` ->
+:func:`texture`, ``cell_noise`` -> :func:`noise`, ...), vectorised over samples, built on
+:mod:`cellgl.reference` (the same cells, hashes and feature points as the GPU).
+``cellgl.evaluate(..., backend="numpy")`` and ``cellgl.render(..., backend="numpy")`` run this;
+the tests compare every preset's GPU output against it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import reference as ref
+from .enums import Distribution, Metric
+from .params import LINEAR
+from .reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
+
+M32 = 0xFFFFFFFF
+
+
+# --------------------------------------------------------------------------- noise.glsl
+
+def noise_gradient(c: np.ndarray, seed: int) -> np.ndarray:
+    """``_cell_noise_gradient``: corner gradients (N, 4) in [-1, 1] for corners c (N, 4) int64."""
+    c = c.astype(np.int64) & M32
+    h = _add(_add(_mul(seed, 0x165667B1), 0x9E3779B9), _mul(c[:, 0], 0x8DA6B343))
+    h = _add(h, _mul(c[:, 1], 0xD8163841))
+    h = _add(h, _mul(c[:, 2], 0xCB1AB31F))
+    h = _add(h, _mul(c[:, 3], 0x27D4EB2F))
+    h = hash_u32(h)
+    h2 = hash_u32(h ^ np.uint64(0x68E31DA4))
+    g = np.stack([u16(h >> np.uint64(16)), u16(h & np.uint64(0xFFFF)),
+                  u16(h2 >> np.uint64(16)), u16(h2 & np.uint64(0xFFFF))], axis=1)
+    return g * 2.0 - 1.0
+
+
+def noise(x: np.ndarray, period, seed: int, dim: int):
+    """``cell_noise``: gradient noise at x (N, 4); returns (value (N,), gradient (N, 4))."""
+    x = np.array(x, dtype=np.float64)
+    x[:, dim:] = 0.0
+    fl = np.floor(x)
+    i0 = fl.astype(np.int64)
+    f = x - fl
+    u = f * f * f * (f * (f * 6.0 - 15.0) + 10.0)
+    du = 30.0 * f * f * (f - 1.0) ** 2
+    value = np.zeros(len(x))
+    grad = np.zeros_like(x)
+    period = np.broadcast_to(np.asarray(period, dtype=np.int64), (4,)) if np.ndim(period) == 1 else period
+    for k in range(1 << dim):
+        o = np.array([k & 1, (k >> 1) & 1, (k >> 2) & 1, (k >> 3) & 1], dtype=np.int64)
+        g = noise_gradient(ref.wrap(i0 + o, period), (seed & M32))
+        g[:, dim:] = 0.0
+        d = f - o
+        s = (g * d).sum(axis=1)
+        wa = np.where(o == 1, u, 1.0 - u)
+        dwa = np.where(o == 1, du, -du)
+        w = wa.prod(axis=1)
+        dw = np.stack([dwa[:, a] * np.prod(np.delete(wa, a, axis=1), axis=1) for a in range(4)], axis=1)
+        value += w * s
+        grad += w[:, None] * g + s[:, None] * dw
+    return value, grad
+
+
+def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
+    """``cell_noise_fractal``: sum 0.5^i n(2^i x) / sum 0.5^i; returns (value, gradient)."""
+    value = np.zeros(len(x))
+    grad = np.zeros((len(x), 4))
+    amp, total, scale = 1.0, 0.0, 1.0
+    period = np.asarray(period, dtype=np.int64)
+    for i in range(octaves):
+        v, g = noise(x * scale, period * int(scale), (seed + i) & M32, dim)
+        value += amp * v
+        grad += amp * scale * g
+        total += amp
+        amp *= 0.5
+        scale *= 2.0
+    return value / total, grad / total
+
+
+# --------------------------------------------------------------------------- texture.glsl
+
+def _tex(recipe) -> dict:
+    """The run-time values the GLSL reads (enums as names), plus derived ones."""
+    v = dict(recipe.values)
+    v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
+    return v
+
+
+def texture_position(p: np.ndarray, t: dict) -> np.ndarray:
+    """``cell_texture_position``: texture space (N, 3) -> basis space (N, 4)."""
+    f = t["frequency"]
+    return np.stack([p[:, 0] * f + t["offset_x"], p[:, 1] * f * t["aspect"] + t["offset_y"],
+                     p[:, 2] * f + t["offset_z"], np.full(len(p), t["time"])], axis=1)
+
+
+def texture_period(t: dict, octave: int) -> np.ndarray:
+    """``cell_texture_period``."""
+    if not t["tileable"]:
+        return np.zeros(4, dtype=np.int64)
+    m = int(round(t["lacunarity"])) ** octave
+    return np.array([int(round(t["frequency"])) * m, int(round(t["frequency"] * t["aspect"])) * m, 0, 0],
+                    dtype=np.int64)
+
+
+def _basis(t: dict, octave: int) -> ref.Params:
+    """``_cell_tex_basis``."""
+    return ref.Params(dim=t["dimension"], metric=Metric[t["metric"].upper()],
+                      distribution=Distribution[t["distribution"].upper()], density=t["density"],
+                      jitter=t["jitter"], min_points=t["min_points"], max_points=t["max_points"],
+                      minkowski_p=t["minkowski_p"], seed=(t["seed"] + 1013 * octave) & M32,
+                      period=tuple(int(c) for c in texture_period(t, octave)))
+
+
+def texture_combination(x: np.ndarray, t: dict, octave: int, n: int):
+    """``cell_texture_combination``: (value (N,), dv/dx (N, 4), id (N,), F1..F4 (N, 4))."""
+    dim = t["dimension"]
+    x = np.array(x, dtype=np.float64)
+    x[:, dim:] = 0.0
+    p = _basis(t, octave)
+    xs = x * t["dist_scale"]
+    fl = np.floor(xs)
+    F, D, I, _ = ref.search(fl.astype(np.int64), xs - fl, p, n)
+    F = F / t["dist_scale"]
+    dF = ref.metric_gradient(D, F * t["dist_scale"], p)
+    dF[..., dim:] = 0.0
+    lin = [t[c] for c in LINEAR]
+    v = np.zeros(len(x))
+    grad = np.zeros((len(x), 4))
+    F4 = np.zeros((len(x), 4))
+    for k in range(n):
+        v += lin[k] * F[:, k]
+        grad += lin[k] * dF[:, k]
+        if k < 4:
+            F4[:, k] = F[:, k]
+    npr = min(n, 4)
+    for i in range(npr):
+        for j in range(npr):
+            c = t[f"c{i + 1}{j + 1}"]
+            v += c * F[:, i] * F[:, j]
+            grad += c * (F[:, i, None] * dF[:, j] + F[:, j, None] * dF[:, i])
+    if t["c_noise"] != 0.0:
+        per = texture_period(t, octave) * int(round(t["noise_frequency"]))
+        nv, gn = noise(x * t["noise_frequency"], per, (t["seed"] + 7919 + octave) & M32, dim)
+        v += t["c_noise"] * nv
+        grad += t["c_noise"] * t["noise_frequency"] * gn
+    return v, grad, I[:, 0], F4
+
+
+def texture_ramp(x: np.ndarray, t: dict, ramp) -> np.ndarray:
+    """``cell_texture_ramp``: colours (N, 3) at x (N,) in [0, 1]."""
+    keys = np.asarray(ramp, dtype=np.float64)       # (n, 4): t, r, g, b
+    n = len(keys)
+    pos, col = keys[:, 0], keys[:, 1:]
+    if t["ramp_mode"] == "spline" and n >= 4:
+        spans = n - 3
+        s = np.clip(x, 0.0, 1.0) * spans
+        k = np.minimum(s.astype(np.int64), spans - 1)
+        s = (s - k)[:, None]
+        p0, p1, p2, p3 = col[k], col[k + 1], col[k + 2], col[k + 3]
+        return 0.5 * ((((-p0 + 3 * p1 - 3 * p2 + p3) * s + (2 * p0 - 5 * p1 + 4 * p2 - p3)) * s
+                       + (p2 - p0)) * s + 2 * p1)
+    out = np.repeat(col[-1][None], len(x), axis=0)
+    done = x <= pos[0]
+    out[done] = col[0]
+    for k in range(1, n):
+        sel = ~done & (x <= pos[k])
+        w = pos[k] - pos[k - 1]
+        f = (x[sel] - pos[k - 1]) / w if w > 0 else np.ones(int(sel.sum()))
+        out[sel] = col[k - 1] + (col[k] - col[k - 1]) * f[:, None]
+        done |= sel
+    return out
+
+
+def texture_cell_value(ids: np.ndarray) -> np.ndarray:
+    """``cell_texture_cell_value``: a value in [0, 1) per feature ID."""
+    h = hash_u32(np.asarray(ids, dtype=np.uint64) ^ np.uint64(0x2545F491))
+    return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
+
+
+def texture(x: np.ndarray, recipe, n: int | None = None) -> dict:
+    """``cell_texture``: the texture at basis positions x (N, 4).
+
+    Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
+    F (N, 4), value (N,), as the GLSL ``CellTexel``.
+    """
+    from .texture import needed_n
+
+    t = _tex(recipe)
+    n = n or needed_n(recipe)
+    N = len(x)
+    fractal = t["fractal"]
+    octaves = 1 if fractal == "none" else int(np.ceil(t["octaves"]))
+    qin = fractal in ("qin", "qin_cube")
+    inv_range = 1.0 / (t["range_hi"] - t["range_lo"])
+    G = np.zeros(N)
+    dG = np.zeros((N, 4))
+    total, amp, scale = 0.0, 1.0, 1.0
+    o: dict = {}
+    for i in range(min(octaves, 8)):
+        w = amp
+        if fractal != "none":
+            w *= min(t["octaves"] - i, 1.0)
+        v, g, ids, F4 = texture_combination(x * scale, t, i, n)
+        if i == 0:
+            o.update(value=v, id=ids, F=F4)
+        b = (v - t["range_lo"]) * inv_range
+        db = g * (inv_range * scale)
+        out = (b < 0.0) | (b > 1.0)
+        b = np.clip(b, 0.0, 1.0)
+        db[out] = 0.0
+        if qin:
+            s = 0.5 - b
+            G += w * np.abs(s)
+            dG -= w * np.sign(s)[:, None] * db
+            total += 0.5 * w
+        else:
+            G += w * b
+            dG += w * db
+            total += w
+        amp *= t["gain"]
+        scale *= t["lacunarity"]
+    G /= total
+    dG /= total
+    if fractal == "qin_cube":
+        dG *= 3.0 * (G * G)[:, None]
+        G = G ** 3
+    if t["invert"]:
+        G = 1.0 - G
+        dG = -dG
+    lw = 1.0 / (t["level_hi"] - t["level_lo"])
+    h = (G - t["level_lo"]) * lw
+    dh = dG * lw
+    out = (h < 0.0) | (h > 1.0)
+    h = np.clip(h, 0.0, 1.0)
+    dh[out] = 0.0
+    o["height"] = h
+    o["grad"] = dh
+    nrm = np.stack([-t["bump"] * dh[:, 0], -t["bump"] * dh[:, 1], np.ones(N)], axis=1)
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    index = h + (texture_cell_value(o["id"]) - h) * t["cell_mix"]
+    if t["noise_color"] != 0.0:
+        per = texture_period(t, 0) * int(round(t["noise_frequency"]))
+        nv, _ = noise_fractal(x * t["noise_frequency"], per, (t["seed"] + 104729) & M32, t["noise_octaves"],
+                              t["dimension"])
+        index = index + t["noise_color"] * nv
+    rgb = texture_ramp(np.clip(index, 0.0, 1.0), t, recipe.ramp)
+    rgb = rgb * (1.0 + (h - 1.0) * t["shade"])[:, None]
+    L = np.array([-1.0, -1.0, 1.5])
+    L /= np.linalg.norm(L)
+    lam = np.clip(nrm @ L / L[2], 0.0, 2.0)
+    rgb = rgb * (1.0 + (lam - 1.0) * t["light"])[:, None]
+    o["color"] = np.concatenate([np.clip(rgb, 0.0, 1.0), np.ones((N, 1))], axis=1)
+    if t["normal_convention"] == "opengl":
+        nrm[:, 1] = -nrm[:, 1]
+    o["normal"] = nrm
+    return o
+
+
+def texture_at(p: np.ndarray, recipe, n: int | None = None) -> dict:
+    """``cell_texture_at``: the texture at texture-space points p (N, 3)."""
+    return texture(texture_position(p, _tex(recipe)), recipe, n)
+
+
+def evaluate(recipe, pts: np.ndarray, outputs) -> dict:
+    """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space)."""
+    from .texture import needed_n
+
+    n = needed_n(recipe)
+    for c in outputs:
+        if c in ("F1", "F2", "F3", "F4"):
+            n = max(n, int(c[1]))
+    o = texture_at(pts, recipe, n)
+    t = _tex(recipe)
+    res = {}
+    for c in outputs:
+        if c == "color":
+            res[c] = o["color"].astype(np.float32)
+        elif c == "height":
+            res[c] = o["height"].astype(np.float32)
+        elif c == "normal":
+            res[c] = (o["normal"] * 0.5 + 0.5).astype(np.float32)
+        elif c == "id":
+            res[c] = o["id"].astype(np.uint32)
+        elif c in ("F1", "F2", "F3", "F4"):
+            res[c] = o["F"][:, int(c[1]) - 1].astype(np.float32)
+        elif c == "grad":
+            f = t["frequency"]
+            res[c] = (o["grad"][:, :3] * np.array([f, f * t["aspect"], f])).astype(np.float32)
+        elif c == "value":
+            res[c] = o["value"].astype(np.float32)
+    return res
