@@ -84,6 +84,23 @@ def _cmd_bake(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# export (cellgl/export.py; see docs/engines.md)
+# --------------------------------------------------------------------------------------------
+
+
+def _add_export(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    from .export import add_parser
+
+    return add_parser(sub)
+
+
+def _cmd_export(args: argparse.Namespace) -> int:
+    from .export import run_cli
+
+    return run_cli(args)
+
+
+# --------------------------------------------------------------------------------------------
 # registry and entry point
 # --------------------------------------------------------------------------------------------
 
@@ -92,6 +109,7 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
     "bake": (_add_bake, _cmd_bake),
     "view": (_add_view, _cmd_view),
+    "export": (_add_export, _cmd_export),
 }
 
 

@@ -302,3 +302,64 @@ def basis_program(p, n: int = 4, frequency: float = 8.0) -> Program:
     )
     return Program(files=["lib/cellular.glsl"], defines=d, params=params, entry=entry,
                    title="basis", recipe={"basis": "F1..F4", "frequency": frequency})
+
+
+# --------------------------------------------------------------------------------------------
+# command line: cellgl export PRESET_OR_RECIPE --target TARGET [-o FILE]
+# --------------------------------------------------------------------------------------------
+
+
+def add_parser(sub):
+    """Declare ``cellgl export`` on the CLI's subparsers."""
+    p = sub.add_parser(
+        "export", help="write a self-contained shader snippet of a recipe (GLSL, GLSL ES, "
+        "Godot, HLSL, WGSL)",
+        description="Export a recipe as a shader snippet whose cellgl_texture(uv) returns the "
+        "pixels `cellgl bake` writes. See docs/engines.md.")
+    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", help="a preset name or a recipe JSON file")
+    p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
+                   help="one of: " + ", ".join(TARGETS) + " (default glsl)")
+    p.add_argument("-o", "--output", metavar="FILE", default=None,
+                   help="write to FILE (atomically) instead of standard output")
+    p.add_argument("--uniforms", action="store_true",
+                   help="declare the recipe's run-time values as cellgl_<name> uniforms instead of "
+                   "constants")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a recipe parameter (repeatable)")
+    return p
+
+
+def run_cli(args) -> int:
+    """Run ``cellgl export``; returns the exit status."""
+    import os
+    import sys
+    import tempfile
+
+    check_target(args.target)
+    recipe = _load(args.recipe, args.sets)
+    text = export(recipe, args.target, uniforms=args.uniforms)
+    if args.output is None:
+        sys.stdout.write(text)
+        return 0
+    path = os.path.abspath(args.output)
+    fd, tmp = tempfile.mkstemp(prefix=".cellgl-export-", dir=os.path.dirname(path))
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+    return 0
+
+
+def _load(recipe, sets=()):
+    from .recipe import Recipe, load_recipe
+
+    r = recipe if isinstance(recipe, Recipe) else load_recipe(recipe)
+    if sets:
+        r = r.set_from_strings(list(sets))
+    return r
