@@ -261,7 +261,9 @@ class Viewer:
             self.readout = None
             return
         vx, vy, vw, vh = self.view_rect
-        x, y = mx - vx, my - vy  # view pixels from the top left, y down
+        # The centre of the pixel under the cursor (ImGui floors mouse positions), from the
+        # view's top left, y down: the readout is for the pixel the user sees.
+        x, y = np.floor(mx - vx) + 0.5, np.floor(my - vy) + 0.5
         if self.mode == "3d":
             pos = self.renderer.object_position_at(int(x), int(vh - 1 - y))
             if pos is None:

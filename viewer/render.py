@@ -51,6 +51,8 @@ class Renderer:
         self._programs_seen: set[int] = set()
         self.last_scale = 1
         self.renders = 0
+        self.budget = None      # seconds per interactive frame (None: INTERACTIVE_BUDGET)
+        self.render_ms = 0.0
 
     def release(self) -> None:
         for tex, fbo, *rest in self._targets.values():
@@ -123,8 +125,9 @@ class Renderer:
         if not interacting or self.full_cost is None:
             return 1
         mp = w * h / 1e6
+        budget = INTERACTIVE_BUDGET if self.budget is None else self.budget
         for s in SCALES:
-            if self.full_cost * mp / (s * s) <= INTERACTIVE_BUDGET:
+            if self.full_cost * mp / (s * s) <= budget:
                 return s
         return SCALES[-1]
 

@@ -1,0 +1,290 @@
+"""The interactive viewer under X (Xvfb): window, ImGui input path, view modes, capture.
+
+A display is needed: ``$DISPLAY`` if set, else an Xvfb this module starts. Without either
+the tests skip, unless ``CELLGL_REQUIRE_GPU=1`` (``.ci/run``), which makes that a failure.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("imgui_bundle")
+pytest.importorskip("glfw")
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SIZE = (704, 352)          # panel 360 px + a 344 x 352 view (unit square 344 px)
+
+
+
+def _preset():
+    from cellgl.recipe import list_presets
+
+    names = [n for n, _ in list_presets()]
+    return "flagstone" if "flagstone" in names else (names[0] if names else None)
+
+
+PRESET = _preset()
+
+
+def _require() -> bool:
+    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+
+
+def _unavailable(msg: str):
+    if _require():
+        pytest.fail(f"CELLGL_REQUIRE_GPU=1 but {msg}", pytrace=False)
+    pytest.skip(msg)
+
+
+@pytest.fixture(scope="module")
+def display():
+    """A usable X display: $DISPLAY, or an Xvfb started here (stopped afterwards)."""
+    if os.environ.get("DISPLAY"):
+        yield os.environ["DISPLAY"]
+        return
+    xvfb = shutil.which("Xvfb")
+    if not xvfb:
+        _unavailable("no DISPLAY and no Xvfb (apt-get install xvfb)")
+    r, w = os.pipe()
+    proc = subprocess.Popen([xvfb, "-displayfd", str(w), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+                            pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    os.close(w)
+    num = b""
+    deadline = time.time() + 20
+    while time.time() < deadline and not num.endswith(b"\n"):
+        chunk = os.read(r, 16)
+        if not chunk:
+            break
+        num += chunk
+    os.close(r)
+    if not num.strip():
+        proc.kill()
+        _unavailable("Xvfb did not start")
+    disp = ":" + num.decode().strip()
+    os.environ["DISPLAY"] = disp
+    try:
+        yield disp
+    finally:
+        del os.environ["DISPLAY"]
+        proc.terminate()
+        proc.wait(10)
+
+
+@pytest.fixture(scope="module")
+def viewer(display):
+    from viewer.app import Viewer, ViewerOptions
+
+    try:
+        v = Viewer(ViewerOptions(recipe=PRESET, size=SIZE, hidden=True))
+    except RuntimeError as exc:
+        _unavailable(f"no OpenGL window: {exc}")
+    yield v
+    v.close()
+
+
+def _settle(v, frames=2):
+    for _ in range(frames):
+        v.frame()
+    while v.renderer.needs_refine:
+        v.frame()
+
+
+def _view(v, img):
+    x, y, w, h = v.view_rect
+    return img[y:y + h, x:x + w]
+
+
+def _reset(v, preset=PRESET):
+    v.load(preset)
+    v.set_mode("2d")
+    v.panzoom.fitted = False
+    v.channel = "color"
+    _settle(v)
+
+
+def _drag(v, name, frac0, frac1, steps=6):
+    """Press on widget ``name`` at fraction frac0 of its width, drag to frac1, release."""
+    x0, y0, x1, y1 = v.widget_rects[name]
+    y = (y0 + y1) / 2
+    xa, xb = x0 + frac0 * (x1 - x0), x0 + frac1 * (x1 - x0)
+    events = [(xa, y, False), (xa, y, True)]
+    events += [(xa + (xb - xa) * k / steps, y, True) for k in range(1, steps + 1)]
+    events += [(xb, y, False), (xb + 400, y, False)]
+    scales = []
+    for ev in events:
+        v.script_mouse([ev])
+        v.frame()
+        scales.append(v.renderer.last_scale)
+    return scales
+
+
+# --------------------------------------------------------------------------------------------
+
+
+def test_window_renders_texture(viewer):
+    _reset(viewer)
+    img = viewer.grab()
+    assert img.shape == (SIZE[1], SIZE[0], 3)
+    view = _view(viewer, img)
+    assert view.std() > 10, "the view is flat: nothing rendered"
+    assert viewer.ctx.error == "GL_NO_ERROR"
+
+
+def test_view_matches_offscreen_render(viewer):
+    """The 2D view's unit square equals cellgl.texture.render of the same recipe (8-bit)."""
+    from cellgl import texture
+
+    _reset(viewer)
+    x, y, w, h = viewer.unit_square_rect()
+    assert w == h == min(viewer.view_rect[2:])
+    got = viewer.grab()[y:y + h, x:x + w].astype(int)
+    ref = texture.render(viewer.model.recipe, w, h)["color"][..., :3]
+    ref = np.round(np.clip(ref, 0, 1) * 255).astype(int)
+    diff = np.abs(got - ref)
+    # Pixel centres on a cell border may land on either side by a float ulp: allow a few.
+    assert np.mean(diff.max(axis=-1) <= 2) > 0.995, f"max diff {diff.max()}, mean {diff.mean():.3f}"
+
+
+def test_slider_drag_changes_recipe_and_frame(viewer):
+    _reset(viewer)
+    viewer.renderer.budget = 1e-4  # force the reduced-resolution preview while dragging
+    before = viewer.grab()
+    name = "jitter" if viewer.model.get("distribution") == "jitter" else "density"
+    value0 = viewer.model.get(name)
+    compiles0 = viewer.renderer.compiles
+    v0 = viewer.model.version
+    scales = _drag(viewer, name, 0.25, 0.75)
+    try:
+        assert viewer.model.get(name) != value0, f"dragging the {name} slider did not change it"
+        assert viewer.model.version > v0
+        assert max(scales) > 1, "no reduced-resolution preview while the slider was dragged"
+        _settle(viewer)
+        assert viewer.renderer.last_scale == 1, "not refined after the slider was released"
+        after = viewer.grab()
+        assert np.abs(_view(viewer, after).astype(int) - _view(viewer, before)).max() > 30
+        # A uniform only: no shader was compiled.
+        assert viewer.renderer.compiles == compiles0
+    finally:
+        viewer.renderer.budget = None
+
+
+def test_recompile_only_on_compile_time_change(viewer):
+    _reset(viewer)
+    c0 = viewer.renderer.compiles
+    viewer.model.set("gain", 0.37)
+    _settle(viewer)
+    assert viewer.renderer.compiles == c0
+    metric = viewer.model.get("metric")
+    viewer.model.set("metric", "manhattan" if metric != "manhattan" else "euclidean")
+    _settle(viewer)
+    assert viewer.renderer.compiles == c0 + 1
+    viewer.model.set("metric", metric)  # back: cached program, no compile
+    _settle(viewer)
+    assert viewer.renderer.compiles == c0 + 1
+
+
+def test_pan_and_zoom_through_imgui_io(viewer):
+    _reset(viewer)
+    x, y, w, h = viewer.view_rect
+    cx, cy = x + w / 2, y + h / 2
+    o0 = viewer.panzoom.origin
+    viewer.script_mouse([(cx, cy, False), (cx, cy, True), (cx + 20, cy + 10, True), (cx + 40, cy + 20, True),
+                         (cx + 40, cy + 20, False)])
+    for _ in range(5):
+        viewer.frame()
+    assert viewer.panzoom.origin == pytest.approx((o0[0] + 40, o0[1] + 20))
+    _reset(viewer)
+
+
+def test_readout_matches_shown_texture(viewer):
+    """F1 / ID under the cursor equal the F1 / id channels of a render at that pixel."""
+    from cellgl import texture
+
+    _reset(viewer)
+    x, y, w, h = viewer.unit_square_rect()
+    px, py = 57, 101
+    viewer.script_mouse([(x + px + 0.5, y + py + 0.5, False)])
+    viewer.frame()
+    r = viewer.readout
+    assert r and "F" in r, r
+    assert r["uv"] == pytest.approx(((px + 0.5) / w, (py + 0.5) / h))
+    ref = texture.render(viewer.model.recipe, w, h, channels=("F1", "id"), x0=px, y0=py, tile_w=1, tile_h=1)
+    assert r["F"][0] == pytest.approx(float(ref["F1"][0, 0]), abs=1e-4)
+    assert r["id"] == int(ref["id"][0, 0])
+    viewer.script_mouse([(5, 5, False)])
+    viewer.frame()
+
+
+@pytest.mark.parametrize("mode", ["2d", "3d", "tiled", "anim"])
+def test_view_modes(viewer, mode, tmp_path):
+    _reset(viewer)
+    viewer.set_mode(mode)
+    if mode == "anim":
+        viewer.playing = False
+        viewer.model.set("time", 0.0)
+    _settle(viewer)
+    img = viewer.grab()
+    view = _view(viewer, img)
+    assert view.std() > 10
+    if mode == "anim":
+        viewer.model.set("time", 0.5)
+        _settle(viewer)
+        assert np.abs(_view(viewer, viewer.grab()).astype(int) - view).max() > 30, "time did not animate"
+    if mode == "3d":
+        # The readout under the centre of the object is a basis value.
+        x, y, w, h = viewer.view_rect
+        viewer.script_mouse([(x + w / 2, y + h / 2, False)])
+        viewer.frame()
+        assert viewer.readout and len(viewer.readout["F"]) == 4
+    path = viewer.screenshot(str(tmp_path / f"{mode}.png"))
+    assert os.path.getsize(path) > 1000
+    assert viewer.ctx.error == "GL_NO_ERROR"
+    _reset(viewer)
+
+
+def test_saved_recipe_bakes_identically(viewer, tmp_path):
+    """Edit, save from the viewer, bake with `cellgl bake`: the bake equals the view."""
+    from PIL import Image
+
+    from viewer import actions
+
+    _reset(viewer)
+    viewer.model.set("seed", 4242)
+    _settle(viewer)
+    x, y, w, h = viewer.unit_square_rect()
+    shown = viewer.grab()[y:y + h, x:x + w].astype(int)
+    path = actions.save_recipe(viewer, str(tmp_path / "edited.json"))
+    out = tmp_path / "edited.png"
+    env = dict(os.environ, PYTHONPATH=ROOT)
+    subprocess.run([sys.executable, "-m", "cellgl", "bake", path, "-o", str(out), "--size", f"{w}x{h}"],
+                   check=True, env=env, cwd=str(tmp_path), capture_output=True, timeout=300)
+    baked = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    assert baked.shape == shown.shape
+    assert np.mean(np.abs(baked - shown).max(axis=-1) <= 2) > 0.995
+    from cellgl.recipe import load_recipe
+
+    assert load_recipe(path) == viewer.model.recipe
+
+
+def test_cli_screenshot(display, tmp_path):
+    out = tmp_path / "shot.png"
+    env = dict(os.environ, PYTHONPATH=ROOT)
+    preset = [PRESET] if PRESET else []
+    r = subprocess.run([sys.executable, "-m", "cellgl", "view", *preset, "--screenshot", str(out),
+                        "--frames", "2", "--size", "512x384", "--set", "seed=7", "--mode", "tiled"],
+                       env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    from PIL import Image
+
+    im = Image.open(out)
+    assert im.size == (512, 384)
+    r = subprocess.run([sys.executable, "-m", "cellgl", "view", *preset, "--screenshot", str(out),
+                        "--set", "no_such_param=1"], env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 2 and "no_such_param" in r.stderr
