@@ -61,8 +61,10 @@ def _chunk_size(n: int, dim: int, outputs) -> int:
     return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
 
 
-def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray):
-    """Dispatch one chunk of ``count`` samples and copy results into ``out``."""
+def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
+         groups=None):
+    """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
+    1D dispatch) and copy results into ``out[start:start + count]``."""
     bufs = {}
     sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim}
     binding = {"F": 2, "delta": 3, "id": 4, "grad": 5}
@@ -73,7 +75,8 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     flags.clear()
     flags.bind_to_storage_buffer(6)
     _set(prog, "u_count", count)
-    prog.run(group_x=(count + LOCAL_SIZE - 1) // LOCAL_SIZE)
+    gx, gy, gz = groups or ((count + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
+    prog.run(group_x=gx, group_y=gy, group_z=gz)
     ctx.memory_barrier()
     for name, buf in bufs.items():
         dtype = np.uint32 if name == "id" else np.float32
@@ -107,7 +110,6 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np
     ctx = context.get_context()
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
     _set_params(prog, p)
-    _set(prog, "u_first", 0)
     _set(prog, "u_scale", float(p.scale))
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs)
@@ -136,13 +138,24 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
     _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))
     _set(prog, "u_spacing", tuple(float(v) for v in spacing))
-    _set(prog, "u_shape", tuple(int(v) for v in shape_xyzw))
-    N = int(np.prod(shape_xyzw))
+    X, Y, Z, W = (int(v) for v in shape_xyzw)
+    N = X * Y * Z * W
     out = _alloc(N, n, p.dim, outputs)
     inexact = np.zeros(N, dtype=bool)
     step = _chunk_size(n, p.dim, outputs)
-    for start in range(0, N, step):
-        count = min(step, N - start)
-        _set(prog, "u_first", start)
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
+    # Slabs of whole rows: several z-layers of full rows, or some rows of one layer,
+    # so each slab is contiguous in the x-fastest output.
+    if X * Y <= step and Y <= _MAX_GROUPS:
+        ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
+    else:
+        ny, nz = max(1, min(step // X, _MAX_GROUPS)), 1
+    gx = (X + LOCAL_SIZE - 1) // LOCAL_SIZE
+    for w in range(W):
+        for z0 in range(0, Z, nz):
+            for y0 in range(0, Y, ny):
+                cy, cz = min(ny, Y - y0), min(nz, Z - z0)
+                _set(prog, "u_slab", (0, y0, z0, w))
+                _set(prog, "u_slab_size", (X, cy))
+                start = ((w * Z + z0) * Y + y0) * X
+                _run(prog, ctx, X * cy * cz, n, p.dim, outputs, out, start, inexact, groups=(gx, cy, cz))
     return out, ~inexact

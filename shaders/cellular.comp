@@ -18,13 +18,15 @@ uniform ivec4 u_period;
 uniform float u_minkowski_p;
 uniform float u_out_scale;     // distances and deltas are multiplied by this
 uniform uint u_count;          // number of samples in this chunk
-uniform uint u_first;          // grid index of the chunk's first sample
 
 #if CELL_GRID
+// The grid is dispatched in slabs: invocation (x, y, z) of a slab is grid
+// sample (x, u_slab.y + y, u_slab.z + z, u_slab.w); no integer division.
 uniform ivec4 u_origin_cell;   // grid origin, split into cell + fraction
 uniform vec4 u_origin_frac;
 uniform vec4 u_spacing;
-uniform ivec4 u_shape;         // samples along x, y, z, w
+uniform ivec4 u_slab;          // first sample of this slab (x is 0)
+uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
 #else
 uniform double u_scale;        // positions are multiplied by this first
 // Sample positions, float64, tightly packed (CELL_DIM values per sample).
@@ -40,25 +42,25 @@ layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_fl
 
 void main()
 {
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= u_count) {
-        return;
-    }
     ivec4 cell;
     vec4 frac;
 #if CELL_GRID
-    // x fastest: s = ((w * Z + z) * Y + y) * X + x
-    ivec4 idx;
-    uint rest = u_first + i;
-    idx.x = int(rest % uint(u_shape.x)); rest /= uint(u_shape.x);
-    idx.y = int(rest % uint(u_shape.y)); rest /= uint(u_shape.y);
-    idx.z = int(rest % uint(u_shape.z)); rest /= uint(u_shape.z);
-    idx.w = int(rest);
+    uvec3 g = gl_GlobalInvocationID;
+    if (g.x >= uint(u_slab_size.x)) {
+        return;
+    }
+    // Output index within the slab, x fastest.
+    uint i = (g.z * uint(u_slab_size.y) + g.y) * uint(u_slab_size.x) + g.x;
+    ivec4 idx = ivec4(int(g.x), u_slab.y + int(g.y), u_slab.z + int(g.z), u_slab.w);
     vec4 pos = u_origin_frac + u_spacing * vec4(idx);
     vec4 fl = floor(pos);
     cell = u_origin_cell + ivec4(fl);
     frac = pos - fl;
 #else
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= u_count) {
+        return;
+    }
     cell = ivec4(0);
     frac = vec4(0.0);
     for (int a = 0; a < CELL_DIM; a++) {
