@@ -79,9 +79,8 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     prog.run(group_x=gx, group_y=gy, group_z=gz)
     ctx.memory_barrier()
     for name, buf in bufs.items():
-        dtype = np.uint32 if name == "id" else np.float32
-        arr = np.frombuffer(buf.read(), dtype=dtype)[: count * sizes[name] // 4]
-        out[name][start:start + count] = arr.reshape(out[name][start:start + count].shape)
+        # Straight into the result array (a contiguous run of whole samples).
+        buf.read_into(out[name][start:start + count], size=count * sizes[name])
         buf.release()
     nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
     if nbad:
