@@ -111,7 +111,11 @@ def _reset(v, preset=PRESET):
 
 def _drag(v, name, frac0, frac1, steps=6):
     """Press on widget ``name`` at fraction frac0 of its width, drag to frac1, release."""
+    v.scroll_to = name
+    v.frame()
+    v.frame()
     x0, y0, x1, y1 = v.widget_rects[name]
+    assert 0 <= y0 and y1 <= v.size[1], f"widget {name} is not on screen: {v.widget_rects[name]}"
     y = (y0 + y1) / 2
     xa, xb = x0 + frac0 * (x1 - x0), x0 + frac1 * (x1 - x0)
     events = [(xa, y, False), (xa, y, True)]

@@ -87,6 +87,7 @@ class Viewer:
         self.render_ms = 0.0
         self.readout: dict | None = None
         self.widget_rects: dict[str, tuple[float, float, float, float]] = {}
+        self.scroll_to: str | None = None   # panel widget to scroll into view next frame
         self._script: list = []
         self._view_drag = False
         self._last_time = time.perf_counter()
@@ -205,7 +206,9 @@ class Viewer:
         imgui.new_frame()
 
         if self.mode == "anim" and self.playing:
-            self.model.set("time", self.model.get("time") + self.speed * min(dt, 0.1))
+            # A hidden window (capture) steps a fixed 1/30 s per frame: reproducible screenshots.
+            step = 1.0 / 30.0 if self.hidden else min(dt, 0.1)
+            self.model.set("time", round(self.model.get("time") + self.speed * step, 9))
 
         if self.panel_visible:
             from .panel import draw_panel
@@ -213,6 +216,9 @@ class Viewer:
             draw_panel(self)
         self._view_input(io)
         imgui.render()
+        # Readouts, bake and export use cellgl's headless context, which may have been made
+        # current on this thread: take the window's context back before drawing.
+        glfw.make_context_current(self.window)
 
         w, h = self.size
         vx, vy, vw, vh = self.view_rect

@@ -27,6 +27,9 @@ _GROUP_TITLES = {
 def _record(viewer, name: str) -> None:
     a, b = imgui.get_item_rect_min(), imgui.get_item_rect_max()
     viewer.widget_rects[name] = (a.x, a.y, b.x, b.y)
+    if viewer.scroll_to == name:  # bring a widget into view (tests, keyboard users)
+        imgui.set_scroll_here_y(0.5)
+        viewer.scroll_to = None
 
 
 def _is_log(p) -> bool:
