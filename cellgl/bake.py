@@ -174,6 +174,8 @@ class _Encoding:
     dtype: np.dtype
 
     def encode(self, a: np.ndarray) -> np.ndarray:
+        if self.channel == "color":
+            a = np.asarray(a)[..., :3]
         if self.channel == "id":
             if self.samples == 3:
                 return id_colors(a)
@@ -186,6 +188,8 @@ class _Encoding:
 def _encoding(channel: str, ext: str, bits: int) -> _Encoding:
     fmt = FORMATS[ext]
     samples = CHANNELS[channel]
+    if channel == "color":
+        samples = 3  # render() gives RGBA with alpha always 1: files get RGB
     if channel == "id":
         if ext == ".png":
             if bits != 8:
@@ -204,7 +208,7 @@ def _encoding(channel: str, ext: str, bits: int) -> _Encoding:
 
 
 #: EXR channel names per cellgl channel.
-_EXR_NAMES = {"color": ("R", "G", "B", "A"), "normal": ("normal.R", "normal.G", "normal.B")}
+_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B")}
 
 
 def _exr_names(channel: str) -> tuple[str, ...]:
@@ -377,7 +381,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     depth_slices : int, optional
         Bake a volume of this many slices, shape ``(D, H, W[, S])`` (``.npy`` and ``.tif`` only).
     channels : sequence of str
-        Any of ``color`` (RGBA), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``. An ``.exr``
+        Any of ``color`` (RGB), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``. An ``.exr``
         holds them all; other formats write one file per channel, ``<stem>_<channel><ext>``,
         when more than one is asked for.
     bit_depth : {8, 16, 32}, optional
@@ -435,6 +439,10 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
     recipe = _load(recipe_or_name, sets, tileable)
+    if depth_slices is not None and recipe.get("dimension") < 3:
+        raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
+                        f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
+                        f"(try --set dimension=3)")
     _check_disk(path.parent, w, h, depth_slices, outputs, ext)
 
     written = []
@@ -593,7 +601,7 @@ _EPILOG = """\
 formats (from the extension) and --depth (bits per sample):
   .png  8 (default) or 16     .exr  16 (half) or 32 (float, default)
   .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
-channels: color (RGBA), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
+channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 examples:
   cellgl bake flagstone -o flagstone.png
