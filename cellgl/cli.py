@@ -101,6 +101,23 @@ def _cmd_export(args: argparse.Namespace) -> int:
 
 
 # --------------------------------------------------------------------------------------------
+# presets (cellgl/recipe.py; see docs/textures.md)
+# --------------------------------------------------------------------------------------------
+
+
+def _add_presets(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    from .recipe import add_presets_parser
+
+    return add_presets_parser(sub)
+
+
+def _cmd_presets(args: argparse.Namespace) -> int:
+    from .recipe import run_presets_cli
+
+    return run_presets_cli(args)
+
+
+# --------------------------------------------------------------------------------------------
 # registry and entry point
 # --------------------------------------------------------------------------------------------
 
@@ -110,6 +127,7 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "bake": (_add_bake, _cmd_bake),
     "view": (_add_view, _cmd_view),
     "export": (_add_export, _cmd_export),
+    "presets": (_add_presets, _cmd_presets),
 }
 
 
