@@ -256,7 +256,8 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
 
     # join continuation lines
     raw = text.replace("\\\n", "")
-    out_lines: list[str] = []
+    # output chunks: (macros in force, lines); a #define/#undef starts a new chunk
+    chunks: list[tuple[dict[str, str], list[str]]] = [(macros, [])]
     # stack of [active_now, any_branch_taken, parent_active, seen_else]
     stack: list[list[bool]] = []
     active = True
@@ -265,7 +266,7 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
         m = _DIRECTIVE_RE.match(line) if line.lstrip().startswith("#") else None
         if m is None:
             if active:
-                out_lines.append(line)
+                chunks[-1][1].append(line)
             continue
         kw, rest = m.group(1), _strip_comment(m.group(2))
         if kw in ("if", "ifdef", "ifndef"):
@@ -308,9 +309,13 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
                 raise TranslateError(
                     f"{where}: function-like macro {m2.group(1)!r} is not supported in exported "
                     "snippets; write a function instead")
+            macros = dict(macros)
             macros[m2.group(1)] = m2.group(3)
+            chunks.append((macros, []))
         elif kw == "undef":
+            macros = dict(macros)
             macros.pop(rest, None)
+            chunks.append((macros, []))
         elif kw == "":
             continue                    # the null directive
         else:
@@ -319,20 +324,29 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
         raise TranslateError(f"{name}: {len(stack)} #if block(s) not closed by #endif")
 
     # substitute macros in code (comments are prose and stay as written)
-    toks = tokenize("\n".join(out_lines))
-    for t in toks:
-        if t.kind == "id" and t.text in macros:
-            value = " ".join(_expand([t.text], macros, name))
-            if not re.search(r"[0-9a-fA-F][uU]\b", value):
-                try:                    # an integer constant expression becomes its value
-                    value = str(_Expr(_ptoks(value), name).parse())
-                except TranslateError:
-                    pass
-            # a negative or compound value keeps its meaning next to any operator
-            if re.fullmatch(r"[\w.]+", value) is None and value:
-                value = f"({value})"
-            t.text = value
-    return _join(toks)
+    out: list[str] = []
+    for env, lines in chunks:
+        if not lines:
+            continue
+        toks = tokenize("\n".join(lines))
+        for t in toks:
+            if t.kind == "id" and t.text in env:
+                t.text = _macro_value(t.text, env, name)
+        out.append(_join(toks))
+    return "\n".join(out)
+
+
+def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
+    value = " ".join(_expand([key], env, name))
+    if not re.search(r"[0-9a-fA-F][uU]\b", value):
+        try:                            # an integer constant expression becomes its value
+            value = str(_Expr(_ptoks(value), name).parse())
+        except TranslateError:
+            pass
+    # a negative or compound value keeps its meaning next to any operator
+    if value and re.fullmatch(r"[\w.]+", value) is None:
+        value = f"({value})"
+    return value
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,267 @@
+"""Snippet export: the preprocessor subset, prefixing, every target through a real compiler,
+and the GLSL / GLSL ES snippets reproducing the GPU's numbers pixel for pixel.
+
+Compilers: glslangValidator (Debian glslang-tools) for GLSL 3.30/4.30, GLSL ES 3.00 and HLSL
+(-D, to SPIR-V); naga through the ``wgpu`` package for WGSL. A missing compiler skips its test
+unless CELLGL_REQUIRE_GPU is set (CI), where it fails.
+"""
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from cellgl import core, export, translate
+
+REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+GLSLANG = shutil.which("glslangValidator")
+
+
+def _missing(what: str):
+    if REQUIRE:
+        pytest.fail(f"CELLGL_REQUIRE_GPU=1 but {what} is missing", pytrace=False)
+    pytest.skip(f"{what} is missing")
+
+
+# --------------------------------------------------------------------------------------------
+# the preprocessor subset
+# --------------------------------------------------------------------------------------------
+
+
+def test_specialise_branches_and_substitution():
+    src = (
+        "#if A == 2\n"
+        "int a = A;\n"
+        "#elif A > 2 && defined(B)\n"
+        "int b = B;\n"
+        "#else\n"
+        "int c;\n"
+        "#endif\n"
+        "#ifdef B\n"
+        "#if (B - 1) * 2 >= 4 || !C\n"
+        "float x = float(B);  // B stays B in a comment\n"
+        "#endif\n"
+        "#endif\n"
+        "#ifndef Z\n"
+        "#define LOCAL (A < 4 ? A : 4)\n"
+        "int n = LOCAL;\n"
+        "#undef LOCAL\n"
+        "int LOCALX = 1;\n"
+        "#endif\n"
+    )
+    out = translate.specialise(src, {"A": 3, "B": 3, "C": 0})
+    assert "#" not in out
+    assert "int b = 3;" in out and "int a" not in out and "int c" not in out
+    assert "float x = float(3);  // B stays B in a comment" in out
+    assert "int n = 3;" in out and "int LOCALX = 1;" in out
+    out = translate.specialise(src, {"A": 2})
+    assert "int a = 2;" in out and "float x" not in out
+
+
+@pytest.mark.parametrize("src, message", [
+    ("#if UNKNOWN\n#endif\n", "undefined macro 'UNKNOWN'"),
+    ("#if 1\n", "not closed"),
+    ("#endif\n", "without #if"),
+    ("#else\n", "without #if"),
+    ("#if 1\n#else\n#else\n#endif\n", "after #else"),
+    ("#define F(x) x\n", "function-like macro"),
+    ('#include "a.glsl"\n', "#include cannot appear"),
+    ("#version 330\n", "#version cannot appear"),
+    ("#if 1 / 0\n#endif\n", "division by zero"),
+])
+def test_specialise_errors(src, message):
+    with pytest.raises(translate.TranslateError, match=re.escape(message)):
+        translate.specialise(src, {})
+
+
+def test_prefix_names():
+    src = ("struct CellThing { float a; };\n"
+           "const int _cell_table[2] = int[2](1, 2);\n"
+           "// cell_f() uses _cell_table\n"
+           "float cell_f(CellThing t) { return t.a + float(_cell_table[1]); }\n"
+           "float helper(float x) { return cell_f(CellThing(x)); }\n")
+    out, mapping = translate.prefix_names(src)
+    assert mapping == {"CellThing": "CellglThing", "_cell_table": "cellgl_table_",
+                       "cell_f": "cellgl_f", "helper": "cellgl_helper"}
+    assert "// cellgl_f() uses cellgl_table_" in out
+    assert "t.a" in out                      # members and locals are left alone
+    assert all(n.startswith(("cellgl_", "Cellgl")) for n in translate.top_level_names(out))
+
+
+# --------------------------------------------------------------------------------------------
+# targets, refusals, header
+# --------------------------------------------------------------------------------------------
+
+BASES = {
+    "poisson": core.make_params(2),
+    "jitter-manhattan": core.make_params(2, distribution="jitter", jitter=0.8, metric="manhattan"),
+    "periodic-minkowski": core.make_params(2, metric="minkowski", minkowski_p=1.5, period=8, seed=7),
+}
+
+
+def basis_snippet(name: str, target: str) -> str:
+    return export.export_program(export.basis_program(BASES[name]), target)
+
+
+@pytest.mark.parametrize("target", ["gles100", "webgl1", "WebGL"])
+def test_webgl1_refused(target):
+    with pytest.raises(export.ExportError, match="WebGL1.*integers"):
+        export.check_target(target)
+
+
+def test_unknown_target_names_the_accepted_ones():
+    with pytest.raises(export.ExportError, match="expected one of: glsl, gles, shadertoy"):
+        export.check_target("metal")
+
+
+@pytest.mark.parametrize("target", list(export.TARGETS))
+def test_snippet_is_self_contained(target):
+    text = basis_snippet("periodic-minkowski", target)
+    assert text.startswith("// cellgl ")
+    assert "Recipe:" in text and "cellgl_texture" in text
+    code = re.sub(r"//[^\n]*", "", text)
+    directives = [ln for ln in code.splitlines() if ln.strip().startswith("#")]
+    assert directives == (["#pragma once"] if target == "unreal" else [])
+    assert "#version" not in code and "#include" not in code
+    assert not re.search(r"\bCELL_\w+", code), "a macro leaked into the code"
+    if export.TARGETS[target].dialect in ("glsl", "gles", "godot"):
+        body = text if target != "godot" else text.replace("shader_type canvas_item;", "")
+        for name in translate.top_level_names(re.sub(r"//[^\n]*", "", body)):
+            assert name.startswith(("cellgl_", "Cellgl")) or name in ("mainImage", "fragment"), name
+
+
+# --------------------------------------------------------------------------------------------
+# real compilers
+# --------------------------------------------------------------------------------------------
+
+_GLSL_MAIN = "out vec4 cellgl_out;\nvoid main() { cellgl_out = cellgl_texture(gl_FragCoord.xy / 64.0); }\n"
+
+
+def glslang(tmp_path, name: str, text: str, *args: str) -> None:
+    if GLSLANG is None:
+        _missing("glslangValidator (Debian glslang-tools)")
+    path = tmp_path / name
+    path.write_text(text)
+    out = ["-o", str(tmp_path / (name + ".spv"))] if "-V" in args else []
+    res = subprocess.run([GLSLANG, *args, *out, str(path)], capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 0, res.stdout + res.stderr
+
+
+def compile_snippet(tmp_path, target: str, text: str) -> None:
+    """Compile ``text`` (a snippet for ``target``) in a minimal shader of its dialect."""
+    d = export.TARGETS[target].dialect
+    if target == "glsl":
+        for version in ("330 core", "430"):
+            glslang(tmp_path, f"glsl{version[:3]}.frag", f"#version {version}\n{text}{_GLSL_MAIN}")
+    elif target == "shadertoy":
+        prelude = ("#version 300 es\nprecision mediump float;\nuniform vec3 iResolution;\n"
+                   "out vec4 cellgl_out;\n")
+        glslang(tmp_path, "st.frag",
+                prelude + text + "void main() { mainImage(cellgl_out, gl_FragCoord.xy); }\n")
+    elif d in ("gles", "godot"):
+        # Godot's language is GLSL ES 3.00 plus its own header and fragment(); the code between
+        # is checked as GLSL ES (Godot itself is not available to the tests).
+        body = text.replace("shader_type canvas_item;", "")
+        body = re.sub(r"void fragment\(\)\n\{\n    COLOR = cellgl_texture\(UV\);\n\}\n", "", body)
+        glslang(tmp_path, f"{target}.frag",
+                "#version 300 es\nprecision mediump float;\n" + body + _GLSL_MAIN)
+    elif d == "hlsl":
+        main = ("float4 main(float4 pos : SV_Position) : SV_Target\n"
+                "{\n    float4 c;\n    cellgl_texture_float(pos.xy / 64.0, c);\n"
+                "    return c + cellgl_texture(pos.yx / 64.0);\n}\n")
+        glslang(tmp_path, f"{target}.hlsl", text + main, "-D", "-V", "-e", "main", "-S", "frag")
+    elif d == "wgsl":
+        wgsl_validate(text + "\n@fragment\nfn cellgl_main(@builtin(position) pos: vec4<f32>) "
+                      "-> @location(0) vec4<f32>\n{\n    return cellgl_texture(pos.xy / 64.0);\n}\n")
+    else:  # pragma: no cover
+        raise AssertionError(target)
+
+
+_WGPU_DEVICE = []
+
+
+def wgsl_validate(text: str) -> None:
+    try:
+        import wgpu
+    except ImportError:
+        _missing("the wgpu package (naga validates WGSL)")
+    if not _WGPU_DEVICE:
+        try:
+            adapter = wgpu.gpu.request_adapter_sync(power_preference="low-power")
+            _WGPU_DEVICE.append(adapter.request_device_sync())
+        except Exception as exc:  # no Vulkan driver (Debian: mesa-vulkan-drivers)
+            _missing(f"a wgpu adapter ({exc})")
+    _WGPU_DEVICE[0].create_shader_module(code=text)   # raises with naga's message if invalid
+
+
+@pytest.mark.parametrize("target", list(export.TARGETS))
+@pytest.mark.parametrize("basis", list(BASES))
+def test_basis_snippet_compiles(tmp_path, basis, target):
+    compile_snippet(tmp_path, target, basis_snippet(basis, target))
+
+
+# --------------------------------------------------------------------------------------------
+# same numbers: render the snippet with ModernGL, compare with the GPU basis / the bake
+# --------------------------------------------------------------------------------------------
+
+_VERT = """#version 330 core
+void main()
+{
+    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
+    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
+}
+"""
+
+
+def render_snippet(ctx, body: str, width: int, height: int) -> np.ndarray:
+    """``cellgl_texture(uv)`` of ``body`` at every pixel centre, rows top to bottom (bake order)."""
+    frag = ("#version 330 core\n" + body +
+            "uniform vec2 size;\nout vec4 cellgl_out;\n"
+            "void main() { cellgl_out = cellgl_texture(gl_FragCoord.xy / size); }\n")
+    prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
+    prog["size"].value = (float(width), float(height))
+    key = (id(ctx), width, height)
+    if key not in _TARGETS:          # kept for the session: releasing a bound FBO upsets moderngl
+        tex = ctx.texture((width, height), 4, dtype="f4")
+        _TARGETS[key] = (ctx.framebuffer(color_attachments=[tex]), tex)
+    fbo = _TARGETS[key][0]
+    vao = ctx.vertex_array(prog, [])
+    try:
+        fbo.use()
+        fbo.viewport = (0, 0, width, height)
+        fbo.clear()
+        vao.render(mode=ctx.TRIANGLES, vertices=3)
+        # FBO row k has gl_FragCoord.y = k + 0.5, i.e. v = (k + 0.5) / H: the bake's row k.
+        data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
+        return data.reshape(height, width, 4).copy()
+    finally:
+        vao.release()
+        prog.release()
+
+
+_TARGETS: dict = {}
+
+
+def snippet_code(text: str) -> str:
+    """The code part of a snippet (everything after the header comment)."""
+    return text.split("\n\n", 1)[1]
+
+
+@pytest.mark.parametrize("target", ["glsl", "gles"])
+@pytest.mark.parametrize("basis", list(BASES))
+def test_basis_snippet_reproduces_the_gpu(ctx, basis, target):
+    W, H, freq = 64, 48, 8.0
+    p = BASES[basis]
+    text = basis_snippet(basis, target)
+    got = render_snippet(ctx, snippet_code(text), W, H)
+    kw = dict(metric=p.metric.name.lower(), distribution=p.distribution.name.lower(),
+              jitter=p.jitter, minkowski_p=p.minkowski_p, seed=p.seed,
+              period=p.period[:2] if any(p.period) else None)
+    ref = core.cellular_grid((H, W), origin=(0.5 * freq / W, 0.5 * freq / H),
+                             spacing=(freq / W, freq / H), n=4, outputs=("F",), **kw)
+    np.testing.assert_allclose(got, ref.F, rtol=2e-5, atol=2e-5)
