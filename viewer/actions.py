@@ -76,7 +76,7 @@ def _error(viewer, exc: Exception) -> None:
 def draw(viewer) -> None:
     st = viewer.__dict__.setdefault("_actions_state", _State())
     if st.path is None:
-        st.path = os.path.join(os.getcwd(), _stem(viewer))
+        st.path = _stem(viewer)  # relative to the working directory
     imgui.set_next_item_width(-1)
     _, st.path = imgui.input_text("##path", st.path)
     if imgui.is_item_hovered():
