@@ -287,11 +287,16 @@ class _Progress:
         self.enabled = enabled and total > 1
         self.stream = stream or sys.stderr
         self.t0 = time.perf_counter()
+        self.last = -1.0
 
     def step(self) -> None:
         self.done += 1
         if not self.enabled:
             return
+        now = time.perf_counter()
+        if self.done < self.total and now - self.last < 0.25:
+            return  # redraw at most four times a second, and always at the end
+        self.last = now
         width = 30
         fill = width * self.done // self.total
         secs = time.perf_counter() - self.t0
@@ -487,8 +492,8 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator
                 raise RuntimeError(f"render() gave {e.channel} of shape {a.shape}, "
                                    f"expected {expect}")
             enc[e.channel] = a
-        yield x0, y0, enc
         bar.step()
+        yield x0, y0, enc
 
 
 def _bands(tiles: Iterator[tuple], plan: _Plan) -> Iterator[dict]:
