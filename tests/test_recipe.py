@@ -1,0 +1,131 @@
+"""Recipes: JSON round trips, strict validation with clear errors, --set parsing, presets listing."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from cellgl import params
+from cellgl.recipe import Recipe, RecipeError, list_presets, load_recipe
+
+
+def test_table_is_consistent():
+    names = [p.name for p in params.PARAMS]
+    assert len(names) == len(set(names))
+    for p in params.PARAMS:
+        assert p.doc and p.group in params.GROUPS
+        if p.type in ("float", "int"):
+            assert p.lo <= p.default <= p.hi, p.name
+        if p.type == "enum":
+            assert p.default in p.choices
+    assert "| `c1 .. c8` |" in params.markdown_table()
+
+
+def test_defaults_round_trip(tmp_path):
+    r = Recipe()
+    assert Recipe.from_dict(r.to_dict()) == r
+    path = tmp_path / "r.json"
+    r.save(path)
+    assert Recipe.load(path) == r
+    assert not list(tmp_path.glob(".*tmp"))      # atomic save leaves no temp file
+
+
+@pytest.mark.parametrize("name", [n for n, _ in list_presets()])
+def test_every_preset_round_trips(name, tmp_path):
+    r = load_recipe(name)
+    assert Recipe.from_dict(json.loads(json.dumps(r.to_dict()))) == r
+    path = tmp_path / f"{name}.json"
+    r.save(path)
+    back = Recipe.load(path)
+    assert back == r and back.variants == r.variants
+
+
+def test_list_presets_has_every_paper_texture():
+    names = {n for n, _ in list_presets()}
+    want = {"f1", "f2", "f3", "f4", "veins", "polka", "flagstone", "crumple", "sea", "hide", "hull", "craters",
+            "rock", "ice", "mountains", "worley-gallery", "qin-marble", "qin-wood", "qin-trunk", "qin-cloud",
+            "qin-flame", "qin-wrinkle"}
+    assert want <= names
+    assert all(doc for _, doc in list_presets())
+    assert len(load_recipe("worley-gallery").variants) == 20
+    assert load_recipe("worley-gallery:9").get("linear")[:4] == [-1.0, -1.0, 2.0, 0.0]
+    assert load_recipe("qin-wrinkle:0").get("octaves") == 1.0
+
+
+def test_qin_coefficients():
+    m = load_recipe("qin-marble")
+    assert m.get("linear")[:4] == [-1.0, 1.0, -1.0, 1.0]
+    assert m.get("products") == [[(-1.0) ** (i + j) for j in range(4)] for i in range(4)]
+    assert len(m.ramp) == 13 and m.get("ramp_mode") == "spline"
+    w = load_recipe("qin-wood")
+    assert w.get("c1") == 1.0 and w.get("c11") == -1.0
+
+
+@pytest.mark.parametrize("d, words", [
+    ({"fractal": {"octaves": 12}}, ["fractal.octaves", "12", "[1.0, 8.0]"]),
+    ({"basis": {"metric": "taxicab"}}, ["basis.metric", "taxicab", "euclidean, manhattan"]),
+    ({"basis": {"dimension": 2.5}}, ["basis.dimension", "2.5", "integer"]),
+    ({"basis": {"octaves": 3}}, ["basis.octaves", "belongs in 'fractal'"]),
+    ({"fractl": {}}, ["fractl", "did you mean fractal"]),
+    ({"mapping": {"invert": "yes"}}, ["mapping.invert", "true or false"]),
+    ({"combination": {"linear": [1, "a"]}}, ["combination.linear[1]", "'a'"]),
+    ({"combination": {"products": [[0, 0], [0, 0]]}}, ["combination.products", "4 x 4"]),
+    ({"combination": {"linear": [1], "c1": 2}}, ["c1", "twice"]),
+    ({"color": {"ramp": [[0.5, 1, 1, 1], [0.2, 0, 0, 0]]}}, ["color.ramp[1]", "must not decrease"]),
+    ({"color": {"ramp_mode": "spline", "ramp": [[0, 0, 0, 0], [1, 1, 1, 1]]}}, ["color.ramp", "at least 4"]),
+    ({"basis": {"min_points": 5, "max_points": 3}}, ["basis.min_points", "max_points"]),
+    ({"combination": {"range_lo": 1, "range_hi": 0}}, ["combination.range_hi", "must exceed"]),
+    ({"domain": {"tileable": True, "frequency": 4.5}}, ["domain.frequency", "4.5", "integer", "tileable"]),
+    ({"domain": {"tileable": True, "frequency": 4}, "fractal": {"fractal": "sum", "lacunarity": 2.5}},
+     ["fractal.lacunarity", "2.5"]),
+    ({"basis": {"distribution": "worley1996"}}, ["basis.distribution", "dimension 3"]),
+    ({"outputs": ["colour"]}, ["outputs", "colour", "color, height"]),
+    ({"cellgl_recipe": 7}, ["cellgl_recipe", "7"]),
+])
+def test_bad_recipes_name_field_and_accepted(d, words):
+    with pytest.raises(RecipeError) as exc:
+        Recipe.from_dict(d)
+    for w in words:
+        assert w in str(exc.value), (w, str(exc.value))
+
+
+def test_set_from_strings():
+    r = Recipe().set_from_strings(["octaves=3.5", "fractal=qin", "seed=0x10", "tileable=true", "frequency=4",
+                                  "linear=[0, 1]", "c12=-1", "ramp=[[0,0,0,0],[1,1,0,0]]"])
+    assert r.get("octaves") == 3.5 and r.get("fractal") == "qin" and r.get("seed") == 16
+    assert r.get("tileable") is True and r.get("linear")[:3] == [0.0, 1.0, 0.0] and r.get("c12") == -1.0
+    assert r.ramp[-1] == (1.0, 1.0, 0.0, 0.0)
+    with pytest.raises(RecipeError, match=r"octave.*did you mean octaves"):
+        Recipe().set_from_strings(["octave=3"])
+    with pytest.raises(RecipeError, match=r"gain=abc.*\[0.0, 1.0\]"):
+        Recipe().set_from_strings(["gain=abc"])
+    with pytest.raises(RecipeError, match="name=value"):
+        Recipe().set_from_strings(["gain"])
+    with pytest.raises(RecipeError, match=r"--set basis.density: out of range: 99"):
+        Recipe().set_from_strings(["density=99"])
+
+
+def test_load_recipe_errors(tmp_path):
+    with pytest.raises(RecipeError, match="unknown preset 'flagston'.*did you mean flagstone"):
+        load_recipe("flagston")
+    with pytest.raises(RecipeError, match="no variant '99'"):
+        load_recipe("worley-gallery:99")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{nope")
+    with pytest.raises(RecipeError, match="not valid JSON"):
+        load_recipe(str(bad))
+    bad.write_text('{"fractal": {"gain": 2}}')
+    with pytest.raises(RecipeError, match=r"bad.json: fractal.gain"):
+        load_recipe(str(bad))
+
+
+def test_cli_presets(capsys):
+    from cellgl.cli import main
+
+    assert main(["presets"]) == 0
+    out = capsys.readouterr().out
+    assert "flagstone" in out and "Worley 1996 Fig. 2" in out
+    assert main(["presets", "veins", "--set", "seed=3"]) == 0
+    assert json.loads(capsys.readouterr().out)["basis"]["seed"] == 3
+    assert main(["presets", "veins", "--set", "seed=-3"]) == 2
+    assert "basis.seed" in capsys.readouterr().err
