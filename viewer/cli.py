@@ -57,7 +57,13 @@ def run(args: argparse.Namespace) -> int:
         sets=list(args.sets), panel=not args.no_panel, time=args.time,
         hidden=args.screenshot is not None,
     )
-    viewer = Viewer(opts)
+    try:
+        viewer = Viewer(opts)
+    except RuntimeError as exc:  # no display / no GL 4.3 window: a user-facing error, not a trace
+        import sys
+
+        print(f"cellgl view: error: {exc}", file=sys.stderr)
+        return 2
     try:
         if args.screenshot:
             viewer.capture(args.screenshot, frames=max(1, args.frames))
@@ -76,6 +82,8 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     try:
         return run(args)
-    except (ValueError, RuntimeError) as exc:
-        print(f"viewer: error: {exc}")
+    except ValueError as exc:
+        import sys
+
+        print(f"viewer: error: {exc}", file=sys.stderr)
         return 2
