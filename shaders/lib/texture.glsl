@@ -250,7 +250,7 @@ CellTexel cell_texture(vec4 x, CellTextureParams t)
     vec3 L = normalize(vec3(-1.0, -1.0, 1.5));
     float lambert = clamp(dot(n, L) / L.z, 0.0, 2.0);
     rgb *= mix(1.0, lambert, t.light);
-    o.color = vec4(clamp(rgb, 0.0, 1.0), 1.0);
+    o.color = vec4(clamp(rgb, vec3(0.0), vec3(1.0)), 1.0);
     o.normal = t.normal_convention == CELL_TEX_NORMAL_OPENGL ? vec3(n.x, -n.y, n.z) : n;
     return o;
 }
