@@ -129,3 +129,15 @@ def test_cli_presets(capsys):
     assert json.loads(capsys.readouterr().out)["basis"]["seed"] == 3
     assert main(["presets", "veins", "--set", "seed=-3"]) == 2
     assert "basis.seed" in capsys.readouterr().err
+
+
+def test_docs_parameter_table_is_current():
+    import importlib.util
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("make_params_table", root / "docs" / "make_params_table.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    text = (root / "docs" / "textures.md").read_text()
+    assert mod.render(text) == text, "run: PYTHONPATH=. python docs/make_params_table.py"
