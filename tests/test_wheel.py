@@ -58,12 +58,20 @@ def test_wheel_contains_shaders(wheel):
         assert any(n.startswith("cellgl/shaders/") and n.endswith(".comp") for n in names)
 
 
-def test_installed_wheel_resolves_shaders(wheel, tmp_path):
-    venv = tmp_path / "venv"
-    _run([sys.executable, "-m", "venv", venv], cwd=tmp_path, timeout=300)
+@pytest.fixture(scope="module")
+def installed(wheel, tmp_path_factory) -> Path:
+    """A clean venv with the wheel installed (shared by the tests below); returns the venv."""
+    tmp = tmp_path_factory.mktemp("installed")
+    venv = tmp / "venv"
+    _run([sys.executable, "-m", "venv", venv], cwd=tmp, timeout=300)
+    _run([venv / "bin" / "python", "-m", "pip", "install", "-q", "--disable-pip-version-check",
+          wheel], cwd=tmp, timeout=600)
+    return venv
+
+
+def test_installed_wheel_resolves_shaders(installed, tmp_path):
+    venv = installed
     py = venv / "bin" / "python"
-    _run([py, "-m", "pip", "install", "-q", "--disable-pip-version-check", wheel],
-         cwd=tmp_path, timeout=600)
 
     # Run from outside the repo with a clean environment, so only site-packages can answer.
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
@@ -97,3 +105,24 @@ def test_installed_wheel_resolves_shaders(wheel, tmp_path):
             pytest.fail(f"cellgl info failed from the installed wheel:\n{r.stderr}")
         pytest.skip(f"no GL context for `cellgl info`: {r.stderr.strip()}")
     assert "GL_RENDERER: " in r.stdout
+
+
+def test_installed_wheel_bakes_a_preset(installed, tmp_path):
+    """README's first command, `cellgl bake flagstone -o flagstone.png`, from the wheel alone."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    r = _run([installed / "bin" / "cellgl", "bake", "flagstone", "-o", "flagstone.png",
+              "--size", "48x32", "--quiet"], cwd=outside, env=env, check=False)
+    if r.returncode != 0 and "context" in r.stderr.lower() and \
+            os.environ.get("CELLGL_REQUIRE_GPU") != "1":
+        pytest.skip(f"no GL context for `cellgl bake`: {r.stderr.strip()}")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in outside.iterdir()) == ["flagstone.png"]
+    import numpy as np
+    from PIL import Image
+
+    with Image.open(outside / "flagstone.png") as im:
+        assert im.size == (48, 32) and im.mode == "RGB"
+        pixels = np.asarray(im).reshape(-1, 3)
+    assert len(np.unique(pixels, axis=0)) > 16  # a texture, not a flat fill
