@@ -118,7 +118,7 @@ def library_code(prog: Program) -> str:
     text = src.text + "\n" + prog.params + "\n" + prog.entry
     text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
     text = translate.specialise(text, prog.defines, name="snippet")
-    text, _ = translate.prefix_names(text)
+    text, _ = translate.prefix_names(text, overrides=_OVERRIDES)
     return _tidy(text)
 
 
@@ -258,11 +258,58 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
     ExportError
         Unknown or refused target, or a recipe the target cannot express.
     """
-    check_target(target)
-    from . import texture_program
-
-    prog = texture_program.program(recipe, uniforms=uniforms)
+    tgt = check_target(target)
+    if uniforms and tgt.dialect == "wgsl":
+        raise ExportError("--uniforms is not supported for WGSL (uniforms need a bind group "
+                          "layout of your renderer); export WGSL with constants")
+    prog = texture_program(recipe, uniforms=uniforms)
     return export_program(prog, target, uniforms=uniforms)
+
+
+#: lib name -> exported name, where the default prefix would collide with an entry point
+_OVERRIDES = {"cell_texture": "cellgl_texture_basis"}
+
+
+def texture_program(recipe, *, uniforms: bool = False) -> Program:
+    """The :class:`Program` of a texture recipe: ``shaders/lib/texture.glsl`` with the recipe's
+    defines, its values as ``cell_<name>`` constants (or uniforms) read by the generated loader,
+    and the entry points ``cellgl_texture(uv)`` (= ``cell_texture_uv``, what the bake runs)
+    and, for solid recipes, ``cellgl_texture3(p)``."""
+    from . import texture
+    from .recipe import Recipe, load_recipe
+
+    r = recipe if isinstance(recipe, Recipe) else load_recipe(recipe)
+    defines = texture.defines(r)
+    solid = int(r.values["dimension"]) >= 3
+    vals = texture.uniform_values(r)
+    if uniforms:
+        params = ("// The recipe's run-time values (set them from the header's table).\n"
+                  + texture.glsl_uniform_block(prefix="cell_"))
+    else:
+        params = ("// The recipe's run-time values.\n"
+                  + texture.glsl_constant_block(r, prefix="cell_"))
+    params += "\n// All of them in the library's parameter struct.\n"
+    params += texture.glsl_params_from_uniforms(prefix="cell_", function="cell_texture_params_load")
+    entry = (
+        "// The RGBA `cellgl bake` writes for the pixel whose centre is uv (v = 0: top row).\n"
+        "vec4 cellgl_texture(vec2 uv)\n"
+        "{\n"
+        "    return cell_texture_uv(uv, cell_texture_params_load());\n"
+        "}\n"
+    )
+    if solid:
+        entry += (
+            "\n// Solid texturing: the texture at p = (u, v, z) in texture space (object space\n"
+            "// scaled so that 1 unit = the image width; z = 0 is the image plane).\n"
+            "vec4 cellgl_texture3(vec3 p)\n"
+            "{\n"
+            "    return cell_texture_at(p, cell_texture_params_load()).color;\n"
+            "}\n"
+        )
+    decl_types = {n: t for t, n, _ in texture._uniform_decls("")}
+    ulist = [(decl_types.get(k[2:], ""), k[2:], v) for k, v in vals.items()]
+    return Program(files=["lib/texture.glsl"], defines=defines, params=params, entry=entry,
+                   title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist)
 
 
 # --------------------------------------------------------------------------------------------
@@ -292,7 +339,7 @@ def basis_program(p, n: int = 4, frequency: float = 8.0) -> Program:
     )
     entry = (
         "// F1..F4 of the basis at uv * cell_frequency.\n"
-        "vec4 cell_texture(vec2 uv)\n"
+        "vec4 cellgl_texture(vec2 uv)\n"
         "{\n"
         "    vec2 pos = uv * cell_frequency;\n"
         "    vec2 fl = floor(pos);\n"
