@@ -143,7 +143,7 @@ def _header(prog: Program, target: Target, uniforms: bool) -> str:
         "pixel centred at uv",
     ]
     if prog.solid:
-        entry.append("vec4 cellgl_texture3(vec3 p)   object-space position (texture cells) -> RGBA")
+        entry.append("vec4 cellgl_texture3(vec3 p)   p = (u, v, z) in texture space (solid texturing; z = 0: the image)")
     if target.dialect == "hlsl":
         entry = [e.replace("vec4", "float4").replace("vec3", "float3").replace("vec2", "float2") for e in entry]
     if target.dialect == "wgsl":
@@ -160,6 +160,10 @@ def _header(prog: Program, target: Target, uniforms: bool) -> str:
         "",
         *textwrap.wrap(target.how, 94),
     ]
+    settings = ", ".join(f"{k}={v}" for k, v in prog.defines.items()
+                         if k.startswith("CELL_") and not k.startswith(("CELL_METRIC_", "CELL_DIST_")))
+    lines += ["", "Compile-time settings resolved in this code (comments may name them):",
+              *textwrap.wrap(settings, 94)]
     if uniforms and prog.uniforms:
         lines += ["", "Uniforms (set them to these values to reproduce the recipe):"]
         for typ, name, value in prog.uniforms:
@@ -220,7 +224,9 @@ void cellgl_texture_float(float2 UV, out float4 Out)
 
 
 def _godot(code: str, name: str) -> str:
-    body = translate.add_highp(code)
+    # Godot compiles its shaders with highp defaults (precision highp float/int), so the code
+    # needs no qualifiers.
+    body = code
     if name == "godotinc":
         return body
     return (

@@ -168,8 +168,10 @@ def compile_snippet(tmp_path, target: str, text: str) -> None:
         # is checked as GLSL ES (Godot itself is not available to the tests).
         body = text.replace("shader_type canvas_item;", "")
         body = re.sub(r"void fragment\(\)\n\{\n    COLOR = cellgl_texture\(UV\);\n\}\n", "", body)
-        glslang(tmp_path, f"{target}.frag",
-                "#version 300 es\nprecision mediump float;\n" + body + _GLSL_MAIN)
+        # Godot declares highp defaults; the gles snippet must work with mediump defaults.
+        prec = ("precision highp float;\nprecision highp int;\n" if d == "godot"
+                else "precision mediump float;\n")
+        glslang(tmp_path, f"{target}.frag", "#version 300 es\n" + prec + body + _GLSL_MAIN)
     elif d == "hlsl":
         main = ("float4 main(float4 pos : SV_Position) : SV_Target\n"
                 "{\n    float4 c;\n    cellgl_texture_float(pos.xy / 64.0, c);\n"
