@@ -64,7 +64,10 @@ MAX_SLICES = 4096         #: largest volume depth (slices)
 MAX_VOXELS = 2 ** 32      #: largest width * height * slices
 MAX_TILE = 2048           #: largest tile side one render pass gets
 DEFAULT_SIZE = (512, 512)
-DEFAULT_BUDGET = 64 << 20  #: bytes of rendered float32 output per tile (or band)
+DEFAULT_BUDGET = 256 << 20  #: bytes of working memory a bake aims to stay within
+#: working memory of render() per pixel beyond its outputs (GPU buffers and read-back on
+#: llvmpipe, measured: about 230 bytes)
+RENDER_BYTES_PER_PIXEL = 256
 
 
 def _accepted(values: Iterable) -> str:
@@ -250,19 +253,26 @@ def _round16_up(n: int) -> int:
     return max(16, -(-n // 16) * 16)
 
 
-def _plan(width, height, slices, ext, channels, tile, budget) -> _Plan:
-    bpp = sum(CHANNELS[c] * 4 for c in channels) * (slices or 1)  # float32 out of render()
+def _plan(width, height, slices, ext, channels, tile, budget, file_bytes) -> _Plan:
+    """Tile size so that rendering one tile, and (PNG/EXR) holding one band, fit ``budget``.
+
+    Half the budget is for the render of one tile (``RENDER_BYTES_PER_PIXEL`` of working memory
+    plus the float32 result and its encoded copy, per pixel and slice); for PNG and EXR, which
+    stream full-width bands of rows, the other half holds the band (encoded, twice while the
+    tiles of a band are joined).
+    """
+    d = slices or 1
+    render_px = (RENDER_BYTES_PER_PIXEL + sum(CHANNELS[c] * 4 for c in channels) + file_bytes) * d
+    half = max(1, budget // 2)
+    side = min(MAX_TILE, max(16, math.isqrt(half // render_px) // 16 * 16))
     stream = FORMATS[ext].stream
     if tile is not None:
         tw = th = tile
     elif stream == "band":
-        # Full-width bands of rows: the band (not one tile) must fit the budget.
-        tw = min(width, MAX_TILE)
-        rows = max(1, budget // max(1, width * bpp))
-        th = min(height, MAX_TILE, rows if rows < 16 else rows // 16 * 16)
+        rows = max(1, half // max(1, width * 2 * file_bytes * d))
+        th = min(height, side, rows if rows < 16 else rows // 16 * 16)
+        tw = min(width, MAX_TILE, max(side, half // (th * render_px) // 16 * 16))
     else:
-        side = int(math.isqrt(max(1, budget // bpp))) // 16 * 16
-        side = min(MAX_TILE, max(16, side))
         tw, th = min(side, _round16_up(width)), min(side, _round16_up(height))
     if stream == "tile":
         tw, th = _round16_up(tw), _round16_up(th)  # TIFF tiles are multiples of 16
@@ -403,7 +413,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     progress : bool
         Draw a progress bar on stderr when there is more than one tile.
     memory_budget : int
-        Bytes of rendered output held at once (per tile, or per band of rows for PNG/EXR).
+        Bytes of working memory the bake aims to stay within beyond the process's baseline
+        (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
 
     Returns
     -------
@@ -452,7 +463,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
 
     written = []
     for out in outputs:
-        plan = _plan(w, h, depth_slices, ext, out.channels, tile, memory_budget)
+        file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
+        plan = _plan(w, h, depth_slices, ext, out.channels, tile, memory_budget, file_bytes)
         _bake_one(recipe, out, ext, plan, progress)
         written.append(out.path)
     return written
@@ -640,7 +652,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="advanced: render N x N tiles (multiple of 16) instead of a size chosen "
                         "from --memory")
     p.add_argument("--memory", default=None, metavar="MB",
-                   help=f"advanced: MB of rendered output held at once "
+                   help=f"advanced: MB of working memory to stay within; sets the tile size "
                         f"(default {DEFAULT_BUDGET >> 20})")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     return p

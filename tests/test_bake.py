@@ -81,20 +81,23 @@ def _fake_render(calls):
 @pytest.fixture
 def fake(monkeypatch):
     """Replace cellgl.recipe / cellgl.texture by stand-ins; yields the list of render calls."""
+    import cellgl.recipe as real_recipe
+    import cellgl.texture as real_texture
+
     calls: list = []
+    # Copies of the real modules (other subcommands import from them) with two names replaced.
     tex = types.ModuleType("cellgl.texture")
+    tex.__dict__.update({k: v for k, v in vars(real_texture).items() if not k.startswith("__")})
     tex.render = _fake_render(calls)
     rec = types.ModuleType("cellgl.recipe")
-
-    class RecipeError(ValueError):
-        pass
+    rec.__dict__.update({k: v for k, v in vars(real_recipe).items() if not k.startswith("__")})
 
     def load_recipe(name):
         if name not in ("flagstone", "fake"):
-            raise RecipeError(f"unknown preset {name!r}; accepted flagstone, fake")
+            raise real_recipe.RecipeError(f"unknown preset {name!r}; accepted flagstone, fake")
         return FakeRecipe(name)
 
-    rec.RecipeError, rec.load_recipe = RecipeError, load_recipe
+    rec.load_recipe = load_recipe
     for name, mod in (("texture", tex), ("recipe", rec)):
         monkeypatch.setitem(sys.modules, f"cellgl.{name}", mod)
         monkeypatch.setattr(cellgl, name, mod, raising=False)
@@ -226,13 +229,15 @@ def test_volume_tiled_equals_one_pass(fake, tmp_path, ext):
 
 
 def test_memory_budget_bounds_tiles(fake, tmp_path):
-    budget = 16 * 16 * 16 * 4  # four 16x16 RGBA float32 tiles
-    B.bake("fake", tmp_path / "a.npy", size=(100, 60), memory_budget=budget, progress=False)
-    assert len(fake) > 1 and all(tw * th * 16 <= budget for _, _, tw, th, _ in fake)
+    budget = 2 * 64 * 64 * (B.RENDER_BYTES_PER_PIXEL + 16 + 12)  # half of it: one 64x64 tile
+    B.bake("fake", tmp_path / "a.npy", size=(200, 150), memory_budget=budget, progress=False)
+    assert len(fake) == 4 * 3 and {(tw, th) for _, _, tw, th, _ in fake} >= {(64, 64)}
     fake.clear()
-    B.bake("fake", tmp_path / "a.png", size=(100, 60), memory_budget=budget, progress=False)
-    rows = {th for _, _, _, th, _ in fake}
-    assert all(r * 100 * 16 <= budget for r in rows)  # a whole band of rows fits
+    B.bake("fake", tmp_path / "a.png", size=(4000, 60), memory_budget=budget, progress=False)
+    for _, _, tw, th, _ in fake:  # a tile's render and a band of 8-bit RGB rows both fit
+        assert tw * th * (B.RENDER_BYTES_PER_PIXEL + 16 + 3) <= budget // 2
+        assert th * 4000 * 2 * 3 <= budget // 2
+    assert max(th for *_, th, _ in fake) >= 16
 
 
 def test_progress_bar(fake, tmp_path, capsys):
