@@ -65,8 +65,8 @@ MAX_VOXELS = 2 ** 32      #: largest width * height * slices
 MAX_TILE = 2048           #: largest tile side one render pass gets
 DEFAULT_SIZE = (512, 512)
 DEFAULT_BUDGET = 256 << 20  #: bytes of working memory a bake aims to stay within
-#: working memory of render() per pixel beyond its outputs (GPU buffers and read-back on
-#: llvmpipe, measured: about 230 bytes)
+#: working memory of render() per pixel beyond its outputs, for one channel (GPU buffers and
+#: read-back on llvmpipe, measured: about 230 bytes); half as much again per extra channel
 RENDER_BYTES_PER_PIXEL = 256
 
 
@@ -262,7 +262,8 @@ def _plan(width, height, slices, ext, channels, tile, budget, file_bytes) -> _Pl
     tiles of a band are joined).
     """
     d = slices or 1
-    render_px = (RENDER_BYTES_PER_PIXEL + sum(CHANNELS[c] * 4 for c in channels) + file_bytes) * d
+    overhead = RENDER_BYTES_PER_PIXEL * (1 + len(channels)) // 2  # grows with the channels
+    render_px = (overhead + sum(CHANNELS[c] * 4 for c in channels) + file_bytes) * d
     half = max(1, budget // 2)
     side = min(MAX_TILE, max(16, math.isqrt(half // render_px) // 16 * 16))
     stream = FORMATS[ext].stream
