@@ -337,8 +337,13 @@ def _load(recipe_or_name, sets, tileable):
     sets = _parse_sets(sets)
     if sets:
         recipe = recipe.set_from_strings(sets)
-    if tileable is not None:
-        recipe = recipe.replace(tileable=bool(tileable))
+    if tileable:
+        recipe, notes = recipe.tileable()
+        for note in notes:
+            print(f"cellgl: tileable: {note} (the texture repeats every whole number of cells)",
+                  file=sys.stderr)
+    elif tileable is not None:
+        recipe = recipe.replace(tileable=False)
     return recipe
 
 

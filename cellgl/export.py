@@ -386,7 +386,6 @@ def run_cli(args) -> int:
     """Run ``cellgl export``; returns the exit status."""
     import os
     import sys
-    import tempfile
 
     check_target(args.target)
     recipe = _load(args.recipe, args.sets)
@@ -394,18 +393,11 @@ def run_cli(args) -> int:
     if args.output is None:
         sys.stdout.write(text)
         return 0
-    path = os.path.abspath(args.output)
-    fd, tmp = tempfile.mkstemp(prefix=".cellgl-export-", dir=os.path.dirname(path))
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+    from .io import atomic_path
+
+    with atomic_path(os.path.abspath(args.output)) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
             f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
     return 0
 
 

@@ -30,7 +30,6 @@ import json
 import math
 import numbers
 import os
-import tempfile
 from pathlib import Path
 from types import MappingProxyType
 
@@ -201,6 +200,36 @@ class Recipe:
                 vals[k] = v
         return Recipe(vals, ramp, name, doc, outputs)
 
+    def tileable(self) -> tuple["Recipe", list[str]]:
+        """This recipe made seamless: ``tileable`` on, with the periods it needs made integers.
+
+        A tileable texture repeats every ``frequency`` cells across and ``frequency * aspect``
+        down, every octave ``lacunarity`` times more, and its noise every ``noise_frequency``
+        times more; each is rounded to the nearest positive integer. Returns the new recipe and
+        a note per value changed (e.g. ``"frequency 7.5 -> 8"``), for the user to see.
+        """
+        v = self._values
+        notes: list[str] = []
+        changes: dict = {"tileable": True}
+
+        def whole(name, x):
+            n = max(1, round(x))
+            if abs(x - n) > 1e-6:
+                notes.append(f"{name} {x:g} -> {n}")
+            return n
+
+        freq = whole("frequency", v["frequency"])
+        aspect = max(1, round(freq * v["aspect"])) / freq      # rows of cells must be whole too
+        if abs(aspect - v["aspect"]) > 1e-9:
+            notes.append(f"aspect {v['aspect']:g} -> {aspect:g}")
+        changes["frequency"] = float(freq)
+        changes["aspect"] = aspect
+        if v["fractal"] != "none":
+            changes["lacunarity"] = float(whole("lacunarity", v["lacunarity"]))
+        if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
+            changes["noise_frequency"] = float(whole("noise_frequency", v["noise_frequency"]))
+        return self.replace(**changes), notes
+
     def set_from_strings(self, items) -> "Recipe":
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe.
 
@@ -303,18 +332,10 @@ class Recipe:
 
     def save(self, path) -> None:
         """Write the recipe as JSON, atomically (temp file + os.replace)."""
-        path = Path(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-        try:
-            with os.fdopen(fd, "w") as f:
-                f.write(self.to_json())
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        from .io import atomic_path
+
+        with atomic_path(path) as tmp:
+            tmp.write_text(self.to_json())
 
     def __eq__(self, other):
         return isinstance(other, Recipe) and self.to_dict() == other.to_dict()

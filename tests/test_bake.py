@@ -39,6 +39,9 @@ class FakeRecipe:
     def replace(self, **kw):
         return FakeRecipe(self.name, {**self.values, **kw})
 
+    def tileable(self):
+        return self.replace(tileable=True), []
+
     def get(self, name):
         return self.values[name]
 
