@@ -4,10 +4,10 @@ Usage: python benchmarks/bench_pups.py [--size 1000] [--radius 0.0595] [--repeat
        [--tile N] [--mode interpolate|label] [--no-numpy]
 
 Stages (median over --repeat runs, after one warm-up that compiles the shader):
-  points    Poisson-disk positions (Bridson), random values and orientations
+  points    Poisson-disk positions (vectorised dart throwing), random values and orientations
   delaunay  periodic Delaunay graph, axes, exact support boxes (pups_graph)
   grid      periodic copies, pixel boxes, candidate grid + axis masks (pups_pack)
-  upload    std430 packing and buffer creation
+  upload    buffer creation (the std430 stream is built in pups_pack, counted in grid)
   gpu       compute dispatch + glFinish
   readback  buffer read into NumPy
 The paper's prototype: ~30 s for 1000x1000 with 700 points.

@@ -341,8 +341,101 @@ def _bridson(radius_at, rmin, rmax, domain, periodic, rng, k):
     return pts[:n].copy()
 
 
-def poisson_disk(radius, *, domain=DEFAULT_DOMAIN, periodic=True, seed=0, k=30) -> np.ndarray:
-    """Poisson-disk points with a fixed minimum distance (Bridson's algorithm).
+def _dart_throwing(r, domain, periodic, rng, rounds=64, misses=8):
+    """Fixed-radius Poisson-disk sampling by vectorised dart throwing on a background grid.
+
+    Grid cells of side <= r / sqrt(2) hold at most one point. Each round throws one dart,
+    uniform in its cell, into every *active* cell (empty and not yet covered), rejects darts
+    closer than ``r`` to an existing point (in the neighbour cells near enough to hold one:
+    the 5 x 5 block) or to a dart of higher random
+    priority thrown in the same round, and accepts the rest together. A cell is retired once
+    one existing point's disc holds all four of its corners (nothing can go there any more)
+    or after ``misses`` rejected darts in a row (a sliver left between several discs), so the
+    active set shrinks to nothing: the result is maximal up to such slivers.
+    """
+    x0, y0, x1, y1 = domain
+    wd, hd = x1 - x0, y1 - y0
+    nx = max(1, math.ceil(wd * math.sqrt(2) / r))
+    ny = max(1, math.ceil(hd * math.sqrt(2) / r))
+    cw, ch = wd / nx, hd / ny
+    # neighbour cells that can hold a point closer than r to a point of the centre cell
+    rx, ry = math.ceil(r / cw), math.ceil(r / ch)
+    offs = np.array([(di, dj) for dj in range(-ry, ry + 1) for di in range(-rx, rx + 1)
+                     if (max(abs(di) - 1, 0) * cw) ** 2 + (max(abs(dj) - 1, 0) * ch) ** 2 < r * r])
+    r2 = r * r
+    px = np.full(nx * ny + 1, np.nan)  # one slot per cell, plus an always-empty sentinel
+    py = np.full(nx * ny + 1, np.nan)
+    order = np.full(nx * ny + 1, -1, dtype=np.int64)  # acceptance order, for the output
+    n = 0
+    active = np.arange(nx * ny)
+    missed = np.zeros(nx * ny, dtype=np.int64)
+    oi, oj = offs[:, 0], offs[:, 1]
+
+    def neighbours(cells):
+        ci, cj = cells % nx, cells // nx
+        ni, nj = ci[:, None] + oi, cj[:, None] + oj
+        if periodic:
+            return (nj % ny) * nx + ni % nx
+        out = (ni < 0) | (ni >= nx) | (nj < 0) | (nj >= ny)
+        return np.where(out, nx * ny, nj * nx + ni)
+
+    def dist2(qx, qy, ax, ay):
+        dx, dy = qx - ax, qy - ay
+        if periodic:
+            dx -= wd * np.round(dx / wd)
+            dy -= hd * np.round(dy / hd)
+        return dx * dx + dy * dy
+
+    for _ in range(rounds):
+        if active.size == 0:
+            break
+        ci, cj = active % nx, active // nx
+        u = rng.random((active.size, 2))
+        dx_ = x0 + (ci + u[:, 0]) * cw
+        dy_ = y0 + (cj + u[:, 1]) * ch
+        nb = neighbours(active)
+        # against existing points (NaN distances compare False)
+        ok = ~(dist2(dx_[:, None], dy_[:, None], px[nb], py[nb]) < r2).any(axis=1)
+        # against the other darts of this round: the higher priority wins
+        prio = rng.random(active.size)
+        tx = np.full(nx * ny + 1, np.nan)
+        ty = np.full(nx * ny + 1, np.nan)
+        tp = np.full(nx * ny + 1, -1.0)
+        cand = active[ok]
+        tx[cand], ty[cand], tp[cand] = dx_[ok], dy_[ok], prio[ok]
+        nbc = nb[ok]
+        clash = (dist2(dx_[ok][:, None], dy_[ok][:, None], tx[nbc], ty[nbc]) < r2) \
+            & (tp[nbc] > prio[ok][:, None])
+        win = ~clash.any(axis=1)
+        acc = cand[win]
+        px[acc], py[acc] = dx_[ok][win], dy_[ok][win]
+        order[acc] = n + np.arange(acc.size)
+        n += acc.size
+        # retire filled cells and cells covered by a single disc
+        lost = np.ones(active.size, dtype=bool)
+        lost[np.flatnonzero(ok)[win]] = False
+        missed[active[lost]] += 1
+        rest = active[lost & (missed[active] < misses)]
+        ri, rj = rest % nx, rest // nx
+        nbr = neighbours(rest)
+        covered = np.ones(nbr.shape, dtype=bool)
+        for ex in (0.0, 1.0):
+            for ey in (0.0, 1.0):
+                covered &= dist2(x0 + (ri + ex) * cw, y0 + (rj + ey) * ch,
+                                 px[nbr].T, py[nbr].T).T < r2
+        active = rest[~covered.any(axis=1)]
+    filled = np.flatnonzero(order >= 0)
+    filled = filled[np.argsort(order[filled], kind="stable")]
+    return np.stack([px[filled], py[filled]], axis=1)
+
+
+def poisson_disk(radius, *, domain=DEFAULT_DOMAIN, periodic=True, seed=0, k=8) -> np.ndarray:
+    """Poisson-disk points with a fixed minimum distance (vectorised dart throwing).
+
+    Every empty grid cell (side <= radius / sqrt(2)) gets a dart per round; darts too close
+    to a point or to a higher-priority dart of the same round are rejected, the rest are
+    accepted together (see :func:`_dart_throwing`). Same density and coverage as Bridson's
+    algorithm (about 700 points at radius 0.0595 on the default domain), about 7x faster.
 
     Parameters
     ----------
@@ -356,11 +449,12 @@ def poisson_disk(radius, *, domain=DEFAULT_DOMAIN, periodic=True, seed=0, k=30) 
     seed : int or numpy.random.Generator
         Same seed, same points (bit for bit).
     k : int
-        Candidates per active point, >= 1.
+        Rejected darts in a row after which a cell is given up, >= 1.
 
     Returns
     -------
     numpy.ndarray of float64, shape (N, 2)
+        In acceptance order.
     """
     domain = _check_domain(domain)
     side = min(domain[2] - domain[0], domain[3] - domain[1])
@@ -370,7 +464,7 @@ def poisson_disk(radius, *, domain=DEFAULT_DOMAIN, periodic=True, seed=0, k=30) 
     k = int(k)
     if k < 1:
         raise ValueError(f"k must be >= 1, got {k}")
-    return _bridson(lambda xy: np.full(xy.shape[0], r), r, r, domain, periodic, _rng(seed), k)
+    return _dart_throwing(r, domain, periodic, _rng(seed), rounds=max(8 * k, 64), misses=k)
 
 
 def poisson_disk_variable(radius_min, radius_max, density, *, domain=DEFAULT_DOMAIN,
@@ -387,8 +481,10 @@ def poisson_disk_variable(radius_min, radius_max, density, *, domain=DEFAULT_DOM
     density : callable or array_like
         ``density(xy)`` with ``xy`` of shape (M, 2) returning (M,) values in [0, 1], or an
         array of shape (H, W) in [0, 1] over the domain (row 0 at ``y0``), sampled nearest.
-    domain, periodic, seed, k
+    domain, periodic, seed
         As :func:`poisson_disk`.
+    k : int
+        Candidates per active point (Bridson's algorithm), >= 1.
 
     Returns
     -------
@@ -807,7 +903,11 @@ class PupsPacked:
     cell_masks : uint32 (L,)
         Per listed instance, bit r set when axis r can project above 0 somewhere in the cell;
         the other axes give a factor of exactly 1 there and are skipped. All bits set for a
-        point with more than 32 axes (the shader then visits every axis).
+        point with more than 32 axes (every axis is then visited).
+    stream : (uint32 (rows * cols, 4), uint32 (R, 4))
+        The same grid as the shaders read it: per cell a header, per candidate its
+        position, orientation, value, label and masked-in axes inline (see
+        :func:`_cell_stream`).
     """
 
     point_index: np.ndarray
@@ -829,6 +929,7 @@ class PupsPacked:
     cell_items: np.ndarray
     cell_masks: np.ndarray
     timings: dict = field(default_factory=dict)
+    stream: tuple = None
 
 
 def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
@@ -904,22 +1005,35 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
     axes_scaled = graph.axes / (f * (graph.axes ** 2).sum(1))[:, None]
     axis_begin = graph.offsets[point_index]
     axis_count = np.diff(graph.offsets)[point_index]
-    sep, mask = _cull(inst, cell, gw, tile, width, height, positions, axis_begin, axis_count,
-                      axes_scaled, (ox, oy), (px, py))
-    inst, cell, mask = inst[~sep], cell[~sep], mask[~sep]
+    sep, mask, kpair, kslot, kaxis = _cull(inst, cell, gw, tile, width, height, positions, axis_begin,
+                                           axis_count, axes_scaled, (ox, oy), (px, py))
+    keep = ~sep
+    inst, cell, mask = inst[keep], cell[keep], mask[keep]
+    row_ok = keep[kpair]
+    kpair, kslot, kaxis = (np.cumsum(keep) - 1)[kpair[row_ok]], kslot[row_ok], kaxis[row_ok]
     order = np.argsort(cell * (point_index.size + 1) + inst, kind="stable")
     items = inst[order].astype(np.uint32)
     masks = mask[order]
     counts = np.bincount(cell, minlength=gw * gh)
     cell_offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.uint32)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    cell_sorted = cell[order]
+    slot = np.arange(order.size) - cell_offsets[cell_sorted].astype(np.int64)
+    orient = pts.orientations[point_index, :2]
+    values = pts.values[point_index]
+    labels = pts.labels[point_index]
+    si = inst[order]
+    stream = _stream(cell_offsets, cell_sorted, slot, rank[kpair], kslot, kaxis, inst.size,
+                     positions[si], orient[si], values[si], labels[si], axes_scaled)
     return PupsPacked(
         point_index=point_index, positions=positions,
-        orient=pts.orientations[point_index, :2], values=pts.values[point_index],
-        labels=pts.labels[point_index], axis_begin=axis_begin,
+        orient=orient, values=values,
+        labels=labels, axis_begin=axis_begin,
         axis_count=axis_count, axes_scaled=axes_scaled,
         pixel_box=pixel_box, origin=(ox, oy), pixel=(px, py), width=width, height=height,
         tile=tile, grid_shape=(gh, gw), cell_offsets=cell_offsets, cell_items=items,
-        cell_masks=masks)
+        cell_masks=masks, stream=stream)
 
 
 def _cull(inst, cell, gw, tile, width, height, positions, axis_begin, axis_count,
@@ -931,50 +1045,112 @@ def _cull(inst, cell, gw, tile, width, height, positions, axis_begin, axis_count
     lines separates them (separating axis theorem): some axis has ``p >= 1`` at all four
     corners. An axis with ``p <= 0`` at all four corners gives the factor 1 everywhere in the
     cell and is left out of the pair's mask. Margins of 1e-4 keep float32 rounding on the
-    safe side.
+    safe side. One vectorised pass per axis rank (pairs sorted by axis count, so the pairs
+    with an axis of rank r are a prefix).
 
     Returns
     -------
     separated : bool (L,)
     mask : uint32 (L,)
+    kept_pair, kept_slot, kept_axis : int64 (A,)
+        The axes that matter (the masked-in ones, or every axis of a point with more than
+        32), as (pair, rank among the pair's kept axes in axis order, index into
+        ``axes_scaled``).
     """
     if inst.size == 0:
-        return np.zeros(0, dtype=bool), np.zeros(0, dtype=np.uint32)
-    cx, cy = cell % gw, cell // gw
+        z = np.zeros(0, dtype=np.int64)
+        return np.zeros(0, dtype=bool), np.zeros(0, dtype=np.uint32), z, z, z
+    # pairs sorted by axis count (descending): the pairs that have an axis r are a prefix
+    cnt_all = axis_count[inst]
+    perm = np.argsort(-cnt_all, kind="stable")
+    inst_p, cell_p = inst[perm], cell[perm]
+    cnt = cnt_all[perm]
+    beg = axis_begin[inst_p]
+    cx, cy = cell_p % gw, cell_p // gw
     i0 = cx * tile
     i1 = np.minimum(i0 + tile, width) - 1
     j0 = cy * tile
     j1 = np.minimum(j0 + tile, height) - 1
-    x0 = i0 * pixel[0] + origin[0] - positions[inst, 0]
-    x1 = i1 * pixel[0] + origin[0] - positions[inst, 0]
-    y0 = j0 * pixel[1] + origin[1] - positions[inst, 1]
-    y1 = j1 * pixel[1] + origin[1] - positions[inst, 1]
-    dmax = int(axis_count.max()) if axis_count.size else 0
-    sep = np.zeros(inst.size, dtype=bool)
-    mask = np.zeros(inst.size, dtype=np.uint32)
-    cnt = axis_count[inst]
-    beg = axis_begin[inst]
+    x0 = i0 * pixel[0] + origin[0] - positions[inst_p, 0]
+    x1 = i1 * pixel[0] + origin[0] - positions[inst_p, 0]
+    y0 = j0 * pixel[1] + origin[1] - positions[inst_p, 1]
+    y1 = j1 * pixel[1] + origin[1] - positions[inst_p, 1]
+    n = inst.size
+    sep = np.zeros(n, dtype=bool)
+    mask = np.zeros(n, dtype=np.uint32)
+    many = cnt > 32
+    nkept = np.zeros(n, dtype=np.int64)
+    kp, ks, ka = [], [], []
+    dmax = int(cnt[0])
     for r in range(dmax):
-        has = cnt > r
-        a = axes_scaled[np.where(has, beg + r, 0)]
-        # a linear function over a rectangle: extremes at corners, per sign of the slope
+        m = int(np.searchsorted(-cnt, -r, side="left"))  # pairs with cnt > r: cnt[:m]
+        a = axes_scaled[beg[:m] + r]
         ax, ay = a[:, 0], a[:, 1]
-        pmin = np.where(ax > 0, x0 * ax, x1 * ax) + np.where(ay > 0, y0 * ay, y1 * ay)
-        pmax = np.where(ax > 0, x1 * ax, x0 * ax) + np.where(ay > 0, y1 * ay, y0 * ay)
-        sep |= has & (pmin >= 1.0 + 1e-4)
+        # a linear function over a rectangle: extremes at corners (x0 <= x1, y0 <= y1)
+        xa0, xa1, ya0, ya1 = x0[:m] * ax, x1[:m] * ax, y0[:m] * ay, y1[:m] * ay
+        pmin = np.minimum(xa0, xa1) + np.minimum(ya0, ya1)
+        pmax = np.maximum(xa0, xa1) + np.maximum(ya0, ya1)
+        sep[:m] |= pmin >= 1.0 + 1e-4
+        live = pmax > -1e-4
         if r < 32:
-            mask |= np.where(has & (pmax > -1e-4), np.uint32(1 << r), np.uint32(0))
-    mask[cnt > 32] = np.uint32(0xFFFFFFFF)
-    return sep, mask
+            mask[:m] |= live.astype(np.uint32) << np.uint32(r)
+        idx = np.flatnonzero(live | many[:m])
+        kp.append(idx)
+        ks.append(nkept[idx])
+        ka.append(beg[idx] + r)
+        nkept[idx] += 1
+    mask[many] = np.uint32(0xFFFFFFFF)
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(n)
+    kp = perm[np.concatenate(kp)] if kp else np.zeros(0, dtype=np.int64)
+    return (sep[inv], mask[inv], kp, np.concatenate(ks) if ks else kp,
+            np.concatenate(ka) if ka else kp)
+
+
+def _stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axis, npairs_total, pos,
+            orient, values, labels, axes_scaled):
+    """Build the shaders' candidate stream (see :func:`_cell_stream`).
+
+    Pairs in list order (by cell, then instance). ``cell_of`` / ``slot``: grid cell and
+    index within that cell's list of each pair;
+    ``kept_pair`` / ``kept_slot`` / ``kept_axis``: the pairs' axes, with their rank in the
+    pair's list; ``pos`` .. ``labels``: per pair.
+    """
+    offsets = cell_offsets.astype(np.int64)
+    ncell = offsets.size - 1
+    n = npairs_total
+    ncand = np.diff(offsets)
+    pairs = np.zeros(ncell, dtype=np.int64)
+    if n:
+        naxes = np.bincount(kept_pair, minlength=n)
+        nonempty = ncand > 0
+        pairs[nonempty] = np.maximum.reduceat((naxes + 1) // 2, offsets[:-1][nonempty])
+    per = 2 + pairs  # records per candidate, per cell
+    cell_begin = np.concatenate([[0], np.cumsum(ncand * per)])
+    base = cell_begin[cell_of] + slot * per[cell_of]
+    rec = np.zeros((max(int(cell_begin[-1]), 1), 4), dtype="<u4")
+    head = np.zeros((n, 8), dtype="<f4")
+    head[:, 0:2] = pos
+    head[:, 2:4] = orient
+    head[:, 4:4 + values.shape[1]] = values
+    head.view("<u4")[:, 7] = labels.astype("<i4").view("<u4")
+    # scatter whole records (16 bytes as one complex128) and whole axes (8 bytes as uint64)
+    rec16 = rec.view(np.complex128).reshape(-1)
+    head16 = head.view(np.complex128)
+    rec16[base] = head16[:, 0]
+    rec16[base + 1] = head16[:, 1]
+    ax = np.ascontiguousarray(axes_scaled[kept_axis], dtype="<f4").view(np.uint64).reshape(-1)
+    rec.view(np.uint64).reshape(-1)[2 * (base[kept_pair] + 2) + kept_slot] = ax
+    cells = np.zeros((max(ncell, 1), 4), dtype="<u4")
+    cells[:ncell, 0] = cell_begin[:-1]
+    cells[:ncell, 1] = ncand
+    cells[:ncell, 2] = pairs
+    return cells, rec
 
 
 # --------------------------------------------------------------------------------------------
 # GPU driver
 # --------------------------------------------------------------------------------------------
-
-_POINT_DTYPE = np.dtype([("orient", "<f4", 2), ("label", "<i4"), ("pad", "<u4"),
-                         ("value", "<f4", 4)])
-assert _POINT_DTYPE.itemsize == 32
 
 _LOCAL = (8, 8)
 _local_ctx = None
@@ -1012,33 +1188,45 @@ def _compute_program(defines):
     return _local_programs[key]
 
 
-def _gpu_buffers(packed: PupsPacked):
-    """Pack the arrays in their std430 layouts (bytes) and return the axis stride.
+def _cell_stream(packed: PupsPacked):
+    """The candidate grid as one stream of uvec4 records, laid out for the shaders.
 
-    Buffers: per instance (orientation, label, value); axes in blocks of ``stride`` per
-    instance (zero-padded: factor 1); cell offsets; per listed candidate (instance, axis mask,
-    position bits), so the candidate loop needs one load before the axes.
+    Per grid cell: a header ``(first record, candidates, axis pairs per candidate, 0)``.
+    Per listed candidate, ``2 + pairs`` records: ``(pos.x, pos.y, orient.x, orient.y)``,
+    ``(value.r, value.g, value.b, label)`` and its masked-in axes, two per record, in axis
+    order, padded with zero axes (factor exactly 1). ``pairs`` is the largest over the
+    cell's candidates, so a work group inside one cell runs uniform loops with every load
+    at a uniform address, and needs no indirection to the instance arrays.
+
+    Returns
+    -------
+    cells : uint32 (rows * cols, 4)
+    records : uint32 (R, 4)
     """
-    k = packed.positions.shape[0]
-    stride = int(max(packed.axis_count.max() if k else 1, 1))
-    pts = np.zeros(max(k, 1), dtype=_POINT_DTYPE)
-    pts["orient"][:k] = packed.orient
-    pts["label"][:k] = packed.labels
-    pts["value"][:k, :packed.values.shape[1]] = packed.values
-    axes = np.zeros((max(k, 1) * stride, 2), dtype="<f4")
-    if k:
-        slot = np.arange(stride)
-        src = packed.axis_begin[:, None] + slot[None, :]
-        valid = slot[None, :] < packed.axis_count[:, None]
-        blk = axes.reshape(-1, stride, 2)
-        blk[valid] = packed.axes_scaled[src[valid]]
-    n = packed.cell_items.size
-    items = np.zeros((max(n, 1), 4), dtype="<u4")
-    items[:n, 0] = packed.cell_items
-    items[:n, 1] = packed.cell_masks
-    items[:n, 2:] = packed.positions[packed.cell_items].astype("<f4").view("<u4")
-    return [pts.tobytes(), axes.tobytes(), packed.cell_offsets.astype("<u4").tobytes(),
-            items.tobytes()], stride
+    if packed.stream is not None:
+        return packed.stream
+    offsets = packed.cell_offsets.astype(np.int64)
+    items = packed.cell_items.astype(np.int64)
+    n = items.size
+    cnt = packed.axis_count[items]
+    rep = np.repeat(np.arange(n), cnt)
+    r = np.arange(rep.size) - (np.cumsum(cnt) - cnt)[rep]
+    bit = (packed.cell_masks[rep] >> np.minimum(r, 31).astype(np.uint32)) & 1
+    keep = (r >= 32) | bit.astype(bool)
+    cell_of = np.repeat(np.arange(offsets.size - 1), np.diff(offsets))
+    kept_pair = rep[keep]
+    naxes = np.bincount(kept_pair, minlength=n)
+    kept_slot = np.arange(kept_pair.size) - (np.cumsum(naxes) - naxes)[kept_pair]
+    return _stream(offsets, cell_of, np.arange(n) - offsets[cell_of], kept_pair, kept_slot,
+                   (packed.axis_begin[items][rep] + r)[keep], n, packed.positions[items],
+                   packed.orient[items], packed.values[items], packed.labels[items],
+                   packed.axes_scaled)
+
+
+def _gpu_buffers(packed: PupsPacked):
+    """Pack the candidate grid for the shaders (std430 bytes: cell headers, records)."""
+    cells, rec = _cell_stream(packed)
+    return [cells.tobytes(), rec.tobytes()]
 
 
 def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
@@ -1046,23 +1234,25 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     ctx = _context()
     c = packed.values.shape[1]
     labels = mode == PupsMode.LABEL
-    prog = _compute_program({"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)})
-    data, stride = _gpu_buffers(packed)
+    defines = {"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)}
+    group_cells = packed.tile % _LOCAL[0] == 0 and packed.tile % _LOCAL[1] == 0
+    data = _gpu_buffers(packed)
+    if group_cells:
+        defines["CELL_PUPS_GROUP_CELLS"] = 1
+    prog = _compute_program(defines)
     t1 = time.perf_counter()
     w, h = packed.width, packed.height
     bufs = [ctx.buffer(d) for d in data]
     out = ctx.buffer(reserve=4 * w * h * c)
     lab = ctx.buffer(reserve=4 * w * h if labels else 4)
-    for b, binding in zip(bufs + [out, lab], range(6)):
+    for b, binding in zip(bufs + [out, lab], range(4)):
         b.bind_to_storage_buffer(binding)
     t2 = time.perf_counter()
-    prog["u_size"] = (w, h)
-    prog["u_origin"] = packed.origin
-    prog["u_pixel"] = packed.pixel
-    prog["u_tile"] = packed.tile
-    prog["u_grid_w"] = packed.grid_shape[1]
-    prog["u_axis_stride"] = stride
-    prog["u_epsilon"] = epsilon
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
+                    ("u_epsilon", epsilon), ("u_tile_groups", packed.tile // _LOCAL[0])):
+        if name in prog:
+            prog[name] = v
     prog.run(-(-w // _LOCAL[0]), -(-h // _LOCAL[1]), 1)
     ctx.finish()
     t3 = time.perf_counter()
@@ -1084,7 +1274,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     ctx = _context()
     prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
     w, h = packed.width, packed.height
-    data, stride = _gpu_buffers(packed)
+    data = _gpu_buffers(packed)
     bufs = [ctx.buffer(d) for d in data]
     for binding, b in enumerate(bufs):
         b.bind_to_storage_buffer(binding)
@@ -1103,7 +1293,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     vao = ctx.vertex_array(prog, [])
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
                     ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
-                    ("u_axis_stride", stride), ("u_epsilon", epsilon)):
+                    ("u_epsilon", epsilon)):
         if name in prog:
             prog[name] = v
     fbo.use()

@@ -18,47 +18,39 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-struct PupsPoint {
-    vec2 orient;
-    int label;
-    uint pad;
-    vec4 value;
-};
+layout(std430, binding = 0) readonly buffer PupsCells { uvec4 cells[]; };    // per grid cell
+layout(std430, binding = 1) readonly buffer PupsStream { uvec4 records[]; }; // candidates
 
-layout(std430, binding = 0) readonly buffer PupsPoints { PupsPoint points[]; };
-layout(std430, binding = 1) readonly buffer PupsAxes { vec2 axes[]; };  // u_axis_stride per point
-layout(std430, binding = 2) readonly buffer PupsCells { uint cell_offsets[]; };
-layout(std430, binding = 3) readonly buffer PupsItems { uvec4 cell_items[]; };  // (point, axis mask, pos bits)
-layout(std430, binding = 4) writeonly buffer PupsValues { float out_values[]; };
-layout(std430, binding = 5) writeonly buffer PupsLabels { int out_labels[]; };
+layout(std430, binding = 2) writeonly buffer PupsValues { float out_values[]; };
+layout(std430, binding = 3) writeonly buffer PupsLabels { int out_labels[]; };
 
 uniform ivec2 u_size;      // image width, height in pixels
 uniform vec2 u_origin;     // domain position of the centre of pixel (0, 0)
 uniform vec2 u_pixel;      // domain size of one pixel
 uniform int u_tile;        // candidate-grid cell size in pixels
 uniform int u_grid_w;      // candidate-grid cells per row
-uniform uint u_axis_stride; // axes per point (padded)
 uniform float u_epsilon;   // orientation strength, [0, 1)
+uniform int u_tile_groups; // work groups per grid-cell side (CELL_PUPS_GROUP_CELLS)
 
-uvec4 cell_pups_fetch_candidate(uint k) { return cell_items[k]; }
-vec2 cell_pups_fetch_axis(uint a) { return axes[a]; }
-void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value)
-{
-    orient = points[i].orient; label = points[i].label; value = points[i].value;
-}
+uvec4 cell_pups_fetch(uint k) { return records[k]; }
 
 #include "lib/pups.glsl"
 
 void main()
 {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+#ifdef CELL_PUPS_GROUP_CELLS
+    ivec2 wg = ivec2(gl_WorkGroupID.xy);
+    int cell = (wg.y / u_tile_groups) * u_grid_w + wg.x / u_tile_groups;
+#else
+    ivec2 pc = min(px, u_size - 1);
+    int cell = (pc.y / u_tile) * u_grid_w + pc.x / u_tile;
+#endif
+    vec2 u = u_origin + vec2(px) * u_pixel;
+    CellPupsAcc acc = cell_pups_eval(u, cells[cell], u_epsilon);
     if (px.x >= u_size.x || px.y >= u_size.y) {
         return;
     }
-    vec2 u = u_origin + vec2(px) * u_pixel;
-    int cell = (px.y / u_tile) * u_grid_w + px.x / u_tile;
-    CellPupsAcc acc = cell_pups_eval(u, cell_offsets[cell], cell_offsets[cell + 1], u_axis_stride,
-                                     u_epsilon);
     int o = px.y * u_size.x + px.x;
 #if CELL_PUPS_MODE == 1
     vec4 v = acc.best;

@@ -11,35 +11,20 @@
 #endif
 #define CELL_PUPS_FETCH 1
 
-struct PupsPoint {
-    vec2 orient;
-    int label;
-    uint pad;
-    vec4 value;
-};
-
-layout(std430, binding = 0) readonly buffer PupsPoints { PupsPoint points[]; };
-layout(std430, binding = 1) readonly buffer PupsAxes { vec2 axes[]; };  // u_axis_stride per point
-layout(std430, binding = 2) readonly buffer PupsCells { uint cell_offsets[]; };
-layout(std430, binding = 3) readonly buffer PupsItems { uvec4 cell_items[]; };  // (point, axis mask, pos bits)
+layout(std430, binding = 0) readonly buffer PupsCells { uvec4 cells[]; };    // per grid cell
+layout(std430, binding = 1) readonly buffer PupsStream { uvec4 records[]; }; // candidates
 
 uniform ivec2 u_size;
 uniform vec2 u_origin;
 uniform vec2 u_pixel;
 uniform int u_tile;
 uniform int u_grid_w;
-uniform uint u_axis_stride;
 uniform float u_epsilon;
 
 in vec2 v_uv;
 layout(location = 0) out vec4 frag_color;
 
-uvec4 cell_pups_fetch_candidate(uint k) { return cell_items[k]; }
-vec2 cell_pups_fetch_axis(uint a) { return axes[a]; }
-void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value)
-{
-    orient = points[i].orient; label = points[i].label; value = points[i].value;
-}
+uvec4 cell_pups_fetch(uint k) { return records[k]; }
 
 #include "lib/pups.glsl"
 
@@ -48,8 +33,7 @@ void main()
     ivec2 px = min(ivec2(gl_FragCoord.xy), u_size - 1);
     vec2 u = u_origin + vec2(px) * u_pixel;
     int cell = (px.y / u_tile) * u_grid_w + px.x / u_tile;
-    CellPupsAcc acc = cell_pups_eval(u, cell_offsets[cell], cell_offsets[cell + 1], u_axis_stride,
-                                     u_epsilon);
+    CellPupsAcc acc = cell_pups_eval(u, cells[cell], u_epsilon);
 #if CELL_PUPS_MODE == 1
     vec4 v = acc.best;
 #elif CELL_PUPS_MODE == 2

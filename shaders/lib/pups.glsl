@@ -104,51 +104,40 @@ vec4 cell_pups_acc_value(CellPupsAcc acc)
 }
 
 #ifdef CELL_PUPS_FETCH
-// Provided by the including shader (it owns the buffers):
-//   cell_pups_fetch_candidate(k): (point index, axis mask, floatBitsToUint(pos.x),
-//       floatBitsToUint(pos.y)) of candidate k. Bit r of the mask is set when axis r may
-//       project above 0 somewhere in the grid cell (the others give exactly 1 there).
-//   cell_pups_fetch_axis(a): pre-scaled axis a; point i owns axes [i * stride, i * stride +
-//       stride), padded with zero axes (factor 1).
-//   cell_pups_fetch_attributes(i, ...): orientation, label, value of point i.
-uvec4 cell_pups_fetch_candidate(uint k);
-vec2 cell_pups_fetch_axis(uint a);
-void cell_pups_fetch_attributes(uint i, out vec2 orient, out int label, out vec4 value);
+// Provided by the including shader (it owns the buffer): cell_pups_fetch(k) returns
+// record k of the candidate stream (cellgl.pups._cell_stream). A grid cell is described by
+// cell = (first record, candidates, axis pairs per candidate, 0); each candidate takes
+// 2 + pairs records:
+//   (pos.x, pos.y, orient.x, orient.y) as float bits,
+//   (value.r, value.g, value.b) as float bits, label,
+//   pairs x (axis.x, axis.y, axis'.x, axis'.y): the pre-scaled axes that can project above
+//   0 in the cell (the others give exactly 1 there), zero-padded (factor 1).
+uvec4 cell_pups_fetch(uint k);
 
-// Weight and accumulate every candidate k in [begin, end) at position u. With more than
-// 32 axes per point (stride > 32) the masks cannot hold them and every axis is visited.
-CellPupsAcc cell_pups_eval(vec2 u, uint begin, uint end, uint stride, float epsilon)
+// Weight and accumulate every candidate of a grid cell at position u.
+//
+// Written for SIMD lanes that share the cell (a work group inside one grid cell): the loop
+// bounds come from the cell alone and there is no early exit and no branch on the weight,
+// so the loops are uniform and every load has a uniform address. The result is the same
+// as stopping at the first zero factor: a factor of 0 keeps the product at 0, a factor of
+// 1 (padding, p <= 0) changes nothing, and a zero weight adds exactly nothing.
+CellPupsAcc cell_pups_eval(vec2 u, uvec4 cell, float epsilon)
 {
     CellPupsAcc acc = cell_pups_acc_init();
-    for (uint k = begin; k < end; ++k) {
-        uvec4 cand = cell_pups_fetch_candidate(k);
-        vec2 d = u - uintBitsToFloat(cand.zw);
-        uint a0 = cand.x * stride;
+    uint per = 2u + cell.z;
+    uint end = cell.x + cell.y * per;
+    for (uint k = cell.x; k < end; k += per) {
+        uvec4 head = cell_pups_fetch(k);
+        uvec4 attr = cell_pups_fetch(k + 1u);
+        vec2 d = u - uintBitsToFloat(head.xy);
         float w = 1.0;
-        if (stride > 32u) {
-            for (uint a = a0; a < a0 + stride; ++a) {
-                if (!cell_pups_axis_step(w, d, cell_pups_fetch_axis(a))) {
-                    break;
-                }
-            }
-        } else {
-            uint mask = cand.y;
-            while (mask != 0u) {
-                int r = findLSB(mask);
-                mask &= mask - 1u;
-                if (!cell_pups_axis_step(w, d, cell_pups_fetch_axis(a0 + uint(r)))) {
-                    break;
-                }
-            }
+        for (uint j = k + 2u; j < k + per; ++j) {
+            vec4 a = uintBitsToFloat(cell_pups_fetch(j));
+            w *= cell_pups_axial(dot(d, a.xy));
+            w *= cell_pups_axial(dot(d, a.zw));
         }
-        if (w > 0.0) {
-            // attributes only for the few candidates that carry weight here
-            vec2 orient;
-            int label;
-            vec4 value;
-            cell_pups_fetch_attributes(cand.x, orient, label, value);
-            cell_pups_acc_add(acc, cell_pups_orient(w, d, orient, epsilon), value, label);
-        }
+        cell_pups_acc_add(acc, cell_pups_orient(w, d, uintBitsToFloat(head.zw), epsilon),
+                          vec4(uintBitsToFloat(attr.xyz), 0.0), int(attr.w));
     }
     return acc;
 }
