@@ -34,12 +34,14 @@ from __future__ import annotations
 
 import copy
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from . import pups as P
 
-__all__ = ["PUPS_PRESETS", "KIND_DEFAULTS", "build_pups", "reference_image"]
+__all__ = ["PUPS_PRESETS", "KIND_DEFAULTS", "build_pups", "build_scene", "evaluate_scene",
+           "PupsScene", "PupsLayer", "reference_image", "REFINE_WORKING_SIZE"]
 
 _COMMON = {"radius": 0.06, "axis_factor": 1.0, "epsilon": 0.5, "orientation": "random",
            "tilt": 0.0}
@@ -221,20 +223,69 @@ def _poisson(p, seed, k, radius=None):
     return P.poisson_disk(r, seed=_stream(seed, k))
 
 
-def _eval(p, pos, values, labels, w, h, seed, backend, mode, axis_factor=None):
+#: side of the square image the ``refine`` kind's intermediate iterations are evaluated at
+#: (their labels are drawn from it), whatever the output size, so that the result does not
+#: depend on the output resolution and can be rendered tile by tile
+REFINE_WORKING_SIZE = 512
+
+
+@dataclass(frozen=True, eq=False)
+class PupsLayer:
+    """One PUPs evaluation of a scene: a graph, how to evaluate it, and its weight.
+
+    Attributes
+    ----------
+    graph : cellgl.pups.PupsGraph
+        On the preset domain ``[-1, 1]^2`` (periodic).
+    mode : str
+        ``interpolate``, ``label`` or ``weighted_sum``.
+    epsilon : float
+    amplitude : float
+        Weight in the normalised sum over layers.
+    fold : bool
+        ``2 |T - 0.5|`` before summing.
+    """
+
+    graph: object
+    mode: str
+    epsilon: float
+    amplitude: float = 1.0
+    fold: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class PupsScene:
+    """Everything of a preset that does not depend on the image size: point sets and graphs.
+
+    ``layers`` are evaluated and combined by :func:`evaluate_scene`; ``lines`` (kind
+    ``graph``) holds the positions and the graph to draw instead.
+    """
+
+    params: dict
+    layers: tuple
+    contours: int = 0
+    lines: object = None
+
+    @property
+    def channels(self) -> int:
+        """1 (intensity) or 3 (RGB)."""
+        if self.lines is not None:
+            return 1
+        return self.layers[0].graph.points.channels
+
+
+def _graph(p, pos, values, labels, seed, axis_factor=None):
     pts = P.pups_points(pos, values, labels, _orientations(p, pos, seed))
-    g = P.pups_graph(pts, p["axis_factor"] if axis_factor is None else axis_factor)
-    return P.pups_evaluate(g, w, h, mode=mode, epsilon=p["epsilon"], backend=backend)
+    return P.pups_graph(pts, p["axis_factor"] if axis_factor is None else axis_factor)
 
 
-def _noise_layer(p, radius, w, h, seed, k, backend):
+def _noise_graph(p, radius, seed, k):
     pos = P.poisson_disk(radius, seed=_stream(seed, k))
     vals = _stream(seed, k + 1000).random(pos.shape[0])
-    t = _eval(p, pos, vals, None, w, h, seed + k, backend, "interpolate")
-    return 2 * np.abs(t - 0.5) if p["fold"] else t
+    return _graph(p, pos, vals, None, seed + k)
 
 
-def _cells_layer(p, radius, w, h, seed, k, backend):
+def _cells_graph(p, radius, seed, k):
     pos = P.poisson_disk(radius, seed=_stream(seed, k))
     pts = P.pups_points(pos, orientations=_orientations(p, pos, seed + k))
     g = P.pups_graph(pts, p["axis_factor"])
@@ -245,12 +296,144 @@ def _cells_layer(p, radius, w, h, seed, k, backend):
     else:
         raise ValueError(f"group must be 'point' or 'cluster', got {p['group']!r}")
     gray = _stream(seed, k + 1000).random(int(labels.max()) + 1)
-    g = P.pups_graph(pts.replace(values=gray[labels], labels=labels), p["axis_factor"])
-    return P.pups_evaluate(g, w, h, mode="label", epsilon=p["epsilon"], backend=backend)
+    return P.pups_graph(pts.replace(values=gray[labels], labels=labels), p["axis_factor"])
 
 
 def _sample_image(img, pos):
     return P._sample_map(img, pos, P.DEFAULT_DOMAIN)
+
+
+def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
+    """The point sets and graphs of a preset name or parameter dict (no image yet).
+
+    Parameters
+    ----------
+    preset_or_params : str or dict
+        As :func:`build_pups`.
+    seed : int
+        Seed of every random choice.
+    backend : {"gpu", "numpy"}
+        Only the ``refine`` kind evaluates anything here (its intermediate iterations, at
+        :data:`REFINE_WORKING_SIZE` squared).
+
+    Returns
+    -------
+    PupsScene
+    """
+    p = _params(preset_or_params)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
+    seed = int(seed)
+    kind = p["kind"]
+    eps = p["epsilon"]
+    if kind == "noise":
+        return PupsScene(p, (PupsLayer(_noise_graph(p, p["radius"], seed, 0), "interpolate", eps,
+                                       fold=bool(p["fold"])),))
+    if kind in ("octaves", "multiscale-cells"):
+        n = int(p["octaves"])
+        if not 1 <= n <= 8:
+            raise ValueError(f"octaves must be in [1, 8], got {p['octaves']!r}")
+        layers = []
+        for i in range(n):
+            r = p["radius"] * 2.0 ** -i
+            if kind == "octaves":
+                layers.append(PupsLayer(_noise_graph(p, r, seed, 10 * i), "interpolate", eps,
+                                        2.0 ** -i, bool(p["fold"])))
+            else:
+                layers.append(PupsLayer(_cells_graph(p, r, seed, 10 * i), "label", eps, 2.0 ** -i))
+        return PupsScene(p, tuple(layers))
+    if kind == "cells":
+        return PupsScene(p, (PupsLayer(_cells_graph(p, p["radius"], seed, 0), "label", eps),))
+    if kind == "cow":
+        pos = _poisson(p, seed, 0)
+        if p["labels"] == "random":
+            labels = (_stream(seed, 1).random(pos.shape[0]) < 0.5).astype(np.int32)
+        elif p["labels"] == "ramp":
+            labels = P.labels_by_ramp(pos, seed=_stream(seed, 1))
+        elif p["labels"] == "image":
+            labels = P.labels_from_image(pos, reference_image(p["image"]), seed=_stream(seed, 1))
+        else:
+            raise ValueError(f"labels must be 'random', 'ramp' or 'image', got {p['labels']!r}")
+        g = _graph(p, pos, labels.astype(np.float64), labels, seed)
+        return PupsScene(p, (PupsLayer(g, "label", eps),))
+    if kind == "giraffe":
+        centres = _poisson(p, seed, 0)
+        pos, labels = P.space_giraffe(centres, n_range=p["n_range"], seed=_stream(seed, 1))
+        colours = np.array([p["background"], p["spot"]], dtype=np.float64)
+        return PupsScene(p, (PupsLayer(_graph(p, pos, colours[labels], labels, seed), "label",
+                                       eps),))
+    if kind == "refine":
+        n = int(p["iterations"])
+        if not 1 <= n <= 8:
+            raise ValueError(f"iterations must be in [1, 8], got {p['iterations']!r}")
+        img = reference_image(p["image"])
+        s = REFINE_WORKING_SIZE
+        for i in range(n):
+            pos = P.poisson_disk(p["radius"] * 2.0 ** (-i / 2), seed=_stream(seed, 10 * i))
+            inten = _sample_image(img, pos)
+            labels = (_stream(seed, 10 * i + 1).random(pos.shape[0]) < inten).astype(np.int32)
+            g = _graph(p, pos, labels.astype(np.float64), labels, seed + i)
+            if i < n - 1:
+                img = P.pups_evaluate(g, s, s, mode="interpolate", epsilon=eps,
+                                      backend=backend).astype(np.float64)
+        return PupsScene(p, (PupsLayer(g, "interpolate", eps),))
+    if kind == "weight":
+        pos = _poisson(p, seed, 0)
+        c = int(np.argmin(np.hypot(pos[:, 0], pos[:, 1])))
+        pos = pos - pos[c]  # put that point at the centre (the set is periodic)
+        vals = np.zeros(pos.shape[0])
+        vals[c] = 1.0
+        return PupsScene(p, (PupsLayer(_graph(p, pos, vals, None, seed), "weighted_sum", eps),),
+                         contours=int(p["contours"]))
+    if kind == "graph":
+        pos = _poisson(p, seed, 0)
+        return PupsScene(p, (), lines=(pos, P.pups_graph(P.pups_points(pos))))
+    raise AssertionError(kind)
+
+
+def evaluate_scene(scene: PupsScene, evaluate_layer, draw_lines=None) -> np.ndarray:
+    """Combine a scene's layers into an image.
+
+    Parameters
+    ----------
+    scene : PupsScene
+    evaluate_layer : callable
+        ``evaluate_layer(layer) -> float32 (h, w) or (h, w, 3)``: one layer on the pixel grid
+        wanted (:func:`build_pups`: the whole image with :func:`cellgl.pups.pups_evaluate`;
+        :mod:`cellgl.pups_recipe`: one tile of it). Per pixel, the combination below depends
+        only on the layers' values at that pixel.
+    draw_lines : callable, optional
+        ``draw_lines(positions, graph, params) -> float32 (h, w)`` for the ``graph`` kind.
+
+    Returns
+    -------
+    numpy.ndarray of float32, shape (h, w) or (h, w, 3)
+    """
+    if scene.lines is not None:
+        return draw_lines(*scene.lines, scene.params)
+    layers = scene.layers
+    if len(layers) == 1 and layers[0].amplitude == 1.0:
+        t = evaluate_layer(layers[0])
+        if layers[0].fold:
+            t = 2 * np.abs(t - 0.5)
+        if scene.contours > 0 or layers[0].mode == "weighted_sum":
+            wt = t.astype(np.float64)
+            k = scene.contours
+            if k > 0:
+                band = np.abs(np.mod(wt * k + 0.5, 1.0) - 0.5)
+                lines = (band < 0.04) & (wt * k > 0.5)
+                wt = np.where(lines, 1.0, 0.35 * wt)
+            return wt.astype(np.float32)
+        return np.ascontiguousarray(t, dtype=np.float32)
+    acc = None
+    for layer in layers:
+        t = evaluate_layer(layer)
+        if layer.fold:
+            t = 2 * np.abs(t - 0.5)
+        if acc is None:
+            acc = np.zeros(t.shape, dtype=np.float64)
+        acc += t * layer.amplitude
+    return (acc / sum(layer.amplitude for layer in layers)).astype(np.float32)
 
 
 def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
@@ -262,7 +445,8 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
         A key of :data:`PUPS_PRESETS` (the ``pups-`` prefix may be left out) or a dict with a
         ``kind`` and that kind's parameters (see the module docstring).
     width, height : int
-        Image size in pixels, each in [1, 16384].
+        Image size in pixels, each in [1, 16384]. The domain ``[-1, 1]^2`` is stretched over
+        the image.
     seed : int
         Seed of every random choice.
     backend : {"gpu", "numpy"}
@@ -272,99 +456,55 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
     numpy.ndarray of float32, shape (height, width) or (height, width, 3)
     """
     p = _params(preset_or_params)
-    width, height = P._check_size(width, height)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be an integer >= 0, got {seed!r}")
-    seed = int(seed)
-    kind = p["kind"]
-    w, h = width, height
-    if kind == "noise":
-        return _noise_layer(p, p["radius"], w, h, seed, 0, backend).astype(np.float32)
-    if kind in ("octaves", "multiscale-cells"):
-        n = int(p["octaves"])
-        if not 1 <= n <= 8:
-            raise ValueError(f"octaves must be in [1, 8], got {p['octaves']!r}")
-        layer = _noise_layer if kind == "octaves" else _cells_layer
-        acc = np.zeros((h, w), dtype=np.float64)
-        for i in range(n):
-            acc += layer(p, p["radius"] * 2.0 ** -i, w, h, seed, 10 * i, backend) * 2.0 ** -i
-        return (acc / sum(2.0 ** -i for i in range(n))).astype(np.float32)
-    if kind == "cells":
-        return _cells_layer(p, p["radius"], w, h, seed, 0, backend)
-    if kind == "cow":
-        pos = _poisson(p, seed, 0)
-        if p["labels"] == "random":
-            labels = (_stream(seed, 1).random(pos.shape[0]) < 0.5).astype(np.int32)
-        elif p["labels"] == "ramp":
-            labels = P.labels_by_ramp(pos, seed=_stream(seed, 1))
-        elif p["labels"] == "image":
-            labels = P.labels_from_image(pos, reference_image(p["image"]), seed=_stream(seed, 1))
-        else:
-            raise ValueError(f"labels must be 'random', 'ramp' or 'image', got {p['labels']!r}")
-        return _eval(p, pos, labels.astype(np.float64), labels, w, h, seed, backend, "label")
-    if kind == "giraffe":
-        centres = _poisson(p, seed, 0)
-        pos, labels = P.space_giraffe(centres, n_range=p["n_range"], seed=_stream(seed, 1))
-        colours = np.array([p["background"], p["spot"]], dtype=np.float64)
-        return _eval(p, pos, colours[labels], labels, w, h, seed, backend, "label")
-    if kind == "refine":
-        n = int(p["iterations"])
-        if not 1 <= n <= 8:
-            raise ValueError(f"iterations must be in [1, 8], got {p['iterations']!r}")
-        img = reference_image(p["image"])
-        for i in range(n):
-            pos = P.poisson_disk(p["radius"] * 2.0 ** (-i / 2), seed=_stream(seed, 10 * i))
-            inten = _sample_image(img, pos)
-            labels = (_stream(seed, 10 * i + 1).random(pos.shape[0]) < inten).astype(np.int32)
-            img = _eval(p, pos, labels.astype(np.float64), labels, w, h, seed + i, backend,
-                        "interpolate").astype(np.float64)
-        return img.astype(np.float32)
-    if kind == "weight":
-        pos = _poisson(p, seed, 0)
-        c = int(np.argmin(np.hypot(pos[:, 0], pos[:, 1])))
-        pos = pos - pos[c]  # put that point at the centre (the set is periodic)
-        vals = np.zeros(pos.shape[0])
-        vals[c] = 1.0
-        wt = _eval(p, pos, vals, None, w, h, seed, backend, "weighted_sum").astype(np.float64)
-        k = int(p["contours"])
-        if k > 0:
-            band = np.abs(np.mod(wt * k + 0.5, 1.0) - 0.5)
-            lines = (band < 0.04) & (wt * k > 0.5)
-            wt = np.where(lines, 1.0, 0.35 * wt)
-        return wt.astype(np.float32)
-    if kind == "graph":
-        return _draw_graph(p, w, h, seed)
-    raise AssertionError(kind)
+    w, h = P._check_size(width, height)
+    scene = build_scene(p, seed=seed, backend=backend)
+
+    def layer(lay):
+        return P.pups_evaluate(lay.graph, w, h, mode=lay.mode, epsilon=lay.epsilon,
+                               backend=backend)
+
+    return evaluate_scene(scene, layer, lambda pos, g, prm: _draw_graph(prm, w, h, pos=pos, graph=g))
 
 
-def _draw_graph(p, w, h, seed):
-    """Rasterise the Delaunay edges (anti-aliased lines) and the points, white on black."""
-    pos = _poisson(p, seed, 0)
-    g = P.pups_graph(P.pups_points(pos))
+def _draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
+    """Rasterise the Delaunay edges (anti-aliased lines) and the points, white on black.
+
+    ``scale``: pixels per domain unit ``(sx, sy)``, default ``(w / 2, h / 2)`` (the domain
+    stretched over the image). ``region``: ``(x0, y0, tw, th)``, the pixels to return; every
+    pixel gets the same value as in the whole image.
+    """
+    g = graph
     owner = np.repeat(np.arange(len(pos)), np.diff(g.offsets))
     a = pos[owner]
     b = a + g.axes
-    sx, sy = w / 2.0, h / 2.0
+    sx, sy = (w / 2.0, h / 2.0) if scale is None else scale
     a = (a + 1) * [sx, sy] - 0.5
     b = (b + 1) * [sx, sy] - 0.5
+    ox, oy, w, h = (0, 0, w, h) if region is None else region
     img = np.zeros((h, w))
     lw = float(p["line_width"])
+    # positions in whole-image pixels; only integer pixel indices are shifted to the region
     for (ax, ay), (bx, by) in zip(a, b):
         n = int(max(abs(bx - ax), abs(by - ay)) * 2) + 2
         t = np.linspace(0, 1, n)
         xs, ys = ax + (bx - ax) * t, ay + (by - ay) * t
+        if xs.max() < ox - 3 or xs.min() > ox + w + 2 or ys.max() < oy - 3 or ys.min() > oy + h + 2:
+            continue
         for dx in range(-2, 3):
             for dy in range(-2, 3):
                 ix = np.round(xs).astype(int) + dx
                 iy = np.round(ys).astype(int) + dy
                 d = np.hypot(ix - xs, iy - ys)
                 v = np.clip(lw / 2 + 0.5 - d, 0, 1)
-                ok = (ix >= 0) & (ix < w) & (iy >= 0) & (iy < h)
-                np.maximum.at(img, (iy[ok], ix[ok]), v[ok] * 0.8)
-    yy, xx = np.mgrid[0:h, 0:w]
+                ok = (ix >= ox) & (ix < ox + w) & (iy >= oy) & (iy < oy + h)
+                np.maximum.at(img, (iy[ok] - oy, ix[ok] - ox), v[ok] * 0.8)
+    yy, xx = np.mgrid[oy:oy + h, ox:ox + w]
     for x, y in (pos + 1) * [sx, sy] - 0.5:
-        x0, x1 = int(max(x - 4, 0)), int(min(x + 5, w))
-        y0, y1 = int(max(y - 4, 0)), int(min(y + 5, h))
-        d = np.hypot(xx[y0:y1, x0:x1] - x, yy[y0:y1, x0:x1] - y)
-        img[y0:y1, x0:x1] = np.maximum(img[y0:y1, x0:x1], np.clip(3.5 - d, 0, 1))
+        x0, x1 = int(max(x - 4, ox)), int(min(x + 5, ox + w))
+        y0, y1 = int(max(y - 4, oy)), int(min(y + 5, oy + h))
+        if x1 <= x0 or y1 <= y0:
+            continue
+        sl = (slice(y0 - oy, y1 - oy), slice(x0 - ox, x1 - ox))
+        d = np.hypot(xx[sl] - x, yy[sl] - y)
+        img[sl] = np.maximum(img[sl], np.clip(3.5 - d, 0, 1))
     return img.astype(np.float32)
