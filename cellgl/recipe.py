@@ -488,7 +488,10 @@ def preset_dir() -> Path:
 
 
 def list_presets() -> list[tuple[str, str]]:
-    """``[(name, one-line doc), ...]`` of every preset, sorted by name."""
+    """``[(name, one-line doc), ...]`` of every preset, sorted by name: the cellular recipes
+    (``cellgl/presets/*.json``) and the PUPs presets (``pups-*``, :mod:`cellgl.pups_recipe`)."""
+    from .pups_recipe import pups_preset_names
+
     out = []
     for path in sorted(preset_dir().glob("*.json")):
         try:
@@ -496,20 +499,30 @@ def list_presets() -> list[tuple[str, str]]:
         except (OSError, json.JSONDecodeError):
             doc = "(unreadable)"
         out.append((path.stem, doc))
-    return out
+    return sorted(out + pups_preset_names())
 
 
-def load_recipe(preset_or_path) -> Recipe:
-    """A preset by name (``"veins"``, ``"worley-gallery:3"`` for a variant) or a recipe JSON file.
+def load_recipe(preset_or_path):
+    """A preset by name (``"veins"``, ``"worley-gallery:3"`` for a variant, ``"pups-cow"``) or a
+    recipe JSON file.
 
-    Raises :class:`RecipeError` naming the known presets if neither matches.
+    Returns a :class:`Recipe`, or a :class:`cellgl.pups_recipe.PupsRecipe` for a PUPs preset or
+    a JSON file with ``"kind": "pups"``. Raises :class:`RecipeError` naming the known presets
+    if neither matches.
     """
-    if isinstance(preset_or_path, Recipe):
+    from .pups_recipe import PupsRecipe, load_pups_preset
+
+    if isinstance(preset_or_path, (Recipe, PupsRecipe)):
         return preset_or_path
     text = str(preset_or_path)
     path = Path(text)
     if path.suffix == ".json" or os.sep in text or path.is_file():
+        if _json_kind(path) == "pups":
+            return PupsRecipe.load(path)
         return Recipe.load(path)
+    pups = load_pups_preset(text)
+    if pups is not None:
+        return pups
     name, _, variant = text.partition(":")
     file = preset_dir() / f"{name}.json"
     if not file.is_file():
@@ -525,6 +538,16 @@ def load_recipe(preset_or_path) -> Recipe:
             return v
     raise RecipeError(f"preset {name!r} has no variant {variant!r}; accepted: 0..{len(vs) - 1}"
                       + (" or " + ", ".join(v.name for v in vs) if vs else ""))
+
+
+def _json_kind(path: Path):
+    """The ``kind`` key of a recipe file (None: a cellular recipe, or unreadable: let
+    :meth:`Recipe.load` report it)."""
+    try:
+        d = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError):
+        return None
+    return d.get("kind") if isinstance(d, dict) else None
 
 
 # ---------------------------------------------------------------------- CLI: cellgl presets
@@ -543,7 +566,12 @@ def add_presets_parser(sub):
 def run_presets_cli(args) -> int:
     """Run ``cellgl presets``."""
     if args.params:
+        from .pups_recipe import PUPS_PARAMS
+
         for prm in PARAMS:
+            print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")
+        print("\nPUPs recipes (pups-* presets; which patterns use each: docs/pups.md):")
+        for prm in PUPS_PARAMS:
             print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")
         return 0
     if args.name:

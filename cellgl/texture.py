@@ -363,6 +363,9 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
     dict of output name -> ndarray
     """
     recipe = load_recipe(recipe)
+    if getattr(recipe, "kind", None) == "pups":
+        raise ValueError(f"evaluate() at arbitrary points is not available for PUPs recipes "
+                         f"({recipe.name}); use render() (channels: color, height)")
     outputs = _check_channels(outputs, OUTPUTS)
     _backend(backend)
     pts = _points(points)
@@ -406,6 +409,11 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
     """
     recipe = load_recipe(recipe)
+    if getattr(recipe, "kind", None) == "pups":  # cellgl.pups_recipe: its own renderer
+        from . import pups_recipe
+
+        return pups_recipe.render(recipe, width, height, channels=channels, x0=x0, y0=y0,
+                                  tile_w=tile_w, tile_h=tile_h, depth=depth, backend=backend)
     channels = _check_channels(channels)
     _backend(backend)
     for name, v in (("width", width), ("height", height)):
