@@ -272,6 +272,14 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
     return export_program(prog, target, uniforms=uniforms)
 
 
+def _refuse_pups(r) -> None:
+    if getattr(r, "kind", None) == "pups":
+        raise ExportError(f"{r.name}: PUPs recipes cannot be exported as shader snippets (a "
+                          "snippet would need the control points, their Delaunay axes and the "
+                          "candidate grid as buffers); bake it to an image instead: cellgl bake "
+                          f"{r.name} -o {r.name}.png")
+
+
 #: lib name -> exported name, where the default prefix would collide with an entry point
 _OVERRIDES = {"cell_texture": "cellgl_texture_basis"}
 
@@ -285,6 +293,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     from .recipe import Recipe, load_recipe
 
     r = recipe if isinstance(recipe, Recipe) else load_recipe(recipe)
+    _refuse_pups(r)
     defines = texture.defines(r)
     solid = int(r.values["dimension"]) >= 3
     vals = texture.uniform_values(r)

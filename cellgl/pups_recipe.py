@@ -265,6 +265,7 @@ class PupsRecipe:
         Changing ``pattern`` keeps the values the new pattern shares and takes the new
         pattern's defaults for the rest.
         """
+        values.pop("tileable", None)  # always periodic (see tileable()): nothing to change
         name = values.pop("name", self.name)
         doc = values.pop("doc", self.doc)
         outputs = values.pop("outputs", self.outputs)
