@@ -292,3 +292,28 @@ def test_cli_screenshot(display, tmp_path):
     r = subprocess.run([sys.executable, "-m", "cellgl", "view", *preset, "--screenshot", str(out),
                         "--set", "no_such_param=1"], env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "no_such_param" in r.stderr
+
+
+def test_pups_preset_view_matches_bake(viewer):
+    """A PUPs preset from the picker: the 2D view's unit square is the bake of that size;
+    3D / 4D are refused with a message; the panel shows the PUPs table's widgets."""
+    from cellgl import texture
+
+    assert "pups-cow" in viewer.model.presets()
+    _reset(viewer, "pups-cow")
+    assert viewer.model.is_pups
+    assert {p.name for p in viewer.model.params} >= {"seed", "radius", "epsilon", "labels"}
+    _settle(viewer)
+    assert any(k in viewer.widget_rects for k in ("radius", "seed")), sorted(viewer.widget_rects)[:20]
+    x, y, w, h = viewer.unit_square_rect()
+    got = viewer.grab()[y:y + h, x:x + w].astype(int)
+    ref = texture.render(viewer.model.recipe, w, h)["color"][..., :3]
+    ref = np.round(np.clip(ref, 0, 1) * 255).astype(int)
+    assert np.mean(np.abs(got - ref).max(axis=-1) <= 2) > 0.999
+    viewer.set_mode("3d")
+    assert viewer.mode == "2d" and "not available for PUPs" in viewer.status
+    viewer.set_mode("tiled")
+    _settle(viewer)
+    assert _view(viewer, viewer.grab()).std() > 10
+    assert viewer.ctx.error == "GL_NO_ERROR"
+    _reset(viewer)

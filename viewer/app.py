@@ -39,6 +39,8 @@ __all__ = ["Viewer", "ViewerOptions", "MODES"]
 
 MODES = ("2d", "3d", "tiled", "anim")
 MODE_LABELS = {"2d": "2D texture", "3d": "3D object", "tiled": "3x3 tiled", "anim": "4D animation"}
+#: modes a PUPs recipe cannot show (it is a 2D texture without a solid or time dimension)
+PUPS_REFUSED_MODES = ("3d", "anim")
 PANEL_WIDTH = 360
 
 
@@ -83,6 +85,10 @@ class Viewer:
         self.bump_view = 1.0
         self.channel = "color"   # 2D / tiled / anim: which channel of the texture to show
         self.status = ""
+        if self.model.is_pups and self.mode in PUPS_REFUSED_MODES:
+            self.status = (f"{MODE_LABELS[self.mode]}: not available for PUPs recipes; "
+                           "showing the 2D texture")
+            self.mode = "2d"
         self.frame_ms = 0.0
         self.render_ms = 0.0
         self.readout: dict | None = None
@@ -299,6 +305,10 @@ class Viewer:
     def set_mode(self, mode: str) -> None:
         if mode not in MODES:
             raise ValueError(f"unknown view mode {mode!r}; expected one of: {', '.join(MODES)}")
+        if self.model.is_pups and mode in PUPS_REFUSED_MODES:
+            self.status = (f"{MODE_LABELS[mode]}: not available for PUPs recipes (2D textures "
+                           "on a periodic point set); use 2D texture or 3x3 tiled")
+            return
         self.mode = mode
         if mode == "anim":
             self._ensure_4d()
@@ -306,6 +316,10 @@ class Viewer:
     def load(self, name_or_path: str) -> None:
         """Replace the recipe (preset picker)."""
         self.model.load_into(name_or_path)
+        if self.model.is_pups and self.mode in PUPS_REFUSED_MODES:
+            self.status = (f"{MODE_LABELS[self.mode]}: not available for PUPs recipes; "
+                           "showing the 2D texture")
+            self.mode = "2d"
         if self.mode == "anim":
             self._ensure_4d()
         glfw.set_window_title(self.window, f"cellgl view: {self.model.name}")

@@ -28,8 +28,6 @@ OBJECT_SCALE = 0.5
 class Model:
     """A recipe being edited, with a version counter."""
 
-    params = PARAMS
-
     def __init__(self, recipe: Recipe):
         self.recipe = recipe
         self.version = 0
@@ -67,6 +65,22 @@ class Model:
     @property
     def name(self) -> str:
         return self.recipe.name
+
+    @property
+    def is_pups(self) -> bool:
+        """A PUPs recipe (:mod:`cellgl.pups_recipe`): 2D only, rendered by its own engine."""
+        return getattr(self.recipe, "kind", None) == "pups"
+
+    @property
+    def params(self):
+        """The parameter table the panel shows: :data:`cellgl.params.PARAMS`, or for a PUPs
+        recipe the entries of :data:`cellgl.pups_recipe.PUPS_PARAMS` its pattern uses."""
+        if self.is_pups:
+            from cellgl.pups_recipe import PUPS_PARAMS
+
+            used = set(self.recipe.names())
+            return tuple(p for p in PUPS_PARAMS if p.name in used)
+        return PARAMS
 
     # ----------------------------------------------------------------------------------------
     # values
@@ -161,6 +175,8 @@ class Model:
 
     def readout_uv(self, u: float, v: float) -> dict:
         """F1..F4 and the F1 feature ID at texture coordinate (u, v) (v down, as image rows)."""
+        if self.is_pups:
+            return {"uv": (u, v), "F": [], "id": None, "pos": (u, v)}
         out = self._cellular(self.basis_position((u, v, 0.0)))
         out["uv"] = (u, v)
         return out

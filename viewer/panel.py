@@ -151,15 +151,15 @@ def _group(viewer, group: str) -> None:
     params = [p for p in viewer.model.params if p.group == group]
     if not params:
         return
-    flags = imgui.TreeNodeFlags_.default_open.value if group in ("basis", "combination", "fractal") else 0
+    flags = imgui.TreeNodeFlags_.default_open.value if group in ("basis", "combination", "fractal", "pattern", "points", "weights") else 0
     if not imgui.collapsing_header(_GROUP_TITLES.get(group, group), flags):
         return
-    if group == "combination":
+    if group == "combination" and not viewer.model.is_pups:
         _coefficients(viewer)
         return
     for p in params:
         param_widget(viewer, p)
-    if group == "color" and hasattr(viewer.model, "ramp"):
+    if group == "color" and hasattr(viewer.model, "ramp") and not viewer.model.is_pups:
         imgui.separator_text("ramp")
         _ramp(viewer)
 
@@ -244,7 +244,14 @@ def draw_panel(viewer) -> None:
     if viewer.status:
         imgui.text_wrapped(viewer.status)
     imgui.separator()
-    for g in GROUPS:
+    groups = GROUPS
+    if viewer.model.is_pups:
+        from cellgl.pups_recipe import PUPS_PARAMS
+
+        groups = tuple(dict.fromkeys(p.group for p in PUPS_PARAMS))
+        imgui.text_wrapped("PUPs recipe: 2D texture (3D object and 4D animation views are not "
+                           "available); channels color, height")
+    for g in groups:
         _group(viewer, g)
     imgui.pop_item_width()
     imgui.end()

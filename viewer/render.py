@@ -53,13 +53,13 @@ class Renderer:
         self.renders = 0
         self.budget = None      # seconds per interactive frame (None: INTERACTIVE_BUDGET)
         self.render_ms = 0.0
+        self._pups_key = None
 
     def release(self) -> None:
-        for tex, fbo, *rest in self._targets.values():
-            fbo.release()
-            tex.release()
-            for r in rest:
-                r.release()
+        for objects in self._targets.values():
+            # (tex, fbo, *extra): the framebuffer first, then its attachments; ("pups_src"): (tex,)
+            for o in (objects[1:2] + objects[:1] + objects[2:]):
+                o.release()
         for vbo, ibo, vao in self._meshes.values():
             vao.release()
             vbo.release()
@@ -167,6 +167,9 @@ class Renderer:
         return rendered
 
     def _render_view(self, viewer, mode, w, h, full_w, full_h) -> None:
+        if self.model.is_pups:
+            self._render_pups(viewer, mode, w, h, full_w, full_h)
+            return
         if mode == "3d":
             self._render_object(viewer, w, h)
         elif mode == "tiled":
@@ -187,8 +190,12 @@ class Renderer:
         prog = self.model.program_2d(self.ctx, channel)
         self._note_program(prog)
         self.model.set_uniforms(prog)
-        # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top.
-        prog["u_view"].value = (float(uv0[0]), float(uv0[1]), float(ext[0]), float(ext[1]))
+        # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top. The
+        # pan uv0 goes into the split origins in float64 and u_view.xy = 0, so a view panned far
+        # from the origin stays as sharp as at it (cellgl.texture.set_view).
+        from cellgl import texture
+
+        texture.set_view(prog, self.model.recipe, uv0, ext)
         if "u_channel" in prog:
             prog["u_channel"].value = CHANNELS.index(channel)
         fbo.use()
@@ -197,6 +204,61 @@ class Renderer:
         vao = self.ctx.vertex_array(prog, [])
         vao.render(mode=self.ctx.TRIANGLES, vertices=3)
         vao.release()
+
+    def _pups_texture(self, side: int, channel: str):
+        """The PUPs recipe baked at ``side x side`` (one period of its point set) by
+        :func:`cellgl.texture.render`, the function behind ``cellgl bake``, as a repeating
+        nearest-sampled texture (row 0 = the image's top row at t = 0). Cached by recipe
+        version, size and channel."""
+        from cellgl import texture
+
+        key = (self.model.version, side, channel)
+        old = self._targets.get("pups_src")
+        if old is not None and self._pups_key == key:
+            return old[0]
+        res = texture.render(self.model.recipe, side, side, channels=(channel,))[channel]
+        rgba = res if res.ndim == 3 else np.dstack([res, res, res, np.ones_like(res)])
+        if old is not None:
+            for o in old:
+                o.release()
+        tex = self.ctx.texture((side, side), 4, np.ascontiguousarray(rgba, np.float32).tobytes(),
+                               dtype="f4")
+        tex.filter = (0x2600, 0x2600)
+        tex.repeat_x = tex.repeat_y = True
+        self._targets["pups_src"] = (tex,)
+        self._pups_key = key
+        return tex
+
+    def _render_pups(self, viewer, mode, w, h, full_w, full_h) -> None:
+        """PUPs recipes (2D only): the bake's pixels, panned and zoomed like the 2D view.
+
+        At zoom 1 the unit square fills the shorter side, ``N = min(w, h)`` pixels: the source
+        is the PUPs render of ``N x N`` (one period), so a view pixel is the bake's pixel.
+        While interacting (reduced resolution) the cached full-resolution source is reused."""
+        channel = viewer.channel if viewer.channel in ("color", "height") else "color"
+        if mode == "tiled":
+            side = max(8, min(full_w, full_h) // 3)
+            src = self._pups_texture(side, channel)
+            if w != full_w:
+                side = max(8, side * w // full_w)
+            tex, fbo = self._target("tile", (side, side))[:2]
+            uv0, ext = (0.0, 0.0), (1.0, 1.0)
+        else:
+            n = max(1, min(full_w, full_h))
+            src = self._pups_texture(n, channel)
+            tex, fbo = self._target("view", (w, h))[:2]
+            uv0, ext = viewer.panzoom.window(full_w, full_h)
+        fbo.use()
+        fbo.clear(0.0, 0.0, 0.0, 1.0)
+        self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND | self.ctx.CULL_FACE)
+        # viewer_blit: tex coord = u_offset + p * u_scale, p in [0, 1] with p.y = 0 at the
+        # bottom; the view shows uv = uv0 + (p.x, 1 - p.y) * ext, texture t = v.
+        self.blit["u_offset"].value = (float(uv0[0]), float(uv0[1] + ext[1]))
+        self.blit["u_scale"].value = (float(ext[0]), -float(ext[1]))
+        self.blit["u_grid"].value = 0.0
+        src.use(0)
+        self.blit["u_tex"].value = 0
+        self.vao_empty.render(mode=self.ctx.TRIANGLES, vertices=3)
 
     def _render_object(self, viewer, w, h) -> None:
         tex, fbo, pos, depth = self._target("object", (w, h), position=True)
