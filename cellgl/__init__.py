@@ -4,12 +4,14 @@ from __future__ import annotations
 __version__ = "0.1.0"
 
 from .core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
+from .density import DensityMap
 from .enums import Distribution, Metric
 from .recipe import Recipe, RecipeError, list_presets, load_recipe
 from .texture import evaluate, render
 
 __all__ = [
     "CellularResult",
+    "DensityMap",
     "Distribution",
     "FeaturePoints",
     "Metric",

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import reference
+from .density import encode as _encode_density
 from .enums import Distribution, Metric, parse_enum
 
 __all__ = ["CellularResult", "FeaturePoints", "cellular", "cellular_grid", "feature_points", "make_params"]
@@ -86,7 +87,8 @@ def _period(period, dim) -> tuple[int, int, int, int]:
 
 
 def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
-                min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None) -> reference.Params:
+                min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None,
+                density_map=None) -> reference.Params:
     """Validate the basis parameters and bundle them as :class:`cellgl.reference.Params`."""
     metric = parse_enum(Metric, metric, "metric")
     distribution = parse_enum(Distribution, distribution, "distribution")
@@ -102,9 +104,15 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
         raise ValueError(f"min_points ({min_points}) must not exceed max_points ({max_points})")
     minkowski_p = _number("minkowski_p", minkowski_p, 0.25, 64.0)
     seed = _number("seed", seed, 0, 2 ** 32 - 1, integer=True)
+    enc = None
+    if density_map is not None:
+        if distribution != Distribution.POISSON:
+            raise ValueError(f"density_map needs distribution 'poisson', got {distribution.name.lower()!r}")
+        enc = _encode_density(density_map, dim)
     return reference.Params(dim=dim, metric=metric, distribution=distribution, density=density,
                             jitter=jitter, min_points=min_points, max_points=max_points,
-                            minkowski_p=minkowski_p, seed=seed, period=_period(period, dim))
+                            minkowski_p=minkowski_p, seed=seed, period=_period(period, dim),
+                            density_map=enc)
 
 
 def _outputs(outputs) -> tuple[str, ...]:
@@ -189,7 +197,7 @@ def _numpy_search(cells, fr, p, n, outputs) -> tuple[dict, np.ndarray]:
 
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
-             min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None,
+             min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
              outputs=("F", "delta", "id"), backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
@@ -214,6 +222,10 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     period : None, int or sequence of d ints >= 0
         Cells repeat with this period on each axis (0: no wrap): the texture tiles
         over ``period`` units.
+    density_map : None or cellgl.DensityMap
+        Spatially varying density (``poisson`` only; ``density`` is then unused): each
+        cell's count is drawn with the density of the map at the cell centre, quantised to
+        16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.density`).
     outputs : sequence of {"F", "delta", "id", "grad"}
         Only these are computed and read back.
     backend : {"gpu", "numpy"}
@@ -229,7 +241,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     outs = _outputs(outputs)
     p = make_params(pts.shape[1], metric=metric, distribution=distribution, density=density,
                     jitter=jitter, min_points=min_points, max_points=max_points,
-                    minkowski_p=minkowski_p, seed=seed, period=period)
+                    minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs)
@@ -243,7 +255,8 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
-                  period=None, outputs=("F", "delta", "id"), backend="gpu") -> CellularResult:
+                  period=None, density_map=None, outputs=("F", "delta", "id"),
+                  backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
     Parameters
@@ -277,7 +290,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     outs = _outputs(outputs)
     p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
-                    seed=seed, period=period)
+                    seed=seed, period=period, density_map=density_map)
 
     def vec(name, v, default):
         v = default if v is None else v
@@ -317,7 +330,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
 
 
 def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, min_points=1,
-                   max_points=9, seed=0, period=None) -> FeaturePoints:
+                   max_points=9, seed=0, period=None, density_map=None) -> FeaturePoints:
     """Every feature point in the given integer cells.
 
     Parameters
@@ -325,7 +338,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
     cells : array_like, (M, d) int, d in 2..4
         Integer cells (for ``worley1996``, cubes of the scaled lattice: side
         1/0.398150 in sample units).
-    distribution, density, jitter, min_points, max_points, seed, period :
+    distribution, density, jitter, min_points, max_points, seed, period, density_map :
         as :func:`cellular`.
 
     Returns
@@ -346,6 +359,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
     if np.any(np.abs(arr) >= COORD_LIMIT):
         raise ValueError("cells must lie within +-2^30")
     p = make_params(arr.shape[1], distribution=distribution, density=density, jitter=jitter,
-                    min_points=min_points, max_points=max_points, seed=seed, period=period)
+                    min_points=min_points, max_points=max_points, seed=seed, period=period,
+                    density_map=density_map)
     pos, ids, which = reference.feature_points(arr, p)
     return FeaturePoints(positions=pos / p.scale, ids=ids, cell_index=which)

@@ -25,6 +25,15 @@ class Distribution(IntEnum):
     WORLEY1996 = 2   #: the book's reference program, bit for bit (3D only)
 
 
+class DensityMapKind(IntEnum):
+    """Spatially varying density of feature points (``CELL_DENSITY_MAP``; :mod:`cellgl.density`)."""
+
+    NONE = 0     #: one density everywhere (the default path, unchanged)
+    RAMP = 1     #: linear ramp along a lattice axis
+    RADIAL = 2   #: distance from a centre
+    IMAGE = 3    #: a grayscale image over a lattice rectangle (read from a storage buffer)
+
+
 def parse_enum(enum: type[IntEnum], value, what: str) -> IntEnum:
     """Return the member of ``enum`` named by ``value`` (a name, or a member).
 
@@ -43,7 +52,8 @@ def parse_enum(enum: type[IntEnum], value, what: str) -> IntEnum:
 def glsl_defines() -> dict[str, int]:
     """``CELL_<ENUM>_<NAME>`` macros for every enum member, e.g. ``CELL_METRIC_EUCLIDEAN = 0``."""
     out: dict[str, int] = {}
-    for enum, prefix in ((Metric, "CELL_METRIC_"), (Distribution, "CELL_DIST_")):
+    for enum, prefix in ((Metric, "CELL_METRIC_"), (Distribution, "CELL_DIST_"),
+                         (DensityMapKind, "CELL_DMAP_")):
         for m in enum:
             out[prefix + m.name] = int(m)
     return out

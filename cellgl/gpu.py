@@ -35,6 +35,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_OUT_ID=int("id" in outputs),
         CELL_OUT_GRAD=int("grad" in outputs),
         CELL_LOCAL_SIZE=LOCAL_SIZE,
+        CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
     )
     return d
 
@@ -54,6 +55,62 @@ def _set_params(prog, p: Params):
     _set(prog, "u_period", tuple(int(v) for v in p.period))
     _set(prog, "u_minkowski_p", float(p.minkowski_p))
     _set(prog, "u_out_scale", float(1.0 / p.scale))
+    set_density(prog, p.density_map)
+
+
+_density_buffers: dict = {}
+
+
+def set_density(prog, enc) -> None:
+    """Set the density-map uniforms of ``prog`` (``u_density_*``) from a
+    :class:`cellgl.density.DensityEncoding` and bind its image levels to storage buffer 7."""
+    if enc is None:
+        return
+    if "u_density_thresholds" in prog:
+        prog["u_density_thresholds"].write(enc.thresholds.astype(np.uint32).tobytes())
+    if "u_density_axis" in prog:
+        u = prog["u_density_axis"]       # the compiler may trim the array to the axes in use
+        u.write(enc.axes[: getattr(u, "array_length", 4)].astype(np.int32).tobytes())
+    _set(prog, "u_density_info", enc.info)
+    bind_density_image(enc.levels)
+
+
+def bind_density_image(levels) -> None:
+    """Upload (cached by content) and bind density-image levels (uint32) to storage buffer 7."""
+    if levels is None:
+        return
+    ctx = context.get_context()
+    data = np.ascontiguousarray(levels, dtype=np.uint32).tobytes()
+    key = (id(ctx), hash(data), len(data))
+    buf = _density_buffers.get(key)
+    if buf is None:
+        for b in _density_buffers.values():
+            b.release()
+        _density_buffers.clear()
+        buf = _density_buffers[key] = ctx.buffer(data)
+    buf.bind_to_storage_buffer(7)
+
+
+def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
+    """Point count and density level of each integer cell (M, 4) int, on the GPU (as the
+    search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
+    ctx = context.get_context()
+    d = defines_for(p, 1)
+    prog = context.compute_program("cell_counts.comp", d)
+    _set_params(prog, p)
+    cells = np.ascontiguousarray(cells, dtype=np.int32)
+    M = len(cells)
+    cb = ctx.buffer(cells.tobytes())
+    cb.bind_to_storage_buffer(0)
+    ob = ctx.buffer(reserve=8 * M)
+    ob.bind_to_storage_buffer(2)
+    _set(prog, "u_count", M)
+    prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
+    ctx.memory_barrier()
+    out = np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64)
+    cb.release()
+    ob.release()
+    return out[:, 0], out[:, 1]
 
 
 def _chunk_size(n: int, dim: int, outputs) -> int:

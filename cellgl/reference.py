@@ -112,6 +112,8 @@ class Params:
     minkowski_p: float = 3.0
     seed: int = 0
     period: tuple[int, int, int, int] = (0, 0, 0, 0)
+    #: spatially varying density (:class:`cellgl.density.DensityEncoding`), poisson only
+    density_map: object = None
 
     @property
     def thresholds(self) -> np.ndarray:
@@ -149,18 +151,29 @@ def _w96_step(state):
     return _add(_mul(state, 1402024253), 586950981)
 
 
-def point_count(state: np.ndarray, p: Params):
-    """``cell_point_count``: returns (new_state, count int64)."""
+def density_level(cells: np.ndarray, p: Params) -> np.ndarray:
+    """``cell_density_level``: the density level (0..15) of each (wrapped) cell (N, 4) int64."""
+    from .density import levels_reference
+
+    return levels_reference(cells, p.density_map)
+
+
+def point_count(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
+    """``cell_point_count`` (``cell_point_count_at`` with a density map: ``cells`` (N, 4) int64,
+    already wrapped, pick each cell's row of the threshold table); returns (new_state, count int64)."""
     if p.distribution == Distribution.WORLEY1996:
         count = worley1996_table()[(state >> np.uint64(24)).astype(np.int64)]
         return _w96_step(state), count
     if p.distribution == Distribution.JITTER:
         return state, np.ones(len(state), dtype=np.int64)
     state, u = rng_next(state)
-    t = p.thresholds.astype(np.uint64)  # (loop order irrelevant: a count)
+    if p.density_map is not None:
+        t = p.density_map.thresholds.astype(np.uint64)[density_level(cells, p)]     # (N, 16)
+    else:
+        t = p.thresholds.astype(np.uint64)[None, :]  # (loop order irrelevant: a count)
     count = np.full(len(state), p.min_points, dtype=np.int64)
     for k in range(p.min_points, p.max_points):
-        count += (u >= t[k]).astype(np.int64)
+        count += (u >= t[:, k]).astype(np.int64)
     return state, count
 
 
@@ -261,8 +274,9 @@ def _insert(F, D, I, d, delta, ids):
 
 def _visit(F, D, I, cells, f, o, p: Params):
     """``_cell_visit`` for the rows given (all arrays already subset)."""
-    state = cell_seed(wrap(cells + o, p.period), p)
-    state, count = point_count(state, p)
+    wc = wrap(cells + o, p.period)
+    state = cell_seed(wc, p)
+    state, count = point_count(state, p, wc)
     base = o.astype(np.float64) - f
     for k in range(int(count.max(initial=0))):
         state, q, ids = next_point(state, p)
@@ -358,8 +372,9 @@ def feature_points(cells: np.ndarray, p: Params):
     M = len(cells)
     c4 = np.zeros((M, 4), dtype=np.int64)
     c4[:, : p.dim] = cells
-    state = cell_seed(wrap(c4, p.period), p)
-    state, count = point_count(state, p)
+    wc = wrap(c4, p.period)
+    state = cell_seed(wc, p)
+    state, count = point_count(state, p, wc)
     pos, ids, which = [], [], []
     for k in range(int(count.max(initial=0))):
         state, q, idk = next_point(state, p)

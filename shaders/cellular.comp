@@ -3,7 +3,7 @@
 // Thin: read the sample, call cell_search(), write what was asked for.
 // Macros (from cellgl/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
-// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE.
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP.
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -16,6 +16,15 @@ uniform int u_max_points;
 uniform uint u_thresholds[CELL_MAX_POINTS];
 uniform ivec4 u_period;
 uniform float u_minkowski_p;
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+uniform uint u_density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
+uniform ivec4 u_density_axis[4];
+uniform ivec4 u_density_info;
+#endif
+#if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
+layout(std430, binding = 7) readonly buffer DensityImage { uint density_image[]; };
+uint cell_density_image_level(int index) { return density_image[index]; }
+#endif
 uniform float u_out_scale;     // distances and deltas are multiplied by this
 uniform uint u_count;          // number of samples in this chunk
 
@@ -83,6 +92,15 @@ void main()
     }
     p.period = u_period;
     p.minkowski_p = u_minkowski_p;
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+    for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
+        p.density_thresholds[k] = u_density_thresholds[k];
+    }
+    for (int a = 0; a < 4; a++) {
+        p.density_axis[a] = u_density_axis[a];
+    }
+    p.density_info = u_density_info;
+#endif
 
     CellResult r = cell_search(cell, frac, p);
 

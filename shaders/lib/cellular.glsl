@@ -17,7 +17,7 @@
 //
 // Requires: hash.glsl, metric.glsl, points.glsl.
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
-//         CELL_MAX_POINTS, CELL_MAX_RING.
+//         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP.
 
 #include "hash.glsl"
 #include "metric.glsl"
@@ -72,8 +72,9 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
 // Test every feature point of the cell at offset o from the sample's cell.
 void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
-    uint state = cell_cell_seed(cell_wrap(cell + o, p.period), p.seed);
-    int count = cell_point_count(state, p);
+    ivec4 c = cell_wrap(cell + o, p.period);
+    uint state = cell_cell_seed(c, p.seed);
+    int count = cell_point_count_at(state, c, p);
     vec4 base = vec4(o) - f;
     for (int k = 0; k < count; k++) {
         uint id;

@@ -6,7 +6,14 @@
 // CELL_DIST selects the distribution at compile time (cellgl.enums.Distribution).
 //
 // Requires: hash.glsl. Macros: CELL_DIM (2..4), CELL_DIST,
-// CELL_MAX_POINTS (the size of the threshold table, >= max_points).
+// CELL_MAX_POINTS (the size of the threshold table, >= max_points),
+// CELL_DENSITY_MAP (CELL_DMAP_NONE, _RAMP, _RADIAL, _IMAGE: spatially varying
+// density, poisson only; cellgl/density.py).
+
+#ifndef CELL_DENSITY_MAP
+#define CELL_DENSITY_MAP 0
+#endif
+#define CELL_DENSITY_LEVELS 16
 
 // Run-time parameters of the basis (everything that does not change the
 // shape of the code).
@@ -21,7 +28,20 @@ struct CellParams {
     uint thresholds[CELL_MAX_POINTS];
     ivec4 period;       // > 0: cells repeat with this period on that axis
     float minkowski_p;  // minkowski metric exponent
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+    // Spatially varying density: row L of this table is the Poisson table of
+    // density level L (cellgl/density.py), picked per cell by cell_density_level().
+    uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
+    ivec4 density_axis[4];  // per lattice axis: (o, n, m, b), see cell_density_level
+    ivec4 density_info;     // (shift, image width, image height, 0)
+#endif
 };
+
+#if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
+// Provided by the entry point (a storage buffer): the density level (0..15)
+// of texel `index` = row * width + column of the density image.
+uint cell_density_image_level(int index);
+#endif
 
 // The classic 1996 population table (Texturing & Modeling, 256 entries,
 // indexed by the 8 high bits of the cube seed; mean 2.598).
@@ -98,6 +118,60 @@ int cell_point_count(inout uint state, CellParams p)
         count += (k >= p.min_points && k < p.max_points && u >= p.thresholds[k]) ? 1 : 0;
     }
     return count;
+#endif
+}
+
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+// The density level (0..15) of an integer (wrapped) cell, from its centre, in
+// integers only so that every GPU and the NumPy reference agree on every cell.
+// Per axis a fixed-point affine term of the cell centre (2t + 1) / 2:
+//   e_a = ((2 clamp(c_a - o_a, 0, n_a) + 1) m_a + b_a) >> shift
+// (>> of a signed int is a floor; every value stays below 2^30).
+int cell_density_level(ivec4 c, CellParams p)
+{
+    int shift = p.density_info.x;
+    ivec4 e = ivec4(0);
+    for (int a = 0; a < CELL_DIM; a++) {
+        ivec4 q = p.density_axis[a];
+        int t = clamp(c[a] - q.x, 0, q.y);
+        e[a] = ((2 * t + 1) * q.z + q.w) >> shift;
+    }
+#if CELL_DENSITY_MAP == CELL_DMAP_RAMP
+    // e in levels: 15 v + 0.5 along the ramp axis (0 on the others).
+    return clamp(e.x + e.y + e.z + e.w, 0, CELL_DENSITY_LEVELS - 1);
+#elif CELL_DENSITY_MAP == CELL_DMAP_RADIAL
+    // e in units of radius / 15360: level k where d >= (2k - 1) / 30 radius.
+    e = clamp(e, ivec4(-15361), ivec4(15361));
+    int d2 = e.x * e.x + e.y * e.y + e.z * e.z + e.w * e.w;
+    int level = 0;
+    for (int k = 1; k < CELL_DENSITY_LEVELS; k++) {
+        int r = (2 * k - 1) * 512;
+        level += d2 >= r * r ? 1 : 0;
+    }
+    return level;
+#else
+    // e.x, e.y: the texel column and row of the cell centre, clamped to the edge.
+    int tx = clamp(e.x, 0, p.density_info.y - 1);
+    int ty = clamp(e.y, 0, p.density_info.z - 1);
+    return int(cell_density_image_level(ty * p.density_info.y + tx));
+#endif
+}
+#endif
+
+// cell_point_count for the cell `cell` (wrapped): with a density map the count
+// is drawn from the cell's own row of the threshold table.
+int cell_point_count_at(inout uint state, ivec4 cell, CellParams p)
+{
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE && CELL_DIST == CELL_DIST_POISSON
+    uint u = cell_rng_next(state);
+    int row = cell_density_level(cell, p) * CELL_MAX_POINTS;
+    int count = p.min_points;
+    for (int k = 0; k < CELL_MAX_POINTS; k++) {
+        count += (k >= p.min_points && k < p.max_points && u >= p.density_thresholds[row + k]) ? 1 : 0;
+    }
+    return count;
+#else
+    return cell_point_count(state, p);
 #endif
 }
 
