@@ -282,7 +282,7 @@ def test_basis_snippet_reproduces_the_gpu(ctx, basis, target):
 def _presets() -> list[str]:
     from cellgl.recipe import list_presets
 
-    return [name for name, _ in list_presets()]
+    return [name for name, _ in list_presets() if not name.startswith("pups-")]  # refused
 
 
 PRESETS = _presets()

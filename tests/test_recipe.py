@@ -30,7 +30,7 @@ def test_defaults_round_trip(tmp_path):
     assert not list(tmp_path.glob(".*tmp"))      # atomic save leaves no temp file
 
 
-@pytest.mark.parametrize("name", [n for n, _ in list_presets()])
+@pytest.mark.parametrize("name", [n for n, _ in list_presets() if not n.startswith("pups-")])
 def test_every_preset_round_trips(name, tmp_path):
     r = load_recipe(name)
     assert Recipe.from_dict(json.loads(json.dumps(r.to_dict()))) == r
