@@ -168,6 +168,13 @@ def _header(prog: Program, target: Target, uniforms: bool) -> str:
         lines += ["", "Uniforms (set them to these values to reproduce the recipe):"]
         for typ, name, value in prog.uniforms:
             lines.append(f"  {typ} cellgl_{name} = {_fmt_value(value)}")
+        if any(name == "origin_cell" for _, name, _ in prog.uniforms):
+            lines += [""] + textwrap.wrap(
+                "offset_x/offset_y/offset_z/time act only through the split origins origin_cell + "
+                "origin_frac (and noise_cell + noise_frac), octave i = floor and rest of "
+                "lacunarity^i * (offset_x, offset_y, offset_z, time) times dist_scale (times "
+                "noise_frequency), computed in double precision: recompute them to animate "
+                "(docs/engines.md).", 94)
     lines += ["", "Recipe:", *recipe.split("\n")]
     return _comment("\n".join(lines)) + "\n"
 

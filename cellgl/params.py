@@ -130,10 +130,10 @@ PARAMS: tuple[Param, ...] = (
           "when tileable (then an integer)", "domain"),
     Param("aspect", "float", 1.0, 0.01, 100.0, "cells along v per cell along u (frequency * aspect: "
           "an integer when tileable)", "domain"),
-    Param("offset_x", "float", 0.0, -1e4, 1e4, "shift of the basis along x, in cells", "domain"),
-    Param("offset_y", "float", 0.0, -1e4, 1e4, "shift of the basis along y, in cells", "domain"),
-    Param("offset_z", "float", 0.5, -1e4, 1e4, "z of the image plane in cells (3D and 4D bases)", "domain"),
-    Param("time", "float", 0.0, -1e4, 1e4, "4th coordinate in cells (4D bases: animation)", "domain"),
+    Param("offset_x", "float", 0.0, -1e9, 1e9, "shift of the basis along x, in cells", "domain"),
+    Param("offset_y", "float", 0.0, -1e9, 1e9, "shift of the basis along y, in cells", "domain"),
+    Param("offset_z", "float", 0.5, -1e9, 1e9, "z of the image plane in cells (3D and 4D bases)", "domain"),
+    Param("time", "float", 0.0, -1e9, 1e9, "4th coordinate in cells (4D bases: animation)", "domain"),
     Param("tileable", "bool", False, None, None, "seamless in u and v: the basis (and noise) repeat every "
           "frequency cells", "domain", compile_time=True),
     # ---- noise: Perlin-style integer-hashed gradient noise

@@ -5,6 +5,11 @@ Function for function, the same names without the ``cell_`` prefix (``cell_textu
 :mod:`cellgl.reference` (the same cells, hashes and feature points as the GPU).
 ``cellgl.evaluate(..., backend="numpy")`` and ``cellgl.render(..., backend="numpy")`` run this;
 the tests compare every preset's GPU output against it.
+
+Big coordinates are split exactly as on the GPU: :func:`lattice_origins` splits the origin
+``(offset_x, offset_y, offset_z, time)`` per octave into an integer cell and a fraction (here
+kept in float64; the GPU gets it as float32), and the functions add the small texture-space
+part ``s`` to the fraction.
 """
 from __future__ import annotations
 
@@ -34,17 +39,20 @@ def noise_gradient(c: np.ndarray, seed: int) -> np.ndarray:
     return g * 2.0 - 1.0
 
 
-def noise(x: np.ndarray, period, seed: int, dim: int):
-    """``cell_noise``: gradient noise at x (N, 4); returns (value (N,), gradient (N, 4))."""
-    x = np.array(x, dtype=np.float64)
-    x[:, dim:] = 0.0
-    fl = np.floor(x)
-    i0 = fl.astype(np.int64)
-    f = x - fl
+def noise_split(cell: np.ndarray, f: np.ndarray, period, seed: int, dim: int):
+    """``cell_noise_split``: gradient noise at lattice position cell (N, 4) int64 + f (N, 4);
+    returns (value (N,), gradient (N, 4))."""
+    cell = np.array(np.broadcast_to(cell, np.shape(f)), dtype=np.int64)
+    f = np.array(f, dtype=np.float64)
+    cell[:, dim:] = 0
+    f[:, dim:] = 0.0
+    fl = np.floor(f)
+    i0 = cell + fl.astype(np.int64)
+    f = f - fl
     u = f * f * f * (f * (f * 6.0 - 15.0) + 10.0)
     du = 30.0 * f * f * (f - 1.0) ** 2
-    value = np.zeros(len(x))
-    grad = np.zeros_like(x)
+    value = np.zeros(len(f))
+    grad = np.zeros_like(f)
     period = np.broadcast_to(np.asarray(period, dtype=np.int64), (4,)) if np.ndim(period) == 1 else period
     for k in range(1 << dim):
         o = np.array([k & 1, (k >> 1) & 1, (k >> 2) & 1, (k >> 3) & 1], dtype=np.int64)
@@ -61,14 +69,22 @@ def noise(x: np.ndarray, period, seed: int, dim: int):
     return value, grad
 
 
-def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
-    """``cell_noise_fractal``: sum 0.5^i n(2^i x) / sum 0.5^i; returns (value, gradient)."""
-    value = np.zeros(len(x))
-    grad = np.zeros((len(x), 4))
+def noise(x: np.ndarray, period, seed: int, dim: int):
+    """``cell_noise``: gradient noise at x (N, 4); returns (value (N,), gradient (N, 4))."""
+    return noise_split(np.zeros(4, dtype=np.int64), x, period, seed, dim)
+
+
+def noise_fractal_split(cell: np.ndarray, f: np.ndarray, period, seed: int, octaves: int, dim: int):
+    """``cell_noise_fractal_split``: sum 0.5^i n(2^i (cell + f)) / sum 0.5^i, octave i at
+    2^i cell + 2^i f; returns (value, gradient)."""
+    f = np.asarray(f, dtype=np.float64)
+    cell = np.asarray(cell, dtype=np.int64)
+    value = np.zeros(len(f))
+    grad = np.zeros((len(f), 4))
     amp, total, scale = 1.0, 0.0, 1.0
     period = np.asarray(period, dtype=np.int64)
     for i in range(octaves):
-        v, g = noise(x * scale, period * int(scale), (seed + i) & M32, dim)
+        v, g = noise_split(cell * int(scale), f * scale, period * int(scale), (seed + i) & M32, dim)
         value += amp * v
         grad += amp * scale * g
         total += amp
@@ -77,20 +93,79 @@ def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
     return value / total, grad / total
 
 
+def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
+    """``cell_noise_fractal``: sum 0.5^i n(2^i x) / sum 0.5^i; returns (value, gradient)."""
+    return noise_fractal_split(np.zeros(4, dtype=np.int64), x, period, seed, octaves, dim)
+
+
 # --------------------------------------------------------------------------- texture.glsl
 
-def _tex(recipe) -> dict:
-    """The run-time values the GLSL reads (enums as names), plus derived ones."""
+#: most fractal octaves (cellgl.texture.MAX_OCTAVES, CELL_TEX_OCTAVES)
+MAX_OCTAVES = 8
+
+
+def _tex(recipe, pan=(0.0, 0.0)) -> dict:
+    """The run-time values the GLSL reads (enums as names), plus derived ones (the split
+    origins of :func:`lattice_origins`)."""
     v = dict(recipe.values)
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
+    v.update(lattice_origins(v, pan))
     return v
 
 
-def texture_position(p: np.ndarray, t: dict) -> np.ndarray:
-    """``cell_texture_position``: texture space (N, 3) -> basis space (N, 4)."""
+def _split(x: np.ndarray, period) -> tuple[np.ndarray, np.ndarray]:
+    """float64 x (4,) -> (int64 cell wrapped by period where > 0, float64 fraction in [0, 1))."""
+    fl = np.floor(x)
+    cell = fl.astype(np.int64)
+    period = np.asarray(period, dtype=np.int64)
+    cell = np.where(period > 0, np.mod(cell, np.maximum(period, 1)), cell)
+    return cell, x - fl
+
+
+def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
+    """The origin ``O = (offset_x, offset_y, offset_z, time)`` split per octave, in float64.
+
+    The basis position of octave ``i`` is ``L^i (O + s)`` with ``L = lacunarity`` and ``s =
+    (u f, v f aspect, z f, 0)`` small; the basis lattice samples it times ``dist_scale``, the
+    noise lattice times ``noise_frequency``. Each ``k O`` is split into an integer cell (wrapped
+    by the octave's period when tileable, so it stays small) and a fraction in [0, 1); the
+    shader adds ``k s`` to the fraction. Axes past the dimension are 0.
+
+    ``pan`` (du, dv) moves the view in uv (the viewer's pan): ``O += (du f, dv f aspect, 0, 0)``,
+    so a pan far away is exact too.
+
+    Returns ``{"origin_cell", "noise_cell": int64 (MAX_OCTAVES, 4), "origin_frac",
+    "noise_frac": float64 (MAX_OCTAVES, 4)}``.
+    """
+    f, dim = t["frequency"], t["dimension"]
+    O = np.array([t["offset_x"] + float(pan[0]) * f, t["offset_y"] + float(pan[1]) * f * t["aspect"],
+                  t["offset_z"], t["time"]], dtype=np.float64)
+    O[dim:] = 0.0
+    ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
+    out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
+    for i in range(MAX_OCTAVES):
+        k = float(t["lacunarity"]) ** i
+        per = texture_period(t, i)
+        c, fr = _split(O * k * ds, per)
+        out["origin_cell"].append(c)
+        out["origin_frac"].append(fr)
+        c, fr = _split(O * k * t["noise_frequency"], per * int(round(t["noise_frequency"])))
+        out["noise_cell"].append(c)
+        out["noise_frac"].append(fr)
+    return {k: np.array(v) for k, v in out.items()}
+
+
+def texture_local(p: np.ndarray, t: dict) -> np.ndarray:
+    """``cell_texture_local``: texture space (N, 3) -> basis space relative to the origin (N, 4)."""
     f = t["frequency"]
-    return np.stack([p[:, 0] * f + t["offset_x"], p[:, 1] * f * t["aspect"] + t["offset_y"],
-                     p[:, 2] * f + t["offset_z"], np.full(len(p), t["time"])], axis=1)
+    return np.stack([p[:, 0] * f, p[:, 1] * f * t["aspect"], p[:, 2] * f, np.zeros(len(p))], axis=1)
+
+
+def texture_lattice(origin_cell: np.ndarray, origin_frac: np.ndarray, s: np.ndarray):
+    """``cell_texture_lattice``: origin_cell + origin_frac + s (N, 4) as (int64 cell, fraction)."""
+    q = origin_frac + s
+    fl = np.floor(q)
+    return origin_cell + fl.astype(np.int64), q - fl
 
 
 def texture_period(t: dict, octave: int) -> np.ndarray:
@@ -111,22 +186,24 @@ def _basis(t: dict, octave: int) -> ref.Params:
                       period=tuple(int(c) for c in texture_period(t, octave)))
 
 
-def texture_combination(x: np.ndarray, t: dict, octave: int, n: int):
-    """``cell_texture_combination``: (value (N,), dv/dx (N, 4), id (N,), F1..F4 (N, 4))."""
+def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
+    """``cell_texture_combination`` at L^octave (O + s) (s already scaled by L^octave):
+    (value (N,), dv/dx (N, 4), id (N,), F1..F4 (N, 4))."""
     dim = t["dimension"]
-    x = np.array(x, dtype=np.float64)
-    x[:, dim:] = 0.0
+    s = np.array(s, dtype=np.float64)
+    s[:, dim:] = 0.0
     p = _basis(t, octave)
-    xs = x * t["dist_scale"]
-    fl = np.floor(xs)
-    F, D, I, _ = ref.search(fl.astype(np.int64), xs - fl, p, n)
+    cell, fr = texture_lattice(t["origin_cell"][octave], t["origin_frac"][octave], s * t["dist_scale"])
+    cell[:, dim:] = 0
+    fr[:, dim:] = 0.0
+    F, D, I, _ = ref.search(cell, fr, p, n)
     F = F / t["dist_scale"]
     dF = ref.metric_gradient(D, F * t["dist_scale"], p)
     dF[..., dim:] = 0.0
     lin = [t[c] for c in LINEAR]
-    v = np.zeros(len(x))
-    grad = np.zeros((len(x), 4))
-    F4 = np.zeros((len(x), 4))
+    v = np.zeros(len(s))
+    grad = np.zeros((len(s), 4))
+    F4 = np.zeros((len(s), 4))
     for k in range(n):
         v += lin[k] * F[:, k]
         grad += lin[k] * dF[:, k]
@@ -140,7 +217,8 @@ def texture_combination(x: np.ndarray, t: dict, octave: int, n: int):
             grad += c * (F[:, i, None] * dF[:, j] + F[:, j, None] * dF[:, i])
     if t["c_noise"] != 0.0:
         per = texture_period(t, octave) * int(round(t["noise_frequency"]))
-        nv, gn = noise(x * t["noise_frequency"], per, (t["seed"] + 7919 + octave) & M32, dim)
+        nv, gn = noise_split(t["noise_cell"][octave], t["noise_frac"][octave] + s * t["noise_frequency"], per,
+                             (t["seed"] + 7919 + octave) & M32, dim)
         v += t["c_noise"] * nv
         grad += t["c_noise"] * t["noise_frequency"] * gn
     return v, grad, I[:, 0], F4
@@ -177,17 +255,18 @@ def texture_cell_value(ids: np.ndarray) -> np.ndarray:
     return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
 
 
-def texture(x: np.ndarray, recipe, n: int | None = None) -> dict:
-    """``cell_texture``: the texture at basis positions x (N, 4).
+def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) -> dict:
+    """``cell_texture``: the texture at basis positions O + s, s (N, 4) small (:func:`texture_local`)
+    and the origin O = (offset_x, offset_y, offset_z, time) split in ``t`` (default ``_tex(recipe)``).
 
     Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
     F (N, 4), value (N,), as the GLSL ``CellTexel``.
     """
     from .texture import needed_n
 
-    t = _tex(recipe)
+    t = t if t is not None else _tex(recipe)
     n = n or needed_n(recipe)
-    N = len(x)
+    N = len(s)
     fractal = t["fractal"]
     octaves = 1 if fractal == "none" else int(np.ceil(t["octaves"]))
     qin = fractal in ("qin", "qin_cube")
@@ -196,11 +275,11 @@ def texture(x: np.ndarray, recipe, n: int | None = None) -> dict:
     dG = np.zeros((N, 4))
     total, amp, scale = 0.0, 1.0, 1.0
     o: dict = {}
-    for i in range(min(octaves, 8)):
+    for i in range(min(octaves, MAX_OCTAVES)):
         w = amp
         if fractal != "none":
             w *= min(t["octaves"] - i, 1.0)
-        v, g, ids, F4 = texture_combination(x * scale, t, i, n)
+        v, g, ids, F4 = texture_combination(s * scale, t, i, n)
         if i == 0:
             o.update(value=v, id=ids, F=F4)
         b = (v - t["range_lo"]) * inv_range
@@ -209,9 +288,9 @@ def texture(x: np.ndarray, recipe, n: int | None = None) -> dict:
         b = np.clip(b, 0.0, 1.0)
         db[out] = 0.0
         if qin:
-            s = 0.5 - b
-            G += w * np.abs(s)
-            dG -= w * np.sign(s)[:, None] * db
+            dev = 0.5 - b
+            G += w * np.abs(dev)
+            dG -= w * np.sign(dev)[:, None] * db
             total += 0.5 * w
         else:
             G += w * b
@@ -240,8 +319,8 @@ def texture(x: np.ndarray, recipe, n: int | None = None) -> dict:
     index = h + (texture_cell_value(o["id"]) - h) * t["cell_mix"]
     if t["noise_color"] != 0.0:
         per = texture_period(t, 0) * int(round(t["noise_frequency"]))
-        nv, _ = noise_fractal(x * t["noise_frequency"], per, (t["seed"] + 104729) & M32, t["noise_octaves"],
-                              t["dimension"])
+        nv, _ = noise_fractal_split(t["noise_cell"][0], t["noise_frac"][0] + s * t["noise_frequency"], per,
+                                    (t["seed"] + 104729) & M32, t["noise_octaves"], t["dimension"])
         index = index + t["noise_color"] * nv
     rgb = texture_ramp(np.clip(index, 0.0, 1.0), t, recipe.ramp)
     rgb = rgb * (1.0 + (h - 1.0) * t["shade"])[:, None]
@@ -256,9 +335,10 @@ def texture(x: np.ndarray, recipe, n: int | None = None) -> dict:
     return o
 
 
-def texture_at(p: np.ndarray, recipe, n: int | None = None) -> dict:
-    """``cell_texture_at``: the texture at texture-space points p (N, 3)."""
-    return texture(texture_position(p, _tex(recipe)), recipe, n)
+def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0)) -> dict:
+    """``cell_texture_at``: the texture at texture-space points p (N, 3) (plus ``pan`` in uv)."""
+    t = _tex(recipe, pan)
+    return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t)
 
 
 def evaluate(recipe, pts: np.ndarray, outputs) -> dict:

@@ -61,6 +61,10 @@ uniform uint u_thresholds[CELL_MAX_POINTS];
 uniform vec4 u_ramp[CELL_TEX_RAMP_KEYS];
 uniform int u_ramp_count;
 uniform float u_dist_scale;
+uniform ivec4 u_origin_cell[CELL_TEX_OCTAVES];
+uniform vec4 u_origin_frac[CELL_TEX_OCTAVES];
+uniform ivec4 u_noise_cell[CELL_TEX_OCTAVES];
+uniform vec4 u_noise_frac[CELL_TEX_OCTAVES];
 
 CellTextureParams cell_texture_params_load()
 {
@@ -128,5 +132,17 @@ CellTextureParams cell_texture_params_load()
     }
     t.ramp_count = u_ramp_count;
     t.dist_scale = u_dist_scale;
+    for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
+        t.origin_cell[k] = u_origin_cell[k];
+    }
+    for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
+        t.origin_frac[k] = u_origin_frac[k];
+    }
+    for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
+        t.noise_cell[k] = u_noise_cell[k];
+    }
+    for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
+        t.noise_frac[k] = u_noise_frac[k];
+    }
     return t;
 }

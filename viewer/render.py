@@ -190,8 +190,12 @@ class Renderer:
         prog = self.model.program_2d(self.ctx, channel)
         self._note_program(prog)
         self.model.set_uniforms(prog)
-        # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top.
-        prog["u_view"].value = (float(uv0[0]), float(uv0[1]), float(ext[0]), float(ext[1]))
+        # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top. The
+        # pan uv0 goes into the split origins in float64 and u_view.xy = 0, so a view panned far
+        # from the origin stays as sharp as at it (cellgl.texture.set_view).
+        from cellgl import texture
+
+        texture.set_view(prog, self.model.recipe, uv0, ext)
         if "u_channel" in prog:
             prog["u_channel"].value = CHANNELS.index(channel)
         fbo.use()

@@ -12,6 +12,11 @@
 //     u(t) = t^3 (t (6 t - 15) + 10)        (Perlin 2002 fade; u' = 30 t^2 (t - 1)^2)
 // n is 0 at every lattice point and roughly within [-1, 1].
 //
+// Big coordinates: the position is given as an integer lattice cell plus a float
+// fraction (cell_noise_split, cell_noise_fractal_split), split on the CPU in
+// float64, so the noise 10^6 cells from the origin is as sharp as at it;
+// cell_noise / cell_noise_fractal take a float position (|x| up to ~10^4).
+//
 // Requires: hash.glsl, points.glsl (cell_wrap). Macros: CELL_DIM (2..4).
 // Only the first CELL_DIM coordinates are used.
 
@@ -26,20 +31,23 @@ vec4 _cell_noise_gradient(ivec4 c, uint seed)
     return g * 2.0 - 1.0;
 }
 
-// Gradient noise at x; grad receives dn/dx (components past CELL_DIM are 0).
-// period: lattice corners wrap with this period per axis where > 0 (only when
-// CELL_PERIODIC), so the noise tiles over `period` lattice cells.
-float cell_noise(vec4 x, ivec4 period, uint seed, out vec4 grad)
+// Gradient noise at lattice position cell + f (f: any float offset, small); grad
+// receives dn/dx (components past CELL_DIM are 0). period: lattice corners wrap
+// with this period per axis where > 0 (only when CELL_PERIODIC), so the noise
+// tiles over `period` lattice cells; keep `cell` wrapped (|cell| << 2^24).
+float cell_noise_split(ivec4 cell, vec4 f, ivec4 period, uint seed, out vec4 grad)
 {
 #if CELL_DIM < 4
-    x.w = 0.0;
+    cell.w = 0;
+    f.w = 0.0;
 #endif
 #if CELL_DIM < 3
-    x.z = 0.0;
+    cell.z = 0;
+    f.z = 0.0;
 #endif
-    vec4 fl = floor(x);
-    ivec4 i0 = ivec4(fl);
-    vec4 f = x - fl;
+    vec4 fl = floor(f);
+    ivec4 i0 = cell + ivec4(fl);
+    f -= fl;
     vec4 u = f * f * f * (f * (f * 6.0 - 15.0) + 10.0);
     vec4 du = 30.0 * f * f * (f - 1.0) * (f - 1.0);
     float value = 0.0;
@@ -67,15 +75,23 @@ float cell_noise(vec4 x, ivec4 period, uint seed, out vec4 grad)
     return value;
 }
 
+// Gradient noise at a float position x (precise for |x| up to ~10^4).
+float cell_noise(vec4 x, ivec4 period, uint seed, out vec4 grad)
+{
+    return cell_noise_split(ivec4(0), x, period, seed, grad);
+}
+
 // Fractal sum of cell_noise: sum 0.5^i n(2^i x) / sum 0.5^i over `octaves`
-// octaves (seed + i for octave i); grad receives its gradient.
-float cell_noise_fractal(vec4 x, ivec4 period, uint seed, int octaves, out vec4 grad)
+// octaves (seed + i for octave i) at x = cell + f; grad receives its gradient.
+// Octave i is at 2^i cell + 2^i f: the integer part stays an integer (wrapping
+// like the hash does) and 2^i f is exact in float32, so no octave loses precision.
+float cell_noise_fractal_split(ivec4 cell, vec4 f, ivec4 period, uint seed, int octaves, out vec4 grad)
 {
     float value = 0.0, amp = 1.0, total = 0.0, scale = 1.0;
     grad = vec4(0.0);
     for (int i = 0; i < octaves; i++) {
         vec4 g;
-        value += amp * cell_noise(x * scale, period * int(scale), seed + uint(i), g);
+        value += amp * cell_noise_split(cell * int(scale), f * scale, period * int(scale), seed + uint(i), g);
         grad += amp * scale * g;
         total += amp;
         amp *= 0.5;
@@ -83,4 +99,10 @@ float cell_noise_fractal(vec4 x, ivec4 period, uint seed, int octaves, out vec4 
     }
     grad /= total;
     return value / total;
+}
+
+// cell_noise_fractal_split at a float position x (precise for |x| up to ~10^4).
+float cell_noise_fractal(vec4 x, ivec4 period, uint seed, int octaves, out vec4 grad)
+{
+    return cell_noise_fractal_split(ivec4(0), x, period, seed, octaves, grad);
 }

@@ -28,6 +28,16 @@
 // with f = frequency. A W x H bake shows pixel (i, j) (row j from the top) at
 // uv = ((i + 0.5) / W, (j + 0.5) / H).
 //
+// Big coordinates: x = O + s with the origin O = (offset_x, offset_y, offset_z,
+// time), which may be large (10^6 cells), and s = (u f, v f aspect, z f, 0),
+// which is small. Octave i samples lattices at scale k = L^i (times dist_scale
+// for the basis, times noise_frequency for the noise); the CPU splits k O in
+// float64 into an integer cell and a float32 fraction (t.origin_cell[i] +
+// t.origin_frac[i] for the basis, t.noise_cell[i] + t.noise_frac[i] for the
+// noise; tileable recipes wrap the cell by the period), and the shader adds
+// only the small k s: cell = origin_cell + floor(origin_frac + k s), fraction
+// = the rest. So a texture 10^6 cells from the origin is as sharp as at it.
+//
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
 // Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes.
@@ -46,13 +56,21 @@ struct CellTexel {
     float value;    // the combination v at octave 0, before normalisation
 };
 
-// Texture space (u, v, z) -> basis space.
-vec4 cell_texture_position(vec3 p, CellTextureParams t)
+// Texture space (u, v, z) -> basis space relative to the origin (offset_x,
+// offset_y, offset_z, time), which t carries split per octave: s = x - O.
+vec4 cell_texture_local(vec3 p, CellTextureParams t)
 {
-    return vec4(p.x * t.frequency + t.offset_x,
-                p.y * t.frequency * t.aspect + t.offset_y,
-                p.z * t.frequency + t.offset_z,
-                t.time);
+    return vec4(p.x * t.frequency, p.y * t.frequency * t.aspect, p.z * t.frequency, 0.0);
+}
+
+// The lattice point origin_cell + origin_frac + s as an integer cell and a
+// fraction in [0, 1) (s small).
+void cell_texture_lattice(ivec4 origin_cell, vec4 origin_frac, vec4 s, out ivec4 cell, out vec4 f)
+{
+    vec4 q = origin_frac + s;
+    vec4 fl = floor(q);
+    cell = origin_cell + ivec4(fl);
+    f = q - fl;
 }
 
 // Lattice period of octave `octave` (cells per texture repeat), 0 where not tileable.
@@ -85,21 +103,31 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
     return p;
 }
 
-// The combination v at basis position x for one octave (x already scaled by
-// lacunarity^octave), its gradient dv/dx, the nearest ID and F1..F4.
-float cell_texture_combination(vec4 x, CellTextureParams t, int octave, out vec4 grad,
+// The combination v for one octave at basis position L^octave (O + s) (s
+// already scaled by lacunarity^octave: L^octave s), its gradient dv/dx, the
+// nearest ID and F1..F4.
+float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4 grad,
                                out uint id, out vec4 F4)
 {
 #if CELL_DIM < 4
-    x.w = 0.0;
+    s.w = 0.0;
 #endif
 #if CELL_DIM < 3
-    x.z = 0.0;
+    s.z = 0.0;
 #endif
     CellParams p = _cell_tex_basis(t, octave);
-    vec4 xs = x * t.dist_scale;
-    vec4 fl = floor(xs);
-    CellResult r = cell_search(ivec4(fl), xs - fl, p);
+    ivec4 cell;
+    vec4 f;
+    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale, cell, f);
+#if CELL_DIM < 4
+    cell.w = 0;
+    f.w = 0.0;
+#endif
+#if CELL_DIM < 3
+    cell.z = 0;
+    f.z = 0.0;
+#endif
+    CellResult r = cell_search(cell, f, p);
 
     float lin[8] = float[8](t.c1, t.c2, t.c3, t.c4, t.c5, t.c6, t.c7, t.c8);
     float prod[16] = float[16](t.c11, t.c12, t.c13, t.c14, t.c21, t.c22, t.c23, t.c24,
@@ -129,7 +157,8 @@ float cell_texture_combination(vec4 x, CellTextureParams t, int octave, out vec4
     if (t.c_noise != 0.0) {
         vec4 gn;
         ivec4 per = cell_texture_period(t, octave) * int(round(t.noise_frequency));
-        v += t.c_noise * cell_noise(x * t.noise_frequency, per, t.seed + 7919u + uint(octave), gn);
+        v += t.c_noise * cell_noise_split(t.noise_cell[octave], t.noise_frac[octave] + s * t.noise_frequency,
+                                          per, t.seed + 7919u + uint(octave), gn);
         grad += t.c_noise * t.noise_frequency * gn;
     }
     id = r.id[0];
@@ -170,8 +199,9 @@ float cell_texture_cell_value(uint id)
     return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
 }
 
-// The texture at basis position x.
-CellTexel cell_texture(vec4 x, CellTextureParams t)
+// The texture at basis position O + s: O = (offset_x, offset_y, offset_z, time),
+// carried split in t; s small (cell_texture_local).
+CellTexel cell_texture(vec4 s, CellTextureParams t)
 {
     CellTexel o;
     int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
@@ -179,7 +209,7 @@ CellTexel cell_texture(vec4 x, CellTextureParams t)
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
     float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
     vec4 dG = vec4(0.0);
-    for (int i = 0; i < 8; i++) {
+    for (int i = 0; i < CELL_TEX_OCTAVES; i++) {
         if (i >= octaves) {
             break;
         }
@@ -189,7 +219,7 @@ CellTexel cell_texture(vec4 x, CellTextureParams t)
         }
         vec4 g, F4;
         uint id;
-        float v = cell_texture_combination(x * scale, t, i, g, id, F4);
+        float v = cell_texture_combination(s * scale, t, i, g, id, F4);
         if (i == 0) {
             o.value = v;
             o.id = id;
@@ -202,9 +232,9 @@ CellTexel cell_texture(vec4 x, CellTextureParams t)
             db = vec4(0.0);
         }
         if (qin) {
-            float s = 0.5 - b;
-            G += w * abs(s);
-            dG -= w * sign(s) * db;
+            float dev = 0.5 - b;
+            G += w * abs(dev);
+            dG -= w * sign(dev) * db;
             total += 0.5 * w;
         } else {
             G += w * b;
@@ -241,8 +271,8 @@ CellTexel cell_texture(vec4 x, CellTextureParams t)
     if (t.noise_color != 0.0) {
         vec4 gn;
         ivec4 per = cell_texture_period(t, 0) * int(round(t.noise_frequency));
-        index += t.noise_color * cell_noise_fractal(x * t.noise_frequency, per, t.seed + 104729u,
-                                                    t.noise_octaves, gn);
+        index += t.noise_color * cell_noise_fractal_split(t.noise_cell[0], t.noise_frac[0] + s * t.noise_frequency,
+                                                          per, t.seed + 104729u, t.noise_octaves, gn);
     }
     vec3 rgb = cell_texture_ramp(clamp(index, 0.0, 1.0), t);
     rgb *= mix(1.0, h, t.shade);
@@ -259,7 +289,7 @@ CellTexel cell_texture(vec4 x, CellTextureParams t)
 // object-space (x, y, z) for solid recipes.
 CellTexel cell_texture_at(vec3 p, CellTextureParams t)
 {
-    return cell_texture(cell_texture_position(p, t), t);
+    return cell_texture(cell_texture_local(p, t), t);
 }
 
 // The RGBA a bake writes for the pixel whose centre is uv (v = 0: top row).

@@ -13,6 +13,7 @@
 #define CELL_TEX_NORMAL_OPENGL 0
 #define CELL_TEX_NORMAL_DIRECTX 1
 #define CELL_TEX_RAMP_KEYS 16
+#define CELL_TEX_OCTAVES 8
 
 struct CellTextureParams {
     float minkowski_p;          // exponent of the minkowski metric
@@ -74,4 +75,8 @@ struct CellTextureParams {
     vec4 ramp[CELL_TEX_RAMP_KEYS];// colour ramp keys: rgb, position t in w
     int ramp_count;             // number of ramp keys in use
     float dist_scale;           // sample scale of the distribution (worley1996: 0.398150, else 1)
+    ivec4 origin_cell[CELL_TEX_OCTAVES];// octave i: basis-lattice cell of dist_scale L^i (offset_x, offset_y, offset_z, time), split in float64
+    vec4 origin_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
+    ivec4 noise_cell[CELL_TEX_OCTAVES];// octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)
+    vec4 noise_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
 };
