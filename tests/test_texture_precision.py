@@ -123,9 +123,14 @@ def test_viewer_pan_far_away_stays_sharp(ctx):
     assert np.all(np.abs(near - ref0) < 2e-3, axis=-1).mean() > 0.98
 
 
-def test_exported_snippet_carries_the_split_origins():
+def test_exported_snippet_far_away_reproduces_the_bake(ctx):
+    """The snippet's constants carry the split origins: cellgl_texture(uv) at offset 10^6 is
+    the bake there (as tests/test_export.py checks at the origin)."""
     from cellgl import export
+    from test_export import render_snippet, snippet_code
 
     r = load_recipe("flagstone").replace(offset_x=FAR, offset_y=FAR)
     text = export.export(r, "glsl")
     assert "cellgl_origin_cell[" in text and "ivec4(1000000, 1000000, 0, 0)" in text
+    got = render_snippet(ctx, snippet_code(text), 64, 48)
+    np.testing.assert_allclose(got, texture.render(r, 64, 48)["color"], rtol=0, atol=2e-5)
