@@ -214,6 +214,17 @@ def _version_error(exc: Exception) -> str:
     return text.splitlines()[0] if text else text
 
 
+def _current(ctx: moderngl.Context) -> moderngl.Context:
+    """Make ``ctx`` the thread's current context and return it.
+
+    Another library in the process (a GLFW window, wgpu's GL backend, a second moderngl
+    context) may have made its own context current since; GL calls would then go to that one,
+    or fail ("cannot create program"). Making ours current again is cheap when it already is.
+    """
+    ctx.mglo.__enter__()
+    return ctx
+
+
 def get_context(backend: str | None = None) -> moderngl.Context:
     """Return the process-wide headless OpenGL 4.3+ context.
 
@@ -226,7 +237,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
     Returns
     -------
     moderngl.Context
-        Cached: the same object for the same backend.
+        Cached: the same object for the same backend; made current on this thread.
 
     Raises
     ------
@@ -243,7 +254,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 candidates = [_check_name(env, "CELLGL_BACKEND")]
             else:
                 if _default_backend is not None:
-                    return _contexts[_default_backend]
+                    return _current(_contexts[_default_backend])
                 candidates = ["egl"]
                 if os.environ.get("DISPLAY"):
                     candidates.append("glx")
@@ -268,7 +279,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 _backend_of[id(ctx)] = name
             if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip():
                 _default_backend = name
-            return ctx
+            return _current(ctx)
 
         skipped = [b for b in BACKENDS if b not in candidates]
         note = ""

@@ -47,6 +47,9 @@ def _gl_error_check(request):
         yield
         return
     gl = request.getfixturevalue("ctx")
+    from cellgl import context
+
+    context.get_context()       # current again, whatever another library made current since
     before = gl.error
     assert before == "GL_NO_ERROR", f"GL error pending before the test: {before}"
     yield

@@ -205,3 +205,28 @@ def test_cli_error_is_one_line_exit_2():
     assert r.returncode == 2
     assert r.stderr.startswith("cellgl: error: ")
     assert "Traceback" not in r.stderr
+
+
+def test_context_survives_another_library_taking_current(ctx):
+    """wgpu's GL backend, a GLFW window or another moderngl context may make their own context
+    current; cellgl's API calls must still work (they used to fail with 'cannot create program')."""
+    import moderngl
+    import numpy as np
+
+    import cellgl
+    from cellgl import context
+
+    pts = np.random.default_rng(0).uniform(0, 8, (500, 3))
+    want = cellgl.cellular(pts, 2, outputs=("F",)).F
+    other = moderngl.create_context(standalone=True, backend="egl", require=330)
+    try:
+        other.mglo.__enter__()
+        got = cellgl.cellular(pts, 2, outputs=("F",)).F
+        assert got.tobytes() == want.tobytes()
+        prog = context.get_context().program(
+            vertex_shader="#version 330\nvoid main() { gl_Position = vec4(0.0); }",
+            fragment_shader="#version 330\nout vec4 o;\nvoid main() { o = vec4(1.0); }")
+        prog.release()
+    finally:
+        other.release()
+        context.get_context()
