@@ -225,6 +225,48 @@ def _current(ctx: moderngl.Context) -> moderngl.Context:
     return ctx
 
 
+class _CurrentEGLLoader:
+    """GL entry points of whatever EGL context is current (a window's); creates nothing."""
+
+    def __init__(self):
+        name = ctypes.util.find_library("EGL")
+        if not name:
+            raise ContextError("libEGL not found; " + _INSTALL_HINT)
+        self._egl = ctypes.CDLL(name)
+        self._egl.eglGetProcAddress.restype = ctypes.c_void_p
+        self._egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+        self._egl.eglGetCurrentContext.restype = ctypes.c_void_p
+        if not self._egl.eglGetCurrentContext():
+            raise ContextError("no EGL context is current on this thread")
+
+    def load_opengl_function(self, name: str) -> int:
+        return self._egl.eglGetProcAddress(name.encode("ascii")) or 0
+
+    def __enter__(self):
+        pass
+
+    def __exit__(self, *args):
+        pass
+
+    def release(self) -> None:
+        pass
+
+
+def attach_current_egl(require: int = REQUIRED_GL) -> moderngl.Context:
+    """A moderngl.Context for the EGL context current on this thread (a GLFW window made with
+    ``CONTEXT_CREATION_API = EGL_CONTEXT_API``), with its default framebuffer as ``screen``.
+
+    Windows use EGL rather than GLX because Mesa will not make a GLX context current in a
+    process that has already initialised EGL (cellgl's headless context): ``BadAccess`` in
+    ``X_GLXMakeCurrent``. With both on EGL they share the thread freely.
+    """
+    ctx = _context_from_loader(_CurrentEGLLoader(), require)
+    ctx._screen = ctx.detect_framebuffer(0)
+    ctx.fbo = ctx.detect_framebuffer()
+    ctx.mglo.fbo = ctx.fbo.mglo
+    return ctx
+
+
 def get_context(backend: str | None = None) -> moderngl.Context:
     """Return the process-wide headless OpenGL 4.3+ context.
 

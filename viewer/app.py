@@ -30,7 +30,8 @@ import imgui_bundle  # noqa: F401  (import order matters)
 from imgui_bundle import imgui
 
 import glfw  # noqa: E402
-import moderngl  # noqa: E402
+
+from cellgl import context
 
 from . import camera, render
 from .model import Model
@@ -69,7 +70,7 @@ class Viewer:
             self.model.set_text(name, value)
         self._init_window(*opts.size, hidden=opts.hidden, vsync=opts.vsync)
         self._init_imgui()
-        self.renderer = render.Renderer(self.ctx, self.model)
+        self.renderer = render.Renderer(self.ctx, self.model, self._take_context)
         self.mode = opts.mode
         self.shape = opts.shape
         self.panel_visible = opts.panel
@@ -113,14 +114,20 @@ class Viewer:
         glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
         glfw.window_hint(glfw.VISIBLE, not hidden)
         glfw.window_hint(glfw.SCALE_TO_MONITOR, False)
+        # EGL, like cellgl's headless context: Mesa refuses GLX once EGL is in the process.
+        glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API)
         self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
         if not self.window:
             glfw.terminate()
             raise RuntimeError("GLFW could not create an OpenGL 4.3 core window")
-        glfw.make_context_current(self.window)
+        self._take_context()
         glfw.swap_interval(1 if vsync and not hidden else 0)
-        self.ctx = moderngl.create_context(require=430)
+        self.ctx = context.attach_current_egl(430)
         self.hidden = hidden
+
+    def _take_context(self) -> None:
+        """Make the window's GL context current (cellgl's headless one may be)."""
+        glfw.make_context_current(self.window)
 
     def _init_imgui(self) -> None:
         self.imgui_ctx = imgui.create_context()
@@ -135,7 +142,7 @@ class Viewer:
     def close(self) -> None:
         if getattr(self, "window", None) is None:
             return
-        glfw.make_context_current(self.window)
+        self._take_context()
         self.renderer.release()
         imgui.backends.opengl3_shutdown()
         imgui.backends.glfw_shutdown()
@@ -200,7 +207,7 @@ class Viewer:
         t0 = time.perf_counter()
         dt = max(1e-4, t0 - self._last_time)
         self._last_time = t0
-        glfw.make_context_current(self.window)
+        self._take_context()
         glfw.poll_events()
         imgui.backends.opengl3_new_frame()
         imgui.backends.glfw_new_frame()
@@ -224,7 +231,7 @@ class Viewer:
         imgui.render()
         # Readouts, bake and export use cellgl's headless context, which may have been made
         # current on this thread: take the window's context back before drawing.
-        glfw.make_context_current(self.window)
+        self._take_context()
 
         w, h = self.size
         vx, vy, vw, vh = self.view_rect

@@ -34,9 +34,12 @@ def _mat(m: np.ndarray) -> bytes:
 
 
 class Renderer:
-    def __init__(self, ctx, model):
+    def __init__(self, ctx, model, take_context=lambda: None):
         self.ctx = ctx
         self.model = model
+        # Makes the window's context current again after a cellgl API call (which makes
+        # cellgl's headless context current).
+        self.take_context = take_context
         self.vao_empty = ctx.vertex_array(context.program("viewer_blit.vert", "viewer_blit.frag", ctx=ctx), [])
         self.blit = context.program("viewer_blit.vert", "viewer_blit.frag", ctx=ctx)
         self.frame_fbo = None
@@ -217,6 +220,7 @@ class Renderer:
         if old is not None and self._pups_key == key:
             return old[0]
         res = texture.render(self.model.recipe, side, side, channels=(channel,))[channel]
+        self.take_context()
         rgba = res if res.ndim == 3 else np.dstack([res, res, res, np.ones_like(res)])
         if old is not None:
             for o in old:
