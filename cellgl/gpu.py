@@ -75,20 +75,20 @@ def set_density(prog, enc) -> None:
     bind_density_image(enc.levels)
 
 
-def bind_density_image(levels) -> None:
-    """Upload (cached by content) and bind density-image levels (uint32) to storage buffer 7."""
+def bind_density_image(levels, ctx=None) -> None:
+    """Upload (cached by content, one buffer per context) and bind density-image levels (uint32)
+    to storage buffer 7 of ``ctx`` (default: cellgl's context; the viewer passes its window's)."""
     if levels is None:
         return
-    ctx = context.get_context()
+    ctx = ctx or context.get_context()
     data = np.ascontiguousarray(levels, dtype=np.uint32).tobytes()
-    key = (id(ctx), hash(data), len(data))
-    buf = _density_buffers.get(key)
-    if buf is None:
-        for b in _density_buffers.values():
-            b.release()
-        _density_buffers.clear()
-        buf = _density_buffers[key] = ctx.buffer(data)
-    buf.bind_to_storage_buffer(7)
+    key = (hash(data), len(data))
+    held = _density_buffers.get(id(ctx))
+    if held is None or held[0] != key or held[2] is not ctx:
+        if held is not None and held[2] is ctx:
+            held[1].release()
+        held = _density_buffers[id(ctx)] = (key, ctx.buffer(data), ctx)
+    held[1].bind_to_storage_buffer(7)
 
 
 def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:

@@ -16,14 +16,16 @@ Structured parts of a recipe have their own validation in :mod:`cellgl.recipe`:
   ``combination.linear`` (8 numbers) and ``combination.products`` (4 x 4).
 
 ``compile_time`` parameters change the shader's code (they become ``#define``s); the others
-are uniforms (``u_<name>``) that a viewer may change every frame.
+are uniforms (``u_<name>``) that a viewer may change every frame, except the ``derived`` ones,
+which the CPU turns into derived uniform arrays (the density map's ``density_*``: its integer
+encoding per octave, :mod:`cellgl.density`) and which have no uniform of their own.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 __all__ = ["Param", "PARAMS", "PARAMS_BY_NAME", "GROUPS", "LINEAR", "PRODUCTS", "N_LINEAR",
-           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES"]
+           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES", "DENSITY_MAPS"]
 
 N_LINEAR = 8            #: linear coefficients c1..c8 (F1..F8)
 N_PRODUCT = 4           #: product coefficients c_ij for i, j <= 4
@@ -35,6 +37,8 @@ FRACTAL_MODES = ("none", "sum", "qin", "qin_cube")
 RAMP_MODES = ("linear", "spline")
 NORMAL_CONVENTIONS = ("opengl", "directx")
 DISTRIBUTIONS = ("poisson", "jitter", "worley1996")
+#: spatially varying feature density (cellgl.density): the map of a texture, in uv
+DENSITY_MAPS = ("none", "ramp_x", "ramp_y", "radial", "image")
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
 
 #: recipe JSON sections, in order
@@ -60,6 +64,7 @@ class Param:
     choices: tuple[str, ...] | None = None
     compile_time: bool = False
     glsl: str | None = None
+    derived: bool = False
 
     @property
     def glsl_type(self) -> str:
@@ -101,7 +106,25 @@ PARAMS: tuple[Param, ...] = (
     Param("metric", "enum", "euclidean", None, None, "distance metric (manhattan: Worley's ship-hull "
           "channels)", "basis", choices=METRICS, compile_time=True),
     Param("minkowski_p", "float", 3.0, 0.25, 64.0, "exponent of the minkowski metric", "basis"),
-    Param("density", "float", 3.0, 0.05, 16.0, "mean feature points per cell (poisson)", "basis"),
+    Param("density", "float", 3.0, 0.05, 16.0, "mean feature points per cell (poisson; "
+          "unused with a density_map)", "basis"),
+    Param("density_map", "enum", "none", None, None, "spatially varying density (poisson): none; ramp_x, "
+          "ramp_y (density_min at density_start to density_max at density_end along u or v); radial "
+          "(density_min at the centre, density_max at density_radius); image (basis.density_image, "
+          "grayscale over the uv square: black density_min, white density_max)", "basis",
+          choices=DENSITY_MAPS, compile_time=True),
+    Param("density_min", "float", 0.5, 0.05, 16.0, "density map: mean points per cell where the map is 0 "
+          "(16 geometric levels between it and density_max)", "basis", derived=True),
+    Param("density_max", "float", 8.0, 0.05, 16.0, "density map: mean points per cell where the map is 1",
+          "basis", derived=True),
+    Param("density_start", "float", 0.0, -100.0, 100.0, "ramp_x/ramp_y: u (or v) where the map is 0",
+          "basis", derived=True),
+    Param("density_end", "float", 1.0, -100.0, 100.0, "ramp_x/ramp_y: u (or v) where the map is 1",
+          "basis", derived=True),
+    Param("density_center_x", "float", 0.5, -100.0, 100.0, "radial: u of the centre", "basis", derived=True),
+    Param("density_center_y", "float", 0.5, -100.0, 100.0, "radial: v of the centre", "basis", derived=True),
+    Param("density_radius", "float", 0.5, 0.001, 100.0, "radial: distance (in u units) where the map "
+          "reaches 1", "basis", derived=True),
     Param("jitter", "float", 1.0, 0.0, 1.0, "displacement of the point from the cell centre (jitter)", "basis"),
     Param("min_points", "int", 1, 0, 16, "poisson: fewest points per cell (Worley: 1)", "basis"),
     Param("max_points", "int", 9, 1, 16, "poisson: most points per cell (Worley: 9)", "basis"),
@@ -184,7 +207,7 @@ def markdown_table() -> str:
             name, doc = "c11 .. c44", ("weights of F_i F_j, all 16 ordered pairs (Qin); JSON: "
                                        "combination.products (4 x 4)")
         default = str(p.default).lower() if isinstance(p.default, bool) else p.default
-        kind = "#define" if p.compile_time else f"u_{p.name}"
+        kind = "#define" if p.compile_time else ("u_density_*" if p.derived else f"u_{p.name}")
         doc = doc.replace("|", "\\|")
         lines.append(f"| {p.group} | `{name}` | {p.type} | `{default}` | {p.range_text()} | {kind} | {doc} |")
     return "\n".join(lines) + "\n"

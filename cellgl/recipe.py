@@ -42,7 +42,10 @@ VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.texture.render(channels=...)``)
 CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")
 _TOP_KEYS = ("cellgl_recipe", "name", "doc", "outputs", "variants") + GROUPS
-_EXTRA = {"combination": ("linear", "products"), "color": ("ramp",)}
+_EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "color": ("ramp",)}
+#: largest side of a density image (cellgl.density.MAX_IMAGE_SIDE)
+_MAX_IMAGE_SIDE = 4096
+_image_cache: dict = {}
 
 
 class RecipeError(ValueError):
@@ -123,6 +126,58 @@ def _outputs(value, path: str) -> tuple:
     return tuple(value)
 
 
+def _density_image(value, path: str, base=None):
+    """A density image path (str or os.PathLike, relative to ``base`` or the working directory),
+    checked readable; returned as an absolute path string (None stays None)."""
+    if value is None:
+        return None
+    if not isinstance(value, (str, os.PathLike)) or not str(value).strip():
+        raise _err(path, value, "the path of a grayscale image (PNG, ...), relative to the recipe file",
+                   "expected a file path, got")
+    p = Path(value).expanduser()
+    if not p.is_absolute():
+        p = Path(base or ".") / p
+    p = p.resolve()
+    density_pixels(str(p), path)
+    return str(p)
+
+
+def density_pixels(file: str, path: str = "basis.density_image"):
+    """The density image ``file`` as float64 (h, w) in [0, 1] (grayscale, row 0 at the top: v = 0),
+    read with Pillow and cached by path and modification time; :class:`RecipeError` if unreadable."""
+    import numpy as np
+
+    try:
+        st = os.stat(file)
+    except OSError as exc:
+        raise RecipeError(f"{path}: cannot read density image {file!r}: {exc.strerror or exc}") from None
+    key = (file, st.st_mtime_ns, st.st_size)
+    img = _image_cache.get(key)
+    if img is None:
+        try:
+            from PIL import Image
+
+            with Image.open(file) as im:
+                im.load()
+                if im.mode in ("I;16", "I;16B", "I;16L", "I"):
+                    a = np.asarray(im, dtype=np.float64) / (65535.0 if im.mode.startswith("I;16") else
+                                                             max(1.0, float(np.asarray(im).max())))
+                else:
+                    a = np.asarray(im.convert("L"), dtype=np.float64) / 255.0
+        except ImportError:
+            raise RecipeError(f"{path}: reading a density image needs Pillow (pip install pillow)") from None
+        except Exception as exc:  # noqa: BLE001 - Pillow raises many kinds
+            raise RecipeError(f"{path}: cannot read density image {file!r} as an image: {exc}") from None
+        if a.ndim != 2 or not (1 <= a.shape[0] <= _MAX_IMAGE_SIDE and 1 <= a.shape[1] <= _MAX_IMAGE_SIDE):
+            raise RecipeError(f"{path}: density image {file!r} is {a.shape[1]}x{a.shape[0]}; accepted: "
+                              f"sides 1..{_MAX_IMAGE_SIDE}")
+        a = np.clip(a, 0.0, 1.0)
+        a.setflags(write=False)
+        _image_cache.clear()
+        img = _image_cache[key] = a
+    return img
+
+
 def _defaults() -> dict:
     return {p.name: p.default for p in PARAMS}
 
@@ -137,12 +192,15 @@ class Recipe:
     ramp : tuple of (t, r, g, b) keys
     outputs : tuple of channel names (the default channels of a bake)
     variants : tuple of Recipe (preset variants; usually empty)
+    density_image : str or None
+        Absolute path of the grayscale image of ``density_map = "image"`` (JSON:
+        ``basis.density_image``, relative to the recipe file); kept, unused, under other maps.
     """
 
-    __slots__ = ("name", "doc", "_values", "ramp", "outputs", "_variants")
+    __slots__ = ("name", "doc", "_values", "ramp", "outputs", "_variants", "density_image")
 
     def __init__(self, values: dict | None = None, ramp=DEFAULT_RAMP, name: str = "custom", doc: str = "",
-                 outputs=("color",), variants=()):
+                 outputs=("color",), variants=(), density_image=None):
         vals = _defaults()
         for k, v in (values or {}).items():
             if k not in PARAMS_BY_NAME:
@@ -154,6 +212,7 @@ class Recipe:
         self.ramp = _ramp(ramp, "color.ramp")
         self.outputs = _outputs(outputs, "outputs")
         self._variants = tuple(variants)
+        self.density_image = _density_image(density_image, "basis.density_image")
         _check(self)
 
     # ------------------------------------------------------------------ access
@@ -169,6 +228,8 @@ class Recipe:
         """The value of parameter ``name`` (or ``"ramp"``, ``"linear"``, ``"products"``)."""
         if name == "ramp":
             return self.ramp
+        if name == "density_image":
+            return self.density_image
         if name == "linear":
             return [self._values[c] for c in LINEAR]
         if name == "products":
@@ -182,12 +243,15 @@ class Recipe:
 
     def replace(self, **values) -> "Recipe":
         """A copy with some parameters changed (also ``ramp=``, ``name=``, ``doc=``, ``outputs=``,
-        ``linear=``, ``products=``); validated like :meth:`from_dict`."""
+        ``linear=``, ``products=``, ``density_image=``); validated like :meth:`from_dict`."""
         vals = dict(self._values)
         ramp, name, doc, outputs = self.ramp, self.name, self.doc, self.outputs
+        image = self.density_image
         for k, v in values.items():
             if k == "ramp":
                 ramp = v
+            elif k == "density_image":
+                image = v
             elif k == "name":
                 name = v
             elif k == "doc":
@@ -198,7 +262,11 @@ class Recipe:
                 vals.update(_coefficients(k, v, f"combination.{k}"))
             else:
                 vals[k] = v
-        return Recipe(vals, ramp, name, doc, outputs)
+        return Recipe(vals, ramp, name, doc, outputs, density_image=image)
+
+    def density_pixels(self):
+        """The density image as float64 (h, w) in [0, 1] (row 0: v = 0), or None."""
+        return None if self.density_image is None else density_pixels(self.density_image)
 
     def tileable(self) -> tuple["Recipe", list[str]]:
         """This recipe made seamless: ``tileable`` on, with the periods it needs made integers.
@@ -263,13 +331,17 @@ class Recipe:
                 g[p.name] = list(v) if isinstance(v, tuple) else v
             if group == "color":
                 g["ramp"] = [list(k) for k in self.ramp]
+            if group == "basis" and self.density_image is not None:
+                g["density_image"] = self.density_image
             d[group] = g
         d["outputs"] = list(self.outputs)
         return d
 
     @classmethod
-    def from_dict(cls, d, *, where: str = "recipe") -> "Recipe":
-        """Validate a JSON-like dict (see the module doc); raises :class:`RecipeError`."""
+    def from_dict(cls, d, *, where: str = "recipe", base=None) -> "Recipe":
+        """Validate a JSON-like dict (see the module doc); raises :class:`RecipeError`.
+        ``base``: the folder relative paths (``basis.density_image``) start from (default: the
+        working directory; :meth:`load`: the recipe file's folder)."""
         if not isinstance(d, dict):
             raise RecipeError(f"{where}: expected a JSON object, got {type(d).__name__}")
         for k in d:
@@ -279,12 +351,13 @@ class Recipe:
         version = d.get("cellgl_recipe", VERSION)
         if version != VERSION:
             raise _err("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
-        values, ramp = _read_groups(d)
+        folder = base
+        values, ramp, image = _read_groups(d, folder)
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
                 raise _err(k, d[k], "a string", "expected a string, got")
         base = cls(values, ramp if ramp is not None else DEFAULT_RAMP, d.get("name", "custom"),
-                   d.get("doc", ""), _outputs(d.get("outputs", ["color"]), "outputs"))
+                   d.get("doc", ""), _outputs(d.get("outputs", ["color"]), "outputs"), density_image=image)
         variants = d.get("variants", [])
         if not isinstance(variants, list):
             raise _err("variants", variants, "a list of partial recipes", "expected a list, got")
@@ -297,11 +370,12 @@ class Recipe:
                 raise RecipeError(f"variants[{k}]: unknown key {bad[0]!r}; accepted: name, doc, "
                                   + ", ".join(GROUPS))
             try:
-                vals, vramp = _read_groups(v)
+                vals, vramp, vimage = _read_groups(v, folder)
                 merged = dict(base._values)
                 merged.update(vals)
                 out.append(cls(merged, vramp if vramp is not None else base.ramp,
-                               v.get("name", f"{base.name}:{k}"), v.get("doc", base.doc), base.outputs))
+                               v.get("name", f"{base.name}:{k}"), v.get("doc", base.doc), base.outputs,
+                               density_image=vimage if vimage is not None else base.density_image))
             except RecipeError as exc:
                 raise RecipeError(f"variants[{k}].{exc}") from None
         base._variants = tuple(out)
@@ -326,7 +400,7 @@ class Recipe:
         except json.JSONDecodeError as exc:
             raise RecipeError(f"{path}: not valid JSON: {exc}") from None
         try:
-            return cls.from_dict(d)
+            return cls.from_dict(d, base=path.resolve().parent)
         except RecipeError as exc:
             raise RecipeError(f"{path}: {exc}") from None
 
@@ -381,9 +455,9 @@ def _coefficients(key: str, value, path: str) -> dict:
     return out
 
 
-def _read_groups(d: dict):
+def _read_groups(d: dict, base=None):
     values: dict = {}
-    ramp = None
+    ramp = image = None
     for group in GROUPS:
         if group not in d:
             continue
@@ -396,6 +470,8 @@ def _read_groups(d: dict):
             if k in _EXTRA.get(group, ()):
                 if k == "ramp":
                     ramp = _ramp(v, path)
+                elif k == "density_image":
+                    image = _density_image(v, path, base)
                 else:
                     coefs = _coefficients(k, v, path)
                     clash = [c for c in coefs if c in g]
@@ -410,11 +486,13 @@ def _read_groups(d: dict):
                                   + ", ".join(n for n in names if n not in PRODUCTS[1:] and n not in LINEAR[1:])
                                   .replace("c1,", "c1..c8,").replace("c11,", "c11..c44,"))
             values[k] = _coerce(p, v, path)
-    return values, ramp
+    return values, ramp, image
 
 
 def _parse(name: str, text: str):
     """Parse a ``--set`` value for parameter ``name``."""
+    if name == "density_image":
+        return text
     if name in ("ramp", "linear", "products", "outputs"):
         try:
             return json.loads(text)
@@ -463,6 +541,22 @@ def _check(r: Recipe) -> None:
     if v["ramp_mode"] == "spline" and len(r.ramp) < 4:
         raise RecipeError(f"color.ramp: spline mode needs at least 4 keys, got {len(r.ramp)}; "
                           "accepted: 4..16 keys, or color.ramp_mode 'linear'")
+    dmap = v["density_map"]
+    if dmap != "none":
+        if v["distribution"] != "poisson":
+            raise RecipeError(f"basis.density_map: {dmap!r} needs basis.distribution 'poisson' (a Poisson "
+                              f"count per cell), got {v['distribution']!r}; accepted: density_map 'none' "
+                              "with jitter or worley1996")
+        if dmap == "image" and r.density_image is None:
+            raise RecipeError("basis.density_map: 'image' needs basis.density_image (the path of a "
+                              "grayscale image, relative to the recipe file)")
+        if dmap.startswith("ramp") and v["density_start"] == v["density_end"]:
+            raise RecipeError(f"basis.density_end: {v['density_end']!r} must differ from "
+                              f"basis.density_start ({v['density_start']!r}) (the ramp runs between them)")
+        if v["tileable"]:
+            raise RecipeError(f"domain.tileable: not available with basis.density_map {dmap!r} (the map "
+                              "does not repeat, so neither would the texture); accepted: tileable false, "
+                              "or density_map 'none'")
     if v["tileable"]:
         if v["distribution"] == "worley1996":
             raise RecipeError("domain.tileable: not available with basis.distribution 'worley1996' "

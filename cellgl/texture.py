@@ -72,10 +72,21 @@ _DERIVED = (
      "octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)"),
     ("vec4", "noise_frac", "[CELL_TEX_OCTAVES]", "... and its fraction in [0, 1)"),
 )
+#: derived fields of a density map (cellgl.density), present only under this condition
+_DENSITY_IF = "#if CELL_DENSITY_MAP != CELL_DMAP_NONE"
+_DERIVED_DENSITY = (
+    ("uint", "density_thresholds", "[CELL_DENSITY_LEVELS * CELL_MAX_POINTS]",
+     "row L: Poisson table of density level L (density_min .. density_max, geometric)"),
+    ("ivec4", "density_axis", "[CELL_TEX_OCTAVES * 4]",
+     "octave i, lattice axis a at 4 i + a: (o, n, m, b) of cell_density_level"),
+    ("ivec4", "density_info", "[CELL_TEX_OCTAVES]", "octave i: (shift, image width, image height, 0)"),
+)
+#: the density image's storage buffer binding (cellgl.gpu.bind_density_image)
+DENSITY_IMAGE_BINDING = 7
 
 
 def _runtime_params():
-    return [p for p in PARAMS if not p.compile_time]
+    return [p for p in PARAMS if not p.compile_time and not p.derived]
 
 
 # ------------------------------------------------------------------------------ GLSL generation
@@ -94,20 +105,31 @@ def glsl_struct_block() -> str:
         lines.append(f"    {p.glsl_type} {p.name};".ljust(32) + f"// {p.doc}")
     for t, n, arr, doc in _DERIVED:
         lines.append(f"    {t} {n}{arr};".ljust(32) + f"// {doc}")
+    lines.append(_DENSITY_IF)
+    for t, n, arr, doc in _DERIVED_DENSITY:
+        lines.append(f"    {t} {n}{arr};".ljust(32) + f"// {doc}")
+    lines.append("#endif")
     lines.append("};")
     return "\n".join(lines) + "\n"
 
 
-def _uniform_decls(prefix: str) -> list[tuple[str, str, str]]:
-    """(glsl type, uniform name, array suffix) of every value the loader reads."""
+def _uniform_decls(prefix: str, density: bool = False) -> list[tuple[str, str, str]]:
+    """(glsl type, uniform name, array suffix) of every value the loader reads (``density``:
+    only the density map's derived arrays)."""
+    if density:
+        return [(t, prefix + n, arr) for t, n, arr, _ in _DERIVED_DENSITY]
     out = [(p.glsl_type, prefix + p.name, "") for p in _runtime_params()]
     out += [(t, prefix + n, arr) for t, n, arr, _ in _DERIVED]
     return out
 
 
 def glsl_uniform_block(prefix: str = "u_") -> str:
-    """``uniform`` declarations for every run-time parameter (and the derived arrays)."""
-    return "".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix))
+    """``uniform`` declarations for every run-time parameter (and the derived arrays; those of
+    the density map under ``#if CELL_DENSITY_MAP != CELL_DMAP_NONE``)."""
+    return ("".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix))
+            + _DENSITY_IF + "\n"
+            + "".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix, True))
+            + "#endif\n")
 
 
 def glsl_params_from_uniforms(prefix: str = "u_", function: str = "cell_texture_params_load") -> str:
@@ -116,19 +138,32 @@ def glsl_params_from_uniforms(prefix: str = "u_", function: str = "cell_texture_
     lines = [f"CellTextureParams {function}()", "{", "    CellTextureParams t;"]
     for p in _runtime_params():
         lines.append(f"    t.{p.name} = {prefix}{p.name};")
-    for _, n, arr, _ in _DERIVED:
-        if arr:
-            lines += [f"    for (int k = 0; k < {arr[1:-1]}; k++) {{",
-                      f"        t.{n}[k] = {prefix}{n}[k];", "    }"]
-        else:
-            lines.append(f"    t.{n} = {prefix}{n};")
-    lines += ["    return t;", "}"]
+    for derived in (_DERIVED, _DERIVED_DENSITY):
+        if derived is _DERIVED_DENSITY:
+            lines.append(_DENSITY_IF)
+        for _, n, arr, _ in derived:
+            if arr:
+                lines += [f"    for (int k = 0; k < {arr[1:-1]}; k++) {{",
+                          f"        t.{n}[k] = {prefix}{n}[k];", "    }"]
+            else:
+                lines.append(f"    t.{n} = {prefix}{n};")
+    lines += ["#endif", "    return t;", "}"]
     return "\n".join(lines) + "\n"
+
+
+_DENSITY_IMAGE_HOOK = f"""
+#if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
+// The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.gpu.bind_density_image):
+// the hook lib/points.glsl declares.
+layout(std430, binding = {DENSITY_IMAGE_BINDING}) readonly buffer CellDensityImage {{ uint u_density_image[]; }};
+uint cell_density_image_level(int index) {{ return u_density_image[index]; }}
+#endif
+"""
 
 
 def _glsl_uniforms_file() -> str:
     return (_GENERATED + "// Entry-point include (after lib/texture.glsl): the u_<param> uniforms and the loader.\n\n"
-            + glsl_uniform_block() + "\n" + glsl_params_from_uniforms())
+            + glsl_uniform_block() + _DENSITY_IMAGE_HOOK + "\n" + glsl_params_from_uniforms())
 
 
 def _f(v: float) -> str:
@@ -144,7 +179,7 @@ def glsl_constant_block(recipe, prefix: str = "u_") -> str:
     recipe = load_recipe(recipe)
     vals = uniform_values(recipe)
     lines = []
-    for t, n, arr in _uniform_decls("u_"):
+    for t, n, arr in _uniform_decls("u_") + (_uniform_decls("u_", True) if "u_density_axis" in vals else []):
         v = vals[n]
         name = prefix + n[2:]
         if arr:
@@ -222,8 +257,16 @@ def defines(recipe, channels=()) -> dict:
         CELL_MAX_POINTS=MAX_POINTS,
         CELL_MAX_RING=max_ring_default(v["dimension"]),
         CELL_PERIODIC=int(bool(v["tileable"])),
+        CELL_DENSITY_MAP=_density_kind(v["density_map"]),
     )
     return d
+
+
+def _density_kind(name: str) -> int:
+    """CELL_DENSITY_MAP of a recipe's ``density_map`` (0: none)."""
+    from .density import KIND_CODES
+
+    return 0 if name == "none" else KIND_CODES["ramp" if name.startswith("ramp") else name]
 
 
 def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
@@ -241,7 +284,7 @@ def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
     from . import texture_reference
 
     recipe = load_recipe(recipe)
-    o = texture_reference._tex(recipe, pan)
+    o = texture_reference.lattice_origins(recipe.values, pan)
     out = {}
     for name in ("origin", "noise"):
         cell, frac = o[name + "_cell"], o[name + "_frac"].astype(np.float32)
@@ -278,10 +321,38 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     for k, a in lattice_origins(recipe, pan).items():
         out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
+    encs = density_encodings(recipe, pan)
+    if encs is not None:
+        out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
+        out["u_density_axis"] = [tuple(int(c) for c in row) for e in encs for row in e.axes]
+        out["u_density_info"] = [e.info for e in encs]
     return out
 
 
-_UNIFORM_DTYPES = {"u_thresholds": np.uint32, "u_origin_cell": np.int32, "u_noise_cell": np.int32}
+def density_encodings(recipe, pan=(0.0, 0.0)):
+    """The density map of each octave as the GPU gets it (:func:`cellgl.texture_reference.
+    density_encodings` with each window origin taken modulo 2^32 as int32), or None.
+
+    Raises RecipeError if the map cannot be encoded (too large for 32-bit integers)."""
+    from . import texture_reference
+
+    recipe = load_recipe(recipe)
+    try:
+        encs = texture_reference.density_encodings(recipe, pan)
+    except ValueError as exc:
+        raise RecipeError(f"basis.density_map: {exc}") from None
+    if encs is None:
+        return None
+    out = []
+    for e in encs:
+        axes = e.axes.copy()
+        axes[:, 0] = (axes[:, 0] + (1 << 31)) % (1 << 32) - (1 << 31)
+        out.append(type(e)(e.kind, axes.astype(np.int32), e.shift, e.size, e.levels, e.thresholds))
+    return out
+
+
+_UNIFORM_DTYPES = {"u_thresholds": np.uint32, "u_origin_cell": np.int32, "u_noise_cell": np.int32,
+                   "u_density_thresholds": np.uint32, "u_density_axis": np.int32, "u_density_info": np.int32}
 
 
 def set_uniforms(prog, recipe, pan=(0.0, 0.0)) -> None:
@@ -290,6 +361,11 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0)) -> None:
     Uniforms the compiler removed are skipped. ``pan`` (du, dv): shift the view by this much
     in uv, exactly (it goes into the split origins in float64, see :func:`set_view`).
     """
+    recipe = load_recipe(recipe)
+    if recipe.values["density_map"] == "image":
+        from .gpu import bind_density_image
+
+        bind_density_image(density_encodings(recipe, pan)[0].levels, ctx=getattr(prog, "ctx", None))
     for name, value in uniform_values(recipe, pan).items():
         if name not in prog:
             continue

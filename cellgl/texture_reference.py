@@ -106,11 +106,73 @@ MAX_OCTAVES = 8
 
 def _tex(recipe, pan=(0.0, 0.0)) -> dict:
     """The run-time values the GLSL reads (enums as names), plus derived ones (the split
-    origins of :func:`lattice_origins`)."""
+    origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`)."""
     v = dict(recipe.values)
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     v.update(lattice_origins(v, pan))
+    v["density_enc"] = density_encodings(recipe, pan, v)
     return v
+
+
+def density_map(recipe):
+    """The recipe's density map in texture-local basis units ``s = (u f, v f aspect, z f, 0)``
+    (a :class:`cellgl.density.DensityMap`), or None (``density_map = "none"``).
+
+    ramp_x/ramp_y run from ``density_start`` to ``density_end`` in u (v); radial is centred at
+    ``(density_center_x, density_center_y)`` in uv with radius ``density_radius`` in u units
+    (isotropic in cells); an image covers the uv square (row 0 at v = 0).
+    """
+    from .density import DensityMap
+
+    v = recipe.values
+    kind = v["density_map"]
+    if kind == "none":
+        return None
+    f = float(v["frequency"])
+    fa = f * float(v["aspect"])
+    kw = dict(density_min=v["density_min"], density_max=v["density_max"])
+    if kind in ("ramp_x", "ramp_y"):
+        axis, k = (0, f) if kind == "ramp_x" else (1, fa)
+        return DensityMap("ramp", **kw, axis=axis, start=v["density_start"] * k, end=v["density_end"] * k)
+    if kind == "radial":
+        return DensityMap("radial", **kw, center=(v["density_center_x"] * f, v["density_center_y"] * fa),
+                          radius=v["density_radius"] * f)
+    return DensityMap("image", **kw, image=recipe.density_pixels(), rect=(0.0, 0.0, f, fa))
+
+
+def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
+    """The density map of each octave as a :class:`cellgl.density.DensityEncoding`, or None.
+
+    Octave ``i`` samples the lattice ``L^i (O + s)`` (:func:`lattice_origins`, ``O`` with the
+    pan), whose origin splits into the cell ``C_i`` and fraction ``r_i``. The map is encoded
+    relative to ``C_i`` (``DensityMap.scaled(L^i, r_i / L^i - pan_s)``: lattice ``x - C_i``), so its
+    integers stay small however far the origin is, and ``C_i`` is then added to each axis's
+    window origin ``o`` (int64 here; the GPU gets it modulo 2^32, where ``c - o`` wraps to the
+    same small difference). Raises ValueError if an octave's map is too large to encode.
+    """
+    from .density import encode
+
+    dm = density_map(recipe)
+    if dm is None:
+        return None
+    t = t if t is not None else dict(recipe.values, **lattice_origins(recipe.values, pan))
+    f = float(t["frequency"])
+    pan_s = (float(pan[0]) * f, float(pan[1]) * f * float(t["aspect"]), 0.0, 0.0)
+    out = []
+    for i in range(MAX_OCTAVES):
+        k = float(t["lacunarity"]) ** i
+        frac = t["origin_frac"][i]
+        offset = tuple(float(frac[a]) / k - pan_s[a] for a in range(4))
+        try:
+            enc = encode(dm.scaled(k, offset), int(t["dimension"]))
+        except ValueError as exc:
+            raise ValueError(f"density map of octave {i} (lacunarity^{i} = {k:g}): {exc}") from None
+        axes = enc.axes.copy()
+        used = axes[:, 1] > 0
+        axes[used, 0] += np.asarray(t["origin_cell"][i], dtype=np.int64)[used]
+        object.__setattr__(enc, "axes", axes)
+        out.append(enc)
+    return out
 
 
 def _split(x: np.ndarray, period) -> tuple[np.ndarray, np.ndarray]:
@@ -179,7 +241,9 @@ def texture_period(t: dict, octave: int) -> np.ndarray:
 
 def _basis(t: dict, octave: int) -> ref.Params:
     """``_cell_tex_basis``."""
-    return ref.Params(dim=t["dimension"], metric=Metric[t["metric"].upper()],
+    enc = t.get("density_enc")
+    return ref.Params(density_map=None if enc is None else enc[octave],
+                      dim=t["dimension"], metric=Metric[t["metric"].upper()],
                       distribution=Distribution[t["distribution"].upper()], density=t["density"],
                       jitter=t["jitter"], min_points=t["min_points"], max_points=t["max_points"],
                       minkowski_p=t["minkowski_p"], seed=(t["seed"] + 1013 * octave) & M32,

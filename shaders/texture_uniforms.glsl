@@ -65,6 +65,18 @@ uniform ivec4 u_origin_cell[CELL_TEX_OCTAVES];
 uniform vec4 u_origin_frac[CELL_TEX_OCTAVES];
 uniform ivec4 u_noise_cell[CELL_TEX_OCTAVES];
 uniform vec4 u_noise_frac[CELL_TEX_OCTAVES];
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+uniform uint u_density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
+uniform ivec4 u_density_axis[CELL_TEX_OCTAVES * 4];
+uniform ivec4 u_density_info[CELL_TEX_OCTAVES];
+#endif
+
+#if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
+// The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.gpu.bind_density_image):
+// the hook lib/points.glsl declares.
+layout(std430, binding = 7) readonly buffer CellDensityImage { uint u_density_image[]; };
+uint cell_density_image_level(int index) { return u_density_image[index]; }
+#endif
 
 CellTextureParams cell_texture_params_load()
 {
@@ -144,5 +156,16 @@ CellTextureParams cell_texture_params_load()
     for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
         t.noise_frac[k] = u_noise_frac[k];
     }
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+    for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
+        t.density_thresholds[k] = u_density_thresholds[k];
+    }
+    for (int k = 0; k < CELL_TEX_OCTAVES * 4; k++) {
+        t.density_axis[k] = u_density_axis[k];
+    }
+    for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
+        t.density_info[k] = u_density_info[k];
+    }
+#endif
     return t;
 }

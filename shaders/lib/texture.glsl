@@ -40,7 +40,8 @@
 //
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
-// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes.
+// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes and
+// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture.py).
 
 #include "cellular.glsl"
 #include "noise.glsl"
@@ -100,6 +101,17 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
     }
     p.period = cell_texture_period(t, octave);
     p.minkowski_p = t.minkowski_p;
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+    // The density map of this octave (cellgl/texture.py density_encodings: the map
+    // in uv, scaled to the octave's lattice, relative to its split origin).
+    for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
+        p.density_thresholds[k] = t.density_thresholds[k];
+    }
+    for (int a = 0; a < 4; a++) {
+        p.density_axis[a] = t.density_axis[octave * 4 + a];
+    }
+    p.density_info = t.density_info[octave];
+#endif
     return p;
 }
 

@@ -17,7 +17,7 @@
 
 struct CellTextureParams {
     float minkowski_p;          // exponent of the minkowski metric
-    float density;              // mean feature points per cell (poisson)
+    float density;              // mean feature points per cell (poisson; unused with a density_map)
     float jitter;               // displacement of the point from the cell centre (jitter)
     int min_points;             // poisson: fewest points per cell (Worley: 1)
     int max_points;             // poisson: most points per cell (Worley: 9)
@@ -79,4 +79,9 @@ struct CellTextureParams {
     vec4 origin_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
     ivec4 noise_cell[CELL_TEX_OCTAVES];// octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)
     vec4 noise_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+    uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];// row L: Poisson table of density level L (density_min .. density_max, geometric)
+    ivec4 density_axis[CELL_TEX_OCTAVES * 4];// octave i, lattice axis a at 4 i + a: (o, n, m, b) of cell_density_level
+    ivec4 density_info[CELL_TEX_OCTAVES];// octave i: (shift, image width, image height, 0)
+#endif
 };
