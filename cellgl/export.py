@@ -287,6 +287,15 @@ def _refuse_pups(r) -> None:
                           f"{r.name} -o {r.name}.png")
 
 
+def _refuse_density_image(r) -> None:
+    if r.values["density_map"] == "image":
+        raise ExportError(f"{r.name}: basis.density_map 'image' cannot be exported as a shader snippet "
+                          "(the snippet would need the density image's levels as a storage buffer or "
+                          "texture, which the engines bind differently); use density_map ramp_x, ramp_y "
+                          f"or radial (exported as constants), or bake it: cellgl bake {r.name} -o "
+                          f"{r.name}.png")
+
+
 #: lib name -> exported name, where the default prefix would collide with an entry point
 _OVERRIDES = {"cell_texture": "cellgl_texture_basis"}
 
@@ -301,6 +310,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
 
     r = recipe if isinstance(recipe, Recipe) else load_recipe(recipe)
     _refuse_pups(r)
+    _refuse_density_image(r)
     defines = texture.defines(r)
     solid = int(r.values["dimension"]) >= 3
     vals = texture.uniform_values(r)

@@ -643,13 +643,21 @@ def measure_range(recipe, samples: int = 65536, *, lo_pct: float = 0.5, hi_pct: 
     points spread over a 1000-cell region and returns its ``lo_pct``/``hi_pct`` percentiles
     ``(range_lo, range_hi)`` (widened if degenerate). Store them in the recipe with
     ``recipe.replace(range_lo=lo, range_hi=hi)``.
+
+    With a density map the cell size varies over the texture, so the points are spread over the
+    texture's own uv square instead (frequency, aspect and the map as the recipe has them).
     """
     recipe = load_recipe(recipe)
-    probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
-                           offset_x=0.0, offset_y=0.0, offset_z=0.0)
     rng = np.random.default_rng(seed)
     dim = recipe.get("dimension")
-    pts = rng.uniform(0.0, 1000.0 if dim == 2 else 100.0, size=(samples, 3))
+    if recipe.values["density_map"] != "none":
+        probe = recipe.replace(fractal="none")
+        pts = rng.uniform(0.0, 1.0, size=(samples, 3))
+        pts[:, 2] = 0.0
+    else:
+        probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
+                               offset_x=0.0, offset_y=0.0, offset_z=0.0)
+        pts = rng.uniform(0.0, 1000.0 if dim == 2 else 100.0, size=(samples, 3))
     if dim == 2:
         pts[:, 2] = 0.0
     val = evaluate(probe, pts, ("value",), backend=backend)["value"].astype(np.float64)

@@ -56,6 +56,16 @@ PRESETS: dict[str, dict] = {
                combination=lin(0, 0, 0, 1), color={"ramp": GREY}),
     "veins": dict(doc="F2 - F1: zero on the Voronoi boundaries, a vein-like tracery (Worley 1996 Fig. 1 "
                   "lower right; T&M Fig. 4.2)", combination=lin(-1, 1), color={"ramp": GREY}),
+    "density": dict(doc="Spatially varying feature density: flagstones, large on the left and small, dense "
+                    "ones on the right (ramp_x from 0.3 to 8 points per cell; Worley 1996: 'small, dense "
+                    "features in one area and larger in another')",
+                    basis={"density_map": "ramp_x", "density_min": 0.3, "density_max": 8.0,
+                           "density_start": 0.0, "density_end": 1.0, "min_points": 0, "max_points": 16},
+                    domain={"frequency": 6.0}, combination=lin(-1, 1),
+                    noise={"noise_color": 0.35, "noise_frequency": 3.0, "noise_octaves": 5},
+                    mapping={"level_hi": 0.08, "bump": 0.05, "light": 0.8},
+                    color={"cell_mix": 1.0, "shade": 0.85, "ramp": STONE},
+                    outputs=["color", "normal", "height", "id"]),
     "polka": dict(doc="Small F1 mapped to a colour: polka dots (Worley 1996, 'Application to texturing')",
                   basis={"density": 1.5}, domain={"frequency": 10.0}, combination=lin(1),
                   color={"ramp": [[0.0, 0.75, 0.1, 0.12], [0.22, 0.75, 0.1, 0.12], [0.26, 0.97, 0.94, 0.84],
