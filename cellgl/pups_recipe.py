@@ -31,7 +31,7 @@ from types import MappingProxyType
 import numpy as np
 
 from .params import Param
-from .recipe import VERSION, RecipeError, _coerce, _err, _suggest
+from .recipe import VERSION, RecipeError, _coerce, _err, _suggest, parse_value
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
            "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for",
@@ -300,7 +300,7 @@ class PupsRecipe:
                                   f"{_suggest(name, PUPS_PARAMS_BY_NAME)}; accepted for pattern "
                                   f"{self._values['pattern']!r}: "
                                   f"{', '.join(params_for(self._values['pattern']))}")
-            changes[name] = _parse_value(p, name, text)
+            changes[name] = parse_value(p, name, text)
         try:
             return self.replace(**changes)
         except RecipeError as exc:
@@ -393,27 +393,6 @@ class PupsRecipe:
 
     def __repr__(self):
         return f"PupsRecipe(name={self.name!r}, pattern={self._values['pattern']!r})"
-
-
-def _parse_value(p: Param, name: str, text: str):
-    try:
-        if p.type == "float":
-            return float(text)
-        if p.type == "int":
-            return int(text, 0)
-        if p.type == "bool":
-            low = text.lower()
-            if low in ("1", "true", "yes", "on"):
-                return True
-            if low in ("0", "false", "no", "off"):
-                return False
-            raise ValueError
-        if p.type == "color":
-            return [float(c) for c in text.strip("[]() ").split(",")]
-        return text
-    except ValueError:
-        raise RecipeError(f"--set {name}={text}: cannot parse {text!r}; accepted: "
-                          + ("an integer in " if p.type == "int" else "") + p.range_text()) from None
 
 
 # ---------------------------------------------------------------------- presets

@@ -504,6 +504,11 @@ def _parse(name: str, text: str):
     if p is None:
         raise RecipeError(f"--set {name}={text}: unknown parameter{_suggest(name, PARAMS_BY_NAME)}; "
                           "see docs/textures.md or `cellgl presets --params`")
+    return parse_value(p, name, text)
+
+
+def parse_value(p: Param, name: str, text: str):
+    """Parse the text of ``--set name=text`` for table parameter ``p`` (any recipe kind's table)."""
     try:
         if p.type == "float":
             return float(text)
