@@ -77,6 +77,8 @@ def main(argv=None) -> int:
 
     presets = []
     for name, _ in list_presets():
+        if name.startswith("pups-"):  # docs/make_pups_gallery.py renders those (512, grey)
+            continue
         presets.append(name)
         if not args.no_variants:
             presets += [v.name if v.name.startswith(f"{name}:") else f"{name}:{k}"
