@@ -226,6 +226,40 @@ def test_readout_matches_shown_texture(viewer):
     viewer.frame()
 
 
+def test_density_image_recipe_is_shown_as_baked(viewer, tmp_path):
+    """A density-image recipe: the 2D view binds the image (the texture.frag hook) and shows the
+    bake; the readout follows the map too."""
+    import json
+
+    import numpy as np
+    from PIL import Image
+
+    from cellgl import texture
+
+    img = np.zeros((4, 4), np.uint8)
+    img[:, 2:] = 255                                    # dense right half
+    Image.fromarray(img).save(tmp_path / "map.png")
+    d = {"name": "dimg", "basis": {"density_map": "image", "density_image": "map.png", "min_points": 0,
+                                   "max_points": 16, "density_min": 0.4, "density_max": 10.0},
+         "combination": {"linear": [-1, 1], "range_lo": 0.0, "range_hi": 0.6}}
+    (tmp_path / "dimg.json").write_text(json.dumps(d))
+    _reset(viewer, str(tmp_path / "dimg.json"))
+    x, y, w, h = viewer.unit_square_rect()
+    got = viewer.grab()[y:y + h, x:x + w].astype(np.float64) / 255.0     # before any other GL work
+    ref = texture.render(viewer.model.recipe, w, h, channels=("color", "F1", "id"))
+    close = np.all(np.abs(got - ref["color"][..., :3]) < 2.5 / 255, axis=-1)
+    assert close.mean() > 0.97
+    px, py = w - 20, h // 2                              # on the dense side
+    viewer.script_mouse([(x + px + 0.5, y + py + 0.5, False)])
+    viewer.frame()
+    r = viewer.readout
+    assert r["F"][0] == pytest.approx(float(ref["F1"][py, px]), abs=1e-4)
+    assert r["id"] == int(ref["id"][py, px])
+    viewer.script_mouse([(5, 5, False)])
+    viewer.frame()
+    _reset(viewer)
+
+
 @pytest.mark.parametrize("mode", ["2d", "3d", "tiled", "anim"])
 def test_view_modes(viewer, mode, tmp_path):
     _reset(viewer)

@@ -170,8 +170,19 @@ class Model:
         r = cellgl.cellular(x[None, :], 4, metric=v["metric"], distribution=v["distribution"],
                             density=v["density"], jitter=v["jitter"], min_points=v["min_points"],
                             max_points=v["max_points"], minkowski_p=v["minkowski_p"], seed=v["seed"],
-                            period=period, outputs=("F", "id"))
+                            period=period, outputs=("F", "id"), density_map=self._density_map())
         return {"F": [float(f) for f in r.F[0]], "id": int(r.id[0, 0]), "pos": tuple(float(c) for c in x)}
+
+    def _density_map(self):
+        """The recipe's density map in absolute basis units (octave 0, as the texture's first
+        octave sees it: the uv map shifted by the offsets), or None."""
+        from cellgl import texture_reference
+
+        dm = texture_reference.density_map(self.recipe)
+        if dm is None:
+            return None
+        v = self.recipe.values
+        return dm.scaled(1.0, (v["offset_x"], v["offset_y"], v["offset_z"], v["time"]))
 
     def readout_uv(self, u: float, v: float) -> dict:
         """F1..F4 and the F1 feature ID at texture coordinate (u, v) (v down, as image rows)."""
