@@ -118,6 +118,23 @@ def _chunk_size(n: int, dim: int, outputs) -> int:
     return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
 
 
+_pool: dict = {}
+
+
+def _storage(ctx, binding: int, nbytes: int):
+    """A storage buffer of at least ``nbytes`` bound to ``binding``, reused across calls
+    (allocating fresh tens-of-MB buffers every call costs as much as a small dispatch)."""
+    key = (id(ctx), binding)
+    buf = _pool.get(key)
+    if buf is None or buf.size < nbytes:
+        if buf is not None:
+            buf.release()
+        buf = ctx.buffer(reserve=max(64, nbytes + nbytes // 4))
+        _pool[key] = buf
+    buf.bind_to_storage_buffer(binding)
+    return buf
+
+
 def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
          groups=None):
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
@@ -126,11 +143,10 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim}
     binding = {"F": 2, "delta": 3, "id": 4, "grad": 5}
     for name in outputs:
-        bufs[name] = ctx.buffer(reserve=max(4, count * sizes[name]))
-        bufs[name].bind_to_storage_buffer(binding[name])
-    flags = ctx.buffer(reserve=4 * (count + 1))
-    flags.clear()
-    flags.bind_to_storage_buffer(6)
+        bufs[name] = _storage(ctx, binding[name], count * sizes[name])
+    # Samples whose search hit the cap: a counter and a list of their indices.
+    flags = _storage(ctx, 6, 4 * (count + 1))
+    flags.write(b"\0\0\0\0")
     _set(prog, "u_count", count)
     gx, gy, gz = groups or ((count + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
     prog.run(group_x=gx, group_y=gy, group_z=gz)
@@ -138,12 +154,10 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     for name, buf in bufs.items():
         # Straight into the result array (a contiguous run of whole samples).
         buf.read_into(out[name][start:start + count], size=count * sizes[name])
-        buf.release()
     nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
     if nbad:
-        f = np.frombuffer(flags.read(), dtype=np.uint32)[1:count + 1]
-        inexact[start:start + count] = f != 0
-    flags.release()
+        idx = np.frombuffer(flags.read(4 * nbad, offset=4), dtype=np.uint32)
+        inexact[start + idx.astype(np.int64)] = True
 
 
 def _alloc(N: int, n: int, dim: int, outputs) -> dict:
@@ -174,10 +188,9 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
         count = min(step, N - start)
-        pb = ctx.buffer(pts[start:start + count])
-        pb.bind_to_storage_buffer(0)
+        chunk = pts[start:start + count]
+        _storage(ctx, 0, chunk.nbytes).write(chunk)
         _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
-        pb.release()
     return out, ~inexact
 
 

@@ -47,7 +47,7 @@ layout(std430, binding = 2) writeonly buffer OutF { float out_F[]; };
 layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
 layout(std430, binding = 5) writeonly buffer OutGrad { float out_grad[]; };
-layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_flag[]; };
+layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_index[]; };
 
 void main()
 {
@@ -125,7 +125,6 @@ void main()
 #endif
     }
     if (!r.exact) {
-        atomicAdd(inexact_count, 1u);
-        inexact_flag[i] = 1u;
+        inexact_index[atomicAdd(inexact_count, 1u)] = i;
     }
 }
