@@ -50,14 +50,6 @@ def hash_u32(x):
     return x
 
 
-def rng_next(state):
-    """``cell_rng_next``: LCG step, then one multiply-xorshift round. Returns (new_state, output)."""
-    state = _add(_mul(state, 747796405), 2891336453)
-    x = state ^ (state >> np.uint64(16))
-    x = _mul(x, 0x7FEB352D)
-    return state, x ^ (x >> np.uint64(15))
-
-
 def u16(v):
     """``cell_u16``: a 16-bit value as a float in (0, 1), centred in its step."""
     return (_u(v).astype(np.float64) + 0.5) * (1.0 / 65536.0)
@@ -166,7 +158,7 @@ def point_count(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
         return _w96_step(state), count
     if p.distribution == Distribution.JITTER:
         return state, np.ones(len(state), dtype=np.int64)
-    state, u = rng_next(state)
+    u = state
     if p.density_map is not None:
         t = p.density_map.thresholds.astype(np.uint64)[density_level(cells, p)]     # (N, 16)
     else:
@@ -188,14 +180,19 @@ def next_point(state: np.ndarray, p: Params):
             f[:, a] = (state.astype(np.float64) + 0.5) / 4294967296.0
         state = _w96_step(state)
         return state, f, ids
-    state, ids = rng_next(state)
-    state, u = rng_next(state)
+    if p.distribution == Distribution.JITTER:
+        u = state                                   # one point: the cell's hash itself
+    else:
+        state = _add(state, 0x9E3779B9)             # point k: avalanche of h + k 0x9e3779b9
+        u = hash_u32(state)
+    ids = hash_u32(u ^ np.uint64(0x5BD1E995))
     f[:, 0] = u16(u >> np.uint64(16))
     f[:, 1] = u16(u & np.uint64(0xFFFF))
     if p.dim >= 3:
-        state, u = rng_next(state)
-        f[:, 2] = u16(u >> np.uint64(16))
-        f[:, 3] = u16(u & np.uint64(0xFFFF))
+        v = _mul(u ^ (u >> np.uint64(15)), 0x2C1B3C6D)
+        v ^= v >> np.uint64(12)
+        f[:, 2] = u16(v >> np.uint64(16))
+        f[:, 3] = u16(v & np.uint64(0xFFFF))
     if p.distribution == Distribution.JITTER:
         f[:, : p.dim] = 0.5 + p.jitter * (f[:, : p.dim] - 0.5)
     return state, f, ids

@@ -16,17 +16,6 @@ uint cell_hash_u32(uint x)
     return x;
 }
 
-// One step of the per-cell random stream: a 32-bit LCG (the multiplier and
-// increment PCG uses) whose state is then mixed by one multiply-xorshift
-// round, so the high and low halves of the output are both usable.
-uint cell_rng_next(inout uint state)
-{
-    state = state * 747796405u + 2891336453u;
-    uint x = state ^ (state >> 16);
-    x *= 0x7feb352du;
-    return x ^ (x >> 15);
-}
-
 // A 16-bit value as a float in (0, 1), centred in its 1/65536 step: exact
 // in float32 and float64, so the GPU and the reference see the same number.
 float cell_u16(uint v)

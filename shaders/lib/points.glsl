@@ -83,7 +83,8 @@ uint cell_cell_seed(ivec4 c, uint seed)
          + seed * 2654435769u;
 }
 #else
-// Hash an integer cell and the seed to the start of the cell's random stream:
+// Hash an integer cell and the seed to the cell's 32-bit random word h (the start
+// of its stream):
 // one avalanche of a wrapping linear combination with large odd constants.
 uint cell_cell_seed(ivec4 c, uint seed)
 {
@@ -109,10 +110,10 @@ int cell_point_count(inout uint state, CellParams p)
 #elif CELL_DIST == CELL_DIST_JITTER
     return 1;
 #else
-    // count = min_points + #{k in [min_points, max_points) : u >= thresholds[k]}.
-    // A fixed-length loop with constant indices once unrolled, so the table
-    // stays in registers.
-    uint u = cell_rng_next(state);
+    // count = min_points + #{k in [min_points, max_points) : u >= thresholds[k]},
+    // u = the cell's hash. A fixed-length loop with constant indices once
+    // unrolled, so the table stays in registers.
+    uint u = state;
     int count = p.min_points;
     for (int k = 0; k < CELL_MAX_POINTS; k++) {
         count += (k >= p.min_points && k < p.max_points && u >= p.thresholds[k]) ? 1 : 0;
@@ -163,7 +164,7 @@ int cell_density_level(ivec4 c, CellParams p)
 int cell_point_count_at(inout uint state, ivec4 cell, CellParams p)
 {
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE && CELL_DIST == CELL_DIST_POISSON
-    uint u = cell_rng_next(state);
+    uint u = state;
     int row = cell_density_level(cell, p) * CELL_MAX_POINTS;
     int count = p.min_points;
     for (int k = 0; k < CELL_MAX_POINTS; k++) {
@@ -190,14 +191,25 @@ vec4 cell_next_point(inout uint state, CellParams p, out uint id)
     f.z = (float(state) + 0.5) * (1.0 / 4294967296.0);
     state = 1402024253u * state + 586950981u;
 #else
-    id = cell_rng_next(state);
-    uint u = cell_rng_next(state);
+#if CELL_DIST == CELL_DIST_JITTER
+    // One point: the cell's hash itself is its random word.
+    uint u = state;
+#else
+    // Point k of the cell: an avalanche of the Weyl sequence h + k 0x9e3779b9
+    // (independent of the count, which used h itself).
+    state += 0x9e3779b9u;
+    uint u = cell_hash_u32(state);
+#endif
+    // x and y from the two halves of u; z and w from a second word derived from
+    // u; the ID from a third (computed only when a caller uses it).
+    id = cell_hash_u32(u ^ 0x5bd1e995u);
     f.x = cell_u16(u >> 16);
     f.y = cell_u16(u & 0xffffu);
 #if CELL_DIM >= 3
-    u = cell_rng_next(state);
-    f.z = cell_u16(u >> 16);
-    f.w = cell_u16(u & 0xffffu);
+    uint v = (u ^ (u >> 15)) * 0x2c1b3c6du;
+    v ^= v >> 12;
+    f.z = cell_u16(v >> 16);
+    f.w = cell_u16(v & 0xffffu);
 #endif
 #if CELL_DIST == CELL_DIST_JITTER
     f = 0.5 + p.jitter * (f - 0.5);
