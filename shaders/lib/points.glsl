@@ -1,8 +1,10 @@
 // cellgl: where the feature points are.
 //
 // Space is diced into integer cells. Each cell hashes (with the seed) to a
-// 32-bit value that starts a small random stream; the stream gives the number
-// of points in the cell and then, point by point, an ID and the position.
+// 32-bit word h. h picks the number of points in the cell; point k (k = 1, 2,
+// ...) takes its position and ID from an avalanche of h + k * 0x9e3779b9 (the
+// jitter distribution's single point from h itself); worley1996 runs the
+// book's LCG instead.
 // CELL_DIST selects the distribution at compile time (cellgl.enums.Distribution).
 //
 // Requires: hash.glsl. Macros: CELL_DIM (2..4), CELL_DIST,
