@@ -7,6 +7,30 @@
 // CELL_METRIC selects the metric at compile time (values from
 // cellgl.enums.Metric: CELL_METRIC_EUCLIDEAN, _MANHATTAN, _CHEBYSHEV, _MINKOWSKI).
 
+// A CELL_DIM-dimensional value in a 4-vector: the components past CELL_DIM set
+// to zero.
+vec4 cell_dims(vec4 v)
+{
+#if CELL_DIM < 4
+    v.w = 0.0;
+#endif
+#if CELL_DIM < 3
+    v.z = 0.0;
+#endif
+    return v;
+}
+
+ivec4 cell_dims_i(ivec4 v)
+{
+#if CELL_DIM < 4
+    v.w = 0;
+#endif
+#if CELL_DIM < 3
+    v.z = 0;
+#endif
+    return v;
+}
+
 // Internal-unit length of a single axis component x.
 float cell_metric_term(float x, float p)
 {
@@ -66,12 +90,7 @@ float cell_metric_length(vec4 d, float p)
 //   Minkowski:  -sign(delta) |delta|^(p-1) / F^(p-1)
 vec4 cell_metric_gradient(vec4 delta, float F, float p)
 {
-#if CELL_DIM < 4
-    delta.w = 0.0;
-#endif
-#if CELL_DIM < 3
-    delta.z = 0.0;
-#endif
+    delta = cell_dims(delta);
     if (F <= 0.0) {
         return vec4(0.0);
     }

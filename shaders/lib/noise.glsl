@@ -37,14 +37,8 @@ vec4 _cell_noise_gradient(ivec4 c, uint seed)
 // tiles over `period` lattice cells; keep `cell` wrapped (|cell| << 2^24).
 float cell_noise_split(ivec4 cell, vec4 f, ivec4 period, uint seed, out vec4 grad)
 {
-#if CELL_DIM < 4
-    cell.w = 0;
-    f.w = 0.0;
-#endif
-#if CELL_DIM < 3
-    cell.z = 0;
-    f.z = 0.0;
-#endif
+    cell = cell_dims_i(cell);
+    f = cell_dims(f);
     vec4 fl = floor(f);
     ivec4 i0 = cell + ivec4(fl);
     f -= fl;
@@ -55,12 +49,7 @@ float cell_noise_split(ivec4 cell, vec4 f, ivec4 period, uint seed, out vec4 gra
     for (int k = 0; k < (1 << CELL_DIM); k++) {
         ivec4 o = ivec4(k & 1, (k >> 1) & 1, (k >> 2) & 1, (k >> 3) & 1);
         vec4 g = _cell_noise_gradient(cell_wrap(i0 + o, period), seed);
-#if CELL_DIM < 4
-        g.w = 0.0;
-#endif
-#if CELL_DIM < 3
-        g.z = 0.0;
-#endif
+        g = cell_dims(g);
         vec4 d = f - vec4(o);
         float s = dot(g, d);
         vec4 on = vec4(o);

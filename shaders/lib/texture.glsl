@@ -121,24 +121,13 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
 float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4 grad,
                                out uint id, out vec4 F4)
 {
-#if CELL_DIM < 4
-    s.w = 0.0;
-#endif
-#if CELL_DIM < 3
-    s.z = 0.0;
-#endif
+    s = cell_dims(s);
     CellParams p = _cell_tex_basis(t, octave);
     ivec4 cell;
     vec4 f;
     cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale, cell, f);
-#if CELL_DIM < 4
-    cell.w = 0;
-    f.w = 0.0;
-#endif
-#if CELL_DIM < 3
-    cell.z = 0;
-    f.z = 0.0;
-#endif
+    cell = cell_dims_i(cell);
+    f = cell_dims(f);
     CellResult r = cell_search(cell, f, p);
 
     float lin[8] = float[8](t.c1, t.c2, t.c3, t.c4, t.c5, t.c6, t.c7, t.c8);
