@@ -1,12 +1,13 @@
 """Command line interface: ``cellgl <command> ...`` (also ``python -m cellgl``).
 
-Each subcommand is a pair of small functions: ``_add_<name>(subparsers)`` declares its arguments
-and ``_cmd_<name>(args) -> int`` runs it. Register new ones in ``_COMMANDS``.
+Each subcommand is a pair of functions: one declares its arguments on the subparsers, one runs
+it (``args -> int``); they live with the command's code and are registered in ``_COMMANDS``.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 from collections.abc import Callable, Sequence
@@ -60,74 +61,27 @@ def _add_view(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "view", help="interactive viewer (GLFW + Dear ImGui); --screenshot FILE for a headless capture"))
 
 
-def _cmd_view(args: argparse.Namespace) -> int:
-    from viewer.cli import run
+def _lazy(module: str, name: str) -> Callable:
+    """``module.name``, imported when first called (a command's dependencies load only when it runs)."""
+    def call(*args):
+        return getattr(importlib.import_module(module), name)(*args)
 
-    return run(args)
-
-
-# --------------------------------------------------------------------------------------------
-# bake (cellgl/bake.py; see docs/bake.md)
-# --------------------------------------------------------------------------------------------
-
-
-def _add_bake(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    from .bake import add_parser
-
-    return add_parser(sub)
-
-
-def _cmd_bake(args: argparse.Namespace) -> int:
-    from .bake import run_cli
-
-    return run_cli(args)
-
-
-# --------------------------------------------------------------------------------------------
-# export (cellgl/export.py; see docs/engines.md)
-# --------------------------------------------------------------------------------------------
-
-
-def _add_export(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    from .export import add_parser
-
-    return add_parser(sub)
-
-
-def _cmd_export(args: argparse.Namespace) -> int:
-    from .export import run_cli
-
-    return run_cli(args)
-
-
-# --------------------------------------------------------------------------------------------
-# presets (cellgl/recipe.py; see docs/textures.md)
-# --------------------------------------------------------------------------------------------
-
-
-def _add_presets(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    from .recipe import add_presets_parser
-
-    return add_presets_parser(sub)
-
-
-def _cmd_presets(args: argparse.Namespace) -> int:
-    from .recipe import run_presets_cli
-
-    return run_presets_cli(args)
+    return call
 
 
 # --------------------------------------------------------------------------------------------
 # registry and entry point
 # --------------------------------------------------------------------------------------------
 
-#: name -> (add arguments, run). Add bake, presets, export, view here.
+#: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
+#: cellgl/bake.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export.py (docs/engines.md),
+#: cellgl/recipe.py (docs/textures.md).
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
-    "bake": (_add_bake, _cmd_bake),
-    "view": (_add_view, _cmd_view),
-    "export": (_add_export, _cmd_export),
-    "presets": (_add_presets, _cmd_presets),
+    "bake": (_lazy("cellgl.bake", "add_parser"), _lazy("cellgl.bake", "run_cli")),
+    "view": (_add_view, _lazy("viewer.cli", "run")),
+    "export": (_lazy("cellgl.export", "add_parser"), _lazy("cellgl.export", "run_cli")),
+    "presets": (_lazy("cellgl.recipe", "add_presets_parser"), _lazy("cellgl.recipe", "run_presets_cli")),
 }
 
 
