@@ -1153,39 +1153,20 @@ def _stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axis, npairs
 # --------------------------------------------------------------------------------------------
 
 _LOCAL = (8, 8)
-_local_ctx = None
-_local_programs = {}
 _fragment_target = {}
 
 
 def _context():
-    """The shared headless context (:func:`cellgl.context.get_context`), or a local EGL one."""
-    global _local_ctx
-    try:
-        from .context import get_context
-    except ImportError:
-        get_context = None
-    if get_context is not None:
-        return get_context()
-    if _local_ctx is None:
-        import moderngl
-        _local_ctx = moderngl.create_standalone_context(require=430, backend="egl")
-    return _local_ctx
+    """The shared headless context (:func:`cellgl.context.get_context`)."""
+    from .context import get_context
+
+    return get_context()
 
 
 def _compute_program(defines):
-    try:
-        from .context import compute_program
-    except ImportError:
-        compute_program = None
-    if compute_program is not None:
-        return compute_program("pups.comp", defines)
-    key = tuple(sorted(defines.items()))
-    if key not in _local_programs:
-        from . import glsl
-        src = glsl.load("pups.comp", defines)
-        _local_programs[key] = _context().compute_shader(src.text)
-    return _local_programs[key]
+    from .context import compute_program
+
+    return compute_program("pups.comp", defines)
 
 
 def _cell_stream(packed: PupsPacked):
