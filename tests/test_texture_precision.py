@@ -13,15 +13,13 @@ import pytest
 from cellgl import texture
 from cellgl.recipe import Recipe, load_recipe
 from cellgl.texture_reference import _tex, texture_period
+from test_texture import RECIPES as TEXTURE_RECIPES     # tests/ is on sys.path under pytest
 
 FAR = 1e6 + 0.3
 
 RECIPES = {
-    "plain": Recipe(),
-    "everything": Recipe().replace(fractal="sum", octaves=3.5, dimension=3, tileable=True, frequency=4.0,
-                                   c_noise=0.3, noise_color=0.2, c2=1.0, c12=-1.0, range_hi=1.5, light=0.5,
-                                   shade=0.5, cell_mix=0.3, ramp_mode="spline",
-                                   ramp=[[0, 0, 0, 0], [0.3, 1, 0, 0], [0.6, 0, 1, 0], [1, 1, 1, 1]]),
+    "plain": TEXTURE_RECIPES["plain"],
+    "everything": TEXTURE_RECIPES["everything"],
     "fractal_noise": Recipe().replace(fractal="qin", octaves=8.0, lacunarity=1.9, c_noise=0.5,
                                       noise_frequency=1.7, noise_color=0.3, noise_octaves=8, light=0.5),
     "jitter_4d": Recipe().replace(dimension=4, distribution="jitter", jitter=0.8, time=1e5 + 0.3, c1=0.0,
