@@ -22,20 +22,6 @@ from cellgl import reference
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
 
 
-def brute(points, fp, metric, p_exp, n):
-    d = np.abs(fp.positions[None, :, :] - points[:, None, :])
-    if metric == "euclidean":
-        dist = np.sqrt((d * d).sum(-1))
-    elif metric == "manhattan":
-        dist = d.sum(-1)
-    elif metric == "chebyshev":
-        dist = d.max(-1)
-    else:
-        dist = (d ** p_exp).sum(-1) ** (1.0 / p_exp)
-    order = np.argsort(dist, axis=1, kind="stable")[:, : n + 1]
-    return np.take_along_axis(dist, order, 1), fp.ids[order]
-
-
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=4000)
@@ -60,7 +46,7 @@ def main(argv=None) -> int:
         lo, hi = int(np.floor(-2.0 * scale)) - reach, int(np.floor(2.0 * scale)) + reach
         cells = np.array(list(itertools.product(range(lo, hi + 1), repeat=dim)))
         fp = cellgl.feature_points(cells, distribution=dist, **kw)
-        F, ids = brute(pts, fp, metric, 3.0, n)
+        F, ids = reference.brute_force(pts, fp.positions, fp.ids, metric, n + 1)
         ok = g.exact
         diff = (g.id != ids[:, :n]) & ok[:, None]
         gap = np.minimum(np.abs(np.diff(F, axis=1))[:, :n],

@@ -359,6 +359,28 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
     return metric_finish(F, p), D, I.astype(np.uint32), exact
 
 
+def brute_force(points: np.ndarray, positions: np.ndarray, ids: np.ndarray, metric, n: int,
+                minkowski_p: float = 3.0):
+    """The n nearest of the given feature points to each sample, by testing every one.
+
+    The yardstick for :func:`search` (tests, ``benchmarks/exactness.py``): points (N, d),
+    positions (K, d), ids (K,) -> F (N, n) float64 ascending, ids (N, n) uint32; equal
+    distances keep the order of ``positions``.
+    """
+    a = np.abs(positions[None, :, :] - points[:, None, :])
+    metric = Metric[metric.upper()] if isinstance(metric, str) else metric
+    if metric == Metric.EUCLIDEAN:
+        dist = np.sqrt((a * a).sum(-1))
+    elif metric == Metric.MANHATTAN:
+        dist = a.sum(-1)
+    elif metric == Metric.CHEBYSHEV:
+        dist = a.max(-1)
+    else:
+        dist = (a ** minkowski_p).sum(-1) ** (1.0 / minkowski_p)
+    order = np.argsort(dist, axis=1, kind="stable")[:, :n]
+    return np.take_along_axis(dist, order, 1), ids[order]
+
+
 def feature_points(cells: np.ndarray, p: Params):
     """Every feature point in the given cells.
 

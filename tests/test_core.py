@@ -52,21 +52,6 @@ def test_gpu_matches_reference(ctx, dim, metric, dist):
     assert g.F.dtype == np.float32 and g.id.dtype == np.uint32 and g.delta.shape == (len(pts), 4, dim)
 
 
-def _brute(points, fp_pos, fp_ids, metric, p_exp, n):
-    d = fp_pos[None, :, :] - points[:, None, :]
-    a = np.abs(d)
-    if metric == "euclidean":
-        dist = np.sqrt((a * a).sum(-1))
-    elif metric == "manhattan":
-        dist = a.sum(-1)
-    elif metric == "chebyshev":
-        dist = a.max(-1)
-    else:
-        dist = ((a ** p_exp).sum(-1)) ** (1.0 / p_exp)
-    order = np.argsort(dist, axis=1, kind="stable")[:, :n]
-    return np.take_along_axis(dist, order, 1), fp_ids[order]
-
-
 BRUTE = [
     (2, "euclidean", dict(distribution="poisson")),
     (2, "manhattan", dict(distribution="jitter", jitter=0.7)),
@@ -92,7 +77,7 @@ def test_reference_equals_brute_force(dim, metric, kw):
     hi = int(np.floor(2.0 * scale)) + reach
     cells = np.array(list(itertools.product(range(lo, hi + 1), repeat=dim)))
     fp = cellgl.feature_points(cells, **kw)
-    F, ids = _brute(pts, fp.positions, fp.ids, metric, 3.0, n)
+    F, ids = reference.brute_force(pts, fp.positions, fp.ids, metric, n)
     np.testing.assert_allclose(r.F, F, rtol=1e-6, atol=1e-6)
     mism = r.id != ids
     assert mism.sum() == 0, f"{mism.sum()} id mismatches vs brute force"
@@ -105,7 +90,7 @@ def test_gpu_equals_brute_force_sparse(ctx):
     g = cellgl.cellular(pts, 4, outputs=("F", "id"), **kw)
     cells = np.array(list(itertools.product(range(-12, 12), repeat=2)))
     fp = cellgl.feature_points(cells, **kw)
-    F, ids = _brute(pts, fp.positions, fp.ids, "euclidean", 3.0, 4)
+    F, ids = reference.brute_force(pts, fp.positions, fp.ids, "euclidean", 4)
     ok = g.exact
     assert ok.mean() > 0.99
     np.testing.assert_allclose(g.F[ok], F[ok], rtol=2e-5, atol=2e-6)
