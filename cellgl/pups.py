@@ -932,7 +932,7 @@ class PupsPacked:
     stream: tuple = None
 
 
-def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
+def pups_pack(graph: PupsGraph, width, height, *, tile=None, grid=True) -> PupsPacked:
     """Lay out a graph for evaluation on a ``width`` x ``height`` pixel grid.
 
     Parameters
@@ -943,6 +943,10 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
     tile : int, optional
         Candidate-grid cell size in pixels, in [1, 1024]; default: about half the mean point
         spacing.
+    grid : bool
+        Build the candidate grid and stream (the compute and fragment paths need them; the
+        raster path does not). Without it ``cell_offsets`` lists no item, ``grid_shape`` is
+        ``(0, 0)`` and ``stream`` is None.
 
     Returns
     -------
@@ -990,6 +994,21 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
         if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or not 1 <= tile <= 1024:
             raise ValueError(f"tile must be an integer in [1, 1024], got {tile!r}")
         tile = int(tile)
+    f = graph.axis_factor
+    axes_scaled = graph.axes / (f * (graph.axes ** 2).sum(1))[:, None]
+    axis_begin = graph.offsets[point_index]
+    axis_count = np.diff(graph.offsets)[point_index]
+    orient = pts.orientations[point_index, :2]
+    values = pts.values[point_index]
+    labels = pts.labels[point_index]
+    if not grid:
+        none = np.zeros(0, dtype=np.uint32)
+        return PupsPacked(
+            point_index=point_index, positions=positions, orient=orient, values=values,
+            labels=labels, axis_begin=axis_begin, axis_count=axis_count,
+            axes_scaled=axes_scaled, pixel_box=pixel_box, origin=(ox, oy), pixel=(px, py),
+            width=width, height=height, tile=tile, grid_shape=(0, 0),
+            cell_offsets=np.zeros(1, dtype=np.uint32), cell_items=none, cell_masks=none)
     gw, gh = -(-width // tile), -(-height // tile)
     nonempty = (i1 >= i0) & (j1 >= j0)
     k = np.nonzero(nonempty)[0]
@@ -1001,10 +1020,6 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
     local = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
     rep_ncx = np.repeat(ncx, cnt)
     cell = (np.repeat(r0, cnt) + local // rep_ncx) * gw + np.repeat(c0, cnt) + local % rep_ncx
-    f = graph.axis_factor
-    axes_scaled = graph.axes / (f * (graph.axes ** 2).sum(1))[:, None]
-    axis_begin = graph.offsets[point_index]
-    axis_count = np.diff(graph.offsets)[point_index]
     sep, mask, kpair, kslot, kaxis = _cull(inst, cell, gw, tile, width, height, positions, axis_begin,
                                            axis_count, axes_scaled, (ox, oy), (px, py))
     keep = ~sep
@@ -1020,9 +1035,6 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None) -> PupsPacked:
     rank[order] = np.arange(order.size)
     cell_sorted = cell[order]
     slot = np.arange(order.size) - cell_offsets[cell_sorted].astype(np.int64)
-    orient = pts.orientations[point_index, :2]
-    values = pts.values[point_index]
-    labels = pts.labels[point_index]
     si = inst[order]
     stream = _stream(cell_offsets, cell_sorted, slot, rank[kpair], kslot, kaxis, inst.size,
                      positions[si], orient[si], values[si], labels[si], axes_scaled)
@@ -1286,13 +1298,219 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     return out.copy()
 
 
+_raster_target = {}
+
+
+def _raster_polygons(packed: PupsPacked):
+    """Convex polygons to rasterise for :func:`_evaluate_raster`, in pixel units.
+
+    Per instance with a non-empty pixel box: the intersection of its axes' half-planes
+    ``d.a <= 1`` (``a`` pre-scaled), each pushed out by one pixel, with its pixel box (pixel
+    edges), so every pixel centre where the weight can be non-zero lies well inside. Found as
+    the feasible pairwise intersections of the boundary lines, sorted by angle.
+
+    Returns
+    -------
+    k : int64 (K',)
+        The instances drawn, increasing (the compute path's summation order).
+    corners : float64 (K', V, 2)
+        Polygon vertices in order (pixel units, pixel (i, j) centred at (i + .5, j + .5)),
+        padded by repeating the last one.
+    count : int64 (K',)
+        Vertices per polygon (0: empty).
+    """
+    box = packed.pixel_box
+    k = np.flatnonzero((box[:, 2] >= box[:, 0]) & (box[:, 3] >= box[:, 1]))
+    if k.size == 0:
+        return k, np.zeros((0, 3, 2)), np.zeros(0, dtype=np.int64)
+    (ox, oy), (px, py) = packed.origin, packed.pixel
+    c = packed.positions[k]
+    n = k.size
+    cnt = packed.axis_count[k]
+    d = int(cnt.max())
+    # lines nrm . x <= hh in coordinates relative to the point (domain units); 4 box sides
+    # first, then the axes (padding repeats a box side)
+    nrm = np.zeros((n, d + 4, 2))
+    hh = np.zeros((n, d + 4))
+    ex0 = ox + (box[k, 0] - 0.5) * px - c[:, 0]
+    ey0 = oy + (box[k, 1] - 0.5) * py - c[:, 1]
+    ex1 = ox + (box[k, 2] + 0.5) * px - c[:, 0]
+    ey1 = oy + (box[k, 3] + 0.5) * py - c[:, 1]
+    nrm[:, 0] = (-1, 0)
+    hh[:, 0] = -ex0
+    nrm[:, 1] = (0, -1)
+    hh[:, 1] = -ey0
+    nrm[:, 2] = (1, 0)
+    hh[:, 2] = ex1
+    nrm[:, 3] = (0, 1)
+    hh[:, 3] = ey1
+    r = np.arange(d)
+    valid = r[None] < cnt[:, None]
+    ai = packed.axis_begin[k][:, None] + np.minimum(r[None], np.maximum(cnt[:, None] - 1, 0))
+    a = packed.axes_scaled[ai]
+    margin = max(px, py)
+    nrm[:, 4:] = np.where(valid[..., None], a, nrm[:, 0:1])
+    hh[:, 4:] = np.where(valid, 1.0 + margin * np.hypot(a[..., 0], a[..., 1]), hh[:, 0:1])
+    # unit normals, so the tolerance below is in domain units
+    ln = np.hypot(nrm[..., 0], nrm[..., 1])
+    nrm /= ln[..., None]
+    hh /= ln
+    i, j = np.triu_indices(d + 4, 1)
+    n1, n2 = nrm[:, i], nrm[:, j]
+    det = n1[..., 0] * n2[..., 1] - n1[..., 1] * n2[..., 0]
+    ok = np.abs(det) > 1e-12
+    sd = np.where(ok, det, 1.0)
+    vx = (hh[:, i] * n2[..., 1] - hh[:, j] * n1[..., 1]) / sd
+    vy = (n1[..., 0] * hh[:, j] - n2[..., 0] * hh[:, i]) / sd
+    slack = 1e-9 * (1.0 + np.abs(hh).max(axis=1))
+    feas = ok.copy()
+    lim = hh + slack[:, None]
+    for q in range(d + 4):  # inside every half-plane (a loop: small arrays, no big temporary)
+        feas &= nrm[:, q, 0:1] * vx + nrm[:, q, 1:2] * vy <= lim[:, q:q + 1]
+    nf = feas.sum(1)
+    cx = np.where(feas, vx, 0).sum(1) / np.maximum(nf, 1)
+    cy = np.where(feas, vy, 0).sum(1) / np.maximum(nf, 1)
+    ang = np.where(feas, np.arctan2(vy - cy[:, None], vx - cx[:, None]), np.inf)
+    order = np.argsort(ang, axis=1, kind="stable")
+    vmax = max(int(nf.max()), 3)
+    order = order[:, :vmax]
+    last = np.take_along_axis(order, np.maximum(nf - 1, 0)[:, None], 1)
+    order = np.where(np.arange(vmax)[None] < nf[:, None], order, last)
+    corners = np.empty((n, vmax, 2))
+    corners[..., 0] = (np.take_along_axis(vx, order, 1) + c[:, 0:1] - ox) / px + 0.5
+    corners[..., 1] = (np.take_along_axis(vy, order, 1) + c[:, 1:2] - oy) / py + 0.5
+    return k, corners, nf
+
+
+def _raster_pairs_limit(ctx):
+    """Largest axis-pair count the raster path can pass as flat vertex outputs: 4 floats per
+    pair next to the point and value vec4s (GL_MAX_VERTEX_OUTPUT_COMPONENTS, 128 on most
+    drivers), and one vertex attribute per pair next to the corner, point and value
+    (GL_MAX_VERTEX_ATTRIBS, 16: 13 pairs, 26 axes)."""
+    comps = int(ctx.info.get("GL_MAX_VERTEX_OUTPUT_COMPONENTS") or 64)
+    attribs = int(ctx.info.get("GL_MAX_VERTEX_ATTRIBS") or 16)
+    return max(0, min((comps - 8) // 4, attribs - 3))
+
+
+def _raster_applies(graph: PupsGraph, mode: PupsMode) -> bool:
+    """Whether :func:`_evaluate_raster` can evaluate ``graph``: modes ``interpolate`` and
+    ``weighted_sum``, every axis list within the varying budget (else: compute)."""
+    if mode == PupsMode.LABEL:
+        return False
+    cnt = np.diff(graph.offsets)
+    d = int(cnt.max()) if cnt.size else 0
+    return (d + 1) // 2 <= _raster_pairs_limit(_context())
+
+
+def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    """Rasterised evaluation (``method="raster"``): per instance the triangles of a convex
+    polygon around its support (:func:`_raster_polygons`), one indexed draw in instance order;
+    each vertex carries its instance's position, orientation, value, label and pre-scaled
+    axes (zero-padded to ``CELL_PUPS_RASTER_PAIRS`` pairs), passed on as ``flat`` outputs, so
+    ``shaders/pups_raster.frag`` reads no buffer. It writes ``(w * value, w)`` and additive
+    blending sums them into an RGBA32F target in instance order (the compute path's order);
+    the division (interpolate) is done here. Modes ``interpolate`` and ``weighted_sum``, at
+    most :func:`_raster_pairs_limit` axis pairs per point (see :func:`_raster_applies`).
+    """
+    from .context import program
+    t0 = time.perf_counter()
+    ctx = _context()
+    import moderngl
+    w, h = packed.width, packed.height
+    k, corners, nv = _raster_polygons(packed)
+    pairs = (int(packed.axis_count[k].max()) + 1) // 2 if k.size else 0
+    if pairs > _raster_pairs_limit(ctx):
+        raise ValueError("too many axes per point for method='raster'")
+    prog = program("pups_raster.vert", "pups_raster.frag", {"CELL_PUPS_RASTER_PAIRS": pairs})
+    # the polygons' vertices, each with its instance's data; fan triangles (0, v, v + 1)
+    n = k.size
+    vmax = corners.shape[1]
+    keep = np.arange(vmax)[None] < nv[:, None]
+    vinst = np.repeat(np.arange(n), nv)
+    nf = 10 + 4 * pairs
+    vert = np.zeros((vinst.size, nf), dtype="<f4")
+    vert[:, 0:2] = corners[keep]
+    kk = k[vinst]
+    vert[:, 2:4] = packed.positions[kk]
+    vert[:, 4:6] = packed.orient[kk]
+    vert[:, 6:6 + packed.values.shape[1]] = packed.values[kk]
+    vert[:, 9] = packed.labels[kk]
+    if pairs:
+        cnt = packed.axis_count[k]
+        r = np.arange(2 * pairs)
+        valid = r[None] < cnt[:, None]
+        ai = packed.axis_begin[k][:, None] + np.minimum(r[None], np.maximum(cnt[:, None] - 1, 0))
+        ax = np.where(valid[..., None], packed.axes_scaled[np.minimum(ai, max(
+            packed.axes_scaled.shape[0] - 1, 0))], 0.0).astype("<f4").reshape(n, 4 * pairs)
+        vert[:, 10:] = ax[vinst]
+    ntri = np.maximum(nv - 2, 0)
+    first = np.cumsum(nv) - nv
+    tri_inst = np.repeat(np.arange(n), ntri)
+    tri_v = np.arange(tri_inst.size) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
+    base = first[tri_inst]
+    idx = np.stack([base, base + tri_v, base + tri_v + 1], axis=1).astype("<u4").reshape(-1)
+    t1 = time.perf_counter()
+    vbuf = ctx.buffer(vert.tobytes() if vert.size else b"\0" * (4 * nf))
+    ibuf = ctx.buffer(idx.tobytes() if idx.size else b"\0" * 4)
+    # one render target, kept while the size stays (as in _evaluate_fragment)
+    key = (id(ctx), w, h)
+    if _raster_target.get("key") != key:
+        tex = ctx.texture((w, h), 4, dtype="f4")
+        fbo = ctx.framebuffer(color_attachments=[tex])
+        fbo.use()
+        for o in _raster_target.get("objects", ()):
+            o.release()
+        # the readback array too: reading into pages already mapped saves ~10 ms at 1000^2
+        _raster_target.update(key=key, objects=(fbo, tex),
+                              acc=np.empty((h, w, 4), dtype=np.float32))
+    fbo, tex = _raster_target["objects"]
+    acc = _raster_target["acc"]
+    fmt = "2f 4f 4f" + (f" {4 * pairs}f" if pairs else "")
+    names = ["in_corner", "in_point", "in_value"] + (["in_axes"] if pairs else [])
+    vao = ctx.vertex_array(prog, [(vbuf, fmt, *names)], index_buffer=ibuf, index_element_size=4)
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_epsilon", epsilon)):
+        if name in prog:
+            prog[name] = v
+    t2 = time.perf_counter()
+    fbo.use()
+    fbo.viewport = (0, 0, w, h)
+    fbo.clear(0.0, 0.0, 0.0, 0.0)
+    ctx.enable(moderngl.BLEND)
+    ctx.blend_func = moderngl.ONE, moderngl.ONE
+    ctx.blend_equation = moderngl.FUNC_ADD
+    try:
+        if idx.size:
+            vao.render(mode=moderngl.TRIANGLES, vertices=int(idx.size))
+        ctx.finish()
+    finally:
+        ctx.disable(moderngl.BLEND)
+    t3 = time.perf_counter()
+    fbo.read_into(acc, components=4, dtype="f4")
+    c = packed.values.shape[1]
+    if mode == PupsMode.WEIGHTED_SUM:
+        vals = acc[..., :c].copy()
+    else:
+        # sum(w T) / sum(w) as the compute path divides (float32), 0 where no weight
+        wsum = acc[..., 3:4]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vals = acc[..., :c] / wsum
+        vals[wsum[..., 0] == 0] = 0
+    for o in (vao, vbuf, ibuf):
+        o.release()
+    t4 = time.perf_counter()
+    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
+    return vals, None
+
+
 # --------------------------------------------------------------------------------------------
 # evaluation
 # --------------------------------------------------------------------------------------------
 
 
 def pups_evaluate(graph: PupsGraph, width, height, *, mode="interpolate", epsilon=0.5,
-                  backend="gpu", tile=None, return_labels=False, timings=None):
+                  backend="gpu", tile=None, return_labels=False, timings=None,
+                  method=None):
     """Evaluate a PUPs texture on a pixel grid covering the points' domain.
 
     Parameters
@@ -1315,6 +1533,15 @@ def pups_evaluate(graph: PupsGraph, width, height, *, mode="interpolate", epsilo
         Also return the label image (mode ``label`` only).
     timings : dict, optional
         Filled with stage times in seconds (``pack``, ``upload``, ``gpu``, ``readback``).
+    method : {None, "raster", "compute"}
+        GPU path (backend ``gpu``). ``compute``: the compute shader over candidate lists
+        (``shaders/pups.comp``). ``raster`` (modes ``interpolate`` and ``weighted_sum``):
+        each point's support polygon drawn as triangles, its data and axes passed as flat
+        vertex outputs, weighted per fragment and summed by additive blending
+        (``shaders/pups_raster.*``); same maths, same summation order, the same image. A set
+        with more axes per point than the varying budget (:func:`_raster_pairs_limit`: 26
+        axes on llvmpipe) falls back to ``compute``. Default None: ``raster`` where it
+        applies, else ``compute`` (mode ``label``).
 
     Returns
     -------
@@ -1331,11 +1558,18 @@ def pups_evaluate(graph: PupsGraph, width, height, *, mode="interpolate", epsilo
         raise ValueError(f"backend must be 'gpu' or 'numpy', got {backend!r}")
     if return_labels and mode != PupsMode.LABEL:
         raise ValueError("return_labels needs mode='label'")
+    if method not in (None, "compute", "raster"):
+        raise ValueError(f"method must be None, 'compute' or 'raster', got {method!r}")
+    if method == "raster" and mode == PupsMode.LABEL:
+        raise ValueError("method='raster' supports modes 'interpolate' and 'weighted_sum'")
     timings = {} if timings is None else timings
     t0 = time.perf_counter()
-    packed = pups_pack(graph, width, height, tile=tile)
+    raster = backend == "gpu" and method != "compute" and _raster_applies(graph, mode)
+    packed = pups_pack(graph, width, height, tile=tile, grid=not raster)
     timings["grid"] = time.perf_counter() - t0
-    if backend == "gpu":
+    if raster:
+        vals, labs = _evaluate_raster(packed, mode, epsilon, timings)
+    elif backend == "gpu":
         vals, labs = _evaluate_gpu(packed, mode, epsilon, timings)
     else:
         t1 = time.perf_counter()

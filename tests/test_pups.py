@@ -231,6 +231,52 @@ def test_fragment_path_matches_compute(ctx):
             np.testing.assert_array_equal(f[..., 3].astype(np.int32), la)
 
 
+@pytest.mark.parametrize("periodic", [True, False])
+@pytest.mark.parametrize("channels", [1, 3])
+@pytest.mark.parametrize("mode", ["interpolate", "weighted_sum"])
+def test_raster_matches_compute_and_reference(ctx, periodic, channels, mode):
+    # method="raster" (support polygons, flat per-point inputs, additive blending) sums the
+    # same float32 weights in the same order as the compute path: the same image, bit for bit
+    g = _graph(0.08, seed=5, channels=channels, periodic=periodic)
+    assert P._raster_applies(g, P.PupsMode[mode.upper()])
+    r = P.pups_evaluate(g, 170, 130, mode=mode, method="raster")
+    c = P.pups_evaluate(g, 170, 130, mode=mode, method="compute")
+    n = P.pups_evaluate(g, 170, 130, mode=mode, backend="numpy")
+    assert r.shape == c.shape and r.dtype == np.float32
+    assert r.tobytes() == c.tobytes()
+    assert r.tobytes() == P.pups_evaluate(g, 170, 130, mode=mode).tobytes()  # the default
+    np.testing.assert_allclose(r, n, atol=2e-5)
+
+
+def test_raster_falls_back_to_compute(ctx, monkeypatch):
+    g = _graph(0.1, seed=6, axis_factor=2.0)
+    c = P.pups_evaluate(g, 90, 70, method="compute")
+    assert P.pups_evaluate(g, 90, 70, method="raster").tobytes() == c.tobytes()
+    # more axes than the flat varyings hold: compute, silently
+    monkeypatch.setattr(P, "_raster_pairs_limit", lambda ctx: 1)
+    assert not P._raster_applies(g, P.PupsMode.INTERPOLATE)
+    monkeypatch.setattr(P, "_evaluate_raster", None)  # would fail if called
+    assert P.pups_evaluate(g, 90, 70, method="raster").tobytes() == c.tobytes()
+    assert P.pups_evaluate(g, 90, 70).tobytes() == c.tobytes()
+    # label mode: compute by default, raster refused
+    assert not P._raster_applies(g, P.PupsMode.LABEL)
+    P.pups_evaluate(g, 90, 70, mode="label")
+    with pytest.raises(ValueError, match="method='raster'"):
+        P.pups_evaluate(g, 90, 70, mode="label", method="raster")
+
+
+def test_raster_pair_budget(ctx):
+    # 4 floats per axis pair next to two vec4s; one attribute per pair next to three
+    lim = P._raster_pairs_limit(ctx)
+    comps = int(ctx.info.get("GL_MAX_VERTEX_OUTPUT_COMPONENTS") or 64)
+    assert 4 <= lim <= (comps - 8) // 4
+    g = _graph(0.1, seed=7)
+    pk = P.pups_pack(g, 64, 48, grid=False)
+    assert pk.stream is None and pk.cell_items.size == 0
+    k, corners, nv = P._raster_polygons(pk)
+    assert (nv >= 3).all() and corners.shape[0] == k.size
+
+
 # ---------------------------------------------------------------------------------- tiling
 
 
@@ -303,6 +349,7 @@ def test_every_preset_is_json_and_renders(ctx):
     (lambda: P.pups_evaluate(_graph(0.2), 10, 10, epsilon=1.0), "epsilon"),
     (lambda: P.pups_evaluate(_graph(0.2), 10, 10, backend="cuda"), "backend"),
     (lambda: P.pups_evaluate(_graph(0.2), 10, 10, mode="max"), "mode"),
+    (lambda: P.pups_evaluate(_graph(0.2), 10, 10, method="vulkan"), "method"),
     (lambda: P.pups_points(np.zeros((5, 3))), "positions"),
     (lambda: P.pups_points(np.zeros((5, 2)), labels=-np.ones(5, int)), "labels"),
     (lambda: P.pups_points(np.zeros((5, 2)), orientations=np.full((5, 3), 2.0)), "orientation"),
