@@ -1,10 +1,11 @@
 """Snippet export: the preprocessor subset, prefixing, every target through a real compiler,
-and the GLSL / GLSL ES snippets reproducing the GPU's numbers pixel for pixel.
+and the GLSL / GLSL ES (ModernGL) and WGSL / HLSL (wgpu compute shaders on lavapipe) snippets
+reproducing the GPU's numbers pixel for pixel.
 
 Compilers: glslangValidator (Debian glslang-tools) for GLSL 3.30/4.30, GLSL ES 3.00 and HLSL
 (-D, to SPIR-V); naga through the ``wgpu`` package (on Mesa lavapipe) for WGSL. A missing
 glslangValidator skips unless CELLGL_REQUIRE_GPU is set (CI), where it fails; a missing wgpu or
-Vulkan driver skips unless CELLGL_REQUIRE_WGSL is set.
+Vulkan driver skips unless CELLGL_REQUIRE_WGSL is set (the WGSL and HLSL runs need both).
 """
 from __future__ import annotations
 
@@ -189,7 +190,8 @@ def compile_snippet(tmp_path, target: str, text: str) -> None:
 _WGPU_DEVICE = []
 
 
-def wgsl_validate(text: str) -> None:
+def wgpu_device():
+    """The wgpu device on the first adapter (Mesa lavapipe here), made once per session."""
     try:
         import wgpu
     except ImportError:
@@ -202,7 +204,11 @@ def wgsl_validate(text: str) -> None:
             _WGPU_DEVICE.append(adapter.request_device_sync())
         except Exception as exc:  # no Vulkan driver (Debian: mesa-vulkan-drivers)
             _missing(f"a wgpu adapter ({exc})", REQUIRE_WGSL)
-    _WGPU_DEVICE[0].create_shader_module(code=text)   # raises with naga's message if invalid
+    return _WGPU_DEVICE[0]
+
+
+def wgsl_validate(text: str) -> None:
+    wgpu_device().create_shader_module(code=text)   # raises with naga's message if invalid
 
 
 @pytest.mark.parametrize("target", list(export.TARGETS))
@@ -341,6 +347,90 @@ def test_solid_entry_reproduces_a_volume_slice(ctx):
     W, H, D = 32, 24, 4
     body = snippet_code(export.export(solid, "glsl"))
     got = render_snippet(ctx, body, W, H, call="cellgl_texture3(vec3(uv, 0.625))")   # slice 2 of 4
+    np.testing.assert_allclose(got, _bake(solid, W, H, depth=D)[2], rtol=0, atol=2e-5)
+
+
+# WGSL and HLSL cannot run in OpenGL: they run as wgpu compute shaders on the Vulkan adapter
+# (Mesa lavapipe), one invocation per pixel centre, writing vec4<f32> to a storage buffer. WGSL
+# goes in as text (naga's WGSL frontend); HLSL is compiled to SPIR-V by glslangValidator -D and
+# goes in as SPIR-V (naga's SPIR-V frontend). -Od: glslang's optimiser fuses a * b + c into
+# fma() (e.g. the Euclidean x*x + y*y + z*z), which is allowed but is not what the bake's GL
+# driver computes; it moves the F-values by an ulp and the bump-mapped presets' colours by up
+# to about 2e-5. Unoptimised, the HLSL snippet gives the WGSL snippet's numbers.
+
+def run_compute(code, entry: str, width: int, height: int) -> np.ndarray:
+    """Dispatch ``entry`` of ``code`` (WGSL text or SPIR-V bytes) over width x height; binding 0
+    of group 0 is the vec4<f32> result buffer. Rows top to bottom (bake order)."""
+    import wgpu
+
+    dev = wgpu_device()
+    module = dev.create_shader_module(code=code)
+    pipeline = dev.create_compute_pipeline(layout="auto",
+                                           compute={"module": module, "entry_point": entry})
+    buf = dev.create_buffer(size=width * height * 16,
+                            usage=wgpu.BufferUsage.STORAGE | wgpu.BufferUsage.COPY_SRC)
+    group = dev.create_bind_group(layout=pipeline.get_bind_group_layout(0),
+                                  entries=[{"binding": 0, "resource": {"buffer": buf}}])
+    enc = dev.create_command_encoder()
+    cpass = enc.begin_compute_pass()
+    cpass.set_pipeline(pipeline)
+    cpass.set_bind_group(0, group)
+    cpass.dispatch_workgroups((width + 7) // 8, (height + 7) // 8, 1)
+    cpass.end()
+    dev.queue.submit([enc.finish()])
+    data = np.frombuffer(dev.queue.read_buffer(buf), dtype=np.float32)
+    return data.reshape(height, width, 4).copy()
+
+
+def run_snippet(tmp_path, target: str, text: str, width: int, height: int,
+                call: str = "cellgl_texture(uv)") -> np.ndarray:
+    """``call`` of the wgsl / hlsl snippet ``text`` at every pixel centre ``uv`` (invocation
+    (x, y) is pixel (x, y), uv = ((x + 0.5) / W, (y + 0.5) / H)), rows top to bottom."""
+    code = snippet_code(text)
+    if target == "wgsl":
+        wgpu_device()     # skip before compiling anything when there is no adapter
+        main = ("\n@group(0) @binding(0) var<storage, read_write> cellgl_result: array<vec4<f32>>;\n"
+                "@compute @workgroup_size(8, 8)\n"
+                "fn cellgl_main(@builtin(global_invocation_id) id: vec3<u32>)\n{\n"
+                f"    if (id.x >= {width}u || id.y >= {height}u) {{ return; }}\n"
+                f"    let uv = (vec2<f32>(id.xy) + vec2<f32>(0.5)) / vec2<f32>({width}.0, {height}.0);\n"
+                f"    cellgl_result[id.y * {width}u + id.x] = {call};\n}}\n")
+        return run_compute(code + main, "cellgl_main", width, height)
+    assert target == "hlsl", target
+    wgpu_device()
+    main = ("\nRWStructuredBuffer<float4> cellgl_result : register(u0);\n"
+            "[numthreads(8, 8, 1)]\n"
+            "void main(uint3 id : SV_DispatchThreadID)\n{\n"
+            f"    if (id.x >= {width}u || id.y >= {height}u) return;\n"
+            f"    float2 uv = (float2(id.xy) + 0.5) / float2({width}.0, {height}.0);\n"
+            f"    cellgl_result[id.y * {width}u + id.x] = {call};\n}}\n")
+    glslang(tmp_path, "run.hlsl", code + main,
+            "-D", "-V", "-S", "comp", "-e", "main", "--target-env", "vulkan1.1", "-Od")
+    spirv = (tmp_path / "run.hlsl.spv").read_bytes()
+    return run_compute(spirv, "main", width, height)
+
+
+#: the GLSL ES spread (density: ~75 s to compile on lavapipe, left to the GLSL test)
+RUN_PRESETS = GLES_PRESETS
+
+
+@pytest.mark.parametrize("target", ["wgsl", "hlsl"])
+@pytest.mark.parametrize("preset", RUN_PRESETS)
+def test_wgsl_hlsl_snippet_reproduces_the_bake(tmp_path, preset, target):
+    W, H = 32, 24
+    got = run_snippet(tmp_path, target, export.export(preset, target), W, H)
+    np.testing.assert_allclose(got, _bake(preset, W, H), rtol=0, atol=2e-5)
+
+
+@pytest.mark.parametrize("target", ["wgsl", "hlsl"])
+def test_wgsl_hlsl_solid_entry_reproduces_a_volume_slice(tmp_path, target):
+    from cellgl.recipe import load_recipe
+
+    solid = next(p for p in RUN_PRESETS if load_recipe(p).values["dimension"] >= 3)
+    W, H, D = 32, 24, 4
+    vec3 = "vec3<f32>" if target == "wgsl" else "float3"
+    got = run_snippet(tmp_path, target, export.export(solid, target), W, H,
+                      call=f"cellgl_texture3({vec3}(uv, 0.625))")           # slice 2 of 4
     np.testing.assert_allclose(got, _bake(solid, W, H, depth=D)[2], rtol=0, atol=2e-5)
 
 
