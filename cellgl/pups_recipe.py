@@ -532,15 +532,9 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     from . import pups as P
     from .pups_presets import _draw_graph, evaluate_scene
 
-    if isinstance(channels, str):
-        channels = (channels,)
-    channels = tuple(channels)
-    if not channels:
-        raise ValueError("channels must name at least one of: " + ", ".join(PUPS_CHANNELS))
-    for c in channels:
-        if c not in PUPS_CHANNELS:
-            raise ValueError(f"channel {c!r} is not available for PUPs recipes; accepted: "
-                             f"{', '.join(PUPS_CHANNELS)}")
+    from .texture import _check_channels
+
+    channels = _check_channels(channels, PUPS_CHANNELS, "channel {!r} is not available for PUPs recipes")
     if depth is not None:
         raise ValueError("depth (a volume) is not available for PUPs recipes: they are 2D")
     if backend not in ("gpu", "numpy"):

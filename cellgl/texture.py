@@ -392,7 +392,9 @@ def set_view(prog, recipe, uv0, extent) -> None:
 
 # ------------------------------------------------------------------------------ GPU evaluation
 
-def _check_channels(channels, allowed=CHANNELS) -> tuple:
+def _check_channels(channels, allowed=CHANNELS, unknown: str = "unknown channel {!r}") -> tuple:
+    """``channels`` (a name or names) as a tuple, each in ``allowed``; ``unknown`` words the
+    error for one that is not (formatted with the name)."""
     if isinstance(channels, str):
         channels = (channels,)
     channels = tuple(channels)
@@ -400,7 +402,7 @@ def _check_channels(channels, allowed=CHANNELS) -> tuple:
         raise ValueError("channels must name at least one of: " + ", ".join(allowed))
     for c in channels:
         if c not in allowed:
-            raise ValueError(f"unknown channel {c!r}; accepted: {', '.join(allowed)}")
+            raise ValueError(f"{unknown.format(c)}; accepted: {', '.join(allowed)}")
     return channels
 
 
