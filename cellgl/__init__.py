@@ -9,6 +9,15 @@ from .enums import Distribution, Metric
 from .recipe import Recipe, RecipeError, list_presets, load_recipe
 from .texture import evaluate, render
 
+
+def __getattr__(name: str):
+    # cellgl.to_dask loads cellgl.dask (and dask itself) only when first used
+    if name == "to_dask":
+        from .dask import to_dask
+
+        return to_dask
+    raise AttributeError(f"module 'cellgl' has no attribute {name!r}")
+
 __all__ = [
     "CellularResult",
     "DensityMap",
@@ -25,4 +34,5 @@ __all__ = [
     "list_presets",
     "load_recipe",
     "render",
+    "to_dask",
 ]

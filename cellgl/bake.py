@@ -293,8 +293,8 @@ def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tup
 
 
 class _Progress:
-    def __init__(self, total: int, label: str, enabled: bool, stream=None):
-        self.total, self.label, self.done = total, label, 0
+    def __init__(self, total: int, label: str, enabled: bool, stream=None, unit: str = "tiles"):
+        self.total, self.label, self.done, self.unit = total, label, 0, unit
         self.enabled = enabled and total > 1
         self.stream = stream or sys.stderr
         self.t0 = time.perf_counter()
@@ -313,7 +313,7 @@ class _Progress:
         secs = time.perf_counter() - self.t0
         eta = secs / self.done * (self.total - self.done)
         self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] "
-                          f"{self.done}/{self.total} tiles, {secs:.0f} s, eta {eta:.0f} s ")
+                          f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s ")
         self.stream.flush()
 
     def close(self) -> None:
@@ -631,19 +631,20 @@ examples:
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
+  cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Declare ``cellgl bake``'s arguments on a subparsers object."""
     p = sub.add_parser(
-        "bake", help="render a preset or recipe to .png/.exr/.tif/.npy",
+        "bake", help="render a preset or recipe to .png/.exr/.tif/.npy (or .zarr on Dask)",
         description="Render a preset or recipe JSON to an image or volume file.",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
                    help="a preset name (cellgl presets) or a recipe .json file")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file: .png, .exr, .tif/.tiff or .npy")
+                   help="output file: .png, .exr, .tif/.tiff or .npy; or a .zarr directory (Dask)")
     p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}", metavar="W[xH[xD]]",
                    help="pixels (default %(default)s); a third number bakes a volume of D slices")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
@@ -661,6 +662,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help=f"advanced: MB of working memory to stay within; sets the tile size "
                         f"(default {DEFAULT_BUDGET >> 20})")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
+    g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
+                             "see docs/scale.md)")
+    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="Dask scheduler address (tcp://host:8786) or scheduler file (.json); "
+                        "default: a local cluster sized to the machine")
+    g.add_argument("--workers", default=None, metavar="N",
+                   help="worker processes of the local cluster (default: one per core)")
+    g.add_argument("--threads", default="1", metavar="N",
+                   help="threads per local worker process (default 1)")
     return p
 
 
@@ -676,6 +686,15 @@ def _int_arg(flag: str, text, lo: int, hi: int) -> int:
 
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
+    if Path(args.output).suffix.lower() == ".zarr":
+        from .dask import zarr_bake
+
+        return zarr_bake.run_cli(args)
+    for flag, value in (("--scheduler", args.scheduler), ("--workers", args.workers),
+                        ("--threads", None if args.threads == "1" else args.threads)):
+        if value is not None:
+            raise BakeError(f"{flag} {value}: only for a distributed .zarr bake "
+                            f"(-o NAME.zarr); accepted outputs here: {_accepted(FORMATS)}")
     budget = DEFAULT_BUDGET if args.memory is None else \
         _int_arg("--memory", args.memory, 1, 1 << 20) << 20
     tile = None if args.tile is None else _int_arg("--tile", args.tile, 16, 8192)

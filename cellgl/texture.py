@@ -45,6 +45,10 @@ __all__ = ["defines", "uniform_values", "lattice_origins", "set_uniforms", "set_
            "measure_range", "needed_n", "OUTPUTS"]
 
 LOCAL_SIZE = 64
+#: largest image side :func:`render` takes. The shader puts a pixel at uv ``(x + 0.5) / W`` in
+#: float32: pixel centres are exact below 2**23, and at 2**20 neighbouring pixels are still 16
+#: float32 steps apart near uv = 1 (a 262144^2 heightfield is baked in tiles: cellgl.dask).
+MAX_SIDE = 1 << 20
 _CHUNK = 1 << 20            # samples per dispatch
 #: what :func:`evaluate` can return: the render channels plus the height gradient in texture
 #: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
@@ -560,8 +564,8 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     channels = _check_channels(channels)
     _backend(backend)
     for name, v in (("width", width), ("height", height)):
-        if not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
-            raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
+        if not isinstance(v, (int, np.integer)) or v < 1 or v > MAX_SIDE:
+            raise ValueError(f"{name} must be an integer in [1, {MAX_SIDE}], got {v!r}")
     tw = width - x0 if tile_w is None else tile_w
     th = height - y0 if tile_h is None else tile_h
     if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):

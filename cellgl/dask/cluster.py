@@ -1,0 +1,106 @@
+"""The Dask cluster a bake or sweep runs on, and running many small tasks on it with a progress bar.
+
+Without a scheduler address, a ``LocalCluster`` of worker *processes* is started, sized to the
+machine. Worker processes are started with ``spawn`` (never ``fork``), so none inherits the
+parent's GL context; each makes its own on its first render.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import sys
+import uuid
+from collections.abc import Callable, Iterable, Iterator
+
+from .blocks import DaskError, require
+
+__all__ = ["cluster_client", "default_workers", "map_tasks", "memory_bytes"]
+
+#: a worker process's memory before its first render (interpreter, numpy, dask, moderngl, zarr;
+#: measured about 170 MB) plus headroom
+WORKER_BASE_BYTES = 300 << 20
+
+
+def memory_bytes() -> int:
+    """Physical memory of this machine in bytes (0 when it cannot be read)."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def default_workers(per_task_bytes: int) -> int:
+    """Worker processes for a local cluster: one per core, fewer if memory would not hold
+    that many workers each rendering one block of ``per_task_bytes``."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    n = max(1, cores or 1)
+    mem = memory_bytes()
+    if mem:
+        n = min(n, max(1, mem // 2 // (WORKER_BASE_BYTES + per_task_bytes)))
+    return n
+
+
+@contextlib.contextmanager
+def cluster_client(scheduler: str | None = None, workers: int | None = None,
+                   threads: int = 1, per_task_bytes: int = 0) -> Iterator[object]:
+    """Yield a ``distributed.Client``: to ``scheduler`` (``tcp://host:8786``, a scheduler file
+    path ending in ``.json``) or to a fresh local cluster of ``workers`` processes with
+    ``threads`` threads each (default: :func:`default_workers`). Closed on leaving."""
+    distributed = require("distributed")
+    dask = require("dask")
+    if scheduler is not None:
+        if workers is not None:
+            raise DaskError(f"--workers {workers}: only for a local cluster; with --scheduler "
+                            f"the cluster's own workers run the bake")
+        kw = ({"scheduler_file": scheduler} if str(scheduler).endswith(".json")
+              else {"address": scheduler})
+        try:
+            client = distributed.Client(timeout="30s", **kw)
+        except (OSError, TimeoutError) as exc:
+            raise DaskError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
+        with client:
+            yield client
+        return
+    n = default_workers(per_task_bytes) if workers is None else workers
+    if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 1024:
+        raise DaskError(f"--workers {workers!r}: expected a whole number in 1..1024")
+    with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
+        cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=threads,
+                                           processes=True, dashboard_address=None,
+                                           silence_logs=40)  # logging.ERROR
+    with cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+def map_tasks(client, fn: Callable, items: Iterable, *args, on_done: Callable | None = None,
+              key: str = "cellgl") -> list:
+    """Run ``fn(item, *args)`` for each item on the cluster; return the results in item order.
+
+    ``args`` are sent to the workers once (scattered), not once per task. ``on_done(result)`` is
+    called as each task finishes (a progress bar). On the first failure the remaining tasks are
+    cancelled and the exception propagates.
+    """
+    distributed = require("distributed")
+    items = list(items)
+    shared = [client.scatter(a, broadcast=True, hash=False) for a in args]
+    run = uuid.uuid4().hex[:12]
+    futures = client.map(fn, items, *[[s] * len(items) for s in shared],
+                         key=[f"{key}-{run}-{k}" for k in range(len(items))])
+    index = {f.key: k for k, f in enumerate(futures)}
+    results: list = [None] * len(items)
+    try:
+        for fut in distributed.as_completed(futures):
+            res = fut.result()  # raises the task's exception here
+            results[index[fut.key]] = res
+            if on_done is not None:
+                on_done(res)
+    except BaseException:
+        client.cancel(futures)
+        raise
+    return results
+
+
+def log(message: str, quiet: bool) -> None:
+    if not quiet:
+        print(f"cellgl: {message}", file=sys.stderr)
