@@ -75,13 +75,14 @@ def _lazy(module: str, name: str) -> Callable:
 
 #: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
 #: cellgl/bake.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export.py (docs/engines.md),
-#: cellgl/recipe.py (docs/textures.md).
+#: cellgl/recipe.py (docs/textures.md), cellgl/dask/ (docs/scale.md: bake -o x.zarr, sweep).
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
     "bake": (_lazy("cellgl.bake", "add_parser"), _lazy("cellgl.bake", "run_cli")),
     "view": (_add_view, _lazy("viewer.cli", "run")),
     "export": (_lazy("cellgl.export", "add_parser"), _lazy("cellgl.export", "run_cli")),
     "presets": (_lazy("cellgl.recipe", "add_presets_parser"), _lazy("cellgl.recipe", "run_presets_cli")),
+    "sweep": (_lazy("cellgl.dask.sweep", "add_parser"), _lazy("cellgl.dask.sweep", "run_cli")),
 }
 
 
