@@ -82,7 +82,7 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "view": (_add_view, _lazy("viewer.cli", "run")),
     "export": (_lazy("cellgl.export", "add_parser"), _lazy("cellgl.export", "run_cli")),
     "presets": (_lazy("cellgl.recipe", "add_presets_parser"), _lazy("cellgl.recipe", "run_presets_cli")),
-    "sweep": (_lazy("cellgl.dask.sweep", "add_parser"), _lazy("cellgl.dask.sweep", "run_cli")),
+    "sweep": (_lazy("cellgl.dask.variations", "add_parser"), _lazy("cellgl.dask.variations", "run_cli")),
 }
 
 

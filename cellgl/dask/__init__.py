@@ -14,7 +14,7 @@ from __future__ import annotations
 
 __all__ = ["to_dask", "bake_zarr", "sweep", "DaskError"]
 
-_WHERE = {"to_dask": "blocks", "DaskError": "blocks", "bake_zarr": "zarr_bake", "sweep": "sweep"}
+_WHERE = {"to_dask": "blocks", "DaskError": "blocks", "bake_zarr": "zarr_bake", "sweep": "variations"}
 
 
 def __getattr__(name: str):
