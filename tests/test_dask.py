@@ -38,7 +38,7 @@ def cluster():
     """2 worker processes x 1 thread, spawned; yields the scheduler address."""
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
         with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                      dashboard_address=None, silence_logs=40) as c:
+                                      dashboard_address=":0", silence_logs=40) as c:
             yield c.scheduler_address
 
 
@@ -76,6 +76,17 @@ def test_to_dask_on_worker_processes(cluster, ctx):
     ref = cellgl.render(cellgl.load_recipe("polka").set_from_strings(["seed=3"]), 700, 600,
                         channels=("normal",))["normal"]
     assert got.shape == (600, 700, 3) and np.array_equal(got, ref)
+
+
+def test_several_threads_share_one_gl_thread(ctx):
+    """A worker with 3 threads renders every block on its one GL thread, so all are right."""
+    a = to_dask("f1", (256, 384), chunks=64, channels="height")
+    with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
+        with distributed.LocalCluster(n_workers=1, threads_per_worker=3, processes=True,
+                                      dashboard_address=":0", silence_logs=40) as c, \
+                distributed.Client(c) as client:
+            got = client.compute(a).result()
+    assert np.array_equal(got, cellgl.render("f1", 384, 256, channels=("height",))["height"])
 
 
 @pytest.mark.parametrize("kwargs, words", [

@@ -67,7 +67,7 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None,
         raise DaskError(f"--workers {workers!r}: expected a whole number in 1..1024")
     with dask.config.set({"distributed.worker.multiprocessing-method": "spawn"}):
         cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=threads,
-                                           processes=True, dashboard_address=None,
+                                           processes=True, dashboard_address=":0",
                                            silence_logs=40)  # logging.ERROR
     with cluster, distributed.Client(cluster) as client:
         yield client
