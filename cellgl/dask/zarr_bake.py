@@ -134,13 +134,12 @@ def _chunk_task(ij, layout: Layout, path: str, meta_json: str) -> int:
     sums = root[CHECKSUMS]
     y0, x0, h, w = layout.block(i, j)
     where = (slice(y0, y0 + h), slice(x0, x0 + w))
-    recorded = int(sums[i, j])
-    if recorded:
-        try:
-            if checksum({c: root[c][where] for c in layout.channels}) == recorded:
-                return 0
-        except Exception:  # noqa: BLE001 - a damaged chunk file: render it again
-            pass
+    try:
+        recorded = int(sums[i, j])
+        if recorded and checksum({c: root[c][where] for c in layout.channels}) == recorded:
+            return 0
+    except Exception:  # noqa: BLE001 - a damaged chunk or checksum file: render it again
+        pass
     res = render_block(layout, i, j)
     for c in layout.channels:
         root[c][where] = res[c]
