@@ -168,8 +168,8 @@ def test_zarr_bake_killed_and_rerun(big_ref, tmp_path):
     or damaged and ends with the same bytes as an uninterrupted bake."""
     out = tmp_path / "k.zarr"
     proc = subprocess.Popen(_bake_cmd(out, "--workers", "2", "-q"), cwd=ROOT,
-                            start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+                            start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
     t0 = time.monotonic()
     try:
         while time.monotonic() - t0 < 120 and proc.poll() is None:
