@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl import bake as cbake
+from cellgl.io import bake as cbake
 from cellgl import texture
 from test_texture import RECIPES as TEXTURE_RECIPES     # tests/ is on sys.path under pytest
 
@@ -150,7 +150,7 @@ def test_zarr_bake_on_two_workers_equals_render(cluster, big_ref, tmp_path):
     assert g.metadata.zarr_format == 3
     meta = g.attrs["cellgl"]
     assert meta["version"] == cellgl.__version__ and meta["size"] == [BIG, BIG]
-    assert cellgl.recipe.Recipe.from_dict(meta["recipe"]).to_dict() == \
+    assert cellgl.Recipe.from_dict(meta["recipe"]).to_dict() == \
         cellgl.load_recipe("f1").to_dict()
     h = g["height"]
     assert h.shape == (BIG, BIG) and h.chunks == (CHUNK, CHUNK) and h.dtype == np.float32

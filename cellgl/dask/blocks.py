@@ -1,6 +1,6 @@
 """Blocks of a cellgl image as Dask tasks: the layout, the per-process GL thread, :func:`to_dask`.
 
-A block is a tile: ``cellgl.texture.render(recipe, W, H, x0=, y0=, tile_w=, tile_h=)``, which
+A block is a tile: ``cellgl.recipes.render(recipe, W, H, x0=, y0=, tile_w=, tile_h=)``, which
 gives the same bits as the same region of a one-pass render. So any cluster, any chunking and any
 order of blocks assemble into exactly the image :func:`cellgl.render` would give.
 
@@ -23,8 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import bake as _bake
-from ..texture import MAX_SIDE  # 2**20: float32 uv keeps pixels apart up to there
+from cellgl import recipes
+from cellgl.io import bake as _bake
+from cellgl.texture.evaluation import MAX_SIDE  # 2**20: float32 uv keeps pixels apart there
 
 __all__ = ["DaskError", "Layout", "to_dask", "on_gl_thread", "render_block", "require",
            "MAX_SIDE", "MAX_CHUNK", "DEFAULT_CHUNK"]
@@ -128,7 +129,7 @@ class Layout:
     @classmethod
     def make(cls, recipe, shape, chunks, channels) -> "Layout":
         """Check and build. ``shape``: ``N`` or ``(height, width)``; ``chunks``: ``N`` or
-        ``(rows, cols)``; ``channels``: names (see :data:`cellgl.bake.CHANNELS`)."""
+        ``(rows, cols)``; ``channels``: names (see :data:`cellgl.io.spec.CHANNELS`)."""
         h, w = _pair("shape", shape)
         ch, cw = _pair("chunks", chunks)
         h, w = _whole("height", h, 1, MAX_SIDE), _whole("width", w, 1, MAX_SIDE)
@@ -178,10 +179,8 @@ def _pair(name: str, value) -> tuple:
 def render_block(layout: Layout, i: int, j: int) -> dict[str, np.ndarray]:
     """Render block ``(i, j)``: ``{channel: (rows, cols[, S]) array}``, on this process's GL
     thread; the same bits as that region of ``cellgl.render(recipe, W, H)``."""
-    from .. import texture
-
     y0, x0, h, w = layout.block(i, j)
-    return on_gl_thread(texture.render, layout.recipe, layout.width, layout.height,
+    return on_gl_thread(recipes.render, layout.recipe, layout.width, layout.height,
                         channels=layout.channels, x0=x0, y0=y0, tile_w=w, tile_h=h)
 
 

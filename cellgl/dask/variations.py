@@ -3,7 +3,7 @@
 Each ``--set NAME=SPEC`` either fixes a parameter (``--set frequency=6``) or sweeps it:
 ``A..B`` (whole numbers, both ends included), ``A..B:STEP``, or alternatives ``a|b|c``. Several
 swept parameters give every combination. Each variation is one task that bakes one file (PNG by
-default; any ``cellgl bake`` format) with :func:`cellgl.bake.bake`, so it is written atomically;
+default; any ``cellgl bake`` format) with :func:`cellgl.io.bake.bake`, so it is written atomically;
 a variation whose files all exist is skipped, so a rerun finishes an interrupted sweep.
 ``DIR/sweep.json`` records the request (recipe, sets, size, channels, format, cellgl version); a
 rerun into the same directory must make the same request.
@@ -11,7 +11,6 @@ rerun into the same directory must make the same request.
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import json
 import os
@@ -20,13 +19,13 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .. import __version__
-from .. import bake as _bake
-from .. import io as cio
+from cellgl._version import __version__
+from cellgl.io import bake as _bake
+from cellgl.io import formats as cio
 from .blocks import DaskError, load, on_gl_thread, require
 from .cluster import cluster_client, log, map_tasks
 
-__all__ = ["sweep", "parse_sweep", "add_parser", "run_cli", "MAX_VARIATIONS"]
+__all__ = ["sweep", "parse_sweep", "MAX_VARIATIONS"]
 
 MAX_VARIATIONS = 10_000_000
 MANIFEST = "sweep.json"
@@ -153,7 +152,7 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
         ``NAME=VALUE`` (fixed), ``NAME=A..B[:STEP]`` (whole numbers, inclusive) or
         ``NAME=a|b|c``; every combination of the swept ones is baked.
     size, channels, bit_depth, tileable
-        As :func:`cellgl.bake.bake` (size at most 65536 a side).
+        As :func:`cellgl.io.bake.bake` (size at most 65536 a side).
     fmt : str
         ``png`` (default), ``exr``, ``tif`` or ``npy``.
     scheduler, workers, threads
@@ -208,54 +207,3 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
 def _pair(size):
     return (size, size) if isinstance(size, int) else tuple(size)
 
-
-_EPILOG = """\
---set NAME=SPEC (repeatable): VALUE fixes a parameter; A..B or A..B:STEP sweeps whole numbers
-  (both ends included); a|b|c sweeps alternatives. Every combination is baked, one file each,
-  named <recipe>_<name><value>...<ext>; files already there are skipped (a rerun resumes).
-examples:
-  cellgl sweep flagstone --set seed=0..9999 -o flagstones/ --size 256
-  cellgl sweep veins --set seed=0..99 --set metric='euclidean|manhattan' -o veins/ --format exr
-  cellgl sweep rock --set seed=0..999 -o rocks/ --scheduler tcp://head:8786
-"""
-
-
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Declare ``cellgl sweep``'s arguments on a subparsers object."""
-    p = sub.add_parser(
-        "sweep", help="bake many variations of a recipe (--set seed=0..9999) on Dask",
-        description="Bake one file per variation of a recipe, on a Dask cluster "
-                    "(pip install 'cellgl[dask]'; see docs/scale.md).",
-        epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
-                   help="a preset name (cellgl presets) or a recipe .json file")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=SPEC",
-                   help="fix or sweep a recipe parameter (repeatable; see below)")
-    p.add_argument("--size", default=f"{_bake.DEFAULT_SIZE[0]}x{_bake.DEFAULT_SIZE[1]}",
-                   metavar="W[xH]", help="pixels per file (default %(default)s)")
-    p.add_argument("--channels", action="append", default=None, metavar="LIST",
-                   help="as cellgl bake (default color)")
-    p.add_argument("--format", default="png", metavar="EXT",
-                   help="png (default), exr, tif or npy")
-    p.add_argument("--depth", default=None, metavar="BITS", help="bits per sample, as cellgl bake")
-    p.add_argument("--tileable", action="store_true", default=None,
-                   help="make every variation wrap around at its edges")
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="Dask scheduler address or scheduler file; default a local cluster")
-    p.add_argument("--workers", default=None, metavar="N",
-                   help="worker processes of the local cluster (default: one per core)")
-    p.add_argument("--threads", default="1", metavar="N",
-                   help="threads per local worker process (default 1)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
-    return p
-
-
-def run_cli(args: argparse.Namespace) -> int:
-    workers = None if args.workers is None else \
-        _bake._int_arg("--workers", args.workers, 1, 1024)
-    sweep(args.recipe, args.output, args.sets, size=args.size,
-          channels=tuple(args.channels or ("color",)), fmt=args.format, bit_depth=args.depth,
-          tileable=args.tileable, scheduler=args.scheduler, workers=workers,
-          threads=_bake._int_arg("--threads", args.threads, 1, 256), progress=not args.quiet)
-    return 0

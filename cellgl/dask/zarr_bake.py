@@ -31,16 +31,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
-from .. import bake as _bake
+from cellgl._version import __version__
+from cellgl.io import bake as _bake
 from .blocks import (DEFAULT_CHUNK, MAX_CHUNK, MAX_SIDE, DaskError, Layout, dtype, load,
                      render_block, require, samples)
 from .cluster import cluster_client, log, map_tasks
 
-__all__ = ["bake_zarr", "run_cli", "checksum", "CHECKSUMS"]
+__all__ = ["bake_zarr", "checksum", "CHECKSUMS"]
 
 CHECKSUMS = "chunk_checksums"   #: name of the per-chunk checksum array in the group
-#: working memory of one render per pixel beyond its outputs (cellgl.bake, measured on llvmpipe)
+#: working memory of one render per pixel beyond its outputs (cellgl.io.spec, measured on llvmpipe)
 _RENDER_BYTES = _bake.RENDER_BYTES_PER_PIXEL
 
 
@@ -166,7 +166,7 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
     chunk : int
         Chunk side in pixels, 16..4096 (default 1024); one chunk is one task and one render.
     sets, tileable
-        Recipe overrides, as :func:`cellgl.bake.bake`.
+        Recipe overrides, as :func:`cellgl.io.bake.bake`.
     scheduler : str, optional
         A Dask scheduler address (``tcp://host:8786``) or scheduler file (``*.json``). Its
         workers must import cellgl and reach ``path`` (a shared file system). Default: a local
@@ -222,23 +222,4 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
     log(f"wrote {path}: {w}x{h}, {len(blocks)} chunks ({rendered} rendered, "
         f"{len(blocks) - rendered} already done and verified), {secs:.1f} s", not progress)
     return summary
-
-
-def run_cli(args) -> int:
-    """``cellgl bake ... -o out.zarr`` (called by :func:`cellgl.bake.run_cli`)."""
-    if args.depth not in (None, "32"):
-        raise DaskError(f"--depth {args.depth}: a .zarr bake stores float32 (ids uint32), "
-                        f"as rendered; accepted 32")
-    if args.memory is not None:
-        raise DaskError("--memory: not used by a .zarr bake; --tile N sets its chunk size")
-    chunk = DEFAULT_CHUNK if args.tile is None else \
-        _bake._int_arg("--tile", args.tile, 16, MAX_CHUNK)
-    workers = None if args.workers is None else \
-        _bake._int_arg("--workers", args.workers, 1, 1024)
-    threads = _bake._int_arg("--threads", args.threads, 1, 256)
-    bake_zarr(args.recipe, args.output, size=args.size,
-              channels=tuple(args.channels or ("color",)), chunk=chunk, sets=args.sets,
-              tileable=args.tileable, scheduler=args.scheduler, workers=workers,
-              threads=threads, progress=not args.quiet)
-    return 0
 

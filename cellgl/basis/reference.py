@@ -11,83 +11,14 @@ All integer arithmetic is done on ``np.uint64`` arrays holding values below
 from __future__ import annotations
 
 import itertools
-import math
-import re
 from dataclasses import dataclass
 
 import numpy as np
 
-from .enums import Distribution, Metric
-
-M32 = np.uint64(0xFFFFFFFF)
-MAX_POINTS = 16        #: CELL_MAX_POINTS: the largest allowed ``max_points``
-BIG = 3.0e38           #: "no point yet" distance, as in the GLSL
-W96_DENSITY_ADJUSTMENT = 0.398150
-
-
-def _u(x) -> np.ndarray:
-    return np.asarray(x, dtype=np.uint64) & M32
-
-
-def _mul(a, b):
-    return (_u(a) * _u(b)) & M32
-
-
-def _add(a, b):
-    return (_u(a) + _u(b)) & M32
-
-
-# --------------------------------------------------------------------------- hash.glsl
-
-def hash_u32(x):
-    """``cell_hash_u32``: lowbias32 avalanche of uint32 values."""
-    x = _u(x)
-    x ^= x >> np.uint64(16)
-    x = _mul(x, 0x7FEB352D)
-    x ^= x >> np.uint64(15)
-    x = _mul(x, 0x846CA68B)
-    x ^= x >> np.uint64(16)
-    return x
-
-
-def u16(v):
-    """``cell_u16``: a 16-bit value as a float in (0, 1), centred in its step."""
-    return (_u(v).astype(np.float64) + 0.5) * (1.0 / 65536.0)
-
-
-# --------------------------------------------------------------------------- points.glsl
-
-_W96_TABLE: np.ndarray | None = None
-
-
-def worley1996_table() -> np.ndarray:
-    """The 256-entry 1996 population table, read from ``shaders/lib/points.glsl``
-    (the one source of truth the GPU compiles)."""
-    global _W96_TABLE
-    if _W96_TABLE is None:
-        from . import glsl
-
-        text = (glsl.shader_dir() / "lib" / "points.glsl").read_text()
-        body = re.search(r"_cell_w96_table\[256\]\s*=\s*int\[256\]\(([^)]*)\)", text).group(1)
-        _W96_TABLE = np.array([int(v) for v in body.replace("\n", " ").split(",")], dtype=np.int64)
-        assert _W96_TABLE.shape == (256,)
-    return _W96_TABLE
-
-
-def poisson_thresholds(density: float) -> np.ndarray:
-    """Population table of a Poisson process, in run-length form.
-
-    Returns uint32 (MAX_POINTS,) with ``t[k] = floor(2**32 * P(X <= k))`` for
-    ``X ~ Poisson(density)``: a uniform 32-bit hash value ``u`` maps to the count
-    ``k`` with ``t[k-1] <= u < t[k]``, which is Worley's 256-entry table indexed
-    by hash bits, with 2**32 entries instead of 256.
-    """
-    cdf = 0.0
-    out = np.zeros(MAX_POINTS, dtype=np.uint64)
-    for k in range(MAX_POINTS):
-        cdf += math.exp(-density + k * math.log(density) - math.lgamma(k + 1))
-        out[k] = min(int(math.floor(min(cdf, 1.0) * 4294967296.0)), 0xFFFFFFFF)
-    return out.astype(np.uint32)
+from cellgl.basis.density import levels_reference
+from cellgl.basis.enums import Distribution, Metric
+from cellgl.basis.population import (BIG, M32, MAX_POINTS, W96_DENSITY_ADJUSTMENT, _add, _mul, _u,  # noqa: F401
+                                     hash_u32, poisson_thresholds, u16, worley1996_table)
 
 
 @dataclass(frozen=True)
@@ -104,7 +35,7 @@ class Params:
     minkowski_p: float = 3.0
     seed: int = 0
     period: tuple[int, int, int, int] = (0, 0, 0, 0)
-    #: spatially varying density (:class:`cellgl.density.DensityEncoding`), poisson only
+    #: spatially varying density (:class:`cellgl.basis.density.DensityEncoding`), poisson only
     density_map: object = None
 
     @property
@@ -145,8 +76,6 @@ def _w96_step(state):
 
 def density_level(cells: np.ndarray, p: Params) -> np.ndarray:
     """``cell_density_level``: the density level (0..15) of each (wrapped) cell (N, 4) int64."""
-    from .density import levels_reference
-
     return levels_reference(cells, p.density_map)
 
 

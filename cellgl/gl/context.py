@@ -24,7 +24,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from . import glsl
+from cellgl.gl import glsl
 
 __all__ = [
     "BACKENDS",
@@ -440,15 +440,15 @@ def compute_program(name: str, defines: Mapping | None = None, *,
     Parameters
     ----------
     name : str
-        Entry file relative to :func:`cellgl.glsl.shader_dir`, e.g. ``"cellular.comp"``.
+        Entry file relative to :func:`cellgl.gl.glsl.shader_dir`, e.g. ``"cellular.comp"``.
     defines : mapping, optional
-        ``#define``s placed after ``#version`` (see :func:`cellgl.glsl.load`).
+        ``#define``s placed after ``#version`` (see :func:`cellgl.gl.glsl.load`).
     ctx : moderngl.Context, optional
         Defaults to :func:`get_context`.
 
     Raises
     ------
-    cellgl.glsl.ShaderError
+    cellgl.gl.glsl.ShaderError
         Loading or compiling failed; driver line numbers are mapped to ``file:line``.
     """
     ctx = ctx if ctx is not None else get_context()

@@ -1,6 +1,6 @@
 """Texture recipes: one JSON-serialisable description of a texture.
 
-A recipe holds a value for every parameter of the table in :mod:`cellgl.params` (basis,
+A recipe holds a value for every parameter of the table in :mod:`cellgl.texture.params` (basis,
 combination, fractal, domain, noise, mapping, colour), the colour ramp, and a name and
 one-line doc. On disk it is JSON, one section per parameter group::
 
@@ -25,7 +25,6 @@ applied over the base; ``load_recipe("worley-gallery:7")`` picks one.
 """
 from __future__ import annotations
 
-import difflib
 import json
 import math
 import numbers
@@ -33,68 +32,19 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
-from .params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
-                     PRODUCTS, Param)
+from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
+                                   check_channels, parse_value)
+from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
+                     PRODUCTS)
 
-__all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS"]
+__all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS", "check_channels",
+           "needed_n"]
 
-VERSION = 1
-#: channels a recipe can produce (``outputs``; ``cellgl.texture.render(channels=...)``)
-CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")
 _TOP_KEYS = ("cellgl_recipe", "name", "doc", "outputs", "variants") + GROUPS
 _EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "color": ("ramp",)}
-#: largest side of a density image (cellgl.density.MAX_IMAGE_SIDE)
+#: largest side of a density image (cellgl.basis.density.MAX_IMAGE_SIDE)
 _MAX_IMAGE_SIDE = 4096
 _image_cache: dict = {}
-
-
-class RecipeError(ValueError):
-    """A recipe (or a ``--set``) is invalid; the message names the field and what is accepted."""
-
-
-def _err(path: str, value, accepted: str, problem: str = "") -> RecipeError:
-    problem = problem or "invalid value"
-    return RecipeError(f"{path}: {problem} {value!r}; accepted: {accepted}")
-
-
-def _suggest(name: str, names) -> str:
-    close = difflib.get_close_matches(name, list(names), n=3)
-    return f" (did you mean {', '.join(close)}?)" if close else ""
-
-
-def _coerce(p: Param, value, path: str):
-    """Validate one parameter value (already parsed from JSON) and return it normalised."""
-    if p.type == "float":
-        if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            raise _err(path, value, p.range_text(), "expected a number, got")
-        v = float(value)
-        if not math.isfinite(v) or v < p.lo or v > p.hi:
-            raise _err(path, value, p.range_text(), "out of range:")
-        return v
-    if p.type == "int":
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise _err(path, value, "an integer in " + p.range_text(), "expected an integer, got")
-        if value < p.lo or value > p.hi:
-            raise _err(path, value, "an integer in " + p.range_text(), "out of range:")
-        return int(value)
-    if p.type == "bool":
-        if not isinstance(value, bool):
-            raise _err(path, value, p.range_text(), "expected true or false, got")
-        return value
-    if p.type == "enum":
-        key = value.strip().lower().replace("-", "_") if isinstance(value, str) else None
-        if key not in p.choices:
-            raise _err(path, value, p.range_text(), "unknown choice")
-        return key
-    if p.type == "color":
-        ok = isinstance(value, (list, tuple)) and len(value) == 3 and all(
-            isinstance(c, numbers.Real) and not isinstance(c, bool) and 0.0 <= c <= 1.0 for c in value)
-        if not ok:
-            raise _err(path, value, p.range_text(), "expected a colour, got")
-        return tuple(float(c) for c in value)
-    raise AssertionError(p.type)
 
 
 def _ramp(value, path: str) -> tuple:
@@ -188,7 +138,7 @@ class Recipe:
     Attributes
     ----------
     name, doc : str
-    values : mapping of parameter name -> value (every name in :data:`cellgl.params.PARAMS`)
+    values : mapping of parameter name -> value (every name in :data:`cellgl.texture.params.PARAMS`)
     ramp : tuple of (t, r, g, b) keys
     outputs : tuple of channel names (the default channels of a bake)
     variants : tuple of Recipe (preset variants; usually empty)
@@ -406,7 +356,7 @@ class Recipe:
 
     def save(self, path) -> None:
         """Write the recipe as JSON, atomically (temp file + os.replace)."""
-        from .io import atomic_path
+        from cellgl.io.formats import atomic_path
 
         with atomic_path(path) as tmp:
             tmp.write_text(self.to_json())
@@ -507,28 +457,6 @@ def _parse(name: str, text: str):
     return parse_value(p, name, text)
 
 
-def parse_value(p: Param, name: str, text: str):
-    """Parse the text of ``--set name=text`` for table parameter ``p`` (any recipe kind's table)."""
-    try:
-        if p.type == "float":
-            return float(text)
-        if p.type == "int":
-            return int(text, 0)
-        if p.type == "bool":
-            low = text.lower()
-            if low in ("1", "true", "yes", "on"):
-                return True
-            if low in ("0", "false", "no", "off"):
-                return False
-            raise ValueError
-        if p.type == "color":
-            return [float(c) for c in text.strip("[]() ").split(",")]
-        return text
-    except ValueError:
-        raise RecipeError(f"--set {name}={text}: cannot parse {text!r}; accepted: "
-                          + ("an integer in " if p.type == "int" else "") + p.range_text()) from None
-
-
 def _check(r: Recipe) -> None:
     """Constraints between fields."""
     v = r._values
@@ -583,14 +511,12 @@ def _check(r: Recipe) -> None:
 
 def preset_dir() -> Path:
     """The folder holding the preset JSON files (package data ``cellgl/presets``)."""
-    return Path(__file__).resolve().parent / "presets"
+    return Path(__file__).resolve().parent.parent / "presets"
 
 
 def list_presets() -> list[tuple[str, str]]:
-    """``[(name, one-line doc), ...]`` of every preset, sorted by name: the cellular recipes
-    (``cellgl/presets/*.json``) and the PUPs presets (``pups-*``, :mod:`cellgl.pups_recipe`)."""
-    from .pups_recipe import pups_preset_names
-
+    """``[(name, one-line doc), ...]`` of the cellular presets (``cellgl/presets/*.json``), sorted
+    by name (:func:`cellgl.recipes.list_presets` adds the PUPs presets)."""
     out = []
     for path in sorted(preset_dir().glob("*.json")):
         try:
@@ -598,34 +524,27 @@ def list_presets() -> list[tuple[str, str]]:
         except (OSError, json.JSONDecodeError):
             doc = "(unreadable)"
         out.append((path.stem, doc))
-    return sorted(out + pups_preset_names())
+    return out
 
 
-def load_recipe(preset_or_path):
-    """A preset by name (``"veins"``, ``"worley-gallery:3"`` for a variant, ``"pups-cow"``) or a
-    recipe JSON file.
+def load_recipe(preset_or_path, known=None):
+    """A cellular recipe: a :class:`Recipe`, a preset by name (``"veins"``,
+    ``"worley-gallery:3"`` for a variant) or a recipe JSON file.
 
-    Returns a :class:`Recipe`, or a :class:`cellgl.pups_recipe.PupsRecipe` for a PUPs preset or
-    a JSON file with ``"kind": "pups"``. Raises :class:`RecipeError` naming the known presets
-    if neither matches.
+    Any recipe kind (PUPs too) loads through :func:`cellgl.recipes.load_recipe`, which passes the
+    names of every preset as ``known`` for the error. Raises :class:`RecipeError` naming the known
+    presets if neither matches.
     """
-    from .pups_recipe import PupsRecipe, load_pups_preset
-
-    if isinstance(preset_or_path, (Recipe, PupsRecipe)):
+    if isinstance(preset_or_path, Recipe):
         return preset_or_path
     text = str(preset_or_path)
     path = Path(text)
-    if path.suffix == ".json" or os.sep in text or path.is_file():
-        if _json_kind(path) == "pups":
-            return PupsRecipe.load(path)
+    if is_path(text):
         return Recipe.load(path)
-    pups = load_pups_preset(text)
-    if pups is not None:
-        return pups
     name, _, variant = text.partition(":")
     file = preset_dir() / f"{name}.json"
     if not file.is_file():
-        names = [n for n, _ in list_presets()]
+        names = known if known is not None else [n for n, _ in list_presets()]
         raise RecipeError(f"unknown preset {text!r}{_suggest(name, names)}; accepted: a recipe .json file or "
                           "one of: " + ", ".join(names))
     recipe = Recipe.load(file)
@@ -639,49 +558,21 @@ def load_recipe(preset_or_path):
                       + (" or " + ", ".join(v.name for v in vs) if vs else ""))
 
 
-def _json_kind(path: Path):
-    """The ``kind`` key of a recipe file (None: a cellular recipe, or unreadable: let
-    :meth:`Recipe.load` report it)."""
-    try:
-        d = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError):
-        return None
-    return d.get("kind") if isinstance(d, dict) else None
+def is_path(text: str) -> bool:
+    """Whether a recipe argument names a file (``.json``, a path separator, or an existing file)
+    rather than a preset."""
+    return Path(text).suffix == ".json" or os.sep in text or Path(text).is_file()
 
 
-# ---------------------------------------------------------------------- CLI: cellgl presets
-
-def add_presets_parser(sub):
-    """Declare ``cellgl presets [NAME] [--params] [--variants]``."""
-    p = sub.add_parser("presets", help="list the texture presets (or show one recipe as JSON)")
-    p.add_argument("name", nargs="?", help="show this preset's recipe JSON (NAME or NAME:VARIANT)")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="with NAME: change a parameter before printing (repeatable)")
-    p.add_argument("--variants", action="store_true", help="also list each preset's variants")
-    p.add_argument("--params", action="store_true", help="list the recipe parameters (name, type, range, doc)")
-    return p
-
-
-def run_presets_cli(args) -> int:
-    """Run ``cellgl presets``."""
-    if args.params:
-        from .pups_recipe import PUPS_PARAMS
-
-        for prm in PARAMS:
-            print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")
-        print("\nPUPs recipes (pups-* presets; which patterns use each: docs/pups.md):")
-        for prm in PUPS_PARAMS:
-            print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")
-        return 0
-    if args.name:
-        recipe = load_recipe(args.name).set_from_strings(args.set)
-        print(recipe.to_json(), end="")
-        return 0
-    presets = list_presets()
-    width = max((len(n) for n, _ in presets), default=0)
-    for name, doc in presets:
-        print(f"{name:{width}s}  {doc}")
-        if args.variants:
-            for k, v in enumerate(load_recipe(name).variants):
-                print(f"{'':{width}s}    {name}:{k}  {v.doc}")
-    return 0
+def needed_n(recipe: Recipe) -> int:
+    """The largest n with F_n in the combination (1 if none)."""
+    v = recipe.values
+    n = 1
+    for i, name in enumerate(LINEAR, 1):
+        if v[name] != 0.0:
+            n = max(n, i)
+    for i in range(1, 5):
+        for j in range(1, 5):
+            if v[f"c{i}{j}"] != 0.0:
+                n = max(n, i, j)
+    return n

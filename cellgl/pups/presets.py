@@ -38,10 +38,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import pups as P
+from cellgl.pups.generators import _sample_map, cluster_labels, labels_by_ramp, labels_from_image, poisson_disk, poisson_disk_variable, random_orientations, space_giraffe
+from cellgl.pups.graph import pups_graph
+from cellgl.pups.points import DEFAULT_DOMAIN, _check_size, pups_points
+from cellgl.pups.synthesis import pups_evaluate
 
 __all__ = ["PUPS_PRESETS", "KIND_DEFAULTS", "build_pups", "build_scene", "evaluate_scene",
-           "PupsScene", "PupsLayer", "reference_image", "REFINE_WORKING_SIZE"]
+           "PupsScene", "PupsLayer", "reference_image", "REFINE_WORKING_SIZE", "pups_presets", "pups_render"]
 
 _COMMON = {"radius": 0.06, "axis_factor": 1.0, "epsilon": 0.5, "orientation": "random",
            "tilt": 0.0}
@@ -198,7 +201,7 @@ def _orientations(p, pos, seed):
     n = pos.shape[0]
     o = p["orientation"]
     if o == "random":
-        return P.random_orientations(n, seed=_stream(seed, 99))
+        return random_orientations(n, seed=_stream(seed, 99))
     if o == "none":
         return np.zeros((n, 3))
     if o == "right":
@@ -218,9 +221,9 @@ def _poisson(p, seed, k, radius=None):
     r = p["radius"] if radius is None else radius
     rmax = p.get("radius_max")
     if rmax is not None and radius is None:
-        return P.poisson_disk_variable(r, rmax, lambda xy: (xy[:, 0] + 1) / 2,
+        return poisson_disk_variable(r, rmax, lambda xy: (xy[:, 0] + 1) / 2,
                                        seed=_stream(seed, k))
-    return P.poisson_disk(r, seed=_stream(seed, k))
+    return poisson_disk(r, seed=_stream(seed, k))
 
 
 #: side of the square image the ``refine`` kind's intermediate iterations are evaluated at
@@ -275,32 +278,32 @@ class PupsScene:
 
 
 def _graph(p, pos, values, labels, seed, axis_factor=None):
-    pts = P.pups_points(pos, values, labels, _orientations(p, pos, seed))
-    return P.pups_graph(pts, p["axis_factor"] if axis_factor is None else axis_factor)
+    pts = pups_points(pos, values, labels, _orientations(p, pos, seed))
+    return pups_graph(pts, p["axis_factor"] if axis_factor is None else axis_factor)
 
 
 def _noise_graph(p, radius, seed, k):
-    pos = P.poisson_disk(radius, seed=_stream(seed, k))
+    pos = poisson_disk(radius, seed=_stream(seed, k))
     vals = _stream(seed, k + 1000).random(pos.shape[0])
     return _graph(p, pos, vals, None, seed + k)
 
 
 def _cells_graph(p, radius, seed, k):
-    pos = P.poisson_disk(radius, seed=_stream(seed, k))
-    pts = P.pups_points(pos, orientations=_orientations(p, pos, seed + k))
-    g = P.pups_graph(pts, p["axis_factor"])
+    pos = poisson_disk(radius, seed=_stream(seed, k))
+    pts = pups_points(pos, orientations=_orientations(p, pos, seed + k))
+    g = pups_graph(pts, p["axis_factor"])
     if p.get("group", "point") == "cluster":
-        labels = P.cluster_labels(g, sizes=p["cluster_sizes"], seed=_stream(seed, k + 2000))
+        labels = cluster_labels(g, sizes=p["cluster_sizes"], seed=_stream(seed, k + 2000))
     elif p.get("group", "point") == "point":
         labels = np.arange(pos.shape[0], dtype=np.int32)
     else:
         raise ValueError(f"group must be 'point' or 'cluster', got {p['group']!r}")
     gray = _stream(seed, k + 1000).random(int(labels.max()) + 1)
-    return P.pups_graph(pts.replace(values=gray[labels], labels=labels), p["axis_factor"])
+    return pups_graph(pts.replace(values=gray[labels], labels=labels), p["axis_factor"])
 
 
 def _sample_image(img, pos):
-    return P._sample_map(img, pos, P.DEFAULT_DOMAIN)
+    return _sample_map(img, pos, DEFAULT_DOMAIN)
 
 
 def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
@@ -349,16 +352,16 @@ def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
         if p["labels"] == "random":
             labels = (_stream(seed, 1).random(pos.shape[0]) < 0.5).astype(np.int32)
         elif p["labels"] == "ramp":
-            labels = P.labels_by_ramp(pos, seed=_stream(seed, 1))
+            labels = labels_by_ramp(pos, seed=_stream(seed, 1))
         elif p["labels"] == "image":
-            labels = P.labels_from_image(pos, reference_image(p["image"]), seed=_stream(seed, 1))
+            labels = labels_from_image(pos, reference_image(p["image"]), seed=_stream(seed, 1))
         else:
             raise ValueError(f"labels must be 'random', 'ramp' or 'image', got {p['labels']!r}")
         g = _graph(p, pos, labels.astype(np.float64), labels, seed)
         return PupsScene(p, (PupsLayer(g, "label", eps),))
     if kind == "giraffe":
         centres = _poisson(p, seed, 0)
-        pos, labels = P.space_giraffe(centres, n_range=p["n_range"], seed=_stream(seed, 1))
+        pos, labels = space_giraffe(centres, n_range=p["n_range"], seed=_stream(seed, 1))
         colours = np.array([p["background"], p["spot"]], dtype=np.float64)
         return PupsScene(p, (PupsLayer(_graph(p, pos, colours[labels], labels, seed), "label",
                                        eps),))
@@ -369,12 +372,12 @@ def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
         img = reference_image(p["image"])
         s = REFINE_WORKING_SIZE
         for i in range(n):
-            pos = P.poisson_disk(p["radius"] * 2.0 ** (-i / 2), seed=_stream(seed, 10 * i))
+            pos = poisson_disk(p["radius"] * 2.0 ** (-i / 2), seed=_stream(seed, 10 * i))
             inten = _sample_image(img, pos)
             labels = (_stream(seed, 10 * i + 1).random(pos.shape[0]) < inten).astype(np.int32)
             g = _graph(p, pos, labels.astype(np.float64), labels, seed + i)
             if i < n - 1:
-                img = P.pups_evaluate(g, s, s, mode="interpolate", epsilon=eps,
+                img = pups_evaluate(g, s, s, mode="interpolate", epsilon=eps,
                                       backend=backend).astype(np.float64)
         return PupsScene(p, (PupsLayer(g, "interpolate", eps),))
     if kind == "weight":
@@ -387,7 +390,7 @@ def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
                          contours=int(p["contours"]))
     if kind == "graph":
         pos = _poisson(p, seed, 0)
-        return PupsScene(p, (), lines=(pos, P.pups_graph(P.pups_points(pos))))
+        return PupsScene(p, (), lines=(pos, pups_graph(pups_points(pos))))
     raise AssertionError(kind)
 
 
@@ -400,7 +403,7 @@ def evaluate_scene(scene: PupsScene, evaluate_layer, draw_lines=None) -> np.ndar
     evaluate_layer : callable
         ``evaluate_layer(layer) -> float32 (h, w) or (h, w, 3)``: one layer on the pixel grid
         wanted (:func:`build_pups`: the whole image with :func:`cellgl.pups.pups_evaluate`;
-        :mod:`cellgl.pups_recipe`: one tile of it). Per pixel, the combination below depends
+        :mod:`cellgl.pups.recipe`: one tile of it). Per pixel, the combination below depends
         only on the layers' values at that pixel.
     draw_lines : callable, optional
         ``draw_lines(positions, graph, params) -> float32 (h, w)`` for the ``graph`` kind.
@@ -456,11 +459,11 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
     numpy.ndarray of float32, shape (height, width) or (height, width, 3)
     """
     p = _params(preset_or_params)
-    w, h = P._check_size(width, height)
+    w, h = _check_size(width, height)
     scene = build_scene(p, seed=seed, backend=backend)
 
     def layer(lay):
-        return P.pups_evaluate(lay.graph, w, h, mode=lay.mode, epsilon=lay.epsilon,
+        return pups_evaluate(lay.graph, w, h, mode=lay.mode, epsilon=lay.epsilon,
                                backend=backend)
 
     return evaluate_scene(scene, layer, lambda pos, g, prm: _draw_graph(prm, w, h, pos=pos, graph=g))
@@ -508,3 +511,35 @@ def _draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
         d = np.hypot(xx[sl] - x, yy[sl] - y)
         img[sl] = np.maximum(img[sl], np.clip(3.5 - d, 0, 1))
     return img.astype(np.float32)
+
+
+def pups_presets():
+    """Names of the built-in PUPs presets.
+
+    Returns
+    -------
+    list of str
+    """
+    return sorted(PUPS_PRESETS)
+
+
+def pups_render(preset_or_params, width, height, *, seed=0, backend="gpu") -> np.ndarray:
+    """Render a PUPs preset (by name) or a parameter dict to an image.
+
+    Parameters
+    ----------
+    preset_or_params : str or dict
+        A name from :func:`pups_presets` (``"pups-cow"``; the ``pups-`` prefix is optional) or
+        a JSON-able parameter dict as in :data:`cellgl.pups.presets.PUPS_PRESETS`.
+    width, height : int
+        Image size in pixels, each in [1, 16384].
+    seed : int
+        Seed for every random choice; same seed, same bits.
+    backend : {"gpu", "numpy"}
+
+    Returns
+    -------
+    numpy.ndarray of float32, shape (height, width) or (height, width, 3)
+        Values in [0, 1] for the built-in presets.
+    """
+    return build_pups(preset_or_params, width, height, seed=seed, backend=backend)

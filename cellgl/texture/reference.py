@@ -2,7 +2,7 @@
 
 Function for function, the same names without the ``cell_`` prefix (``cell_texture`` ->
 :func:`texture`, ``cell_noise`` -> :func:`noise`, ...), vectorised over samples, built on
-:mod:`cellgl.reference` (the same cells, hashes and feature points as the GPU).
+:mod:`cellgl.basis.reference` (the same cells, hashes and feature points as the GPU).
 ``cellgl.evaluate(..., backend="numpy")`` and ``cellgl.render(..., backend="numpy")`` run this;
 the tests compare every preset's GPU output against it.
 
@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import reference as ref
-from .enums import Distribution, Metric
-from .params import LINEAR
-from .reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
+from cellgl.basis import reference as ref
+from cellgl.basis.enums import Distribution, Metric
+from cellgl.texture.params import LINEAR
+from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
 
 M32 = 0xFFFFFFFF
 
@@ -116,13 +116,13 @@ def _tex(recipe, pan=(0.0, 0.0)) -> dict:
 
 def density_map(recipe):
     """The recipe's density map in texture-local basis units ``s = (u f, v f aspect, z f, 0)``
-    (a :class:`cellgl.density.DensityMap`), or None (``density_map = "none"``).
+    (a :class:`cellgl.basis.density.DensityMap`), or None (``density_map = "none"``).
 
     ramp_x/ramp_y run from ``density_start`` to ``density_end`` in u (v); radial is centred at
     ``(density_center_x, density_center_y)`` in uv with radius ``density_radius`` in u units
     (isotropic in cells); an image covers the uv square (row 0 at v = 0).
     """
-    from .density import DensityMap
+    from cellgl.basis.density import DensityMap
 
     v = recipe.values
     kind = v["density_map"]
@@ -141,7 +141,7 @@ def density_map(recipe):
 
 
 def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
-    """The density map of each octave as a :class:`cellgl.density.DensityEncoding`, or None.
+    """The density map of each octave as a :class:`cellgl.basis.density.DensityEncoding`, or None.
 
     Octave ``i`` samples the lattice ``L^i (O + s)`` (:func:`lattice_origins`, ``O`` with the
     pan), whose origin splits into the cell ``C_i`` and fraction ``r_i``. The map is encoded
@@ -150,7 +150,7 @@ def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
     window origin ``o`` (int64 here; the GPU gets it modulo 2^32, where ``c - o`` wraps to the
     same small difference). Raises ValueError if an octave's map is too large to encode.
     """
-    from .density import encode
+    from cellgl.basis.density import encode
 
     dm = density_map(recipe)
     if dm is None:
@@ -326,7 +326,7 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
     F (N, 4), value (N,), as the GLSL ``CellTexel``.
     """
-    from .texture import needed_n
+    from cellgl.texture.recipe import needed_n
 
     t = t if t is not None else _tex(recipe)
     n = n or needed_n(recipe)
@@ -407,7 +407,7 @@ def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0)) -> d
 
 def evaluate(recipe, pts: np.ndarray, outputs) -> dict:
     """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space)."""
-    from .texture import needed_n
+    from cellgl.texture.recipe import needed_n
 
     n = needed_n(recipe)
     for c in outputs:

@@ -26,7 +26,7 @@ class Distribution(IntEnum):
 
 
 class DensityMapKind(IntEnum):
-    """Spatially varying density of feature points (``CELL_DENSITY_MAP``; :mod:`cellgl.density`)."""
+    """Spatially varying density of feature points (``CELL_DENSITY_MAP``; :mod:`cellgl.basis.density`)."""
 
     NONE = 0     #: one density everywhere (the default path, unchanged)
     RAMP = 1     #: linear ramp along a lattice axis

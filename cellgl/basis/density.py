@@ -8,7 +8,7 @@ population table of density
     density_L = density_min * (density_max / density_min) ** (L / 15)
 
 (geometric steps: equal ratios of cell size between neighbouring levels). The 16 tables are
-computed here in Python (:func:`cellgl.reference.poisson_thresholds`) and passed to the GPU as a
+computed here in Python (:func:`cellgl.basis.reference.poisson_thresholds`) and passed to the GPU as a
 16 x 16 uint32 table, one row per level.
 
 The level of a cell is a function of the cell's **centre** ``c + 0.5`` (lattice units), but it
@@ -37,7 +37,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .enums import DensityMapKind
+from cellgl.basis.enums import DensityMapKind
+from cellgl.basis.population import MAX_POINTS, poisson_thresholds
 
 __all__ = ["DensityMap", "DensityEncoding", "KINDS", "LEVELS", "encode", "levels_reference"]
 
@@ -219,8 +220,6 @@ def _encode_axes(specs):
 
 def encode(dm: DensityMap, dim: int) -> DensityEncoding:
     """Encode ``dm`` for a ``dim``-dimensional lattice (validates the map against ``dim``)."""
-    from .reference import MAX_POINTS, poisson_thresholds
-
     if not isinstance(dm, DensityMap):
         raise ValueError(f"density_map must be None or a cellgl.DensityMap, got {type(dm).__name__}")
     specs = [None] * 4

@@ -1,16 +1,16 @@
 """PUPs recipes: the PUPs presets as recipes that bake, preview and list like the others.
 
 A :class:`PupsRecipe` is the recipe form of a parameter dict of
-:data:`cellgl.pups_presets.PUPS_PRESETS`: a ``pattern`` (the preset *kind*) and the values
+:data:`cellgl.pups.presets.PUPS_PRESETS`: a ``pattern`` (the preset *kind*) and the values
 of the parameter table :data:`PUPS_PARAMS` that this pattern uses (same :class:`Param` type
-as :data:`cellgl.params.PARAMS`, so ``--set``, the viewer's sliders and the docs table are
-generated from it). The table is derived from :data:`cellgl.pups_presets.KIND_DEFAULTS`
+as :data:`cellgl.texture.params.PARAMS`, so ``--set``, the viewer's sliders and the docs table are
+generated from it). The table is derived from :data:`cellgl.pups.presets.KIND_DEFAULTS`
 (which keys each kind has, and their defaults), not written per preset. On disk::
 
     {"cellgl_recipe": 1, "kind": "pups", "name": "pups-cow", "doc": "...",
      "pups": {"pattern": "cow", "seed": 0, "radius": 0.05, ...}, "outputs": ["color"]}
 
-Rendering (:func:`render`, reached through :func:`cellgl.texture.render`): one period of the
+Rendering (:func:`render`, reached through :func:`cellgl.recipes.render`): one period of the
 periodic point set (the preset domain ``[-1, 1]^2``) spans the *shorter* side of the image,
 undistorted; a ``W x H`` image with ``max / min`` an integer tiles seamlessly. Work happens in
 *pixel space* (point positions scaled to pixels), where the pixel centres the shader computes
@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import copy
 import json
-import math
 import os
 import tempfile
 from collections import OrderedDict
@@ -30,14 +29,14 @@ from types import MappingProxyType
 
 import numpy as np
 
-from .params import Param
-from .recipe import VERSION, RecipeError, _coerce, _err, _suggest, parse_value
+from cellgl.texture.params import Param
+from cellgl.texture.schema import VERSION, RecipeError, _coerce, _err, _suggest, parse_value
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
            "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for",
            "markdown_table"]
 
-#: what a PUPs recipe renders (``cellgl.texture.render(channels=...)``)
+#: what a PUPs recipe renders (``cellgl.render(channels=...)``)
 PUPS_CHANNELS = ("color", "height")
 #: patterns (the presets' kinds; ``multiscale-cells`` is written ``multiscale_cells``)
 PATTERNS = ("noise", "octaves", "cells", "multiscale_cells", "cow", "giraffe", "refine", "weight",
@@ -47,7 +46,7 @@ MIN_RADIUS = 0.005
 
 PUPS_PARAMS: tuple[Param, ...] = (
     Param("pattern", "enum", "noise", None, None, "what the control points carry and how they are "
-          "evaluated (the preset kinds of cellgl.pups_presets)", "pattern", choices=PATTERNS),
+          "evaluated (the preset kinds of cellgl.pups.presets)", "pattern", choices=PATTERNS),
     Param("seed", "int", 0, 0, 2 ** 32 - 1, "seed of every random choice (points, values, labels, "
           "orientations)", "pattern"),
     Param("radius", "float", 0.06, MIN_RADIUS, 0.5, "Poisson-disk minimum distance between control "
@@ -94,7 +93,7 @@ def _kind(pattern: str) -> str:
 
 def params_for(pattern: str) -> tuple[str, ...]:
     """Table names used by ``pattern`` (plus ``"image"`` where it reads one), in table order."""
-    from .pups_presets import KIND_DEFAULTS
+    from cellgl.pups.presets import KIND_DEFAULTS
 
     keys = set(KIND_DEFAULTS[_kind(pattern)])
     names = {"pattern", "seed"}
@@ -106,7 +105,7 @@ def params_for(pattern: str) -> tuple[str, ...]:
 
 def _from_preset_dict(d: dict) -> dict:
     """Recipe values (table names) from a preset dict (``kind`` + parameters)."""
-    from .pups_presets import KIND_DEFAULTS
+    from cellgl.pups.presets import KIND_DEFAULTS
 
     kind = d["kind"]
     full = copy.deepcopy(KIND_DEFAULTS[kind])
@@ -123,7 +122,7 @@ def _from_preset_dict(d: dict) -> dict:
 
 
 def _to_preset_dict(values: dict) -> dict:
-    """The parameter dict :func:`cellgl.pups_presets.build_scene` takes."""
+    """The parameter dict :func:`cellgl.pups.presets.build_scene` takes."""
     pattern = values["pattern"]
     d = {"kind": _kind(pattern)}
     for name in params_for(pattern):
@@ -152,7 +151,7 @@ class PupsRecipe:
     Attributes
     ----------
     kind : str
-        ``"pups"`` (cellular recipes, :class:`cellgl.recipe.Recipe`, have no ``kind``).
+        ``"pups"`` (cellular recipes, :class:`cellgl.texture.recipe.Recipe`, have no ``kind``).
     name, doc : str
     values : mapping of table name -> value, for the names of :meth:`names` (the pattern's)
     image : str or None
@@ -171,7 +170,7 @@ class PupsRecipe:
         values = dict(values or {})
         pattern = _coerce(PUPS_PARAMS_BY_NAME["pattern"], values.get("pattern", "noise"),
                           "pups.pattern")
-        from .pups_presets import KIND_DEFAULTS
+        from cellgl.pups.presets import KIND_DEFAULTS
 
         vals = _from_preset_dict({"kind": _kind(pattern)})
         vals["seed"] = 0
@@ -281,7 +280,7 @@ class PupsRecipe:
 
     def set_from_strings(self, items) -> "PupsRecipe":
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe."""
-        from .recipe import _parse
+        from cellgl.texture.recipe import _parse
 
         changes = {}
         for item in items:
@@ -379,7 +378,7 @@ class PupsRecipe:
             raise
 
     def preset_params(self) -> dict:
-        """The parameter dict of :mod:`cellgl.pups_presets` (``kind`` + parameters)."""
+        """The parameter dict of :mod:`cellgl.pups.presets` (``kind`` + parameters)."""
         d = _to_preset_dict(self._values)
         if self.image is not None:
             d["image"] = self.image
@@ -399,7 +398,7 @@ class PupsRecipe:
 
 def pups_preset_names() -> list[tuple[str, str]]:
     """``[(name, one-line doc), ...]`` of the PUPs presets, sorted by name."""
-    from .pups_presets import PUPS_PRESETS
+    from cellgl.pups.presets import PUPS_PRESETS
 
     return [(n, f"PUPs fig. {d.get('figure', '?')}: {d.get('description', '')}")
             for n, d in sorted(PUPS_PRESETS.items())]
@@ -407,7 +406,7 @@ def pups_preset_names() -> list[tuple[str, str]]:
 
 def load_pups_preset(name: str) -> PupsRecipe | None:
     """The PUPs preset ``name`` as a recipe, or None if there is none of that name."""
-    from .pups_presets import PUPS_PRESETS
+    from cellgl.pups.presets import PUPS_PRESETS
 
     d = PUPS_PRESETS.get(name)
     if d is None:
@@ -437,7 +436,7 @@ def _cached(cache: OrderedDict, key, make):
 
 
 def _scene(recipe: PupsRecipe, backend: str):
-    from .pups_presets import build_scene
+    from cellgl.pups.presets import build_scene
 
     key = (json.dumps(recipe.preset_params(), sort_keys=True), recipe.get("seed"), backend)
     return _cached(_SCENES, key, lambda: build_scene(recipe.preset_params(),
@@ -463,7 +462,8 @@ class _Scaled:
         """A non-periodic graph of the instances (point + period shift) that reach the region,
         ordered by shift (``(0, 0)`` first, then row by row) and point index: the same order
         for every region, so sums run in the same order in a tile and in the whole image."""
-        from .pups import PupsGraph, PupsPoints
+        from cellgl.pups.graph import PupsGraph
+        from cellgl.pups.points import PupsPoints
 
         S = float(self.period)
         b = self.bbox
@@ -508,7 +508,7 @@ def period_px(width: int, height: int) -> int:
 def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), x0: int = 0,
            y0: int = 0, tile_w: int | None = None, tile_h: int | None = None, depth=None,
            backend: str = "gpu") -> dict:
-    """Render (a tile of) a PUPs recipe; :func:`cellgl.texture.render` calls this.
+    """Render (a tile of) a PUPs recipe; :func:`cellgl.recipes.render` calls this.
 
     Parameters
     ----------
@@ -529,12 +529,12 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     -------
     dict channel -> ndarray (row 0 at the top)
     """
-    from . import pups as P
-    from .pups_presets import _draw_graph, evaluate_scene
+    from cellgl.pups.synthesis import pups_evaluate
+    from cellgl.pups.presets import _draw_graph, evaluate_scene
 
-    from .texture import _check_channels
+    from cellgl.texture.schema import check_channels
 
-    channels = _check_channels(channels, PUPS_CHANNELS, "channel {!r} is not available for PUPs recipes")
+    channels = check_channels(channels, PUPS_CHANNELS, "channel {!r} is not available for PUPs recipes")
     if depth is not None:
         raise ValueError("depth (a volume) is not available for PUPs recipes: they are 2D")
     if backend not in ("gpu", "numpy"):
@@ -559,7 +559,7 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
         c = lay.graph.points.channels
         if g is None:
             return np.zeros((th, tw) if c == 1 else (th, tw, c), np.float32)
-        return P.pups_evaluate(g, tw, th, mode=lay.mode, epsilon=lay.epsilon, backend=backend)
+        return pups_evaluate(g, tw, th, mode=lay.mode, epsilon=lay.epsilon, backend=backend)
 
     def lines(pos, graph, prm):
         return _draw_graph(prm, width, height, pos=pos, graph=graph, scale=(S / 2.0, S / 2.0),
@@ -580,7 +580,7 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
 
 def markdown_table() -> str:
     """The PUPs parameter table as Markdown (``docs/pups.md`` embeds it)."""
-    from .pups_presets import KIND_DEFAULTS
+    from cellgl.pups.presets import KIND_DEFAULTS
 
     lines = ["| group | name | type | default | accepted | patterns | doc |",
              "| --- | --- | --- | --- | --- | --- | --- |"]

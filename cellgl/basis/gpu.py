@@ -1,6 +1,6 @@
 """GPU evaluation of the cellular basis: compute shader over sample lists and grids.
 
-Only :mod:`cellgl.core` calls this; it receives validated parameters. Work is
+Only :mod:`cellgl.basis.core` calls this; it receives validated parameters. Work is
 split into chunks so that no storage buffer exceeds a few tens of MB, and only
 the outputs that were asked for are computed (compile-time switches) and read
 back.
@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import context
-from .enums import glsl_defines
-from .reference import MAX_POINTS, Params, max_ring_default
+from cellgl.gl import context
+from cellgl.basis.enums import glsl_defines
+from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
 LOCAL_SIZE = 64
 _CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
@@ -63,7 +63,7 @@ _density_buffers: dict = {}
 
 def set_density(prog, enc) -> None:
     """Set the density-map uniforms of ``prog`` (``u_density_*``) from a
-    :class:`cellgl.density.DensityEncoding` and bind its image levels to storage buffer 7."""
+    :class:`cellgl.basis.density.DensityEncoding` and bind its image levels to storage buffer 7."""
     if enc is None:
         return
     if "u_density_thresholds" in prog:

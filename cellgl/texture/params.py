@@ -2,11 +2,11 @@
 
 Each :class:`Param` has a name, a type, a default, a range (or choices), a one-line doc and a
 group (the section of the recipe JSON it lives in). Everything else is generated from this
-table: the recipe schema check (:mod:`cellgl.recipe`), the ``u_<name>`` uniforms and the
+table: the recipe schema check (:mod:`cellgl.texture.recipe`), the ``u_<name>`` uniforms and the
 ``CellTextureParams`` struct of the shaders (:mod:`cellgl.texture`), the snippet constants,
 the viewer's sliders, the CLI's ``--set name=value`` and the table in ``docs/textures.md``.
 
-Structured parts of a recipe have their own validation in :mod:`cellgl.recipe`:
+Structured parts of a recipe have their own validation in :mod:`cellgl.texture.recipe`:
 
 * the colour ramp (``color.ramp``: 1..16 keys ``[t, r, g, b]``);
 * the coefficients: each one *also* has a table entry so that sliders and ``--set`` work
@@ -18,7 +18,7 @@ Structured parts of a recipe have their own validation in :mod:`cellgl.recipe`:
 ``compile_time`` parameters change the shader's code (they become ``#define``s); the others
 are uniforms (``u_<name>``) that a viewer may change every frame, except the ``derived`` ones,
 which the CPU turns into derived uniform arrays (the density map's ``density_*``: its integer
-encoding per octave, :mod:`cellgl.density`) and which have no uniform of their own.
+encoding per octave, :mod:`cellgl.basis.density`) and which have no uniform of their own.
 """
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ FRACTAL_MODES = ("none", "sum", "qin", "qin_cube")
 RAMP_MODES = ("linear", "spline")
 NORMAL_CONVENTIONS = ("opengl", "directx")
 DISTRIBUTIONS = ("poisson", "jitter", "worley1996")
-#: spatially varying feature density (cellgl.density): the map of a texture, in uv
+#: spatially varying feature density (cellgl.basis.density): the map of a texture, in uv
 DENSITY_MAPS = ("none", "ramp_x", "ramp_y", "radial", "image")
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
 

@@ -1,4 +1,5 @@
-"""Bake a recipe (or a preset) to an image or volume file: ``cellgl bake`` and :func:`bake`.
+"""Bake a recipe (or a preset) to an image or volume file: :func:`bake` (``cellgl bake``, whose
+command line is :mod:`cellgl.io.bake_cli`).
 
 The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``). Output
 larger than one tile is rendered tile by tile and streamed to the file, so memory stays bounded;
@@ -8,214 +9,27 @@ Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
 import shutil
 import sys
 import time
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from . import io as cio
+from cellgl.io import formats as cio
 
 __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
            "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
 
 
-class BakeError(ValueError):
-    """A bad bake request: the message names the value and what is accepted."""
-
-
-# --------------------------------------------------------------------------------------------
-# what can be baked, and how
-# --------------------------------------------------------------------------------------------
-
-#: Channels render() produces -> samples per pixel.
-CHANNELS: dict[str, int] = {"color": 4, "height": 1, "normal": 3, "id": 1,
-                            "F1": 1, "F2": 1, "F3": 1, "F4": 1}
-
-
-@dataclass(frozen=True)
-class _Format:
-    name: str
-    depths: tuple[int, ...]
-    default_depth: int
-    volume: bool
-    #: "band" (full-width rows, top first), "tile" (row-major tiles), "piece" (any order)
-    stream: str
-
-
-#: Extension -> format. ``--depth`` (bits per sample) must be one of ``depths``.
-FORMATS: dict[str, _Format] = {
-    ".png": _Format("PNG", (8, 16), 8, False, "band"),
-    ".exr": _Format("OpenEXR", (16, 32), 32, False, "band"),
-    ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
-    ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
-    ".npy": _Format("NumPy", (32,), 32, True, "piece"),
-}
-
-MAX_SIDE = 65536          #: largest width or height
-MAX_SLICES = 4096         #: largest volume depth (slices)
-MAX_VOXELS = 2 ** 32      #: largest width * height * slices
-MAX_TILE = 2048           #: largest tile side one render pass gets
-DEFAULT_SIZE = (512, 512)
-DEFAULT_BUDGET = 256 << 20  #: bytes of working memory a bake aims to stay within
-#: working memory of render() per pixel beyond its outputs, for one channel (GPU buffers and
-#: read-back on llvmpipe, measured: about 230 bytes); half as much again per extra channel
-RENDER_BYTES_PER_PIXEL = 256
-
-
-def _accepted(values: Iterable) -> str:
-    return ", ".join(str(v) for v in values)
-
-
-def parse_size(text: str) -> tuple[int, int, int | None]:
-    """Parse ``W``, ``WxH`` or ``WxHxD`` into ``(W, H, D or None)``.
-
-    Raises
-    ------
-    BakeError
-        Malformed text, or a side outside 1..MAX_SIDE, slices outside 1..MAX_SLICES, or more
-        than MAX_VOXELS in all.
-    """
-    parts = str(text).strip().lower().replace("*", "x").split("x")
-    try:
-        nums = [int(p) for p in parts]
-    except ValueError:
-        nums = []
-    if not 1 <= len(nums) <= 3:
-        raise BakeError(f"--size {text!r}: expected W, WxH or WxHxD with whole numbers, "
-                        f"e.g. 512, 1024x512 or 64x64x16")
-    w, h, d = nums[0], (nums[1] if len(nums) > 1 else nums[0]), (nums[2] if len(nums) > 2 else None)
-    _check_size(w, h, d, f"--size {text}")
-    return w, h, d
-
-
-def _check_size(w: int, h: int, d: int | None, what: str) -> None:
-    for name, v in (("width", w), ("height", h)):
-        if not isinstance(v, (int, np.integer)) or not 1 <= v <= MAX_SIDE:
-            raise BakeError(f"{what}: {name} {v} is out of range; accepted 1..{MAX_SIDE}")
-    if d is not None and (not isinstance(d, (int, np.integer)) or not 1 <= d <= MAX_SLICES):
-        raise BakeError(f"{what}: depth {d} (volume slices) is out of range; "
-                        f"accepted 1..{MAX_SLICES}")
-    n = w * h * (d or 1)
-    if n > MAX_VOXELS:
-        raise BakeError(f"{what}: {n} pixels is too many; at most {MAX_VOXELS} (2**32)")
-
-
-def parse_channels(values: str | Iterable[str]) -> tuple[str, ...]:
-    """Normalise channel names (comma lists allowed, ``f1`` == ``F1``); reject unknown ones."""
-    if isinstance(values, str):
-        values = [values]
-    out: list[str] = []
-    lookup = {c.lower(): c for c in CHANNELS}
-    for v in values:
-        for part in str(v).split(","):
-            part = part.strip()
-            if not part:
-                continue
-            name = lookup.get(part.lower())
-            if name is None:
-                raise BakeError(f"--channels {part!r}: unknown channel; accepted "
-                                f"{_accepted(CHANNELS)}")
-            if name not in out:
-                out.append(name)
-    if not out:
-        raise BakeError(f"--channels: no channel given; accepted {_accepted(CHANNELS)}")
-    return tuple(out)
-
-
-def _parse_sets(sets: Iterable[str]) -> list[str]:
-    out = []
-    for s in sets:
-        name, eq, value = str(s).partition("=")
-        if not eq or not name.strip() or not value.strip():
-            raise BakeError(f"--set {s!r}: expected NAME=VALUE, e.g. --set seed=7")
-        out.append(f"{name.strip()}={value.strip()}")
-    return out
-
-
-# --------------------------------------------------------------------------------------------
-# per-channel encoding: render() output -> file samples
-# --------------------------------------------------------------------------------------------
-
-
-def _quantize(v: np.ndarray, bits: int) -> np.ndarray:
-    top = (1 << bits) - 1
-    v = np.nan_to_num(np.asarray(v, np.float32), nan=0.0, posinf=1.0, neginf=0.0)
-    q = np.floor(np.clip(v, 0.0, 1.0) * np.float32(top) + np.float32(0.5))
-    return q.astype(np.uint8 if bits == 8 else np.uint16)
-
-
-def id_colors(ids: np.ndarray) -> np.ndarray:
-    """False colour for cell ids: ``(..., 3)`` uint8 from an integer hash of each id.
-
-    The same id always gets the same colour, so a tiled bake matches a one-pass one.
-    """
-    x = np.asarray(ids).astype(np.uint32, copy=True)
-    with np.errstate(over="ignore"):
-        x ^= x >> np.uint32(16)
-        x *= np.uint32(0x7FEB352D)
-        x ^= x >> np.uint32(15)
-        x *= np.uint32(0x846CA68B)
-        x ^= x >> np.uint32(16)
-    return np.stack([(x >> np.uint32(s)) & np.uint32(255) for s in (0, 8, 16)],
-                    axis=-1).astype(np.uint8)
-
-
-@dataclass(frozen=True)
-class _Encoding:
-    """How one channel is stored: sample count and dtype in the file."""
-
-    channel: str
-    samples: int
-    dtype: np.dtype
-
-    def encode(self, a: np.ndarray) -> np.ndarray:
-        if self.channel == "color":
-            a = np.asarray(a)[..., :3]
-        if self.channel == "id":
-            if self.samples == 3:
-                return id_colors(a)
-            return np.asarray(a).astype(np.uint32, copy=False)
-        if self.dtype == np.uint8 or self.dtype == np.uint16:
-            return _quantize(a, self.dtype.itemsize * 8)
-        return np.asarray(a).astype(self.dtype, copy=False)
-
-
-def _encoding(channel: str, ext: str, bits: int) -> _Encoding:
-    fmt = FORMATS[ext]
-    samples = CHANNELS[channel]
-    if channel == "color":
-        samples = 3  # render() gives RGBA with alpha always 1: files get RGB
-    if channel == "id":
-        if ext == ".png":
-            if bits != 8:
-                raise BakeError(f"--channels id with .png: ids are written as an 8-bit false-"
-                                f"colour preview, so --depth must be 8 (got {bits}); for raw "
-                                f"uint32 ids use .tif, .exr or .npy")
-            return _Encoding(channel, 3, np.dtype(np.uint8))
-        if ext in (".tif", ".tiff") and bits != 32:
-            raise BakeError(f"--channels id with {ext}: ids are uint32, so --depth must be 32 "
-                            f"(got {bits})")
-        return _Encoding(channel, 1, np.dtype(np.uint32))
-    if fmt.stream == "band" and ext == ".exr":
-        return _Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
-    return _Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
-                                                 32: np.float32}[bits]))
-
-
-#: EXR channel names per cellgl channel.
-_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B")}
-
-
-def _exr_names(channel: str) -> tuple[str, ...]:
-    return _EXR_NAMES.get(channel, (channel,))
+from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
+                            MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, _accepted, _check_size, _Encoding,
+                            _encoding, _exr_names, _parse_sets, id_colors, parse_channels, parse_size)
 
 
 # --------------------------------------------------------------------------------------------
@@ -328,10 +142,10 @@ class _Progress:
 
 
 def _load(recipe_or_name, sets, tileable):
-    from . import recipe as rmod
+    from cellgl import recipes
 
     if isinstance(recipe_or_name, (str, os.PathLike)):
-        recipe = rmod.load_recipe(str(recipe_or_name))
+        recipe = recipes.load_recipe(str(recipe_or_name))
     else:
         recipe = recipe_or_name
     sets = _parse_sets(sets)
@@ -393,7 +207,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     Parameters
     ----------
     recipe_or_name : Recipe or str or PathLike
-        A :class:`cellgl.recipe.Recipe`, a preset name (``cellgl presets``) or a recipe JSON path.
+        A :class:`cellgl.texture.recipe.Recipe`, a preset name (``cellgl presets``) or a recipe JSON path.
     path : str or PathLike
         Output file; the extension picks the format: ``.png``, ``.exr``, ``.tif``/``.tiff``,
         ``.npy``. Its directory must exist.
@@ -432,7 +246,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     BakeError (a ValueError)
         Bad extension, size, depth, channel, tile or ``--set``; the message names the value and
         what is accepted. Nothing is written.
-    cellgl.recipe.RecipeError
+    cellgl.texture.recipe.RecipeError
         Unknown preset or bad recipe value.
     """
     path, ext = _check_path(path)
@@ -496,10 +310,10 @@ def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
 
 def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator[tuple]:
     """Yield (x0, y0, {channel: encoded array}) row-major; arrays (h, w[, S]) or (D, h, w[, S])."""
-    from . import texture
+    from cellgl import recipes
 
     for x0, y0, tw, th in plan.tiles():
-        res = texture.render(recipe, plan.width, plan.height, channels=out.channels,
+        res = recipes.render(recipe, plan.width, plan.height, channels=out.channels,
                              x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices)
         enc = {}
         for e in out.encodings:
@@ -614,102 +428,3 @@ def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
                            rgb=rgb, description=meta)
         finally:
             del vol, page_tiles
-
-
-# --------------------------------------------------------------------------------------------
-# command line: cellgl bake
-# --------------------------------------------------------------------------------------------
-
-_EPILOG = """\
-formats (from the extension) and --depth (bits per sample):
-  .png  8 (default) or 16     .exr  16 (half) or 32 (float, default)
-  .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
-channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
-  An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
-examples:
-  cellgl bake flagstone -o flagstone.png
-  cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
-  cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
-  cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
-  cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
-"""
-
-
-def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    """Declare ``cellgl bake``'s arguments on a subparsers object."""
-    p = sub.add_parser(
-        "bake", help="render a preset or recipe to .png/.exr/.tif/.npy (or .zarr on Dask)",
-        description="Render a preset or recipe JSON to an image or volume file.",
-        epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
-                   help="a preset name (cellgl presets) or a recipe .json file")
-    p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file: .png, .exr, .tif/.tiff or .npy; or a .zarr directory (Dask)")
-    p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}", metavar="W[xH[xD]]",
-                   help="pixels (default %(default)s); a third number bakes a volume of D slices")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a recipe parameter (repeatable)")
-    p.add_argument("--tileable", action="store_true", default=None,
-                   help="make the texture wrap around at its edges")
-    p.add_argument("--channels", action="append", default=None, metavar="LIST",
-                   help="comma-separated: color, height, normal, id, F1..F4 (default color)")
-    p.add_argument("--depth", default=None, metavar="BITS",
-                   help="bits per sample: 8|16|32 (default per format, see below)")
-    p.add_argument("--tile", default=None, metavar="N",
-                   help="advanced: render N x N tiles (multiple of 16) instead of a size chosen "
-                        "from --memory")
-    p.add_argument("--memory", default=None, metavar="MB",
-                   help=f"advanced: MB of working memory to stay within; sets the tile size "
-                        f"(default {DEFAULT_BUDGET >> 20})")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
-    g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
-                             "see docs/scale.md)")
-    g.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="Dask scheduler address (tcp://host:8786) or scheduler file (.json); "
-                        "default: a local cluster sized to the machine")
-    g.add_argument("--workers", default=None, metavar="N",
-                   help="worker processes of the local cluster (default: one per core)")
-    g.add_argument("--threads", default="1", metavar="N",
-                   help="threads per local worker process (default 1)")
-    return p
-
-
-def _int_arg(flag: str, text, lo: int, hi: int) -> int:
-    try:
-        v = int(str(text).strip())
-    except ValueError:
-        raise BakeError(f"{flag} {text!r}: expected a whole number in {lo}..{hi}") from None
-    if not lo <= v <= hi:
-        raise BakeError(f"{flag} {v}: out of range; accepted {lo}..{hi}")
-    return v
-
-
-def run_cli(args: argparse.Namespace) -> int:
-    """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
-    if Path(args.output).suffix.lower() == ".zarr":
-        from .dask import zarr_bake
-
-        return zarr_bake.run_cli(args)
-    for flag, value in (("--scheduler", args.scheduler), ("--workers", args.workers),
-                        ("--threads", None if args.threads == "1" else args.threads)):
-        if value is not None:
-            raise BakeError(f"{flag} {value}: only for a distributed .zarr bake "
-                            f"(-o NAME.zarr); accepted outputs here: {_accepted(FORMATS)}")
-    budget = DEFAULT_BUDGET if args.memory is None else \
-        _int_arg("--memory", args.memory, 1, 1 << 20) << 20
-    tile = None if args.tile is None else _int_arg("--tile", args.tile, 16, 8192)
-    t0 = time.perf_counter()
-    try:
-        paths = bake(args.recipe, args.output, size=args.size,
-                     channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
-                     tileable=args.tileable, sets=args.sets, tile=tile,
-                     progress=not args.quiet, memory_budget=budget)
-    except OSError as exc:
-        where = f" {exc.filename}" if exc.filename else ""
-        raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None
-    if not args.quiet:
-        secs = time.perf_counter() - t0
-        for p in paths:
-            print(f"wrote {p} ({os.path.getsize(p) / 1024:.0f} KiB, {secs:.1f} s)",
-                  file=sys.stderr)
-    return 0

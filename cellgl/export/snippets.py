@@ -10,7 +10,7 @@ the entry points
 * ``vec4 cellgl_texture3(vec3 p)``: solid recipes only, object-space texturing.
 
 GLSL ES, Godot, HLSL and WGSL are generated mechanically from the same specialised GLSL
-(:mod:`cellgl.translate`), never from a second copy of the maths.
+(:mod:`cellgl.export.translate`), never from a second copy of the maths.
 """
 from __future__ import annotations
 
@@ -18,7 +18,9 @@ import json
 import textwrap
 from dataclasses import dataclass, field
 
-from . import __version__, glsl, translate
+from cellgl._version import __version__
+from cellgl.gl import glsl
+from cellgl.export import translate
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
 
@@ -252,7 +254,7 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
 
     Parameters
     ----------
-    recipe : cellgl.recipe.Recipe, str or path
+    recipe : cellgl.texture.recipe.Recipe, str or path
         A recipe, a preset name or a recipe JSON file.
     target : str
         One of :data:`TARGETS` (``glsl``, ``gles``, ``shadertoy``, ``godot``, ``godotinc``,
@@ -305,10 +307,10 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     defines, its values as ``cell_<name>`` constants (or uniforms) read by the generated loader,
     and the entry points ``cellgl_texture(uv)`` (= ``cell_texture_uv``, what the bake runs)
     and, for solid recipes, ``cellgl_texture3(p)``."""
-    from . import texture
-    from .recipe import Recipe, load_recipe
+    from cellgl.recipes import load_recipe
+    from cellgl.texture import shader as texture
 
-    r = recipe if isinstance(recipe, Recipe) else load_recipe(recipe)
+    r = load_recipe(recipe)
     _refuse_pups(r)
     _refuse_density_image(r)
     defines = texture.defines(r)
@@ -356,8 +358,8 @@ def _glsl_float(v: float) -> str:
 
 def basis_program(p, n: int = 4, frequency: float = 8.0) -> Program:
     """A program whose ``cellgl_texture(uv)`` returns ``(F1, F2, F3, F4)`` of the basis ``p``
-    (a :class:`cellgl.reference.Params`, 2D) at ``uv * frequency``."""
-    from .gpu import defines_for
+    (a :class:`cellgl.basis.reference.Params`, 2D) at ``uv * frequency``."""
+    from cellgl.basis.gpu import defines_for
 
     d = defines_for(p, n)
     thresholds = ", ".join(f"{int(t)}u" for t in p.thresholds)
@@ -419,7 +421,7 @@ def run_cli(args) -> int:
     if args.output is None:
         sys.stdout.write(text)
         return 0
-    from .io import atomic_path
+    from cellgl.io.formats import atomic_path
 
     with atomic_path(os.path.abspath(args.output)) as tmp:
         with open(tmp, "w", encoding="utf-8", newline="\n") as f:
@@ -428,9 +430,9 @@ def run_cli(args) -> int:
 
 
 def _load(recipe, sets=()):
-    from .recipe import Recipe, load_recipe
+    from cellgl.recipes import load_recipe
 
-    r = recipe if isinstance(recipe, Recipe) else load_recipe(recipe)
+    r = load_recipe(recipe)
     if sets:
         r = r.set_from_strings(list(sets))
     return r

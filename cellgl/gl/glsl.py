@@ -86,11 +86,11 @@ def shader_dir() -> Path:
     In an installed wheel the shaders are the package ``cellgl.shaders`` (next to this file);
     in a source checkout they are the repository's top-level ``shaders/``.
     """
-    here = Path(__file__).resolve().parent
-    installed = here / "shaders"
+    package = Path(__file__).resolve().parent.parent   # cellgl/
+    installed = package / "shaders"
     if installed.is_dir():
         return installed
-    return here.parent / "shaders"
+    return package.parent / "shaders"
 
 
 def format_define(key: str, value: object) -> str:

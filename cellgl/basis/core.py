@@ -2,8 +2,8 @@
 
 Validates every argument (errors name the bad value and the accepted range),
 splits float64 positions into an integer cell and a float fraction, and
-dispatches to the GPU (:mod:`cellgl.gpu`) or the NumPy reference
-(:mod:`cellgl.reference`).
+dispatches to the GPU (:mod:`cellgl.basis.gpu`) or the NumPy reference
+(:mod:`cellgl.basis.reference`).
 """
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import reference
-from .density import encode as _encode_density
-from .enums import Distribution, Metric, parse_enum
+from cellgl.basis import reference
+from cellgl.basis.density import encode as _encode_density
+from cellgl.basis.enums import Distribution, Metric, parse_enum
 
 __all__ = ["CellularResult", "FeaturePoints", "cellular", "cellular_grid", "feature_points", "make_params"]
 
@@ -89,7 +89,7 @@ def _period(period, dim) -> tuple[int, int, int, int]:
 def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
                 min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None,
                 density_map=None) -> reference.Params:
-    """Validate the basis parameters and bundle them as :class:`cellgl.reference.Params`."""
+    """Validate the basis parameters and bundle them as :class:`cellgl.basis.reference.Params`."""
     metric = parse_enum(Metric, metric, "metric")
     distribution = parse_enum(Distribution, distribution, "distribution")
     if dim not in (2, 3, 4):
@@ -225,7 +225,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     density_map : None or cellgl.DensityMap
         Spatially varying density (``poisson`` only; ``density`` is then unused): each
         cell's count is drawn with the density of the map at the cell centre, quantised to
-        16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.density`).
+        16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.basis.density`).
     outputs : sequence of {"F", "delta", "id", "grad"}
         Only these are computed and read back.
     backend : {"gpu", "numpy"}
@@ -246,7 +246,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs)
     else:
-        from . import gpu
+        from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
         out, exact = gpu.search_points(pts, p, n, outs)
@@ -317,7 +317,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         cells, fr = split(pts)
         out, exact = _numpy_search(cells, fr, p, n, outs)
     else:
-        from . import gpu
+        from cellgl.basis import gpu
 
         ocell = np.zeros(4, dtype=np.int64)
         ofrac = np.zeros(4)

@@ -1,0 +1,85 @@
+"""Command line of the Dask front end: ``cellgl sweep`` and the ``.zarr`` branch of
+``cellgl bake`` (its arguments are declared by :mod:`cellgl.io.bake_cli`). docs/scale.md."""
+from __future__ import annotations
+
+import argparse
+
+from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
+from cellgl.dask.variations import sweep
+from cellgl.dask.zarr_bake import bake_zarr
+from cellgl.io.spec import DEFAULT_SIZE, _int_arg
+
+__all__ = ["add_sweep_parser", "run_sweep", "run_zarr_bake"]
+
+
+def run_zarr_bake(args: argparse.Namespace) -> int:
+    """``cellgl bake ... -o out.zarr`` (called by :func:`cellgl.io.bake_cli.run_cli`)."""
+    if args.depth not in (None, "32"):
+        raise DaskError(f"--depth {args.depth}: a .zarr bake stores float32 (ids uint32), "
+                        f"as rendered; accepted 32")
+    if args.memory is not None:
+        raise DaskError("--memory: not used by a .zarr bake; --tile N sets its chunk size")
+    chunk = DEFAULT_CHUNK if args.tile is None else \
+        _int_arg("--tile", args.tile, 16, MAX_CHUNK)
+    workers = None if args.workers is None else \
+        _int_arg("--workers", args.workers, 1, 1024)
+    threads = _int_arg("--threads", args.threads, 1, 256)
+    bake_zarr(args.recipe, args.output, size=args.size,
+              channels=tuple(args.channels or ("color",)), chunk=chunk, sets=args.sets,
+              tileable=args.tileable, scheduler=args.scheduler, workers=workers,
+              threads=threads, progress=not args.quiet)
+    return 0
+
+
+
+_EPILOG = """\
+--set NAME=SPEC (repeatable): VALUE fixes a parameter; A..B or A..B:STEP sweeps whole numbers
+  (both ends included); a|b|c sweeps alternatives. Every combination is baked, one file each,
+  named <recipe>_<name><value>...<ext>; files already there are skipped (a rerun resumes).
+examples:
+  cellgl sweep flagstone --set seed=0..9999 -o flagstones/ --size 256
+  cellgl sweep veins --set seed=0..99 --set metric='euclidean|manhattan' -o veins/ --format exr
+  cellgl sweep rock --set seed=0..999 -o rocks/ --scheduler tcp://head:8786
+"""
+
+
+def add_sweep_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Declare ``cellgl sweep``'s arguments on a subparsers object."""
+    p = sub.add_parser(
+        "sweep", help="bake many variations of a recipe (--set seed=0..9999) on Dask",
+        description="Bake one file per variation of a recipe, on a Dask cluster "
+                    "(pip install 'cellgl[dask]'; see docs/scale.md).",
+        epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
+                   help="a preset name (cellgl presets) or a recipe .json file")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=SPEC",
+                   help="fix or sweep a recipe parameter (repeatable; see below)")
+    p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}",
+                   metavar="W[xH]", help="pixels per file (default %(default)s)")
+    p.add_argument("--channels", action="append", default=None, metavar="LIST",
+                   help="as cellgl bake (default color)")
+    p.add_argument("--format", default="png", metavar="EXT",
+                   help="png (default), exr, tif or npy")
+    p.add_argument("--depth", default=None, metavar="BITS", help="bits per sample, as cellgl bake")
+    p.add_argument("--tileable", action="store_true", default=None,
+                   help="make every variation wrap around at its edges")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="Dask scheduler address or scheduler file; default a local cluster")
+    p.add_argument("--workers", default=None, metavar="N",
+                   help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--threads", default="1", metavar="N",
+                   help="threads per local worker process (default 1)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
+    return p
+
+
+def run_sweep(args: argparse.Namespace) -> int:
+    """``cellgl sweep ...``."""
+    workers = None if args.workers is None else \
+        _int_arg("--workers", args.workers, 1, 1024)
+    sweep(args.recipe, args.output, args.sets, size=args.size,
+          channels=tuple(args.channels or ("color",)), fmt=args.format, bit_depth=args.depth,
+          tileable=args.tileable, scheduler=args.scheduler, workers=workers,
+          threads=_int_arg("--threads", args.threads, 1, 256), progress=not args.quiet)
+    return 0
