@@ -229,6 +229,14 @@ def test_zarr_bake_cli_errors(tmp_path, capsys, args, words):
     assert not (tmp_path / "e.zarr").exists()
 
 
+def test_unreachable_scheduler_writes_nothing(tmp_path):
+    with pytest.raises(DaskError, match=r"--scheduler 'tcp://127.0.0.1:9': cannot connect"), \
+            dask.config.set({"distributed.comm.timeouts.connect": "2s"}):
+        bake_zarr("f1", tmp_path / "n.zarr", size=64, scheduler="tcp://127.0.0.1:9",
+                  progress=False)
+    assert not list(tmp_path.iterdir())
+
+
 def test_scheduler_flag_needs_zarr(tmp_path, capsys):
     from cellgl.cli import main
 

@@ -30,7 +30,7 @@ from cellgl.texture.evaluation import MAX_SIDE  # 2**20: float32 uv keeps pixels
 __all__ = ["DaskError", "Layout", "to_dask", "on_gl_thread", "render_block", "require",
            "MAX_SIDE", "MAX_CHUNK", "DEFAULT_CHUNK"]
 
-MAX_CHUNK = 4096         #: largest chunk side (one render pass; ~4 GiB working memory at 4096)
+MAX_CHUNK = 4096         #: largest chunk side (one render pass: about 2 GB of working memory)
 DEFAULT_CHUNK = 1024     #: default chunk side: 4 MiB of float32 height per chunk
 
 

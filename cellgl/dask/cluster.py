@@ -55,7 +55,7 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None,
         kw = ({"scheduler_file": scheduler} if str(scheduler).endswith(".json")
               else {"address": scheduler})
         try:
-            client = distributed.Client(timeout="30s", **kw)
+            client = distributed.Client(**kw)   # waits distributed.comm.timeouts.connect
         except (OSError, TimeoutError) as exc:
             raise DaskError(f"--scheduler {scheduler!r}: cannot connect ({exc})") from None
         with client:

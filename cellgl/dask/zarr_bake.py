@@ -197,12 +197,9 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
     layout = Layout.make(load(recipe_or_name, sets, tileable), (h, w), chunk, channels)
     meta = _meta(layout, int(chunk))
     t0 = time.perf_counter()
-    if path.exists():
+    resume = path.exists()
+    if resume:
         _check_existing(path, meta)
-        log(f"{path} exists: resuming (chunks already written are checked, not re-rendered)",
-            not progress)
-    else:
-        _create(path, layout, meta)
     per_task = layout.chunk_w * layout.chunk_h * (
         _RENDER_BYTES * (1 + len(layout.channels)) // 2
         + 8 * sum(samples(c) for c in layout.channels))
@@ -210,6 +207,11 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
     bar = _bake._Progress(len(blocks), f"baking {path.name}", progress, unit="chunks")
     try:
         with cluster_client(scheduler, workers, threads, per_task) as client:
+            if resume:
+                log(f"{path} exists: resuming (chunks already written are checked, not "
+                    f"re-rendered)", not progress)
+            else:
+                _create(path, layout, meta)   # only once there is a cluster to fill it
             done = map_tasks(client, _chunk_task, blocks, layout, str(path.resolve()),
                              json.dumps(meta, sort_keys=True), on_done=lambda _: bar.step(),
                              key="cellgl-zarr-chunk")
