@@ -120,20 +120,20 @@ def _sweep_task(item, job: _Job) -> int:
     return 1
 
 
-def _manifest(outdir: Path, request: dict) -> None:
+def _check_manifest(outdir: Path, request: dict) -> bool:
+    """Whether ``outdir`` already holds this sweep's manifest; raises if it holds another."""
     file = outdir / MANIFEST
-    if file.exists():
-        try:
-            old = json.loads(file.read_text())
-        except (OSError, ValueError):
-            old = None
-        if old != request:
-            differ = [k for k in request if not isinstance(old, dict) or old.get(k) != request[k]]
-            raise DaskError(f"{str(outdir)!r} holds another sweep ({MANIFEST}: not the same "
-                            f"{', '.join(differ) or 'request'}); use an empty directory")
-        return
-    with cio.atomic_path(file) as tmp:
-        tmp.write_text(json.dumps(request, indent=1, sort_keys=True) + "\n")
+    if not file.exists():
+        return False
+    try:
+        old = json.loads(file.read_text())
+    except (OSError, ValueError):
+        old = None
+    if old != request:
+        differ = [k for k in request if not isinstance(old, dict) or old.get(k) != request[k]]
+        raise DaskError(f"{str(outdir)!r} holds another sweep ({MANIFEST}: not the same "
+                        f"{', '.join(differ) or 'request'}); use an empty directory")
+    return True
 
 
 def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("color",),
@@ -183,15 +183,19 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
     items = list(_variations(stem, axes, ext))
     job = _Job(base, str(outdir.resolve()), (w, h), channels, bit_depth, tileable)
     _bake._check_bits(ext, bit_depth)
-    outdir.mkdir(exist_ok=True)
-    _manifest(outdir, {"generator": "cellgl", "version": __version__, "recipe": base.to_dict(),
-                       "sets": list(sets), "size": [w, h], "channels": list(channels),
-                       "format": ext[1:], "depth": bit_depth, "tileable": tileable,
-                       "variations": len(items)})
+    request = {"generator": "cellgl", "version": __version__, "recipe": base.to_dict(),
+               "sets": list(sets), "size": [w, h], "channels": list(channels),
+               "format": ext[1:], "depth": bit_depth, "tileable": tileable,
+               "variations": len(items)}
+    have = _check_manifest(outdir, request)
     t0 = time.perf_counter()
     bar = _bake._Progress(len(items), f"sweep {outdir.name}", progress, unit="files")
     try:
         with cluster_client(scheduler, workers, threads) as client:
+            if not have:   # only once there is a cluster to fill it
+                outdir.mkdir(exist_ok=True)
+                with cio.atomic_path(outdir / MANIFEST) as tmp:
+                    tmp.write_text(json.dumps(request, indent=1, sort_keys=True) + "\n")
             done = map_tasks(client, _sweep_task, items, job, on_done=lambda _: bar.step(),
                              key="cellgl-sweep")
     finally:
