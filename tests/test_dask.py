@@ -126,6 +126,23 @@ def test_import_cellgl_stays_light():
     assert out.stdout.strip() == "cellgl.dask.blocks"
 
 
+def test_map_tasks_keeps_order_and_raises(cluster, monkeypatch):
+    import math
+
+    from cellgl.dask import cluster as dcluster
+
+    monkeypatch.setattr(dcluster, "MIN_IN_FLIGHT", 3)    # a window smaller than the work
+    monkeypatch.setattr(dcluster, "IN_FLIGHT_PER_THREAD", 1)
+    seen = []
+    with distributed.Client(cluster) as client:
+        squares = [float(k * k) for k in range(40)]
+        assert dcluster.map_tasks(client, math.sqrt, squares, on_done=seen.append) == \
+            [float(k) for k in range(40)]
+        assert sorted(seen) == [float(k) for k in range(40)]
+        with pytest.raises(ValueError, match="math domain error"):
+            dcluster.map_tasks(client, math.sqrt, [4.0, 9.0, -1.0, 16.0] * 5)
+
+
 # --------------------------------------------------------------------------------------------
 # the Zarr bake
 # --------------------------------------------------------------------------------------------

@@ -72,30 +72,55 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None,
         yield client
 
 
+#: tasks kept submitted per worker thread: enough to keep every thread busy, few enough that a
+#: 65536-chunk bake starts at once (the scheduler spends a few ms per task it holds)
+IN_FLIGHT_PER_THREAD = 4
+MIN_IN_FLIGHT = 64
+
+
 def map_tasks(client, fn: Callable, items: Iterable, *args, on_done: Callable | None = None,
               key: str = "cellgl") -> list:
     """Run ``fn(item, *args)`` for each item on the cluster; return the results in item order.
 
-    ``args`` are sent to the workers once (scattered), not once per task. ``on_done(result)`` is
-    called as each task finishes (a progress bar). On the first failure the remaining tasks are
-    cancelled and the exception propagates.
+    ``args`` are sent to the workers once (scattered), not once per task. Tasks are submitted
+    as a moving window (a few per worker thread, re-sized as workers come and go), not all at
+    once. ``on_done(result)`` is called as each task finishes (a progress bar). On the first
+    failure the tasks still submitted are cancelled and the exception propagates.
     """
     distributed = require("distributed")
     items = list(items)
     shared = [client.scatter(a, broadcast=True, hash=False) for a in args]
     run = uuid.uuid4().hex[:12]
-    futures = client.map(fn, items, *[[s] * len(items) for s in shared],
-                         key=[f"{key}-{run}-{k}" for k in range(len(items))])
-    index = {f.key: k for k, f in enumerate(futures)}
     results: list = [None] * len(items)
+    index: dict = {}
+    pending = distributed.as_completed()
+    nxt = 0
+
+    def window() -> int:
+        threads = sum(client.nthreads().values())
+        return max(MIN_IN_FLIGHT, IN_FLIGHT_PER_THREAD * threads)
+
+    def top_up(limit: int) -> None:
+        nonlocal nxt
+        while nxt < len(items) and pending.count() < limit:
+            fut = client.submit(fn, items[nxt], *shared, key=f"{key}-{run}-{nxt}")
+            index[fut.key] = nxt
+            pending.add(fut)
+            nxt += 1
+
+    limit = window()
+    top_up(limit)
     try:
-        for fut in distributed.as_completed(futures):
+        for done, fut in enumerate(pending, 1):
             res = fut.result()  # raises the task's exception here
-            results[index[fut.key]] = res
+            results[index.pop(fut.key)] = res
             if on_done is not None:
                 on_done(res)
+            if done % MIN_IN_FLIGHT == 0:
+                limit = window()
+            top_up(limit)
     except BaseException:
-        client.cancel(futures)
+        client.cancel(list(pending.futures))
         raise
     return results
 
