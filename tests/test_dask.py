@@ -219,6 +219,19 @@ def test_zarr_bake_killed_and_rerun(big_ref, tmp_path):
     assert _chunk_files(out) == files
 
 
+def test_zarr_bake_partial_chunks_and_channels(cluster, tmp_path, ctx):
+    out = tmp_path / "p.zarr"
+    bake_zarr("flagstone", out, size="100x70", channels="color,id", chunk=32, scheduler=cluster,
+              sets=["seed=5"], tileable=True, progress=False)
+    g = zarr.open_group(str(out), mode="r")
+    recipe, _ = cellgl.load_recipe("flagstone").set_from_strings(["seed=5"]).tileable()
+    ref = cellgl.render(recipe, 100, 70, channels=("color", "id"))
+    assert g["color"].shape == (70, 100, 4) and g["color"].chunks == (32, 32, 4)
+    assert np.array_equal(g["color"][:], ref["color"]) and np.array_equal(g["id"][:], ref["id"])
+    assert g["id"].dtype == np.uint32 and g[CHECKSUMS].shape == (3, 4)
+    assert g.attrs["cellgl"]["recipe"]["domain"]["tileable"] is True
+
+
 def test_zarr_bake_refuses_another_request(tmp_path):
     out = tmp_path / "a.zarr"
     bake_zarr("f1", out, size=64, channels=["height"], chunk=32, workers=1, progress=False)
