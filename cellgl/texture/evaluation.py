@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cellgl.basis.core import real_array
 from cellgl.texture.recipe import CHANNELS, Recipe, check_channels, load_recipe
 from cellgl.texture.shader import LOCAL_SIZE, defines, set_uniforms, set_view
 
@@ -91,10 +92,7 @@ def _gpu_run(recipe: Recipe, channels, count: int, setup) -> dict:
 
 
 def _points(points) -> np.ndarray:
-    try:
-        pts = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("points must be a numeric array of shape (N, 2) (u, v) or (N, 3) (u, v, z)") from None
+    pts = real_array("points", points, "of shape (N, 2) (u, v) or (N, 3) (u, v, z)")
     if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
         raise ValueError(f"points must have shape (N, 2) (u, v) or (N, 3) (u, v, z) with N >= 1, "
                          f"got shape {pts.shape}")
