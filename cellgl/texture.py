@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import antialias, texture_dispatch
 from .enums import Distribution, Metric, glsl_defines
 from .params import (FRACTAL_MODES, LINEAR, MAX_RAMP_KEYS, NORMAL_CONVENTIONS, PARAMS, PARAMS_BY_NAME,
                      RAMP_MODES)
@@ -44,8 +45,6 @@ __all__ = ["defines", "uniform_values", "lattice_origins", "set_uniforms", "set_
            "glsl_params_from_uniforms", "glsl_constant_block", "evaluate", "render", "render_fragment",
            "measure_range", "needed_n", "OUTPUTS"]
 
-LOCAL_SIZE = 64
-_CHUNK = 1 << 20            # samples per dispatch
 #: what :func:`evaluate` can return: the render channels plus the height gradient in texture
 #: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
 OUTPUTS = CHANNELS + ("grad", "value")
@@ -65,6 +64,8 @@ _DERIVED = (
     ("vec4", "ramp", "[CELL_TEX_RAMP_KEYS]", "colour ramp keys: rgb, position t in w"),
     ("int", "ramp_count", "", "number of ramp keys in use"),
     ("float", "dist_scale", "", "sample scale of the distribution (worley1996: 0.398150, else 1)"),
+    ("float", "feature_frequency", "", "feature points per basis unit along a line (cellgl.antialias)"),
+    ("float", "octave_mean", "", "mean of an octave's fractal term over the plane (cellgl.antialias)"),
     ("ivec4", "origin_cell", "[CELL_TEX_OCTAVES]",
      "octave i: basis-lattice cell of dist_scale L^i (offset_x, offset_y, offset_z, time), split in float64"),
     ("vec4", "origin_frac", "[CELL_TEX_OCTAVES]", "... and its fraction in [0, 1)"),
@@ -162,8 +163,11 @@ uint cell_density_image_level(int index) {{ return u_density_image[index]; }}
 
 
 def _glsl_uniforms_file() -> str:
-    return (_GENERATED + "// Entry-point include (after lib/texture.glsl): the u_<param> uniforms and the loader.\n\n"
-            + glsl_uniform_block() + _DENSITY_IMAGE_HOOK + "\n" + glsl_params_from_uniforms())
+    return (_GENERATED + "// Entry-point include (after lib/texture.glsl): the u_<param> uniforms and the loader.\n"
+            "// A baked program (CELL_TEX_BAKED: cellgl.texture, one recipe per program) declares the\n"
+            "// u_<param> names as constants instead (glsl_constant_block), so the compiler folds them.\n\n"
+            "#ifndef CELL_TEX_BAKED\n" + glsl_uniform_block() + "#endif\n"
+            + _DENSITY_IMAGE_HOOK + "\n" + glsl_params_from_uniforms())
 
 
 def _f(v: float) -> str:
@@ -319,6 +323,8 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp"] = keys + [keys[-1]] * (MAX_RAMP_KEYS - len(keys))
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
+    out["u_feature_frequency"] = antialias.feature_frequency(v)
+    out["u_octave_mean"] = antialias.octave_mean(recipe)
     for k, a in lattice_origins(recipe, pan).items():
         out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
     encs = density_encodings(recipe, pan)
@@ -411,65 +417,6 @@ def _backend(backend):
         raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
 
 
-def _gpu_run(recipe: Recipe, channels, count: int, setup) -> dict:
-    """Dispatch texture.comp over ``count`` samples; ``setup(prog, first, n)`` binds inputs."""
-    from . import context
-
-    ctx = context.get_context()
-    grid = setup.grid
-    d = defines(recipe, channels)
-    d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=LOCAL_SIZE)
-    prog = context.compute_program("texture.comp", d)
-    set_uniforms(prog, recipe)
-    out = {"color": np.empty((count, 4), np.float32), "aux": np.empty((count, 4), np.float32),
-           "F": np.empty((count, 4), np.float32), "grad": np.empty((count, 4), np.float32),
-           "id": np.empty(count, np.uint32)}
-    want = {"color": "color" in channels,
-            "aux": bool({"height", "normal"} & set(channels)),
-            "F": any(c.startswith("F") for c in channels),
-            "grad": bool({"grad", "value"} & set(channels)),
-            "id": "id" in channels}
-    bind = {"color": 1, "aux": 2, "F": 3, "grad": 4, "id": 5}
-    for start in range(0, count, _CHUNK):
-        n = min(_CHUNK, count - start)
-        bufs = {}
-        for k, b in bind.items():
-            size = 4 * n if k == "id" else 16 * n
-            bufs[k] = ctx.buffer(reserve=size)
-            bufs[k].bind_to_storage_buffer(b)
-        extra = setup(prog, start, n)
-        if "u_count" in prog:
-            prog["u_count"].value = n
-        if "u_first" in prog:
-            prog["u_first"].value = start
-        prog.run(group_x=(n + LOCAL_SIZE - 1) // LOCAL_SIZE)
-        ctx.memory_barrier()
-        for k, buf in bufs.items():
-            if want[k]:
-                dt = np.uint32 if k == "id" else np.float32
-                out[k][start:start + n] = np.frombuffer(buf.read(), dtype=dt).reshape(out[k][start:start + n].shape)
-            buf.release()
-        for b in extra:
-            b.release()
-    res = {}
-    for c in channels:
-        if c == "color":
-            res[c] = out["color"]
-        elif c == "height":
-            res[c] = out["aux"][:, 0].copy()
-        elif c == "normal":
-            res[c] = out["aux"][:, 1:4].copy()
-        elif c == "id":
-            res[c] = out["id"]
-        elif c in ("F1", "F2", "F3", "F4"):
-            res[c] = out["F"][:, int(c[1]) - 1].copy()
-        elif c == "grad":
-            res[c] = out["grad"][:, :3].copy()
-        elif c == "value":
-            res[c] = out["grad"][:, 3].copy()
-    return res
-
-
 def _points(points) -> np.ndarray:
     try:
         pts = np.asarray(points, dtype=np.float64)
@@ -485,7 +432,7 @@ def _points(points) -> np.ndarray:
     return pts
 
 
-def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
+def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter_width=0.0) -> dict:
     """Evaluate a recipe at arbitrary texture-space points.
 
     Parameters
@@ -500,6 +447,10 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
         ``grad`` (N, 3) float32 (dh/du, dh/dv, dh/dz, analytic), ``value`` (N,) float32 (the
         combination before normalisation, octave 0).
     backend : {"gpu", "numpy"}
+    filter_width : float or (du, dv) or (du, dv, dz)
+        The footprint of every point in texture space (e.g. ``1 / W`` for the pixels of a
+        W-wide image): fractal octaves finer than it fade to their mean (the recipe's
+        ``antialias``, :mod:`cellgl.antialias`). Default 0: point samples.
 
     Returns
     -------
@@ -512,10 +463,11 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
     outputs = _check_channels(outputs, OUTPUTS)
     _backend(backend)
     pts = _points(points)
+    duvz = _filter_width(filter_width)
     if backend == "numpy":
         from . import texture_reference
 
-        return texture_reference.evaluate(recipe, pts, outputs)
+        return texture_reference.evaluate(recipe, pts, outputs, duvz)
     from . import context
 
     ctx = context.get_context()
@@ -525,10 +477,28 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
         p4[:, :3] = pts[start:start + n]
         b = ctx.buffer(p4.tobytes())
         b.bind_to_storage_buffer(0)
+        if "u_filter_width" in prog:
+            prog["u_filter_width"].value = tuple(float(c) for c in duvz)
         return [b]
 
-    setup.grid = False
-    return _gpu_run(recipe, outputs, len(pts), setup)
+    return texture_dispatch.run(recipe, outputs, len(pts), setup, grid=False)
+
+
+def _filter_width(fw) -> np.ndarray:
+    """``filter_width`` as (du, dv, dz) float64, checked."""
+    try:
+        a = np.asarray(fw, dtype=np.float64)
+    except (TypeError, ValueError):
+        a = np.array([np.nan])
+    if a.ndim == 0:
+        a = np.array([a, a, 0.0])
+    elif a.shape in ((2,), (3,)):
+        a = np.concatenate([a, np.zeros(3 - len(a))])
+    else:
+        raise ValueError(f"filter_width must be a number, (du, dv) or (du, dv, dz), got {fw!r}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0.0):
+        raise ValueError(f"filter_width must be finite and >= 0, got {fw!r}")
+    return a
 
 
 def _shape_out(res: dict, lead: tuple) -> dict:
@@ -540,9 +510,14 @@ def _shape_out(res: dict, lead: tuple) -> dict:
 
 def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,
            tile_w: int | None = None, tile_h: int | None = None, depth: int | None = None,
-           backend: str = "gpu") -> dict:
+           backend: str = "gpu", samples: int = 1) -> dict:
     """Render the sub-rectangle ``[x0, x0 + tile_w) x [y0, y0 + tile_h)`` of the full
     ``width x height`` image of a recipe (tiles are bit-identical to a one-pass render).
+
+    Each pixel is band-limited to its footprint (the recipe's ``antialias``) and, with
+    ``samples = n^2`` (1, 4, 9, ..., 64), averaged over the centres of an n x n grid of
+    sub-pixels (colour, height, normal, grad; ``id``, ``F1``..``F4`` from the pixel centre);
+    see :mod:`cellgl.antialias`.
 
     Returns
     -------
@@ -555,10 +530,14 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     if getattr(recipe, "kind", None) == "pups":  # cellgl.pups_recipe: its own renderer
         from . import pups_recipe
 
+        if samples != 1:
+            raise ValueError(f"samples={samples!r}: supersampling is for texture recipes; "
+                             f"{recipe.name} is a PUPs recipe (accepted: 1)")
         return pups_recipe.render(recipe, width, height, channels=channels, x0=x0, y0=y0,
                                   tile_w=tile_w, tile_h=tile_h, depth=depth, backend=backend)
     channels = _check_channels(channels)
     _backend(backend)
+    n_sub = antialias.grid_side(samples)
     for name, v in (("width", width), ("height", height)):
         if not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
             raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
@@ -580,7 +559,10 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
         z = (np.arange(D) + 0.5) / D if depth else np.zeros(1)
         Z, V, U = np.meshgrid(z, v, u, indexing="ij")
         pts = np.stack([U.ravel(), V.ravel(), Z.ravel()], axis=1)
-        res = texture_reference.evaluate(recipe, pts, channels)
+        duvz = np.array([1.0 / width, 1.0 / height, 1.0 / D if depth else 0.0])
+        res = texture_reference.evaluate(recipe, pts, channels, duvz)
+        if n_sub > 1:
+            res.update(_supersample_reference(recipe, pts, channels, duvz, samples))
     else:
         def setup(prog, start, n):
             for name, value in (("u_size", (width, height)), ("u_origin", (x0, y0)),
@@ -589,10 +571,32 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
                     prog[name].value = value
             return []
 
-        setup.grid = True
-        res = _gpu_run(recipe, channels, tw * th * D, setup)
+        res = texture_dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub)
     lead = (D, th, tw) if depth else (th, tw)
     return _shape_out(res, lead)
+
+
+def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
+    """NumPy twin of texture.comp's supersampling: the averaged channels at pixel centres ``pts``."""
+    from . import texture_reference
+
+    avg = [c for c in channels if c in ("color", "height", "normal", "grad")]
+    if not avg:
+        return {}
+    n = antialias.grid_side(samples)
+    sub = np.array([duvz[0] / n, duvz[1] / n, duvz[2]])
+    acc: dict = {}
+    for off in antialias.subsample_offsets(samples):
+        p = pts + np.array([off[0] * duvz[0], off[1] * duvz[1], 0.0])
+        o = texture_reference.evaluate(recipe, p, [c for c in avg if c != "normal"] + ["normal"], sub)
+        for c in avg:
+            x = o[c].astype(np.float64)
+            acc[c] = acc.get(c, 0.0) + (x * 2.0 - 1.0 if c == "normal" else x)
+    out = {c: (a / samples).astype(np.float32) for c, a in acc.items() if c != "normal"}
+    if "normal" in acc:
+        nrm = acc["normal"] / np.linalg.norm(acc["normal"], axis=1, keepdims=True)
+        out["normal"] = (nrm * 0.5 + 0.5).astype(np.float32)
+    return out
 
 
 _fragment_target: dict = {}

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import reference as ref
+from .antialias import smoothscale
 from .enums import Distribution, Metric
 from .params import LINEAR
 from .reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
@@ -104,11 +105,17 @@ def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
 MAX_OCTAVES = 8
 
 
-def _tex(recipe, pan=(0.0, 0.0)) -> dict:
+def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     """The run-time values the GLSL reads (enums as names), plus derived ones (the split
-    origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`)."""
+    origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`,
+    the band limit's ``feature_frequency`` and ``octave_mean`` of :mod:`cellgl.antialias`;
+    ``mean=False``: 0 for the mean, which that module measures with this)."""
+    from . import antialias
+
     v = dict(recipe.values)
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
+    v["feature_frequency"] = antialias.feature_frequency(v)
+    v["octave_mean"] = antialias.octave_mean(recipe) if mean else 0.0
     v.update(lattice_origins(v, pan))
     v["density_enc"] = density_encodings(recipe, pan, v)
     return v
@@ -319,9 +326,17 @@ def texture_cell_value(ids: np.ndarray) -> np.ndarray:
     return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
 
 
-def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) -> dict:
-    """``cell_texture``: the texture at basis positions O + s, s (N, 4) small (:func:`texture_local`)
-    and the origin O = (offset_x, offset_y, offset_z, time) split in ``t`` (default ``_tex(recipe)``).
+def texture_footprint(duvz, t: dict) -> np.ndarray:
+    """``cell_texture_footprint``: a pixel spanning ``duvz`` ((3,) or (N, 3)) in texture space,
+    in basis units."""
+    f = t["frequency"]
+    return np.max(np.abs(np.asarray(duvz, dtype=np.float64)) * np.array([f, f * t["aspect"], f]), axis=-1)
+
+
+def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, r=0.0) -> dict:
+    """``cell_texture_filtered``: the texture at basis positions O + s, s (N, 4) small
+    (:func:`texture_local`) and the origin O = (offset_x, offset_y, offset_z, time) split in ``t``
+    (default ``_tex(recipe)``), band-limited to the footprint ``r`` (scalar or (N,), basis units).
 
     Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
     F (N, 4), value (N,), as the GLSL ``CellTexel``.
@@ -339,27 +354,31 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     dG = np.zeros((N, 4))
     total, amp, scale = 0.0, 1.0, 1.0
     o: dict = {}
+    spacings = t["antialias"] * t["feature_frequency"] * np.broadcast_to(np.asarray(r, dtype=np.float64), (N,))
     for i in range(min(octaves, MAX_OCTAVES)):
         w = amp
         if fractal != "none":
             w *= min(t["octaves"] - i, 1.0)
-        v, g, ids, F4 = texture_combination(s * scale, t, i, n)
-        if i == 0:
-            o.update(value=v, id=ids, F=F4)
-        b = (v - t["range_lo"]) * inv_range
-        db = g * (inv_range * scale)
-        out = (b < 0.0) | (b > 1.0)
-        b = np.clip(b, 0.0, 1.0)
-        db[out] = 0.0
-        if qin:
-            dev = 0.5 - b
-            G += w * np.abs(dev)
-            dG -= w * np.sign(dev)[:, None] * db
-            total += 0.5 * w
+        a = smoothscale(spacings * scale)
+        if i == 0 or np.any(a > 0.0):
+            v, g, ids, F4 = texture_combination(s * scale, t, i, n)
+            if i == 0:
+                o.update(value=v, id=ids, F=F4)
+            b = (v - t["range_lo"]) * inv_range
+            db = g * (inv_range * scale)
+            out = (b < 0.0) | (b > 1.0)
+            b = np.clip(b, 0.0, 1.0)
+            db[out] = 0.0
+            term = b
+            if qin:
+                dev = 0.5 - b
+                term = np.abs(dev)
+                db = -np.sign(dev)[:, None] * db
+            G += w * (a * term + (1.0 - a) * t["octave_mean"])
+            dG += (w * a)[:, None] * db
         else:
-            G += w * b
-            dG += w * db
-            total += w
+            G += w * t["octave_mean"]
+        total += 0.5 * w if qin else w
         amp *= t["gain"]
         scale *= t["lacunarity"]
     G /= total
@@ -399,21 +418,23 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     return o
 
 
-def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0)) -> dict:
-    """``cell_texture_at``: the texture at texture-space points p (N, 3) (plus ``pan`` in uv)."""
+def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0), duvz=(0.0, 0.0, 0.0)) -> dict:
+    """``cell_texture_at_filtered``: the texture at texture-space points p (N, 3) (plus ``pan``
+    in uv), band-limited to pixels spanning ``duvz`` ((3,) or (N, 3); 0: point samples)."""
     t = _tex(recipe, pan)
-    return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t)
+    return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t, texture_footprint(duvz, t))
 
 
-def evaluate(recipe, pts: np.ndarray, outputs) -> dict:
-    """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space)."""
+def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
+    """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space; ``duvz``:
+    the footprint of each point in texture space, as its ``filter_width``)."""
     from .texture import needed_n
 
     n = needed_n(recipe)
     for c in outputs:
         if c in ("F1", "F2", "F3", "F4"):
             n = max(n, int(c[1]))
-    o = texture_at(pts, recipe, n)
+    o = texture_at(pts, recipe, n, duvz=duvz)
     t = _tex(recipe)
     res = {}
     for c in outputs:

@@ -1,0 +1,99 @@
+#!/usr/bin/env python
+"""Texture layer vs the basis it wraps: ``cellgl.render`` next to ``cellgl.cellular_grid``.
+
+For each preset, in one run, side by side:
+
+* ``texture``: ``cellgl.render(preset, S, S)`` (colour only: what ``cellgl bake`` computes),
+  in Msamples/s (pixels per second);
+* ``basis``: ``cellgl.cellular_grid`` over the same S x S grid with the same basis (dimension,
+  metric, distribution, density, jitter, seed, the highest F_n the recipe reads, outputs F),
+  in Msamples/s, divided by the number of octaves the texture evaluates per pixel (a 6-octave
+  fractal searches the basis 6 times per pixel), so that ``basis`` is the rate the texture would
+  reach if it cost nothing beyond its basis searches;
+* ``ratio`` = basis / texture: the factor the texture layer costs over its own basis searches
+  (1.0: free).
+
+    python benchmarks/bench_texture.py                    # every texture preset, 512^2, best of 3
+    python benchmarks/bench_texture.py --size 256 --repeats 2 f1 qin-cloud
+    python benchmarks/bench_texture.py --samples 4        # bakes with 4 samples per pixel
+
+Rates on a shared machine are noisy; the ratio, measured in the same run, is the number to
+compare. See benchmarks/README.md.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+
+_REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+if _REPO not in sys.path:
+    sys.path.insert(0, _REPO)
+
+
+def best_time(fn, repeats: int) -> float:
+    """Best wall time of ``repeats`` calls of fn(), after one warm-up call (compiles shaders)."""
+    fn()
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return best
+
+
+def basis_args(recipe) -> tuple[dict, int]:
+    """(cellular_grid keyword arguments for the recipe's basis, basis searches per pixel)."""
+    from cellgl.texture import needed_n
+
+    v = recipe.values
+    octaves = 1 if v["fractal"] == "none" else int(math.ceil(v["octaves"]))
+    kw = dict(n=needed_n(recipe), metric=v["metric"], distribution=v["distribution"],
+              density=v["density"], jitter=v["jitter"], min_points=v["min_points"],
+              max_points=v["max_points"], minkowski_p=v["minkowski_p"], seed=v["seed"],
+              outputs=("F",))
+    return kw, octaves
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("presets", nargs="*", help="texture presets (default: all)")
+    ap.add_argument("--size", type=int, default=512, help="S x S pixels (default 512)")
+    ap.add_argument("--repeats", type=int, default=3, help="timed runs per row, best kept (default 3)")
+    ap.add_argument("--samples", type=int, default=1, help="samples per pixel of the texture bake")
+    args = ap.parse_args(argv)
+
+    import cellgl
+    from cellgl.recipe import load_recipe
+
+    names = args.presets or [n for n in cellgl.list_presets() if load_recipe(n).get("density_map") == "none"
+                             and getattr(load_recipe(n), "kind", "texture") != "pups"]
+    S = args.size
+    print(f"# {S}x{S}, best of {args.repeats}, samples {args.samples}; "
+          f"load: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
+    print(f"{'preset':<14} {'dim':>3} {'oct':>3} {'texture Ms/s':>13} {'basis Ms/s':>11} {'ratio':>6}")
+    ratios = []
+    for name in names:
+        recipe = load_recipe(name)
+        kw, octaves = basis_args(recipe)
+        dim = recipe.get("dimension")
+        shape = (S, S) if dim == 2 else (1, S, S) if dim == 3 else (1, 1, S, S)
+        kwargs = {"samples": args.samples} if args.samples != 1 else {}
+        t_tex = best_time(lambda: cellgl.render(recipe, S, S, **kwargs), args.repeats)
+        spacing = recipe.get("frequency") / S     # the texture's octave-0 lattice step per pixel
+        t_basis = best_time(lambda: cellgl.cellular_grid(shape, spacing=spacing, **kw), args.repeats)
+        tex = S * S / t_tex / 1e6
+        basis = S * S / t_basis / 1e6 / octaves
+        ratios.append(basis / tex)
+        print(f"{name:<14} {dim:>3} {octaves:>3} {tex:>13.2f} {basis:>11.2f} {basis / tex:>6.2f}", flush=True)
+    if ratios:
+        geo = math.exp(sum(math.log(r) for r in ratios) / len(ratios))
+        print(f"# ratio basis/texture: geometric mean {geo:.2f}, max {max(ratios):.2f}; "
+              f"load after: {os.getloadavg()[0]:.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
