@@ -11,7 +11,13 @@ For each preset, in one run, side by side:
   fractal searches the basis 6 times per pixel), so that ``basis`` is the rate the texture would
   reach if it cost nothing beyond its basis searches;
 * ``ratio`` = basis / texture: the factor the texture layer costs over its own basis searches
-  (1.0: free).
+  (1.0: free);
+* ``uniform`` and its ratio: the same render with the recipe's values as uniforms (as the viewer
+  runs it, and as bakes ran before the baked programs of ``cellgl/texture_dispatch.py``).
+
+The recipes are rendered with ``antialias = 0`` so that every octave is searched, as the basis
+rate assumes (the band limit skips octaves finer than two pixels: faster still; ``--band`` keeps
+the recipe's value).
 
     python benchmarks/bench_texture.py                    # every texture preset, 512^2, best of 3
     python benchmarks/bench_texture.py --size 256 --repeats 2 f1 qin-cloud
@@ -63,34 +69,52 @@ def main(argv=None) -> int:
     ap.add_argument("--size", type=int, default=512, help="S x S pixels (default 512)")
     ap.add_argument("--repeats", type=int, default=3, help="timed runs per row, best kept (default 3)")
     ap.add_argument("--samples", type=int, default=1, help="samples per pixel of the texture bake")
+    ap.add_argument("--band", action="store_true", help="keep the recipes' band limit (antialias)")
     args = ap.parse_args(argv)
 
     import cellgl
+    from cellgl import texture_dispatch
     from cellgl.recipe import load_recipe
 
-    names = args.presets or [n for n in cellgl.list_presets() if load_recipe(n).get("density_map") == "none"
-                             and getattr(load_recipe(n), "kind", "texture") != "pups"]
+    # Texture presets without a density map (cellular_grid would need the map rebuilt in cells).
+    names = args.presets or [n for n, _ in cellgl.list_presets()
+                             if getattr(load_recipe(n), "kind", "texture") != "pups"
+                             and load_recipe(n).get("density_map") == "none"]
     S = args.size
     print(f"# {S}x{S}, best of {args.repeats}, samples {args.samples}; "
           f"load: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
-    print(f"{'preset':<14} {'dim':>3} {'oct':>3} {'texture Ms/s':>13} {'basis Ms/s':>11} {'ratio':>6}")
-    ratios = []
+    print(f"{'preset':<14} {'dim':>3} {'oct':>3} {'texture Ms/s':>13} {'basis Ms/s':>11} {'ratio':>6} "
+          f"{'uniform Ms/s':>13} {'ratio':>6}")
+    ratios, uratios = [], []
     for name in names:
         recipe = load_recipe(name)
+        if not args.band:
+            recipe = recipe.replace(antialias=0.0)
         kw, octaves = basis_args(recipe)
         dim = recipe.get("dimension")
         shape = (S, S) if dim == 2 else (1, S, S) if dim == 3 else (1, 1, S, S)
         kwargs = {"samples": args.samples} if args.samples != 1 else {}
         t_tex = best_time(lambda: cellgl.render(recipe, S, S, **kwargs), args.repeats)
+        texture_dispatch.BAKE_CONSTANTS = False
+        try:
+            t_uni = best_time(lambda: cellgl.render(recipe, S, S, **kwargs), args.repeats)
+        finally:
+            texture_dispatch.BAKE_CONSTANTS = True
         spacing = recipe.get("frequency") / S     # the texture's octave-0 lattice step per pixel
         t_basis = best_time(lambda: cellgl.cellular_grid(shape, spacing=spacing, **kw), args.repeats)
         tex = S * S / t_tex / 1e6
+        uni = S * S / t_uni / 1e6
         basis = S * S / t_basis / 1e6 / octaves
         ratios.append(basis / tex)
-        print(f"{name:<14} {dim:>3} {octaves:>3} {tex:>13.2f} {basis:>11.2f} {basis / tex:>6.2f}", flush=True)
+        uratios.append(basis / uni)
+        print(f"{name:<14} {dim:>3} {octaves:>3} {tex:>13.2f} {basis:>11.2f} {basis / tex:>6.2f} "
+              f"{uni:>13.2f} {basis / uni:>6.2f}", flush=True)
     if ratios:
-        geo = math.exp(sum(math.log(r) for r in ratios) / len(ratios))
-        print(f"# ratio basis/texture: geometric mean {geo:.2f}, max {max(ratios):.2f}; "
+        def geo(rs):
+            return math.exp(sum(math.log(r) for r in rs) / len(rs))
+
+        print(f"# ratio basis/texture: geometric mean {geo(ratios):.2f}, max {max(ratios):.2f} "
+              f"(uniform program: {geo(uratios):.2f}, max {max(uratios):.2f}); "
               f"load after: {os.getloadavg()[0]:.2f}")
     return 0
 

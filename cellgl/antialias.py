@@ -9,7 +9,7 @@ fractal mode (``shaders/lib/texture.glsl``, ``cell_texture_filtered``): with the
 (the pixel's size in basis units) and ``feature_frequency`` (:func:`feature_frequency`), octave
 ``i`` spans ``w_i = antialias * feature_frequency * L^i * r`` feature spacings per pixel and
 its term (``b`` or ``|0.5 - b|``) becomes ``a_i term + (1 - a_i) octave_mean`` with
-``a_i = 1 - smoothstep(0.25, 0.5, w_i)`` (:func:`smoothscale`) and ``octave_mean`` the term's
+``a_i = 1 - smoothstep(0.5, 1, w_i)`` (:func:`smoothscale`) and ``octave_mean`` the term's
 mean over the plane (:func:`octave_mean`). The weights and their sum are untouched, so a bake
 large enough that every ``a_i = 1`` is unchanged, bit for bit.
 
@@ -36,8 +36,8 @@ __all__ = ["AA_LO", "AA_HI", "MAX_SAMPLES", "smoothscale", "feature_frequency", 
 
 #: the band limit starts fading an octave at AA_LO feature spacings per pixel and ends at AA_HI
 #: (the GLSL's CELL_TEX_AA_LO / CELL_TEX_AA_HI; a test checks they agree)
-AA_LO = 0.25
-AA_HI = 0.5
+AA_LO = 0.5
+AA_HI = 1.0
 #: most samples per pixel of a supersampled bake (an 8 x 8 grid)
 MAX_SAMPLES = 64
 #: points the octave mean is measured at (fixed, so the mean is the same bits every run)

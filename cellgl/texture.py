@@ -324,7 +324,6 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     out["u_feature_frequency"] = antialias.feature_frequency(v)
-    out["u_octave_mean"] = antialias.octave_mean(recipe)
     for k, a in lattice_origins(recipe, pan).items():
         out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
     encs = density_encodings(recipe, pan)
@@ -332,6 +331,7 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
         out["u_density_axis"] = [tuple(int(c) for c in row) for e in encs for row in e.axes]
         out["u_density_info"] = [e.info for e in encs]
+    out["u_octave_mean"] = antialias.octave_mean(recipe)     # after the map's checks
     return out
 
 
@@ -559,7 +559,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
         z = (np.arange(D) + 0.5) / D if depth else np.zeros(1)
         Z, V, U = np.meshgrid(z, v, u, indexing="ij")
         pts = np.stack([U.ravel(), V.ravel(), Z.ravel()], axis=1)
-        duvz = np.array([1.0 / width, 1.0 / height, 1.0 / D if depth else 0.0])
+        duvz = np.array([1.0 / width, 1.0 / height, 0.0])     # slices: band-limited in the image plane
         res = texture_reference.evaluate(recipe, pts, channels, duvz)
         if n_sub > 1:
             res.update(_supersample_reference(recipe, pts, channels, duvz, samples))

@@ -115,9 +115,9 @@ def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     v = dict(recipe.values)
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     v["feature_frequency"] = antialias.feature_frequency(v)
-    v["octave_mean"] = antialias.octave_mean(recipe) if mean else 0.0
     v.update(lattice_origins(v, pan))
     v["density_enc"] = density_encodings(recipe, pan, v)
+    v["octave_mean"] = antialias.octave_mean(recipe) if mean else 0.0
     return v
 
 

@@ -54,8 +54,9 @@ void main()
     vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
                   (float(u_origin.y + y) + 0.5) / float(u_size.y),
                   u_depth > 0 ? (float(k) + 0.5) / float(u_depth) : 0.0);
-    // The pixel (voxel) in texture space.
-    vec3 duvz = vec3(1.0 / float(u_size.x), 1.0 / float(u_size.y), u_depth > 0 ? 1.0 / float(u_depth) : 0.0);
+    // The pixel in texture space (a volume's slices too are band-limited in the image plane
+    // only, so that slice k equals the image bake at its z).
+    vec3 duvz = vec3(1.0 / float(u_size.x), 1.0 / float(u_size.y), 0.0);
 #else
     vec3 p = points[i].xyz;
     vec3 duvz = u_filter_width;

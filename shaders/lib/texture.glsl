@@ -53,10 +53,11 @@
 //
 // so the sum of weights, and with it the look of a large bake (every a_i = 1), is
 // unchanged; an octave with a_i = 0 is not searched at all. The features of one octave are
-// a Voronoi pattern about 1 / feature_frequency apart: w = 0.25 is four pixels per feature
-// (still resolved), w = 0.5 two (the Nyquist limit of the pattern, whose creases alias long
-// before). t.octave_mean (cellgl/antialias.py) is the mean of the octave's term, b or
-// |0.5 - b|, measured once per recipe with the NumPy reference.
+// a Voronoi pattern about 1 / feature_frequency apart: w = 0.5 is two pixels per feature
+// (the Nyquist limit of the pattern: kept), w = 1 one (gone). The thresholds were chosen
+// by measurement (docs/antialias.md): fading from four pixels down lost more resolved
+// detail than it removed aliasing. t.octave_mean (cellgl/antialias.py) is the mean of the
+// octave's term, b or |0.5 - b|, measured once per recipe with the NumPy reference.
 //
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
@@ -221,9 +222,9 @@ float cell_texture_cell_value(uint id)
 }
 
 // The band-limit factor a of an octave whose features are w feature spacings per pixel
-// (see the header): 1 while they span four pixels or more, 0 from two pixels down.
-#define CELL_TEX_AA_LO 0.25
-#define CELL_TEX_AA_HI 0.5
+// (see the header): 1 while they are two pixels apart or more, 0 from one pixel down.
+#define CELL_TEX_AA_LO 0.5
+#define CELL_TEX_AA_HI 1.0
 float cell_texture_smoothscale(float w)
 {
     return 1.0 - smoothstep(CELL_TEX_AA_LO, CELL_TEX_AA_HI, w);

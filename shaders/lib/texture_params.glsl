@@ -53,7 +53,7 @@ struct CellTextureParams {
     float octaves;              // number of octaves (terms; fractional: the last is faded in). Worley's i = 0..5 is 6
     float lacunarity;           // frequency ratio between octaves (integer when tileable)
     float gain;                 // amplitude ratio between octaves
-    float antialias;            // band limit (Qin's smoothscale): each octave fades to its mean as its features shrink from 4 to 2 pixels apart, times antialias (0: off, point samples)
+    float antialias;            // band limit (Qin's smoothscale): each octave fades to its mean as its features shrink from 2 to 1 pixel apart, times antialias (0: off, point samples)
     float frequency;            // cells across the texture (u in [0, 1]); the period when tileable (then an integer)
     float aspect;               // cells along v per cell along u (frequency * aspect: an integer when tileable)
     float offset_x;             // shift of the basis along x, in cells
