@@ -14,6 +14,7 @@ import math
 import os
 import shutil
 import sys
+import dataclasses
 import time
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
@@ -21,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import antialias
 from . import io as cio
 
 __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
@@ -237,6 +239,7 @@ class _Plan:
     slices: int | None
     tile_w: int
     tile_h: int
+    samples: int = 1       #: per pixel (an n x n grid; cellgl.antialias)
 
     def tiles(self) -> Iterator[tuple[int, int, int, int]]:
         """(x0, y0, w, h) row-major."""
@@ -386,7 +389,7 @@ def _check_tile(tile) -> int | None:
 
 
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
-         bit_depth=None, tileable=None, sets=(), tile=None, progress=True,
+         bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
          memory_budget=DEFAULT_BUDGET) -> list[Path]:
     """Render a recipe to a file, tile by tile, atomically.
 
@@ -416,6 +419,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     tile : int, optional
         Render tiles of ``tile x tile`` pixels (multiple of 16) instead of a size chosen from
         ``memory_budget``.
+    samples : int
+        Samples per pixel, a square (1, 4, 9, ..., 64): colour, height and normal averaged over
+        an n x n grid of sub-pixels (stratified, deterministic; :mod:`cellgl.antialias`).
     progress : bool
         Draw a progress bar on stderr when there is more than one tile.
     memory_budget : int
@@ -451,6 +457,10 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     channels = parse_channels(channels)
     bits = _check_bits(ext, bit_depth)
     tile = _check_tile(tile)
+    try:
+        samples = antialias.check_samples(samples)
+    except ValueError as exc:
+        raise BakeError(f"--samples: {exc}") from None
     outputs = []
     for p, chs in _output_paths(path, channels):
         outputs.append(_Output(p, chs, tuple(_encoding(c, ext, bits) for c in chs)))
@@ -461,6 +471,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
     recipe = _load(recipe_or_name, sets, tileable)
+    if samples != 1 and getattr(recipe, "kind", None) == "pups":
+        raise BakeError(f"--samples {samples}: supersampling is for texture recipes; "
+                        f"{recipe.name} is a PUPs recipe (accepted: 1)")
     if depth_slices is not None and recipe.get("dimension") < 3:
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
@@ -470,7 +483,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     written = []
     for out in outputs:
         file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-        plan = _plan(w, h, depth_slices, ext, out.channels, tile, memory_budget, file_bytes)
+        plan = dataclasses.replace(_plan(w, h, depth_slices, ext, out.channels, tile, memory_budget, file_bytes),
+                                   samples=samples)
         _bake_one(recipe, out, ext, plan, progress)
         written.append(out.path)
     return written
@@ -500,7 +514,7 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator
 
     for x0, y0, tw, th in plan.tiles():
         res = texture.render(recipe, plan.width, plan.height, channels=out.channels,
-                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices)
+                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices, samples=plan.samples)
         enc = {}
         for e in out.encodings:
             a = e.encode(res[e.channel])
@@ -629,6 +643,7 @@ channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), 
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
+  cellgl bake crumple -o crumple.png --size 256 --samples 4
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
 """
@@ -654,6 +669,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="comma-separated: color, height, normal, id, F1..F4 (default color)")
     p.add_argument("--depth", default=None, metavar="BITS",
                    help="bits per sample: 8|16|32 (default per format, see below)")
+    p.add_argument("--samples", default="1", metavar="N",
+                   help="samples per pixel: 1 (default), 4, 9, 16, ... 64 (an n x n grid averaged: "
+                        "smooth edges; band-limited fractals need none)")
     p.add_argument("--tile", default=None, metavar="N",
                    help="advanced: render N x N tiles (multiple of 16) instead of a size chosen "
                         "from --memory")
@@ -679,11 +697,12 @@ def run_cli(args: argparse.Namespace) -> int:
     budget = DEFAULT_BUDGET if args.memory is None else \
         _int_arg("--memory", args.memory, 1, 1 << 20) << 20
     tile = None if args.tile is None else _int_arg("--tile", args.tile, 16, 8192)
+    samples = _int_arg("--samples", args.samples, 1, antialias.MAX_SAMPLES)
     t0 = time.perf_counter()
     try:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
-                     tileable=args.tileable, sets=args.sets, tile=tile,
+                     tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
                      progress=not args.quiet, memory_budget=budget)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
