@@ -52,7 +52,7 @@ def best_time(fn, repeats: int) -> float:
 
 def basis_args(recipe) -> tuple[dict, int]:
     """(cellular_grid keyword arguments for the recipe's basis, basis searches per pixel)."""
-    from cellgl.texture import needed_n
+    from cellgl.texture.recipe import needed_n
 
     v = recipe.values
     octaves = 1 if v["fractal"] == "none" else int(math.ceil(v["octaves"]))
@@ -73,8 +73,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     import cellgl
-    from cellgl import texture_dispatch
-    from cellgl.recipe import load_recipe
+    from cellgl.texture import dispatch as texture_dispatch
+    from cellgl.texture.recipe import load_recipe
 
     # Texture presets without a density map (cellular_grid would need the map rebuilt in cells).
     names = args.presets or [n for n, _ in cellgl.list_presets()

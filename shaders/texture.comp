@@ -2,7 +2,7 @@
 // cellgl compute entry: a texture recipe over a pixel grid (bakes) or a point list.
 // Thin: compute the texture-space point and its footprint, call cell_texture_filtered()
 // (once, or over a grid of sub-pixels), write the channels asked for.
-// Macros (from cellgl/texture.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE,
+// Macros (from cellgl/texture/dispatch.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE,
 //   CELL_TEX_SUPERSAMPLE  n: average an n x n grid of sub-pixel centres (grid only; 1: none)
 //   CELL_TEX_OUT          bit mask of the outputs written: 1 colour, 2 height + normal,
 //                         4 F1..F4, 8 gradient + value, 16 id

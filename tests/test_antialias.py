@@ -11,8 +11,12 @@ import re
 import numpy as np
 import pytest
 
-from cellgl import antialias, bake, glsl, texture, texture_dispatch
-from cellgl.recipe import load_recipe
+from cellgl import texture
+from cellgl.gl import glsl
+from cellgl.io import bake
+from cellgl.texture import antialias
+from cellgl.texture import dispatch as texture_dispatch
+from cellgl.texture.recipe import load_recipe
 
 CHANNELS = ("color", "height", "normal")
 

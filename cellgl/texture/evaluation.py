@@ -1,0 +1,272 @@
+"""Evaluate cellular texture recipes on the GPU (``shaders/texture.comp``, ``texture.frag``) or
+with the NumPy twin (:mod:`cellgl.texture.reference`).
+
+:func:`evaluate` samples a recipe at arbitrary points, :func:`render` renders an image, a tile
+of one or a volume (tiles are bit-identical to a one-pass render), :func:`render_fragment` runs
+the viewer's fragment path offscreen, :func:`measure_range` measures a combination's range.
+The shader text, macros and uniforms come from :mod:`cellgl.texture.shader`. Any recipe kind
+(PUPs too) renders through :func:`cellgl.recipes.render`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cellgl.texture import antialias, dispatch
+from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
+from cellgl.texture.shader import defines, set_view
+
+__all__ = ["evaluate", "render", "render_fragment", "measure_range", "OUTPUTS"]
+
+#: what :func:`evaluate` can return: the render channels plus the height gradient in texture
+#: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
+OUTPUTS = CHANNELS + ("grad", "value")
+
+
+def _backend(backend):
+    if backend not in ("gpu", "numpy"):
+        raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
+
+
+def _points(points) -> np.ndarray:
+    try:
+        pts = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("points must be a numeric array of shape (N, 2) (u, v) or (N, 3) (u, v, z)") from None
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
+        raise ValueError(f"points must have shape (N, 2) (u, v) or (N, 3) (u, v, z) with N >= 1, "
+                         f"got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise ValueError("points must be finite")
+    if pts.shape[1] == 2:
+        pts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1)
+    return pts
+
+
+def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter_width=0.0) -> dict:
+    """Evaluate a recipe at arbitrary texture-space points.
+
+    Parameters
+    ----------
+    recipe : Recipe, preset name or recipe path
+    points : array_like (N, 2) or (N, 3) float
+        ``(u, v)`` on the image plane (``v = 0``: top row) or ``(u, v, z)`` for solid recipes
+        (basis position ``(u f + offset_x, v f aspect + offset_y, z f + offset_z, time)``).
+    outputs : sequence of str
+        Any of ``color`` (N, 4) float32, ``height`` (N,) float32, ``normal`` (N, 3) float32
+        in [0, 1] encoding, ``id`` (N,) uint32, ``F1``..``F4`` (N,) float32 (octave 0),
+        ``grad`` (N, 3) float32 (dh/du, dh/dv, dh/dz, analytic), ``value`` (N,) float32 (the
+        combination before normalisation, octave 0).
+    backend : {"gpu", "numpy"}
+    filter_width : float or (du, dv) or (du, dv, dz)
+        The footprint of every point in texture space (e.g. ``1 / W`` for the pixels of a
+        W-wide image): fractal octaves finer than it fade to their mean (the recipe's
+        ``antialias``, :mod:`cellgl.texture.antialias`). Default 0: point samples.
+
+    Returns
+    -------
+    dict of output name -> ndarray
+    """
+    recipe = load_recipe(recipe)
+    outputs = check_channels(outputs, OUTPUTS)
+    _backend(backend)
+    pts = _points(points)
+    duvz = _filter_width(filter_width)
+    if backend == "numpy":
+        from cellgl.texture import reference as texture_reference
+
+        return texture_reference.evaluate(recipe, pts, outputs, duvz)
+    from cellgl.gl import context
+
+    ctx = context.get_context()
+
+    def setup(prog, start, n):
+        p4 = np.zeros((n, 4), np.float32)
+        p4[:, :3] = pts[start:start + n]
+        b = ctx.buffer(p4.tobytes())
+        b.bind_to_storage_buffer(0)
+        if "u_filter_width" in prog:
+            prog["u_filter_width"].value = tuple(float(c) for c in duvz)
+        return [b]
+
+    return dispatch.run(recipe, outputs, len(pts), setup, grid=False)
+
+
+def _filter_width(fw) -> np.ndarray:
+    """``filter_width`` as (du, dv, dz) float64, checked."""
+    try:
+        a = np.asarray(fw, dtype=np.float64)
+    except (TypeError, ValueError):
+        a = np.array([np.nan])
+    if a.ndim == 0:
+        a = np.array([a, a, 0.0])
+    elif a.shape in ((2,), (3,)):
+        a = np.concatenate([a, np.zeros(3 - len(a))])
+    else:
+        raise ValueError(f"filter_width must be a number, (du, dv) or (du, dv, dz), got {fw!r}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0.0):
+        raise ValueError(f"filter_width must be finite and >= 0, got {fw!r}")
+    return a
+
+
+def _shape_out(res: dict, lead: tuple) -> dict:
+    out = {}
+    for k, a in res.items():
+        out[k] = a.reshape(lead + a.shape[1:])
+    return out
+
+
+def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,
+           tile_w: int | None = None, tile_h: int | None = None, depth: int | None = None,
+           backend: str = "gpu", samples: int = 1) -> dict:
+    """Render the sub-rectangle ``[x0, x0 + tile_w) x [y0, y0 + tile_h)`` of the full
+    ``width x height`` image of a recipe (tiles are bit-identical to a one-pass render).
+
+    Each pixel is band-limited to its footprint (the recipe's ``antialias``) and, with
+    ``samples = n^2`` (1, 4, 9, ..., 64), averaged over the centres of an n x n grid of
+    sub-pixels (colour, height, normal; ``id``, ``F1``..``F4`` from the pixel centre); see
+    :mod:`cellgl.texture.antialias`.
+
+    Returns
+    -------
+    dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
+    float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
+    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
+    ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
+    """
+    recipe = load_recipe(recipe)
+    channels = check_channels(channels)
+    _backend(backend)
+    n_sub = antialias.grid_side(samples)
+    for name, v in (("width", width), ("height", height)):
+        if not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
+            raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
+    tw = width - x0 if tile_w is None else tile_w
+    th = height - y0 if tile_h is None else tile_h
+    if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):
+        raise ValueError(f"tile [{x0}, {x0 + tw}) x [{y0}, {y0 + th}) lies outside the {width}x{height} image")
+    if depth is not None:
+        if recipe.get("dimension") < 3:
+            raise ValueError("depth (a volume) needs a solid recipe: basis.dimension 3 or 4, got 2")
+        if not isinstance(depth, (int, np.integer)) or depth < 1 or depth > 4096:
+            raise ValueError(f"depth must be an integer in [1, 4096], got {depth!r}")
+    D = depth or 1
+    if backend == "numpy":
+        from cellgl.texture import reference as texture_reference
+
+        u = (x0 + np.arange(tw) + 0.5) / width
+        v = (y0 + np.arange(th) + 0.5) / height
+        z = (np.arange(D) + 0.5) / D if depth else np.zeros(1)
+        Z, V, U = np.meshgrid(z, v, u, indexing="ij")
+        pts = np.stack([U.ravel(), V.ravel(), Z.ravel()], axis=1)
+        duvz = np.array([1.0 / width, 1.0 / height, 0.0])     # slices: band-limited in the image plane
+        res = texture_reference.evaluate(recipe, pts, channels, duvz)
+        if n_sub > 1:
+            res.update(_supersample_reference(recipe, pts, channels, duvz, samples))
+    else:
+        def setup(prog, start, n):
+            for name, value in (("u_size", (width, height)), ("u_origin", (x0, y0)),
+                                ("u_tile", (tw, th)), ("u_depth", int(depth or 0))):
+                if name in prog:
+                    prog[name].value = value
+            return []
+
+        res = dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub)
+    lead = (D, th, tw) if depth else (th, tw)
+    return _shape_out(res, lead)
+
+
+def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
+    """NumPy twin of texture.comp's supersampling: the averaged channels at pixel centres ``pts``."""
+    from cellgl.texture import reference as texture_reference
+
+    avg = [c for c in channels if c in ("color", "height", "normal")]
+    if not avg:
+        return {}
+    n = antialias.grid_side(samples)
+    sub = np.array([duvz[0] / n, duvz[1] / n, duvz[2]])
+    acc: dict = {}
+    for off in antialias.subsample_offsets(samples):
+        p = pts + np.array([off[0] * duvz[0], off[1] * duvz[1], 0.0])
+        o = texture_reference.evaluate(recipe, p, [c for c in avg if c != "normal"] + ["normal"], sub)
+        for c in avg:
+            x = o[c].astype(np.float64)
+            acc[c] = acc.get(c, 0.0) + (x * 2.0 - 1.0 if c == "normal" else x)
+    out = {c: (a / samples).astype(np.float32) for c, a in acc.items() if c != "normal"}
+    if "normal" in acc:
+        nrm = acc["normal"] / np.linalg.norm(acc["normal"], axis=1, keepdims=True)
+        out["normal"] = (nrm * 0.5 + 0.5).astype(np.float32)
+    return out
+
+
+_fragment_target: dict = {}
+
+
+def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
+                    view=(0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
+    """The viewer's path: ``shaders/texture.frag`` over a ``width x height`` RGBA32F target,
+    read back with row 0 at the top (for tests; the viewer draws to its window instead).
+
+    ``view`` (u0, v0, du, dv): the target shows ``uv = (u0, v0) + (s, t) * (du, dv)``, ``s, t``
+    in [0, 1] (set by :func:`set_view`: the pan goes into the split origins). Fragment uniforms
+    besides the recipe's: ``u_view`` (vec4: uv = xy + (v_uv.x, 1 - v_uv.y) * zw) and
+    ``u_channel`` (index into :data:`cellgl.texture.recipe.CHANNELS`).
+    """
+    from cellgl.gl import context
+
+    recipe = load_recipe(recipe)
+    ctx = context.get_context()
+    prog = context.program("fullscreen.vert", "texture.frag", defines(recipe, (channel,)))
+    set_view(prog, recipe, view[:2], view[2:])
+    if "u_channel" in prog:
+        prog["u_channel"].value = CHANNELS.index(channel)
+    key = (id(ctx), width, height)
+    if _fragment_target.get("key") != key:
+        tex = ctx.texture((width, height), 4, dtype="f4")
+        fbo = ctx.framebuffer(color_attachments=[tex])
+        fbo.use()
+        for o in _fragment_target.get("objects", ()):
+            o.release()
+        _fragment_target.update(key=key, objects=(fbo, tex))
+    fbo, tex = _fragment_target["objects"]
+    fbo.use()
+    fbo.viewport = (0, 0, width, height)
+    vao = ctx.vertex_array(prog, [])
+    vao.render(mode=ctx.TRIANGLES, vertices=3)
+    data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(height, width, 4)
+    vao.release()
+    return data[::-1].copy()
+
+
+# ------------------------------------------------------------------------------ normalisation
+
+def measure_range(recipe, samples: int = 65536, *, lo_pct: float = 0.5, hi_pct: float = 99.5,
+                  seed: int = 12345, backend: str = "gpu") -> tuple[float, float]:
+    """Measure the range of the recipe's combination (Worley: "empirically determining the range
+    of values that the combination returns").
+
+    Evaluates the raw combination (one octave, no tiling) at ``samples`` deterministic random
+    points spread over a 1000-cell region and returns its ``lo_pct``/``hi_pct`` percentiles
+    ``(range_lo, range_hi)`` (widened if degenerate). Store them in the recipe with
+    ``recipe.replace(range_lo=lo, range_hi=hi)``.
+
+    With a density map the cell size varies over the texture, so the points are spread over the
+    texture's own uv square instead (frequency, aspect and the map as the recipe has them).
+    """
+    recipe = load_recipe(recipe)
+    rng = np.random.default_rng(seed)
+    dim = recipe.get("dimension")
+    if recipe.values["density_map"] != "none":
+        probe = recipe.replace(fractal="none")
+        pts = rng.uniform(0.0, 1.0, size=(samples, 3))
+        pts[:, 2] = 0.0
+    else:
+        probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
+                               offset_x=0.0, offset_y=0.0, offset_z=0.0)
+        pts = rng.uniform(0.0, 1000.0 if dim == 2 else 100.0, size=(samples, 3))
+    if dim == 2:
+        pts[:, 2] = 0.0
+    val = evaluate(probe, pts, ("value",), backend=backend)["value"].astype(np.float64)
+    lo, hi = np.percentile(val, [lo_pct, hi_pct])
+    if not hi > lo:
+        lo, hi = lo - 0.5, hi + 0.5
+    return float(round(lo, 6)), float(round(hi, 6))
