@@ -326,9 +326,10 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator
     """Yield (x0, y0, {channel: encoded array}) row-major; arrays (h, w[, S]) or (D, h, w[, S])."""
     from cellgl import recipes
 
+    extra = {"samples": plan.samples} if plan.samples != 1 else {}
     for x0, y0, tw, th in plan.tiles():
         res = recipes.render(recipe, plan.width, plan.height, channels=out.channels,
-                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices, samples=plan.samples)
+                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices, **extra)
         enc = {}
         for e in out.encodings:
             a = e.encode(res[e.channel])

@@ -10,8 +10,8 @@ fractal mode (``shaders/lib/texture.glsl``, ``cell_texture_filtered``): with the
 ``i`` spans ``w_i = antialias * feature_frequency * L^i * r`` feature spacings per pixel and
 its term (``b`` or ``|0.5 - b|``) becomes ``a_i term + (1 - a_i) octave_mean`` with
 ``a_i = 1 - smoothstep(0.5, 1, w_i)`` (:func:`smoothscale`) and ``octave_mean`` the term's
-mean over the plane (:func:`octave_mean`). The weights and their sum are untouched, so a bake
-large enough that every ``a_i = 1`` is unchanged, bit for bit.
+mean over the plane (:func:`cellgl.texture.reference.octave_mean`). The weights and their sum
+are untouched, so a bake large enough that every ``a_i = 1`` is unchanged, bit for bit.
 
 The footprint comes from the bake (``1 / W`` of a W-pixel side, divided by the supersampling
 grid), from derivatives (``fwidth`` in the viewer and in the snippets' ``cellgl_texture(uv)``) or
@@ -31,8 +31,8 @@ import math
 
 import numpy as np
 
-__all__ = ["AA_LO", "AA_HI", "MAX_SAMPLES", "smoothscale", "feature_frequency", "octave_mean",
-           "check_samples", "grid_side", "subsample_offsets"]
+__all__ = ["AA_LO", "AA_HI", "MAX_SAMPLES", "smoothscale", "feature_frequency", "check_samples", "grid_side",
+           "subsample_offsets"]
 
 #: the band limit starts fading an octave at AA_LO feature spacings per pixel and ends at AA_HI
 #: (the GLSL's CELL_TEX_AA_LO / CELL_TEX_AA_HI; a test checks they agree)
@@ -40,8 +40,6 @@ AA_LO = 0.5
 AA_HI = 1.0
 #: most samples per pixel of a supersampled bake (an 8 x 8 grid)
 MAX_SAMPLES = 64
-#: points the octave mean is measured at (fixed, so the mean is the same bits every run)
-_MEAN_SAMPLES = 4096
 
 
 def smoothscale(w) -> np.ndarray:
@@ -67,68 +65,6 @@ def feature_frequency(values) -> float:
         density = float(values["density"])
     scale = W96_DENSITY_ADJUSTMENT if values["distribution"] == "worley1996" else 1.0
     return float(scale * density ** (1.0 / dim))
-
-
-#: the recipe values the octave mean depends on (the basis and the combination)
-_MEAN_GROUPS = ("basis", "combination")
-
-
-def octave_mean(recipe) -> float:
-    """The mean over the plane of one octave's fractal term, ``b`` (fractal ``none`` and ``sum``)
-    or ``|0.5 - b|`` (``qin``, ``qin_cube``), with ``b = clamp((v - range_lo) / (range_hi -
-    range_lo), 0, 1)``: what a band-limited octave fades to.
-
-    Measured with the NumPy reference at 4096 fixed points (as :func:`cellgl.texture.measure_range`
-    places them: a 1000-cell square in 2D, 100-cell cube in 3D/4D, or the texture's uv square with
-    a density map), rounded to float32, cached per basis and combination.
-    """
-    from cellgl.texture.params import PARAMS
-
-    v = recipe.values
-    key = tuple((p.name, v[p.name]) for p in PARAMS if p.group in _MEAN_GROUPS)
-    key += (v["fractal"] in ("qin", "qin_cube"),)
-    if v["density_map"] != "none":
-        key += (v["frequency"], v["aspect"], v["offset_x"], v["offset_y"], v["offset_z"], v["time"])
-        if v["density_map"] == "image":
-            key += (recipe.density_pixels().tobytes(),)
-    return _octave_mean(key, recipe)
-
-
-#: measured means by key (the oldest dropped past 256 entries)
-_MEANS: dict = {}
-
-
-def _octave_mean(key, recipe) -> float:
-    hit = _MEANS.get(key)
-    if hit is None:
-        hit = _MEANS[key] = _measure_mean(recipe)
-        if len(_MEANS) > 256:
-            _MEANS.pop(next(iter(_MEANS)))
-    return hit
-
-
-def _measure_mean(recipe) -> float:
-    from cellgl.texture import reference as texture_reference
-    from cellgl.texture.recipe import needed_n
-
-    v = recipe.values
-    rng = np.random.default_rng(20001)
-    dim = int(v["dimension"])
-    pts = np.zeros((_MEAN_SAMPLES, 3))
-    if v["density_map"] != "none":
-        probe = recipe.replace(fractal="none")
-        pts[:, :2] = rng.uniform(0.0, 1.0, size=(_MEAN_SAMPLES, 2))
-    else:
-        probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
-                               offset_x=0.0, offset_y=0.0, offset_z=0.0, time=0.0)
-        side = 1000.0 if dim == 2 else 100.0
-        pts[:, : min(dim, 3)] = rng.uniform(0.0, side, size=(_MEAN_SAMPLES, min(dim, 3)))
-    t = texture_reference._tex(probe, mean=False)
-    s = texture_reference.texture_local(pts, t)
-    val, _, _, _ = texture_reference.texture_combination(s, t, 0, needed_n(probe))
-    b = np.clip((val - v["range_lo"]) / (v["range_hi"] - v["range_lo"]), 0.0, 1.0)
-    term = np.abs(0.5 - b) if v["fractal"] in ("qin", "qin_cube") else b
-    return float(np.float32(term.mean()))
 
 
 def check_samples(samples) -> int:

@@ -17,8 +17,8 @@ import numpy as np
 
 from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
-from cellgl.texture.antialias import smoothscale
-from cellgl.texture.params import LINEAR
+from cellgl.texture.antialias import feature_frequency, smoothscale
+from cellgl.texture.params import LINEAR, PARAMS
 from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
 
 M32 = 0xFFFFFFFF
@@ -108,16 +108,14 @@ MAX_OCTAVES = 8
 def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     """The run-time values the GLSL reads (enums as names), plus derived ones (the split
     origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`,
-    the band limit's ``feature_frequency`` and ``octave_mean`` of :mod:`cellgl.texture.antialias`;
-    ``mean=False``: 0 for the mean, which that module measures with this)."""
-    from cellgl.texture import antialias
-
+    the band limit's ``feature_frequency`` (:mod:`cellgl.texture.antialias`) and :func:`octave_mean`;
+    ``mean=False``: 0 for the mean, which :func:`octave_mean` measures with this)."""
     v = dict(recipe.values)
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
-    v["feature_frequency"] = antialias.feature_frequency(v)
+    v["feature_frequency"] = feature_frequency(v)
     v.update(lattice_origins(v, pan))
     v["density_enc"] = density_encodings(recipe, pan, v)
-    v["octave_mean"] = antialias.octave_mean(recipe) if mean else 0.0
+    v["octave_mean"] = octave_mean(recipe) if mean else 0.0
     return v
 
 
@@ -454,3 +452,66 @@ def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
         elif c == "value":
             res[c] = o["value"].astype(np.float32)
     return res
+
+
+# --------------------------------------------------------------------------- band limit
+
+#: points the octave mean is measured at (fixed, so the mean is the same bits every run)
+_MEAN_SAMPLES = 4096
+#: the recipe values the octave mean depends on (the basis and the combination)
+_MEAN_GROUPS = ("basis", "combination")
+
+
+def octave_mean(recipe) -> float:
+    """The mean over the plane of one octave's fractal term, ``b`` (fractal ``none`` and ``sum``)
+    or ``|0.5 - b|`` (``qin``, ``qin_cube``), with ``b = clamp((v - range_lo) / (range_hi -
+    range_lo), 0, 1)``: what a band-limited octave fades to.
+
+    Measured with this reference at 4096 fixed points (as :func:`cellgl.texture.measure_range`
+    places them: a 1000-cell square in 2D, 100-cell cube in 3D/4D, or the texture's uv square with
+    a density map), rounded to float32, cached per basis and combination.
+    """
+    v = recipe.values
+    key = tuple((p.name, v[p.name]) for p in PARAMS if p.group in _MEAN_GROUPS)
+    key += (v["fractal"] in ("qin", "qin_cube"),)
+    if v["density_map"] != "none":
+        key += (v["frequency"], v["aspect"], v["offset_x"], v["offset_y"], v["offset_z"], v["time"])
+        if v["density_map"] == "image":
+            key += (recipe.density_pixels().tobytes(),)
+    return _octave_mean(key, recipe)
+
+
+#: measured means by key (the oldest dropped past 256 entries)
+_MEANS: dict = {}
+
+
+def _octave_mean(key, recipe) -> float:
+    hit = _MEANS.get(key)
+    if hit is None:
+        hit = _MEANS[key] = _measure_mean(recipe)
+        if len(_MEANS) > 256:
+            _MEANS.pop(next(iter(_MEANS)))
+    return hit
+
+
+def _measure_mean(recipe) -> float:
+    from cellgl.texture.recipe import needed_n
+
+    v = recipe.values
+    rng = np.random.default_rng(20001)
+    dim = int(v["dimension"])
+    pts = np.zeros((_MEAN_SAMPLES, 3))
+    if v["density_map"] != "none":
+        probe = recipe.replace(fractal="none")
+        pts[:, :2] = rng.uniform(0.0, 1.0, size=(_MEAN_SAMPLES, 2))
+    else:
+        probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
+                               offset_x=0.0, offset_y=0.0, offset_z=0.0, time=0.0)
+        side = 1000.0 if dim == 2 else 100.0
+        pts[:, : min(dim, 3)] = rng.uniform(0.0, side, size=(_MEAN_SAMPLES, min(dim, 3)))
+    t = _tex(probe, mean=False)
+    s = texture_local(pts, t)
+    val, _, _, _ = texture_combination(s, t, 0, needed_n(probe))
+    b = np.clip((val - v["range_lo"]) / (v["range_hi"] - v["range_lo"]), 0.0, 1.0)
+    term = np.abs(0.5 - b) if v["fractal"] in ("qin", "qin_cube") else b
+    return float(np.float32(term.mean()))

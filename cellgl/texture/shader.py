@@ -61,7 +61,7 @@ _DERIVED = (
     ("int", "ramp_count", "", "number of ramp keys in use"),
     ("float", "dist_scale", "", "sample scale of the distribution (worley1996: 0.398150, else 1)"),
     ("float", "feature_frequency", "", "feature points per basis unit along a line (cellgl.texture.antialias)"),
-    ("float", "octave_mean", "", "mean of an octave's fractal term over the plane (cellgl.texture.antialias)"),
+    ("float", "octave_mean", "", "mean of an octave's fractal term over the plane (cellgl.texture.reference.octave_mean)"),
     ("ivec4", "origin_cell", "[CELL_TEX_OCTAVES]",
      "octave i: basis-lattice cell of dist_scale L^i (offset_x, offset_y, offset_z, time), split in float64"),
     ("vec4", "origin_frac", "[CELL_TEX_OCTAVES]", "... and its fraction in [0, 1)"),
@@ -313,7 +313,9 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
         out["u_density_axis"] = [tuple(int(c) for c in row) for e in encs for row in e.axes]
         out["u_density_info"] = [e.info for e in encs]
-    out["u_octave_mean"] = antialias.octave_mean(recipe)     # after the map's checks
+    from cellgl.texture.reference import octave_mean
+
+    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
     return out
 
 

@@ -77,7 +77,7 @@ struct CellTextureParams {
     int ramp_count;             // number of ramp keys in use
     float dist_scale;           // sample scale of the distribution (worley1996: 0.398150, else 1)
     float feature_frequency;    // feature points per basis unit along a line (cellgl.texture.antialias)
-    float octave_mean;          // mean of an octave's fractal term over the plane (cellgl.texture.antialias)
+    float octave_mean;          // mean of an octave's fractal term over the plane (cellgl.texture.reference.octave_mean)
     ivec4 origin_cell[CELL_TEX_OCTAVES];// octave i: basis-lattice cell of dist_scale L^i (offset_x, offset_y, offset_z, time), split in float64
     vec4 origin_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
     ivec4 noise_cell[CELL_TEX_OCTAVES];// octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)
