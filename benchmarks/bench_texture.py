@@ -13,13 +13,13 @@ For each preset, in one run, side by side:
 * ``ratio`` = basis / texture: the factor the texture layer costs over its own basis searches
   (1.0: free);
 * ``uniform`` and its ratio: the same render with the recipe's values as uniforms (as the viewer
-  runs it, and as bakes ran before the baked programs of ``cellgl/texture_dispatch.py``).
+  runs it, and as bakes ran before the baked programs of ``cellgl/texture/dispatch.py``).
 
 The recipes are rendered with ``antialias = 0`` so that every octave is searched, as the basis
 rate assumes (the band limit skips octaves finer than two pixels: faster still; ``--band`` keeps
 the recipe's value).
 
-    python benchmarks/bench_texture.py                    # every texture preset, 512^2, best of 3
+    python benchmarks/bench_texture.py                    # every texture preset, 512^2, best of 5
     python benchmarks/bench_texture.py --size 256 --repeats 2 f1 qin-cloud
     python benchmarks/bench_texture.py --samples 4        # bakes with 4 samples per pixel
 
@@ -39,15 +39,32 @@ if _REPO not in sys.path:
     sys.path.insert(0, _REPO)
 
 
-def best_time(fn, repeats: int) -> float:
-    """Best wall time of ``repeats`` calls of fn(), after one warm-up call (compiles shaders)."""
-    fn()
-    best = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
+def best_times(fns, repeats: int) -> list[float]:
+    """Best wall time of each of ``fns``, after one warm-up call of each (compiles shaders); the
+    calls are interleaved (fn0, fn1, ..., fn0, fn1, ...) so that a change of load on a shared
+    machine hits every row alike."""
+    for fn in fns:
         fn()
-        best = min(best, time.perf_counter() - t0)
+    best = [float("inf")] * len(fns)
+    for _ in range(repeats):
+        for k, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            best[k] = min(best[k], time.perf_counter() - t0)
     return best
+
+
+def _uniform_program(fn):
+    """fn run with the recipe's values as uniforms (the viewer's program) instead of baked."""
+    from cellgl.texture import dispatch
+
+    def run():
+        dispatch.BAKE_CONSTANTS = False
+        try:
+            fn()
+        finally:
+            dispatch.BAKE_CONSTANTS = True
+    return run
 
 
 def basis_args(recipe) -> tuple[dict, int]:
@@ -67,19 +84,17 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("presets", nargs="*", help="texture presets (default: all)")
     ap.add_argument("--size", type=int, default=512, help="S x S pixels (default 512)")
-    ap.add_argument("--repeats", type=int, default=3, help="timed runs per row, best kept (default 3)")
+    ap.add_argument("--repeats", type=int, default=5, help="timed runs per row, best kept (default 5)")
     ap.add_argument("--samples", type=int, default=1, help="samples per pixel of the texture bake")
     ap.add_argument("--band", action="store_true", help="keep the recipes' band limit (antialias)")
     args = ap.parse_args(argv)
 
     import cellgl
-    from cellgl.texture import dispatch as texture_dispatch
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.recipes import is_pups, load_recipe
 
     # Texture presets without a density map (cellular_grid would need the map rebuilt in cells).
     names = args.presets or [n for n, _ in cellgl.list_presets()
-                             if getattr(load_recipe(n), "kind", "texture") != "pups"
-                             and load_recipe(n).get("density_map") == "none"]
+                             if not is_pups(load_recipe(n)) and load_recipe(n).get("density_map") == "none"]
     S = args.size
     print(f"# {S}x{S}, best of {args.repeats}, samples {args.samples}; "
           f"load: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
@@ -94,14 +109,15 @@ def main(argv=None) -> int:
         dim = recipe.get("dimension")
         shape = (S, S) if dim == 2 else (1, S, S) if dim == 3 else (1, 1, S, S)
         kwargs = {"samples": args.samples} if args.samples != 1 else {}
-        t_tex = best_time(lambda: cellgl.render(recipe, S, S, **kwargs), args.repeats)
-        texture_dispatch.BAKE_CONSTANTS = False
-        try:
-            t_uni = best_time(lambda: cellgl.render(recipe, S, S, **kwargs), args.repeats)
-        finally:
-            texture_dispatch.BAKE_CONSTANTS = True
         spacing = recipe.get("frequency") / S     # the texture's octave-0 lattice step per pixel
-        t_basis = best_time(lambda: cellgl.cellular_grid(shape, spacing=spacing, **kw), args.repeats)
+
+        def tex_fn():
+            cellgl.render(recipe, S, S, **kwargs)
+
+        def basis_fn():
+            cellgl.cellular_grid(shape, spacing=spacing, **kw)
+
+        t_tex, t_basis, t_uni = best_times([tex_fn, basis_fn, _uniform_program(tex_fn)], args.repeats)
         tex = S * S / t_tex / 1e6
         uni = S * S / t_uni / 1e6
         basis = S * S / t_basis / 1e6 / octaves

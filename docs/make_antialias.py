@@ -28,7 +28,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import cellgl  # noqa: E402
-from cellgl.texture.recipe import load_recipe  # noqa: E402
+from cellgl.recipes import load_recipe  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 PRESETS = ("qin-cloud", "hide", "crumple", "rock", "qin-wrinkle")
