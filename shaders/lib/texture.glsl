@@ -56,8 +56,9 @@
 // a Voronoi pattern about 1 / feature_frequency apart: w = 0.5 is two pixels per feature
 // (the Nyquist limit of the pattern: kept), w = 1 one (gone). The thresholds were chosen
 // by measurement (docs/antialias.md): fading from four pixels down lost more resolved
-// detail than it removed aliasing. t.octave_mean (cellgl/antialias.py) is the mean of the
-// octave's term, b or |0.5 - b|, measured once per recipe with the NumPy reference.
+// detail than it removed aliasing. t.octave_mean is the mean of the octave's term, b or
+// |0.5 - b|, measured once per recipe with the NumPy reference (cellgl/texture/reference.py,
+// octave_mean).
 //
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
