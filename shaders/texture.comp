@@ -6,15 +6,12 @@
 //   CELL_TEX_SUPERSAMPLE  n: average an n x n grid of sub-pixel centres (grid only; 1: none)
 //   CELL_TEX_OUT          bit mask of the outputs written: 1 colour, 2 height + normal,
 //                         4 F1..F4, 8 gradient + value, 16 id
-//   CELL_TEX_BAKED        (defined for a program compiled for one recipe) the recipe's values
-//                         are constants (the generated texture_baked.glsl), not uniforms
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
 #include "lib/texture.glsl"
-#ifdef CELL_TEX_BAKED
-#include "texture_baked.glsl"
-#endif
+// The u_<param> uniforms and their loader; a bake compiles the recipe's values as constants
+// in its place (cellgl/texture/dispatch.py).
 #include "texture_uniforms.glsl"
 
 uniform uint u_count;           // samples in this dispatch

@@ -6,10 +6,10 @@ Where the time goes, and what this module does about it (``benchmarks/bench_text
   coefficients are 0, that ``light`` is 0 or how many ramp keys there are, so every pixel pays
   for all 24 combination terms, the copies of the uniform arrays into ``CellTextureParams``,
   their dynamic indexing, the lighting and both ramp modes. A bake compiles ``texture.comp``
-  with ``CELL_TEX_BAKED`` and the recipe's values as constants (the same
-  :func:`cellgl.texture.shader.glsl_constant_block` the snippets use, as the generated include
-  ``texture_baked.glsl``), so the compiler folds all of that away; the viewer keeps uniforms
-  (it changes them every frame). A compile costs ~0.1 s on llvmpipe; the last
+  with ``texture_uniforms.glsl`` replaced by the recipe's values as constants
+  (:func:`cellgl.texture.shader.glsl_baked_uniforms_file`: the same
+  :func:`~cellgl.texture.shader.glsl_constant_block` the snippets use), so the compiler folds
+  all of that away; the viewer keeps uniforms (it changes them every frame). A compile costs ~0.1 s on llvmpipe; the last
   :data:`MAX_BAKED` programs are kept.
 * **Only the outputs asked for** are written (``CELL_TEX_OUT``) and read back, from storage
   buffers reused across calls instead of five fresh ones per dispatch.
@@ -53,17 +53,17 @@ def _program(recipe, defines: dict):
 
     ctx = context.get_context()
     if not BAKE_CONSTANTS:
-        prog = context.compute_program("texture.comp", defines, files={"texture_baked.glsl": ""})
+        prog = context.compute_program("texture.comp", defines)
         texture.set_uniforms(prog, recipe)
         return prog
-    consts = texture.glsl_constant_block(recipe)
+    consts = texture.glsl_baked_uniforms_file(recipe)
     key = (id(ctx), tuple(sorted(defines.items())), consts)
     prog = _baked.get(key)
     if prog is not None:
         _baked.move_to_end(key)
     else:
-        d = dict(defines, CELL_TEX_BAKED=1)
-        prog = context.compute_program("texture.comp", d, files={"texture_baked.glsl": consts}, cache=False)
+        prog = context.compute_program("texture.comp", defines, files={"texture_uniforms.glsl": consts},
+                                       cache=False)
         _baked[key] = prog
         while len(_baked) > MAX_BAKED:
             _baked.popitem(last=False)[1].release()
