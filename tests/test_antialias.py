@@ -142,7 +142,7 @@ def test_bad_samples_are_refused(samples):
         texture.render("f1", 8, 8, samples=samples)
 
 
-@pytest.mark.parametrize("fw", [-0.1, float("nan"), float("inf"), (0.1, 0.1, 0.1, 0.1), "x"])
+@pytest.mark.parametrize("fw", [-0.1, float("nan"), float("inf"), (0.1, 0.1, 0.1, 0.1), "x", True, 1j])
 def test_bad_filter_width_is_refused(fw):
     with pytest.raises(ValueError, match="filter_width"):
         texture.evaluate("f1", [[0.5, 0.5]], filter_width=fw)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cellgl.basis.core import real_array
 from cellgl.texture import antialias, dispatch
 from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
 from cellgl.texture.shader import defines, set_view
@@ -28,10 +29,7 @@ def _backend(backend):
 
 
 def _points(points) -> np.ndarray:
-    try:
-        pts = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("points must be a numeric array of shape (N, 2) (u, v) or (N, 3) (u, v, z)") from None
+    pts = real_array("points", points, "of shape (N, 2) (u, v) or (N, 3) (u, v, z)")
     if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
         raise ValueError(f"points must have shape (N, 2) (u, v) or (N, 3) (u, v, z) with N >= 1, "
                          f"got shape {pts.shape}")
@@ -93,10 +91,7 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
 
 def _filter_width(fw) -> np.ndarray:
     """``filter_width`` as (du, dv, dz) float64, checked."""
-    try:
-        a = np.asarray(fw, dtype=np.float64)
-    except (TypeError, ValueError):
-        a = np.array([np.nan])
+    a = real_array("filter_width", fw, "(a number, (du, dv) or (du, dv, dz))")
     if a.ndim == 0:
         a = np.array([a, a, 0.0])
     elif a.shape in ((2,), (3,)):
