@@ -307,6 +307,19 @@ def test_preset_compiles(tmp_path, preset, target):
     compile_snippet(tmp_path, target, text)
 
 
+def test_glsl_snippet_without_its_fragment_tail_compiles_as_a_compute_shader(tmp_path):
+    # GLSL has no fwidth outside fragment shaders: the fwidth entry points come last, after a
+    # marker, so a compute shader keeps everything before it and calls the _filtered entries.
+    text = snippet_code(export.export("qin-wrinkle", "glsl"))
+    head, tail = text.split("// Fragment (pixel) shaders only", 1)
+    assert "fwidth(uv)" in tail and "fwidth(p)" in tail
+    main = ("layout(local_size_x = 8) in;\nlayout(std430, binding = 0) buffer Out { vec4 cellgl_out[]; };\n"
+            "void main() { uint i = gl_GlobalInvocationID.x; vec2 uv = vec2(float(i) / 64.0, 0.5);\n"
+            "    cellgl_out[i] = cellgl_texture_filtered(uv, vec2(1.0 / 64.0))\n"
+            "        + cellgl_texture3_filtered(vec3(uv, 0.25), vec3(1.0 / 64.0, 1.0 / 64.0, 0.0)); }\n")
+    glslang(tmp_path, "compute.comp", "#version 430\n" + head + main)
+
+
 @pytest.mark.parametrize("target", ["glsl", "gles", "hlsl", "godot"])
 def test_uniforms_variant_compiles(tmp_path, target):
     text = export.export("flagstone", target, uniforms=True)

@@ -343,11 +343,6 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
         "{\n"
         "    return cell_texture_uv(uv, duv, cell_texture_params_load());\n"
         "}\n"
-        "\n// The same with the pixel's size from derivatives: fragment (pixel) shaders only.\n"
-        "vec4 cellgl_texture(vec2 uv)\n"
-        "{\n"
-        "    return cellgl_texture_filtered(uv, fwidth(uv));\n"
-        "}\n"
     )
     if solid:
         entry += (
@@ -358,8 +353,19 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
             "{\n"
             "    return cell_texture_at_filtered(p, dp, cell_texture_params_load()).color;\n"
             "}\n"
-            "\n// The same with the pixel's footprint from derivatives: fragment (pixel) shaders only.\n"
-            "vec4 cellgl_texture3(vec3 p)\n"
+        )
+    # Last, so that a compute or vertex shader (no derivatives there) can drop them.
+    entry += (
+        "\n// Fragment (pixel) shaders only, the pixel's size from derivatives: delete from here\n"
+        "// to the end in other stages, which have no fwidth.\n"
+        "vec4 cellgl_texture(vec2 uv)\n"
+        "{\n"
+        "    return cellgl_texture_filtered(uv, fwidth(uv));\n"
+        "}\n"
+    )
+    if solid:
+        entry += (
+            "\nvec4 cellgl_texture3(vec3 p)\n"
             "{\n"
             "    return cellgl_texture3_filtered(p, fwidth(p));\n"
             "}\n"
