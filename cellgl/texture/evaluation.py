@@ -77,16 +77,36 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
 
     ctx = context.get_context()
 
-    def setup(prog, start, n):
-        p4 = np.zeros((n, 4), np.float32)
-        p4[:, :3] = pts[start:start + n]
-        b = ctx.buffer(p4.tobytes())
-        b.bind_to_storage_buffer(0)
-        if "u_filter_width" in prog:
-            prog["u_filter_width"].value = tuple(float(c) for c in duvz)
-        return [b]
+    def setup_for(local):
+        def setup(prog, start, n):
+            p4 = np.zeros((n, 4), np.float32)
+            p4[:, :3] = local[start:start + n]
+            b = ctx.buffer(p4.tobytes())
+            b.bind_to_storage_buffer(0)
+            if "u_filter_width" in prog:
+                prog["u_filter_width"].value = tuple(float(c) for c in duvz)
+            return [b]
+        return setup
 
-    return dispatch.run(recipe, outputs, len(pts), setup, grid=False)
+    # The shader adds the sample's texture position to the split origins in float32, which holds
+    # only the first few cells exactly. So points are grouped by their whole part (u, v, z) and each
+    # group goes with that whole part as a float64 pan of the origins (as the viewer pans) and its
+    # fraction as the position: a point at uv 1e9 is as exact as one at 0.5.
+    whole = np.floor(pts)
+    if not whole.any():
+        return dispatch.run(recipe, outputs, len(pts), setup_for(pts), grid=False)
+    keys, inverse = np.unique(whole, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    out = None
+    for g, key in enumerate(keys):
+        idx = np.nonzero(inverse == g)[0]
+        res = dispatch.run(recipe, outputs, len(idx), setup_for(pts[idx] - key), grid=False,
+                           pan=tuple(float(c) for c in key))
+        if out is None:
+            out = {k: np.empty((len(pts),) + a.shape[1:], a.dtype) for k, a in res.items()}
+        for k, a in res.items():
+            out[k][idx] = a
+    return out
 
 
 def _filter_width(fw) -> np.ndarray:

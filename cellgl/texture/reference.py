@@ -162,7 +162,7 @@ def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
         return None
     t = t if t is not None else dict(recipe.values, **lattice_origins(recipe.values, pan))
     f = float(t["frequency"])
-    pan_s = (float(pan[0]) * f, float(pan[1]) * f * float(t["aspect"]), 0.0, 0.0)
+    pan_s = (float(pan[0]) * f, float(pan[1]) * f * float(t["aspect"]), _pan_z(pan) * f, 0.0)
     out = []
     for i in range(MAX_OCTAVES):
         k = float(t["lacunarity"]) ** i
@@ -178,6 +178,10 @@ def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
         object.__setattr__(enc, "axes", axes)
         out.append(enc)
     return out
+
+
+def _pan_z(pan) -> float:
+    return float(pan[2]) if len(pan) > 2 else 0.0
 
 
 def _split(x: np.ndarray, period) -> tuple[np.ndarray, np.ndarray]:
@@ -198,7 +202,8 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     by the octave's period when tileable, so it stays small) and a fraction in [0, 1); the
     shader adds ``k s`` to the fraction. Axes past the dimension are 0.
 
-    ``pan`` (du, dv) moves the view in uv (the viewer's pan): ``O += (du f, dv f aspect, 0, 0)``,
+    ``pan`` (du, dv) or (du, dv, dz) moves the view in texture space (the viewer's pan; the whole
+    part of far points in :func:`cellgl.texture.evaluate`): ``O += (du f, dv f aspect, dz f, 0)``,
     so a pan far away is exact too.
 
     Returns ``{"origin_cell", "noise_cell": int64 (MAX_OCTAVES, 4), "origin_frac",
@@ -206,7 +211,7 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     """
     f, dim = t["frequency"], t["dimension"]
     O = np.array([t["offset_x"] + float(pan[0]) * f, t["offset_y"] + float(pan[1]) * f * t["aspect"],
-                  t["offset_z"], t["time"]], dtype=np.float64)
+                  t["offset_z"] + _pan_z(pan) * f, t["time"]], dtype=np.float64)
     O[dim:] = 0.0
     ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
     out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
