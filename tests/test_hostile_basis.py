@@ -179,3 +179,33 @@ def test_huge_density_image_is_refused_from_its_header(tmp_path, monkeypatch):
     monkeypatch.setattr(Image.Image, "load", no_decode)
     with pytest.raises(R.RecipeError, match=r"is 10000x10000; accepted: sides 1..4096"):
         R.density_pixels(str(path))
+
+
+# ---------------------------------------------------------------- 2. evaluate far from [0, 1] uv
+
+@pytest.mark.parametrize("base", [1e4, 1e6, 1e9])
+@pytest.mark.parametrize("preset", ["f1", "qin-cloud", "density"])
+def test_evaluate_far_from_the_unit_square(ctx, base, preset):
+    """IDs equal the NumPy path's and distances agree to float32 tolerance at uv 1e4..1e9 (1% of the
+    IDs were wrong at 1e4, all at 1e9), points spread over several whole uv cells."""
+    rng = np.random.default_rng(int(base) % 97)
+    pts = base + rng.uniform(-1.5, 1.5, (600, 2))
+    if preset == "density" and base > 2 ** 30 / 8:
+        # the GPU encodes the map relative to the panned origin in 32-bit integers: past 2^30
+        # cells it says so (the NumPy path has no such limit)
+        with pytest.raises(ValueError, match=r"basis.density_map: density map of octave 0"):
+            cellgl.evaluate(preset, pts, ("id",))
+        return
+    g = cellgl.evaluate(preset, pts, ("id", "F1", "color"))
+    n = cellgl.evaluate(preset, pts, ("id", "F1", "color"), backend="numpy")
+    assert (g["id"] == n["id"]).all()
+    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
+    np.testing.assert_allclose(g["color"], n["color"], atol=5e-5)
+
+
+def test_evaluate_far_in_z_for_a_solid_recipe(ctx):
+    pts = np.column_stack([np.full(200, 0.25), np.linspace(0.0, 1.0, 200), np.full(200, 3e5 + 0.5)])
+    g = cellgl.evaluate("qin-marble", pts, ("id", "F1"))
+    n = cellgl.evaluate("qin-marble", pts, ("id", "F1"), backend="numpy")
+    assert (g["id"] == n["id"]).all()
+    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
