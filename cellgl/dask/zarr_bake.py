@@ -119,12 +119,13 @@ def _check_existing(path: Path, meta: dict) -> None:
 
 
 @functools.lru_cache(maxsize=4)
-def _open(path: str, meta_json: str):
+def _open(path: str, meta_json: str) -> dict:
+    """The group's arrays by name, opened once per worker process and bake."""
     zarr = require("zarr")
     root = zarr.open_group(path, mode="r+")
     if json.dumps(root.attrs.get("cellgl"), sort_keys=True) != meta_json:
         raise RuntimeError(f"{path} changed while baking (its cellgl attributes differ)")
-    return root
+    return dict(root.arrays())
 
 
 def _chunk_task(ij, layout: Layout, path: str, meta_json: str) -> int:
