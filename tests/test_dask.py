@@ -302,7 +302,7 @@ def test_sweep_bakes_each_variation(cluster, tmp_path, ctx):
         sweep("polka", out, ["seed=0..3"], size=48, scheduler=cluster, progress=False)
 
 
-@pytest.mark.parametrize("sets, words", [
+@pytest.mark.parametrize("sets, words", [     # --set specs, or other keyword arguments
     (["seed=5..2"], "a range A..B[:STEP] needs A <= B"),
     (["seed"], "expected NAME=VALUE, NAME=A..B[:STEP] or NAME=a|b|c"),
     (["seed=1|"], "an empty alternative"),
@@ -310,9 +310,15 @@ def test_sweep_bakes_each_variation(cluster, tmp_path, ctx):
     (["seed=0..9999", "density=1|2|3", "octaves=0..999"], "at most 10000000"),
     (["seed=0..2**40"], "cannot parse"),
     (["jitter=0..5"], "out of range"),
+    ({"size": 0}, "width 0 is out of range; accepted 1..65536"),
+    ({"size": (64, 70000)}, "height 70000 is out of range"),
+    ({"size": "64x64x4"}, "a sweep bakes images, not volumes"),
+    ({"fmt": "jpg"}, "--format 'jpg': accepted png, exr, tif, tiff, npy"),
 ])
-def test_sweep_bad_sets(tmp_path, sets, words):
-    with pytest.raises(ValueError, match=None) as exc:
-        sweep("polka", tmp_path / "s", sets, workers=1, progress=False)
+def test_sweep_bad_input(tmp_path, sets, words):
+    kw = sets if isinstance(sets, dict) else {}
+    sets = ["seed=0..1"] if kw else sets
+    with pytest.raises(ValueError) as exc:
+        sweep("polka", tmp_path / "s", sets, workers=1, progress=False, **kw)
     assert words in str(exc.value)
     assert not (tmp_path / "s").exists()

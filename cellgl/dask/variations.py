@@ -19,6 +19,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from cellgl._version import __version__
 from cellgl.io import bake as _bake
 from cellgl.io import formats as cio
@@ -173,6 +175,7 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
     if not (outdir.parent if str(outdir.parent) else Path(".")).is_dir():
         raise DaskError(f"output directory {str(outdir.parent)!r} does not exist")
     w, h, d = _bake.parse_size(size) if isinstance(size, str) else (*_pair(size), None)
+    _bake._check_size(w, h, d, f"size {size}")
     if d is not None:
         raise DaskError(f"--size {size}: a sweep bakes images, not volumes")
     channels = _bake.parse_channels(channels)
@@ -208,6 +211,12 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
             "skipped": len(items) - baked, "seconds": secs}
 
 
-def _pair(size):
-    return (size, size) if isinstance(size, int) else tuple(size)
 
+def _pair(size) -> tuple:
+    if isinstance(size, (int, np.integer)) and not isinstance(size, bool):
+        return size, size
+    try:
+        w, h = size
+    except (TypeError, ValueError):
+        raise DaskError(f"size {size!r}: expected W, (W, H) or 'WxH'") from None
+    return w, h
