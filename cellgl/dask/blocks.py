@@ -130,8 +130,8 @@ class Layout:
     def make(cls, recipe, shape, chunks, channels) -> "Layout":
         """Check and build. ``shape``: ``N`` or ``(height, width)``; ``chunks``: ``N`` or
         ``(rows, cols)``; ``channels``: names (see :data:`cellgl.io.spec.CHANNELS`)."""
-        h, w = _pair("shape", shape)
-        ch, cw = _pair("chunks", chunks)
+        h, w = pair("shape", shape)
+        ch, cw = pair("chunks", chunks)
         h, w = _whole("height", h, 1, MAX_SIDE), _whole("width", w, 1, MAX_SIDE)
         ch = _whole("chunk rows", ch, 1, MAX_CHUNK)
         cw = _whole("chunk columns", cw, 1, MAX_CHUNK)
@@ -166,13 +166,14 @@ class Layout:
         return (self.height, self.width) + ((s,) if s > 1 else ())
 
 
-def _pair(name: str, value) -> tuple:
+def pair(name: str, value, form: str = "N or (rows, cols)") -> tuple:
+    """``N`` -> ``(N, N)``; a pair as it is; else a DaskError saying ``form`` is expected."""
     if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
         return value, value
     try:
         a, b = value
     except (TypeError, ValueError):
-        raise DaskError(f"{name} {value!r}: expected N or (rows, cols)") from None
+        raise DaskError(f"{name} {value!r}: expected {form}") from None
     return a, b
 
 

@@ -13,7 +13,7 @@ import sys
 import uuid
 from collections.abc import Callable, Iterable, Iterator
 
-from .blocks import DaskError, require
+from cellgl.dask.blocks import DaskError, require
 
 __all__ = ["cluster_client", "default_workers", "map_tasks", "memory_bytes"]
 

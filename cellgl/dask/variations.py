@@ -19,13 +19,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
 from cellgl._version import __version__
 from cellgl.io import bake as _bake
 from cellgl.io import formats as cio
-from .blocks import DaskError, load, on_gl_thread, require
-from .cluster import cluster_client, log, map_tasks
+from cellgl.dask.blocks import DaskError, load, on_gl_thread, pair, require
+from cellgl.dask.cluster import cluster_client, log, map_tasks
 
 __all__ = ["sweep", "parse_sweep", "MAX_VARIATIONS"]
 
@@ -174,7 +172,10 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
         raise DaskError(f"output {str(outdir)!r} is a file; give a directory")
     if not (outdir.parent if str(outdir.parent) else Path(".")).is_dir():
         raise DaskError(f"output directory {str(outdir.parent)!r} does not exist")
-    w, h, d = _bake.parse_size(size) if isinstance(size, str) else (*_pair(size), None)
+    if isinstance(size, str):
+        w, h, d = _bake.parse_size(size)
+    else:
+        (w, h), d = pair("size", size, "W, (W, H) or 'WxH'"), None
     _bake._check_size(w, h, d, f"size {size}")
     if d is not None:
         raise DaskError(f"--size {size}: a sweep bakes images, not volumes")
@@ -211,12 +212,3 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
             "skipped": len(items) - baked, "seconds": secs}
 
 
-
-def _pair(size) -> tuple:
-    if isinstance(size, (int, np.integer)) and not isinstance(size, bool):
-        return size, size
-    try:
-        w, h = size
-    except (TypeError, ValueError):
-        raise DaskError(f"size {size!r}: expected W, (W, H) or 'WxH'") from None
-    return w, h

@@ -33,9 +33,9 @@ import numpy as np
 
 from cellgl._version import __version__
 from cellgl.io import bake as _bake
-from .blocks import (DEFAULT_CHUNK, MAX_CHUNK, MAX_SIDE, DaskError, Layout, dtype, load,
+from cellgl.dask.blocks import (DEFAULT_CHUNK, MAX_CHUNK, MAX_SIDE, DaskError, Layout, dtype, load, pair,
                      render_block, require, samples)
-from .cluster import cluster_client, log, map_tasks
+from cellgl.dask.cluster import cluster_client, log, map_tasks
 
 __all__ = ["bake_zarr", "checksum", "CHECKSUMS"]
 
@@ -65,10 +65,8 @@ def _parse_size(size) -> tuple[int, int]:
             raise DaskError(f"--size {size!r}: expected W or WxH with whole numbers for a .zarr "
                             f"bake (no volumes), e.g. 262144 or 8192x4096")
         w, h = nums[0], nums[-1]
-    elif isinstance(size, (int, np.integer)):
-        w = h = size
     else:
-        w, h = size
+        w, h = pair("size", size, "W, (W, H) or 'WxH'")
     for name, v in (("width", w), ("height", h)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not 1 <= v <= MAX_SIDE:
             raise DaskError(f"size: {name} {v!r} is out of range; accepted 1..{MAX_SIDE}")
