@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import context
+from . import features as _features
 from .enums import glsl_defines
 from .reference import MAX_POINTS, Params, max_ring_default
 
@@ -37,7 +38,15 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_LOCAL_SIZE=LOCAL_SIZE,
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
     )
+    d.update(_features.defines(outputs, p.dim))
     return d
+
+
+def _buffers(outputs) -> tuple[str, ...]:
+    """The output buffers for ``outputs``: the basis outputs, and ``features`` (the record of
+    ``shaders/lib/features.glsl``) when a feature output needs a walk."""
+    basis = tuple(o for o in outputs if o in ("F", "delta", "id", "grad"))
+    return basis + (("features",) if any(_features.flags(outputs).values()) else ())
 
 
 def _set(prog, name, value):
@@ -115,6 +124,7 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
 
 def _chunk_size(n: int, dim: int, outputs) -> int:
     per = 4 * n * (dim if ("delta" in outputs or "grad" in outputs) else 1)
+    per = max(per, 4 * _features.STRIDE if "features" in outputs else 0)
     return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
 
 
@@ -140,8 +150,9 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
     1D dispatch) and copy results into ``out[start:start + count]``."""
     bufs = {}
-    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim}
-    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5}
+    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim,
+             "features": 4 * _features.STRIDE}
+    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5, "features": 1}
     for name in outputs:
         bufs[name] = _storage(ctx, binding[name], count * sizes[name])
     # Samples whose search hit the cap: a counter and a list of their indices.
@@ -165,21 +176,27 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
     for name in outputs:
         if name in ("delta", "grad"):
             out[name] = np.empty((N, n, dim), dtype=np.float32)
+        elif name == "features":
+            out[name] = np.empty((N, _features.STRIDE), dtype=np.float32)
         else:
             out[name] = np.empty((N, n), dtype=np.uint32 if name == "id" else np.float32)
     return out
 
 
-def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
     The shader scales them by ``p.scale`` and splits them into an integer cell
     and a float32 fraction in double precision. Returns ({output name: array},
-    exact (N,) bool).
+    exact (N,) bool). Feature outputs (:data:`cellgl.features.OUTPUTS`) in ``outputs`` switch
+    on the walks of ``shaders/lib/features.glsl`` (``smoothness`` in lattice units) and add
+    ``"features"``, its per-sample record, to the result.
     """
     ctx = context.get_context()
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
     _set_params(prog, p)
+    _set(prog, "u_smoothness", float(smoothness))
+    outputs = _buffers(outputs)
     _set(prog, "u_scale", float(p.scale))
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs)
@@ -194,7 +211,8 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np
     return out, ~inexact
 
 
-def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs,
+                smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
     """Cellular basis on a regular grid generated on the GPU.
 
     shape_xyzw: samples along x, y, z, w (unused axes 1); origin split into
@@ -204,6 +222,8 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     ctx = context.get_context()
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
     _set_params(prog, p)
+    _set(prog, "u_smoothness", float(smoothness))
+    outputs = _buffers(outputs)
     _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
     _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))
     _set(prog, "u_spacing", tuple(float(v) for v in spacing))
