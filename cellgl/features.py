@@ -106,6 +106,8 @@ def _reach(w: dict, rows, on: dict) -> np.ndarray:
 def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
     """``_cell_walk_point`` for one candidate per row."""
     on = w["on"]
+    delta = delta.copy()
+    delta[:, p.dim:] = 0.0
     e = delta - w["d1"][rows]
     e2 = (e * e).sum(axis=1)
     mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
@@ -192,7 +194,8 @@ def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float
     on = flags(outputs)
     max_ring = max_ring or feature_max_ring(p.dim)
     N = len(cells)
-    d1 = np.asarray(D[:, 0], dtype=np.float64)
+    d1 = np.array(D[:, 0], dtype=np.float64)
+    d1[:, p.dim:] = 0.0
     w = dict(on=on, around=False, d1=d1, id1=np.asarray(I[:, 0]).astype(np.uint64),
              F1=np.asarray(F[:, 0], dtype=np.float64), k=float(smoothness),
              edge=np.full(N, BIG), edge_n=np.zeros((N, 4)), wsum=np.zeros(N), wdelta=np.zeros((N, 4)),

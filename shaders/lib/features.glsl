@@ -121,6 +121,7 @@ float _cell_walk_reach(_CellWalk w)
 
 void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, CellParams p)
 {
+    delta = cell_dims(delta);
     vec4 e = delta - w.d1;                  // pj - p1
     float e2 = dot(e, e);
     bool is_p1 = id == w.id1 && e2 < 1e-10;
@@ -212,7 +213,7 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
 {
     _CellWalk w;
     w.around = false;
-    w.d1 = r.delta[0];
+    w.d1 = cell_dims(r.delta[0]);
     w.id1 = r.id[0];
     w.F1 = r.F[0];
     w.k = smoothness;
