@@ -67,7 +67,7 @@ def _set_params(prog, p: Params):
     set_density(prog, p.density_map)
 
 
-_density_buffers: dict = {}
+_bound_buffers: dict = {}
 
 
 def set_density(prog, enc) -> None:
@@ -87,17 +87,22 @@ def set_density(prog, enc) -> None:
 def bind_density_image(levels, ctx=None) -> None:
     """Upload (cached by content, one buffer per context) and bind density-image levels (uint32)
     to storage buffer 7 of ``ctx`` (default: cellgl's context; the viewer passes its window's)."""
-    if levels is None:
-        return
+    if levels is not None:
+        bind_storage(levels, 7, ctx)
+
+
+def bind_storage(words, binding: int, ctx=None) -> None:
+    """Upload uint32 ``words`` (cached by content, one buffer per context and binding) and bind
+    them to storage buffer ``binding`` of ``ctx`` (default: cellgl's context)."""
     ctx = ctx or context.get_context()
-    data = np.ascontiguousarray(levels, dtype=np.uint32).tobytes()
+    data = np.ascontiguousarray(words, dtype=np.uint32).tobytes()
     key = (hash(data), len(data))
-    held = _density_buffers.get(id(ctx))
+    held = _bound_buffers.get((id(ctx), binding))
     if held is None or held[0] != key or held[2] is not ctx:
         if held is not None and held[2] is ctx:
             held[1].release()
-        held = _density_buffers[id(ctx)] = (key, ctx.buffer(data), ctx)
-    held[1].bind_to_storage_buffer(7)
+        held = _bound_buffers[(id(ctx), binding)] = (key, ctx.buffer(data), ctx)
+    held[1].bind_to_storage_buffer(binding)
 
 
 def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
