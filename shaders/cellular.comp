@@ -1,7 +1,7 @@
 #version 430
 // cellgl compute entry: the cellular basis at a list of samples or on a grid.
 // Thin: read the sample, call cell_search(), write what was asked for.
-// Macros (from cellgl/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
+// Macros (from cellgl/basis/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
 // CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, and those of
 // lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE, CELL_FEATURE_MAX_RING).
@@ -12,7 +12,7 @@ layout(local_size_x = CELL_LOCAL_SIZE) in;
 
 #define CELL_FEATURES (CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE)
 #if CELL_FEATURES
-// Per sample CELL_FEATURE_STRIDE floats (cellgl/features.py unpacks them): edge,
+// Per sample CELL_FEATURE_STRIDE floats (cellgl/basis/features.py unpacks them): edge,
 // n-sphere radius, smooth F1, 0, edge gradient (4), smooth delta (4), smooth
 // gradient (4), smooth attribute (colour, value).
 #define CELL_FEATURE_STRIDE 20

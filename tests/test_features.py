@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl import features
+from cellgl.basis import features
+from cellgl.basis.core import make_params, split
 
 ALL = features.OUTPUTS
 EUCLID = ("edge", "edge_grad", "nsphere", "position", "color", "smooth_F1", "smooth_position",
@@ -142,7 +143,7 @@ def test_edge_is_zero_on_the_border_and_position_is_the_nearest_point():
 
 
 def test_color_is_the_bake_id_false_colour():
-    from cellgl.bake import id_colors
+    from cellgl.io.spec import id_colors
 
     r = cellgl.cellular(_pts(2, n=50), 1, outputs=("id", "color"), backend="numpy")
     np.testing.assert_array_equal(np.round(r.color * 255).astype(np.uint8), id_colors(r.id[:, 0]))
@@ -161,12 +162,12 @@ def test_grid_features_match_point_features(ctx):
 
 
 def test_walk_cap_is_reported_not_wrong():
-    from cellgl import reference
+    from cellgl.basis import reference
 
     kw = dict(distribution="poisson", density=0.05, min_points=0)
     pts = _pts(2, n=100, lo=-20, hi=20)
-    p = cellgl.core.make_params(2, **kw)
-    cells, fr = cellgl.core.split(pts)
+    p = make_params(2, **kw)
+    cells, fr = split(pts)
     F, D, I, ex = reference.search(cells, fr, p, 1)
     out = features.features(cells, fr, p, F, D, I, ex, ("edge",), max_ring=1)
     full = features.features(cells, fr, p, F, D, I, ex, ("edge",), max_ring=40)
@@ -188,9 +189,9 @@ def test_bad_input(bad, match):
 
 
 def test_fast_path_defines_are_unchanged():
-    from cellgl import gpu
+    from cellgl.basis import gpu
 
-    p = cellgl.core.make_params(2)
+    p = make_params(2)
     d = gpu.defines_for(p, 4, ("F", "delta", "id"))
     assert d["CELL_EDGE"] == d["CELL_SMOOTH"] == d["CELL_NSPHERE"] == 0
     d = gpu.defines_for(p, 1, ("F", "edge", "smooth_F1"))

@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl import cell_image, export
-from cellgl.recipe import Recipe, RecipeError, load_recipe
+from cellgl import export
+from cellgl.recipes import load_recipe
+from cellgl.texture import images as cell_image
+from cellgl.texture.recipe import Recipe, RecipeError, preset_dir
 
-IMAGE = str(cellgl.recipe.preset_dir() / "images" / "sunset.png")
+IMAGE = str(preset_dir() / "images" / "sunset.png")
 
 RECIPES = {
     "edge": dict(c1=0.0, c_edge=1.0, range_hi=0.5, bump=0.2),
@@ -78,7 +80,7 @@ def test_cell_colour_is_the_image_at_the_feature_point():
     pts = np.random.default_rng(6).uniform(0.05, 0.95, (300, 2))
     col = cellgl.evaluate(r, pts, ("color",))["color"][:, :3]
     pos = cellgl.cellular(pts * f, 1, outputs=("position",)).position
-    want = cell_image.sample(cell_image.pixels(IMAGE), pos / f, wrap=False)
+    want = cell_image.sample(cell_image.cell_pixels(IMAGE), pos / f, wrap=False)
     np.testing.assert_allclose(col, want, atol=2e-5)
 
 

@@ -1,6 +1,6 @@
 // cellgl: textures from the cellular basis (Worley 1996, Qin 2000).
 //
-// One recipe (cellgl/recipe.py) evaluated at a point of basis space:
+// One recipe (cellgl/texture/recipe.py) evaluated at a point of basis space:
 //
 //   value  v(x) = sum_i c_i F_i(x) + sum_{i,j<=4} c_ij F_i(x) F_j(x) + c_noise n(x)
 //                 + c_edge E(x) + c_smooth S(x) + c_nsphere R(x)
@@ -47,7 +47,7 @@
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
 // Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes,
-// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture.py),
+// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture/shader.py),
 // those of features.glsl and CELL_TEX_CELL_IMAGE (cell_color image).
 
 #include "features.glsl"
@@ -110,7 +110,7 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
     p.period = cell_texture_period(t, octave);
     p.minkowski_p = t.minkowski_p;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
-    // The density map of this octave (cellgl/texture.py density_encodings: the map
+    // The density map of this octave (cellgl/texture/shader.py density_encodings: the map
     // in uv, scaled to the octave's lattice, relative to its split origin).
     for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
         p.density_thresholds[k] = t.density_thresholds[k];
@@ -219,7 +219,7 @@ float cell_texture_cell_value(uint id)
 }
 
 #if CELL_TEX_CELL_IMAGE
-// Provided by the entry point (a storage buffer, cellgl/cell_image.py): texel
+// Provided by the entry point (a storage buffer, cellgl/texture/images.py): texel
 // `index` = row * width + column of the cell image as r | g << 8 | b << 16.
 uint cell_texture_image_texel(int index);
 
