@@ -16,7 +16,6 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 _REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -44,13 +43,10 @@ print(json.dumps(out))
 
 
 def best(fn, repeats=3):
-    fn()
-    t = float("inf")
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        t = min(t, time.perf_counter() - t0)
-    return t
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from bench_core import best_time
+
+    return best_time(fn, repeats)
 
 
 def feature_cost(quick: bool) -> None:

@@ -164,13 +164,7 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
         rows = np.nonzero(~done)[0]
         if len(rows) == 0:
             return np.ones(N, dtype=bool)
-        r = np.minimum(_reach(w, rows, on), ring + 2.0)
-        fa = f[rows]
-        lo = np.zeros((len(rows), 4), dtype=np.int64)
-        hi = np.zeros((len(rows), 4), dtype=np.int64)
-        for a in range(p.dim):
-            hi[:, a] = np.minimum(ring, np.ceil(r + fa[:, a]).astype(np.int64) - 1)
-            lo[:, a] = -np.minimum(ring, np.ceil(r + 1.0 - fa[:, a]).astype(np.int64) - 1)
+        lo, hi = ref.ring_window(ring, np.minimum(_reach(w, rows, on), ring + 2.0), f[rows], p.dim)
         for o in _offsets(ring, p.dim):
             inside = np.all((o >= lo) & (o <= hi), axis=1)
             sel = rows[inside]
@@ -285,16 +279,7 @@ def brute_force(points: np.ndarray, positions: np.ndarray, smoothness: float = 0
     the nearest point; float64.
     """
     diff = positions[None, :, :] - points[:, None, :]
-    a = np.abs(diff)
-    metric = Metric[metric.upper()] if isinstance(metric, str) else metric
-    if metric == Metric.EUCLIDEAN:
-        d = np.sqrt((a * a).sum(-1))
-    elif metric == Metric.MANHATTAN:
-        d = a.sum(-1)
-    elif metric == Metric.CHEBYSHEV:
-        d = a.max(-1)
-    else:
-        d = (a ** minkowski_p).sum(-1) ** (1.0 / minkowski_p)
+    d = ref.distances(points, positions, metric, minkowski_p)
     near = np.argmin(d, axis=1)
     F1 = d[np.arange(len(points)), near]
     p1 = positions[near]

@@ -185,12 +185,8 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         if (float(ring - 1) + m >= reach) {
             return true;
         }
-        float r = min(reach, float(ring + 2));
-        ivec4 lo = ivec4(0), hi = ivec4(0);
-        for (int a = 0; a < CELL_DIM; a++) {
-            hi[a] = min(ring, int(ceil(r + f[a])) - 1);
-            lo[a] = -min(ring, int(ceil(r + 1.0 - f[a])) - 1);
-        }
+        ivec4 lo, hi;
+        cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
         for (int x = lo.x; x <= hi.x; x++)
         for (int y = lo.y; y <= hi.y; y++)
         for (int z = lo.z; z <= hi.z; z++)
