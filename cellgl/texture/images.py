@@ -24,6 +24,10 @@ MAX_SIDE = 4096      #: largest side of a density or cell image (cellgl.basis.de
 _cache: dict = {}
 
 
+class _TooLarge(Exception):
+    """An image whose header gives a side past :data:`MAX_SIDE`."""
+
+
 class ImageError(ValueError):
     """An image cannot be read or is unusable (the recipe reports it as a RecipeError)."""
 
@@ -59,19 +63,24 @@ def _read(file: str, path: str, kind: str, convert):
     key = (file, st.st_mtime_ns, st.st_size, kind)
     img = _cache.get(key)
     if img is None:
+        size = None
         try:
             from PIL import Image
 
             with Image.open(file) as im:
+                # the header gives the size: a huge image is refused before it is decoded
+                size = im.size
+                if not (1 <= size[0] <= MAX_SIDE and 1 <= size[1] <= MAX_SIDE):
+                    raise _TooLarge
                 im.load()
                 a = convert(im)
         except ImportError:
             raise ImageError(f"{path}: reading a {what} needs Pillow (pip install pillow)") from None
+        except _TooLarge:
+            raise ImageError(f"{path}: {what} {file!r} is {size[0]}x{size[1]}; accepted: "
+                             f"sides 1..{MAX_SIDE}") from None
         except Exception as exc:  # noqa: BLE001 - Pillow raises many kinds
             raise ImageError(f"{path}: cannot read {what} {file!r} as an image: {exc}") from None
-        if not (1 <= a.shape[0] <= MAX_SIDE and 1 <= a.shape[1] <= MAX_SIDE):
-            raise ImageError(f"{path}: {what} {file!r} is {a.shape[1]}x{a.shape[0]}; accepted: "
-                             f"sides 1..{MAX_SIDE}")
         a.setflags(write=False)
         if len(_cache) > 8:
             _cache.clear()
