@@ -178,8 +178,8 @@ PRESETS: dict[str, dict] = {
                         "distance-to-edge fractal): cracks within cracks", basis={"density": 1.0},
                         domain={"frequency": 2.0}, combination=dict(lin(0), c_edge=1.0),
                         fractal={"fractal": "min", "octaves": 3.0},
-                        mapping={"level_hi": 0.3, "bump": 0.06, "light": 0.8},
-                        color={"cell_mix": 0.5, "shade": 0.8,
+                        mapping={"level_hi": 0.12, "bump": 0.06, "light": 0.6},
+                        color={"cell_mix": 0.6, "shade": 0.7,
                                "ramp": [[0.0, 0.42, 0.3, 0.2], [0.5, 0.72, 0.58, 0.42], [1.0, 0.85, 0.74, 0.58]]},
                         outputs=["color", "normal", "height"]),
     "hammered": dict(doc="Hammered copper: smooth F1 (k = 0.12 cells) dimples that merge without creases, "
