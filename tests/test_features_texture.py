@@ -145,3 +145,17 @@ def test_sample_is_bilinear_between_texel_centres():
     np.testing.assert_allclose(got, [0.0, 1.0, 0.5, 1.0, 0.25])
     wrapped = cell_image.sample(img, np.array([[1.0, 0.25]]), wrap=True)[:, 0]
     np.testing.assert_allclose(wrapped, [0.5])          # between the last texel and the first again
+
+
+def test_bake_binds_its_own_cell_image(ctx):
+    """Whatever is bound at the cell image's binding before (another program's buffer), a bake
+    binds the recipe's image: the colours are the picture's, as the NumPy path gives them."""
+    stray = ctx.buffer(np.zeros(64, np.uint32).tobytes())
+    stray.bind_to_storage_buffer(cell_image.BINDING)
+    try:
+        r = load_recipe("stained-glass")
+        g = cellgl.render(r, 24, 24)["color"]
+        n = cellgl.render(r, 24, 24, backend="numpy")["color"]
+        assert np.mean(np.abs(g - n).max(axis=-1) > 2e-3) < 0.02
+    finally:
+        stray.release()
