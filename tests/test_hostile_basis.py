@@ -209,3 +209,70 @@ def test_evaluate_far_in_z_for_a_solid_recipe(ctx):
     n = cellgl.evaluate("qin-marble", pts, ("id", "F1"), backend="numpy")
     assert (g["id"] == n["id"]).all()
     np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
+
+
+# ---------------------------------------------------------------- 1. every basis dispatch within the limit
+
+def test_cell_counts_dispatches_stay_within_the_group_limit(ctx, monkeypatch):
+    """gpu.cell_counts (the density tests' GPU twin) splits its cells as the search does: each
+    dispatch within the group limit, the counts equal to one unsplit call."""
+    import moderngl
+
+    from cellgl.basis import core, reference
+
+    p = core.make_params(2, density=2.0)
+    cells = np.zeros((300, 4), np.int64)
+    cells[:, 0] = np.arange(300) - 150
+    cells[:, 1] = np.arange(300) * 7 % 31
+    whole = gpu.cell_counts(cells, p)
+    groups = []
+    real_run = moderngl.ComputeShader.run
+    monkeypatch.setattr(moderngl.ComputeShader, "run",
+                        lambda self, group_x=1, *a, **k: (groups.append(group_x), real_run(self, group_x, *a, **k)))
+    monkeypatch.setattr(gpu, "_MAX_GROUPS", 2)
+    split = gpu.cell_counts(cells, p)
+    assert len(groups) == 3 and max(groups) <= 2
+    np.testing.assert_array_equal(split[0], whole[0])
+    _, ref = reference.point_count(reference.cell_seed(cells, p), p, cells)
+    np.testing.assert_array_equal(split[0], ref)
+
+
+# ---------------------------------------------------------------- 11. more values of the wrong type
+
+@pytest.mark.parametrize("channels", [None, 3, object()])
+def test_texture_channels_not_a_sequence(channels):
+    with pytest.raises(ValueError, match="channels must be a name or a sequence of names"):
+        cellgl.evaluate("f1", [[0.5, 0.5]], channels)
+    with pytest.raises(ValueError, match="channels must be a name or a sequence of names"):
+        cellgl.render("f1", 4, 4, channels=channels, backend="numpy")
+
+
+@pytest.mark.parametrize("period", ["22", b"22"])
+def test_period_as_text(period):
+    with pytest.raises(ValueError, match=r"period must be an integer or a sequence of 2 integers.*'22'"):
+        cellgl.cellular([[0.5, 0.5]], 1, period=period)
+
+
+def test_masked_entries_are_refused():
+    """A masked entry has no value: its hidden data was used as a coordinate."""
+    pts = np.ma.masked_array([[0.5, 0.5], [9.0, 0.25]], mask=[[0, 0], [1, 0]])
+    with pytest.raises(ValueError, match=r"points is a masked array with masked entries \(first at \[1, 0\]\)"):
+        cellgl.cellular(pts, 1, backend="numpy")
+    with pytest.raises(ValueError, match="points is a masked array"):
+        cellgl.evaluate("f1", pts, backend="numpy")
+    with pytest.raises(ValueError, match="cells is a masked array"):
+        cellgl.feature_points(np.ma.masked_array([[1, 2]], mask=[[1, 0]]))
+    # nothing masked: the values are used
+    ok = cellgl.cellular(np.ma.masked_array([[0.5, 0.5]], mask=False), 1, backend="numpy")
+    assert ok.F[0, 0] == cellgl.cellular([[0.5, 0.5]], 1, backend="numpy").F[0, 0]
+
+
+@pytest.mark.parametrize("image,rect", [
+    (np.full((2, 2), 0.5 + 0.5j), (0, 0, 1, 1)),        # complex: the imaginary part was dropped
+    (np.array([[True, False]]), (0, 0, 1, 1)),          # bool: cast to 0/1
+    (np.full((2, 2), 0.5), (0, 0, True, 1)),
+    (np.full((2, 2), 0.5), ((0, 0), (1, 1))),
+])
+def test_density_image_of_the_wrong_type(image, rect):
+    with pytest.raises(ValueError, match=r"(image must hold real numbers|rect must be a finite number|rect must be \(x0, y0, x1, y1\))"):
+        cellgl.DensityMap("image", 0.5, 4.0, image=image, rect=rect)

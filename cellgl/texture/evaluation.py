@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cellgl.basis.core import real_array
+from cellgl.basis.arrays import real_array
 from cellgl.texture import antialias, dispatch
 from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
 from cellgl.texture.shader import defines, set_view
