@@ -181,6 +181,22 @@ def test_huge_density_image_is_refused_from_its_header(tmp_path, monkeypatch):
         R.density_pixels(str(path))
 
 
+def test_huge_pups_reference_image_is_refused_from_its_header(tmp_path, monkeypatch):
+    from PIL import Image
+
+    from cellgl.pups.presets import reference_image
+
+    path = tmp_path / "huge.png"
+    _png_header_only(path, 10000, 300)
+
+    def no_decode(self, *a, **k):
+        raise AssertionError("the image was decoded")
+
+    monkeypatch.setattr(Image.Image, "load", no_decode)
+    with pytest.raises(ValueError, match=r"reference image .* is 10000x300; accepted: sides 1..4096"):
+        reference_image(str(path))
+
+
 # ---------------------------------------------------------------- 2. evaluate far from [0, 1] uv
 
 @pytest.mark.parametrize("base", [1e4, 1e6, 1e9])
