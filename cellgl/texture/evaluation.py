@@ -95,13 +95,15 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
     whole = np.floor(pts)
     if not whole.any():
         return dispatch.run(recipe, outputs, len(pts), setup_for(pts), grid=False)
-    keys, inverse = np.unique(whole, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
+    order = np.lexsort(whole.T[::-1])           # points of one whole part next to each other
+    ws = whole[order]
+    starts = np.flatnonzero(np.concatenate([[True], np.any(ws[1:] != ws[:-1], axis=1), [True]]))
     out = None
-    for g, key in enumerate(keys):
-        idx = np.nonzero(inverse == g)[0]
+    for g in range(len(starts) - 1):
+        idx = order[starts[g]:starts[g + 1]]
+        key = ws[starts[g]]
         res = dispatch.run(recipe, outputs, len(idx), setup_for(pts[idx] - key), grid=False,
-                           pan=tuple(float(c) for c in key))
+                           pan=tuple(float(c) for c in key), pan_only=g > 0)
         if out is None:
             out = {k: np.empty((len(pts),) + a.shape[1:], a.dtype) for k, a in res.items()}
         for k, a in res.items():

@@ -312,6 +312,18 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     out["u_feature_frequency"] = antialias.feature_frequency(v)
+    out.update(pan_uniform_values(recipe, pan))
+    from cellgl.texture.reference import octave_mean
+
+    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
+    return out
+
+
+def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
+    """The part of :func:`uniform_values` that depends on ``pan``: the split origins and the
+    density map's encoding (``cellgl.evaluate`` sets only these for each group of points after
+    the first)."""
+    out = {}
     for k, a in lattice_origins(recipe, pan).items():
         out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
     encs = density_encodings(recipe, pan)
@@ -319,9 +331,6 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
         out["u_density_axis"] = [tuple(int(c) for c in row) for e in encs for row in e.axes]
         out["u_density_info"] = [e.info for e in encs]
-    from cellgl.texture.reference import octave_mean
-
-    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
     return out
 
 
@@ -351,18 +360,20 @@ _UNIFORM_DTYPES = {"u_thresholds": np.uint32, "u_origin_cell": np.int32, "u_nois
                    "u_density_thresholds": np.uint32, "u_density_axis": np.int32, "u_density_info": np.int32}
 
 
-def set_uniforms(prog, recipe, pan=(0.0, 0.0)) -> None:
+def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> None:
     """Set every ``u_<param>`` uniform of ``prog`` (compute or fragment) from the recipe.
 
     Uniforms the compiler removed are skipped. ``pan`` (du, dv): shift the view by this much
     in uv, exactly (it goes into the split origins in float64, see :func:`set_view`).
+    ``pan_only``: set only those that depend on ``pan`` (the rest were set for this recipe).
     """
     recipe = load_recipe(recipe)
     if recipe.values["density_map"] == "image":
         from cellgl.basis.gpu import bind_density_image
 
         bind_density_image(density_encodings(recipe, pan)[0].levels, ctx=getattr(prog, "ctx", None))
-    for name, value in uniform_values(recipe, pan).items():
+    values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan)
+    for name, value in values.items():
         if name not in prog:
             continue
         u = prog[name]
