@@ -70,8 +70,8 @@ def _program(recipe, defines: dict, pan=None, pan_only=False):
         _baked[key] = prog
         while len(_baked) > MAX_BAKED:
             _baked.popitem(last=False)[1].release()
-    if recipe.values["density_map"] == "image":
-        texture.set_uniforms(prog, recipe)        # binds the density image (no uniforms left)
+    if recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
+        texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
     return prog
 
 
