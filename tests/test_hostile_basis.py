@@ -203,13 +203,18 @@ def test_huge_pups_reference_image_is_refused_from_its_header(tmp_path, monkeypa
 
 # ---------------------------------------------------------------- 2. evaluate far from [0, 1] uv
 
+def _tiled_stained_glass():
+    return cellgl.load_recipe("stained-glass").tileable()[0]
+
+
 @pytest.mark.parametrize("base", [1e4, 1e6, 1e9])
-@pytest.mark.parametrize("preset", ["f1", "qin-cloud", "density"])
+@pytest.mark.parametrize("preset", ["f1", "qin-cloud", "density", "stained-glass", _tiled_stained_glass])
 def test_evaluate_far_from_the_unit_square(ctx, base, preset):
     """IDs equal the NumPy path's and distances agree to float32 tolerance at uv 1e4..1e9 (1% of the
     IDs were wrong at 1e4, all at 1e9), points spread over several whole uv cells."""
     rng = np.random.default_rng(int(base) % 97)
     pts = base + rng.uniform(-1.5, 1.5, (600, 2))
+    preset = preset() if callable(preset) else preset
     if preset == "density" and base > 2 ** 30 / 8:
         # the GPU encodes the map relative to the panned origin in 32-bit integers: past 2^30
         # cells it says so (the NumPy path has no such limit)

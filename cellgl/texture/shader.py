@@ -365,7 +365,10 @@ def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         out["u_density_info"] = [e.info for e in encs]
     if recipe.values["cell_color"] == "image":
         h, w = recipe.cell_pixels().shape[:2]
-        out["u_cell_image_info"] = (float(pan[0]), float(pan[1]), float(w), float(h))
+        pu, pv = float(pan[0]), float(pan[1])
+        if recipe.values["tileable"]:       # period 1 in uv: only the pan's fraction, exact in float32
+            pu, pv = pu - math.floor(pu), pv - math.floor(pv)
+        out["u_cell_image_info"] = (pu, pv, float(w), float(h))
     return out
 
 
