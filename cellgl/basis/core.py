@@ -16,6 +16,7 @@ import numpy as np
 
 from cellgl.basis import features as _features
 from cellgl.basis import reference
+from cellgl.basis.arrays import real_array, refuse_masked
 from cellgl.basis.density import encode as _encode_density
 from cellgl.basis.enums import Distribution, Metric, parse_enum
 
@@ -96,6 +97,8 @@ def _period(period, dim) -> tuple[int, int, int, int]:
         return (0, 0, 0, 0)
     if isinstance(period, (numbers.Number, np.generic)):     # one value for every axis
         vals = [period] * dim
+    elif isinstance(period, (str, bytes)):
+        vals = None
     else:
         try:
             vals = list(period)
@@ -161,35 +164,6 @@ def _check_n_backend(n, backend):
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; expected one of: {', '.join(BACKENDS)}")
     return n
-
-
-#: dtype kinds accepted as coordinates: signed and unsigned integers, floats (and object arrays
-#: of Python numbers, converted); bool, complex, datetime, strings are refused, never cast
-_REAL_KINDS = "iuf"
-
-
-def real_array(name: str, value, expected: str) -> np.ndarray:
-    """``value`` as a float64 array, refusing what is not a real number (bool, complex, datetime,
-    timedelta, strings, bytes, records) with a ValueError naming ``name``, the dtype found and
-    ``expected`` (the accepted shape), instead of a silent cast or a raw TypeError."""
-    try:
-        arr = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None
-    if arr.dtype.kind == "O":
-        items = arr.ravel().tolist()
-        if any(isinstance(v, (bool, np.bool_)) or not isinstance(v, (numbers.Real, np.integer, np.floating))
-               for v in items):
-            bad = next(v for v in items if isinstance(v, (bool, np.bool_))
-                       or not isinstance(v, (numbers.Real, np.integer, np.floating)))
-            raise ValueError(f"{name} must hold real numbers {expected}; got {type(bad).__name__} {bad!r}")
-    elif arr.dtype.kind not in _REAL_KINDS:
-        raise ValueError(f"{name} must hold real numbers (integers or floats) {expected}; got dtype "
-                         f"{arr.dtype} (bool, complex, datetime and text are not coordinates)")
-    try:
-        return arr.astype(np.float64)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None
 
 
 def _points(points) -> np.ndarray:
@@ -455,6 +429,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
         ``positions`` float64 (K, d) in sample units, ``ids`` uint32 (K,),
         ``cell_index`` int64 (K,).
     """
+    refuse_masked("cells", cells)
     raw = np.asarray(cells) if not isinstance(cells, np.ndarray) else cells
     if raw.dtype.kind in "iu":
         arr = raw                   # compared as integers below (uint64 2^63 must not wrap)

@@ -113,17 +113,22 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     prog = context.compute_program("cell_counts.comp", d)
     _set_params(prog, p)
     cells = np.ascontiguousarray(cells, dtype=np.int32)
-    M = len(cells)
-    cb = ctx.buffer(cells.tobytes())
-    cb.bind_to_storage_buffer(0)
-    ob = ctx.buffer(reserve=8 * M)
-    ob.bind_to_storage_buffer(2)
-    _set(prog, "u_count", M)
-    prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
-    ctx.memory_barrier()
-    out = np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64)
-    cb.release()
-    ob.release()
+    parts = []
+    step = LOCAL_SIZE * _MAX_GROUPS      # one dispatch's worth (a larger one would be dropped)
+    for first in range(0, len(cells), step):
+        chunk = cells[first:first + step]
+        M = len(chunk)
+        cb = ctx.buffer(chunk.tobytes())
+        cb.bind_to_storage_buffer(0)
+        ob = ctx.buffer(reserve=8 * M)
+        ob.bind_to_storage_buffer(2)
+        _set(prog, "u_count", M)
+        prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
+        ctx.memory_barrier()
+        parts.append(np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64))
+        cb.release()
+        ob.release()
+    out = np.concatenate(parts)
     return out[:, 0], out[:, 1]
 
 

@@ -343,6 +343,19 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     out["u_feature_frequency"] = antialias.feature_frequency(v)
+    out.update(pan_uniform_values(recipe, pan))
+    from cellgl.texture.reference import octave_mean
+
+    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
+    return out
+
+
+def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
+    """The part of :func:`uniform_values` that depends on ``pan``: the split origins, the
+    density map's encoding and the cell image's placement (``cellgl.evaluate`` sets only these
+    for each group of points after the first)."""
+    recipe = load_recipe(recipe)
+    out = {}
     for k, a in lattice_origins(recipe, pan).items():
         out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
     encs = density_encodings(recipe, pan)
@@ -350,12 +363,12 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
         out["u_density_axis"] = [tuple(int(c) for c in row) for e in encs for row in e.axes]
         out["u_density_info"] = [e.info for e in encs]
-    if v["cell_color"] == "image":
+    if recipe.values["cell_color"] == "image":
         h, w = recipe.cell_pixels().shape[:2]
-        out["u_cell_image_info"] = (float(pan[0]), float(pan[1]), float(w), float(h))
-    from cellgl.texture.reference import octave_mean
-
-    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
+        pu, pv = float(pan[0]), float(pan[1])
+        if recipe.values["tileable"]:       # period 1 in uv: only the pan's fraction, exact in float32
+            pu, pv = pu - math.floor(pu), pv - math.floor(pv)
+        out["u_cell_image_info"] = (pu, pv, float(w), float(h))
     return out
 
 
@@ -385,11 +398,12 @@ _UNIFORM_DTYPES = {"u_thresholds": np.uint32, "u_origin_cell": np.int32, "u_nois
                    "u_density_thresholds": np.uint32, "u_density_axis": np.int32, "u_density_info": np.int32}
 
 
-def set_uniforms(prog, recipe, pan=(0.0, 0.0)) -> None:
+def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> None:
     """Set every ``u_<param>`` uniform of ``prog`` (compute or fragment) from the recipe.
 
     Uniforms the compiler removed are skipped. ``pan`` (du, dv): shift the view by this much
     in uv, exactly (it goes into the split origins in float64, see :func:`set_view`).
+    ``pan_only``: set only those that depend on ``pan`` (the rest were set for this recipe).
     """
     recipe = load_recipe(recipe)
     if recipe.values["density_map"] == "image":
@@ -400,7 +414,8 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0)) -> None:
         from cellgl.texture.images import bind
 
         bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
-    for name, value in uniform_values(recipe, pan).items():
+    values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan)
+    for name, value in values.items():
         if name not in prog:
             continue
         u = prog[name]

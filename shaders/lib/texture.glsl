@@ -254,6 +254,10 @@ vec3 cell_texture_image(vec2 uv, CellTextureParams t)
     uv -= floor(uv);
 #endif
     vec2 x = uv * vec2(size) - 0.5;
+#if !CELL_PERIODIC
+    // Far outside the image (uv 10^9: x past the int range) the edge texels are all there is.
+    x = clamp(x, vec2(-1.0), vec2(size));
+#endif
     vec2 x0 = floor(x);
     vec2 fr = x - x0;
     vec3 c = vec3(0.0);
