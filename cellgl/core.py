@@ -86,9 +86,25 @@ def _period(period, dim) -> tuple[int, int, int, int]:
     return tuple(out + [0] * (4 - dim))
 
 
+STRETCH_RANGE = (1.0 / 16.0, 16.0)     #: accepted length of a stretched cell along an axis
+ORBIT_MAX = 0.5                         #: largest orbit radius (a point's circle spans its cell)
+
+
+def _stretch(stretch, dim) -> tuple[float, float, float, float]:
+    if stretch is None:
+        return (1.0, 1.0, 1.0, 1.0)
+    vals = [stretch] * dim if isinstance(stretch, numbers.Real) else list(np.ravel(stretch))
+    if len(vals) != dim:
+        raise ValueError(f"stretch must be a number or a sequence of {dim} numbers (one per axis), "
+                         f"got {stretch!r}")
+    lo, hi = STRETCH_RANGE
+    out = [_number("stretch", v if not isinstance(v, np.generic) else v.item(), lo, hi) for v in vals]
+    return tuple(out + [1.0] * (4 - dim))
+
+
 def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
                 min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None,
-                density_map=None) -> reference.Params:
+                density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0) -> reference.Params:
     """Validate the basis parameters and bundle them as :class:`cellgl.reference.Params`."""
     metric = parse_enum(Metric, metric, "metric")
     distribution = parse_enum(Distribution, distribution, "distribution")
@@ -104,6 +120,12 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
         raise ValueError(f"min_points ({min_points}) must not exceed max_points ({max_points})")
     minkowski_p = _number("minkowski_p", minkowski_p, 0.25, 64.0)
     seed = _number("seed", seed, 0, 2 ** 32 - 1, integer=True)
+    stretch = _stretch(stretch, dim)
+    orbit_radius = _number("orbit_radius", orbit_radius, 0.0, ORBIT_MAX)
+    orbit_phase = _number("orbit_phase", orbit_phase, -1e9, 1e9)
+    if density_map is not None and any(v != 1.0 for v in stretch):
+        raise ValueError(f"density_map is not available with stretched cells (stretch={stretch[:dim]}); "
+                         "accepted: stretch None (or all 1) with a density map")
     enc = None
     if density_map is not None:
         if distribution != Distribution.POISSON:
@@ -112,7 +134,13 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
     return reference.Params(dim=dim, metric=metric, distribution=distribution, density=density,
                             jitter=jitter, min_points=min_points, max_points=max_points,
                             minkowski_p=minkowski_p, seed=seed, period=_period(period, dim),
-                            density_map=enc)
+                            density_map=enc, stretch=stretch, orbit_radius=orbit_radius,
+                            orbit_turn=reference.orbit_turn(orbit_phase))
+
+
+def _lattice_scale(p: reference.Params) -> np.ndarray:
+    """Per axis (d,): sample units -> lattice units (the distribution's scale over the stretch)."""
+    return p.scale / np.asarray(p.stretch[: p.dim])
 
 
 def _outputs(outputs) -> tuple[str, ...]:
@@ -198,6 +226,7 @@ def _numpy_search(cells, fr, p, n, outputs) -> tuple[dict, np.ndarray]:
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
              min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
+             stretch=None, orbit_radius=0.0, orbit_phase=0.0,
              outputs=("F", "delta", "id"), backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
@@ -226,6 +255,15 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Spatially varying density (``poisson`` only; ``density`` is then unused): each
         cell's count is drawn with the density of the map at the cell centre, quantised to
         16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.density`).
+    stretch : None, float or sequence of d floats in [1/16, 16]
+        Stretched cells: cell ``[c, c + 1)`` of axis ``a`` spans ``[c s_a, (c + 1) s_a)`` in
+        sample units, the feature points stretched with it; distances stay true (the search is
+        exact under the stretch). ``period`` counts lattice cells. Not with ``density_map``.
+    orbit_radius : float in [0, 0.5]
+        Loopable animation: every feature point circles (in x, y) inside its cell with this
+        radius in cells, once per loop, from its own phase, in its own direction.
+    orbit_phase : float
+        Time in loops: ``orbit_phase`` and ``orbit_phase + 1`` give the same bits.
     outputs : sequence of {"F", "delta", "id", "grad"}
         Only these are computed and read back.
     backend : {"gpu", "numpy"}
@@ -241,7 +279,10 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     outs = _outputs(outputs)
     p = make_params(pts.shape[1], metric=metric, distribution=distribution, density=density,
                     jitter=jitter, min_points=min_points, max_points=max_points,
-                    minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map)
+                    minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map,
+                    stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
+    if p.aniso:
+        pts = pts / np.asarray(p.stretch[: p.dim])      # the GPU scales by p.scale itself
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs)
@@ -255,8 +296,8 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
-                  period=None, density_map=None, outputs=("F", "delta", "id"),
-                  backend="gpu") -> CellularResult:
+                  period=None, density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0,
+                  outputs=("F", "delta", "id"), backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
     Parameters
@@ -290,7 +331,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     outs = _outputs(outputs)
     p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
-                    seed=seed, period=period, density_map=density_map)
+                    seed=seed, period=period, density_map=density_map, stretch=stretch,
+                    orbit_radius=orbit_radius, orbit_phase=orbit_phase)
 
     def vec(name, v, default):
         v = default if v is None else v
@@ -301,11 +343,11 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
             raise ValueError(f"{name} must be finite, got {v!r}")
         return arr.astype(np.float64)
 
-    org = vec("origin", origin, 0.0) * p.scale
+    org = vec("origin", origin, 0.0) * _lattice_scale(p)
     spc = vec("spacing", spacing, 1.0)
     if np.any(spc <= 0):
         raise ValueError(f"spacing must be > 0 on every axis, got {spacing!r}")
-    spc = spc * p.scale
+    spc = spc * _lattice_scale(p)
     shape_xyzw = list(reversed(shape)) + [1] * (4 - dim)
     far = org + spc * (np.array(shape_xyzw[:dim]) - 1)
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
@@ -330,7 +372,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
 
 
 def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, min_points=1,
-                   max_points=9, seed=0, period=None, density_map=None) -> FeaturePoints:
+                   max_points=9, seed=0, period=None, density_map=None, stretch=None,
+                   orbit_radius=0.0, orbit_phase=0.0) -> FeaturePoints:
     """Every feature point in the given integer cells.
 
     Parameters
@@ -338,8 +381,9 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
     cells : array_like, (M, d) int, d in 2..4
         Integer cells (for ``worley1996``, cubes of the scaled lattice: side
         1/0.398150 in sample units).
-    distribution, density, jitter, min_points, max_points, seed, period, density_map :
-        as :func:`cellular`.
+    distribution, density, jitter, min_points, max_points, seed, period, density_map, stretch,
+    orbit_radius, orbit_phase :
+        as :func:`cellular` (with ``stretch``, cell ``c`` spans ``c s`` .. ``(c + 1) s``).
 
     Returns
     -------
@@ -360,6 +404,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
         raise ValueError("cells must lie within +-2^30")
     p = make_params(arr.shape[1], distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, seed=seed, period=period,
-                    density_map=density_map)
+                    density_map=density_map, stretch=stretch, orbit_radius=orbit_radius,
+                    orbit_phase=orbit_phase)
     pos, ids, which = reference.feature_points(arr, p)
-    return FeaturePoints(positions=pos / p.scale, ids=ids, cell_index=which)
+    return FeaturePoints(positions=pos / _lattice_scale(p), ids=ids, cell_index=which)

@@ -3,7 +3,8 @@
 // Thin: read the sample, call cell_search(), write what was asked for.
 // Macros (from cellgl/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
-// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP.
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, CELL_ORBIT,
+// CELL_ANISO.
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -24,6 +25,13 @@ uniform ivec4 u_density_info;
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
 layout(std430, binding = 7) readonly buffer DensityImage { uint density_image[]; };
 uint cell_density_image_level(int index) { return density_image[index]; }
+#endif
+#if CELL_ORBIT
+uniform float u_orbit_radius;
+uniform uint u_orbit_turn;
+#endif
+#if CELL_ANISO
+uniform vec4 u_stretch;
 #endif
 uniform float u_out_scale;     // distances and deltas are multiplied by this
 uniform uint u_count;          // number of samples in this chunk
@@ -100,6 +108,13 @@ void main()
         p.density_axis[a] = u_density_axis[a];
     }
     p.density_info = u_density_info;
+#endif
+#if CELL_ORBIT
+    p.orbit_radius = u_orbit_radius;
+    p.orbit_turn = u_orbit_turn;
+#endif
+#if CELL_ANISO
+    p.stretch = u_stretch;
 #endif
 
     CellResult r = cell_search(cell, frac, p);
