@@ -33,6 +33,7 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
+from . import domain
 from .params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
                      PRODUCTS, Param)
 
@@ -296,6 +297,7 @@ class Recipe:
             changes["lacunarity"] = float(whole("lacunarity", v["lacunarity"]))
         if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
             changes["noise_frequency"] = float(whole("noise_frequency", v["noise_frequency"]))
+        changes.update(domain.tileable_changes(v, freq, aspect, notes))
         return self.replace(**changes), notes
 
     def set_from_strings(self, items) -> "Recipe":
@@ -577,6 +579,7 @@ def _check(r: Recipe) -> None:
             integral("fractal.lacunarity", v["lacunarity"])
         if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
             integral("noise.noise_frequency", v["noise_frequency"])
+    domain.check(v)
 
 
 # ---------------------------------------------------------------------- presets

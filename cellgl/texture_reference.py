@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import domain
 from . import reference as ref
 from .enums import Distribution, Metric
 from .params import LINEAR
@@ -196,8 +197,12 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     ``pan`` (du, dv) moves the view in uv (the viewer's pan): ``O += (du f, dv f aspect, 0, 0)``,
     so a pan far away is exact too.
 
+    Stretched cells (:mod:`cellgl.domain`): the basis lattice samples ``k O dist_scale /
+    stretch``, wrapped by the period in lattice cells. The warp noise's lattice (octave 0 only)
+    samples ``O warp_frequency``.
+
     Returns ``{"origin_cell", "noise_cell": int64 (MAX_OCTAVES, 4), "origin_frac",
-    "noise_frac": float64 (MAX_OCTAVES, 4)}``.
+    "noise_frac": float64 (MAX_OCTAVES, 4), "warp_cell": int64 (4,), "warp_frac": float64 (4,)}``.
     """
     f, dim = t["frequency"], t["dimension"]
     O = np.array([t["offset_x"] + float(pan[0]) * f, t["offset_y"] + float(pan[1]) * f * t["aspect"],
@@ -205,16 +210,20 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     O[dim:] = 0.0
     ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
     out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
+    st = np.asarray(domain.stretch(t))
     for i in range(MAX_OCTAVES):
         k = float(t["lacunarity"]) ** i
         per = texture_period(t, i)
-        c, fr = _split(O * k * ds, per)
+        c, fr = _split(O * k * ds / st, domain.lattice_period(per, t))
         out["origin_cell"].append(c)
         out["origin_frac"].append(fr)
         c, fr = _split(O * k * t["noise_frequency"], per * int(round(t["noise_frequency"])))
         out["noise_cell"].append(c)
         out["noise_frac"].append(fr)
-    return {k: np.array(v) for k, v in out.items()}
+    out = {k: np.array(v) for k, v in out.items()}
+    out["warp_cell"], out["warp_frac"] = _split(O * t["warp_frequency"],
+                                                texture_period(t, 0) * int(round(t["warp_frequency"])))
+    return out
 
 
 def texture_local(p: np.ndarray, t: dict) -> np.ndarray:
@@ -247,7 +256,9 @@ def _basis(t: dict, octave: int) -> ref.Params:
                       distribution=Distribution[t["distribution"].upper()], density=t["density"],
                       jitter=t["jitter"], min_points=t["min_points"], max_points=t["max_points"],
                       minkowski_p=t["minkowski_p"], seed=(t["seed"] + 1013 * octave) & M32,
-                      period=tuple(int(c) for c in texture_period(t, octave)))
+                      period=tuple(int(c) for c in domain.lattice_period(texture_period(t, octave), t)),
+                      stretch=domain.stretch(t), orbit_radius=float(t["orbit_radius"]),
+                      orbit_turn=domain.orbit_turn(t["orbit_phase"]))
 
 
 def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
@@ -257,7 +268,8 @@ def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
     s = np.array(s, dtype=np.float64)
     s[:, dim:] = 0.0
     p = _basis(t, octave)
-    cell, fr = texture_lattice(t["origin_cell"][octave], t["origin_frac"][octave], s * t["dist_scale"])
+    cell, fr = texture_lattice(t["origin_cell"][octave], t["origin_frac"][octave],
+                               s * t["dist_scale"] / np.asarray(domain.stretch(t)))
     cell[:, dim:] = 0
     fr[:, dim:] = 0.0
     F, D, I, _ = ref.search(cell, fr, p, n)
@@ -319,6 +331,22 @@ def texture_cell_value(ids: np.ndarray) -> np.ndarray:
     return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
 
 
+def texture_warp(s: np.ndarray, t: dict):
+    """``cell_texture_warp``: the warped positions (N, 4) and the rows j (4, N, 4) of the warp's
+    Jacobian minus the identity."""
+    dim = t["dimension"]
+    per = texture_period(t, 0) * int(round(t["warp_frequency"]))
+    x = t["warp_frac"] + s * t["warp_frequency"]
+    d = np.zeros_like(s)
+    j = np.zeros((4,) + s.shape)
+    for a in range(dim):
+        seed = (t["seed"] + domain.WARP_SEED + domain.WARP_SEED_STEP * a) & M32
+        v, g = noise_fractal_split(t["warp_cell"], x, per, seed, t["warp_octaves"], dim)
+        d[:, a] = t["warp_amount"] * v
+        j[a] = t["warp_amount"] * t["warp_frequency"] * g
+    return s + d, j
+
+
 def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) -> dict:
     """``cell_texture``: the texture at basis positions O + s, s (N, 4) small (:func:`texture_local`)
     and the origin O = (offset_x, offset_y, offset_z, time) split in ``t`` (default ``_tex(recipe)``).
@@ -331,6 +359,9 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     t = t if t is not None else _tex(recipe)
     n = n or needed_n(recipe)
     N = len(s)
+    j = None
+    if t["warp_amount"] != 0.0:
+        s, j = texture_warp(np.asarray(s, dtype=np.float64), t)
     fractal = t["fractal"]
     octaves = 1 if fractal == "none" else int(np.ceil(t["octaves"]))
     qin = fractal in ("qin", "qin_cube")
@@ -376,6 +407,8 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     out = (h < 0.0) | (h > 1.0)
     h = np.clip(h, 0.0, 1.0)
     dh[out] = 0.0
+    if j is not None:
+        dh = dh + sum(dh[:, a, None] * j[a] for a in range(4))
     o["height"] = h
     o["grad"] = dh
     nrm = np.stack([-t["bump"] * dh[:, 0], -t["bump"] * dh[:, 1], np.ones(N)], axis=1)

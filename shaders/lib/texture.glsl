@@ -38,10 +38,18 @@
 // only the small k s: cell = origin_cell + floor(origin_frac + k s), fraction
 // = the rest. So a texture 10^6 cells from the origin is as sharp as at it.
 //
+// Stretched cells (CELL_ANISO): basis position x lies in the lattice at
+// x dist_scale / stretch, and the search measures distances in basis units
+// (cellular.glsl). Domain warp: the whole texture is evaluated at s + d(s),
+// d = warp_amount (n_0, n_1, ...) fractal gradient noise (cell_texture_warp);
+// the gradient follows by the chain rule. Loopable animation (CELL_ORBIT): the
+// feature points orbit (points.glsl cell_orbit) at t.orbit_turn.
+//
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
-// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes and
-// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture.py).
+// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes,
+// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture.py),
+// CELL_ORBIT and CELL_ANISO (cellgl/domain.py).
 
 #include "cellular.glsl"
 #include "noise.glsl"
@@ -88,6 +96,16 @@ ivec4 cell_texture_period(CellTextureParams t, int octave)
 #endif
 }
 
+// The length of a cell along each axis (1, 1, 1, 1 unless CELL_ANISO).
+vec4 cell_texture_stretch(CellTextureParams t)
+{
+#if CELL_ANISO
+    return vec4(t.stretch_x, t.stretch_y, CELL_DIM >= 3 ? t.stretch_z : 1.0, 1.0);
+#else
+    return vec4(1.0);
+#endif
+}
+
 // The basis parameters of one octave.
 CellParams _cell_tex_basis(CellTextureParams t, int octave)
 {
@@ -100,6 +118,15 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
         p.thresholds[k] = t.thresholds[k];
     }
     p.period = cell_texture_period(t, octave);
+#if CELL_ANISO
+    // The repeat in lattice cells (whole numbers when tileable; 0 stays 0).
+    p.period = ivec4(round(vec4(p.period) / cell_texture_stretch(t)));
+    p.stretch = cell_texture_stretch(t);
+#endif
+#if CELL_ORBIT
+    p.orbit_radius = t.orbit_radius;
+    p.orbit_turn = t.orbit_turn;
+#endif
     p.minkowski_p = t.minkowski_p;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     // The density map of this octave (cellgl/texture.py density_encodings: the map
@@ -125,7 +152,8 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     CellParams p = _cell_tex_basis(t, octave);
     ivec4 cell;
     vec4 f;
-    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale, cell, f);
+    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale / cell_texture_stretch(t),
+                         cell, f);
     cell = cell_dims_i(cell);
     f = cell_dims(f);
     CellResult r = cell_search(cell, f, p);
@@ -200,11 +228,44 @@ float cell_texture_cell_value(uint id)
     return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
 }
 
+// Domain warp: s + warp_amount (n_0, n_1, ...), n_a the fractal gradient noise
+// (warp_octaves, seed + 31337 + 101 a) at the warp lattice position
+// warp_frequency (O + s), carried split as t.warp_cell + t.warp_frac + s
+// warp_frequency (repeating with the texture when tileable). j0..j3 receive the
+// rows of the warp's Jacobian minus the identity: ja = d(displacement_a)/ds.
+vec4 cell_texture_warp(vec4 s, CellTextureParams t, out vec4 j0, out vec4 j1, out vec4 j2, out vec4 j3)
+{
+    ivec4 per = cell_texture_period(t, 0) * int(round(t.warp_frequency));
+    vec4 x = t.warp_frac + s * t.warp_frequency;
+    vec4 d = vec4(0.0);
+    vec4 g;
+    float k = t.warp_amount * t.warp_frequency;
+    d.x = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31337u, t.warp_octaves, g);
+    j0 = k * g;
+    d.y = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31438u, t.warp_octaves, g);
+    j1 = k * g;
+    j2 = vec4(0.0);
+    j3 = vec4(0.0);
+#if CELL_DIM >= 3
+    d.z = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31539u, t.warp_octaves, g);
+    j2 = k * g;
+#endif
+#if CELL_DIM >= 4
+    d.w = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31640u, t.warp_octaves, g);
+    j3 = k * g;
+#endif
+    return s + d;
+}
+
 // The texture at basis position O + s: O = (offset_x, offset_y, offset_z, time),
 // carried split in t; s small (cell_texture_local).
 CellTexel cell_texture(vec4 s, CellTextureParams t)
 {
     CellTexel o;
+    vec4 wj0 = vec4(0.0), wj1 = vec4(0.0), wj2 = vec4(0.0), wj3 = vec4(0.0);
+    if (t.warp_amount != 0.0) {
+        s = cell_texture_warp(s, t, wj0, wj1, wj2, wj3);
+    }
     int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
     bool qin = t.fractal == CELL_TEX_FRACTAL_QIN || t.fractal == CELL_TEX_FRACTAL_QIN_CUBE;
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
@@ -262,6 +323,8 @@ CellTexel cell_texture(vec4 s, CellTextureParams t)
         h = clamp(h, 0.0, 1.0);
         dh = vec4(0.0);
     }
+    // Through the warp: dh/ds = (I + J)^T dh/ds' (J = 0 without one).
+    dh += dh.x * wj0 + dh.y * wj1 + dh.z * wj2 + dh.w * wj3;
     o.height = h;
     o.grad = dh;
 
