@@ -660,6 +660,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--memory", default=None, metavar="MB",
                    help=f"advanced: MB of working memory to stay within; sets the tile size "
                         f"(default {DEFAULT_BUDGET >> 20})")
+    p.add_argument("--frames", default=None, metavar="N",
+                   help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
+                        ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/frames.py)")
+    p.add_argument("--fps", default="24", metavar="FPS",
+                   help="frames per second of an animated .webp/.gif (default %(default)s)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     return p
 
@@ -681,10 +686,22 @@ def run_cli(args: argparse.Namespace) -> int:
     tile = None if args.tile is None else _int_arg("--tile", args.tile, 16, 8192)
     t0 = time.perf_counter()
     try:
-        paths = bake(args.recipe, args.output, size=args.size,
-                     channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
-                     tileable=args.tileable, sets=args.sets, tile=tile,
-                     progress=not args.quiet, memory_budget=budget)
+        if getattr(args, "frames", None) is not None:
+            from .frames import MAX_FPS, MAX_FRAMES, bake_frames
+
+            try:
+                fps = float(args.fps)
+            except ValueError:
+                raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
+            paths = bake_frames(args.recipe, args.output, _int_arg("--frames", args.frames, 1, MAX_FRAMES),
+                                fps=fps, size=args.size, channels=tuple(args.channels or ("color",)),
+                                bit_depth=args.depth, tileable=args.tileable, sets=args.sets, tile=tile,
+                                progress=not args.quiet, memory_budget=budget)
+        else:
+            paths = bake(args.recipe, args.output, size=args.size,
+                         channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
+                         tileable=args.tileable, sets=args.sets, tile=tile,
+                         progress=not args.quiet, memory_budget=budget)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None

@@ -123,9 +123,6 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
     stretch = _stretch(stretch, dim)
     orbit_radius = _number("orbit_radius", orbit_radius, 0.0, ORBIT_MAX)
     orbit_phase = _number("orbit_phase", orbit_phase, -1e9, 1e9)
-    if density_map is not None and any(v != 1.0 for v in stretch):
-        raise ValueError(f"density_map is not available with stretched cells (stretch={stretch[:dim]}); "
-                         "accepted: stretch None (or all 1) with a density map")
     enc = None
     if density_map is not None:
         if distribution != Distribution.POISSON:
@@ -134,13 +131,10 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
     return reference.Params(dim=dim, metric=metric, distribution=distribution, density=density,
                             jitter=jitter, min_points=min_points, max_points=max_points,
                             minkowski_p=minkowski_p, seed=seed, period=_period(period, dim),
-                            density_map=enc, stretch=stretch, orbit_radius=orbit_radius,
+                            density_map=enc, axis_scale=reference.axis_scale(stretch, dim),
+                            orbit_radius=orbit_radius,
                             orbit_turn=reference.orbit_turn(orbit_phase))
 
-
-def _lattice_scale(p: reference.Params) -> np.ndarray:
-    """Per axis (d,): sample units -> lattice units (the distribution's scale over the stretch)."""
-    return p.scale / np.asarray(p.stretch[: p.dim])
 
 
 def _outputs(outputs) -> tuple[str, ...]:
@@ -215,12 +209,13 @@ def _numpy_search(cells, fr, p, n, outputs) -> tuple[dict, np.ndarray]:
     inv = 1.0 / p.scale
     if "F" in outputs:
         out["F"] = (F * inv).astype(np.float32)
+    w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
     if "delta" in outputs:
-        out["delta"] = (D[..., : p.dim] * inv).astype(np.float32)
+        out["delta"] = (D[..., : p.dim] / w * inv).astype(np.float32)
     if "id" in outputs:
         out["id"] = I
     if "grad" in outputs:
-        out["grad"] = reference.metric_gradient(D[..., : p.dim], F, p).astype(np.float32)
+        out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
     return out, exact
 
 
@@ -256,9 +251,11 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         cell's count is drawn with the density of the map at the cell centre, quantised to
         16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.density`).
     stretch : None, float or sequence of d floats in [1/16, 16]
-        Stretched cells: cell ``[c, c + 1)`` of axis ``a`` spans ``[c s_a, (c + 1) s_a)`` in
-        sample units, the feature points stretched with it; distances stay true (the search is
-        exact under the stretch). ``period`` counts lattice cells. Not with ``density_map``.
+        Stretched cells: distances are measured with axis ``a`` weighted by ``w_a = g / s_a``
+        (``g`` the geometric mean of the ``s_a``, so ``prod w = 1``), so the Voronoi cells are
+        ``s_a`` long relative to each other along each axis, with their mean size unchanged.
+        F is that weighted distance, exactly (the search's bounds are weighted too); ``delta``
+        stays in sample units and ``grad`` is the gradient of the weighted F.
     orbit_radius : float in [0, 0.5]
         Loopable animation: every feature point circles (in x, y) inside its cell with this
         radius in cells, once per loop, from its own phase, in its own direction.
@@ -281,8 +278,6 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
                     jitter=jitter, min_points=min_points, max_points=max_points,
                     minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map,
                     stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    if p.aniso:
-        pts = pts / np.asarray(p.stretch[: p.dim])      # the GPU scales by p.scale itself
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs)
@@ -343,11 +338,11 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
             raise ValueError(f"{name} must be finite, got {v!r}")
         return arr.astype(np.float64)
 
-    org = vec("origin", origin, 0.0) * _lattice_scale(p)
+    org = vec("origin", origin, 0.0) * p.scale
     spc = vec("spacing", spacing, 1.0)
     if np.any(spc <= 0):
         raise ValueError(f"spacing must be > 0 on every axis, got {spacing!r}")
-    spc = spc * _lattice_scale(p)
+    spc = spc * p.scale
     shape_xyzw = list(reversed(shape)) + [1] * (4 - dim)
     far = org + spc * (np.array(shape_xyzw[:dim]) - 1)
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
@@ -383,7 +378,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
         1/0.398150 in sample units).
     distribution, density, jitter, min_points, max_points, seed, period, density_map, stretch,
     orbit_radius, orbit_phase :
-        as :func:`cellular` (with ``stretch``, cell ``c`` spans ``c s`` .. ``(c + 1) s``).
+        as :func:`cellular` (``stretch`` changes distances, not positions).
 
     Returns
     -------
@@ -407,4 +402,4 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
                     density_map=density_map, stretch=stretch, orbit_radius=orbit_radius,
                     orbit_phase=orbit_phase)
     pos, ids, which = reference.feature_points(arr, p)
-    return FeaturePoints(positions=pos / _lattice_scale(p), ids=ids, cell_index=which)
+    return FeaturePoints(positions=pos / p.scale, ids=ids, cell_index=which)

@@ -4,10 +4,11 @@ The parameters live in the table (:mod:`cellgl.params`: ``stretch_x``/``_y``/``_
 ``orbit_radius``, ``orbit_phase``, ``warp_amount``, ``warp_frequency``, ``warp_octaves``); this
 module holds what the recipe, the shaders' uniforms and the NumPy twin derive from them:
 
-* **stretched cells**: basis position ``x`` lies in lattice cell ``floor(x dist_scale / s)``
-  (``s`` the per-axis stretch); the search measures distances in basis units, exactly
-  (``shaders/lib/cellular.glsl``, ``CELL_ANISO``). A tileable texture needs a whole number of
-  lattice cells per repeat: ``frequency / stretch_x`` and ``frequency aspect / stretch_y``.
+* **stretched cells**: the distance weights axis ``a`` by ``w_a = g / stretch_a`` (``g`` the
+  geometric mean of the stretches, so ``prod w = 1``): the Voronoi cells are ``stretch_a`` long
+  relative to each other, their mean size (one per feature point) and F's distribution
+  unchanged. The search stays exact under the weights (``shaders/lib/cellular.glsl``,
+  ``CELL_ANISO``); the lattice is not stretched, so tiling is unaffected.
 * **domain warp**: the sample moves to ``s + warp_amount (n_0, n_1, ...)`` with ``n_a`` fractal
   gradient noise at ``warp_frequency`` (``cell_texture_warp``); its lattice origin is split
   like the others (``warp_cell`` + ``warp_frac``), and it repeats with the texture when tileable.
@@ -17,29 +18,27 @@ module holds what the recipe, the shaders' uniforms and the NumPy twin derive fr
 """
 from __future__ import annotations
 
-import numpy as np
-
+from . import reference
 from .reference import orbit_turn
 
-__all__ = ["stretch", "aniso", "orbit", "check", "tileable_changes", "lattice_period", "orbit_turn",
-           "WARP_SEED", "WARP_SEED_STEP"]
+__all__ = ["axis_scale", "aniso", "orbit", "check", "tileable_changes", "orbit_turn", "WARP_SEED",
+           "WARP_SEED_STEP"]
 
 #: seed of the warp noise along axis a: seed + WARP_SEED + WARP_SEED_STEP a (octave i adds i)
 WARP_SEED = 31337
 WARP_SEED_STEP = 101
 
 
-def stretch(v) -> tuple[float, float, float, float]:
-    """The cell length per axis ``(stretch_x, stretch_y, stretch_z, 1)``, 1 past the dimension."""
-    s = [float(v["stretch_x"]), float(v["stretch_y"]), float(v["stretch_z"]), 1.0]
-    for a in range(int(v["dimension"]), 4):
-        s[a] = 1.0
-    return tuple(s)
+def axis_scale(v) -> tuple[float, float, float, float]:
+    """The distance weight per axis of a recipe's stretched cells (:func:`cellgl.reference.axis_scale`
+    of ``(stretch_x, stretch_y, stretch_z)`` over its dimension; 1 past it)."""
+    dim = int(v["dimension"])
+    return reference.axis_scale((v["stretch_x"], v["stretch_y"], v["stretch_z"], 1.0), min(dim, 3))
 
 
 def aniso(v) -> bool:
     """Whether a recipe's cells are stretched (``CELL_ANISO``)."""
-    return any(c != 1.0 for c in stretch(v))
+    return any(c != 1.0 for c in axis_scale(v))
 
 
 def orbit(v) -> bool:
@@ -47,56 +46,24 @@ def orbit(v) -> bool:
     return float(v["orbit_radius"]) > 0.0
 
 
-def _whole(x: float) -> bool:
-    return abs(x - round(x)) <= 1e-6 and round(x) >= 1
-
-
 def check(v) -> None:
     """Constraints between these parameters and the rest of a recipe (values ``v``)."""
     from .recipe import RecipeError
 
-    if aniso(v):
-        if v["density_map"] != "none":
-            raise RecipeError(f"basis.density_map: {v['density_map']!r} is not available with stretched cells "
-                              f"(basis.stretch_x/_y/_z = {stretch(v)[:int(v['dimension'])]}); accepted: "
-                              "density_map 'none', or every stretch 1")
-        if v["tileable"]:
-            for path, cells, s in (("domain.frequency / basis.stretch_x", v["frequency"], v["stretch_x"]),
-                                   ("domain.frequency * domain.aspect / basis.stretch_y",
-                                    v["frequency"] * v["aspect"], v["stretch_y"])):
-                if not _whole(cells / s):
-                    raise RecipeError(f"{path}: {cells / s!r} must be a positive integer when domain.tileable "
-                                      "is true (whole stretched cells per repeat)")
-    if v["tileable"] and v["warp_amount"] != 0.0 and not _whole(v["warp_frequency"]):
-        raise RecipeError(f"domain.warp_frequency: {v['warp_frequency']!r} must be a positive integer when "
-                          "domain.tileable is true (the warp noise repeats with the texture)")
+    if v["tileable"] and v["warp_amount"] != 0.0:
+        wf = v["warp_frequency"]
+        if abs(wf - round(wf)) > 1e-6 or round(wf) < 1:
+            raise RecipeError(f"domain.warp_frequency: {wf!r} must be a positive integer when domain.tileable "
+                              "is true (the warp noise repeats with the texture)")
 
 
-def tileable_changes(v, frequency: float, aspect: float, notes: list) -> dict:
-    """For :meth:`cellgl.recipe.Recipe.tileable`: the stretch and warp values that make a recipe
-    with this (integer) ``frequency`` and ``aspect`` seamless, with a note per changed value."""
-    out = {}
-    for name, cells in (("stretch_x", frequency), ("stretch_y", frequency * aspect)):
-        s = float(v[name])
-        if s != 1.0:
-            n = max(1, round(cells / s))
-            new = cells / n
-            if abs(new - s) > 1e-9:
-                notes.append(f"{name} {s:g} -> {new:g}")
-            out[name] = new
-    if v["warp_amount"] != 0.0:
-        wf = float(v["warp_frequency"])
-        n = max(1, round(wf))
-        if abs(wf - n) > 1e-6:
-            notes.append(f"warp_frequency {wf:g} -> {n}")
-        out["warp_frequency"] = float(n)
-    return out
-
-
-def lattice_period(per, v) -> np.ndarray:
-    """``cell_texture_lattice_period``: the basis-space repeat ``per`` (4,) int in lattice cells
-    (divided by the stretch, rounded; 0 stays 0)."""
-    per = np.asarray(per, dtype=np.int64)
-    if not aniso(v):
-        return per
-    return np.round(per / np.asarray(stretch(v))).astype(np.int64)
+def tileable_changes(v, notes: list) -> dict:
+    """For :meth:`cellgl.recipe.Recipe.tileable`: the warp frequency that makes a recipe seamless
+    (rounded to a positive integer), with a note if it changed."""
+    if v["warp_amount"] == 0.0:
+        return {}
+    wf = float(v["warp_frequency"])
+    n = max(1, round(wf))
+    if abs(wf - n) > 1e-6:
+        notes.append(f"warp_frequency {wf:g} -> {n}")
+    return {"warp_frequency": float(n)}

@@ -27,7 +27,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_METRIC=int(p.metric),
         CELL_DIST=int(p.distribution),
         CELL_MAX_POINTS=MAX_POINTS,
-        CELL_MAX_RING=max_ring_default(p.dim, p.stretch),
+        CELL_MAX_RING=max_ring_default(p.dim, p.axis_scale),
         CELL_GRID=int(grid),
         CELL_PERIODIC=int(any(p.period)),
         CELL_OUT_F=int("F" in outputs),
@@ -59,7 +59,7 @@ def _set_params(prog, p: Params):
     _set(prog, "u_out_scale", float(1.0 / p.scale))
     _set(prog, "u_orbit_radius", float(p.orbit_radius))
     _set(prog, "u_orbit_turn", int(p.orbit_turn))
-    _set(prog, "u_stretch", tuple(float(v) for v in p.stretch))
+    _set(prog, "u_axis_scale", tuple(float(v) for v in p.axis_scale))
     set_density(prog, p.density_map)
 
 

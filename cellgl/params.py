@@ -18,7 +18,7 @@ Structured parts of a recipe have their own validation in :mod:`cellgl.recipe`:
 ``compile_time`` parameters change the shader's code (they become ``#define``s); the others
 are uniforms (``u_<name>``) that a viewer may change every frame, except the ``derived`` ones,
 which the CPU turns into derived uniform arrays (the density map's ``density_*``: its integer
-encoding per octave, :mod:`cellgl.density`; ``orbit_phase``: the integer ``u_orbit_turn``) and
+encoding per octave, :mod:`cellgl.density`; ``orbit_phase``: the integer ``u_orbit_turn``; ``stretch_*``: the weights ``u_axis_scale``) and
 which have no uniform of their own.
 """
 from __future__ import annotations
@@ -131,8 +131,9 @@ PARAMS: tuple[Param, ...] = (
     Param("max_points", "int", 9, 1, 16, "poisson: most points per cell (Worley: 9)", "basis"),
     Param("seed", "int", 0, 0, 2 ** 32 - 1, "random seed of the feature points and the noise", "basis",
           glsl="uint"),
-    *(Param(f"stretch_{a}", "float", 1.0, 1.0 / 16.0, 16.0, f"length of a cell along {a}, in basis units "
-            f"(stretched cells; distances stay exact){' (3D and 4D bases)' if a == 'z' else ''}", "basis")
+    *(Param(f"stretch_{a}", "float", 1.0, 1.0 / 16.0, 16.0, f"relative length of the cells along {a} "
+            f"(stretched cells: the distance weights axes by 1 / stretch, normalised; exact)"
+            f"{' (3D and 4D bases)' if a == 'z' else ''}", "basis", derived=True)
       for a in "xyz"),
     Param("orbit_radius", "float", 0.0, 0.0, 0.5, "loopable animation: each feature point circles in "
           "its cell (x, y) with this radius in cells, once per loop", "basis"),
@@ -203,7 +204,8 @@ assert len(PARAMS_BY_NAME) == len(PARAMS)
 assert all(p.group in GROUPS for p in PARAMS)
 
 #: the uniform a derived parameter reaches the shader through (default: the density map's)
-_DERIVED_UNIFORM = {"orbit_phase": "u_orbit_turn"}
+_DERIVED_UNIFORM = {"orbit_phase": "u_orbit_turn", "stretch_x": "u_axis_scale", "stretch_y": "u_axis_scale",
+                    "stretch_z": "u_axis_scale"}
 
 #: the default ramp: black to white
 DEFAULT_RAMP = ((0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0))

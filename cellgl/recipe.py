@@ -297,7 +297,7 @@ class Recipe:
             changes["lacunarity"] = float(whole("lacunarity", v["lacunarity"]))
         if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
             changes["noise_frequency"] = float(whole("noise_frequency", v["noise_frequency"]))
-        changes.update(domain.tileable_changes(v, freq, aspect, notes))
+        changes.update(domain.tileable_changes(v, notes))
         return self.replace(**changes), notes
 
     def set_from_strings(self, items) -> "Recipe":

@@ -110,8 +110,9 @@ class Params:
     orbit_radius: float = 0.0
     #: ... and the time as a fraction of the loop times 2^32, modulo 2^32 (:func:`orbit_turn`)
     orbit_turn: int = 0
-    #: stretched cells (CELL_ANISO): the length of a cell along each axis (1 past ``dim``)
-    stretch: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    #: anisotropic distance (CELL_ANISO): the weight of each axis (1 past ``dim``;
+    #: :func:`axis_scale` of a stretch)
+    axis_scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
 
     @property
     def orbit(self) -> bool:
@@ -120,8 +121,8 @@ class Params:
 
     @property
     def aniso(self) -> bool:
-        """Whether the cells are stretched (CELL_ANISO)."""
-        return any(s != 1.0 for s in self.stretch)
+        """Whether the distance is anisotropic (CELL_ANISO)."""
+        return any(s != 1.0 for s in self.axis_scale)
 
     @property
     def thresholds(self) -> np.ndarray:
@@ -132,6 +133,17 @@ class Params:
         """Sample positions are multiplied by this before the search (and
         distances divided by it after): only worley1996 rescales."""
         return W96_DENSITY_ADJUSTMENT if self.distribution == Distribution.WORLEY1996 else 1.0
+
+
+def axis_scale(stretch, dim: int) -> tuple[float, float, float, float]:
+    """The per-axis distance weights of stretched cells: ``w_a = g / stretch_a`` with ``g`` the
+    geometric mean of ``stretch[:dim]`` (so ``prod w = 1``: the cells keep their mean size, only
+    their shape changes, and F keeps its distribution under a Poisson process); 1 past ``dim``."""
+    s = [float(x) for x in stretch[:dim]]
+    if all(x == 1.0 for x in s):
+        return (1.0, 1.0, 1.0, 1.0)
+    g = math.exp(sum(math.log(x) for x in s) / dim)
+    return tuple([g / x for x in s] + [1.0] * (4 - dim))
 
 
 def orbit_turn(phase: float) -> int:
@@ -316,29 +328,29 @@ def _visit(F, D, I, cells, f, o, p: Params):
     for k in range(int(count.max(initial=0))):
         state, q, ids = next_point(state, p)
         has = k < count
-        delta = (base + q) * np.asarray(p.stretch)
+        delta = (base + q) * np.asarray(p.axis_scale)
         d = np.where(has, metric_length(delta, p), np.inf)
         _insert(F, D, I, d, delta, ids)
 
 
-def max_ring_default(dim: int, stretch=(1.0,)) -> int:
+def max_ring_default(dim: int, axis_scale=(1.0,)) -> int:
     """CELL_MAX_RING: rings searched before a result is marked inexact (times the ratio of the
-    longest to the shortest cell side, rounded up, for stretched cells: at most 64)."""
-    ratio = max(stretch[:dim]) / min(stretch[:dim])
+    largest to the smallest axis weight, rounded up, for anisotropic distances: at most 64)."""
+    ratio = max(axis_scale[:dim]) / min(axis_scale[:dim])
     return min(64, {2: 8, 3: 5, 4: 3}[dim] * math.ceil(ratio - 1e-9))
 
 
 def _box_distance(o: np.ndarray, f: np.ndarray, p: Params) -> np.ndarray:
     g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0))
-    return metric_length(g * np.asarray(p.stretch), p)
+    return metric_length(g * np.asarray(p.axis_scale), p)
 
 
 def _ring_bound(rings: float, m: np.ndarray, ma: np.ndarray, p: Params) -> np.ndarray:
     """``_cell_ring_bound``: internal-unit lower bound on the distance to any point beyond
-    ``rings`` full rings; m (N,) the nearest face distance, ma (N, 4) the stretched per-axis ones."""
+    ``rings`` full rings; m (N,) the nearest face distance, ma (N, 4) the weighted per-axis ones."""
     if not p.aniso:
         return metric_term(rings + m, p)
-    st = np.asarray(p.stretch)
+    st = np.asarray(p.axis_scale)
     return np.min(metric_term(st[None, : p.dim] * rings + ma[:, : p.dim], p), axis=1)
 
 
@@ -357,7 +369,7 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
     F (N, n) float64, delta (N, n, 4) float64, id (N, n) uint32, exact (N,) bool
     """
     if max_ring is None:
-        max_ring = max_ring_default(p.dim, p.stretch)
+        max_ring = max_ring_default(p.dim, p.axis_scale)
     N = len(cells)
     F = np.full((N, n), BIG)
     D = np.zeros((N, n, 4))
@@ -381,7 +393,7 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
 
     fd = f[:, : p.dim]
     m = np.minimum(fd, 1.0 - fd).min(axis=1)
-    ma = np.minimum(f, 1.0 - f) * np.asarray(p.stretch)
+    ma = np.minimum(f, 1.0 - f) * np.asarray(p.axis_scale)
     exact = np.zeros(N, dtype=bool)
     active = np.ones(N, dtype=bool)
     for ring in range(2, max_ring + 1):
@@ -397,7 +409,7 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
         hi = np.zeros((len(rows), 4), dtype=np.int64)
         lo = np.zeros((len(rows), 4), dtype=np.int64)
         for a in range(p.dim):
-            ra = np.where(Fr < BIG, reach / p.stretch[a], reach) if p.aniso else reach
+            ra = np.where(Fr < BIG, reach / p.axis_scale[a], reach) if p.aniso else reach
             hi[:, a] = np.minimum(ring, np.ceil(ra + fa[:, a]).astype(np.int64) - 1)
             lo[:, a] = -np.minimum(ring, np.ceil(ra + 1.0 - fa[:, a]).astype(np.int64) - 1)
         for o in _ring_offsets(ring, p.dim):

@@ -75,6 +75,7 @@ _DERIVED = (
     ("ivec4", "warp_cell", "", "warp-noise lattice cell of warp_frequency (offset_x, offset_y, offset_z, time)"),
     ("vec4", "warp_frac", "", "... and its fraction in [0, 1)"),
     ("uint", "orbit_turn", "", "orbit_phase as a fraction of the loop times 2^32 (wrapping)"),
+    ("vec4", "axis_scale", "", "distance weight per axis of stretched cells (cellgl/domain.py axis_scale)"),
 )
 #: derived fields of a density map (cellgl.density), present only under this condition
 _DENSITY_IF = "#if CELL_DENSITY_MAP != CELL_DMAP_NONE"
@@ -261,7 +262,7 @@ def defines(recipe, channels=()) -> dict:
         CELL_METRIC=int(Metric[v["metric"].upper()]),
         CELL_DIST=int(Distribution[v["distribution"].upper()]),
         CELL_MAX_POINTS=MAX_POINTS,
-        CELL_MAX_RING=max_ring_default(v["dimension"], domain.stretch(v)),
+        CELL_MAX_RING=max_ring_default(v["dimension"], domain.axis_scale(v)),
         CELL_PERIODIC=int(bool(v["tileable"])),
         CELL_DENSITY_MAP=_density_kind(v["density_map"]),
         CELL_ORBIT=int(domain.orbit(v)),
@@ -332,6 +333,7 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         rows = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in np.atleast_2d(a)]
         out["u_" + k] = rows if a.ndim == 2 else rows[0]
     out["u_orbit_turn"] = domain.orbit_turn(v["orbit_phase"])
+    out["u_axis_scale"] = domain.axis_scale(v)
     encs = density_encodings(recipe, pan)
     if encs is not None:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]

@@ -197,9 +197,7 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     ``pan`` (du, dv) moves the view in uv (the viewer's pan): ``O += (du f, dv f aspect, 0, 0)``,
     so a pan far away is exact too.
 
-    Stretched cells (:mod:`cellgl.domain`): the basis lattice samples ``k O dist_scale /
-    stretch``, wrapped by the period in lattice cells. The warp noise's lattice (octave 0 only)
-    samples ``O warp_frequency``.
+    The warp noise's lattice (octave 0 only, :mod:`cellgl.domain`) samples ``O warp_frequency``.
 
     Returns ``{"origin_cell", "noise_cell": int64 (MAX_OCTAVES, 4), "origin_frac",
     "noise_frac": float64 (MAX_OCTAVES, 4), "warp_cell": int64 (4,), "warp_frac": float64 (4,)}``.
@@ -210,11 +208,10 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     O[dim:] = 0.0
     ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
     out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
-    st = np.asarray(domain.stretch(t))
     for i in range(MAX_OCTAVES):
         k = float(t["lacunarity"]) ** i
         per = texture_period(t, i)
-        c, fr = _split(O * k * ds / st, domain.lattice_period(per, t))
+        c, fr = _split(O * k * ds, per)
         out["origin_cell"].append(c)
         out["origin_frac"].append(fr)
         c, fr = _split(O * k * t["noise_frequency"], per * int(round(t["noise_frequency"])))
@@ -256,8 +253,8 @@ def _basis(t: dict, octave: int) -> ref.Params:
                       distribution=Distribution[t["distribution"].upper()], density=t["density"],
                       jitter=t["jitter"], min_points=t["min_points"], max_points=t["max_points"],
                       minkowski_p=t["minkowski_p"], seed=(t["seed"] + 1013 * octave) & M32,
-                      period=tuple(int(c) for c in domain.lattice_period(texture_period(t, octave), t)),
-                      stretch=domain.stretch(t), orbit_radius=float(t["orbit_radius"]),
+                      period=tuple(int(c) for c in texture_period(t, octave)),
+                      axis_scale=domain.axis_scale(t), orbit_radius=float(t["orbit_radius"]),
                       orbit_turn=domain.orbit_turn(t["orbit_phase"]))
 
 
@@ -268,13 +265,12 @@ def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
     s = np.array(s, dtype=np.float64)
     s[:, dim:] = 0.0
     p = _basis(t, octave)
-    cell, fr = texture_lattice(t["origin_cell"][octave], t["origin_frac"][octave],
-                               s * t["dist_scale"] / np.asarray(domain.stretch(t)))
+    cell, fr = texture_lattice(t["origin_cell"][octave], t["origin_frac"][octave], s * t["dist_scale"])
     cell[:, dim:] = 0
     fr[:, dim:] = 0.0
     F, D, I, _ = ref.search(cell, fr, p, n)
     F = F / t["dist_scale"]
-    dF = ref.metric_gradient(D, F * t["dist_scale"], p)
+    dF = ref.metric_gradient(D, F * t["dist_scale"], p) * np.asarray(p.axis_scale)
     dF[..., dim:] = 0.0
     lin = [t[c] for c in LINEAR]
     v = np.zeros(len(s))

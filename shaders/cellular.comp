@@ -31,7 +31,7 @@ uniform float u_orbit_radius;
 uniform uint u_orbit_turn;
 #endif
 #if CELL_ANISO
-uniform vec4 u_stretch;
+uniform vec4 u_axis_scale;
 #endif
 uniform float u_out_scale;     // distances and deltas are multiplied by this
 uniform uint u_count;          // number of samples in this chunk
@@ -114,7 +114,7 @@ void main()
     p.orbit_turn = u_orbit_turn;
 #endif
 #if CELL_ANISO
-    p.stretch = u_stretch;
+    p.axis_scale = u_axis_scale;
 #endif
 
     CellResult r = cell_search(cell, frac, p);
@@ -126,7 +126,11 @@ void main()
 #endif
 #if CELL_OUT_DELTA
         for (int a = 0; a < CELL_DIM; a++) {
+#if CELL_ANISO
+            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] / u_axis_scale[a] * u_out_scale;
+#else
             out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] * u_out_scale;
+#endif
         }
 #endif
 #if CELL_OUT_ID
@@ -134,6 +138,9 @@ void main()
 #endif
 #if CELL_OUT_GRAD
         vec4 g = cell_metric_gradient(r.delta[k], r.F[k], u_minkowski_p);
+#if CELL_ANISO
+        g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
+#endif
         for (int a = 0; a < CELL_DIM; a++) {
             out_grad[o * uint(CELL_DIM) + uint(a)] = g[a];
         }

@@ -8,9 +8,6 @@ uniform float u_jitter;
 uniform int u_min_points;
 uniform int u_max_points;
 uniform uint u_seed;
-uniform float u_stretch_x;
-uniform float u_stretch_y;
-uniform float u_stretch_z;
 uniform float u_orbit_radius;
 uniform float u_c1;
 uniform float u_c2;
@@ -75,6 +72,7 @@ uniform vec4 u_noise_frac[CELL_TEX_OCTAVES];
 uniform ivec4 u_warp_cell;
 uniform vec4 u_warp_frac;
 uniform uint u_orbit_turn;
+uniform vec4 u_axis_scale;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
 uniform uint u_density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
 uniform ivec4 u_density_axis[CELL_TEX_OCTAVES * 4];
@@ -97,9 +95,6 @@ CellTextureParams cell_texture_params_load()
     t.min_points = u_min_points;
     t.max_points = u_max_points;
     t.seed = u_seed;
-    t.stretch_x = u_stretch_x;
-    t.stretch_y = u_stretch_y;
-    t.stretch_z = u_stretch_z;
     t.orbit_radius = u_orbit_radius;
     t.c1 = u_c1;
     t.c2 = u_c2;
@@ -176,6 +171,7 @@ CellTextureParams cell_texture_params_load()
     t.warp_cell = u_warp_cell;
     t.warp_frac = u_warp_frac;
     t.orbit_turn = u_orbit_turn;
+    t.axis_scale = u_axis_scale;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
         t.density_thresholds[k] = u_density_thresholds[k];

@@ -15,12 +15,11 @@
 // The sample is given as an integer cell plus a float fraction in [0, 1), so
 // precision does not depend on the distance from the origin.
 //
-// Stretched cells (CELL_ANISO): cell a is p.stretch[a] long on axis a. The
-// search still runs in lattice units, but every distance is measured after
-// scaling each axis by its stretch (a lattice vector v has length
-// |stretch * v|), and the bounds above are taken in those units per axis, so
-// the answer is still exactly that of a brute-force search over the stretched
-// feature points.
+// Anisotropic distance (CELL_ANISO, stretched cells): a vector v has length
+// |p.axis_scale * v| (each axis weighted), so the Voronoi cells of the
+// feature points stretch along the axes of small weight. The box distances
+// and the ring bounds above are taken in those units, per axis, so the answer
+// is still exactly that of a brute-force search under the weighted metric.
 //
 // Requires: hash.glsl, metric.glsl, points.glsl.
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
@@ -37,11 +36,11 @@ struct CellResult {
     bool exact;           // false only if the search cap was reached
 };
 
-// A lattice-unit vector in stretched (distance) units.
-vec4 _cell_stretch(vec4 v, CellParams p)
+// A vector in the units distances are measured in (CELL_ANISO: axes weighted).
+vec4 _cell_axis_scale(vec4 v, CellParams p)
 {
 #if CELL_ANISO
-    return v * p.stretch;
+    return v * p.axis_scale;
 #else
     return v;
 #endif
@@ -59,7 +58,7 @@ float _cell_box_distance(ivec4 o, vec4 f, CellParams p)
             g[a] = float(-o[a] - 1) + f[a];
         }
     }
-    return cell_metric_length(_cell_stretch(g, p), p.minkowski_p);
+    return cell_metric_length(_cell_axis_scale(g, p), p.minkowski_p);
 }
 
 // Insert one candidate (internal-unit distance d) into the sorted lists.
@@ -96,7 +95,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     for (int k = 0; k < count; k++) {
         uint id;
         vec4 q = cell_next_point(state, p, id);
-        vec4 delta = _cell_stretch(base + q, p);
+        vec4 delta = _cell_axis_scale(base + q, p);
         _cell_insert(r, cell_metric_length(delta, p.minkowski_p), delta, id);
     }
 }
@@ -104,15 +103,15 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 // Internal-unit lower bound on the distance to any point beyond `rings` full
 // rings of cells around the sample's: such a point's offset is +-(rings + 1)
 // on some axis a, so it is at least rings + (distance to the nearer face of
-// the sample's cell on a) away, m the least of those. Stretched (CELL_ANISO):
-// the least over the axes of stretch[a] rings + ma[a], ma = stretch * (the
-// per-axis face distances).
+// the sample's cell on a) away, m the least of those. Weighted (CELL_ANISO):
+// the least over the axes of axis_scale[a] rings + ma[a], ma = axis_scale *
+// (the per-axis face distances).
 float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
 {
 #if CELL_ANISO
     float b = 3.0e38;
     for (int a = 0; a < CELL_DIM; a++) {
-        b = min(b, cell_metric_term(p.stretch[a] * rings + ma[a], p.minkowski_p));
+        b = min(b, cell_metric_term(p.axis_scale[a] * rings + ma[a], p.minkowski_p));
     }
     return b;
 #else
@@ -158,7 +157,7 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
     for (int a = 0; a < CELL_DIM; a++) {
         m = min(m, min(f[a], 1.0 - f[a]));
     }
-    vec4 ma = _cell_stretch(min(f, 1.0 - f), p);
+    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
 
     // Rings 2, 3, ...: only while a point in the ring could still be closer
     // than F_n; inside a ring only the window of cells that can reach, each
@@ -177,7 +176,7 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
         for (int a = 0; a < CELL_DIM; a++) {
 #if CELL_ANISO
             // In lattice units on this axis (no point found yet: the whole ring).
-            float ra = r.F[CELL_N - 1] < 3.0e38 ? reach / p.stretch[a] : reach;
+            float ra = r.F[CELL_N - 1] < 3.0e38 ? reach / p.axis_scale[a] : reach;
 #else
             float ra = reach;
 #endif

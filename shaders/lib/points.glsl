@@ -11,8 +11,8 @@
 // CELL_MAX_POINTS (the size of the threshold table, >= max_points),
 // CELL_DENSITY_MAP (CELL_DMAP_NONE, _RAMP, _RADIAL, _IMAGE: spatially varying
 // density, poisson only; cellgl/density.py), CELL_ORBIT (1: loopable animation,
-// the points orbit inside their cells; cell_orbit), CELL_ANISO (1: stretched
-// cells, CellParams.stretch; used by cellular.glsl).
+// the points orbit inside their cells; cell_orbit), CELL_ANISO (1: anisotropic
+// distance, CellParams.axis_scale: stretched cells; used by cellular.glsl).
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
@@ -50,7 +50,7 @@ struct CellParams {
     uint orbit_turn;        // animation time as a fraction of the loop, times 2^32 (wraps)
 #endif
 #if CELL_ANISO
-    vec4 stretch;           // length of a cell along each axis (1 past CELL_DIM)
+    vec4 axis_scale;        // weight of each axis in the distance (1 past CELL_DIM)
 #endif
 };
 

@@ -38,9 +38,8 @@
 // only the small k s: cell = origin_cell + floor(origin_frac + k s), fraction
 // = the rest. So a texture 10^6 cells from the origin is as sharp as at it.
 //
-// Stretched cells (CELL_ANISO): basis position x lies in the lattice at
-// x dist_scale / stretch, and the search measures distances in basis units
-// (cellular.glsl). Domain warp: the whole texture is evaluated at s + d(s),
+// Stretched cells (CELL_ANISO): distances weight axis a by t.axis_scale[a]
+// (cellgl/domain.py: normalised 1 / stretch), exactly (cellular.glsl). Domain warp: the whole texture is evaluated at s + d(s),
 // d = warp_amount (n_0, n_1, ...) fractal gradient noise (cell_texture_warp);
 // the gradient follows by the chain rule. Loopable animation (CELL_ORBIT): the
 // feature points orbit (points.glsl cell_orbit) at t.orbit_turn.
@@ -96,16 +95,6 @@ ivec4 cell_texture_period(CellTextureParams t, int octave)
 #endif
 }
 
-// The length of a cell along each axis (1, 1, 1, 1 unless CELL_ANISO).
-vec4 cell_texture_stretch(CellTextureParams t)
-{
-#if CELL_ANISO
-    return vec4(t.stretch_x, t.stretch_y, CELL_DIM >= 3 ? t.stretch_z : 1.0, 1.0);
-#else
-    return vec4(1.0);
-#endif
-}
-
 // The basis parameters of one octave.
 CellParams _cell_tex_basis(CellTextureParams t, int octave)
 {
@@ -119,9 +108,7 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
     }
     p.period = cell_texture_period(t, octave);
 #if CELL_ANISO
-    // The repeat in lattice cells (whole numbers when tileable; 0 stays 0).
-    p.period = ivec4(round(vec4(p.period) / cell_texture_stretch(t)));
-    p.stretch = cell_texture_stretch(t);
+    p.axis_scale = t.axis_scale;
 #endif
 #if CELL_ORBIT
     p.orbit_radius = t.orbit_radius;
@@ -152,8 +139,7 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     CellParams p = _cell_tex_basis(t, octave);
     ivec4 cell;
     vec4 f;
-    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale / cell_texture_stretch(t),
-                         cell, f);
+    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale, cell, f);
     cell = cell_dims_i(cell);
     f = cell_dims(f);
     CellResult r = cell_search(cell, f, p);
@@ -169,6 +155,9 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     for (int k = 0; k < CELL_N; k++) {
         F[k] = r.F[k] / t.dist_scale;
         dF[k] = cell_metric_gradient(r.delta[k], r.F[k], t.minkowski_p);
+#if CELL_ANISO
+        dF[k] *= t.axis_scale;      // r.delta is weighted: the chain rule
+#endif
         v += lin[k] * F[k];
         grad += lin[k] * dF[k];
         if (k < 4) {

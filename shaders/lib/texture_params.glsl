@@ -22,9 +22,6 @@ struct CellTextureParams {
     int min_points;             // poisson: fewest points per cell (Worley: 1)
     int max_points;             // poisson: most points per cell (Worley: 9)
     uint seed;                  // random seed of the feature points and the noise
-    float stretch_x;            // length of a cell along x, in basis units (stretched cells; distances stay exact)
-    float stretch_y;            // length of a cell along y, in basis units (stretched cells; distances stay exact)
-    float stretch_z;            // length of a cell along z, in basis units (stretched cells; distances stay exact) (3D and 4D bases)
     float orbit_radius;         // loopable animation: each feature point circles in its cell (x, y) with this radius in cells, once per loop
     float c1;                   // weight of F1 (Worley's linear combination)
     float c2;                   // weight of F2 (Worley's linear combination)
@@ -89,6 +86,7 @@ struct CellTextureParams {
     ivec4 warp_cell;            // warp-noise lattice cell of warp_frequency (offset_x, offset_y, offset_z, time)
     vec4 warp_frac;             // ... and its fraction in [0, 1)
     uint orbit_turn;            // orbit_phase as a fraction of the loop times 2^32 (wrapping)
+    vec4 axis_scale;            // distance weight per axis of stretched cells (cellgl/domain.py axis_scale)
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];// row L: Poisson table of density level L (density_min .. density_max, geometric)
     ivec4 density_axis[CELL_TEX_OCTAVES * 4];// octave i, lattice axis a at 4 i + a: (o, n, m, b) of cell_density_level
