@@ -8,10 +8,12 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl import cli, reference, texture
-from cellgl.frames import bake_frames
-from cellgl.recipe import Recipe, RecipeError, load_recipe
-from cellgl.texture_reference import texture_at
+from cellgl import cli, texture
+from cellgl.basis import reference
+from cellgl.io.frames import bake_frames
+from cellgl.recipes import load_recipe
+from cellgl.texture.recipe import Recipe, RecipeError
+from cellgl.texture.reference import texture_at
 
 
 def _cells_around(pts: np.ndarray, margin: int) -> np.ndarray:
@@ -218,7 +220,7 @@ def test_frames_sequence_and_animation(ctx, tmp_path):
 
 
 def test_frames_are_all_or_nothing(ctx, tmp_path, monkeypatch):
-    import cellgl.texture as T
+    import cellgl.recipes as T
 
     real, calls = T.render, []
 
