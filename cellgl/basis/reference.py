@@ -11,6 +11,7 @@ All integer arithmetic is done on ``np.uint64`` arrays holding values below
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
