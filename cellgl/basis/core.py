@@ -86,7 +86,7 @@ def _period(period, dim) -> tuple[int, int, int, int]:
     return tuple(out + [0] * (4 - dim))
 
 
-STRETCH_RANGE = (1.0 / 16.0, 16.0)     #: accepted length of a stretched cell along an axis
+STRETCH_RANGE = (1.0 / 256.0, 256.0)   #: accepted relative length of a stretched cell along an axis
 ORBIT_MAX = 0.5                         #: largest orbit radius (a point's circle spans its cell)
 
 
@@ -250,7 +250,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Spatially varying density (``poisson`` only; ``density`` is then unused): each
         cell's count is drawn with the density of the map at the cell centre, quantised to
         16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.basis.density`).
-    stretch : None, float or sequence of d floats in [1/16, 16]
+    stretch : None, float or sequence of d floats in [1/256, 256]
         Stretched cells: distances are measured with axis ``a`` weighted by ``w_a = g / s_a``
         (``g`` the geometric mean of the ``s_a``, so ``prod w = 1``), so the Voronoi cells are
         ``s_a`` long relative to each other along each axis, with their mean size unchanged.
