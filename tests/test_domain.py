@@ -14,6 +14,7 @@ from cellgl.io.frames import bake_frames
 from cellgl.recipes import load_recipe
 from cellgl.texture.recipe import Recipe, RecipeError
 from cellgl.texture.reference import texture_at
+from test_texture import assert_gpu_matches_numpy      # tests/ is on sys.path under pytest
 
 
 def _cells_around(pts: np.ndarray, margin: int) -> np.ndarray:
@@ -139,14 +140,7 @@ RECIPES = {
 
 @pytest.mark.parametrize("name", RECIPES)
 def test_texture_gpu_matches_numpy(ctx, name):
-    r = RECIPES[name]
-    chs = ("color", "height", "normal", "id", "F1", "F2")
-    g = texture.render(r, 24, 20, channels=chs)
-    n = texture.render(r, 24, 20, channels=chs, backend="numpy")
-    tie = np.abs(n["F2"] - n["F1"]) < 1e-4
-    assert np.array_equal(g["id"][~tie], n["id"][~tie])
-    for k in ("color", "height", "normal", "F1", "F2"):
-        np.testing.assert_allclose(g[k], n[k], atol=2e-4, err_msg=k)
+    assert_gpu_matches_numpy(RECIPES[name])
 
 
 @pytest.mark.parametrize("name", ["warp", "stretch-fractal"])
