@@ -434,7 +434,8 @@ def _compile_error(what: str, exc: Exception, src: glsl.Source) -> glsl.ShaderEr
 
 
 def compute_program(name: str, defines: Mapping | None = None, *,
-                    ctx: moderngl.Context | None = None) -> moderngl.ComputeShader:
+                    ctx: moderngl.Context | None = None, files: Mapping[str, str] | None = None,
+                    cache: bool = True) -> moderngl.ComputeShader:
     """Compile (once, cached) the compute shader ``shaders/<name>``.
 
     Parameters
@@ -445,6 +446,10 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         ``#define``s placed after ``#version`` (see :func:`cellgl.gl.glsl.load`).
     ctx : moderngl.Context, optional
         Defaults to :func:`get_context`.
+    files : mapping of str to str, optional
+        Generated include files (see :func:`cellgl.glsl.load`).
+    cache : bool
+        False: compile a new program and do not keep it (the caller owns and releases it).
 
     Raises
     ------
@@ -452,16 +457,17 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         Loading or compiling failed; driver line numbers are mapped to ``file:line``.
     """
     ctx = ctx if ctx is not None else get_context()
-    key = ("compute", id(ctx), name, _defines_key(defines))
+    key = ("compute", id(ctx), name, _defines_key(defines), tuple(sorted((files or {}).items())))
     with _lock:
-        prog = _programs.get(key)
+        prog = _programs.get(key) if cache else None
         if prog is None:
-            src = glsl.load(name, defines)
+            src = glsl.load(name, defines, files=files)
             try:
                 prog = ctx.compute_shader(src.text)
             except moderngl.Error as exc:
                 raise _compile_error(f"compiling {name}", exc, src) from None
-            _programs[key] = prog
+            if cache:
+                _programs[key] = prog
         return prog
 
 
