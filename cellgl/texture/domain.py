@@ -50,6 +50,11 @@ def check(v) -> None:
     """Constraints between these parameters and the rest of a recipe (values ``v``)."""
     from cellgl.texture.schema import RecipeError
 
+    used = [k for k in ("c_edge", "c_nsphere", "c_smooth") if k in v and v[k] != 0.0]
+    if aniso(v) and used:
+        raise RecipeError(f"combination.{used[0]}: the cell features (distance to edge, n-sphere radius, smooth "
+                          "F1) measure unweighted distances, so they are not available with stretched cells "
+                          f"(basis.stretch_x/_y/_z != 1); accepted: {used[0]} 0, or every stretch 1")
     if v["tileable"] and v["warp_amount"] != 0.0:
         wf = v["warp_frequency"]
         if abs(wf - round(wf)) > 1e-6 or round(wf) < 1:
