@@ -123,6 +123,10 @@ def test_bad_basis_arguments():
         cellgl.cellular(np.zeros((1, 2)), orbit_radius=0.6)
     with pytest.raises(ValueError, match="orbit_phase"):
         cellgl.feature_points(np.zeros((1, 2), int), orbit_phase=float("nan"))
+    with pytest.raises(ValueError, match="outputs edge are not available with stretched cells"):
+        cellgl.cellular(np.zeros((1, 2)), stretch=(2.0, 1.0), outputs=("F", "edge"), backend="numpy")
+    with pytest.raises(RecipeError, match="combination.c_edge: the cell features"):
+        Recipe().replace(stretch_x=2.0, c_edge=1.0)
 
 
 # ---------------------------------------------------------------------------- textures

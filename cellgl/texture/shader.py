@@ -353,6 +353,8 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     out["u_feature_frequency"] = antialias.feature_frequency(v)
+    out["u_orbit_turn"] = domain.orbit_turn(v["orbit_phase"])
+    out["u_axis_scale"] = domain.axis_scale(v)
     out.update(pan_uniform_values(recipe, pan))
     from cellgl.texture.reference import octave_mean
 
@@ -369,8 +371,6 @@ def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     for k, a in lattice_origins(recipe, pan).items():
         rows = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in np.atleast_2d(a)]
         out["u_" + k] = rows if a.ndim == 2 else rows[0]
-    out["u_orbit_turn"] = domain.orbit_turn(v["orbit_phase"])
-    out["u_axis_scale"] = domain.axis_scale(v)
     encs = density_encodings(recipe, pan)
     if encs is not None:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
