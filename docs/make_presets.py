@@ -29,6 +29,7 @@ WOOD = [[0.0, 0.45, 0.26, 0.12], [0.0, 0.45, 0.26, 0.12], [0.5, 0.72, 0.50, 0.28
         [1.0, 0.36, 0.20, 0.09], [1.0, 0.36, 0.20, 0.09]]
 FLAME = [[0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0], [0.25, 0.45, 0.02, 0.0], [0.45, 0.85, 0.15, 0.0],
          [0.65, 1.0, 0.5, 0.05], [0.85, 1.0, 0.85, 0.3], [1.0, 1.0, 1.0, 0.85], [1.0, 1.0, 1.0, 0.85]]
+PASTEL = [[0.0, 0.55, 0.62, 0.78], [0.35, 0.85, 0.66, 0.62], [0.7, 0.93, 0.85, 0.6], [1.0, 0.62, 0.8, 0.66]]
 # Qin's eq. 7: mix(sky, cloud, smoothstep(0, 1, .)) with smoothstep sampled at quarter steps.
 CLOUD = [[0.0, 0.15, 0.15, 0.60], [0.25, 0.2825, 0.2825, 0.6625], [0.5, 0.575, 0.575, 0.80],
          [0.75, 0.8675, 0.8675, 0.9375], [1.0, 1.0, 1.0, 1.0]]
@@ -162,6 +163,26 @@ PRESETS: dict[str, dict] = {
                         mapping={"bump": 0.7, "light": 1.0},
                         color={"ramp": [[0.0, 0.8, 0.78, 0.74], [1.0, 0.8, 0.78, 0.74]]},
                         outputs=["normal", "color", "height"]),
+    "wobbly-cells": dict(doc="Domain warp: cells whose borders wander, the sample displaced by fractal gradient "
+                         "noise before the basis (as Substance's and FastNoiseLite's domain warp); still the exact "
+                         "F2 - F1", domain={"frequency": 6.0, "warp_amount": 0.3, "warp_frequency": 1.5,
+                                              "warp_octaves": 3},
+                         combination=lin(-1, 1), mapping={"level_hi": 0.1, "bump": 0.05, "light": 0.8},
+                         color={"cell_mix": 1.0, "shade": 0.85, "ramp": PASTEL},
+                         outputs=["color", "normal", "height", "id"]),
+    "wood-grain": dict(doc="Stretched cells: Qin's wood F1 - F1 F1 on cells 12 times longer along x than y "
+                       "(exact distances under the stretch), lightly warped: planks of long grain",
+                       domain={"frequency": 8.0, "warp_amount": 0.15, "warp_frequency": 0.5},
+                       basis={"stretch_x": 3.0, "stretch_y": 0.25, "density": 2.0},
+                       combination=prod([1], {(1, 1): -1.0}), fractal={"fractal": "sum", "octaves": 2.0},
+                       color={"ramp_mode": "spline", "ramp": WOOD}),
+    "caustics": dict(doc="Loopable animation: F2 - F1 ridges of light on water, the feature points orbiting in "
+                     "their cells (orbit_radius 0.3); `cellgl bake caustics --frames 48 -o c.webp` loops "
+                     "seamlessly", basis={"distribution": "jitter", "jitter": 0.8, "orbit_radius": 0.3},
+                     domain={"frequency": 6.0, "warp_amount": 0.2, "warp_frequency": 0.5},
+                     combination=lin(-1, 1), mapping={"invert": True, "level_lo": 0.55},
+                     color={"ramp": [[0.0, 0.02, 0.22, 0.38], [0.55, 0.05, 0.42, 0.6], [0.85, 0.45, 0.8, 0.9],
+                                     [1.0, 0.92, 1.0, 1.0]]}),
     "worley-gallery": dict(doc="Worley 1996 Fig. 4 (T&M Fig. 4.3): 20 linear combinations c1 F1 + .. + c4 F4 "
                            "in a generic colour spline; variants :0..:19", basis={"dimension": 3},
                            domain={"frequency": 4.0}, combination=lin(1), color={"ramp": SPECTRUM}),

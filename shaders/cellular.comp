@@ -3,8 +3,9 @@
 // Thin: read the sample, call cell_search(), write what was asked for.
 // Macros (from cellgl/basis/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
-// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, and those of
-// lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE, CELL_FEATURE_MAX_RING).
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, CELL_ORBIT,
+// CELL_ANISO, and those of lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE,
+// CELL_FEATURE_MAX_RING).
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -35,6 +36,13 @@ uniform ivec4 u_density_info;
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
 layout(std430, binding = 7) readonly buffer DensityImage { uint density_image[]; };
 uint cell_density_image_level(int index) { return density_image[index]; }
+#endif
+#if CELL_ORBIT
+uniform float u_orbit_radius;
+uniform uint u_orbit_turn;
+#endif
+#if CELL_ANISO
+uniform vec4 u_axis_scale;
 #endif
 uniform float u_out_scale;     // distances and deltas are multiplied by this
 uniform uint u_count;          // number of samples in this chunk
@@ -122,6 +130,13 @@ void main()
     }
     p.density_info = u_density_info;
 #endif
+#if CELL_ORBIT
+    p.orbit_radius = u_orbit_radius;
+    p.orbit_turn = u_orbit_turn;
+#endif
+#if CELL_ANISO
+    p.axis_scale = u_axis_scale;
+#endif
 
     CellResult r = cell_search(cell, frac, p);
 
@@ -132,7 +147,11 @@ void main()
 #endif
 #if CELL_OUT_DELTA
         for (int a = 0; a < CELL_DIM; a++) {
+#if CELL_ANISO
+            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] / u_axis_scale[a] * u_out_scale;
+#else
             out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] * u_out_scale;
+#endif
         }
 #endif
 #if CELL_OUT_ID
@@ -140,6 +159,9 @@ void main()
 #endif
 #if CELL_OUT_GRAD
         vec4 g = cell_metric_gradient(r.delta[k], r.F[k], u_minkowski_p);
+#if CELL_ANISO
+        g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
+#endif
         for (int a = 0; a < CELL_DIM; a++) {
             out_grad[o * uint(CELL_DIM) + uint(a)] = g[a];
         }

@@ -8,6 +8,7 @@ uniform float u_jitter;
 uniform int u_min_points;
 uniform int u_max_points;
 uniform uint u_seed;
+uniform float u_orbit_radius;
 uniform float u_c1;
 uniform float u_c2;
 uniform float u_c3;
@@ -50,6 +51,9 @@ uniform float u_offset_x;
 uniform float u_offset_y;
 uniform float u_offset_z;
 uniform float u_time;
+uniform float u_warp_amount;
+uniform float u_warp_frequency;
+uniform int u_warp_octaves;
 uniform float u_noise_frequency;
 uniform int u_noise_octaves;
 uniform float u_noise_color;
@@ -72,6 +76,10 @@ uniform ivec4 u_origin_cell[CELL_TEX_OCTAVES];
 uniform vec4 u_origin_frac[CELL_TEX_OCTAVES];
 uniform ivec4 u_noise_cell[CELL_TEX_OCTAVES];
 uniform vec4 u_noise_frac[CELL_TEX_OCTAVES];
+uniform ivec4 u_warp_cell;
+uniform vec4 u_warp_frac;
+uniform uint u_orbit_turn;
+uniform vec4 u_axis_scale;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
 uniform uint u_density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
 uniform ivec4 u_density_axis[CELL_TEX_OCTAVES * 4];
@@ -104,6 +112,7 @@ CellTextureParams cell_texture_params_load()
     t.min_points = u_min_points;
     t.max_points = u_max_points;
     t.seed = u_seed;
+    t.orbit_radius = u_orbit_radius;
     t.c1 = u_c1;
     t.c2 = u_c2;
     t.c3 = u_c3;
@@ -146,6 +155,9 @@ CellTextureParams cell_texture_params_load()
     t.offset_y = u_offset_y;
     t.offset_z = u_offset_z;
     t.time = u_time;
+    t.warp_amount = u_warp_amount;
+    t.warp_frequency = u_warp_frequency;
+    t.warp_octaves = u_warp_octaves;
     t.noise_frequency = u_noise_frequency;
     t.noise_octaves = u_noise_octaves;
     t.noise_color = u_noise_color;
@@ -180,6 +192,10 @@ CellTextureParams cell_texture_params_load()
     for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
         t.noise_frac[k] = u_noise_frac[k];
     }
+    t.warp_cell = u_warp_cell;
+    t.warp_frac = u_warp_frac;
+    t.orbit_turn = u_orbit_turn;
+    t.axis_scale = u_axis_scale;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
         t.density_thresholds[k] = u_density_thresholds[k];

@@ -295,9 +295,10 @@ def _presets() -> list[str]:
 
 
 PRESETS = _presets()
-#: a spread of features for the GLSL ES renders (fractal modes, metrics, splines, noise, 3D)
+#: a spread of features for the GLSL ES renders (fractal modes, metrics, splines, noise, 3D; domain
+#: warp, stretched cells and orbiting points: caustics, wood-grain)
 GLES_PRESETS = [p for p in ("flagstone", "hull", "qin-marble", "qin-wrinkle", "craters", "worley-gallery",
-                            "edge-cracks", "hammered")
+                            "edge-cracks", "hammered", "caustics", "wood-grain")
                 if p in PRESETS]
 
 

@@ -39,17 +39,23 @@ RECIPES = {
 }
 
 
-@pytest.mark.parametrize("name", RECIPES)
-def test_gpu_matches_numpy(ctx, name):
-    r = RECIPES[name]
+def assert_gpu_matches_numpy(r, width: int = 24, height: int = 20) -> None:
+    """A render of recipe r on the GPU equals the NumPy twin's: IDs exactly except at F1 = F2
+    ties, colour, height, normal, F1, F2 within 2e-4 (also used by tests/test_domain.py)."""
     chs = ("color", "height", "normal", "id", "F1", "F2")
-    g = texture.render(r, 24, 20, channels=chs)
-    n = texture.render(r, 24, 20, channels=chs, backend="numpy")
-    assert g["color"].shape == (20, 24, 4) and g["normal"].shape == (20, 24, 3) and g["id"].dtype == np.uint32
+    g = texture.render(r, width, height, channels=chs)
+    n = texture.render(r, width, height, channels=chs, backend="numpy")
+    assert g["color"].shape == (height, width, 4) and g["normal"].shape == (height, width, 3)
+    assert g["id"].dtype == np.uint32
     tie = np.abs(n["F2"] - n["F1"]) < 1e-4
     assert np.array_equal(g["id"][~tie], n["id"][~tie])
     for k in ("color", "height", "normal", "F1", "F2"):
         np.testing.assert_allclose(g[k], n[k], atol=2e-4, err_msg=k)
+
+
+@pytest.mark.parametrize("name", RECIPES)
+def test_gpu_matches_numpy(ctx, name):
+    assert_gpu_matches_numpy(RECIPES[name])
 
 
 def _fd(recipe, pts, eps=1e-6):

@@ -344,3 +344,40 @@ def test_pups_preset_view_matches_bake(viewer):
     assert _view(viewer, viewer.grab()).std() > 10
     assert viewer.ctx.error == "GL_NO_ERROR"
     _reset(viewer)
+
+
+@pytest.mark.parametrize("preset", ["wobbly-cells", "wood-grain", "caustics"])
+def test_warped_stretched_orbiting_readout_and_view(viewer, preset):
+    """Domain warp, stretched cells, orbiting points: the view is the bake and the readout
+    under the cursor is the basis value the texture shows there (warped position, weighted
+    distance, moved points)."""
+    _reset(viewer, preset)
+    x, y, w, h = viewer.unit_square_rect()
+    px, py = 41, 77
+    viewer.script_mouse([(x + px + 0.5, y + py + 0.5, False)])
+    viewer.frame()
+    r = viewer.readout
+    ref = cellgl.render(viewer.model.recipe, w, h, channels=("F1", "id"), x0=px, y0=py, tile_w=1, tile_h=1)
+    assert r["F"][0] == pytest.approx(float(ref["F1"][0, 0]), abs=1e-4)
+    assert r["id"] == int(ref["id"][0, 0])
+    viewer.script_mouse([(5, 5, False)])
+    viewer.frame()
+    _reset(viewer)
+
+
+def test_anim_mode_loops_orbiting_points(viewer):
+    """A recipe with orbit_radius > 0 animates its loop (orbit_phase), staying in its dimension."""
+    _reset(viewer, "caustics")
+    viewer.set_mode("anim")
+    assert viewer.model.get("dimension") == 2 and "orbit" in viewer.status
+    viewer.playing = False
+    _settle(viewer)
+    first = _view(viewer, viewer.grab()).astype(int)
+    viewer.playing = True
+    for _ in range(8):
+        viewer.frame()
+    viewer.playing = False
+    assert 0.0 < viewer.model.get("orbit_phase") < 1.0
+    _settle(viewer)
+    assert np.abs(_view(viewer, viewer.grab()).astype(int) - first).max() > 30, "the points did not move"
+    _reset(viewer)

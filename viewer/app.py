@@ -217,7 +217,11 @@ class Viewer:
         if self.mode == "anim" and self.playing:
             # A hidden window (capture) steps a fixed 1/30 s per frame: reproducible screenshots.
             step = 1.0 / 30.0 if self.hidden else min(dt, 0.1)
-            self.model.set("time", round(self.model.get("time") + self.speed * step, 9))
+            if self.model.loops:
+                # Orbiting points: one loop every 1 / (speed / 4) s, the phase kept in [0, 1).
+                self.model.set("orbit_phase", round((self.model.get("orbit_phase") + 0.25 * self.speed * step) % 1.0, 9))
+            else:
+                self.model.set("time", round(self.model.get("time") + self.speed * step, 9))
 
         if self.panel_visible:
             from .panel import draw_panel
@@ -328,7 +332,9 @@ class Viewer:
         glfw.set_window_title(self.window, f"cellgl view: {self.model.name}")
 
     def _ensure_4d(self) -> None:
-        if int(self.model.get("dimension")) < 4:
+        if self.model.loops:
+            self.status = "animation: the feature points orbit (orbit_phase loops)"
+        elif int(self.model.get("dimension")) < 4:
             self.model.set("dimension", 4)
             self.status = "4D animation: dimension set to 4 (time is the 4th coordinate)"
 

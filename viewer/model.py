@@ -161,8 +161,26 @@ class Model:
         d = int(dim or v["dimension"])
         return x[:d]
 
+    @property
+    def loops(self) -> bool:
+        """The recipe animates by orbiting feature points (``orbit_radius > 0``): a loop."""
+        return not self.is_pups and float(self.recipe.get("orbit_radius")) > 0.0
+
+    def _warped(self, p, x: np.ndarray) -> np.ndarray:
+        """Basis position x of texture point p moved by the recipe's domain warp (as the texture
+        samples it), or x itself without one."""
+        if float(self.recipe.get("warp_amount")) == 0.0:
+            return x
+        from cellgl.texture import reference as texture_reference
+
+        t = texture_reference._tex(self.recipe)
+        s = texture_reference.texture_local(np.asarray([p], dtype=np.float64), t)
+        sw, _ = texture_reference.texture_warp(s, t)
+        return x + (sw - s)[0, : len(x)]
+
     def _cellular(self, x: np.ndarray) -> dict:
         import cellgl
+        from cellgl.texture import domain as texture_domain
 
         v = self.recipe.values
         period = None
@@ -171,7 +189,9 @@ class Model:
         r = cellgl.cellular(x[None, :], 4, metric=v["metric"], distribution=v["distribution"],
                             density=v["density"], jitter=v["jitter"], min_points=v["min_points"],
                             max_points=v["max_points"], minkowski_p=v["minkowski_p"], seed=v["seed"],
-                            period=period, outputs=("F", "id"), density_map=self._density_map())
+                            period=period, outputs=("F", "id"), density_map=self._density_map(),
+                            stretch=[1.0 / w for w in texture_domain.axis_scale(v)[: len(x)]],
+                            orbit_radius=v["orbit_radius"], orbit_phase=v["orbit_phase"])
         return {"F": [float(f) for f in r.F[0]], "id": int(r.id[0, 0]), "pos": tuple(float(c) for c in x)}
 
     def _density_map(self):
@@ -189,7 +209,7 @@ class Model:
         """F1..F4 and the F1 feature ID at texture coordinate (u, v) (v down, as image rows)."""
         if self.is_pups:
             return {"uv": (u, v), "F": [], "id": None, "pos": (u, v)}
-        out = self._cellular(self.basis_position((u, v, 0.0)))
+        out = self._cellular(self._warped((u, v, 0.0), self.basis_position((u, v, 0.0))))
         out["uv"] = (u, v)
         return out
 
@@ -197,4 +217,4 @@ class Model:
         """The same at object-space point ``q`` of the 3D view."""
         p = np.asarray(q, float) * OBJECT_SCALE + 0.5
         dim = max(3, int(self.recipe.get("dimension")))
-        return self._cellular(self.basis_position(p, dim))
+        return self._cellular(self._warped(p, self.basis_position(p, dim)))

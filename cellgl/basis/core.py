@@ -114,9 +114,25 @@ def _period(period, dim) -> tuple[int, int, int, int]:
     return tuple(out + [0] * (4 - dim))
 
 
+STRETCH_RANGE = (1.0 / 256.0, 256.0)   #: accepted relative length of a stretched cell along an axis
+ORBIT_MAX = 0.5                         #: largest orbit radius (a point's circle spans its cell)
+
+
+def _stretch(stretch, dim) -> tuple[float, float, float, float]:
+    if stretch is None:
+        return (1.0, 1.0, 1.0, 1.0)
+    vals = [stretch] * dim if isinstance(stretch, numbers.Real) else list(np.ravel(stretch))
+    if len(vals) != dim:
+        raise ValueError(f"stretch must be a number or a sequence of {dim} numbers (one per axis), "
+                         f"got {stretch!r}")
+    lo, hi = STRETCH_RANGE
+    out = [_number("stretch", v if not isinstance(v, np.generic) else v.item(), lo, hi) for v in vals]
+    return tuple(out + [1.0] * (4 - dim))
+
+
 def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
                 min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None,
-                density_map=None) -> reference.Params:
+                density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0) -> reference.Params:
     """Validate the basis parameters and bundle them as :class:`cellgl.basis.reference.Params`."""
     metric = parse_enum(Metric, metric, "metric")
     distribution = parse_enum(Distribution, distribution, "distribution")
@@ -132,6 +148,9 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
         raise ValueError(f"min_points ({min_points}) must not exceed max_points ({max_points})")
     minkowski_p = _number("minkowski_p", minkowski_p, 0.25, 64.0)
     seed = _number("seed", seed, 0, 2 ** 32 - 1, integer=True)
+    stretch = _stretch(stretch, dim)
+    orbit_radius = _number("orbit_radius", orbit_radius, 0.0, ORBIT_MAX)
+    orbit_phase = _number("orbit_phase", orbit_phase, -1e9, 1e9)
     enc = None
     if density_map is not None:
         if distribution != Distribution.POISSON:
@@ -140,7 +159,19 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
     return reference.Params(dim=dim, metric=metric, distribution=distribution, density=density,
                             jitter=jitter, min_points=min_points, max_points=max_points,
                             minkowski_p=minkowski_p, seed=seed, period=_period(period, dim),
-                            density_map=enc)
+                            density_map=enc, axis_scale=reference.axis_scale(stretch, dim),
+                            orbit_radius=orbit_radius,
+                            orbit_turn=reference.orbit_turn(orbit_phase))
+
+
+
+def _check_stretch_features(p: reference.Params, outputs) -> None:
+    """The cell features (edge, n-sphere, smooth, position, colour) measure unweighted distances:
+    refuse them with stretched cells rather than answer under the wrong metric."""
+    feats = [o for o in outputs if o in _features.OUTPUTS]
+    if p.aniso and feats:
+        raise ValueError(f"outputs {', '.join(feats)} are not available with stretched cells (stretch != 1); "
+                         "accepted with stretch: F, delta, id, grad")
 
 
 def _outputs(outputs) -> tuple[str, ...]:
@@ -232,12 +263,13 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> t
     basis = _basis_outputs(outputs)
     if "F" in basis:
         out["F"] = (F * inv).astype(np.float32)
+    w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
     if "delta" in basis:
-        out["delta"] = (D[..., : p.dim] * inv).astype(np.float32)
+        out["delta"] = (D[..., : p.dim] / w * inv).astype(np.float32)
     if "id" in basis:
         out["id"] = I
     if "grad" in basis:
-        out["grad"] = reference.metric_gradient(D[..., : p.dim], F, p).astype(np.float32)
+        out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
     if set(outputs) & set(_features.OUTPUTS):
         feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale)
         exact = feats["exact"]
@@ -255,6 +287,7 @@ def _gpu_finish(out: dict, outs, positions, p) -> None:
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
              min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
+             stretch=None, orbit_radius=0.0, orbit_phase=0.0,
              outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
@@ -283,6 +316,17 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Spatially varying density (``poisson`` only; ``density`` is then unused): each
         cell's count is drawn with the density of the map at the cell centre, quantised to
         16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.basis.density`).
+    stretch : None, float or sequence of d floats in [1/256, 256]
+        Stretched cells: distances are measured with axis ``a`` weighted by ``w_a = g / s_a``
+        (``g`` the geometric mean of the ``s_a``, so ``prod w = 1``), so the Voronoi cells are
+        ``s_a`` long relative to each other along each axis, with their mean size unchanged.
+        F is that weighted distance, exactly (the search's bounds are weighted too); ``delta``
+        stays in sample units and ``grad`` is the gradient of the weighted F.
+    orbit_radius : float in [0, 0.5]
+        Loopable animation: every feature point circles (in x, y) inside its cell with this
+        radius in cells, once per loop, from its own phase, in its own direction.
+    orbit_phase : float
+        Time in loops: ``orbit_phase`` and ``orbit_phase + 1`` give the same bits.
     outputs : sequence of {"F", "delta", "id", "grad", "edge", "edge_grad", "nsphere",
               "position", "color", "smooth_F1", "smooth_position", "smooth_grad", "smooth_color"}
         Only these are computed and read back. ``edge`` (distance to the cell's border) and
@@ -303,8 +347,10 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     outs = _outputs(outputs)
     p = make_params(pts.shape[1], metric=metric, distribution=distribution, density=density,
                     jitter=jitter, min_points=min_points, max_points=max_points,
-                    minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map)
+                    minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map,
+                    stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
     smoothness = _features.check(outs, p.metric, smoothness)
+    _check_stretch_features(p, outs)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts)
@@ -325,8 +371,8 @@ def _gpu_outputs(outs) -> tuple[str, ...]:
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
-                  period=None, density_map=None, outputs=("F", "delta", "id"), smoothness=0.1,
-                  backend="gpu") -> CellularResult:
+                  period=None, density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0,
+                  outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
     Parameters
@@ -365,8 +411,10 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     outs = _outputs(outputs)
     p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
-                    seed=seed, period=period, density_map=density_map)
+                    seed=seed, period=period, density_map=density_map, stretch=stretch,
+                    orbit_radius=orbit_radius, orbit_phase=orbit_phase)
     smoothness = _features.check(outs, p.metric, smoothness)
+    _check_stretch_features(p, outs)
 
     def vec(name, v, default):
         v = default if v is None else v
@@ -412,7 +460,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
 
 
 def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, min_points=1,
-                   max_points=9, seed=0, period=None, density_map=None) -> FeaturePoints:
+                   max_points=9, seed=0, period=None, density_map=None, stretch=None,
+                   orbit_radius=0.0, orbit_phase=0.0) -> FeaturePoints:
     """Every feature point in the given integer cells.
 
     Parameters
@@ -420,8 +469,9 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
     cells : array_like, (M, d) int, d in 2..4
         Integer cells (for ``worley1996``, cubes of the scaled lattice: side
         1/0.398150 in sample units).
-    distribution, density, jitter, min_points, max_points, seed, period, density_map :
-        as :func:`cellular`.
+    distribution, density, jitter, min_points, max_points, seed, period, density_map, stretch,
+    orbit_radius, orbit_phase :
+        as :func:`cellular` (``stretch`` changes distances, not positions).
 
     Returns
     -------
@@ -450,6 +500,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
     arr = arr.astype(np.int64)
     p = make_params(arr.shape[1], distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, seed=seed, period=period,
-                    density_map=density_map)
+                    density_map=density_map, stretch=stretch, orbit_radius=orbit_radius,
+                    orbit_phase=orbit_phase)
     pos, ids, which = reference.feature_points(arr, p)
     return FeaturePoints(positions=pos / p.scale, ids=ids, cell_index=which)

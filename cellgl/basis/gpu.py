@@ -28,7 +28,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_METRIC=int(p.metric),
         CELL_DIST=int(p.distribution),
         CELL_MAX_POINTS=MAX_POINTS,
-        CELL_MAX_RING=max_ring_default(p.dim),
+        CELL_MAX_RING=max_ring_default(p.dim, p.axis_scale),
         CELL_GRID=int(grid),
         CELL_PERIODIC=int(any(p.period)),
         CELL_OUT_F=int("F" in outputs),
@@ -37,6 +37,8 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_OUT_GRAD=int("grad" in outputs),
         CELL_LOCAL_SIZE=LOCAL_SIZE,
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
+        CELL_ORBIT=int(p.orbit),
+        CELL_ANISO=int(p.aniso),
     )
     d.update(_features.defines(outputs, p.dim))
     return d
@@ -64,6 +66,9 @@ def _set_params(prog, p: Params):
     _set(prog, "u_period", tuple(int(v) for v in p.period))
     _set(prog, "u_minkowski_p", float(p.minkowski_p))
     _set(prog, "u_out_scale", float(1.0 / p.scale))
+    _set(prog, "u_orbit_radius", float(p.orbit_radius))
+    _set(prog, "u_orbit_turn", int(p.orbit_turn))
+    _set(prog, "u_axis_scale", tuple(float(v) for v in p.axis_scale))
     set_density(prog, p.density_map)
 
 

@@ -11,6 +11,7 @@ All integer arithmetic is done on ``np.uint64`` arrays holding values below
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +38,23 @@ class Params:
     period: tuple[int, int, int, int] = (0, 0, 0, 0)
     #: spatially varying density (:class:`cellgl.basis.density.DensityEncoding`), poisson only
     density_map: object = None
+    #: loopable animation (CELL_ORBIT): radius of each point's circle in cells, [0, 0.5]
+    orbit_radius: float = 0.0
+    #: ... and the time as a fraction of the loop times 2^32, modulo 2^32 (:func:`orbit_turn`)
+    orbit_turn: int = 0
+    #: anisotropic distance (CELL_ANISO): the weight of each axis (1 past ``dim``;
+    #: :func:`axis_scale` of a stretch)
+    axis_scale: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+
+    @property
+    def orbit(self) -> bool:
+        """Whether the points orbit (CELL_ORBIT)."""
+        return self.orbit_radius > 0.0
+
+    @property
+    def aniso(self) -> bool:
+        """Whether the distance is anisotropic (CELL_ANISO)."""
+        return any(s != 1.0 for s in self.axis_scale)
 
     @property
     def thresholds(self) -> np.ndarray:
@@ -47,6 +65,39 @@ class Params:
         """Sample positions are multiplied by this before the search (and
         distances divided by it after): only worley1996 rescales."""
         return W96_DENSITY_ADJUSTMENT if self.distribution == Distribution.WORLEY1996 else 1.0
+
+
+def axis_scale(stretch, dim: int) -> tuple[float, float, float, float]:
+    """The per-axis distance weights of stretched cells: ``w_a = g / stretch_a`` with ``g`` the
+    geometric mean of ``stretch[:dim]`` (so ``prod w = 1``: the cells keep their mean size, only
+    their shape changes, and F keeps its distribution under a Poisson process); 1 past ``dim``."""
+    s = [float(x) for x in stretch[:dim]]
+    if all(x == 1.0 for x in s):
+        return (1.0, 1.0, 1.0, 1.0)
+    g = math.exp(sum(math.log(x) for x in s) / dim)
+    return tuple([g / x for x in s] + [1.0] * (4 - dim))
+
+
+def orbit_turn(phase: float) -> int:
+    """The loop time ``phase`` (in loops: 0 and 1 are the same frame) as the uint32 the shaders
+    take: ``round(phase * 2^32) mod 2^32``, computed exactly from the float64 value, so that
+    ``phase`` and ``phase + 1`` give the same turn."""
+    from fractions import Fraction
+
+    return round(Fraction(float(phase)) * (1 << 32)) % (1 << 32)
+
+
+def orbit(f: np.ndarray, ids: np.ndarray, p: Params) -> np.ndarray:
+    """``cell_orbit``: the points at f (N, 4) in their cells moved along their circles."""
+    h = hash_u32(_u(ids) ^ np.uint64(0x3C6EF372))
+    turn = np.where((h & np.uint64(1)) != 0, np.uint64(p.orbit_turn),
+                    np.uint64((-p.orbit_turn) & 0xFFFFFFFF))
+    a = (_add(h, turn) >> np.uint64(8)).astype(np.float64) * (2.0 * math.pi / 16777216.0)
+    r = p.orbit_radius
+    f = f.copy()
+    f[:, 0] = 0.5 + (1.0 - 2.0 * r) * (f[:, 0] - 0.5) + r * np.cos(a)
+    f[:, 1] = 0.5 + (1.0 - 2.0 * r) * (f[:, 1] - 0.5) + r * np.sin(a)
+    return f
 
 
 def wrap(cells: np.ndarray, period) -> np.ndarray:
@@ -108,7 +159,7 @@ def next_point(state: np.ndarray, p: Params):
             state = _w96_step(state)
             f[:, a] = (state.astype(np.float64) + 0.5) / 4294967296.0
         state = _w96_step(state)
-        return state, f, ids
+        return state, (orbit(f, ids, p) if p.orbit else f), ids
     if p.distribution == Distribution.JITTER:
         u = state                                   # one point: the cell's hash itself
     else:
@@ -124,7 +175,7 @@ def next_point(state: np.ndarray, p: Params):
         f[:, 3] = u16(v & np.uint64(0xFFFF))
     if p.distribution == Distribution.JITTER:
         f[:, : p.dim] = 0.5 + p.jitter * (f[:, : p.dim] - 0.5)
-    return state, f, ids
+    return state, (orbit(f, ids, p) if p.orbit else f), ids
 
 
 # --------------------------------------------------------------------------- metric.glsl
@@ -207,19 +258,30 @@ def _visit(F, D, I, cells, f, o, p: Params):
     for k in range(int(count.max(initial=0))):
         state, q, ids = next_point(state, p)
         has = k < count
-        delta = base + q
+        delta = (base + q) * np.asarray(p.axis_scale)
         d = np.where(has, metric_length(delta, p), np.inf)
         _insert(F, D, I, d, delta, ids)
 
 
-def max_ring_default(dim: int) -> int:
-    """CELL_MAX_RING: rings searched before a result is marked inexact."""
-    return {2: 8, 3: 5, 4: 3}[dim]
+def max_ring_default(dim: int, axis_scale=(1.0,)) -> int:
+    """CELL_MAX_RING: rings searched before a result is marked inexact (times the ratio of the
+    largest to the smallest axis weight, rounded up, for anisotropic distances: at most 64)."""
+    ratio = max(axis_scale[:dim]) / min(axis_scale[:dim])
+    return min(64, {2: 8, 3: 5, 4: 3}[dim] * math.ceil(ratio - 1e-9))
 
 
 def _box_distance(o: np.ndarray, f: np.ndarray, p: Params) -> np.ndarray:
     g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0))
-    return metric_length(g, p)
+    return metric_length(g * np.asarray(p.axis_scale), p)
+
+
+def _ring_bound(rings: float, m: np.ndarray, ma: np.ndarray, p: Params) -> np.ndarray:
+    """``_cell_ring_bound``: internal-unit lower bound on the distance to any point beyond
+    ``rings`` full rings; m (N,) the nearest face distance, ma (N, 4) the weighted per-axis ones."""
+    if not p.aniso:
+        return metric_term(rings + m, p)
+    st = np.asarray(p.axis_scale)
+    return np.min(metric_term(st[None, : p.dim] * rings + ma[:, : p.dim], p), axis=1)
 
 
 def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | None = None):
@@ -237,7 +299,7 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
     F (N, n) float64, delta (N, n, 4) float64, id (N, n) uint32, exact (N,) bool
     """
     if max_ring is None:
-        max_ring = max_ring_default(p.dim)
+        max_ring = max_ring_default(p.dim, p.axis_scale)
     N = len(cells)
     F = np.full((N, n), BIG)
     D = np.zeros((N, n, 4))
@@ -261,10 +323,11 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
 
     fd = f[:, : p.dim]
     m = np.minimum(fd, 1.0 - fd).min(axis=1)
+    ma = np.minimum(f, 1.0 - f) * np.asarray(p.axis_scale)
     exact = np.zeros(N, dtype=bool)
     active = np.ones(N, dtype=bool)
     for ring in range(2, max_ring + 1):
-        done = active & (metric_term(ring - 1 + m, p) >= F[:, -1])
+        done = active & (_ring_bound(ring - 1, m, ma, p) >= F[:, -1])
         exact |= done
         active &= ~done
         rows = np.nonzero(active)[0]
@@ -272,14 +335,23 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
             break
         Fr = F[rows, -1]
         reach = np.where(Fr < BIG, metric_finish(Fr, p) * 1.000001 + 1e-6, ring + 2.0)
-        lo, hi = ring_window(ring, reach, f[rows], p.dim)
+        if p.aniso:     # the window per axis in lattice units (no point found yet: the whole ring)
+            fa = f[rows]
+            hi = np.zeros((len(rows), 4), dtype=np.int64)
+            lo = np.zeros((len(rows), 4), dtype=np.int64)
+            for a in range(p.dim):
+                ra = np.where(Fr < BIG, reach / p.axis_scale[a], reach)
+                hi[:, a] = np.minimum(ring, np.ceil(ra + fa[:, a]).astype(np.int64) - 1)
+                lo[:, a] = -np.minimum(ring, np.ceil(ra + 1.0 - fa[:, a]).astype(np.int64) - 1)
+        else:
+            lo, hi = ring_window(ring, reach, f[rows], p.dim)
         for o in _ring_offsets(ring, p.dim):
             ov = np.asarray(o)
             inside = np.all((ov >= lo) & (ov <= hi), axis=1)
             visit(rows[inside], o)
     else:
         rows = np.nonzero(active)[0]
-        exact[rows] = metric_term(max_ring + m[rows], p) >= F[rows, -1]
+        exact[rows] = _ring_bound(max_ring, m[rows], ma[rows], p) >= F[rows, -1]
     return metric_finish(F, p), D, I.astype(np.uint32), exact
 
 

@@ -59,6 +59,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--memory", default=None, metavar="MB",
                    help=f"advanced: MB of working memory to stay within; sets the tile size "
                         f"(default {DEFAULT_BUDGET >> 20})")
+    p.add_argument("--frames", default=None, metavar="N",
+                   help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
+                        ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
+    p.add_argument("--fps", default="24", metavar="FPS",
+                   help="frames per second of an animated .webp/.gif (default %(default)s)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -89,6 +94,8 @@ def run_cli(args: argparse.Namespace) -> int:
     samples = _int_arg("--samples", args.samples, 1, MAX_SAMPLES)
     t0 = time.perf_counter()
     try:
+        if args.frames is not None:
+            return _run_frames(args, tile, budget, t0)
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
@@ -101,4 +108,23 @@ def run_cli(args: argparse.Namespace) -> int:
         for p in paths:
             print(f"wrote {p} ({os.path.getsize(p) / 1024:.0f} KiB, {secs:.1f} s)",
                   file=sys.stderr)
+    return 0
+
+
+def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
+    """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
+    from cellgl.io.frames import MAX_FPS, MAX_FRAMES, bake_frames
+
+    try:
+        fps = float(args.fps)
+    except ValueError:
+        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
+    paths = bake_frames(args.recipe, args.output, _int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
+                        size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
+                        tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
+                        memory_budget=budget)
+    if not args.quiet:
+        total = sum(os.path.getsize(p) for p in paths)
+        print(f"wrote {len(paths)} file(s): {paths[0]}{' .. ' + str(paths[-1]) if len(paths) > 1 else ''} "
+              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s)", file=sys.stderr)
     return 0

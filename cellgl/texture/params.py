@@ -18,7 +18,8 @@ Structured parts of a recipe have their own validation in :mod:`cellgl.texture.r
 ``compile_time`` parameters change the shader's code (they become ``#define``s); the others
 are uniforms (``u_<name>``) that a viewer may change every frame, except the ``derived`` ones,
 which the CPU turns into derived uniform arrays (the density map's ``density_*``: its integer
-encoding per octave, :mod:`cellgl.basis.density`) and which have no uniform of their own.
+encoding per octave, :mod:`cellgl.basis.density`; ``orbit_phase``: the integer ``u_orbit_turn``;
+``stretch_*``: the weights ``u_axis_scale``) and which have no uniform of their own.
 """
 from __future__ import annotations
 
@@ -132,6 +133,14 @@ PARAMS: tuple[Param, ...] = (
     Param("max_points", "int", 9, 1, 16, "poisson: most points per cell (Worley: 9)", "basis"),
     Param("seed", "int", 0, 0, 2 ** 32 - 1, "random seed of the feature points and the noise", "basis",
           glsl="uint"),
+    *(Param(f"stretch_{a}", "float", 1.0, 1.0 / 16.0, 16.0, f"relative length of the cells along {a} "
+            f"(stretched cells: the distance weights axes by 1 / stretch, normalised; exact)"
+            f"{' (3D and 4D bases)' if a == 'z' else ''}", "basis", derived=True)
+      for a in "xyz"),
+    Param("orbit_radius", "float", 0.0, 0.0, 0.5, "loopable animation: each feature point circles in "
+          "its cell (x, y) with this radius in cells, once per loop", "basis"),
+    Param("orbit_phase", "float", 0.0, -1e9, 1e9, "animation time in loops (orbit_phase + 1 is the same "
+          "frame, bit for bit); `cellgl bake --frames N` steps it by 1/N", "basis", derived=True),
     # ---- combination: value = sum c_i F_i + sum c_ij F_i F_j + c_noise * noise
     *(_coef(n, f"weight of F{n[1:]} (Worley's linear combination)", 1.0 if n == "c1" else 0.0) for n in LINEAR),
     *(_coef(n, f"weight of F{n[1]} F{n[2]} (Qin's product terms)") for n in PRODUCTS),
@@ -173,6 +182,12 @@ PARAMS: tuple[Param, ...] = (
     Param("time", "float", 0.0, -1e9, 1e9, "4th coordinate in cells (4D bases: animation)", "domain"),
     Param("tileable", "bool", False, None, None, "seamless in u and v: the basis (and noise) repeat every "
           "frequency cells", "domain", compile_time=True),
+    Param("warp_amount", "float", 0.0, 0.0, 8.0, "domain warp: the sample moves by up to about this many "
+          "cells along each axis, by fractal gradient noise, before the basis", "domain"),
+    Param("warp_frequency", "float", 1.0, 0.01, 64.0, "domain warp: noise lattice cells per basis cell "
+          "(an integer when tileable)", "domain"),
+    Param("warp_octaves", "int", 3, 1, 8, "domain warp: octaves of the warp noise (gain 0.5, "
+          "lacunarity 2)", "domain"),
     # ---- noise: Perlin-style integer-hashed gradient noise
     Param("noise_frequency", "float", 1.0, 0.01, 64.0, "noise lattice cells per basis cell (an integer "
           "when tileable)", "noise"),
@@ -205,6 +220,10 @@ PARAMS_BY_NAME: dict[str, Param] = {p.name: p for p in PARAMS}
 assert len(PARAMS_BY_NAME) == len(PARAMS)
 assert all(p.group in GROUPS for p in PARAMS)
 
+#: the uniform a derived parameter reaches the shader through (default: the density map's)
+_DERIVED_UNIFORM = {"orbit_phase": "u_orbit_turn", "stretch_x": "u_axis_scale", "stretch_y": "u_axis_scale",
+                    "stretch_z": "u_axis_scale"}
+
 #: the default ramp: black to white
 DEFAULT_RAMP = ((0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0))
 
@@ -224,7 +243,8 @@ def markdown_table() -> str:
             name, doc = "c11 .. c44", ("weights of F_i F_j, all 16 ordered pairs (Qin); JSON: "
                                        "combination.products (4 x 4)")
         default = str(p.default).lower() if isinstance(p.default, bool) else p.default
-        kind = "#define" if p.compile_time else ("u_density_*" if p.derived else f"u_{p.name}")
+        kind = "#define" if p.compile_time else (_DERIVED_UNIFORM.get(p.name, "u_density_*") if p.derived
+                                                 else f"u_{p.name}")
         doc = doc.replace("|", "\\|")
         lines.append(f"| {p.group} | `{name}` | {p.type} | `{default}` | {p.range_text()} | {kind} | {doc} |")
     return "\n".join(lines) + "\n"

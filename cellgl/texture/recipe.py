@@ -32,6 +32,7 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
+from cellgl.texture import domain
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
                                    check_channels, parse_value)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
@@ -228,6 +229,7 @@ class Recipe:
             changes["lacunarity"] = float(whole("lacunarity", v["lacunarity"]))
         if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
             changes["noise_frequency"] = float(whole("noise_frequency", v["noise_frequency"]))
+        changes.update(domain.tileable_changes(v, notes))
         return self.replace(**changes), notes
 
     def set_from_strings(self, items) -> "Recipe":
@@ -516,6 +518,7 @@ def _check(r: Recipe) -> None:
             integral("fractal.lacunarity", v["lacunarity"])
         if v["c_noise"] != 0.0 or v["noise_color"] != 0.0:
             integral("noise.noise_frequency", v["noise_frequency"])
+    domain.check(v)
 
 
 # ---------------------------------------------------------------------- presets

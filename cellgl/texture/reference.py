@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cellgl.texture import domain
 from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.texture.antialias import feature_frequency, smoothscale
@@ -207,8 +208,10 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     part of far points in :func:`cellgl.texture.evaluate`): ``O += (du f, dv f aspect, dz f, 0)``,
     so a pan far away is exact too.
 
+    The warp noise's lattice (octave 0 only, :mod:`cellgl.texture.domain`) samples ``O warp_frequency``.
+
     Returns ``{"origin_cell", "noise_cell": int64 (MAX_OCTAVES, 4), "origin_frac",
-    "noise_frac": float64 (MAX_OCTAVES, 4)}``.
+    "noise_frac": float64 (MAX_OCTAVES, 4), "warp_cell": int64 (4,), "warp_frac": float64 (4,)}``.
     """
     f, dim = t["frequency"], t["dimension"]
     O = np.array([t["offset_x"] + float(pan[0]) * f, t["offset_y"] + float(pan[1]) * f * t["aspect"],
@@ -225,7 +228,10 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
         c, fr = _split(O * k * t["noise_frequency"], per * int(round(t["noise_frequency"])))
         out["noise_cell"].append(c)
         out["noise_frac"].append(fr)
-    return {k: np.array(v) for k, v in out.items()}
+    out = {k: np.array(v) for k, v in out.items()}
+    out["warp_cell"], out["warp_frac"] = _split(O * t["warp_frequency"],
+                                                texture_period(t, 0) * int(round(t["warp_frequency"])))
+    return out
 
 
 def texture_local(p: np.ndarray, t: dict) -> np.ndarray:
@@ -258,7 +264,9 @@ def _basis(t: dict, octave: int) -> ref.Params:
                       distribution=Distribution[t["distribution"].upper()], density=t["density"],
                       jitter=t["jitter"], min_points=t["min_points"], max_points=t["max_points"],
                       minkowski_p=t["minkowski_p"], seed=(t["seed"] + 1013 * octave) & M32,
-                      period=tuple(int(c) for c in texture_period(t, octave)))
+                      period=tuple(int(c) for c in texture_period(t, octave)),
+                      axis_scale=domain.axis_scale(t), orbit_radius=float(t["orbit_radius"]),
+                      orbit_turn=domain.orbit_turn(t["orbit_phase"]))
 
 
 def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
@@ -274,7 +282,7 @@ def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
     fr[:, dim:] = 0.0
     F, D, I, exact = ref.search(cell, fr, p, n)
     F = F / t["dist_scale"]
-    dF = ref.metric_gradient(D, F * t["dist_scale"], p)
+    dF = ref.metric_gradient(D, F * t["dist_scale"], p) * np.asarray(p.axis_scale)
     dF[..., dim:] = 0.0
     lin = [t[c] for c in LINEAR]
     v = np.zeros(len(s))
@@ -357,6 +365,22 @@ def texture_cell_value(ids: np.ndarray) -> np.ndarray:
     return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
 
 
+def texture_warp(s: np.ndarray, t: dict):
+    """``cell_texture_warp``: the warped positions (N, 4) and the rows j (4, N, 4) of the warp's
+    Jacobian minus the identity."""
+    dim = t["dimension"]
+    per = texture_period(t, 0) * int(round(t["warp_frequency"]))
+    x = t["warp_frac"] + s * t["warp_frequency"]
+    d = np.zeros_like(s)
+    j = np.zeros((4,) + s.shape)
+    for a in range(dim):
+        seed = (t["seed"] + domain.WARP_SEED + domain.WARP_SEED_STEP * a) & M32
+        v, g = noise_fractal_split(t["warp_cell"], x, per, seed, t["warp_octaves"], dim)
+        d[:, a] = t["warp_amount"] * v
+        j[a] = t["warp_amount"] * t["warp_frequency"] * g
+    return s + d, j
+
+
 def texture_footprint(duvz, t: dict) -> np.ndarray:
     """``cell_texture_footprint``: a pixel spanning ``duvz`` ((3,) or (N, 3)) in texture space,
     in basis units."""
@@ -377,6 +401,9 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
     t = t if t is not None else _tex(recipe)
     n = n or needed_n(recipe)
     N = len(s)
+    j = None
+    if t["warp_amount"] != 0.0:
+        s, j = texture_warp(np.asarray(s, dtype=np.float64), t)
     fractal = t["fractal"]
     octaves = 1 if fractal == "none" else int(np.ceil(t["octaves"]))
     qin = fractal in ("qin", "qin_cube")
@@ -446,6 +473,8 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
     out = (h < 0.0) | (h > 1.0)
     h = np.clip(h, 0.0, 1.0)
     dh[out] = 0.0
+    if j is not None:
+        dh = dh + sum(dh[:, a, None] * j[a] for a in range(4))
     o["height"] = h
     o["grad"] = dh
     nrm = np.stack([-t["bump"] * dh[:, 0], -t["bump"] * dh[:, 1], np.ones(N)], axis=1)

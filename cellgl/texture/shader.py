@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cellgl.texture import domain
 from cellgl.basis.enums import Distribution, Metric, glsl_defines
 from cellgl.texture import antialias
 from cellgl.texture.params import (FRACTAL_MODES, MAX_RAMP_KEYS, NORMAL_CONVENTIONS, PARAMS, PARAMS_BY_NAME,
@@ -70,6 +71,10 @@ _DERIVED = (
     ("ivec4", "noise_cell", "[CELL_TEX_OCTAVES]",
      "octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)"),
     ("vec4", "noise_frac", "[CELL_TEX_OCTAVES]", "... and its fraction in [0, 1)"),
+    ("ivec4", "warp_cell", "", "warp-noise lattice cell of warp_frequency (offset_x, offset_y, offset_z, time)"),
+    ("vec4", "warp_frac", "", "... and its fraction in [0, 1)"),
+    ("uint", "orbit_turn", "", "orbit_phase as a fraction of the loop times 2^32 (wrapping)"),
+    ("vec4", "axis_scale", "", "distance weight per axis of stretched cells (cellgl/texture/domain.py)"),
 )
 #: derived fields of a density map (cellgl.basis.density), present only under this condition
 _DENSITY_IF = "#if CELL_DENSITY_MAP != CELL_DMAP_NONE"
@@ -229,6 +234,8 @@ def glsl_constant_block(recipe, prefix: str = "u_") -> str:
             lines.append(f"const uint {name} = {int(v)}u;")
         elif t in ("vec3", "vec4"):
             lines.append(f"const {t} {name} = {t}({', '.join(_f(c) for c in v)});")
+        elif t == "ivec4":
+            lines.append(f"const ivec4 {name} = ivec4({', '.join(str(int(c)) for c in v)});")
         else:
             lines.append(f"const int {name} = {int(v)};")
     return "\n".join(lines) + "\n"
@@ -273,9 +280,11 @@ def defines(recipe, channels=()) -> dict:
         CELL_METRIC=int(Metric[v["metric"].upper()]),
         CELL_DIST=int(Distribution[v["distribution"].upper()]),
         CELL_MAX_POINTS=MAX_POINTS,
-        CELL_MAX_RING=max_ring_default(v["dimension"]),
+        CELL_MAX_RING=max_ring_default(v["dimension"], domain.axis_scale(v)),
         CELL_PERIODIC=int(bool(v["tileable"])),
         CELL_DENSITY_MAP=_density_kind(v["density_map"]),
+        CELL_ORBIT=int(domain.orbit(v)),
+        CELL_ANISO=int(domain.aniso(v)),
         CELL_EDGE=int(v["c_edge"] != 0.0),
         CELL_SMOOTH=int(v["smoothness"] > 0.0 and (v["c_smooth"] != 0.0 or v["cell_mix"] != 0.0)),
         CELL_NSPHERE=int(v["c_nsphere"] != 0.0),
@@ -295,7 +304,8 @@ def _density_kind(name: str) -> int:
 def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
     """The recipe's origin ``(offset_x, offset_y, offset_z, time)`` split per octave, as the GPU
     gets it: ``{"origin_cell", "noise_cell": int32 (MAX_OCTAVES, 4), "origin_frac",
-    "noise_frac": float32 (MAX_OCTAVES, 4) in [0, 1)}``.
+    "noise_frac": float32 (MAX_OCTAVES, 4) in [0, 1), "warp_cell" int32 (4,), "warp_frac"
+    float32 (4,)}`` (the warp noise's lattice, octave 0 only).
 
     The split is :func:`cellgl.texture.reference.lattice_origins` (float64: octave ``i``'s
     lattice position ``k O``, ``k = lacunarity^i`` times ``dist_scale`` or ``noise_frequency``,
@@ -309,7 +319,7 @@ def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
     recipe = load_recipe(recipe)
     o = texture_reference.lattice_origins(recipe.values, pan)
     out = {}
-    for name in ("origin", "noise"):
+    for name in ("origin", "noise", "warp"):
         cell, frac = o[name + "_cell"], o[name + "_frac"].astype(np.float32)
         up = frac >= 1.0
         cell = cell + up
@@ -343,6 +353,8 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     out["u_feature_frequency"] = antialias.feature_frequency(v)
+    out["u_orbit_turn"] = domain.orbit_turn(v["orbit_phase"])
+    out["u_axis_scale"] = domain.axis_scale(v)
     out.update(pan_uniform_values(recipe, pan))
     from cellgl.texture.reference import octave_mean
 
@@ -357,7 +369,8 @@ def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     recipe = load_recipe(recipe)
     out = {}
     for k, a in lattice_origins(recipe, pan).items():
-        out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
+        rows = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in np.atleast_2d(a)]
+        out["u_" + k] = rows if a.ndim == 2 else rows[0]
     encs = density_encodings(recipe, pan)
     if encs is not None:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]

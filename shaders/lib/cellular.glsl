@@ -15,9 +15,15 @@
 // The sample is given as an integer cell plus a float fraction in [0, 1), so
 // precision does not depend on the distance from the origin.
 //
+// Anisotropic distance (CELL_ANISO, stretched cells): a vector v has length
+// |p.axis_scale * v| (each axis weighted), so the Voronoi cells of the
+// feature points stretch along the axes of small weight. The box distances
+// and the ring bounds above are taken in those units, per axis, so the answer
+// is still exactly that of a brute-force search under the weighted metric.
+//
 // Requires: hash.glsl, metric.glsl, points.glsl.
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
-//         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP.
+//         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO.
 
 #include "hash.glsl"
 #include "metric.glsl"
@@ -30,9 +36,19 @@ struct CellResult {
     bool exact;           // false only if the search cap was reached
 };
 
+// A vector in the units distances are measured in (CELL_ANISO: axes weighted).
+vec4 _cell_axis_scale(vec4 v, CellParams p)
+{
+#if CELL_ANISO
+    return v * p.axis_scale;
+#else
+    return v;
+#endif
+}
+
 // Internal-unit distance from the sample (fraction f of its cell) to the
 // nearest point of the cell at offset o.
-float _cell_box_distance(ivec4 o, vec4 f, float p)
+float _cell_box_distance(ivec4 o, vec4 f, CellParams p)
 {
     vec4 g = vec4(0.0);
     for (int a = 0; a < CELL_DIM; a++) {
@@ -42,7 +58,7 @@ float _cell_box_distance(ivec4 o, vec4 f, float p)
             g[a] = float(-o[a] - 1) + f[a];
         }
     }
-    return cell_metric_length(g, p);
+    return cell_metric_length(_cell_axis_scale(g, p), p.minkowski_p);
 }
 
 // Insert one candidate (internal-unit distance d) into the sorted lists.
@@ -91,9 +107,28 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     for (int k = 0; k < count; k++) {
         uint id;
         vec4 q = cell_next_point(state, p, id);
-        vec4 delta = base + q;
+        vec4 delta = _cell_axis_scale(base + q, p);
         _cell_insert(r, cell_metric_length(delta, p.minkowski_p), delta, id);
     }
+}
+
+// Internal-unit lower bound on the distance to any point beyond `rings` full
+// rings of cells around the sample's: such a point's offset is +-(rings + 1)
+// on some axis a, so it is at least rings + (distance to the nearer face of
+// the sample's cell on a) away, m the least of those. Weighted (CELL_ANISO):
+// the least over the axes of axis_scale[a] rings + ma[a], ma = axis_scale *
+// (the per-axis face distances).
+float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
+{
+#if CELL_ANISO
+    float b = 3.0e38;
+    for (int a = 0; a < CELL_DIM; a++) {
+        b = min(b, cell_metric_term(p.axis_scale[a] * rings + ma[a], p.minkowski_p));
+    }
+    return b;
+#else
+    return cell_metric_term(rings + m, p.minkowski_p);
+#endif
 }
 
 CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
@@ -124,7 +159,7 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 #endif
     {
         ivec4 o = ivec4(x, y, z, w);
-        if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p.minkowski_p) < r.F[CELL_N - 1]) {
+        if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
             _cell_visit(r, cell, f, o, p);
         }
     }
@@ -134,6 +169,7 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
     for (int a = 0; a < CELL_DIM; a++) {
         m = min(m, min(f[a], 1.0 - f[a]));
     }
+    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
 
     // Rings 2, 3, ...: only while a point in the ring could still be closer
     // than F_n; inside a ring only the window of cells that can reach, each
@@ -141,7 +177,7 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
     r.exact = false;
     int ring = 2;
     for (; ring <= CELL_MAX_RING; ring++) {
-        if (cell_metric_term(float(ring - 1) + m, p.minkowski_p) >= r.F[CELL_N - 1]) {
+        if (_cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
             r.exact = true;
             break;
         }
@@ -149,7 +185,18 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
             ? cell_metric_finish(r.F[CELL_N - 1], p.minkowski_p) * 1.000001 + 1e-6
             : float(ring + 2);
         ivec4 lo, hi;
+#if CELL_ANISO
+        lo = ivec4(0);
+        hi = ivec4(0);
+        for (int a = 0; a < CELL_DIM; a++) {
+            // In lattice units on this axis (no point found yet: the whole ring).
+            float ra = r.F[CELL_N - 1] < 3.0e38 ? reach / p.axis_scale[a] : reach;
+            hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
+            lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
+        }
+#else
         cell_ring_window(ring, reach, f, lo, hi);
+#endif
         for (int x = lo.x; x <= hi.x; x++)
         for (int y = lo.y; y <= hi.y; y++)
         for (int z = lo.z; z <= hi.z; z++)
@@ -157,13 +204,13 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
             ivec4 o = ivec4(x, y, z, w);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                && _cell_box_distance(o, f, p.minkowski_p) < r.F[CELL_N - 1]) {
+                && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
                 _cell_visit(r, cell, f, o, p);
             }
         }
     }
     if (ring > CELL_MAX_RING) {
-        r.exact = cell_metric_term(float(CELL_MAX_RING) + m, p.minkowski_p) >= r.F[CELL_N - 1];
+        r.exact = _cell_ring_bound(float(CELL_MAX_RING), m, ma, p) >= r.F[CELL_N - 1];
     }
     for (int k = 0; k < CELL_N; k++) {
         r.F[k] = cell_metric_finish(r.F[k], p.minkowski_p);

@@ -194,7 +194,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             ivec4 o = ivec4(x, y, z, v);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                && _cell_box_distance(o, f, p.minkowski_p)
+                && _cell_box_distance(o, f, p)
                    < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
                 _cell_walk_cell(w, cell, f, o, p);
             }

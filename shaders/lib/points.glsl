@@ -10,10 +10,18 @@
 // Requires: hash.glsl. Macros: CELL_DIM (2..4), CELL_DIST,
 // CELL_MAX_POINTS (the size of the threshold table, >= max_points),
 // CELL_DENSITY_MAP (CELL_DMAP_NONE, _RAMP, _RADIAL, _IMAGE: spatially varying
-// density, poisson only; cellgl/basis/density.py).
+// density, poisson only; cellgl/basis/density.py), CELL_ORBIT (1: loopable
+// animation, the points orbit inside their cells; cell_orbit), CELL_ANISO (1:
+// anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl).
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
+#endif
+#ifndef CELL_ORBIT
+#define CELL_ORBIT 0
+#endif
+#ifndef CELL_ANISO
+#define CELL_ANISO 0
 #endif
 #define CELL_DENSITY_LEVELS 16
 
@@ -36,6 +44,13 @@ struct CellParams {
     uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
     ivec4 density_axis[4];  // per lattice axis: (o, n, m, b), see cell_density_level
     ivec4 density_info;     // (shift, image width, image height, 0)
+#endif
+#if CELL_ORBIT
+    float orbit_radius;     // radius of each point's circle, in cells, [0, 0.5]
+    uint orbit_turn;        // animation time as a fraction of the loop, times 2^32 (wraps)
+#endif
+#if CELL_ANISO
+    vec4 axis_scale;        // weight of each axis in the distance (1 past CELL_DIM)
 #endif
 };
 
@@ -178,6 +193,28 @@ int cell_point_count_at(inout uint state, ivec4 cell, CellParams p)
 #endif
 }
 
+#if CELL_ORBIT
+// Loopable animation: the point at f (in [0, 1]^d of its cell) circles in the
+// xy plane, once per loop, around f pulled towards the cell centre by the
+// radius r (so the whole circle stays inside the cell and the exact search's
+// bounds hold):
+//     c = 0.5 + (1 - 2 r) (f - 0.5),   f' = c + r (cos a, sin a),
+//     a = 2 pi ((phase + s turn) mod 2^32) / 2^32,
+// phase and the direction s = +-1 from a hash of the point's ID. The angle is
+// integer arithmetic until the last step, so turn and turn + 2^32 (the next
+// loop) give the same bits.
+vec4 cell_orbit(vec4 f, uint id, CellParams p)
+{
+    uint h = cell_hash_u32(id ^ 0x3c6ef372u);
+    uint turn = (h & 1u) != 0u ? p.orbit_turn : 0u - p.orbit_turn;
+    float a = float((h + turn) >> 8) * (6.283185307179586 / 16777216.0);
+    float r = p.orbit_radius;
+    f.x = 0.5 + (1.0 - 2.0 * r) * (f.x - 0.5) + r * cos(a);
+    f.y = 0.5 + (1.0 - 2.0 * r) * (f.y - 0.5) + r * sin(a);
+    return f;
+}
+#endif
+
 // The next feature point of the stream: its ID, and its position relative to
 // the cell's lower corner, each coordinate in [0, 1].
 vec4 cell_next_point(inout uint state, CellParams p, out uint id)
@@ -216,6 +253,9 @@ vec4 cell_next_point(inout uint state, CellParams p, out uint id)
 #if CELL_DIST == CELL_DIST_JITTER
     f = 0.5 + p.jitter * (f - 0.5);
 #endif
+#endif
+#if CELL_ORBIT
+    f = cell_orbit(f, id, p);
 #endif
     return f;
 }

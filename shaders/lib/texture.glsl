@@ -45,6 +45,13 @@
 // only the small k s: cell = origin_cell + floor(origin_frac + k s), fraction
 // = the rest. So a texture 10^6 cells from the origin is as sharp as at it.
 //
+// Stretched cells (CELL_ANISO): distances weight axis a by t.axis_scale[a]
+// (cellgl/texture/domain.py: normalised 1 / stretch), exactly (cellular.glsl).
+// Domain warp: the whole texture is evaluated at s + d(s), d = warp_amount
+// (n_0, n_1, ...) fractal gradient noise (cell_texture_warp); the gradient
+// follows by the chain rule. Loopable animation (CELL_ORBIT): the feature
+// points orbit (points.glsl cell_orbit) at t.orbit_turn.
+//
 // Band limit (antialiasing; Qin's smoothscale). Qin's cloud (eq. 7) multiplies octave
 // i by smoothscale(2^i x), a factor that "depends on the differential surface area" at
 // the point, so that octaves finer than the pixel fade out instead of aliasing. cellgl's
@@ -70,7 +77,8 @@
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
 // Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes,
 // CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture/shader.py),
-// those of features.glsl and CELL_TEX_CELL_IMAGE (cell_color image).
+// CELL_ORBIT and CELL_ANISO (cellgl/texture/domain.py), those of features.glsl and
+// CELL_TEX_CELL_IMAGE (cell_color image).
 
 #include "features.glsl"
 #include "noise.glsl"
@@ -130,6 +138,13 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
         p.thresholds[k] = t.thresholds[k];
     }
     p.period = cell_texture_period(t, octave);
+#if CELL_ANISO
+    p.axis_scale = t.axis_scale;
+#endif
+#if CELL_ORBIT
+    p.orbit_radius = t.orbit_radius;
+    p.orbit_turn = t.orbit_turn;
+#endif
     p.minkowski_p = t.minkowski_p;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     // The density map of this octave (cellgl/texture/shader.py density_encodings: the map
@@ -171,6 +186,9 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     for (int k = 0; k < CELL_N; k++) {
         F[k] = r.F[k] / t.dist_scale;
         dF[k] = cell_metric_gradient(r.delta[k], r.F[k], t.minkowski_p);
+#if CELL_ANISO
+        dF[k] *= t.axis_scale;      // r.delta is weighted: the chain rule
+#endif
         v += lin[k] * F[k];
         grad += lin[k] * dF[k];
         if (k < 4) {
@@ -240,6 +258,35 @@ float cell_texture_cell_value(uint id)
     return cell_id_value(id);
 }
 
+// Domain warp: s + warp_amount (n_0, n_1, ...), n_a the fractal gradient noise
+// (warp_octaves, seed + 31337 + 101 a) at the warp lattice position
+// warp_frequency (O + s), carried split as t.warp_cell + t.warp_frac + s
+// warp_frequency (repeating with the texture when tileable). j0..j3 receive the
+// rows of the warp's Jacobian minus the identity: ja = d(displacement_a)/ds.
+vec4 cell_texture_warp(vec4 s, CellTextureParams t, out vec4 j0, out vec4 j1, out vec4 j2, out vec4 j3)
+{
+    ivec4 per = cell_texture_period(t, 0) * int(round(t.warp_frequency));
+    vec4 x = t.warp_frac + s * t.warp_frequency;
+    vec4 d = vec4(0.0);
+    vec4 g;
+    float k = t.warp_amount * t.warp_frequency;
+    d.x = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31337u, t.warp_octaves, g);
+    j0 = k * g;
+    d.y = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31438u, t.warp_octaves, g);
+    j1 = k * g;
+    j2 = vec4(0.0);
+    j3 = vec4(0.0);
+#if CELL_DIM >= 3
+    d.z = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31539u, t.warp_octaves, g);
+    j2 = k * g;
+#endif
+#if CELL_DIM >= 4
+    d.w = t.warp_amount * cell_noise_fractal_split(t.warp_cell, x, per, t.seed + 31640u, t.warp_octaves, g);
+    j3 = k * g;
+#endif
+    return s + d;
+}
+
 #if CELL_TEX_CELL_IMAGE
 // Provided by the entry point (a storage buffer, cellgl/texture/images.py): texel
 // `index` = row * width + column of the cell image as r | g << 8 | b << 16.
@@ -300,6 +347,10 @@ float cell_texture_footprint(vec3 duvz, CellTextureParams t)
 CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
 {
     CellTexel o;
+    vec4 wj0 = vec4(0.0), wj1 = vec4(0.0), wj2 = vec4(0.0), wj3 = vec4(0.0);
+    if (t.warp_amount != 0.0) {
+        s = cell_texture_warp(s, t, wj0, wj1, wj2, wj3);
+    }
     int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
     bool qin = t.fractal == CELL_TEX_FRACTAL_QIN || t.fractal == CELL_TEX_FRACTAL_QIN_CUBE;
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
@@ -386,6 +437,8 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
         h = clamp(h, 0.0, 1.0);
         dh = vec4(0.0);
     }
+    // Through the warp: dh/ds = (I + J)^T dh/ds' (J = 0 without one).
+    dh += dh.x * wj0 + dh.y * wj1 + dh.z * wj2 + dh.w * wj3;
     o.height = h;
     o.grad = dh;
 

@@ -23,6 +23,7 @@ struct CellTextureParams {
     int min_points;             // poisson: fewest points per cell (Worley: 1)
     int max_points;             // poisson: most points per cell (Worley: 9)
     uint seed;                  // random seed of the feature points and the noise
+    float orbit_radius;         // loopable animation: each feature point circles in its cell (x, y) with this radius in cells, once per loop
     float c1;                   // weight of F1 (Worley's linear combination)
     float c2;                   // weight of F2 (Worley's linear combination)
     float c3;                   // weight of F3 (Worley's linear combination)
@@ -65,6 +66,9 @@ struct CellTextureParams {
     float offset_y;             // shift of the basis along y, in cells
     float offset_z;             // z of the image plane in cells (3D and 4D bases)
     float time;                 // 4th coordinate in cells (4D bases: animation)
+    float warp_amount;          // domain warp: the sample moves by up to about this many cells along each axis, by fractal gradient noise, before the basis
+    float warp_frequency;       // domain warp: noise lattice cells per basis cell (an integer when tileable)
+    int warp_octaves;           // domain warp: octaves of the warp noise (gain 0.5, lacunarity 2)
     float noise_frequency;      // noise lattice cells per basis cell (an integer when tileable)
     int noise_octaves;          // octaves of the discoloration noise (gain 0.5, lacunarity 2)
     float noise_color;          // fractal-noise discoloration: added to the ramp index
@@ -87,6 +91,10 @@ struct CellTextureParams {
     vec4 origin_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
     ivec4 noise_cell[CELL_TEX_OCTAVES];// octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)
     vec4 noise_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
+    ivec4 warp_cell;            // warp-noise lattice cell of warp_frequency (offset_x, offset_y, offset_z, time)
+    vec4 warp_frac;             // ... and its fraction in [0, 1)
+    uint orbit_turn;            // orbit_phase as a fraction of the loop times 2^32 (wrapping)
+    vec4 axis_scale;            // distance weight per axis of stretched cells (cellgl/texture/domain.py)
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];// row L: Poisson table of density level L (density_min .. density_max, geometric)
     ivec4 density_axis[CELL_TEX_OCTAVES * 4];// octave i, lattice axis a at 4 i + a: (o, n, m, b) of cell_density_level
