@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from .enums import Distribution, Metric, glsl_defines
+from .gl_call import gl_call
 from .params import (FRACTAL_MODES, LINEAR, MAX_RAMP_KEYS, NORMAL_CONVENTIONS, PARAMS, PARAMS_BY_NAME,
                      RAMP_MODES)
 from .recipe import CHANNELS, Recipe, RecipeError, load_recipe
@@ -411,6 +412,7 @@ def _backend(backend):
         raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
 
 
+@gl_call
 def _gpu_run(recipe: Recipe, channels, count: int, setup) -> dict:
     """Dispatch texture.comp over ``count`` samples; ``setup(prog, first, n)`` binds inputs."""
     from . import context
@@ -518,12 +520,10 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
         return texture_reference.evaluate(recipe, pts, outputs)
     from . import context
 
-    ctx = context.get_context()
-
     def setup(prog, start, n):
         p4 = np.zeros((n, 4), np.float32)
         p4[:, :3] = pts[start:start + n]
-        b = ctx.buffer(p4.tobytes())
+        b = context.get_context().buffer(p4.tobytes())  # inside _gpu_run's cellgl call
         b.bind_to_storage_buffer(0)
         return [b]
 
@@ -598,6 +598,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
 _fragment_target: dict = {}
 
 
+@gl_call
 def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
                     view=(0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
     """The viewer's path: ``shaders/texture.frag`` over a ``width x height`` RGBA32F target,
@@ -616,15 +617,15 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     set_view(prog, recipe, view[:2], view[2:])
     if "u_channel" in prog:
         prog["u_channel"].value = CHANNELS.index(channel)
-    key = (id(ctx), width, height)
-    if _fragment_target.get("key") != key:
+    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (width, height):
         tex = ctx.texture((width, height), 4, dtype="f4")
         fbo = ctx.framebuffer(color_attachments=[tex])
         fbo.use()
-        for o in _fragment_target.get("objects", ()):
+        for o in target.get("objects", ()):
             o.release()
-        _fragment_target.update(key=key, objects=(fbo, tex))
-    fbo, tex = _fragment_target["objects"]
+        target.update(key=(width, height), objects=(fbo, tex))
+    fbo, tex = target["objects"]
     fbo.use()
     fbo.viewport = (0, 0, width, height)
     vao = ctx.vertex_array(prog, [])
