@@ -32,6 +32,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cellgl import pups as P  # noqa: E402
+from cellgl.pups import gpu as G  # noqa: E402
 
 
 def run_once(args, backend):
@@ -73,7 +74,7 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--no-numpy", action="store_true")
     args = ap.parse_args(argv)
-    ctx = P._context()
+    ctx = G._context()
     print(f"device: {ctx.info.get('GL_RENDERER')}  ({ctx.info.get('GL_VERSION')})")
     gpu = ["compute"] if args.mode == "label" else ["raster", "compute"]
     backends = gpu + ([] if args.no_numpy else ["numpy"])

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 import cellgl
-from cellgl import reference
+from cellgl.basis import reference
 
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
 

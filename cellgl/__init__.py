@@ -1,13 +1,13 @@
 """cellgl: cellular texture basis functions (Worley, Qin, PUPs) on the GPU."""
 from __future__ import annotations
 
-__version__ = "0.1.0"
+from cellgl._version import __version__
 
-from .core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
-from .density import DensityMap
-from .enums import Distribution, Metric
-from .recipe import Recipe, RecipeError, list_presets, load_recipe
-from .texture import evaluate, render
+from cellgl.basis.core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
+from cellgl.basis.density import DensityMap
+from cellgl.basis.enums import Distribution, Metric
+from cellgl.recipes import evaluate, list_presets, load_recipe, render
+from cellgl.texture.recipe import Recipe, RecipeError
 
 __all__ = [
     "CellularResult",

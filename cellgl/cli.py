@@ -37,7 +37,7 @@ def _fmt(value: object) -> str:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from . import context
+    from cellgl.gl import context
 
     ctx = context.get_context(args.backend)
     info = context.context_info(ctx)
@@ -74,14 +74,14 @@ def _lazy(module: str, name: str) -> Callable:
 # --------------------------------------------------------------------------------------------
 
 #: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
-#: cellgl/bake.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export.py (docs/engines.md),
-#: cellgl/recipe.py (docs/textures.md).
+#: cellgl/io/bake_cli.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/snippets.py
+#: (docs/engines.md), cellgl/recipes.py (docs/textures.md).
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
-    "bake": (_lazy("cellgl.bake", "add_parser"), _lazy("cellgl.bake", "run_cli")),
+    "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
     "view": (_add_view, _lazy("viewer.cli", "run")),
-    "export": (_lazy("cellgl.export", "add_parser"), _lazy("cellgl.export", "run_cli")),
-    "presets": (_lazy("cellgl.recipe", "add_presets_parser"), _lazy("cellgl.recipe", "run_presets_cli")),
+    "export": (_lazy("cellgl.export.snippets", "add_parser"), _lazy("cellgl.export.snippets", "run_cli")),
+    "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
 }
 
 
@@ -97,8 +97,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
-    from .context import ContextError
-    from .glsl import ShaderError
+    from cellgl.gl.context import ContextError
+    from cellgl.gl.glsl import ShaderError
 
     return (ValueError, ContextError, ShaderError)
 

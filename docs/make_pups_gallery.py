@@ -16,7 +16,7 @@ from PIL import Image
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cellgl.pups import pups_render  # noqa: E402
-from cellgl.pups_presets import PUPS_PRESETS  # noqa: E402
+from cellgl.pups.presets import PUPS_PRESETS  # noqa: E402
 
 
 def to_png(img: np.ndarray, path: Path) -> None:

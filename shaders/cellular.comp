@@ -1,7 +1,7 @@
 #version 430
 // cellgl compute entry: the cellular basis at a list of samples or on a grid.
 // Thin: read the sample, call cell_search(), write what was asked for.
-// Macros (from cellgl/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
+// Macros (from cellgl/basis/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
 // CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP.
 

@@ -2,7 +2,7 @@
 // cellgl: PUPs texture evaluation over a pixel grid (bake and Python API).
 // Thin entry: read the buffers, call shaders/lib/pups.glsl, write.
 //
-// Defines (set by cellgl/pups.py):
+// Defines (set by cellgl/pups/):
 //   CELL_PUPS_CHANNELS  1 or 3 floats written per pixel
 //   CELL_PUPS_MODE      0: the interpolated value (3); 1: the heaviest point's
 //                       value and label; 2: the sum of value * weight

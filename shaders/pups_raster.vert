@@ -7,7 +7,7 @@
 // point's data, passed on as flat outputs, so the fragment shader
 // (shaders/pups_raster.frag) reads no buffer; the blending adds the points up.
 //
-// Defines (set by cellgl/pups.py):
+// Defines (set by cellgl/pups/):
 //   CELL_PUPS_RASTER_PAIRS  axis pairs per point: half the largest axis count, rounded up;
 //                           shorter lists are padded with zero axes (factor exactly 1)
 

@@ -1,7 +1,7 @@
 #version 430
 // cellgl compute entry: a texture recipe over a pixel grid (bakes) or a point list.
 // Thin: compute the texture-space point, call cell_texture_at(), write the channels.
-// Macros (from cellgl/texture.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE.
+// Macros (from cellgl/texture/shader.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE.
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 

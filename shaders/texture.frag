@@ -5,7 +5,7 @@
 //   u_view     uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw (v = 0 at the top, as bakes);
 //              cellgl.texture.set_view puts the pan into the split origins (float64) and
 //              sets u_view.xy = 0, so a view far from the origin stays sharp
-//   u_channel  0 color, 1 height, 2 normal, 3 id (cell value), 4..7 F1..F4 (cellgl.recipe.CHANNELS)
+//   u_channel  0 color, 1 height, 2 normal, 3 id (cell value), 4..7 F1..F4 (cellgl.texture.schema.CHANNELS)
 
 #include "lib/texture.glsl"
 #include "texture_uniforms.glsl"

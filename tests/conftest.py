@@ -29,8 +29,8 @@ def _require_gpu() -> bool:
 
 @pytest.fixture(scope="session")
 def ctx():
-    """The process-wide cellgl context (cellgl.context.get_context())."""
-    from cellgl import context
+    """The process-wide cellgl context (cellgl.gl.context.get_context())."""
+    from cellgl.gl import context
 
     try:
         return context.get_context()
@@ -47,7 +47,7 @@ def _gl_error_check(request):
         yield
         return
     gl = request.getfixturevalue("ctx")
-    from cellgl import context
+    from cellgl.gl import context
 
     context.get_context()       # current again, whatever another library made current since
     before = gl.error

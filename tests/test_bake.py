@@ -9,13 +9,11 @@ from __future__ import annotations
 
 import os
 import sys
-import types
 
 import numpy as np
 import pytest
 
-import cellgl
-from cellgl import bake as B
+from cellgl.io import bake as B
 from cellgl import cli
 
 # --------------------------------------------------------------------------------------------
@@ -83,27 +81,20 @@ def _fake_render(calls):
 
 @pytest.fixture
 def fake(monkeypatch):
-    """Replace cellgl.recipe / cellgl.texture by stand-ins; yields the list of render calls."""
-    import cellgl.recipe as real_recipe
-    import cellgl.texture as real_texture
+    """Replace cellgl.recipes.load_recipe / render (what the bake calls) by stand-ins; yields the
+    list of render calls."""
+    from cellgl import recipes
+    from cellgl.texture.recipe import RecipeError
 
     calls: list = []
-    # Copies of the real modules (other subcommands import from them) with two names replaced.
-    tex = types.ModuleType("cellgl.texture")
-    tex.__dict__.update({k: v for k, v in vars(real_texture).items() if not k.startswith("__")})
-    tex.render = _fake_render(calls)
-    rec = types.ModuleType("cellgl.recipe")
-    rec.__dict__.update({k: v for k, v in vars(real_recipe).items() if not k.startswith("__")})
 
     def load_recipe(name):
         if name not in ("flagstone", "fake"):
-            raise real_recipe.RecipeError(f"unknown preset {name!r}; accepted flagstone, fake")
+            raise RecipeError(f"unknown preset {name!r}; accepted flagstone, fake")
         return FakeRecipe(name)
 
-    rec.load_recipe = load_recipe
-    for name, mod in (("texture", tex), ("recipe", rec)):
-        monkeypatch.setitem(sys.modules, f"cellgl.{name}", mod)
-        monkeypatch.setattr(cellgl, name, mod, raising=False)
+    monkeypatch.setattr(recipes, "load_recipe", load_recipe)
+    monkeypatch.setattr(recipes, "render", _fake_render(calls))
     return calls
 
 
@@ -255,13 +246,13 @@ def test_progress_bar(fake, tmp_path, capsys):
 
 def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
     seen = []
-    render = sys.modules["cellgl.texture"].render
+    render = sys.modules["cellgl.recipes"].render
 
     def spy(recipe, *a, **kw):
         seen.append(recipe.values)
         return render(recipe, *a, **kw)
 
-    monkeypatch.setattr(sys.modules["cellgl.texture"], "render", spy)
+    monkeypatch.setattr(sys.modules["cellgl.recipes"], "render", spy)
     assert cli.main(["bake", "fake", "-o", str(tmp_path / "a.npy"), "--size", "8",
                      "--set", "seed=3", "--tileable", "-q"]) == 0
     assert seen[-1]["seed"] == 3 and seen[-1]["tileable"] is True
@@ -318,14 +309,14 @@ def test_unknown_preset(fake, tmp_path, capsys):
 def test_interrupt_leaves_nothing_behind(fake, tmp_path, monkeypatch, capsys):
     dest = tmp_path / "keep.tif"
     dest.write_bytes(b"previous")
-    render = sys.modules["cellgl.texture"].render
+    render = sys.modules["cellgl.recipes"].render
 
     def flaky(*a, **kw):
         if len(fake) == 3:
             raise KeyboardInterrupt
         return render(*a, **kw)
 
-    monkeypatch.setattr(sys.modules["cellgl.texture"], "render", flaky)
+    monkeypatch.setattr(sys.modules["cellgl.recipes"], "render", flaky)
     for name in ("keep.tif", "new.png", "vol.tif", "vol.npy"):
         fake.clear()
         size = "48x48x2" if name.startswith("vol") else "48x48"
@@ -341,7 +332,7 @@ def test_interrupt_leaves_nothing_behind(fake, tmp_path, monkeypatch, capsys):
 
 
 def _recipe(**kw):
-    from cellgl.recipe import Recipe
+    from cellgl.texture.recipe import Recipe
 
     return Recipe().replace(**kw)
 
@@ -410,7 +401,7 @@ def test_gpu_tileable_continues_across_both_edges(ctx, tmp_path):
 
 
 def test_gpu_preset_from_cli(ctx, tmp_path, capsys):
-    from cellgl.recipe import list_presets
+    from cellgl.recipes import list_presets
 
     names = [n for n, _ in list_presets()]
     if "flagstone" not in names:

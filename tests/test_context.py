@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cellgl import context, glsl
+from cellgl.gl import context
+from cellgl.gl import glsl
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -153,7 +154,7 @@ def _python(code: str, **env) -> subprocess.CompletedProcess:
 
 def test_glx_without_display_is_a_clear_context_error():
     # In a fresh process so the session context is untouched.
-    r = _python("import cellgl.context as c; c.get_context('glx')", DISPLAY="")
+    r = _python("import cellgl.gl.context as c; c.get_context('glx')", DISPLAY="")
     assert r.returncode != 0
     assert "ContextError" in r.stderr and "DISPLAY" in r.stderr
     assert "libegl-mesa0" in r.stderr and "4.3" in r.stderr
@@ -164,7 +165,7 @@ def test_glx_without_display_is_a_clear_context_error():
 def test_osmesa_backend_runs_compute():
     # OSMesa makes its own context current: keep it out of the test process.
     code = (
-        "import json, numpy as np, cellgl.context as c\n"
+        "import json, numpy as np, cellgl.gl.context as c\n"
         "ctx = c.get_context()\n"
         "cs = ctx.compute_shader('#version 430\\nlayout(local_size_x=8) in;\\n"
         "layout(std430, binding=0) buffer B { uint v[]; };\\n"
@@ -214,7 +215,7 @@ def test_context_survives_another_library_taking_current(ctx):
     import numpy as np
 
     import cellgl
-    from cellgl import context
+    from cellgl.gl import context
 
     pts = np.random.default_rng(0).uniform(0, 8, (500, 3))
     want = cellgl.cellular(pts, 2, outputs=("F",)).F

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl import reference
+from cellgl.basis import reference
 
 METRICS = ["euclidean", "manhattan", "chebyshev", "minkowski"]
 CASES = [(d, m, dist) for d in (2, 3, 4) for m in METRICS for dist in ("poisson", "jitter")] + [
@@ -280,7 +280,7 @@ def test_bad_input_is_a_clear_error(call, match):
 @pytest.mark.parametrize("shape", [(7, 33, 70), (3, 5, 33, 170)])
 def test_grid_in_slabs_equals_one_pass(ctx, monkeypatch, shape):
     """A grid too big for one dispatch is run in slabs of rows/layers; the bits do not change."""
-    from cellgl import gpu
+    from cellgl.basis import gpu
 
     kw = dict(spacing=0.21, n=2, outputs=("F", "id"))
     one = cellgl.cellular_grid(shape, **kw)

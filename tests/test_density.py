@@ -8,7 +8,10 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl import core, density, gpu, reference
+from cellgl.basis import core
+from cellgl.basis import density
+from cellgl.basis import gpu
+from cellgl.basis import reference
 
 IMG = np.random.default_rng(0).uniform(0.0, 1.0, (7, 13))
 MAPS = {
@@ -163,7 +166,7 @@ def test_small_cells_where_dense():
 
 def test_default_path_unchanged(ctx):
     """No map: the shader has no density code (the macro is 0) and the results are as before."""
-    from cellgl import gpu
+    from cellgl.basis import gpu
 
     p = core.make_params(2)
     assert gpu.defines_for(p, 4)["CELL_DENSITY_MAP"] == 0

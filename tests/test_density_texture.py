@@ -9,8 +9,10 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from cellgl import export, texture
-from cellgl.recipe import Recipe, RecipeError, load_recipe
+from cellgl import texture
+from cellgl.export import snippets as export
+from cellgl.texture.recipe import Recipe, RecipeError
+from cellgl.recipes import load_recipe
 
 # a small grayscale image: dense (white) top-left quarter, sparse elsewhere, a mid-grey band
 IMG = np.zeros((6, 8), np.uint8)
@@ -60,7 +62,8 @@ def test_gpu_equals_numpy_and_tiles_equal_one_pass(ctx, image_path, name):
 def test_octaves_use_the_map_scaled_to_their_lattice(image_path):
     """Octave i's encoding is the uv map seen from the lattice lacunarity^i (O + s): the level of
     a cell follows the map at the cell centre's uv, in every octave."""
-    from cellgl import density, texture_reference
+    from cellgl.basis import density
+    from cellgl.texture import reference as texture_reference
 
     r = _recipes(image_path)["ramp_y_fractal"]
     t = texture_reference._tex(r)

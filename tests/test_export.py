@@ -17,7 +17,9 @@ import subprocess
 import numpy as np
 import pytest
 
-from cellgl import core, export, translate
+from cellgl.export import snippets as export
+from cellgl.basis import core
+from cellgl.export import translate
 
 REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
 REQUIRE_WGSL = os.environ.get("CELLGL_REQUIRE_WGSL", "").strip().lower() in ("1", "true", "yes")
@@ -290,7 +292,7 @@ def test_basis_snippet_reproduces_the_gpu(ctx, basis, target):
 
 
 def _presets() -> list[str]:
-    from cellgl.recipe import list_presets
+    from cellgl.recipes import list_presets
 
     return [name for name, _ in list_presets() if not name.startswith("pups-")]  # refused
 
@@ -372,7 +374,7 @@ def test_gles_snippet_reproduces_the_bake(ctx, preset):
 
 
 def test_solid_entry_reproduces_a_volume_slice(ctx):
-    from cellgl.recipe import load_recipe
+    from cellgl.recipes import load_recipe
 
     solid = next(p for p in GLES_PRESETS if load_recipe(p).values["dimension"] >= 3)
     W, H, D = 32, 24, 4
@@ -455,7 +457,7 @@ def test_wgsl_hlsl_snippet_reproduces_the_bake(tmp_path, preset, target):
 
 @pytest.mark.parametrize("target", ["wgsl", "hlsl"])
 def test_wgsl_hlsl_solid_entry_reproduces_a_volume_slice(tmp_path, target):
-    from cellgl.recipe import load_recipe
+    from cellgl.recipes import load_recipe
 
     solid = next(p for p in RUN_PRESETS if load_recipe(p).values["dimension"] >= 3)
     W, H, D = 32, 24, 4
@@ -466,7 +468,7 @@ def test_wgsl_hlsl_solid_entry_reproduces_a_volume_slice(tmp_path, target):
 
 
 def test_two_dimensional_recipes_have_no_solid_entry():
-    from cellgl.recipe import load_recipe
+    from cellgl.recipes import load_recipe
 
     flat = [p for p in PRESETS if load_recipe(p).values["dimension"] == 2]
     for p in flat[:1]:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from cellgl import glsl
+from cellgl.gl import glsl
 
 
 def write(root: Path, files: dict[str, str]) -> Path:

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cellgl import context
+from cellgl.gl import context
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -69,7 +69,7 @@ def test_every_thread_gets_a_working_context(ctx):
     """Only the first thread that used cellgl worked ("cannot create buffer" elsewhere). Here
     the main thread holds the context outside any cellgl call (the test fixture's
     get_context()), so the other threads get private ones."""
-    from cellgl import core
+    from cellgl.basis import core
 
     want = _height()
     pts = np.random.default_rng(1).random((100, 2)) * 4
@@ -88,7 +88,8 @@ def test_threads_share_one_context_in_a_fresh_process():
     (get_context()) makes the others fall back to private contexts, still correct."""
     code = """
 import threading, numpy as np
-from cellgl import context, texture
+from cellgl.gl import context
+from cellgl import texture
 def h(): return texture.render("flagstone", 24, 16, channels=("height",))["height"]
 res = []
 t = threading.Thread(target=lambda: res.append(h())); t.start(); t.join()

@@ -1,4 +1,4 @@
-"""cellgl.io: the PNG/EXR/TIFF/NPY writers read back exactly, stream, and write atomically."""
+"""cellgl.io.formats: the PNG/EXR/TIFF/NPY writers read back exactly, stream, and write atomically."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from cellgl import io
+from cellgl.io import formats as io
 
 
 def _bands(a, rows):

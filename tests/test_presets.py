@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cellgl import texture
-from cellgl.recipe import list_presets, load_recipe
+from cellgl.recipes import list_presets, load_recipe
 
 NAMES = [n for n, _ in list_presets() if not n.startswith("pups-")]  # PUPs: test_pups_recipe.py
 VARIANTS = [f"{n}:{k}" for n in NAMES for k in range(len(load_recipe(n).variants))]

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from cellgl import pups as P
-from cellgl import pups_reference as R
-from cellgl.pups_presets import PUPS_PRESETS, build_pups
+from cellgl.pups import gpu as G
+from cellgl.pups import reference as R
+from cellgl.pups.presets import PUPS_PRESETS, build_pups
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -223,7 +224,7 @@ def test_fragment_path_matches_compute(ctx):
     g = _graph(0.1, seed=3, channels=3)
     pk = P.pups_pack(g, 120, 90)
     for mode in (P.PupsMode.INTERPOLATE, P.PupsMode.LABEL):
-        f = P._evaluate_fragment(pk, mode, 0.5)
+        f = G._evaluate_fragment(pk, mode, 0.5)
         a, la = (P.pups_evaluate(g, 120, 90, mode="label", return_labels=True)
                  if mode == P.PupsMode.LABEL else (P.pups_evaluate(g, 120, 90), None))
         np.testing.assert_allclose(f[..., :3], a, atol=1e-6)
@@ -238,7 +239,7 @@ def test_raster_matches_compute_and_reference(ctx, periodic, channels, mode):
     # method="raster" (support polygons, flat per-point inputs, additive blending) sums the
     # same float32 weights in the same order as the compute path: the same image, bit for bit
     g = _graph(0.08, seed=5, channels=channels, periodic=periodic)
-    assert P._raster_applies(g, P.PupsMode[mode.upper()])
+    assert G._raster_applies(g, P.PupsMode[mode.upper()])
     r = P.pups_evaluate(g, 170, 130, mode=mode, method="raster")
     c = P.pups_evaluate(g, 170, 130, mode=mode, method="compute")
     n = P.pups_evaluate(g, 170, 130, mode=mode, backend="numpy")
@@ -253,13 +254,13 @@ def test_raster_falls_back_to_compute(ctx, monkeypatch):
     c = P.pups_evaluate(g, 90, 70, method="compute")
     assert P.pups_evaluate(g, 90, 70, method="raster").tobytes() == c.tobytes()
     # more axes than the flat varyings hold: compute, silently
-    monkeypatch.setattr(P, "_raster_pairs_limit", lambda ctx: 1)
-    assert not P._raster_applies(g, P.PupsMode.INTERPOLATE)
-    monkeypatch.setattr(P, "_evaluate_raster", None)  # would fail if called
+    monkeypatch.setattr(G, "_raster_pairs_limit", lambda ctx: 1)
+    assert not G._raster_applies(g, P.PupsMode.INTERPOLATE)
+    monkeypatch.setattr(G, "_evaluate_raster", None)  # would fail if called
     assert P.pups_evaluate(g, 90, 70, method="raster").tobytes() == c.tobytes()
     assert P.pups_evaluate(g, 90, 70).tobytes() == c.tobytes()
     # label mode: compute by default, raster refused
-    assert not P._raster_applies(g, P.PupsMode.LABEL)
+    assert not G._raster_applies(g, P.PupsMode.LABEL)
     P.pups_evaluate(g, 90, 70, mode="label")
     with pytest.raises(ValueError, match="method='raster'"):
         P.pups_evaluate(g, 90, 70, mode="label", method="raster")
@@ -267,13 +268,13 @@ def test_raster_falls_back_to_compute(ctx, monkeypatch):
 
 def test_raster_pair_budget(ctx):
     # 4 floats per axis pair next to two vec4s; one attribute per pair next to three
-    lim = P._raster_pairs_limit(ctx)
+    lim = G._raster_pairs_limit(ctx)
     comps = int(ctx.info.get("GL_MAX_VERTEX_OUTPUT_COMPONENTS") or 64)
     assert 4 <= lim <= (comps - 8) // 4
     g = _graph(0.1, seed=7)
     pk = P.pups_pack(g, 64, 48, grid=False)
     assert pk.stream is None and pk.cell_items.size == 0
-    k, corners, nv = P._raster_polygons(pk)
+    k, corners, nv = G._raster_polygons(pk)
     assert (nv >= 3).all() and corners.shape[0] == k.size
 
 

@@ -8,9 +8,12 @@ import sys
 import numpy as np
 import pytest
 
-from cellgl import pups_recipe as R
-from cellgl.pups_presets import PUPS_PRESETS, _params, build_pups
-from cellgl.recipe import RecipeError, list_presets, load_recipe
+import cellgl
+
+from cellgl.pups import recipe as R
+from cellgl.pups.presets import PUPS_PRESETS, _params, build_pups
+from cellgl.texture.recipe import RecipeError
+from cellgl.recipes import list_presets, load_recipe
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -27,7 +30,7 @@ def test_every_preset_round_trips(tmp_path):
 
 
 def test_table_is_derived_from_the_kinds():
-    from cellgl.pups_presets import KIND_DEFAULTS
+    from cellgl.pups.presets import KIND_DEFAULTS
 
     for kind, keys in KIND_DEFAULTS.items():
         names = set(R.params_for(kind.replace("-", "_")))
@@ -84,23 +87,19 @@ def test_render_dispatch_channels(ctx):
 @pytest.mark.parametrize("name", ["pups-cow", "pups-noise-folded", "pups-octaves",
                                   "pups-weight-isolines", "pups-graph", "pups-giraffe"])
 def test_tiles_equal_one_pass(ctx, name):
-    from cellgl import texture
-
     r = load_recipe(name)
     W, H = 100, 70
-    full = texture.render(r, W, H, channels=("color", "height"))
+    full = cellgl.render(r, W, H, channels=("color", "height"))
     for x0, y0, tw, th in [(0, 0, 48, 32), (48, 32, 52, 38), (16, 48, 80, 22)]:
-        t = texture.render(r, W, H, channels=("color", "height"), x0=x0, y0=y0, tile_w=tw, tile_h=th)
+        t = cellgl.render(r, W, H, channels=("color", "height"), x0=x0, y0=y0, tile_w=tw, tile_h=th)
         for c in ("color", "height"):
             assert t[c].tobytes() == full[c][y0:y0 + th, x0:x0 + tw].tobytes(), (name, c)
 
 
 def test_numpy_backend_agrees(ctx):
-    from cellgl import texture
-
     r = load_recipe("pups-noise")
-    a = texture.render(r, 48, 48)["color"]
-    b = texture.render(r, 48, 48, backend="numpy")["color"]
+    a = cellgl.render(r, 48, 48)["color"]
+    b = cellgl.render(r, 48, 48, backend="numpy")["color"]
     assert np.abs(a - b).max() < 1e-4
 
 
@@ -121,9 +120,7 @@ def test_bake_cli(ctx, tmp_path):
     a = np.asarray(Image.open(tmp_path / "cow.png"))
     assert np.array_equal(a, np.asarray(Image.open(tmp_path / "cow_t.png")))
     assert set(np.unique(a)) == {0, 255}       # binary labels
-    from cellgl import texture
-
-    ref = texture.render(load_recipe("pups-cow").replace(seed=3), 64, 64)["color"][..., :3]
+    ref = cellgl.render(load_recipe("pups-cow").replace(seed=3), 64, 64)["color"][..., :3]
     assert np.array_equal(a, np.round(ref * 255).astype(np.uint8))
     r = _cli("bake", "pups-cow", "-o", "x.png", "--channels", "normal", cwd=tmp_path)
     assert r.returncode == 2 and "accepted: color, height" in r.stderr

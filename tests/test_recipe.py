@@ -5,8 +5,9 @@ import json
 
 import pytest
 
-from cellgl import params
-from cellgl.recipe import Recipe, RecipeError, list_presets, load_recipe
+from cellgl.texture import params
+from cellgl.texture.recipe import Recipe, RecipeError
+from cellgl.recipes import list_presets, load_recipe
 
 
 def test_table_is_consistent():

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from cellgl import texture
-from cellgl.recipe import Recipe, load_recipe
-from cellgl.texture_reference import texture_at, texture_ramp
+from cellgl.texture.recipe import Recipe
+from cellgl.recipes import load_recipe
+from cellgl.texture.reference import texture_at, texture_ramp
 
 
 def test_generated_glsl_is_current():

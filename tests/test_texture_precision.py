@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from cellgl import texture
-from cellgl.recipe import Recipe, load_recipe
-from cellgl.texture_reference import _tex, texture_period
+from cellgl.texture.recipe import Recipe
+from cellgl.recipes import load_recipe
+from cellgl.texture.reference import _tex, texture_period
 from test_texture import RECIPES as TEXTURE_RECIPES     # tests/ is on sys.path under pytest
 
 FAR = 1e6 + 0.3
@@ -134,7 +135,7 @@ def test_viewer_pan_far_away_stays_sharp(ctx):
 def test_exported_snippet_far_away_reproduces_the_bake(ctx):
     """The snippet's constants carry the split origins: cellgl_texture(uv) at offset 10^6 is
     the bake there (as tests/test_export.py checks at the origin)."""
-    from cellgl import export
+    from cellgl.export import snippets as export
     from test_export import render_snippet, snippet_code
 
     r = load_recipe("flagstone").replace(offset_x=FAR, offset_y=FAR)

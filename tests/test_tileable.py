@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl.recipe import load_recipe
+from cellgl.recipes import load_recipe
 
 
 def test_tileable_rounds_periods_and_says_so():

@@ -15,6 +15,8 @@ import time
 import numpy as np
 import pytest
 
+import cellgl
+
 pytest.importorskip("imgui_bundle")
 pytest.importorskip("glfw")
 
@@ -24,7 +26,7 @@ SIZE = (704, 352)          # panel 360 px + a 344 x 352 view (unit square 344 px
 
 
 def _preset():
-    from cellgl.recipe import list_presets
+    from cellgl.recipes import list_presets
 
     names = [n for n, _ in list_presets()]
     return "flagstone" if "flagstone" in names else (names[0] if names else None)
@@ -143,13 +145,11 @@ def test_window_renders_texture(viewer):
 
 def test_view_matches_offscreen_render(viewer):
     """The 2D view's unit square equals cellgl.texture.render of the same recipe (8-bit)."""
-    from cellgl import texture
-
     _reset(viewer)
     x, y, w, h = viewer.unit_square_rect()
     assert w == h == min(viewer.view_rect[2:])
     got = viewer.grab()[y:y + h, x:x + w].astype(int)
-    ref = texture.render(viewer.model.recipe, w, h)["color"][..., :3]
+    ref = cellgl.render(viewer.model.recipe, w, h)["color"][..., :3]
     ref = np.round(np.clip(ref, 0, 1) * 255).astype(int)
     diff = np.abs(got - ref)
     # Pixel centres on a cell border may land on either side by a float ulp: allow a few.
@@ -209,8 +209,6 @@ def test_pan_and_zoom_through_imgui_io(viewer):
 
 def test_readout_matches_shown_texture(viewer):
     """F1 / ID under the cursor equal the F1 / id channels of a render at that pixel."""
-    from cellgl import texture
-
     _reset(viewer)
     x, y, w, h = viewer.unit_square_rect()
     px, py = 57, 101
@@ -219,7 +217,7 @@ def test_readout_matches_shown_texture(viewer):
     r = viewer.readout
     assert r and "F" in r, r
     assert r["uv"] == pytest.approx(((px + 0.5) / w, (py + 0.5) / h))
-    ref = texture.render(viewer.model.recipe, w, h, channels=("F1", "id"), x0=px, y0=py, tile_w=1, tile_h=1)
+    ref = cellgl.render(viewer.model.recipe, w, h, channels=("F1", "id"), x0=px, y0=py, tile_w=1, tile_h=1)
     assert r["F"][0] == pytest.approx(float(ref["F1"][0, 0]), abs=1e-4)
     assert r["id"] == int(ref["id"][0, 0])
     viewer.script_mouse([(5, 5, False)])
@@ -233,9 +231,6 @@ def test_density_image_recipe_is_shown_as_baked(viewer, tmp_path):
 
     import numpy as np
     from PIL import Image
-
-    from cellgl import texture
-
     img = np.zeros((4, 4), np.uint8)
     img[:, 2:] = 255                                    # dense right half
     Image.fromarray(img).save(tmp_path / "map.png")
@@ -246,7 +241,7 @@ def test_density_image_recipe_is_shown_as_baked(viewer, tmp_path):
     _reset(viewer, str(tmp_path / "dimg.json"))
     x, y, w, h = viewer.unit_square_rect()
     got = viewer.grab()[y:y + h, x:x + w].astype(np.float64) / 255.0     # before any other GL work
-    ref = texture.render(viewer.model.recipe, w, h, channels=("color", "F1", "id"))
+    ref = cellgl.render(viewer.model.recipe, w, h, channels=("color", "F1", "id"))
     close = np.all(np.abs(got - ref["color"][..., :3]) < 2.5 / 255, axis=-1)
     assert close.mean() > 0.97
     px, py = w - 20, h // 2                              # on the dense side
@@ -306,7 +301,7 @@ def test_saved_recipe_bakes_identically(viewer, tmp_path):
     baked = np.asarray(Image.open(out).convert("RGB")).astype(int)
     assert baked.shape == shown.shape
     assert np.mean(np.abs(baked - shown).max(axis=-1) <= 2) > 0.995
-    from cellgl.recipe import load_recipe
+    from cellgl.recipes import load_recipe
 
     assert load_recipe(path) == viewer.model.recipe
 
@@ -331,8 +326,6 @@ def test_cli_screenshot(display, tmp_path):
 def test_pups_preset_view_matches_bake(viewer):
     """A PUPs preset from the picker: the 2D view's unit square is the bake of that size;
     3D / 4D are refused with a message; the panel shows the PUPs table's widgets."""
-    from cellgl import texture
-
     assert "pups-cow" in viewer.model.presets()
     _reset(viewer, "pups-cow")
     assert viewer.model.is_pups
@@ -341,7 +334,7 @@ def test_pups_preset_view_matches_bake(viewer):
     assert any(k in viewer.widget_rects for k in ("radius", "seed")), sorted(viewer.widget_rects)[:20]
     x, y, w, h = viewer.unit_square_rect()
     got = viewer.grab()[y:y + h, x:x + w].astype(int)
-    ref = texture.render(viewer.model.recipe, w, h)["color"][..., :3]
+    ref = cellgl.render(viewer.model.recipe, w, h)["color"][..., :3]
     ref = np.round(np.clip(ref, 0, 1) * 255).astype(int)
     assert np.mean(np.abs(got - ref).max(axis=-1) <= 2) > 0.999
     viewer.set_mode("3d")

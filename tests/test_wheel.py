@@ -48,7 +48,7 @@ def wheel(tmp_path_factory) -> Path:
 
 def test_wheel_contains_shaders(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    assert "cellgl/glsl.py" in names and "cellgl/context.py" in names
+    assert "cellgl/gl/glsl.py" in names and "cellgl/gl/context.py" in names
     expected = _source_shaders()
     missing = [rel for rel in expected if f"cellgl/shaders/{rel}" not in names]
     assert not missing, f"shader files missing from the wheel: {missing}"
@@ -78,7 +78,7 @@ def test_installed_wheel_resolves_shaders(installed, tmp_path):
     outside = tmp_path / "elsewhere"
     outside.mkdir()
     code = (
-        "import cellgl.glsl as g\n"
+        "import cellgl.gl.glsl as g\n"
         "print(g.shader_dir())\n"
         "for p in sorted(g.shader_dir().glob('*.comp')):\n"
         "    src = g.load(p.name)\n"

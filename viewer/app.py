@@ -31,18 +31,14 @@ from imgui_bundle import imgui
 
 import glfw  # noqa: E402
 
-from cellgl import context
+from cellgl.gl import context
 
 from . import camera, render
 from .model import Model
+from .modes import MODE_LABELS, MODES, PANEL_WIDTH, PUPS_REFUSED_MODES
 
 __all__ = ["Viewer", "ViewerOptions", "MODES"]
 
-MODES = ("2d", "3d", "tiled", "anim")
-MODE_LABELS = {"2d": "2D texture", "3d": "3D object", "tiled": "3x3 tiled", "anim": "4D animation"}
-#: modes a PUPs recipe cannot show (it is a 2D texture without a solid or time dimension)
-PUPS_REFUSED_MODES = ("3d", "anim")
-PANEL_WIDTH = 360
 
 
 @dataclass

@@ -6,7 +6,7 @@ import argparse
 
 __all__ = ["add_arguments", "run", "main"]
 
-MODES = ("2d", "3d", "tiled", "anim")
+from .modes import MODES
 SHAPES = ("sphere", "torus", "cube", "plane")
 
 

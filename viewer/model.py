@@ -1,4 +1,4 @@
-"""The viewer's document: one recipe (:class:`cellgl.recipe.Recipe`), edited in place.
+"""The viewer's document: one recipe (:class:`cellgl.texture.recipe.Recipe`), edited in place.
 
 Edits go through :meth:`Recipe.replace`, so every value the panel sets is validated exactly as
 a recipe file is; a rejected value leaves the recipe unchanged and the error is shown. Each
@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from cellgl import context
-from cellgl.params import PARAMS
-from cellgl.recipe import Recipe, list_presets, load_recipe
+from cellgl.gl import context
+from cellgl.texture.params import PARAMS
+from cellgl.recipes import list_presets, load_recipe
+from cellgl.texture.recipe import Recipe
 
 __all__ = ["Model", "DEFAULT_PRESET"]
 
@@ -68,15 +69,15 @@ class Model:
 
     @property
     def is_pups(self) -> bool:
-        """A PUPs recipe (:mod:`cellgl.pups_recipe`): 2D only, rendered by its own engine."""
+        """A PUPs recipe (:mod:`cellgl.pups.recipe`): 2D only, rendered by its own engine."""
         return getattr(self.recipe, "kind", None) == "pups"
 
     @property
     def params(self):
-        """The parameter table the panel shows: :data:`cellgl.params.PARAMS`, or for a PUPs
-        recipe the entries of :data:`cellgl.pups_recipe.PUPS_PARAMS` its pattern uses."""
+        """The parameter table the panel shows: :data:`cellgl.texture.params.PARAMS`, or for a PUPs
+        recipe the entries of :data:`cellgl.pups.recipe.PUPS_PARAMS` its pattern uses."""
         if self.is_pups:
-            from cellgl.pups_recipe import PUPS_PARAMS
+            from cellgl.pups.recipe import PUPS_PARAMS
 
             used = set(self.recipe.names())
             return tuple(p for p in PUPS_PARAMS if p.name in used)
@@ -176,7 +177,7 @@ class Model:
     def _density_map(self):
         """The recipe's density map in absolute basis units (octave 0, as the texture's first
         octave sees it: the uv map shifted by the offsets), or None."""
-        from cellgl import texture_reference
+        from cellgl.texture import reference as texture_reference
 
         dm = texture_reference.density_map(self.recipe)
         if dm is None:

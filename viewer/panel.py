@@ -1,4 +1,4 @@
-"""The ImGui panel: generated from the parameter table (:data:`cellgl.params.PARAMS`).
+"""The ImGui panel: generated from the parameter table (:data:`cellgl.texture.params.PARAMS`).
 
 Every parameter gets a widget from its type: a slider per float / int (its ``lo`` / ``hi``; a
 logarithmic slider where the range spans decades), a checkbox per bool, a combo per enum, a
@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from imgui_bundle import imgui
 
-from cellgl.params import GROUPS, LINEAR, N_LINEAR, PRODUCTS
+from .modes import MODE_LABELS, MODES, PANEL_WIDTH
+from cellgl.texture.params import GROUPS, LINEAR, N_LINEAR, PRODUCTS
 
 __all__ = ["draw_panel", "param_widget"]
 
@@ -165,8 +166,6 @@ def _group(viewer, group: str) -> None:
 
 
 def _view_section(viewer) -> None:
-    from .app import MODE_LABELS, MODES
-
     for i, m in enumerate(MODES):
         if i % 2:
             imgui.same_line(170)
@@ -185,7 +184,7 @@ def _view_section(viewer) -> None:
     elif viewer.mode == "tiled":
         _, viewer.tile_borders = imgui.checkbox("show tile borders", viewer.tile_borders)
     if viewer.mode != "3d":
-        from cellgl.recipe import CHANNELS
+        from cellgl.texture.recipe import CHANNELS
 
         chans = list(CHANNELS)
         imgui.set_next_item_width(120)
@@ -229,8 +228,6 @@ def _actions(viewer) -> None:
 def draw_panel(viewer) -> None:
     """The whole panel, docked to the left edge."""
     w, h = viewer.size
-    from .app import PANEL_WIDTH
-
     imgui.set_next_window_pos(imgui.ImVec2(0, 0))
     imgui.set_next_window_size(imgui.ImVec2(min(PANEL_WIDTH, w - 64), h))
     flags = (imgui.WindowFlags_.no_move.value | imgui.WindowFlags_.no_resize.value
@@ -246,7 +243,7 @@ def draw_panel(viewer) -> None:
     imgui.separator()
     groups = GROUPS
     if viewer.model.is_pups:
-        from cellgl.pups_recipe import PUPS_PARAMS
+        from cellgl.pups.recipe import PUPS_PARAMS
 
         groups = tuple(dict.fromkeys(p.group for p in PUPS_PARAMS))
         imgui.text_wrapped("PUPs recipe: 2D texture (3D object and 4D animation views are not "

@@ -6,7 +6,7 @@ the frame. While the user drags a slider or the view, it is rendered at 1/2 or 1
 (chosen from the measured cost of the last full-resolution render) and upscaled; once input
 stops the next frame renders at full resolution ("refine").
 
-Programs come from :func:`cellgl.context.program`, which caches them by their ``#define``s: a
+Programs come from :func:`cellgl.gl.context.program`, which caches them by their ``#define``s: a
 shader is compiled only when a compile-time parameter changes.
 """
 
@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from cellgl import context
+from cellgl.gl import context
 
 from . import meshes
 
@@ -188,7 +188,7 @@ class Renderer:
             self._render_texture(fbo, uv0, ext, viewer.channel)
 
     def _render_texture(self, fbo, uv0, ext, channel: str = "color") -> None:
-        from cellgl.recipe import CHANNELS
+        from cellgl.texture.recipe import CHANNELS
 
         prog = self.model.program_2d(self.ctx, channel)
         self._note_program(prog)
@@ -196,7 +196,7 @@ class Renderer:
         # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top. The
         # pan uv0 goes into the split origins in float64 and u_view.xy = 0, so a view panned far
         # from the origin stays as sharp as at it (cellgl.texture.set_view).
-        from cellgl import texture
+        from cellgl.texture import shader as texture
 
         texture.set_view(prog, self.model.recipe, uv0, ext)
         if "u_channel" in prog:
@@ -210,16 +210,16 @@ class Renderer:
 
     def _pups_texture(self, side: int, channel: str):
         """The PUPs recipe baked at ``side x side`` (one period of its point set) by
-        :func:`cellgl.texture.render`, the function behind ``cellgl bake``, as a repeating
+        :func:`cellgl.recipes.render`, the function behind ``cellgl bake``, as a repeating
         nearest-sampled texture (row 0 = the image's top row at t = 0). Cached by recipe
         version, size and channel."""
-        from cellgl import texture
+        from cellgl import recipes
 
         key = (self.model.version, side, channel)
         old = self._targets.get("pups_src")
         if old is not None and self._pups_key == key:
             return old[0]
-        res = texture.render(self.model.recipe, side, side, channels=(channel,))[channel]
+        res = recipes.render(self.model.recipe, side, side, channels=(channel,))[channel]
         self.take_context()
         rgba = res if res.ndim == 3 else np.dstack([res, res, res, np.ones_like(res)])
         if old is not None:

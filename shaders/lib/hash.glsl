@@ -1,7 +1,7 @@
 // cellgl: integer hashing shared by every cellular function.
 //
 // Only uint32 multiply / xor / shift, wrapping modulo 2^32, so NumPy
-// (cellgl/reference.py, np.uint32), GLSL 3.30+/4.x, GLSL ES 3.00, HLSL and WGSL
+// (cellgl/basis/reference.py, np.uint32), GLSL 3.30+/4.x, GLSL ES 3.00, HLSL and WGSL
 // all produce the same bits. No fract(sin(x)) anywhere.
 
 // A strong 32-bit avalanche (two multiply-xorshift rounds; constants from

@@ -5,7 +5,7 @@
 // sum |x|^p), and converted to true distances only at the end.
 //
 // CELL_METRIC selects the metric at compile time (values from
-// cellgl.enums.Metric: CELL_METRIC_EUCLIDEAN, _MANHATTAN, _CHEBYSHEV, _MINKOWSKI).
+// cellgl.basis.enums.Metric: CELL_METRIC_EUCLIDEAN, _MANHATTAN, _CHEBYSHEV, _MINKOWSKI).
 
 // A CELL_DIM-dimensional value in a 4-vector: the components past CELL_DIM set
 // to zero.

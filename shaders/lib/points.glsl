@@ -5,12 +5,12 @@
 // ...) takes its position and ID from an avalanche of h + k * 0x9e3779b9 (the
 // jitter distribution's single point from h itself); worley1996 runs the
 // book's LCG instead.
-// CELL_DIST selects the distribution at compile time (cellgl.enums.Distribution).
+// CELL_DIST selects the distribution at compile time (cellgl.basis.enums.Distribution).
 //
 // Requires: hash.glsl. Macros: CELL_DIM (2..4), CELL_DIST,
 // CELL_MAX_POINTS (the size of the threshold table, >= max_points),
 // CELL_DENSITY_MAP (CELL_DMAP_NONE, _RAMP, _RADIAL, _IMAGE: spatially varying
-// density, poisson only; cellgl/density.py).
+// density, poisson only; cellgl/basis/density.py).
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
@@ -32,7 +32,7 @@ struct CellParams {
     float minkowski_p;  // minkowski metric exponent
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     // Spatially varying density: row L of this table is the Poisson table of
-    // density level L (cellgl/density.py), picked per cell by cell_density_level().
+    // density level L (cellgl/basis/density.py), picked per cell by cell_density_level().
     uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
     ivec4 density_axis[4];  // per lattice axis: (o, n, m, b), see cell_density_level
     ivec4 density_info;     // (shift, image width, image height, 0)

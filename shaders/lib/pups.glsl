@@ -20,7 +20,7 @@
 // The texture is sum(T_c W_c) / sum(W_c) (3); a label texture takes the label
 // of the heaviest point (the first in candidate order on an exact tie).
 //
-// NumPy twin: cellgl/pups_reference.py (same function names, float64).
+// NumPy twin: cellgl/pups/reference.py (same function names, float64).
 //
 // Axes are passed pre-scaled: axis_scaled = axis / (factor * |axis|^2), so the
 // normalised projection is a single dot product.

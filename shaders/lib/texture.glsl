@@ -1,6 +1,6 @@
 // cellgl: textures from the cellular basis (Worley 1996, Qin 2000).
 //
-// One recipe (cellgl/recipe.py) evaluated at a point of basis space:
+// One recipe (cellgl/texture/recipe.py) evaluated at a point of basis space:
 //
 //   value  v(x) = sum_i c_i F_i(x) + sum_{i,j<=4} c_ij F_i(x) F_j(x) + c_noise n(x)
 //                 (Worley's linear combinations, Qin's generalized basis, the book's
@@ -41,7 +41,7 @@
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
 // Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes and
-// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture.py).
+// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture/shader.py).
 
 #include "cellular.glsl"
 #include "noise.glsl"
@@ -102,7 +102,7 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
     p.period = cell_texture_period(t, octave);
     p.minkowski_p = t.minkowski_p;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
-    // The density map of this octave (cellgl/texture.py density_encodings: the map
+    // The density map of this octave (cellgl/texture/shader.py density_encodings: the map
     // in uv, scaled to the octave's lattice, relative to its split origin).
     for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
         p.density_thresholds[k] = t.density_thresholds[k];

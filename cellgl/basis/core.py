@@ -1,0 +1,365 @@
+"""The public cellular-basis API: :func:`cellular`, :func:`cellular_grid`, :func:`feature_points`.
+
+Validates every argument (errors name the bad value and the accepted range),
+splits float64 positions into an integer cell and a float fraction, and
+dispatches to the GPU (:mod:`cellgl.basis.gpu`) or the NumPy reference
+(:mod:`cellgl.basis.reference`).
+"""
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+import numpy as np
+
+from cellgl.basis import reference
+from cellgl.basis.density import encode as _encode_density
+from cellgl.basis.enums import Distribution, Metric, parse_enum
+
+__all__ = ["CellularResult", "FeaturePoints", "cellular", "cellular_grid", "feature_points", "make_params"]
+
+N_MAX = 8                       #: largest n (F1..F8)
+OUTPUTS = ("F", "delta", "id", "grad")
+BACKENDS = ("gpu", "numpy")
+COORD_LIMIT = 2.0 ** 30         #: |position| (in cells) must stay below this
+
+
+@dataclass
+class CellularResult:
+    """Result of :func:`cellular` / :func:`cellular_grid`.
+
+    Attributes (``None`` when not requested in ``outputs``), with ``S`` the
+    sample shape ((N,) for point lists, the grid shape for grids):
+
+    F : float32 (*S, n) -- distances F1..Fn, ascending
+    delta : float32 (*S, n, d) -- feature point minus sample position
+    id : uint32 (*S, n) -- feature point IDs
+    grad : float32 (*S, n, d) -- gradient of each F_k with respect to the sample position
+    exact : bool (*S) -- False where the search cap was reached (the result may then be
+        missing a nearer point); True everywhere in practice
+    """
+
+    F: np.ndarray | None
+    delta: np.ndarray | None
+    id: np.ndarray | None
+    grad: np.ndarray | None
+    exact: np.ndarray
+
+
+@dataclass
+class FeaturePoints:
+    """Result of :func:`feature_points`.
+
+    positions : float64 (K, d); ids : uint32 (K,); cell_index : int64 (K,) row of ``cells``
+    each point came from. Points are ordered by cell, then by their order in the cell.
+    """
+
+    positions: np.ndarray
+    ids: np.ndarray
+    cell_index: np.ndarray
+
+
+def _number(name, value, lo, hi, *, integer=False, lo_open=False):
+    ok_type = isinstance(value, numbers.Integral) if integer else isinstance(value, numbers.Real)
+    if isinstance(value, bool) or not ok_type:
+        kind = "an integer" if integer else "a number"
+        raise ValueError(f"{name} must be {kind} in [{lo}, {hi}], got {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or v > hi or v < lo or (lo_open and v <= lo):
+        rng = f"({lo}, {hi}]" if lo_open else f"[{lo}, {hi}]"
+        raise ValueError(f"{name} must be in {rng}, got {value!r}")
+    return int(value) if integer else v
+
+
+def _period(period, dim) -> tuple[int, int, int, int]:
+    if period is None:
+        return (0, 0, 0, 0)
+    vals = [period] * dim if isinstance(period, numbers.Integral) else list(period)
+    if len(vals) != dim:
+        raise ValueError(f"period must be an integer or a sequence of {dim} integers (one per axis), got {period!r}")
+    out = []
+    for v in vals:
+        if v is None:
+            v = 0
+        out.append(_number("period", v, 0, 2 ** 24, integer=True))
+    return tuple(out + [0] * (4 - dim))
+
+
+def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
+                min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None,
+                density_map=None) -> reference.Params:
+    """Validate the basis parameters and bundle them as :class:`cellgl.basis.reference.Params`."""
+    metric = parse_enum(Metric, metric, "metric")
+    distribution = parse_enum(Distribution, distribution, "distribution")
+    if dim not in (2, 3, 4):
+        raise ValueError(f"points must have 2, 3 or 4 coordinates, got {dim}")
+    if distribution == Distribution.WORLEY1996 and dim != 3:
+        raise ValueError(f"distribution 'worley1996' is 3D only, got {dim}D points")
+    density = _number("density", density, 0.0, 16.0, lo_open=True)
+    jitter = _number("jitter", jitter, 0.0, 1.0)
+    min_points = _number("min_points", min_points, 0, reference.MAX_POINTS, integer=True)
+    max_points = _number("max_points", max_points, 1, reference.MAX_POINTS, integer=True)
+    if min_points > max_points:
+        raise ValueError(f"min_points ({min_points}) must not exceed max_points ({max_points})")
+    minkowski_p = _number("minkowski_p", minkowski_p, 0.25, 64.0)
+    seed = _number("seed", seed, 0, 2 ** 32 - 1, integer=True)
+    enc = None
+    if density_map is not None:
+        if distribution != Distribution.POISSON:
+            raise ValueError(f"density_map needs distribution 'poisson', got {distribution.name.lower()!r}")
+        enc = _encode_density(density_map, dim)
+    return reference.Params(dim=dim, metric=metric, distribution=distribution, density=density,
+                            jitter=jitter, min_points=min_points, max_points=max_points,
+                            minkowski_p=minkowski_p, seed=seed, period=_period(period, dim),
+                            density_map=enc)
+
+
+def _outputs(outputs) -> tuple[str, ...]:
+    if isinstance(outputs, str):
+        outputs = (outputs,)
+    outs = tuple(outputs)
+    for o in outs:
+        if o not in OUTPUTS:
+            raise ValueError(f"unknown output {o!r}; expected any of: {', '.join(OUTPUTS)}")
+    if not outs:
+        raise ValueError(f"outputs must name at least one of: {', '.join(OUTPUTS)}")
+    return tuple(o for o in OUTPUTS if o in outs)
+
+
+def _check_n_backend(n, backend):
+    n = _number("n", n, 1, N_MAX, integer=True)
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; expected one of: {', '.join(BACKENDS)}")
+    return n
+
+
+def _points(points) -> np.ndarray:
+    try:
+        pts = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"points must be a numeric array of shape (N, d), d in 2..4: {exc}") from None
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3, 4):
+        raise ValueError(f"points must have shape (N, d) with d in 2..4, got shape {pts.shape}")
+    if pts.shape[0] == 0:
+        raise ValueError("points is empty (shape (0, d)); pass at least one sample")
+    return pts
+
+
+def _check_coords(pos: np.ndarray, scaled: np.ndarray) -> None:
+    """Raise for NaN, infinite or too large coordinates (two reductions in the common case).
+    ``scaled`` is ``pos`` in cells (after the distribution's scale)."""
+    if scaled.min() > -COORD_LIMIT and scaled.max() < COORD_LIMIT:     # False for NaN too
+        return
+    bad = ~np.isfinite(pos)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise ValueError(f"points must be finite; points[{i}, {j}] is {pos[i, j]}")
+    i, j = np.argwhere(np.abs(scaled) >= COORD_LIMIT)[0]
+    raise ValueError(f"coordinates must lie within +-2^30 cells; got {pos[i, j]!r} at [{i}, {j}]")
+
+
+def split(pos: np.ndarray):
+    """Split float64 positions (N, d) into int64 cells (N, 4) and float64 fractions (N, 4)
+    in [0, 1) (unused axes 0), as the NumPy reference takes them."""
+    _check_coords(pos, pos)
+    fl = np.floor(pos)
+    N, d = pos.shape
+    cells = np.zeros((N, 4), dtype=np.int64)
+    cells[:, :d] = fl.astype(np.int64)
+    fr = np.zeros((N, 4), dtype=np.float64)
+    fr[:, :d] = pos - fl
+    return cells, fr
+
+
+def _finish(out: dict, exact, shape, p: reference.Params, n: int) -> CellularResult:
+    def get(name, tail):
+        a = out.get(name)
+        return None if a is None else a.reshape(tuple(shape) + tail)
+
+    return CellularResult(F=get("F", (n,)), delta=get("delta", (n, p.dim)), id=get("id", (n,)),
+                          grad=get("grad", (n, p.dim)), exact=np.asarray(exact).reshape(shape))
+
+
+def _numpy_search(cells, fr, p, n, outputs) -> tuple[dict, np.ndarray]:
+    F, D, I, exact = reference.search(cells, fr, p, n)
+    out = {}
+    inv = 1.0 / p.scale
+    if "F" in outputs:
+        out["F"] = (F * inv).astype(np.float32)
+    if "delta" in outputs:
+        out["delta"] = (D[..., : p.dim] * inv).astype(np.float32)
+    if "id" in outputs:
+        out["id"] = I
+    if "grad" in outputs:
+        out["grad"] = reference.metric_gradient(D[..., : p.dim], F, p).astype(np.float32)
+    return out, exact
+
+
+def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
+             min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
+             outputs=("F", "delta", "id"), backend="gpu") -> CellularResult:
+    """Worley's cellular basis F1..Fn at arbitrary points.
+
+    Parameters
+    ----------
+    points : array_like, (N, d) float, d in 2..4
+        Sample positions, in cells (feature density is per unit cell).
+    n : int, 1..8
+        Number of nearest feature points (F1..Fn).
+    metric : {"euclidean", "manhattan", "chebyshev", "minkowski"}
+    distribution : {"poisson", "jitter", "worley1996"}
+        ``poisson``: per-cell count ~ Poisson(``density``) clamped to
+        [``min_points``, ``max_points``]; ``jitter``: one point per cell displaced by
+        ``jitter`` from the centre; ``worley1996``: the book's reference program (3D),
+        bit for bit (positions are scaled by 0.398150 first, distances divided by it).
+    density : float in (0, 16]
+        Mean points per cell (poisson).
+    jitter : float in [0, 1]
+    min_points, max_points : int in [0, 16], [1, 16]
+    minkowski_p : float in [0.25, 64]
+    seed : int in [0, 2**32 - 1]
+    period : None, int or sequence of d ints >= 0
+        Cells repeat with this period on each axis (0: no wrap): the texture tiles
+        over ``period`` units.
+    density_map : None or cellgl.DensityMap
+        Spatially varying density (``poisson`` only; ``density`` is then unused): each
+        cell's count is drawn with the density of the map at the cell centre, quantised to
+        16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.basis.density`).
+    outputs : sequence of {"F", "delta", "id", "grad"}
+        Only these are computed and read back.
+    backend : {"gpu", "numpy"}
+
+    Returns
+    -------
+    CellularResult
+        ``F`` float32 (N, n), ``delta`` float32 (N, n, d), ``id`` uint32 (N, n),
+        ``grad`` float32 (N, n, d), ``exact`` bool (N,).
+    """
+    pts = _points(points)
+    n = _check_n_backend(n, backend)
+    outs = _outputs(outputs)
+    p = make_params(pts.shape[1], metric=metric, distribution=distribution, density=density,
+                    jitter=jitter, min_points=min_points, max_points=max_points,
+                    minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map)
+    if backend == "numpy":
+        cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
+        out, exact = _numpy_search(cells, fr, p, n, outs)
+    else:
+        from cellgl.basis import gpu
+
+        _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
+        out, exact = gpu.search_points(pts, p, n, outs)
+    return _finish(out, exact, (len(pts),), p, n)
+
+
+def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
+                  density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
+                  period=None, density_map=None, outputs=("F", "delta", "id"),
+                  backend="gpu") -> CellularResult:
+    """The cellular basis on a regular grid, with sample positions generated on the GPU.
+
+    Parameters
+    ----------
+    shape : tuple of 2..4 ints
+        Grid shape in array order, last axis = x: ``(H, W)`` for an image,
+        ``(D, H, W)`` for a volume, ``(T, D, H, W)`` in 4D.
+    origin : float or sequence of d floats, in (x, y, z, w) order
+        Position of sample ``[0, ..., 0]``; default all zeros.
+    spacing : float or sequence of d floats > 0, in (x, y, z, w) order
+        Distance between neighbouring samples along each axis.
+    n, metric, distribution, ... : as :func:`cellular`.
+
+    Returns
+    -------
+    CellularResult
+        Arrays shaped ``shape + (n,)`` (F, id) and ``shape + (n, d)`` (delta, grad).
+        Sample ``[..., i, j]`` lies at ``origin + spacing * (j, i, ...)``.
+    """
+    try:
+        shape = tuple(int(s) for s in shape)
+    except TypeError:
+        raise ValueError(f"shape must be a tuple of 2..4 positive ints, got {shape!r}") from None
+    dim = len(shape)
+    if dim not in (2, 3, 4) or any(s < 1 for s in shape):
+        raise ValueError(f"shape must be a tuple of 2..4 positive ints, got {shape!r}")
+    total = math.prod(shape)
+    if total > 2 ** 31 - 1:
+        raise ValueError(f"grid has {total} samples; at most 2^31 - 1 per call (bake in tiles)")
+    n = _check_n_backend(n, backend)
+    outs = _outputs(outputs)
+    p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
+                    min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
+                    seed=seed, period=period, density_map=density_map)
+
+    def vec(name, v, default):
+        v = default if v is None else v
+        arr = np.broadcast_to(np.asarray(v, dtype=np.float64), (dim,)) if np.ndim(v) == 0 else np.asarray(v, dtype=np.float64)
+        if arr.shape != (dim,):
+            raise ValueError(f"{name} must be a number or {dim} numbers (x, y, ...), got {v!r}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name} must be finite, got {v!r}")
+        return arr.astype(np.float64)
+
+    org = vec("origin", origin, 0.0) * p.scale
+    spc = vec("spacing", spacing, 1.0)
+    if np.any(spc <= 0):
+        raise ValueError(f"spacing must be > 0 on every axis, got {spacing!r}")
+    spc = spc * p.scale
+    shape_xyzw = list(reversed(shape)) + [1] * (4 - dim)
+    far = org + spc * (np.array(shape_xyzw[:dim]) - 1)
+    if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
+        raise ValueError("grid extends beyond +-2^30 cells; move origin closer to 0")
+    if backend == "numpy":
+        axes = [org[a] + spc[a] * np.arange(shape_xyzw[a]) for a in range(dim)]
+        mesh = np.meshgrid(*reversed(axes), indexing="ij")        # array order
+        pts = np.stack(list(reversed(mesh)), axis=-1).reshape(-1, dim)
+        cells, fr = split(pts)
+        out, exact = _numpy_search(cells, fr, p, n, outs)
+    else:
+        from cellgl.basis import gpu
+
+        ocell = np.zeros(4, dtype=np.int64)
+        ofrac = np.zeros(4)
+        ocell[:dim] = np.floor(org)
+        ofrac[:dim] = org - np.floor(org)
+        sp4 = np.zeros(4)
+        sp4[:dim] = spc
+        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, outs)
+    return _finish(out, exact, shape, p, n)
+
+
+def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, min_points=1,
+                   max_points=9, seed=0, period=None, density_map=None) -> FeaturePoints:
+    """Every feature point in the given integer cells.
+
+    Parameters
+    ----------
+    cells : array_like, (M, d) int, d in 2..4
+        Integer cells (for ``worley1996``, cubes of the scaled lattice: side
+        1/0.398150 in sample units).
+    distribution, density, jitter, min_points, max_points, seed, period, density_map :
+        as :func:`cellular`.
+
+    Returns
+    -------
+    FeaturePoints
+        ``positions`` float64 (K, d) in sample units, ``ids`` uint32 (K,),
+        ``cell_index`` int64 (K,).
+    """
+    arr = np.asarray(cells)
+    if arr.ndim != 2 or arr.shape[1] not in (2, 3, 4):
+        raise ValueError(f"cells must have shape (M, d) with d in 2..4, got shape {arr.shape}")
+    if arr.shape[0] == 0:
+        raise ValueError("cells is empty (shape (0, d)); pass at least one cell")
+    if not np.issubdtype(arr.dtype, np.integer):
+        if not np.all(np.isfinite(arr)) or not np.all(arr == np.floor(arr)):
+            raise ValueError("cells must hold integers")
+    arr = arr.astype(np.int64)
+    if np.any(np.abs(arr) >= COORD_LIMIT):
+        raise ValueError("cells must lie within +-2^30")
+    p = make_params(arr.shape[1], distribution=distribution, density=density, jitter=jitter,
+                    min_points=min_points, max_points=max_points, seed=seed, period=period,
+                    density_map=density_map)
+    pos, ids, which = reference.feature_points(arr, p)
+    return FeaturePoints(positions=pos / p.scale, ids=ids, cell_index=which)

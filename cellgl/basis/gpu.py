@@ -1,0 +1,233 @@
+"""GPU evaluation of the cellular basis: compute shader over sample lists and grids.
+
+Only :mod:`cellgl.basis.core` calls this; it receives validated parameters. Work is
+split into chunks so that no storage buffer exceeds a few tens of MB, and only
+the outputs that were asked for are computed (compile-time switches) and read
+back.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cellgl.gl import context
+from cellgl.basis.enums import glsl_defines
+from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
+
+LOCAL_SIZE = 64
+_CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
+_MAX_GROUPS = 65535
+
+
+def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
+    """The compile-time macros of ``shaders/cellular.comp`` for these parameters."""
+    d = glsl_defines()
+    d.update(
+        CELL_DIM=p.dim,
+        CELL_N=n,
+        CELL_METRIC=int(p.metric),
+        CELL_DIST=int(p.distribution),
+        CELL_MAX_POINTS=MAX_POINTS,
+        CELL_MAX_RING=max_ring_default(p.dim),
+        CELL_GRID=int(grid),
+        CELL_PERIODIC=int(any(p.period)),
+        CELL_OUT_F=int("F" in outputs),
+        CELL_OUT_DELTA=int("delta" in outputs),
+        CELL_OUT_ID=int("id" in outputs),
+        CELL_OUT_GRAD=int("grad" in outputs),
+        CELL_LOCAL_SIZE=LOCAL_SIZE,
+        CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
+    )
+    return d
+
+
+def _set(prog, name, value):
+    if name in prog:
+        prog[name].value = value
+
+
+def _set_params(prog, p: Params):
+    _set(prog, "u_seed", int(p.seed))
+    _set(prog, "u_jitter", float(p.jitter))
+    _set(prog, "u_min_points", int(p.min_points))
+    _set(prog, "u_max_points", int(p.max_points))
+    if "u_thresholds" in prog:
+        prog["u_thresholds"].write(p.thresholds.astype(np.uint32).tobytes())
+    _set(prog, "u_period", tuple(int(v) for v in p.period))
+    _set(prog, "u_minkowski_p", float(p.minkowski_p))
+    _set(prog, "u_out_scale", float(1.0 / p.scale))
+    set_density(prog, p.density_map)
+
+
+_density_buffers: dict = {}
+
+
+def set_density(prog, enc) -> None:
+    """Set the density-map uniforms of ``prog`` (``u_density_*``) from a
+    :class:`cellgl.basis.density.DensityEncoding` and bind its image levels to storage buffer 7."""
+    if enc is None:
+        return
+    if "u_density_thresholds" in prog:
+        prog["u_density_thresholds"].write(enc.thresholds.astype(np.uint32).tobytes())
+    if "u_density_axis" in prog:
+        u = prog["u_density_axis"]       # the compiler may trim the array to the axes in use
+        u.write(enc.axes[: getattr(u, "array_length", 4)].astype(np.int32).tobytes())
+    _set(prog, "u_density_info", enc.info)
+    bind_density_image(enc.levels)
+
+
+def bind_density_image(levels, ctx=None) -> None:
+    """Upload (cached by content, one buffer per context) and bind density-image levels (uint32)
+    to storage buffer 7 of ``ctx`` (default: cellgl's context; the viewer passes its window's)."""
+    if levels is None:
+        return
+    ctx = ctx or context.get_context()
+    data = np.ascontiguousarray(levels, dtype=np.uint32).tobytes()
+    key = (hash(data), len(data))
+    held = _density_buffers.get(id(ctx))
+    if held is None or held[0] != key or held[2] is not ctx:
+        if held is not None and held[2] is ctx:
+            held[1].release()
+        held = _density_buffers[id(ctx)] = (key, ctx.buffer(data), ctx)
+    held[1].bind_to_storage_buffer(7)
+
+
+@context.gl_call
+def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
+    """Point count and density level of each integer cell (M, 4) int, on the GPU (as the
+    search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
+    ctx = context.get_context()
+    d = defines_for(p, 1)
+    prog = context.compute_program("cell_counts.comp", d)
+    _set_params(prog, p)
+    cells = np.ascontiguousarray(cells, dtype=np.int32)
+    M = len(cells)
+    cb = ctx.buffer(cells.tobytes())
+    cb.bind_to_storage_buffer(0)
+    ob = ctx.buffer(reserve=8 * M)
+    ob.bind_to_storage_buffer(2)
+    _set(prog, "u_count", M)
+    prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
+    ctx.memory_barrier()
+    out = np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64)
+    cb.release()
+    ob.release()
+    return out[:, 0], out[:, 1]
+
+
+def _chunk_size(n: int, dim: int, outputs) -> int:
+    per = 4 * n * (dim if ("delta" in outputs or "grad" in outputs) else 1)
+    return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
+
+
+_pool: dict = {}
+
+
+def _storage(ctx, binding: int, nbytes: int):
+    """A storage buffer of at least ``nbytes`` bound to ``binding``, reused across calls
+    (allocating fresh tens-of-MB buffers every call costs as much as a small dispatch)."""
+    key = (id(ctx), binding)
+    buf = _pool.get(key)
+    if buf is None or buf.size < nbytes:
+        if buf is not None:
+            buf.release()
+        buf = ctx.buffer(reserve=max(64, nbytes + nbytes // 4))
+        _pool[key] = buf
+    buf.bind_to_storage_buffer(binding)
+    return buf
+
+
+def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
+         groups=None):
+    """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
+    1D dispatch) and copy results into ``out[start:start + count]``."""
+    bufs = {}
+    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim}
+    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5}
+    for name in outputs:
+        bufs[name] = _storage(ctx, binding[name], count * sizes[name])
+    # Samples whose search hit the cap: a counter and a list of their indices.
+    flags = _storage(ctx, 6, 4 * (count + 1))
+    flags.write(b"\0\0\0\0")
+    _set(prog, "u_count", count)
+    gx, gy, gz = groups or ((count + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
+    prog.run(group_x=gx, group_y=gy, group_z=gz)
+    ctx.memory_barrier()
+    for name, buf in bufs.items():
+        # Straight into the result array (a contiguous run of whole samples).
+        buf.read_into(out[name][start:start + count], size=count * sizes[name])
+    nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
+    if nbad:
+        idx = np.frombuffer(flags.read(4 * nbad, offset=4), dtype=np.uint32)
+        inexact[start + idx.astype(np.int64)] = True
+
+
+def _alloc(N: int, n: int, dim: int, outputs) -> dict:
+    out = {}
+    for name in outputs:
+        if name in ("delta", "grad"):
+            out[name] = np.empty((N, n, dim), dtype=np.float32)
+        else:
+            out[name] = np.empty((N, n), dtype=np.uint32 if name == "id" else np.float32)
+    return out
+
+
+@context.gl_call
+def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+    """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
+
+    The shader scales them by ``p.scale`` and splits them into an integer cell
+    and a float32 fraction in double precision. Returns ({output name: array},
+    exact (N,) bool).
+    """
+    ctx = context.get_context()
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
+    _set_params(prog, p)
+    _set(prog, "u_scale", float(p.scale))
+    N = len(pts)
+    out = _alloc(N, n, p.dim, outputs)
+    inexact = np.zeros(N, dtype=bool)
+    step = _chunk_size(n, p.dim, outputs)
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
+    for start in range(0, N, step):
+        count = min(step, N - start)
+        chunk = pts[start:start + count]
+        _storage(ctx, 0, chunk.nbytes).write(chunk)
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
+    return out, ~inexact
+
+
+@context.gl_call
+def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+    """Cellular basis on a regular grid generated on the GPU.
+
+    shape_xyzw: samples along x, y, z, w (unused axes 1); origin split into
+    int cell (4,) and float fraction (4,); spacing (4,) (all already scaled).
+    Returns flat arrays in x-fastest order, as :func:`search_points`.
+    """
+    ctx = context.get_context()
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
+    _set_params(prog, p)
+    _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
+    _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))
+    _set(prog, "u_spacing", tuple(float(v) for v in spacing))
+    X, Y, Z, W = (int(v) for v in shape_xyzw)
+    N = X * Y * Z * W
+    out = _alloc(N, n, p.dim, outputs)
+    inexact = np.zeros(N, dtype=bool)
+    step = _chunk_size(n, p.dim, outputs)
+    # Slabs of whole rows: several z-layers of full rows, or some rows of one layer,
+    # so each slab is contiguous in the x-fastest output.
+    if X * Y <= step and Y <= _MAX_GROUPS:
+        ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
+    else:
+        ny, nz = max(1, min(step // X, _MAX_GROUPS)), 1
+    gx = (X + LOCAL_SIZE - 1) // LOCAL_SIZE
+    for w in range(W):
+        for z0 in range(0, Z, nz):
+            for y0 in range(0, Y, ny):
+                cy, cz = min(ny, Y - y0), min(nz, Z - z0)
+                _set(prog, "u_slab", (0, y0, z0, w))
+                _set(prog, "u_slab_size", (X, cy))
+                start = ((w * Z + z0) * Y + y0) * X
+                _run(prog, ctx, X * cy * cz, n, p.dim, outputs, out, start, inexact, groups=(gx, cy, cz))
+    return out, ~inexact

@@ -1,0 +1,337 @@
+"""NumPy float64 twin of ``shaders/lib/*.glsl``.
+
+Function for function, the same names (without the ``cell_`` prefix) and the
+same integer hashing, vectorised over samples. ``cellgl.cellular(...,
+backend="numpy")`` runs this; the tests cross-check the GPU against it and
+check it against a brute-force search over :func:`feature_points`.
+
+All integer arithmetic is done on ``np.uint64`` arrays holding values below
+2**32 and masked after every multiply/add, which is exactly uint32 wrapping.
+"""
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from cellgl.basis.density import levels_reference
+from cellgl.basis.enums import Distribution, Metric
+from cellgl.basis.population import (BIG, M32, MAX_POINTS, W96_DENSITY_ADJUSTMENT, _add, _mul, _u,  # noqa: F401
+                                     hash_u32, poisson_thresholds, u16, worley1996_table)
+
+
+@dataclass(frozen=True)
+class Params:
+    """Everything that defines the basis (the GLSL macros and ``CellParams``)."""
+
+    dim: int
+    metric: Metric = Metric.EUCLIDEAN
+    distribution: Distribution = Distribution.POISSON
+    density: float = 3.0
+    jitter: float = 1.0
+    min_points: int = 1
+    max_points: int = 9
+    minkowski_p: float = 3.0
+    seed: int = 0
+    period: tuple[int, int, int, int] = (0, 0, 0, 0)
+    #: spatially varying density (:class:`cellgl.basis.density.DensityEncoding`), poisson only
+    density_map: object = None
+
+    @property
+    def thresholds(self) -> np.ndarray:
+        return poisson_thresholds(self.density)
+
+    @property
+    def scale(self) -> float:
+        """Sample positions are multiplied by this before the search (and
+        distances divided by it after): only worley1996 rescales."""
+        return W96_DENSITY_ADJUSTMENT if self.distribution == Distribution.WORLEY1996 else 1.0
+
+
+def wrap(cells: np.ndarray, period) -> np.ndarray:
+    """``cell_wrap``: cells (..., 4) int64 onto the periodic lattice."""
+    out = cells.copy()
+    for a, m in enumerate(period):
+        if m > 0:
+            out[..., a] = np.mod(out[..., a], m)
+    return out
+
+
+def cell_seed(cells: np.ndarray, p: Params) -> np.ndarray:
+    """``cell_cell_seed``: start of each cell's random stream. cells (N, 4) int64."""
+    c = cells.astype(np.int64) & 0xFFFFFFFF
+    if p.distribution == Distribution.WORLEY1996:
+        h = _add(_add(_mul(c[:, 0], 702395077), _mul(c[:, 1], 915488749)), _mul(c[:, 2], 2120969693))
+        return _add(h, _mul(p.seed, 2654435769))
+    h = _add(_mul(p.seed, 0x27D4EB2F), _add(_mul(c[:, 0], 0x8DA6B343), _mul(c[:, 1], 0xD8163841)))
+    for a, k in ((2, 0xCB1AB31F), (3, 0x165667B1))[: p.dim - 2]:
+        h = _add(h, _mul(c[:, a], k))
+    return hash_u32(h)
+
+
+def _w96_step(state):
+    return _add(_mul(state, 1402024253), 586950981)
+
+
+def density_level(cells: np.ndarray, p: Params) -> np.ndarray:
+    """``cell_density_level``: the density level (0..15) of each (wrapped) cell (N, 4) int64."""
+    return levels_reference(cells, p.density_map)
+
+
+def point_count(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
+    """``cell_point_count`` (``cell_point_count_at`` with a density map: ``cells`` (N, 4) int64,
+    already wrapped, pick each cell's row of the threshold table); returns (new_state, count int64)."""
+    if p.distribution == Distribution.WORLEY1996:
+        count = worley1996_table()[(state >> np.uint64(24)).astype(np.int64)]
+        return _w96_step(state), count
+    if p.distribution == Distribution.JITTER:
+        return state, np.ones(len(state), dtype=np.int64)
+    u = state
+    if p.density_map is not None:
+        t = p.density_map.thresholds.astype(np.uint64)[density_level(cells, p)]     # (N, 16)
+    else:
+        t = p.thresholds.astype(np.uint64)[None, :]  # (loop order irrelevant: a count)
+    count = np.full(len(state), p.min_points, dtype=np.int64)
+    for k in range(p.min_points, p.max_points):
+        count += (u >= t[:, k]).astype(np.int64)
+    return state, count
+
+
+def next_point(state: np.ndarray, p: Params):
+    """``cell_next_point``: returns (new_state, position in cell (N, 4) float64, id uint32)."""
+    n = len(state)
+    f = np.zeros((n, 4), dtype=np.float64)
+    if p.distribution == Distribution.WORLEY1996:
+        ids = state.copy()
+        for a in range(3):
+            state = _w96_step(state)
+            f[:, a] = (state.astype(np.float64) + 0.5) / 4294967296.0
+        state = _w96_step(state)
+        return state, f, ids
+    if p.distribution == Distribution.JITTER:
+        u = state                                   # one point: the cell's hash itself
+    else:
+        state = _add(state, 0x9E3779B9)             # point k: avalanche of h + k 0x9e3779b9
+        u = hash_u32(state)
+    ids = hash_u32(u ^ np.uint64(0x5BD1E995))
+    f[:, 0] = u16(u >> np.uint64(16))
+    f[:, 1] = u16(u & np.uint64(0xFFFF))
+    if p.dim >= 3:
+        v = _mul(u ^ (u >> np.uint64(15)), 0x2C1B3C6D)
+        v ^= v >> np.uint64(12)
+        f[:, 2] = u16(v >> np.uint64(16))
+        f[:, 3] = u16(v & np.uint64(0xFFFF))
+    if p.distribution == Distribution.JITTER:
+        f[:, : p.dim] = 0.5 + p.jitter * (f[:, : p.dim] - 0.5)
+    return state, f, ids
+
+
+# --------------------------------------------------------------------------- metric.glsl
+
+def metric_term(x, p: Params):
+    x = np.abs(x)
+    if p.metric == Metric.EUCLIDEAN:
+        return x * x
+    if p.metric == Metric.MINKOWSKI:
+        return x ** p.minkowski_p
+    return x
+
+
+def metric_length(d: np.ndarray, p: Params) -> np.ndarray:
+    """Internal-unit length over the first ``dim`` components of d (..., 4)."""
+    t = metric_term(d[..., : p.dim], p)
+    return t.max(axis=-1) if p.metric == Metric.CHEBYSHEV else t.sum(axis=-1)
+
+
+def metric_finish(acc, p: Params):
+    if p.metric == Metric.EUCLIDEAN:
+        return np.sqrt(acc)
+    if p.metric == Metric.MINKOWSKI:
+        return acc ** (1.0 / p.minkowski_p)
+    return acc
+
+
+def metric_gradient(delta: np.ndarray, F: np.ndarray, p: Params) -> np.ndarray:
+    """``cell_metric_gradient``: dF/dsample. delta (..., d), F (...)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        Fe = F[..., None]
+        if p.metric == Metric.EUCLIDEAN:
+            g = -delta / Fe
+        elif p.metric == Metric.MANHATTAN:
+            g = -np.sign(delta)
+        elif p.metric == Metric.CHEBYSHEV:
+            k = np.argmax(np.abs(delta), axis=-1)
+            g = np.zeros_like(delta)
+            sel = np.take_along_axis(delta, k[..., None], axis=-1)
+            np.put_along_axis(g, k[..., None], -np.sign(sel), axis=-1)
+        else:
+            q = p.minkowski_p
+            g = -np.sign(delta) * np.abs(delta) ** (q - 1.0) / Fe ** (q - 1.0)
+    return np.where(Fe > 0, g, 0.0)
+
+
+# --------------------------------------------------------------------------- cellular.glsl
+
+def _block_offsets(dim: int):
+    """Offsets of ring 1 in the GPU's loop order (x outermost, -1..1)."""
+    rng = [range(-1, 2)] * dim + [range(0, 1)] * (4 - dim)
+    return [o for o in itertools.product(*rng) if any(o)]
+
+
+def _ring_offsets(ring: int, dim: int):
+    """All offsets of a ring >= 2 in the GPU's loop order (before windowing)."""
+    rng = [range(-ring, ring + 1)] * dim + [range(0, 1)] * (4 - dim)
+    return [o for o in itertools.product(*rng) if max(abs(v) for v in o) == ring]
+
+
+def _insert(F, D, I, d, delta, ids):
+    """``_cell_insert`` for a batch: merge one candidate per row, keeping the
+    existing entry first on equal distances (stable sort)."""
+    n = F.shape[1]
+    allF = np.concatenate([F, d[:, None]], axis=1)
+    order = np.argsort(allF, axis=1, kind="stable")[:, :n]
+    F[:] = np.take_along_axis(allF, order, axis=1)
+    allD = np.concatenate([D, delta[:, None, :]], axis=1)
+    D[:] = np.take_along_axis(allD, order[:, :, None], axis=1)
+    allI = np.concatenate([I, ids[:, None]], axis=1)
+    I[:] = np.take_along_axis(allI, order, axis=1)
+
+
+def _visit(F, D, I, cells, f, o, p: Params):
+    """``_cell_visit`` for the rows given (all arrays already subset)."""
+    wc = wrap(cells + o, p.period)
+    state = cell_seed(wc, p)
+    state, count = point_count(state, p, wc)
+    base = o.astype(np.float64) - f
+    for k in range(int(count.max(initial=0))):
+        state, q, ids = next_point(state, p)
+        has = k < count
+        delta = base + q
+        d = np.where(has, metric_length(delta, p), np.inf)
+        _insert(F, D, I, d, delta, ids)
+
+
+def max_ring_default(dim: int) -> int:
+    """CELL_MAX_RING: rings searched before a result is marked inexact."""
+    return {2: 8, 3: 5, 4: 3}[dim]
+
+
+def _box_distance(o: np.ndarray, f: np.ndarray, p: Params) -> np.ndarray:
+    g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0))
+    return metric_length(g, p)
+
+
+def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | None = None):
+    """``cell_search``: the n nearest feature points of each sample.
+
+    Parameters
+    ----------
+    cells : (N, 4) int64 -- integer cell of each sample (unused axes 0)
+    f : (N, 4) float64 -- fraction within the cell, in [0, 1)
+    p : Params
+    n : int -- how many neighbours
+
+    Returns
+    -------
+    F (N, n) float64, delta (N, n, 4) float64, id (N, n) uint32, exact (N,) bool
+    """
+    if max_ring is None:
+        max_ring = max_ring_default(p.dim)
+    N = len(cells)
+    F = np.full((N, n), BIG)
+    D = np.zeros((N, n, 4))
+    I = np.zeros((N, n), dtype=np.uint64)
+
+    def visit(rows, o):
+        """Visit offset o (4,) or (len(rows), 4) for the given rows, pruned."""
+        o = np.broadcast_to(np.asarray(o, dtype=np.int64), (len(rows), 4))
+        keep = _box_distance(o, f[rows], p) < F[rows, -1]
+        rows, o = rows[keep], o[keep]
+        if len(rows) == 0:
+            return
+        sF, sD, sI = F[rows], D[rows], I[rows]
+        _visit(sF, sD, sI, cells[rows], f[rows], o, p)
+        F[rows], D[rows], I[rows] = sF, sD, sI
+
+    every = np.arange(N)
+    visit(every, (0, 0, 0, 0))
+    for o in _block_offsets(p.dim):
+        visit(every, o)
+
+    fd = f[:, : p.dim]
+    m = np.minimum(fd, 1.0 - fd).min(axis=1)
+    exact = np.zeros(N, dtype=bool)
+    active = np.ones(N, dtype=bool)
+    for ring in range(2, max_ring + 1):
+        done = active & (metric_term(ring - 1 + m, p) >= F[:, -1])
+        exact |= done
+        active &= ~done
+        rows = np.nonzero(active)[0]
+        if len(rows) == 0:
+            break
+        Fr = F[rows, -1]
+        reach = np.where(Fr < BIG, metric_finish(Fr, p) * 1.000001 + 1e-6, ring + 2.0)
+        fa = f[rows]
+        hi = np.zeros((len(rows), 4), dtype=np.int64)
+        lo = np.zeros((len(rows), 4), dtype=np.int64)
+        for a in range(p.dim):
+            hi[:, a] = np.minimum(ring, np.ceil(reach + fa[:, a]).astype(np.int64) - 1)
+            lo[:, a] = -np.minimum(ring, np.ceil(reach + 1.0 - fa[:, a]).astype(np.int64) - 1)
+        for o in _ring_offsets(ring, p.dim):
+            ov = np.asarray(o)
+            inside = np.all((ov >= lo) & (ov <= hi), axis=1)
+            visit(rows[inside], o)
+    else:
+        rows = np.nonzero(active)[0]
+        exact[rows] = metric_term(max_ring + m[rows], p) >= F[rows, -1]
+    return metric_finish(F, p), D, I.astype(np.uint32), exact
+
+
+def brute_force(points: np.ndarray, positions: np.ndarray, ids: np.ndarray, metric, n: int,
+                minkowski_p: float = 3.0):
+    """The n nearest of the given feature points to each sample, by testing every one.
+
+    The yardstick for :func:`search` (tests, ``benchmarks/exactness.py``): points (N, d),
+    positions (K, d), ids (K,) -> F (N, n) float64 ascending, ids (N, n) uint32; equal
+    distances keep the order of ``positions``.
+    """
+    a = np.abs(positions[None, :, :] - points[:, None, :])
+    metric = Metric[metric.upper()] if isinstance(metric, str) else metric
+    if metric == Metric.EUCLIDEAN:
+        dist = np.sqrt((a * a).sum(-1))
+    elif metric == Metric.MANHATTAN:
+        dist = a.sum(-1)
+    elif metric == Metric.CHEBYSHEV:
+        dist = a.max(-1)
+    else:
+        dist = (a ** minkowski_p).sum(-1) ** (1.0 / minkowski_p)
+    order = np.argsort(dist, axis=1, kind="stable")[:, :n]
+    return np.take_along_axis(dist, order, 1), ids[order]
+
+
+def feature_points(cells: np.ndarray, p: Params):
+    """Every feature point in the given cells.
+
+    cells (M, d) int64 -> positions (K, d) float64 in the cells' lattice,
+    ids (K,) uint32, cell index (K,) int64. Periodic wrapping applies to the
+    hashing, not to the returned positions.
+    """
+    M = len(cells)
+    c4 = np.zeros((M, 4), dtype=np.int64)
+    c4[:, : p.dim] = cells
+    wc = wrap(c4, p.period)
+    state = cell_seed(wc, p)
+    state, count = point_count(state, p, wc)
+    pos, ids, which = [], [], []
+    for k in range(int(count.max(initial=0))):
+        state, q, idk = next_point(state, p)
+        has = np.nonzero(k < count)[0]
+        pos.append(c4[has, : p.dim] + q[has, : p.dim])
+        ids.append(idk[has])
+        which.append(has)
+    if not pos:
+        return np.zeros((0, p.dim)), np.zeros(0, np.uint32), np.zeros(0, np.int64)
+    which = np.concatenate(which)
+    order = np.lexsort((np.concatenate([np.full(len(h), k) for k, h in enumerate(pos)]), which))
+    return (np.concatenate(pos)[order], np.concatenate(ids)[order].astype(np.uint32), which[order])

@@ -1,0 +1,157 @@
+"""Step 2 of a snippet: :func:`prefix_names` gives every top-level name the ``cellgl_`` prefix;
+:func:`add_highp` pins GLSL ES declarations to ``highp``."""
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+
+from cellgl.export.translate.tokens import (
+    GLSL_TYPES,
+    TranslateError,
+    _code,
+    _join,
+    tokenize,
+)
+
+# --------------------------------------------------------------------------------------------
+# 2. top-level names and the prefix
+# --------------------------------------------------------------------------------------------
+
+
+
+def top_level_names(text: str) -> dict[str, str]:
+    """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``."""
+    toks = [t for t in tokenize(text) if t.kind not in ("ws", "comment")]
+    names: dict[str, str] = {}
+    depth = 0
+    stmt: list[str] = []
+    for t in toks:
+        if t.text == "{":
+            if depth == 0:
+                _decl(stmt, names, brace=True)
+                stmt = []
+            depth += 1
+            continue
+        if t.text == "}":
+            depth -= 1
+            continue
+        if depth:
+            continue
+        if t.text == ";":
+            _decl(stmt, names, brace=False)
+            stmt = []
+            continue
+        stmt.append(t.text)
+    return names
+
+
+_QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "in", "out", "inout", "flat",
+               "precise", "invariant"}
+
+
+def _decl(stmt: list[str], names: dict[str, str], brace: bool) -> None:
+    s = [t for t in stmt if t not in _QUALIFIERS]
+    if not s:
+        return
+    if s[0] == "struct":
+        if len(s) >= 2:
+            names[s[1]] = "struct"
+        return
+    if len(s) >= 3 and s[2] == "(" and brace:
+        names[s[1]] = "function"
+        return
+    if len(s) >= 3 and s[2] == "(":
+        names[s[1]] = "function"    # prototype
+        return
+    # variable(s): TYPE NAME [= ...] [, NAME ...]; TYPE NAME[N] = ...
+    if len(s) >= 2 and re.fullmatch(r"[A-Za-z_]\w*", s[1]):
+        names[s[1]] = "variable"
+        depth = 0
+        for i, t in enumerate(s[2:], start=2):
+            if t in "([":
+                depth += 1
+            elif t in ")]":
+                depth -= 1
+            elif t == "," and depth == 0 and i + 1 < len(s):
+                names[s[i + 1]] = "variable"
+
+
+def prefixed(name: str, kind: str) -> str:
+    """The exported spelling of a library name.
+
+    ``cell_x`` -> ``cellgl_x``; private ``_cell_x`` -> ``cellgl_x_``; struct ``CellX`` ->
+    ``CellglX``; anything else gets ``cellgl_`` (``Cellgl`` for structs) in front.
+    """
+    if kind == "struct":
+        if name.startswith("Cellgl"):
+            return name
+        if name.startswith("Cell"):
+            return "Cellgl" + name[4:]
+        return "Cellgl" + name[:1].upper() + name[1:]
+    if name.startswith("cellgl_"):
+        return name
+    if name.startswith("_cell_"):
+        return "cellgl_" + name[6:] + "_"
+    if name.startswith("cell_"):
+        return "cellgl_" + name[5:]
+    if name.startswith("_"):
+        return "cellgl_" + name.lstrip("_") + "_"
+    return "cellgl_" + name
+
+
+def prefix_names(text: str, *, keep: set[str] = frozenset(),
+                 overrides: Mapping[str, str] | None = None) -> tuple[str, dict[str, str]]:
+    """Rename every top-level name with :func:`prefixed` (code and comments alike).
+
+    ``overrides`` gives explicit new names (e.g. to keep a library function clear of an entry
+    point's name: WGSL has no overloading).
+
+    Returns the new text and the ``{old: new}`` map. Raises :class:`TranslateError` when two
+    names would collide.
+    """
+    decls = top_level_names(text)
+    mapping = {n: prefixed(n, k) for n, k in decls.items() if n not in keep}
+    for old, new in (overrides or {}).items():
+        if old in mapping:
+            mapping[old] = new
+    mapping = {a: b for a, b in mapping.items() if a != b}
+    seen: dict[str, str] = {}
+    for old, new in mapping.items():
+        if new in seen or (new in decls and new not in mapping):
+            raise TranslateError(f"prefixing {old!r} gives {new!r}, which is taken")
+        seen[new] = old
+    toks = tokenize(text)
+    word = re.compile(r"\b(" + "|".join(map(re.escape, mapping)) + r")\b") if mapping else None
+    for t in toks:
+        if t.kind == "id" and t.text in mapping:
+            t.text = mapping[t.text]
+        elif t.kind == "comment" and word is not None:
+            t.text = word.sub(lambda m: mapping[m.group(1)], t.text)
+    return _join(toks), mapping
+
+
+# --------------------------------------------------------------------------------------------
+# GLSL ES: highp everywhere
+# --------------------------------------------------------------------------------------------
+
+_PRECISION_TYPES = GLSL_TYPES - {"void", "bool", "bvec2", "bvec3", "bvec4"}
+
+
+def add_highp(text: str) -> str:
+    """Put ``highp`` before every declaration of a float/int/uint type (GLSL ES 3.00).
+
+    The ES default int precision in fragment shaders is ``mediump`` (16 bits on some GPUs),
+    which would break the 32-bit hashes; qualifying each declaration keeps the user's own
+    ``precision`` statements untouched.
+    """
+    toks = tokenize(text)
+    code = _code(toks)
+    for n, i in enumerate(code):
+        t = toks[i]
+        if t.kind != "id" or t.text not in _PRECISION_TYPES:
+            continue
+        nxt = toks[code[n + 1]] if n + 1 < len(code) else None
+        prv = toks[code[n - 1]].text if n else ""
+        if nxt is not None and nxt.kind == "id" and prv not in ("highp", "mediump", "lowp"):
+            t.text = "highp " + t.text
+    return _join(toks)

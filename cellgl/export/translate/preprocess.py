@@ -1,0 +1,270 @@
+"""Step 1 of a snippet: :func:`specialise`, a small C preprocessor for the subset the library
+uses; inactive branches are dropped and every macro replaced by its value."""
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+
+from cellgl.export.translate.tokens import TranslateError, _join, tokenize
+
+# --------------------------------------------------------------------------------------------
+# 1. preprocessor subset
+# --------------------------------------------------------------------------------------------
+
+_DIRECTIVE_RE = re.compile(r"^\s*#\s*(\w*)\s*(.*?)\s*$")
+
+
+def _strip_comment(s: str) -> str:
+    s = re.sub(r"/\*.*?\*/", " ", s)
+    return s.split("//", 1)[0].strip()
+
+
+class _Expr:
+    """Integer constant expression of ``#if`` (C semantics, truncating division)."""
+
+    _BIN = [
+        ("||",), ("&&",), ("|",), ("^",), ("&",), ("==", "!="), ("<", ">", "<=", ">="),
+        ("<<", ">>"), ("+", "-"), ("*", "/", "%"),
+    ]
+
+    def __init__(self, toks: list[str], where: str):
+        self.toks = toks
+        self.i = 0
+        self.where = where
+
+    def error(self, msg: str) -> TranslateError:
+        return TranslateError(f"{self.where}: {msg} in #if expression {' '.join(self.toks)!r}")
+
+    def peek(self) -> str | None:
+        return self.toks[self.i] if self.i < len(self.toks) else None
+
+    def take(self) -> str:
+        t = self.peek()
+        if t is None:
+            raise self.error("unexpected end")
+        self.i += 1
+        return t
+
+    def parse(self) -> int:
+        v = self.ternary()
+        if self.peek() is not None:
+            raise self.error(f"unexpected {self.peek()!r}")
+        return v
+
+    def ternary(self) -> int:
+        c = self.binary(0)
+        if self.peek() == "?":
+            self.take()
+            a = self.ternary()
+            if self.take() != ":":
+                raise self.error("expected ':'")
+            b = self.ternary()
+            return a if c else b
+        return c
+
+    def binary(self, level: int) -> int:
+        if level == len(self._BIN):
+            return self.unary()
+        v = self.binary(level + 1)
+        while self.peek() in self._BIN[level]:
+            op = self.take()
+            w = self.binary(level + 1)
+            if op in ("/", "%") and w == 0:
+                raise self.error("division by zero")
+            v = {
+                "||": lambda: int(bool(v) or bool(w)), "&&": lambda: int(bool(v) and bool(w)),
+                "|": lambda: v | w, "^": lambda: v ^ w, "&": lambda: v & w,
+                "==": lambda: int(v == w), "!=": lambda: int(v != w), "<": lambda: int(v < w),
+                ">": lambda: int(v > w), "<=": lambda: int(v <= w), ">=": lambda: int(v >= w),
+                "<<": lambda: v << w, ">>": lambda: v >> w, "+": lambda: v + w, "-": lambda: v - w,
+                "*": lambda: v * w,
+                "/": lambda: int(v / w) if (v < 0) != (w < 0) else v // w,
+                "%": lambda: v - w * (int(v / w) if (v < 0) != (w < 0) else v // w),
+            }[op]()
+        return v
+
+    def unary(self) -> int:
+        t = self.take()
+        if t == "!":
+            return int(not self.unary())
+        if t == "-":
+            return -self.unary()
+        if t == "+":
+            return self.unary()
+        if t == "~":
+            return ~self.unary()
+        if t == "(":
+            v = self.ternary()
+            if self.take() != ")":
+                raise self.error("expected ')'")
+            return v
+        m = re.fullmatch(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?", t)
+        if m:
+            return int(m.group(1), 0) if not re.fullmatch(r"0\d+", m.group(1)) else int(m.group(1), 8)
+        if re.fullmatch(r"[A-Za-z_]\w*", t):
+            raise self.error(f"undefined macro {t!r}")
+        raise self.error(f"unexpected {t!r}")
+
+
+def _expand(tokens: list[str], macros: Mapping[str, str], where: str, depth: int = 0) -> list[str]:
+    if depth > 32:
+        raise TranslateError(f"{where}: macro expansion too deep (recursive #define?)")
+    out: list[str] = []
+    for t in tokens:
+        if t in macros:
+            out.extend(_expand(_ptoks(macros[t]), macros, where, depth + 1))
+        else:
+            out.append(t)
+    return out
+
+
+def _ptoks(s: str) -> list[str]:
+    return [t.text for t in tokenize(s) if t.kind not in ("ws", "comment")]
+
+
+def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
+    toks = _ptoks(_strip_comment(expr))
+    resolved: list[str] = []
+    i = 0
+    while i < len(toks):           # defined X / defined(X) before expansion
+        if toks[i] == "defined":
+            if i + 1 < len(toks) and toks[i + 1] == "(":
+                if i + 3 >= len(toks) or toks[i + 3] != ")":
+                    raise TranslateError(f"{where}: malformed defined() in {expr!r}")
+                name, i = toks[i + 2], i + 4
+            elif i + 1 < len(toks):
+                name, i = toks[i + 1], i + 2
+            else:
+                raise TranslateError(f"{where}: malformed defined in {expr!r}")
+            resolved.append("1" if name in macros else "0")
+        else:
+            resolved.append(toks[i])
+            i += 1
+    if not resolved:
+        raise TranslateError(f"{where}: empty #if expression")
+    return bool(_Expr(_expand(resolved, macros, where), where).parse())
+
+
+def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader>") -> str:
+    """Evaluate the preprocessor directives of ``text`` with ``defines`` and substitute macros.
+
+    Parameters
+    ----------
+    text : str
+        GLSL source (includes already resolved), may contain directives.
+    defines : mapping of str to int, float, bool or str
+        The macros in force at the top (values as in :func:`cellgl.gl.glsl.format_define`).
+    name : str
+        Used in error messages.
+
+    Returns
+    -------
+    str
+        The text with inactive branches and every directive line removed and every macro in code
+        replaced by its (fully expanded) value. Comments are kept unchanged.
+
+    Raises
+    ------
+    TranslateError
+        Unbalanced conditionals, an undefined macro in an ``#if``, a function-like macro,
+        ``#include``/``#version``/``#error``/``#pragma``/``#extension`` and other directives.
+    """
+    macros: dict[str, str] = {}
+    for k, v in defines.items():
+        if isinstance(v, bool):
+            v = int(v)
+        macros[str(k)] = "" if v is None else (repr(float(v)) if isinstance(v, float) else str(v))
+
+    # join continuation lines
+    raw = text.replace("\\\n", "")
+    # output chunks: (macros in force, lines); a #define/#undef starts a new chunk
+    chunks: list[tuple[dict[str, str], list[str]]] = [(macros, [])]
+    # stack of [active_now, any_branch_taken, parent_active, seen_else]
+    stack: list[list[bool]] = []
+    active = True
+    for num, line in enumerate(raw.split("\n"), start=1):
+        where = f"{name}:{num}"
+        m = _DIRECTIVE_RE.match(line) if line.lstrip().startswith("#") else None
+        if m is None:
+            if active:
+                chunks[-1][1].append(line)
+            continue
+        kw, rest = m.group(1), _strip_comment(m.group(2))
+        if kw in ("if", "ifdef", "ifndef"):
+            if not active:
+                stack.append([False, True, False, False])
+            else:
+                if kw == "if":
+                    cond = _eval_if(rest, macros, where)
+                else:
+                    if not re.fullmatch(r"[A-Za-z_]\w*", rest):
+                        raise TranslateError(f"{where}: #{kw} needs one macro name, got {rest!r}")
+                    cond = (rest in macros) == (kw == "ifdef")
+                stack.append([cond, cond, True, False])
+            active = stack[-1][0]
+        elif kw in ("elif", "else"):
+            if not stack:
+                raise TranslateError(f"{where}: #{kw} without #if")
+            top = stack[-1]
+            if top[3]:
+                raise TranslateError(f"{where}: #{kw} after #else")
+            if kw == "else":
+                top[3] = True
+                top[0] = top[2] and not top[1]
+            else:
+                top[0] = top[2] and not top[1] and _eval_if(rest, macros, where)
+            top[1] = top[1] or top[0]
+            active = top[0]
+        elif kw == "endif":
+            if not stack:
+                raise TranslateError(f"{where}: #endif without #if")
+            stack.pop()
+            active = stack[-1][0] if stack else True
+        elif not active:
+            continue
+        elif kw == "define":
+            m2 = re.match(r"([A-Za-z_]\w*)(\(?)\s*(.*)$", rest)
+            if not m2:
+                raise TranslateError(f"{where}: malformed #define {rest!r}")
+            if m2.group(2):
+                raise TranslateError(
+                    f"{where}: function-like macro {m2.group(1)!r} is not supported in exported "
+                    "snippets; write a function instead")
+            macros = dict(macros)
+            macros[m2.group(1)] = m2.group(3)
+            chunks.append((macros, []))
+        elif kw == "undef":
+            macros = dict(macros)
+            macros.pop(rest, None)
+            chunks.append((macros, []))
+        elif kw == "":
+            continue                    # the null directive
+        else:
+            raise TranslateError(f"{where}: #{kw} cannot appear in an exported snippet")
+    if stack:
+        raise TranslateError(f"{name}: {len(stack)} #if block(s) not closed by #endif")
+
+    # substitute macros in code (comments are prose and stay as written)
+    out: list[str] = []
+    for env, lines in chunks:
+        if not lines:
+            continue
+        toks = tokenize("\n".join(lines))
+        for t in toks:
+            if t.kind == "id" and t.text in env:
+                t.text = _macro_value(t.text, env, name)
+        out.append(_join(toks))
+    return "\n".join(out)
+
+
+def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
+    value = " ".join(_expand([key], env, name))
+    if not re.search(r"[0-9a-fA-F][uU]\b", value):
+        try:                            # an integer constant expression becomes its value
+            value = str(_Expr(_ptoks(value), name).parse())
+        except TranslateError:
+            pass
+    # a negative or compound value keeps its meaning next to any operator
+    if value and re.fullmatch(r"[\w.]+", value) is None:
+        value = f"({value})"
+    return value

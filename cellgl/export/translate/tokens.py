@@ -1,0 +1,64 @@
+"""Tokens of GLSL text (the lexer every translation step shares) and the error they raise."""
+from __future__ import annotations
+
+import re
+
+
+class TranslateError(ValueError):
+    """The shader text uses a construct the exporter cannot specialise or translate."""
+
+
+# --------------------------------------------------------------------------------------------
+# tokens
+# --------------------------------------------------------------------------------------------
+
+_TOKEN_RE = re.compile(
+    r"(?P<comment>//[^\n]*|/\*.*?\*/)"
+    r"|(?P<ws>\s+)"
+    r"|(?P<num>0[xX][0-9a-fA-F]+[uU]?|(?:\d+\.\d*|\.\d+)(?:[eE][+-]?\d+)?[fF]?|\d+[eE][+-]?\d+[fF]?"
+    r"|\d+[uU]?)"
+    r"|(?P<id>[A-Za-z_][A-Za-z0-9_]*)"
+    r"|(?P<op><<=|>>=|\+\+|--|<<|>>|<=|>=|==|!=|&&|\|\||\^\^|[-+*/%&|^]=|[-+*/%<>=!~&|^?:;,.(){}\[\]])",
+    re.S,
+)
+
+
+class Tok:
+    __slots__ = ("kind", "text")
+
+    def __init__(self, kind: str, text: str):
+        self.kind = kind
+        self.text = text
+
+    def __repr__(self) -> str:
+        return f"Tok({self.kind}, {self.text!r})"
+
+
+def tokenize(text: str) -> list[Tok]:
+    """Split GLSL text (no directives) into tokens: comment, ws, num, id, op."""
+    out: list[Tok] = []
+    pos = 0
+    while pos < len(text):
+        m = _TOKEN_RE.match(text, pos)
+        if not m:
+            line = text.count("\n", 0, pos) + 1
+            raise TranslateError(f"line {line}: unexpected character {text[pos]!r}")
+        out.append(Tok(m.lastgroup, m.group()))
+        pos = m.end()
+    return out
+
+
+def _join(toks: list[Tok]) -> str:
+    return "".join(t.text for t in toks)
+
+
+def _code(toks: list[Tok]) -> list[int]:
+    """Indices of the tokens that are code (not whitespace or comments)."""
+    return [i for i, t in enumerate(toks) if t.kind not in ("ws", "comment")]
+
+
+GLSL_TYPES = {
+    "void", "bool", "int", "uint", "float",
+    "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec2", "uvec3", "uvec4",
+    "bvec2", "bvec3", "bvec4", "mat2", "mat3", "mat4",
+}

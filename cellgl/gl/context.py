@@ -1,0 +1,589 @@
+"""Headless OpenGL 4.3+ context and shader program cache.
+
+One context per backend per process. Backends, in the order tried when none is named:
+
+``egl``
+    glcontext's EGL backend (headless; Mesa llvmpipe or a GPU driver).
+``glx``
+    glcontext's X11 backend, only when ``DISPLAY`` is set.
+``osmesa``
+    Mesa's off-screen library ``libOSMesa`` through a small ctypes loader, only when the library
+    can be found.
+
+The environment variable ``CELLGL_BACKEND`` (``egl``, ``glx`` or ``osmesa``) forces one backend.
+
+Threads: one shared context per backend and process, and one lock. Every cellgl call that does
+GL work holds the lock and has the context current on the calling thread for its duration, then
+releases it from the thread, so calls from any number of threads are safe (they run one at a
+time). :func:`get_context` called outside a cellgl call (your own moderngl work) leaves the
+context current on your thread; wrap such work in ``with current() as ctx:`` when other threads
+use cellgl meanwhile. A thread that finds the shared context held that way by another thread gets
+a context of its own (its programs compile again) instead of failing.
+
+fork: a child process forked after the parent used GL (``os.fork``, multiprocessing's ``fork``
+start method) gets a fresh context on first use: the parent's, whose driver threads do not
+exist in the child, is left untouched (using or releasing it would hang). See README, "Threads
+and processes".
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import ctypes.util
+import os
+import subprocess
+import sys
+import threading
+from collections import deque
+from collections.abc import Mapping
+
+import moderngl
+
+from cellgl.gl import glsl, osmesa
+from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
+from cellgl.gl.threads import gl_call
+
+__all__ = [
+    "BACKENDS",
+    "ContextError",
+    "REQUIRED_GL",
+    "check_gl_error",
+    "compute_program",
+    "context_info",
+    "current",
+    "get_context",
+    "gl_call",
+    "program",
+]
+
+#: Accepted backend names, in the order tried.
+BACKENDS = ("egl", "glx", "osmesa")
+
+#: Minimum OpenGL version (compute shaders, SSBOs), as moderngl's version code.
+REQUIRED_GL = 430
+
+_INSTALL_HINT = (
+    "cellgl needs an OpenGL 4.3 (core) context for compute shaders. On Debian/Ubuntu install "
+    "Mesa's headless EGL driver: `apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri` "
+    "(or `apt-get install libosmesa6` and set CELLGL_BACKEND=osmesa)."
+)
+
+
+class ContextError(RuntimeError):
+    """No usable OpenGL 4.3 context could be created."""
+
+
+_lock = threading.RLock()
+_contexts: dict[str, moderngl.Context] = {}      # the shared context of each backend
+_default_backend: str | None = None
+_backend_of: dict[int, str] = {}
+_programs: dict[tuple, object] = {}
+#: id(ctx) -> (ctx, ident of the thread it is current on), as far as cellgl made it so
+_bound: dict[int, tuple[moderngl.Context, int]] = {}
+#: thread-private contexts (see get_context) not in use: backend -> contexts, reused
+_spare: dict[str, list] = {}
+_private: set[int] = set()
+_tls = threading.local()   # depth (nesting of current()), guard, private: backend -> ctx
+_pid = os.getpid()
+#: displays opened in this process / in a process it was forked from (their threads are gone)
+_opened: set[str] = set()
+_tainted: set[str] = set()
+#: GL state inherited through fork: kept alive, never released (releasing would hang)
+_orphans: list = []
+
+
+def _context_from_loader(loader, require: int) -> moderngl.Context:
+    """Wrap a loader object in a standalone moderngl.Context (moderngl 5.10+ internals)."""
+    ctx = moderngl.Context.__new__(moderngl.Context)
+    ctx.mglo, ctx.version_code = moderngl.mgl.create_context(
+        glversion=require, mode="standalone", context=loader
+    )
+    ctx._info = None
+    ctx._extensions = None
+    ctx.extra = None
+    ctx._gc_mode = None
+    ctx._objects = deque()
+    ctx._screen = None
+    ctx.fbo = None
+    if ctx.version_code < require:
+        raise ContextError(
+            f"OpenGL {require // 100}.{require % 100 // 10} required, "
+            f"got {ctx.version_code // 100}.{ctx.version_code % 100 // 10}"
+        )
+    return ctx
+
+
+# --------------------------------------------------------------------------------------------
+# Backends
+# --------------------------------------------------------------------------------------------
+
+
+def _create(backend: str) -> moderngl.Context:
+    """A new context of ``backend``, current on this thread, on a display whose driver threads
+    exist in this process (see :mod:`cellgl.gl.surfaceless`)."""
+    if backend == "egl":
+        if "egl" not in _tainted:
+            _opened.add("egl")
+            return moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_GL)
+        if "egl-surfaceless" not in _tainted:
+            from cellgl.gl.surfaceless import SurfacelessEGLLoader
+
+            _opened.add("egl-surfaceless")
+            return _from_loader(SurfacelessEGLLoader())
+        raise ContextError(_FORKED)
+    if backend in _tainted:
+        raise ContextError(_FORKED)
+    if backend == "glx":
+        if not os.environ.get("DISPLAY"):
+            raise ContextError("DISPLAY is not set")
+        _opened.add("glx")
+        # glcontext's default backend on Linux is X11/GLX.
+        return moderngl.create_context(standalone=True, require=REQUIRED_GL)
+    if backend == "osmesa":
+        path = osmesa.probe()
+        _opened.add("osmesa")
+        return _from_loader(osmesa.OSMesaLoader(library=path))
+    raise _unknown_backend(backend)
+
+
+_FORKED = ("this process was forked from one that had already used every display this backend "
+           "can open (Mesa's driver threads do not survive fork, so those displays would hang); "
+           "start it with multiprocessing's 'spawn' or 'forkserver' method instead")
+
+
+def _from_loader(loader) -> moderngl.Context:
+    try:
+        return _context_from_loader(loader, REQUIRED_GL)
+    except Exception:
+        loader.release()
+        raise
+
+
+def _unknown_backend(name: object) -> ValueError:
+    return ValueError(
+        f"unknown OpenGL backend {name!r}; accepted values: {', '.join(BACKENDS)}"
+    )
+
+
+def _check_name(name: str, origin: str) -> str:
+    key = name.strip().lower()
+    if key not in BACKENDS:
+        raise ValueError(
+            f"unknown OpenGL backend {name!r} (from {origin}); "
+            f"accepted values: {', '.join(BACKENDS)}"
+        )
+    return key
+
+
+def _version_error(exc: Exception) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.splitlines()[0] if text else text
+
+
+def _current(ctx: moderngl.Context) -> moderngl.Context:
+    """Make ``ctx`` the thread's current context and return it.
+
+    Another library in the process (a GLFW window, wgpu's GL backend, a second moderngl
+    context) may have made its own context current since; GL calls would then go to that one,
+    or fail ("cannot create program"). Making ours current again is cheap when it already is.
+    """
+    ctx.mglo.__enter__()
+    _bound[id(ctx)] = (ctx, threading.get_ident())
+    if getattr(_tls, "guard", None) is None:
+        _tls.guard = _ThreadGuard()
+    return ctx
+
+
+def _release(ctx: moderngl.Context) -> None:
+    """Make ``ctx`` current on no thread (so that another thread can make it current)."""
+    ctx.mglo.__exit__(None, None, None)
+    _bound.pop(id(ctx), None)
+
+
+class _ThreadGuard:
+    """Lives in a thread's locals; when the thread ends, releases the contexts still current
+    on it (a context left current on a finished thread can never be made current again) and
+    hands its private contexts back for reuse."""
+
+    def __init__(self):
+        self.pid, self.ident = os.getpid(), threading.get_ident()
+
+    def __del__(self):
+        if os.getpid() != self.pid:  # the copy in a forked child: its contexts are not ours
+            return
+        try:
+            for ctx, ident in list(_bound.values()):
+                if ident == self.ident:
+                    _release(ctx)
+                    if id(ctx) in _private:
+                        _spare.setdefault(_backend_of[id(ctx)], []).append(ctx)
+        except Exception:  # noqa: BLE001 - interpreter shutdown
+            pass
+
+
+def _take(shared: moderngl.Context, name: str) -> moderngl.Context:
+    """``shared`` made current on this thread, or this thread's private context of backend
+    ``name`` when ``shared`` is current on another thread (held there outside cellgl calls:
+    the caller holds the lock)."""
+    private = getattr(_tls, "private", None)
+    if private is None:
+        private = _tls.private = {}
+    if name in private:
+        return _current(private[name])
+    owner = _bound.get(id(shared))
+    if owner is None or owner[1] == threading.get_ident():
+        return _current(shared)
+    spare = _spare.get(name)
+    ctx = spare.pop() if spare else _create(name)
+    _backend_of[id(ctx)] = name
+    _private.add(id(ctx))
+    private[name] = ctx
+    return _current(ctx)
+
+
+def _after_fork_in_child() -> None:
+    """In a forked child: forget the parent's GL state (keeping it alive: releasing it would
+    wait for driver threads that do not exist here) and the lock (another thread may have held
+    it at fork time); the next get_context() opens a display of its own."""
+    global _lock, _tls, _bound, _default_backend, _pid
+    if _pid == os.getpid():
+        return
+    _orphans.append((dict(_contexts), dict(_programs), _bound, _spare.copy(), _tls))
+    _tainted.update(_opened)
+    _opened.clear()
+    for table in (_contexts, _programs, _backend_of, _spare, _private, osmesa.probed):
+        table.clear()
+    _bound, _default_backend = {}, None
+    _lock, _tls, _pid = threading.RLock(), threading.local(), os.getpid()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+@contextlib.contextmanager
+def _section():
+    """Hold the lock; on leaving the outermost one, release from this thread the contexts made
+    current during it (those current here before stay so)."""
+    with _lock:
+        depth = getattr(_tls, "depth", 0)
+        me = threading.get_ident()
+        before = {k for k, (_, t) in _bound.items() if t == me} if depth == 0 else set()
+        _tls.depth = depth + 1
+        try:
+            yield
+        finally:
+            _tls.depth = depth
+            if depth == 0:
+                for k, (ctx, t) in list(_bound.items()):
+                    if t == me and k not in before and k not in _private:
+                        _release(ctx)
+
+
+@contextlib.contextmanager
+def current(backend: str | None = None):
+    """``with current() as ctx:``: the context (as :func:`get_context`) current on this thread,
+    with the process's GL lock held, for GL work of your own while other threads use cellgl.
+    On leaving, it is released from the thread again (unless it was current here before)."""
+    with _section():
+        yield get_context(backend)
+
+
+class _CurrentEGLLoader:
+    """GL entry points of whatever EGL context is current (a window's); creates nothing."""
+
+    def __init__(self):
+        name = ctypes.util.find_library("EGL")
+        if not name:
+            raise ContextError("libEGL not found; " + _INSTALL_HINT)
+        self._egl = ctypes.CDLL(name)
+        self._egl.eglGetProcAddress.restype = ctypes.c_void_p
+        self._egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+        self._egl.eglGetCurrentContext.restype = ctypes.c_void_p
+        if not self._egl.eglGetCurrentContext():
+            raise ContextError("no EGL context is current on this thread")
+
+    def load_opengl_function(self, name: str) -> int:
+        return self._egl.eglGetProcAddress(name.encode("ascii")) or 0
+
+    def __enter__(self):
+        pass
+
+    def __exit__(self, *args):
+        pass
+
+    def release(self) -> None:
+        pass
+
+
+def attach_current_egl(require: int = REQUIRED_GL) -> moderngl.Context:
+    """A moderngl.Context for the EGL context current on this thread (a GLFW window made with
+    ``CONTEXT_CREATION_API = EGL_CONTEXT_API``), with its default framebuffer as ``screen``.
+
+    Windows use EGL rather than GLX because Mesa will not make a GLX context current in a
+    process that has already initialised EGL (cellgl's headless context): ``BadAccess`` in
+    ``X_GLXMakeCurrent``. With both on EGL they share the thread freely.
+    """
+    ctx = _context_from_loader(_CurrentEGLLoader(), require)
+    ctx._screen = ctx.detect_framebuffer(0)
+    ctx.fbo = ctx.detect_framebuffer()
+    ctx.mglo.fbo = ctx.fbo.mglo
+    return ctx
+
+
+def get_context(backend: str | None = None) -> moderngl.Context:
+    """Return the process-wide headless OpenGL 4.3+ context.
+
+    Parameters
+    ----------
+    backend : {"egl", "glx", "osmesa"}, optional
+        Force a backend. Default: ``$CELLGL_BACKEND`` if set, else the first of
+        egl, glx (when ``DISPLAY`` is set), osmesa (when libOSMesa is found) that works.
+
+    Returns
+    -------
+    moderngl.Context
+        Cached: the same object for the same backend (per process: a forked child gets its
+        own); made current on this thread, where it stays current until the thread ends or
+        a cellgl call on it finishes that did not find it current. Safe from any thread; a
+        thread that finds the shared context current on another (outside cellgl calls) gets a
+        private one. See :func:`current` for GL work of your own beside other threads.
+
+    Raises
+    ------
+    ValueError
+        Unknown backend name.
+    ContextError
+        No backend gave an OpenGL 4.3 context; the message lists each backend tried.
+    """
+    global _default_backend
+    if _pid != os.getpid():  # forked by a path that skipped the at-fork hook
+        _after_fork_in_child()
+    with _lock:
+        if backend is None:
+            env = os.environ.get("CELLGL_BACKEND", "").strip()
+            if env:
+                candidates = [_check_name(env, "CELLGL_BACKEND")]
+            else:
+                if _default_backend is not None:
+                    return _take(_contexts[_default_backend], _default_backend)
+                candidates = ["egl"]
+                if os.environ.get("DISPLAY"):
+                    candidates.append("glx")
+                if ctypes.util.find_library("OSMesa"):
+                    candidates.append("osmesa")
+        else:
+            if not isinstance(backend, str):
+                raise _unknown_backend(backend)
+            candidates = [_check_name(backend, "backend argument")]
+
+        errors = []
+        for name in candidates:
+            if name in _contexts:
+                ctx = _contexts[name]
+            else:
+                try:
+                    ctx = _create(name)
+                except Exception as exc:  # each backend fails in its own way
+                    errors.append(f"  {name}: {_version_error(exc)}")
+                    continue
+                _contexts[name] = ctx
+                _backend_of[id(ctx)] = name
+                _current(ctx)  # created current on this thread
+            if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip():
+                _default_backend = name
+            return _take(ctx, name)
+
+        skipped = [b for b in BACKENDS if b not in candidates]
+        note = ""
+        if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip() and skipped:
+            reasons = {"glx": "DISPLAY not set", "osmesa": "libOSMesa not found"}
+            note = "\n" + "\n".join(f"  {b}: skipped ({reasons.get(b, 'not tried')})"
+                                    for b in skipped)
+        settings = [f"{k}={os.environ[k]}" for k in osmesa.DRIVER_ENV if k in os.environ]
+        if settings:
+            note += ("\n  driver settings in the environment: " + ", ".join(settings)
+                     + " (unset them to let Mesa choose, or set GALLIUM_DRIVER=llvmpipe)")
+        raise ContextError(
+            "could not create an OpenGL 4.3 context. Backends tried:\n"
+            + "\n".join(errors) + note + "\n" + _INSTALL_HINT
+        )
+
+
+def backend_name(ctx: moderngl.Context | None = None) -> str | None:
+    """Return the backend name a context made by :func:`get_context` came from."""
+    ctx = ctx if ctx is not None else get_context()
+    return _backend_of.get(id(ctx))
+
+
+# --------------------------------------------------------------------------------------------
+# Limits
+# --------------------------------------------------------------------------------------------
+
+_GL_MAX_COMPUTE_SHARED_MEMORY_SIZE = 0x8262
+
+
+def _get_proc(backend: str | None, name: str) -> int:
+    """Address of GL function ``name`` for the current context of ``backend`` (0 if unknown)."""
+    bname = name.encode("ascii")
+    try:
+        if backend == "osmesa":
+            lib = ctypes.CDLL(ctypes.util.find_library("OSMesa"))
+            fn = lib.OSMesaGetProcAddress
+        elif backend == "glx":
+            lib = ctypes.CDLL(ctypes.util.find_library("GL"))
+            fn = lib.glXGetProcAddressARB
+        else:
+            lib = ctypes.CDLL(ctypes.util.find_library("EGL"))
+            fn = lib.eglGetProcAddress
+        fn.restype = ctypes.c_void_p
+        fn.argtypes = [ctypes.c_char_p]
+        return fn(bname) or 0
+    except (OSError, AttributeError, TypeError):
+        return 0
+
+
+def _get_integer(ctx: moderngl.Context, pname: int) -> int | None:
+    addr = _get_proc(_backend_of.get(id(ctx)), "glGetIntegerv")
+    if not addr:
+        return None
+    proto = ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.POINTER(ctypes.c_int))
+    value = ctypes.c_int(-1)
+    proto(addr)(pname, ctypes.byref(value))
+    # Querying an enum the driver does not know leaves GL_INVALID_ENUM behind: clear it.
+    if ctx.error != "GL_NO_ERROR":
+        return None
+    return value.value if value.value >= 0 else None
+
+
+@gl_call
+def context_info(ctx: moderngl.Context | None = None) -> dict:
+    """Describe a context: backend, driver strings and compute limits.
+
+    Returns
+    -------
+    dict
+        Keys ``backend``, ``GL_VENDOR``, ``GL_RENDERER``, ``GL_VERSION``, ``gl_version_code``,
+        ``GL_MAX_COMPUTE_WORK_GROUP_COUNT`` (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_SIZE``
+        (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
+        (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
+    """
+    ctx = ctx if ctx is not None else get_context()
+    info = ctx.info
+    return {
+        "backend": _backend_of.get(id(ctx)),
+        "GL_VENDOR": info.get("GL_VENDOR"),
+        "GL_RENDERER": info.get("GL_RENDERER"),
+        "GL_VERSION": info.get("GL_VERSION"),
+        "gl_version_code": ctx.version_code,
+        "GL_MAX_COMPUTE_WORK_GROUP_COUNT": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_COUNT", ())),
+        "GL_MAX_COMPUTE_WORK_GROUP_SIZE": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_SIZE", ())),
+        "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS": info.get("GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS"),
+        "GL_MAX_SHADER_STORAGE_BLOCK_SIZE": info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"),
+        "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE": _get_integer(ctx, _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE),
+    }
+
+
+def check_gl_error(ctx: moderngl.Context | None = None) -> None:
+    """Raise RuntimeError if the context has a pending GL error (reading it clears it)."""
+    ctx = ctx if ctx is not None else get_context()
+    err = ctx.error
+    if err != "GL_NO_ERROR":
+        raise RuntimeError(f"OpenGL error: {err}")
+
+
+# --------------------------------------------------------------------------------------------
+# Programs
+# --------------------------------------------------------------------------------------------
+
+
+def _defines_key(defines: Mapping | None) -> tuple:
+    if not defines:
+        return ()
+    return tuple(sorted((str(k), repr(v)) for k, v in defines.items()))
+
+
+def _compile_error(what: str, exc: Exception, src: glsl.Source) -> glsl.ShaderError:
+    err = glsl.ShaderError(f"{what}: {glsl.map_error(str(exc), src).strip()}")
+    err.sources = [src]
+    return err
+
+
+def compute_program(name: str, defines: Mapping | None = None, *,
+                    ctx: moderngl.Context | None = None) -> moderngl.ComputeShader:
+    """Compile (once, cached) the compute shader ``shaders/<name>``.
+
+    Parameters
+    ----------
+    name : str
+        Entry file relative to :func:`cellgl.gl.glsl.shader_dir`, e.g. ``"cellular.comp"``.
+    defines : mapping, optional
+        ``#define``s placed after ``#version`` (see :func:`cellgl.gl.glsl.load`).
+    ctx : moderngl.Context, optional
+        Defaults to :func:`get_context`.
+
+    Raises
+    ------
+    cellgl.gl.glsl.ShaderError
+        Loading or compiling failed; driver line numbers are mapped to ``file:line``.
+    """
+    ctx = ctx if ctx is not None else get_context()
+    key = ("compute", id(ctx), name, _defines_key(defines))
+    with _lock:
+        prog = _programs.get(key)
+        if prog is None:
+            src = glsl.load(name, defines)
+            try:
+                prog = ctx.compute_shader(src.text)
+            except moderngl.Error as exc:
+                raise _compile_error(f"compiling {name}", exc, src) from None
+            _programs[key] = prog
+        return prog
+
+
+def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
+            ctx: moderngl.Context | None = None) -> moderngl.Program:
+    """Compile and link (once, cached) a vertex + fragment program from ``shaders/``.
+
+    See :func:`compute_program` for ``defines``, ``ctx`` and errors.
+    """
+    ctx = ctx if ctx is not None else get_context()
+    key = ("program", id(ctx), vertex, fragment, _defines_key(defines))
+    with _lock:
+        prog = _programs.get(key)
+        if prog is None:
+            vs = glsl.load(vertex, defines)
+            fs = glsl.load(fragment, defines)
+            try:
+                prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
+            except moderngl.Error as exc:
+                raise _program_error(vertex, fragment, exc, vs, fs) from None
+            _programs[key] = prog
+        return prog
+
+
+def _program_error(vertex, fragment, exc, vs, fs) -> glsl.ShaderError:
+    # moderngl's message names the stage ("vertex_shader" / "fragment_shader") before its log.
+    text = str(exc)
+    if "fragment_shader" in text and "vertex_shader" not in text:
+        src = fs
+    elif "vertex_shader" in text and "fragment_shader" not in text:
+        src = vs
+    else:
+        src = None
+    message = glsl.map_error(text, src) if src is not None else text
+    err = glsl.ShaderError(f"compiling {vertex} + {fragment}: {message.strip()}")
+    err.sources = [vs, fs]
+    return err
+
+
+def clear_program_cache() -> None:
+    """Forget compiled programs (e.g. after editing shader files)."""
+    with _lock:
+        for prog in _programs.values():
+            try:
+                prog.release()
+            except Exception:
+                pass
+        _programs.clear()

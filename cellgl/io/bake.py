@@ -1,0 +1,430 @@
+"""Bake a recipe (or a preset) to an image or volume file: :func:`bake` (``cellgl bake``, whose
+command line is :mod:`cellgl.io.bake_cli`).
+
+The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``). Output
+larger than one tile is rendered tile by tile and streamed to the file, so memory stays bounded;
+every pixel is rendered at the same uv as in a one-pass bake, so the two give the same bits.
+Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from cellgl.io import formats as cio
+
+__all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
+           "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
+
+
+from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
+                            MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, _accepted, _check_size, _Encoding,
+                            _encoding, _exr_names, _parse_sets, id_colors, parse_channels, parse_size)
+
+
+# --------------------------------------------------------------------------------------------
+# planning
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Output:
+    path: Path
+    channels: tuple[str, ...]
+    encodings: tuple[_Encoding, ...]
+
+
+@dataclass(frozen=True)
+class _Plan:
+    width: int
+    height: int
+    slices: int | None
+    tile_w: int
+    tile_h: int
+
+    def tiles(self) -> Iterator[tuple[int, int, int, int]]:
+        """(x0, y0, w, h) row-major."""
+        for y0 in range(0, self.height, self.tile_h):
+            for x0 in range(0, self.width, self.tile_w):
+                yield (x0, y0, min(self.tile_w, self.width - x0), min(self.tile_h, self.height - y0))
+
+    @property
+    def count(self) -> int:
+        return math.ceil(self.width / self.tile_w) * math.ceil(self.height / self.tile_h)
+
+
+def _round16_up(n: int) -> int:
+    return max(16, -(-n // 16) * 16)
+
+
+def _plan(width, height, slices, ext, channels, tile, budget, file_bytes) -> _Plan:
+    """Tile size so that rendering one tile, and (PNG/EXR) holding one band, fit ``budget``.
+
+    Half the budget is for the render of one tile (``RENDER_BYTES_PER_PIXEL`` of working memory
+    plus the float32 result and its encoded copy, per pixel and slice); for PNG and EXR, which
+    stream full-width bands of rows, the other half holds the band (encoded, twice while the
+    tiles of a band are joined).
+    """
+    d = slices or 1
+    overhead = RENDER_BYTES_PER_PIXEL * (1 + len(channels)) // 2  # grows with the channels
+    render_px = (overhead + sum(CHANNELS[c] * 4 for c in channels) + file_bytes) * d
+    half = max(1, budget // 2)
+    side = min(MAX_TILE, max(16, math.isqrt(half // render_px) // 16 * 16))
+    stream = FORMATS[ext].stream
+    if tile is not None:
+        tw = th = tile
+    elif stream == "band":
+        rows = max(1, half // max(1, width * 2 * file_bytes * d))
+        th = min(height, side, rows if rows < 16 else rows // 16 * 16)
+        tw = min(width, MAX_TILE, max(side, half // (th * render_px) // 16 * 16))
+    else:
+        tw, th = min(side, _round16_up(width)), min(side, _round16_up(height))
+    if stream == "tile":
+        tw, th = _round16_up(tw), _round16_up(th)  # TIFF tiles are multiples of 16
+    return _Plan(width, height, slices, tw, th)
+
+
+def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tuple[str, ...]]]:
+    ext = path.suffix.lower()
+    if ext == ".exr" or len(channels) == 1:
+        return [(path, channels)]
+    return [(path.with_name(f"{path.stem}_{c}{path.suffix}"), (c,)) for c in channels]
+
+
+# --------------------------------------------------------------------------------------------
+# progress
+# --------------------------------------------------------------------------------------------
+
+
+class _Progress:
+    def __init__(self, total: int, label: str, enabled: bool, stream=None):
+        self.total, self.label, self.done = total, label, 0
+        self.enabled = enabled and total > 1
+        self.stream = stream or sys.stderr
+        self.t0 = time.perf_counter()
+        self.last = -1.0
+
+    def step(self) -> None:
+        self.done += 1
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if self.done < self.total and now - self.last < 0.25:
+            return  # redraw at most four times a second, and always at the end
+        self.last = now
+        width = 30
+        fill = width * self.done // self.total
+        secs = time.perf_counter() - self.t0
+        eta = secs / self.done * (self.total - self.done)
+        self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] "
+                          f"{self.done}/{self.total} tiles, {secs:.0f} s, eta {eta:.0f} s ")
+        self.stream.flush()
+
+    def close(self) -> None:
+        if self.enabled and self.done:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+# --------------------------------------------------------------------------------------------
+# the bake
+# --------------------------------------------------------------------------------------------
+
+
+def _load(recipe_or_name, sets, tileable):
+    from cellgl import recipes
+
+    if isinstance(recipe_or_name, (str, os.PathLike)):
+        recipe = recipes.load_recipe(str(recipe_or_name))
+    else:
+        recipe = recipe_or_name
+    sets = _parse_sets(sets)
+    if sets:
+        recipe = recipe.set_from_strings(sets)
+    if tileable:
+        recipe, notes = recipe.tileable()
+        for note in notes:
+            print(f"cellgl: tileable: {note} (the texture repeats every whole number of cells)",
+                  file=sys.stderr)
+    elif tileable is not None:
+        recipe = recipe.replace(tileable=False)
+    return recipe
+
+
+def _check_bits(ext: str, bit_depth) -> int:
+    fmt = FORMATS[ext]
+    if bit_depth is None:
+        return fmt.default_depth
+    try:
+        bits = int(bit_depth)
+    except (TypeError, ValueError):
+        bits = None
+    if bits not in fmt.depths or str(bit_depth).strip() != str(bits):
+        raise BakeError(f"--depth {bit_depth}: {ext} accepts {_accepted(fmt.depths)} bits "
+                        f"(8|16|32 overall: .png 8/16, .tif 8/16/32, .exr 16/32, .npy 32)")
+    return bits
+
+
+def _check_path(path) -> tuple[Path, str]:
+    path = Path(os.fspath(path))
+    ext = path.suffix.lower()
+    if ext not in FORMATS:
+        raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
+                        f"accepted {_accepted(FORMATS)}")
+    if path.is_dir():
+        raise BakeError(f"output {str(path)!r} is a directory; give a file name")
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.is_dir():
+        raise BakeError(f"output directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise BakeError(f"output directory {str(parent)!r} is not writable")
+    return path, ext
+
+
+def _check_tile(tile) -> int | None:
+    if tile is None:
+        return None
+    if not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
+        raise BakeError(f"--tile {tile}: accepted multiples of 16 in 16..8192")
+    return int(tile)
+
+
+def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
+         bit_depth=None, tileable=None, sets=(), tile=None, progress=True,
+         memory_budget=DEFAULT_BUDGET) -> list[Path]:
+    """Render a recipe to a file, tile by tile, atomically.
+
+    Parameters
+    ----------
+    recipe_or_name : Recipe or str or PathLike
+        A :class:`cellgl.texture.recipe.Recipe`, a preset name (``cellgl presets``) or a recipe JSON path.
+    path : str or PathLike
+        Output file; the extension picks the format: ``.png``, ``.exr``, ``.tif``/``.tiff``,
+        ``.npy``. Its directory must exist.
+    size : int or (int, int) or str
+        ``W``, ``(W, H)`` or ``"WxH[xD]"``; sides 1..65536.
+    depth_slices : int, optional
+        Bake a volume of this many slices, shape ``(D, H, W[, S])`` (``.npy`` and ``.tif`` only).
+    channels : sequence of str
+        Any of ``color`` (RGB), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``. An ``.exr``
+        holds them all; other formats write one file per channel, ``<stem>_<channel><ext>``,
+        when more than one is asked for.
+    bit_depth : {8, 16, 32}, optional
+        Bits per sample: ``.png`` 8 (default) or 16; ``.tif`` 8, 16 or 32 (float, default);
+        ``.exr`` 16 (half) or 32 (float, default); ``.npy`` 32. 8/16 bits store values clamped
+        to [0, 1].
+    tileable : bool, optional
+        Override the recipe's ``tileable`` (the texture then wraps at its edges).
+    sets : sequence of str
+        ``"name=value"`` recipe overrides (as ``--set``).
+    tile : int, optional
+        Render tiles of ``tile x tile`` pixels (multiple of 16) instead of a size chosen from
+        ``memory_budget``.
+    progress : bool
+        Draw a progress bar on stderr when there is more than one tile.
+    memory_budget : int
+        Bytes of working memory the bake aims to stay within beyond the process's baseline
+        (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+
+    Raises
+    ------
+    BakeError (a ValueError)
+        Bad extension, size, depth, channel, tile or ``--set``; the message names the value and
+        what is accepted. Nothing is written.
+    cellgl.texture.recipe.RecipeError
+        Unknown preset or bad recipe value.
+    """
+    path, ext = _check_path(path)
+    fmt = FORMATS[ext]
+    if isinstance(size, str):
+        w, h, d = parse_size(size)
+        depth_slices = depth_slices if depth_slices is not None else d
+    else:
+        w, h = (size, size) if isinstance(size, (int, np.integer)) else tuple(size)
+        _check_size(w, h, None, f"size {w}x{h}")
+    if depth_slices is not None:
+        _check_size(w, h, depth_slices, f"size {w}x{h}x{depth_slices}")
+        if not fmt.volume:
+            raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
+                            f"written to .npy or .tif only")
+    channels = parse_channels(channels)
+    bits = _check_bits(ext, bit_depth)
+    tile = _check_tile(tile)
+    outputs = []
+    for p, chs in _output_paths(path, channels):
+        outputs.append(_Output(p, chs, tuple(_encoding(c, ext, bits) for c in chs)))
+    if ext == ".exr" and not cio.have_exr():
+        raise BakeError("writing .exr files needs the 'OpenEXR' package: "
+                        "pip install 'cellgl[exr]'")
+    if ext in (".tif", ".tiff") and not cio.have_tiff():
+        raise BakeError("writing .tif files needs the 'tifffile' package: "
+                        "pip install 'cellgl[tiff]'")
+    recipe = _load(recipe_or_name, sets, tileable)
+    if depth_slices is not None and recipe.get("dimension") < 3:
+        raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
+                        f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
+                        f"(try --set dimension=3)")
+    _check_disk(path.parent, w, h, depth_slices, outputs, ext)
+
+    written = []
+    for out in outputs:
+        file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
+        plan = _plan(w, h, depth_slices, ext, out.channels, tile, memory_budget, file_bytes)
+        _bake_one(recipe, out, ext, plan, progress)
+        written.append(out.path)
+    return written
+
+
+def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
+    # Uncompressed formats (and the volume TIFF spool) need their full size on disk.
+    if ext not in (".npy", ".tif", ".tiff"):
+        return
+    need = 0
+    for out in outputs:
+        px = w * h * (d or 1)
+        per = sum(e.samples * e.dtype.itemsize for e in out.encodings)
+        need += px * per * (2 if (ext != ".npy" and d) else (1 if ext == ".npy" else 0))
+    try:
+        free = shutil.disk_usage(directory).free
+    except OSError:
+        return
+    if need > free:
+        raise BakeError(f"not enough disk space in {str(directory)!r}: the bake needs about "
+                        f"{need / 2**30:.1f} GiB, {free / 2**30:.1f} GiB free")
+
+
+def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator[tuple]:
+    """Yield (x0, y0, {channel: encoded array}) row-major; arrays (h, w[, S]) or (D, h, w[, S])."""
+    from cellgl import recipes
+
+    for x0, y0, tw, th in plan.tiles():
+        res = recipes.render(recipe, plan.width, plan.height, channels=out.channels,
+                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices)
+        enc = {}
+        for e in out.encodings:
+            a = e.encode(res[e.channel])
+            lead = (plan.slices,) if plan.slices else ()
+            expect = lead + (th, tw) + ((e.samples,) if e.samples > 1 else ())
+            if a.shape != expect:
+                raise RuntimeError(f"render() gave {e.channel} of shape {a.shape}, "
+                                   f"expected {expect}")
+            enc[e.channel] = a
+        bar.step()
+        yield x0, y0, enc
+
+
+def _bands(tiles: Iterator[tuple], plan: _Plan) -> Iterator[dict]:
+    """Group row-major tiles into full-width bands: {channel: (rows, W[, S])}."""
+    per_row = math.ceil(plan.width / plan.tile_w)
+    row: list[dict] = []
+    for _, _, enc in tiles:
+        row.append(enc)
+        if len(row) == per_row:
+            yield {k: (np.concatenate([t[k] for t in row], axis=1) if per_row > 1 else row[0][k])
+                   for k in row[0]}
+            row = []
+
+
+def _meta(recipe, out: _Output, plan: _Plan) -> str:
+    try:
+        rec = recipe.to_dict()
+    except Exception:  # noqa: BLE001 - metadata is best effort
+        rec = None
+    size = [plan.width, plan.height] + ([plan.slices] if plan.slices else [])
+    return json.dumps({"generator": "cellgl", "recipe": rec, "size": size,
+                       "channels": list(out.channels)}, sort_keys=True, default=str)
+
+
+def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool) -> None:
+    bar = _Progress(plan.count, f"baking {out.path.name}", progress)
+    meta = _meta(recipe, out, plan)
+    try:
+        with cio.atomic_path(out.path) as tmp:
+            tiles = _render_tiles(recipe, out, plan, bar)
+            if ext == ".png":
+                (e,) = out.encodings
+                cio.write_png(tmp, (b[e.channel] for b in _bands(tiles, plan)), plan.width,
+                              plan.height, e.samples, e.dtype.itemsize * 8,
+                              text={"Software": "cellgl", "cellgl": meta})
+            elif ext == ".exr":
+                _write_exr(tmp, tiles, out, plan, meta)
+            elif ext == ".npy":
+                (e,) = out.encodings
+                cio.write_npy(tmp, _npy_pieces(tiles, e, plan), _shape(e, plan), e.dtype)
+            else:
+                _write_tiff(tmp, tiles, out, plan, meta)
+    finally:
+        bar.close()
+
+
+def _shape(e: _Encoding, plan: _Plan) -> tuple[int, ...]:
+    lead = (plan.slices,) if plan.slices else ()
+    return lead + (plan.height, plan.width) + ((e.samples,) if e.samples > 1 else ())
+
+
+def _npy_pieces(tiles, e: _Encoding, plan: _Plan):
+    for x0, y0, enc in tiles:
+        a = enc[e.channel]
+        lead = (slice(None),) if plan.slices else ()
+        th, tw = a.shape[len(lead):len(lead) + 2]
+        yield lead + (slice(y0, y0 + th), slice(x0, x0 + tw)), a
+
+
+def _write_exr(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
+    dtypes = {}
+    for e in out.encodings:
+        for name in _exr_names(e.channel):
+            dtypes[name] = e.dtype
+
+    def split(band):
+        res = {}
+        for e in out.encodings:
+            a = band[e.channel]
+            names = _exr_names(e.channel)
+            if len(names) == 1:
+                res[names[0]] = a
+            else:
+                for i, name in enumerate(names):
+                    res[name] = a[..., i]
+        return res
+
+    cio.write_exr(tmp, (split(b) for b in _bands(tiles, plan)), plan.width, plan.height,
+                  dtypes, attributes={"cellgl": meta})
+
+
+def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
+    (e,) = out.encodings
+    shape = _shape(e, plan)
+    rgb = e.samples in (3, 4)
+    if not plan.slices:
+        cio.write_tiff(tmp, (enc[e.channel] for _, _, enc in tiles), shape, e.dtype,
+                       (plan.tile_h, plan.tile_w), rgb=rgb, description=meta)
+        return
+    # A volume is rendered as (D, h, w) columns but TIFF wants page after page: spool the
+    # columns to a memory-mapped .npy next to the output (deleted afterwards), then stream pages.
+    with cio.scratch_path(out.path.parent, suffix=".spool.npy") as spool:
+        cio.write_npy(spool, _npy_pieces(tiles, e, plan), shape, e.dtype)
+        vol = np.load(spool, mmap_mode="r")
+        page = _Plan(plan.width, plan.height, None, plan.tile_w, plan.tile_h)
+        page_tiles = (vol[z, y:y + th, x:x + tw]
+                      for z in range(plan.slices) for x, y, tw, th in page.tiles())
+        try:
+            cio.write_tiff(tmp, page_tiles, shape, e.dtype, (plan.tile_h, plan.tile_w),
+                           rgb=rgb, description=meta)
+        finally:
+            del vol, page_tiles

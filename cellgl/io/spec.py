@@ -1,0 +1,202 @@
+"""What a bake can produce: formats, size limits, size and channel arguments, and how each
+channel is encoded in each format (:mod:`cellgl.io.bake` writes them)."""
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["BakeError", "CHANNELS", "FORMATS", "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS", "parse_size",
+           "parse_channels", "id_colors"]
+
+
+class BakeError(ValueError):
+    """A bad bake request: the message names the value and what is accepted."""
+
+
+# --------------------------------------------------------------------------------------------
+# what can be baked, and how
+# --------------------------------------------------------------------------------------------
+
+#: Channels render() produces -> samples per pixel.
+CHANNELS: dict[str, int] = {"color": 4, "height": 1, "normal": 3, "id": 1,
+                            "F1": 1, "F2": 1, "F3": 1, "F4": 1}
+
+
+@dataclass(frozen=True)
+class _Format:
+    name: str
+    depths: tuple[int, ...]
+    default_depth: int
+    volume: bool
+    #: "band" (full-width rows, top first), "tile" (row-major tiles), "piece" (any order)
+    stream: str
+
+
+#: Extension -> format. ``--depth`` (bits per sample) must be one of ``depths``.
+FORMATS: dict[str, _Format] = {
+    ".png": _Format("PNG", (8, 16), 8, False, "band"),
+    ".exr": _Format("OpenEXR", (16, 32), 32, False, "band"),
+    ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
+    ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
+    ".npy": _Format("NumPy", (32,), 32, True, "piece"),
+}
+
+MAX_SIDE = 65536          #: largest width or height
+MAX_SLICES = 4096         #: largest volume depth (slices)
+MAX_VOXELS = 2 ** 32      #: largest width * height * slices
+MAX_TILE = 2048           #: largest tile side one render pass gets
+DEFAULT_SIZE = (512, 512)
+DEFAULT_BUDGET = 256 << 20  #: bytes of working memory a bake aims to stay within
+#: working memory of render() per pixel beyond its outputs, for one channel (GPU buffers and
+#: read-back on llvmpipe, measured: about 230 bytes); half as much again per extra channel
+RENDER_BYTES_PER_PIXEL = 256
+
+
+def _accepted(values: Iterable) -> str:
+    return ", ".join(str(v) for v in values)
+
+
+def parse_size(text: str) -> tuple[int, int, int | None]:
+    """Parse ``W``, ``WxH`` or ``WxHxD`` into ``(W, H, D or None)``.
+
+    Raises
+    ------
+    BakeError
+        Malformed text, or a side outside 1..MAX_SIDE, slices outside 1..MAX_SLICES, or more
+        than MAX_VOXELS in all.
+    """
+    parts = str(text).strip().lower().replace("*", "x").split("x")
+    try:
+        nums = [int(p) for p in parts]
+    except ValueError:
+        nums = []
+    if not 1 <= len(nums) <= 3:
+        raise BakeError(f"--size {text!r}: expected W, WxH or WxHxD with whole numbers, "
+                        f"e.g. 512, 1024x512 or 64x64x16")
+    w, h, d = nums[0], (nums[1] if len(nums) > 1 else nums[0]), (nums[2] if len(nums) > 2 else None)
+    _check_size(w, h, d, f"--size {text}")
+    return w, h, d
+
+
+def _check_size(w: int, h: int, d: int | None, what: str) -> None:
+    for name, v in (("width", w), ("height", h)):
+        if not isinstance(v, (int, np.integer)) or not 1 <= v <= MAX_SIDE:
+            raise BakeError(f"{what}: {name} {v} is out of range; accepted 1..{MAX_SIDE}")
+    if d is not None and (not isinstance(d, (int, np.integer)) or not 1 <= d <= MAX_SLICES):
+        raise BakeError(f"{what}: depth {d} (volume slices) is out of range; "
+                        f"accepted 1..{MAX_SLICES}")
+    n = w * h * (d or 1)
+    if n > MAX_VOXELS:
+        raise BakeError(f"{what}: {n} pixels is too many; at most {MAX_VOXELS} (2**32)")
+
+
+def parse_channels(values: str | Iterable[str]) -> tuple[str, ...]:
+    """Normalise channel names (comma lists allowed, ``f1`` == ``F1``); reject unknown ones."""
+    if isinstance(values, str):
+        values = [values]
+    out: list[str] = []
+    lookup = {c.lower(): c for c in CHANNELS}
+    for v in values:
+        for part in str(v).split(","):
+            part = part.strip()
+            if not part:
+                continue
+            name = lookup.get(part.lower())
+            if name is None:
+                raise BakeError(f"--channels {part!r}: unknown channel; accepted "
+                                f"{_accepted(CHANNELS)}")
+            if name not in out:
+                out.append(name)
+    if not out:
+        raise BakeError(f"--channels: no channel given; accepted {_accepted(CHANNELS)}")
+    return tuple(out)
+
+
+def _parse_sets(sets: Iterable[str]) -> list[str]:
+    out = []
+    for s in sets:
+        name, eq, value = str(s).partition("=")
+        if not eq or not name.strip() or not value.strip():
+            raise BakeError(f"--set {s!r}: expected NAME=VALUE, e.g. --set seed=7")
+        out.append(f"{name.strip()}={value.strip()}")
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# per-channel encoding: render() output -> file samples
+# --------------------------------------------------------------------------------------------
+
+
+def _quantize(v: np.ndarray, bits: int) -> np.ndarray:
+    top = (1 << bits) - 1
+    v = np.nan_to_num(np.asarray(v, np.float32), nan=0.0, posinf=1.0, neginf=0.0)
+    q = np.floor(np.clip(v, 0.0, 1.0) * np.float32(top) + np.float32(0.5))
+    return q.astype(np.uint8 if bits == 8 else np.uint16)
+
+
+def id_colors(ids: np.ndarray) -> np.ndarray:
+    """False colour for cell ids: ``(..., 3)`` uint8 from an integer hash of each id.
+
+    The same id always gets the same colour, so a tiled bake matches a one-pass one.
+    """
+    x = np.asarray(ids).astype(np.uint32, copy=True)
+    with np.errstate(over="ignore"):
+        x ^= x >> np.uint32(16)
+        x *= np.uint32(0x7FEB352D)
+        x ^= x >> np.uint32(15)
+        x *= np.uint32(0x846CA68B)
+        x ^= x >> np.uint32(16)
+    return np.stack([(x >> np.uint32(s)) & np.uint32(255) for s in (0, 8, 16)],
+                    axis=-1).astype(np.uint8)
+
+
+@dataclass(frozen=True)
+class _Encoding:
+    """How one channel is stored: sample count and dtype in the file."""
+
+    channel: str
+    samples: int
+    dtype: np.dtype
+
+    def encode(self, a: np.ndarray) -> np.ndarray:
+        if self.channel == "color":
+            a = np.asarray(a)[..., :3]
+        if self.channel == "id":
+            if self.samples == 3:
+                return id_colors(a)
+            return np.asarray(a).astype(np.uint32, copy=False)
+        if self.dtype == np.uint8 or self.dtype == np.uint16:
+            return _quantize(a, self.dtype.itemsize * 8)
+        return np.asarray(a).astype(self.dtype, copy=False)
+
+
+def _encoding(channel: str, ext: str, bits: int) -> _Encoding:
+    fmt = FORMATS[ext]
+    samples = CHANNELS[channel]
+    if channel == "color":
+        samples = 3  # render() gives RGBA with alpha always 1: files get RGB
+    if channel == "id":
+        if ext == ".png":
+            if bits != 8:
+                raise BakeError(f"--channels id with .png: ids are written as an 8-bit false-"
+                                f"colour preview, so --depth must be 8 (got {bits}); for raw "
+                                f"uint32 ids use .tif, .exr or .npy")
+            return _Encoding(channel, 3, np.dtype(np.uint8))
+        if ext in (".tif", ".tiff") and bits != 32:
+            raise BakeError(f"--channels id with {ext}: ids are uint32, so --depth must be 32 "
+                            f"(got {bits})")
+        return _Encoding(channel, 1, np.dtype(np.uint32))
+    if fmt.stream == "band" and ext == ".exr":
+        return _Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
+    return _Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
+                                                 32: np.float32}[bits]))
+
+
+#: EXR channel names per cellgl channel.
+_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B")}
+
+
+def _exr_names(channel: str) -> tuple[str, ...]:
+    return _EXR_NAMES.get(channel, (channel,))

@@ -1,0 +1,351 @@
+"""PUPs on the GPU: the compute path (candidate grid, ``shaders/pups.comp``), the fragment path
+and the raster path (each control point's support polygon drawn with additive blending)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from cellgl.pups.graph import PupsGraph
+from cellgl.pups.pack import PupsPacked, _stream
+from cellgl.pups.points import PupsMode
+
+# --------------------------------------------------------------------------------------------
+# GPU driver
+# --------------------------------------------------------------------------------------------
+
+_LOCAL = (8, 8)
+_fragment_target = {}
+
+
+def _context():
+    """The shared headless context (:func:`cellgl.gl.context.get_context`)."""
+    from cellgl.gl.context import get_context
+
+    return get_context()
+
+
+def _compute_program(defines):
+    from cellgl.gl.context import compute_program
+
+    return compute_program("pups.comp", defines)
+
+
+def _cell_stream(packed: PupsPacked):
+    """The candidate grid as one stream of uvec4 records, laid out for the shaders.
+
+    Per grid cell: a header ``(first record, candidates, axis pairs per candidate, 0)``.
+    Per listed candidate, ``2 + pairs`` records: ``(pos.x, pos.y, orient.x, orient.y)``,
+    ``(value.r, value.g, value.b, label)`` and its masked-in axes, two per record, in axis
+    order, padded with zero axes (factor exactly 1). ``pairs`` is the largest over the
+    cell's candidates, so a work group inside one cell runs uniform loops with every load
+    at a uniform address, and needs no indirection to the instance arrays.
+
+    Returns
+    -------
+    cells : uint32 (rows * cols, 4)
+    records : uint32 (R, 4)
+    """
+    if packed.stream is not None:
+        return packed.stream
+    offsets = packed.cell_offsets.astype(np.int64)
+    items = packed.cell_items.astype(np.int64)
+    n = items.size
+    cnt = packed.axis_count[items]
+    rep = np.repeat(np.arange(n), cnt)
+    r = np.arange(rep.size) - (np.cumsum(cnt) - cnt)[rep]
+    bit = (packed.cell_masks[rep] >> np.minimum(r, 31).astype(np.uint32)) & 1
+    keep = (r >= 32) | bit.astype(bool)
+    cell_of = np.repeat(np.arange(offsets.size - 1), np.diff(offsets))
+    kept_pair = rep[keep]
+    naxes = np.bincount(kept_pair, minlength=n)
+    kept_slot = np.arange(kept_pair.size) - (np.cumsum(naxes) - naxes)[kept_pair]
+    return _stream(offsets, cell_of, np.arange(n) - offsets[cell_of], kept_pair, kept_slot,
+                   (packed.axis_begin[items][rep] + r)[keep], n, packed.positions[items],
+                   packed.orient[items], packed.values[items], packed.labels[items],
+                   packed.axes_scaled)
+
+
+def _gpu_buffers(packed: PupsPacked):
+    """Pack the candidate grid for the shaders (std430 bytes: cell headers, records)."""
+    cells, rec = _cell_stream(packed)
+    return [cells.tobytes(), rec.tobytes()]
+
+
+def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    t0 = time.perf_counter()
+    ctx = _context()
+    c = packed.values.shape[1]
+    labels = mode == PupsMode.LABEL
+    defines = {"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)}
+    group_cells = packed.tile % _LOCAL[0] == 0 and packed.tile % _LOCAL[1] == 0
+    data = _gpu_buffers(packed)
+    if group_cells:
+        defines["CELL_PUPS_GROUP_CELLS"] = 1
+    prog = _compute_program(defines)
+    t1 = time.perf_counter()
+    w, h = packed.width, packed.height
+    bufs = [ctx.buffer(d) for d in data]
+    out = ctx.buffer(reserve=4 * w * h * c)
+    lab = ctx.buffer(reserve=4 * w * h if labels else 4)
+    for b, binding in zip(bufs + [out, lab], range(4)):
+        b.bind_to_storage_buffer(binding)
+    t2 = time.perf_counter()
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
+                    ("u_epsilon", epsilon), ("u_tile_groups", packed.tile // _LOCAL[0])):
+        if name in prog:
+            prog[name] = v
+    prog.run(-(-w // _LOCAL[0]), -(-h // _LOCAL[1]), 1)
+    ctx.finish()
+    t3 = time.perf_counter()
+    vals = np.frombuffer(out.read(), dtype=np.float32).reshape(h, w, c)
+    labs = np.frombuffer(lab.read(), dtype=np.int32).reshape(h, w) if labels else None
+    for b in bufs + [out, lab]:
+        b.release()
+    t4 = time.perf_counter()
+    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
+    return vals, labs
+
+
+def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
+    """The viewer's path: ``shaders/pups.frag`` into an RGBA32F target.
+
+    Returns float32 (H, W, 4): rgb value, alpha the label as a float.
+    """
+    from cellgl.gl.context import program
+    ctx = _context()
+    prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
+    w, h = packed.width, packed.height
+    data = _gpu_buffers(packed)
+    bufs = [ctx.buffer(d) for d in data]
+    for binding, b in enumerate(bufs):
+        b.bind_to_storage_buffer(binding)
+    # One render target, kept while the size stays: deleting the bound framebuffer would
+    # leave moderngl restoring a dead binding (GL_INVALID_OPERATION) on the next one.
+    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (w, h):
+        tex = ctx.texture((w, h), 4, dtype="f4")
+        fbo = ctx.framebuffer(color_attachments=[tex])
+        fbo.use()
+        for o in target.get("objects", ()):
+            o.release()
+        target.update(key=(w, h), objects=(fbo, tex))
+    fbo, tex = target["objects"]
+    vao = ctx.vertex_array(prog, [])
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
+                    ("u_epsilon", epsilon)):
+        if name in prog:
+            prog[name] = v
+    fbo.use()
+    fbo.viewport = (0, 0, w, h)
+    vao.render(mode=ctx.TRIANGLES, vertices=3)
+    out = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(h, w, 4)
+    for o in bufs + [vao]:
+        o.release()
+    return out.copy()
+
+
+_raster_target = {}
+
+
+def _raster_polygons(packed: PupsPacked):
+    """Convex polygons to rasterise for :func:`_evaluate_raster`, in pixel units.
+
+    Per instance with a non-empty pixel box: the intersection of its axes' half-planes
+    ``d.a <= 1`` (``a`` pre-scaled), each pushed out by one pixel, with its pixel box (pixel
+    edges), so every pixel centre where the weight can be non-zero lies well inside. Found as
+    the feasible pairwise intersections of the boundary lines, sorted by angle.
+
+    Returns
+    -------
+    k : int64 (K',)
+        The instances drawn, increasing (the compute path's summation order).
+    corners : float64 (K', V, 2)
+        Polygon vertices in order (pixel units, pixel (i, j) centred at (i + .5, j + .5)),
+        padded by repeating the last one.
+    count : int64 (K',)
+        Vertices per polygon (0: empty).
+    """
+    box = packed.pixel_box
+    k = np.flatnonzero((box[:, 2] >= box[:, 0]) & (box[:, 3] >= box[:, 1]))
+    if k.size == 0:
+        return k, np.zeros((0, 3, 2)), np.zeros(0, dtype=np.int64)
+    (ox, oy), (px, py) = packed.origin, packed.pixel
+    c = packed.positions[k]
+    n = k.size
+    cnt = packed.axis_count[k]
+    d = int(cnt.max())
+    # lines nrm . x <= hh in coordinates relative to the point (domain units); 4 box sides
+    # first, then the axes (padding repeats a box side)
+    nrm = np.zeros((n, d + 4, 2))
+    hh = np.zeros((n, d + 4))
+    ex0 = ox + (box[k, 0] - 0.5) * px - c[:, 0]
+    ey0 = oy + (box[k, 1] - 0.5) * py - c[:, 1]
+    ex1 = ox + (box[k, 2] + 0.5) * px - c[:, 0]
+    ey1 = oy + (box[k, 3] + 0.5) * py - c[:, 1]
+    nrm[:, 0] = (-1, 0)
+    hh[:, 0] = -ex0
+    nrm[:, 1] = (0, -1)
+    hh[:, 1] = -ey0
+    nrm[:, 2] = (1, 0)
+    hh[:, 2] = ex1
+    nrm[:, 3] = (0, 1)
+    hh[:, 3] = ey1
+    r = np.arange(d)
+    valid = r[None] < cnt[:, None]
+    ai = packed.axis_begin[k][:, None] + np.minimum(r[None], np.maximum(cnt[:, None] - 1, 0))
+    a = packed.axes_scaled[ai]
+    margin = max(px, py)
+    nrm[:, 4:] = np.where(valid[..., None], a, nrm[:, 0:1])
+    hh[:, 4:] = np.where(valid, 1.0 + margin * np.hypot(a[..., 0], a[..., 1]), hh[:, 0:1])
+    # unit normals, so the tolerance below is in domain units
+    ln = np.hypot(nrm[..., 0], nrm[..., 1])
+    nrm /= ln[..., None]
+    hh /= ln
+    i, j = np.triu_indices(d + 4, 1)
+    n1, n2 = nrm[:, i], nrm[:, j]
+    det = n1[..., 0] * n2[..., 1] - n1[..., 1] * n2[..., 0]
+    ok = np.abs(det) > 1e-12
+    sd = np.where(ok, det, 1.0)
+    vx = (hh[:, i] * n2[..., 1] - hh[:, j] * n1[..., 1]) / sd
+    vy = (n1[..., 0] * hh[:, j] - n2[..., 0] * hh[:, i]) / sd
+    slack = 1e-9 * (1.0 + np.abs(hh).max(axis=1))
+    feas = ok.copy()
+    lim = hh + slack[:, None]
+    for q in range(d + 4):  # inside every half-plane (a loop: small arrays, no big temporary)
+        feas &= nrm[:, q, 0:1] * vx + nrm[:, q, 1:2] * vy <= lim[:, q:q + 1]
+    nf = feas.sum(1)
+    cx = np.where(feas, vx, 0).sum(1) / np.maximum(nf, 1)
+    cy = np.where(feas, vy, 0).sum(1) / np.maximum(nf, 1)
+    ang = np.where(feas, np.arctan2(vy - cy[:, None], vx - cx[:, None]), np.inf)
+    order = np.argsort(ang, axis=1, kind="stable")
+    vmax = max(int(nf.max()), 3)
+    order = order[:, :vmax]
+    last = np.take_along_axis(order, np.maximum(nf - 1, 0)[:, None], 1)
+    order = np.where(np.arange(vmax)[None] < nf[:, None], order, last)
+    corners = np.empty((n, vmax, 2))
+    corners[..., 0] = (np.take_along_axis(vx, order, 1) + c[:, 0:1] - ox) / px + 0.5
+    corners[..., 1] = (np.take_along_axis(vy, order, 1) + c[:, 1:2] - oy) / py + 0.5
+    return k, corners, nf
+
+
+def _raster_pairs_limit(ctx):
+    """Largest axis-pair count the raster path can pass as flat vertex outputs: 4 floats per
+    pair next to the point and value vec4s (GL_MAX_VERTEX_OUTPUT_COMPONENTS, 128 on most
+    drivers), and one vertex attribute per pair next to the corner, point and value
+    (GL_MAX_VERTEX_ATTRIBS, 16: 13 pairs, 26 axes)."""
+    comps = int(ctx.info.get("GL_MAX_VERTEX_OUTPUT_COMPONENTS") or 64)
+    attribs = int(ctx.info.get("GL_MAX_VERTEX_ATTRIBS") or 16)
+    return max(0, min((comps - 8) // 4, attribs - 3))
+
+
+def _raster_applies(graph: PupsGraph, mode: PupsMode) -> bool:
+    """Whether :func:`_evaluate_raster` can evaluate ``graph``: modes ``interpolate`` and
+    ``weighted_sum``, every axis list within the varying budget (else: compute)."""
+    if mode == PupsMode.LABEL:
+        return False
+    cnt = np.diff(graph.offsets)
+    d = int(cnt.max()) if cnt.size else 0
+    return (d + 1) // 2 <= _raster_pairs_limit(_context())
+
+
+def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    """Rasterised evaluation (``method="raster"``): per instance the triangles of a convex
+    polygon around its support (:func:`_raster_polygons`), one indexed draw in instance order;
+    each vertex carries its instance's position, orientation, value, label and pre-scaled
+    axes (zero-padded to ``CELL_PUPS_RASTER_PAIRS`` pairs), passed on as ``flat`` outputs, so
+    ``shaders/pups_raster.frag`` reads no buffer. It writes ``(w * value, w)`` and additive
+    blending sums them into an RGBA32F target in instance order (the compute path's order);
+    the division (interpolate) is done here. Modes ``interpolate`` and ``weighted_sum``, at
+    most :func:`_raster_pairs_limit` axis pairs per point (see :func:`_raster_applies`).
+    """
+    from cellgl.gl.context import program
+    t0 = time.perf_counter()
+    ctx = _context()
+    import moderngl
+    w, h = packed.width, packed.height
+    k, corners, nv = _raster_polygons(packed)
+    pairs = (int(packed.axis_count[k].max()) + 1) // 2 if k.size else 0
+    if pairs > _raster_pairs_limit(ctx):
+        raise ValueError("too many axes per point for method='raster'")
+    prog = program("pups_raster.vert", "pups_raster.frag", {"CELL_PUPS_RASTER_PAIRS": pairs})
+    # the polygons' vertices, each with its instance's data; fan triangles (0, v, v + 1)
+    n = k.size
+    vmax = corners.shape[1]
+    keep = np.arange(vmax)[None] < nv[:, None]
+    vinst = np.repeat(np.arange(n), nv)
+    nf = 10 + 4 * pairs
+    vert = np.zeros((vinst.size, nf), dtype="<f4")
+    vert[:, 0:2] = corners[keep]
+    kk = k[vinst]
+    vert[:, 2:4] = packed.positions[kk]
+    vert[:, 4:6] = packed.orient[kk]
+    vert[:, 6:6 + packed.values.shape[1]] = packed.values[kk]
+    vert[:, 9] = packed.labels[kk]
+    if pairs:
+        cnt = packed.axis_count[k]
+        r = np.arange(2 * pairs)
+        valid = r[None] < cnt[:, None]
+        ai = packed.axis_begin[k][:, None] + np.minimum(r[None], np.maximum(cnt[:, None] - 1, 0))
+        ax = np.where(valid[..., None], packed.axes_scaled[np.minimum(ai, max(
+            packed.axes_scaled.shape[0] - 1, 0))], 0.0).astype("<f4").reshape(n, 4 * pairs)
+        vert[:, 10:] = ax[vinst]
+    ntri = np.maximum(nv - 2, 0)
+    first = np.cumsum(nv) - nv
+    tri_inst = np.repeat(np.arange(n), ntri)
+    tri_v = np.arange(tri_inst.size) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
+    base = first[tri_inst]
+    idx = np.stack([base, base + tri_v, base + tri_v + 1], axis=1).astype("<u4").reshape(-1)
+    t1 = time.perf_counter()
+    vbuf = ctx.buffer(vert.tobytes() if vert.size else b"\0" * (4 * nf))
+    ibuf = ctx.buffer(idx.tobytes() if idx.size else b"\0" * 4)
+    # one render target, kept while the size stays (as in _evaluate_fragment)
+    target = _raster_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (w, h):
+        tex = ctx.texture((w, h), 4, dtype="f4")
+        fbo = ctx.framebuffer(color_attachments=[tex])
+        fbo.use()
+        for o in target.get("objects", ()):
+            o.release()
+        # the readback array too: reading into pages already mapped saves ~10 ms at 1000^2
+        target.update(key=(w, h), objects=(fbo, tex), acc=np.empty((h, w, 4), dtype=np.float32))
+    fbo, tex = target["objects"]
+    acc = target["acc"]
+    fmt = "2f 4f 4f" + (f" {4 * pairs}f" if pairs else "")
+    names = ["in_corner", "in_point", "in_value"] + (["in_axes"] if pairs else [])
+    vao = ctx.vertex_array(prog, [(vbuf, fmt, *names)], index_buffer=ibuf, index_element_size=4)
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_epsilon", epsilon)):
+        if name in prog:
+            prog[name] = v
+    t2 = time.perf_counter()
+    fbo.use()
+    fbo.viewport = (0, 0, w, h)
+    fbo.clear(0.0, 0.0, 0.0, 0.0)
+    ctx.enable(moderngl.BLEND)
+    ctx.blend_func = moderngl.ONE, moderngl.ONE
+    ctx.blend_equation = moderngl.FUNC_ADD
+    try:
+        if idx.size:
+            vao.render(mode=moderngl.TRIANGLES, vertices=int(idx.size))
+        ctx.finish()
+    finally:
+        ctx.disable(moderngl.BLEND)
+    t3 = time.perf_counter()
+    fbo.read_into(acc, components=4, dtype="f4")
+    c = packed.values.shape[1]
+    if mode == PupsMode.WEIGHTED_SUM:
+        vals = acc[..., :c].copy()
+    else:
+        # sum(w T) / sum(w) as the compute path divides (float32), 0 where no weight
+        wsum = acc[..., 3:4]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            vals = acc[..., :c] / wsum
+        vals[wsum[..., 0] == 0] = 0
+    for o in (vao, vbuf, ibuf):
+        o.release()
+    t4 = time.perf_counter()
+    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
+    return vals, None

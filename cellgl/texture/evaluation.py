@@ -1,0 +1,278 @@
+"""Evaluate cellular texture recipes on the GPU (``shaders/texture.comp``, ``texture.frag``) or
+with the NumPy twin (:mod:`cellgl.texture.reference`).
+
+:func:`evaluate` samples a recipe at arbitrary points, :func:`render` renders an image, a tile
+of one or a volume (tiles are bit-identical to a one-pass render), :func:`render_fragment` runs
+the viewer's fragment path offscreen, :func:`measure_range` measures a combination's range.
+The shader text, macros and uniforms come from :mod:`cellgl.texture.shader`. Any recipe kind
+(PUPs too) renders through :func:`cellgl.recipes.render`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cellgl.gl.threads import gl_call
+from cellgl.texture.recipe import CHANNELS, Recipe, check_channels, load_recipe
+from cellgl.texture.shader import LOCAL_SIZE, defines, set_uniforms, set_view
+
+__all__ = ["evaluate", "render", "render_fragment", "measure_range", "OUTPUTS"]
+
+_CHUNK = 1 << 20            # samples per dispatch
+#: what :func:`evaluate` can return: the render channels plus the height gradient in texture
+#: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
+OUTPUTS = CHANNELS + ("grad", "value")
+
+
+def _backend(backend):
+    if backend not in ("gpu", "numpy"):
+        raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
+
+
+@gl_call
+def _gpu_run(recipe: Recipe, channels, count: int, setup) -> dict:
+    """Dispatch texture.comp over ``count`` samples; ``setup(prog, first, n)`` binds inputs."""
+    from cellgl.gl import context
+
+    ctx = context.get_context()
+    grid = setup.grid
+    d = defines(recipe, channels)
+    d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=LOCAL_SIZE)
+    prog = context.compute_program("texture.comp", d)
+    set_uniforms(prog, recipe)
+    out = {"color": np.empty((count, 4), np.float32), "aux": np.empty((count, 4), np.float32),
+           "F": np.empty((count, 4), np.float32), "grad": np.empty((count, 4), np.float32),
+           "id": np.empty(count, np.uint32)}
+    want = {"color": "color" in channels,
+            "aux": bool({"height", "normal"} & set(channels)),
+            "F": any(c.startswith("F") for c in channels),
+            "grad": bool({"grad", "value"} & set(channels)),
+            "id": "id" in channels}
+    bind = {"color": 1, "aux": 2, "F": 3, "grad": 4, "id": 5}
+    for start in range(0, count, _CHUNK):
+        n = min(_CHUNK, count - start)
+        bufs = {}
+        for k, b in bind.items():
+            size = 4 * n if k == "id" else 16 * n
+            bufs[k] = ctx.buffer(reserve=size)
+            bufs[k].bind_to_storage_buffer(b)
+        extra = setup(prog, start, n)
+        if "u_count" in prog:
+            prog["u_count"].value = n
+        if "u_first" in prog:
+            prog["u_first"].value = start
+        prog.run(group_x=(n + LOCAL_SIZE - 1) // LOCAL_SIZE)
+        ctx.memory_barrier()
+        for k, buf in bufs.items():
+            if want[k]:
+                dt = np.uint32 if k == "id" else np.float32
+                out[k][start:start + n] = np.frombuffer(buf.read(), dtype=dt).reshape(out[k][start:start + n].shape)
+            buf.release()
+        for b in extra:
+            b.release()
+    res = {}
+    for c in channels:
+        if c == "color":
+            res[c] = out["color"]
+        elif c == "height":
+            res[c] = out["aux"][:, 0].copy()
+        elif c == "normal":
+            res[c] = out["aux"][:, 1:4].copy()
+        elif c == "id":
+            res[c] = out["id"]
+        elif c in ("F1", "F2", "F3", "F4"):
+            res[c] = out["F"][:, int(c[1]) - 1].copy()
+        elif c == "grad":
+            res[c] = out["grad"][:, :3].copy()
+        elif c == "value":
+            res[c] = out["grad"][:, 3].copy()
+    return res
+
+
+def _points(points) -> np.ndarray:
+    try:
+        pts = np.asarray(points, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ValueError("points must be a numeric array of shape (N, 2) (u, v) or (N, 3) (u, v, z)") from None
+    if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
+        raise ValueError(f"points must have shape (N, 2) (u, v) or (N, 3) (u, v, z) with N >= 1, "
+                         f"got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise ValueError("points must be finite")
+    if pts.shape[1] == 2:
+        pts = np.concatenate([pts, np.zeros((len(pts), 1))], axis=1)
+    return pts
+
+
+def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
+    """Evaluate a recipe at arbitrary texture-space points.
+
+    Parameters
+    ----------
+    recipe : Recipe, preset name or recipe path
+    points : array_like (N, 2) or (N, 3) float
+        ``(u, v)`` on the image plane (``v = 0``: top row) or ``(u, v, z)`` for solid recipes
+        (basis position ``(u f + offset_x, v f aspect + offset_y, z f + offset_z, time)``).
+    outputs : sequence of str
+        Any of ``color`` (N, 4) float32, ``height`` (N,) float32, ``normal`` (N, 3) float32
+        in [0, 1] encoding, ``id`` (N,) uint32, ``F1``..``F4`` (N,) float32 (octave 0),
+        ``grad`` (N, 3) float32 (dh/du, dh/dv, dh/dz, analytic), ``value`` (N,) float32 (the
+        combination before normalisation, octave 0).
+    backend : {"gpu", "numpy"}
+
+    Returns
+    -------
+    dict of output name -> ndarray
+    """
+    recipe = load_recipe(recipe)
+    outputs = check_channels(outputs, OUTPUTS)
+    _backend(backend)
+    pts = _points(points)
+    if backend == "numpy":
+        from cellgl.texture import reference as texture_reference
+
+        return texture_reference.evaluate(recipe, pts, outputs)
+    from cellgl.gl import context
+
+    def setup(prog, start, n):
+        p4 = np.zeros((n, 4), np.float32)
+        p4[:, :3] = pts[start:start + n]
+        b = context.get_context().buffer(p4.tobytes())  # inside _gpu_run's cellgl call
+        b.bind_to_storage_buffer(0)
+        return [b]
+
+    setup.grid = False
+    return _gpu_run(recipe, outputs, len(pts), setup)
+
+
+def _shape_out(res: dict, lead: tuple) -> dict:
+    out = {}
+    for k, a in res.items():
+        out[k] = a.reshape(lead + a.shape[1:])
+    return out
+
+
+def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,
+           tile_w: int | None = None, tile_h: int | None = None, depth: int | None = None,
+           backend: str = "gpu") -> dict:
+    """Render the sub-rectangle ``[x0, x0 + tile_w) x [y0, y0 + tile_h)`` of the full
+    ``width x height`` image of a recipe (tiles are bit-identical to a one-pass render).
+
+    Returns
+    -------
+    dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
+    float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
+    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
+    ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
+    """
+    recipe = load_recipe(recipe)
+    channels = check_channels(channels)
+    _backend(backend)
+    for name, v in (("width", width), ("height", height)):
+        if not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
+            raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
+    tw = width - x0 if tile_w is None else tile_w
+    th = height - y0 if tile_h is None else tile_h
+    if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):
+        raise ValueError(f"tile [{x0}, {x0 + tw}) x [{y0}, {y0 + th}) lies outside the {width}x{height} image")
+    if depth is not None:
+        if recipe.get("dimension") < 3:
+            raise ValueError("depth (a volume) needs a solid recipe: basis.dimension 3 or 4, got 2")
+        if not isinstance(depth, (int, np.integer)) or depth < 1 or depth > 4096:
+            raise ValueError(f"depth must be an integer in [1, 4096], got {depth!r}")
+    D = depth or 1
+    if backend == "numpy":
+        from cellgl.texture import reference as texture_reference
+
+        u = (x0 + np.arange(tw) + 0.5) / width
+        v = (y0 + np.arange(th) + 0.5) / height
+        z = (np.arange(D) + 0.5) / D if depth else np.zeros(1)
+        Z, V, U = np.meshgrid(z, v, u, indexing="ij")
+        pts = np.stack([U.ravel(), V.ravel(), Z.ravel()], axis=1)
+        res = texture_reference.evaluate(recipe, pts, channels)
+    else:
+        def setup(prog, start, n):
+            for name, value in (("u_size", (width, height)), ("u_origin", (x0, y0)),
+                                ("u_tile", (tw, th)), ("u_depth", int(depth or 0))):
+                if name in prog:
+                    prog[name].value = value
+            return []
+
+        setup.grid = True
+        res = _gpu_run(recipe, channels, tw * th * D, setup)
+    lead = (D, th, tw) if depth else (th, tw)
+    return _shape_out(res, lead)
+
+
+_fragment_target: dict = {}
+
+
+@gl_call
+def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
+                    view=(0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
+    """The viewer's path: ``shaders/texture.frag`` over a ``width x height`` RGBA32F target,
+    read back with row 0 at the top (for tests; the viewer draws to its window instead).
+
+    ``view`` (u0, v0, du, dv): the target shows ``uv = (u0, v0) + (s, t) * (du, dv)``, ``s, t``
+    in [0, 1] (set by :func:`set_view`: the pan goes into the split origins). Fragment uniforms
+    besides the recipe's: ``u_view`` (vec4: uv = xy + (v_uv.x, 1 - v_uv.y) * zw) and
+    ``u_channel`` (index into :data:`cellgl.texture.recipe.CHANNELS`).
+    """
+    from cellgl.gl import context
+
+    recipe = load_recipe(recipe)
+    ctx = context.get_context()
+    prog = context.program("fullscreen.vert", "texture.frag", defines(recipe, (channel,)))
+    set_view(prog, recipe, view[:2], view[2:])
+    if "u_channel" in prog:
+        prog["u_channel"].value = CHANNELS.index(channel)
+    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (width, height):
+        tex = ctx.texture((width, height), 4, dtype="f4")
+        fbo = ctx.framebuffer(color_attachments=[tex])
+        fbo.use()
+        for o in target.get("objects", ()):
+            o.release()
+        target.update(key=(width, height), objects=(fbo, tex))
+    fbo, tex = target["objects"]
+    fbo.use()
+    fbo.viewport = (0, 0, width, height)
+    vao = ctx.vertex_array(prog, [])
+    vao.render(mode=ctx.TRIANGLES, vertices=3)
+    data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(height, width, 4)
+    vao.release()
+    return data[::-1].copy()
+
+
+# ------------------------------------------------------------------------------ normalisation
+
+def measure_range(recipe, samples: int = 65536, *, lo_pct: float = 0.5, hi_pct: float = 99.5,
+                  seed: int = 12345, backend: str = "gpu") -> tuple[float, float]:
+    """Measure the range of the recipe's combination (Worley: "empirically determining the range
+    of values that the combination returns").
+
+    Evaluates the raw combination (one octave, no tiling) at ``samples`` deterministic random
+    points spread over a 1000-cell region and returns its ``lo_pct``/``hi_pct`` percentiles
+    ``(range_lo, range_hi)`` (widened if degenerate). Store them in the recipe with
+    ``recipe.replace(range_lo=lo, range_hi=hi)``.
+
+    With a density map the cell size varies over the texture, so the points are spread over the
+    texture's own uv square instead (frequency, aspect and the map as the recipe has them).
+    """
+    recipe = load_recipe(recipe)
+    rng = np.random.default_rng(seed)
+    dim = recipe.get("dimension")
+    if recipe.values["density_map"] != "none":
+        probe = recipe.replace(fractal="none")
+        pts = rng.uniform(0.0, 1.0, size=(samples, 3))
+        pts[:, 2] = 0.0
+    else:
+        probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
+                               offset_x=0.0, offset_y=0.0, offset_z=0.0)
+        pts = rng.uniform(0.0, 1000.0 if dim == 2 else 100.0, size=(samples, 3))
+    if dim == 2:
+        pts[:, 2] = 0.0
+    val = evaluate(probe, pts, ("value",), backend=backend)["value"].astype(np.float64)
+    lo, hi = np.percentile(val, [lo_pct, hi_pct])
+    if not hi > lo:
+        lo, hi = lo - 0.5, hi + 0.5
+    return float(round(lo, 6)), float(round(hi, 6))

@@ -1,0 +1,213 @@
+"""The texture parameter table: every scalar parameter of a recipe, declared once.
+
+Each :class:`Param` has a name, a type, a default, a range (or choices), a one-line doc and a
+group (the section of the recipe JSON it lives in). Everything else is generated from this
+table: the recipe schema check (:mod:`cellgl.texture.recipe`), the ``u_<name>`` uniforms and the
+``CellTextureParams`` struct of the shaders (:mod:`cellgl.texture`), the snippet constants,
+the viewer's sliders, the CLI's ``--set name=value`` and the table in ``docs/textures.md``.
+
+Structured parts of a recipe have their own validation in :mod:`cellgl.texture.recipe`:
+
+* the colour ramp (``color.ramp``: 1..16 keys ``[t, r, g, b]``);
+* the coefficients: each one *also* has a table entry so that sliders and ``--set`` work
+  uniformly: ``c1`` .. ``c8`` are Worley's linear weights (``sum c_i F_i``) and ``c11`` ..
+  ``c44`` Qin's product weights (``sum_{i,j<=4} c_ij F_i F_j``, all 16 ordered pairs, so
+  ``c12`` and ``c21`` both multiply ``F1 F2``). In recipe JSON they are written compactly as
+  ``combination.linear`` (8 numbers) and ``combination.products`` (4 x 4).
+
+``compile_time`` parameters change the shader's code (they become ``#define``s); the others
+are uniforms (``u_<name>``) that a viewer may change every frame, except the ``derived`` ones,
+which the CPU turns into derived uniform arrays (the density map's ``density_*``: its integer
+encoding per octave, :mod:`cellgl.basis.density`) and which have no uniform of their own.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Param", "PARAMS", "PARAMS_BY_NAME", "GROUPS", "LINEAR", "PRODUCTS", "N_LINEAR",
+           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES", "DENSITY_MAPS"]
+
+N_LINEAR = 8            #: linear coefficients c1..c8 (F1..F8)
+N_PRODUCT = 4           #: product coefficients c_ij for i, j <= 4
+MAX_RAMP_KEYS = 16      #: keys in a colour ramp
+
+#: fractal modes, in their GLSL integer order (CELL_TEX_FRACTAL_*)
+FRACTAL_MODES = ("none", "sum", "qin", "qin_cube")
+#: colour-ramp interpolation, in GLSL order (CELL_TEX_RAMP_*)
+RAMP_MODES = ("linear", "spline")
+NORMAL_CONVENTIONS = ("opengl", "directx")
+DISTRIBUTIONS = ("poisson", "jitter", "worley1996")
+#: spatially varying feature density (cellgl.basis.density): the map of a texture, in uv
+DENSITY_MAPS = ("none", "ramp_x", "ramp_y", "radial", "image")
+METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
+
+#: recipe JSON sections, in order
+GROUPS = ("basis", "combination", "fractal", "domain", "noise", "mapping", "color")
+
+
+@dataclass(frozen=True)
+class Param:
+    """One scalar parameter of a texture recipe.
+
+    type is "float", "int", "bool", "enum" or "color" (an RGB triple in [0, 1]).
+    ``lo``/``hi`` bound numbers (inclusive); ``choices`` names the values of an enum
+    (stored as the name, passed to GLSL as the index). ``glsl`` overrides the GLSL type.
+    """
+
+    name: str
+    type: str
+    default: object
+    lo: float | None
+    hi: float | None
+    doc: str
+    group: str
+    choices: tuple[str, ...] | None = None
+    compile_time: bool = False
+    glsl: str | None = None
+    derived: bool = False
+
+    @property
+    def glsl_type(self) -> str:
+        if self.glsl:
+            return self.glsl
+        return {"float": "float", "int": "int", "bool": "int", "enum": "int", "color": "vec3"}[self.type]
+
+    def range_text(self) -> str:
+        """The accepted values, as error messages and docs print them."""
+        if self.type == "enum":
+            return "one of: " + ", ".join(self.choices)
+        if self.type == "bool":
+            return "true or false"
+        if self.type == "color":
+            return "[r, g, b] with each in [0, 1]"
+        return f"[{_num(self.lo)}, {_num(self.hi)}]"
+
+
+def _num(v) -> str:
+    if isinstance(v, float) and v.is_integer() and abs(v) < 1e15:
+        return str(int(v)) if abs(v) >= 1e4 else repr(v)
+    return repr(v)
+
+
+def _coef(name: str, doc: str, default: float = 0.0) -> Param:
+    return Param(name, "float", default, -64.0, 64.0, doc, "combination")
+
+
+LINEAR = tuple(f"c{i}" for i in range(1, N_LINEAR + 1))
+PRODUCTS = tuple(f"c{i}{j}" for i in range(1, N_PRODUCT + 1) for j in range(1, N_PRODUCT + 1))
+
+PARAMS: tuple[Param, ...] = (
+    # ---- basis: where the feature points are and how distance is measured
+    Param("dimension", "int", 2, 2, 4, "dimension of the basis: 2 (image plane), 3 (solid: uv plus z), "
+          "4 (solid plus time)", "basis", compile_time=True),
+    Param("distribution", "enum", "poisson", None, None, "feature points: poisson (Worley: Poisson count per "
+          "cell), jitter (one per cell), worley1996 (the book's program, 3D only)", "basis",
+          choices=DISTRIBUTIONS, compile_time=True),
+    Param("metric", "enum", "euclidean", None, None, "distance metric (manhattan: Worley's ship-hull "
+          "channels)", "basis", choices=METRICS, compile_time=True),
+    Param("minkowski_p", "float", 3.0, 0.25, 64.0, "exponent of the minkowski metric", "basis"),
+    Param("density", "float", 3.0, 0.05, 16.0, "mean feature points per cell (poisson; "
+          "unused with a density_map)", "basis"),
+    Param("density_map", "enum", "none", None, None, "spatially varying density (poisson): none; ramp_x, "
+          "ramp_y (density_min at density_start to density_max at density_end along u or v); radial "
+          "(density_min at the centre, density_max at density_radius); image (basis.density_image, "
+          "grayscale over the uv square: black density_min, white density_max)", "basis",
+          choices=DENSITY_MAPS, compile_time=True),
+    Param("density_min", "float", 0.5, 0.05, 16.0, "density map: mean points per cell where the map is 0 "
+          "(16 geometric levels between it and density_max)", "basis", derived=True),
+    Param("density_max", "float", 8.0, 0.05, 16.0, "density map: mean points per cell where the map is 1",
+          "basis", derived=True),
+    Param("density_start", "float", 0.0, -100.0, 100.0, "ramp_x/ramp_y: u (or v) where the map is 0",
+          "basis", derived=True),
+    Param("density_end", "float", 1.0, -100.0, 100.0, "ramp_x/ramp_y: u (or v) where the map is 1",
+          "basis", derived=True),
+    Param("density_center_x", "float", 0.5, -100.0, 100.0, "radial: u of the centre", "basis", derived=True),
+    Param("density_center_y", "float", 0.5, -100.0, 100.0, "radial: v of the centre", "basis", derived=True),
+    Param("density_radius", "float", 0.5, 0.001, 100.0, "radial: distance (in u units) where the map "
+          "reaches 1", "basis", derived=True),
+    Param("jitter", "float", 1.0, 0.0, 1.0, "displacement of the point from the cell centre (jitter)", "basis"),
+    Param("min_points", "int", 1, 0, 16, "poisson: fewest points per cell (Worley: 1)", "basis"),
+    Param("max_points", "int", 9, 1, 16, "poisson: most points per cell (Worley: 9)", "basis"),
+    Param("seed", "int", 0, 0, 2 ** 32 - 1, "random seed of the feature points and the noise", "basis",
+          glsl="uint"),
+    # ---- combination: value = sum c_i F_i + sum c_ij F_i F_j + c_noise * noise
+    *(_coef(n, f"weight of F{n[1:]} (Worley's linear combination)", 1.0 if n == "c1" else 0.0) for n in LINEAR),
+    *(_coef(n, f"weight of F{n[1]} F{n[2]} (Qin's product terms)") for n in PRODUCTS),
+    Param("c_noise", "float", 0.0, -64.0, 64.0, "weight of gradient noise at the same position (Qin's "
+          "noise comparisons)", "combination"),
+    Param("range_lo", "float", 0.0, -1e6, 1e6, "value mapped to 0 (measured: 0.5th percentile; "
+          "see cellgl.texture.measure_range)", "combination"),
+    Param("range_hi", "float", 1.0, -1e6, 1e6, "value mapped to 1 (measured: 99.5th percentile)",
+          "combination"),
+    # ---- fractal: G = sum w_i b(lacunarity^i x), w_i = gain^i
+    Param("fractal", "enum", "none", None, None, "none; sum (Worley: sum gain^i b(lac^i x)); qin (sum gain^i "
+          "|0.5 - b(lac^i x)|); qin_cube (its cube, Qin's wrinkle bump); normalised to [0, 1]", "fractal",
+          choices=FRACTAL_MODES),
+    Param("octaves", "float", 6.0, 1.0, 8.0, "number of octaves (terms; fractional: the last is faded in). "
+          "Worley's i = 0..5 is 6", "fractal"),
+    Param("lacunarity", "float", 2.0, 1.0, 4.0, "frequency ratio between octaves (integer when tileable)",
+          "fractal"),
+    Param("gain", "float", 0.5, 0.0, 1.0, "amplitude ratio between octaves", "fractal"),
+    # ---- domain: texture coordinates -> basis space
+    Param("frequency", "float", 8.0, 0.01, 4096.0, "cells across the texture (u in [0, 1]); the period "
+          "when tileable (then an integer)", "domain"),
+    Param("aspect", "float", 1.0, 0.01, 100.0, "cells along v per cell along u (frequency * aspect: "
+          "an integer when tileable)", "domain"),
+    Param("offset_x", "float", 0.0, -1e9, 1e9, "shift of the basis along x, in cells", "domain"),
+    Param("offset_y", "float", 0.0, -1e9, 1e9, "shift of the basis along y, in cells", "domain"),
+    Param("offset_z", "float", 0.5, -1e9, 1e9, "z of the image plane in cells (3D and 4D bases)", "domain"),
+    Param("time", "float", 0.0, -1e9, 1e9, "4th coordinate in cells (4D bases: animation)", "domain"),
+    Param("tileable", "bool", False, None, None, "seamless in u and v: the basis (and noise) repeat every "
+          "frequency cells", "domain", compile_time=True),
+    # ---- noise: Perlin-style integer-hashed gradient noise
+    Param("noise_frequency", "float", 1.0, 0.01, 64.0, "noise lattice cells per basis cell (an integer "
+          "when tileable)", "noise"),
+    Param("noise_octaves", "int", 4, 1, 8, "octaves of the discoloration noise (gain 0.5, lacunarity 2)",
+          "noise"),
+    Param("noise_color", "float", 0.0, -4.0, 4.0, "fractal-noise discoloration: added to the ramp index",
+          "noise"),
+    # ---- mapping: normalised value -> height, bump, lighting
+    Param("invert", "bool", False, None, None, "height = 1 - G", "mapping"),
+    Param("level_lo", "float", 0.0, -4.0, 4.0, "height window: G at level_lo -> 0 ...", "mapping"),
+    Param("level_hi", "float", 1.0, -4.0, 4.0, "... and at level_hi -> 1 (clamped)", "mapping"),
+    Param("bump", "float", 1.0, 0.0, 256.0, "normal-map strength: height units per cell", "mapping"),
+    Param("normal_convention", "enum", "opengl", None, None, "normal-map green: opengl (+Y up) or directx "
+          "(+Y down)", "mapping", choices=NORMAL_CONVENTIONS),
+    Param("light", "float", 0.0, 0.0, 1.0, "preview lighting of the colour by the bump normal "
+          "(light from the top left)", "mapping"),
+    # ---- colour
+    Param("ramp_mode", "enum", "linear", None, None, "linear (keys at their t) or spline (RenderMan "
+          "Catmull-Rom through evenly spaced keys, as Qin; t ignored, >= 4 keys)", "color",
+          choices=RAMP_MODES),
+    Param("cell_mix", "float", 0.0, 0.0, 1.0, "ramp index = mix(height, cell value from the F1 feature "
+          "ID, cell_mix): 1 = a constant colour per cell (flagstones)", "color"),
+    Param("shade", "float", 0.0, 0.0, 1.0, "colour *= mix(1, height, shade) (grout of flagstones)", "color"),
+)
+
+PARAMS_BY_NAME: dict[str, Param] = {p.name: p for p in PARAMS}
+assert len(PARAMS_BY_NAME) == len(PARAMS)
+assert all(p.group in GROUPS for p in PARAMS)
+
+#: the default ramp: black to white
+DEFAULT_RAMP = ((0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0))
+
+
+def markdown_table() -> str:
+    """The parameter table as Markdown (``docs/textures.md`` embeds it)."""
+    lines = ["| group | name | type | default | accepted | shader | doc |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for p in PARAMS:
+        if p.name in PRODUCTS[1:] or p.name in LINEAR[1:]:
+            continue
+        name = p.name
+        doc = p.doc
+        if p.name == "c1":
+            name, doc = "c1 .. c8", "weights of F1 .. F8 (Worley's linear combination); JSON: combination.linear"
+        elif p.name == "c11":
+            name, doc = "c11 .. c44", ("weights of F_i F_j, all 16 ordered pairs (Qin); JSON: "
+                                       "combination.products (4 x 4)")
+        default = str(p.default).lower() if isinstance(p.default, bool) else p.default
+        kind = "#define" if p.compile_time else ("u_density_*" if p.derived else f"u_{p.name}")
+        doc = doc.replace("|", "\\|")
+        lines.append(f"| {p.group} | `{name}` | {p.type} | `{default}` | {p.range_text()} | {kind} | {doc} |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,149 @@
+"""The package's architecture holds: every module imports alone, there is no import cycle, and
+imports only go down the layers of docs/architecture.md (lazy imports inside functions count)."""
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: the layers, bottom first: a module may import modules of its own layer or below, never above.
+#: Each entry is a module or a package prefix (every module under it).
+LAYERS = (
+    ("files", ("cellgl._version", "cellgl.io.formats")),
+    ("gl", ("cellgl.gl",)),
+    ("basis", ("cellgl.basis",)),
+    ("texture", ("cellgl.texture",)),
+    ("pups", ("cellgl.pups",)),
+    ("recipes", ("cellgl.recipes",)),
+    ("front ends", ("cellgl.export", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.formats")),
+    ("public API", ("cellgl",)),
+    ("viewer", ("viewer",)),
+    ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__")),
+)
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for top in ("cellgl", "viewer"):
+        for path in sorted((ROOT / top).rglob("*.py")):
+            parts = path.relative_to(ROOT).with_suffix("").parts
+            if parts[-1] == "__init__":
+                parts = parts[:-1]
+            out[".".join(parts)] = path
+    return out
+
+
+MODULES = _modules()
+
+
+def _layer(module: str) -> int:
+    """Index in LAYERS of the most specific prefix that holds ``module``."""
+    best, best_len = None, -1
+    for i, (_, prefixes) in enumerate(LAYERS):
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and len(p) > best_len:
+                best, best_len = i, len(p)
+    assert best is not None, f"{module} is in no layer: add it to LAYERS (and docs/architecture.md)"
+    return best
+
+
+def _imports(module: str) -> set[str]:
+    """The project modules ``module`` imports (at any depth of its code)."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            # `from pkg import name`: the submodule pkg.name where there is one, else pkg
+            names = [f"{base}.{a.name}" if f"{base}.{a.name}" in MODULES else base for a in node.names]
+        else:
+            continue
+        for name in names:
+            while name and name not in MODULES:   # `import cellgl.gl.glsl.x` -> the module itself
+                name = name.rpartition(".")[0]
+            if name and name != module:
+                out.add(name)
+    return out
+
+
+GRAPH = {m: _imports(m) for m in MODULES}
+
+
+def test_every_module_is_in_a_layer():
+    for m in MODULES:
+        _layer(m)
+
+
+def test_imports_go_down_the_layers():
+    bad = []
+    for m, deps in GRAPH.items():
+        for d in deps:
+            if _layer(d) > _layer(m):
+                bad.append(f"{m} ({LAYERS[_layer(m)][0]}) imports {d} ({LAYERS[_layer(d)][0]})")
+    assert not bad, "imports against the layer order:\n" + "\n".join(sorted(bad))
+
+
+def test_no_import_cycle():
+    # a package's __init__ re-exports its modules; the implicit import of a parent package by its
+    # submodules is not an edge
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(m):
+        state[m] = 1
+        stack.append(m)
+        for d in sorted(GRAPH[m]):
+            if m.startswith(d + "."):
+                continue
+            if state.get(d) == 1:
+                cycle = stack[stack.index(d):] + [d]
+                pytest.fail("import cycle: " + " -> ".join(cycle))
+            if d not in state:
+                visit(d)
+        stack.pop()
+        state[m] = 2
+
+    for m in sorted(GRAPH):
+        if m not in state:
+            visit(m)
+
+
+def test_the_layer_test_sees_a_cycle(monkeypatch):
+    """The checks above can fail: a made-up upward import is caught."""
+    monkeypatch.setitem(GRAPH, "cellgl.basis.core", GRAPH["cellgl.basis.core"] | {"cellgl.texture.recipe"})
+    with pytest.raises(AssertionError, match="cellgl.basis.core .basis. imports cellgl.texture.recipe"):
+        test_imports_go_down_the_layers()
+
+
+@pytest.mark.parametrize("chunk", range(4))
+def test_each_module_imports_alone(chunk):
+    """``import M`` in a fresh interpreter works for every module (no hidden order dependence)."""
+    mods = [m for m in sorted(MODULES) if not m.endswith("__main__")][chunk::4]   # __main__ runs the CLI
+
+    def run(m):
+        r = subprocess.run([sys.executable, "-c", f"import {m}"], cwd=ROOT, capture_output=True,
+                           text=True, timeout=120)
+        return m, r.returncode, r.stderr.strip().splitlines()[-1:] if r.returncode else []
+
+    with ThreadPoolExecutor(4) as pool:
+        failed = [f"{m}: {err}" for m, rc, err in pool.map(run, mods) if rc]
+    assert not failed, "modules that do not import alone:\n" + "\n".join(failed)
+
+
+def test_modules_stay_small():
+    """No module past ~600 lines (the house rule; split by idea, not by count)."""
+    big = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 620}
+    assert not big, f"modules over 620 lines: {big}"
