@@ -176,3 +176,180 @@ def test_misconfigured_driver_is_an_error_not_a_segfault(backend):
     assert "cellgl: error: could not create an OpenGL 4.3 context" in r.stderr
     assert "GALLIUM_DRIVER=iris" in r.stderr
     assert "Traceback" not in r.stderr
+
+
+# --------------------------------------------------------------------------------------------
+# a full disk
+# --------------------------------------------------------------------------------------------
+
+
+def _bake(path, **kw):
+    from cellgl.io import bake as B
+
+    kw.setdefault("size", (32, 32))
+    kw.setdefault("progress", False)
+    return B.bake("flagstone", path, **kw)
+
+
+def test_npy_bake_reserves_its_space_and_reports_enospc(ctx, tmp_path, monkeypatch):
+    """The .npy memory map wrote into a sparse file: a disk filling up mid-bake was a SIGBUS
+    (exit 135, no message). Its blocks are reserved first; ENOSPC is a message naming the file
+    and the size needed, and nothing is left behind."""
+    from cellgl.io.spec import BakeError
+
+    calls = []
+
+    def full(fd, offset, length):
+        calls.append(length)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "posix_fallocate", full)
+    with pytest.raises(BakeError) as info:
+        _bake(tmp_path / "vol.npy", channels=("F1",))
+    msg = str(info.value)
+    assert str(tmp_path / "vol.npy") in msg and "No space left on device" in msg
+    assert "needs 4.1 KiB" in msg, msg          # 32 * 32 float32 + the 128-byte header
+    assert calls == [32 * 32 * 4 + 128]
+    assert os.listdir(tmp_path) == []
+
+
+def test_free_space_check_gives_a_readable_size(ctx, tmp_path, monkeypatch):
+    """The up-front check said "needs about 0.0 GiB" for anything under 50 MiB."""
+    import shutil
+
+    from cellgl.io.spec import BakeError
+
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(1 << 20, 1 << 20, 1000))
+    with pytest.raises(BakeError, match=r"needs about 16\.0 KiB, 1000 B free"):
+        _bake(tmp_path / "a.npy", size=(64, 64), channels=("F1",))
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.fixture
+def tiny_tmpfs(tmp_path):
+    """A 64 KiB tmpfs (root only; skipped elsewhere)."""
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    mnt = tmp_path / "tiny"
+    mnt.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", str(mnt)],
+                       capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip()}")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", "-l", str(mnt)], capture_output=True)
+
+
+def test_npy_bake_on_a_really_full_disk(tiny_tmpfs):
+    """The real thing: a 256 KiB .npy on a 64 KiB tmpfs, the free-space check fooled (as when
+    another process fills the disk during the bake): an error, not a SIGBUS."""
+    code = f"""
+import shutil, sys
+shutil.disk_usage = lambda p: shutil._ntuple_diskusage(1 << 40, 0, 1 << 40)
+from cellgl import cli
+sys.exit(cli.main(["bake", "flagstone", "-o", {str(tiny_tmpfs / "big.npy")!r}, "--size", "256x256",
+                   "--channels", "F1", "-q"]))
+"""
+    r = _python(code)
+    assert r.returncode == 2, (r.returncode, r.stderr[-1500:])
+    assert "cellgl: error: cannot write" in r.stderr and "No space left on device" in r.stderr
+    assert "needs 256.1 KiB" in r.stderr
+    assert os.listdir(tiny_tmpfs) == []
+
+
+# --------------------------------------------------------------------------------------------
+# signals and kills mid-bake
+# --------------------------------------------------------------------------------------------
+
+_SLOW = {"npy": ["--size", "2048x2048", "--tile", "64", "--channels", "F1"],
+         "tif": ["--size", "256x256x64", "--tile", "32", "--channels", "F1", "--set", "dimension=3"]}
+
+
+def _start_bake(directory: Path, fmt: str) -> subprocess.Popen:
+    """A bake that takes seconds, started once its temporary files exist."""
+    argv = [sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(directory / f"out.{fmt}"),
+            "-q", *_SLOW[fmt]]
+    p = subprocess.Popen(argv, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)),
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    want = "spool" if fmt == "tif" else "part"
+    deadline = time.monotonic() + 120
+    while not any(want in n for n in os.listdir(directory)):
+        if p.poll() is not None or time.monotonic() > deadline:
+            p.kill()
+            pytest.fail(f"the bake ended or stalled before writing: {p.communicate()[1][-1000:]}")
+        time.sleep(0.05)
+    time.sleep(0.3)
+    assert p.poll() is None, "the bake finished before the signal: make it slower"
+    return p
+
+
+@pytest.mark.parametrize("sig, fmt", [(signal.SIGTERM, "npy"), (signal.SIGHUP, "tif")])
+def test_term_and_hup_clean_up_like_ctrl_c(ctx, tmp_path, sig, fmt):
+    """SIGTERM and SIGHUP left the .part file (and a volume's spool, 768 MiB at 512^3)."""
+    p = _start_bake(tmp_path, fmt)
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 128 + sig, (p.returncode, err[-1000:])
+    assert "Traceback" not in err
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_later_bake_removes_what_a_killed_one_left(ctx, tmp_path):
+    """SIGKILL cannot be caught: the temporary names carry pid and host, and the next bake in
+    that directory removes those of processes that are gone (and nothing else)."""
+    p = _start_bake(tmp_path, "tif")
+    p.kill()
+    p.communicate(timeout=60)
+    left = sorted(os.listdir(tmp_path))
+    assert any("spool" in n for n in left) and any(".part" in n for n in left), left
+    other = tmp_path / ".out.cellgl-1@elsewhere.0123abcd.part.tif"  # another host's bake
+    other.write_bytes(b"")
+    (tmp_path / "mine.txt").write_text("kept")
+    _bake(tmp_path / "small.png", size=(16, 16))
+    assert sorted(os.listdir(tmp_path)) == sorted([other.name, "mine.txt", "small.png"])
+
+
+def test_temporary_names_fit_in_255_bytes_whatever_the_output_name(ctx, tmp_path):
+    """A 250-byte output name made a temporary name over 255 bytes (ENAMETOOLONG)."""
+    name = "é" * 122 + ".png"   # 248 bytes of UTF-8
+    assert len(os.fsencode(name)) == 248
+    (out,) = _bake(tmp_path / name, size=(16, 16))
+    assert out.name == name and os.listdir(tmp_path) == [name]
+    from cellgl.io.tempfiles import temp_name
+
+    for n in (name, "x" * 255, "a.png", "b" * 200 + "." + "e" * 50):
+        tmp = temp_name(tmp_path / n)
+        assert len(os.fsencode(tmp)) <= 255 and tmp.startswith("."), tmp
+    from cellgl.io.spec import BakeError
+
+    with pytest.raises(BakeError, match="is 256 bytes long; accepted at most 255"):
+        _bake(tmp_path / ("y" * 252 + ".png"))
+
+
+# --------------------------------------------------------------------------------------------
+# several files land together or not at all
+# --------------------------------------------------------------------------------------------
+
+
+def test_multi_channel_bake_is_all_or_nothing(ctx, tmp_path, monkeypatch):
+    """A bake failing on its second channel left the first channel's file."""
+    recipes = sys.modules["cellgl.recipes"]
+    render = recipes.render
+
+    def failing(*a, **kw):
+        if "height" in kw.get("channels", ()):
+            raise RuntimeError("the GPU fell over")
+        return render(*a, **kw)
+
+    monkeypatch.setattr(recipes, "render", failing)
+    old = tmp_path / "tex_color.png"
+    old.write_bytes(b"previous")
+    with pytest.raises(RuntimeError, match="fell over"):
+        _bake(tmp_path / "tex.png", channels=("color", "height"))
+    assert sorted(os.listdir(tmp_path)) == ["tex_color.png"]
+    assert old.read_bytes() == b"previous"
+    monkeypatch.setattr(recipes, "render", render)
+    paths = _bake(tmp_path / "tex.png", channels=("color", "height"))
+    assert sorted(p.name for p in paths) == sorted(os.listdir(tmp_path))

@@ -418,7 +418,11 @@ def run_cli(args) -> int:
     import os
     import sys
 
+    from cellgl.io.tempfiles import check_output
+
     check_target(args.target)
+    if args.output is not None:  # before the work: a missing or read-only directory, a long name
+        check_output(os.path.abspath(args.output))
     recipe = _load(args.recipe, args.sets)
     text = export(recipe, args.target, uniforms=args.uniforms)
     if args.output is None:

@@ -12,7 +12,7 @@ import numbers
 
 from cellgl.texture.params import Param
 
-__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "parse_value"]
+__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "parse_value", "read_json"]
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
@@ -21,6 +21,49 @@ CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")
 
 class RecipeError(ValueError):
     """A recipe (or a ``--set``) is invalid; the message names the field and what is accepted."""
+
+
+#: most digits an integer literal in a recipe may have (seeds are 32-bit: 10 digits)
+MAX_INT_DIGITS = 40
+
+
+def _parse_int(text: str) -> int:
+    digits = len(text.lstrip("-"))
+    if digits > MAX_INT_DIGITS:
+        raise RecipeError(f"an integer literal of {digits} digits; no recipe value has more "
+                          f"than {MAX_INT_DIGITS}")
+    return int(text)
+
+
+def read_json(path) -> object:
+    """The JSON value in recipe file ``path``; RecipeError naming the file otherwise.
+
+    Unreadable files, text that is not UTF-8, malformed JSON, integer literals of more than
+    :data:`MAX_INT_DIGITS` digits and nesting too deep for the parser each get a message
+    instead of a traceback.
+    """
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise RecipeError(f"cannot read recipe {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise RecipeError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
+                          f"{exc.start}, line {line}); save the recipe as UTF-8") from None
+    try:
+        return json.loads(text, parse_int=_parse_int)
+    except json.JSONDecodeError as exc:
+        raise RecipeError(f"{path}: not valid JSON: {exc}") from None
+    except RecursionError:
+        raise RecipeError(f"{path}: JSON nested too deeply (a recipe is a few levels deep)") from None
+    except RecipeError as exc:
+        raise RecipeError(f"{path}: {exc}") from None
 
 
 def _err(path: str, value, accepted: str, problem: str = "") -> RecipeError:
