@@ -30,10 +30,10 @@ def _python(code: str, timeout: float = 180, **env) -> subprocess.CompletedProce
                           capture_output=True, text=True, timeout=timeout)
 
 
-def _cli(*args, timeout: float = 180, **kw) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "cellgl", *args], cwd=REPO, capture_output=True,
-                          text=True, timeout=timeout, env=dict(os.environ, PYTHONPATH=str(REPO)),
-                          **kw)
+def _cli(*args, timeout: float = 180, stdout=subprocess.PIPE) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "cellgl", *args], cwd=REPO, stdout=stdout,
+                          stderr=subprocess.PIPE, text=True, timeout=timeout,
+                          env=dict(os.environ, PYTHONPATH=str(REPO)))
 
 
 def _height(seed: int = 0) -> np.ndarray:
@@ -353,3 +353,103 @@ def test_multi_channel_bake_is_all_or_nothing(ctx, tmp_path, monkeypatch):
     monkeypatch.setattr(recipes, "render", render)
     paths = _bake(tmp_path / "tex.png", channels=("color", "height"))
     assert sorted(p.name for p in paths) == sorted(os.listdir(tmp_path))
+
+
+# --------------------------------------------------------------------------------------------
+# the command line: an error message, never a traceback
+# --------------------------------------------------------------------------------------------
+
+
+def _recipe_files(d: Path) -> dict[str, Path]:
+    files = {
+        "huge_int.json": '{"basis": {"seed": ' + "9" * 5000 + "}}",
+        "huge_float.json": '{"basis": {"density": ' + "9" * 400 + "}}",
+        "deep.json": "[" * 100000 + "]" * 100000,
+        "deep_value.json": '{"basis": ' + "[" * 100000 + "]" * 100000 + "}",
+    }
+    out = {}
+    for name, text in files.items():
+        out[name] = d / name
+        out[name].write_text(text)
+    out["latin1.json"] = d / "latin1.json"
+    out["latin1.json"].write_bytes('{"name": "café"}'.encode("latin-1"))
+    return out
+
+
+def _assert_clean_error(r: subprocess.CompletedProcess, *needles: str) -> None:
+    assert r.returncode == 2, (r.returncode, r.stderr[-1500:])
+    assert "Traceback" not in r.stderr, r.stderr[-1500:]
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("cellgl: error: "), r.stderr[-1500:]
+    for n in needles:
+        assert n in lines[0], (n, lines[0][:500])
+
+
+@pytest.mark.parametrize("name, needle", [
+    ("huge_int.json", "integer literal of 5000 digits"),
+    ("huge_float.json", "integer literal of 400 digits"),
+    ("deep.json", "nested too deeply"),
+    ("deep_value.json", "nested too deeply"),
+    ("latin1.json", "not UTF-8 text (byte 0xe9"),
+])
+@pytest.mark.parametrize("command", ["bake", "export"])
+def test_hostile_recipe_files(tmp_path, name, needle, command):
+    path = _recipe_files(tmp_path)[name]
+    extra = ["-o", str(tmp_path / "out.png"), "--size", "8"] if command == "bake" else []
+    _assert_clean_error(_cli(command, str(path), *extra), str(path), needle)
+
+
+def test_hostile_names_and_paths(tmp_path):
+    long = "a" * 300
+    _assert_clean_error(_cli("presets", long), "unknown preset", "(300 characters)")
+    _assert_clean_error(_cli("bake", long, "-o", str(tmp_path / "x.png")), "unknown preset")
+    _assert_clean_error(_cli("export", "flagstone", "-o", str(tmp_path / "no" / "dir" / "x.glsl")),
+                        "does not exist")
+    _assert_clean_error(_cli("export", "flagstone", "-o", str(tmp_path)), "is a directory")
+    _assert_clean_error(_cli("export", "flagstone", "-o", str(tmp_path / (long + ".glsl"))),
+                        "bytes long; accepted at most 255")
+    _assert_clean_error(_cli("bake", "flagstone", "-o", str(tmp_path / (long + ".png"))),
+                        "bytes long; accepted at most 255")
+    assert os.listdir(tmp_path) == []
+
+
+def test_export_to_a_read_only_directory(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if os.geteuid() == 0:  # root writes through permissions: use a read-only mount
+        r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=16k", "tmpfs", str(ro)],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            pytest.skip(f"cannot mount a read-only tmpfs: {r.stderr.strip()}")
+    else:
+        ro.chmod(0o555)
+    try:
+        _assert_clean_error(_cli("export", "flagstone", "-o", str(ro / "x.glsl")), "not writable")
+    finally:
+        if os.geteuid() == 0:
+            subprocess.run(["umount", "-l", str(ro)], capture_output=True)
+        ro.chmod(0o755)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
+@pytest.mark.parametrize("argv", [["presets"], ["presets", "flagstone"], ["presets", "--params"],
+                                  ["export", "flagstone"]])
+def test_full_stdout(argv):
+    with open("/dev/full", "w") as full:
+        r = _cli(*argv, stdout=full)
+    _assert_clean_error(r, "cannot write to standard output: No space left on device")
+
+
+def test_unexpected_exception_is_a_message_not_a_traceback(tmp_path):
+    code = """
+import sys
+from cellgl import cli, recipes
+def boom(*a, **k): raise TypeError("something unforeseen")
+recipes.load_recipe = boom
+sys.exit(cli.main(["presets", "flagstone"]))
+"""
+    r = _python(code)
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert "cellgl: error: internal error: TypeError: something unforeseen" in r.stderr
+    r = _python(code, CELLGL_DEBUG="1")
+    assert r.returncode == 1 and "Traceback" in r.stderr
