@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl.gl import context
+from cellgl.gl.threads import gl_call
 from cellgl.basis.enums import glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
@@ -91,7 +92,7 @@ def bind_density_image(levels, ctx=None) -> None:
     held[1].bind_to_storage_buffer(7)
 
 
-@context.gl_call
+@gl_call
 def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     """Point count and density level of each integer cell (M, 4) int, on the GPU (as the
     search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
@@ -171,7 +172,7 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
     return out
 
 
-@context.gl_call
+@gl_call
 def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
@@ -196,7 +197,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np
     return out, ~inexact
 
 
-@context.gl_call
+@gl_call
 def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
     """Cellular basis on a regular grid generated on the GPU.
 

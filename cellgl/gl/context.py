@@ -42,7 +42,6 @@ import moderngl
 
 from cellgl.gl import glsl, osmesa
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
-from cellgl.gl.threads import gl_call
 
 __all__ = [
     "BACKENDS",
@@ -53,7 +52,6 @@ __all__ = [
     "context_info",
     "current",
     "get_context",
-    "gl_call",
     "program",
 ]
 
@@ -457,7 +455,6 @@ def _get_integer(ctx: moderngl.Context, pname: int) -> int | None:
     return value.value if value.value >= 0 else None
 
 
-@gl_call
 def context_info(ctx: moderngl.Context | None = None) -> dict:
     """Describe a context: backend, driver strings and compute limits.
 
@@ -469,7 +466,11 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
         (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
     """
-    ctx = ctx if ctx is not None else get_context()
+    with _section():  # a cellgl call: from any thread, leaving no context held there
+        return _info(ctx if ctx is not None else get_context())
+
+
+def _info(ctx: moderngl.Context) -> dict:
     info = ctx.info
     return {
         "backend": _backend_of.get(id(ctx)),
