@@ -32,8 +32,6 @@ import contextlib
 import ctypes
 import ctypes.util
 import os
-import subprocess
-import sys
 import threading
 from collections import deque
 from collections.abc import Mapping
