@@ -453,3 +453,16 @@ sys.exit(cli.main(["presets", "flagstone"]))
     assert "cellgl: error: internal error: TypeError: something unforeseen" in r.stderr
     r = _python(code, CELLGL_DEBUG="1")
     assert r.returncode == 1 and "Traceback" in r.stderr
+
+
+def test_huge_numbers_in_recipe_values_and_set():
+    """A float parameter given an integer beyond float range raised OverflowError; an integer
+    of 5000 digits made the error message itself fail (no repr past 4300 digits)."""
+    from cellgl.texture.recipe import Recipe, RecipeError
+
+    with pytest.raises(RecipeError, match=r"basis\.density: out of range: <an integer of about 401"):
+        Recipe().replace(density=10 ** 400)
+    with pytest.raises(RecipeError, match=r"basis\.seed: out of range: <an integer of about 5001"):
+        Recipe().replace(seed=10 ** 5000)
+    with pytest.raises(RecipeError, match=r"cannot parse .*\(5000 characters\)"):
+        Recipe().set_from_strings(["seed=" + "9" * 5000])

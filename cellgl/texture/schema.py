@@ -66,9 +66,17 @@ def read_json(path) -> object:
         raise RecipeError(f"{path}: {exc}") from None
 
 
+def _shown(value) -> str:
+    """``repr(value)`` for a message: long ones shortened (a 5000-digit integer has no repr)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
+        return f"<an integer of about {int(value.bit_length() * 0.30103) + 1} digits>"
+    text = repr(value)
+    return text if len(text) <= 100 else f"{text[:80]}... ({len(text)} characters)"
+
+
 def _err(path: str, value, accepted: str, problem: str = "") -> RecipeError:
     problem = problem or "invalid value"
-    return RecipeError(f"{path}: {problem} {value!r}; accepted: {accepted}")
+    return RecipeError(f"{path}: {problem} {_shown(value)}; accepted: {accepted}")
 
 
 def _suggest(name: str, names) -> str:
@@ -81,7 +89,10 @@ def _coerce(p: Param, value, path: str):
     if p.type == "float":
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise _err(path, value, p.range_text(), "expected a number, got")
-        v = float(value)
+        try:
+            v = float(value)
+        except OverflowError:  # an integer beyond float range
+            v = math.inf
         if not math.isfinite(v) or v < p.lo or v > p.hi:
             raise _err(path, value, p.range_text(), "out of range:")
         return v
@@ -129,7 +140,8 @@ def parse_value(p: Param, name: str, text: str):
             return [float(c) for c in text.strip("[]() ").split(",")]
         return text
     except ValueError:
-        raise RecipeError(f"--set {name}={text}: cannot parse {text!r}; accepted: "
+        shown = text if len(text) <= 80 else f"{text[:60]}... ({len(text)} characters)"
+        raise RecipeError(f"--set {name}={shown}: cannot parse {shown!r}; accepted: "
                           + ("an integer in " if p.type == "int" else "") + p.range_text()) from None
 
 
