@@ -116,8 +116,18 @@ class Terminated(BaseException):
         self.signum = signum
 
 
-def _raise_terminated(signum, frame):
+def _raise(signum: int):
     raise Terminated(signum)
+
+
+def _raise_terminated(signum, frame):
+    gl = sys.modules.get("cellgl.gl.context")
+    if gl is not None and getattr(gl._tls, "depth", 0) > 0:
+        # inside a GL call: raised as it returns (an exception in the middle of GL work has
+        # been seen to crash the driver at exit)
+        gl.deferred[:] = [lambda: _raise(signum)]
+        return
+    _raise(signum)
 
 
 @contextlib.contextmanager
@@ -175,7 +185,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         except KeyboardInterrupt:
             return 130
         except Terminated as exc:
-            return 128 + exc.signum
+            # Unwound: temporary files are gone. Leave without the interpreter's teardown, which
+            # would release GL state the signal may have interrupted mid-call (a rare SIGSEGV).
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(Exception):
+                    stream.flush()
+            os._exit(128 + exc.signum)
         except BrokenPipeError:
             # Output piped into e.g. `head`: stop quietly, as other command line tools do.
             _quiet_stdout()

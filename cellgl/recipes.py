@@ -62,7 +62,7 @@ def _json_kind(path: Path):
 
 def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,
            tile_w: int | None = None, tile_h: int | None = None, depth: int | None = None,
-           backend: str = "gpu") -> dict:
+           backend: str = "gpu", samples: int = 1) -> dict:
     """Render the sub-rectangle ``[x0, x0 + tile_w) x [y0, y0 + tile_h)`` of the full
     ``width x height`` image of any recipe (tiles are bit-identical to a one-pass render):
     :func:`cellgl.texture.evaluation.render` for a cellular recipe, :func:`cellgl.pups.recipe.render`
@@ -77,12 +77,16 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     recipes give ``color`` and ``height``.
     """
     recipe = load_recipe(recipe)
-    fn = pups_recipe.render if is_pups(recipe) else cellular_render.render
-    return fn(recipe, width, height, channels=channels, x0=x0, y0=y0, tile_w=tile_w, tile_h=tile_h,
-              depth=depth, backend=backend)
+    kw = dict(channels=channels, x0=x0, y0=y0, tile_w=tile_w, tile_h=tile_h, depth=depth, backend=backend)
+    if is_pups(recipe):
+        if samples != 1:
+            raise ValueError(f"samples={samples!r}: supersampling is for cellular texture recipes; "
+                             f"{recipe.name} is a PUPs recipe (accepted: 1)")
+        return pups_recipe.render(recipe, width, height, **kw)
+    return cellular_render.render(recipe, width, height, samples=samples, **kw)
 
 
-def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
+def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter_width=0.0) -> dict:
     """Evaluate a cellular recipe at arbitrary texture-space points: see
     :func:`cellgl.texture.evaluation.evaluate` for the arguments and outputs (PUPs recipes render
     images only: :func:`render`)."""
@@ -90,7 +94,7 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
     if is_pups(recipe):
         raise ValueError(f"evaluate() at arbitrary points is not available for PUPs recipes "
                          f"({recipe.name}); use render() (channels: color, height)")
-    return cellular_render.evaluate(recipe, points, outputs, backend)
+    return cellular_render.evaluate(recipe, points, outputs, backend, filter_width=filter_width)
 
 
 # ---------------------------------------------------------------------- CLI: cellgl presets

@@ -20,7 +20,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from cellgl import io as cio  # noqa: E402
+from cellgl.io import formats as cio  # noqa: E402
 from cellgl.io.bake import bake  # noqa: E402
 from cellgl.texture.recipe import list_presets, load_recipe  # noqa: E402
 

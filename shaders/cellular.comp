@@ -31,10 +31,13 @@ uniform uint u_count;          // number of samples in this chunk
 #if CELL_GRID
 // The grid is dispatched in slabs: invocation (x, y, z) of a slab is grid
 // sample (x, u_slab.y + y, u_slab.z + z, u_slab.w); no integer division.
+// Sample positions are computed in double precision and then split into an integer cell and a
+// float32 fraction, as the point path does: a sample 10^6 cells from the grid origin is as exact
+// as one at it.
 uniform ivec4 u_origin_cell;   // grid origin, split into cell + fraction
-uniform vec4 u_origin_frac;
-uniform vec4 u_spacing;
-uniform ivec4 u_slab;          // first sample of this slab (x is 0)
+uniform dvec4 u_origin_frac;
+uniform dvec4 u_spacing;
+uniform ivec4 u_slab;          // first sample of this slab
 uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
 #else
 uniform double u_scale;        // positions are multiplied by this first
@@ -60,11 +63,18 @@ void main()
     }
     // Output index within the slab, x fastest.
     uint i = (g.z * uint(u_slab_size.y) + g.y) * uint(u_slab_size.x) + g.x;
-    ivec4 idx = ivec4(int(g.x), u_slab.y + int(g.y), u_slab.z + int(g.z), u_slab.w);
-    vec4 pos = u_origin_frac + u_spacing * vec4(idx);
-    vec4 fl = floor(pos);
+    ivec4 idx = ivec4(u_slab.x + int(g.x), u_slab.y + int(g.y), u_slab.z + int(g.z), u_slab.w);
+    dvec4 pos = u_origin_frac + u_spacing * dvec4(idx);
+    dvec4 fl = floor(pos);
     cell = u_origin_cell + ivec4(fl);
-    frac = pos - fl;
+    frac = vec4(pos - fl);
+    // A fraction just below 1 can round up to 1.0 in float32.
+    for (int a = 0; a < 4; a++) {
+        if (frac[a] >= 1.0) {
+            cell[a] += 1;
+            frac[a] = 0.0;
+        }
+    }
 #else
     uint i = gl_GlobalInvocationID.x;
     if (i >= u_count) {

@@ -1,11 +1,17 @@
 #version 430
 // cellgl compute entry: a texture recipe over a pixel grid (bakes) or a point list.
-// Thin: compute the texture-space point, call cell_texture_at(), write the channels.
-// Macros (from cellgl/texture/shader.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE.
+// Thin: compute the texture-space point and its footprint, call cell_texture_filtered()
+// (once, or over a grid of sub-pixels), write the channels asked for.
+// Macros (from cellgl/texture/dispatch.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE,
+//   CELL_TEX_SUPERSAMPLE  n: average an n x n grid of sub-pixel centres (grid only; 1: none)
+//   CELL_TEX_OUT          bit mask of the outputs written: 1 colour, 2 height + normal,
+//                         4 F1..F4, 8 gradient + value, 16 id
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
 #include "lib/texture.glsl"
+// The u_<param> uniforms and their loader; a bake compiles the recipe's values as constants
+// in its place (cellgl/texture/dispatch.py).
 #include "texture_uniforms.glsl"
 
 uniform uint u_count;           // samples in this dispatch
@@ -18,6 +24,7 @@ uniform ivec2 u_tile;           // tile width, height
 uniform int u_depth;            // volume slices along z (0: one image at z = 0)
 #else
 layout(std430, binding = 0) readonly buffer Points { vec4 points[]; };   // (u, v, z, -)
+uniform vec3 u_filter_width;    // footprint of every point in texture space (0: point samples)
 #endif
 layout(std430, binding = 1) writeonly buffer OutColor { vec4 out_color[]; };
 layout(std430, binding = 2) writeonly buffer OutAux { vec4 out_aux[]; };    // height, normal (0..1)
@@ -25,12 +32,15 @@ layout(std430, binding = 3) writeonly buffer OutF { vec4 out_F[]; };        // F
 layout(std430, binding = 4) writeonly buffer OutGrad { vec4 out_grad[]; };  // dh/du, dh/dv, dh/dz, value
 layout(std430, binding = 5) writeonly buffer OutId { uint out_id[]; };
 
+#define CELL_TEX_WANT(bit) ((CELL_TEX_OUT & (bit)) != 0)
+
 void main()
 {
     uint i = gl_GlobalInvocationID.x;
     if (i >= u_count) {
         return;
     }
+    CellTextureParams t = cell_texture_params_load();
 #if CELL_TEX_GRID
     // x fastest, then y (rows, top first), then z slices.
     uint s = u_first + i;
@@ -41,14 +51,61 @@ void main()
     vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
                   (float(u_origin.y + y) + 0.5) / float(u_size.y),
                   u_depth > 0 ? (float(k) + 0.5) / float(u_depth) : 0.0);
+    // The pixel in texture space (a volume's slices too are band-limited in the image plane
+    // only, so that slice k equals the image bake at its z).
+    vec3 duvz = vec3(1.0 / float(u_size.x), 1.0 / float(u_size.y), 0.0);
 #else
     vec3 p = points[i].xyz;
+    vec3 duvz = u_filter_width;
 #endif
-    CellTextureParams t = cell_texture_params_load();
-    CellTexel c = cell_texture_at(p, t);
-    out_color[i] = c.color;
-    out_aux[i] = vec4(c.height, c.normal * 0.5 + 0.5);
+    vec4 local = cell_texture_local(p, t);
+#if CELL_TEX_GRID && CELL_TEX_SUPERSAMPLE > 1
+    // Supersampling: the centres of an n x n grid of sub-pixels (x fastest), each band-limited
+    // to its own footprint; colour, height and gradient averaged, normals summed and
+    // renormalised. ID, F1..F4 and the value stay those of the pixel centre (below).
+    const int n = CELL_TEX_SUPERSAMPLE;
+    float r = cell_texture_footprint(vec3(duvz.xy / float(n), duvz.z), t);
+    vec4 color = vec4(0.0), grad = vec4(0.0);
+    float height = 0.0;
+    vec3 normal = vec3(0.0);
+    for (int sy = 0; sy < n; sy++)
+    for (int sx = 0; sx < n; sx++) {
+        vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
+        CellTexel c = cell_texture_filtered(cell_texture_local(p + vec3(off * duvz.xy, 0.0), t), r, t);
+        color += c.color;
+        height += c.height;
+        normal += c.normal;
+        grad += c.grad;
+    }
+    float inv = 1.0 / float(n * n);
+    color *= inv;
+    height *= inv;
+    grad *= inv;
+    normal = normalize(normal);
+#if CELL_TEX_WANT(4 | 8 | 16)
+    CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
+#endif
+#else
+    CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
+    vec4 color = c.color, grad = c.grad;
+    float height = c.height;
+    vec3 normal = c.normal;
+#endif
+#if CELL_TEX_WANT(1)
+    out_color[i] = color;
+#endif
+#if CELL_TEX_WANT(2)
+    out_aux[i] = vec4(height, normal * 0.5 + 0.5);
+#endif
+#if CELL_TEX_WANT(4)
     out_F[i] = c.F;
+#endif
+#if CELL_TEX_WANT(8)
+    c.grad = grad;
     out_grad[i] = vec4(cell_texture_grad_uvz(c, t), c.value);
+#endif
+#if CELL_TEX_WANT(16)
     out_id[i] = c.id;
+#endif
 }
+#undef CELL_TEX_WANT

@@ -1,6 +1,7 @@
 #version 430
 // cellgl fragment entry (viewer): a texture recipe over the viewport.
-// Thin: the uv of this fragment, cell_texture_at(), one channel out.
+// Thin: the uv of this fragment and its footprint fwidth(uv), cell_texture_at_filtered(),
+// one channel out.
 // Uniforms: the recipe's u_<param> (cellgl.texture.set_uniforms), plus
 //   u_view     uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw (v = 0 at the top, as bakes);
 //              cellgl.texture.set_view puts the pan into the split origins (float64) and
@@ -20,7 +21,8 @@ void main()
 {
     vec2 uv = u_view.xy + vec2(v_uv.x, 1.0 - v_uv.y) * u_view.zw;
     CellTextureParams t = cell_texture_params_load();
-    CellTexel c = cell_texture_at(vec3(uv, 0.0), t);
+    // Band-limited to this fragment's footprint in uv (lib/texture.glsl: the antialiasing).
+    CellTexel c = cell_texture_at_filtered(vec3(uv, 0.0), vec3(fwidth(uv), 0.0), t);
     if (u_channel == 1) {
         frag_color = vec4(vec3(c.height), 1.0);
     } else if (u_channel == 2) {

@@ -39,6 +39,7 @@ uniform int u_fractal;
 uniform float u_octaves;
 uniform float u_lacunarity;
 uniform float u_gain;
+uniform float u_antialias;
 uniform float u_frequency;
 uniform float u_aspect;
 uniform float u_offset_x;
@@ -61,6 +62,8 @@ uniform uint u_thresholds[CELL_MAX_POINTS];
 uniform vec4 u_ramp[CELL_TEX_RAMP_KEYS];
 uniform int u_ramp_count;
 uniform float u_dist_scale;
+uniform float u_feature_frequency;
+uniform float u_octave_mean;
 uniform ivec4 u_origin_cell[CELL_TEX_OCTAVES];
 uniform vec4 u_origin_frac[CELL_TEX_OCTAVES];
 uniform ivec4 u_noise_cell[CELL_TEX_OCTAVES];
@@ -118,6 +121,7 @@ CellTextureParams cell_texture_params_load()
     t.octaves = u_octaves;
     t.lacunarity = u_lacunarity;
     t.gain = u_gain;
+    t.antialias = u_antialias;
     t.frequency = u_frequency;
     t.aspect = u_aspect;
     t.offset_x = u_offset_x;
@@ -144,6 +148,8 @@ CellTextureParams cell_texture_params_load()
     }
     t.ramp_count = u_ramp_count;
     t.dist_scale = u_dist_scale;
+    t.feature_frequency = u_feature_frequency;
+    t.octave_mean = u_octave_mean;
     for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
         t.origin_cell[k] = u_origin_cell[k];
     }

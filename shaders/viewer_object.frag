@@ -27,7 +27,8 @@ void main()
 {
     CellTextureParams t = cell_texture_params_load();
     vec3 p = v_object * u_object_scale + 0.5;
-    CellTexel x = cell_texture_at(p, t);
+    // Band-limited to the fragment's footprint in texture space (lib/texture.glsl).
+    CellTexel x = cell_texture_at_filtered(p, fwidth(p), t);
 
     vec3 n = normalize(v_normal);
     if (!gl_FrontFacing) {

@@ -264,7 +264,7 @@ def test_poisson_population_statistics():
     (lambda: cellgl.cellular(np.zeros((3, 2)), period=[-1, 2]), r"period must be in"),
     (lambda: cellgl.cellular(np.zeros((3, 2)), period=[1, 2, 3]), r"sequence of 2"),
     (lambda: cellgl.cellular([[3e9, 0.0]]), r"2\^30"),
-    (lambda: cellgl.cellular([["a", "b"]]), r"numeric"),
+    (lambda: cellgl.cellular([["a", "b"]]), r"points must hold real numbers"),
     (lambda: cellgl.cellular_grid((0, 4)), r"positive ints"),
     (lambda: cellgl.cellular_grid((4,)), r"2..4"),
     (lambda: cellgl.cellular_grid((4, 4), spacing=(1, -1)), r"spacing must be > 0"),

@@ -109,8 +109,8 @@ def test_viewer_fragment_path_and_pan(ctx, image_path):
         u0, v0, du, dv = 0.31, -0.17, 0.7, 0.9
         frag = texture.render_fragment(r, 32, 24, view=(u0, v0, du, dv))
         uu, vv = np.meshgrid(u0 + (np.arange(32) + 0.5) / 32 * du, v0 + (np.arange(24) + 0.5) / 24 * dv)
-        ref = texture.evaluate(r, np.stack([uu.ravel(), vv.ravel()], 1), ("color",),
-                               backend="numpy")["color"].reshape(24, 32, 4)
+        ref = texture.evaluate(r, np.stack([uu.ravel(), vv.ravel()], 1), ("color",), backend="numpy",
+                               filter_width=(du / 32, dv / 24))["color"].reshape(24, 32, 4)
         assert np.all(np.abs(frag - ref) < 2e-3, axis=-1).mean() > 0.97
 
 

@@ -311,6 +311,19 @@ def test_preset_compiles(tmp_path, preset, target):
     compile_snippet(tmp_path, target, text)
 
 
+def test_glsl_snippet_without_its_fragment_tail_compiles_as_a_compute_shader(tmp_path):
+    # GLSL has no fwidth outside fragment shaders: the fwidth entry points come last, after a
+    # marker, so a compute shader keeps everything before it and calls the _filtered entries.
+    text = snippet_code(export.export("qin-wrinkle", "glsl"))
+    head, tail = text.split("// Fragment (pixel) shaders only", 1)
+    assert "fwidth(uv)" in tail and "fwidth(p)" in tail
+    main = ("layout(local_size_x = 8) in;\nlayout(std430, binding = 0) buffer Out { vec4 cellgl_out[]; };\n"
+            "void main() { uint i = gl_GlobalInvocationID.x; vec2 uv = vec2(float(i) / 64.0, 0.5);\n"
+            "    cellgl_out[i] = cellgl_texture_filtered(uv, vec2(1.0 / 64.0))\n"
+            "        + cellgl_texture3_filtered(vec3(uv, 0.25), vec3(1.0 / 64.0, 1.0 / 64.0, 0.0)); }\n")
+    glslang(tmp_path, "compute.comp", "#version 430\n" + head + main)
+
+
 @pytest.mark.parametrize("target", ["glsl", "gles", "hlsl", "godot"])
 def test_uniforms_variant_compiles(tmp_path, target):
     text = export.export("flagstone", target, uniforms=True)
@@ -416,9 +429,14 @@ def run_compute(code, entry: str, width: int, height: int) -> np.ndarray:
 
 
 def run_snippet(tmp_path, target: str, text: str, width: int, height: int,
-                call: str = "cellgl_texture(uv)") -> np.ndarray:
+                call: str | None = None) -> np.ndarray:
     """``call`` of the wgsl / hlsl snippet ``text`` at every pixel centre ``uv`` (invocation
-    (x, y) is pixel (x, y), uv = ((x + 0.5) / W, (y + 0.5) / H)), rows top to bottom."""
+    (x, y) is pixel (x, y), uv = ((x + 0.5) / W, (y + 0.5) / H)), rows top to bottom. Default:
+    ``cellgl_texture_filtered(uv, (1 / W, 1 / H))``, the bake's pixel (a compute shader has no
+    derivatives for ``cellgl_texture(uv)``)."""
+    if call is None:
+        vec2 = "vec2<f32>" if target == "wgsl" else "float2"
+        call = f"cellgl_texture_filtered(uv, {vec2}(1.0 / {width}.0, 1.0 / {height}.0))"
     code = snippet_code(text)
     if target == "wgsl":
         wgpu_device()     # skip before compiling anything when there is no adapter
@@ -462,8 +480,8 @@ def test_wgsl_hlsl_solid_entry_reproduces_a_volume_slice(tmp_path, target):
     solid = next(p for p in RUN_PRESETS if load_recipe(p).values["dimension"] >= 3)
     W, H, D = 32, 24, 4
     vec3 = "vec3<f32>" if target == "wgsl" else "float3"
-    got = run_snippet(tmp_path, target, export.export(solid, target), W, H,
-                      call=f"cellgl_texture3({vec3}(uv, 0.625))")           # slice 2 of 4
+    got = run_snippet(tmp_path, target, export.export(solid, target), W, H,       # slice 2 of 4
+                      call=f"cellgl_texture3_filtered({vec3}(uv, 0.625), {vec3}(1.0 / {W}.0, 1.0 / {H}.0, 0.0))")
     np.testing.assert_allclose(got, _bake(solid, W, H, depth=D)[2], rtol=0, atol=2e-5)
 
 

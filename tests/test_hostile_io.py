@@ -263,8 +263,8 @@ sys.exit(cli.main(["bake", "flagstone", "-o", {str(tiny_tmpfs / "big.npy")!r}, "
 # signals and kills mid-bake
 # --------------------------------------------------------------------------------------------
 
-_SLOW = {"npy": ["--size", "2048x2048", "--tile", "64", "--channels", "F1"],
-         "tif": ["--size", "256x256x64", "--tile", "32", "--channels", "F1", "--set", "dimension=3"]}
+_SLOW = {"npy": ["--size", "4096x2048", "--tile", "64", "--channels", "F1"],
+         "tif": ["--size", "256x256x128", "--tile", "16", "--channels", "F1", "--set", "dimension=3"]}
 
 
 def _start_bake(directory: Path, fmt: str) -> subprocess.Popen:

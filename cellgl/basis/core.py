@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import operator
 from dataclasses import dataclass
 
 import numpy as np
@@ -75,8 +76,14 @@ def _number(name, value, lo, hi, *, integer=False, lo_open=False):
 def _period(period, dim) -> tuple[int, int, int, int]:
     if period is None:
         return (0, 0, 0, 0)
-    vals = [period] * dim if isinstance(period, numbers.Integral) else list(period)
-    if len(vals) != dim:
+    if isinstance(period, (numbers.Number, np.generic)):     # one value for every axis
+        vals = [period] * dim
+    else:
+        try:
+            vals = list(period)
+        except TypeError:
+            vals = None
+    if vals is None or len(vals) != dim:
         raise ValueError(f"period must be an integer or a sequence of {dim} integers (one per axis), got {period!r}")
     out = []
     for v in vals:
@@ -118,7 +125,11 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
 def _outputs(outputs) -> tuple[str, ...]:
     if isinstance(outputs, str):
         outputs = (outputs,)
-    outs = tuple(outputs)
+    try:
+        outs = tuple(outputs)
+    except TypeError:
+        raise ValueError(f"outputs must be a sequence of names among: {', '.join(OUTPUTS)}; "
+                         f"got {outputs!r}") from None
     for o in outs:
         if o not in OUTPUTS:
             raise ValueError(f"unknown output {o!r}; expected any of: {', '.join(OUTPUTS)}")
@@ -134,11 +145,37 @@ def _check_n_backend(n, backend):
     return n
 
 
-def _points(points) -> np.ndarray:
+#: dtype kinds accepted as coordinates: signed and unsigned integers, floats (and object arrays
+#: of Python numbers, converted); bool, complex, datetime, strings are refused, never cast
+_REAL_KINDS = "iuf"
+
+
+def real_array(name: str, value, expected: str) -> np.ndarray:
+    """``value`` as a float64 array, refusing what is not a real number (bool, complex, datetime,
+    timedelta, strings, bytes, records) with a ValueError naming ``name``, the dtype found and
+    ``expected`` (the accepted shape), instead of a silent cast or a raw TypeError."""
     try:
-        pts = np.asarray(points, dtype=np.float64)
+        arr = np.asarray(value)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"points must be a numeric array of shape (N, d), d in 2..4: {exc}") from None
+        raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None
+    if arr.dtype.kind == "O":
+        items = arr.ravel().tolist()
+        if any(isinstance(v, (bool, np.bool_)) or not isinstance(v, (numbers.Real, np.integer, np.floating))
+               for v in items):
+            bad = next(v for v in items if isinstance(v, (bool, np.bool_))
+                       or not isinstance(v, (numbers.Real, np.integer, np.floating)))
+            raise ValueError(f"{name} must hold real numbers {expected}; got {type(bad).__name__} {bad!r}")
+    elif arr.dtype.kind not in _REAL_KINDS:
+        raise ValueError(f"{name} must hold real numbers (integers or floats) {expected}; got dtype "
+                         f"{arr.dtype} (bool, complex, datetime and text are not coordinates)")
+    try:
+        return arr.astype(np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None
+
+
+def _points(points) -> np.ndarray:
+    pts = real_array("points", points, "of shape (N, d), d in 2..4")
     if pts.ndim != 2 or pts.shape[1] not in (2, 3, 4):
         raise ValueError(f"points must have shape (N, d) with d in 2..4, got shape {pts.shape}")
     if pts.shape[0] == 0:
@@ -274,12 +311,17 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     -------
     CellularResult
         Arrays shaped ``shape + (n,)`` (F, id) and ``shape + (n, d)`` (delta, grad).
-        Sample ``[..., i, j]`` lies at ``origin + spacing * (j, i, ...)``.
+        Sample ``[..., i, j]`` lies at ``origin + spacing * (j, i, ...)`` (computed in float64 on
+    the GPU, then split into cell and fraction: exact however far from ``origin``).
     """
+    shape_in = shape
     try:
-        shape = tuple(int(s) for s in shape)
+        shape = tuple(operator.index(s) if not isinstance(s, (bool, np.bool_)) else None for s in shape)
     except TypeError:
-        raise ValueError(f"shape must be a tuple of 2..4 positive ints, got {shape!r}") from None
+        shape = None
+    if shape is None or None in shape:
+        raise ValueError(f"shape must be a tuple of 2..4 positive ints (whole numbers, not floats), "
+                         f"got {shape_in!r}")
     dim = len(shape)
     if dim not in (2, 3, 4) or any(s < 1 for s in shape):
         raise ValueError(f"shape must be a tuple of 2..4 positive ints, got {shape!r}")
@@ -294,7 +336,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
 
     def vec(name, v, default):
         v = default if v is None else v
-        arr = np.broadcast_to(np.asarray(v, dtype=np.float64), (dim,)) if np.ndim(v) == 0 else np.asarray(v, dtype=np.float64)
+        arr = real_array(name, v, f"(a number or {dim} numbers x, y, ...)")
+        arr = np.broadcast_to(arr, (dim,)) if arr.ndim == 0 else arr
         if arr.shape != (dim,):
             raise ValueError(f"{name} must be a number or {dim} numbers (x, y, ...), got {v!r}")
         if not np.all(np.isfinite(arr)):
@@ -347,17 +390,24 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
         ``positions`` float64 (K, d) in sample units, ``ids`` uint32 (K,),
         ``cell_index`` int64 (K,).
     """
-    arr = np.asarray(cells)
+    raw = np.asarray(cells) if not isinstance(cells, np.ndarray) else cells
+    if raw.dtype.kind in "iu":
+        arr = raw                   # compared as integers below (uint64 2^63 must not wrap)
+    else:
+        arr = real_array("cells", cells, "of integers, shape (M, d), d in 2..4")
     if arr.ndim != 2 or arr.shape[1] not in (2, 3, 4):
         raise ValueError(f"cells must have shape (M, d) with d in 2..4, got shape {arr.shape}")
     if arr.shape[0] == 0:
         raise ValueError("cells is empty (shape (0, d)); pass at least one cell")
-    if not np.issubdtype(arr.dtype, np.integer):
-        if not np.all(np.isfinite(arr)) or not np.all(arr == np.floor(arr)):
-            raise ValueError("cells must hold integers")
+    if arr.dtype.kind == "f" and (not np.all(np.isfinite(arr)) or not np.all(arr == np.floor(arr))):
+        i, j = np.argwhere(~np.isfinite(arr) | (arr != np.floor(arr)))[0]
+        raise ValueError(f"cells must hold integers; cells[{i}, {j}] is {arr[i, j]!r}")
+    # range check in the input's own type (a cast first would wrap 2^63 or overflow abs(int64 min))
+    out_of_range = (arr >= COORD_LIMIT) | (arr <= -COORD_LIMIT)
+    if out_of_range.any():
+        i, j = np.argwhere(out_of_range)[0]
+        raise ValueError(f"cells must lie within +-2^30 (exclusive); cells[{i}, {j}] is {arr[i, j]!r}")
     arr = arr.astype(np.int64)
-    if np.any(np.abs(arr) >= COORD_LIMIT):
-        raise ValueError("cells must lie within +-2^30")
     p = make_params(arr.shape[1], distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, seed=seed, period=period,
                     density_map=density_map)

@@ -151,6 +151,8 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     flags.write(b"\0\0\0\0")
     _set(prog, "u_count", count)
     gx, gy, gz = groups or ((count + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
+    if max(gx, gy, gz) > _MAX_GROUPS:   # GL drops such a dispatch: the buffers would stay unwritten
+        raise RuntimeError(f"internal error: dispatch of {gx} x {gy} x {gz} work groups exceeds {_MAX_GROUPS}")
     prog.run(group_x=gx, group_y=gy, group_z=gz)
     ctx.memory_barrier()
     for name, buf in bufs.items():
@@ -209,15 +211,34 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
     _set_params(prog, p)
     _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
-    _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))
+    _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))      # dvec4: float64
     _set(prog, "u_spacing", tuple(float(v) for v in spacing))
     X, Y, Z, W = (int(v) for v in shape_xyzw)
     N = X * Y * Z * W
     out = _alloc(N, n, p.dim, outputs)
     inexact = np.zeros(N, dtype=bool)
-    step = _chunk_size(n, p.dim, outputs)
-    # Slabs of whole rows: several z-layers of full rows, or some rows of one layer,
-    # so each slab is contiguous in the x-fastest output.
+    for slab, start, groups in _grid_slabs(X, Y, Z, W, _chunk_size(n, p.dim, outputs)):
+        _set(prog, "u_slab", slab[:4])
+        _set(prog, "u_slab_size", slab[4:])
+        count = slab[4] * slab[5] * groups[2]
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, groups=groups)
+    return out, ~inexact
+
+
+def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):
+    """The dispatches of an X x Y x Z x W grid (x fastest), each contiguous in the output and within
+    :data:`_MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first
+    output index, (groups x, y, z))``. Several z-layers of full rows, or some rows of one layer,
+    or (a row wider than ``step``) a run of columns of one row."""
+    if X > step:          # wider than one dispatch (> LOCAL_SIZE * _MAX_GROUPS samples): split rows
+        for w in range(W):
+            for z in range(Z):
+                for y in range(Y):
+                    row = ((w * Z + z) * Y + y) * X
+                    for x0 in range(0, X, step):
+                        cx = min(step, X - x0)
+                        yield (x0, y, z, w, cx, 1), row + x0, ((cx + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
+        return
     if X * Y <= step and Y <= _MAX_GROUPS:
         ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
     else:
@@ -227,8 +248,4 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
         for z0 in range(0, Z, nz):
             for y0 in range(0, Y, ny):
                 cy, cz = min(ny, Y - y0), min(nz, Z - z0)
-                _set(prog, "u_slab", (0, y0, z0, w))
-                _set(prog, "u_slab_size", (X, cy))
-                start = ((w * Z + z0) * Y + y0) * X
-                _run(prog, ctx, X * cy * cz, n, p.dim, outputs, out, start, inexact, groups=(gx, cy, cz))
-    return out, ~inexact
+                yield (0, y0, z0, w, X, cy), ((w * Z + z0) * Y + y0) * X, (gx, cy, cz)

@@ -87,6 +87,7 @@ class Program:
     title : the recipe's name; recipe: its JSON-able dict (for the header)
     solid : whether ``cell_texture3`` exists
     uniforms : ``[(glsl type, name, value)]`` of the uniforms when ``params`` declares them
+    filtered : whether ``cellgl_texture_filtered`` (and ``cellgl_texture3_filtered``) exist
     """
 
     files: list[str]
@@ -97,6 +98,7 @@ class Program:
     recipe: dict | None = None
     solid: bool = False
     uniforms: list[tuple[str, str, object]] = field(default_factory=list)
+    filtered: bool = False
 
 
 def check_target(target: str) -> Target:
@@ -142,15 +144,23 @@ def _header(prog: Program, target: Target, uniforms: bool) -> str:
     recipe = json.dumps(prog.recipe, indent=1, sort_keys=False) if prog.recipe is not None else "{}"
     entry = [
         "vec4 cellgl_texture(vec2 uv)   uv in [0,1]^2 -> the RGBA `cellgl bake` writes for the "
-        "pixel centred at uv",
+        "pixel centred at uv" + (" (fragment shaders: the pixel size from fwidth(uv))" if prog.filtered else ""),
     ]
+    if prog.filtered:
+        entry.append("vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)   the same for a pixel of size duv in uv "
+                     "(a W x H bake: (1/W, 1/H)); any stage")
     if prog.solid:
         entry.append("vec4 cellgl_texture3(vec3 p)   p = (u, v, z) in texture space (solid texturing; z = 0: the image)")
+        entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)   the same for a pixel spanning dp; any stage")
     if target.dialect == "hlsl":
         entry = [e.replace("vec4", "float4").replace("vec3", "float3").replace("vec2", "float2") for e in entry]
     if target.dialect == "wgsl":
         entry = [e.replace("vec4 cellgl_texture(vec2 uv)", "fn cellgl_texture(uv: vec2<f32>) -> vec4<f32>")
                   .replace("vec4 cellgl_texture3(vec3 p)", "fn cellgl_texture3(p: vec3<f32>) -> vec4<f32>")
+                  .replace("vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)",
+                           "fn cellgl_texture_filtered(uv: vec2<f32>, duv: vec2<f32>) -> vec4<f32>")
+                  .replace("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)",
+                           "fn cellgl_texture3_filtered(p: vec3<f32>, dp: vec3<f32>) -> vec4<f32>")
                  for e in entry]
     lines = [
         f"cellgl {__version__}: cellular texture '{prog.title}' for {target.title}.",
@@ -299,14 +309,15 @@ def _refuse_density_image(r) -> None:
 
 
 #: lib name -> exported name, where the default prefix would collide with an entry point
-_OVERRIDES = {"cell_texture": "cellgl_texture_basis"}
+_OVERRIDES = {"cell_texture": "cellgl_texture_basis", "cell_texture_filtered": "cellgl_texture_basis_filtered"}
 
 
 def texture_program(recipe, *, uniforms: bool = False) -> Program:
     """The :class:`Program` of a texture recipe: ``shaders/lib/texture.glsl`` with the recipe's
     defines, its values as ``cell_<name>`` constants (or uniforms) read by the generated loader,
-    and the entry points ``cellgl_texture(uv)`` (= ``cell_texture_uv``, what the bake runs)
-    and, for solid recipes, ``cellgl_texture3(p)``."""
+    and the entry points ``cellgl_texture_filtered(uv, duv)`` (= ``cell_texture_uv``, what the
+    bake runs), ``cellgl_texture(uv)`` (the same with ``duv = fwidth(uv)``) and, for solid
+    recipes, ``cellgl_texture3(p)`` / ``cellgl_texture3_filtered(p, dp)``."""
     from cellgl.recipes import load_recipe
     from cellgl.texture import shader as texture
 
@@ -325,19 +336,38 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     params += "\n// All of them in the library's parameter struct.\n"
     params += texture.glsl_params_from_uniforms(prefix="cell_", function="cell_texture_params_load")
     entry = (
-        "// The RGBA `cellgl bake` writes for the pixel whose centre is uv (v = 0: top row).\n"
-        "vec4 cellgl_texture(vec2 uv)\n"
+        "// The RGBA `cellgl bake` writes for the pixel whose centre is uv (v = 0: top row) and\n"
+        "// whose size in uv is duv (a W x H bake: (1/W, 1/H)): fractal octaves finer than the\n"
+        "// pixel fade out (band limit); duv = (0, 0): point samples. Any shader stage.\n"
+        "vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)\n"
         "{\n"
-        "    return cell_texture_uv(uv, cell_texture_params_load());\n"
+        "    return cell_texture_uv(uv, duv, cell_texture_params_load());\n"
         "}\n"
     )
     if solid:
         entry += (
             "\n// Solid texturing: the texture at p = (u, v, z) in texture space (object space\n"
-            "// scaled so that 1 unit = the image width; z = 0 is the image plane).\n"
-            "vec4 cellgl_texture3(vec3 p)\n"
+            "// scaled so that 1 unit = the image width; z = 0 is the image plane), band-limited\n"
+            "// to a pixel spanning dp in texture space (0: point samples). Any shader stage.\n"
+            "vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)\n"
             "{\n"
-            "    return cell_texture_at(p, cell_texture_params_load()).color;\n"
+            "    return cell_texture_at_filtered(p, dp, cell_texture_params_load()).color;\n"
+            "}\n"
+        )
+    # Last, so that a compute or vertex shader (no derivatives there) can drop them.
+    entry += (
+        "\n// Fragment (pixel) shaders only, the pixel's size from derivatives: delete from here\n"
+        "// to the end in other stages, which have no fwidth.\n"
+        "vec4 cellgl_texture(vec2 uv)\n"
+        "{\n"
+        "    return cellgl_texture_filtered(uv, fwidth(uv));\n"
+        "}\n"
+    )
+    if solid:
+        entry += (
+            "\nvec4 cellgl_texture3(vec3 p)\n"
+            "{\n"
+            "    return cellgl_texture3_filtered(p, fwidth(p));\n"
             "}\n"
         )
     # every uniform the values fill, the density map's included: a header line without its type
@@ -346,7 +376,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     ulist = [(decl_types[k[2:]] + (f"[{len(v)}]" if isinstance(v, (list, tuple)) else ""), k[2:], v)
              for k, v in vals.items()]
     return Program(files=["lib/texture.glsl"], defines=defines, params=params, entry=entry,
-                   title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist)
+                   title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist, filtered=True)
 
 
 # --------------------------------------------------------------------------------------------

@@ -87,6 +87,9 @@ _opened: set[str] = set()
 _tainted: set[str] = set()
 #: GL state inherited through fork: kept alive, never released (releasing would hang)
 _orphans: list = []
+#: what a signal handler (the CLI's, for SIGTERM/SIGHUP) deferred because it fired inside a
+#: cellgl call: called (it raises) on leaving the outermost one, never in the middle of GL work
+deferred: list = []
 
 
 def _context_from_loader(loader, require: int) -> moderngl.Context:
@@ -251,6 +254,7 @@ def _after_fork_in_child() -> None:
     for table in (_contexts, _programs, _backend_of, _spare, _private, osmesa.probed):
         table.clear()
     _bound, _default_backend = {}, None
+    deferred.clear()
     _lock, _tls, _pid = threading.RLock(), threading.local(), os.getpid()
 
 
@@ -275,6 +279,8 @@ def _section():
                 for k, (ctx, t) in list(_bound.items()):
                     if t == me and k not in before and k not in _private:
                         _release(ctx)
+                if deferred and threading.current_thread() is threading.main_thread():
+                    deferred.pop()()
 
 
 @contextlib.contextmanager
@@ -510,7 +516,8 @@ def _compile_error(what: str, exc: Exception, src: glsl.Source) -> glsl.ShaderEr
 
 
 def compute_program(name: str, defines: Mapping | None = None, *,
-                    ctx: moderngl.Context | None = None) -> moderngl.ComputeShader:
+                    ctx: moderngl.Context | None = None, files: Mapping[str, str] | None = None,
+                    cache: bool = True) -> moderngl.ComputeShader:
     """Compile (once, cached) the compute shader ``shaders/<name>``.
 
     Parameters
@@ -521,6 +528,10 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         ``#define``s placed after ``#version`` (see :func:`cellgl.gl.glsl.load`).
     ctx : moderngl.Context, optional
         Defaults to :func:`get_context`.
+    files : mapping of str to str, optional
+        Generated include files (see :func:`cellgl.glsl.load`).
+    cache : bool
+        False: compile a new program and do not keep it (the caller owns and releases it).
 
     Raises
     ------
@@ -528,16 +539,17 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         Loading or compiling failed; driver line numbers are mapped to ``file:line``.
     """
     ctx = ctx if ctx is not None else get_context()
-    key = ("compute", id(ctx), name, _defines_key(defines))
+    key = ("compute", id(ctx), name, _defines_key(defines), tuple(sorted((files or {}).items())))
     with _lock:
-        prog = _programs.get(key)
+        prog = _programs.get(key) if cache else None
         if prog is None:
-            src = glsl.load(name, defines)
+            src = glsl.load(name, defines, files=files)
             try:
                 prog = ctx.compute_shader(src.text)
             except moderngl.Error as exc:
                 raise _compile_error(f"compiling {name}", exc, src) from None
-            _programs[key] = prog
+            if cache:
+                _programs[key] = prog
         return prog
 
 

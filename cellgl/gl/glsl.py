@@ -125,14 +125,17 @@ def format_define(key: str, value: object) -> str:
 
 
 class _Resolver:
-    def __init__(self, root: Path):
+    def __init__(self, root: Path, files: Mapping[str, str] | None = None):
         self.root = root
+        self.virtual = dict(files or {})
         self.seen: set[str] = set()
         self.files: list[str] = []
         self.lines: list[str] = []
         self.line_map: list[tuple[str, int]] = []
 
     def _read(self, rel: str, where: str | None) -> str:
+        if rel in self.virtual:
+            return self.virtual[rel]
         path = self.root / rel
         try:
             return path.read_text(encoding="utf-8")
@@ -192,7 +195,7 @@ def _root(root: str | Path | None) -> Path:
 
 
 def load(name: str, defines: Mapping[str, object] | None = None, *,
-         root: str | Path | None = None) -> Source:
+         root: str | Path | None = None, files: Mapping[str, str] | None = None) -> Source:
     """Load entry shader ``name`` (relative to ``root``, default :func:`shader_dir`).
 
     Parameters
@@ -203,6 +206,9 @@ def load(name: str, defines: Mapping[str, object] | None = None, *,
         Emitted as ``#define`` lines right after ``#version`` (see :func:`format_define`).
     root : path, optional
         Shader root directory; defaults to :func:`shader_dir`.
+    files : mapping of str to str, optional
+        Generated files: ``{relative path: text}`` read instead of (or in the absence of) the
+        file of that path under the root (e.g. a recipe's values as constants).
 
     Returns
     -------
@@ -213,7 +219,7 @@ def load(name: str, defines: Mapping[str, object] | None = None, *,
     ShaderError
         Missing file or include, a ``#version`` in an included file, a malformed include.
     """
-    resolver = _Resolver(_root(root))
+    resolver = _Resolver(_root(root), files)
     resolver.add(name, is_library=False, where=None, at=None, markers=False)
     src = resolver.source()
     if defines:

@@ -15,6 +15,7 @@ import math
 import os
 import shutil
 import sys
+import dataclasses
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -24,6 +25,7 @@ import numpy as np
 
 from cellgl.io import formats as cio
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, human_size
+from cellgl.texture import antialias
 
 __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
            "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
@@ -53,6 +55,7 @@ class _Plan:
     slices: int | None
     tile_w: int
     tile_h: int
+    samples: int = 1       #: per pixel (an n x n grid; cellgl.texture.antialias)
 
     def tiles(self) -> Iterator[tuple[int, int, int, int]]:
         """(x0, y0, w, h) row-major."""
@@ -210,7 +213,7 @@ def _check_tile(tile) -> int | None:
 
 
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
-         bit_depth=None, tileable=None, sets=(), tile=None, progress=True,
+         bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
          memory_budget=DEFAULT_BUDGET) -> list[Path]:
     """Render a recipe to a file, tile by tile, atomically.
 
@@ -240,6 +243,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     tile : int, optional
         Render tiles of ``tile x tile`` pixels (multiple of 16) instead of a size chosen from
         ``memory_budget``.
+    samples : int
+        Samples per pixel, a square (1, 4, 9, ..., 64): colour, height and normal averaged over
+        an n x n grid of sub-pixels (stratified, deterministic; :mod:`cellgl.texture.antialias`).
     progress : bool
         Draw a progress bar on stderr when there is more than one tile.
     memory_budget : int
@@ -275,6 +281,10 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     channels = parse_channels(channels)
     bits = _check_bits(ext, bit_depth)
     tile = _check_tile(tile)
+    try:
+        samples = antialias.check_samples(samples)
+    except ValueError as exc:
+        raise BakeError(f"--samples: {exc}") from None
     outputs = []
     for p, chs in _output_paths(path, channels):
         outputs.append(_Output(p, chs, tuple(_encoding(c, ext, bits) for c in chs)))
@@ -285,6 +295,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
     recipe = _load(recipe_or_name, sets, tileable)
+    if samples != 1 and getattr(recipe, "kind", None) == "pups":
+        raise BakeError(f"--samples {samples}: supersampling is for texture recipes; "
+                        f"{recipe.name} is a PUPs recipe (accepted: 1)")
     if depth_slices is not None and recipe.get("dimension") < 3:
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
@@ -298,7 +311,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     with atomic_paths([out.path for out in outputs]) as tmps:
         for out, tmp in zip(outputs, tmps):
             file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-            plan = _plan(w, h, depth_slices, ext, out.channels, tile, memory_budget, file_bytes)
+            plan = dataclasses.replace(_plan(w, h, depth_slices, ext, out.channels, tile, memory_budget,
+                                             file_bytes), samples=samples)
             _bake_one(recipe, out, ext, plan, progress, tmp)
     return [out.path for out in outputs]
 
@@ -325,9 +339,10 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator
     """Yield (x0, y0, {channel: encoded array}) row-major; arrays (h, w[, S]) or (D, h, w[, S])."""
     from cellgl import recipes
 
+    extra = {"samples": plan.samples} if plan.samples != 1 else {}
     for x0, y0, tw, th in plan.tiles():
         res = recipes.render(recipe, plan.width, plan.height, channels=out.channels,
-                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices)
+                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices, **extra)
         enc = {}
         for e in out.encodings:
             a = e.encode(res[e.channel])

@@ -8,6 +8,7 @@ import time
 
 from cellgl.io.bake import bake
 from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, BakeError
+from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]
 
@@ -21,6 +22,7 @@ channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), 
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
+  cellgl bake crumple -o crumple.png --size 256 --samples 4
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
 """
@@ -46,6 +48,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="comma-separated: color, height, normal, id, F1..F4 (default color)")
     p.add_argument("--depth", default=None, metavar="BITS",
                    help="bits per sample: 8|16|32 (default per format, see below)")
+    p.add_argument("--samples", default="1", metavar="N",
+                   help="samples per pixel: 1 (default), 4, 9, 16, ... 64 (an n x n grid averaged: "
+                        "smooth edges; band-limited fractals need none)")
     p.add_argument("--tile", default=None, metavar="N",
                    help="advanced: render N x N tiles (multiple of 16) instead of a size chosen "
                         "from --memory")
@@ -71,11 +76,12 @@ def run_cli(args: argparse.Namespace) -> int:
     budget = DEFAULT_BUDGET if args.memory is None else \
         _int_arg("--memory", args.memory, 1, 1 << 20) << 20
     tile = None if args.tile is None else _int_arg("--tile", args.tile, 16, 8192)
+    samples = _int_arg("--samples", args.samples, 1, MAX_SAMPLES)
     t0 = time.perf_counter()
     try:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
-                     tileable=args.tileable, sets=args.sets, tile=tile,
+                     tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
                      progress=not args.quiet, memory_budget=budget)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""

@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from cellgl.basis.core import real_array
 from cellgl.gl.threads import gl_call
-from cellgl.texture.recipe import CHANNELS, Recipe, check_channels, load_recipe
-from cellgl.texture.shader import LOCAL_SIZE, defines, set_uniforms, set_view
+from cellgl.texture import antialias, dispatch
+from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
+from cellgl.texture.shader import defines, set_view
 
 __all__ = ["evaluate", "render", "render_fragment", "measure_range", "OUTPUTS"]
 
-_CHUNK = 1 << 20            # samples per dispatch
 #: what :func:`evaluate` can return: the render channels plus the height gradient in texture
 #: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
 OUTPUTS = CHANNELS + ("grad", "value")
@@ -28,71 +29,8 @@ def _backend(backend):
         raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
 
 
-@gl_call
-def _gpu_run(recipe: Recipe, channels, count: int, setup) -> dict:
-    """Dispatch texture.comp over ``count`` samples; ``setup(prog, first, n)`` binds inputs."""
-    from cellgl.gl import context
-
-    ctx = context.get_context()
-    grid = setup.grid
-    d = defines(recipe, channels)
-    d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=LOCAL_SIZE)
-    prog = context.compute_program("texture.comp", d)
-    set_uniforms(prog, recipe)
-    out = {"color": np.empty((count, 4), np.float32), "aux": np.empty((count, 4), np.float32),
-           "F": np.empty((count, 4), np.float32), "grad": np.empty((count, 4), np.float32),
-           "id": np.empty(count, np.uint32)}
-    want = {"color": "color" in channels,
-            "aux": bool({"height", "normal"} & set(channels)),
-            "F": any(c.startswith("F") for c in channels),
-            "grad": bool({"grad", "value"} & set(channels)),
-            "id": "id" in channels}
-    bind = {"color": 1, "aux": 2, "F": 3, "grad": 4, "id": 5}
-    for start in range(0, count, _CHUNK):
-        n = min(_CHUNK, count - start)
-        bufs = {}
-        for k, b in bind.items():
-            size = 4 * n if k == "id" else 16 * n
-            bufs[k] = ctx.buffer(reserve=size)
-            bufs[k].bind_to_storage_buffer(b)
-        extra = setup(prog, start, n)
-        if "u_count" in prog:
-            prog["u_count"].value = n
-        if "u_first" in prog:
-            prog["u_first"].value = start
-        prog.run(group_x=(n + LOCAL_SIZE - 1) // LOCAL_SIZE)
-        ctx.memory_barrier()
-        for k, buf in bufs.items():
-            if want[k]:
-                dt = np.uint32 if k == "id" else np.float32
-                out[k][start:start + n] = np.frombuffer(buf.read(), dtype=dt).reshape(out[k][start:start + n].shape)
-            buf.release()
-        for b in extra:
-            b.release()
-    res = {}
-    for c in channels:
-        if c == "color":
-            res[c] = out["color"]
-        elif c == "height":
-            res[c] = out["aux"][:, 0].copy()
-        elif c == "normal":
-            res[c] = out["aux"][:, 1:4].copy()
-        elif c == "id":
-            res[c] = out["id"]
-        elif c in ("F1", "F2", "F3", "F4"):
-            res[c] = out["F"][:, int(c[1]) - 1].copy()
-        elif c == "grad":
-            res[c] = out["grad"][:, :3].copy()
-        elif c == "value":
-            res[c] = out["grad"][:, 3].copy()
-    return res
-
-
 def _points(points) -> np.ndarray:
-    try:
-        pts = np.asarray(points, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError("points must be a numeric array of shape (N, 2) (u, v) or (N, 3) (u, v, z)") from None
+    pts = real_array("points", points, "of shape (N, 2) (u, v) or (N, 3) (u, v, z)")
     if pts.ndim != 2 or pts.shape[1] not in (2, 3) or len(pts) == 0:
         raise ValueError(f"points must have shape (N, 2) (u, v) or (N, 3) (u, v, z) with N >= 1, "
                          f"got shape {pts.shape}")
@@ -103,7 +41,7 @@ def _points(points) -> np.ndarray:
     return pts
 
 
-def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
+def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter_width=0.0) -> dict:
     """Evaluate a recipe at arbitrary texture-space points.
 
     Parameters
@@ -118,6 +56,10 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
         ``grad`` (N, 3) float32 (dh/du, dh/dv, dh/dz, analytic), ``value`` (N,) float32 (the
         combination before normalisation, octave 0).
     backend : {"gpu", "numpy"}
+    filter_width : float or (du, dv) or (du, dv, dz)
+        The footprint of every point in texture space (e.g. ``1 / W`` for the pixels of a
+        W-wide image): fractal octaves finer than it fade to their mean (the recipe's
+        ``antialias``, :mod:`cellgl.texture.antialias`). Default 0: point samples.
 
     Returns
     -------
@@ -127,21 +69,57 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu") -> dict:
     outputs = check_channels(outputs, OUTPUTS)
     _backend(backend)
     pts = _points(points)
+    duvz = _filter_width(filter_width)
     if backend == "numpy":
         from cellgl.texture import reference as texture_reference
 
-        return texture_reference.evaluate(recipe, pts, outputs)
+        return texture_reference.evaluate(recipe, pts, outputs, duvz)
     from cellgl.gl import context
 
-    def setup(prog, start, n):
-        p4 = np.zeros((n, 4), np.float32)
-        p4[:, :3] = pts[start:start + n]
-        b = context.get_context().buffer(p4.tobytes())  # inside _gpu_run's cellgl call
-        b.bind_to_storage_buffer(0)
-        return [b]
+    def setup_for(local):
+        def setup(prog, start, n):
+            p4 = np.zeros((n, 4), np.float32)
+            p4[:, :3] = local[start:start + n]
+            b = context.get_context().buffer(p4.tobytes())  # inside dispatch.run's cellgl call
+            b.bind_to_storage_buffer(0)
+            if "u_filter_width" in prog:
+                prog["u_filter_width"].value = tuple(float(c) for c in duvz)
+            return [b]
+        return setup
 
-    setup.grid = False
-    return _gpu_run(recipe, outputs, len(pts), setup)
+    # The shader adds the sample's texture position to the split origins in float32, which holds
+    # only the first few cells exactly. So points are grouped by their whole part (u, v, z) and each
+    # group goes with that whole part as a float64 pan of the origins (as the viewer pans) and its
+    # fraction as the position: a point at uv 1e9 is as exact as one at 0.5.
+    whole = np.floor(pts)
+    if not whole.any():
+        return dispatch.run(recipe, outputs, len(pts), setup_for(pts), grid=False)
+    keys, inverse = np.unique(whole, axis=0, return_inverse=True)
+    inverse = inverse.ravel()
+    out = None
+    for g, key in enumerate(keys):
+        idx = np.nonzero(inverse == g)[0]
+        res = dispatch.run(recipe, outputs, len(idx), setup_for(pts[idx] - key), grid=False,
+                           pan=tuple(float(c) for c in key))
+        if out is None:
+            out = {k: np.empty((len(pts),) + a.shape[1:], a.dtype) for k, a in res.items()}
+        for k, a in res.items():
+            out[k][idx] = a
+    return out
+
+
+def _filter_width(fw) -> np.ndarray:
+    """``filter_width`` as (du, dv, dz) float64, checked."""
+    a = real_array("filter_width", fw, "(a number, (du, dv) or (du, dv, dz))")
+    if a.ndim == 0:
+        a = np.array([a, a, 0.0])
+    elif a.shape in ((2,), (3,)):
+        a = np.concatenate([a, np.zeros(3 - len(a))])
+    else:
+        raise ValueError(f"filter_width must be a number, (du, dv) or (du, dv, dz), got {fw!r}")
+    if not np.all(np.isfinite(a)) or np.any(a < 0.0):
+        raise ValueError(f"filter_width must be finite and >= 0, got {fw!r}")
+    return a
 
 
 def _shape_out(res: dict, lead: tuple) -> dict:
@@ -153,9 +131,14 @@ def _shape_out(res: dict, lead: tuple) -> dict:
 
 def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,
            tile_w: int | None = None, tile_h: int | None = None, depth: int | None = None,
-           backend: str = "gpu") -> dict:
+           backend: str = "gpu", samples: int = 1) -> dict:
     """Render the sub-rectangle ``[x0, x0 + tile_w) x [y0, y0 + tile_h)`` of the full
     ``width x height`` image of a recipe (tiles are bit-identical to a one-pass render).
+
+    Each pixel is band-limited to its footprint (the recipe's ``antialias``) and, with
+    ``samples = n^2`` (1, 4, 9, ..., 64), averaged over the centres of an n x n grid of
+    sub-pixels (colour, height, normal; ``id``, ``F1``..``F4`` from the pixel centre); see
+    :mod:`cellgl.texture.antialias`.
 
     Returns
     -------
@@ -167,6 +150,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     recipe = load_recipe(recipe)
     channels = check_channels(channels)
     _backend(backend)
+    n_sub = antialias.grid_side(samples)
     for name, v in (("width", width), ("height", height)):
         if not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
             raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
@@ -188,7 +172,10 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
         z = (np.arange(D) + 0.5) / D if depth else np.zeros(1)
         Z, V, U = np.meshgrid(z, v, u, indexing="ij")
         pts = np.stack([U.ravel(), V.ravel(), Z.ravel()], axis=1)
-        res = texture_reference.evaluate(recipe, pts, channels)
+        duvz = np.array([1.0 / width, 1.0 / height, 0.0])     # slices: band-limited in the image plane
+        res = texture_reference.evaluate(recipe, pts, channels, duvz)
+        if n_sub > 1:
+            res.update(_supersample_reference(recipe, pts, channels, duvz, samples))
     else:
         def setup(prog, start, n):
             for name, value in (("u_size", (width, height)), ("u_origin", (x0, y0)),
@@ -197,10 +184,32 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
                     prog[name].value = value
             return []
 
-        setup.grid = True
-        res = _gpu_run(recipe, channels, tw * th * D, setup)
+        res = dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub)
     lead = (D, th, tw) if depth else (th, tw)
     return _shape_out(res, lead)
+
+
+def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
+    """NumPy twin of texture.comp's supersampling: the averaged channels at pixel centres ``pts``."""
+    from cellgl.texture import reference as texture_reference
+
+    avg = [c for c in channels if c in ("color", "height", "normal")]
+    if not avg:
+        return {}
+    n = antialias.grid_side(samples)
+    sub = np.array([duvz[0] / n, duvz[1] / n, duvz[2]])
+    acc: dict = {}
+    for off in antialias.subsample_offsets(samples):
+        p = pts + np.array([off[0] * duvz[0], off[1] * duvz[1], 0.0])
+        o = texture_reference.evaluate(recipe, p, [c for c in avg if c != "normal"] + ["normal"], sub)
+        for c in avg:
+            x = o[c].astype(np.float64)
+            acc[c] = acc.get(c, 0.0) + (x * 2.0 - 1.0 if c == "normal" else x)
+    out = {c: (a / samples).astype(np.float32) for c, a in acc.items() if c != "normal"}
+    if "normal" in acc:
+        nrm = acc["normal"] / np.linalg.norm(acc["normal"], axis=1, keepdims=True)
+        out["normal"] = (nrm * 0.5 + 0.5).astype(np.float32)
+    return out
 
 
 _fragment_target: dict = {}

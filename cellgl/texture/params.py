@@ -148,6 +148,9 @@ PARAMS: tuple[Param, ...] = (
     Param("lacunarity", "float", 2.0, 1.0, 4.0, "frequency ratio between octaves (integer when tileable)",
           "fractal"),
     Param("gain", "float", 0.5, 0.0, 1.0, "amplitude ratio between octaves", "fractal"),
+    Param("antialias", "float", 1.0, 0.0, 4.0, "band limit (Qin's smoothscale): each octave fades to its "
+          "mean as its features shrink from 2 to 1 pixel apart, times antialias (0: off, point samples)",
+          "fractal"),
     # ---- domain: texture coordinates -> basis space
     Param("frequency", "float", 8.0, 0.01, 4096.0, "cells across the texture (u in [0, 1]); the period "
           "when tileable (then an integer)", "domain"),

@@ -104,10 +104,15 @@ def density_pixels(file: str, path: str = "basis.density_image"):
     key = (file, st.st_mtime_ns, st.st_size)
     img = _image_cache.get(key)
     if img is None:
+        size = None
         try:
             from PIL import Image
 
             with Image.open(file) as im:
+                # the header gives the size: a huge image is refused before it is decoded
+                size = im.size
+                if not (1 <= size[0] <= _MAX_IMAGE_SIDE and 1 <= size[1] <= _MAX_IMAGE_SIDE):
+                    raise _TooLarge
                 im.load()
                 if im.mode in ("I;16", "I;16B", "I;16L", "I"):
                     a = np.asarray(im, dtype=np.float64) / (65535.0 if im.mode.startswith("I;16") else
@@ -116,6 +121,9 @@ def density_pixels(file: str, path: str = "basis.density_image"):
                     a = np.asarray(im.convert("L"), dtype=np.float64) / 255.0
         except ImportError:
             raise RecipeError(f"{path}: reading a density image needs Pillow (pip install pillow)") from None
+        except _TooLarge:
+            raise RecipeError(f"{path}: density image {file!r} is {size[0]}x{size[1]}; accepted: "
+                              f"sides 1..{_MAX_IMAGE_SIDE}") from None
         except Exception as exc:  # noqa: BLE001 - Pillow raises many kinds
             raise RecipeError(f"{path}: cannot read density image {file!r} as an image: {exc}") from None
         if a.ndim != 2 or not (1 <= a.shape[0] <= _MAX_IMAGE_SIDE and 1 <= a.shape[1] <= _MAX_IMAGE_SIDE):
@@ -126,6 +134,10 @@ def density_pixels(file: str, path: str = "basis.density_image"):
         _image_cache.clear()
         img = _image_cache[key] = a
     return img
+
+
+class _TooLarge(Exception):
+    """A density image whose header gives a side past :data:`_MAX_IMAGE_SIDE`."""
 
 
 def _defaults() -> dict:

@@ -17,7 +17,8 @@ import numpy as np
 
 from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
-from cellgl.texture.params import LINEAR
+from cellgl.texture.antialias import feature_frequency, smoothscale
+from cellgl.texture.params import LINEAR, PARAMS
 from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
 
 M32 = 0xFFFFFFFF
@@ -104,13 +105,17 @@ def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
 MAX_OCTAVES = 8
 
 
-def _tex(recipe, pan=(0.0, 0.0)) -> dict:
+def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     """The run-time values the GLSL reads (enums as names), plus derived ones (the split
-    origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`)."""
+    origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`,
+    the band limit's ``feature_frequency`` (:mod:`cellgl.texture.antialias`) and :func:`octave_mean`;
+    ``mean=False``: 0 for the mean, which :func:`octave_mean` measures with this)."""
     v = dict(recipe.values)
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
+    v["feature_frequency"] = feature_frequency(v)
     v.update(lattice_origins(v, pan))
     v["density_enc"] = density_encodings(recipe, pan, v)
+    v["octave_mean"] = octave_mean(recipe) if mean else 0.0
     return v
 
 
@@ -157,7 +162,7 @@ def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
         return None
     t = t if t is not None else dict(recipe.values, **lattice_origins(recipe.values, pan))
     f = float(t["frequency"])
-    pan_s = (float(pan[0]) * f, float(pan[1]) * f * float(t["aspect"]), 0.0, 0.0)
+    pan_s = (float(pan[0]) * f, float(pan[1]) * f * float(t["aspect"]), _pan_z(pan) * f, 0.0)
     out = []
     for i in range(MAX_OCTAVES):
         k = float(t["lacunarity"]) ** i
@@ -173,6 +178,10 @@ def density_encodings(recipe, pan=(0.0, 0.0), t: dict | None = None):
         object.__setattr__(enc, "axes", axes)
         out.append(enc)
     return out
+
+
+def _pan_z(pan) -> float:
+    return float(pan[2]) if len(pan) > 2 else 0.0
 
 
 def _split(x: np.ndarray, period) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +202,8 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     by the octave's period when tileable, so it stays small) and a fraction in [0, 1); the
     shader adds ``k s`` to the fraction. Axes past the dimension are 0.
 
-    ``pan`` (du, dv) moves the view in uv (the viewer's pan): ``O += (du f, dv f aspect, 0, 0)``,
+    ``pan`` (du, dv) or (du, dv, dz) moves the view in texture space (the viewer's pan; the whole
+    part of far points in :func:`cellgl.texture.evaluate`): ``O += (du f, dv f aspect, dz f, 0)``,
     so a pan far away is exact too.
 
     Returns ``{"origin_cell", "noise_cell": int64 (MAX_OCTAVES, 4), "origin_frac",
@@ -201,7 +211,7 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     """
     f, dim = t["frequency"], t["dimension"]
     O = np.array([t["offset_x"] + float(pan[0]) * f, t["offset_y"] + float(pan[1]) * f * t["aspect"],
-                  t["offset_z"], t["time"]], dtype=np.float64)
+                  t["offset_z"] + _pan_z(pan) * f, t["time"]], dtype=np.float64)
     O[dim:] = 0.0
     ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
     out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
@@ -319,9 +329,17 @@ def texture_cell_value(ids: np.ndarray) -> np.ndarray:
     return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
 
 
-def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) -> dict:
-    """``cell_texture``: the texture at basis positions O + s, s (N, 4) small (:func:`texture_local`)
-    and the origin O = (offset_x, offset_y, offset_z, time) split in ``t`` (default ``_tex(recipe)``).
+def texture_footprint(duvz, t: dict) -> np.ndarray:
+    """``cell_texture_footprint``: a pixel spanning ``duvz`` ((3,) or (N, 3)) in texture space,
+    in basis units."""
+    f = t["frequency"]
+    return np.max(np.abs(np.asarray(duvz, dtype=np.float64)) * np.array([f, f * t["aspect"], f]), axis=-1)
+
+
+def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, r=0.0) -> dict:
+    """``cell_texture_filtered``: the texture at basis positions O + s, s (N, 4) small
+    (:func:`texture_local`) and the origin O = (offset_x, offset_y, offset_z, time) split in ``t``
+    (default ``_tex(recipe)``), band-limited to the footprint ``r`` (scalar or (N,), basis units).
 
     Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
     F (N, 4), value (N,), as the GLSL ``CellTexel``.
@@ -339,27 +357,31 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     dG = np.zeros((N, 4))
     total, amp, scale = 0.0, 1.0, 1.0
     o: dict = {}
+    spacings = t["antialias"] * t["feature_frequency"] * np.broadcast_to(np.asarray(r, dtype=np.float64), (N,))
     for i in range(min(octaves, MAX_OCTAVES)):
         w = amp
         if fractal != "none":
             w *= min(t["octaves"] - i, 1.0)
-        v, g, ids, F4 = texture_combination(s * scale, t, i, n)
-        if i == 0:
-            o.update(value=v, id=ids, F=F4)
-        b = (v - t["range_lo"]) * inv_range
-        db = g * (inv_range * scale)
-        out = (b < 0.0) | (b > 1.0)
-        b = np.clip(b, 0.0, 1.0)
-        db[out] = 0.0
-        if qin:
-            dev = 0.5 - b
-            G += w * np.abs(dev)
-            dG -= w * np.sign(dev)[:, None] * db
-            total += 0.5 * w
+        a = smoothscale(spacings * scale)
+        if i == 0 or np.any(a > 0.0):
+            v, g, ids, F4 = texture_combination(s * scale, t, i, n)
+            if i == 0:
+                o.update(value=v, id=ids, F=F4)
+            b = (v - t["range_lo"]) * inv_range
+            db = g * (inv_range * scale)
+            out = (b < 0.0) | (b > 1.0)
+            b = np.clip(b, 0.0, 1.0)
+            db[out] = 0.0
+            term = b
+            if qin:
+                dev = 0.5 - b
+                term = np.abs(dev)
+                db = -np.sign(dev)[:, None] * db
+            G += w * (a * term + (1.0 - a) * t["octave_mean"])
+            dG += (w * a)[:, None] * db
         else:
-            G += w * b
-            dG += w * db
-            total += w
+            G += w * t["octave_mean"]
+        total += 0.5 * w if qin else w
         amp *= t["gain"]
         scale *= t["lacunarity"]
     G /= total
@@ -399,21 +421,23 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None) 
     return o
 
 
-def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0)) -> dict:
-    """``cell_texture_at``: the texture at texture-space points p (N, 3) (plus ``pan`` in uv)."""
+def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0), duvz=(0.0, 0.0, 0.0)) -> dict:
+    """``cell_texture_at_filtered``: the texture at texture-space points p (N, 3) (plus ``pan``
+    in uv), band-limited to pixels spanning ``duvz`` ((3,) or (N, 3); 0: point samples)."""
     t = _tex(recipe, pan)
-    return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t)
+    return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t, texture_footprint(duvz, t))
 
 
-def evaluate(recipe, pts: np.ndarray, outputs) -> dict:
-    """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space)."""
+def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
+    """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space; ``duvz``:
+    the footprint of each point in texture space, as its ``filter_width``)."""
     from cellgl.texture.recipe import needed_n
 
     n = needed_n(recipe)
     for c in outputs:
         if c in ("F1", "F2", "F3", "F4"):
             n = max(n, int(c[1]))
-    o = texture_at(pts, recipe, n)
+    o = texture_at(pts, recipe, n, duvz=duvz)
     t = _tex(recipe)
     res = {}
     for c in outputs:
@@ -433,3 +457,66 @@ def evaluate(recipe, pts: np.ndarray, outputs) -> dict:
         elif c == "value":
             res[c] = o["value"].astype(np.float32)
     return res
+
+
+# --------------------------------------------------------------------------- band limit
+
+#: points the octave mean is measured at (fixed, so the mean is the same bits every run)
+_MEAN_SAMPLES = 4096
+#: the recipe values the octave mean depends on (the basis and the combination)
+_MEAN_GROUPS = ("basis", "combination")
+
+
+def octave_mean(recipe) -> float:
+    """The mean over the plane of one octave's fractal term, ``b`` (fractal ``none`` and ``sum``)
+    or ``|0.5 - b|`` (``qin``, ``qin_cube``), with ``b = clamp((v - range_lo) / (range_hi -
+    range_lo), 0, 1)``: what a band-limited octave fades to.
+
+    Measured with this reference at 4096 fixed points (as :func:`cellgl.texture.measure_range`
+    places them: a 1000-cell square in 2D, 100-cell cube in 3D/4D, or the texture's uv square with
+    a density map), rounded to float32, cached per basis and combination.
+    """
+    v = recipe.values
+    key = tuple((p.name, v[p.name]) for p in PARAMS if p.group in _MEAN_GROUPS)
+    key += (v["fractal"] in ("qin", "qin_cube"),)
+    if v["density_map"] != "none":
+        key += (v["frequency"], v["aspect"], v["offset_x"], v["offset_y"], v["offset_z"], v["time"])
+        if v["density_map"] == "image":
+            key += (recipe.density_pixels().tobytes(),)
+    return _octave_mean(key, recipe)
+
+
+#: measured means by key (the oldest dropped past 256 entries)
+_MEANS: dict = {}
+
+
+def _octave_mean(key, recipe) -> float:
+    hit = _MEANS.get(key)
+    if hit is None:
+        hit = _MEANS[key] = _measure_mean(recipe)
+        if len(_MEANS) > 256:
+            _MEANS.pop(next(iter(_MEANS)))
+    return hit
+
+
+def _measure_mean(recipe) -> float:
+    from cellgl.texture.recipe import needed_n
+
+    v = recipe.values
+    rng = np.random.default_rng(20001)
+    dim = int(v["dimension"])
+    pts = np.zeros((_MEAN_SAMPLES, 3))
+    if v["density_map"] != "none":
+        probe = recipe.replace(fractal="none")
+        pts[:, :2] = rng.uniform(0.0, 1.0, size=(_MEAN_SAMPLES, 2))
+    else:
+        probe = recipe.replace(tileable=False, fractal="none", frequency=1.0, aspect=1.0,
+                               offset_x=0.0, offset_y=0.0, offset_z=0.0, time=0.0)
+        side = 1000.0 if dim == 2 else 100.0
+        pts[:, : min(dim, 3)] = rng.uniform(0.0, side, size=(_MEAN_SAMPLES, min(dim, 3)))
+    t = _tex(probe, mean=False)
+    s = texture_local(pts, t)
+    val, _, _, _ = texture_combination(s, t, 0, needed_n(probe))
+    b = np.clip((val - v["range_lo"]) / (v["range_hi"] - v["range_lo"]), 0.0, 1.0)
+    term = np.abs(0.5 - b) if v["fractal"] in ("qin", "qin_cube") else b
+    return float(np.float32(term.mean()))

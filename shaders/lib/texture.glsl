@@ -11,7 +11,8 @@
 //              or sum_i w_i |0.5 - b(L^i x)| / (0.5 sum w_i)  (qin, Qin's eq. 6)
 //              or the cube of that                          (qin_cube: Qin's wrinkle bump)
 //                 with w_i = gain^i, L = lacunarity, i < octaves (the last octave
-//                 weighted by the fractional part of octaves); octave i uses seed + 1013 i
+//                 weighted by the fractional part of octaves); octave i uses seed + 1013 i;
+//                 each octave's term band-limited to the pixel footprint (below)
 //   height h(x) = clamp(((invert ? 1 - G : G) - level_lo) / (level_hi - level_lo), 0, 1)
 //   colour      = ramp(mix(h, cell value of the F1 ID, cell_mix) + noise_color * fbm(x))
 //                 * mix(1, h, shade) * mix(1, lambert(normal), light)
@@ -37,6 +38,27 @@
 // noise; tileable recipes wrap the cell by the period), and the shader adds
 // only the small k s: cell = origin_cell + floor(origin_frac + k s), fraction
 // = the rest. So a texture 10^6 cells from the origin is as sharp as at it.
+//
+// Band limit (antialiasing; Qin's smoothscale). Qin's cloud (eq. 7) multiplies octave
+// i by smoothscale(2^i x), a factor that "depends on the differential surface area" at
+// the point, so that octaves finer than the pixel fade out instead of aliasing. cellgl's
+// form: with the footprint r (the pixel's size in basis units: the bake knows it, a
+// fragment shader takes it from derivatives, cell_texture(s, t) uses 0 = unfiltered) and
+// t.feature_frequency (feature points per basis unit along a line: dist_scale
+// density^(1/dim)), octave i spans w_i = antialias feature_frequency L^i r feature
+// spacings per pixel, and its term fades towards the term's mean over the plane:
+//
+//   a_i = 1 - smoothstep(CELL_TEX_AA_LO, CELL_TEX_AA_HI, w_i)    (cell_texture_smoothscale)
+//   term_i -> a_i term_i + (1 - a_i) t.octave_mean               (its gradient: a_i dterm_i)
+//
+// so the sum of weights, and with it the look of a large bake (every a_i = 1), is
+// unchanged; an octave with a_i = 0 is not searched at all. The features of one octave are
+// a Voronoi pattern about 1 / feature_frequency apart: w = 0.5 is two pixels per feature
+// (the Nyquist limit of the pattern: kept), w = 1 one (gone). The thresholds were chosen
+// by measurement (docs/antialias.md): fading from four pixels down lost more resolved
+// detail than it removed aliasing. t.octave_mean is the mean of the octave's term, b or
+// |0.5 - b|, measured once per recipe with the NumPy reference (cellgl/texture/reference.py,
+// octave_mean).
 //
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
@@ -200,9 +222,27 @@ float cell_texture_cell_value(uint id)
     return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
 }
 
+// The band-limit factor a of an octave whose features are w feature spacings per pixel
+// (see the header): 1 while they are two pixels apart or more, 0 from one pixel down.
+#define CELL_TEX_AA_LO 0.5
+#define CELL_TEX_AA_HI 1.0
+float cell_texture_smoothscale(float w)
+{
+    return 1.0 - smoothstep(CELL_TEX_AA_LO, CELL_TEX_AA_HI, w);
+}
+
+// The footprint r of a pixel (or sample) that spans duvz in texture space, in basis units:
+// the largest of its sides after the domain's scale (frequency, frequency aspect, frequency).
+float cell_texture_footprint(vec3 duvz, CellTextureParams t)
+{
+    vec3 d = abs(duvz) * vec3(t.frequency, t.frequency * t.aspect, t.frequency);
+    return max(d.x, max(d.y, d.z));
+}
+
 // The texture at basis position O + s: O = (offset_x, offset_y, offset_z, time),
-// carried split in t; s small (cell_texture_local).
-CellTexel cell_texture(vec4 s, CellTextureParams t)
+// carried split in t; s small (cell_texture_local); band-limited to a pixel of
+// footprint r basis units (cell_texture_footprint; 0: no band limit).
+CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
 {
     CellTexel o;
     int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
@@ -210,6 +250,8 @@ CellTexel cell_texture(vec4 s, CellTextureParams t)
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
     float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
     vec4 dG = vec4(0.0);
+    // Feature spacings per pixel at octave 0 (times L^i at octave i).
+    float spacings = t.antialias * t.feature_frequency * r;
     for (int i = 0; i < CELL_TEX_OCTAVES; i++) {
         if (i >= octaves) {
             break;
@@ -218,30 +260,35 @@ CellTexel cell_texture(vec4 s, CellTextureParams t)
         if (t.fractal != CELL_TEX_FRACTAL_NONE) {
             w *= min(t.octaves - float(i), 1.0);
         }
-        vec4 g, F4;
-        uint id;
-        float v = cell_texture_combination(s * scale, t, i, g, id, F4);
-        if (i == 0) {
-            o.value = v;
-            o.id = id;
-            o.F = F4;
-        }
-        float b = (v - t.range_lo) * inv_range;
-        vec4 db = g * (inv_range * scale);
-        if (b < 0.0 || b > 1.0) {
-            b = clamp(b, 0.0, 1.0);
-            db = vec4(0.0);
-        }
-        if (qin) {
-            float dev = 0.5 - b;
-            G += w * abs(dev);
-            dG -= w * sign(dev) * db;
-            total += 0.5 * w;
+        float a = cell_texture_smoothscale(spacings * scale);
+        // Octave 0 is always searched: the ID and F1..F4 outputs come from it.
+        if (a > 0.0 || i == 0) {
+            vec4 g, F4;
+            uint id;
+            float v = cell_texture_combination(s * scale, t, i, g, id, F4);
+            if (i == 0) {
+                o.value = v;
+                o.id = id;
+                o.F = F4;
+            }
+            float b = (v - t.range_lo) * inv_range;
+            vec4 db = g * (inv_range * scale);
+            if (b < 0.0 || b > 1.0) {
+                b = clamp(b, 0.0, 1.0);
+                db = vec4(0.0);
+            }
+            float term = b;
+            if (qin) {
+                float dev = 0.5 - b;
+                term = abs(dev);
+                db = -sign(dev) * db;
+            }
+            G += w * (a * term + (1.0 - a) * t.octave_mean);
+            dG += (w * a) * db;
         } else {
-            G += w * b;
-            dG += w * db;
-            total += w;
+            G += w * t.octave_mean;
         }
+        total += qin ? 0.5 * w : w;
         amp *= t.gain;
         scale *= t.lacunarity;
     }
@@ -286,17 +333,32 @@ CellTexel cell_texture(vec4 s, CellTextureParams t)
     return o;
 }
 
+// The texture at O + s without a band limit (a point sample).
+CellTexel cell_texture(vec4 s, CellTextureParams t)
+{
+    return cell_texture_filtered(s, 0.0, t);
+}
+
 // The texture at texture-space point p = (u, v, z): uv on the image plane, or
-// object-space (x, y, z) for solid recipes.
+// object-space (x, y, z) for solid recipes; band-limited to a pixel spanning duvz in
+// texture space (e.g. (1 / W, 1 / H, 0) for a W x H bake, fwidth(p) in a fragment
+// shader; 0: a point sample).
+CellTexel cell_texture_at_filtered(vec3 p, vec3 duvz, CellTextureParams t)
+{
+    return cell_texture_filtered(cell_texture_local(p, t), cell_texture_footprint(duvz, t), t);
+}
+
+// The texture at texture-space point p, unfiltered.
 CellTexel cell_texture_at(vec3 p, CellTextureParams t)
 {
     return cell_texture(cell_texture_local(p, t), t);
 }
 
-// The RGBA a bake writes for the pixel whose centre is uv (v = 0: top row).
-vec4 cell_texture_uv(vec2 uv, CellTextureParams t)
+// The RGBA a bake writes for the pixel whose centre is uv (v = 0: top row) and whose
+// size is duv in uv (a W x H bake: (1 / W, 1 / H)).
+vec4 cell_texture_uv(vec2 uv, vec2 duv, CellTextureParams t)
 {
-    return cell_texture_at(vec3(uv, 0.0), t).color;
+    return cell_texture_at_filtered(vec3(uv, 0.0), vec3(duv, 0.0), t).color;
 }
 
 // dh/d(u, v, z): the height gradient in texture space.

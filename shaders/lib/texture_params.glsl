@@ -53,6 +53,7 @@ struct CellTextureParams {
     float octaves;              // number of octaves (terms; fractional: the last is faded in). Worley's i = 0..5 is 6
     float lacunarity;           // frequency ratio between octaves (integer when tileable)
     float gain;                 // amplitude ratio between octaves
+    float antialias;            // band limit (Qin's smoothscale): each octave fades to its mean as its features shrink from 2 to 1 pixel apart, times antialias (0: off, point samples)
     float frequency;            // cells across the texture (u in [0, 1]); the period when tileable (then an integer)
     float aspect;               // cells along v per cell along u (frequency * aspect: an integer when tileable)
     float offset_x;             // shift of the basis along x, in cells
@@ -75,6 +76,8 @@ struct CellTextureParams {
     vec4 ramp[CELL_TEX_RAMP_KEYS];// colour ramp keys: rgb, position t in w
     int ramp_count;             // number of ramp keys in use
     float dist_scale;           // sample scale of the distribution (worley1996: 0.398150, else 1)
+    float feature_frequency;    // feature points per basis unit along a line (cellgl.texture.antialias)
+    float octave_mean;          // mean of an octave's fractal term over the plane (cellgl.texture.reference.octave_mean)
     ivec4 origin_cell[CELL_TEX_OCTAVES];// octave i: basis-lattice cell of dist_scale L^i (offset_x, offset_y, offset_z, time), split in float64
     vec4 origin_frac[CELL_TEX_OCTAVES];// ... and its fraction in [0, 1)
     ivec4 noise_cell[CELL_TEX_OCTAVES];// octave i: noise-lattice cell of noise_frequency L^i (offset_x, offset_y, offset_z, time)

@@ -1,0 +1,142 @@
+"""Run ``shaders/texture.comp`` for :func:`cellgl.texture.evaluate` and :func:`cellgl.texture.render`.
+
+Where the time goes, and what this module does about it (``benchmarks/bench_texture.py``):
+
+* **Baked programs.** With the recipe's values as uniforms, the compiler cannot know that most
+  coefficients are 0, that ``light`` is 0 or how many ramp keys there are, so every pixel pays
+  for all 24 combination terms, the copies of the uniform arrays into ``CellTextureParams``,
+  their dynamic indexing, the lighting and both ramp modes. A bake compiles ``texture.comp``
+  with ``texture_uniforms.glsl`` replaced by the recipe's values as constants
+  (:func:`cellgl.texture.shader.glsl_baked_uniforms_file`: the same
+  :func:`~cellgl.texture.shader.glsl_constant_block` the snippets use), so the compiler folds
+  all of that away; the viewer keeps uniforms (it changes them every frame). A compile costs ~0.1 s on llvmpipe; the last
+  :data:`MAX_BAKED` programs are kept.
+* **Only the outputs asked for** are written (``CELL_TEX_OUT``) and read back, from storage
+  buffers reused across calls instead of five fresh ones per dispatch.
+"""
+from __future__ import annotations
+
+from collections import OrderedDict
+
+import numpy as np
+
+from cellgl.gl.threads import gl_call
+
+__all__ = ["MAX_BAKED", "run", "output_mask"]
+
+_CHUNK = 1 << 20            # samples per dispatch
+#: baked programs kept (least recently used dropped)
+MAX_BAKED = 16
+#: False: compile with uniforms, as the viewer does (benchmarks/bench_texture.py --uniforms)
+BAKE_CONSTANTS = True
+
+#: output buffer -> (binding, bytes per sample, bit in CELL_TEX_OUT, channels it carries)
+_OUTPUTS = {
+    "color": (1, 16, 1, ("color",)),
+    "aux": (2, 16, 2, ("height", "normal")),
+    "F": (3, 16, 4, ("F1", "F2", "F3", "F4")),
+    "grad": (4, 16, 8, ("grad", "value")),
+    "id": (5, 4, 16, ("id",)),
+}
+
+_baked: dict = {}   # id(ctx) -> OrderedDict of its baked programs
+_pool: dict = {}
+
+
+def output_mask(channels) -> int:
+    """``CELL_TEX_OUT`` for these channels."""
+    return sum(bit for _, _, bit, chans in _OUTPUTS.values() if set(chans) & set(channels))
+
+
+def _program(recipe, defines: dict, pan=None):
+    """texture.comp for ``recipe`` with ``defines``: baked (constants, LRU-cached) or with uniforms
+    (always with a ``pan``: one program serves every pan, where baking would compile per pan)."""
+    from cellgl.gl import context
+    from cellgl.texture import shader as texture
+
+    ctx = context.get_context()
+    if not BAKE_CONSTANTS or pan is not None:
+        prog = context.compute_program("texture.comp", defines)
+        texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan)
+        return prog
+    consts = texture.glsl_baked_uniforms_file(recipe)
+    key = (tuple(sorted(defines.items())), consts)
+    # one LRU per context: a program is released only while its own context is current
+    baked = _baked.setdefault(id(ctx), OrderedDict())
+    prog = baked.get(key)
+    if prog is not None:
+        baked.move_to_end(key)
+    else:
+        prog = context.compute_program("texture.comp", defines, files={"texture_uniforms.glsl": consts},
+                                       cache=False)
+        baked[key] = prog
+        while len(baked) > MAX_BAKED:
+            baked.popitem(last=False)[1].release()
+    if recipe.values["density_map"] == "image":
+        texture.set_uniforms(prog, recipe)        # binds the density image (no uniforms left)
+    return prog
+
+
+def _buffer(ctx, binding: int, nbytes: int):
+    """A storage buffer of at least ``nbytes`` at ``binding``, reused across calls."""
+    key = (id(ctx), binding)
+    buf = _pool.get(key)
+    if buf is None or buf.size < nbytes:
+        if buf is not None:
+            buf.release()
+        buf = _pool[key] = ctx.buffer(reserve=max(64, nbytes))
+    buf.bind_to_storage_buffer(binding)
+    return buf
+
+
+@gl_call
+def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1, pan=None) -> dict:
+    """Dispatch texture.comp over ``count`` samples and return ``{channel: array}`` (flat, one row
+    per sample). ``setup(prog, first, n)`` sets the entry's own uniforms and returns buffers to
+    release after the chunk; ``supersample``: n of the n x n sub-pixel grid (grid only); ``pan``
+    (du, dv, dz): added to the samples' texture position in float64, through the split origins."""
+    from cellgl.gl import context
+    from cellgl.texture import shader as texture
+
+    local_size = texture.LOCAL_SIZE
+    ctx = context.get_context()
+    mask = output_mask(channels)
+    d = texture.defines(recipe, channels)
+    d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=local_size, CELL_TEX_OUT=mask,
+             CELL_TEX_SUPERSAMPLE=int(supersample))
+    prog = _program(recipe, d, pan)
+    out = {}
+    for name, (binding, size, bit, _) in _OUTPUTS.items():
+        if mask & bit:
+            shape = (count,) if name == "id" else (count, 4)
+            out[name] = np.empty(shape, np.uint32 if name == "id" else np.float32)
+    for start in range(0, count, _CHUNK):
+        n = min(_CHUNK, count - start)
+        bufs = {name: _buffer(ctx, _OUTPUTS[name][0], n * _OUTPUTS[name][1]) for name in out}
+        extra = setup(prog, start, n)
+        for name, value in (("u_count", n), ("u_first", start)):
+            if name in prog:
+                prog[name].value = value
+        prog.run(group_x=(n + local_size - 1) // local_size)
+        ctx.memory_barrier()
+        for name, buf in bufs.items():
+            buf.read_into(out[name][start:start + n], size=n * _OUTPUTS[name][1])
+        for b in extra:
+            b.release()
+    res = {}
+    for c in channels:
+        if c == "color":
+            res[c] = out["color"]
+        elif c == "height":
+            res[c] = out["aux"][:, 0].copy()
+        elif c == "normal":
+            res[c] = out["aux"][:, 1:4].copy()
+        elif c == "id":
+            res[c] = out["id"]
+        elif c in ("F1", "F2", "F3", "F4"):
+            res[c] = out["F"][:, int(c[1]) - 1].copy()
+        elif c == "grad":
+            res[c] = out["grad"][:, :3].copy()
+        elif c == "value":
+            res[c] = out["grad"][:, 3].copy()
+    return res

@@ -1,0 +1,211 @@
+"""The basis API under hostile input: wide grids, far positions, overflowing integers, values of
+the wrong type, Minkowski exponents below 1, huge density images (issue 10). Each test failed
+before its fix."""
+from __future__ import annotations
+
+import datetime
+import struct
+import zlib
+
+import numpy as np
+import pytest
+
+import cellgl
+from cellgl.basis import gpu
+
+
+def _brute(pts, n=1, **kw):
+    return cellgl.cellular(pts, n, backend="numpy", outputs=("F", "id"), **kw)
+
+
+# ---------------------------------------------------------------- 1. rows past 65535 work groups
+
+def test_grid_slabs_stay_within_the_group_limit(monkeypatch):
+    """Every dispatch of a grid wider than one dispatch covers its samples once, contiguously."""
+    monkeypatch.setattr(gpu, "_MAX_GROUPS", 3)
+    step = gpu._chunk_size(1, 2, ("F",))
+    X, Y = step * 2 + 17, 3
+    seen = np.zeros(X * Y, int)
+    for (x0, y0, z0, w, cols, rows), start, groups in gpu._grid_slabs(X, Y, 1, 1, step):
+        assert max(groups) <= 3 and cols <= step
+        assert start == (y0 * X + x0)
+        seen[start:start + cols * rows * groups[2]] += 1
+    assert (seen == 1).all()
+
+
+def test_narrow_group_limit_grid_equals_reference(ctx, monkeypatch):
+    """With the group limit forced small, a grid split into column runs equals the reference."""
+    monkeypatch.setattr(gpu, "_MAX_GROUPS", 2)       # 128 samples per dispatch
+    r = cellgl.cellular_grid((3, 300), origin=(0.5, 2.0), spacing=(0.05, 0.3), n=2, outputs=("F", "id"))
+    ref = cellgl.cellular_grid((3, 300), origin=(0.5, 2.0), spacing=(0.05, 0.3), n=2, outputs=("F", "id"),
+                               backend="numpy")
+    np.testing.assert_allclose(r.F, ref.F, atol=2e-6)
+    assert (r.id == ref.id).mean() > 0.999
+    assert r.exact.all()
+
+
+def test_row_wider_than_4194240_samples(ctx):
+    """A real row past LOCAL_SIZE * 65535 samples: written everywhere, equal to the reference."""
+    W = 64 * 65535 + 100
+    r = cellgl.cellular_grid((1, W), spacing=(0.001, 1.0), n=1, outputs=("F", "id"))
+    assert (r.F > 0).all(), "unwritten (zero) distances"
+    idx = np.array([0, W // 2, W - 101, W - 100, W - 1])
+    ref = _brute(np.stack([idx * 0.001, np.zeros(len(idx))], axis=1))
+    np.testing.assert_allclose(r.F[0, idx, 0], ref.F[:, 0], atol=2e-6)
+    assert (r.id[0, idx, 0] == ref.id[:, 0]).all()
+
+
+# ---------------------------------------------------------------- 3. grid positions far from the origin
+
+def test_grid_far_from_its_origin_is_exact(ctx):
+    """Samples 1e4 cells from the grid origin (float32 positions erred by 7e-4 there)."""
+    n_x = 30000
+    r = cellgl.cellular_grid((1, n_x), spacing=(0.3711, 1.0), n=2, outputs=("F",))
+    idx = np.arange(n_x - 50, n_x)
+    ref = _brute(np.stack([idx * 0.3711, np.zeros(len(idx))], axis=1), n=2)
+    np.testing.assert_allclose(r.F[0, idx], ref.F, atol=3e-6)
+
+
+# ---------------------------------------------------------------- 3. feature_points overflow
+
+@pytest.mark.parametrize("cell", [np.uint64(2 ** 63), np.int64(-2 ** 63), np.uint64(2 ** 64 - 1), 2 ** 40])
+def test_feature_points_refuses_integers_past_the_range(cell):
+    arr = np.array([[cell, 0]], dtype=np.asarray(cell).dtype if isinstance(cell, np.generic) else None)
+    with pytest.raises(ValueError, match=r"cells must lie within \+-2\^30"):
+        cellgl.feature_points(arr)
+
+
+def test_feature_points_uint_cells_work():
+    a = cellgl.feature_points(np.array([[3, 4], [5, 6]], dtype=np.uint64))
+    b = cellgl.feature_points(np.array([[3, 4], [5, 6]], dtype=np.int32))
+    assert np.array_equal(a.positions, b.positions) and np.array_equal(a.ids, b.ids)
+
+
+# ---------------------------------------------------------------- 11. wrong types get ValueError
+
+@pytest.mark.parametrize("bad", [
+    np.array([[1 + 2j, 0.5]]),                                          # complex: was cast silently
+    np.array([[True, False]]),                                          # bool
+    np.array([[np.datetime64("2020-01-01"), np.datetime64("2020-01-02")]]),
+    [[datetime.date(2020, 1, 1), 0.5]],
+    [["1", "2"]],
+])
+def test_points_of_the_wrong_type(bad):
+    with pytest.raises(ValueError, match="points must hold real numbers"):
+        cellgl.cellular(bad, 1)
+
+
+def test_texture_points_of_the_wrong_type():
+    with pytest.raises(ValueError, match="points must hold real numbers"):
+        cellgl.evaluate("f1", np.array([[0.5 + 1j, 0.5]]))
+
+
+@pytest.mark.parametrize("cells", [[["a", "b"]], np.array([[1.5, 2.0]]), np.array([[True, False]]),
+                                   [[np.nan, 0.0]]])
+def test_feature_points_refuses_non_integers(cells):
+    with pytest.raises(ValueError, match="cells must hold"):
+        cellgl.feature_points(cells)
+
+
+@pytest.mark.parametrize("period", [2.5, "4", [1.5, 2], object()])
+def test_bad_period(period):
+    with pytest.raises(ValueError, match="period must be"):
+        cellgl.cellular([[0.5, 0.5]], 1, period=period)
+
+
+@pytest.mark.parametrize("outputs", [None, 3])
+def test_bad_outputs(outputs):
+    with pytest.raises(ValueError, match="outputs must"):
+        cellgl.cellular([[0.5, 0.5]], 1, outputs=outputs)
+
+
+@pytest.mark.parametrize("shape", [(2.5, 4), (4.0, 4), (True, 4), "ab", 7])
+def test_bad_grid_shape(shape):
+    with pytest.raises(ValueError, match="shape must be a tuple of 2..4 positive ints"):
+        cellgl.cellular_grid(shape, backend="numpy")
+
+
+def test_bad_grid_origin_type():
+    with pytest.raises(ValueError, match="origin must hold real numbers"):
+        cellgl.cellular_grid((2, 2), origin=(1j, 0.0), backend="numpy")
+
+
+# ---------------------------------------------------------------- 13. Minkowski p < 1: the true bound
+
+#: the smallest minkowski_p (per dimension) at which no sample reaches the search cap, at density
+#: >= 1 and any n <= 8 (README "Exactness"); measured over 20,000 random samples
+MINKOWSKI_EXACT_FROM = {2: 0.35, 3: 0.55, 4: 0.8}
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_minkowski_exact_bound(ctx, dim):
+    rng = np.random.default_rng(dim)
+    pts = rng.uniform(0.0, 100.0, (3000, dim))
+    r = cellgl.cellular(pts, 8, metric="minkowski", minkowski_p=MINKOWSKI_EXACT_FROM[dim], density=1.0,
+                        outputs=("F",))
+    assert r.exact.all(), f"{(~r.exact).sum()} capped samples at the documented bound"
+
+
+@pytest.mark.parametrize("dim", [3, 4])
+def test_minkowski_below_the_bound_is_flagged_not_wrong(ctx, dim):
+    """Below the bound the cap is reached: the flag says so for most samples (it is not silent)."""
+    rng = np.random.default_rng(7)
+    pts = rng.uniform(0.0, 100.0, (500, dim))
+    r = cellgl.cellular(pts, 4, metric="minkowski", minkowski_p=0.25, density=1.0, outputs=("F",))
+    assert (~r.exact).mean() > 0.9
+
+
+# ---------------------------------------------------------------- 14. density image size from the header
+
+def _png_header_only(path, w, h):
+    """A PNG whose header says w x h (no pixel data): opening it costs nothing, decoding fails."""
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+                     + chunk(b"IEND", b""))
+
+
+def test_huge_density_image_is_refused_from_its_header(tmp_path, monkeypatch):
+    from PIL import Image
+
+    from cellgl.texture import recipe as R
+
+    path = tmp_path / "huge.png"
+    _png_header_only(path, 10000, 10000)
+
+    def no_decode(self, *a, **k):
+        raise AssertionError("the image was decoded")
+
+    monkeypatch.setattr(Image.Image, "load", no_decode)
+    with pytest.raises(R.RecipeError, match=r"is 10000x10000; accepted: sides 1..4096"):
+        R.density_pixels(str(path))
+
+
+# ---------------------------------------------------------------- 2. evaluate far from [0, 1] uv
+
+@pytest.mark.parametrize("base", [1e4, 1e6, 1e9])
+@pytest.mark.parametrize("preset", ["f1", "qin-cloud", "density"])
+def test_evaluate_far_from_the_unit_square(ctx, base, preset):
+    """IDs equal the NumPy path's and distances agree to float32 tolerance at uv 1e4..1e9 (1% of the
+    IDs were wrong at 1e4, all at 1e9), points spread over several whole uv cells."""
+    rng = np.random.default_rng(int(base) % 97)
+    pts = base + rng.uniform(-1.5, 1.5, (600, 2))
+    if preset == "density" and base > 2 ** 30 / 8:
+        # the GPU encodes the map relative to the panned origin in 32-bit integers: past 2^30
+        # cells it says so (the NumPy path has no such limit)
+        with pytest.raises(ValueError, match=r"basis.density_map: density map of octave 0"):
+            cellgl.evaluate(preset, pts, ("id",))
+        return
+    g = cellgl.evaluate(preset, pts, ("id", "F1", "color"))
+    n = cellgl.evaluate(preset, pts, ("id", "F1", "color"), backend="numpy")
+    assert (g["id"] == n["id"]).all()
+    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
+    np.testing.assert_allclose(g["color"], n["color"], atol=5e-5)
+
+
+def test_evaluate_far_in_z_for_a_solid_recipe(ctx):
+    pts = np.column_stack([np.full(200, 0.25), np.linspace(0.0, 1.0, 200), np.full(200, 3e5 + 0.5)])
+    g = cellgl.evaluate("qin-marble", pts, ("id", "F1"))
+    n = cellgl.evaluate("qin-marble", pts, ("id", "F1"), backend="numpy")
+    assert (g["id"] == n["id"]).all()
+    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
