@@ -165,6 +165,46 @@ PRESETS: dict[str, dict] = {
     "worley-gallery": dict(doc="Worley 1996 Fig. 4 (T&M Fig. 4.3): 20 linear combinations c1 F1 + .. + c4 F4 "
                            "in a generic colour spline; variants :0..:19", basis={"dimension": 3},
                            domain={"frequency": 4.0}, combination=lin(1), color={"ramp": SPECTRUM}),
+    # ---- issue 12: the features artists reach for in Blender, Houdini and Substance
+    "edge-tiles": dict(doc="Tiles from the exact distance to the cell's border: flat faces, a bevel and dark "
+                       "grout of even width (Blender's Distance to Edge, exact next to big cells)",
+                       basis={"density": 1.2}, domain={"frequency": 6.0}, combination=dict(lin(0), c_edge=1.0),
+                       mapping={"level_hi": 0.22, "bump": 0.1, "light": 0.9},
+                       color={"cell_mix": 1.0, "shade": 0.9,
+                              "ramp": [[0.0, 0.62, 0.30, 0.20], [0.35, 0.75, 0.45, 0.30], [0.7, 0.85, 0.72, 0.55],
+                                       [1.0, 0.55, 0.60, 0.58]]},
+                       outputs=["color", "normal", "height", "id"]),
+    "edge-cracks": dict(doc="Dried mud: distance to edge over three octaves combined by min (Blender's "
+                        "distance-to-edge fractal): cracks within cracks", basis={"density": 1.0},
+                        domain={"frequency": 2.0}, combination=dict(lin(0), c_edge=1.0),
+                        fractal={"fractal": "min", "octaves": 3.0},
+                        mapping={"level_hi": 0.12, "bump": 0.06, "light": 0.6},
+                        color={"cell_mix": 0.6, "shade": 0.7,
+                               "ramp": [[0.0, 0.42, 0.3, 0.2], [0.5, 0.72, 0.58, 0.42], [1.0, 0.85, 0.74, 0.58]]},
+                        outputs=["color", "normal", "height"]),
+    "hammered": dict(doc="Hammered copper: smooth F1 (k = 0.12 cells) dimples that merge without creases, "
+                     "the patina of each cell blended with the same weights", basis={"density": 2.0},
+                     domain={"frequency": 6.0}, combination=dict(lin(0), c_smooth=1.0, smoothness=0.12),
+                     range=(-0.35, 0.85), mapping={"bump": 0.8, "light": 1.0},
+                     color={"cell_mix": 0.35,
+                            "ramp": [[0.0, 0.45, 0.22, 0.12], [0.5, 0.78, 0.45, 0.28], [0.8, 0.9, 0.62, 0.42],
+                                     [1.0, 0.62, 0.36, 0.22]]},
+                     outputs=["color", "normal", "height"]),
+    "nsphere-dots": dict(doc="Dots as large as each cell allows: F1 - r, r the n-sphere radius (half the "
+                         "distance to the nearest other point), so neighbouring dots just touch",
+                         basis={"density": 1.5}, domain={"frequency": 8.0},
+                         combination=dict(lin(1), c_nsphere=-1.0), range=(-0.03, 0.03),
+                         color={"cell_mix": 0.4,
+                                "ramp": [[0.0, 0.85, 0.2, 0.2], [0.13, 0.95, 0.65, 0.15], [0.26, 0.2, 0.6, 0.35],
+                                         [0.4, 0.2, 0.35, 0.8], [0.6, 0.96, 0.93, 0.86], [1.0, 0.96, 0.93, 0.86]]}),
+    "stained-glass": dict(doc="Stained glass: each cell takes the colour of a picture at its feature point "
+                          "(cell-attribute lookup, cellgl/presets/images/sunset.png), lead came from the "
+                          "distance to edge", domain={"frequency": 12.0},
+                          combination=dict(lin(0), c_edge=1.0), range=(0.0, 1.0),
+                          mapping={"level_hi": 0.06, "bump": 0.02, "light": 0.5},
+                          color={"cell_color": "image", "cell_image": "IMAGES/sunset.png", "cell_mix": 1.0,
+                                 "shade": 1.0},
+                          outputs=["color", "normal", "height"]),
 }
 
 #: the 20 linear combinations (the figure does not print its coefficients: these are
@@ -190,9 +230,13 @@ def build(name: str, spec: dict) -> Recipe:
     spec = dict(spec)
     doc = spec.pop("doc")
     outputs = spec.pop("outputs", ["color"])
+    fixed = spec.pop("range", None)       # set by hand (a level set at v = 0, a distance in cells)
+    if "cell_image" in spec.get("color", {}):
+        spec["color"] = dict(spec["color"], cell_image=spec["color"]["cell_image"].replace(
+            "IMAGES", str(preset_dir() / "images")))
     d = {"name": name, "doc": doc, "outputs": outputs, **spec}
     r = Recipe.from_dict(d)
-    lo, hi = measure_range(r)
+    lo, hi = fixed or measure_range(r)
     r = r.replace(range_lo=lo, range_hi=hi)
     variants = []
     if name == "worley-gallery":

@@ -3,11 +3,22 @@
 // Thin: read the sample, call cell_search(), write what was asked for.
 // Macros (from cellgl/basis/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
-// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP.
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, and those of
+// lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE, CELL_FEATURE_MAX_RING).
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
-#include "lib/cellular.glsl"
+#include "lib/features.glsl"
+
+#define CELL_FEATURES (CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE)
+#if CELL_FEATURES
+// Per sample CELL_FEATURE_STRIDE floats (cellgl/basis/features.py unpacks them): edge,
+// n-sphere radius, smooth F1, 0, edge gradient (4), smooth delta (4), smooth
+// gradient (4), smooth attribute (colour, value).
+#define CELL_FEATURE_STRIDE 20
+uniform float u_smoothness;    // k of smooth F1, lattice units
+layout(std430, binding = 1) writeonly buffer OutFeatures { float out_features[]; };
+#endif
 
 uniform uint u_seed;
 uniform float u_jitter;
@@ -134,7 +145,23 @@ void main()
         }
 #endif
     }
-    if (!r.exact) {
+    bool exact = r.exact;
+#if CELL_FEATURES
+    CellFeatures x = cell_features(cell, frac, p, r, u_smoothness);
+    exact = x.exact;
+    uint b = i * uint(CELL_FEATURE_STRIDE);
+    out_features[b] = x.edge * u_out_scale;
+    out_features[b + 1u] = x.nsphere * u_out_scale;
+    out_features[b + 2u] = x.smooth_F * u_out_scale;
+    out_features[b + 3u] = 0.0;
+    for (int a = 0; a < 4; a++) {
+        out_features[b + 4u + uint(a)] = x.edge_grad[a];
+        out_features[b + 8u + uint(a)] = x.smooth_delta[a] * u_out_scale;
+        out_features[b + 12u + uint(a)] = x.smooth_grad[a];
+        out_features[b + 16u + uint(a)] = x.smooth_attr[a];
+    }
+#endif
+    if (!exact) {
         inexact_index[atomicAdd(inexact_count, 1u)] = i;
     }
 }

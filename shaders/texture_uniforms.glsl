@@ -33,6 +33,10 @@ uniform float u_c42;
 uniform float u_c43;
 uniform float u_c44;
 uniform float u_c_noise;
+uniform float u_c_edge;
+uniform float u_c_smooth;
+uniform float u_c_nsphere;
+uniform float u_smoothness;
 uniform float u_range_lo;
 uniform float u_range_hi;
 uniform int u_fractal;
@@ -73,12 +77,22 @@ uniform uint u_density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];
 uniform ivec4 u_density_axis[CELL_TEX_OCTAVES * 4];
 uniform ivec4 u_density_info[CELL_TEX_OCTAVES];
 #endif
+#if CELL_TEX_CELL_IMAGE
+uniform vec4 u_cell_image_info;
+#endif
 
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
 // The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image):
 // the hook lib/points.glsl declares.
 layout(std430, binding = 7) readonly buffer CellDensityImage { uint u_density_image[]; };
 uint cell_density_image_level(int index) { return u_density_image[index]; }
+#endif
+
+#if CELL_TEX_CELL_IMAGE
+// The cell image as r | g << 8 | b << 16 per texel, row-major, row 0 at v = 0
+// (cellgl.texture.images.bind): the hook lib/texture.glsl declares.
+layout(std430, binding = 6) readonly buffer CellImage { uint u_cell_image[]; };
+uint cell_texture_image_texel(int index) { return u_cell_image[index]; }
 #endif
 
 CellTextureParams cell_texture_params_load()
@@ -115,6 +129,10 @@ CellTextureParams cell_texture_params_load()
     t.c43 = u_c43;
     t.c44 = u_c44;
     t.c_noise = u_c_noise;
+    t.c_edge = u_c_edge;
+    t.c_smooth = u_c_smooth;
+    t.c_nsphere = u_c_nsphere;
+    t.smoothness = u_smoothness;
     t.range_lo = u_range_lo;
     t.range_hi = u_range_hi;
     t.fractal = u_fractal;
@@ -172,6 +190,9 @@ CellTextureParams cell_texture_params_load()
     for (int k = 0; k < CELL_TEX_OCTAVES; k++) {
         t.density_info[k] = u_density_info[k];
     }
+#endif
+#if CELL_TEX_CELL_IMAGE
+    t.cell_image_info = u_cell_image_info;
 #endif
     return t;
 }

@@ -292,14 +292,16 @@ def test_basis_snippet_reproduces_the_gpu(ctx, basis, target):
 
 
 def _presets() -> list[str]:
-    from cellgl.recipes import list_presets
+    from cellgl.recipes import list_presets, load_recipe
 
-    return [name for name, _ in list_presets() if not name.startswith("pups-")]  # refused
+    return [name for name, _ in list_presets()                       # pups and cell images: refused
+            if not name.startswith("pups-") and load_recipe(name).values["cell_color"] != "image"]
 
 
 PRESETS = _presets()
 #: a spread of features for the GLSL ES renders (fractal modes, metrics, splines, noise, 3D)
-GLES_PRESETS = [p for p in ("flagstone", "hull", "qin-marble", "qin-wrinkle", "craters", "worley-gallery")
+GLES_PRESETS = [p for p in ("flagstone", "hull", "qin-marble", "qin-wrinkle", "craters", "worley-gallery",
+                            "edge-cracks", "hammered")
                 if p in PRESETS]
 
 

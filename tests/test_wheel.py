@@ -58,6 +58,14 @@ def test_wheel_contains_shaders(wheel):
         assert any(n.startswith("cellgl/shaders/") and n.endswith(".comp") for n in names)
 
 
+def test_wheel_ships_the_preset_images(wheel):
+    """A preset's image (stained-glass's cell image) comes with it."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    folder = Path(__file__).resolve().parents[1] / "cellgl" / "presets" / "images"
+    images = sorted(p.name for p in folder.glob("*.png"))
+    assert images and all(f"cellgl/presets/images/{n}" in names for n in images)
+
+
 @pytest.fixture(scope="module")
 def installed(wheel, tmp_path_factory) -> Path:
     """A clean venv with the wheel installed (shared by the tests below); returns the venv."""

@@ -14,14 +14,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cellgl.basis import features as _features
 from cellgl.basis import reference
+from cellgl.basis.arrays import real_array, refuse_masked
 from cellgl.basis.density import encode as _encode_density
 from cellgl.basis.enums import Distribution, Metric, parse_enum
 
 __all__ = ["CellularResult", "FeaturePoints", "cellular", "cellular_grid", "feature_points", "make_params"]
 
 N_MAX = 8                       #: largest n (F1..F8)
-OUTPUTS = ("F", "delta", "id", "grad")
+OUTPUTS = ("F", "delta", "id", "grad") + _features.OUTPUTS
 BACKENDS = ("gpu", "numpy")
 COORD_LIMIT = 2.0 ** 30         #: |position| (in cells) must stay below this
 
@@ -39,6 +41,14 @@ class CellularResult:
     grad : float32 (*S, n, d) -- gradient of each F_k with respect to the sample position
     exact : bool (*S) -- False where the search cap was reached (the result may then be
         missing a nearer point); True everywhere in practice
+    edge : float32 (*S) -- distance to the border of the sample's Voronoi cell (Euclidean)
+    edge_grad : float32 (*S, d) -- its gradient (minus the normal of the nearest border plane)
+    nsphere : float32 (*S) -- half the distance from the F1 point to its nearest other point
+    position : float64 (*S, d) -- the F1 feature point
+    color : float32 (*S, 3) -- the F1 cell's colour (from its ID)
+    smooth_F1 : float32 (*S) -- smooth F1, ``-k log sum_j exp(-F_j / k)``, k = ``smoothness``
+    smooth_position, smooth_grad : float64 / float32 (*S, d); smooth_color : float32 (*S, 3) --
+        the feature position, gradient and cell colour averaged with the same weights
     """
 
     F: np.ndarray | None
@@ -46,6 +56,15 @@ class CellularResult:
     id: np.ndarray | None
     grad: np.ndarray | None
     exact: np.ndarray
+    edge: np.ndarray | None = None
+    edge_grad: np.ndarray | None = None
+    nsphere: np.ndarray | None = None
+    position: np.ndarray | None = None
+    color: np.ndarray | None = None
+    smooth_F1: np.ndarray | None = None
+    smooth_position: np.ndarray | None = None
+    smooth_grad: np.ndarray | None = None
+    smooth_color: np.ndarray | None = None
 
 
 @dataclass
@@ -78,6 +97,8 @@ def _period(period, dim) -> tuple[int, int, int, int]:
         return (0, 0, 0, 0)
     if isinstance(period, (numbers.Number, np.generic)):     # one value for every axis
         vals = [period] * dim
+    elif isinstance(period, (str, bytes)):
+        vals = None
     else:
         try:
             vals = list(period)
@@ -145,35 +166,6 @@ def _check_n_backend(n, backend):
     return n
 
 
-#: dtype kinds accepted as coordinates: signed and unsigned integers, floats (and object arrays
-#: of Python numbers, converted); bool, complex, datetime, strings are refused, never cast
-_REAL_KINDS = "iuf"
-
-
-def real_array(name: str, value, expected: str) -> np.ndarray:
-    """``value`` as a float64 array, refusing what is not a real number (bool, complex, datetime,
-    timedelta, strings, bytes, records) with a ValueError naming ``name``, the dtype found and
-    ``expected`` (the accepted shape), instead of a silent cast or a raw TypeError."""
-    try:
-        arr = np.asarray(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None
-    if arr.dtype.kind == "O":
-        items = arr.ravel().tolist()
-        if any(isinstance(v, (bool, np.bool_)) or not isinstance(v, (numbers.Real, np.integer, np.floating))
-               for v in items):
-            bad = next(v for v in items if isinstance(v, (bool, np.bool_))
-                       or not isinstance(v, (numbers.Real, np.integer, np.floating)))
-            raise ValueError(f"{name} must hold real numbers {expected}; got {type(bad).__name__} {bad!r}")
-    elif arr.dtype.kind not in _REAL_KINDS:
-        raise ValueError(f"{name} must hold real numbers (integers or floats) {expected}; got dtype "
-                         f"{arr.dtype} (bool, complex, datetime and text are not coordinates)")
-    try:
-        return arr.astype(np.float64)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None
-
-
 def _points(points) -> np.ndarray:
     pts = real_array("points", points, "of shape (N, d), d in 2..4")
     if pts.ndim != 2 or pts.shape[1] not in (2, 3, 4):
@@ -209,33 +201,61 @@ def split(pos: np.ndarray):
     return cells, fr
 
 
-def _finish(out: dict, exact, shape, p: reference.Params, n: int) -> CellularResult:
+def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> CellularResult:
     def get(name, tail):
-        a = out.get(name)
+        a = out.get(name) if name in outputs else None
         return None if a is None else a.reshape(tuple(shape) + tail)
 
+    d, dim = p.dim, p.dim
+    tails = {"edge": (), "edge_grad": (d,), "nsphere": (), "position": (dim,), "color": (3,),
+             "smooth_F1": (), "smooth_position": (d,), "smooth_grad": (d,), "smooth_color": (3,)}
     return CellularResult(F=get("F", (n,)), delta=get("delta", (n, p.dim)), id=get("id", (n,)),
-                          grad=get("grad", (n, p.dim)), exact=np.asarray(exact).reshape(shape))
+                          grad=get("grad", (n, p.dim)), exact=np.asarray(exact).reshape(shape),
+                          **{k: get(k, t) for k, t in tails.items()})
 
 
-def _numpy_search(cells, fr, p, n, outputs) -> tuple[dict, np.ndarray]:
+def _basis_outputs(outs) -> tuple[str, ...]:
+    """The F1..Fn outputs the search must produce for ``outs`` (the features' position and
+    colour come from the F1 offset and ID)."""
+    need = set(outs)
+    if "position" in need:
+        need.add("delta")
+    if "color" in need:
+        need.add("id")
+    return tuple(o for o in ("F", "delta", "id", "grad") if o in need) or ("F",)
+
+
+def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> tuple[dict, np.ndarray]:
     F, D, I, exact = reference.search(cells, fr, p, n)
     out = {}
     inv = 1.0 / p.scale
-    if "F" in outputs:
+    basis = _basis_outputs(outputs)
+    if "F" in basis:
         out["F"] = (F * inv).astype(np.float32)
-    if "delta" in outputs:
+    if "delta" in basis:
         out["delta"] = (D[..., : p.dim] * inv).astype(np.float32)
-    if "id" in outputs:
+    if "id" in basis:
         out["id"] = I
-    if "grad" in outputs:
+    if "grad" in basis:
         out["grad"] = reference.metric_gradient(D[..., : p.dim], F, p).astype(np.float32)
+    if set(outputs) & set(_features.OUTPUTS):
+        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale)
+        exact = feats["exact"]
+        _features.finish(out, feats, positions, p.scale, p.dim, outputs)
     return out, exact
+
+
+def _gpu_finish(out: dict, outs, positions, p) -> None:
+    """Turn the GPU's feature record into the requested feature outputs."""
+    if set(outs) & set(_features.OUTPUTS):
+        raw = out.pop("features", None)
+        feats = _features.unpack(raw, p.dim) if raw is not None else {}
+        _features.finish(out, feats, positions, 1.0, p.dim, outs)
 
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
              min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
-             outputs=("F", "delta", "id"), backend="gpu") -> CellularResult:
+             outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
     Parameters
@@ -263,15 +283,20 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Spatially varying density (``poisson`` only; ``density`` is then unused): each
         cell's count is drawn with the density of the map at the cell centre, quantised to
         16 levels between ``density_min`` and ``density_max`` (see :mod:`cellgl.basis.density`).
-    outputs : sequence of {"F", "delta", "id", "grad"}
-        Only these are computed and read back.
+    outputs : sequence of {"F", "delta", "id", "grad", "edge", "edge_grad", "nsphere",
+              "position", "color", "smooth_F1", "smooth_position", "smooth_grad", "smooth_color"}
+        Only these are computed and read back. ``edge`` (distance to the cell's border) and
+        ``nsphere`` need the Euclidean metric; the ``smooth_*`` outputs blend every feature
+        point with weight ``exp(-(F_j - F1) / smoothness)`` (see :mod:`cellgl.basis.features`).
+    smoothness : float in [0, 0.25]
+        ``k`` of smooth F1, in sample units (0: the hard minimum).
     backend : {"gpu", "numpy"}
 
     Returns
     -------
     CellularResult
         ``F`` float32 (N, n), ``delta`` float32 (N, n, d), ``id`` uint32 (N, n),
-        ``grad`` float32 (N, n, d), ``exact`` bool (N,).
+        ``grad`` float32 (N, n, d), ``exact`` bool (N,), and the feature outputs asked for.
     """
     pts = _points(points)
     n = _check_n_backend(n, backend)
@@ -279,20 +304,28 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     p = make_params(pts.shape[1], metric=metric, distribution=distribution, density=density,
                     jitter=jitter, min_points=min_points, max_points=max_points,
                     minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map)
+    smoothness = _features.check(outs, p.metric, smoothness)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs)
+        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts)
     else:
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = gpu.search_points(pts, p, n, outs)
-    return _finish(out, exact, (len(pts),), p, n)
+        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs), smoothness * p.scale)
+        _gpu_finish(out, outs, pts, p)
+    return _finish(out, exact, (len(pts),), p, n, outs)
+
+
+def _gpu_outputs(outs) -> tuple[str, ...]:
+    """What the compute shader is asked for: the basis outputs ``outs`` need, and the feature
+    outputs (which become its feature record)."""
+    return _basis_outputs(outs) + tuple(o for o in outs if o in _features.OUTPUTS)
 
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
-                  period=None, density_map=None, outputs=("F", "delta", "id"),
+                  period=None, density_map=None, outputs=("F", "delta", "id"), smoothness=0.1,
                   backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
@@ -333,6 +366,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
                     seed=seed, period=period, density_map=density_map)
+    smoothness = _features.check(outs, p.metric, smoothness)
 
     def vec(name, v, default):
         v = default if v is None else v
@@ -353,12 +387,15 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     far = org + spc * (np.array(shape_xyzw[:dim]) - 1)
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
         raise ValueError("grid extends beyond +-2^30 cells; move origin closer to 0")
-    if backend == "numpy":
+    positions = None
+    if backend == "numpy" or {"position", "smooth_position"} & set(outs):
         axes = [org[a] + spc[a] * np.arange(shape_xyzw[a]) for a in range(dim)]
         mesh = np.meshgrid(*reversed(axes), indexing="ij")        # array order
         pts = np.stack(list(reversed(mesh)), axis=-1).reshape(-1, dim)
+        positions = pts / p.scale if p.scale != 1.0 else pts
+    if backend == "numpy":
         cells, fr = split(pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs)
+        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
     else:
         from cellgl.basis import gpu
 
@@ -368,8 +405,10 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, outs)
-    return _finish(out, exact, shape, p, n)
+        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs),
+                                     smoothness * p.scale)
+        _gpu_finish(out, outs, positions, p)
+    return _finish(out, exact, shape, p, n, outs)
 
 
 def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, min_points=1,
@@ -390,6 +429,7 @@ def feature_points(cells, *, distribution="poisson", density=3.0, jitter=1.0, mi
         ``positions`` float64 (K, d) in sample units, ``ids`` uint32 (K,),
         ``cell_index`` int64 (K,).
     """
+    refuse_masked("cells", cells)
     raw = np.asarray(cells) if not isinstance(cells, np.ndarray) else cells
     if raw.dtype.kind in "iu":
         arr = raw                   # compared as integers below (uint64 2^63 must not wrap)

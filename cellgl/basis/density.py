@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from cellgl.basis.arrays import real_array
 from cellgl.basis.enums import DensityMapKind
 from cellgl.basis.population import MAX_POINTS, poisson_thresholds
 
@@ -121,10 +122,8 @@ class DensityMap:
             set_("center", tuple(_real("center", v, -_COORD, _COORD) for v in c))
             set_("radius", _real("radius", self.radius, 0.0, 2.0 ** 20, lo_open=True))
         else:
-            try:
-                img = np.asarray(self.image, dtype=np.float64)
-            except (TypeError, ValueError):
-                raise ValueError("image must be a numeric array of shape (h, w) with values in [0, 1]") from None
+            img = real_array("image", [] if self.image is None else self.image,
+                             "of shape (h, w) with values in [0, 1]")
             if self.image is None or img.ndim != 2 or not (1 <= img.shape[0] <= MAX_IMAGE_SIDE
                                                            and 1 <= img.shape[1] <= MAX_IMAGE_SIDE):
                 raise ValueError(f"image must have shape (h, w) with 1 <= h, w <= {MAX_IMAGE_SIDE}, "
@@ -134,10 +133,13 @@ class DensityMap:
                                  f"[{np.nanmin(img)}, {np.nanmax(img)}]")
             set_("image", img)
             try:
-                r = tuple(float(v) for v in self.rect)
-            except (TypeError, ValueError):
-                raise ValueError(f"rect must be (x0, y0, x1, y1), got {self.rect!r}") from None
-            if len(r) != 4 or not all(math.isfinite(v) and abs(v) < _COORD for v in r) \
+                r = tuple(self.rect)
+            except TypeError:
+                r = ()
+            if len(r) != 4:
+                raise ValueError(f"rect must be (x0, y0, x1, y1), got {self.rect!r}")
+            r = tuple(_real("rect", v) for v in r)      # refuses bool, complex, text, nan
+            if not all(abs(v) < _COORD for v in r) \
                     or not (r[0] < r[2] and r[1] < r[3]):
                 raise ValueError(f"rect must be (x0, y0, x1, y1) with x0 < x1, y0 < y1, finite, got {self.rect!r}")
             set_("rect", r)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl.gl import context
+from cellgl.basis import features as _features
 from cellgl.gl.threads import gl_call
 from cellgl.basis.enums import glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
@@ -38,7 +39,15 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_LOCAL_SIZE=LOCAL_SIZE,
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
     )
+    d.update(_features.defines(outputs, p.dim))
     return d
+
+
+def _buffers(outputs) -> tuple[str, ...]:
+    """The output buffers for ``outputs``: the basis outputs, and ``features`` (the record of
+    ``shaders/lib/features.glsl``) when a feature output needs a walk."""
+    basis = tuple(o for o in outputs if o in ("F", "delta", "id", "grad"))
+    return basis + (("features",) if any(_features.flags(outputs).values()) else ())
 
 
 def _set(prog, name, value):
@@ -59,7 +68,7 @@ def _set_params(prog, p: Params):
     set_density(prog, p.density_map)
 
 
-_density_buffers: dict = {}
+_bound_buffers: dict = {}
 
 
 def set_density(prog, enc) -> None:
@@ -79,17 +88,22 @@ def set_density(prog, enc) -> None:
 def bind_density_image(levels, ctx=None) -> None:
     """Upload (cached by content, one buffer per context) and bind density-image levels (uint32)
     to storage buffer 7 of ``ctx`` (default: cellgl's context; the viewer passes its window's)."""
-    if levels is None:
-        return
+    if levels is not None:
+        bind_storage(levels, 7, ctx)
+
+
+def bind_storage(words, binding: int, ctx=None) -> None:
+    """Upload uint32 ``words`` (cached by content, one buffer per context and binding) and bind
+    them to storage buffer ``binding`` of ``ctx`` (default: cellgl's context)."""
     ctx = ctx or context.get_context()
-    data = np.ascontiguousarray(levels, dtype=np.uint32).tobytes()
+    data = np.ascontiguousarray(words, dtype=np.uint32).tobytes()
     key = (hash(data), len(data))
-    held = _density_buffers.get(id(ctx))
+    held = _bound_buffers.get((id(ctx), binding))
     if held is None or held[0] != key or held[2] is not ctx:
         if held is not None and held[2] is ctx:
             held[1].release()
-        held = _density_buffers[id(ctx)] = (key, ctx.buffer(data), ctx)
-    held[1].bind_to_storage_buffer(7)
+        held = _bound_buffers[(id(ctx), binding)] = (key, ctx.buffer(data), ctx)
+    held[1].bind_to_storage_buffer(binding)
 
 
 @gl_call
@@ -101,22 +115,28 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     prog = context.compute_program("cell_counts.comp", d)
     _set_params(prog, p)
     cells = np.ascontiguousarray(cells, dtype=np.int32)
-    M = len(cells)
-    cb = ctx.buffer(cells.tobytes())
-    cb.bind_to_storage_buffer(0)
-    ob = ctx.buffer(reserve=8 * M)
-    ob.bind_to_storage_buffer(2)
-    _set(prog, "u_count", M)
-    prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
-    ctx.memory_barrier()
-    out = np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64)
-    cb.release()
-    ob.release()
+    parts = []
+    step = LOCAL_SIZE * _MAX_GROUPS      # one dispatch's worth (a larger one would be dropped)
+    for first in range(0, len(cells), step):
+        chunk = cells[first:first + step]
+        M = len(chunk)
+        cb = ctx.buffer(chunk.tobytes())
+        cb.bind_to_storage_buffer(0)
+        ob = ctx.buffer(reserve=8 * M)
+        ob.bind_to_storage_buffer(2)
+        _set(prog, "u_count", M)
+        prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
+        ctx.memory_barrier()
+        parts.append(np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64))
+        cb.release()
+        ob.release()
+    out = np.concatenate(parts)
     return out[:, 0], out[:, 1]
 
 
 def _chunk_size(n: int, dim: int, outputs) -> int:
     per = 4 * n * (dim if ("delta" in outputs or "grad" in outputs) else 1)
+    per = max(per, 4 * _features.STRIDE if "features" in outputs else 0)
     return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
 
 
@@ -142,8 +162,9 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
     1D dispatch) and copy results into ``out[start:start + count]``."""
     bufs = {}
-    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim}
-    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5}
+    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim,
+             "features": 4 * _features.STRIDE}
+    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5, "features": 1}
     for name in outputs:
         bufs[name] = _storage(ctx, binding[name], count * sizes[name])
     # Samples whose search hit the cap: a counter and a list of their indices.
@@ -169,22 +190,28 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
     for name in outputs:
         if name in ("delta", "grad"):
             out[name] = np.empty((N, n, dim), dtype=np.float32)
+        elif name == "features":
+            out[name] = np.empty((N, _features.STRIDE), dtype=np.float32)
         else:
             out[name] = np.empty((N, n), dtype=np.uint32 if name == "id" else np.float32)
     return out
 
 
 @gl_call
-def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
     The shader scales them by ``p.scale`` and splits them into an integer cell
     and a float32 fraction in double precision. Returns ({output name: array},
-    exact (N,) bool).
+    exact (N,) bool). Feature outputs (:data:`cellgl.basis.features.OUTPUTS`) in ``outputs`` switch
+    on the walks of ``shaders/lib/features.glsl`` (``smoothness`` in lattice units) and add
+    ``"features"``, its per-sample record, to the result.
     """
     ctx = context.get_context()
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
     _set_params(prog, p)
+    _set(prog, "u_smoothness", float(smoothness))
+    outputs = _buffers(outputs)
     _set(prog, "u_scale", float(p.scale))
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs)
@@ -200,7 +227,8 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs) -> tuple[dict, np
 
 
 @gl_call
-def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs) -> tuple[dict, np.ndarray]:
+def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs,
+                smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
     """Cellular basis on a regular grid generated on the GPU.
 
     shape_xyzw: samples along x, y, z, w (unused axes 1); origin split into
@@ -210,6 +238,8 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     ctx = context.get_context()
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
     _set_params(prog, p)
+    _set(prog, "u_smoothness", float(smoothness))
+    outputs = _buffers(outputs)
     _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
     _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))      # dvec4: float64
     _set(prog, "u_spacing", tuple(float(v) for v in spacing))

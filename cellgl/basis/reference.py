@@ -272,12 +272,7 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
             break
         Fr = F[rows, -1]
         reach = np.where(Fr < BIG, metric_finish(Fr, p) * 1.000001 + 1e-6, ring + 2.0)
-        fa = f[rows]
-        hi = np.zeros((len(rows), 4), dtype=np.int64)
-        lo = np.zeros((len(rows), 4), dtype=np.int64)
-        for a in range(p.dim):
-            hi[:, a] = np.minimum(ring, np.ceil(reach + fa[:, a]).astype(np.int64) - 1)
-            lo[:, a] = -np.minimum(ring, np.ceil(reach + 1.0 - fa[:, a]).astype(np.int64) - 1)
+        lo, hi = ring_window(ring, reach, f[rows], p.dim)
         for o in _ring_offsets(ring, p.dim):
             ov = np.asarray(o)
             inside = np.all((ov >= lo) & (ov <= hi), axis=1)
@@ -288,6 +283,30 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
     return metric_finish(F, p), D, I.astype(np.uint32), exact
 
 
+def ring_window(ring: int, reach: np.ndarray, f: np.ndarray, dim: int):
+    """``cell_ring_window``: the offsets lo, hi (N, 4) int64 of ring ``ring`` a point within true
+    distance ``reach`` (N,) of samples at fractions f (N, 4) can lie in."""
+    lo = np.zeros((len(f), 4), dtype=np.int64)
+    hi = np.zeros((len(f), 4), dtype=np.int64)
+    for a in range(dim):
+        hi[:, a] = np.minimum(ring, np.ceil(reach + f[:, a]).astype(np.int64) - 1)
+        lo[:, a] = -np.minimum(ring, np.ceil(reach + 1.0 - f[:, a]).astype(np.int64) - 1)
+    return lo, hi
+
+
+def distances(points: np.ndarray, positions: np.ndarray, metric, minkowski_p: float = 3.0) -> np.ndarray:
+    """(N, K) distances from every sample (N, d) to every position (K, d), float64."""
+    a = np.abs(positions[None, :, :] - points[:, None, :])
+    metric = Metric[metric.upper()] if isinstance(metric, str) else metric
+    if metric == Metric.EUCLIDEAN:
+        return np.sqrt((a * a).sum(-1))
+    if metric == Metric.MANHATTAN:
+        return a.sum(-1)
+    if metric == Metric.CHEBYSHEV:
+        return a.max(-1)
+    return (a ** minkowski_p).sum(-1) ** (1.0 / minkowski_p)
+
+
 def brute_force(points: np.ndarray, positions: np.ndarray, ids: np.ndarray, metric, n: int,
                 minkowski_p: float = 3.0):
     """The n nearest of the given feature points to each sample, by testing every one.
@@ -296,16 +315,7 @@ def brute_force(points: np.ndarray, positions: np.ndarray, ids: np.ndarray, metr
     positions (K, d), ids (K,) -> F (N, n) float64 ascending, ids (N, n) uint32; equal
     distances keep the order of ``positions``.
     """
-    a = np.abs(positions[None, :, :] - points[:, None, :])
-    metric = Metric[metric.upper()] if isinstance(metric, str) else metric
-    if metric == Metric.EUCLIDEAN:
-        dist = np.sqrt((a * a).sum(-1))
-    elif metric == Metric.MANHATTAN:
-        dist = a.sum(-1)
-    elif metric == Metric.CHEBYSHEV:
-        dist = a.max(-1)
-    else:
-        dist = (a ** minkowski_p).sum(-1) ** (1.0 / minkowski_p)
+    dist = distances(points, positions, metric, minkowski_p)
     order = np.argsort(dist, axis=1, kind="stable")[:, :n]
     return np.take_along_axis(dist, order, 1), ids[order]
 

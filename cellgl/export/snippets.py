@@ -308,6 +308,14 @@ def _refuse_density_image(r) -> None:
                           f"{r.name}.png")
 
 
+def _refuse_cell_image(r) -> None:
+    if r.values["cell_color"] == "image":
+        raise ExportError(f"{r.name}: color.cell_color 'image' cannot be exported as a shader snippet (the "
+                          "snippet would need the cell image as a storage buffer or texture, which the "
+                          "engines bind differently); sample your own texture at the cell's feature point, "
+                          f"or bake it: cellgl bake {r.name} -o {r.name}.png")
+
+
 #: lib name -> exported name, where the default prefix would collide with an entry point
 _OVERRIDES = {"cell_texture": "cellgl_texture_basis", "cell_texture_filtered": "cellgl_texture_basis_filtered"}
 
@@ -324,6 +332,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     r = load_recipe(recipe)
     _refuse_pups(r)
     _refuse_density_image(r)
+    _refuse_cell_image(r)
     defines = texture.defines(r)
     solid = int(r.values["dimension"]) >= 3
     vals = texture.uniform_values(r)

@@ -131,6 +131,10 @@ _DOC_KEYS = ("kind", "figure", "description")
 # --------------------------------------------------------------------------------------------
 
 
+#: the largest side of a reference image file (labels sample it per point: more detail is unused)
+MAX_REFERENCE_SIDE = 4096
+
+
 def reference_image(name="builtin:shapes", size=256):
     """A grayscale reference image for label assignment, values in [0, 1].
 
@@ -138,7 +142,8 @@ def reference_image(name="builtin:shapes", size=256):
     ----------
     name : str
         ``"builtin:shapes"`` (a disc, a ring and a wavy band with soft edges: gray only near
-        boundaries) or a path to an image file (converted to grayscale).
+        boundaries) or a path to an image file (converted to grayscale; sides up to
+        :data:`MAX_REFERENCE_SIDE`, checked from the header before the image is decoded).
     size : int
         Side of the built-in image in pixels.
 
@@ -161,10 +166,18 @@ def reference_image(name="builtin:shapes", size=256):
     if isinstance(name, str) and name.startswith("builtin:"):
         raise ValueError(f"unknown built-in reference image {name!r}; accepted: 'builtin:shapes'")
     from PIL import Image
+    img = None
     try:
-        img = Image.open(name).convert("L")
-    except OSError as e:
+        with Image.open(name) as im:
+            # the header gives the size: a huge image is refused before it is decoded
+            w, h = im.size
+            if 1 <= w <= MAX_REFERENCE_SIDE and 1 <= h <= MAX_REFERENCE_SIDE:
+                img = im.convert("L")
+    except Exception as e:  # noqa: BLE001 - Pillow raises many kinds (OSError, DecompressionBombError)
         raise ValueError(f"cannot read reference image {name!r}: {e}") from None
+    if img is None:
+        raise ValueError(f"reference image {name!r} is {w}x{h}; accepted: sides 1..{MAX_REFERENCE_SIDE} "
+                         f"(scale it down first)")
     return np.asarray(img, dtype=np.float64) / 255.0
 
 

@@ -48,16 +48,18 @@ def output_mask(channels) -> int:
     return sum(bit for _, _, bit, chans in _OUTPUTS.values() if set(chans) & set(channels))
 
 
-def _program(recipe, defines: dict, pan=None):
+def _program(recipe, defines: dict, pan=None, pan_only=False):
     """texture.comp for ``recipe`` with ``defines``: baked (constants, LRU-cached) or with uniforms
-    (always with a ``pan``: one program serves every pan, where baking would compile per pan)."""
+    (always with a ``pan``: one program serves every pan, where baking would compile per pan;
+    ``pan_only``: the program's other uniforms are already this recipe's)."""
     from cellgl.gl import context
     from cellgl.texture import shader as texture
 
     ctx = context.get_context()
     if not BAKE_CONSTANTS or pan is not None:
         prog = context.compute_program("texture.comp", defines)
-        texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan)
+        texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan,
+                             pan_only=pan_only and pan is not None)
         return prog
     consts = texture.glsl_baked_uniforms_file(recipe)
     key = (tuple(sorted(defines.items())), consts)
@@ -72,8 +74,8 @@ def _program(recipe, defines: dict, pan=None):
         baked[key] = prog
         while len(baked) > MAX_BAKED:
             baked.popitem(last=False)[1].release()
-    if recipe.values["density_map"] == "image":
-        texture.set_uniforms(prog, recipe)        # binds the density image (no uniforms left)
+    if recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
+        texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
     return prog
 
 
@@ -90,11 +92,13 @@ def _buffer(ctx, binding: int, nbytes: int):
 
 
 @gl_call
-def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1, pan=None) -> dict:
+def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1, pan=None,
+        pan_only: bool = False) -> dict:
     """Dispatch texture.comp over ``count`` samples and return ``{channel: array}`` (flat, one row
     per sample). ``setup(prog, first, n)`` sets the entry's own uniforms and returns buffers to
     release after the chunk; ``supersample``: n of the n x n sub-pixel grid (grid only); ``pan``
-    (du, dv, dz): added to the samples' texture position in float64, through the split origins."""
+    (du, dv, dz): added to the samples' texture position in float64, through the split origins;
+    ``pan_only``: the last call ran this recipe with the same channels (only the pan changed)."""
     from cellgl.gl import context
     from cellgl.texture import shader as texture
 
@@ -104,7 +108,7 @@ def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1
     d = texture.defines(recipe, channels)
     d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=local_size, CELL_TEX_OUT=mask,
              CELL_TEX_SUPERSAMPLE=int(supersample))
-    prog = _program(recipe, d, pan)
+    prog = _program(recipe, d, pan, pan_only)
     out = {}
     for name, (binding, size, bit, _) in _OUTPUTS.items():
         if mask & bit:

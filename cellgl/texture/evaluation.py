@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cellgl.basis.core import real_array
+from cellgl.basis.arrays import real_array
 from cellgl.gl.threads import gl_call
 from cellgl.texture import antialias, dispatch
 from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
@@ -65,6 +65,13 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
     -------
     dict of output name -> ndarray
     """
+    return _evaluate(recipe, points, outputs, backend, filter_width)
+
+
+def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = True) -> dict:
+    """:func:`evaluate`; ``split_far=False`` skips grouping far points by their whole part (one
+    dispatch, positions in float32: only for statistics such as :func:`measure_range`, whose
+    65,536 points spread over 10^6 unit squares would otherwise cost a dispatch each)."""
     recipe = load_recipe(recipe)
     outputs = check_channels(outputs, OUTPUTS)
     _backend(backend)
@@ -92,15 +99,17 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
     # group goes with that whole part as a float64 pan of the origins (as the viewer pans) and its
     # fraction as the position: a point at uv 1e9 is as exact as one at 0.5.
     whole = np.floor(pts)
-    if not whole.any():
+    if not split_far or not whole.any():
         return dispatch.run(recipe, outputs, len(pts), setup_for(pts), grid=False)
-    keys, inverse = np.unique(whole, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
+    order = np.lexsort(whole.T[::-1])           # points of one whole part next to each other
+    ws = whole[order]
+    starts = np.flatnonzero(np.concatenate([[True], np.any(ws[1:] != ws[:-1], axis=1), [True]]))
     out = None
-    for g, key in enumerate(keys):
-        idx = np.nonzero(inverse == g)[0]
+    for g in range(len(starts) - 1):
+        idx = order[starts[g]:starts[g + 1]]
+        key = ws[starts[g]]
         res = dispatch.run(recipe, outputs, len(idx), setup_for(pts[idx] - key), grid=False,
-                           pan=tuple(float(c) for c in key))
+                           pan=tuple(float(c) for c in key), pan_only=g > 0)
         if out is None:
             out = {k: np.empty((len(pts),) + a.shape[1:], a.dtype) for k, a in res.items()}
         for k, a in res.items():
@@ -280,7 +289,9 @@ def measure_range(recipe, samples: int = 65536, *, lo_pct: float = 0.5, hi_pct: 
         pts = rng.uniform(0.0, 1000.0 if dim == 2 else 100.0, size=(samples, 3))
     if dim == 2:
         pts[:, 2] = 0.0
-    val = evaluate(probe, pts, ("value",), backend=backend)["value"].astype(np.float64)
+    # float32 positions up to 1000 cells (one dispatch): ample for percentiles, and the stored ranges
+    # of the presets were measured so
+    val = _evaluate(probe, pts, ("value",), backend, 0.0, split_far=False)["value"].astype(np.float64)
     lo, hi = np.percentile(val, [lo_pct, hi_pct])
     if not hi > lo:
         lo, hi = lo - 0.5, hi + 0.5

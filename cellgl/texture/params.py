@@ -32,7 +32,7 @@ N_PRODUCT = 4           #: product coefficients c_ij for i, j <= 4
 MAX_RAMP_KEYS = 16      #: keys in a colour ramp
 
 #: fractal modes, in their GLSL integer order (CELL_TEX_FRACTAL_*)
-FRACTAL_MODES = ("none", "sum", "qin", "qin_cube")
+FRACTAL_MODES = ("none", "sum", "qin", "qin_cube", "min")
 #: colour-ramp interpolation, in GLSL order (CELL_TEX_RAMP_*)
 RAMP_MODES = ("linear", "spline")
 NORMAL_CONVENTIONS = ("opengl", "directx")
@@ -40,6 +40,8 @@ DISTRIBUTIONS = ("poisson", "jitter", "worley1996")
 #: spatially varying feature density (cellgl.basis.density): the map of a texture, in uv
 DENSITY_MAPS = ("none", "ramp_x", "ramp_y", "radial", "image")
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
+#: where the per-cell colour comes from (cell_mix): the ramp at the cell value, or an image
+CELL_COLORS = ("ramp", "image")
 
 #: recipe JSON sections, in order
 GROUPS = ("basis", "combination", "fractal", "domain", "noise", "mapping", "color")
@@ -135,13 +137,22 @@ PARAMS: tuple[Param, ...] = (
     *(_coef(n, f"weight of F{n[1]} F{n[2]} (Qin's product terms)") for n in PRODUCTS),
     Param("c_noise", "float", 0.0, -64.0, 64.0, "weight of gradient noise at the same position (Qin's "
           "noise comparisons)", "combination"),
+    Param("c_edge", "float", 0.0, -64.0, 64.0, "weight of the distance to the cell's border (exact, "
+          "Euclidean metric only; Blender's Distance to Edge)", "combination"),
+    Param("c_smooth", "float", 0.0, -64.0, 64.0, "weight of smooth F1 (-k log sum exp(-F_j / k), k = "
+          "smoothness)", "combination"),
+    Param("c_nsphere", "float", 0.0, -64.0, 64.0, "weight of the n-sphere radius: half the distance from "
+          "the F1 point to its nearest other point (Euclidean metric only)", "combination"),
+    Param("smoothness", "float", 0.0, 0.0, 0.25, "k of smooth F1, in cells (0: F1 itself); with cell_mix "
+          "the cell value and the cell_image position blend the same way", "combination"),
     Param("range_lo", "float", 0.0, -1e6, 1e6, "value mapped to 0 (measured: 0.5th percentile; "
           "see cellgl.texture.measure_range)", "combination"),
     Param("range_hi", "float", 1.0, -1e6, 1e6, "value mapped to 1 (measured: 99.5th percentile)",
           "combination"),
     # ---- fractal: G = sum w_i b(lacunarity^i x), w_i = gain^i
     Param("fractal", "enum", "none", None, None, "none; sum (Worley: sum gain^i b(lac^i x)); qin (sum gain^i "
-          "|0.5 - b(lac^i x)|); qin_cube (its cube, Qin's wrinkle bump); normalised to [0, 1]", "fractal",
+          "|0.5 - b(lac^i x)|); qin_cube (its cube, Qin's wrinkle bump); normalised to [0, 1]; min (Blender's "
+          "distance-to-edge fractal: min_i v(lac^i x) / lac^i, then normalised; gain unused)", "fractal",
           choices=FRACTAL_MODES),
     Param("octaves", "float", 6.0, 1.0, 8.0, "number of octaves (terms; fractional: the last is faded in). "
           "Worley's i = 0..5 is 6", "fractal"),
@@ -184,6 +195,9 @@ PARAMS: tuple[Param, ...] = (
           choices=RAMP_MODES),
     Param("cell_mix", "float", 0.0, 0.0, 1.0, "ramp index = mix(height, cell value from the F1 feature "
           "ID, cell_mix): 1 = a constant colour per cell (flagstones)", "color"),
+    Param("cell_color", "enum", "ramp", None, None, "the per-cell colour of cell_mix: ramp (at the cell "
+          "value) or image (color.cell_image sampled at the cell's feature point: mosaic, stained glass; "
+          "colour = mix(ramp(height), image, cell_mix))", "color", choices=CELL_COLORS, compile_time=True),
     Param("shade", "float", 0.0, 0.0, 1.0, "colour *= mix(1, height, shade) (grout of flagstones)", "color"),
 )
 

@@ -41,10 +41,7 @@ __all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir",
            "needed_n"]
 
 _TOP_KEYS = ("cellgl_recipe", "name", "doc", "outputs", "variants") + GROUPS
-_EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "color": ("ramp",)}
-#: largest side of a density image (cellgl.basis.density.MAX_IMAGE_SIDE)
-_MAX_IMAGE_SIDE = 4096
-_image_cache: dict = {}
+_EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "color": ("ramp", "cell_image")}
 
 
 def _ramp(value, path: str) -> tuple:
@@ -76,68 +73,25 @@ def _outputs(value, path: str) -> tuple:
     return tuple(value)
 
 
-def _density_image(value, path: str, base=None):
-    """A density image path (str or os.PathLike, relative to ``base`` or the working directory),
-    checked readable; returned as an absolute path string (None stays None)."""
-    if value is None:
-        return None
-    if not isinstance(value, (str, os.PathLike)) or not str(value).strip():
-        raise _err(path, value, "the path of a grayscale image (PNG, ...), relative to the recipe file",
-                   "expected a file path, got")
-    p = Path(value).expanduser()
-    if not p.is_absolute():
-        p = Path(base or ".") / p
-    p = p.resolve()
-    density_pixels(str(p), path)
-    return str(p)
+def _image(value, path: str, kind: str, base=None):
+    """An image path checked readable (:func:`cellgl.texture.images.resolve`), absolute, or None."""
+    from cellgl.texture import images
+
+    try:
+        return images.resolve(value, path, kind, base)
+    except images.ImageError as exc:
+        raise RecipeError(str(exc)) from None
 
 
 def density_pixels(file: str, path: str = "basis.density_image"):
     """The density image ``file`` as float64 (h, w) in [0, 1] (grayscale, row 0 at the top: v = 0),
     read with Pillow and cached by path and modification time; :class:`RecipeError` if unreadable."""
-    import numpy as np
+    from cellgl.texture import images
 
     try:
-        st = os.stat(file)
-    except OSError as exc:
-        raise RecipeError(f"{path}: cannot read density image {file!r}: {exc.strerror or exc}") from None
-    key = (file, st.st_mtime_ns, st.st_size)
-    img = _image_cache.get(key)
-    if img is None:
-        size = None
-        try:
-            from PIL import Image
-
-            with Image.open(file) as im:
-                # the header gives the size: a huge image is refused before it is decoded
-                size = im.size
-                if not (1 <= size[0] <= _MAX_IMAGE_SIDE and 1 <= size[1] <= _MAX_IMAGE_SIDE):
-                    raise _TooLarge
-                im.load()
-                if im.mode in ("I;16", "I;16B", "I;16L", "I"):
-                    a = np.asarray(im, dtype=np.float64) / (65535.0 if im.mode.startswith("I;16") else
-                                                             max(1.0, float(np.asarray(im).max())))
-                else:
-                    a = np.asarray(im.convert("L"), dtype=np.float64) / 255.0
-        except ImportError:
-            raise RecipeError(f"{path}: reading a density image needs Pillow (pip install pillow)") from None
-        except _TooLarge:
-            raise RecipeError(f"{path}: density image {file!r} is {size[0]}x{size[1]}; accepted: "
-                              f"sides 1..{_MAX_IMAGE_SIDE}") from None
-        except Exception as exc:  # noqa: BLE001 - Pillow raises many kinds
-            raise RecipeError(f"{path}: cannot read density image {file!r} as an image: {exc}") from None
-        if a.ndim != 2 or not (1 <= a.shape[0] <= _MAX_IMAGE_SIDE and 1 <= a.shape[1] <= _MAX_IMAGE_SIDE):
-            raise RecipeError(f"{path}: density image {file!r} is {a.shape[1]}x{a.shape[0]}; accepted: "
-                              f"sides 1..{_MAX_IMAGE_SIDE}")
-        a = np.clip(a, 0.0, 1.0)
-        a.setflags(write=False)
-        _image_cache.clear()
-        img = _image_cache[key] = a
-    return img
-
-
-class _TooLarge(Exception):
-    """A density image whose header gives a side past :data:`_MAX_IMAGE_SIDE`."""
+        return images.density_pixels(file, path)
+    except images.ImageError as exc:
+        raise RecipeError(str(exc)) from None
 
 
 def _defaults() -> dict:
@@ -157,12 +111,14 @@ class Recipe:
     density_image : str or None
         Absolute path of the grayscale image of ``density_map = "image"`` (JSON:
         ``basis.density_image``, relative to the recipe file); kept, unused, under other maps.
+    cell_image : str or None
+        Absolute path of the RGB image of ``cell_color = "image"`` (JSON: ``color.cell_image``).
     """
 
-    __slots__ = ("name", "doc", "_values", "ramp", "outputs", "_variants", "density_image")
+    __slots__ = ("name", "doc", "_values", "ramp", "outputs", "_variants", "density_image", "cell_image")
 
     def __init__(self, values: dict | None = None, ramp=DEFAULT_RAMP, name: str = "custom", doc: str = "",
-                 outputs=("color",), variants=(), density_image=None):
+                 outputs=("color",), variants=(), density_image=None, cell_image=None):
         vals = _defaults()
         for k, v in (values or {}).items():
             if k not in PARAMS_BY_NAME:
@@ -174,7 +130,8 @@ class Recipe:
         self.ramp = _ramp(ramp, "color.ramp")
         self.outputs = _outputs(outputs, "outputs")
         self._variants = tuple(variants)
-        self.density_image = _density_image(density_image, "basis.density_image")
+        self.density_image = _image(density_image, "basis.density_image", "density")
+        self.cell_image = _image(cell_image, "color.cell_image", "cell")
         _check(self)
 
     # ------------------------------------------------------------------ access
@@ -192,6 +149,8 @@ class Recipe:
             return self.ramp
         if name == "density_image":
             return self.density_image
+        if name == "cell_image":
+            return self.cell_image
         if name == "linear":
             return [self._values[c] for c in LINEAR]
         if name == "products":
@@ -205,15 +164,18 @@ class Recipe:
 
     def replace(self, **values) -> "Recipe":
         """A copy with some parameters changed (also ``ramp=``, ``name=``, ``doc=``, ``outputs=``,
-        ``linear=``, ``products=``, ``density_image=``); validated like :meth:`from_dict`."""
+        ``linear=``, ``products=``, ``density_image=``, ``cell_image=``); validated like
+        :meth:`from_dict`."""
         vals = dict(self._values)
         ramp, name, doc, outputs = self.ramp, self.name, self.doc, self.outputs
-        image = self.density_image
+        image, cimage = self.density_image, self.cell_image
         for k, v in values.items():
             if k == "ramp":
                 ramp = v
             elif k == "density_image":
                 image = v
+            elif k == "cell_image":
+                cimage = v
             elif k == "name":
                 name = v
             elif k == "doc":
@@ -224,7 +186,15 @@ class Recipe:
                 vals.update(_coefficients(k, v, f"combination.{k}"))
             else:
                 vals[k] = v
-        return Recipe(vals, ramp, name, doc, outputs, density_image=image)
+        return Recipe(vals, ramp, name, doc, outputs, density_image=image, cell_image=cimage)
+
+    def cell_pixels(self):
+        """The cell image as uint8 (h, w, 3) RGB (row 0: v = 0), or None."""
+        if self.cell_image is None:
+            return None
+        from cellgl.texture.images import cell_pixels
+
+        return cell_pixels(self.cell_image)
 
     def density_pixels(self):
         """The density image as float64 (h, w) in [0, 1] (row 0: v = 0), or None."""
@@ -293,6 +263,8 @@ class Recipe:
                 g[p.name] = list(v) if isinstance(v, tuple) else v
             if group == "color":
                 g["ramp"] = [list(k) for k in self.ramp]
+                if self.cell_image is not None:
+                    g["cell_image"] = self.cell_image
             if group == "basis" and self.density_image is not None:
                 g["density_image"] = self.density_image
             d[group] = g
@@ -314,12 +286,13 @@ class Recipe:
         if version != VERSION:
             raise _err("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
         folder = base
-        values, ramp, image = _read_groups(d, folder)
+        values, ramp, image, cimage = _read_groups(d, folder)
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
                 raise _err(k, d[k], "a string", "expected a string, got")
         base = cls(values, ramp if ramp is not None else DEFAULT_RAMP, d.get("name", "custom"),
-                   d.get("doc", ""), _outputs(d.get("outputs", ["color"]), "outputs"), density_image=image)
+                   d.get("doc", ""), _outputs(d.get("outputs", ["color"]), "outputs"), density_image=image,
+                   cell_image=cimage)
         variants = d.get("variants", [])
         if not isinstance(variants, list):
             raise _err("variants", variants, "a list of partial recipes", "expected a list, got")
@@ -332,21 +305,29 @@ class Recipe:
                 raise RecipeError(f"variants[{k}]: unknown key {bad[0]!r}; accepted: name, doc, "
                                   + ", ".join(GROUPS))
             try:
-                vals, vramp, vimage = _read_groups(v, folder)
+                vals, vramp, vimage, vcimage = _read_groups(v, folder)
                 merged = dict(base._values)
                 merged.update(vals)
                 out.append(cls(merged, vramp if vramp is not None else base.ramp,
                                v.get("name", f"{base.name}:{k}"), v.get("doc", base.doc), base.outputs,
-                               density_image=vimage if vimage is not None else base.density_image))
+                               density_image=vimage if vimage is not None else base.density_image,
+                               cell_image=vcimage if vcimage is not None else base.cell_image))
             except RecipeError as exc:
                 raise RecipeError(f"variants[{k}].{exc}") from None
         base._variants = tuple(out)
         return base
 
-    def to_json(self) -> str:
+    def to_json(self, base=None) -> str:
+        """The JSON text (with the variants); ``base``: a folder, image paths under it are
+        written relative to it (as :meth:`save` does for the file's folder)."""
         d = self.to_dict()
         if self._variants:
             d["variants"] = [_variant_dict(self, v) for v in self._variants]
+        if base is not None:
+            for group, key in (("basis", "density_image"), ("color", "cell_image")):
+                for g in [d] + d.get("variants", []):
+                    if key in g.get(group, {}):
+                        g[group][key] = _relative(g[group][key], base)
         return json.dumps(d, indent=2) + "\n"
 
     @classmethod
@@ -364,7 +345,7 @@ class Recipe:
         from cellgl.io.formats import atomic_path
 
         with atomic_path(path) as tmp:
-            tmp.write_text(self.to_json())
+            tmp.write_text(self.to_json(base=Path(path).resolve().parent))
 
     def __eq__(self, other):
         return isinstance(other, Recipe) and self.to_dict() == other.to_dict()
@@ -374,6 +355,14 @@ class Recipe:
 
     def __repr__(self):
         return f"Recipe(name={self.name!r})"
+
+
+def _relative(file: str, base) -> str:
+    """``file`` relative to the folder ``base`` when it lies under it (posix separators)."""
+    try:
+        return Path(file).resolve().relative_to(Path(base).resolve()).as_posix()
+    except ValueError:
+        return file
 
 
 def _variant_dict(base: Recipe, v: Recipe) -> dict:
@@ -412,7 +401,7 @@ def _coefficients(key: str, value, path: str) -> dict:
 
 def _read_groups(d: dict, base=None):
     values: dict = {}
-    ramp = image = None
+    ramp = image = cimage = None
     for group in GROUPS:
         if group not in d:
             continue
@@ -426,7 +415,9 @@ def _read_groups(d: dict, base=None):
                 if k == "ramp":
                     ramp = _ramp(v, path)
                 elif k == "density_image":
-                    image = _density_image(v, path, base)
+                    image = _image(v, path, "density", base)
+                elif k == "cell_image":
+                    cimage = _image(v, path, "cell", base)
                 else:
                     coefs = _coefficients(k, v, path)
                     clash = [c for c in coefs if c in g]
@@ -441,12 +432,12 @@ def _read_groups(d: dict, base=None):
                                   + ", ".join(n for n in names if n not in PRODUCTS[1:] and n not in LINEAR[1:])
                                   .replace("c1,", "c1..c8,").replace("c11,", "c11..c44,"))
             values[k] = _coerce(p, v, path)
-    return values, ramp, image
+    return values, ramp, image, cimage
 
 
 def _parse(name: str, text: str):
     """Parse a ``--set`` value for parameter ``name``."""
-    if name == "density_image":
+    if name in ("density_image", "cell_image"):
         return text
     if name in ("ramp", "linear", "products", "outputs"):
         try:
@@ -479,6 +470,14 @@ def _check(r: Recipe) -> None:
     if v["ramp_mode"] == "spline" and len(r.ramp) < 4:
         raise RecipeError(f"color.ramp: spline mode needs at least 4 keys, got {len(r.ramp)}; "
                           "accepted: 4..16 keys, or color.ramp_mode 'linear'")
+    for term in ("c_edge", "c_nsphere"):
+        if v[term] != 0.0 and v["metric"] != "euclidean":
+            raise RecipeError(f"combination.{term}: {v[term]!r} needs basis.metric 'euclidean' (the distance "
+                              f"to a bisector plane and the inscribed ball are Euclidean), got {v['metric']!r}; "
+                              f"accepted: {term} 0 with other metrics")
+    if v["cell_color"] == "image" and r.cell_image is None:
+        raise RecipeError("color.cell_color: 'image' needs color.cell_image (the path of an RGB image, "
+                          "relative to the recipe file)")
     dmap = v["density_map"]
     if dmap != "none":
         if v["distribution"] != "poisson":

@@ -114,6 +114,7 @@ def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     v["dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     v["feature_frequency"] = feature_frequency(v)
     v.update(lattice_origins(v, pan))
+    v["pan"] = (float(pan[0]), float(pan[1]))
     v["density_enc"] = density_encodings(recipe, pan, v)
     v["octave_mean"] = octave_mean(recipe) if mean else 0.0
     return v
@@ -262,7 +263,8 @@ def _basis(t: dict, octave: int) -> ref.Params:
 
 def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
     """``cell_texture_combination`` at L^octave (O + s) (s already scaled by L^octave):
-    (value (N,), dv/dx (N, 4), id (N,), F1..F4 (N, 4))."""
+    (value (N,), dv/dx (N, 4), id (N,), F1..F4 (N, 4), cell (N, 4): offset to the (smooth) F1
+    point in basis units and the (smooth) cell value)."""
     dim = t["dimension"]
     s = np.array(s, dtype=np.float64)
     s[:, dim:] = 0.0
@@ -270,7 +272,7 @@ def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
     cell, fr = texture_lattice(t["origin_cell"][octave], t["origin_frac"][octave], s * t["dist_scale"])
     cell[:, dim:] = 0
     fr[:, dim:] = 0.0
-    F, D, I, _ = ref.search(cell, fr, p, n)
+    F, D, I, exact = ref.search(cell, fr, p, n)
     F = F / t["dist_scale"]
     dF = ref.metric_gradient(D, F * t["dist_scale"], p)
     dF[..., dim:] = 0.0
@@ -289,13 +291,39 @@ def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
             c = t[f"c{i + 1}{j + 1}"]
             v += c * F[:, i] * F[:, j]
             grad += c * (F[:, i, None] * dF[:, j] + F[:, j, None] * dF[:, i])
+    fl = texture_feature_flags(t)
+    cell_out = np.zeros((len(s), 4))
+    if any(fl.values()):
+        from cellgl.basis.features import features
+
+        names = ("edge",) * fl["edge"] + ("smooth_F1",) * fl["smooth"] + ("nsphere",) * fl["nsphere"]
+        x = features(cell, fr, p, F * t["dist_scale"], D, I, exact, names, t["smoothness"] * t["dist_scale"])
+        ds = t["dist_scale"]
+        v += (t["c_edge"] * x["edge"] + t["c_smooth"] * x["smooth_F"] + t["c_nsphere"] * x["nsphere"]) / ds
+        grad += t["c_edge"] * x["edge_grad"] + t["c_smooth"] * x["smooth_grad"]
+        cell_out[:, :3] = x["smooth_delta"][:, :3] / ds
+        cell_out[:, 3] = x["smooth_attr"][:, 3]
+    else:
+        from cellgl.basis.features import id_value
+
+        v += t["c_smooth"] * F[:, 0]
+        grad += t["c_smooth"] * dF[:, 0]
+        cell_out[:, :3] = D[:, 0, :3] / t["dist_scale"]
+        cell_out[:, 3] = id_value(I[:, 0])
     if t["c_noise"] != 0.0:
         per = texture_period(t, octave) * int(round(t["noise_frequency"]))
         nv, gn = noise_split(t["noise_cell"][octave], t["noise_frac"][octave] + s * t["noise_frequency"], per,
                              (t["seed"] + 7919 + octave) & M32, dim)
         v += t["c_noise"] * nv
         grad += t["c_noise"] * t["noise_frequency"] * gn
-    return v, grad, I[:, 0], F4
+    return v, grad, I[:, 0], F4, cell_out
+
+
+def texture_feature_flags(t: dict) -> dict:
+    """The features walks of a recipe (``CELL_EDGE``, ``CELL_SMOOTH``, ``CELL_NSPHERE`` of
+    :func:`cellgl.texture.defines`)."""
+    return {"edge": t["c_edge"] != 0.0, "nsphere": t["c_nsphere"] != 0.0,
+            "smooth": t["smoothness"] > 0.0 and (t["c_smooth"] != 0.0 or t["cell_mix"] != 0.0)}
 
 
 def texture_ramp(x: np.ndarray, t: dict, ramp) -> np.ndarray:
@@ -364,9 +392,22 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
             w *= min(t["octaves"] - i, 1.0)
         a = smoothscale(spacings * scale)
         if i == 0 or np.any(a > 0.0):
-            v, g, ids, F4 = texture_combination(s * scale, t, i, n)
+            v, g, ids, F4, cell = texture_combination(s * scale, t, i, n)
             if i == 0:
-                o.update(value=v, id=ids, F=F4)
+                o.update(value=v, id=ids, F=F4, cell=cell)
+            if fractal == "min":
+                # Blender's distance-to-edge fractal: the least v(L^i x) / L^i, normalised below;
+                # octave i > 0 fades in by the fraction of octaves and its band limit a
+                vm = v / scale
+                if i == 0:
+                    G, dG = vm, g
+                else:
+                    fade = min(t["octaves"] - i, 1.0) * a
+                    take = vm < G
+                    G = np.where(take, G + (vm - G) * fade, G)
+                    dG = np.where(take[:, None], dG + (g - dG) * fade[:, None], dG)
+                scale *= t["lacunarity"]
+                continue
             b = (v - t["range_lo"]) * inv_range
             db = g * (inv_range * scale)
             out = (b < 0.0) | (b > 1.0)
@@ -379,13 +420,20 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
                 db = -np.sign(dev)[:, None] * db
             G += w * (a * term + (1.0 - a) * t["octave_mean"])
             dG += (w * a)[:, None] * db
-        else:
+        elif fractal != "min":
             G += w * t["octave_mean"]
         total += 0.5 * w if qin else w
         amp *= t["gain"]
         scale *= t["lacunarity"]
-    G /= total
-    dG /= total
+    if fractal == "min":
+        G = (G - t["range_lo"]) * inv_range
+        dG = dG * inv_range
+        out = (G < 0.0) | (G > 1.0)
+        G = np.clip(G, 0.0, 1.0)
+        dG[out] = 0.0
+    else:
+        G /= total
+        dG /= total
     if fractal == "qin_cube":
         dG *= 3.0 * (G * G)[:, None]
         G = G ** 3
@@ -402,13 +450,21 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
     o["grad"] = dh
     nrm = np.stack([-t["bump"] * dh[:, 0], -t["bump"] * dh[:, 1], np.ones(N)], axis=1)
     nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
-    index = h + (texture_cell_value(o["id"]) - h) * t["cell_mix"]
+    image = t["cell_color"] == "image"
+    index = h if image else h + (o["cell"][:, 3] - h) * t["cell_mix"]
     if t["noise_color"] != 0.0:
         per = texture_period(t, 0) * int(round(t["noise_frequency"]))
         nv, _ = noise_fractal_split(t["noise_cell"][0], t["noise_frac"][0] + s * t["noise_frequency"], per,
                                     (t["seed"] + 104729) & M32, t["noise_octaves"], t["dimension"])
         index = index + t["noise_color"] * nv
     rgb = texture_ramp(np.clip(index, 0.0, 1.0), t, recipe.ramp)
+    if image:
+        from cellgl.texture.images import sample
+
+        pt = s + o["cell"]
+        uv = np.stack([t["pan"][0] + pt[:, 0] / t["frequency"],
+                       t["pan"][1] + pt[:, 1] / (t["frequency"] * t["aspect"])], axis=1)
+        rgb = rgb + (sample(recipe.cell_pixels(), uv, bool(t["tileable"])) - rgb) * t["cell_mix"]
     rgb = rgb * (1.0 + (h - 1.0) * t["shade"])[:, None]
     L = np.array([-1.0, -1.0, 1.5])
     L /= np.linalg.norm(L)
@@ -516,7 +572,7 @@ def _measure_mean(recipe) -> float:
         pts[:, : min(dim, 3)] = rng.uniform(0.0, side, size=(_MEAN_SAMPLES, min(dim, 3)))
     t = _tex(probe, mean=False)
     s = texture_local(pts, t)
-    val, _, _, _ = texture_combination(s, t, 0, needed_n(probe))
+    val = texture_combination(s, t, 0, needed_n(probe))[0]
     b = np.clip((val - v["range_lo"]) / (v["range_hi"] - v["range_lo"]), 0.0, 1.0)
     term = np.abs(0.5 - b) if v["fractal"] in ("qin", "qin_cube") else b
     return float(np.float32(term.mean()))

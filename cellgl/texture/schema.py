@@ -150,7 +150,11 @@ def check_channels(channels, allowed=CHANNELS, unknown: str = "unknown channel {
     error for one that is not (formatted with the name)."""
     if isinstance(channels, str):
         channels = (channels,)
-    channels = tuple(channels)
+    try:
+        channels = tuple(channels)
+    except TypeError:           # None, a number: not a sequence of names
+        raise ValueError(f"channels must be a name or a sequence of names among: {', '.join(allowed)}; "
+                         f"got {channels!r}") from None
     if not channels:
         raise ValueError("channels must name at least one of: " + ", ".join(allowed))
     for c in channels:

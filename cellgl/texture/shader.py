@@ -38,6 +38,8 @@ from cellgl.texture import antialias
 from cellgl.texture.params import (FRACTAL_MODES, MAX_RAMP_KEYS, NORMAL_CONVENTIONS, PARAMS, PARAMS_BY_NAME,
                      RAMP_MODES)
 from cellgl.texture.recipe import RecipeError, load_recipe, needed_n
+from cellgl.texture.images import BINDING as CELL_IMAGE_BINDING
+from cellgl.basis.features import feature_max_ring
 from cellgl.basis.reference import MAX_POINTS, W96_DENSITY_ADJUSTMENT, max_ring_default, poisson_thresholds
 
 __all__ = ["defines", "uniform_values", "lattice_origins", "set_uniforms", "set_view", "glsl_struct_block",
@@ -80,6 +82,13 @@ _DERIVED_DENSITY = (
 )
 #: the density image's storage buffer binding (cellgl.basis.gpu.bind_density_image)
 DENSITY_IMAGE_BINDING = 7
+#: derived fields of a cell image (cellgl.texture.images), present only under this condition
+_CELL_IMAGE_IF = "#if CELL_TEX_CELL_IMAGE"
+_DERIVED_CELL_IMAGE = (
+    ("vec4", "cell_image_info", "", "cell_color image: (u, v) of the view's pan, width, height"),
+)
+#: the conditional groups of derived fields: (#if line, fields)
+_CONDITIONAL = ((_DENSITY_IF, _DERIVED_DENSITY), (_CELL_IMAGE_IF, _DERIVED_CELL_IMAGE))
 
 
 def _runtime_params():
@@ -102,19 +111,22 @@ def glsl_struct_block() -> str:
         lines.append(f"    {p.glsl_type} {p.name};".ljust(32) + f"// {p.doc}")
     for t, n, arr, doc in _DERIVED:
         lines.append(f"    {t} {n}{arr};".ljust(32) + f"// {doc}")
-    lines.append(_DENSITY_IF)
-    for t, n, arr, doc in _DERIVED_DENSITY:
-        lines.append(f"    {t} {n}{arr};".ljust(32) + f"// {doc}")
-    lines.append("#endif")
+    for cond, fields in _CONDITIONAL:
+        lines.append(cond)
+        for t, n, arr, doc in fields:
+            lines.append(f"    {t} {n}{arr};".ljust(32) + f"// {doc}")
+        lines.append("#endif")
     lines.append("};")
     return "\n".join(lines) + "\n"
 
 
-def _uniform_decls(prefix: str, density: bool = False) -> list[tuple[str, str, str]]:
+def _uniform_decls(prefix: str, density=False) -> list[tuple[str, str, str]]:
     """(glsl type, uniform name, array suffix) of every value the loader reads (``density``:
-    only the density map's derived arrays)."""
+    only those of a conditional group of derived fields, :data:`_CONDITIONAL`: True for the
+    density map's, or the group itself)."""
     if density:
-        return [(t, prefix + n, arr) for t, n, arr, _ in _DERIVED_DENSITY]
+        fields = _DERIVED_DENSITY if density is True else density
+        return [(t, prefix + n, arr) for t, n, arr, _ in fields]
     out = [(p.glsl_type, prefix + p.name, "") for p in _runtime_params()]
     out += [(t, prefix + n, arr) for t, n, arr, _ in _DERIVED]
     return out
@@ -124,9 +136,9 @@ def glsl_uniform_block(prefix: str = "u_") -> str:
     """``uniform`` declarations for every run-time parameter (and the derived arrays; those of
     the density map under ``#if CELL_DENSITY_MAP != CELL_DMAP_NONE``)."""
     return ("".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix))
-            + _DENSITY_IF + "\n"
-            + "".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix, True))
-            + "#endif\n")
+            + "".join(cond + "\n"
+                      + "".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix, fields))
+                      + "#endif\n" for cond, fields in _CONDITIONAL))
 
 
 def glsl_params_from_uniforms(prefix: str = "u_", function: str = "cell_texture_params_load") -> str:
@@ -135,16 +147,18 @@ def glsl_params_from_uniforms(prefix: str = "u_", function: str = "cell_texture_
     lines = [f"CellTextureParams {function}()", "{", "    CellTextureParams t;"]
     for p in _runtime_params():
         lines.append(f"    t.{p.name} = {prefix}{p.name};")
-    for derived in (_DERIVED, _DERIVED_DENSITY):
-        if derived is _DERIVED_DENSITY:
-            lines.append(_DENSITY_IF)
+    for cond, derived in ((None, _DERIVED),) + _CONDITIONAL:
+        if cond:
+            lines.append(cond)
         for _, n, arr, _ in derived:
             if arr:
                 lines += [f"    for (int k = 0; k < {arr[1:-1]}; k++) {{",
                           f"        t.{n}[k] = {prefix}{n}[k];", "    }"]
             else:
                 lines.append(f"    t.{n} = {prefix}{n};")
-    lines += ["#endif", "    return t;", "}"]
+        if cond:
+            lines.append("#endif")
+    lines += ["    return t;", "}"]
     return "\n".join(lines) + "\n"
 
 
@@ -154,6 +168,13 @@ _DENSITY_IMAGE_HOOK = f"""
 // the hook lib/points.glsl declares.
 layout(std430, binding = {DENSITY_IMAGE_BINDING}) readonly buffer CellDensityImage {{ uint u_density_image[]; }};
 uint cell_density_image_level(int index) {{ return u_density_image[index]; }}
+#endif
+
+#if CELL_TEX_CELL_IMAGE
+// The cell image as r | g << 8 | b << 16 per texel, row-major, row 0 at v = 0
+// (cellgl.texture.images.bind): the hook lib/texture.glsl declares.
+layout(std430, binding = {CELL_IMAGE_BINDING}) readonly buffer CellImage {{ uint u_cell_image[]; }};
+uint cell_texture_image_texel(int index) {{ return u_cell_image[index]; }}
 #endif
 """
 
@@ -185,7 +206,12 @@ def glsl_constant_block(recipe, prefix: str = "u_") -> str:
     recipe = load_recipe(recipe)
     vals = uniform_values(recipe)
     lines = []
-    for t, n, arr in _uniform_decls("u_") + (_uniform_decls("u_", True) if "u_density_axis" in vals else []):
+    decls = _uniform_decls("u_")
+    for _, fields in _CONDITIONAL:
+        extra = _uniform_decls("u_", fields)
+        if all(n in vals for _, n, _ in extra):
+            decls += extra
+    for t, n, arr in decls:
         v = vals[n]
         name = prefix + n[2:]
         if arr:
@@ -201,8 +227,8 @@ def glsl_constant_block(recipe, prefix: str = "u_") -> str:
             lines.append(f"const float {name} = {_f(v)};")
         elif t == "uint":
             lines.append(f"const uint {name} = {int(v)}u;")
-        elif t == "vec3":
-            lines.append(f"const vec3 {name} = vec3({', '.join(_f(c) for c in v)});")
+        elif t in ("vec3", "vec4"):
+            lines.append(f"const {t} {name} = {t}({', '.join(_f(c) for c in v)});")
         else:
             lines.append(f"const int {name} = {int(v)};")
     return "\n".join(lines) + "\n"
@@ -250,6 +276,11 @@ def defines(recipe, channels=()) -> dict:
         CELL_MAX_RING=max_ring_default(v["dimension"]),
         CELL_PERIODIC=int(bool(v["tileable"])),
         CELL_DENSITY_MAP=_density_kind(v["density_map"]),
+        CELL_EDGE=int(v["c_edge"] != 0.0),
+        CELL_SMOOTH=int(v["smoothness"] > 0.0 and (v["c_smooth"] != 0.0 or v["cell_mix"] != 0.0)),
+        CELL_NSPHERE=int(v["c_nsphere"] != 0.0),
+        CELL_FEATURE_MAX_RING=feature_max_ring(v["dimension"]),
+        CELL_TEX_CELL_IMAGE=int(v["cell_color"] == "image"),
     )
     return d
 
@@ -312,6 +343,19 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_ramp_count"] = len(keys)
     out["u_dist_scale"] = W96_DENSITY_ADJUSTMENT if v["distribution"] == "worley1996" else 1.0
     out["u_feature_frequency"] = antialias.feature_frequency(v)
+    out.update(pan_uniform_values(recipe, pan))
+    from cellgl.texture.reference import octave_mean
+
+    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
+    return out
+
+
+def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
+    """The part of :func:`uniform_values` that depends on ``pan``: the split origins, the
+    density map's encoding and the cell image's placement (``cellgl.evaluate`` sets only these
+    for each group of points after the first)."""
+    recipe = load_recipe(recipe)
+    out = {}
     for k, a in lattice_origins(recipe, pan).items():
         out["u_" + k] = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in a]
     encs = density_encodings(recipe, pan)
@@ -319,9 +363,12 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
         out["u_density_thresholds"] = [int(x) for x in encs[0].thresholds.ravel()]
         out["u_density_axis"] = [tuple(int(c) for c in row) for e in encs for row in e.axes]
         out["u_density_info"] = [e.info for e in encs]
-    from cellgl.texture.reference import octave_mean
-
-    out["u_octave_mean"] = octave_mean(recipe)     # after the map's checks
+    if recipe.values["cell_color"] == "image":
+        h, w = recipe.cell_pixels().shape[:2]
+        pu, pv = float(pan[0]), float(pan[1])
+        if recipe.values["tileable"]:       # period 1 in uv: only the pan's fraction, exact in float32
+            pu, pv = pu - math.floor(pu), pv - math.floor(pv)
+        out["u_cell_image_info"] = (pu, pv, float(w), float(h))
     return out
 
 
@@ -351,18 +398,24 @@ _UNIFORM_DTYPES = {"u_thresholds": np.uint32, "u_origin_cell": np.int32, "u_nois
                    "u_density_thresholds": np.uint32, "u_density_axis": np.int32, "u_density_info": np.int32}
 
 
-def set_uniforms(prog, recipe, pan=(0.0, 0.0)) -> None:
+def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> None:
     """Set every ``u_<param>`` uniform of ``prog`` (compute or fragment) from the recipe.
 
     Uniforms the compiler removed are skipped. ``pan`` (du, dv): shift the view by this much
     in uv, exactly (it goes into the split origins in float64, see :func:`set_view`).
+    ``pan_only``: set only those that depend on ``pan`` (the rest were set for this recipe).
     """
     recipe = load_recipe(recipe)
     if recipe.values["density_map"] == "image":
         from cellgl.basis.gpu import bind_density_image
 
         bind_density_image(density_encodings(recipe, pan)[0].levels, ctx=getattr(prog, "ctx", None))
-    for name, value in uniform_values(recipe, pan).items():
+    if recipe.values["cell_color"] == "image":
+        from cellgl.texture.images import bind
+
+        bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
+    values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan)
+    for name, value in values.items():
         if name not in prog:
             continue
         u = prog[name]

@@ -69,6 +69,18 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
     }
 }
 
+// The window of ring `ring` that a point within true distance `reach` of the
+// sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
+void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
+{
+    lo = ivec4(0);
+    hi = ivec4(0);
+    for (int a = 0; a < CELL_DIM; a++) {
+        hi[a] = min(ring, int(ceil(reach + f[a])) - 1);
+        lo[a] = -min(ring, int(ceil(reach + 1.0 - f[a])) - 1);
+    }
+}
+
 // Test every feature point of the cell at offset o from the sample's cell.
 void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
@@ -136,11 +148,8 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
         float reach = r.F[CELL_N - 1] < 3.0e38
             ? cell_metric_finish(r.F[CELL_N - 1], p.minkowski_p) * 1.000001 + 1e-6
             : float(ring + 2);
-        ivec4 lo = ivec4(0), hi = ivec4(0);
-        for (int a = 0; a < CELL_DIM; a++) {
-            hi[a] = min(ring, int(ceil(reach + f[a])) - 1);
-            lo[a] = -min(ring, int(ceil(reach + 1.0 - f[a])) - 1);
-        }
+        ivec4 lo, hi;
+        cell_ring_window(ring, reach, f, lo, hi);
         for (int x = lo.x; x <= hi.x; x++)
         for (int y = lo.y; y <= hi.y; y++)
         for (int z = lo.z; z <= hi.z; z++)

@@ -3,19 +3,25 @@
 // One recipe (cellgl/texture/recipe.py) evaluated at a point of basis space:
 //
 //   value  v(x) = sum_i c_i F_i(x) + sum_{i,j<=4} c_ij F_i(x) F_j(x) + c_noise n(x)
+//                 + c_edge E(x) + c_smooth S(x) + c_nsphere R(x)
 //                 (Worley's linear combinations, Qin's generalized basis, the book's
-//                 F1 F2 and F3^2 - F2^2, and gradient noise for comparison)
+//                 F1 F2 and F3^2 - F2^2, and gradient noise for comparison; distance to
+//                 edge, smooth F1 and n-sphere radius: features.glsl)
 //   basis  b(x) = clamp((v(x) - range_lo) / (range_hi - range_lo), 0, 1)
 //                 (range measured once, empirically, as Worley did)
 //   fractal G(x) = sum_i w_i b(L^i x) / sum_i w_i          (sum: Worley's G_n)
 //              or sum_i w_i |0.5 - b(L^i x)| / (0.5 sum w_i)  (qin, Qin's eq. 6)
 //              or the cube of that                          (qin_cube: Qin's wrinkle bump)
+//              or b(min_i v(L^i x) / L^i)                   (min: Blender's edge fractal)
 //                 with w_i = gain^i, L = lacunarity, i < octaves (the last octave
 //                 weighted by the fractional part of octaves); octave i uses seed + 1013 i;
 //                 each octave's term band-limited to the pixel footprint (below)
 //   height h(x) = clamp(((invert ? 1 - G : G) - level_lo) / (level_hi - level_lo), 0, 1)
 //   colour      = ramp(mix(h, cell value of the F1 ID, cell_mix) + noise_color * fbm(x))
 //                 * mix(1, h, shade) * mix(1, lambert(normal), light)
+//                 (cell_color image: mix(ramp(h + noise), image at the F1 point, cell_mix)
+//                 instead; with smoothness > 0 the cell value and the point are the
+//                 smooth-F1 blends)
 //
 // The gradient of h is analytic: dF_n/dx is the unit vector from the n-th feature
 // point towards x (cell_metric_gradient), carried through the combination, the
@@ -62,10 +68,11 @@
 //
 // Requires: cellular.glsl, noise.glsl, texture_params.glsl (generated from the
 // parameter table: struct CellTextureParams, CELL_TEX_* enums).
-// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes and
-// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture/shader.py).
+// Macros: those of cellular.glsl, plus CELL_PERIODIC for tileable recipes,
+// CELL_DENSITY_MAP (a density map: the fields t.density_* of cellgl/texture/shader.py),
+// those of features.glsl and CELL_TEX_CELL_IMAGE (cell_color image).
 
-#include "cellular.glsl"
+#include "features.glsl"
 #include "noise.glsl"
 #include "texture_params.glsl"
 
@@ -77,6 +84,7 @@ struct CellTexel {
     uint id;        // ID of the nearest feature point (octave 0)
     vec4 F;         // F1..F4 at octave 0 (0 past CELL_N)
     float value;    // the combination v at octave 0, before normalisation
+    vec4 cell;      // octave 0: (feature point - x) in basis units (xyz), cell value (w)
 };
 
 // Texture space (u, v, z) -> basis space relative to the origin (offset_x,
@@ -139,9 +147,9 @@ CellParams _cell_tex_basis(CellTextureParams t, int octave)
 
 // The combination v for one octave at basis position L^octave (O + s) (s
 // already scaled by lacunarity^octave: L^octave s), its gradient dv/dx, the
-// nearest ID and F1..F4.
+// nearest ID, F1..F4 and the cell (CellTexel.cell; at this octave's scale).
 float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4 grad,
-                               out uint id, out vec4 F4)
+                               out uint id, out vec4 F4, out vec4 cell_out)
 {
     s = cell_dims(s);
     CellParams p = _cell_tex_basis(t, octave);
@@ -177,6 +185,16 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
         grad += c * (F[i] * dF[j] + F[j] * dF[i]);
     }
 #undef CELL_TEX_NP
+#if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
+    CellFeatures x = cell_features(cell, f, p, r, t.smoothness * t.dist_scale);
+    v += (t.c_edge * x.edge + t.c_smooth * x.smooth_F + t.c_nsphere * x.nsphere) / t.dist_scale;
+    grad += t.c_edge * x.edge_grad + t.c_smooth * x.smooth_grad;
+    cell_out = vec4(x.smooth_delta.xyz / t.dist_scale, x.smooth_attr.w);
+#else
+    v += t.c_smooth * F[0];          // smoothness 0: smooth F1 is F1
+    grad += t.c_smooth * dF[0];
+    cell_out = vec4(r.delta[0].xyz / t.dist_scale, cell_id_value(r.id[0]));
+#endif
     if (t.c_noise != 0.0) {
         vec4 gn;
         ivec4 per = cell_texture_period(t, octave) * int(round(t.noise_frequency));
@@ -219,8 +237,45 @@ vec3 cell_texture_ramp(float x, CellTextureParams t)
 // A value in [0, 1) constant over the Voronoi cell of feature point `id`.
 float cell_texture_cell_value(uint id)
 {
-    return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
+    return cell_id_value(id);
 }
+
+#if CELL_TEX_CELL_IMAGE
+// Provided by the entry point (a storage buffer, cellgl/texture/images.py): texel
+// `index` = row * width + column of the cell image as r | g << 8 | b << 16.
+uint cell_texture_image_texel(int index);
+
+// The cell image (over the uv square, row 0 at v = 0) at uv: bilinear between
+// texel centres, edges clamped, or wrapped when tileable.
+vec3 cell_texture_image(vec2 uv, CellTextureParams t)
+{
+    ivec2 size = ivec2(t.cell_image_info.zw);
+#if CELL_PERIODIC
+    uv -= floor(uv);
+#endif
+    vec2 x = uv * vec2(size) - 0.5;
+#if !CELL_PERIODIC
+    // Far outside the image (uv 10^9: x past the int range) the edge texels are all there is.
+    x = clamp(x, vec2(-1.0), vec2(size));
+#endif
+    vec2 x0 = floor(x);
+    vec2 fr = x - x0;
+    vec3 c = vec3(0.0);
+    for (int k = 0; k < 4; k++) {
+        ivec2 d = ivec2(k & 1, k >> 1);
+        ivec2 q = ivec2(x0) + d;
+#if CELL_PERIODIC
+        q = q - size * ivec2(floor(vec2(q) / vec2(size)));
+#else
+        q = clamp(q, ivec2(0), size - 1);
+#endif
+        uint u = cell_texture_image_texel(q.y * size.x + q.x);
+        float w = (d.x == 1 ? fr.x : 1.0 - fr.x) * (d.y == 1 ? fr.y : 1.0 - fr.y);
+        c += w * vec3(float(u & 255u), float((u >> 8) & 255u), float((u >> 16) & 255u));
+    }
+    return c * (1.0 / 255.0);
+}
+#endif
 
 // The band-limit factor a of an octave whose features are w feature spacings per pixel
 // (see the header): 1 while they are two pixels apart or more, 0 from one pixel down.
@@ -263,13 +318,26 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
         float a = cell_texture_smoothscale(spacings * scale);
         // Octave 0 is always searched: the ID and F1..F4 outputs come from it.
         if (a > 0.0 || i == 0) {
-            vec4 g, F4;
+            vec4 g, F4, cell;
             uint id;
-            float v = cell_texture_combination(s * scale, t, i, g, id, F4);
+            float v = cell_texture_combination(s * scale, t, i, g, id, F4, cell);
             if (i == 0) {
                 o.value = v;
                 o.id = id;
                 o.F = F4;
+                o.cell = cell;
+            }
+            if (t.fractal == CELL_TEX_FRACTAL_MIN) {
+                // Blender's distance-to-edge fractal: the least v(L^i x) / L^i, normalised
+                // after the loop; octave i > 0 fades in by the fraction of octaves and a.
+                float vm = v / scale;
+                if (i == 0 || vm < G) {
+                    float fade = i == 0 ? 1.0 : min(t.octaves - float(i), 1.0) * a;
+                    G = mix(G, vm, fade);
+                    dG = mix(dG, g, fade);
+                }
+                scale *= t.lacunarity;
+                continue;
             }
             float b = (v - t.range_lo) * inv_range;
             vec4 db = g * (inv_range * scale);
@@ -285,15 +353,24 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
             }
             G += w * (a * term + (1.0 - a) * t.octave_mean);
             dG += (w * a) * db;
-        } else {
+        } else if (t.fractal != CELL_TEX_FRACTAL_MIN) {
             G += w * t.octave_mean;
         }
         total += qin ? 0.5 * w : w;
         amp *= t.gain;
         scale *= t.lacunarity;
     }
-    G /= total;
-    dG /= total;
+    if (t.fractal == CELL_TEX_FRACTAL_MIN) {
+        G = (G - t.range_lo) * inv_range;
+        dG *= inv_range;
+        if (G < 0.0 || G > 1.0) {
+            G = clamp(G, 0.0, 1.0);
+            dG = vec4(0.0);
+        }
+    } else {
+        G /= total;
+        dG /= total;
+    }
     if (t.fractal == CELL_TEX_FRACTAL_QIN_CUBE) {
         dG *= 3.0 * G * G;
         G = G * G * G;
@@ -315,7 +392,11 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
     // Normal, y down (image rows) first.
     vec3 n = normalize(vec3(-t.bump * dh.x, -t.bump * dh.y, 1.0));
 
-    float index = mix(h, cell_texture_cell_value(o.id), t.cell_mix);
+#if CELL_TEX_CELL_IMAGE
+    float index = h;
+#else
+    float index = mix(h, o.cell.w, t.cell_mix);
+#endif
     if (t.noise_color != 0.0) {
         vec4 gn;
         ivec4 per = cell_texture_period(t, 0) * int(round(t.noise_frequency));
@@ -323,6 +404,13 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
                                                           per, t.seed + 104729u, t.noise_octaves, gn);
     }
     vec3 rgb = cell_texture_ramp(clamp(index, 0.0, 1.0), t);
+#if CELL_TEX_CELL_IMAGE
+    // The feature point's uv: the sample's (s / (f, f aspect), plus the view's pan)
+    // plus its offset.
+    vec4 pt = s + o.cell;
+    vec2 uv = t.cell_image_info.xy + vec2(pt.x / t.frequency, pt.y / (t.frequency * t.aspect));
+    rgb = mix(rgb, cell_texture_image(uv, t), t.cell_mix);
+#endif
     rgb *= mix(1.0, h, t.shade);
     // Preview lighting from the top left, normalised so that a flat surface keeps its colour.
     vec3 L = normalize(vec3(-1.0, -1.0, 1.5));

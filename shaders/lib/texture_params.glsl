@@ -8,6 +8,7 @@
 #define CELL_TEX_FRACTAL_SUM 1
 #define CELL_TEX_FRACTAL_QIN 2
 #define CELL_TEX_FRACTAL_QIN_CUBE 3
+#define CELL_TEX_FRACTAL_MIN 4
 #define CELL_TEX_RAMP_LINEAR 0
 #define CELL_TEX_RAMP_SPLINE 1
 #define CELL_TEX_NORMAL_OPENGL 0
@@ -47,9 +48,13 @@ struct CellTextureParams {
     float c43;                  // weight of F4 F3 (Qin's product terms)
     float c44;                  // weight of F4 F4 (Qin's product terms)
     float c_noise;              // weight of gradient noise at the same position (Qin's noise comparisons)
+    float c_edge;               // weight of the distance to the cell's border (exact, Euclidean metric only; Blender's Distance to Edge)
+    float c_smooth;             // weight of smooth F1 (-k log sum exp(-F_j / k), k = smoothness)
+    float c_nsphere;            // weight of the n-sphere radius: half the distance from the F1 point to its nearest other point (Euclidean metric only)
+    float smoothness;           // k of smooth F1, in cells (0: F1 itself); with cell_mix the cell value and the cell_image position blend the same way
     float range_lo;             // value mapped to 0 (measured: 0.5th percentile; see cellgl.texture.measure_range)
     float range_hi;             // value mapped to 1 (measured: 99.5th percentile)
-    int fractal;                // none; sum (Worley: sum gain^i b(lac^i x)); qin (sum gain^i |0.5 - b(lac^i x)|); qin_cube (its cube, Qin's wrinkle bump); normalised to [0, 1]
+    int fractal;                // none; sum (Worley: sum gain^i b(lac^i x)); qin (sum gain^i |0.5 - b(lac^i x)|); qin_cube (its cube, Qin's wrinkle bump); normalised to [0, 1]; min (Blender's distance-to-edge fractal: min_i v(lac^i x) / lac^i, then normalised; gain unused)
     float octaves;              // number of octaves (terms; fractional: the last is faded in). Worley's i = 0..5 is 6
     float lacunarity;           // frequency ratio between octaves (integer when tileable)
     float gain;                 // amplitude ratio between octaves
@@ -86,5 +91,8 @@ struct CellTextureParams {
     uint density_thresholds[CELL_DENSITY_LEVELS * CELL_MAX_POINTS];// row L: Poisson table of density level L (density_min .. density_max, geometric)
     ivec4 density_axis[CELL_TEX_OCTAVES * 4];// octave i, lattice axis a at 4 i + a: (o, n, m, b) of cell_density_level
     ivec4 density_info[CELL_TEX_OCTAVES];// octave i: (shift, image width, image height, 0)
+#endif
+#if CELL_TEX_CELL_IMAGE
+    vec4 cell_image_info;       // cell_color image: (u, v) of the view's pan, width, height
 #endif
 };

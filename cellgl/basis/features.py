@@ -1,0 +1,294 @@
+"""Voronoi-cell features beyond F1..Fn: distance to edge, smooth F1, n-sphere radius, cell
+position and colour. NumPy float64 twin of ``shaders/lib/features.glsl``, plus the output
+bookkeeping of :func:`cellgl.cellular` and brute-force yardsticks for the tests.
+
+Function for function as the GLSL (``cell_features`` -> :func:`features`, ``_cell_walk`` ->
+:func:`_walk`, ``cell_id_color`` -> :func:`id_color`), vectorised over samples with the same
+walk (rings of cells, each skipped when its nearest possible point is beyond the reach).
+
+* ``edge``: the Euclidean distance from the sample to the border of its Voronoi cell, min over
+  the other feature points of the distance to their bisector plane with the F1 point. A point
+  at distance ``d`` gives a plane at least ``(d - F1) / 2`` away, so the walk reaches
+  ``F1 + 2 E`` for the best plane ``E`` so far: exact, where a fixed 3^d window is not.
+* ``smooth_F1``: ``-k log sum_j exp(-F_j / k)``, with the position, gradient and colour
+  averaged with the same weights; points with ``F_j >= F1 + 16 k`` (weight below ``e^-16``)
+  are left out.
+* ``nsphere``: half the distance from the F1 point to its nearest other feature point.
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from cellgl.basis import reference as ref
+from cellgl.basis.enums import Metric
+
+#: outputs of :func:`cellgl.cellular` beyond F, delta, id, grad
+OUTPUTS = ("edge", "edge_grad", "nsphere", "position", "color",
+           "smooth_F1", "smooth_position", "smooth_grad", "smooth_color")
+#: outputs that are Euclidean notions (a bisector plane, an inscribed ball)
+EUCLIDEAN_ONLY = ("edge", "edge_grad", "nsphere")
+SMOOTH_CUTOFF = 16.0        #: CELL_SMOOTH_CUTOFF: weights below e^-16 are left out
+SMOOTHNESS_MAX = 0.25       #: largest smoothness k (cells): the walk then reaches F1 + 4
+STRIDE = 20                 #: CELL_FEATURE_STRIDE: floats per sample in the GPU record
+BIG = ref.BIG
+
+
+def feature_max_ring(dim: int) -> int:
+    """CELL_FEATURE_MAX_RING: rings a feature walk may visit before it reports inexact."""
+    return {2: 12, 3: 8, 4: 5}[dim]
+
+
+def flags(outputs) -> dict:
+    """Which walks the outputs need: ``{"edge", "smooth", "nsphere"}`` -> bool."""
+    outs = set(outputs)
+    return {"edge": bool(outs & {"edge", "edge_grad"}),
+            "smooth": any(o.startswith("smooth_") for o in outs),
+            "nsphere": "nsphere" in outs}
+
+
+def defines(outputs, dim: int) -> dict:
+    """The macros of ``shaders/lib/features.glsl`` for these outputs."""
+    f = flags(outputs)
+    return dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=int(f["smooth"]), CELL_NSPHERE=int(f["nsphere"]),
+                CELL_FEATURE_MAX_RING=feature_max_ring(dim))
+
+
+# --------------------------------------------------------------------------- per ID
+
+def id_color(ids) -> np.ndarray:
+    """``cell_id_color``: the cell colour of each feature ID, float64 (..., 3) in [0, 1]."""
+    h = ref.hash_u32(np.asarray(ids, dtype=np.uint64))
+    return np.stack([((h >> np.uint64(s)) & np.uint64(255)).astype(np.float64) / 255.0 for s in (0, 8, 16)],
+                    axis=-1)
+
+
+def id_value(ids) -> np.ndarray:
+    """``cell_id_value``: a value in [0, 1) per feature ID."""
+    h = ref.hash_u32(np.asarray(ids, dtype=np.uint64) ^ np.uint64(0x2545F491))
+    return (h >> np.uint64(8)).astype(np.float64) / 16777216.0
+
+
+def id_attribute(ids) -> np.ndarray:
+    """``cell_id_attribute``: (colour, value) per ID, (..., 4)."""
+    return np.concatenate([id_color(ids), id_value(ids)[..., None]], axis=-1)
+
+
+# --------------------------------------------------------------------------- the walks
+
+def _visit(w: dict, rows, cells, f, o, p: ref.Params):
+    """``_cell_walk_cell`` at offset o (4,) for the given rows."""
+    wc = ref.wrap(cells[rows] + o, p.period)
+    state = ref.cell_seed(wc, p)
+    state, count = ref.point_count(state, p, wc)
+    base = o.astype(np.float64) - f[rows]
+    for k in range(int(count.max(initial=0))):
+        state, q, ids = ref.next_point(state, p)
+        has = k < count
+        _point(w, rows[has], base[has] + q[has], ids[has], o, q[has], p)
+
+
+def _reach(w: dict, rows, on: dict) -> np.ndarray:
+    """``_cell_walk_reach`` (with its rounding margin) of the given rows."""
+    if w["around"]:
+        r = w["nn"][rows]
+    else:
+        F1 = w["F1"][rows]
+        r = F1.copy()
+        if on["edge"]:
+            r = np.maximum(r, F1 + 2.0 * np.minimum(w["edge"][rows], 1e30))
+        if on["smooth"]:
+            r = np.maximum(r, F1 + SMOOTH_CUTOFF * w["k"])
+    return r * 1.000001 + 1e-6
+
+
+def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
+    """``_cell_walk_point`` for one candidate per row."""
+    on = w["on"]
+    delta = delta.copy()
+    delta[:, p.dim:] = 0.0
+    e = delta - w["d1"][rows]
+    e2 = (e * e).sum(axis=1)
+    mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
+    if w["around"]:
+        w["nn"][rows] = np.where(mine, w["nn"][rows], np.minimum(w["nn"][rows], np.sqrt(e2)))
+        return
+    hit = rows[mine]
+    w["found"][hit] = True
+    w["o1"][hit] = o
+    w["q1"][hit] = q[mine]
+    if on["edge"]:
+        ok = ~mine & (e2 > 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / np.sqrt(e2)
+            b = (0.5 * (delta + w["d1"][rows]) * e).sum(axis=1) * inv
+        better = ok & (b < w["edge"][rows])
+        r = rows[better]
+        w["edge"][r] = b[better]
+        w["edge_n"][r] = e[better] * inv[better, None]
+    if on["smooth"]:
+        F1 = w["F1"][rows]
+        d = np.where(mine, F1, ref.metric_finish(ref.metric_length(delta, p), p))
+        k = w["k"]
+        take = mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k))
+        if not take.any():
+            return
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            wt = np.where(mine, 1.0, np.exp((F1 - d) / k) if k > 0 else 0.0)
+        r, wt, dl, dd = rows[take], wt[take], delta[take], d[take]
+        w["wsum"][r] += wt
+        w["wdelta"][r] += wt[:, None] * dl
+        g = np.zeros_like(dl)
+        g[:, : p.dim] = ref.metric_gradient(dl[:, : p.dim], dd, p)
+        w["wgrad"][r] += wt[:, None] * g
+        w["wattr"][r] += wt[:, None] * id_attribute(ids[take])
+
+
+def _offsets(ring: int, dim: int):
+    rng = [range(-ring, ring + 1)] * dim + [range(0, 1)] * (4 - dim)
+    return [np.array(o, dtype=np.int64) for o in itertools.product(*rng) if max(abs(v) for v in o) == ring]
+
+
+def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
+    """``_cell_walk`` for every row; returns whether each finished within ``max_ring`` rings."""
+    N = len(cells)
+    on = w["on"]
+    fd = f[:, : p.dim]
+    m = np.minimum(fd, 1.0 - fd).min(axis=1)
+    every = np.arange(N)
+    _visit(w, every, cells, f, np.zeros(4, dtype=np.int64), p)
+    done = np.zeros(N, dtype=bool)
+    for ring in range(1, max_ring + 1):
+        done |= (ring - 1) + m >= _reach(w, every, on)
+        rows = np.nonzero(~done)[0]
+        if len(rows) == 0:
+            return np.ones(N, dtype=bool)
+        lo, hi = ref.ring_window(ring, np.minimum(_reach(w, rows, on), ring + 2.0), f[rows], p.dim)
+        for o in _offsets(ring, p.dim):
+            inside = np.all((o >= lo) & (o <= hi), axis=1)
+            sel = rows[inside]
+            if len(sel) == 0:
+                continue
+            near = ref._box_distance(np.broadcast_to(o, (len(sel), 4)), f[sel], p) \
+                < ref.metric_term(_reach(w, sel, on), p)
+            if near.any():
+                _visit(w, sel[near], cells, f, o, p)
+    return max_ring + m >= _reach(w, every, on)
+
+
+def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float = 0.0,
+             max_ring: int | None = None) -> dict:
+    """``cell_features``: the walks the ``outputs`` need, for samples (cells (N, 4) int64,
+    fractions f (N, 4)) whose :func:`cellgl.reference.search` result is F, D, I, exact.
+
+    Returns ``{"edge", "nsphere", "smooth_F": (N,), "edge_grad", "smooth_delta", "smooth_grad",
+    "smooth_attr": (N, 4), "exact": (N,) bool}`` in lattice units (``smoothness`` too).
+    """
+    on = flags(outputs)
+    max_ring = max_ring or feature_max_ring(p.dim)
+    N = len(cells)
+    d1 = np.array(D[:, 0], dtype=np.float64)
+    d1[:, p.dim:] = 0.0
+    w = dict(on=on, around=False, d1=d1, id1=np.asarray(I[:, 0]).astype(np.uint64),
+             F1=np.asarray(F[:, 0], dtype=np.float64), k=float(smoothness),
+             edge=np.full(N, BIG), edge_n=np.zeros((N, 4)), wsum=np.zeros(N), wdelta=np.zeros((N, 4)),
+             wgrad=np.zeros((N, 4)), wattr=np.zeros((N, 4)), found=np.zeros(N, dtype=bool),
+             o1=np.zeros((N, 4), dtype=np.int64), q1=np.zeros((N, 4)), nn=np.full(N, BIG))
+    ok = np.asarray(exact, dtype=bool) & _walk(w, cells, f, p, max_ring)
+    g1 = np.zeros((N, 4))
+    g1[:, : p.dim] = ref.metric_gradient(d1[:, : p.dim], w["F1"], p)
+    out = dict(edge=np.maximum(w["edge"], 0.0), edge_grad=-w["edge_n"], smooth_F=w["F1"].copy(),
+               smooth_delta=d1.copy(), smooth_grad=g1, smooth_attr=id_attribute(w["id1"]),
+               nsphere=np.zeros(N))
+    if on["smooth"]:
+        s = w["wsum"] > 0
+        inv = 1.0 / w["wsum"][s]
+        out["smooth_F"][s] = w["F1"][s] - w["k"] * np.log(w["wsum"][s])
+        for name in ("delta", "grad", "attr"):
+            out["smooth_" + name][s] = w["w" + name][s] * inv[:, None]
+    if on["nsphere"]:
+        v = dict(w, around=True, d1=np.zeros((N, 4)), nn=np.full(N, BIG))
+        rows = np.nonzero(w["found"])[0]
+        ok &= w["found"]
+        if len(rows):
+            sub = {k: (a[rows] if isinstance(a, np.ndarray) and a.shape[:1] == (N,) else a) for k, a in v.items()}
+            ok[rows] &= _walk(sub, cells[rows] + w["o1"][rows], w["q1"][rows], p, max_ring)
+            out["nsphere"][rows] = 0.5 * sub["nn"]
+    out["exact"] = ok
+    return out
+
+
+def unpack(raw: np.ndarray, dim: int) -> dict:
+    """The GPU's per-sample record (N, STRIDE) float32 as :func:`features` names it."""
+    return dict(edge=raw[:, 0], nsphere=raw[:, 1], smooth_F=raw[:, 2], edge_grad=raw[:, 4:4 + dim],
+                smooth_delta=raw[:, 8:8 + dim], smooth_grad=raw[:, 12:12 + dim], smooth_attr=raw[:, 16:20])
+
+
+def check(outputs, metric, smoothness) -> float:
+    """Validate the feature outputs against the metric and the smoothness; returns it as float."""
+    import math
+    import numbers
+
+    metric = Metric[metric.upper()] if isinstance(metric, str) else Metric(metric)
+    bad = [o for o in outputs if o in EUCLIDEAN_ONLY]
+    if bad and metric != Metric.EUCLIDEAN:
+        raise ValueError(f"output {bad[0]!r} needs metric 'euclidean' (the distance to a bisector plane "
+                         f"and the inscribed ball are Euclidean notions, as in Blender), got "
+                         f"{metric.name.lower()!r}")
+    if isinstance(smoothness, bool) or not isinstance(smoothness, numbers.Real) \
+            or not math.isfinite(smoothness) or not 0.0 <= smoothness <= SMOOTHNESS_MAX:
+        raise ValueError(f"smoothness must be a number in [0, {SMOOTHNESS_MAX}] (cells), got {smoothness!r}")
+    return float(smoothness)
+
+
+def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int, want) -> None:
+    """Fill ``out`` with the requested feature outputs (sample units) from the walk's result
+    ``feats`` (lattice units, or the GPU's already scaled record when ``scale`` is 1), the
+    sample positions (N, d) float64 and the F1 offsets ``out["delta"]`` and IDs ``out["id"]``."""
+    inv = 1.0 / scale
+    f32 = np.float32
+    if "edge" in want:
+        out["edge"] = (np.asarray(feats["edge"], np.float64) * inv).astype(f32)
+    if "edge_grad" in want:
+        out["edge_grad"] = np.asarray(feats["edge_grad"][:, :dim]).astype(f32)
+    if "nsphere" in want:
+        out["nsphere"] = (np.asarray(feats["nsphere"], np.float64) * inv).astype(f32)
+    if "smooth_F1" in want:
+        out["smooth_F1"] = (np.asarray(feats["smooth_F"], np.float64) * inv).astype(f32)
+    if "smooth_grad" in want:
+        out["smooth_grad"] = np.asarray(feats["smooth_grad"][:, :dim]).astype(f32)
+    if "smooth_position" in want:
+        out["smooth_position"] = positions + np.asarray(feats["smooth_delta"][:, :dim], np.float64) * inv
+    if "smooth_color" in want:
+        out["smooth_color"] = np.asarray(feats["smooth_attr"][:, :3]).astype(f32)
+    if "position" in want:
+        out["position"] = positions + np.asarray(out["delta"][:, 0, :dim], np.float64)
+    if "color" in want:
+        out["color"] = id_color(out["id"][:, 0]).astype(f32)
+
+
+# --------------------------------------------------------------------------- brute force
+
+def brute_force(points: np.ndarray, positions: np.ndarray, smoothness: float = 0.1,
+                minkowski_p: float = 3.0, metric="euclidean") -> dict:
+    """The features by testing every given feature point (the yardstick for the tests).
+
+    points (N, d), positions (K, d) (every feature point that can matter) -> ``edge``,
+    ``nsphere`` (Euclidean), ``smooth_F1`` (no cut-off: every point), ``position`` (N, d) of
+    the nearest point; float64.
+    """
+    diff = positions[None, :, :] - points[:, None, :]
+    d = ref.distances(points, positions, metric, minkowski_p)
+    near = np.argmin(d, axis=1)
+    F1 = d[np.arange(len(points)), near]
+    p1 = positions[near]
+    e = positions[None, :, :] - p1[:, None, :]                       # pj - p1
+    el = np.sqrt((e * e).sum(-1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b = ((0.5 * (diff + (p1 - points)[:, None, :])) * e).sum(-1) / el
+    b[el == 0] = np.inf
+    nn = np.where(el == 0, np.inf, el).min(axis=1)
+    k = smoothness
+    s = F1 - k * np.log(np.exp(-(d - F1[:, None]) / k).sum(axis=1)) if k > 0 else F1
+    return dict(edge=b.min(axis=1), nsphere=0.5 * nn, smooth_F1=s, position=p1, F1=F1)

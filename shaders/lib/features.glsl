@@ -1,0 +1,262 @@
+// cellgl: features of the Voronoi cell beyond F1..Fn, exact.
+//
+// cell_features() takes the result of cell_search() and walks the cells again
+// to find, for the sample x with nearest feature point p1 (F1 = |p1 - x|):
+//
+//   * distance to edge (CELL_EDGE, Euclidean): the distance from x to the
+//     border of p1's Voronoi cell, min over the other points pj of the
+//     distance to their bisector plane,
+//         b_j = dot((p1 + pj) / 2 - x, n_j),   n_j = (pj - p1) / |pj - p1|,
+//     and its gradient -n_j of the nearest plane. Exact: a point at distance
+//     d from x has |pj - p1| <= d + F1, so b_j >= (d^2 - F1^2) / (2 (d + F1))
+//     = (d - F1) / 2; once the best plane is at E, no point further than
+//     F1 + 2 E from x can beat it, and the walk visits every cell nearer than
+//     that (not a fixed 3^d window, which misses planes next to big cells).
+//   * smooth F1 (CELL_SMOOTH, any metric): the exponential smooth minimum
+//         S = -k log sum_j exp(-F_j / k) = F1 - k log sum_j w_j,
+//         w_j = exp(-(F_j - F1) / k),
+//     with the offset to the feature point, the gradient and the cell
+//     attribute (cell_id_attribute) averaged with the weights w_j / sum w.
+//     Points with F_j >= F1 + CELL_SMOOTH_CUTOFF k (w_j < e^-16 ~ 1.1e-7, under
+//     float32 resolution) are left out; every nearer one is visited. k = 0 is
+//     the hard minimum (S = F1).
+//   * n-sphere radius (CELL_NSPHERE, Euclidean): half the distance from p1 to
+//     its nearest other feature point (the radius of the largest ball around
+//     p1 inside its cell), found by an exact nearest-neighbour walk around p1.
+//
+// The walks go ring by ring (Chebyshev rings of cells, as cell_search), skip
+// every cell whose nearest possible point is beyond the current reach, stop
+// once a whole ring is beyond it, and report CellFeatures.exact = false instead
+// of a wrong answer if CELL_FEATURE_MAX_RING rings were not enough.
+//
+// Requires: cellular.glsl. Macros: those of cellular.glsl, CELL_EDGE,
+// CELL_SMOOTH, CELL_NSPHERE (0 or 1; all 0: nothing below is compiled and
+// cell_search is untouched), CELL_FEATURE_MAX_RING.
+
+#include "cellular.glsl"
+
+#ifndef CELL_EDGE
+#define CELL_EDGE 0
+#endif
+#ifndef CELL_SMOOTH
+#define CELL_SMOOTH 0
+#endif
+#ifndef CELL_NSPHERE
+#define CELL_NSPHERE 0
+#endif
+
+// The colour of the cell of feature point `id`: bytes 0, 8 and 16 of its hash,
+// each / 255 (the false colour of `cellgl bake --channels id`).
+vec3 cell_id_color(uint id)
+{
+    uint h = cell_hash_u32(id);
+    return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) * (1.0 / 255.0);
+}
+
+// A value in [0, 1) constant over the cell of feature point `id` (the texture
+// layer's per-cell ramp index).
+float cell_id_value(uint id)
+{
+    return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
+}
+
+// Everything smooth F1 averages per feature point: (colour, value).
+vec4 cell_id_attribute(uint id)
+{
+    return vec4(cell_id_color(id), cell_id_value(id));
+}
+
+#if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
+
+#define CELL_SMOOTH_CUTOFF 16.0
+
+struct CellFeatures {
+    float edge;          // distance to the cell's border (CELL_EDGE)
+    vec4 edge_grad;      // its gradient: minus the normal of the nearest bisector plane
+    float smooth_F;      // smooth F1 (CELL_SMOOTH)
+    vec4 smooth_delta;   // weighted mean of (feature point - sample)
+    vec4 smooth_grad;    // d smooth_F / d sample
+    vec4 smooth_attr;    // weighted mean of cell_id_attribute
+    float nsphere;       // n-sphere radius (CELL_NSPHERE)
+    bool exact;          // false if a walk reached CELL_FEATURE_MAX_RING
+};
+
+// State of one walk. Around the sample (around = false): the F1 point's offset
+// d1 and ID, and the sums of the features; around the F1 point (around = true,
+// d1 = 0): the distance to its nearest other point.
+struct _CellWalk {
+    bool around;
+    vec4 d1;
+    uint id1;
+    float F1;
+    float k;
+    float edge;
+    vec4 edge_n;
+    float wsum;
+    vec4 wdelta;
+    vec4 wgrad;
+    vec4 wattr;
+    bool found;      // the F1 point was seen: its cell offset o1, position q1 in it
+    ivec4 o1;
+    vec4 q1;
+    float nn;
+};
+
+// True distance from the walk's centre beyond which no point matters (now).
+float _cell_walk_reach(_CellWalk w)
+{
+    if (w.around) {
+        return w.nn;
+    }
+    float reach = w.F1;
+#if CELL_EDGE
+    reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
+#endif
+#if CELL_SMOOTH
+    reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+#endif
+    // A margin for rounding: visiting more is always safe.
+    return reach * 1.000001 + 1e-6;
+}
+
+void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, CellParams p)
+{
+    delta = cell_dims(delta);
+    vec4 e = delta - w.d1;                  // pj - p1
+    float e2 = dot(e, e);
+    bool is_p1 = id == w.id1 && e2 < 1e-10;
+    if (w.around) {
+        if (!is_p1) {
+            w.nn = min(w.nn, sqrt(e2));
+        }
+        return;
+    }
+    if (is_p1) {
+        w.found = true;
+        w.o1 = o;
+        w.q1 = q;
+    }
+#if CELL_EDGE
+    if (!is_p1 && e2 > 0.0) {
+        float inv = inversesqrt(e2);
+        float b = dot(0.5 * (delta + w.d1), e) * inv;
+        if (b < w.edge) {
+            w.edge = b;
+            w.edge_n = e * inv;
+        }
+    }
+#endif
+#if CELL_SMOOTH
+    float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+    if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
+        float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
+        w.wsum += wt;
+        w.wdelta += wt * delta;
+        w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
+        w.wattr += wt * cell_id_attribute(id);
+    }
+#endif
+}
+
+void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+{
+    ivec4 c = cell_wrap(cell + o, p.period);
+    uint state = cell_cell_seed(c, p.seed);
+    int count = cell_point_count_at(state, c, p);
+    vec4 base = vec4(o) - f;
+    for (int k = 0; k < count; k++) {
+        uint id;
+        vec4 q = cell_next_point(state, p, id);
+        _cell_walk_point(w, base + q, id, o, q, p);
+    }
+}
+
+// Visit every cell around (cell, f) that can hold a point within the reach;
+// returns whether the walk finished before CELL_FEATURE_MAX_RING rings.
+bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
+{
+    float m = 1.0;
+    for (int a = 0; a < CELL_DIM; a++) {
+        m = min(m, min(f[a], 1.0 - f[a]));
+    }
+    _cell_walk_cell(w, cell, f, ivec4(0), p);
+    for (int ring = 1; ring <= CELL_FEATURE_MAX_RING; ring++) {
+        float reach = _cell_walk_reach(w);
+        if (float(ring - 1) + m >= reach) {
+            return true;
+        }
+        ivec4 lo, hi;
+        cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
+        for (int x = lo.x; x <= hi.x; x++)
+        for (int y = lo.y; y <= hi.y; y++)
+        for (int z = lo.z; z <= hi.z; z++)
+        for (int v = lo.w; v <= hi.w; v++) {
+            ivec4 o = ivec4(x, y, z, v);
+            ivec4 ao = abs(o);
+            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                && _cell_box_distance(o, f, p.minkowski_p)
+                   < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
+                _cell_walk_cell(w, cell, f, o, p);
+            }
+        }
+    }
+    return float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
+}
+
+// The features of the sample (cell, f) whose cell_search() result is r;
+// smoothness: k of smooth F1 in lattice units (>= 0).
+CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
+{
+    _CellWalk w;
+    w.around = false;
+    w.d1 = cell_dims(r.delta[0]);
+    w.id1 = r.id[0];
+    w.F1 = r.F[0];
+    w.k = smoothness;
+    w.edge = 3.0e38;
+    w.edge_n = vec4(0.0);
+    w.wsum = 0.0;
+    w.wdelta = vec4(0.0);
+    w.wgrad = vec4(0.0);
+    w.wattr = vec4(0.0);
+    w.found = false;
+    w.o1 = ivec4(0);
+    w.q1 = vec4(0.0);
+    w.nn = 3.0e38;
+
+    CellFeatures o;
+    o.exact = r.exact && _cell_walk(w, cell, f, p);
+    o.edge = max(w.edge, 0.0);
+    o.edge_grad = -w.edge_n;
+    o.smooth_F = r.F[0];
+    o.smooth_delta = r.delta[0];
+    o.smooth_grad = cell_metric_gradient(r.delta[0], r.F[0], p.minkowski_p);
+    o.smooth_attr = cell_id_attribute(r.id[0]);
+    o.nsphere = 0.0;
+#if CELL_SMOOTH
+    if (w.wsum > 0.0) {
+        float inv = 1.0 / w.wsum;
+        o.smooth_F = w.F1 - w.k * log(w.wsum);
+        o.smooth_delta = w.wdelta * inv;
+        o.smooth_grad = w.wgrad * inv;
+        o.smooth_attr = w.wattr * inv;
+    }
+#endif
+#if CELL_NSPHERE
+    // Around the F1 point: the cell it lies in (unwrapped, as the walk wraps
+    // each visit) and its position in that cell.
+    _CellWalk v = w;
+    v.around = true;
+    v.d1 = vec4(0.0);
+    v.nn = 3.0e38;
+    if (w.found) {
+        o.exact = o.exact && _cell_walk(v, cell + w.o1, w.q1, p);
+        o.nsphere = 0.5 * v.nn;
+    } else {
+        o.exact = false;
+    }
+#endif
+    return o;
+}
+
+#endif

@@ -1,0 +1,198 @@
+"""Voronoi-cell features (distance to edge, smooth F1, n-sphere radius, cell position and colour):
+GPU vs NumPy reference vs brute force over feature_points, gradients, bad input."""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import cellgl
+from cellgl.basis import features
+from cellgl.basis.core import make_params, split
+
+ALL = features.OUTPUTS
+EUCLID = ("edge", "edge_grad", "nsphere", "position", "color", "smooth_F1", "smooth_position",
+          "smooth_grad", "smooth_color")
+SMOOTH = ("position", "color", "smooth_F1", "smooth_position", "smooth_grad", "smooth_color")
+
+GPU_CASES = [
+    (2, "euclidean", dict(distribution="poisson"), EUCLID),
+    (2, "euclidean", dict(distribution="poisson", density=0.4, min_points=0), EUCLID),   # big empty regions
+    (3, "euclidean", dict(distribution="jitter", jitter=0.8), EUCLID),
+    (3, "euclidean", dict(distribution="worley1996"), EUCLID),
+    (4, "euclidean", dict(distribution="poisson", density=1.5), EUCLID),
+    (2, "euclidean", dict(distribution="jitter", period=(5, 7)), EUCLID),
+    (2, "manhattan", dict(distribution="poisson"), SMOOTH),
+    (3, "minkowski", dict(distribution="poisson", minkowski_p=1.5), SMOOTH),
+]
+
+
+def _pts(dim, n=300, lo=-4.0, hi=4.0, seed=3):
+    return np.random.default_rng(seed).uniform(lo, hi, (n, dim))
+
+
+@pytest.mark.parametrize("dim,metric,kw,outs", GPU_CASES)
+def test_gpu_matches_reference(ctx, dim, metric, kw, outs):
+    pts = _pts(dim)
+    g = cellgl.cellular(pts, 1, metric=metric, outputs=outs, smoothness=0.12, **kw)
+    r = cellgl.cellular(pts, 1, metric=metric, outputs=outs, smoothness=0.12, backend="numpy", **kw)
+    assert g.exact.all() and r.exact.all()
+    for name in outs:
+        a, b = getattr(g, name), getattr(r, name)
+        assert a.shape == b.shape, name
+        tol = 1e-6 if name == "position" else 2e-5
+        # gradients and blended colours change fast only where a weight or the nearest plane
+        # switches; compare them where the F1 point is the same
+        np.testing.assert_allclose(a, b, atol=tol if "grad" not in name else 2e-4, rtol=2e-5, err_msg=name)
+    assert g.position.dtype == np.float64 and g.edge is not None or "edge" not in outs
+
+
+def _box_points(pts, kw, pad):
+    """Every feature point in the cells covering pts, widened by pad cells."""
+    dim = pts.shape[1]
+    lo = np.floor(pts.min(0)).astype(int) - pad
+    hi = np.floor(pts.max(0)).astype(int) + pad
+    cells = np.array(list(itertools.product(*[range(lo[a], hi[a] + 1) for a in range(dim)])))
+    return cellgl.feature_points(cells, **kw)
+
+
+BRUTE = [
+    (2, dict(distribution="poisson")),
+    (2, dict(distribution="poisson", density=0.3, min_points=0)),     # sparse: cells empty, big Voronoi cells
+    (2, dict(distribution="jitter", jitter=1.0)),
+    (3, dict(distribution="poisson", density=0.8, min_points=0)),
+    (3, dict(distribution="jitter", jitter=0.5)),
+]
+
+
+@pytest.mark.parametrize("dim,kw", BRUTE)
+def test_exact_against_brute_force(dim, kw):
+    pts = _pts(dim, n=150 if dim == 2 else 60, lo=-2.0, hi=2.0)
+    r = cellgl.cellular(pts, 1, outputs=("edge", "nsphere", "smooth_F1", "position"), smoothness=0.1,
+                        backend="numpy", **kw)
+    assert r.exact.all()
+    fp = _box_points(pts, kw, pad=9 if dim == 2 else 5)
+    bf = features.brute_force(pts, fp.positions, smoothness=0.1)
+    np.testing.assert_allclose(r.edge, bf["edge"], atol=1e-6)
+    np.testing.assert_allclose(r.nsphere, bf["nsphere"], atol=1e-6)
+    np.testing.assert_allclose(r.position, bf["position"], atol=1e-6)
+    np.testing.assert_allclose(r.smooth_F1, bf["smooth_F1"], atol=1e-6)
+
+
+def test_gpu_exact_against_brute_force_sparse(ctx):
+    kw = dict(distribution="poisson", density=0.25, min_points=0)
+    pts = _pts(2, n=200, lo=-3.0, hi=3.0, seed=11)
+    g = cellgl.cellular(pts, 1, outputs=("edge", "nsphere"), **kw)
+    bf = features.brute_force(pts, _box_points(pts, kw, pad=10).positions)
+    assert g.exact.all()
+    np.testing.assert_allclose(g.edge, bf["edge"], atol=2e-5, rtol=2e-5)
+    np.testing.assert_allclose(g.nsphere, bf["nsphere"], atol=2e-5, rtol=2e-5)
+
+
+def test_a_fixed_window_is_wrong_where_the_walk_is_exact():
+    """Blender and Material Maker look for the nearest bisector in the 3^d cells around the
+    sample; next to big cells that misses the nearest border. The walk does not."""
+    kw = dict(distribution="poisson", density=0.3, min_points=0)
+    pts = _pts(2, n=400, lo=-3.0, hi=3.0, seed=5)
+    r = cellgl.cellular(pts, 1, outputs=("edge",), backend="numpy", **kw)
+    fp = _box_points(pts, kw, pad=9)
+    exact = features.brute_force(pts, fp.positions)["edge"]
+    window = np.empty(len(pts))
+    for i, x in enumerate(pts):
+        own = np.all(np.abs(np.floor(fp.positions) - np.floor(x)) <= 1, axis=1)
+        window[i] = features.brute_force(x[None], fp.positions[own])["edge"][0] if own.sum() > 1 else np.inf
+    np.testing.assert_allclose(r.edge, exact, atol=1e-6)
+    assert np.sum(np.abs(window - exact) > 1e-3) > 10
+
+
+@pytest.mark.parametrize("metric", ["euclidean", "manhattan"])
+def test_gradients_match_finite_differences(metric):
+    pts = _pts(2, n=200, seed=8)
+    outs = ("smooth_F1", "smooth_grad") + (("edge", "edge_grad") if metric == "euclidean" else ())
+    kw = dict(metric=metric, outputs=outs, smoothness=0.15, backend="numpy")
+    r = cellgl.cellular(pts, 1, **kw)
+    h = 1e-5
+    for name in ("smooth_F1", "edge")[: len(outs) // 2]:
+        fd = np.stack([(getattr(cellgl.cellular(pts + h * np.eye(2)[a], 1, **kw), name)
+                        - getattr(cellgl.cellular(pts - h * np.eye(2)[a], 1, **kw), name)) / (2 * h)
+                       for a in range(2)], axis=1)
+        grad = getattr(r, "smooth_grad" if name == "smooth_F1" else "edge_grad")
+        ok = np.all(np.abs(fd - grad) < 2e-2, axis=1)       # away from kinks (nearest plane switches)
+        assert ok.mean() > 0.9, name
+
+
+def test_smoothness_zero_is_the_hard_minimum_and_blends_grow_with_it():
+    pts = _pts(2, n=200)
+    r0 = cellgl.cellular(pts, 1, outputs=("F", "color") + SMOOTH, smoothness=0.0, backend="numpy")
+    np.testing.assert_allclose(r0.smooth_F1, r0.F[:, 0], atol=1e-7)
+    np.testing.assert_allclose(r0.smooth_color, r0.color, atol=1e-7)
+    np.testing.assert_allclose(r0.smooth_position, r0.position, atol=1e-7)
+    r1 = cellgl.cellular(pts, 1, outputs=("F",) + SMOOTH, smoothness=0.2, backend="numpy")
+    assert np.all(r1.smooth_F1 <= r1.F[:, 0] + 1e-9)
+    assert np.mean(r1.F[:, 0] - r1.smooth_F1) > 0.01
+
+
+def test_edge_is_zero_on_the_border_and_position_is_the_nearest_point():
+    r = cellgl.cellular(_pts(2, n=300), 2, outputs=("F", "delta", "edge", "position", "nsphere"), backend="numpy")
+    # the edge distance never exceeds half the F1-F2 gap's bound (F2 - F1) / 2 <= E ... <= (F1 + F2) / 2
+    F1, F2 = r.F[:, 0], r.F[:, 1]
+    assert np.all(r.edge >= (F2 - F1) / 2 - 1e-6) and np.all(r.edge <= (F1 + F2) / 2 + 1e-6)
+    # n-sphere: the ball around the F1 point inside its cell reaches no further than the sample's border
+    assert np.all(r.nsphere <= F1 + r.edge + 1e-6)
+
+
+def test_color_is_the_bake_id_false_colour():
+    from cellgl.io.spec import id_colors
+
+    r = cellgl.cellular(_pts(2, n=50), 1, outputs=("id", "color"), backend="numpy")
+    np.testing.assert_array_equal(np.round(r.color * 255).astype(np.uint8), id_colors(r.id[:, 0]))
+
+
+def test_grid_features_match_point_features(ctx):
+    g = cellgl.cellular_grid((12, 16), origin=(0.1, 0.2), spacing=0.25, n=1,
+                             outputs=("edge", "position", "smooth_position"))
+    ys, xs = np.mgrid[0:12, 0:16]
+    pts = np.stack([0.1 + 0.25 * xs, 0.2 + 0.25 * ys], axis=-1).reshape(-1, 2)
+    p = cellgl.cellular(pts, 1, outputs=("edge", "position", "smooth_position"))
+    np.testing.assert_allclose(g.edge.reshape(-1), p.edge, atol=1e-6)
+    np.testing.assert_allclose(g.position.reshape(-1, 2), p.position, atol=1e-5)
+    np.testing.assert_allclose(g.smooth_position.reshape(-1, 2), p.smooth_position, atol=1e-5)
+    assert g.edge.shape == (12, 16) and g.position.shape == (12, 16, 2)
+
+
+def test_walk_cap_is_reported_not_wrong():
+    from cellgl.basis import reference
+
+    kw = dict(distribution="poisson", density=0.05, min_points=0)
+    pts = _pts(2, n=100, lo=-20, hi=20)
+    p = make_params(2, **kw)
+    cells, fr = split(pts)
+    F, D, I, ex = reference.search(cells, fr, p, 1)
+    out = features.features(cells, fr, p, F, D, I, ex, ("edge",), max_ring=1)
+    full = features.features(cells, fr, p, F, D, I, ex, ("edge",), max_ring=40)
+    assert not out["exact"].all()
+    ok = out["exact"] & full["exact"]
+    np.testing.assert_allclose(out["edge"][ok], full["edge"][ok])
+
+
+@pytest.mark.parametrize("bad,match", [
+    (dict(metric="manhattan", outputs=("edge",)), "needs metric 'euclidean'"),
+    (dict(metric="chebyshev", outputs=("nsphere",)), "needs metric 'euclidean'"),
+    (dict(outputs=("smooth_F1",), smoothness=0.5), r"smoothness must be a number in \[0, 0.25\]"),
+    (dict(outputs=("smooth_F1",), smoothness=float("nan")), "smoothness"),
+    (dict(outputs=("edges",)), "unknown output 'edges'"),
+])
+def test_bad_input(bad, match):
+    with pytest.raises(ValueError, match=match):
+        cellgl.cellular(_pts(2, n=4), 1, backend="numpy", **bad)
+
+
+def test_fast_path_defines_are_unchanged():
+    from cellgl.basis import gpu
+
+    p = make_params(2)
+    d = gpu.defines_for(p, 4, ("F", "delta", "id"))
+    assert d["CELL_EDGE"] == d["CELL_SMOOTH"] == d["CELL_NSPHERE"] == 0
+    d = gpu.defines_for(p, 1, ("F", "edge", "smooth_F1"))
+    assert d["CELL_EDGE"] == d["CELL_SMOOTH"] == 1 and d["CELL_NSPHERE"] == 0
