@@ -7,9 +7,13 @@ it (``args -> int``); they live with the command's code and are registered in ``
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import json
+import os
+import signal
 import sys
+import threading
 from collections.abc import Callable, Sequence
 
 __all__ = ["main", "build_parser"]
@@ -104,23 +108,105 @@ def _user_errors() -> tuple[type[BaseException], ...]:
     return (ValueError, ContextError, ShaderError)
 
 
+class Terminated(BaseException):
+    """SIGTERM or SIGHUP, raised in the main thread like KeyboardInterrupt for Ctrl-C, so that
+    every ``with`` block unwinds: temporary files are deleted, outputs left as they were."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise(signum: int):
+    raise Terminated(signum)
+
+
+def _raise_terminated(signum, frame):
+    gl = sys.modules.get("cellgl.gl.context")
+    if gl is not None and getattr(gl._tls, "depth", 0) > 0:
+        # inside a GL call: raised as it returns (an exception in the middle of GL work has
+        # been seen to crash the driver at exit)
+        gl.deferred[:] = [lambda: _raise(signum)]
+        return
+    _raise(signum)
+
+
+@contextlib.contextmanager
+def _signals_unwind():
+    """SIGTERM and SIGHUP raise :class:`Terminated` while the command runs (main thread only)."""
+    old = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in ("SIGTERM", "SIGHUP"):
+            sig = getattr(signal, name, None)
+            if sig is not None:
+                old[sig] = signal.signal(sig, _raise_terminated)
+    try:
+        yield
+    finally:
+        for sig, handler in old.items():
+            signal.signal(sig, handler)
+
+
+def _error(message: str, status: int = 2) -> int:
+    try:
+        print(f"{PROG}: error: {message}", file=sys.stderr)
+    except OSError:
+        pass
+    return status
+
+
+def _os_error(exc: OSError) -> str:
+    what = exc.strerror or str(exc)
+    if exc.filename is not None:
+        return f"{exc.filename}: {what}"
+    return f"cannot write to standard output: {what}"
+
+
+def _quiet_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush cannot fail again."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError):
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; return the exit status (0 ok, 2 usage or user error)."""
+    """Run the command line; return the exit status (0 ok, 1 internal error, 2 usage or user
+    error, 128 + N on signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP). Never a traceback unless
+    ``CELLGL_DEBUG=1``."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    try:
-        return int(args._run(args) or 0)
-    except _user_errors() as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        return 130
-    except BrokenPipeError:
-        # Output piped into e.g. `head`: stop quietly, as other command line tools do.
-        import os
-
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+    with _signals_unwind():
+        try:
+            status = int(args._run(args) or 0)
+            sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
+            return status
+        except _user_errors() as exc:
+            return _error(str(exc))
+        except KeyboardInterrupt:
+            return 130
+        except Terminated as exc:
+            # Unwound: temporary files are gone. Leave without the interpreter's teardown, which
+            # would release GL state the signal may have interrupted mid-call (a rare SIGSEGV).
+            for stream in (sys.stdout, sys.stderr):
+                with contextlib.suppress(Exception):
+                    stream.flush()
+            os._exit(128 + exc.signum)
+        except BrokenPipeError:
+            # Output piped into e.g. `head`: stop quietly, as other command line tools do.
+            _quiet_stdout()
+            return 0
+        except OSError as exc:
+            if exc.filename is None:
+                _quiet_stdout()
+            return _error(_os_error(exc))
+        except RecursionError:
+            return _error("input nested too deeply")
+        except Exception as exc:  # noqa: BLE001 - the last resort: a message, not a traceback
+            if os.environ.get("CELLGL_DEBUG", "").strip() not in ("", "0"):
+                raise
+            return _error(f"internal error: {type(exc).__name__}: {exc} (CELLGL_DEBUG=1 shows "
+                          "the traceback; please report it)", status=1)
 
 
 if __name__ == "__main__":  # pragma: no cover

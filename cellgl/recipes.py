@@ -8,7 +8,6 @@ its functions, and the front ends (bake, export, viewer, CLI) use it.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from cellgl.pups import recipe as pups_recipe
@@ -17,6 +16,7 @@ from cellgl.texture import recipe as cellular
 from cellgl.texture import evaluation as cellular_render
 from cellgl.texture.params import PARAMS
 from cellgl.texture.recipe import Recipe
+from cellgl.texture.schema import RecipeError, read_json
 
 __all__ = ["load_recipe", "list_presets", "render", "evaluate", "is_pups"]
 
@@ -54,8 +54,8 @@ def _json_kind(path: Path):
     """The ``kind`` key of a recipe file (None: a cellular recipe, or unreadable: let
     :meth:`Recipe.load` report it)."""
     try:
-        d = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError):
+        d = read_json(path)
+    except RecipeError:
         return None
     return d.get("kind") if isinstance(d, dict) else None
 

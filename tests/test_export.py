@@ -232,14 +232,18 @@ void main()
 """
 
 
-def render_snippet(ctx, body: str, width: int, height: int, call: str = "cellgl_texture(uv)") -> np.ndarray:
+def render_snippet(ctx, body: str, width: int, height: int, call: str = "cellgl_texture(uv)",
+                   uniforms: dict | None = None) -> np.ndarray:
     """``call`` (default ``cellgl_texture(uv)``) of ``body`` at every pixel centre ``uv``, rows
-    top to bottom (bake order)."""
+    top to bottom (bake order); ``uniforms``: name -> value set on the program first."""
     frag = ("#version 330 core\n" + body +
             "uniform vec2 size;\nout vec4 cellgl_out;\n"
             f"void main() {{ vec2 uv = gl_FragCoord.xy / size; cellgl_out = {call}; }}\n")
     prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
     prog["size"].value = (float(width), float(height))
+    for name, value in (uniforms or {}).items():
+        if name in prog:  # the compiler drops uniforms the code never reads
+            prog[name].value = value
     key = (id(ctx), width, height)
     if key not in _TARGETS:          # kept for the session: releasing a bound FBO upsets moderngl
         tex = ctx.texture((width, height), 4, dtype="f4")
@@ -329,6 +333,33 @@ def test_uniforms_variant_compiles(tmp_path, target):
     code = re.sub(r"//[^\n]*", "", text)
     assert re.search(r"uniform (highp )?float cellgl_frequency;", code)
     compile_snippet(tmp_path, target, text)
+
+
+def header_uniforms(text: str) -> dict:
+    """What a client that reads the header's ``type name = value`` lines gets: name -> value
+    (lines it cannot read as that, e.g. without a type, are skipped as a client would)."""
+    import ast
+
+    out = {}
+    for m in re.finditer(r"^//   ([a-z]+[0-9]?(?:\[\d+\])?) (cellgl_\w+) = (.+)$", text, re.M):
+        typ, name, value = m.groups()
+        v = ast.literal_eval(value)
+        out[name] = list(v) if typ.endswith("]") else v
+    return out
+
+
+@pytest.mark.parametrize("preset", ["density", "flagstone"])
+def test_uniforms_header_reproduces_the_bake(ctx, preset):
+    """Every uniform in the --uniforms header carries its type (the density map's three
+    arrays had none: set from the header they stayed 0 and the image was wrong)."""
+    W, H = 48, 32
+    text = export.export(preset, "glsl", uniforms=True)
+    code = snippet_code(text)
+    declared = set(re.findall(r"^uniform \w+ (cellgl_\w+)", code, re.M))
+    values = header_uniforms(text)
+    assert declared <= set(values), sorted(declared - set(values))
+    got = render_snippet(ctx, code, W, H, uniforms=values)
+    np.testing.assert_allclose(got, _bake(preset, W, H), atol=2e-6)
 
 
 def test_wgsl_uniforms_refused():

@@ -11,6 +11,7 @@ import numpy as np
 
 from cellgl.gl import context
 from cellgl.basis import features as _features
+from cellgl.gl.threads import gl_call
 from cellgl.basis.enums import glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
@@ -110,6 +111,7 @@ def bind_storage(words, binding: int, ctx=None) -> None:
     held[1].bind_to_storage_buffer(binding)
 
 
+@gl_call
 def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     """Point count and density level of each integer cell (M, 4) int, on the GPU (as the
     search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
@@ -200,6 +202,7 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
     return out
 
 
+@gl_call
 def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
@@ -228,6 +231,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     return out, ~inexact
 
 
+@gl_call
 def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs,
                 smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
     """Cellular basis on a regular grid generated on the GPU.

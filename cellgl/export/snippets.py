@@ -379,8 +379,11 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
             "    return cellgl_texture3_filtered(p, fwidth(p));\n"
             "}\n"
         )
-    decl_types = {n: t for t, n, _ in texture._uniform_decls("")}
-    ulist = [(decl_types.get(k[2:], ""), k[2:], v) for k, v in vals.items()]
+    # every uniform the values fill, the density map's included: a header line without its type
+    # would leave a client that reads `type name = value` with that uniform at 0
+    decl_types = {n: t for t, n, _ in texture._uniform_decls("") + texture._uniform_decls("", True)}
+    ulist = [(decl_types[k[2:]] + (f"[{len(v)}]" if isinstance(v, (list, tuple)) else ""), k[2:], v)
+             for k, v in vals.items()]
     return Program(files=["lib/texture.glsl"], defines=defines, params=params, entry=entry,
                    title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist, filtered=True)
 
@@ -454,7 +457,11 @@ def run_cli(args) -> int:
     import os
     import sys
 
+    from cellgl.io.tempfiles import check_output
+
     check_target(args.target)
+    if args.output is not None:  # before the work: a missing or read-only directory, a long name
+        check_output(os.path.abspath(args.output))
     recipe = _load(args.recipe, args.sets)
     text = export(recipe, args.target, uniforms=args.uniforms)
     if args.output is None:

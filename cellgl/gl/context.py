@@ -11,10 +11,24 @@ One context per backend per process. Backends, in the order tried when none is n
     can be found.
 
 The environment variable ``CELLGL_BACKEND`` (``egl``, ``glx`` or ``osmesa``) forces one backend.
+
+Threads: one shared context per backend and process, and one lock. Every cellgl call that does
+GL work holds the lock and has the context current on the calling thread for its duration, then
+releases it from the thread, so calls from any number of threads are safe (they run one at a
+time). :func:`get_context` called outside a cellgl call (your own moderngl work) leaves the
+context current on your thread; wrap such work in ``with current() as ctx:`` when other threads
+use cellgl meanwhile. A thread that finds the shared context held that way by another thread gets
+a context of its own (its programs compile again) instead of failing.
+
+fork: a child process forked after the parent used GL (``os.fork``, multiprocessing's ``fork``
+start method) gets a fresh context on first use: the parent's, whose driver threads do not
+exist in the child, is left untouched (using or releasing it would hang). See README, "Threads
+and processes".
 """
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import ctypes.util
 import os
@@ -24,7 +38,8 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl
+from cellgl.gl import glsl, osmesa
+from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
     "BACKENDS",
@@ -33,6 +48,7 @@ __all__ = [
     "check_gl_error",
     "compute_program",
     "context_info",
+    "current",
     "get_context",
     "program",
 ]
@@ -55,98 +71,25 @@ class ContextError(RuntimeError):
 
 
 _lock = threading.RLock()
-_contexts: dict[str, moderngl.Context] = {}
+_contexts: dict[str, moderngl.Context] = {}      # the shared context of each backend
 _default_backend: str | None = None
 _backend_of: dict[int, str] = {}
 _programs: dict[tuple, object] = {}
-
-
-# --------------------------------------------------------------------------------------------
-# OSMesa loader
-# --------------------------------------------------------------------------------------------
-
-_OSMESA_RGBA = 0x1908
-_GL_UNSIGNED_BYTE = 0x1401
-_OSMESA_FORMAT = 0x22
-_OSMESA_DEPTH_BITS = 0x30
-_OSMESA_STENCIL_BITS = 0x31
-_OSMESA_ACCUM_BITS = 0x32
-_OSMESA_PROFILE = 0x33
-_OSMESA_CORE_PROFILE = 0x34
-_OSMESA_CONTEXT_MAJOR_VERSION = 0x36
-_OSMESA_CONTEXT_MINOR_VERSION = 0x37
-
-
-class OSMesaLoader:
-    """A moderngl loader (``load_opengl_function``, ``release``) backed by libOSMesa.
-
-    Creates a core-profile context (4.5, else 4.3) and makes it current on a small RGBA pbuffer.
-    """
-
-    def __init__(self, width: int = 16, height: int = 16, library: str | None = None):
-        path = library or ctypes.util.find_library("OSMesa")
-        if not path:
-            raise ContextError("libOSMesa not found (Debian/Ubuntu: apt-get install libosmesa6)")
-        lib = ctypes.CDLL(path)
-        self._lib = lib
-        lib.OSMesaCreateContextAttribs.restype = ctypes.c_void_p
-        lib.OSMesaCreateContextAttribs.argtypes = [ctypes.POINTER(ctypes.c_int), ctypes.c_void_p]
-        lib.OSMesaMakeCurrent.restype = ctypes.c_ubyte
-        lib.OSMesaMakeCurrent.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint,
-                                          ctypes.c_int, ctypes.c_int]
-        lib.OSMesaGetProcAddress.restype = ctypes.c_void_p
-        lib.OSMesaGetProcAddress.argtypes = [ctypes.c_char_p]
-        lib.OSMesaDestroyContext.restype = None
-        lib.OSMesaDestroyContext.argtypes = [ctypes.c_void_p]
-
-        self._ctx = None
-        tried = []
-        for major, minor in ((4, 5), (4, 3)):
-            attribs = [
-                _OSMESA_FORMAT, _OSMESA_RGBA,
-                _OSMESA_DEPTH_BITS, 24,
-                _OSMESA_STENCIL_BITS, 8,
-                _OSMESA_ACCUM_BITS, 0,
-                _OSMESA_PROFILE, _OSMESA_CORE_PROFILE,
-                _OSMESA_CONTEXT_MAJOR_VERSION, major,
-                _OSMESA_CONTEXT_MINOR_VERSION, minor,
-                0,
-            ]
-            arr = (ctypes.c_int * len(attribs))(*attribs)
-            handle = lib.OSMesaCreateContextAttribs(arr, None)
-            if handle:
-                self._ctx = handle
-                break
-            tried.append(f"{major}.{minor}")
-        if not self._ctx:
-            raise ContextError(
-                f"OSMesa ({path}) could not create a core profile context of version "
-                f"{' or '.join(tried)}; cellgl needs OpenGL 4.3 (a gallium/llvmpipe OSMesa, "
-                "e.g. Mesa >= 20)"
-            )
-        self._width, self._height = width, height
-        self._buffer = ctypes.create_string_buffer(width * height * 4)
-        self.make_current()
-
-    def make_current(self) -> None:
-        ok = self._lib.OSMesaMakeCurrent(self._ctx, self._buffer, _GL_UNSIGNED_BYTE,
-                                         self._width, self._height)
-        if not ok:
-            raise ContextError("OSMesaMakeCurrent failed")
-
-    def load_opengl_function(self, name: str) -> int:
-        return self._lib.OSMesaGetProcAddress(name.encode("ascii")) or 0
-
-    def __enter__(self):
-        self.make_current()
-
-    def __exit__(self, *args):
-        pass
-
-    def release(self) -> None:
-        if self._ctx:
-            self._lib.OSMesaDestroyContext(self._ctx)
-            self._ctx = None
+#: id(ctx) -> (ctx, ident of the thread it is current on), as far as cellgl made it so
+_bound: dict[int, tuple[moderngl.Context, int]] = {}
+#: thread-private contexts (see get_context) not in use: backend -> contexts, reused
+_spare: dict[str, list] = {}
+_private: set[int] = set()
+_tls = threading.local()   # depth (nesting of current()), guard, private: backend -> ctx
+_pid = os.getpid()
+#: displays opened in this process / in a process it was forked from (their threads are gone)
+_opened: set[str] = set()
+_tainted: set[str] = set()
+#: GL state inherited through fork: kept alive, never released (releasing would hang)
+_orphans: list = []
+#: what a signal handler (the CLI's, for SIGTERM/SIGHUP) deferred because it fired inside a
+#: cellgl call: called (it raises) on leaving the outermost one, never in the middle of GL work
+deferred: list = []
 
 
 def _context_from_loader(loader, require: int) -> moderngl.Context:
@@ -176,21 +119,44 @@ def _context_from_loader(loader, require: int) -> moderngl.Context:
 
 
 def _create(backend: str) -> moderngl.Context:
+    """A new context of ``backend``, current on this thread, on a display whose driver threads
+    exist in this process (see :mod:`cellgl.gl.surfaceless`)."""
     if backend == "egl":
-        return moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_GL)
+        if "egl" not in _tainted:
+            _opened.add("egl")
+            return moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_GL)
+        if "egl-surfaceless" not in _tainted:
+            from cellgl.gl.surfaceless import SurfacelessEGLLoader
+
+            _opened.add("egl-surfaceless")
+            return _from_loader(SurfacelessEGLLoader())
+        raise ContextError(_FORKED)
+    if backend in _tainted:
+        raise ContextError(_FORKED)
     if backend == "glx":
         if not os.environ.get("DISPLAY"):
             raise ContextError("DISPLAY is not set")
+        _opened.add("glx")
         # glcontext's default backend on Linux is X11/GLX.
         return moderngl.create_context(standalone=True, require=REQUIRED_GL)
     if backend == "osmesa":
-        loader = OSMesaLoader()
-        try:
-            return _context_from_loader(loader, REQUIRED_GL)
-        except Exception:
-            loader.release()
-            raise
+        path = osmesa.probe()
+        _opened.add("osmesa")
+        return _from_loader(osmesa.OSMesaLoader(library=path))
     raise _unknown_backend(backend)
+
+
+_FORKED = ("this process was forked from one that had already used every display this backend "
+           "can open (Mesa's driver threads do not survive fork, so those displays would hang); "
+           "start it with multiprocessing's 'spawn' or 'forkserver' method instead")
+
+
+def _from_loader(loader) -> moderngl.Context:
+    try:
+        return _context_from_loader(loader, REQUIRED_GL)
+    except Exception:
+        loader.release()
+        raise
 
 
 def _unknown_backend(name: object) -> ValueError:
@@ -222,7 +188,108 @@ def _current(ctx: moderngl.Context) -> moderngl.Context:
     or fail ("cannot create program"). Making ours current again is cheap when it already is.
     """
     ctx.mglo.__enter__()
+    _bound[id(ctx)] = (ctx, threading.get_ident())
+    if getattr(_tls, "guard", None) is None:
+        _tls.guard = _ThreadGuard()
     return ctx
+
+
+def _release(ctx: moderngl.Context) -> None:
+    """Make ``ctx`` current on no thread (so that another thread can make it current)."""
+    ctx.mglo.__exit__(None, None, None)
+    _bound.pop(id(ctx), None)
+
+
+class _ThreadGuard:
+    """Lives in a thread's locals; when the thread ends, releases the contexts still current
+    on it (a context left current on a finished thread can never be made current again) and
+    hands its private contexts back for reuse."""
+
+    def __init__(self):
+        self.pid, self.ident = os.getpid(), threading.get_ident()
+
+    def __del__(self):
+        if os.getpid() != self.pid:  # the copy in a forked child: its contexts are not ours
+            return
+        try:
+            for ctx, ident in list(_bound.values()):
+                if ident == self.ident:
+                    _release(ctx)
+                    if id(ctx) in _private:
+                        _spare.setdefault(_backend_of[id(ctx)], []).append(ctx)
+        except Exception:  # noqa: BLE001 - interpreter shutdown
+            pass
+
+
+def _take(shared: moderngl.Context, name: str) -> moderngl.Context:
+    """``shared`` made current on this thread, or this thread's private context of backend
+    ``name`` when ``shared`` is current on another thread (held there outside cellgl calls:
+    the caller holds the lock)."""
+    private = getattr(_tls, "private", None)
+    if private is None:
+        private = _tls.private = {}
+    if name in private:
+        return _current(private[name])
+    owner = _bound.get(id(shared))
+    if owner is None or owner[1] == threading.get_ident():
+        return _current(shared)
+    spare = _spare.get(name)
+    ctx = spare.pop() if spare else _create(name)
+    _backend_of[id(ctx)] = name
+    _private.add(id(ctx))
+    private[name] = ctx
+    return _current(ctx)
+
+
+def _after_fork_in_child() -> None:
+    """In a forked child: forget the parent's GL state (keeping it alive: releasing it would
+    wait for driver threads that do not exist here) and the lock (another thread may have held
+    it at fork time); the next get_context() opens a display of its own."""
+    global _lock, _tls, _bound, _default_backend, _pid
+    if _pid == os.getpid():
+        return
+    _orphans.append((dict(_contexts), dict(_programs), _bound, _spare.copy(), _tls))
+    _tainted.update(_opened)
+    _opened.clear()
+    for table in (_contexts, _programs, _backend_of, _spare, _private, osmesa.probed):
+        table.clear()
+    _bound, _default_backend = {}, None
+    deferred.clear()
+    _lock, _tls, _pid = threading.RLock(), threading.local(), os.getpid()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+@contextlib.contextmanager
+def _section():
+    """Hold the lock; on leaving the outermost one, release from this thread the contexts made
+    current during it (those current here before stay so)."""
+    with _lock:
+        depth = getattr(_tls, "depth", 0)
+        me = threading.get_ident()
+        before = {k for k, (_, t) in _bound.items() if t == me} if depth == 0 else set()
+        _tls.depth = depth + 1
+        try:
+            yield
+        finally:
+            _tls.depth = depth
+            if depth == 0:
+                for k, (ctx, t) in list(_bound.items()):
+                    if t == me and k not in before and k not in _private:
+                        _release(ctx)
+                if deferred and threading.current_thread() is threading.main_thread():
+                    deferred.pop()()
+
+
+@contextlib.contextmanager
+def current(backend: str | None = None):
+    """``with current() as ctx:``: the context (as :func:`get_context`) current on this thread,
+    with the process's GL lock held, for GL work of your own while other threads use cellgl.
+    On leaving, it is released from the thread again (unless it was current here before)."""
+    with _section():
+        yield get_context(backend)
 
 
 class _CurrentEGLLoader:
@@ -279,7 +346,11 @@ def get_context(backend: str | None = None) -> moderngl.Context:
     Returns
     -------
     moderngl.Context
-        Cached: the same object for the same backend; made current on this thread.
+        Cached: the same object for the same backend (per process: a forked child gets its
+        own); made current on this thread, where it stays current until the thread ends or
+        a cellgl call on it finishes that did not find it current. Safe from any thread; a
+        thread that finds the shared context current on another (outside cellgl calls) gets a
+        private one. See :func:`current` for GL work of your own beside other threads.
 
     Raises
     ------
@@ -289,6 +360,8 @@ def get_context(backend: str | None = None) -> moderngl.Context:
         No backend gave an OpenGL 4.3 context; the message lists each backend tried.
     """
     global _default_backend
+    if _pid != os.getpid():  # forked by a path that skipped the at-fork hook
+        _after_fork_in_child()
     with _lock:
         if backend is None:
             env = os.environ.get("CELLGL_BACKEND", "").strip()
@@ -296,7 +369,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 candidates = [_check_name(env, "CELLGL_BACKEND")]
             else:
                 if _default_backend is not None:
-                    return _current(_contexts[_default_backend])
+                    return _take(_contexts[_default_backend], _default_backend)
                 candidates = ["egl"]
                 if os.environ.get("DISPLAY"):
                     candidates.append("glx")
@@ -319,9 +392,10 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                     continue
                 _contexts[name] = ctx
                 _backend_of[id(ctx)] = name
+                _current(ctx)  # created current on this thread
             if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip():
                 _default_backend = name
-            return _current(ctx)
+            return _take(ctx, name)
 
         skipped = [b for b in BACKENDS if b not in candidates]
         note = ""
@@ -329,6 +403,10 @@ def get_context(backend: str | None = None) -> moderngl.Context:
             reasons = {"glx": "DISPLAY not set", "osmesa": "libOSMesa not found"}
             note = "\n" + "\n".join(f"  {b}: skipped ({reasons.get(b, 'not tried')})"
                                     for b in skipped)
+        settings = [f"{k}={os.environ[k]}" for k in osmesa.DRIVER_ENV if k in os.environ]
+        if settings:
+            note += ("\n  driver settings in the environment: " + ", ".join(settings)
+                     + " (unset them to let Mesa choose, or set GALLIUM_DRIVER=llvmpipe)")
         raise ContextError(
             "could not create an OpenGL 4.3 context. Backends tried:\n"
             + "\n".join(errors) + note + "\n" + _INSTALL_HINT
@@ -392,7 +470,11 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
         (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
     """
-    ctx = ctx if ctx is not None else get_context()
+    with _section():  # a cellgl call: from any thread, leaving no context held there
+        return _info(ctx if ctx is not None else get_context())
+
+
+def _info(ctx: moderngl.Context) -> dict:
     info = ctx.info
     return {
         "backend": _backend_of.get(id(ctx)),

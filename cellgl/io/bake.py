@@ -9,6 +9,7 @@ Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
@@ -23,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl.io.tempfiles import NAME_MAX, atomic_paths, human_size
 from cellgl.texture import antialias
 
 __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
@@ -184,6 +186,7 @@ def _check_path(path) -> tuple[Path, str]:
     if ext not in FORMATS:
         raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
                         f"accepted {_accepted(FORMATS)}")
+    _check_name(path)
     if path.is_dir():
         raise BakeError(f"output {str(path)!r} is a directory; give a file name")
     parent = path.parent if str(path.parent) else Path(".")
@@ -192,6 +195,13 @@ def _check_path(path) -> tuple[Path, str]:
     if not os.access(parent, os.W_OK):
         raise BakeError(f"output directory {str(parent)!r} is not writable")
     return path, ext
+
+
+def _check_name(path: Path) -> None:
+    n = len(os.fsencode(path.name))
+    if n > NAME_MAX:
+        raise BakeError(f"output file name {path.name[:40]!r}... is {n} bytes long; "
+                        f"accepted at most {NAME_MAX}")
 
 
 def _check_tile(tile) -> int | None:
@@ -292,16 +302,19 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
                         f"(try --set dimension=3)")
+    for out in outputs:
+        _check_name(out.path)
     _check_disk(path.parent, w, h, depth_slices, outputs, ext)
 
-    written = []
-    for out in outputs:
-        file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-        plan = dataclasses.replace(_plan(w, h, depth_slices, ext, out.channels, tile, memory_budget, file_bytes),
-                                   samples=samples)
-        _bake_one(recipe, out, ext, plan, progress)
-        written.append(out.path)
-    return written
+    # All the files land together, or none does: each is rendered to its temporary file and
+    # they are renamed onto the outputs only once every one is complete.
+    with atomic_paths([out.path for out in outputs]) as tmps:
+        for out, tmp in zip(outputs, tmps):
+            file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
+            plan = dataclasses.replace(_plan(w, h, depth_slices, ext, out.channels, tile, memory_budget,
+                                             file_bytes), samples=samples)
+            _bake_one(recipe, out, ext, plan, progress, tmp)
+    return [out.path for out in outputs]
 
 
 def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
@@ -319,7 +332,7 @@ def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
         return
     if need > free:
         raise BakeError(f"not enough disk space in {str(directory)!r}: the bake needs about "
-                        f"{need / 2**30:.1f} GiB, {free / 2**30:.1f} GiB free")
+                        f"{human_size(need)}, {human_size(free)} free")
 
 
 def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator[tuple]:
@@ -365,24 +378,28 @@ def _meta(recipe, out: _Output, plan: _Plan) -> str:
                        "channels": list(out.channels)}, sort_keys=True, default=str)
 
 
-def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool) -> None:
+def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: Path) -> None:
+    """Render ``out`` into ``tmp``, its temporary file (see :func:`bake`)."""
     bar = _Progress(plan.count, f"baking {out.path.name}", progress)
     meta = _meta(recipe, out, plan)
+    tiles = _render_tiles(recipe, out, plan, bar)
     try:
-        with cio.atomic_path(out.path) as tmp:
-            tiles = _render_tiles(recipe, out, plan, bar)
-            if ext == ".png":
-                (e,) = out.encodings
-                cio.write_png(tmp, (b[e.channel] for b in _bands(tiles, plan)), plan.width,
-                              plan.height, e.samples, e.dtype.itemsize * 8,
-                              text={"Software": "cellgl", "cellgl": meta})
-            elif ext == ".exr":
-                _write_exr(tmp, tiles, out, plan, meta)
-            elif ext == ".npy":
-                (e,) = out.encodings
-                cio.write_npy(tmp, _npy_pieces(tiles, e, plan), _shape(e, plan), e.dtype)
-            else:
-                _write_tiff(tmp, tiles, out, plan, meta)
+        if ext == ".png":
+            (e,) = out.encodings
+            cio.write_png(tmp, (b[e.channel] for b in _bands(tiles, plan)), plan.width,
+                          plan.height, e.samples, e.dtype.itemsize * 8,
+                          text={"Software": "cellgl", "cellgl": meta})
+        elif ext == ".exr":
+            _write_exr(tmp, tiles, out, plan, meta)
+        elif ext == ".npy":
+            (e,) = out.encodings
+            cio.write_npy(tmp, _npy_pieces(tiles, e, plan), _shape(e, plan), e.dtype)
+        else:
+            _write_tiff(tmp, tiles, out, plan, meta)
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise BakeError(f"cannot write {out.path}: {exc.strerror}") from None
+        raise
     finally:
         bar.close()
 
@@ -432,7 +449,7 @@ def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
         return
     # A volume is rendered as (D, h, w) columns but TIFF wants page after page: spool the
     # columns to a memory-mapped .npy next to the output (deleted afterwards), then stream pages.
-    with cio.scratch_path(out.path.parent, suffix=".spool.npy") as spool:
+    with cio.scratch_path(out.path.parent, suffix=".npy") as spool:
         cio.write_npy(spool, _npy_pieces(tiles, e, plan), shape, e.dtype)
         vol = np.load(spool, mmap_mode="r")
         page = _Plan(plan.width, plan.height, None, plan.tile_w, plan.tile_h)

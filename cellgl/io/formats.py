@@ -23,12 +23,13 @@ from __future__ import annotations
 import contextlib
 import os
 import struct
-import tempfile
 import zlib
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
+
+from cellgl.io.tempfiles import atomic_paths, reserve, scratch_path
 
 __all__ = [
     "atomic_path",
@@ -47,12 +48,6 @@ __all__ = [
 # --------------------------------------------------------------------------------------------
 
 
-def _default_mode() -> int:
-    umask = os.umask(0)
-    os.umask(umask)
-    return 0o666 & ~umask
-
-
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[Path]:
     """Yield a temporary path next to ``path``; on success move it onto ``path``.
@@ -68,43 +63,20 @@ def atomic_path(path: str | os.PathLike, suffix: str | None = None) -> Iterator[
     Yields
     ------
     pathlib.Path
-        A fresh, empty file in the destination's directory, named ``.<name>.<random>.part<ext>``.
-        Write to it (by path) inside the ``with`` block.
+        A fresh, empty file in the destination's directory, named
+        ``.<stem>.cellgl-<pid>@<host>.<random>.part<ext>`` (at most 255 bytes; see
+        :mod:`cellgl.io.tempfiles`). Write to it (by path) inside the ``with`` block.
 
     Notes
     -----
     On leaving the block normally the file is flushed to disk, given the usual permissions
     (``0o666`` less the umask) and renamed onto ``path`` with ``os.replace`` (atomic on POSIX
     and Windows). On any exception, ``KeyboardInterrupt`` included, it is deleted and the
-    exception propagates; ``path`` is untouched.
+    exception propagates; ``path`` is untouched. :func:`cellgl.io.tempfiles.atomic_paths` does
+    the same for several files at once.
     """
-    path = Path(path)
-    suffix = path.suffix if suffix is None else suffix
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".part{suffix}", dir=path.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
-    try:
-        yield tmp_path
-        with open(tmp_path, "rb+") as f:
-            os.fsync(f.fileno())
-        os.chmod(tmp_path, _default_mode())
-        os.replace(tmp_path, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            tmp_path.unlink()
-        raise
-
-
-@contextlib.contextmanager
-def scratch_path(directory: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
-    """Yield a fresh hidden temporary file in ``directory``; it is deleted on leaving, always."""
-    fd, tmp = tempfile.mkstemp(prefix=".cellgl.", suffix=suffix, dir=directory)
-    os.close(fd)
-    try:
-        yield Path(tmp)
-    finally:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+    with atomic_paths([path], ext=suffix) as (tmp,):
+        yield tmp
 
 
 # --------------------------------------------------------------------------------------------
@@ -365,6 +337,9 @@ def write_npy(path: str | os.PathLike, pieces: Iterable[tuple[tuple, np.ndarray]
     mm = np.lib.format.open_memmap(str(path), mode="w+", dtype=np.dtype(dtype),
                                    shape=tuple(int(s) for s in shape))
     try:
+        # The map's file is sparse: on a disk that fills up, a write into it is a SIGBUS (no
+        # message, no cleanup). Reserve its blocks first: a full disk is then an OSError here.
+        reserve(path, mm.offset + mm.nbytes)
         for index, piece in pieces:
             mm[index] = piece
         mm.flush()

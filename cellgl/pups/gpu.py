@@ -123,16 +123,15 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
         b.bind_to_storage_buffer(binding)
     # One render target, kept while the size stays: deleting the bound framebuffer would
     # leave moderngl restoring a dead binding (GL_INVALID_OPERATION) on the next one.
-    key = (id(ctx), w, h)
-    if _fragment_target.get("key") != key:
+    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (w, h):
         tex = ctx.texture((w, h), 4, dtype="f4")
         fbo = ctx.framebuffer(color_attachments=[tex])
         fbo.use()
-        old = _fragment_target.get("objects", ())
-        for o in old:
+        for o in target.get("objects", ()):
             o.release()
-        _fragment_target.update(key=key, objects=(fbo, tex))
-    fbo, tex = _fragment_target["objects"]
+        target.update(key=(w, h), objects=(fbo, tex))
+    fbo, tex = target["objects"]
     vao = ctx.vertex_array(prog, [])
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
                     ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
@@ -303,18 +302,17 @@ def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings
     vbuf = ctx.buffer(vert.tobytes() if vert.size else b"\0" * (4 * nf))
     ibuf = ctx.buffer(idx.tobytes() if idx.size else b"\0" * 4)
     # one render target, kept while the size stays (as in _evaluate_fragment)
-    key = (id(ctx), w, h)
-    if _raster_target.get("key") != key:
+    target = _raster_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (w, h):
         tex = ctx.texture((w, h), 4, dtype="f4")
         fbo = ctx.framebuffer(color_attachments=[tex])
         fbo.use()
-        for o in _raster_target.get("objects", ()):
+        for o in target.get("objects", ()):
             o.release()
         # the readback array too: reading into pages already mapped saves ~10 ms at 1000^2
-        _raster_target.update(key=key, objects=(fbo, tex),
-                              acc=np.empty((h, w, 4), dtype=np.float32))
-    fbo, tex = _raster_target["objects"]
-    acc = _raster_target["acc"]
+        target.update(key=(w, h), objects=(fbo, tex), acc=np.empty((h, w, 4), dtype=np.float32))
+    fbo, tex = target["objects"]
+    acc = target["acc"]
     fmt = "2f 4f 4f" + (f" {4 * pairs}f" if pairs else "")
     names = ["in_corner", "in_point", "in_value"] + (["in_axes"] if pairs else [])
     vao = ctx.vertex_array(prog, [(vbuf, fmt, *names)], index_buffer=ibuf, index_element_size=4)

@@ -30,7 +30,7 @@ from types import MappingProxyType
 import numpy as np
 
 from cellgl.texture.params import Param
-from cellgl.texture.schema import VERSION, RecipeError, _coerce, _err, _suggest, parse_value
+from cellgl.texture.schema import VERSION, RecipeError, _coerce, _err, _suggest, parse_value, read_json
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
            "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for",
@@ -351,12 +351,7 @@ class PupsRecipe:
     def load(cls, path) -> "PupsRecipe":
         """Read a PUPs recipe JSON file."""
         path = Path(path)
-        try:
-            d = json.loads(path.read_text())
-        except OSError as exc:
-            raise RecipeError(f"cannot read recipe {str(path)!r}: {exc.strerror or exc}") from None
-        except json.JSONDecodeError as exc:
-            raise RecipeError(f"{path}: not valid JSON: {exc}") from None
+        d = read_json(path)
         try:
             return cls.from_dict(d)
         except RecipeError as exc:

@@ -34,6 +34,7 @@ import time
 
 import numpy as np
 
+from cellgl.gl.threads import gl_call
 from cellgl.pups import gpu
 from cellgl.pups.graph import PupsGraph
 from cellgl.pups.pack import pups_pack
@@ -48,6 +49,7 @@ __all__ = ["pups_evaluate"]
 # --------------------------------------------------------------------------------------------
 
 
+@gl_call
 def pups_evaluate(graph: PupsGraph, width, height, *, mode="interpolate", epsilon=0.5,
                   backend="gpu", tile=None, return_labels=False, timings=None,
                   method=None):

@@ -20,6 +20,8 @@ from collections import OrderedDict
 
 import numpy as np
 
+from cellgl.gl.threads import gl_call
+
 __all__ = ["MAX_BAKED", "run", "output_mask"]
 
 _CHUNK = 1 << 20            # samples per dispatch
@@ -37,7 +39,7 @@ _OUTPUTS = {
     "id": (5, 4, 16, ("id",)),
 }
 
-_baked: OrderedDict = OrderedDict()
+_baked: dict = {}   # id(ctx) -> OrderedDict of its baked programs
 _pool: dict = {}
 
 
@@ -60,16 +62,18 @@ def _program(recipe, defines: dict, pan=None, pan_only=False):
                              pan_only=pan_only and pan is not None)
         return prog
     consts = texture.glsl_baked_uniforms_file(recipe)
-    key = (id(ctx), tuple(sorted(defines.items())), consts)
-    prog = _baked.get(key)
+    key = (tuple(sorted(defines.items())), consts)
+    # one LRU per context: a program is released only while its own context is current
+    baked = _baked.setdefault(id(ctx), OrderedDict())
+    prog = baked.get(key)
     if prog is not None:
-        _baked.move_to_end(key)
+        baked.move_to_end(key)
     else:
         prog = context.compute_program("texture.comp", defines, files={"texture_uniforms.glsl": consts},
                                        cache=False)
-        _baked[key] = prog
-        while len(_baked) > MAX_BAKED:
-            _baked.popitem(last=False)[1].release()
+        baked[key] = prog
+        while len(baked) > MAX_BAKED:
+            baked.popitem(last=False)[1].release()
     if recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
         texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
     return prog
@@ -87,6 +91,7 @@ def _buffer(ctx, binding: int, nbytes: int):
     return buf
 
 
+@gl_call
 def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1, pan=None,
         pan_only: bool = False) -> dict:
     """Dispatch texture.comp over ``count`` samples and return ``{channel: array}`` (flat, one row

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl.basis.arrays import real_array
+from cellgl.gl.threads import gl_call
 from cellgl.texture import antialias, dispatch
 from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
 from cellgl.texture.shader import defines, set_view
@@ -86,13 +87,11 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
         return texture_reference.evaluate(recipe, pts, outputs, duvz)
     from cellgl.gl import context
 
-    ctx = context.get_context()
-
     def setup_for(local):
         def setup(prog, start, n):
             p4 = np.zeros((n, 4), np.float32)
             p4[:, :3] = local[start:start + n]
-            b = ctx.buffer(p4.tobytes())
+            b = context.get_context().buffer(p4.tobytes())  # inside dispatch.run's cellgl call
             b.bind_to_storage_buffer(0)
             if "u_filter_width" in prog:
                 prog["u_filter_width"].value = tuple(float(c) for c in duvz)
@@ -229,6 +228,7 @@ def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
 _fragment_target: dict = {}
 
 
+@gl_call
 def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
                     view=(0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
     """The viewer's path: ``shaders/texture.frag`` over a ``width x height`` RGBA32F target,
@@ -247,15 +247,15 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     set_view(prog, recipe, view[:2], view[2:])
     if "u_channel" in prog:
         prog["u_channel"].value = CHANNELS.index(channel)
-    key = (id(ctx), width, height)
-    if _fragment_target.get("key") != key:
+    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
+    if target.get("key") != (width, height):
         tex = ctx.texture((width, height), 4, dtype="f4")
         fbo = ctx.framebuffer(color_attachments=[tex])
         fbo.use()
-        for o in _fragment_target.get("objects", ()):
+        for o in target.get("objects", ()):
             o.release()
-        _fragment_target.update(key=key, objects=(fbo, tex))
-    fbo, tex = _fragment_target["objects"]
+        target.update(key=(width, height), objects=(fbo, tex))
+    fbo, tex = target["objects"]
     fbo.use()
     fbo.viewport = (0, 0, width, height)
     vao = ctx.vertex_array(prog, [])

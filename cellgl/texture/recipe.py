@@ -34,7 +34,7 @@ from types import MappingProxyType
 
 from cellgl.texture import domain
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
-                                   check_channels, parse_value)
+                                   check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
                      PRODUCTS)
 
@@ -336,14 +336,7 @@ class Recipe:
     def load(cls, path) -> "Recipe":
         """Read a recipe JSON file."""
         path = Path(path)
-        try:
-            text = path.read_text()
-        except OSError as exc:
-            raise RecipeError(f"cannot read recipe {str(path)!r}: {exc.strerror or exc}") from None
-        try:
-            d = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise RecipeError(f"{path}: not valid JSON: {exc}") from None
+        d = read_json(path)
         try:
             return cls.from_dict(d, base=path.resolve().parent)
         except RecipeError as exc:
@@ -557,10 +550,11 @@ def load_recipe(preset_or_path, known=None):
         return Recipe.load(path)
     name, _, variant = text.partition(":")
     file = preset_dir() / f"{name}.json"
-    if not file.is_file():
+    if not _is_file(file):
         names = known if known is not None else [n for n, _ in list_presets()]
-        raise RecipeError(f"unknown preset {text!r}{_suggest(name, names)}; accepted: a recipe .json file or "
-                          "one of: " + ", ".join(names))
+        shown = repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
+        raise RecipeError(f"unknown preset {shown}{_suggest(name, names)}; accepted: a recipe .json "
+                          "file or one of: " + ", ".join(names))
     recipe = Recipe.load(file)
     if not variant:
         return recipe
@@ -575,7 +569,14 @@ def load_recipe(preset_or_path, known=None):
 def is_path(text: str) -> bool:
     """Whether a recipe argument names a file (``.json``, a path separator, or an existing file)
     rather than a preset."""
-    return Path(text).suffix == ".json" or os.sep in text or Path(text).is_file()
+    return Path(text).suffix == ".json" or os.sep in text or _is_file(Path(text))
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except OSError:  # a name too long for the filesystem, ...: not a file we can read
+        return False
 
 
 def needed_n(recipe: Recipe) -> int:

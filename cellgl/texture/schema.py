@@ -12,7 +12,7 @@ import numbers
 
 from cellgl.texture.params import Param
 
-__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "parse_value"]
+__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "parse_value", "read_json"]
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
@@ -23,9 +23,60 @@ class RecipeError(ValueError):
     """A recipe (or a ``--set``) is invalid; the message names the field and what is accepted."""
 
 
+#: most digits an integer literal in a recipe may have (seeds are 32-bit: 10 digits)
+MAX_INT_DIGITS = 40
+
+
+def _parse_int(text: str) -> int:
+    digits = len(text.lstrip("-"))
+    if digits > MAX_INT_DIGITS:
+        raise RecipeError(f"an integer literal of {digits} digits; no recipe value has more "
+                          f"than {MAX_INT_DIGITS}")
+    return int(text)
+
+
+def read_json(path) -> object:
+    """The JSON value in recipe file ``path``; RecipeError naming the file otherwise.
+
+    Unreadable files, text that is not UTF-8, malformed JSON, integer literals of more than
+    :data:`MAX_INT_DIGITS` digits and nesting too deep for the parser each get a message
+    instead of a traceback.
+    """
+    import json
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise RecipeError(f"cannot read recipe {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise RecipeError(f"{path}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
+                          f"{exc.start}, line {line}); save the recipe as UTF-8") from None
+    try:
+        return json.loads(text, parse_int=_parse_int)
+    except json.JSONDecodeError as exc:
+        raise RecipeError(f"{path}: not valid JSON: {exc}") from None
+    except RecursionError:
+        raise RecipeError(f"{path}: JSON nested too deeply (a recipe is a few levels deep)") from None
+    except RecipeError as exc:
+        raise RecipeError(f"{path}: {exc}") from None
+
+
+def _shown(value) -> str:
+    """``repr(value)`` for a message: long ones shortened (a 5000-digit integer has no repr)."""
+    if isinstance(value, int) and not isinstance(value, bool) and value.bit_length() > 200:
+        return f"<an integer of about {int(value.bit_length() * 0.30103) + 1} digits>"
+    text = repr(value)
+    return text if len(text) <= 100 else f"{text[:80]}... ({len(text)} characters)"
+
+
 def _err(path: str, value, accepted: str, problem: str = "") -> RecipeError:
     problem = problem or "invalid value"
-    return RecipeError(f"{path}: {problem} {value!r}; accepted: {accepted}")
+    return RecipeError(f"{path}: {problem} {_shown(value)}; accepted: {accepted}")
 
 
 def _suggest(name: str, names) -> str:
@@ -38,7 +89,10 @@ def _coerce(p: Param, value, path: str):
     if p.type == "float":
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise _err(path, value, p.range_text(), "expected a number, got")
-        v = float(value)
+        try:
+            v = float(value)
+        except OverflowError:  # an integer beyond float range
+            v = math.inf
         if not math.isfinite(v) or v < p.lo or v > p.hi:
             raise _err(path, value, p.range_text(), "out of range:")
         return v
@@ -86,7 +140,8 @@ def parse_value(p: Param, name: str, text: str):
             return [float(c) for c in text.strip("[]() ").split(",")]
         return text
     except ValueError:
-        raise RecipeError(f"--set {name}={text}: cannot parse {text!r}; accepted: "
+        shown = text if len(text) <= 80 else f"{text[:60]}... ({len(text)} characters)"
+        raise RecipeError(f"--set {name}={shown}: cannot parse {shown!r}; accepted: "
                           + ("an integer in " if p.type == "int" else "") + p.range_text()) from None
 
 

@@ -1,0 +1,199 @@
+"""Temporary files of cellgl's writers: named so a later run can tell its own stale ones, committed
+all together or not at all, with their disk space reserved up front.
+
+A temporary file lives next to its destination and is named
+``.<stem>.cellgl-<pid>@<host>.<random>.<kind><ext>`` (``kind`` ``part`` for a file that becomes an
+output, ``spool`` for scratch data), never more than 255 bytes whatever the destination's name (the
+stem is shortened). A process killed mid-write (SIGKILL, a power cut) cannot delete its own; the
+next write into that directory on the same host removes those whose process is gone
+(:func:`sweep_stale`). SIGTERM and SIGHUP are turned into an exception by the command line, so they
+clean up like Ctrl-C does.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import re
+import secrets
+import shutil
+import socket
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+__all__ = ["atomic_paths", "scratch_path", "sweep_stale", "reserve", "temp_name", "human_size",
+           "check_output", "NAME_MAX"]
+
+NAME_MAX = 255  #: bytes in one file name on every common filesystem
+_EXT_MAX = 32   #: longest extension kept on a temporary name
+_HOST = re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:40] or "host"
+_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:part|spool)(?:\..*)?$")
+
+
+def human_size(n: int) -> str:
+    """``n`` bytes as ``"512 B"``, ``"4.0 MiB"``, ``"3.2 GiB"`` (never "0.0 GiB")."""
+    size = float(n)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if size < 1024 or unit == "TiB":
+            return f"{int(size)} B" if unit == "B" else f"{size:.1f} {unit}"
+        size /= 1024
+    raise AssertionError
+
+
+def _shorten(text: str, limit: int) -> str:
+    """``text`` cut to at most ``limit`` bytes of UTF-8 (on a character boundary)."""
+    raw = os.fsencode(text)
+    if len(raw) <= limit:
+        return text
+    return raw[:max(0, limit)].decode("utf-8", "ignore") if limit > 0 else ""
+
+
+def temp_name(dest: str | os.PathLike, kind: str = "part", ext: str | None = None) -> str:
+    """A fresh temporary file name for ``dest`` (see the module doc), at most 255 bytes."""
+    dest = Path(dest)
+    ext = dest.suffix if ext is None else ext
+    ext = ext if len(os.fsencode(ext)) <= _EXT_MAX else ""
+    tag = f".cellgl-{os.getpid()}@{_HOST}.{secrets.token_hex(4)}.{kind}{ext}"
+    stem = _shorten(dest.stem, NAME_MAX - 1 - len(os.fsencode(tag)))
+    return f".{stem}{tag}"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True  # someone else's process
+    return True
+
+
+def sweep_stale(directory: str | os.PathLike) -> list[Path]:
+    """Remove cellgl's temporary files in ``directory`` left by processes of this host that no
+    longer run (a bake killed with SIGKILL); returns the paths removed. Never raises."""
+    removed = []
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    for entry in entries:
+        m = _TEMP.match(entry.name) if entry.name.startswith(".") else None
+        if not m or m.group(2) != _HOST or int(m.group(1)) == os.getpid():
+            continue
+        if not _alive(int(m.group(1))):
+            with contextlib.suppress(OSError):
+                os.unlink(entry.path)
+                removed.append(Path(entry.path))
+    return removed
+
+
+def _create(directory: Path, dest: Path, kind: str, ext: str | None = None) -> Path:
+    for _ in range(100):
+        tmp = directory / temp_name(dest, kind, ext)
+        try:
+            os.close(os.open(tmp, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        except FileExistsError:
+            continue
+        except OSError as exc:  # name the destination, not the temporary file
+            raise OSError(exc.errno, f"cannot create a file there: {exc.strerror}",
+                          str(dest)) from None
+        return tmp
+    raise FileExistsError(errno.EEXIST, "no free temporary name", str(directory))
+
+
+def _default_mode() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
+
+
+@contextlib.contextmanager
+def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> Iterator[list[Path]]:
+    """Yield one temporary path beside each destination; on success move them all onto their
+    destinations, on any exception (``KeyboardInterrupt`` and the CLI's SIGTERM/SIGHUP
+    included) delete them all and leave every destination as it was.
+
+    Every file is complete and flushed to disk before the first rename, so the destinations
+    change together (a crash between two renames, a narrow window, is the only way to see some
+    new and some old). Stale temporary files of dead processes in those directories are
+    removed first (:func:`sweep_stale`). ``ext``: the temporary names' extension (default: each
+    destination's, so libraries that look at it see the right one).
+    """
+    dests = [Path(p) for p in paths]
+    for d in {p.parent for p in dests}:
+        sweep_stale(d if str(d) else ".")
+    tmps: list[Path] = []
+    try:
+        for d in dests:
+            tmps.append(_create(d.parent, d, "part", ext))
+        yield list(tmps)
+        for t in tmps:
+            with open(t, "rb+") as f:
+                os.fsync(f.fileno())
+            os.chmod(t, _default_mode())
+        for t, d in zip(tmps, dests):
+            os.replace(t, d)
+    except BaseException:
+        for t in tmps:
+            with contextlib.suppress(OSError):
+                t.unlink()
+        raise
+
+
+@contextlib.contextmanager
+def scratch_path(directory: str | os.PathLike, suffix: str = "") -> Iterator[Path]:
+    """Yield a fresh hidden temporary file in ``directory``; it is deleted on leaving, always."""
+    directory = Path(directory)
+    tmp = _create(directory, directory / "scratch", "spool", suffix)
+    try:
+        yield tmp
+    finally:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+
+
+def reserve(path: str | os.PathLike, nbytes: int) -> None:
+    """Give ``path`` (an existing file) ``nbytes`` of real disk blocks now, so that writing
+    through a memory map later cannot hit a full disk (SIGBUS, no message).
+
+    Raises
+    ------
+    OSError
+        ``ENOSPC``: the message names the file, the space needed and the space free.
+    """
+    if not hasattr(os, "posix_fallocate") or nbytes <= 0:
+        return
+    fd = os.open(path, os.O_RDWR)
+    try:
+        os.posix_fallocate(fd, 0, int(nbytes))
+    except OSError as exc:
+        if exc.errno in (errno.EOPNOTSUPP, errno.EINVAL, errno.ENOSYS):
+            return  # the filesystem cannot reserve: the memory map writes as before
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            try:
+                free = f", {human_size(shutil.disk_usage(Path(path).parent).free)} free"
+            except OSError:
+                free = ""
+            raise OSError(exc.errno, f"{os.strerror(exc.errno)} (the file needs "
+                                     f"{human_size(nbytes)}{free})", str(path)) from None
+        raise
+    finally:
+        os.close(fd)
+
+
+def check_output(path: str | os.PathLike) -> Path:
+    """``path`` as a destination a writer can create, else ValueError saying why (directory
+    missing or not writable, a directory given, a name longer than 255 bytes)."""
+    path = Path(os.fspath(path))
+    parent = path.parent if str(path.parent) else Path(".")
+    if len(os.fsencode(path.name)) > NAME_MAX:
+        raise ValueError(f"output file name {path.name[:40]!r}... is {len(os.fsencode(path.name))} "
+                         f"bytes long; accepted at most {NAME_MAX}")
+    if path.is_dir():
+        raise ValueError(f"output {str(path)!r} is a directory; give a file name")
+    if not parent.is_dir():
+        raise ValueError(f"output directory {str(parent)!r} does not exist")
+    if not os.access(parent, os.W_OK):
+        raise ValueError(f"output directory {str(parent)!r} is not writable")
+    return path
