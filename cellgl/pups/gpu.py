@@ -6,6 +6,8 @@ import time
 
 import numpy as np
 
+from cellgl.gl.targets import float_target
+
 from cellgl.pups.graph import PupsGraph
 from cellgl.pups.pack import PupsPacked, _stream
 from cellgl.pups.points import PupsMode
@@ -121,17 +123,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     bufs = [ctx.buffer(d) for d in data]
     for binding, b in enumerate(bufs):
         b.bind_to_storage_buffer(binding)
-    # One render target, kept while the size stays: deleting the bound framebuffer would
-    # leave moderngl restoring a dead binding (GL_INVALID_OPERATION) on the next one.
-    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
-    if target.get("key") != (w, h):
-        tex = ctx.texture((w, h), 4, dtype="f4")
-        fbo = ctx.framebuffer(color_attachments=[tex])
-        fbo.use()
-        for o in target.get("objects", ()):
-            o.release()
-        target.update(key=(w, h), objects=(fbo, tex))
-    fbo, tex = target["objects"]
+    fbo, tex = float_target(_fragment_target, ctx, w, h)["objects"]
     vao = ctx.vertex_array(prog, [])
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
                     ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
@@ -301,18 +293,10 @@ def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings
     t1 = time.perf_counter()
     vbuf = ctx.buffer(vert.tobytes() if vert.size else b"\0" * (4 * nf))
     ibuf = ctx.buffer(idx.tobytes() if idx.size else b"\0" * 4)
-    # one render target, kept while the size stays (as in _evaluate_fragment)
-    target = _raster_target.setdefault(id(ctx), {})  # per context: never another's objects
-    if target.get("key") != (w, h):
-        tex = ctx.texture((w, h), 4, dtype="f4")
-        fbo = ctx.framebuffer(color_attachments=[tex])
-        fbo.use()
-        for o in target.get("objects", ()):
-            o.release()
-        # the readback array too: reading into pages already mapped saves ~10 ms at 1000^2
-        target.update(key=(w, h), objects=(fbo, tex), acc=np.empty((h, w, 4), dtype=np.float32))
+    target = float_target(_raster_target, ctx, w, h)
     fbo, tex = target["objects"]
-    acc = target["acc"]
+    # the readback array is kept too: reading into pages already mapped saves ~10 ms at 1000^2
+    acc = target.setdefault("acc", np.empty((h, w, 4), dtype=np.float32))
     fmt = "2f 4f 4f" + (f" {4 * pairs}f" if pairs else "")
     names = ["in_corner", "in_point", "in_value"] + (["in_axes"] if pairs else [])
     vao = ctx.vertex_array(prog, [(vbuf, fmt, *names)], index_buffer=ibuf, index_element_size=4)

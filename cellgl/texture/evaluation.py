@@ -240,6 +240,7 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     ``u_channel`` (index into :data:`cellgl.texture.recipe.CHANNELS`).
     """
     from cellgl.gl import context
+    from cellgl.gl.targets import float_target
 
     recipe = load_recipe(recipe)
     ctx = context.get_context()
@@ -247,15 +248,7 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     set_view(prog, recipe, view[:2], view[2:])
     if "u_channel" in prog:
         prog["u_channel"].value = CHANNELS.index(channel)
-    target = _fragment_target.setdefault(id(ctx), {})  # per context: never another's objects
-    if target.get("key") != (width, height):
-        tex = ctx.texture((width, height), 4, dtype="f4")
-        fbo = ctx.framebuffer(color_attachments=[tex])
-        fbo.use()
-        for o in target.get("objects", ()):
-            o.release()
-        target.update(key=(width, height), objects=(fbo, tex))
-    fbo, tex = target["objects"]
+    fbo, tex = float_target(_fragment_target, ctx, width, height)["objects"]
     fbo.use()
     fbo.viewport = (0, 0, width, height)
     vao = ctx.vertex_array(prog, [])
