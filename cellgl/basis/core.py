@@ -140,6 +140,9 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
         raise ValueError(f"points must have 2, 3 or 4 coordinates, got {dim}")
     if distribution == Distribution.WORLEY1996 and dim != 3:
         raise ValueError(f"distribution 'worley1996' is 3D only, got {dim}D points")
+    if distribution == Distribution.BLENDER and seed != 0:
+        raise ValueError(f"distribution 'blender' has no seed (Blender's node has none; offset the "
+                         f"points instead), got seed={seed!r}; accepted: 0")
     density = _number("density", density, 0.0, 16.0, lo_open=True)
     jitter = _number("jitter", jitter, 0.0, 1.0)
     min_points = _number("min_points", min_points, 0, reference.MAX_POINTS, integer=True)

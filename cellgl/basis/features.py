@@ -84,7 +84,7 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     state, count = ref.point_count(state, p, wc)
     base = o.astype(np.float64) - f[rows]
     for k in range(int(count.max(initial=0))):
-        state, q, ids = ref.next_point(state, p)
+        state, q, ids = ref.next_point(state, p, wc)
         has = k < count
         _point(w, rows[has], base[has] + q[has], ids[has], o, q[has], p)
 

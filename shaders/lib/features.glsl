@@ -166,7 +166,7 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     vec4 base = vec4(o) - f;
     for (int k = 0; k < count; k++) {
         uint id;
-        vec4 q = cell_next_point(state, p, id);
+        vec4 q = cell_next_point(state, c, p, id);
         _cell_walk_point(w, base + q, id, o, q, p);
     }
 }

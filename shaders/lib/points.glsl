@@ -91,7 +91,67 @@ ivec4 cell_wrap(ivec4 c, ivec4 period)
 #endif
 }
 
-#if CELL_DIST == CELL_DIST_WORLEY1996
+// Blender's Voronoi node: the float bits of an integer cell's coordinates.
+uvec4 _cell_blender_words(ivec4 c)
+{
+    return floatBitsToUint(vec4(c));
+}
+
+// Blender's point in cell c before Randomness, each coordinate in [0, 1]
+// (CELL_DIM coordinates; x from the hash of the coordinates, the others from
+// the coordinates with 1.0 or 2.0 appended, or rotated in 4D).
+vec4 cell_blender_point(ivec4 c)
+{
+    uvec4 k = _cell_blender_words(c);
+    const uint one = 0x3f800000u, two = 0x40000000u;    // float bits of 1.0, 2.0
+#if CELL_DIM == 2
+    return vec4(cell_unit_float(cell_jenkins(k.x, k.y)), cell_unit_float(cell_jenkins(k.x, k.y, one)),
+                0.0, 0.0);
+#elif CELL_DIM == 3
+    return vec4(cell_unit_float(cell_jenkins(k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins(k.x, k.y, k.z, one)),
+                cell_unit_float(cell_jenkins(k.x, k.y, k.z, two)), 0.0);
+#else
+    return vec4(cell_unit_float(cell_jenkins(k.x, k.y, k.z, k.w)),
+                cell_unit_float(cell_jenkins(k.w, k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins(k.z, k.w, k.x, k.y)),
+                cell_unit_float(cell_jenkins(k.y, k.z, k.w, k.x)));
+#endif
+}
+
+// Blender's colour of cell c (the node's Color output for a point in it).
+vec3 cell_blender_color(ivec4 c)
+{
+    uvec4 k = _cell_blender_words(c);
+    const uint one = 0x3f800000u, two = 0x40000000u;
+#if CELL_DIM == 2
+    return vec3(cell_unit_float(cell_jenkins(k.x, k.y)), cell_unit_float(cell_jenkins(k.x, k.y, one)),
+                cell_unit_float(cell_jenkins(k.x, k.y, two)));
+#elif CELL_DIM == 3
+    return vec3(cell_unit_float(cell_jenkins(k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins(k.x, k.y, k.z, one)),
+                cell_unit_float(cell_jenkins(k.x, k.y, k.z, two)));
+#else
+    return vec3(cell_unit_float(cell_jenkins(k.x, k.y, k.z, k.w)),
+                cell_unit_float(cell_jenkins(k.z, k.x, k.w, k.y)),
+                cell_unit_float(cell_jenkins(k.w, k.z, k.y, k.x)));
+#endif
+}
+
+#if CELL_DIST == CELL_DIST_BLENDER
+// The cell's point ID: the first hash of its coordinates (cell_blender_point's x).
+uint cell_cell_seed(ivec4 c, uint seed)
+{
+    uvec4 k = _cell_blender_words(c);
+#if CELL_DIM == 2
+    return cell_jenkins(k.x, k.y);
+#elif CELL_DIM == 3
+    return cell_jenkins(k.x, k.y, k.z);
+#else
+    return cell_jenkins(k.x, k.y, k.z, k.w);
+#endif
+}
+#elif CELL_DIST == CELL_DIST_WORLEY1996
 // The book's cube seed: 702395077 x + 915488749 y + 2120969693 z (mod 2^32),
 // plus the cellgl seed times an odd constant (0 leaves the original untouched).
 uint cell_cell_seed(ivec4 c, uint seed)
@@ -124,7 +184,7 @@ int cell_point_count(inout uint state, CellParams p)
     int count = _cell_w96_table[state >> 24];
     state = 1402024253u * state + 586950981u;
     return count;
-#elif CELL_DIST == CELL_DIST_JITTER
+#elif CELL_DIST == CELL_DIST_JITTER || CELL_DIST == CELL_DIST_BLENDER
     return 1;
 #else
     // count = min_points + #{k in [min_points, max_points) : u >= thresholds[k]},
@@ -215,12 +275,16 @@ vec4 cell_orbit(vec4 f, uint id, CellParams p)
 }
 #endif
 
-// The next feature point of the stream: its ID, and its position relative to
-// the cell's lower corner, each coordinate in [0, 1].
-vec4 cell_next_point(inout uint state, CellParams p, out uint id)
+// The next feature point of the stream of (wrapped) cell c: its ID, and its
+// position relative to the cell's lower corner, each coordinate in [0, 1].
+vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
 {
     vec4 f = vec4(0.0);
-#if CELL_DIST == CELL_DIST_WORLEY1996
+#if CELL_DIST == CELL_DIST_BLENDER
+    // Blender: the hash times Randomness (p.jitter), a float32 product as in the node.
+    id = state;
+    f = cell_blender_point(c) * p.jitter;
+#elif CELL_DIST == CELL_DIST_WORLEY1996
     id = state;
     state = 1402024253u * state + 586950981u;
     f.x = (float(state) + 0.5) * (1.0 / 4294967296.0);
