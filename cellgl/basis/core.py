@@ -259,7 +259,8 @@ def _basis_outputs(outs) -> tuple[str, ...]:
     return tuple(o for o in ("F", "delta", "id", "grad") if o in need) or ("F",)
 
 
-def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> tuple[dict, np.ndarray]:
+def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
+                  smooth="exp") -> tuple[dict, np.ndarray]:
     F, D, I, exact = reference.search(cells, fr, p, n)
     out = {}
     inv = 1.0 / p.scale
@@ -274,7 +275,8 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> t
     if "grad" in basis:
         out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
     if set(outputs) & set(_features.OUTPUTS):
-        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale)
+        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale,
+                                   smooth=smooth)
         exact = feats["exact"]
         _features.finish(out, feats, positions, p.scale, p.dim, outputs)
     return out, exact
@@ -291,7 +293,7 @@ def _gpu_finish(out: dict, outs, positions, p) -> None:
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
              min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
              stretch=None, orbit_radius=0.0, orbit_phase=0.0,
-             outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
+             outputs=("F", "delta", "id"), smoothness=0.1, smooth="exp", backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
     Parameters
@@ -335,8 +337,13 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Only these are computed and read back. ``edge`` (distance to the cell's border) and
         ``nsphere`` need the Euclidean metric; the ``smooth_*`` outputs blend every feature
         point with weight ``exp(-(F_j - F1) / smoothness)`` (see :mod:`cellgl.basis.features`).
-    smoothness : float in [0, 0.25]
-        ``k`` of smooth F1, in sample units (0: the hard minimum).
+    smoothness : float in [0, 0.25] (``smooth="exp"``) or [0, 1] (``"polynomial"``)
+        ``k`` of smooth F1, in sample units (0: the hard minimum); for ``"polynomial"`` the
+        Smoothness socket of Blender's node (its fold uses k = smoothness / 2).
+    smooth : {"exp", "polynomial"}
+        ``exp``: the log-sum-exp smooth minimum over every point (exact); ``polynomial``:
+        Blender's running polynomial smooth minimum over the 5^d block of cells around the
+        sample's, in the node's order (:func:`cellgl.basis.features.poly_smooth`).
     backend : {"gpu", "numpy"}
 
     Returns
@@ -352,16 +359,16 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
                     jitter=jitter, min_points=min_points, max_points=max_points,
                     minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map,
                     stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    smoothness = _features.check(outs, p.metric, smoothness)
+    smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts)
+        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts, smooth)
     else:
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs), smoothness * p.scale)
+        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs), smoothness * p.scale, smooth)
         _gpu_finish(out, outs, pts, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
@@ -375,7 +382,7 @@ def _gpu_outputs(outs) -> tuple[str, ...]:
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
                   period=None, density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0,
-                  outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
+                  outputs=("F", "delta", "id"), smoothness=0.1, smooth="exp", backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
     Parameters
@@ -416,7 +423,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
                     seed=seed, period=period, density_map=density_map, stretch=stretch,
                     orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    smoothness = _features.check(outs, p.metric, smoothness)
+    smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
 
     def vec(name, v, default):
@@ -446,7 +453,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         positions = pts / p.scale if p.scale != 1.0 else pts
     if backend == "numpy":
         cells, fr = split(pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
+        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions, smooth)
     else:
         from cellgl.basis import gpu
 
@@ -457,7 +464,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         sp4 = np.zeros(4)
         sp4[:dim] = spc
         out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs),
-                                     smoothness * p.scale)
+                                     smoothness * p.scale, smooth)
         _gpu_finish(out, outs, positions, p)
     return _finish(out, exact, shape, p, n, outs)
 
