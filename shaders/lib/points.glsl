@@ -91,6 +91,66 @@ ivec4 cell_wrap(ivec4 c, ivec4 period)
 #endif
 }
 
+#if CELL_DIST == CELL_DIST_BLENDER
+// Compiled only for distribution "blender" (other recipes' shader text is unchanged).
+// Bob Jenkins' lookup3 hash of 1..4 uint32 words, as Blender's Voronoi node
+// hashes the float bits of a cell's coordinates (distribution "blender";
+// cellgl/basis/population.py jenkins_hash is the NumPy twin). A rotation, the
+// three-word final mix, and the mix that absorbs the first three of four words.
+uint _cell_rot(uint x, int k)
+{
+    return (x << uint(k)) | (x >> uint(32 - k));
+}
+
+uint _cell_jenkins_final(uint a, uint b, uint c)
+{
+    c ^= b; c -= _cell_rot(b, 14);
+    a ^= c; a -= _cell_rot(c, 11);
+    b ^= a; b -= _cell_rot(a, 25);
+    c ^= b; c -= _cell_rot(b, 16);
+    a ^= c; a -= _cell_rot(c, 4);
+    b ^= a; b -= _cell_rot(a, 14);
+    c ^= b; c -= _cell_rot(b, 24);
+    return c;
+}
+
+uint cell_jenkins(uint x)
+{
+    uint s = 0xdeadbeefu + 17u;          // seed: 0xdeadbeef + 4 n + 13, n words
+    return _cell_jenkins_final(s + x, s, s);
+}
+
+uint cell_jenkins(uint x, uint y)
+{
+    uint s = 0xdeadbeefu + 21u;
+    return _cell_jenkins_final(s + x, s + y, s);
+}
+
+uint cell_jenkins(uint x, uint y, uint z)
+{
+    uint s = 0xdeadbeefu + 25u;
+    return _cell_jenkins_final(s + x, s + y, s + z);
+}
+
+uint cell_jenkins(uint x, uint y, uint z, uint w)
+{
+    uint s = 0xdeadbeefu + 29u;
+    uint a = s + x, b = s + y, c = s + z;
+    a -= c; a ^= _cell_rot(c, 4);  c += b;
+    b -= a; b ^= _cell_rot(a, 6);  a += c;
+    c -= b; c ^= _cell_rot(b, 8);  b += a;
+    a -= c; a ^= _cell_rot(c, 16); c += b;
+    b -= a; b ^= _cell_rot(a, 19); a += c;
+    c -= b; c ^= _cell_rot(b, 4);  b += a;
+    return _cell_jenkins_final(a + w, b, c);
+}
+
+// A uint32 hash as Blender's float in [0, 1]: float(h) rounded to float32, / 2^32.
+float cell_unit_float(uint h)
+{
+    return float(h) * (1.0 / 4294967296.0);
+}
+
 // Blender's Voronoi node: the float bits of an integer cell's coordinates.
 uvec4 _cell_blender_words(ivec4 c)
 {
@@ -138,7 +198,6 @@ vec3 cell_blender_color(ivec4 c)
 #endif
 }
 
-#if CELL_DIST == CELL_DIST_BLENDER
 // The cell's point ID: the first hash of its coordinates (cell_blender_point's x).
 uint cell_cell_seed(ivec4 c, uint seed)
 {
