@@ -192,7 +192,7 @@ def poly_smooth(cells, f, p: ref.Params, smoothness: float) -> dict:
     cells around each sample's, in the node's order (x fastest), with k = smoothness / 2.
 
     Returns ``{"smooth_F": (N,), "smooth_delta", "smooth_grad", "smooth_attr": (N, 4)}``
-    (lattice units; the attribute is the folded cell colour and 0).
+    (lattice units; the attribute is the folded cell colour and cell value).
     """
     from cellgl.basis.population import blender_color
     from cellgl.basis.enums import Distribution
@@ -202,7 +202,7 @@ def poly_smooth(cells, f, p: ref.Params, smoothness: float) -> dict:
     s = np.full(N, 8.0)
     gs = np.zeros((N, 4))
     pos = np.zeros((N, 4))
-    col = np.zeros((N, 3))
+    col = np.zeros((N, 4))          # colour and cell value
     span = range(-2, 3)
     axes = [span if a < p.dim else range(0, 1) for a in range(4)]
     for ow, oz, oy, ox in itertools.product(*reversed(axes)):       # w outermost, x fastest
@@ -233,13 +233,15 @@ def poly_smooth(cells, f, p: ref.Params, smoothness: float) -> dict:
             gs = (1.0 - h[:, None]) * gs + h[:, None] * gd + ((d - s) - k * (1.0 - 2.0 * h))[:, None] * gh
             s = s + h * (d - s) - c0
             c1 = (c0 / (1.0 + 3.0 * k))[:, None]
-            cc = blender_color(wc, p.dim) if p.distribution == Distribution.BLENDER else id_color(ids)
+            if p.distribution == Distribution.BLENDER:
+                cc = np.concatenate([blender_color(wc, p.dim), id_value(ids)[:, None]], axis=1)
+            else:
+                cc = id_attribute(ids)
             col = col + h[:, None] * (cc - col) - c1
             pos = pos + h[:, None] * (q - pos) - c1
     delta = pos - f
     delta[:, p.dim:] = 0.0
-    return dict(smooth_F=s, smooth_delta=delta, smooth_grad=gs,
-                smooth_attr=np.concatenate([col, np.zeros((N, 1))], axis=1))
+    return dict(smooth_F=s, smooth_delta=delta, smooth_grad=gs, smooth_attr=col)
 
 
 def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float = 0.0,

@@ -210,7 +210,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 //     h = smoothstep(0, 1, 1/2 + (s - d) / (2 k)),  c = k h (1 - h),
 //     s <- mix(s, d, h) - c,
 // with k = smoothness / 2; the point's position and cell colour are folded with
-// the same h and c / (1 + 3 k). The fold depends on the order (a point far
+// the same h and c / (1 + 3 k) (and the cell value, for the texture layer). The fold depends on the order (a point far
 // from the sample, visited before the nearest one, can still pull s down), so
 // it is the node's definition over the node's window, not a minimum over all
 // points. Its gradient is carried along by the chain rule. smoothness 0: the
@@ -226,7 +226,7 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
     float s = 8.0;
     vec4 gs = vec4(0.0);            // d s / d sample
     vec4 pos = vec4(0.0);           // folded point position, relative to the sample's cell
-    vec3 col = vec3(0.0);
+    vec4 col = vec4(0.0);           // folded cell colour and cell value (cell_id_value)
 #if CELL_DIM >= 4
     for (int v = -2; v <= 2; v++)
 #else
@@ -265,9 +265,9 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
             s = mix(s, d, h) - c0;
             float c1 = c0 / (1.0 + 3.0 * k);
 #if CELL_DIST == CELL_DIST_BLENDER
-            vec3 cc = cell_blender_color(c);
+            vec4 cc = vec4(cell_blender_color(c), cell_id_value(id));
 #else
-            vec3 cc = cell_id_color(id);
+            vec4 cc = cell_id_attribute(id);
 #endif
             col = mix(col, cc, h) - c1;
             pos = mix(pos, q, h) - c1;
@@ -276,7 +276,7 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
     o.smooth_F = s;
     o.smooth_delta = cell_dims(pos - f);
     o.smooth_grad = cell_dims(gs);
-    o.smooth_attr = vec4(col, 0.0);
+    o.smooth_attr = col;
 }
 #endif
 

@@ -114,28 +114,30 @@ uint _cell_jenkins_final(uint a, uint b, uint c)
     return c;
 }
 
-uint cell_jenkins(uint x)
+uint cell_jenkins1(uint x)
 {
     uint s = 0xdeadbeefu + 17u;          // seed: 0xdeadbeef + 4 n + 13, n words
     return _cell_jenkins_final(s + x, s, s);
 }
 
-uint cell_jenkins(uint x, uint y)
+uint cell_jenkins2(uint x, uint y)
 {
     uint s = 0xdeadbeefu + 21u;
     return _cell_jenkins_final(s + x, s + y, s);
 }
 
-uint cell_jenkins(uint x, uint y, uint z)
+uint cell_jenkins3(uint x, uint y, uint z)
 {
     uint s = 0xdeadbeefu + 25u;
     return _cell_jenkins_final(s + x, s + y, s + z);
 }
 
-uint cell_jenkins(uint x, uint y, uint z, uint w)
+uint cell_jenkins4(uint x, uint y, uint z, uint w)
 {
     uint s = 0xdeadbeefu + 29u;
-    uint a = s + x, b = s + y, c = s + z;
+    uint a = s + x;
+    uint b = s + y;
+    uint c = s + z;
     a -= c; a ^= _cell_rot(c, 4);  c += b;
     b -= a; b ^= _cell_rot(a, 6);  a += c;
     c -= b; c ^= _cell_rot(b, 8);  b += a;
@@ -163,19 +165,20 @@ uvec4 _cell_blender_words(ivec4 c)
 vec4 cell_blender_point(ivec4 c)
 {
     uvec4 k = _cell_blender_words(c);
-    const uint one = 0x3f800000u, two = 0x40000000u;    // float bits of 1.0, 2.0
+    const uint one = 0x3f800000u;     // float bits of 1.0
+    const uint two = 0x40000000u;     // and of 2.0
 #if CELL_DIM == 2
-    return vec4(cell_unit_float(cell_jenkins(k.x, k.y)), cell_unit_float(cell_jenkins(k.x, k.y, one)),
+    return vec4(cell_unit_float(cell_jenkins2(k.x, k.y)), cell_unit_float(cell_jenkins3(k.x, k.y, one)),
                 0.0, 0.0);
 #elif CELL_DIM == 3
-    return vec4(cell_unit_float(cell_jenkins(k.x, k.y, k.z)),
-                cell_unit_float(cell_jenkins(k.x, k.y, k.z, one)),
-                cell_unit_float(cell_jenkins(k.x, k.y, k.z, two)), 0.0);
+    return vec4(cell_unit_float(cell_jenkins3(k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, one)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, two)), 0.0);
 #else
-    return vec4(cell_unit_float(cell_jenkins(k.x, k.y, k.z, k.w)),
-                cell_unit_float(cell_jenkins(k.w, k.x, k.y, k.z)),
-                cell_unit_float(cell_jenkins(k.z, k.w, k.x, k.y)),
-                cell_unit_float(cell_jenkins(k.y, k.z, k.w, k.x)));
+    return vec4(cell_unit_float(cell_jenkins4(k.x, k.y, k.z, k.w)),
+                cell_unit_float(cell_jenkins4(k.w, k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins4(k.z, k.w, k.x, k.y)),
+                cell_unit_float(cell_jenkins4(k.y, k.z, k.w, k.x)));
 #endif
 }
 
@@ -183,18 +186,19 @@ vec4 cell_blender_point(ivec4 c)
 vec3 cell_blender_color(ivec4 c)
 {
     uvec4 k = _cell_blender_words(c);
-    const uint one = 0x3f800000u, two = 0x40000000u;
+    const uint one = 0x3f800000u;
+    const uint two = 0x40000000u;
 #if CELL_DIM == 2
-    return vec3(cell_unit_float(cell_jenkins(k.x, k.y)), cell_unit_float(cell_jenkins(k.x, k.y, one)),
-                cell_unit_float(cell_jenkins(k.x, k.y, two)));
+    return vec3(cell_unit_float(cell_jenkins2(k.x, k.y)), cell_unit_float(cell_jenkins3(k.x, k.y, one)),
+                cell_unit_float(cell_jenkins3(k.x, k.y, two)));
 #elif CELL_DIM == 3
-    return vec3(cell_unit_float(cell_jenkins(k.x, k.y, k.z)),
-                cell_unit_float(cell_jenkins(k.x, k.y, k.z, one)),
-                cell_unit_float(cell_jenkins(k.x, k.y, k.z, two)));
+    return vec3(cell_unit_float(cell_jenkins3(k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, one)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, two)));
 #else
-    return vec3(cell_unit_float(cell_jenkins(k.x, k.y, k.z, k.w)),
-                cell_unit_float(cell_jenkins(k.z, k.x, k.w, k.y)),
-                cell_unit_float(cell_jenkins(k.w, k.z, k.y, k.x)));
+    return vec3(cell_unit_float(cell_jenkins4(k.x, k.y, k.z, k.w)),
+                cell_unit_float(cell_jenkins4(k.z, k.x, k.w, k.y)),
+                cell_unit_float(cell_jenkins4(k.w, k.z, k.y, k.x)));
 #endif
 }
 
@@ -203,11 +207,11 @@ uint cell_cell_seed(ivec4 c, uint seed)
 {
     uvec4 k = _cell_blender_words(c);
 #if CELL_DIM == 2
-    return cell_jenkins(k.x, k.y);
+    return cell_jenkins2(k.x, k.y);
 #elif CELL_DIM == 3
-    return cell_jenkins(k.x, k.y, k.z);
+    return cell_jenkins3(k.x, k.y, k.z);
 #else
-    return cell_jenkins(k.x, k.y, k.z, k.w);
+    return cell_jenkins4(k.x, k.y, k.z, k.w);
 #endif
 }
 #elif CELL_DIST == CELL_DIST_WORLEY1996
