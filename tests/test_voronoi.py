@@ -269,3 +269,44 @@ def test_voronoi_equals_blenders_node(ctx, blender_outputs, backend):
                 assert np.all(theirs >= want - 1e-5) and np.any(theirs > want + 1e-5), label
     # the known misses of the node's 3^d window (Manhattan F1/F2) are among them
     assert any("manhattan" in m[0] for m in misses), misses
+
+
+def test_cli_voronoi(ctx, tmp_path, capsys):
+    from cellgl.cli import main
+
+    out = tmp_path / "d.npy"
+    assert main(["voronoi", "-o", str(out), "--size", "16", "8", "--dimensions", "2", "--feature", "F2",
+                 "--detail", "1.5", "--backend", "numpy"]) == 0
+    img = np.load(out)
+    assert img.shape == (8, 16)
+    u, v = (np.arange(16) + 0.5) / 16, 1 - (np.arange(8) + 0.5) / 8
+    pts = np.stack(np.meshgrid(u, v), -1).reshape(-1, 2)
+    want = cellgl.voronoi(pts, dimensions=2, feature="F2", detail=1.5, backend="numpy").distance
+    np.testing.assert_array_equal(img.ravel(), want)
+    png = tmp_path / "c.png"
+    assert main(["voronoi", "-o", str(png), "--size", "8", "--output", "color"]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["voronoi", "-o", str(tmp_path / "x.png"), "--dimensions", "1", "--output", "position"]) == 2
+    assert "has no such output" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
+
+
+@pytest.mark.parametrize("backend", ["gpu", "numpy"])
+def test_blender_color_output_is_the_nodes(ctx, backend):
+    """cellgl.cellular's ``color`` with distribution 'blender': Blender's colour of the F1 cell,
+    also on a grid and where the points sit on their cell's corner (randomness 0)."""
+    pts = np.random.default_rng(8).uniform(-9, 9, (500, 3))
+    for jitter in (1.0, 0.0):
+        r = cellgl.cellular(pts, n=1, distribution="blender", jitter=jitter, outputs=("color",),
+                            backend=backend)
+        q, c = _window_points(pts, 3, jitter, 2)
+        d = np.sqrt(((q - pts[:, None, :]) ** 2).sum(-1))
+        near = np.argmin(d, axis=1)
+        cells = c[np.arange(len(pts)), near]
+        np.testing.assert_array_equal(r.color, pop.blender_color(cells, 3))
+    g = cellgl.cellular_grid((6, 7), spacing=0.37, n=1, distribution="blender", outputs=("color",),
+                             backend=backend)
+    ys, xs = np.mgrid[0:6, 0:7]
+    p2 = np.stack([xs.ravel() * 0.37, ys.ravel() * 0.37], 1)
+    want = cellgl.cellular(p2, n=1, distribution="blender", outputs=("color",), backend="numpy").color
+    np.testing.assert_array_equal(g.color.reshape(-1, 3), want)

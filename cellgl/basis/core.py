@@ -248,11 +248,11 @@ def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> Ce
                           **{k: get(k, t) for k, t in tails.items()})
 
 
-def _basis_outputs(outs) -> tuple[str, ...]:
+def _basis_outputs(outs, blender: bool = False) -> tuple[str, ...]:
     """The F1..Fn outputs the search must produce for ``outs`` (the features' position and
-    colour come from the F1 offset and ID)."""
+    colour come from the F1 offset and ID; Blender's colour from the F1 cell, found from both)."""
     need = set(outs)
-    if "position" in need:
+    if "position" in need or ("color" in need and blender):
         need.add("delta")
     if "color" in need:
         need.add("id")
@@ -264,7 +264,7 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
     F, D, I, exact = reference.search(cells, fr, p, n)
     out = {}
     inv = 1.0 / p.scale
-    basis = _basis_outputs(outputs)
+    basis = _basis_outputs(outputs, p.distribution == Distribution.BLENDER)
     if "F" in basis:
         out["F"] = (F * inv).astype(np.float32)
     w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
@@ -278,7 +278,7 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
         feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale,
                                    smooth=smooth)
         exact = feats["exact"]
-        _features.finish(out, feats, positions, p.scale, p.dim, outputs)
+        _features.finish(out, feats, positions, p.scale, p.dim, outputs, p.distribution == Distribution.BLENDER)
     return out, exact
 
 
@@ -287,7 +287,7 @@ def _gpu_finish(out: dict, outs, positions, p) -> None:
     if set(outs) & set(_features.OUTPUTS):
         raw = out.pop("features", None)
         feats = _features.unpack(raw, p.dim) if raw is not None else {}
-        _features.finish(out, feats, positions, 1.0, p.dim, outs)
+        _features.finish(out, feats, positions, 1.0, p.dim, outs, p.distribution == Distribution.BLENDER)
 
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
@@ -368,15 +368,16 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs), smoothness * p.scale, smooth)
+        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs, p), smoothness * p.scale, smooth)
         _gpu_finish(out, outs, pts, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
-def _gpu_outputs(outs) -> tuple[str, ...]:
+def _gpu_outputs(outs, p: reference.Params) -> tuple[str, ...]:
     """What the compute shader is asked for: the basis outputs ``outs`` need, and the feature
     outputs (which become its feature record)."""
-    return _basis_outputs(outs) + tuple(o for o in outs if o in _features.OUTPUTS)
+    return (_basis_outputs(outs, p.distribution == Distribution.BLENDER)
+            + tuple(o for o in outs if o in _features.OUTPUTS))
 
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
@@ -446,7 +447,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
         raise ValueError("grid extends beyond +-2^30 cells; move origin closer to 0")
     positions = None
-    if backend == "numpy" or {"position", "smooth_position"} & set(outs):
+    if backend == "numpy" or {"position", "smooth_position"} & set(outs) \
+            or ("color" in outs and p.distribution == Distribution.BLENDER):
         axes = [org[a] + spc[a] * np.arange(shape_xyzw[a]) for a in range(dim)]
         mesh = np.meshgrid(*reversed(axes), indexing="ij")        # array order
         pts = np.stack(list(reversed(mesh)), axis=-1).reshape(-1, dim)
@@ -463,7 +465,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs),
+        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs, p),
                                      smoothness * p.scale, smooth)
         _gpu_finish(out, outs, positions, p)
     return _finish(out, exact, shape, p, n, outs)

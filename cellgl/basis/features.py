@@ -323,10 +323,12 @@ def check(outputs, metric, smoothness, smooth: str = "exp") -> float:
     return float(smoothness)
 
 
-def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int, want) -> None:
+def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int, want,
+           blender: bool = False) -> None:
     """Fill ``out`` with the requested feature outputs (sample units) from the walk's result
     ``feats`` (lattice units, or the GPU's already scaled record when ``scale`` is 1), the
-    sample positions (N, d) float64 and the F1 offsets ``out["delta"]`` and IDs ``out["id"]``."""
+    sample positions (N, d) float64 and the F1 offsets ``out["delta"]`` and IDs ``out["id"]``
+    (``blender``: distribution 'blender', whose ``color`` is Blender's colour of the F1 cell)."""
     inv = 1.0 / scale
     f32 = np.float32
     if "edge" in want:
@@ -345,7 +347,12 @@ def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int
         out["smooth_color"] = np.asarray(feats["smooth_attr"][:, :3]).astype(f32)
     if "position" in want:
         out["position"] = positions + np.asarray(out["delta"][:, 0, :dim], np.float64)
-    if "color" in want:
+    if "color" in want and blender:
+        from cellgl.basis.population import blender_color, blender_owner_cells
+
+        at = positions + np.asarray(out["delta"][:, 0, :dim], np.float64)
+        out["color"] = blender_color(blender_owner_cells(at, out["id"][:, 0], dim), dim).astype(f32)
+    elif "color" in want:
         out["color"] = id_color(out["id"][:, 0]).astype(f32)
 
 

@@ -191,3 +191,23 @@ def blender_color(cells, dim: int) -> np.ndarray:
         x, y, z, w = k
         hs = [jenkins_hash(x, y, z, w), jenkins_hash(z, x, w, y), jenkins_hash(w, z, y, x)]
     return np.stack([unit_float(h) for h in hs], axis=1)
+
+
+def blender_owner_cells(lattice_pos, ids, dim: int) -> np.ndarray:
+    """The integer cell of each Blender point (N, dim) int64, from its position (N, >= dim) in
+    lattice units and its ID (the hash of its cell, :func:`blender_id`): the cell holding the
+    position, or the neighbour whose hash is the ID where the point lies on a face (a hash of
+    1.0, or the rounding of a float32 offset)."""
+    import itertools
+
+    cells = np.floor(np.asarray(lattice_pos, dtype=np.float64)[:, :dim]).astype(np.int64)
+    ids = _u(ids)
+    rows = np.nonzero(blender_id(cells, dim) != ids)[0]
+    for o in itertools.product((-1, 0, 1), repeat=dim):
+        if not len(rows):
+            break
+        cand = cells[rows] + np.array(o)
+        hit = blender_id(cand, dim) == ids[rows]
+        cells[rows[hit]] = cand[hit]
+        rows = rows[~hit]
+    return cells

@@ -30,7 +30,7 @@ import numpy as np
 from cellgl.basis import core
 from cellgl.basis.arrays import real_array
 from cellgl.basis.enums import Distribution, Metric, parse_enum
-from cellgl.basis.population import blender_color, blender_id
+from cellgl.basis.population import blender_color, blender_owner_cells
 
 __all__ = ["VoronoiResult", "voronoi", "FEATURES"]
 
@@ -101,27 +101,6 @@ def _max_distance(metric: Metric, exponent: float, dim: int, randomness: float) 
     return (dim * a ** exponent) ** (1.0 / exponent)
 
 
-def _owner_cells(lattice_pos: np.ndarray, ids: np.ndarray, dim: int) -> np.ndarray:
-    """The integer cell of each Blender point (N, dim), from its position and its ID (the hash of
-    its cell): the cell holding the position, or a neighbour whose hash is the ID where the
-    point lies on a face (a hash of 1.0, or rounding)."""
-    cells = np.floor(lattice_pos).astype(np.int64)
-    ids = np.asarray(ids, dtype=np.uint64)
-    todo = blender_id(cells, dim) != ids
-    if todo.any():
-        import itertools
-
-        rows = np.nonzero(todo)[0]
-        for o in itertools.product((-1, 0, 1), repeat=dim):
-            if not len(rows):
-                break
-            cand = cells[rows] + np.array(o)
-            hit = blender_id(cand, dim) == ids[rows]
-            cells[rows[hit]] = cand[hit]
-            rows = rows[~hit]
-    return cells
-
-
 def _octave(coord, dim, feature, kw, backend, smoothness):
     """One octave at lattice coordinates ``coord`` (N, dim): (distance, colour, position in
     lattice units, exact)."""
@@ -138,7 +117,7 @@ def _octave(coord, dim, feature, kw, backend, smoothness):
     k = n - 1
     pos = coord + r.delta[:, k].astype(np.float64)
     if kw["distribution"] == Distribution.BLENDER:
-        col = blender_color(_owner_cells(pos, r.id[:, k], dim), dim).astype(np.float64)
+        col = blender_color(blender_owner_cells(pos, r.id[:, k], dim), dim).astype(np.float64)
     else:
         from cellgl.basis.features import id_color
 
