@@ -30,8 +30,9 @@
 // of a wrong answer if CELL_FEATURE_MAX_RING rings were not enough.
 //
 // Requires: cellular.glsl. Macros: those of cellular.glsl, CELL_EDGE,
-// CELL_SMOOTH, CELL_NSPHERE (0 or 1; all 0: nothing below is compiled and
-// cell_search is untouched), CELL_FEATURE_MAX_RING.
+// CELL_SMOOTH, CELL_NSPHERE (0 or 1; CELL_SMOOTH 2: smooth F1 as Blender's
+// Voronoi node folds it, _cell_poly_smooth below; all 0: nothing below is
+// compiled and cell_search is untouched), CELL_FEATURE_MAX_RING.
 
 #include "cellular.glsl"
 
