@@ -45,6 +45,12 @@
 #ifndef CELL_NSPHERE
 #define CELL_NSPHERE 0
 #endif
+#ifndef CELL_SMOOTH_EXTRA
+// 0: only smooth F1 itself is wanted; its offset, gradient and attribute are
+// not accumulated (they stay those of the F1 point), a shader specialised per
+// requested output.
+#define CELL_SMOOTH_EXTRA 1
+#endif
 
 // The colour of the cell of feature point `id`: bytes 0, 8 and 16 of its hash,
 // each / 255 (the false colour of `cellgl bake --channels id`).
@@ -152,9 +158,11 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
     if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
         float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
         w.wsum += wt;
+#if CELL_SMOOTH_EXTRA
         w.wdelta += wt * delta;
         w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
         w.wattr += wt * cell_id_attribute(id);
+#endif
     }
 #endif
 }
@@ -181,7 +189,32 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         m = min(m, min(f[a], 1.0 - f[a]));
     }
     _cell_walk_cell(w, cell, f, ivec4(0), p);
-    for (int ring = 1; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    // Ring 1 as a block of constant bounds, unrolled into straight-line SIMD
+    // code as in cell_search (most walks end in it); the same cells in the same
+    // order as the window loop below would visit, each under the same test.
+    if (m >= _cell_walk_reach(w)) {
+        return true;
+    }
+    for (int x = -1; x <= 1; x++)
+    for (int y = -1; y <= 1; y++)
+#if CELL_DIM >= 3
+    for (int z = -1; z <= 1; z++)
+#else
+    for (int z = 0; z <= 0; z++)
+#endif
+#if CELL_DIM >= 4
+    for (int v = -1; v <= 1; v++)
+#else
+    for (int v = 0; v <= 0; v++)
+#endif
+    {
+        ivec4 o = ivec4(x, y, z, v);
+        if (any(notEqual(o, ivec4(0)))
+            && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
+            _cell_walk_cell(w, cell, f, o, p);
+        }
+    }
+    for (int ring = 2; ring <= CELL_FEATURE_MAX_RING; ring++) {
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
             return true;
@@ -249,7 +282,6 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
             vec4 q = cell_dims(vec4(o4) + cell_next_point(state, c, p, id));
             vec4 delta = q - f;
             float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-            vec4 gd = cell_metric_gradient(delta, d, p.minkowski_p);
             float h, dh_ds;
             if (k > 0.0) {
                 float t = 0.5 + 0.5 * (s - d) / k;
@@ -260,10 +292,14 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
                 dh_ds = 0.0;
             }
             float c0 = k * h * (1.0 - h);
+#if CELL_SMOOTH_EXTRA
+            vec4 gd = cell_metric_gradient(delta, d, p.minkowski_p);
             // d s_new = (1 - h) ds + h dd + ((d - s) - k (1 - 2 h)) dh, dh = dh_ds (ds - dd)
             vec4 gh = dh_ds * (gs - gd);
             gs = (1.0 - h) * gs + h * gd + ((d - s) - k * (1.0 - 2.0 * h)) * gh;
+#endif
             s = mix(s, d, h) - c0;
+#if CELL_SMOOTH_EXTRA
             float c1 = c0 / (1.0 + 3.0 * k);
 #if CELL_DIST == CELL_DIST_BLENDER
             vec4 cc = vec4(cell_blender_color(c), cell_id_value(id));
@@ -272,12 +308,15 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
 #endif
             col = mix(col, cc, h) - c1;
             pos = mix(pos, q, h) - c1;
+#endif
         }
     }
     o.smooth_F = s;
+#if CELL_SMOOTH_EXTRA
     o.smooth_delta = cell_dims(pos - f);
     o.smooth_grad = cell_dims(gs);
     o.smooth_attr = col;
+#endif
 }
 #endif
 
@@ -317,9 +356,11 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     if (w.wsum > 0.0) {
         float inv = 1.0 / w.wsum;
         o.smooth_F = w.F1 - w.k * log(w.wsum);
+#if CELL_SMOOTH_EXTRA
         o.smooth_delta = w.wdelta * inv;
         o.smooth_grad = w.wgrad * inv;
         o.smooth_attr = w.wattr * inv;
+#endif
     }
 #endif
 #if CELL_NSPHERE
