@@ -26,8 +26,10 @@ Markers: HTML comments on the lines right above a fence (several may stack), inv
                                               down; the doc says how long the full one takes)
     <!-- docs-test: timeout: SECONDS -->      instead of the default of DEFAULT_TIMEOUT seconds
     <!-- docs-test: interactive -->           each command opens a window and waits for the user:
-                                              it must still be running, with no error printed,
-                                              after INTERACTIVE_SECONDS, and is then closed
+                                              a window titled 'cellgl...' must appear on the
+                                              display, the command must still be running, with no
+                                              error printed, INTERACTIVE_SECONDS later, and is
+                                              then closed
 
 A failure names the document, the line of the fence (and of the failing command or the Python
 traceback's line in the document), the command, and the last lines of its output.
@@ -50,7 +52,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 DEFAULT_TIMEOUT = 120.0           # seconds per block: the slowest runs in about 20 s on 2 cores
-INTERACTIVE_SECONDS = 8.0         # how long an interactive command must stay up
+INTERACTIVE_SECONDS = 3.0         # how long an interactive command must stay up once its window is there
 PYTHON_LANGS = {"python", "py", "python3"}
 SHELL_LANGS = {"sh", "bash", "shell"}
 CONSOLE_LANGS = {"console"}
@@ -612,11 +614,25 @@ class DocSession:
                              output=_read(out), line=line)
 
     def _run_interactive(self, block: Block) -> None:
+        display = self.env.get("DISPLAY")
         for k, cmd in shell_commands(block.text()):
             out = self._file("interactive.txt")
             p = self._spawn(["bash", "-c", cmd], out)
-            rc = self._wait(p, INTERACTIVE_SECONDS)
             line = block.line + k
+            # the window must appear (its title names cellgl), then the command must stay up
+            deadline, seen = time.monotonic() + block.timeout, None
+            while display and seen is None and p.poll() is None and time.monotonic() < deadline:
+                names = x11_window_names(display)
+                if names is None:
+                    break               # no libX11 to ask: the staying-up check alone
+                seen = next((n for n in names if "cellgl" in n), None)
+                if seen is None:
+                    time.sleep(0.25)
+            if display and seen is None and p.poll() is None and time.monotonic() >= deadline:
+                _kill_group(p)
+                raise self._fail(block, f"opened no window titled 'cellgl...' within {block.timeout:g} s",
+                                 command=cmd, output=_read(out), line=line)
+            rc = self._wait(p, INTERACTIVE_SECONDS)
             if rc is not None:
                 raise self._fail(block, f"exited (status {rc}) instead of staying open for "
                                         f"{INTERACTIVE_SECONDS:g} s", command=cmd, output=_read(out), line=line)
@@ -712,6 +728,59 @@ def _line_of(block: Block, line: int | None) -> str | None:
         k += 1
         text = text.rstrip()[:-1] + " " + lines[k].strip()
     return text
+
+
+def x11_window_names(display: str) -> list[str] | None:
+    """The names (titles) of the windows on X display ``display``, two levels below the root;
+    None where libX11 cannot be loaded or the display not opened."""
+    import ctypes
+    import ctypes.util
+
+    lib = ctypes.util.find_library("X11")
+    if not lib:
+        return None
+    try:
+        x = ctypes.CDLL(lib)
+    except OSError:
+        return None
+    ulong, vp = ctypes.c_ulong, ctypes.c_void_p
+    x.XOpenDisplay.restype, x.XOpenDisplay.argtypes = vp, [ctypes.c_char_p]
+    x.XDefaultRootWindow.restype, x.XDefaultRootWindow.argtypes = ulong, [vp]
+    x.XQueryTree.argtypes = [vp, ulong, ctypes.POINTER(ulong), ctypes.POINTER(ulong),
+                             ctypes.POINTER(ctypes.POINTER(ulong)), ctypes.POINTER(ctypes.c_uint)]
+    x.XFetchName.argtypes = [vp, ulong, ctypes.POINTER(vp)]
+    x.XFree.argtypes, x.XCloseDisplay.argtypes = [vp], [vp]
+    # a window may vanish while it is walked: Xlib's default error handler would exit the process
+    handler = ctypes.CFUNCTYPE(ctypes.c_int, vp, vp)(lambda d, e: 0)
+    x.XSetErrorHandler.restype, x.XSetErrorHandler.argtypes = vp, [vp]
+    old = x.XSetErrorHandler(ctypes.cast(handler, vp))
+    d = x.XOpenDisplay(display.encode())
+    if not d:
+        x.XSetErrorHandler(old)
+        return None
+    names: list[str] = []
+
+    def walk(w: int, depth: int) -> None:
+        r, parent, children, n = ulong(), ulong(), ctypes.POINTER(ulong)(), ctypes.c_uint()
+        if not x.XQueryTree(d, w, ctypes.byref(r), ctypes.byref(parent), ctypes.byref(children), ctypes.byref(n)):
+            return
+        kids = [children[i] for i in range(n.value)]
+        if children:
+            x.XFree(ctypes.cast(children, vp))
+        for c in kids:
+            name = vp()
+            if x.XFetchName(d, c, ctypes.byref(name)) and name.value:
+                names.append(ctypes.string_at(name.value).decode("utf-8", "replace"))
+                x.XFree(name)
+            if depth < 1:
+                walk(c, depth + 1)
+
+    try:
+        walk(x.XDefaultRootWindow(d), 0)
+    finally:
+        x.XCloseDisplay(d)
+        x.XSetErrorHandler(old)
+    return names
 
 
 def _int(path: Path) -> int | None:

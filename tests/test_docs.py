@@ -275,3 +275,23 @@ goodbye
     assert msg.startswith("docs/t.md:7: ```console block (fence at line 1) printed something else"), msg
     assert "goodbye" in msg and "hello" in msg
     assert (s.workdir / "a.json").is_file()
+
+
+def test_runner_interactive_commands_must_stay_open(tmp_path, display):
+    blocks, s = _doc(tmp_path, f"""<!-- docs-test: interactive -->
+<!-- docs-test: timeout: 2 -->
+{FENCE}sh
+sleep 60                 # no window: fails where there is a display to look at
+true
+{FENCE}
+""")
+    s.env.pop("DISPLAY", None)
+    if display:
+        s.env["DISPLAY"] = display
+        with pytest.raises(BlockFailed, match=r"docs/t.md:4: .*opened no window titled 'cellgl...' within 2 s"):
+            s.run(blocks[0])
+        assert dr.x11_window_names(display) is not None        # libX11 answers: the check is real
+        s.env.pop("DISPLAY")
+    with pytest.raises(BlockFailed, match=r"docs/t.md:5: .*exited \(status 0\) instead of staying open"):
+        s.run(blocks[0])
+    s.close()
