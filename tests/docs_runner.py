@@ -61,7 +61,7 @@ TAIL_LINES = 25                   # output lines shown with a failure
 
 _FENCE = re.compile(r"^(?P<indent>[ \t]*)(?P<fence>`{3,}|~{3,})[ \t]*(?P<info>[^`\s]*)[^`]*$")
 _MARKER = re.compile(r"^\s*<!--\s*docs-test:(?P<body>.*?)-->\s*$")
-_ANY_MARKER = re.compile(r"docs-test\s*:")
+_ANY_MARKER = re.compile(r"^\s*<!--.*docs-test")      # a marker line that _MARKER does not take
 
 
 class DocError(Exception):

@@ -253,9 +253,16 @@ sleep 20
     ('```python\nx = [1,\n```\n', "not valid Python"),
 ])
 def test_runner_refuses_bad_markers(tmp_path, text, error):
+    """A marker that would be silently ignored is an error naming the document and line."""
     with pytest.raises(DocError, match=error) as exc:
         _doc(tmp_path, "# t\n" + text)
     assert str(exc.value).startswith(("docs/t.md:2:", "docs/t.md:3:")), str(exc.value)   # the fence, or the line
+
+
+def test_runner_prose_may_mention_the_markers(tmp_path):
+    blocks, _ = _doc(tmp_path, "Mark it with `<!-- docs-test: skip: REASON -->` above the fence.\n"
+                               "<!-- an ordinary comment -->\n```sh\ntrue\n```\n")
+    assert len(blocks) == 1 and blocks[0].skip is None and blocks[0].line == 3
 
 
 def test_runner_console_blocks_compare_output(tmp_path):
