@@ -367,21 +367,17 @@ def check_file(path: Path) -> str | None:
     return None
 
 
-_OUT_FLAGS = ("-o", "--output", "--out")
-
-
 def named_outputs(command: str) -> list[str]:
-    """The files a shell command says it writes: ``-o FILE``, ``--output=FILE``, ``> FILE``."""
+    """The files a shell command says it writes: ``-o FILE``, ``> FILE``. (Not ``--output``:
+    ``cellgl voronoi --output color`` names a socket.)"""
     try:
         words = shlex.split(command, comments=True)
     except ValueError:
         return []
     out = []
     for k, w in enumerate(words):
-        if w in _OUT_FLAGS + (">", "1>") and k + 1 < len(words):
+        if w in ("-o", ">", "1>") and k + 1 < len(words):
             out.append(words[k + 1])
-        elif any(w.startswith(f + "=") for f in _OUT_FLAGS if f.startswith("--")):
-            out.append(w.split("=", 1)[1])
         elif w.startswith(">") and len(w) > 1 and not w.startswith(">&") and not w.startswith(">>"):
             out.append(w[1:])
     return [o for o in out if o and not o.startswith("/dev/")]
