@@ -342,7 +342,15 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.nn = 3.0e38;
 
     CellFeatures o;
+#if CELL_TRACK_F1_CELL
+    // n-sphere radius alone: the search already knows the F1 point's cell.
+    w.found = true;
+    w.o1 = r.o1;
+    w.q1 = r.q1;
+    o.exact = r.exact;
+#else
     o.exact = r.exact && _cell_walk(w, cell, f, p);
+#endif
     o.edge = max(w.edge, 0.0);
     o.edge_grad = -w.edge_n;
     o.smooth_F = r.F[0];
