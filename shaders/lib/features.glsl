@@ -214,6 +214,29 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             _cell_walk_cell(w, cell, f, o, p);
         }
     }
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+    if (!w.around) {
+        // Smooth F1 alone: the reach F1 + cutoff k does not change during the
+        // walk, so rings 2 .. R (the last the ring loop would enter) are one
+        // window loop, each cell under the same test.
+        float reach = _cell_walk_reach(w);
+        int last = int(ceil(min(reach - m, float(CELL_FEATURE_MAX_RING))));
+        ivec4 lo, hi;
+        cell_ring_window(last, min(reach, float(last + 2)), f, lo, hi);
+        for (int x = lo.x; x <= hi.x; x++)
+        for (int y = lo.y; y <= hi.y; y++)
+        for (int z = lo.z; z <= hi.z; z++)
+        for (int v = lo.w; v <= hi.w; v++) {
+            ivec4 o = ivec4(x, y, z, v);
+            ivec4 ao = abs(o);
+            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2
+                && _cell_box_distance(o, f, p) < cell_metric_term(reach, p.minkowski_p)) {
+                _cell_walk_cell(w, cell, f, o, p);
+            }
+        }
+        return float(last) + m >= reach;
+    }
+#endif
     for (int ring = 2; ring <= CELL_FEATURE_MAX_RING; ring++) {
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
