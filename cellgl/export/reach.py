@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 from cellgl.export.translate.tokens import Tok, tokenize
 
-__all__ = ["Item", "parse", "scalarise", "fold", "reach", "compile_glsl", "unparse"]
+__all__ = ["Item", "parse", "scalarise", "reach", "unparse"]
 
 _QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "flat", "precise", "invariant"}
 
@@ -174,59 +174,133 @@ def _split_args(toks: list[Tok], code: list[int], lo: int, hi: int) -> list[tupl
 # 1. constant parameter structs -> the loader's names
 # --------------------------------------------------------------------------------------------
 
-_LOADER_RE = re.compile(r"\b(\w+)\.(\w+)(\s*\[\s*\w+\s*\])?\s*=\s*([A-Za-z_]\w*)(\s*\[\s*\w+\s*\])?\s*;")
+_ASSIGN_RE = re.compile(r"^\s*(\w+)\.(\w+)\s*=\s*([^;]*);\s*$")
+_COPY_RE = re.compile(r"^\s*(\w+)\.(\w+)\s*\[\s*(\w+)\s*\]\s*=\s*([A-Za-z_]\w*)\s*\[\s*\3\s*\]\s*;\s*$")
+_TYPE_WORDS = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec2",
+               "uvec3", "uvec4", "true", "false"}
+
+
+def _loader_fields(load: Item, globals_: set[str]) -> dict[str, tuple[str, list[int]]]:
+    """``{field: (value text, loader lines)}`` of the fields the loader sets from globals and
+    literals only (``p.f = cellgl_f;``, ``p.f = ivec4(0);``, ``p.f[k] = cellgl_f[k];`` in a loop)."""
+    lines = "".join(t.text for t in load.toks).split("\n")
+    out: dict[str, tuple[str, list[int]]] = {}
+    for n, ln in enumerate(lines):
+        m = _COPY_RE.match(ln)
+        if m and m.group(4) in globals_ and n > 0 and lines[n - 1].strip().startswith("for") \
+                and n + 1 < len(lines) and lines[n + 1].strip() == "}":
+            out[m.group(2)] = (m.group(4), [n - 1, n, n + 1])
+            continue
+        m = _ASSIGN_RE.match(ln)
+        if m:
+            ids = set(re.findall(r"\b[A-Za-z_]\w*\b", m.group(3)))
+            if ids <= globals_ | _TYPE_WORDS:
+                rhs = m.group(3).strip()
+                if not re.fullmatch(r"[\w.]+", rhs) and not re.fullmatch(r"\w+\([^()]*\)", rhs):
+                    rhs = f"({rhs})"
+                out[m.group(2)] = (rhs, [n])
+    return out
 
 
 def scalarise(items: list[Item], struct: str, loader: str) -> list[Item]:
-    """Replace the struct ``struct`` by the names its loader function ``loader`` fills it from.
+    """Replace the fields of the struct ``struct`` by the values its loader ``loader`` sets them to.
 
-    Applies only when every value of the struct is the loader's result: no other function
-    declares a local of that type or takes it as ``out``/``inout``, and every field a function
-    reads is one the loader sets from a plain name (``t.f = name;`` or ``t.f[k] = name[k];``).
-    Otherwise ``items`` are returned unchanged.
+    Applies when every value of the struct comes straight from the loader: parameters (not
+    ``out``/``inout``) and locals ``S p = loader(...);``. A field the loader sets from globals and
+    literals only is read as that value everywhere and leaves the struct and the loader; when no
+    field is left, the struct parameter is dropped from every signature and call, and the struct
+    and its loader are no longer reached. Otherwise ``items`` are returned unchanged.
     """
     load = next((it for it in items if it.kind == "function" and it.name == loader), None)
-    if load is None:
+    sdef = next((it for it in items if it.kind == "struct" and it.name == struct), None)
+    if load is None or sdef is None:
         return items
-    fields: dict[str, str] = {}
-    for m in _LOADER_RE.finditer("".join(t.text for t in load.toks if t.kind != "comment")):
-        fields[m.group(2)] = m.group(4)
-    # functions taking the struct: name -> (parameter index, parameter name)
-    takes: dict[str, tuple[int, str]] = {}
+    globals_ = {it.name for it in items if it.kind == "variable"}
+    fields = _loader_fields(load, globals_)
+    sfields = set(re.findall(r"\b(\w+)\s*(?:\[\s*\w+\s*\])?\s*;", "".join(
+        t.text for t in sdef.toks if t.kind != "comment")))
+    complete = sfields <= set(fields)
+    takes: dict[str, tuple[int, str]] = {}      # function -> (parameter index, parameter name)
+    holders: dict[str, set[str]] = {}           # function -> names of the struct's values in it
     for it in items:
         if it.kind not in ("function", "prototype") or it.name == loader:
             continue
         toks, code = it.toks, _code_idx(it.toks)
-        op = next(n for n, i in enumerate(code) if toks[i].text == "(")
+        w = [toks[i].text for i in code]
+        op = w.index("(")
         cl = _match(toks, code, op)
+        names = set()
         for k, (a, b) in enumerate(_split_args(toks, code, op, cl)):
-            words = [toks[code[m]].text for m in range(a, b)]
+            words = w[a:b]
             if struct in words:
                 if set(words) & {"out", "inout"} or len(words) != 2 + ("in" in words) + ("const" in words):
                     return items
                 takes[it.name] = (k, words[-1])
-        # a local of the struct type (other than the parameter) may hold another value
-        body = [toks[i].text for i in code[cl + 1:]]
-        if struct in body:
-            return items
+                names.add(words[-1])
+        for n in range(cl + 1, len(w)):
+            if w[n] == struct:
+                if not (n + 3 < len(w) and w[n + 2] == "=" and w[n + 3] == loader):
+                    return items               # a local that may hold another value
+                names.add(w[n + 1])
+        holders[it.name] = names
     out = []
     for it in items:
-        if it.name == loader and it.kind == "function":
-            out.append(it)
+        if it.kind == "function" and it.name == loader:
+            out.append(it if complete else _drop_lines(it, [n for _, ln in fields.values() for n in ln]))
+            continue
+        if it.kind == "struct" and it.name == struct:
+            out.append(it if complete else _drop_fields(it, set(fields)))
             continue
         toks = list(it.toks)
-        pname = takes.get(it.name, (None, None))[1]
-        if pname is not None:
+        for pname in holders.get(it.name, ()):
             toks = _replace_fields(toks, pname, fields)
+        if complete:
+            toks = _drop_struct_args(toks, takes, loader, skip_sig=it.name in takes)
             if toks is None:
                 return items
-        toks = _drop_struct_args(toks, takes, loader, skip_sig=it.name in takes)
-        if toks is None:
-            return items
-        if pname is not None and any(t.kind == "id" and t.text == pname for t in toks[_sig_end(toks):]):
-            return items                          # still used whole: cannot drop it
+            for pname in holders.get(it.name, ()):
+                toks = _drop_local(toks, struct, pname)
+                if any(t.kind == "id" and t.text == pname for t in toks[_sig_end(toks):]):
+                    return items                      # still used whole: cannot drop it
         out.append(Item(it.kind, it.name, toks, it.comment))
     return out
+
+
+def _drop_lines(it: Item, lines: list[int]) -> Item:
+    text = "".join(t.text for t in it.toks).split("\n")
+    keep = "\n".join(ln for n, ln in enumerate(text) if n not in set(lines))
+    return Item(it.kind, it.name, tokenize(keep), it.comment)
+
+
+def _drop_fields(it: Item, fields: set[str]) -> Item:
+    text = "".join(t.text for t in it.toks).split("\n")
+    drop = set()
+    for n in range(len(text) - 1, -1, -1):
+        m = re.match(r"^\s*\w+\s+(\w+)\s*(\[\s*\w+\s*\])?\s*;", text[n])
+        if m and m.group(1) in fields:
+            drop.add(n)
+        elif text[n].strip().startswith("//") and n + 1 in drop:
+            drop.add(n)
+    return Item(it.kind, it.name, tokenize("\n".join(ln for n, ln in enumerate(text) if n not in drop)),
+                it.comment)
+
+
+def _drop_local(toks: list[Tok], struct: str, pname: str) -> list[Tok]:
+    """Remove ``struct pname = ...;`` when ``pname`` is not used anywhere else."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(len(w) - 2):
+        if w[n] == struct and w[n + 1] == pname and w[n + 2] == "=":
+            if w.count(pname) > 1:
+                return toks
+            end = w.index(";", n)
+            start = code[n]
+            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+                start -= 1
+            if start > 0 and toks[start - 1].kind == "ws":
+                start -= 1
+            return toks[:start] + toks[code[end] + 1:]
+    return toks
 
 
 def _sig_end(toks: list[Tok]) -> int:
@@ -235,7 +309,7 @@ def _sig_end(toks: list[Tok]) -> int:
     return code[_match(toks, code, op)] + 1
 
 
-def _replace_fields(toks: list[Tok], pname: str, fields: dict[str, str]) -> list[Tok] | None:
+def _replace_fields(toks: list[Tok], pname: str, fields: dict) -> list[Tok]:
     code = _code_idx(toks)
     out = list(toks)
     drop: set[int] = set()
@@ -243,10 +317,10 @@ def _replace_fields(toks: list[Tok], pname: str, fields: dict[str, str]) -> list
         if toks[i].text == pname and toks[code[n + 1]].text == ".":
             f = toks[code[n + 2]].text
             if f not in fields:
-                return None
-            out[i] = Tok("id", fields[f])
+                continue
+            out[i] = Tok("id", fields[f][0])
             drop.update((code[n + 1], code[n + 2]))
-    return [t for k, t in enumerate(out) if k not in drop]
+    return tokenize("".join(t.text for k, t in enumerate(out) if k not in drop))
 
 
 def _drop_struct_args(toks: list[Tok], takes: dict, loader: str, skip_sig: bool) -> list[Tok] | None:
@@ -284,248 +358,6 @@ def _drop_struct_args(toks: list[Tok], takes: dict, loader: str, skip_sig: bool)
 
 
 # --------------------------------------------------------------------------------------------
-# 2. constant folding of conditions
-# --------------------------------------------------------------------------------------------
-
-_LIT_RE = re.compile(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?|(\d+\.\d*|\.\d+|\d+)([eE][+-]?\d+)?[fF]?")
-
-
-def constants(items: list[Item]) -> dict[str, str]:
-    """``{name: literal}`` of the global scalar constants initialised with a literal."""
-    env = {}
-    for it in items:
-        if it.kind != "variable":
-            continue
-        c = it.code()
-        if c[:1] == ["const"] and len(c) >= 6 and c[3] == "=" and c[-1] == ";":
-            val = "".join(c[4:-1]).strip("()")
-            if _literal(val) is not None or val in ("true", "false"):
-                env[c[2]] = val
-    return env
-
-
-def _literal(s: str):
-    neg = s.startswith("-")
-    body = s[1:] if neg else s
-    m = _LIT_RE.fullmatch(body)
-    if not m:
-        return None
-    if m.group(1):
-        v = int(m.group(1), 0)
-    else:
-        v = float(body.rstrip("fF"))
-    return -v if neg else v
-
-
-_PY_OPS = {"&&": " and ", "||": " or ", "!": " not ", "==": "==", "!=": "!=", "<": "<", ">": ">",
-           "<=": "<=", ">=": ">=", "(": "(", ")": ")", "+": "+", "-": "-", "*": "*"}
-
-
-def _evaluate(words: list[str], env: dict[str, str]):
-    """The value of a condition of literals, known constants and operators, else None."""
-    py = []
-    for w in words:
-        if w in env:
-            w = env[w]
-        if w in ("true", "false"):
-            py.append(" True " if w == "true" else " False ")
-        elif w in _PY_OPS:
-            py.append(_PY_OPS[w])
-        else:
-            v = _literal(w)
-            if v is None:
-                return None
-            py.append(repr(v))
-    try:
-        return eval("".join(py), {"__builtins__": {}}, {})  # noqa: S307 - literals/operators only
-    except Exception:
-        return None
-
-
-def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
-    """Remove the branches of ``if`` statements and ternaries whose condition is constant."""
-    out = []
-    for it in items:
-        if it.kind != "function":
-            out.append(it)
-            continue
-        toks = it.toks
-        for _ in range(50):
-            local = dict(env)
-            local.update(_local_constants(toks, env))
-            new = _fold_once(toks, local)
-            if new is None:
-                break
-            toks = new
-        out.append(Item(it.kind, it.name, toks, it.comment))
-    return out
-
-
-_ASSIGN = {"=", "+=", "-=", "*=", "/=", "%=", "<<=", ">>=", "&=", "|=", "^=", "++", "--"}
-
-
-def _local_constants(toks: list[Tok], env: dict[str, str]) -> dict[str, str]:
-    """Locals ``TYPE x = <constant>;`` never assigned, incremented or passed anywhere after."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    found = {}
-    for n in range(1, len(w) - 3):
-        if w[n - 1] in ("int", "uint", "float", "bool") and re.fullmatch(r"[A-Za-z_]\w*", w[n]) \
-                and w[n + 1] == "=" and (n < 2 or w[n - 2] in (";", "{", "}")):
-            end = w.index(";", n)
-            v = _evaluate(w[n + 2:end], env)
-            if v is None or w.count(w[n]) < 1:
-                continue
-            uses = [m for m in range(len(w)) if w[m] == w[n] and m != n]
-            if any((m + 1 < len(w) and w[m + 1] in _ASSIGN) or w[m - 1] in ("++", "--")
-                   or w[m - 1] in ("(", ",") and m + 1 < len(w) and w[m + 1] in (")", ",")
-                   for m in uses):
-                continue
-            found[w[n]] = _glsl_literal(v, w[n - 1])
-    return found
-
-
-def _glsl_literal(v, typ: str) -> str:
-    if typ == "bool" or isinstance(v, bool):
-        return "true" if v else "false"
-    if typ == "float":
-        return repr(float(v))
-    if typ == "uint":
-        return f"{int(v)}u"
-    return str(int(v))
-
-
-def _fold_once(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n, s in enumerate(w):
-        if s == "if" and n + 1 < len(w) and w[n + 1] == "(":
-            cl = _match(toks, code, n + 1)
-            v = _evaluate(w[n + 2:cl], env)
-            if v is None or w[cl + 1] != "{":
-                continue
-            then_end = _match(toks, code, cl + 1)
-            keep: tuple[int, int] | None     # code positions of the kept part, brackets included
-            end = then_end
-            else_part = None
-            if then_end + 1 < len(w) and w[then_end + 1] == "else":
-                if w[then_end + 2] == "{":
-                    e_end = _match(toks, code, then_end + 2)
-                    else_part = (then_end + 2, e_end)
-                    end = e_end
-                elif w[then_end + 2] == "if":
-                    e_end = _if_chain_end(toks, code, w, then_end + 2)
-                    else_part = (then_end + 2, e_end)
-                    end = e_end
-                else:
-                    continue
-            keep = (cl + 1, then_end) if v else else_part
-            return _splice(toks, code, n, end, keep)
-        if s == "?":
-            lo = _ternary_start(w, n)
-            v = _evaluate(w[lo:n], env)
-            if v is None:
-                continue
-            colon, hi = _ternary_parts(w, n)
-            if colon is None:
-                continue
-            a = "".join(toks[code[m]].text + " " for m in range(n + 1, colon)).strip()
-            b = "".join(toks[code[m]].text + " " for m in range(colon + 1, hi)).strip()
-            pick = _respace(a if v else b)
-            new = toks[:code[lo]] + [Tok("id", "(" + pick + ")")] + toks[code[hi - 1] + 1:]
-            return new
-    return None
-
-
-def _respace(s: str) -> str:
-    s = re.sub(r"\s*([(\[.])\s*", r"\1", s)
-    s = re.sub(r"\s*([)\]])", r"\1", s)
-    return s.replace(" ,", ",")
-
-
-def _if_chain_end(toks, code, w, n) -> int:
-    cl = _match(toks, code, n + 1)
-    end = _match(toks, code, cl + 1)
-    if end + 1 < len(w) and w[end + 1] == "else":
-        if w[end + 2] == "{":
-            return _match(toks, code, end + 2)
-        return _if_chain_end(toks, code, w, end + 2)
-    return end
-
-
-def _ternary_start(w: list[str], q: int) -> int:
-    depth = 0
-    for m in range(q - 1, -1, -1):
-        s = w[m]
-        if s in ")]":
-            depth += 1
-        elif s in "([":
-            if depth == 0:
-                return m + 1
-            depth -= 1
-        elif depth == 0 and (s in (",", ";", "{", "}", "return", "?", ":") or s in _ASSIGN):
-            return m + 1
-    return 0
-
-
-def _ternary_parts(w: list[str], q: int):
-    depth, nest, colon = 0, 0, None
-    for m in range(q + 1, len(w)):
-        s = w[m]
-        if s in "([":
-            depth += 1
-        elif s in ")]":
-            if depth == 0:
-                return (colon, m) if colon is not None else (None, None)
-            depth -= 1
-        elif depth == 0 and s == "?":
-            nest += 1
-        elif depth == 0 and s == ":":
-            if nest:
-                nest -= 1
-            elif colon is None:
-                colon = m
-            else:
-                return colon, m
-        elif depth == 0 and s in (",", ";"):
-            return (colon, m) if colon is not None else (None, None)
-    return None, None
-
-
-def _splice(toks, code, start, end, keep) -> list[Tok]:
-    """Replace code positions start..end (a whole if statement) by the inside of ``keep``
-    (a braced block, dedented one level; kept as a block when it declares a name) or nothing."""
-    before = toks[:code[start]]
-    after = toks[code[end] + 1:]
-    if keep is None:
-        # drop the statement and the indentation/newline in front of it
-        while before and before[-1].kind == "ws" and "\n" not in before[-1].text:
-            before.pop()
-        if before and before[-1].kind == "ws":
-            before[-1] = Tok("ws", before[-1].text.rsplit("\n", 1)[0])
-            if not before[-1].text:
-                before.pop()
-        return before + after
-    a, b = keep
-    if toks[code[a]].text != "{":           # an else-if chain: keep it as it is
-        return before + toks[code[a]:code[b] + 1] + after
-    inner = toks[code[a] + 1:code[b]]
-    words = [t.text for t in inner if t.kind not in ("ws", "comment")]
-    declares = any(words[k] in ("int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec4", "uvec4")
-                   and k + 1 < len(words) and re.fullmatch(r"[A-Za-z_]\w*", words[k + 1])
-                   for k in range(len(words)))
-    if declares:
-        return before + toks[code[a]:code[b] + 1] + after
-    if start > 0 and toks[code[start - 1]].text == "else":   # `else if (true) {A}` -> `else {A}`
-        return before + toks[code[a]:code[b] + 1] + after
-    text = "".join(t.text for t in inner)
-    text = re.sub(r"\n    ", "\n", text).strip()
-    if not text:
-        return _splice(toks, code, start, end, None)
-    return before + tokenize(text) + after
-
-
-# --------------------------------------------------------------------------------------------
 # 3. reachability
 # --------------------------------------------------------------------------------------------
 
@@ -546,20 +378,3 @@ def reach(items: list[Item], entries) -> list[Item]:
         for it in by_name[name]:
             todo.extend(u for u in it.uses() if u in by_name and u not in seen)
     return [it for it in items if it.name in seen]
-
-
-# --------------------------------------------------------------------------------------------
-# the whole middle end
-# --------------------------------------------------------------------------------------------
-
-
-def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) -> str:
-    """Scalarise ``structs`` (``[(struct, loader)]``), fold, and keep what ``entries`` reach."""
-    items = [it for it in parse(text) if it.kind != "other"]
-    for struct, loader in structs:
-        items = scalarise(items, struct, loader)
-    items = reach(items, entries)
-    if fold_constants:
-        items = fold(items, constants(items))
-        items = reach(items, entries)
-    return unparse(items)

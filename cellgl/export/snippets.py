@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 from cellgl._version import __version__
 from cellgl.gl import glsl
-from cellgl.export import reach, translate
+from cellgl.export import fold, translate
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
 
@@ -130,14 +130,15 @@ def library_code(prog: Program) -> str:
     text, _ = translate.prefix_names(text, overrides=_OVERRIDES)
     entries = prog.entries or [n for n in ENTRY_POINTS
                                if re.search(rf"\b{n}\s*\(", prog.entry.replace("cell_", "cellgl_"))]
-    text = reach.compile_glsl(text, entries, structs=_CONSTANT_STRUCTS)
+    text = fold.compile_glsl(text, entries, structs=_CONSTANT_STRUCTS)
     return _tidy(text)
 
 
 #: the functions a snippet may export (the reachability pass starts from those it defines)
 ENTRY_POINTS = ("cellgl_texture", "cellgl_texture_filtered", "cellgl_texture3", "cellgl_texture3_filtered")
 #: parameter structs that only ever hold their loader's values: scalarised away (reach.scalarise)
-_CONSTANT_STRUCTS = (("CellglTextureParams", "cellgl_texture_params_load"), ("CellglParams", "cellgl_params_load"))
+_CONSTANT_STRUCTS = (("CellglTextureParams", "cellgl_texture_params_load"), ("CellglParams", "cellgl_params_load"),
+                     ("CellglParams", "cellgl_tex_basis_"))
 
 
 def _tidy(text: str) -> str:
