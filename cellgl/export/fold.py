@@ -60,7 +60,7 @@ def _literal(s: str):
     return -v if neg else v
 
 
-_PY_OPS = {"&&": " and ", "||": " or ", "!": " not ", "==": "==", "!=": "!=", "<": "<", ">": ">",
+_PY_OPS = {"&&": " and ", "||": " or ", "!": " not ", "==": "==", "!=": "!=", "<": "<", ">": ">", "/": "/",
            "<=": "<=", ">=": ">=", "(": "(", ")": ")", "+": "+", "-": "-", "*": "*"}
 
 
@@ -99,6 +99,8 @@ def _balanced(words: list[str]) -> bool:
 
 
 def _evaluate_all(words: list[str], env: dict[str, str]):
+    if "/" in words and any(isinstance(_literal(env.get(x, x)), int) for x in words):
+        return None                      # integer division: leave it to the compiler
     py = []
     for w in words:
         if w in env:
@@ -138,6 +140,14 @@ def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
                 new = _substitute_locals(toks, env)
             if new is None:
                 new = _dead_local(toks, impure)
+            if new is None:
+                new = _split_declarators(toks)
+            if new is None:
+                new = _dead_store(toks, impure)
+            if new is None:
+                new = _last_store(toks, impure)
+            if new is None:
+                new = _loop_range(toks, local)
             if new is None:
                 break
             toks = new
@@ -404,6 +414,219 @@ def _dead_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
     return None
 
 
+_DECL_TYPES = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec4"}
+
+
+def _split_declarators(toks: list[Tok]) -> list[Tok] | None:
+    """``vec4 a = x, b;`` -> ``vec4 a = x;`` and ``vec4 b;`` on their own lines."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(1, len(w) - 2):
+        if w[n] in _DECL_TYPES and w[n - 1] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n + 1]) \
+                and w[n + 2] in ("=", ","):
+            end = _stmt_end(toks, code, w, n)
+            parts, depth, start = [], 0, n + 1
+            for m in range(n + 1, end):
+                depth += w[m] in ("(", "[")
+                depth -= w[m] in (")", "]")
+                if w[m] == "," and depth == 0:
+                    parts.append((start, m))
+                    start = m + 1
+            if not parts:
+                continue
+            parts.append((start, end))
+            ind = toks[code[n] - 1].text.rsplit("\n", 1)[-1] if toks[code[n] - 1].kind == "ws" else ""
+            text = f"\n{ind}".join(w[n] + " " + "".join(toks[i].text for i in range(code[a], code[b - 1] + 1)).strip()
+                                   + ";" for a, b in parts)
+            return tokenize("".join(t.text for t in toks[:code[n]]) + text
+                            + "".join(t.text for t in toks[code[end] + 1:]))
+    return None
+
+
+_STORE = {"=", "+=", "-=", "*=", "/="}
+
+
+def _dead_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """Remove a local that is only ever written (``x = ...;``, ``x.y += ...;``, ``x[0] = ...;``),
+    with its declaration and those statements (their right-hand sides call nothing with out
+    parameters)."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 2):
+        if not (w[n - 1] in _DECL_TYPES | {"CellglTexel"} and w[n - 2] in (";", "{", "}")
+                and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] in ("=", ";", "[")):
+            continue
+        name = w[n]
+        decl_end = _stmt_end(toks, code, w, n - 1)
+        if any(x in impure for x in w[n:decl_end]):
+            continue
+        spans = [(n - 1, decl_end)]
+        ok = True
+        m = decl_end + 1
+        while m < len(w):
+            if w[m] != name or w[m - 1] == ".":
+                m += 1
+                continue
+            if w[m - 1] not in (";", "{", "}"):
+                ok = False
+                break
+            k = m + 1
+            while k < len(w) and (w[k] == "." or w[k - 1] == "." or w[k] == "["):
+                k = _match(toks, code, k) + 1 if w[k] == "[" else k + 1
+            end = _stmt_end(toks, code, w, m)
+            if k >= len(w) or w[k] not in _STORE or any(x in impure for x in w[m:end]):
+                ok = False
+                break
+            spans.append((m, end))
+            m = end + 1
+        if not ok:
+            continue
+        out = list(toks)
+        kill = set()
+        for a, b in spans:
+            start = code[a]
+            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+                start -= 1
+            if start > 0 and toks[start - 1].kind == "ws":
+                start -= 1
+            kill.update(range(start, code[b] + 1))
+        return [t for i, t in enumerate(out) if i not in kill]
+    return None
+
+
+def _loop_bodies(toks, code, w) -> set[int]:
+    """Code positions of the '{' that open loop bodies."""
+    out = set()
+    for n, x in enumerate(w):
+        if x in ("for", "while") and n + 1 < len(w) and w[n + 1] == "(":
+            cl = _match(toks, code, n + 1)
+            if cl + 1 < len(w) and w[cl + 1] == "{":
+                out.add(cl + 1)
+            elif cl + 1 < len(w) and w[cl + 1] in ("for",):
+                out |= {cl + 1}
+    return out
+
+
+def _in_loop(toks, code, w, m, loops) -> bool:
+    depth = 0
+    for k in range(m - 1, -1, -1):
+        if w[k] == "}":
+            depth += 1
+        elif w[k] == "{":
+            if depth == 0:
+                if k in loops:
+                    return True
+            else:
+                depth -= 1
+        elif w[k] == "for" and depth == 0:
+            return True                       # the body of a for without braces
+    return False
+
+
+def _last_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """Remove a store ``x op= ...;`` to a local after which x is never read (outside loops)."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    loops = None
+    op = w.index("(") if "(" in w else 0
+    cl = _match(toks, code, op) if op else 0
+    params = set(w[op:cl])
+    for m in range(cl + 1, len(w) - 2):
+        if w[m - 1] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[m]) and w[m + 1] in _STORE \
+                and w[m] not in params and w[m + 1] != "=":
+            end = _stmt_end(toks, code, w, m)
+            if w[m] in w[end + 1:] or any(x in impure for x in w[m:end]):
+                continue
+            if loops is None:
+                loops = _loop_bodies(toks, code, w)
+            if _in_loop(toks, code, w, m, loops):
+                continue
+            start = code[m]
+            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+                start -= 1
+            if start > 0 and toks[start - 1].kind == "ws":
+                start -= 1
+            return toks[:start] + toks[code[end] + 1:]
+    return None
+
+
+def _loop_range(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
+    """``for (int k = 0; k < 16; k++) { x += (k >= 1 && k < 9 && c) ? 1 : 0; }`` -> the loop
+    over 1 <= k < 9 with ``c`` alone: a body that is one statement guarded by bounds on k."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(len(w) - 12):
+        if w[n:n + 3] != ["for", "(", "int"]:
+            continue
+        cl = _match(toks, code, n + 1)
+        var = w[n + 3]
+        head = w[n + 2:cl]
+        if len(head) != 11 or head[2] != "=" or head[4] != ";" or head[5:7] != [var, "<"] \
+                or head[8] != ";" or head[9:] != [var, "++"]:
+            continue
+        lo, hi = _literal(head[3]), _literal(head[7])
+        if not isinstance(lo, int) or not isinstance(hi, int) or w[cl + 1] != "{":
+            continue
+        body_end = _match(toks, code, cl + 1)
+        body = w[cl + 2:body_end]
+        if body.count(";") != 1:
+            continue
+        new_lo, new_hi, drop = lo, hi, []
+        for k in range(len(body) - 3):
+            seg = body[k:k + 4]
+            if seg[0] in ("(", "&&") and seg[1] == var and seg[2] in (">=", "<") and isinstance(
+                    _literal(env.get(seg[3], seg[3])), int) and body[k + 4] == "&&":
+                v = _literal(env.get(seg[3], seg[3]))
+                if seg[2] == ">=":
+                    new_lo = max(new_lo, v)
+                else:
+                    new_hi = min(new_hi, v)
+                drop.append(cl + 2 + k + 1)
+        if not drop:
+            continue
+        out = list(toks)
+        kill = set()
+        for m in drop:                        # "k >= 1 &&" (the bound and its &&)
+            kill.update(range(code[m], code[m + 3] + 1))
+            j = code[m + 3] + 1
+            while j < len(toks) and toks[j].kind == "ws":
+                kill.add(j)
+                j += 1
+        out[code[n + 5]] = Tok("num", str(new_lo))
+        out[code[n + 9]] = Tok("num", str(max(new_lo, new_hi)))
+        return tokenize("".join(t.text for i, t in enumerate(out) if i not in kill))
+    return None
+
+
+def _array_elements(items: list[Item]) -> list[Item]:
+    """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
+    arrays read at a literal index, where the element is short."""
+    arrays = {}
+    for it in items:
+        c = it.code()
+        if it.kind == "variable" and c[:1] == ["const"] and len(c) > 8 and c[3] == "[" and c[6] == "=":
+            toks, code = it.toks, _code_idx(it.toks)
+            op = c.index("(", 7)
+            cl = _match(toks, code, op)
+            arrays[c[2]] = ["".join(t.text for t in toks[code[a]:code[b - 1] + 1]).strip()
+                            for a, b in _split_args(toks, code, op, cl)]
+    if not arrays:
+        return items
+    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[(\d+)\]")
+
+    def elem(m):
+        vals = arrays[m.group(1)]
+        k = int(m.group(2))
+        return vals[k] if k < len(vals) and len(vals[k]) <= 40 else m.group()
+
+    out = []
+    for it in items:
+        if it.kind == "function":
+            it = Item(it.kind, it.name, tokenize(pat.sub(elem, "".join(t.text for t in it.toks))), it.comment)
+        out.append(it)
+    return out
+
+
 # --------------------------------------------------------------------------------------------
 # loops with constant bounds
 # --------------------------------------------------------------------------------------------
@@ -499,6 +722,12 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[*/]=\s*\(?{_ONE}\)?\s*;[^\n]*(?=\n)", "", text)
         text = _mix(text)
         text = re.sub(r"\n[ \t]*\{\s*\}[ \t]*(?=\n)", "", text)          # an empty block
+        text = re.sub(r"\n[ \t]*if \((?:[^;{}()]|\([^;{}()]*\))*\) \{\s*\}[ \t]*(?=\n)", "", text)
+        # x * 1.0, x / 1.0, x - 0.0, x + 0.0 (floats: the same value; the snippet compiles as GLSL
+        # ES, which has no implicit int -> float, so x is a float)
+        text = re.sub(r"(?<=[\w)\]])\s*[*/]\s*1\.0(?![\w.(\[])", "", text)
+        text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
+        text = re.sub(r"(?<=[\w)\]])\s*[-+]\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
         if text == old:
             break
     return tokenize(text)
@@ -638,9 +867,11 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
         if fold_constants:
             env = constants(items)
             items = _inline_constants(items, env)
+            items = _array_elements(items)
             items = fold(items, env)
         items = _inline(items, set(entries))
         items = _drop_unused_params(items, set(entries))
+        items = _drop_unused_outs(items, set(entries))
         items = _dead_fields(items)
         items = reach(items, entries)
         if unparse(items) == before:
@@ -681,6 +912,51 @@ def _drop_unused_params(items: list[Item], keep) -> list[Item]:
     return items
 
 
+def _drop_unused_outs(items: list[Item], keep) -> list[Item]:
+    """An ``out`` parameter whose argument is, at every call, a local used nowhere else becomes a
+    local of the function (whose stores the dead-store pass then removes)."""
+    from cellgl.export.reach import _drop_struct_args
+
+    for it in items:
+        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
+            continue
+        params, _ = _params(it)
+        for k, words in enumerate(params):
+            if words[:1] != ["out"] or len(words) != 3:
+                continue
+            calls_ok, n_calls = True, 0
+            for x in items:
+                if x.kind != "function" or x is it:
+                    continue
+                toks, code = x.toks, _code_idx(x.toks)
+                w = [toks[i].text for i in code]
+                for m in range(len(w) - 1):
+                    if w[m] == it.name and w[m + 1] == "(":
+                        n_calls += 1
+                        cl = _match(toks, code, m + 1)
+                        args = _split_args(toks, code, m + 1, cl)
+                        a, b = args[k]
+                        if b - a != 1 or w.count(w[a]) != 2 or w[_decl_at(w, w[a])] not in _DECL_TYPES:
+                            calls_ok = False
+            if not calls_ok or not n_calls:
+                continue
+            takes = {it.name: (k, words[-1])}
+            new = []
+            for x in items:
+                toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
+                if x is it:
+                    text = "".join(t.text for t in toks)
+                    text = text.replace("{", "{\n    " + words[1] + " " + words[2] + ";", 1)
+                    toks = tokenize(text)
+                new.append(Item(x.kind, x.name, toks, x.comment))
+            return _drop_unused_outs(new, keep)
+    return items
+
+
+def _decl_at(w: list[str], name: str) -> int:
+    return next((m - 1 for m in range(1, len(w)) if w[m] == name), 0)
+
+
 def _impure_arg(x: Item, toks: list[Tok], impure: set[str]) -> bool:
     """Whether dropping arguments removed a call to a function with out parameters."""
     before = [t.text for t in x.toks if t.kind == "id"]
@@ -690,20 +966,27 @@ def _impure_arg(x: Item, toks: list[Tok], impure: set[str]) -> bool:
 
 def _dead_fields(items: list[Item]) -> list[Item]:
     """Remove struct fields that are written (``o.f = ...;``) but never read, and those writes."""
-    text = "\n".join(it.text() for it in items)
+    code = "\n".join("".join(t.text for t in it.toks if t.kind != "comment") for it in items)
+    impure = {it.name for it in items if it.kind == "function"
+              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
     out = items
     for st in [it for it in items if it.kind == "struct"]:
         body = "".join(t.text for t in st.toks if t.kind != "comment")
         fields = re.findall(r"\b(\w+)\s*(?:\[\s*\w+\s*\])?\s*;", body)
-        holders = set(re.findall(rf"\b{st.name}\s+(\w+)\s*;", text))
+        holders = set(re.findall(rf"\b{st.name}\s+(\w+)\s*[;,)=]", code))
         dead = set()
         if not holders:
             continue
         names = "|".join(sorted(holders))
+        others = {v for t, v in re.findall(r"\b(Cellgl\w+)\s+(\w+)\b", code) if t != st.name} - holders
         for f in fields:
-            count = len(re.findall(rf"\.\s*{f}\b", text))
-            writes = len(re.findall(rf"(?<![\w.])(?:{names})\.{f}\s*=(?!=)", text))
-            if count and writes == count:
+            reads = [b for b in re.findall(rf"(\w*)\s*\.\s*{f}\b(?!(?:\s*\[[^\]]*\])?\s*=[^=])", code)
+                     if b not in others]
+            stores = re.findall(rf"(?<![\w.])(?:{names})\.{f}(?:\s*\[[^\]]*\])?\s*=(?!=)[^;]*;", code)
+            writes = len(stores)
+            if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure):
+                continue
+            if writes and not reads:
                 dead.add(f)
         if not dead or len(dead) == len(fields):
             continue
@@ -716,7 +999,7 @@ def _dead_fields(items: list[Item]) -> list[Item]:
             elif it.kind == "function":
                 t = "".join(x.text for x in it.toks)
                 for f in dead:
-                    t = re.sub(rf"\n[ \t]*(?:{'|'.join(holders)})\.{f}\s*=[^;]*;[^\n]*(?=\n)", "", t)
+                    t = re.sub(rf"\n[ \t]*(?:{'|'.join(holders)})\.{f}(?:\s*\[[^\]]*\])?\s*=[^;]*;[^\n]*(?=\n)", "", t)
                 new.append(Item(it.kind, it.name, tokenize(t), it.comment))
             else:
                 new.append(it)

@@ -104,6 +104,9 @@ class Program:
     command: str = ""
     signatures: tuple = ()
     entries: tuple = ()
+    #: the target-specific tails (``shadertoy``: mainImage, ``godot``: fragment(), ``unity``: the
+    #: Custom Function wrapper, HLSL); default: those of cellgl_texture
+    tails: dict = field(default_factory=dict)
 
 
 def check_target(target: str) -> Target:
@@ -230,11 +233,11 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     elif d == "gles":
         body = translate.add_highp(code)
         if tgt.name == "shadertoy":
-            body += _SHADERTOY_MAIN
+            body += prog.tails.get("shadertoy", _SHADERTOY_MAIN)
     elif d == "godot":
-        body = _godot(code, tgt.name)
+        body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
     elif d == "hlsl":
-        body = translate.to_hlsl(code) + _UNITY_WRAPPER
+        body = translate.to_hlsl(code) + prog.tails.get("unity", _UNITY_WRAPPER)
         if tgt.name == "unreal":
             body = "#pragma once\n\n" + body
     elif d == "wgsl":
@@ -262,16 +265,16 @@ void cellgl_texture_float(float2 UV, out float4 Out)
 """
 
 
-def _godot(code: str, name: str) -> str:
+_GODOT_FRAGMENT = "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
+
+
+def _godot(code: str, name: str, fragment: str = _GODOT_FRAGMENT) -> str:
     # Godot compiles its shaders with highp defaults (precision highp float/int), so the code
     # needs no qualifiers.
     body = code
     if name == "godotinc":
         return body
-    return (
-        "shader_type canvas_item;\n\n" + body +
-        "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
-    )
+    return "shader_type canvas_item;\n\n" + body + fragment
 
 
 # --------------------------------------------------------------------------------------------
