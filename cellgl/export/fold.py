@@ -20,7 +20,17 @@ from __future__ import annotations
 
 import re
 
-from cellgl.export.reach import Item, _code_idx, _match, _split_args, parse, reach, scalarise, unparse
+from cellgl.export.reach import (
+    Item,
+    _code_idx,
+    _match,
+    _split_args,
+    parse,
+    reach,
+    scalarise,
+    tidy_comments,
+    unparse,
+)
 from cellgl.export.translate.tokens import Tok, tokenize
 
 __all__ = ["compile_glsl", "constants", "fold"]
@@ -690,7 +700,7 @@ def _fold_loop(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
             continue
         sub = list(toks)
         for m in range(cl + 1, body_end + 1):
-            if w[m] == var:
+            if w[m] == var and w[m - 1] != ".":
                 sub[code[m]] = Tok("num", str(a))
         if w[cl + 1] == "{":
             return tokenize("".join(t.text for t in _splice(sub, code, n, body_end, (cl + 1, body_end))))
@@ -876,7 +886,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
         items = reach(items, entries)
         if unparse(items) == before:
             break
-    return unparse(_ordered(items))
+    return unparse(tidy_comments(_ordered(items)))
 
 
 def _params(it: Item):

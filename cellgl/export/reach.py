@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 from cellgl.export.translate.tokens import Tok, tokenize
 
-__all__ = ["Item", "parse", "scalarise", "reach", "unparse"]
+__all__ = ["Item", "parse", "scalarise", "reach", "tidy_comments", "unparse"]
 
 _QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "flat", "precise", "invariant"}
 
@@ -111,6 +111,25 @@ def _item(toks: list[Tok], comment: list[Tok]) -> Item:
     if len(s) >= 2 and re.fullmatch(r"[A-Za-z_]\w*", s[1]):
         return Item("variable", s[1], list(toks), comment)
     return Item("other", "", list(toks), comment)
+
+
+def tidy_comments(items: list[Item], lines: int = 3) -> list[Item]:
+    """A declaration keeps the first sentence of the comment right above it (at most ``lines``
+    lines); comment lines and blank lines inside function bodies go (trailing comments on code
+    lines stay)."""
+    out = []
+    for it in items:
+        com = "".join(t.text for t in it.comment).strip("\n").split("\n") if it.comment else []
+        end = next((k for k, ln in enumerate(com) if ln.rstrip().endswith(".")), len(com) - 1)
+        com = com[:min(end + 1, lines)]
+        comment = tokenize("\n".join(com) + "\n") if com else []
+        toks = it.toks
+        if it.kind == "function":
+            text = "".join(t.text for t in toks).split("\n")
+            text = [ln for ln in text if ln.strip() and not ln.strip().startswith("//")]
+            toks = tokenize("\n".join(text))
+        out.append(Item(it.kind, it.name, toks, comment))
+    return out
 
 
 def unparse(items: list[Item]) -> str:

@@ -176,7 +176,7 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
         + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + ").",
         f"Regenerate (do not edit): {command} --target {target.name}{' --uniforms' if uniforms else ''}",
         *("  " + e for e in entry),
-        *textwrap.wrap(target.how, 96),
+        *textwrap.wrap(_how(target, prog), 96),
     ]
     if uniforms and prog.uniforms:
         used = set(re.findall(r"\bcellgl_(\w+)", code)) if code else None
@@ -194,6 +194,19 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
     recipe = json.dumps(prog.recipe, separators=(",", ":")) if prog.recipe is not None else "{}"
     lines += ["Recipe: " + recipe]
     return _comment("\n".join(lines)) + "\n"
+
+
+def _how(target: Target, prog: Program) -> str:
+    """The target's paragraph on where to paste and what to call, for this program's entry."""
+    if not prog.entries:
+        return target.how
+    entry = prog.entries[0]
+    how = target.how.replace("mainImage shows the texture stretched over the viewport",
+                             "mainImage shows it, 8 cells per screen height")
+    how = re.sub(r"cellgl_texture\((uv|UV)\)", entry + "(p)", how)
+    size = {"vec2": 2, "vec3": 3}.get(prog.signatures[0].split()[0], 1) if prog.signatures else 4
+    how = how.replace("output Float 4", f"output Float {size}")
+    return how.replace("cellgl_texture", entry).replace("input UV", "input p").replace("(UV, out Out)", "(p, out Out)")
 
 
 _SIG_WGSL = {"vec2": "vec2<f32>", "vec3": "vec3<f32>", "vec4": "vec4<f32>", "float": "f32", "uint": "u32",
@@ -462,7 +475,21 @@ def add_parser(sub):
         "Godot, HLSL, WGSL)",
         description="Export a recipe as a shader snippet whose cellgl_texture(uv) returns the "
         "pixels `cellgl bake` writes. See docs/engines.md.")
-    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", help="a preset name or a recipe JSON file")
+    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", nargs="?", default=None,
+                   help="a preset name or a recipe JSON file (not with --basis)")
+    b = p.add_argument_group("basis-only snippets (one function of the cellular basis, no texture)")
+    b.add_argument("--basis", default=None, metavar="NAME",
+                   help="f1, f1f2, f1f2f3, f1f2f3f4, edge or cellid: e.g. --basis f1f2 --dim 3 gives "
+                   "vec2 cellgl_f1f2(vec3 p), the values of cellgl.cellular")
+    b.add_argument("--dim", type=int, default=2, help="2, 3 or 4: the point type (default 2)")
+    b.add_argument("--metric", default="euclidean", help="euclidean, manhattan, chebyshev, minkowski")
+    b.add_argument("--distribution", default="poisson", help="poisson or jitter")
+    b.add_argument("--density", type=float, default=3.0, help="mean points per cell (poisson)")
+    b.add_argument("--jitter", type=float, default=1.0, help="jitter in [0, 1] (jitter distribution)")
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--min-points", type=int, default=1)
+    b.add_argument("--max-points", type=int, default=9)
+    b.add_argument("--minkowski-p", type=float, default=3.0)
     p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
                    help="one of: " + ", ".join(TARGETS) + " (default glsl)")
     p.add_argument("-o", "--output", metavar="FILE", default=None,
@@ -483,10 +510,21 @@ def run_cli(args) -> int:
     from cellgl.io.tempfiles import check_output
 
     check_target(args.target)
+    if (args.basis is None) == (args.recipe is None):
+        raise ExportError("give either a preset / recipe file or --basis NAME (not both)")
+    if args.basis is not None and (args.uniforms or args.sets):
+        raise ExportError("--uniforms and --set apply to recipes, not to --basis snippets")
     if args.output is not None:  # before the work: a missing or read-only directory, a long name
         check_output(os.path.abspath(args.output))
-    recipe = _load(args.recipe, args.sets)
-    text = export(recipe, args.target, uniforms=args.uniforms)
+    if args.basis is not None:
+        from cellgl.export.basis import basis_export
+
+        text = basis_export(args.basis, args.dim, args.target, metric=args.metric,
+                            distribution=args.distribution, density=args.density, jitter=args.jitter,
+                            seed=args.seed, min_points=args.min_points, max_points=args.max_points,
+                            minkowski_p=args.minkowski_p)
+    else:
+        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms)
     if args.output is None:
         sys.stdout.write(text)
         return 0
