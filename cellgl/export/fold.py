@@ -989,10 +989,17 @@ def _dead_fields(items: list[Item]) -> list[Item]:
             continue
         names = "|".join(sorted(holders))
         others = {v for t, v in re.findall(r"\b(Cellgl\w+)\s+(\w+)\b", code) if t != st.name} - holders
+        access = {}                          # field -> [(base, is a store)]
+        for m in re.finditer(r"\.([A-Za-z_]\w*)", code):
+            if m.group(1) not in fields:
+                continue
+            base = re.search(r"(\w*)\s*$", code[max(0, m.start() - 40):m.start()]).group(1)
+            store = re.match(r"(?:\s*\[[^\]]*\])?\s*=(?!=)", code[m.end():m.end() + 40]) is not None
+            access.setdefault(m.group(1), []).append((base, store))
         for f in fields:
-            reads = [b for b in re.findall(rf"(\w*)\s*\.\s*{f}\b(?!(?:\s*\[[^\]]*\])?\s*=[^=])", code)
-                     if b not in others]
-            stores = re.findall(rf"(?<![\w.])(?:{names})\.{f}(?:\s*\[[^\]]*\])?\s*=(?!=)[^;]*;", code)
+            reads = [b for b, store in access.get(f, ()) if not store and b not in others]
+            stores = re.findall(rf"(?<![\w.])(?:{names})\.{f}(?:\s*\[[^\]]*\])?\s*=(?!=)[^;]*;", code) \
+                if f in access else []
             writes = len(stores)
             if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure):
                 continue

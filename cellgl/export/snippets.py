@@ -125,7 +125,22 @@ def check_target(target: str) -> Target:
 
 
 def library_code(prog: Program) -> str:
-    """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left."""
+    """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left,
+    only what the entry points reach (:mod:`cellgl.export.fold`). Cached per program: the
+    targets of one recipe share it."""
+    key = (tuple(prog.files), tuple(sorted((k, str(v)) for k, v in prog.defines.items())), prog.params,
+           prog.entry, tuple(prog.entries))
+    if key not in _CODE_CACHE:
+        if len(_CODE_CACHE) > 64:
+            _CODE_CACHE.clear()
+        _CODE_CACHE[key] = _library_code(prog)
+    return _CODE_CACHE[key]
+
+
+_CODE_CACHE: dict = {}
+
+
+def _library_code(prog: Program) -> str:
     src = glsl.resolve_library(prog.files)
     text = src.text + "\n" + prog.params + "\n" + prog.entry
     text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
