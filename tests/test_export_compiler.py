@@ -264,7 +264,8 @@ def _main(target: str, basis: str, dim: int) -> str:
         rt = _HLSL.get(ret, ret)
         return (f"float4 main(float4 pos : SV_Position) : SV_Target\n{{\n    {rt} o;\n"
                 f"    cellgl_{basis}_float(({pt})(pos.x / 8.0), o);\n"
-                f"    return float4(({rt})cellgl_{basis}(({pt})(pos.y / 8.0)) + o, 0.0).xxxx;\n}}\n"
+                f"    float v = (float)(cellgl_{basis}(({pt})(pos.y / 8.0)) + o);\n"
+                "    return float4(v, v, v, 1.0);\n}\n"
                 if ret in ("float", "uint") else
                 f"float4 main(float4 pos : SV_Position) : SV_Target\n{{\n    {rt} o;\n"
                 f"    cellgl_{basis}_float(({pt})(pos.x / 8.0), o);\n"
