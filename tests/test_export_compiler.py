@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from cellgl.basis import core
-from cellgl.export import fold, reach
+from cellgl.export import compiler, reach
 from cellgl.export import snippets as export
 from cellgl.export.basis import BASES, basis_export
 
@@ -88,7 +88,7 @@ float entry(float x)
 
 
 def test_compiler_keeps_only_what_the_entry_reaches():
-    out = fold.compile_glsl(_LIB, ["entry"], structs=[("P", "load")])
+    out = compiler.compile_glsl(_LIB, ["entry"], structs=[("P", "load")])
     assert "entry" in out and "scale" in out
     for gone in ("unused", "k_unused", "k_also_unused", "struct P", "load()", "t.mode", "dead",
                  "k_mode", "y = unused"):
@@ -104,7 +104,7 @@ def test_compiler_output_computes_the_same(ctx):
     """The folded program gives the value of the original (run both on the GL context)."""
     full = _LIB.replace("\nfloat entry", "\nfloat entry_ref(float x)\n{\n    return scale(x, load());\n}\n"
                         "\nfloat entry")
-    small = fold.compile_glsl(_LIB, ["entry"], structs=[("P", "load")])
+    small = compiler.compile_glsl(_LIB, ["entry"], structs=[("P", "load")])
     for name in ("entry", "scale", "k_gain", "k_table"):
         small = re.sub(rf"\b{name}\b", name + "_new", small)
     both = full + "\n" + small

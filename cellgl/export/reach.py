@@ -189,6 +189,27 @@ def _split_args(toks: list[Tok], code: list[int], lo: int, hi: int) -> list[tupl
     return args
 
 
+def _stmt_end(toks, code, w, n) -> int:
+    """Code position of the last token of the statement starting at ``n``."""
+    if w[n] == "{":
+        return _match(toks, code, n)
+    if w[n] in ("for", "while") or w[n] == "if":
+        cl = _match(toks, code, n + 1)
+        end = _stmt_end(toks, code, w, cl + 1)
+        if w[n] == "if" and end + 1 < len(w) and w[end + 1] == "else":
+            end = _stmt_end(toks, code, w, end + 2)
+        return end
+    depth = 0
+    for m in range(n, len(w)):
+        if w[m] in "([":
+            depth += 1
+        elif w[m] in ")]":
+            depth -= 1
+        elif w[m] == ";" and depth == 0:
+            return m
+    return len(w) - 1
+
+
 # --------------------------------------------------------------------------------------------
 # 1. constant parameter structs -> the loader's names
 # --------------------------------------------------------------------------------------------
