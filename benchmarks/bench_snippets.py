@@ -14,6 +14,7 @@ preset (``cellgl export PRESET``, its ``cellgl_texture(uv)``).
 
     python benchmarks/bench_snippets.py                   # everything, 1024^2, median of 5
     python benchmarks/bench_snippets.py --size 512 --repeats 3 f1 flagstone
+    python benchmarks/bench_snippets.py --compare old/ f1     # also old/f1.glsl (an older export)
 
 Timings are medians of ``--repeats`` renders after one warm-up render (which compiles), the rows
 interleaved so that a change of load on a shared machine hits every row alike. The load average
@@ -74,7 +75,7 @@ def _frag(body: str, call: str) -> str:
             f"    bench_out = {call};\n}}\n")
 
 
-def rows(names: list[str]):
+def rows(names: list[str], compare: str | None = None):
     """``[(label, fragment shader)]``: the compact reference first."""
     from cellgl.export import snippets
     from cellgl.export.basis import basis_export
@@ -103,6 +104,10 @@ def rows(names: list[str]):
         if names and label.split(",")[0] not in names:
             continue
         out.append((label, _frag(code(snippets.export(r, "glsl")), "cellgl_texture(uv)")))
+        old = os.path.join(compare, label.replace(", distribution=", "-") + ".glsl") if compare else None
+        if old and os.path.exists(old):
+            with open(old, encoding="utf-8") as f:
+                out.append((f"{label} ({old})", _frag(code(f.read()), "cellgl_texture(uv)")))
     return out
 
 
@@ -111,6 +116,9 @@ def main(argv=None) -> int:
     ap.add_argument("names", nargs="*", help="presets / basis names (default: all)")
     ap.add_argument("--size", type=int, default=1024)
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--compare", metavar="DIR", default=None,
+                    help="also time DIR/PRESET.glsl (GLSL snippets of the same presets exported by "
+                    "another cellgl version; f1 with distribution=jitter: DIR/f1-jitter.glsl)")
     args = ap.parse_args(argv)
 
     from cellgl.gl import context
@@ -120,7 +128,7 @@ def main(argv=None) -> int:
     tex = ctx.texture((S, S), 4)
     fbo = ctx.framebuffer(color_attachments=[tex])
     progs = []
-    for label, frag in rows(args.names):
+    for label, frag in rows(args.names, args.compare):
         prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
         prog["size"].value = (float(S), float(S))
         progs.append((label, prog, ctx.vertex_array(prog, [])))
