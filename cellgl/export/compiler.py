@@ -282,7 +282,8 @@ def _dead_fields(items: list[Item]) -> list[Item]:
             stores = re.findall(rf"(?<![\w.])(?:{names})\.{f}(?:\s*\[[^\]]*\])?\s*=(?!=)[^;]*;", code) \
                 if f in access else []
             writes = len(stores)
-            if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure):
+            if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure) \
+                    and not all(_effects_unused(items, x, impure) for x in stores):
                 continue
             if writes and not reads:
                 dead.add(f)
@@ -302,6 +303,52 @@ def _dead_fields(items: list[Item]) -> list[Item]:
                 new.append(it)
         out = new
     return out
+
+
+def _effects_unused(items: list[Item], store: str, impure: set[str]) -> bool:
+    """Whether the calls in ``store`` (a statement ``o.f = ...;``) only change locals of the
+    function it is in that nothing reads after it: then the statement can go whole."""
+    sigs = {it.name: _params(it)[0] for it in items if it.kind == "function" and it.name in impure}
+    for it in items:
+        if it.kind != "function":
+            continue
+        text = "".join(t.text for t in it.toks if t.kind != "comment")
+        at = text.find(store)
+        if at < 0:
+            continue
+        before, after = text[:at], text[at + len(store):]
+        toks = tokenize(store)
+        code = _code_idx(toks)
+        w = [toks[i].text for i in code]
+        for n in range(len(w) - 1):
+            if w[n] in sigs and w[n + 1] == "(":
+                cl = _match(toks, code, n + 1)
+                for k, (a, b) in enumerate(_split_args(toks, code, n + 1, cl)):
+                    if k >= len(sigs[w[n]]) or not set(sigs[w[n]][k]) & {"out", "inout"}:
+                        continue
+                    name = w[a]
+                    if b - a != 1 or not re.search(rf"\b\w+\s+{name}\s*;", before) \
+                            or re.search(rf"\b{name}\b", after) or _in_a_loop(before):
+                        return False
+        return True
+    return False
+
+
+def _in_a_loop(before: str) -> bool:
+    """Whether the end of ``before`` (a function's text) is inside a loop body."""
+    depth, k = 0, len(before)
+    while k > 0:
+        k -= 1
+        if before[k] == "}":
+            depth += 1
+        elif before[k] == "{":
+            if depth == 0:
+                head = before[:k].rstrip()
+                if head.endswith(")") and re.search(r"\b(for|while)\s*\([^{};]*(;[^{};]*){0,2}\)$", head):
+                    return True
+            else:
+                depth -= 1
+    return False
 
 
 def _ordered(items: list[Item]) -> list[Item]:

@@ -114,14 +114,16 @@ def _item(toks: list[Tok], comment: list[Tok]) -> Item:
 
 
 def tidy_comments(items: list[Item], lines: int = 3) -> list[Item]:
-    """A declaration keeps the first sentence of the comment right above it (at most ``lines``
-    lines); comment lines and blank lines inside function bodies go (trailing comments on code
-    lines stay)."""
+    """A declaration keeps the first sentence of the comment right above it (when longer than
+    ``lines`` lines: its first line); comment lines and blank lines inside function bodies go
+    (trailing comments on code lines stay)."""
     out = []
     for it in items:
         com = "".join(t.text for t in it.comment).strip("\n").split("\n") if it.comment else []
         end = next((k for k, ln in enumerate(com) if ln.rstrip().endswith(".")), len(com) - 1)
-        com = com[:min(end + 1, lines)]
+        com = com[:end + 1] if end < lines else com[:1]
+        if com and len(com) == 1 and not com[0].rstrip().endswith((".", ":")) and end >= 1:
+            com[0] = com[0].rstrip() + " ..."
         comment = tokenize("\n".join(com) + "\n") if com else []
         toks = it.toks
         if it.kind == "function":

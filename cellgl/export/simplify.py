@@ -86,7 +86,7 @@ def _dead_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
     for n in range(2, len(w) - 2):
-        if not (w[n - 1] in _DECL_TYPES | {"CellglTexel"} and w[n - 2] in (";", "{", "}")
+        if not ((w[n - 1] in _DECL_TYPES or w[n - 1].startswith("Cellgl")) and w[n - 2] in (";", "{", "}")
                 and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] in ("=", ";", "[")):
             continue
         name = w[n]
@@ -202,6 +202,9 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[-+]=\s*\(?{_ZERO}\)?\s*;[^\n]*(?=\n)", "", text)
         text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[*/]=\s*\(?{_ONE}\)?\s*;[^\n]*(?=\n)", "", text)
         text = _mix(text)
+        # a zero term of a sum: (0.0 * x + y) -> (y), y + 0.0 * x -> y (x a name, field or index)
+        text = re.sub(r"(?<=[(=+])(\s*)0\.0 \* [\w.\[\]]+ \+ ", r"\1", text)
+        text = re.sub(r" \+ 0\.0 \* [\w.\[\]]+(?=\s*[);,+\-])", "", text)
         text = re.sub(r"\n[ \t]*\{\s*\}[ \t]*(?=\n)", "", text)          # an empty block
         text = re.sub(r"\n[ \t]*if \((?:[^;{}()]|\([^;{}()]*\))*\) \{\s*\}[ \t]*(?=\n)", "", text)
         # x * 1.0, x / 1.0, x - 0.0, x + 0.0 (floats: the same value; the snippet compiles as GLSL
