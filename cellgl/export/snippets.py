@@ -219,8 +219,11 @@ def _how(target: Target, prog: Program) -> str:
     if not prog.entries:
         return target.how
     entry = prog.entries[0]
-    how = target.how.replace("mainImage shows the texture stretched over the viewport",
-                             "mainImage shows it, 8 cells per screen height")
+    # a basis function has no fwidth: leave out what the texture's how says about it
+    how = " ".join(x for x in re.split(r"(?<=\.) ", target.how)
+                   if "fwidth" not in x and "Fragment (pixel)" not in x)
+    how = how.replace("mainImage shows the texture stretched over the viewport",
+                      "mainImage shows it, 8 cells per screen height")
     how = re.sub(r"cellgl_texture\((uv|UV)\)", entry + "(p)", how)
     size = {"vec2": 2, "vec3": 3}.get(prog.signatures[0].split()[0], 1) if prog.signatures else 4
     how = how.replace("output Float 4", f"output Float {size}")
