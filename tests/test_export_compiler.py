@@ -326,3 +326,34 @@ def test_cli_basis(capsys):
                       (["f1", "--basis", "f1"], "not both"), ([], "not both")):
         assert main(["export", *args]) == 2
         assert msg in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------------
+# recipe variations the presets do not cover: the folded code still gives the bake's pixels
+# --------------------------------------------------------------------------------------------
+
+VARIATIONS = [
+    ("f1", ["fractal=sum", "octaves=3.5"]),
+    ("f1", ["fractal=qin_cube", "octaves=2", "light=0.5"]),
+    ("f1", ["fractal=min", "octaves=3"]),
+    ("f1", ["tileable=true", "frequency=4"]),
+    ("f1", ["density_map=radial"]),
+    ("f1", ["stretch_x=2.0"]),
+    ("f1", ["orbit_radius=0.2", "distribution=jitter"]),
+    ("f1", ["noise_color=0.3", "warp_amount=0.3"]),
+    ("f1", ["smoothness=0.2", "c_smooth=1.0", "c1=0.0"]),
+    ("f1", ["metric=minkowski", "minkowski_p=1.5", "dimension=3"]),
+    ("f1", ["dimension=4", "metric=chebyshev"]),
+]
+
+
+@pytest.mark.parametrize("preset, sets", VARIATIONS, ids=[" ".join(s) for _, s in VARIATIONS])
+def test_recipe_variation_reproduces_the_bake(ctx, preset, sets):
+    from cellgl import texture
+    from cellgl.recipes import load_recipe
+
+    W, H = 32, 24
+    r = load_recipe(preset).set_from_strings(sets)
+    got = render_snippet(ctx, snippet_code(export.export(r, "glsl")), W, H)
+    want = texture.render(r, W, H, channels=("color",))["color"]
+    np.testing.assert_allclose(got, want, rtol=0, atol=2e-5)
