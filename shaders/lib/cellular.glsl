@@ -23,7 +23,8 @@
 //
 // Requires: hash.glsl, metric.glsl, points.glsl.
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
-//         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO.
+//         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO,
+//         CELL_RING1_PRUNE (default: 1 but for the jitter distribution).
 
 #include "hash.glsl"
 #include "metric.glsl"
@@ -38,6 +39,13 @@
 #endif
 #ifndef CELL_TRACK_F1_CELL
 #define CELL_TRACK_F1_CELL 0
+#endif
+#ifndef CELL_RING1_PRUNE
+#if CELL_DIST == CELL_DIST_JITTER
+#define CELL_RING1_PRUNE 0
+#else
+#define CELL_RING1_PRUNE 1
+#endif
 #endif
 
 struct CellResult {
@@ -168,8 +176,11 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 
     // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block.
     // Constant loop bounds, so the compiler unrolls the block into
-    // straight-line SIMD code; a cell is skipped when its nearest possible
-    // point is no closer than the current F_n.
+    // straight-line SIMD code. With CELL_RING1_PRUNE a cell is skipped when
+    // its nearest possible point is no closer than the current F_n (skipping
+    // never changes the result: such a point could not be inserted); the
+    // jitter distribution visits all 3^d, its one point per cell costing less
+    // than the test.
     _cell_visit(r, cell, f, ivec4(0), p);
     for (int x = -1; x <= 1; x++)
     for (int y = -1; y <= 1; y++)
@@ -185,7 +196,11 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 #endif
     {
         ivec4 o = ivec4(x, y, z, w);
+#if CELL_RING1_PRUNE
         if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+#else
+        if (any(notEqual(o, ivec4(0)))) {
+#endif
             _cell_visit(r, cell, f, o, p);
         }
     }
@@ -225,8 +240,17 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 #endif
         for (int x = lo.x; x <= hi.x; x++)
         for (int y = lo.y; y <= hi.y; y++)
+#if CELL_DIM >= 3
         for (int z = lo.z; z <= hi.z; z++)
-        for (int w = lo.w; w <= hi.w; w++) {
+#else
+        for (int z = 0; z <= 0; z++)
+#endif
+#if CELL_DIM >= 4
+        for (int w = lo.w; w <= hi.w; w++)
+#else
+        for (int w = 0; w <= 0; w++)
+#endif
+        {
             ivec4 o = ivec4(x, y, z, w);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
