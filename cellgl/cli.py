@@ -87,6 +87,7 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "export": (_lazy("cellgl.export.snippets", "add_parser"), _lazy("cellgl.export.snippets", "run_cli")),
     "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
     "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
+    "blender": (_lazy("cellgl.blender.scene", "add_parser"), _lazy("cellgl.blender.scene", "run_cli")),
 }
 
 

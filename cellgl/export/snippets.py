@@ -64,6 +64,10 @@ TARGETS: dict[str, Target] = {t.name: t for t in (
            "/Project/cellgl.ush, Code 'return cellgl_texture(UV);', input UV, output Float 4."),
     Target("wgsl", "wgsl", "WGSL (WebGPU)", ".wgsl",
            "Paste into your WGSL module and call cellgl_texture(uv) (f32 vectors)."),
+    Target("osl", "osl", "Open Shading Language (Blender Cycles, Arnold, RenderMan, Houdini)", ".osl",
+           "Save as cellgl_<name>.osl and load it as a shader (Blender: Script node, Cycles with Open "
+           "Shading Language on; docs/engines.md): Vector in, Color, Fac, F1..F4, Value, CellColor, "
+           "CellValue, IDLow/IDHigh and a bump Normal out."),
 )}
 
 #: target names that are refused, with the reason
@@ -152,6 +156,10 @@ def _header(prog: Program, target: Target, uniforms: bool) -> str:
     if prog.solid:
         entry.append("vec4 cellgl_texture3(vec3 p)   p = (u, v, z) in texture space (solid texturing; z = 0: the image)")
         entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)   the same for a pixel spanning dp; any stage")
+    if target.dialect == "osl":
+        entry = [f"shader cellgl_{prog.title}(point Vector, <the recipe's values>, output color Color, "
+                 "output float Fac, ..., output normal Normal)   Vector (x, y) in [0,1]^2 -> the RGB "
+                 "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
     if target.dialect == "hlsl":
         entry = [e.replace("vec4", "float4").replace("vec3", "float3").replace("vec2", "float2") for e in entry]
     if target.dialect == "wgsl":
@@ -219,6 +227,10 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
             body = "#pragma once\n\n" + body
     elif d == "wgsl":
         body = translate.to_wgsl(code)
+    elif d == "osl":
+        from cellgl.export.osl import osl_shader
+
+        body = osl_shader(prog, code)
     else:  # pragma: no cover
         raise AssertionError(d)
     return head + "\n" + body
@@ -284,6 +296,9 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
         Unknown or refused target, or a recipe the target cannot express.
     """
     tgt = check_target(target)
+    if uniforms and tgt.dialect == "osl":
+        raise ExportError("--uniforms is not supported for OSL: the shader's parameters are already "
+                          "its run-time values; export OSL with constants")
     if uniforms and tgt.dialect == "wgsl":
         raise ExportError("--uniforms is not supported for WGSL (uniforms need a bind group "
                           "layout of your renderer); export WGSL with constants")

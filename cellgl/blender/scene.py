@@ -1,0 +1,233 @@
+"""A Blender scene that renders a recipe's OSL export as ``cellgl bake`` would: ``cellgl blender``.
+
+The mapping (what makes "render the file as is at N x N" give the bake's image):
+
+* a plane spanning x, y in [0, 1] at z = 0, UV = (x, y), its material an OSL Script node (the
+  export, as internal text) fed by the UV map; the node's Color goes to an Emission shader of
+  strength 1, so the rendered value of a pixel is the shader's Color there;
+* an orthographic camera at (0.5, 0.5, 1) looking down -z with ortho scale 1: the frame is the
+  plane, and pixel (column i, row j from the top) of an N x N render is centred at
+  x = (i + 0.5) / N, y = 1 - (j + 0.5) / N, which the shader maps to the bake's
+  uv = ((i + 0.5) / N, (j + 0.5) / N);
+* Cycles on the CPU with OSL, 1 sample, a box pixel filter of the smallest width (0.01 px: the
+  sample lies within 0.005 px of the pixel centre), no denoising, no bounces; the view transform
+  ``Raw`` (Blender's default AgX, or Standard's sRGB curve, would change the colours: the bake's
+  8-bit values are the shader's values times 255) and 8-bit PNG output at the recipe's bake
+  size (or ``size``).
+"""
+from __future__ import annotations
+
+import os
+
+from cellgl.blender.runtime import compile_script_node, import_bpy
+
+__all__ = ["build_scene", "write_blend", "render_scene", "set_recipe", "AOVS", "add_parser", "run_cli"]
+
+#: shader outputs written as Cycles AOVs when ``build_scene(aovs=True)``: name -> AOV type
+AOVS = {"Fac": "VALUE", "F1": "VALUE", "F2": "VALUE", "CellColor": "COLOR", "IDLow": "VALUE",
+        "IDHigh": "VALUE"}
+
+
+def _osl_text(recipe) -> tuple[str, str]:
+    from cellgl.export.snippets import export
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe(recipe)
+    return r.name, export(r, "osl")
+
+
+def build_scene(recipe, size: int | None = None, *, aovs: bool = False):
+    """Replace the open Blender file by the scene of ``recipe`` (see the module's mapping).
+
+    Parameters
+    ----------
+    recipe : Recipe, str or path
+        A texture recipe, a preset name or a recipe JSON file (PUPs recipes and image-driven
+        ones are refused, as by ``cellgl export``).
+    size : int, optional
+        Render resolution N (N x N); default: the bake's default width.
+    aovs : bool
+        Also write the shader outputs :data:`AOVS` as Cycles AOVs (for tests).
+
+    Returns
+    -------
+    bpy.types.Scene
+    """
+    bpy = import_bpy()
+    if size is None:
+        from cellgl.io.spec import DEFAULT_SIZE
+
+        size = DEFAULT_SIZE[0]
+    size = int(size)
+    if not 1 <= size <= 16384:
+        raise ValueError(f"size {size} is out of range; accepted: 1 to 16384")
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    cy = scene.cycles
+    cy.device = "CPU"
+    cy.shading_system = True
+    cy.samples = 1
+    cy.use_adaptive_sampling = False
+    cy.use_denoising = False
+    cy.pixel_filter_type = "BOX"
+    cy.filter_width = 0.01
+    cy.max_bounces = 0
+    cy.seed = 0
+    scene.render.resolution_x = scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.render.film_transparent = False
+    scene.view_settings.view_transform = "Raw"
+    scene.view_settings.look = "None"
+    scene.view_settings.exposure = 0.0
+    scene.view_settings.gamma = 1.0
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.color_depth = "8"
+
+    mesh = bpy.data.meshes.new("cellgl_plane")
+    mesh.from_pydata([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)], [], [(0, 1, 2, 3)])
+    uv = mesh.uv_layers.new(name="UVMap")
+    for loop in mesh.loops:
+        x, y, _ = mesh.vertices[loop.vertex_index].co
+        uv.data[loop.index].uv = (x, y)
+    plane = bpy.data.objects.new("cellgl_plane", mesh)
+    scene.collection.objects.link(plane)
+
+    cam_data = bpy.data.cameras.new("cellgl_camera")
+    cam_data.type = "ORTHO"
+    cam_data.ortho_scale = 1.0
+    cam_data.clip_start = 0.01
+    cam_data.clip_end = 10.0
+    cam = bpy.data.objects.new("cellgl_camera", cam_data)
+    cam.location = (0.5, 0.5, 1.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+
+    mat = bpy.data.materials.new("cellgl")
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.clear()
+    coords = nodes.new("ShaderNodeTexCoord")
+    script = nodes.new("ShaderNodeScript")
+    script.name = "cellgl"
+    script.mode = "INTERNAL"
+    emit = nodes.new("ShaderNodeEmission")
+    out = nodes.new("ShaderNodeOutputMaterial")
+    coords.location, script.location, emit.location, out.location = (-500, 0), (-250, 0), (100, 0), (300, 0)
+    mesh.materials.append(mat)
+    scene["cellgl_aovs"] = bool(aovs)
+    if aovs:
+        layer = scene.view_layers[0]
+        for name, kind in AOVS.items():
+            a = layer.aovs.add()
+            a.name, a.type = name, kind
+    set_recipe(scene, recipe)
+    links.new(emit.outputs["Emission"], out.inputs["Surface"])
+    return scene
+
+
+def set_recipe(scene, recipe) -> None:
+    """Put ``recipe``'s OSL export into the scene's Script node (recompiled, outputs rewired),
+    keeping everything else: one scene renders many recipes."""
+    bpy = import_bpy()
+    name, text = _osl_text(recipe)
+    mat = bpy.data.materials["cellgl"]
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    script = nodes["cellgl"]
+    old = script.script
+    script.script = bpy.data.texts.new(f"cellgl_{name}.osl")
+    script.script.write(text)
+    if old is not None:
+        bpy.data.texts.remove(old)
+    # a socket that survives a recompile keeps its value: the previous recipe's parameters
+    for sockets in (script.inputs, script.outputs):
+        for sock in list(sockets):
+            sockets.remove(sock)
+    compile_script_node(script)
+    coords = next(n for n in nodes if n.bl_idname == "ShaderNodeTexCoord")
+    links.new(coords.outputs["UV"], script.inputs["Vector"])
+    emit = next(n for n in nodes if n.bl_idname == "ShaderNodeEmission")
+    links.new(script.outputs["Color"], emit.inputs["Color"])
+    emit.inputs["Strength"].default_value = 1.0
+    if scene.get("cellgl_aovs"):
+        for n in [n for n in nodes if n.bl_idname == "ShaderNodeOutputAOV"]:
+            nodes.remove(n)
+        for k, (aov, kind) in enumerate(AOVS.items()):
+            node = nodes.new("ShaderNodeOutputAOV")
+            node.aov_name = aov
+            node.location = (100, -200 - 120 * k)
+            links.new(script.outputs[aov], node.inputs["Color" if kind == "COLOR" else "Value"])
+    scene["cellgl_recipe"] = name
+    mat.node_tree.update_tag()
+    mat.update_tag()
+
+
+def write_blend(recipe, path, *, size: int | None = None) -> str:
+    """Write the scene of ``recipe`` (see :func:`build_scene`) to the ``.blend`` file ``path``,
+    atomically; returns the path."""
+    from cellgl.io.formats import atomic_path
+    from cellgl.io.tempfiles import check_output
+
+    path = os.path.abspath(os.fspath(path))
+    if not path.endswith(".blend"):
+        raise ValueError(f"output {path!r} must end in .blend")
+    check_output(path)
+    bpy = import_bpy()
+    build_scene(recipe, size)
+    bpy.context.preferences.filepaths.save_version = 0     # no .blend1 beside the temporary file
+    with atomic_path(path) as tmp:
+        bpy.ops.wm.save_as_mainfile(filepath=str(tmp), compress=True, copy=True)
+    return path
+
+
+def render_scene(scene, path: str) -> str:
+    """Render ``scene`` to ``path`` (PNG as set up; ``.exr``: a float multilayer EXR holding
+    the AOVs too)."""
+    bpy = import_bpy()
+    settings = scene.render.image_settings
+    fmt = settings.file_format
+    if path.endswith(".exr"):
+        settings.file_format = "OPEN_EXR_MULTILAYER"
+        settings.color_depth = "32"
+        settings.exr_codec = "ZIP"
+    scene.render.filepath = path
+    try:
+        bpy.ops.render.render(write_still=True, scene=scene.name)
+    finally:
+        settings.file_format = fmt
+        if fmt == "PNG":
+            settings.color_depth = "8"
+    return path
+
+
+# --------------------------------------------------------------------------------------------
+# command line: cellgl blender PRESET -o FILE.blend [--size N]
+# --------------------------------------------------------------------------------------------
+
+
+def add_parser(sub):
+    """Declare ``cellgl blender`` on the CLI's subparsers."""
+    p = sub.add_parser(
+        "blender", help="write a Blender scene (.blend) rendering a recipe's OSL export in Cycles",
+        description="Write a .blend whose render (as is, N x N) is the image `cellgl bake RECIPE "
+        "--size N` writes: a plane with the OSL export in a Script node, an orthographic camera. "
+        "Needs the [blender] extra (bpy 4.5). See docs/engines.md.")
+    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", help="a preset name or a recipe JSON file")
+    p.add_argument("-o", "--output", metavar="FILE.blend", required=True, help="the .blend to write")
+    p.add_argument("--size", type=int, default=None, metavar="N",
+                   help="render resolution N x N (default: the bake's default, 512)")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a recipe parameter (repeatable)")
+    return p
+
+
+def run_cli(args) -> int:
+    """Run ``cellgl blender``; returns the exit status."""
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe(args.recipe)
+    if args.sets:
+        r = r.set_from_strings(list(args.sets))
+    write_blend(r, args.output, size=args.size)
+    return 0
