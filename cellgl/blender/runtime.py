@@ -75,8 +75,11 @@ def compile_script_node(node) -> None:
     def report(kind, text):
         messages.append(f"{'/'.join(sorted(kind))}: {text}")
 
-    _cycles_osl().update_script_node(node, report)
-    if not node.bytecode and not node.bytecode_hash:
+    if node.mode == "INTERNAL":
+        node.bytecode = ""
+        node.bytecode_hash = ""
+    ok = _cycles_osl().update_script_node(node, report)
+    if not ok:
         raise RuntimeError("OSL compilation failed: " + ("; ".join(messages) or "no report"))
 
 

@@ -5,8 +5,8 @@ The mapping (what makes "render the file as is at N x N" give the bake's image):
 * a plane spanning x, y in [0, 1] at z = 0, UV = (x, y), its material an OSL Script node (the
   export, as internal text) fed by the UV map; the node's Color goes to an Emission shader of
   strength 1, so the rendered value of a pixel is the shader's Color there;
-* an orthographic camera at (0.5, 0.5, 1) looking down -z with ortho scale 1: the frame is the
-  plane, and pixel (column i, row j from the top) of an N x N render is centred at
+* an orthographic camera at (0.5, 0.5, 1) looking down -z with ortho scale 1 (less
+  :data:`CYCLES_SAMPLE_OFFSET` / N, see there): the frame is the plane, and pixel (column i, row j from the top) of an N x N render is centred at
   x = (i + 0.5) / N, y = 1 - (j + 0.5) / N, which the shader maps to the bake's
   uv = ((i + 0.5) / N, (j + 0.5) / N);
 * Cycles on the CPU with OSL, 1 sample, a box pixel filter of the smallest width (0.01 px: the
@@ -22,6 +22,12 @@ import os
 from cellgl.blender.runtime import compile_script_node, import_bpy
 
 __all__ = ["build_scene", "write_blend", "render_scene", "set_recipe", "AOVS", "add_parser", "run_cli"]
+
+#: where Cycles 4.5 puts the first (only) sample of a pixel with a box filter of width 0.01,
+#: right of and above the pixel centre, in pixels (measured: rendering P; about 0.5 / 1023, half a
+#: step of its 1024-entry filter table). Without the correction, a pixel whose centre lies within
+#: ~4e-6 of a cell border in uv may take the neighbour's ID: 0 to 3 pixels in 128 x 128.
+CYCLES_SAMPLE_OFFSET = 0.0004886
 
 #: shader outputs written as Cycles AOVs when ``build_scene(aovs=True)``: name -> AOV type
 AOVS = {"Fac": "VALUE", "F1": "VALUE", "F2": "VALUE", "CellColor": "COLOR", "IDLow": "VALUE",
@@ -100,7 +106,9 @@ def build_scene(recipe, size: int | None = None, *, aovs: bool = False):
     cam_data.clip_start = 0.01
     cam_data.clip_end = 10.0
     cam = bpy.data.objects.new("cellgl_camera", cam_data)
-    cam.location = (0.5, 0.5, 1.0)
+    # Cycles puts the first sample CYCLES_SAMPLE_OFFSET px right of and above the pixel centre
+    # (its box filter table read at 0.5): the camera moves back by that much
+    cam.location = (0.5 - CYCLES_SAMPLE_OFFSET / size, 0.5 - CYCLES_SAMPLE_OFFSET / size, 1.0)
     scene.collection.objects.link(cam)
     scene.camera = cam
 

@@ -288,6 +288,19 @@ class _Osl:
             return self.call(x[1], x[2])
         raise AssertionError(k)
 
+    def size(self, node) -> str:
+        """An array size: an integer constant expression, folded (OSL wants a literal)."""
+        def ev(x):
+            if x[0] == "num" and re.fullmatch(r"\d+[uU]?", x[1]):
+                return int(x[1].rstrip("uU"))
+            if x[0] == "paren":
+                return ev(x[1])
+            if x[0] == "binary" and x[1] in ("+", "-", "*", "<<"):
+                a, b = ev(x[2]), ev(x[3])
+                return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x[1]]
+            raise TranslateError("OSL translation: an array size that is not an integer constant")
+        return str(ev(node))
+
     def vec_get(self, t: str) -> str:
         comp, n = _vec(t)
         ot, oc = self.osl_type(t), _osl_scalar(comp)
@@ -574,7 +587,7 @@ class _Osl:
         for name, size, init in decls:
             n = self.name(name)
             if size is not None:
-                sz, _ = self.ex(size)
+                sz = self.size(size)
                 self.scopes[-1][name] = (typ, sz)
                 if init is None:
                     out.append(f"{ot} {n}[{sz}];")
@@ -631,7 +644,7 @@ class _Osl:
                 for mcom, typ, mname, size, trail in item[3]:
                     ot = self.osl_type(typ)
                     if size is not None:
-                        sz, _ = self.ex(size)
+                        sz = self.size(size)
                         members[mname] = (typ, sz)
                         lines.append(f"    {ot} {self.name(mname)}[{sz}];" + (f"  {trail}" if trail else ""))
                     else:
@@ -648,7 +661,7 @@ class _Osl:
                 for name, size, init in decls:
                     if init is None:
                         raise TranslateError(f"OSL translation: global {name!r} needs a value")
-                    self.globals[name] = (typ, self.ex(size)[0] if size is not None else None, init)
+                    self.globals[name] = (typ, self.size(size) if size is not None else None, init)
             elif k == "func":
                 _, com, ret, name, params, body = item
                 if name in self.drop:
@@ -684,8 +697,8 @@ class _Osl:
             ot = self.osl_type(typ)
             arr = ""
             if size is not None:
-                arr = f"[{self.ex(size)[0]}]"
-                scope[pname] = (typ, self.ex(size)[0])
+                arr = f"[{self.size(size)}]"
+                scope[pname] = (typ, self.size(size))
             else:
                 scope[pname] = typ
             n = self.name(pname)
