@@ -11,7 +11,8 @@ extra: ``pip install "cellgl[blender]"``), lazily: ``import cellgl`` never loads
 """
 from __future__ import annotations
 
-__all__ = ["import_bpy", "compile_script_node", "write_blend", "build_scene", "add_parser", "run_cli"]
+__all__ = ["import_bpy", "compile_script_node", "osl_compile", "write_blend", "build_scene", "set_recipe",
+           "render_scene", "render_outputs"]
 
 
 def __getattr__(name):
@@ -19,7 +20,7 @@ def __getattr__(name):
         from cellgl.blender import runtime
 
         return getattr(runtime, name)
-    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene"):
+    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene", "render_outputs", "set_recipe"):
         from cellgl.blender import scene
 
         return getattr(scene, name)

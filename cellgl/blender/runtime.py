@@ -54,8 +54,14 @@ def import_bpy():
 
 
 def _cycles_osl():
+    import importlib
+
     for name, mod in list(sys.modules.items()):
         if name.endswith("cycles.osl") and hasattr(mod, "update_script_node"):
+            return mod
+    for name in [n for n in sys.modules if n == "cycles" or n.endswith(".cycles")]:
+        mod = importlib.import_module(name + ".osl")
+        if hasattr(mod, "update_script_node"):
             return mod
     raise RuntimeError("the Cycles add-on's osl module is not loaded (call import_bpy first)")
 

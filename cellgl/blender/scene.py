@@ -21,17 +21,14 @@ import os
 
 from cellgl.blender.runtime import compile_script_node, import_bpy
 
-__all__ = ["build_scene", "write_blend", "render_scene", "set_recipe", "AOVS", "add_parser", "run_cli"]
+__all__ = ["build_scene", "write_blend", "render_scene", "render_outputs", "set_recipe", "add_parser",
+           "run_cli", "CYCLES_SAMPLE_OFFSET"]
 
 #: where Cycles 4.5 puts the first (only) sample of a pixel with a box filter of width 0.01,
 #: right of and above the pixel centre, in pixels (measured: rendering P; about 0.5 / 1023, half a
 #: step of its 1024-entry filter table). Without the correction, a pixel whose centre lies within
 #: ~4e-6 of a cell border in uv may take the neighbour's ID: 0 to 3 pixels in 128 x 128.
 CYCLES_SAMPLE_OFFSET = 0.0004886
-
-#: shader outputs written as Cycles AOVs when ``build_scene(aovs=True)``: name -> AOV type
-AOVS = {"Fac": "VALUE", "F1": "VALUE", "F2": "VALUE", "CellColor": "COLOR", "IDLow": "VALUE",
-        "IDHigh": "VALUE"}
 
 
 def _osl_text(recipe) -> tuple[str, str]:
@@ -42,7 +39,17 @@ def _osl_text(recipe) -> tuple[str, str]:
     return r.name, export(r, "osl")
 
 
-def build_scene(recipe, size: int | None = None, *, aovs: bool = False):
+def _check_size(size) -> int:
+    if size is None:
+        from cellgl.io.spec import DEFAULT_SIZE
+
+        return DEFAULT_SIZE[0]
+    if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size <= 16384:
+        raise ValueError(f"size {size!r} is out of range; accepted: an integer from 1 to 16384")
+    return size
+
+
+def build_scene(recipe, size: int | None = None):
     """Replace the open Blender file by the scene of ``recipe`` (see the module's mapping).
 
     Parameters
@@ -52,21 +59,13 @@ def build_scene(recipe, size: int | None = None, *, aovs: bool = False):
         ones are refused, as by ``cellgl export``).
     size : int, optional
         Render resolution N (N x N); default: the bake's default width.
-    aovs : bool
-        Also write the shader outputs :data:`AOVS` as Cycles AOVs (for tests).
 
     Returns
     -------
     bpy.types.Scene
     """
+    size = _check_size(size)
     bpy = import_bpy()
-    if size is None:
-        from cellgl.io.spec import DEFAULT_SIZE
-
-        size = DEFAULT_SIZE[0]
-    size = int(size)
-    if not 1 <= size <= 16384:
-        raise ValueError(f"size {size} is out of range; accepted: 1 to 16384")
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.engine = "CYCLES"
@@ -124,12 +123,6 @@ def build_scene(recipe, size: int | None = None, *, aovs: bool = False):
     out = nodes.new("ShaderNodeOutputMaterial")
     coords.location, script.location, emit.location, out.location = (-500, 0), (-250, 0), (100, 0), (300, 0)
     mesh.materials.append(mat)
-    scene["cellgl_aovs"] = bool(aovs)
-    if aovs:
-        layer = scene.view_layers[0]
-        for name, kind in AOVS.items():
-            a = layer.aovs.add()
-            a.name, a.type = name, kind
     set_recipe(scene, recipe)
     links.new(emit.outputs["Emission"], out.inputs["Surface"])
     return scene
@@ -158,14 +151,6 @@ def set_recipe(scene, recipe) -> None:
     emit = next(n for n in nodes if n.bl_idname == "ShaderNodeEmission")
     links.new(script.outputs["Color"], emit.inputs["Color"])
     emit.inputs["Strength"].default_value = 1.0
-    if scene.get("cellgl_aovs"):
-        for n in [n for n in nodes if n.bl_idname == "ShaderNodeOutputAOV"]:
-            nodes.remove(n)
-        for k, (aov, kind) in enumerate(AOVS.items()):
-            node = nodes.new("ShaderNodeOutputAOV")
-            node.aov_name = aov
-            node.location = (100, -200 - 120 * k)
-            links.new(script.outputs[aov], node.inputs["Color" if kind == "COLOR" else "Value"])
     scene["cellgl_recipe"] = name
     mat.node_tree.update_tag()
     mat.update_tag()
@@ -181,6 +166,7 @@ def write_blend(recipe, path, *, size: int | None = None) -> str:
     if not path.endswith(".blend"):
         raise ValueError(f"output {path!r} must end in .blend")
     check_output(path)
+    _check_size(size)
     bpy = import_bpy()
     build_scene(recipe, size)
     bpy.context.preferences.filepaths.save_version = 0     # no .blend1 beside the temporary file
@@ -190,13 +176,12 @@ def write_blend(recipe, path, *, size: int | None = None) -> str:
 
 
 def render_scene(scene, path: str) -> str:
-    """Render ``scene`` to ``path`` (PNG as set up; ``.exr``: a float multilayer EXR holding
-    the AOVs too)."""
+    """Render ``scene`` to ``path``: PNG as set up, or (``.exr``) a float32 EXR."""
     bpy = import_bpy()
     settings = scene.render.image_settings
     fmt = settings.file_format
     if path.endswith(".exr"):
-        settings.file_format = "OPEN_EXR_MULTILAYER"
+        settings.file_format = "OPEN_EXR"
         settings.color_depth = "32"
         settings.exr_codec = "ZIP"
     scene.render.filepath = path
@@ -207,6 +192,44 @@ def render_scene(scene, path: str) -> str:
         if fmt == "PNG":
             settings.color_depth = "8"
     return path
+
+
+def render_outputs(recipes, size: int, outdir) -> list[str]:
+    """Render each recipe of ``recipes`` in one scene (built once, the Script node's text swapped
+    per recipe) into ``outdir``: ``NAME.png``, the render as is (what the ``.blend`` gives);
+    ``NAME.id.exr``, float RGB = (IDLow, IDHigh, Fac); ``NAME.cell.exr``, float RGB = CellColor.
+    Returns the recipe names, in order.
+
+    The ID is ``IDLow + 65536 * IDHigh`` (both exact integers in float32).
+    """
+    from cellgl.recipes import load_recipe
+
+    bpy = import_bpy()
+    outdir = os.path.abspath(os.fspath(outdir))
+    recipes = [load_recipe(r) for r in recipes]
+    if not recipes:
+        return []
+    scene = build_scene(recipes[0], size)
+    tree = bpy.data.materials["cellgl"].node_tree
+    nodes, links = tree.nodes, tree.links
+    names = []
+    for k, r in enumerate(recipes):
+        if k:
+            set_recipe(scene, r)
+        script = nodes["cellgl"]
+        emit = next(n for n in nodes if n.bl_idname == "ShaderNodeEmission")
+        render_scene(scene, os.path.join(outdir, f"{r.name}.png"))
+        pack = nodes.new("ShaderNodeCombineXYZ")
+        for i, out in enumerate(("IDLow", "IDHigh", "Fac")):
+            links.new(script.outputs[out], pack.inputs[i])
+        links.new(pack.outputs[0], emit.inputs["Color"])
+        render_scene(scene, os.path.join(outdir, f"{r.name}.id.exr"))
+        nodes.remove(pack)
+        links.new(script.outputs["CellColor"], emit.inputs["Color"])
+        render_scene(scene, os.path.join(outdir, f"{r.name}.cell.exr"))
+        links.new(script.outputs["Color"], emit.inputs["Color"])
+        names.append(r.name)
+    return names
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,8 +257,14 @@ def run_cli(args) -> int:
     """Run ``cellgl blender``; returns the exit status."""
     from cellgl.recipes import load_recipe
 
+    from cellgl.blender.runtime import BlenderMissing
+
     r = load_recipe(args.recipe)
     if args.sets:
         r = r.set_from_strings(list(args.sets))
-    write_blend(r, args.output, size=args.size)
+    _osl_text(r)                    # refusals (PUPs, image-driven recipes) before Blender loads
+    try:
+        write_blend(r, args.output, size=args.size)
+    except BlenderMissing as exc:
+        raise ValueError(str(exc)) from None
     return 0

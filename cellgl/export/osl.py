@@ -77,6 +77,8 @@ def _quote(s: str) -> str:
 def osl_shader(prog, code: str) -> str:
     """The OSL text of texture program ``prog``: ``code`` (its specialised GLSL) translated,
     plus the ``shader`` block."""
+    if not prog.filtered:
+        return _basis_shader(prog, code)
     params = exposed_params(prog)
     names = ["cellgl_" + p.name for p, _ in params]
     lib = to_osl(code, params=names, drop=("cellgl_texture", "cellgl_texture3", "cellgl_texture_filtered",
@@ -141,3 +143,27 @@ def osl_shader(prog, code: str) -> str:
         "}",
     ]
     return lib + "\n" + "\n".join(lines) + "\n"
+
+
+def _basis_shader(prog, code: str) -> str:
+    """The shader of a program whose ``cellgl_texture(vec2 uv)`` returns four values (the bare
+    basis: F1..F4), with no parameters: outputs F1..F4 at uv = (x, 1 - y) of ``Vector``."""
+    lib = to_osl(code)
+    return lib + "\n" + "\n".join([
+        "shader cellgl_basis(",
+        "    point Vector = point(0, 0, 0),",
+        "    output float F1 = 0,",
+        "    output float F2 = 0,",
+        "    output float F3 = 0,",
+        "    output float F4 = 0)",
+        "{",
+        "    point q0 = Vector;",
+        "    if (!isconnected(Vector))",
+        '        getattribute("geom:generated", q0);',
+        "    cellgl_vec4 f = cellgl_texture(cellgl_vec2(q0[0], 1.0 - q0[1]));",
+        "    F1 = f.x;",
+        "    F2 = f.y;",
+        "    F3 = f.z;",
+        "    F4 = f.w;",
+        "}",
+    ]) + "\n"

@@ -163,6 +163,8 @@ class _Osl:
                 self.helper("cellgl_udiv", (
                     "// uint / and %, by long division on the int's bits.\n"
                     "int cellgl_udiv(int a, int b)\n{\n"
+                    "    if (b < 0)          // b >= 2^31: the quotient is 0 or 1\n"
+                    "        return (a ^ (1 << 31)) >= (b ^ (1 << 31)) ? 1 : 0;\n"
                     "    int q = 0; int r = 0;\n"
                     "    for (int i = 31; i >= 0; i--) {\n"
                     "        r = (r << 1) | ((a >> i) & 1);\n"
@@ -598,6 +600,17 @@ class _Osl:
                     raise TranslateError(f"OSL translation: array {name!r} initialised from an expression")
                 continue
             self.scopes[-1][name] = typ
+            if init is not None and init[0] == "ctor" and init[1] in self.structs \
+                    and any(a[0] == "arrctor" for a in init[2]):
+                # a struct with array members: member by member (OSL has no array expressions)
+                out.append(f"{ot} {n};")
+                for (m, mt), a in zip(self.structs[typ].items(), init[2]):
+                    if a[0] == "arrctor":
+                        for j, e in enumerate(a[3]):
+                            out.append(f"{n}.{self.name(m)}[{j}] = {self.conv_to(e, mt[0])};")
+                    else:
+                        out.append(f"{n}.{self.name(m)} = {self.conv_to(a, mt)};")
+                continue
             if init is None:
                 out.append(f"{ot} {n};")
             else:
