@@ -59,6 +59,16 @@ def exposed_params(prog):
     return out
 
 
+#: OSL standard-library names a parameter would shadow (oslc warns): such a parameter gets a
+#: trailing underscore (its label stays the plain name)
+_OSL_STD = frozenset({"bump", "displace", "noise", "mix", "step", "smoothstep", "clamp", "min", "max",
+                      "area", "filterwidth", "transform", "length", "distance", "color", "point"})
+
+
+def _pname(name: str) -> str:
+    return name + "_" if name in _OSL_STD else name
+
+
 def _lit(v, typ: str) -> str:
     if typ == "float":
         r = repr(float(v))
@@ -94,7 +104,7 @@ def osl_shader(prog, code: str) -> str:
                 f"{typ} max = {_lit(hi, typ)}", f'string help = "{_quote(p.doc)}"']
         if p.type == "bool":
             meta.append('string widget = "checkBox"')
-        lines.append(f"    {typ} {p.name} = {_lit(value, typ)} [[ {', '.join(meta)} ]],")
+        lines.append(f"    {typ} {_pname(p.name)} = {_lit(value, typ)} [[ {', '.join(meta)} ]],")
     for typ, name, default, doc in OUTPUTS:
         lines.append(f'    output {typ} {name} = {default} [[ string help = "{_quote(doc)}" ]],')
     lines[-1] = lines[-1].rstrip(",")
@@ -112,7 +122,7 @@ def osl_shader(prog, code: str) -> str:
         "    vector ddx = Dx(q);",
         "    vector ddy = Dy(q);",
         "    vector dq = vector(hypot(ddx[0], ddy[0]), hypot(ddx[1], ddy[1]), hypot(ddx[2], ddy[2]));",
-        f"    CellglTextureParams t = cellgl_texture_params_load({', '.join(p.name for p, _ in params)});",
+        f"    CellglTextureParams t = cellgl_texture_params_load({', '.join(_pname(p.name) for p, _ in params)});",
         f"    CellglTexel x = cellgl_texture_at_filtered(cellgl_vec3(q[0], q[1], {z}), "
         f"cellgl_vec3(dq[0], dq[1], {'dq[2]' if prog.solid else '0.0'}), t);",
         "    Color = color(x.color_.x, x.color_.y, x.color_.z);",
