@@ -68,7 +68,8 @@ def test_osl_export_declares_parameters_outputs_and_coordinates():
     r = load_recipe("flagstone")
     head = text[text.index("shader cellgl_flagstone("):]
     assert "point Vector = point(0, 0, 0)" in head
-    assert 'getattribute("geom:generated", q0)' in head        # unconnected: generated coordinates
+    assert '!isconnected(Vector) && !getattribute("geom:generated", q0)' in head   # generated coords
+    assert "q0 = point(u, v, 0);" in head
     m = re.search(r"float frequency = ([0-9.e+-]+) \[\[ (.*?) \]\]", head)
     assert m and float(m.group(1)) == pytest.approx(r.values["frequency"])
     p = PARAMS_BY_NAME["frequency"]

@@ -11,7 +11,8 @@ hosts put v = 0 at the bottom of an image, cellgl's bakes at the top row. With `
 UV map spanning [0, 1]^2, the pixel centred at ``Vector`` gets what ``cellgl bake`` writes for
 the pixel centred at (u, v); the pixel footprint comes from the derivatives of ``Vector`` (the
 band limit of the octaves, like a bake's 1 / size). Unconnected, ``Vector`` is the object's
-generated texture coordinates, as with Blender's own texture nodes.
+generated texture coordinates, as with Blender's own texture nodes (renderers without that
+attribute: the surface's ``(u, v)``).
 """
 from __future__ import annotations
 
@@ -113,8 +114,9 @@ def osl_shader(prog, code: str) -> str:
         ")",
         "{",
         "    point q0 = Vector;",
-        "    if (!isconnected(Vector))",
-        '        getattribute("geom:generated", q0);',
+        "    // unconnected: generated coordinates (Cycles), else the surface's (u, v)",
+        "    if (!isconnected(Vector) && !getattribute(\"geom:generated\", q0))",
+        "        q0 = point(u, v, 0);",
         "    // cellgl's texture space: v = 0 at the top row of a bake",
         "    vector q = vector(q0[0], 1.0 - q0[1], q0[2]);",
         "    // the pixel's extent along each axis, whichever directions the host's two screen",
