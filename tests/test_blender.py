@@ -183,3 +183,80 @@ def test_osl_export_compiles_in_cycles():
     assert info["in"]["frequency"][1] == pytest.approx(r.values["frequency"])
     assert info["in"]["cell_mix"][1] == pytest.approx(r.values["cell_mix"])
     assert "P" not in info["in"] and "Vector" in info["in"]
+
+
+_UINT_GLSL = """
+uint hash(uint x)
+{
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+uint mixed(uint k)
+{
+    uint a = hash(k);
+    uint b = (hash(k ^ 0x5bd1e995u) >> (k % 31u)) | 1u;
+    uint r = a / b;
+    r ^= (a % b) * 0x9e3779b9u;
+    r ^= a < b ? 0xdeadbeefu : 0u;
+    r ^= b >= 0x80000000u ? 0x12345678u : 0u;
+    r ^= uint(float(a) * 0.5);
+    r += uint(float(a >> 1)) >> 3;
+    return r;
+}
+"""
+
+
+def _uint_reference(k: np.ndarray) -> np.ndarray:
+    u = np.uint32
+
+    def h(x):
+        x = x.astype(np.uint32)
+        with np.errstate(over="ignore"):
+            x ^= x >> u(16)
+            x *= u(0x7FEB352D)
+            x ^= x >> u(15)
+            x *= u(0x846CA68B)
+            x ^= x >> u(16)
+        return x
+
+    k = k.astype(np.uint32)
+    a = h(k)
+    b = (h(k ^ u(0x5BD1E995)) >> (k % u(31))) | u(1)
+    with np.errstate(over="ignore"):
+        r = a // b
+        r ^= (a % b) * u(0x9E3779B9)
+        r ^= np.where(a < b, u(0xDEADBEEF), u(0))
+        r ^= np.where(b >= u(0x80000000), u(0x12345678), u(0))
+        r ^= (a.astype(np.float32) * np.float32(0.5)).astype(np.uint32)
+        r += (a >> u(1)).astype(np.float32).astype(np.uint32) >> u(3)
+    return r
+
+
+def test_osl_unsigned_arithmetic_is_bit_exact(tmp_path):
+    """The uint emulation on OSL's int (logical >>, unsigned < and >=, / and %, uint <-> float,
+    wrapping *): a GLSL function of the library's dialect, translated and run by Cycles per
+    pixel, against NumPy's uint32 (the bits the GLSL path gives)."""
+    _need_bpy()
+    from cellgl.export.translate import to_osl
+
+    n = 32
+    shader = to_osl(_UINT_GLSL) + (
+        "shader t(point Vector = point(0), output color Color = 0)\n{\n"
+        f"    int k = int(floor(Vector[0] * {n})) + {n} * int(floor((1.0 - Vector[1]) * {n}));\n"
+        "    int r = mixed(k * 7919 + 13);\n"
+        "    Color = color(float(r & 65535), float((r >> 16) & 65535), 0.0);\n}\n")
+    out = tmp_path / "uint.exr"
+    proc = _python("from cellgl.blender.scene import build_scene, set_script, render_scene\n"
+                   f"scene = build_scene('f1', {n})\nset_script(scene, {shader!r})\n"
+                   f"render_scene(scene, {str(out)!r})\n")
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    px = _read_exr(out)
+    got = px[..., 0].astype(np.int64) + 65536 * px[..., 1].astype(np.int64)
+    k = np.arange(n * n).reshape(n, n) * 7919 + 13
+    want = _uint_reference(k).astype(np.int64)
+    assert np.count_nonzero(got != want) == 0, np.argwhere(got != want)[:5]

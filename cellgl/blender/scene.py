@@ -21,7 +21,8 @@ import os
 
 from cellgl.blender.runtime import compile_script_node, import_bpy
 
-__all__ = ["build_scene", "write_blend", "render_scene", "render_outputs", "set_recipe", "add_parser",
+__all__ = ["build_scene", "write_blend", "render_scene", "render_outputs", "set_recipe", "set_script",
+           "add_parser",
            "run_cli", "CYCLES_SAMPLE_OFFSET"]
 
 #: where Cycles 4.5 puts the first (only) sample of a pixel with a box filter of width 0.01,
@@ -131,8 +132,14 @@ def build_scene(recipe, size: int | None = None):
 def set_recipe(scene, recipe) -> None:
     """Put ``recipe``'s OSL export into the scene's Script node (recompiled, outputs rewired),
     keeping everything else: one scene renders many recipes."""
-    bpy = import_bpy()
     name, text = _osl_text(recipe)
+    set_script(scene, text, name)
+
+
+def set_script(scene, text: str, name: str = "shader") -> None:
+    """Put OSL source ``text`` into the scene's Script node (see :func:`set_recipe`): any shader
+    with a point input ``Vector`` and a color output ``Color``."""
+    bpy = import_bpy()
     mat = bpy.data.materials["cellgl"]
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     script = nodes["cellgl"]
