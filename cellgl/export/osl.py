@@ -16,6 +16,8 @@ attribute: the surface's ``(u, v)``).
 """
 from __future__ import annotations
 
+import re
+
 from cellgl.export.translate import to_osl
 
 __all__ = ["EXPOSED_EXCLUDED", "exposed_params", "osl_shader"]
@@ -45,16 +47,24 @@ OUTPUTS = (
 )
 
 
-def exposed_params(prog):
-    """``[(Param, value)]`` of the values of ``prog`` (a texture :class:`Program`) that become
-    OSL shader parameters: the run-time scalars the library reads directly."""
+def exposed_params(prog, code: str):
+    """``[(Param, value)]`` of the values of ``prog`` (a texture :class:`Program`; ``code``: its
+    specialised GLSL) that become OSL shader parameters: the run-time scalars the specialised
+    code reads directly (a weight of F5 in a recipe computing F1..F2 would be a slider that does
+    nothing)."""
     from cellgl.texture.params import PARAMS_BY_NAME
 
+    n = int(prog.defines.get("CELL_N", 4))
+    reads = re.sub(r"^\s*t\.(\w+) = cellgl_\1;$", "", code, flags=re.M)    # the loader's copies
+    used = set(re.findall(r"\.\s*(\w+)", reads))
     out = []
     for typ, name, value in prog.uniforms:
         p = PARAMS_BY_NAME.get(name)
         if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \
-                or isinstance(value, (list, tuple)):
+                or isinstance(value, (list, tuple)) or name not in used:
+            continue
+        m = re.fullmatch(r"c(\d)(\d)?", name)
+        if m and any(int(d) > n for d in m.groups() if d):
             continue
         out.append((p, value))
     return out
@@ -90,7 +100,7 @@ def osl_shader(prog, code: str) -> str:
     plus the ``shader`` block."""
     if not prog.filtered:
         return _basis_shader(prog, code)
-    params = exposed_params(prog)
+    params = exposed_params(prog, code)
     names = ["cellgl_" + p.name for p, _ in params]
     lib = to_osl(code, params=names, drop=("cellgl_texture", "cellgl_texture3", "cellgl_texture_filtered",
                                            "cellgl_texture3_filtered"))

@@ -410,46 +410,45 @@ class _Osl(_OslLib):
         return head + "\n\n" + "\n\n".join(funcs_out) + "\n"
 
     def emit_item(self, item, funcs_out: list, overloads: dict) -> None:
-        if True:
-            k = item[0]
-            if k == "struct":
-                members = {}
-                lines = [f"struct {item[2]}", "{"]
-                for mcom, typ, mname, size, trail in item[3]:
-                    ot = self.osl_type(typ)
-                    if size is not None:
-                        sz = self.size(size)
-                        members[mname] = (typ, sz)
-                        lines.append(f"    {ot} {self.name(mname)}[{sz}];" + (f"  {trail}" if trail else ""))
-                    else:
-                        members[mname] = typ
-                        lines.append(f"    {ot} {self.name(mname)};" + (f"  {trail}" if trail else ""))
-                lines.append("};")
-                self.structs[item[2]] = members
-                funcs_out.append("\n".join(self.comment_lines(item[1]) + lines))
-            elif k == "gdecl":
-                quals, typ, decls = item[2], item[3], item[4]
-                if "uniform" in quals:
-                    raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
-                                         "shader's parameters are OSL's uniforms)")
-                for name, size, init in decls:
-                    if init is None:
-                        raise TranslateError(f"OSL translation: global {name!r} needs a value")
-                    self.globals[name] = (typ, self.size(size) if size is not None else None, init)
-            elif k == "func":
-                _, com, ret, name, params, body = item
-                if name in self.drop:
-                    return
-                used: set = set()
-                self.globals_used(body, used)
-                passed = [g for g in self.params if g in used]
-                n = overloads.get(name, 0)
-                overloads[name] = n + 1
-                oname = self.name(name) if n == 0 else f"{name}_{n}"
-                ptypes = [(t, s) if s is not None else t for _, t, _, s in params]
-                self.funcs.setdefault(name, []).append(
-                    (ptypes, [m for m, _, _, _ in params], ret, oname, [self.name(g) for g in passed]))
-                funcs_out.append("\n".join(self.comment_lines(com) + self.func(item, oname, passed, used)))
+        k = item[0]
+        if k == "struct":
+            members = {}
+            lines = [f"struct {item[2]}", "{"]
+            for mcom, typ, mname, size, trail in item[3]:
+                ot = self.osl_type(typ)
+                if size is not None:
+                    sz = self.size(size)
+                    members[mname] = (typ, sz)
+                    lines.append(f"    {ot} {self.name(mname)}[{sz}];" + (f"  {trail}" if trail else ""))
+                else:
+                    members[mname] = typ
+                    lines.append(f"    {ot} {self.name(mname)};" + (f"  {trail}" if trail else ""))
+            lines.append("};")
+            self.structs[item[2]] = members
+            funcs_out.append("\n".join(self.comment_lines(item[1]) + lines))
+        elif k == "gdecl":
+            quals, typ, decls = item[2], item[3], item[4]
+            if "uniform" in quals:
+                raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
+                                     "shader's parameters are OSL's uniforms)")
+            for name, size, init in decls:
+                if init is None:
+                    raise TranslateError(f"OSL translation: global {name!r} needs a value")
+                self.globals[name] = (typ, self.size(size) if size is not None else None, init)
+        elif k == "func":
+            _, com, ret, name, params, body = item
+            if name in self.drop:
+                return
+            used: set = set()
+            self.globals_used(body, used)
+            passed = [g for g in self.params if g in used]
+            n = overloads.get(name, 0)
+            overloads[name] = n + 1
+            oname = self.name(name) if n == 0 else f"{name}_{n}"
+            ptypes = [(t, s) if s is not None else t for _, t, _, s in params]
+            self.funcs.setdefault(name, []).append(
+                (ptypes, [m for m, _, _, _ in params], ret, oname, [self.name(g) for g in passed]))
+            funcs_out.append("\n".join(self.comment_lines(com) + self.func(item, oname, passed, used)))
 
     def comment_lines(self, com) -> list[str]:
         out = []

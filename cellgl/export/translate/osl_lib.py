@@ -55,9 +55,11 @@ def _int_lit(v: int) -> str:
 
 
 def _same(p, t) -> bool:
+    """Whether an argument of GLSL type ``t`` matches a parameter of type ``p`` exactly (arrays:
+    by element type), for overload resolution."""
     if isinstance(p, tuple) or isinstance(t, tuple):
         return isinstance(p, tuple) and isinstance(t, tuple) and _same(p[0], t[0])
-    return p == t or {p, t} == {"int", "uint"} and False
+    return p == t
 
 
 _OPNAME = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "mod", "&": "and", "|": "or",
