@@ -122,6 +122,13 @@ def check_target(target: str) -> Target:
 
 def library_code(prog: Program) -> str:
     """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left."""
+    return specialised_code(prog)
+
+
+def specialised_code(prog: Program) -> str:
+    """The library of ``prog`` with its compile-time choices resolved and names prefixed, its
+    run-time values still the loader's named constants (the OSL target turns those into shader
+    parameters, so it takes this code, not a constant-folded one)."""
     src = glsl.resolve_library(prog.files)
     text = src.text + "\n" + prog.params + "\n" + prog.entry
     text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
@@ -210,7 +217,7 @@ def _fmt_value(v) -> str:
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`)."""
     tgt = check_target(target)
-    code = library_code(prog)
+    code = library_code(prog) if tgt.dialect != "osl" else specialised_code(prog)
     head = _header(prog, tgt, uniforms)
     d = tgt.dialect
     if d == "glsl":
