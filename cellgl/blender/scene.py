@@ -17,7 +17,9 @@ The mapping (what makes "render the file as is at N x N" give the bake's image):
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 
 from cellgl.blender.runtime import compile_script_node, import_bpy
 
@@ -144,8 +146,9 @@ def set_script(scene, text: str, name: str = "shader") -> None:
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     script = nodes["cellgl"]
     old = script.script
-    script.script = bpy.data.texts.new(f"cellgl_{name}.osl")
-    script.script.write(text)
+    new = bpy.data.texts.new(f"cellgl_{name}.osl")
+    new.write(text)             # before the assignment, which compiles the text it gets
+    script.script = new
     if old is not None:
         bpy.data.texts.remove(old)
     # a socket that survives a recompile keeps its value: the previous recipe's parameters
@@ -177,9 +180,23 @@ def write_blend(recipe, path, *, size: int | None = None) -> str:
     bpy = import_bpy()
     build_scene(recipe, size)
     bpy.context.preferences.filepaths.save_version = 0     # no .blend1 beside the temporary file
-    with atomic_path(path) as tmp:
+    with atomic_path(path) as tmp, _quiet():
         bpy.ops.wm.save_as_mainfile(filepath=str(tmp), compress=True, copy=True)
     return path
+
+
+@contextlib.contextmanager
+def _quiet():
+    """Blender's own messages on standard output (``Info: Saved ...``) silenced."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
 
 
 def render_scene(scene, path: str) -> str:
