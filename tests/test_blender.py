@@ -206,6 +206,8 @@ uint mixed(uint k)
     r ^= b >= 0x80000000u ? 0x12345678u : 0u;
     r ^= uint(float(a) * 0.5);
     r += uint(float(a >> 1)) >> 3;
+    r ^= floatBitsToUint(float(int(k) - 500) * 0.37);
+    r ^= floatBitsToUint(float(a) * 1.5e-30) * 3u;
     return r;
 }
 """
@@ -234,12 +236,14 @@ def _uint_reference(k: np.ndarray) -> np.ndarray:
         r ^= np.where(b >= u(0x80000000), u(0x12345678), u(0))
         r ^= (a.astype(np.float32) * np.float32(0.5)).astype(np.uint32)
         r += (a >> u(1)).astype(np.float32).astype(np.uint32) >> u(3)
+        r ^= ((k.astype(np.int64) - 500).astype(np.float32) * np.float32(0.37)).view(np.uint32)
+        r ^= (a.astype(np.float32) * np.float32(1.5e-30)).view(np.uint32) * u(3)
     return r
 
 
 def test_osl_unsigned_arithmetic_is_bit_exact(tmp_path):
     """The uint emulation on OSL's int (logical >>, unsigned < and >=, / and %, uint <-> float,
-    wrapping *): a GLSL function of the library's dialect, translated and run by Cycles per
+    floatBitsToUint, wrapping *): a GLSL function of the library's dialect, translated and run by Cycles per
     pixel, against NumPy's uint32 (the bits the GLSL path gives)."""
     _need_bpy()
     from cellgl.export.translate import to_osl

@@ -124,6 +124,41 @@ class _OslLib:
             "// uint(float) for 0 <= x < 2^32.\n"
             "int cellgl_f2u(float x) { return x >= 2147483648.0 ? int(x - 2147483648.0) ^ (1 << 31) : int(x); }"))
 
+    def float_bits(self) -> str:
+        """``floatBitsToUint`` (OSL has no bit casts): the IEEE 754 fields of a finite float
+        computed exactly (powers of two multiply and divide exactly; log2 only guesses the
+        exponent, which is then corrected). -0.0 gives the bits of +0.0."""
+        return self.helper("cellgl_float_bits", (
+            "// 2^e, exactly (binary powering of 2 or 1/2), |e| < 256.\n"
+            "float cellgl_pow2(int e)\n{\n"
+            "    float b = e < 0 ? 0.5 : 2.0;\n"
+            "    int n = abs(e);\n"
+            "    float p = 1.0;\n"
+            "    for (int i = 0; i < 8; i++) {\n"
+            "        if ((n >> i) & 1)\n"
+            "            p *= b;\n"
+            "        b *= b;\n"
+            "    }\n"
+            "    return p;\n}\n\n"
+            "// floatBitsToUint(x) for finite x: sign, biased exponent, mantissa.\n"
+            "int cellgl_float_bits(float x)\n{\n"
+            "    if (x == 0.0)\n"
+            "        return 0;\n"
+            "    int s = x < 0.0 ? (1 << 31) : 0;\n"
+            "    float a = abs(x);\n"
+            "    int e = clamp(int(floor(log2(a))), -149, 127);\n"
+            "    float p = cellgl_pow2(e);\n"
+            "    if (p > a) {\n"
+            "        e -= 1;\n"
+            "        p = cellgl_pow2(e);\n"
+            "    } else if (e < 127 && p * 2.0 <= a) {\n"
+            "        e += 1;\n"
+            "        p = cellgl_pow2(e);\n"
+            "    }\n"
+            "    if (e < -126)           // subnormal: a = m 2^-149\n"
+            "        return s | int(a * cellgl_pow2(126) * 8388608.0);\n"
+            "    return s | ((e + 127) << 23) | int((a / p - 1.0) * 8388608.0);\n}"))
+
     def scalar_op(self, op: str, a: str, b: str, t: str) -> str:
         """``a op b`` for scalars of GLSL type ``t`` (both operands already of that type)."""
         if t == "uint":
@@ -242,6 +277,18 @@ class _OslLib:
             name = self.helper(f"cellgl_normalize_{t}", f"{ot} cellgl_normalize_{t}({ot} a) "
                                f"{{ return {mul}(a, 1.0 / sqrt({dot}(a, a))); }}")
             return f"{name}({ss[0]})", t
+        if fn in ("floatBitsToUint", "floatBitsToInt"):
+            self.float_bits()
+            t = types[0]
+            v = _vec(t)
+            if not v:
+                return f"cellgl_float_bits({ss[0]})", "uint" if fn.endswith("Uint") else "int"
+            rt = ("u" if fn.endswith("Uint") else "i") + f"vec{v[1]}"
+            ot, ort = self.osl_type(t), self.osl_type(rt)
+            name = f"cellgl_{fn}_{t}"
+            self.helper(name, f"{ort} {name}({ot} a) {{ return {ort}("
+                        + ", ".join(f"cellgl_float_bits(a.{c})" for c in _XYZW[:v[1]]) + "); }")
+            return f"{name}({ss[0]})", rt
         if fn == "fract":
             self.helper("cellgl_fract", "float cellgl_fract(float x) { return x - floor(x); }")
         if fn == "atan" and len(ss) == 2:
