@@ -12,7 +12,7 @@ extra: ``pip install "cellgl[blender]"``), lazily: ``import cellgl`` never loads
 from __future__ import annotations
 
 __all__ = ["import_bpy", "compile_script_node", "osl_compile", "write_blend", "build_scene", "set_recipe",
-           "render_scene", "render_outputs"]
+           "render_scene", "render_outputs", "set_script"]
 
 
 def __getattr__(name):
@@ -20,7 +20,7 @@ def __getattr__(name):
         from cellgl.blender import runtime
 
         return getattr(runtime, name)
-    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene", "render_outputs", "set_recipe"):
+    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene", "render_outputs", "set_recipe", "set_script"):
         from cellgl.blender import scene
 
         return getattr(scene, name)
