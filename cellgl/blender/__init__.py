@@ -20,7 +20,8 @@ def __getattr__(name):
         from cellgl.blender import runtime
 
         return getattr(runtime, name)
-    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene", "render_outputs", "set_recipe", "set_script"):
+    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene", "render_outputs",
+                "set_recipe", "set_script"):
         from cellgl.blender import scene
 
         return getattr(scene, name)
