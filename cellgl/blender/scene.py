@@ -6,14 +6,13 @@ The mapping (what makes "render the file as is at N x N" give the bake's image):
   export, as internal text) fed by the UV map; the node's Color goes to an Emission shader of
   strength 1, so the rendered value of a pixel is the shader's Color there;
 * an orthographic camera at (0.5, 0.5, 1) looking down -z with ortho scale 1 (less
-  :data:`CYCLES_SAMPLE_OFFSET` / N, see there): the frame is the plane, and pixel (column i, row j from the top) of an N x N render is centred at
-  x = (i + 0.5) / N, y = 1 - (j + 0.5) / N, which the shader maps to the bake's
-  uv = ((i + 0.5) / N, (j + 0.5) / N);
-* Cycles on the CPU with OSL, 1 sample, a box pixel filter of the smallest width (0.01 px: the
-  sample lies within 0.005 px of the pixel centre), no denoising, no bounces; the view transform
-  ``Raw`` (Blender's default AgX, or Standard's sRGB curve, would change the colours: the bake's
-  8-bit values are the shader's values times 255) and 8-bit PNG output at the recipe's bake
-  size (or ``size``).
+  :data:`CYCLES_SAMPLE_OFFSET` / N, see there): the frame is the plane, and pixel (column i,
+  row j from the top) of an N x N render is centred at x = (i + 0.5) / N, y = 1 - (j + 0.5) / N,
+  which the shader maps to the bake's uv = ((i + 0.5) / N, (j + 0.5) / N);
+* Cycles on the CPU with OSL, 1 sample, a box pixel filter of the smallest width (0.01 px), no
+  denoising, no bounces; the view transform ``Raw`` (Blender's default AgX, or Standard's sRGB
+  curve, would change the colours: the bake's 8-bit values are the shader's values times 255)
+  and 8-bit PNG output at the bake's default size (or ``size``).
 """
 from __future__ import annotations
 
