@@ -89,6 +89,7 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
     "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
     "voronoi": (_lazy("cellgl.voronoi_cli", "add_parser"), _lazy("cellgl.voronoi_cli", "run_cli")),
+    "blender": (_lazy("cellgl.blender.scene", "add_parser"), _lazy("cellgl.blender.scene", "run_cli")),
 }
 
 
