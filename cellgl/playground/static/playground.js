@@ -741,7 +741,7 @@ void main()
     },
     // compile a GLSL ES snippet (as copied) in a fresh program and render it like the canvas
     renderSnippet(text) {
-      const src = "#version 300 es\nprecision highp float;\nprecision highp int;\n" + text + `
+      return api.renderFragment("#version 300 es\nprecision highp float;\nprecision highp int;\n" + text + `
 uniform highp vec4 pg_view;
 out highp vec4 pg_color;
 void main()
@@ -750,8 +750,13 @@ void main()
     vec2 xy = vec2(px.x, pg_view.y - 1.0 - px.y);
     pg_color = cellgl_texture_filtered((xy + 0.5) / pg_view.xy, 1.0 / pg_view.xy);
 }
-`;
+`);
+    },
+    // compile a whole fragment shader, draw it over the canvas, return the pixels
+    renderFragment(src) {
       const prog = link(src);
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.viewport(0, 0, canvas.width, canvas.height);
       draw({ prog }, [canvas.width, canvas.height, 1, 0]);
       gl.deleteProgram(prog);
       return api.pixels();

@@ -1,0 +1,211 @@
+"""The web playground (``cellgl playground``) in a real browser: Debian's headless Chromium driven
+by selenium, the site opened from ``file://`` with the network off (WebGL2 on SwiftShader).
+
+For every preset the page offers: its canvas equals ``cellgl bake`` at the same size within
+1/255; after three sliders move it equals ``cellgl bake --set`` with the values the page
+reports; the GLSL ES and three.js snippets it copies compile and render the same pixels; the
+``cellgl bake`` command it copies runs and writes that image. One browser session serves all
+presets (64 x 64 canvases). A missing Chromium skips unless CELLGL_REQUIRE_GPU is set (CI).
+"""
+from __future__ import annotations
+
+import base64
+import importlib.util
+import os
+import re
+import shlex
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cellgl.recipes import is_pups, list_presets, load_recipe
+
+ROOT = Path(__file__).resolve().parents[1]
+SIZE = 64
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+DRIVER = shutil.which("chromedriver")
+REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--proxy-server=127.0.0.1:9",
+         "--window-size=1400,900")
+
+
+def _texture_presets():
+    from cellgl.playground.variants import exportable
+
+    out = []
+    for name, _ in list_presets():
+        r = load_recipe(name)
+        if not is_pups(r) and exportable(r) is None:
+            out.append(name)
+    return out
+
+
+PRESETS = _texture_presets()
+
+
+def _export_helpers():
+    spec = importlib.util.spec_from_file_location("_cellgl_test_export", ROOT / "tests" / "test_export.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    from cellgl.playground import build_site
+
+    out = tmp_path_factory.mktemp("playground")
+    res = build_site(out)
+    assert res["presets"] == PRESETS
+    return out
+
+
+@pytest.fixture(scope="module")
+def page(site, tmp_path_factory):
+    if CHROMIUM is None or DRIVER is None:
+        if REQUIRE:
+            pytest.fail("chromium and chromium-driver are required (CELLGL_REQUIRE_GPU=1); .ci/setup installs them")
+        pytest.skip("no chromium / chromedriver (apt install chromium chromium-driver)")
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        if REQUIRE:
+            pytest.fail("selenium is required (the test extra)")
+        pytest.skip("no selenium")
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for f in FLAGS:
+        opts.add_argument(f)
+    opts.add_argument(f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}")
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(options=opts, service=Service(DRIVER))
+    driver.set_script_timeout(240)
+    try:
+        driver.get((site / "index.html").as_uri() + f"?size={SIZE}")
+        driver.execute_async_script("arguments[arguments.length - 1](window.cellglPlayground.idle())")
+        yield driver
+    finally:
+        driver.quit()
+
+
+def call(driver, js: str):
+    """Run ``js`` (an expression, may be a promise) in the page and return its value."""
+    return driver.execute_async_script(
+        f"const done = arguments[arguments.length - 1];"
+        f"Promise.resolve().then(() => {js}).then(done, (e) => done({{__error: String(e && e.stack || e)}}));")
+
+
+def ok(value):
+    assert not (isinstance(value, dict) and "__error" in value), value.get("__error")
+    return value
+
+
+def pixels(b64: str) -> np.ndarray:
+    return np.frombuffer(base64.b64decode(b64), np.uint8).reshape(SIZE, SIZE, 4)
+
+
+def bake(tmp_path, name, sets=(), stem="bake") -> np.ndarray:
+    from PIL import Image
+
+    from cellgl.io.bake import bake as bake_file
+
+    path = tmp_path / f"{stem}.png"
+    bake_file(name, path, size=(SIZE, SIZE), sets=list(sets), progress=False)
+    return np.asarray(Image.open(path).convert("RGBA"))
+
+
+def assert_close(got: np.ndarray, want: np.ndarray, what: str):
+    diff = np.abs(got[..., :3].astype(int) - want[..., :3].astype(int))
+    assert diff.max() <= 1, f"{what}: {int((diff > 1).any(axis=-1).sum())} pixels differ by more than 1/255 " \
+                            f"(max {diff.max()})"
+
+
+def move_sliders(driver, name: str) -> list[str]:
+    """Drag three of the preset's sliders (set the range input and fire its input event, as a
+    drag does); returns the names moved."""
+    v = load_recipe(name).values
+    picks = ["seed", "jitter" if v["density_map"] != "none" else "frequency"]
+    if v["fractal"] != "none" and v["fractal"] != "min":
+        picks.append("gain")
+    elif v["density_map"] != "none":
+        picks.append("level_hi")
+    else:
+        picks.append("c2")           # from 0 on F1 presets: n = 2, another shader variant
+    for i, p in enumerate(picks):
+        ok(call(driver, f"""(() => {{
+            const el = document.getElementById("p-{p}");
+            const lo = Number(el.min), hi = Number(el.max);
+            el.value = String(lo + (hi - lo) * {0.31 + 0.17 * i});
+            el.dispatchEvent(new Event("input", {{bubbles: true}}));
+            return window.cellglPlayground.idle();
+        }})()"""))
+    return picks
+
+
+THREE_STUB = """(() => {
+    const text = window.cellglPlayground.copyText("threejs");
+    const body = text.replace(/^import .*$/m, "").replace("export const", "const");
+    const THREE = { GLSL3: "300 es", ShaderMaterial: class { constructor(o) { Object.assign(this, o); } } };
+    const m = new Function("THREE", body + "\\nreturn cellglMaterial;")(THREE);
+    // three.js's GLSL3 ShaderMaterial prefix (#version, precision); vUv from a full-screen triangle
+    const frag = m.fragmentShader.replace("in vec2 vUv;", "");
+    return { glslVersion: m.glslVersion, vertex: m.vertexShader, frag };
+})()"""
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_preset_in_the_browser_equals_the_bake(page, tmp_path, name):
+    from cellgl.export.snippets import texture_program
+    from cellgl.playground.variants import variant_id, variant_key
+
+    st = ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    assert st["error"] is None and st["missing"] is None, st
+    want_key = variant_key(texture_program(load_recipe(name), uniforms=True).defines)
+    assert st["key"] == want_key and st["variant"] == variant_id(want_key)
+    assert st["command"] == f"cellgl bake {name} -o {name}.png --size {SIZE}x{SIZE}"
+    assert_close(pixels(call(page, "window.cellglPlayground.pixels()")), bake(tmp_path, name), f"{name} canvas")
+
+    moved = move_sliders(page, name)
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    assert st["error"] is None and st["missing"] is None, st
+    assert sorted(s.split("=")[0] for s in st["sets"]) == sorted(moved), st["sets"]
+    want = bake(tmp_path, name, st["sets"], "moved")
+    shown = pixels(call(page, "window.cellglPlayground.pixels()"))
+    assert_close(shown, want, f"{name} after --set {' '.join(st['sets'])}")
+    assert np.abs(shown.astype(int) - bake(tmp_path, name)).max() > 8, "the sliders changed nothing"
+
+    # the copied GLSL ES snippet compiles and renders the same pixels
+    gles = ok(call(page, "window.cellglPlayground.copyText('gles')"))
+    assert not re.search(r"^uniform ", gles, re.M) and "cellgl_texture_filtered" in gles
+    got = pixels(ok(call(page, f"window.cellglPlayground.renderSnippet({gles!r})")))
+    assert_close(got, want, f"{name} copied GLSL ES")
+    # ... and the three.js material's fragment shader too
+    three = ok(call(page, THREE_STUB))
+    assert three["glslVersion"] == "300 es" and "projectionMatrix" in three["vertex"]
+    # three.js adds #version and precision; vUv as the full-screen quad interpolates it
+    frag = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
+            f"vec2 pg_vuv() {{ return (floor(gl_FragCoord.xy) + 0.5) / {SIZE}.0; }}\n#define vUv pg_vuv()\n"
+            + three["frag"])
+    got = pixels(ok(call(page, f"window.cellglPlayground.renderFragment({frag!r})")))
+    assert_close(got, want, f"{name} copied three.js fragment shader")
+
+    # the copied command runs and writes the same image
+    from PIL import Image
+
+    from cellgl.cli import main
+
+    argv = shlex.split(st["command"])
+    assert argv[:3] == ["cellgl", "bake", name]
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        assert main(argv[1:]) == 0
+    finally:
+        os.chdir(cwd)
+    ran = np.asarray(Image.open(tmp_path / f"{name}.png").convert("RGBA"))
+    np.testing.assert_array_equal(ran, want)
