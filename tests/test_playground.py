@@ -209,3 +209,92 @@ def test_preset_in_the_browser_equals_the_bake(page, tmp_path, name):
         os.chdir(cwd)
     ran = np.asarray(Image.open(tmp_path / f"{name}.png").convert("RGBA"))
     np.testing.assert_array_equal(ran, want)
+
+
+@pytest.mark.parametrize("name", [p for p in ("f1", "crumple") if p in PRESETS])
+def test_copied_wgsl_hlsl_godot_snippets_compile(page, tmp_path, name):
+    helpers = _export_helpers()
+    ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    move_sliders(page, name)
+    for target in ("wgsl", "hlsl", "godot"):
+        text = ok(call(page, f"window.cellglPlayground.copyText({target!r})"))
+        assert f"--target {target}" in text and "--set seed=" in text
+        if target == "godot":   # the exporter's own fragment(), as compile_snippet expects it
+            text += "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
+        helpers.compile_snippet(tmp_path, target, text)
+
+
+def test_tiled_and_animated_views(page):
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    flat = call(page, "window.cellglPlayground.pixels()")
+    page.find_element("css selector", "#views button[data-view=tiled]").click()
+    st = ok(call(page, "window.cellglPlayground.idle()"))
+    assert st["view"] == "tiled" and st["error"] is None
+    tiled = pixels(call(page, "window.cellglPlayground.pixels()"))
+    assert (tiled != pixels(flat)).any()
+    # 3 x 3 copies: the texture repeats every SIZE / 3 pixels (a third of a pixel off per copy)
+    k, t = SIZE // 3, tiled[..., :3].astype(int)
+    same = np.abs(t[:k, :k] - t[k:2 * k, k:2 * k]).mean()
+    other = np.abs(t[:k, :k] - t[:k, k // 2:k // 2 + k]).mean()
+    assert same < other / 2, (same, other)
+    page.find_element("css selector", "#views button[data-view=anim]").click()
+    a = ok(call(page, "new Promise((r) => setTimeout(r, 300)).then(() => window.cellglPlayground.state())"))
+    first = call(page, "window.cellglPlayground.pixels()")
+    b = ok(call(page, "new Promise((r) => setTimeout(r, 900)).then(() => window.cellglPlayground.state())"))
+    assert b["error"] is None and b["rendered"] > a["rendered"]
+    assert call(page, "window.cellglPlayground.pixels()") != first
+    assert any(s.startswith("offset_x=") for s in b["sets"]), b["sets"]   # the command follows the frame
+    page.find_element("css selector", "#views button[data-view='2d']").click()
+    ok(call(page, "window.cellglPlayground.idle()"))
+
+
+def test_page_works_offline_and_names_what_it_leaves_out(page, site):
+    logs = [e for e in page.get_log("browser") if e["level"] == "SEVERE"]
+    assert not logs, logs
+    note = page.find_element("id", "refused").text
+    pups = [n for n, _ in list_presets() if n.startswith("pups-")]
+    if pups:
+        assert f"the {len(pups)} PUPs presets" in note
+    assert "stained-glass" in note or "stained-glass" in PRESETS
+    # every file the page loads is in the site: nothing from the network
+    html = (site / "index.html").read_text()
+    assert "http://" not in html and "https://" not in html
+
+
+def test_screenshot(page, tmp_path):
+    """The docs' screenshot (docs/screenshots/playground.png; CELLGL_UPDATE_DOCS=1 rewrites it)."""
+    from PIL import Image
+
+    page.set_window_size(1400, 860)
+    page.get(page.current_url.split("?")[0] + "?size=256&preset=flagstone")
+    ok(call(page, "window.cellglPlayground.idle()"))
+    ok(call(page, """(() => { const el = document.getElementById("p-frequency");
+        el.value = "6"; el.dispatchEvent(new Event("input", {bubbles: true}));
+        return window.cellglPlayground.idle(); })()"""))
+    shot = tmp_path / "playground.png"
+    page.save_screenshot(str(shot))
+    img = Image.open(shot).convert("RGB")
+    assert img.size[0] >= 1200
+    # the canvas shows the texture (not the empty checkerboard)
+    assert np.asarray(img).std() > 20
+    doc = ROOT / "docs" / "screenshots" / "playground.png"
+    if os.environ.get("CELLGL_UPDATE_DOCS") == "1":
+        img.resize((img.size[0] * 3 // 4, img.size[1] * 3 // 4), Image.LANCZOS).quantize(128).save(doc, optimize=True)
+    assert doc.is_file() and doc.stat().st_size < 400_000
+
+
+def test_page_warns_where_the_recipe_check_refuses(page):
+    from cellgl.texture.schema import RecipeError
+
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    for name, value in (("max_points", 3), ("min_points", 5)):
+        ok(call(page, f"""(() => {{ const el = document.getElementById("p-{name}");
+            el.value = "{value}"; el.dispatchEvent(new Event("input", {{bubbles: true}}));
+            return window.cellglPlayground.idle(); }})()"""))
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    assert st["problems"] == ["min_points exceeds max_points"], st["problems"]
+    assert page.find_element("id", "notice").is_displayed()
+    with pytest.raises(RecipeError, match="min_points"):
+        load_recipe("f1").set_from_strings(st["sets"])
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    assert ok(call(page, "window.cellglPlayground.state()"))["problems"] == []

@@ -144,6 +144,37 @@
     return u;
   }
 
+  // cellgl.texture.recipe._check and domain.check: the rules between parameters, as warnings
+  // (the page still renders; the copied command would report the error)
+  function problems(v, ramp) {
+    const out = [];
+    const integral = (x) => Math.abs(x - Math.round(x)) <= 1e-6 && Math.round(x) >= 1;
+    if (v.min_points > v.max_points) out.push("min_points exceeds max_points");
+    if (v.distribution === "worley1996" && v.dimension !== 3) out.push("worley1996 needs dimension 3");
+    if (!(v.range_hi > v.range_lo)) out.push("range_hi must exceed range_lo");
+    if (!(v.level_hi > v.level_lo)) out.push("level_hi must exceed level_lo");
+    if (v.ramp_mode === "spline" && ramp.length < 4) out.push("spline ramp_mode needs at least 4 ramp keys");
+    ["c_edge", "c_nsphere"].forEach((t) => {
+      if (v[t] !== 0 && v.metric !== "euclidean") out.push(t + " needs metric euclidean");
+    });
+    if (v.density_map !== "none" && v.distribution !== "poisson") out.push("a density_map needs distribution poisson");
+    if (v.density_map !== "none" && v.tileable) out.push("tileable is not available with a density_map");
+    if (v.tileable) {
+      if (v.distribution === "worley1996") out.push("tileable is not available with worley1996");
+      if (!integral(v.frequency)) out.push("tileable: frequency must be a positive integer");
+      if (!integral(v.frequency * v.aspect)) out.push("tileable: frequency * aspect must be a positive integer");
+      if (v.fractal !== "none" && !integral(v.lacunarity)) out.push("tileable: lacunarity must be an integer");
+      if ((v.c_noise !== 0 || v.noise_color !== 0) && !integral(v.noise_frequency)) {
+        out.push("tileable: noise_frequency must be an integer");
+      }
+      if (v.warp_amount !== 0 && !integral(v.warp_frequency)) out.push("tileable: warp_frequency must be an integer");
+    }
+    const stretched = axisScale(v).some((x) => x !== 1);
+    const used = ["c_edge", "c_nsphere", "c_smooth"].filter((k) => v[k] !== 0);
+    if (stretched && used.length) out.push(used[0] + " is not available with stretched cells");
+    return out;
+  }
+
   // ------------------------------------------------------------------ state
   const state = { preset: null, values: null, view: "2d", size: 256, renderer: "webgl2", t0: 0,
                   mean: null, meanKey: null, error: null, frameMs: 0 };
@@ -363,7 +394,10 @@ void main()
       return;
     }
     state.missing = null;
-    $("notice").hidden = true;
+    state.problems = problems(v, pre.ramp);
+    $("notice").hidden = !state.problems.length;
+    $("notice").textContent = state.problems.length ? "cellgl would refuse these values: " +
+      state.problems.join("; ") + "." : "";
     const mk = meanKey(v);
     if (state.meanKey !== mk) {
       state.mean = await octaveMean(v, pre.ramp, pre.fixed_uniforms);
@@ -555,7 +589,10 @@ void main()
     return r > 100 ? 1 : r > 10 ? 2 : 3;
   }
   const controls = {};
+  // density_map and cell_color need data only Python makes (the map's encoding, an image)
+  const ALWAYS_FROZEN = ["density_map", "cell_color"];
   function frozen(name) {
+    if (ALWAYS_FROZEN.includes(name)) return true;
     return state.values && state.values.density_map !== "none" && SITE.density_frozen.includes(name) &&
       PRESETS[state.preset].values.density_map !== "none";
   }
@@ -719,7 +756,7 @@ void main()
       return { preset: state.preset, view: state.view, size: state.size, error: state.error, missing: state.missing,
                variant: state.variant && state.variant.id, key: variantKey(state.values), mean: state.mean,
                sets: setList(state.shown || state.values), command: bakeCommand(state.shown || state.values),
-               rendered: state.rendered || 0 };
+               rendered: state.rendered || 0, problems: state.problems || [] };
     },
     // RGBA bytes of the canvas, rows from the top, base64
     pixels() {
