@@ -211,7 +211,7 @@ def test_preset_in_the_browser_equals_the_bake(page, tmp_path, name):
     np.testing.assert_array_equal(ran, want)
 
 
-@pytest.mark.parametrize("name", [p for p in ("f1", "crumple") if p in PRESETS])
+@pytest.mark.parametrize("name", [p for p in ("f1", "crumple", "density") if p in PRESETS])
 def test_copied_wgsl_hlsl_godot_snippets_compile(page, tmp_path, name):
     helpers = _export_helpers()
     ok(call(page, f"window.cellglPlayground.select({name!r})"))
@@ -265,7 +265,7 @@ def test_screenshot(page, tmp_path):
     """The docs' screenshot (docs/screenshots/playground.png; CELLGL_UPDATE_DOCS=1 rewrites it)."""
     from PIL import Image
 
-    page.set_window_size(1400, 860)
+    page.set_window_size(1400, 900)
     page.get(page.current_url.split("?")[0] + "?size=256&preset=flagstone")
     ok(call(page, "window.cellglPlayground.idle()"))
     ok(call(page, """(() => { const el = document.getElementById("p-frequency");
@@ -298,3 +298,39 @@ def test_page_warns_where_the_recipe_check_refuses(page):
         load_recipe("f1").set_from_strings(st["sets"])
     ok(call(page, "window.cellglPlayground.select('f1')"))
     assert ok(call(page, "window.cellglPlayground.state()"))["problems"] == []
+
+
+def _wgsl_consts(text: str) -> tuple[str, dict]:
+    """A WGSL snippet's code with its ``const cellgl_*`` values cut out, and those values."""
+    values = {}
+
+    def cut(m):
+        body = m.group(3)
+        while re.search(r"<[^<>]*>", body):
+            body = re.sub(r"<[^<>]*>", "", body)
+        body = re.sub(r"vec\d|array", "", body)
+        values[m.group(1)] = [float(x) for x in re.findall(r"-?\d+(?:\.\d*)?(?:e[-+]?\d+)?", body)]
+        return f"const cellgl_{m.group(1)}: {m.group(2)} = ...;"
+
+    code = re.sub(r"^const cellgl_(\w+): ([^=]+) = (.*);$", cut, text.split("\n\n", 1)[1], flags=re.M)
+    return code, values
+
+
+@pytest.mark.parametrize("name", [p for p in ("f1", "crumple", "wood-grain", "density", "qin-marble")
+                                  if p in PRESETS])
+def test_copied_wgsl_equals_the_exporter(page, name):
+    """The page writes the current values into the WGSL snippet; with the values it reports,
+    ``cellgl export --target wgsl --set ...`` gives the same code and the same numbers (the
+    octave mean, measured on the GPU in the page, to 1e-5; Poisson thresholds to 1 in 2^32)."""
+    from cellgl.export import export
+
+    ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    move_sliders(page, name)
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    page_code, page_vals = _wgsl_consts(ok(call(page, "window.cellglPlayground.copyText('wgsl')")))
+    py_code, py_vals = _wgsl_consts(export(load_recipe(name).set_from_strings(st["sets"]), "wgsl"))
+    assert page_code == py_code
+    assert page_vals.keys() == py_vals.keys()
+    for k, want in py_vals.items():
+        tol = 1e-5 if k == "octave_mean" else 1 if "thresholds" in k else 0
+        np.testing.assert_allclose(page_vals[k], want, rtol=0, atol=tol, err_msg=k)

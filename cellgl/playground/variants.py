@@ -106,10 +106,12 @@ def variant_texts(recipe) -> dict:
 
 
 def _body(text: str) -> str:
-    """A snippet without its header: the leading block of comment lines."""
+    """A snippet without its header: the leading block of comment lines, up to a blank line."""
     lines = text.split("\n")
     i = 0
-    while i < len(lines) and (lines[i].startswith("//") or not lines[i].strip()):
+    while i < len(lines) and lines[i].startswith("//"):
+        i += 1
+    while i < len(lines) and not lines[i].strip():
         i += 1
     return "\n".join(lines[i:])
 

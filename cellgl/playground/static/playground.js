@@ -459,11 +459,14 @@ void main()
   }
   function wgslValue(type, x) {
     let m;
-    if ((m = /^array<(.+), (\d+)>$/.exec(type))) return `${type}(${x.slice(0, +m[2]).map((e) => wgslValue(m[1], e)).join(", ")})`;
+    if ((m = /^array<(.+), ([\d *]+)>$/.exec(type))) {
+      return `${type}(${x.slice(0, arrayLength(m[2])).map((e) => wgslValue(m[1], e)).join(", ")})`;
+    }
     if ((m = /^vec(\d)<(\w+)>$/.exec(type))) return `${type}(${x.map((e) => wgslValue(m[2], e)).join(", ")})`;
     if (type === "f32") return fmtF(x);
     if (type === "u32") return x + "u";
-    return String(x);
+    if (type === "i32") return String(x);
+    throw new Error("WGSL type " + type);
   }
   function wgslConsts(text, u) {
     return text.replace(/^const cellgl_(\w+): ([^=]+) = .*;$/gm, (m, name, type) =>
