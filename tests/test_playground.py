@@ -30,6 +30,7 @@ REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "tru
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
          "--disable-background-networking", "--disable-component-update", "--disable-sync",
          "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--proxy-server=127.0.0.1:9",
+         "--enable-unsafe-webgpu", "--use-webgpu-adapter=swiftshader",
          "--window-size=1400,900")
 
 
@@ -334,3 +335,21 @@ def test_copied_wgsl_equals_the_exporter(page, name):
     for k, want in py_vals.items():
         tol = 1e-5 if k == "octave_mean" else 1 if "thresholds" in k else 0
         np.testing.assert_allclose(page_vals[k], want, rtol=0, atol=tol, err_msg=k)
+
+
+@pytest.mark.parametrize("name", [p for p in ("f1", "flagstone", "wood-grain") if p in PRESETS])
+def test_webgpu_renders_the_copied_wgsl_as_the_bake(page, tmp_path, name):
+    """Where the browser offers WebGPU (headless Chromium here: SwiftShader's adapter), the
+    WebGPU renderer draws the WGSL snippet the page copies; it gives the bake's pixels."""
+    assert call(page, "window.cellglPlayground.webgpu()") is True
+    ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    move_sliders(page, name)
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    got = pixels(ok(call(page, "window.cellglPlayground.webgpuPixels()")))
+    assert_close(got, bake(tmp_path, name, st["sets"]), f"{name} WebGPU")
+    page.find_element("id", "use-webgpu").click()
+    st = ok(call(page, "window.cellglPlayground.idle()"))
+    assert st["error"] is None, st["error"]
+    assert page.find_element("id", "gpuview").is_displayed()
+    page.find_element("css selector", "#renderer button[data-r=webgl2]").click()
+    ok(call(page, "window.cellglPlayground.idle()"))

@@ -420,7 +420,7 @@ void main()
     state.frameMs = performance.now() - t;
     state.rendered = (state.rendered || 0) + 1;
     updateCopy(v, variant);
-    if (state.renderer === "webgpu") await renderWebGPU(v, variant);
+    if (state.renderer === "webgpu") await renderWebGPU();
   }
 
   // ------------------------------------------------------------------ snippets
@@ -543,9 +543,7 @@ void main()
       const adapter = await navigator.gpu.requestAdapter();
       if (!adapter) throw new Error("no adapter");
       const device = await adapter.requestDevice();
-      const ctx = $("gpuview").getContext("webgpu");
-      const format = navigator.gpu.getPreferredCanvasFormat();
-      gpu = { device, ctx, format, cache: {} };
+      gpu = { device, cache: {} };
       $("use-webgpu").disabled = false;
       $("webgpu").textContent = "WebGPU: available";
       $("webgpu").classList.remove("dim");
@@ -553,37 +551,73 @@ void main()
       $("webgpu").textContent = "WebGPU: " + e.message;
     }
   }
-  async function renderWebGPU(v, variant) {
-    const c = $("gpuview");
-    c.width = c.height = state.size;
-    gpu.ctx.configure({ device: gpu.device, format: gpu.format, alphaMode: "opaque" });
+  // The WGSL snippet (the current values as constants) drawn over a full-screen triangle into
+  // `view` (a texture view of `format`), like the WebGL2 canvas.
+  async function drawWebGPU(variant, format, view) {
+    const n = (state.view === "tiled" ? 3 : 1) / state.size;
     const code = wgslConsts(variant.wgsl, state.uniforms) + `
 @vertex fn pg_vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
     let p = array<vec2<f32>, 3>(vec2<f32>(-1.0, -1.0), vec2<f32>(3.0, -1.0), vec2<f32>(-1.0, 3.0));
     return vec4<f32>(p[i], 0.0, 1.0);
 }
 @fragment fn pg_fs(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
-    let n = ${fmtF(state.view === "tiled" ? 3 : 1)} / ${fmtF(state.size)};
-    let uv = fract(floor(pos.xy) * n + 0.5 * n);
+    let n = ${fmtF(n)};
+    let uv = fract((floor(pos.xy) + vec2<f32>(0.5)) * n);
     return cellgl_texture_filtered(uv, vec2<f32>(n, n));
 }
 `;
-    const module = gpu.device.createShaderModule({ code });
-    const info = await module.getCompilationInfo();
-    const err = info.messages.find((m) => m.type === "error");
-    if (err) throw new Error("WGSL: " + err.message);
-    const pipeline = gpu.device.createRenderPipeline({
-      layout: "auto", vertex: { module, entryPoint: "pg_vs" },
-      fragment: { module, entryPoint: "pg_fs", targets: [{ format: gpu.format }] },
-      primitive: { topology: "triangle-list" } });
+    const key = format + "\n" + code;
+    let pipeline = gpu.cache[key];
+    if (!pipeline) {
+      const module = gpu.device.createShaderModule({ code });
+      const info = await module.getCompilationInfo();
+      const err = info.messages.find((m) => m.type === "error");
+      if (err) throw new Error("WGSL: " + err.message + " (line " + err.lineNum + ")");
+      pipeline = await gpu.device.createRenderPipelineAsync({
+        layout: "auto", vertex: { module, entryPoint: "pg_vs" },
+        fragment: { module, entryPoint: "pg_fs", targets: [{ format }] },
+        primitive: { topology: "triangle-list" } });
+      gpu.cache = { [key]: pipeline };      // keep one: every slider move is a new module
+    }
     const enc = gpu.device.createCommandEncoder();
-    const pass = enc.beginRenderPass({ colorAttachments: [{ view: gpu.ctx.getCurrentTexture().createView(),
-                                                            loadOp: "clear", storeOp: "store", clearValue: [0, 0, 0, 1] }] });
+    const pass = enc.beginRenderPass({ colorAttachments: [{ view, loadOp: "clear", storeOp: "store",
+                                                            clearValue: [0, 0, 0, 1] }] });
     pass.setPipeline(pipeline);
     pass.draw(3);
     pass.end();
-    gpu.device.queue.submit([enc.finish()]);
+    return enc;
   }
+  // The WebGPU view: rendered offscreen, read back and shown on a 2D canvas (the same bytes the
+  // tests compare; works in headless browsers, which may not present WebGPU canvases)
+  async function renderWebGPU() {
+    const c = $("gpuview");
+    c.width = c.height = state.size;
+    const bytes = await webgpuBytes();
+    c.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(bytes.buffer), state.size, state.size), 0, 0);
+  }
+  // RGBA bytes of the WebGPU rendering (rows from the top), as pixels() for the WebGL2 canvas
+  async function webgpuBytes() {
+    const size = state.size, row = Math.ceil(size * 4 / 256) * 256;
+    const tex = gpu.device.createTexture({ size: [size, size], format: "rgba8unorm",
+      usage: GPUTextureUsage.RENDER_ATTACHMENT | GPUTextureUsage.COPY_SRC });
+    const buf = gpu.device.createBuffer({ size: row * size, usage: GPUBufferUsage.COPY_DST | GPUBufferUsage.MAP_READ });
+    const enc = await drawWebGPU(state.variant, "rgba8unorm", tex.createView());
+    enc.copyTextureToBuffer({ texture: tex }, { buffer: buf, bytesPerRow: row }, [size, size]);
+    gpu.device.queue.submit([enc.finish()]);
+    await buf.mapAsync(GPUMapMode.READ);
+    const src = new Uint8Array(buf.getMappedRange());
+    const out = new Uint8Array(size * size * 4);
+    for (let y = 0; y < size; y++) out.set(src.subarray(y * row, y * row + size * 4), y * size * 4);
+    buf.unmap();
+    tex.destroy();
+    buf.destroy();
+    return out;
+  }
+  const base64 = (bytes) => {
+    let s = "";
+    for (let i = 0; i < bytes.length; i += 0x8000) s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+    return btoa(s);
+  };
 
   // ------------------------------------------------------------------ UI
   function decimals(p) {
@@ -769,10 +803,13 @@ void main()
       gl.readPixels(0, 0, n, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
       const out = new Uint8Array(n * h * 4);
       for (let y = 0; y < h; y++) out.set(px.subarray((h - 1 - y) * n * 4, (h - y) * n * 4), y * n * 4);
-      let s = "";
-      for (let i = 0; i < out.length; i += 0x8000) s += String.fromCharCode.apply(null, out.subarray(i, i + 0x8000));
-      return btoa(s);
+      return base64(out);
     },
+    webgpu: () => gpuReady.then(() => !!gpu),
+    webgpuPixels: () => gpuReady.then(() => {
+      if (!gpu) throw new Error("no WebGPU in this browser");
+      return webgpuBytes().then(base64);
+    }),
     copyText(target) {
       const v = state.shown || state.values;
       if (target === "bake") return bakeCommand(v);
@@ -816,7 +853,7 @@ void main()
   buildGallery();
   buildControls();
   bindToolbar();
-  initWebGPU();
+  const gpuReady = initWebGPU();
   const first = params.get("preset");
   selectPreset(PRESETS[first] ? first : (PRESETS.flagstone ? "flagstone" : SITE.presets[0].name));
 })();
