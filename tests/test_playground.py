@@ -130,7 +130,9 @@ def move_sliders(driver, name: str) -> list[str]:
     """Drag three of the preset's sliders (set the range input and fire its input event, as a
     drag does); returns the names moved."""
     v = load_recipe(name).values
-    picks = ["seed", "jitter" if v["density_map"] != "none" else "frequency"]
+    # (Blender's points have no seed: move them instead)
+    picks = ["offset_y" if v["distribution"] == "blender" else "seed",
+             "jitter" if v["density_map"] != "none" else "frequency"]
     if v["fractal"] != "none" and v["fractal"] != "min":
         picks.append("gain")
     elif v["density_map"] != "none":
@@ -219,7 +221,7 @@ def test_copied_wgsl_hlsl_godot_snippets_compile(page, tmp_path, name):
     move_sliders(page, name)
     for target in ("wgsl", "hlsl", "godot"):
         text = ok(call(page, f"window.cellglPlayground.copyText({target!r})"))
-        assert f"--target {target}" in text and "--set seed=" in text
+        assert f"--target {target}" in text and " --set seed=" in text
         if target == "godot":   # the exporter's own fragment(), as compile_snippet expects it
             text += "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
         helpers.compile_snippet(tmp_path, target, text)

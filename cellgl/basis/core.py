@@ -140,6 +140,9 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
         raise ValueError(f"points must have 2, 3 or 4 coordinates, got {dim}")
     if distribution == Distribution.WORLEY1996 and dim != 3:
         raise ValueError(f"distribution 'worley1996' is 3D only, got {dim}D points")
+    if distribution == Distribution.BLENDER and seed != 0:
+        raise ValueError(f"distribution 'blender' has no seed (Blender's node has none; offset the "
+                         f"points instead), got seed={seed!r}; accepted: 0")
     density = _number("density", density, 0.0, 16.0, lo_open=True)
     jitter = _number("jitter", jitter, 0.0, 1.0)
     min_points = _number("min_points", min_points, 0, reference.MAX_POINTS, integer=True)
@@ -245,22 +248,23 @@ def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> Ce
                           **{k: get(k, t) for k, t in tails.items()})
 
 
-def _basis_outputs(outs) -> tuple[str, ...]:
+def _basis_outputs(outs, blender: bool = False) -> tuple[str, ...]:
     """The F1..Fn outputs the search must produce for ``outs`` (the features' position and
-    colour come from the F1 offset and ID)."""
+    colour come from the F1 offset and ID; Blender's colour from the F1 cell, found from both)."""
     need = set(outs)
-    if "position" in need:
+    if "position" in need or ("color" in need and blender):
         need.add("delta")
     if "color" in need:
         need.add("id")
     return tuple(o for o in ("F", "delta", "id", "grad") if o in need) or ("F",)
 
 
-def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> tuple[dict, np.ndarray]:
+def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
+                  smooth="exp") -> tuple[dict, np.ndarray]:
     F, D, I, exact = reference.search(cells, fr, p, n)
     out = {}
     inv = 1.0 / p.scale
-    basis = _basis_outputs(outputs)
+    basis = _basis_outputs(outputs, p.distribution == Distribution.BLENDER)
     if "F" in basis:
         out["F"] = (F * inv).astype(np.float32)
     w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
@@ -271,9 +275,10 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> t
     if "grad" in basis:
         out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
     if set(outputs) & set(_features.OUTPUTS):
-        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale)
+        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale,
+                                   smooth=smooth)
         exact = feats["exact"]
-        _features.finish(out, feats, positions, p.scale, p.dim, outputs)
+        _features.finish(out, feats, positions, p.scale, p.dim, outputs, p.distribution == Distribution.BLENDER)
     return out, exact
 
 
@@ -282,13 +287,13 @@ def _gpu_finish(out: dict, outs, positions, p) -> None:
     if set(outs) & set(_features.OUTPUTS):
         raw = out.pop("features", None)
         feats = _features.unpack(raw, p.dim) if raw is not None else {}
-        _features.finish(out, feats, positions, 1.0, p.dim, outs)
+        _features.finish(out, feats, positions, 1.0, p.dim, outs, p.distribution == Distribution.BLENDER)
 
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
              min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
              stretch=None, orbit_radius=0.0, orbit_phase=0.0,
-             outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
+             outputs=("F", "delta", "id"), smoothness=0.1, smooth="exp", backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
     Parameters
@@ -332,8 +337,13 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Only these are computed and read back. ``edge`` (distance to the cell's border) and
         ``nsphere`` need the Euclidean metric; the ``smooth_*`` outputs blend every feature
         point with weight ``exp(-(F_j - F1) / smoothness)`` (see :mod:`cellgl.basis.features`).
-    smoothness : float in [0, 0.25]
-        ``k`` of smooth F1, in sample units (0: the hard minimum).
+    smoothness : float in [0, 0.25] (``smooth="exp"``) or [0, 1] (``"polynomial"``)
+        ``k`` of smooth F1, in sample units (0: the hard minimum); for ``"polynomial"`` the
+        Smoothness socket of Blender's node (its fold uses k = smoothness / 2).
+    smooth : {"exp", "polynomial"}
+        ``exp``: the log-sum-exp smooth minimum over every point (exact); ``polynomial``:
+        Blender's running polynomial smooth minimum over the 5^d block of cells around the
+        sample's, in the node's order (:func:`cellgl.basis.features.poly_smooth`).
     backend : {"gpu", "numpy"}
 
     Returns
@@ -349,30 +359,31 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
                     jitter=jitter, min_points=min_points, max_points=max_points,
                     minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map,
                     stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    smoothness = _features.check(outs, p.metric, smoothness)
+    smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts)
+        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts, smooth)
     else:
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs), smoothness * p.scale)
+        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs, p), smoothness * p.scale, smooth)
         _gpu_finish(out, outs, pts, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
-def _gpu_outputs(outs) -> tuple[str, ...]:
+def _gpu_outputs(outs, p: reference.Params) -> tuple[str, ...]:
     """What the compute shader is asked for: the basis outputs ``outs`` need, and the feature
     outputs (which become its feature record)."""
-    return _basis_outputs(outs) + tuple(o for o in outs if o in _features.OUTPUTS)
+    return (_basis_outputs(outs, p.distribution == Distribution.BLENDER)
+            + tuple(o for o in outs if o in _features.OUTPUTS))
 
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
                   period=None, density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0,
-                  outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
+                  outputs=("F", "delta", "id"), smoothness=0.1, smooth="exp", backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
     Parameters
@@ -413,7 +424,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
                     seed=seed, period=period, density_map=density_map, stretch=stretch,
                     orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    smoothness = _features.check(outs, p.metric, smoothness)
+    smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
 
     def vec(name, v, default):
@@ -436,14 +447,15 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
         raise ValueError("grid extends beyond +-2^30 cells; move origin closer to 0")
     positions = None
-    if backend == "numpy" or {"position", "smooth_position"} & set(outs):
+    if backend == "numpy" or {"position", "smooth_position"} & set(outs) \
+            or ("color" in outs and p.distribution == Distribution.BLENDER):
         axes = [org[a] + spc[a] * np.arange(shape_xyzw[a]) for a in range(dim)]
         mesh = np.meshgrid(*reversed(axes), indexing="ij")        # array order
         pts = np.stack(list(reversed(mesh)), axis=-1).reshape(-1, dim)
         positions = pts / p.scale if p.scale != 1.0 else pts
     if backend == "numpy":
         cells, fr = split(pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
+        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions, smooth)
     else:
         from cellgl.basis import gpu
 
@@ -453,8 +465,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs),
-                                     smoothness * p.scale)
+        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs, p),
+                                     smoothness * p.scale, smooth)
         _gpu_finish(out, outs, positions, p)
     return _finish(out, exact, shape, p, n, outs)
 

@@ -20,7 +20,7 @@ _CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
 _MAX_GROUPS = 65535
 
 
-def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
+def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: str = "exp") -> dict:
     """The compile-time macros of ``shaders/cellular.comp`` for these parameters."""
     d = glsl_defines()
     d.update(
@@ -41,7 +41,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_ORBIT=int(p.orbit),
         CELL_ANISO=int(p.aniso),
     )
-    d.update(_features.defines(outputs, p.dim))
+    d.update(_features.defines(outputs, p.dim, smooth))
     return d
 
 
@@ -203,7 +203,8 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
 
 
 @gl_call
-def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
+def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0,
+                  smooth: str = "exp") -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
     The shader scales them by ``p.scale`` and splits them into an integer cell
@@ -213,7 +214,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     ``"features"``, its per-sample record, to the result.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False, smooth=smooth))
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
     outputs = _buffers(outputs)
@@ -233,7 +234,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
 
 @gl_call
 def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs,
-                smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
+                smoothness: float = 0.0, smooth: str = "exp") -> tuple[dict, np.ndarray]:
     """Cellular basis on a regular grid generated on the GPU.
 
     shape_xyzw: samples along x, y, z, w (unused axes 1); origin split into
@@ -241,7 +242,7 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     Returns flat arrays in x-fastest order, as :func:`search_points`.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True, smooth=smooth))
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
     outputs = _buffers(outputs)

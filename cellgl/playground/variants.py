@@ -17,6 +17,7 @@ from dataclasses import replace
 
 from cellgl.export.snippets import ExportError, export, export_program, texture_program
 from cellgl.recipes import load_recipe
+from cellgl.texture.params import PARAMS_BY_NAME
 
 __all__ = ["KEY_MACROS", "variant_key", "variant_id", "neighbours", "variant_texts", "PROBE_ENTRY"]
 
@@ -57,10 +58,10 @@ def _tries(r):
     """Recipes one compile-time choice away from ``r`` (some may be refused)."""
     v = r.values
     out = []
-    for m in ("euclidean", "manhattan", "chebyshev", "minkowski"):
+    for m in PARAMS_BY_NAME["metric"].choices:
         out.append(dict(metric=m))
-    for d in ("poisson", "jitter", "worley1996"):
-        out.append(dict(distribution=d))
+    for d in PARAMS_BY_NAME["distribution"].choices:
+        out.append(dict(distribution=d, seed=0) if d == "blender" else dict(distribution=d))
     out.append(dict(tileable=not v["tileable"]))
     for n in range(1, 5):               # n = 1..4: zero the coefficients past n, make c_n count
         ch = {f"c{i}": 0.0 for i in range(n + 1, 9)}
@@ -71,6 +72,8 @@ def _tries(r):
     for c in ("c_edge", "c_nsphere"):
         out.append({c: 0.0 if v[c] != 0.0 else 0.5})
     out.append(dict(smoothness=0.0) if v["smoothness"] > 0 else dict(smoothness=0.05, c_smooth=v["c_smooth"] or 0.5))
+    if v["smoothness"] > 0 and v["smoothness"] <= 0.25:
+        out.append(dict(smooth="polynomial" if v["smooth"] == "exp" else "exp"))
     out.append(dict(orbit_radius=0.0 if v["orbit_radius"] > 0 else 0.25))
     aniso = any(v[f"stretch_{a}"] != 1.0 for a in "xyz")
     out.append(dict(stretch_x=1.0, stretch_y=1.0, stretch_z=1.0) if aniso else dict(stretch_x=2.0))

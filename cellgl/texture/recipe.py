@@ -464,6 +464,14 @@ def _check(r: Recipe) -> None:
     if v["distribution"] == "worley1996" and v["dimension"] != 3:
         raise RecipeError(f"basis.distribution: 'worley1996' needs basis.dimension 3, got "
                           f"{v['dimension']}; accepted: poisson, jitter for dimension 2 and 4")
+    if v["distribution"] == "blender" and v["seed"] != 0:
+        raise RecipeError(f"basis.seed: {v['seed']!r} with basis.distribution 'blender' (Blender's points "
+                          "have no seed; move the texture with domain.offset_x/offset_y instead); "
+                          "accepted: seed 0")
+    if v["smooth"] == "exp" and v["smoothness"] > 0.25:
+        raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
+                          "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "
+                          "'polynomial' for up to 1")
     if not v["range_hi"] > v["range_lo"]:
         raise RecipeError(f"combination.range_hi: {v['range_hi']} must exceed combination.range_lo "
                           f"({v['range_lo']})")

@@ -56,7 +56,7 @@
   // cellgl.texture.antialias.feature_frequency
   function featureFrequency(v) {
     let density = v.density;
-    if (v.distribution === "jitter") density = 1;
+    if (v.distribution === "jitter" || v.distribution === "blender") density = 1;
     else if (v.distribution === "worley1996") density = 2.5;
     else if (v.density_map !== "none") density = v.density_max;
     const scale = v.distribution === "worley1996" ? C.w96 : 1;
@@ -117,7 +117,7 @@
       CELL_MAX_RING: Math.min(64, { 2: 8, 3: 5, 4: 3 }[v.dimension] * Math.ceil(ratio - 1e-9)),
       CELL_PERIODIC: v.tileable ? 1 : 0, CELL_DENSITY_MAP: dmap, CELL_ORBIT: v.orbit_radius > 0 ? 1 : 0,
       CELL_ANISO: as.some((x) => x !== 1) ? 1 : 0, CELL_EDGE: v.c_edge !== 0 ? 1 : 0,
-      CELL_SMOOTH: v.smoothness > 0 && (v.c_smooth !== 0 || v.cell_mix !== 0) ? 1 : 0,
+      CELL_SMOOTH: v.smoothness > 0 && (v.c_smooth !== 0 || v.cell_mix !== 0) ? (v.smooth === "polynomial" ? 2 : 1) : 0,
       CELL_NSPHERE: v.c_nsphere !== 0 ? 1 : 0, CELL_TEX_CELL_IMAGE: v.cell_color === "image" ? 1 : 0,
     };
     return SITE.key_macros.map((k) => k + "=" + d[k]).join(",");
@@ -153,6 +153,8 @@
     if (v.distribution === "worley1996" && v.dimension !== 3) out.push("worley1996 needs dimension 3");
     if (!(v.range_hi > v.range_lo)) out.push("range_hi must exceed range_lo");
     if (!(v.level_hi > v.level_lo)) out.push("level_hi must exceed level_lo");
+    if (v.distribution === "blender" && v.seed !== 0) out.push("blender points have no seed (seed 0)");
+    if (v.smooth === "exp" && v.smoothness > 0.25) out.push("smoothness above 0.25 needs smooth polynomial");
     if (v.ramp_mode === "spline" && ramp.length < 4) out.push("spline ramp_mode needs at least 4 ramp keys");
     ["c_edge", "c_nsphere"].forEach((t) => {
       if (v[t] !== 0 && v.metric !== "euclidean") out.push(t + " needs metric euclidean");
