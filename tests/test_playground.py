@@ -355,3 +355,29 @@ def test_webgpu_renders_the_copied_wgsl_as_the_bake(page, tmp_path, name):
     assert page.find_element("id", "gpuview").is_displayed()
     page.find_element("css selector", "#renderer button[data-r=webgl2]").click()
     ok(call(page, "window.cellglPlayground.idle()"))
+
+
+def test_site_files_and_refusals(tmp_path):
+    """Without a browser: the site a recipe file gives (its commands name the file), every
+    preset's variant file present, and a clear error when no preset can be shown."""
+    import json
+
+    from cellgl.cli import main
+    from cellgl.playground import build_site
+
+    recipe = tmp_path / "my recipe.json"
+    load_recipe("f2").replace(frequency=5.0).save(recipe)
+    out = tmp_path / "site"
+    res = build_site(out, [str(recipe), "hull"], thumbs=False, neighbours=False)
+    assert res["presets"] == ["f2", "hull"] and res["variants"] == 2
+    text = (out / "data" / "site.js").read_text()
+    site = json.loads(text[text.index("(") + 1:text.rindex(")")])
+    assert [p["source"] for p in site["presets"]] == [str(recipe), "hull"]
+    assert site["presets"][0]["values"]["frequency"] == 5.0
+    for p in site["presets"]:
+        assert (out / "variants" / f"{p['variant']}.js").is_file()
+    for f in ("index.html", "playground.js", "playground.css"):
+        assert (out / f).stat().st_size > 1000
+    with pytest.raises(ValueError, match="no preset to show: pups-cow: PUPs"):
+        build_site(tmp_path / "none", ["pups-cow"])
+    assert main(["playground", "-o", str(tmp_path / "none"), "--preset", "stained-glass", "-q"]) == 2

@@ -94,13 +94,13 @@ def _mean_points() -> dict:
     return out
 
 
-def _preset_entry(r, thumbs: bool) -> dict:
+def _preset_entry(r, source: str, thumbs: bool) -> dict:
     prog = V.texture_program(r, uniforms=True)
     vals = {k: v for k, v in r.values.items()}
     fixed = {}
     if r.values["density_map"] != "none":
         fixed = {n: v for _, n, v in prog.uniforms if n.startswith("density_")}
-    return {"name": r.name, "doc": r.doc, "values": vals, "ramp": [list(k) for k in r.ramp],
+    return {"name": r.name, "source": source, "doc": r.doc, "values": vals, "ramp": [list(k) for k in r.ramp],
             "variant": V.variant_id(V.variant_key(prog.defines)), "fixed_uniforms": fixed,
             "octave_mean": float(dict((n, v) for _, n, v in prog.uniforms)["octave_mean"]),
             "thumb": _thumb(r) if thumbs else None}
@@ -117,7 +117,8 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     ----------
     out_dir : str or path
     presets : list of str, optional
-        Preset names (default: every cellular preset; PUPs presets are not exportable).
+        Preset names or recipe JSON files (default: every cellular preset; PUPs presets are not
+        exportable). The page's commands name them as given.
     thumbs : bool
         Render a thumbnail of each preset.
     neighbours : bool
@@ -142,9 +143,12 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
             refused[name] = why.split(": ", 1)[-1].split(";")[0]
             continue
         recipes[name] = r
-        entries.append(_preset_entry(r, thumbs))
+        entries.append(_preset_entry(r, str(name), thumbs))
         if log:
             log(f"preset {name}")
+    if not entries:
+        raise ValueError("no preset to show: " + "; ".join(f"{n}: {why}" for n, why in refused.items())
+                         + " (accepted: cellular texture presets, `cellgl presets`)")
     todo = {}
     for r in recipes.values():
         for n in (V.neighbours(r) if neighbours else [r]):
@@ -193,7 +197,7 @@ def add_parser(sub):
         "views and buttons that copy the snippet or the `cellgl bake` command. See docs/playground.md.")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory to write (created)")
     p.add_argument("--preset", dest="presets", action="append", default=None, metavar="NAME",
-                   help="only these presets (repeatable; default: all)")
+                   help="only these presets or recipe .json files (repeatable; default: every preset)")
     p.add_argument("--no-thumbnails", action="store_true", help="skip rendering the preset thumbnails")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
     return p

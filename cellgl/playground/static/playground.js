@@ -486,9 +486,10 @@ void main()
   }
   function header(target, v) {
     const sets = setList(v).map((s) => " --set " + s).join("");
+    const source = PRESETS[state.preset].source || state.preset;
     return `// cellgl ${SITE.version} playground: '${state.preset}'${sets ? " with" + sets : ""}.\n` +
-      `// The same pixels as \`cellgl bake ${state.preset}${sets}\`; the exporter's own version (with the\n` +
-      `// recipe in its header): \`cellgl export ${state.preset} --target ${target}${sets}\`.\n` +
+      `// The same pixels as \`cellgl bake ${source}${sets}\`; the exporter's own version (with the\n` +
+      `// recipe in its header): \`cellgl export ${source} --target ${target}${sets}\`.\n` +
       `// Entry points: cellgl_texture(uv) (fragment shaders) and cellgl_texture_filtered(uv, duv);\n` +
       `// uv in [0, 1]^2, v = 0 the top row; duv the pixel's size in uv.\n\n`;
   }
@@ -514,8 +515,9 @@ void main()
   }
   function bakeCommand(v) {
     const sz = state.size;
-    const quote = (s) => (/^[\w.,=:+-]+$/.test(s) ? s : "'" + s.replace(/'/g, "'\\''") + "'");
-    return ["cellgl", "bake", state.preset, "-o", state.preset + ".png", "--size", sz + "x" + sz]
+    const quote = (s) => (/^[\w.,=:+\/-]+$/.test(s) ? s : "'" + s.replace(/'/g, "'\\''") + "'");
+    const source = PRESETS[state.preset].source || state.preset;
+    return ["cellgl", "bake", quote(source), "-o", state.preset + ".png", "--size", sz + "x" + sz]
       .concat(...setList(v).map((s) => ["--set", quote(s)])).join(" ");
   }
   let codeTarget = "gles";
