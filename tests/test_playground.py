@@ -269,7 +269,8 @@ def test_screenshot(page, tmp_path):
     from PIL import Image
 
     page.set_window_size(1400, 900)
-    page.get(page.current_url.split("?")[0] + "?size=256&preset=flagstone")
+    url = page.current_url.split("?")[0]
+    page.get(url + "?size=256&preset=flagstone")
     ok(call(page, "window.cellglPlayground.idle()"))
     ok(call(page, """(() => { const el = document.getElementById("p-frequency");
         el.value = "6"; el.dispatchEvent(new Event("input", {bubbles: true}));
@@ -284,6 +285,8 @@ def test_screenshot(page, tmp_path):
     if os.environ.get("CELLGL_UPDATE_DOCS") == "1":
         img.resize((img.size[0] * 3 // 4, img.size[1] * 3 // 4), Image.LANCZOS).quantize(128).save(doc, optimize=True)
     assert doc.is_file() and doc.stat().st_size < 400_000
+    page.get(url + f"?size={SIZE}")        # as the other tests expect it
+    ok(call(page, "window.cellglPlayground.idle()"))
 
 
 def test_page_warns_where_the_recipe_check_refuses(page):
