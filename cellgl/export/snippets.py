@@ -68,6 +68,10 @@ TARGETS: dict[str, Target] = {t.name: t for t in (
            "cellgl_texture3, if present) uses fwidth, so it works only in fragment shaders; in compute "
            "or vertex shaders call cellgl_texture_filtered(uv, duv) and delete the file from the "
            "comment 'Fragment (pixel) shaders only' to the end."),
+    Target("osl", "osl", "Open Shading Language (Blender Cycles, Arnold, RenderMan, Houdini)", ".osl",
+           "Save as cellgl_<name>.osl and load it as a shader (Blender: Script node, Cycles with Open "
+           "Shading Language on; docs/engines.md): Vector in, Color, Fac, F1..F4, Value, CellColor, "
+           "CellValue, IDLow/IDHigh and a bump Normal out."),
 )}
 
 #: target names that are refused, with the reason
@@ -143,15 +147,22 @@ def library_code(prog: Program) -> str:
 _CODE_CACHE: dict = {}
 
 
-def _library_code(prog: Program) -> str:
+def specialised_code(prog: Program) -> str:
+    """The library of ``prog`` with its compile-time choices resolved and names prefixed, its
+    run-time values still the loader's named constants (the OSL target turns those into shader
+    parameters, so it takes this code, not a constant-folded one)."""
     src = glsl.resolve_library(prog.files)
     text = src.text + "\n" + prog.params + "\n" + prog.entry
     text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
     text = translate.specialise(text, prog.defines, name="snippet")
     text, _ = translate.prefix_names(text, overrides=_OVERRIDES)
+    return _tidy(text)
+
+
+def _library_code(prog: Program) -> str:
     entries = prog.entries or [n for n in ENTRY_POINTS
                                if re.search(rf"\b{n}\s*\(", prog.entry.replace("cell_", "cellgl_"))]
-    text = compiler.compile_glsl(text, entries, structs=_CONSTANT_STRUCTS)
+    text = compiler.compile_glsl(specialised_code(prog), entries, structs=_CONSTANT_STRUCTS)
     return _tidy(text)
 
 
@@ -189,6 +200,10 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
         entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp): the same for a pixel spanning dp; any stage")
     entry = [_signature(e, target.dialect) for e in entry]
     command = prog.command or f"cellgl export {prog.title}"
+    if target.dialect == "osl":
+        entry = [f"shader cellgl_{prog.title}(point Vector, <the recipe's values>, output color Color, "
+                 "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
+                 "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
     lines = [
         f"cellgl {__version__}: {prog.kind} '{prog.title}' for {target.title}; exact (the same values as "
         + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + ").",
@@ -259,7 +274,7 @@ def _fmt_value(v) -> str:
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`)."""
     tgt = check_target(target)
-    code = library_code(prog)
+    code = library_code(prog) if tgt.dialect != "osl" else specialised_code(prog)
     head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
     if d == "glsl":
@@ -276,6 +291,10 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
             body = "#pragma once\n\n" + body
     elif d == "wgsl":
         body = translate.to_wgsl(code)
+    elif d == "osl":
+        from cellgl.export.osl import osl_shader
+
+        body = osl_shader(prog, code)
     else:  # pragma: no cover
         raise AssertionError(d)
     return head + "\n" + body
@@ -341,6 +360,9 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
         Unknown or refused target, or a recipe the target cannot express.
     """
     tgt = check_target(target)
+    if uniforms and tgt.dialect == "osl":
+        raise ExportError("--uniforms is not supported for OSL: the shader's parameters are already "
+                          "its run-time values; export OSL with constants")
     if uniforms and tgt.dialect == "wgsl":
         raise ExportError("--uniforms is not supported for WGSL (uniforms need a bind group "
                           "layout of your renderer); export WGSL with constants")
