@@ -175,11 +175,12 @@ def main() -> int:
     ap.add_argument("--size", type=int, default=1024, help="image side (samples = size^2)")
     ap.add_argument("--repeats", type=int, default=5, help="interleaved rounds (median reported)")
     ap.add_argument("--dims", type=int, nargs="+", default=[2, 3], choices=(2, 3))
-    ap.add_argument("--only", default="", help="only the cases whose label contains this")
+    ap.add_argument("--only", nargs="+", default=[""], metavar="TEXT",
+                    help="only the cases whose label contains one of these (e.g. '2D distance')")
     ap.add_argument("--quick", action="store_true", help="fewer smoothness values")
     ap.add_argument("--blender-python", default=os.environ.get("CELLGL_BLENDER_PYTHON", sys.executable))
     a = ap.parse_args()
-    todo = [c for c in cases(a.dims, a.quick) if a.only in c[0]]
+    todo = [c for c in cases(a.dims, a.quick) if any(o in c[0] for o in a.only)]
     samples = a.size * a.size
     load0 = os.getloadavg()
     blender = Blender(a.blender_python, a.size)
