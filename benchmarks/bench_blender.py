@@ -35,6 +35,7 @@ if _REPO not in sys.path:
     sys.path.insert(0, _REPO)
 
 SCALE = 16.0       # the node's Scale: cells per unit; the plane spans [-1, 1]^2, 32 cells across
+PAUSE = 0.3        # seconds of quiet before each timed call
 Z = 0.37           # the plane's height (3D): z * SCALE is not a cell border
 
 # The Blender worker: reads one JSON case per line, renders it, prints the seconds.
@@ -192,8 +193,13 @@ def main() -> int:
         for rnd in range(a.repeats):
             for label, bcase, _ in todo:
                 t = times[label]
+                # A pause before each timed call: the other side's worker threads (Cycles' task
+                # pool spins a while after a render) must not eat into it.
+                time.sleep(PAUSE)
                 t["const"].append(blender.render({"feature": "CONST"}))
+                time.sleep(PAUSE)
                 t["blender"].append(blender.render(bcase))
+                time.sleep(PAUSE)
                 t0 = time.perf_counter()
                 calls[label]()
                 t["cellgl"].append(time.perf_counter() - t0)
