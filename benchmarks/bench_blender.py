@@ -35,7 +35,7 @@ if _REPO not in sys.path:
     sys.path.insert(0, _REPO)
 
 SCALE = 16.0       # the node's Scale: cells per unit; the plane spans [-1, 1]^2, 32 cells across
-PAUSE = 0.3        # seconds of quiet before each timed call
+PAUSE = 0.2        # seconds of quiet before each timed call
 Z = 0.37           # the plane's height (3D): z * SCALE is not a cell border
 
 # The Blender worker: reads one JSON case per line, renders it, prints the seconds.
@@ -129,6 +129,28 @@ class Blender:
             except (ValueError, TypeError):
                 continue          # Blender's own output
 
+    def wait_idle(self, timeout: float = 5.0) -> None:
+        """Return once the worker has used no CPU for a while (Cycles frees its session and its
+        threads spin after the render call returned): its leftovers must not slow the next
+        timed call, ours or its own."""
+        path = f"/proc/{self.proc.pid}/stat"
+        if not os.path.exists(path):
+            time.sleep(PAUSE)
+            return
+
+        def cpu():
+            with open(path) as fh:
+                fields = fh.read().rsplit(")", 1)[1].split()
+            return int(fields[11]) + int(fields[12])          # utime + stime, clock ticks
+
+        end = time.monotonic() + timeout
+        last, still = cpu(), 0
+        while time.monotonic() < end and still < 3:
+            time.sleep(0.05)
+            now = cpu()
+            still = still + 1 if now == last else 0
+            last = now
+
     def close(self):
         self.proc.stdin.close()
         self.proc.wait()
@@ -197,8 +219,9 @@ def main() -> int:
                 # pool spins a while after a render) must not eat into it.
                 time.sleep(PAUSE)
                 t["const"].append(blender.render({"feature": "CONST"}))
-                time.sleep(PAUSE)
+                blender.wait_idle()
                 t["blender"].append(blender.render(bcase))
+                blender.wait_idle()
                 time.sleep(PAUSE)
                 t0 = time.perf_counter()
                 calls[label]()
