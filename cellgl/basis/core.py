@@ -277,6 +277,61 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> t
     return out, exact
 
 
+def _gpu_passes(run, outs, N: int) -> tuple[dict, np.ndarray]:
+    """The GPU dispatches for ``outs``: one for the basis outputs (F, delta, id, grad, and what
+    position and colour need), then one per feature walk (edge, n-sphere, smooth), each with the
+    whole loop budget (``CELL_LOOP_BUDGET``) to itself. So a sample gets the same bits, and the
+    same exact flag, whatever else was asked with it. ``run(outputs)`` dispatches one pass and
+    returns ``({name: array}, exact)``; the walks' records are merged into ``"features"``."""
+    fams = _features.flags(outs)
+    out, exact = {}, np.ones(N, dtype=bool)
+    if set(outs) & {"F", "delta", "id", "grad", "position", "color"} or not any(fams.values()):
+        out, exact = run(_basis_outputs(outs))
+        exact = exact.copy()
+    if any(fams.values()):
+        record = np.zeros((N, _features.STRIDE), dtype=np.float32)
+        for fam, on in fams.items():
+            if on:
+                got, ok = run(tuple(o for o in outs if o in _features.FAMILIES[fam]))
+                cols = _features.COLUMNS[fam]
+                record[:, cols] = got["features"][:, cols]
+                exact &= ok
+        out["features"] = record
+    return out, exact
+
+
+#: the fallback searches at most this many samples at once (memory of the vectorised reference)
+_FALLBACK_CHUNK = 1 << 16
+
+
+def _fallback(out: dict, exact: np.ndarray, where, p, n, outs, smoothness) -> np.ndarray:
+    """Search the samples the GPU flagged inexact (its loop budget or ring cap reached) again with
+    the NumPy reference, which has no loop budget and goes up to
+    :func:`cellgl.basis.reference.max_ring_default` rings, and put its answer in their place in
+    ``out`` (finished outputs, flat sample axis). ``where(rows)`` gives the rows' (cells,
+    fractions, positions). Returns the new exact flags; a sample still inexact (points too sparse
+    for every ring the reference searches) stays flagged, with a warning."""
+    rows_all = np.nonzero(~exact)[0]
+    exact = exact.copy()
+    for first in range(0, len(rows_all), _FALLBACK_CHUNK):
+        rows = rows_all[first:first + _FALLBACK_CHUNK]
+        cells, fr, positions = where(rows)
+        ref_out, ok = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
+        for name, arr in ref_out.items():
+            if name in out:
+                out[name][rows] = arr
+        exact[rows] = ok
+    left = int((~exact).sum())
+    if left:
+        import warnings
+
+        warnings.warn(f"{left} of {exact.size} samples could not be computed exactly (their nearest "
+                      f"feature points lie beyond {reference.max_ring_default(p.dim, p.axis_scale)} "
+                      "rings of cells: the points are too sparse, raise density or min_points); "
+                      "they are flagged False in .exact", RuntimeWarning, stacklevel=3)
+    return exact
+
+
 def _gpu_finish(out: dict, outs, positions, p) -> None:
     """Turn the GPU's feature record into the requested feature outputs."""
     if set(outs) & set(_features.OUTPUTS):
@@ -358,8 +413,14 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs), smoothness * p.scale)
+        out, exact = _gpu_passes(lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale),
+                                 outs, len(pts))
         _gpu_finish(out, outs, pts, p)
+        if not exact.all():
+            def where(rows):
+                cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])
+                return cells, fr, pts[rows]
+            exact = _fallback(out, exact, where, p, n, outs, smoothness)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
@@ -453,9 +514,21 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs),
-                                     smoothness * p.scale)
+        out, exact = _gpu_passes(lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o,
+                                                           smoothness * p.scale), outs, total)
         _gpu_finish(out, outs, positions, p)
+        if not exact.all():
+            def where(rows):
+                # sample index -> position, as the shader computes it (cellular.comp, CELL_GRID)
+                idx = np.stack(np.unravel_index(rows, shape_xyzw[::-1])[::-1], axis=1).astype(np.float64)
+                pos = ofrac[:dim] + sp4[:dim] * idx[:, :dim]
+                fl = np.floor(pos)
+                cells = np.zeros((len(rows), 4), dtype=np.int64)
+                cells[:, :dim] = ocell[:dim] + fl.astype(np.int64)
+                fr = np.zeros((len(rows), 4))
+                fr[:, :dim] = pos - fl
+                return cells, fr, None if positions is None else positions[rows]
+            exact = _fallback(out, exact, where, p, n, outs, smoothness)
     return _finish(out, exact, shape, p, n, outs)
 
 

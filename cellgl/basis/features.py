@@ -36,8 +36,16 @@ BIG = ref.BIG
 
 
 def feature_max_ring(dim: int) -> int:
-    """CELL_FEATURE_MAX_RING: rings a feature walk may visit before it reports inexact."""
-    return {2: 12, 3: 8, 4: 5}[dim]
+    """CELL_FEATURE_MAX_RING: rings a feature walk may visit before it reports inexact (on the GPU
+    the loop budget, ``CELL_LOOP_BUDGET``, usually stops it first; docs/exactness.md)."""
+    return {2: 24, 3: 12, 4: 7}[dim]
+
+
+#: the walks, each run in a pass of its own on the GPU, and the outputs each serves
+FAMILIES = {"edge": ("edge", "edge_grad"), "nsphere": ("nsphere",),
+            "smooth": ("smooth_F1", "smooth_position", "smooth_grad", "smooth_color")}
+#: the columns of the GPU's feature record (:func:`unpack`) each walk writes
+COLUMNS = {"edge": [0, 4, 5, 6, 7], "nsphere": [1], "smooth": [2] + list(range(8, 20))}
 
 
 def flags(outputs) -> dict:
