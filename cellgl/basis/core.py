@@ -321,15 +321,20 @@ def _fallback(out: dict, exact: np.ndarray, where, p, n, outs, smoothness) -> np
             if name in out:
                 out[name][rows] = arr
         exact[rows] = ok
-    left = int((~exact).sum())
+    return exact
+
+
+def _warn_inexact(exact: np.ndarray, p) -> None:
+    """The one thing the library cannot fix by searching further: a warning naming the limit."""
+    left = int(np.size(exact) - np.count_nonzero(exact))
     if left:
         import warnings
 
-        warnings.warn(f"{left} of {exact.size} samples could not be computed exactly (their nearest "
-                      f"feature points lie beyond {reference.max_ring_default(p.dim, p.axis_scale)} "
-                      "rings of cells: the points are too sparse, raise density or min_points); "
-                      "they are flagged False in .exact", RuntimeWarning, stacklevel=3)
-    return exact
+        warnings.warn(f"{left} of {np.size(exact)} samples could not be computed exactly: their nearest "
+                      f"feature points may lie beyond {reference.max_ring_default(p.dim, p.axis_scale)} "
+                      "rings of cells, the most the search visits (points too sparse: raise density "
+                      "or min_points; minkowski_p below 1 also reaches far). They are flagged False in "
+                      ".exact (docs/exactness.md)", RuntimeWarning, stacklevel=3)
 
 
 def _gpu_finish(out: dict, outs, positions, p) -> None:
@@ -409,6 +414,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts)
+        _warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
@@ -421,6 +427,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
                 cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])
                 return cells, fr, pts[rows]
             exact = _fallback(out, exact, where, p, n, outs, smoothness)
+            _warn_inexact(exact, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
@@ -505,6 +512,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     if backend == "numpy":
         cells, fr = split(pts)
         out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
+        _warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
@@ -529,6 +537,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                 fr[:, :dim] = pos - fl
                 return cells, fr, None if positions is None else positions[rows]
             exact = _fallback(out, exact, where, p, n, outs, smoothness)
+            _warn_inexact(exact, p)
     return _finish(out, exact, shape, p, n, outs)
 
 
