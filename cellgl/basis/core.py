@@ -277,17 +277,21 @@ def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> t
     return out, exact
 
 
-def _gpu_passes(run, outs, N: int) -> tuple[dict, np.ndarray]:
+_BASIS_NAMES = ("F", "delta", "id", "grad", "position", "color")
+
+
+def _gpu_passes(run, outs, N: int) -> tuple[dict, list]:
     """The GPU dispatches for ``outs``: one for the basis outputs (F, delta, id, grad, and what
     position and colour need), then one per feature walk (edge, n-sphere, smooth), each with the
     whole loop budget (``CELL_LOOP_BUDGET``) to itself. So a sample gets the same bits, and the
     same exact flag, whatever else was asked with it. ``run(outputs)`` dispatches one pass and
-    returns ``({name: array}, exact)``; the walks' records are merged into ``"features"``."""
+    returns ``({name: array}, exact)``; the walks' records are merged into ``"features"``.
+    Returns the outputs and, per pass, (the output names it serves, its exact flags)."""
     fams = _features.flags(outs)
-    out, exact = {}, np.ones(N, dtype=bool)
-    if set(outs) & {"F", "delta", "id", "grad", "position", "color"} or not any(fams.values()):
+    out, passes = {}, []
+    if set(outs) & set(_BASIS_NAMES) or not any(fams.values()):
         out, exact = run(_basis_outputs(outs))
-        exact = exact.copy()
+        passes.append((_BASIS_NAMES, exact))
     if any(fams.values()):
         record = np.zeros((N, _features.STRIDE), dtype=np.float32)
         for fam, on in fams.items():
@@ -295,32 +299,37 @@ def _gpu_passes(run, outs, N: int) -> tuple[dict, np.ndarray]:
                 got, ok = run(tuple(o for o in outs if o in _features.FAMILIES[fam]))
                 cols = _features.COLUMNS[fam]
                 record[:, cols] = got["features"][:, cols]
-                exact &= ok
+                passes.append((_features.FAMILIES[fam], ok))
         out["features"] = record
-    return out, exact
+    return out, passes
 
 
 #: the fallback searches at most this many samples at once (memory of the vectorised reference)
 _FALLBACK_CHUNK = 1 << 16
 
 
-def _fallback(out: dict, exact: np.ndarray, where, p, n, outs, smoothness) -> np.ndarray:
-    """Search the samples the GPU flagged inexact (its loop budget or ring cap reached) again with
-    the NumPy reference, which has no loop budget and goes up to
-    :func:`cellgl.basis.reference.max_ring_default` rings, and put its answer in their place in
-    ``out`` (finished outputs, flat sample axis). ``where(rows)`` gives the rows' (cells,
-    fractions, positions). Returns the new exact flags; a sample still inexact (points too sparse
-    for every ring the reference searches) stays flagged, with a warning."""
-    rows_all = np.nonzero(~exact)[0]
-    exact = exact.copy()
-    for first in range(0, len(rows_all), _FALLBACK_CHUNK):
-        rows = rows_all[first:first + _FALLBACK_CHUNK]
-        cells, fr, positions = where(rows)
-        ref_out, ok = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
-        for name, arr in ref_out.items():
-            if name in out:
-                out[name][rows] = arr
-        exact[rows] = ok
+def _fallback(out: dict, passes: list, where, p, n, outs, smoothness) -> np.ndarray:
+    """Search the samples a GPU pass flagged inexact (its loop budget, the driver's limit or the
+    ring cap reached) again with the NumPy reference, which has no loop budget and goes up to
+    :func:`cellgl.basis.reference.max_ring_default` rings, and put its answer for that pass's
+    outputs only in their place in ``out`` (finished outputs, flat sample axis): the other passes'
+    bits stay the GPU's. ``where(rows)`` gives the rows' (cells, fractions, positions). Returns the
+    exact flags; a sample still inexact (points too sparse for every ring the reference searches)
+    stays flagged."""
+    exact = np.ones(len(passes[0][1]), dtype=bool)
+    for names, ok in passes:
+        ok = ok.copy()
+        rows_all = np.nonzero(~ok)[0]
+        pass_outs = tuple(o for o in outs if o in names)
+        for first in range(0, len(rows_all), _FALLBACK_CHUNK):
+            rows = rows_all[first:first + _FALLBACK_CHUNK]
+            cells, fr, positions = where(rows)
+            ref_out, ok_rows = _numpy_search(cells, fr, p, n, pass_outs or ("F",), smoothness, positions)
+            for name, arr in ref_out.items():
+                if name in out and name in names:
+                    out[name][rows] = arr
+            ok[rows] = ok_rows
+        exact &= ok
     return exact
 
 
@@ -419,14 +428,15 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _gpu_passes(lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale),
-                                 outs, len(pts))
+        out, passes = _gpu_passes(lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale),
+                                  outs, len(pts))
         _gpu_finish(out, outs, pts, p)
+        exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():
             def where(rows):
                 cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])
                 return cells, fr, pts[rows]
-            exact = _fallback(out, exact, where, p, n, outs, smoothness)
+            exact = _fallback(out, passes, where, p, n, outs, smoothness)
             _warn_inexact(exact, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
@@ -522,9 +532,10 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, exact = _gpu_passes(lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o,
-                                                           smoothness * p.scale), outs, total)
+        out, passes = _gpu_passes(lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o,
+                                                            smoothness * p.scale), outs, total)
         _gpu_finish(out, outs, positions, p)
+        exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():
             def where(rows):
                 # sample index -> position, as the shader computes it (cellular.comp, CELL_GRID)
@@ -536,7 +547,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                 fr = np.zeros((len(rows), 4))
                 fr[:, :dim] = pos - fl
                 return cells, fr, None if positions is None else positions[rows]
-            exact = _fallback(out, exact, where, p, n, outs, smoothness)
+            exact = _fallback(out, passes, where, p, n, outs, smoothness)
             _warn_inexact(exact, p)
     return _finish(out, exact, shape, p, n, outs)
 

@@ -42,10 +42,11 @@
 #include "points.glsl"
 
 #ifndef CELL_LOOP_BUDGET
-// 4096 per invocation: 8 invocations of one llvmpipe SIMD vector (AVX2) then
-// spend at most 32768 of its 65535 together, the rest is margin for the
-// caller's own loops.
-#define CELL_LOOP_BUDGET 4096
+// 6144 per invocation: the 8 invocations of one llvmpipe SIMD vector (AVX2)
+// then spend at most 49152 of its 65535 together, the rest is margin for the
+// caller's own loops. Measured in docs/exactness.md; a search needing more is
+// flagged (cellgl recomputes it with the NumPy reference).
+#define CELL_LOOP_BUDGET 6144
 #endif
 // The most one step of a search loop can spend: one pass of a window loop and
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
