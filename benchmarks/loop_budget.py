@@ -9,11 +9,13 @@ limiter took for one SIMD vector of invocations (``driver``, limit 65535) and th
 the GPU flagged (recomputed by the NumPy reference before they reach the user).
 
     python benchmarks/loop_budget.py [--samples 1024] [--quick]
+    python benchmarks/loop_budget.py --fallback     # what the NumPy fallback costs
 """
 from __future__ import annotations
 
 import argparse
 import itertools
+import time
 
 import numpy as np
 
@@ -59,11 +61,40 @@ def _outputs(label: str):
     return ("F", "delta", "id", "grad")
 
 
+def fallback_cost(samples: int) -> None:
+    """Seconds per call of :func:`cellgl.cellular` where the GPU serves every sample, where the
+    fallback recomputes every sample (4D smooth F1 at the largest smoothness: no invocation can
+    finish it inside llvmpipe's limit), and the NumPy backend for the same request."""
+    import cellgl
+
+    rng = np.random.default_rng(3)
+    print(f"{'case':<34} {'samples':>7} {'gpu s':>7} {'flagged':>8} {'numpy s':>8}")
+    for dim, label, kw in [(4, "smooth_F1 k=0.25 (4D)", dict(outputs=("smooth_F1",), smoothness=SMOOTHNESS_MAX)),
+                           (3, "smooth_F1 k=0.25 (3D)", dict(outputs=("smooth_F1",), smoothness=SMOOTHNESS_MAX)),
+                           (4, "F1..F4 (4D)", dict(outputs=("F",)))]:
+        pts = rng.uniform(-50, 50, (samples, dim))
+        p = core.make_params(dim)
+        cellgl.cellular(pts[:64], 4 if label.startswith("F") else 1, **kw)     # compile
+        _, _, flagged = gpu.loop_probe(pts[: min(samples, 4096)], p, 1, core._gpu_outputs(kw["outputs"]),
+                                       kw.get("smoothness", 0.0))
+        t = time.perf_counter()
+        cellgl.cellular(pts, 4 if label.startswith("F") else 1, **kw)
+        tg = time.perf_counter() - t
+        t = time.perf_counter()
+        cellgl.cellular(pts, 4 if label.startswith("F") else 1, backend="numpy", **kw)
+        tn = time.perf_counter() - t
+        print(f"{label:<34} {samples:>7} {tg:>7.2f} {flagged.mean():>8.1%} {tn:>8.2f}", flush=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=1024)
     ap.add_argument("--quick", action="store_true", help="n in (1, 8) only")
+    ap.add_argument("--fallback", action="store_true", help="time the NumPy fallback instead")
     args = ap.parse_args(argv)
+    if args.fallback:
+        fallback_cost(args.samples)
+        return 0
     rng = np.random.default_rng(7)
     print(f"{'dim':>3} {'points':<22} {'metric':<10} {'n':>2} {'pass':<28} {'own':>5} {'driver':>6} {'flagged':>8}")
     worst = {}
