@@ -10,6 +10,7 @@ the GPU flagged (recomputed by the NumPy reference before they reach the user).
 
     python benchmarks/loop_budget.py [--samples 1024] [--quick]
     python benchmarks/loop_budget.py --fallback     # what the NumPy fallback costs
+    python benchmarks/loop_budget.py --sparse       # flagged shares of sparse Poisson, by density
 """
 from __future__ import annotations
 
@@ -86,14 +87,43 @@ def fallback_cost(samples: int) -> None:
         print(f"{label:<34} {samples:>7} {tg:>7.2f} {flagged.mean():>8.1%} {tn:>8.2f}", flush=True)
 
 
+def sparse(samples: int) -> None:
+    """Sparse Poisson (``min_points=0``): the share of samples the GPU flagged (and the fallback
+    recomputed) and the share still flagged in ``exact`` after the fallback, by dimension and
+    density, for F1..F4 and F1..F8."""
+    import warnings
+
+    import cellgl
+
+    rng = np.random.default_rng(11)
+    print(f"{'dim':>3} {'density':>8} {'n':>2} {'GPU flagged':>11} {'returned inexact':>16} {'s':>6}")
+    for dim in (2, 3, 4):
+        for density in (0.25, 0.1, 0.05, 0.02, 0.01, 0.005, 0.002, 0.001):
+            for n in (4, 8):
+                pts = rng.uniform(-1000, 1000, (samples, dim))
+                p = core.make_params(dim, density=density, min_points=0)
+                _, _, flagged = gpu.loop_probe(pts[:4096], p, n, ("F",))
+                t = time.perf_counter()
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    r = cellgl.cellular(pts, n, density=density, min_points=0, outputs=("F",))
+                dt = time.perf_counter() - t
+                print(f"{dim:>3} {density:>8} {n:>2} {flagged.mean():>11.3%} {1 - r.exact.mean():>16.3%} {dt:>6.2f}",
+                      flush=True)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=1024)
     ap.add_argument("--quick", action="store_true", help="n in (1, 8) only")
     ap.add_argument("--fallback", action="store_true", help="time the NumPy fallback instead")
+    ap.add_argument("--sparse", action="store_true", help="flagged shares of sparse Poisson instead")
     args = ap.parse_args(argv)
     if args.fallback:
         fallback_cost(args.samples)
+        return 0
+    if args.sparse:
+        sparse(args.samples)
         return 0
     rng = np.random.default_rng(7)
     print(f"{'dim':>3} {'points':<22} {'metric':<10} {'n':>2} {'pass':<28} {'own':>5} {'driver':>6} {'flagged':>8}")
