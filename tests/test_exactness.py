@@ -193,6 +193,22 @@ def test_tiny_budget_flags_then_recomputes_never_wrong(ctx, monkeypatch, outputs
         _check("tiny budget smooth", r.smooth_F1, want["smooth_F1"], r.exact)
 
 
+def test_tiny_budget_on_a_grid(ctx, monkeypatch):
+    """cellular_grid (positions made on the GPU) with a budget of 40: the flagged samples come back
+    from the fallback at their grid positions, equal to the brute force."""
+    _with_budget(monkeypatch, 40)
+    base = 100000.0
+    g = cellgl.cellular_grid((3, 4, 5), origin=(base + 0.3, base + 0.1, base + 0.7), spacing=0.3, n=4,
+                             outputs=("F", "edge"))
+    zs, ys, xs = np.mgrid[0:3, 0:4, 0:5]
+    rel = np.stack([0.3 + 0.3 * xs.ravel(), 0.1 + 0.3 * ys.ravel(), 0.7 + 0.3 * zs.ravel()], 1)
+    assert rel.max() <= SPAN
+    pts, reach = _block(3, base, {})
+    want = _brute(rel, pts, 4, "euclidean")
+    _check("tiny budget grid F", g.F.reshape(-1, 4), want["F"], g.exact.ravel(), reach=reach)
+    _check("tiny budget grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
+
+
 def test_driver_cut_is_caught_by_the_canary(ctx, monkeypatch):
     """With the budget lifted (10^6), 4D smooth F1 at k = 0.25 spends more than llvmpipe's 65535
     loop passes per SIMD vector: the driver cuts loops silently, and the canary flags exactly those
