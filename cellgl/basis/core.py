@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cellgl.basis import features as _features
+from cellgl.basis import passes as _passes
 from cellgl.basis import reference
 from cellgl.basis.arrays import real_array, refuse_masked
 from cellgl.basis.density import encode as _encode_density
@@ -245,107 +246,6 @@ def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> Ce
                           **{k: get(k, t) for k, t in tails.items()})
 
 
-def _basis_outputs(outs) -> tuple[str, ...]:
-    """The F1..Fn outputs the search must produce for ``outs`` (the features' position and
-    colour come from the F1 offset and ID)."""
-    need = set(outs)
-    if "position" in need:
-        need.add("delta")
-    if "color" in need:
-        need.add("id")
-    return tuple(o for o in ("F", "delta", "id", "grad") if o in need) or ("F",)
-
-
-def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> tuple[dict, np.ndarray]:
-    F, D, I, exact = reference.search(cells, fr, p, n)
-    out = {}
-    inv = 1.0 / p.scale
-    basis = _basis_outputs(outputs)
-    if "F" in basis:
-        out["F"] = (F * inv).astype(np.float32)
-    w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
-    if "delta" in basis:
-        out["delta"] = (D[..., : p.dim] / w * inv).astype(np.float32)
-    if "id" in basis:
-        out["id"] = I
-    if "grad" in basis:
-        out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
-    if set(outputs) & set(_features.OUTPUTS):
-        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale)
-        exact = feats["exact"]
-        _features.finish(out, feats, positions, p.scale, p.dim, outputs)
-    return out, exact
-
-
-_BASIS_NAMES = ("F", "delta", "id", "grad", "position", "color")
-
-
-def _gpu_passes(run, outs, N: int) -> tuple[dict, list]:
-    """The GPU dispatches for ``outs``: one for the basis outputs (F, delta, id, grad, and what
-    position and colour need), then one per feature walk (edge, n-sphere, smooth), each with the
-    whole loop budget (``CELL_LOOP_BUDGET``) to itself. So a sample gets the same bits, and the
-    same exact flag, whatever else was asked with it. ``run(outputs)`` dispatches one pass and
-    returns ``({name: array}, exact)``; the walks' records are merged into ``"features"``.
-    Returns the outputs and, per pass, (the output names it serves, its exact flags)."""
-    fams = _features.flags(outs)
-    out, passes = {}, []
-    if set(outs) & set(_BASIS_NAMES) or not any(fams.values()):
-        out, exact = run(_basis_outputs(outs))
-        passes.append((_BASIS_NAMES, exact))
-    if any(fams.values()):
-        record = np.zeros((N, _features.STRIDE), dtype=np.float32)
-        for fam, on in fams.items():
-            if on:
-                got, ok = run(tuple(o for o in outs if o in _features.FAMILIES[fam]))
-                cols = _features.COLUMNS[fam]
-                record[:, cols] = got["features"][:, cols]
-                passes.append((_features.FAMILIES[fam], ok))
-        out["features"] = record
-    return out, passes
-
-
-#: the fallback searches at most this many samples at once (memory of the vectorised reference)
-_FALLBACK_CHUNK = 1 << 16
-
-
-def _fallback(out: dict, passes: list, where, p, n, outs, smoothness) -> np.ndarray:
-    """Search the samples a GPU pass flagged inexact (its loop budget, the driver's limit or the
-    ring cap reached) again with the NumPy reference, which has no loop budget and goes up to
-    :func:`cellgl.basis.reference.max_ring_default` rings, and put its answer for that pass's
-    outputs only in their place in ``out`` (finished outputs, flat sample axis): the other passes'
-    bits stay the GPU's. ``where(rows)`` gives the rows' (cells, fractions, positions). Returns the
-    exact flags; a sample still inexact (points too sparse for every ring the reference searches)
-    stays flagged."""
-    exact = np.ones(len(passes[0][1]), dtype=bool)
-    for names, ok in passes:
-        ok = ok.copy()
-        rows_all = np.nonzero(~ok)[0]
-        pass_outs = tuple(o for o in outs if o in names)
-        for first in range(0, len(rows_all), _FALLBACK_CHUNK):
-            rows = rows_all[first:first + _FALLBACK_CHUNK]
-            cells, fr, positions = where(rows)
-            ref_out, ok_rows = _numpy_search(cells, fr, p, n, pass_outs or ("F",), smoothness, positions)
-            for name, arr in ref_out.items():
-                if name in out and name in names:
-                    out[name][rows] = arr
-            ok[rows] = ok_rows
-        exact &= ok
-    return exact
-
-
-def _warn_inexact(exact: np.ndarray, p) -> None:
-    """The one thing the library cannot fix by searching further: a warning naming the limit."""
-    left = int(np.size(exact) - np.count_nonzero(exact))
-    if left:
-        import warnings
-
-        warnings.warn(f"{left} of {np.size(exact)} samples could not be computed exactly: their nearest "
-                      f"feature points may lie beyond {reference.max_ring_default(p.dim, p.axis_scale)} "
-                      "rings of cells, the most the search visits (points too sparse: raise density "
-                      "or min_points; minkowski_p below 1 also reaches far). They are flagged False in "
-                      ".exact (docs/exactness.md)", RuntimeWarning, stacklevel=3)
-
-
 def _gpu_finish(out: dict, outs, positions, p) -> None:
     """Turn the GPU's feature record into the requested feature outputs."""
     if set(outs) & set(_features.OUTPUTS):
@@ -422,13 +322,13 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     _check_stretch_features(p, outs)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts)
-        _warn_inexact(exact, p)
+        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, pts)
+        _passes.warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, passes = _gpu_passes(lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale),
+        out, passes = _passes.gpu_passes(lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale),
                                   outs, len(pts))
         _gpu_finish(out, outs, pts, p)
         exact = np.logical_and.reduce([ok for _, ok in passes])
@@ -436,15 +336,15 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
             def where(rows):
                 cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])
                 return cells, fr, pts[rows]
-            exact = _fallback(out, passes, where, p, n, outs, smoothness)
-            _warn_inexact(exact, p)
+            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness)
+            _passes.warn_inexact(exact, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
 def _gpu_outputs(outs) -> tuple[str, ...]:
     """What the compute shader is asked for: the basis outputs ``outs`` need, and the feature
     outputs (which become its feature record)."""
-    return _basis_outputs(outs) + tuple(o for o in outs if o in _features.OUTPUTS)
+    return _passes.basis_outputs(outs) + tuple(o for o in outs if o in _features.OUTPUTS)
 
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
@@ -521,8 +421,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         positions = pts / p.scale if p.scale != 1.0 else pts
     if backend == "numpy":
         cells, fr = split(pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions)
-        _warn_inexact(exact, p)
+        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, positions)
+        _passes.warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
@@ -532,7 +432,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, passes = _gpu_passes(lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o,
+        out, passes = _passes.gpu_passes(lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o,
                                                             smoothness * p.scale), outs, total)
         _gpu_finish(out, outs, positions, p)
         exact = np.logical_and.reduce([ok for _, ok in passes])
@@ -547,8 +447,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                 fr = np.zeros((len(rows), 4))
                 fr[:, :dim] = pos - fl
                 return cells, fr, None if positions is None else positions[rows]
-            exact = _fallback(out, passes, where, p, n, outs, smoothness)
-            _warn_inexact(exact, p)
+            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness)
+            _passes.warn_inexact(exact, p)
     return _finish(out, exact, shape, p, n, outs)
 
 
