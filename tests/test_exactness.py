@@ -273,3 +273,34 @@ def test_sparse_poisson_is_served_exactly(ctx, dim):
     X = np.random.default_rng(2).uniform(-50, 50, (3000, dim))
     r = cellgl.cellular(X, 4, density=0.25, min_points=0, outputs=("F",))
     assert r.exact.mean() == 1.0
+
+
+# ------------------------------------------------------------------ textures and PUPs
+
+
+def test_texture_cut_by_the_driver_raises(ctx):
+    """A texture whose loops llvmpipe would cut (smooth F1 at k = 0.25, 8 octaves, 16 samples per
+    pixel: far past 65535 loop passes per SIMD vector) is refused with LoopLimitError, never
+    returned with wrong pixels; a shipped smooth preset is served."""
+    from cellgl.texture.dispatch import LoopLimitError
+
+    r = cellgl.load_recipe("f1").replace(smoothness=0.25, c_smooth=1.0, c1=0.0, octaves=8.0, fractal="sum")
+    with pytest.raises(LoopLimitError, match="cut the loops"):
+        cellgl.render(r, 4096, 4096, tile_w=16, tile_h=4, samples=16)
+    assert np.isfinite(cellgl.render(cellgl.load_recipe("hammered"), 16, 16)["color"]).all()
+
+
+def test_pups_loop_budget_is_known_before_the_dispatch(ctx, monkeypatch):
+    """PUPs: the loop passes of a candidate grid are computed on the CPU; a grid past the driver's
+    limit is refused with a clear error."""
+    from cellgl.pups import gpu as pups_gpu
+
+    seen = []
+    orig = pups_gpu._check_budget
+    monkeypatch.setattr(pups_gpu, "_check_budget", lambda packed, g: seen.append(
+        pups_gpu.loop_budget(packed, g)) or orig(packed, g))
+    cellgl.render("pups-giraffe", 64, 64)
+    assert seen and 0 < max(seen) < pups_gpu.DRIVER_LOOP_LIMIT
+    monkeypatch.setattr(pups_gpu, "DRIVER_LOOP_LIMIT", max(seen))
+    with pytest.raises(RuntimeError, match="past the driver's limit"):
+        cellgl.render("pups-giraffe", 64, 64)
