@@ -302,5 +302,5 @@ def test_pups_loop_budget_is_known_before_the_dispatch(ctx, monkeypatch):
     cellgl.render("pups-giraffe", 64, 64)
     assert seen and 0 < max(seen) < pups_gpu.DRIVER_LOOP_LIMIT
     monkeypatch.setattr(pups_gpu, "DRIVER_LOOP_LIMIT", max(seen))
-    with pytest.raises(RuntimeError, match="past the driver's limit"):
+    with pytest.raises(ValueError, match="past the driver's limit"):
         cellgl.render("pups-giraffe", 64, 64)

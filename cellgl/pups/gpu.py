@@ -91,7 +91,7 @@ def _check_budget(packed: PupsPacked, group_cells: bool) -> None:
     """Refuse a candidate grid whose loops the driver could cut (clear error, no wrong pixels)."""
     need = loop_budget(packed, group_cells)
     if need >= DRIVER_LOOP_LIMIT:
-        raise RuntimeError(f"PUPs: a candidate-grid cell needs up to {need} loop passes per SIMD vector, "
+        raise ValueError(f"PUPs: a candidate-grid cell needs up to {need} loop passes per SIMD vector, "
                            f"past the driver's limit of {DRIVER_LOOP_LIMIT} (Mesa llvmpipe): lower the "
                            "point density or the support size (docs/exactness.md)")
 

@@ -31,9 +31,11 @@ __all__ = ["MAX_BAKED", "LoopLimitError", "run", "output_mask"]
 DRIVER_LOOP_LIMIT = 65535
 
 
-class LoopLimitError(RuntimeError):
+class LoopLimitError(ValueError):
     """The driver cut the loops of some samples (llvmpipe's 65535 loop passes per SIMD vector):
-    their values would be wrong, so none are returned."""
+    their values would be wrong, so none are returned. A ValueError: the request is too heavy for
+    the driver (fewer octaves, less supersampling or a smaller smoothness serve it); the command
+    line reports it as a user error."""
 
 _CHUNK = 1 << 20            # samples per dispatch
 #: baked programs kept (least recently used dropped)
