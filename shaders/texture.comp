@@ -38,13 +38,13 @@ layout(std430, binding = 5) writeonly buffer OutId { uint out_id[]; };
 // then each loop still to come runs once. This loop of u_loop_canary (= 2) passes runs
 // twice unless that happened: otherwise the sample is counted, and cellgl raises.
 uniform int u_loop_canary;
-layout(std430, binding = 6) buffer LoopCut { uint loop_cut_count; };
+layout(std430, binding = 9) buffer LoopCut { uint loop_cut_count; };     // 6, 7: the cell and density images
 #ifndef CELL_LOOP_PROBE
 #define CELL_LOOP_PROBE 0
 #endif
 #if CELL_LOOP_PROBE
 uniform int u_loop_probe;       // far more passes than any limiter: runs until it stops it
-layout(std430, binding = 8) writeonly buffer LoopProbe { int loop_probe[]; };
+layout(std430, binding = 10) writeonly buffer LoopProbe { int loop_probe[]; };
 #endif
 
 #define CELL_TEX_WANT(bit) ((CELL_TEX_OUT & (bit)) != 0)

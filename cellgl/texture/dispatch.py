@@ -144,9 +144,9 @@ def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1
         for name, value in (("u_count", n), ("u_first", start), ("u_loop_canary", 2), ("u_loop_probe", 1 << 30)):
             if name in prog:
                 prog[name].value = value
-        flag = _buffer(ctx, 6, 4)
+        flag = _buffer(ctx, 9, 4)        # texture.comp's LoopCut (6, 7: the cell and density images)
         flag.write(b"\0\0\0\0")
-        pbuf = _buffer(ctx, 8, 4 * n) if probe else None
+        pbuf = _buffer(ctx, 10, 4 * n) if probe else None
         prog.run(group_x=(n + local_size - 1) // local_size)
         ctx.memory_barrier()
         for name, buf in bufs.items():
