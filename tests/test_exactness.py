@@ -148,6 +148,26 @@ def test_smooth_other_metrics_at_the_largest_smoothness(ctx, metric):
     _check(f"smooth {metric}", r.smooth_F1, want["smooth_F1"], r.exact)
 
 
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_stretch_and_density_map(ctx, dim):
+    """Stretched cells (weighted distance, w_a = g / s_a with g the geometric mean of the s_a) and a
+    density ramp (0.2 .. 12 points per cell, empty cells allowed), F1..F8, against the brute force."""
+    base = 20000.0
+    x, rel = _samples(dim, base, 24, seed=20 + dim)
+    s = np.array([3.0, 0.5, 1.0, 2.0][:dim])
+    w = np.exp(np.log(s).mean()) / s
+    pts, reach = _block(dim, base, {})
+    want = np.sort([_distances((pts - xi) * w, "euclidean") for xi in rel], axis=1)[:, :8]
+    r = cellgl.cellular(x, 8, stretch=list(s), outputs=("F",))
+    _check(f"{dim}D stretch", r.F, want, r.exact, reach=reach * w.min())
+    dm = cellgl.DensityMap("ramp", axis=0, start=base - 3, end=base + 3, density_min=0.2, density_max=12.0)
+    kw = dict(density_map=dm, min_points=0, max_points=16)
+    pts, reach = _block(dim, base, kw)
+    want = _brute(rel, pts, 8, "euclidean")
+    r = cellgl.cellular(x, 8, outputs=("F",), **kw)
+    _check(f"{dim}D density map", r.F, want["F"], r.exact, reach=reach)
+
+
 def test_grid_matrix_far_and_periodic(ctx):
     """cellular_grid (positions made on the GPU) at 5e8 with a period, against the brute force."""
     base = 499999999.0
