@@ -7,7 +7,9 @@
    checkout and with another one (e.g. a checkout of main), alternating in subprocesses, best
    of ``--repeats``; the ratio this / baseline.
 
-    python benchmarks/bench_features.py [--quick] [--baseline /path/to/other/checkout]
+3. ``--smooth``: smooth F1 against smoothness, log-sum-exp against Blender's polynomial fold.
+
+    python benchmarks/bench_features.py [--quick] [--baseline /path/to/other/checkout] [--smooth]
 """
 from __future__ import annotations
 
@@ -68,6 +70,31 @@ def feature_cost(quick: bool) -> None:
         print(f"| {dim}D | {side}^{dim} | {name} | {t * 1e3:.1f} | {ratio:.2f} |")
 
 
+def smooth_cost(quick: bool) -> None:
+    """Smooth F1 against smoothness: cellgl's log-sum-exp walk (visits every point within
+    F1 + 16 k) and Blender's polynomial fold (the node's 5^d block: flat in k)."""
+    sys.path.insert(0, _REPO)
+    import cellgl
+
+    rows = []
+    for dim, side, spacing in ((2, 256 if quick else 512, 1 / 16), (3, 24 if quick else 48, 1 / 6)):
+        shape = (side,) * dim
+        kw = dict(spacing=spacing, n=1, distribution="blender")
+        base = best(lambda: cellgl.cellular_grid(shape, outputs=("F",), **kw))
+        rows.append((dim, side, "F1", "", base))
+        for mode, ks in (("exp", (0.05, 0.1, 0.25)), ("polynomial", (0.25, 0.5, 1.0))):
+            for k in ks:
+                t = best(lambda: cellgl.cellular_grid(shape, outputs=("smooth_F1",), smoothness=k,
+                                                      smooth=mode, **kw))
+                rows.append((dim, side, f"smooth_F1 {mode}", k, t))
+    print("| dim | grid | outputs | smoothness | time (ms) | / F1 |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    base = {}
+    for dim, side, name, k, t in rows:
+        base.setdefault(dim, t)
+        print(f"| {dim}D | {side}^{dim} | {name} | {k} | {t * 1e3:.1f} | {t / base[dim]:.2f} |")
+
+
 def fast_path(baseline: str, quick: bool, repeats: int) -> None:
     args = ["256", "32", "256"] if quick else ["1024", "96", "512"]
     times: dict = {"this": {}, "baseline": {}}
@@ -91,8 +118,13 @@ def main() -> int:
     ap.add_argument("--quick", action="store_true", help="small sizes (a smoke run)")
     ap.add_argument("--baseline", metavar="REPO", help="another checkout to time the fast path against")
     ap.add_argument("--repeats", type=int, default=3, help="alternating rounds against the baseline")
+    ap.add_argument("--smooth", action="store_true",
+                    help="only smooth F1 against smoothness (log-sum-exp vs Blender's polynomial fold)")
     a = ap.parse_args()
     print(f"load: {os.getloadavg()[0]:.2f} (1 min), {os.cpu_count()} cores")
+    if a.smooth:
+        smooth_cost(a.quick)
+        return 0
     feature_cost(a.quick)
     if a.baseline:
         fast_path(os.path.abspath(a.baseline), a.quick, a.repeats)

@@ -76,7 +76,7 @@ def fallback_cost(samples: int) -> None:
         pts = rng.uniform(-50, 50, (samples, dim))
         p = core.make_params(dim)
         cellgl.cellular(pts[:64], 4 if label.startswith("F") else 1, **kw)     # compile
-        _, _, flagged = gpu.loop_probe(pts[: min(samples, 4096)], p, 1, core._gpu_outputs(kw["outputs"]),
+        _, _, flagged = gpu.loop_probe(pts[: min(samples, 4096)], p, 1, core._gpu_outputs(kw["outputs"], p),
                                        kw.get("smoothness", 0.0))
         t = time.perf_counter()
         cellgl.cellular(pts, 4 if label.startswith("F") else 1, **kw)
@@ -137,7 +137,7 @@ def main(argv=None) -> int:
         if any(o in ("edge", "nsphere") for o in outs) and metric != "euclidean":
             continue
         p = core.make_params(dim, **kw)
-        own, driver, flagged = gpu.loop_probe(pts, p, n, core._gpu_outputs(outs), smooth * p.scale)
+        own, driver, flagged = gpu.loop_probe(pts, p, n, core._gpu_outputs(outs, p), smooth * p.scale)
         print(f"{dim:>3} {dname:<22} {metric:<10} {n:>2} {label:<28} {own.max():>5} {driver.max():>6} "
               f"{flagged.mean():>8.2%}", flush=True)
         key = (dim, label.split(":")[0] if ":" in label else ("basis" if label.startswith("F,") else label))

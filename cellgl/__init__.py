@@ -6,6 +6,7 @@ from cellgl._version import __version__
 from cellgl.basis.core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
 from cellgl.basis.density import DensityMap
 from cellgl.basis.enums import Distribution, Metric
+from cellgl.basis.voronoi import VoronoiResult, voronoi
 from cellgl.recipes import evaluate, list_presets, load_recipe, render
 from cellgl.texture.recipe import Recipe, RecipeError
 
@@ -36,4 +37,6 @@ __all__ = [
     "load_recipe",
     "render",
     "to_dask",
+    "voronoi",
+    "VoronoiResult",
 ]

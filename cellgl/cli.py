@@ -79,7 +79,8 @@ def _lazy(module: str, name: str) -> Callable:
 
 #: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
 #: cellgl/io/bake_cli.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/snippets.py
-#: (docs/engines.md), cellgl/recipes.py (docs/textures.md), cellgl/dask/cli.py (docs/scale.md).
+#: (docs/engines.md), cellgl/recipes.py (docs/textures.md), cellgl/dask/cli.py (docs/scale.md),
+#: cellgl/voronoi_cli.py (docs/blender.md).
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
     "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
@@ -87,6 +88,7 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "export": (_lazy("cellgl.export.snippets", "add_parser"), _lazy("cellgl.export.snippets", "run_cli")),
     "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
     "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
+    "voronoi": (_lazy("cellgl.voronoi_cli", "add_parser"), _lazy("cellgl.voronoi_cli", "run_cli")),
 }
 
 

@@ -2,12 +2,22 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import cellgl
 from cellgl.basis import reference
+
+#: The 256-entry population table of the reference program published with Worley's 1996 chapter
+#: (a fact of the paper, row by row; see tests/data/README.md), kept with the tests.
+W96_TABLE_FILE = Path(__file__).resolve().parent / "data" / "worley1996_population_table.txt"
+
+
+def _w96_table() -> list[int]:
+    return [int(v) for v in W96_TABLE_FILE.read_text().replace("\n", ",").split(",") if v.strip()]
+
 
 METRICS = ["euclidean", "manhattan", "chebyshev", "minkowski"]
 CASES = [(d, m, dist) for d in (2, 3, 4) for m in METRICS for dist in ("poisson", "jitter")] + [
@@ -184,11 +194,7 @@ def test_grid_matches_points(ctx):
 
 def _w96_by_hand(cx, cy, cz):
     """Feature points of one cube, straight from the published description."""
-    table = [int(v) for v in open(
-        __import__("pathlib").Path(__file__).resolve().parents[2] / "shared/data/worley1996_population_table.txt"
-    ).read().replace("\n", ",").split(",") if v.strip()] if (
-        __import__("pathlib").Path(__file__).resolve().parents[2] / "shared/data/worley1996_population_table.txt"
-    ).exists() else list(reference.worley1996_table())
+    table = _w96_table()
     M = 2 ** 32
     seed = (702395077 * (cx % M) + 915488749 * (cy % M) + 2120969693 * (cz % M)) % M
     count = table[seed >> 24]
@@ -215,11 +221,9 @@ def test_worley1996_points_by_hand():
         np.testing.assert_allclose(got_pos * reference.W96_DENSITY_ADJUSTMENT, pos, rtol=0, atol=1e-12)
 
 
-def test_worley1996_table_matches_shared_data():
-    path = __import__("pathlib").Path(__file__).resolve().parents[2] / "shared/data/worley1996_population_table.txt"
-    if not path.exists():
-        pytest.skip("shared/data not beside the checkout")
-    vals = [int(v) for v in path.read_text().replace("\n", ",").split(",") if v.strip()]
+def test_worley1996_table_matches_the_paper():
+    vals = _w96_table()
+    assert len(vals) == 256
     assert list(reference.worley1996_table()) == vals
     assert abs(np.mean(vals) - 2.598) < 0.01
 

@@ -200,7 +200,7 @@ def test_tiny_budget_flags_then_recomputes_never_wrong(ctx, monkeypatch, outputs
     pts, reach = _block(dim, 1000.0, {})
     want = _brute(rel, pts, 4, "euclidean", 0.1)
     p = core.make_params(dim)
-    raw, exact = gpu.search_points(x, p, 4, core._gpu_outputs(outputs), 0.1)
+    raw, exact = gpu.search_points(x, p, 4, core._gpu_outputs(outputs, p), 0.1)
     assert (~exact).mean() > 0.5, "a budget of 60 must stop most searches"
     if "F" in raw:
         ok = exact

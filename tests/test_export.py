@@ -496,6 +496,16 @@ def test_two_dimensional_recipes_have_no_solid_entry():
         assert "cellgl_texture3" not in export.export(p, "glsl")
 
 
+def test_wgsl_header_says_cellgl_texture_is_for_fragment_shaders():
+    """WGSL allows fwidth only in fragment shaders: the header says so, not only the file's end."""
+    text = export.export("flagstone", "wgsl")
+    header = text[:text.index("\nfn ")]
+    words = " ".join(ln.lstrip("/ ") for ln in header.splitlines()[:16])
+    assert "uses fwidth, so it works only in fragment shaders" in words, words
+    assert "cellgl_texture_filtered(uv, duv)" in words
+    assert "// Fragment (pixel) shaders only" in text[len(header):]     # the block the header names
+
+
 # --------------------------------------------------------------------------------------------
 # command line
 # --------------------------------------------------------------------------------------------

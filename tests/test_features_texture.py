@@ -112,8 +112,12 @@ def test_recipe_errors(tmp_path):
     (tmp_path / "bad.png").write_text("not an image")
     with pytest.raises(RecipeError, match="as an image"):
         Recipe.from_dict({"color": {"cell_color": "image", "cell_image": "bad.png"}}, base=tmp_path)
-    with pytest.raises(RecipeError, match=r"smoothness: out of range: 0.5; accepted: \[0.0, 0.25\]"):
+    with pytest.raises(RecipeError, match=r"smoothness: 0.5 exceeds 0.25 with combination.smooth 'exp'.*"
+                                          r"accepted: \[0, 0.25\], or smooth 'polynomial' for up to 1"):
         Recipe(dict(smoothness=0.5))
+    assert Recipe(dict(smoothness=0.5, smooth="polynomial")).get("smoothness") == 0.5
+    with pytest.raises(RecipeError, match=r"smoothness: out of range: 1.5; accepted: \[0.0, 1.0\]"):
+        Recipe(dict(smoothness=1.5, smooth="polynomial"))
     with pytest.raises(RecipeError, match="unknown choice 'maximum'"):
         Recipe(dict(fractal="maximum"))
 

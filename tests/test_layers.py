@@ -25,7 +25,7 @@ LAYERS = (
                     "cellgl.dask")),
     ("public API", ("cellgl",)),
     ("viewer", ("viewer",)),
-    ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli")),
+    ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli", "cellgl.voronoi_cli")),
 )
 
 

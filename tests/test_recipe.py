@@ -90,6 +90,26 @@ def test_bad_recipes_name_field_and_accepted(d, words):
         assert w in str(exc.value), (w, str(exc.value))
 
 
+@pytest.mark.parametrize("text, held", [("{}", "it is empty"), ('{"name": "x"}', "it holds only 'name'"),
+                                        ('{"cellgl_recipe": 1, "basis": {}, "outputs": ["color"]}', "'basis'"),
+                                        ('{"kind": "pups", "name": "x"}', "it holds only 'kind', 'name'")])
+def test_a_recipe_file_that_sets_nothing_is_refused(tmp_path, capsys, text, held):
+    """A mistyped or truncated file must not bake the default grey F1 and exit 0."""
+    from cellgl.cli import main
+
+    path = tmp_path / "empty.json"
+    path.write_text(text)
+    out = tmp_path / "out.png"
+    assert main(["bake", str(path), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "empty.json" in err and "no" in err and "parameter set" in err and held in err, err
+    assert not out.exists()
+    assert "presets" in err                 # says where a whole recipe comes from
+    with pytest.raises(RecipeError, match="no parameter set"):
+        Recipe.from_dict({"name": "x"})
+    assert Recipe.from_dict({"basis": {"seed": 3}}).get("seed") == 3    # one value is enough
+
+
 def test_set_from_strings():
     r = Recipe().set_from_strings(["octaves=3.5", "fractal=qin", "seed=0x10", "tileable=true", "frequency=4",
                                   "linear=[0, 1]", "c12=-1", "ramp=[[0,0,0,0],[1,1,0,0]]"])

@@ -323,6 +323,19 @@ def test_cli_screenshot(display, tmp_path):
     assert r.returncode == 2 and "no_such_param" in r.stderr
 
 
+def test_no_display_is_one_clear_error():
+    """Without a display: one `cellgl view: error:` line with GLFW's reason, no GLFWError warning."""
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env["PYTHONPATH"] = ROOT
+    r = subprocess.run([sys.executable, "-m", "cellgl", "view", "flagstone"], env=env, capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 2, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith("cellgl view: error: GLFW could not initialise (") and "DISPLAY" in lines[0]
+    assert "xvfb-run" in lines[0]
+
+
 def test_pups_preset_view_matches_bake(viewer):
     """A PUPs preset from the picker: the 2D view's unit square is the bake of that size;
     3D / 4D are refused with a message; the panel shows the PUPs table's widgets."""

@@ -100,9 +100,27 @@ class Viewer:
     # setup / teardown
 
     def _init_window(self, w: int, h: int, hidden: bool, vsync: bool) -> None:
+        # GLFW reports why init or window creation failed through its error callback (pyGLFW's
+        # default prints a GLFWError warning): collect the messages into the one clear error.
+        errors: list[str] = []
+        glfw.set_error_callback(lambda code, text: errors.append(
+            text.decode(errors="replace") if isinstance(text, bytes) else str(text)))
+        try:
+            self._open_window(w, h, hidden, errors)
+        finally:
+            glfw.set_error_callback(None)     # back to pyGLFW's default reporting
+        self._take_context()
+        glfw.swap_interval(1 if vsync and not hidden else 0)
+        self.ctx = context.attach_current_egl(430)
+        self.hidden = hidden
+
+    def _open_window(self, w: int, h: int, hidden: bool, errors: list) -> None:
+        def why() -> str:
+            return f" ({'; '.join(errors)})" if errors else ""
+
         if not glfw.init():
-            raise RuntimeError("GLFW could not initialise (no display? run under xvfb-run, or "
-                               "use `cellgl bake` for headless output)")
+            raise RuntimeError(f"GLFW could not initialise{why()}: no display? run under xvfb-run, or "
+                               "use `cellgl bake` for headless output")
         glfw.default_window_hints()
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 4)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
@@ -115,11 +133,7 @@ class Viewer:
         self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
         if not self.window:
             glfw.terminate()
-            raise RuntimeError("GLFW could not create an OpenGL 4.3 core window")
-        self._take_context()
-        glfw.swap_interval(1 if vsync and not hidden else 0)
-        self.ctx = context.attach_current_egl(430)
-        self.hidden = hidden
+            raise RuntimeError(f"GLFW could not create an OpenGL 4.3 core window{why()}")
 
     def _take_context(self) -> None:
         """Make the window's GL context current (cellgl's headless one may be)."""

@@ -141,6 +141,9 @@ def make_params(dim, *, metric="euclidean", distribution="poisson", density=3.0,
         raise ValueError(f"points must have 2, 3 or 4 coordinates, got {dim}")
     if distribution == Distribution.WORLEY1996 and dim != 3:
         raise ValueError(f"distribution 'worley1996' is 3D only, got {dim}D points")
+    if distribution == Distribution.BLENDER and seed != 0:
+        raise ValueError(f"distribution 'blender' has no seed (Blender's node has none; offset the "
+                         f"points instead), got seed={seed!r}; accepted: 0")
     density = _number("density", density, 0.0, 16.0, lo_open=True)
     jitter = _number("jitter", jitter, 0.0, 1.0)
     min_points = _number("min_points", min_points, 0, reference.MAX_POINTS, integer=True)
@@ -251,13 +254,13 @@ def _gpu_finish(out: dict, outs, positions, p) -> None:
     if set(outs) & set(_features.OUTPUTS):
         raw = out.pop("features", None)
         feats = _features.unpack(raw, p.dim) if raw is not None else {}
-        _features.finish(out, feats, positions, 1.0, p.dim, outs)
+        _features.finish(out, feats, positions, 1.0, p.dim, outs, p.distribution == Distribution.BLENDER)
 
 
 def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density=3.0, jitter=1.0,
              min_points=1, max_points=9, minkowski_p=3.0, seed=0, period=None, density_map=None,
              stretch=None, orbit_radius=0.0, orbit_phase=0.0,
-             outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
+             outputs=("F", "delta", "id"), smoothness=0.1, smooth="exp", backend="gpu") -> CellularResult:
     """Worley's cellular basis F1..Fn at arbitrary points.
 
     Parameters
@@ -301,8 +304,13 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         Only these are computed and read back. ``edge`` (distance to the cell's border) and
         ``nsphere`` need the Euclidean metric; the ``smooth_*`` outputs blend every feature
         point with weight ``exp(-(F_j - F1) / smoothness)`` (see :mod:`cellgl.basis.features`).
-    smoothness : float in [0, 0.25]
-        ``k`` of smooth F1, in sample units (0: the hard minimum).
+    smoothness : float in [0, 0.25] (``smooth="exp"``) or [0, 1] (``"polynomial"``)
+        ``k`` of smooth F1, in sample units (0: the hard minimum); for ``"polynomial"`` the
+        Smoothness socket of Blender's node (its fold uses k = smoothness / 2).
+    smooth : {"exp", "polynomial"}
+        ``exp``: the log-sum-exp smooth minimum over every point (exact); ``polynomial``:
+        Blender's running polynomial smooth minimum over the 5^d block of cells around the
+        sample's, in the node's order (:func:`cellgl.basis.features.poly_smooth`).
     backend : {"gpu", "numpy"}
 
     Returns
@@ -318,39 +326,40 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
                     jitter=jitter, min_points=min_points, max_points=max_points,
                     minkowski_p=minkowski_p, seed=seed, period=period, density_map=density_map,
                     stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    smoothness = _features.check(outs, p.metric, smoothness)
+    smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, pts)
+        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, pts, smooth)
         _passes.warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, passes = _passes.gpu_passes(lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale),
-                                  outs, len(pts))
+        out, passes = _passes.gpu_passes(
+            lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p)
         _gpu_finish(out, outs, pts, p)
         exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():
             def where(rows):
                 cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])
                 return cells, fr, pts[rows]
-            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness)
+            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness, smooth)
             _passes.warn_inexact(exact, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
-def _gpu_outputs(outs) -> tuple[str, ...]:
+def _gpu_outputs(outs, p: reference.Params) -> tuple[str, ...]:
     """What the compute shader is asked for: the basis outputs ``outs`` need, and the feature
     outputs (which become its feature record)."""
-    return _passes.basis_outputs(outs) + tuple(o for o in outs if o in _features.OUTPUTS)
+    return (_passes.basis_outputs(outs, p.distribution == Distribution.BLENDER)
+            + tuple(o for o in outs if o in _features.OUTPUTS))
 
 
 def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", distribution="poisson",
                   density=3.0, jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0,
                   period=None, density_map=None, stretch=None, orbit_radius=0.0, orbit_phase=0.0,
-                  outputs=("F", "delta", "id"), smoothness=0.1, backend="gpu") -> CellularResult:
+                  outputs=("F", "delta", "id"), smoothness=0.1, smooth="exp", backend="gpu") -> CellularResult:
     """The cellular basis on a regular grid, with sample positions generated on the GPU.
 
     Parameters
@@ -391,7 +400,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p,
                     seed=seed, period=period, density_map=density_map, stretch=stretch,
                     orbit_radius=orbit_radius, orbit_phase=orbit_phase)
-    smoothness = _features.check(outs, p.metric, smoothness)
+    smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
 
     def vec(name, v, default):
@@ -414,14 +423,15 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
         raise ValueError("grid extends beyond +-2^30 cells; move origin closer to 0")
     positions = None
-    if backend == "numpy" or {"position", "smooth_position"} & set(outs):
+    if backend == "numpy" or {"position", "smooth_position"} & set(outs) \
+            or ("color" in outs and p.distribution == Distribution.BLENDER):
         axes = [org[a] + spc[a] * np.arange(shape_xyzw[a]) for a in range(dim)]
         mesh = np.meshgrid(*reversed(axes), indexing="ij")        # array order
         pts = np.stack(list(reversed(mesh)), axis=-1).reshape(-1, dim)
         positions = pts / p.scale if p.scale != 1.0 else pts
     if backend == "numpy":
         cells, fr = split(pts)
-        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, positions)
+        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, positions, smooth)
         _passes.warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
@@ -432,8 +442,9 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, passes = _passes.gpu_passes(lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o,
-                                                            smoothness * p.scale), outs, total)
+        out, passes = _passes.gpu_passes(
+            lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o, smoothness * p.scale, smooth),
+            outs, total, p)
         _gpu_finish(out, outs, positions, p)
         exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():
@@ -447,7 +458,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
                 fr = np.zeros((len(rows), 4))
                 fr[:, :dim] = pos - fl
                 return cells, fr, None if positions is None else positions[rows]
-            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness)
+            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness, smooth)
             _passes.warn_inexact(exact, p)
     return _finish(out, exact, shape, p, n, outs)
 

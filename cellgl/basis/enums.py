@@ -23,6 +23,7 @@ class Distribution(IntEnum):
     POISSON = 0      #: Poisson count of mean ``density`` per cell, clamped to [min_points, max_points]
     JITTER = 1       #: one point per cell, displaced from the centre by ``jitter``
     WORLEY1996 = 2   #: the book's reference program, bit for bit (3D only)
+    BLENDER = 3      #: Blender's Voronoi node: one point per cell from its hash, ``jitter`` as Randomness
 
 
 class DensityMapKind(IntEnum):

@@ -57,10 +57,15 @@ def flags(outputs) -> dict:
             "nsphere": "nsphere" in outs}
 
 
-def defines(outputs, dim: int) -> dict:
-    """The macros of ``shaders/lib/features.glsl`` for these outputs."""
+SMOOTH_MODES = ("exp", "polynomial")   #: smooth F1: log-sum-exp (exact), or Blender's polynomial fold
+
+
+def defines(outputs, dim: int, smooth: str = "exp") -> dict:
+    """The macros of ``shaders/lib/features.glsl`` for these outputs (``CELL_SMOOTH`` 1: the
+    exponential smooth minimum, 2: Blender's polynomial fold)."""
     f = flags(outputs)
-    return dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=int(f["smooth"]), CELL_NSPHERE=int(f["nsphere"]),
+    mode = (2 if smooth == "polynomial" else 1) if f["smooth"] else 0
+    return dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=mode, CELL_NSPHERE=int(f["nsphere"]),
                 CELL_FEATURE_MAX_RING=feature_max_ring(dim))
 
 
@@ -95,7 +100,7 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     state, count = ref.point_count(state, p, wc)
     base = o.astype(np.float64) - f[rows]
     for k in range(int(count.max(initial=0))):
-        state, q, ids = ref.next_point(state, p)
+        state, q, ids = ref.next_point(state, p, wc)
         has = k < count
         _point(w, rows[has], base[has] + q[has], ids[has], o[has], q[has], p)
 
@@ -206,15 +211,81 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
     return max_ring + m >= _reach(w, every, on)
 
 
+def _smoothstep(t):
+    t = np.clip(t, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def poly_smooth(cells, f, p: ref.Params, smoothness: float) -> dict:
+    """``_cell_poly_smooth``: smooth F1 as Blender's Voronoi node folds it, over the 5^d block of
+    cells around each sample's, in the node's order (x fastest), with k = smoothness / 2.
+
+    Returns ``{"smooth_F": (N,), "smooth_delta", "smooth_grad", "smooth_attr": (N, 4)}``
+    (lattice units; the attribute is the folded cell colour and cell value).
+    """
+    from cellgl.basis.population import blender_color
+    from cellgl.basis.enums import Distribution
+
+    N = len(cells)
+    k = 0.5 * float(smoothness)
+    s = np.full(N, 8.0)
+    gs = np.zeros((N, 4))
+    pos = np.zeros((N, 4))
+    col = np.zeros((N, 4))          # colour and cell value
+    span = range(-2, 3)
+    axes = [span if a < p.dim else range(0, 1) for a in range(4)]
+    for ow, oz, oy, ox in itertools.product(*reversed(axes)):       # w outermost, x fastest
+        o = np.array([ox, oy, oz, ow], dtype=np.int64)
+        wc = ref.wrap(cells + o, p.period)
+        state = ref.cell_seed(wc, p)
+        state, count = ref.point_count(state, p, wc)
+        for j in range(int(count.max(initial=0))):
+            state, q, ids = ref.next_point(state, p, wc)
+            has = j < count
+            q = o + q
+            q[:, p.dim:] = 0.0
+            delta = q - f
+            d = ref.metric_finish(ref.metric_length(delta, p), p)
+            gd = np.zeros((N, 4))
+            gd[:, : p.dim] = ref.metric_gradient(delta[:, : p.dim], d, p)
+            if k > 0:
+                t = 0.5 + 0.5 * (s - d) / k
+                h = _smoothstep(t)
+                dh = np.where((t > 0) & (t < 1), 6.0 * t * (1.0 - t), 0.0) * 0.5 / k
+            else:
+                h = (d < s).astype(np.float64)
+                dh = np.zeros(N)
+            h = np.where(has, h, 0.0)
+            dh = np.where(has, dh, 0.0)
+            c0 = k * h * (1.0 - h)
+            gh = dh[:, None] * (gs - gd)
+            gs = (1.0 - h[:, None]) * gs + h[:, None] * gd + ((d - s) - k * (1.0 - 2.0 * h))[:, None] * gh
+            s = s + h * (d - s) - c0
+            c1 = (c0 / (1.0 + 3.0 * k))[:, None]
+            if p.distribution == Distribution.BLENDER:
+                cc = np.concatenate([blender_color(wc, p.dim), id_value(ids)[:, None]], axis=1)
+            else:
+                cc = id_attribute(ids)
+            col = col + h[:, None] * (cc - col) - c1
+            pos = pos + h[:, None] * (q - pos) - c1
+    delta = pos - f
+    delta[:, p.dim:] = 0.0
+    return dict(smooth_F=s, smooth_delta=delta, smooth_grad=gs, smooth_attr=col)
+
+
 def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float = 0.0,
-             max_ring: int | None = None) -> dict:
+             max_ring: int | None = None, smooth: str = "exp") -> dict:
     """``cell_features``: the walks the ``outputs`` need, for samples (cells (N, 4) int64,
-    fractions f (N, 4)) whose :func:`cellgl.reference.search` result is F, D, I, exact.
+    fractions f (N, 4)) whose :func:`cellgl.reference.search` result is F, D, I, exact
+    (``smooth="polynomial"``: smooth F1 from :func:`poly_smooth` instead of the walk).
 
     Returns ``{"edge", "nsphere", "smooth_F": (N,), "edge_grad", "smooth_delta", "smooth_grad",
     "smooth_attr": (N, 4), "exact": (N,) bool}`` in lattice units (``smoothness`` too).
     """
     on = flags(outputs)
+    poly = on["smooth"] and smooth == "polynomial"
+    if poly:
+        on["smooth"] = False
     max_ring = max_ring or feature_max_ring(p.dim)
     N = len(cells)
     d1 = np.array(D[:, 0], dtype=np.float64)
@@ -236,6 +307,8 @@ def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float
         out["smooth_F"][s] = w["F1"][s] - w["k"] * np.log(w["wsum"][s])
         for name in ("delta", "grad", "attr"):
             out["smooth_" + name][s] = w["w" + name][s] * inv[:, None]
+    if poly:
+        out.update(poly_smooth(cells, f, p, smoothness))
     if on["nsphere"]:
         v = dict(w, around=True, d1=np.zeros((N, 4)), nn=np.full(N, BIG))
         rows = np.nonzero(w["found"])[0]
@@ -254,8 +327,12 @@ def unpack(raw: np.ndarray, dim: int) -> dict:
                 smooth_delta=raw[:, 8:8 + dim], smooth_grad=raw[:, 12:12 + dim], smooth_attr=raw[:, 16:20])
 
 
-def check(outputs, metric, smoothness) -> float:
-    """Validate the feature outputs against the metric and the smoothness; returns it as float."""
+SMOOTHNESS_MAX_POLY = 1.0  #: largest smoothness of the polynomial fold (the node's socket range)
+
+
+def check(outputs, metric, smoothness, smooth: str = "exp") -> float:
+    """Validate the feature outputs against the metric and the smoothness (and the smooth mode);
+    returns the smoothness as float."""
     import math
     import numbers
 
@@ -265,16 +342,22 @@ def check(outputs, metric, smoothness) -> float:
         raise ValueError(f"output {bad[0]!r} needs metric 'euclidean' (the distance to a bisector plane "
                          f"and the inscribed ball are Euclidean notions, as in Blender), got "
                          f"{metric.name.lower()!r}")
+    if smooth not in SMOOTH_MODES:
+        raise ValueError(f"unknown smooth {smooth!r}; expected one of: {', '.join(SMOOTH_MODES)}")
+    top = SMOOTHNESS_MAX_POLY if smooth == "polynomial" else SMOOTHNESS_MAX
     if isinstance(smoothness, bool) or not isinstance(smoothness, numbers.Real) \
-            or not math.isfinite(smoothness) or not 0.0 <= smoothness <= SMOOTHNESS_MAX:
-        raise ValueError(f"smoothness must be a number in [0, {SMOOTHNESS_MAX}] (cells), got {smoothness!r}")
+            or not math.isfinite(smoothness) or not 0.0 <= smoothness <= top:
+        raise ValueError(f"smoothness must be a number in [0, {top}] (cells) with smooth={smooth!r}, "
+                         f"got {smoothness!r}")
     return float(smoothness)
 
 
-def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int, want) -> None:
+def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int, want,
+           blender: bool = False) -> None:
     """Fill ``out`` with the requested feature outputs (sample units) from the walk's result
     ``feats`` (lattice units, or the GPU's already scaled record when ``scale`` is 1), the
-    sample positions (N, d) float64 and the F1 offsets ``out["delta"]`` and IDs ``out["id"]``."""
+    sample positions (N, d) float64 and the F1 offsets ``out["delta"]`` and IDs ``out["id"]``
+    (``blender``: distribution 'blender', whose ``color`` is Blender's colour of the F1 cell)."""
     inv = 1.0 / scale
     f32 = np.float32
     if "edge" in want:
@@ -293,7 +376,12 @@ def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int
         out["smooth_color"] = np.asarray(feats["smooth_attr"][:, :3]).astype(f32)
     if "position" in want:
         out["position"] = positions + np.asarray(out["delta"][:, 0, :dim], np.float64)
-    if "color" in want:
+    if "color" in want and blender:
+        from cellgl.basis.population import blender_color, blender_owner_cells
+
+        at = positions + np.asarray(out["delta"][:, 0, :dim], np.float64)
+        out["color"] = blender_color(blender_owner_cells(at, out["id"][:, 0], dim), dim).astype(f32)
+    elif "color" in want:
         out["color"] = id_color(out["id"][:, 0]).astype(f32)
 
 

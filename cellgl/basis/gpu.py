@@ -24,7 +24,7 @@ _MAX_GROUPS = 65535
 DRIVER_LOOP_LIMIT = 65535
 
 
-def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
+def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: str = "exp") -> dict:
     """The compile-time macros of ``shaders/cellular.comp`` for these parameters."""
     d = glsl_defines()
     d.update(
@@ -45,7 +45,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False) -> dict:
         CELL_ORBIT=int(p.orbit),
         CELL_ANISO=int(p.aniso),
     )
-    d.update(_features.defines(outputs, p.dim))
+    d.update(_features.defines(outputs, p.dim, smooth))
     return d
 
 
@@ -208,7 +208,8 @@ def _alloc(N: int, n: int, dim: int, outputs) -> dict:
 
 
 @gl_call
-def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
+def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0,
+                  smooth: str = "exp") -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
     The shader scales them by ``p.scale`` and splits them into an integer cell
@@ -218,7 +219,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     ``"features"``, its per-sample record, to the result.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False))
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False, smooth=smooth))
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
     outputs = _buffers(outputs)
@@ -238,7 +239,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
 
 @gl_call
 def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int, outputs,
-                smoothness: float = 0.0) -> tuple[dict, np.ndarray]:
+                smoothness: float = 0.0, smooth: str = "exp") -> tuple[dict, np.ndarray]:
     """Cellular basis on a regular grid generated on the GPU.
 
     shape_xyzw: samples along x, y, z, w (unused axes 1); origin split into
@@ -246,7 +247,7 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     Returns flat arrays in x-fastest order, as :func:`search_points`.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True))
+    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True, smooth=smooth))
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
     outputs = _buffers(outputs)
@@ -293,14 +294,14 @@ def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):
 
 @gl_call
 def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0,
-               budget: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+               budget: int | None = None, smooth: str = "exp") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measure the loop budget of :func:`search_points` (the measurement build of
     ``shaders/cellular.comp``, ``CELL_LOOP_PROBE``): per sample the search's own count of loop
     iterations (``CellResult.loops``), the iterations the driver's limiter counted for the sample's
     SIMD vector of invocations (llvmpipe; :data:`DRIVER_LOOP_LIMIT` minus what it had left at the
     end), and whether the sample was flagged inexact. ``budget`` overrides ``CELL_LOOP_BUDGET``."""
     ctx = context.get_context()
-    d = defines_for(p, n, outputs, grid=False)
+    d = defines_for(p, n, outputs, grid=False, smooth=smooth)
     d["CELL_LOOP_PROBE"] = 1
     if budget is not None:
         d["CELL_LOOP_BUDGET"] = int(budget)

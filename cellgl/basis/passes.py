@@ -9,26 +9,31 @@ import numpy as np
 
 from cellgl.basis import features as _features
 from cellgl.basis import reference
+from cellgl.basis.enums import Distribution
 
 __all__ = ["basis_outputs", "numpy_search", "gpu_passes", "fallback", "warn_inexact"]
 
 
-def basis_outputs(outs) -> tuple[str, ...]:
+def basis_outputs(outs, blender: bool = False) -> tuple[str, ...]:
     """The F1..Fn outputs the search must produce for ``outs`` (the features' position and
-    colour come from the F1 offset and ID)."""
+    colour come from the F1 offset and ID; Blender's colour from the F1 cell, found from both)."""
     need = set(outs)
-    if "position" in need:
+    if "position" in need or ("color" in need and blender):
         need.add("delta")
     if "color" in need:
         need.add("id")
     return tuple(o for o in ("F", "delta", "id", "grad") if o in need) or ("F",)
 
 
-def numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> tuple[dict, np.ndarray]:
+def numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
+                 smooth="exp") -> tuple[dict, np.ndarray]:
+    """The NumPy backend (and the GPU's fallback): ``({output: array}, exact)`` for samples given
+    as cells and fractions (lattice units), ``smoothness`` and ``positions`` in sample units."""
     F, D, I, exact = reference.search(cells, fr, p, n)
     out = {}
     inv = 1.0 / p.scale
-    basis = basis_outputs(outputs)
+    blender = p.distribution == Distribution.BLENDER
+    basis = basis_outputs(outputs, blender)
     if "F" in basis:
         out["F"] = (F * inv).astype(np.float32)
     w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
@@ -39,16 +44,17 @@ def numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None) -> tu
     if "grad" in basis:
         out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
     if set(outputs) & set(_features.OUTPUTS):
-        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale)
+        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale,
+                                   smooth=smooth)
         exact = feats["exact"]
-        _features.finish(out, feats, positions, p.scale, p.dim, outputs)
+        _features.finish(out, feats, positions, p.scale, p.dim, outputs, blender)
     return out, exact
 
 
 _BASIS_NAMES = ("F", "delta", "id", "grad", "position", "color")
 
 
-def gpu_passes(run, outs, N: int) -> tuple[dict, list]:
+def gpu_passes(run, outs, N: int, p) -> tuple[dict, list]:
     """The GPU dispatches for ``outs``: one for the basis outputs (F, delta, id, grad, and what
     position and colour need), then one per feature walk (edge, n-sphere, smooth), each with the
     whole loop budget (``CELL_LOOP_BUDGET``) to itself. So a sample gets the same bits, and the
@@ -58,7 +64,7 @@ def gpu_passes(run, outs, N: int) -> tuple[dict, list]:
     fams = _features.flags(outs)
     out, passes = {}, []
     if set(outs) & set(_BASIS_NAMES) or not any(fams.values()):
-        out, exact = run(basis_outputs(outs))
+        out, exact = run(basis_outputs(outs, p.distribution == Distribution.BLENDER))
         passes.append((_BASIS_NAMES, exact))
     if any(fams.values()):
         record = np.zeros((N, _features.STRIDE), dtype=np.float32)
@@ -76,7 +82,7 @@ def gpu_passes(run, outs, N: int) -> tuple[dict, list]:
 _FALLBACK_CHUNK = 1 << 16
 
 
-def fallback(out: dict, passes: list, where, p, n, outs, smoothness) -> np.ndarray:
+def fallback(out: dict, passes: list, where, p, n, outs, smoothness, smooth="exp") -> np.ndarray:
     """Search the samples a GPU pass flagged inexact (its loop budget, the driver's limit or the
     ring cap reached) again with the NumPy reference, which has no loop budget and goes up to
     :func:`cellgl.basis.reference.max_ring_default` rings, and put its answer for that pass's
@@ -92,7 +98,7 @@ def fallback(out: dict, passes: list, where, p, n, outs, smoothness) -> np.ndarr
         for first in range(0, len(rows_all), _FALLBACK_CHUNK):
             rows = rows_all[first:first + _FALLBACK_CHUNK]
             cells, fr, positions = where(rows)
-            ref_out, ok_rows = numpy_search(cells, fr, p, n, pass_outs or ("F",), smoothness, positions)
+            ref_out, ok_rows = numpy_search(cells, fr, p, n, pass_outs or ("F",), smoothness, positions, smooth)
             for name, arr in ref_out.items():
                 if name in out and name in names:
                     out[name][rows] = arr

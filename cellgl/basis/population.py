@@ -80,3 +80,134 @@ def poisson_thresholds(density: float) -> np.ndarray:
         cdf += math.exp(-density + k * math.log(density) - math.lgamma(k + 1))
         out[k] = min(int(math.floor(min(cdf, 1.0) * 4294967296.0)), 0xFFFFFFFF)
     return out.astype(np.uint32)
+
+
+# --------------------------------------------------------------------------- Blender's points
+
+def _rot(x, k: int):
+    """Rotate uint32 values left by k bits."""
+    x = _u(x)
+    return ((x << np.uint64(k)) | (x >> np.uint64(32 - k))) & M32
+
+
+def _sub(a, b):
+    return (_u(a) + np.uint64(1 << 32) - _u(b)) & M32
+
+
+def _jenkins_final(a, b, c):
+    """Bob Jenkins' lookup3 final mix of three uint32 words; returns c."""
+    w = {"a": a, "b": b, "c": c}
+    for x, y, k in (("c", "b", 14), ("a", "c", 11), ("b", "a", 25), ("c", "b", 16),
+                    ("a", "c", 4), ("b", "a", 14), ("c", "b", 24)):
+        w[x] = _sub(w[x] ^ w[y], _rot(w[y], k))      # x ^= y; x -= rot(y, k)
+    return w["c"]
+
+
+def _jenkins_mix(a, b, c):
+    """lookup3's reversible mix of three uint32 words (used before the last word of 4)."""
+    w = {"a": a, "b": b, "c": c}
+    for x, y, z, k in (("a", "c", "b", 4), ("b", "a", "c", 6), ("c", "b", "a", 8),
+                       ("a", "c", "b", 16), ("b", "a", "c", 19), ("c", "b", "a", 4)):
+        # x -= y; x ^= rot(y, k); y += z
+        w[x] = _sub(w[x], w[y]) ^ _rot(w[y], k)
+        w[y] = _add(w[y], w[z])
+    return w["a"], w["b"], w["c"]
+
+
+def jenkins_hash(*words):
+    """lookup3 hash of 1..4 uint32 words (arrays broadcast), as Blender hashes a cell's float bits."""
+    n = len(words)
+    init = _u(0xDEADBEEF + (n << 2) + 13)
+    a = b = c = init
+    if n == 4:
+        a, b, c = _add(a, words[0]), _add(b, words[1]), _add(c, words[2])
+        a, b, c = _jenkins_mix(a, b, c)
+        a = _add(a, words[3])
+    else:
+        a = _add(a, words[0])
+        if n >= 2:
+            b = _add(b, words[1])
+        if n >= 3:
+            c = _add(c, words[2])
+    return _jenkins_final(a, b, c)
+
+
+def float_bits(x) -> np.ndarray:
+    """The IEEE bits of float32 values, as uint64 (``floatBitsToUint``)."""
+    return np.asarray(x, dtype=np.float32).view(np.uint32).astype(np.uint64)
+
+
+def unit_float(h) -> np.ndarray:
+    """A uint32 hash as Blender's float in [0, 1]: float32(h) / 2^32 (float32, rounded to nearest)."""
+    return (_u(h).astype(np.float32) * np.float32(1.0 / 4294967296.0)).astype(np.float32)
+
+
+_ONE, _TWO = 0x3F800000, 0x40000000      # float bits of 1.0 and 2.0
+
+
+def blender_cell_words(cells, dim: int) -> list:
+    """The float bits of each cell coordinate (cells (N, >= dim) int)."""
+    c = np.asarray(cells)
+    return [float_bits(c[:, a].astype(np.float32)) for a in range(dim)]
+
+
+def blender_point(cells, dim: int) -> np.ndarray:
+    """Blender's feature point of each integer cell, before Randomness: float32 (N, dim) in
+    [0, 1], the hash of the cell's coordinates as floats (x from one hash, y, z, w from the same
+    coordinates with a constant or a rotation appended)."""
+    k = blender_cell_words(cells, dim)
+    one, two = _u(_ONE), _u(_TWO)
+    if dim == 1:
+        hs = [jenkins_hash(k[0])]
+    elif dim == 2:
+        hs = [jenkins_hash(k[0], k[1]), jenkins_hash(k[0], k[1], one)]
+    elif dim == 3:
+        hs = [jenkins_hash(*k), jenkins_hash(*k, one), jenkins_hash(*k, two)]
+    else:
+        x, y, z, w = k
+        hs = [jenkins_hash(x, y, z, w), jenkins_hash(w, x, y, z), jenkins_hash(z, w, x, y),
+              jenkins_hash(y, z, w, x)]
+    return np.stack([unit_float(h) for h in hs], axis=1)
+
+
+def blender_id(cells, dim: int) -> np.ndarray:
+    """The ID of Blender's point in each cell: the hash of its coordinates (the first of
+    :func:`blender_point`'s hashes, and of :func:`blender_color`'s), uint64 values < 2^32."""
+    return jenkins_hash(*blender_cell_words(cells, dim))
+
+
+def blender_color(cells, dim: int) -> np.ndarray:
+    """Blender's colour of each integer cell: float32 (N, 3) in [0, 1], three hashes of the
+    cell's coordinates as floats."""
+    k = blender_cell_words(cells, dim)
+    one, two = _u(_ONE), _u(_TWO)
+    if dim == 1:
+        hs = [jenkins_hash(k[0]), jenkins_hash(k[0], one), jenkins_hash(k[0], two)]
+    elif dim == 2:
+        hs = [jenkins_hash(k[0], k[1]), jenkins_hash(k[0], k[1], one), jenkins_hash(k[0], k[1], two)]
+    elif dim == 3:
+        hs = [jenkins_hash(*k), jenkins_hash(*k, one), jenkins_hash(*k, two)]
+    else:
+        x, y, z, w = k
+        hs = [jenkins_hash(x, y, z, w), jenkins_hash(z, x, w, y), jenkins_hash(w, z, y, x)]
+    return np.stack([unit_float(h) for h in hs], axis=1)
+
+
+def blender_owner_cells(lattice_pos, ids, dim: int) -> np.ndarray:
+    """The integer cell of each Blender point (N, dim) int64, from its position (N, >= dim) in
+    lattice units and its ID (the hash of its cell, :func:`blender_id`): the cell holding the
+    position, or the neighbour whose hash is the ID where the point lies on a face (a hash of
+    1.0, or the rounding of a float32 offset)."""
+    import itertools
+
+    cells = np.floor(np.asarray(lattice_pos, dtype=np.float64)[:, :dim]).astype(np.int64)
+    ids = _u(ids)
+    rows = np.nonzero(blender_id(cells, dim) != ids)[0]
+    for o in itertools.product((-1, 0, 1), repeat=dim):
+        if not len(rows):
+            break
+        cand = cells[rows] + np.array(o)
+        hit = blender_id(cand, dim) == ids[rows]
+        cells[rows[hit]] = cand[hit]
+        rows = rows[~hit]
+    return cells

@@ -19,7 +19,8 @@ import numpy as np
 from cellgl.basis.density import levels_reference
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.basis.population import (BIG, M32, MAX_POINTS, W96_DENSITY_ADJUSTMENT, _add, _mul, _u,  # noqa: F401
-                                     hash_u32, poisson_thresholds, u16, worley1996_table)
+                                     blender_id, blender_point, hash_u32, poisson_thresholds, u16,
+                                     worley1996_table)
 
 
 @dataclass(frozen=True)
@@ -111,6 +112,8 @@ def wrap(cells: np.ndarray, period) -> np.ndarray:
 
 def cell_seed(cells: np.ndarray, p: Params) -> np.ndarray:
     """``cell_cell_seed``: start of each cell's random stream. cells (N, 4) int64."""
+    if p.distribution == Distribution.BLENDER:
+        return blender_id(cells, p.dim)
     c = cells.astype(np.int64) & 0xFFFFFFFF
     if p.distribution == Distribution.WORLEY1996:
         h = _add(_add(_mul(c[:, 0], 702395077), _mul(c[:, 1], 915488749)), _mul(c[:, 2], 2120969693))
@@ -136,7 +139,7 @@ def point_count(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
     if p.distribution == Distribution.WORLEY1996:
         count = worley1996_table()[(state >> np.uint64(24)).astype(np.int64)]
         return _w96_step(state), count
-    if p.distribution == Distribution.JITTER:
+    if p.distribution in (Distribution.JITTER, Distribution.BLENDER):
         return state, np.ones(len(state), dtype=np.int64)
     u = state
     if p.density_map is not None:
@@ -149,10 +152,14 @@ def point_count(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
     return state, count
 
 
-def next_point(state: np.ndarray, p: Params):
-    """``cell_next_point``: returns (new_state, position in cell (N, 4) float64, id uint32)."""
+def next_point(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
+    """``cell_next_point`` of the (wrapped) cells (N, 4) int64 whose streams are at ``state``:
+    returns (new_state, position in cell (N, 4) float64, id uint32)."""
     n = len(state)
     f = np.zeros((n, 4), dtype=np.float64)
+    if p.distribution == Distribution.BLENDER:      # the hash times Randomness, in float32
+        f[:, : p.dim] = blender_point(cells, p.dim) * np.float32(p.jitter)
+        return state, (orbit(f, state, p) if p.orbit else f), state.copy()
     if p.distribution == Distribution.WORLEY1996:
         ids = state.copy()
         for a in range(3):
@@ -256,7 +263,7 @@ def _visit(F, D, I, cells, f, o, p: Params):
     state, count = point_count(state, p, wc)
     base = o.astype(np.float64) - f
     for k in range(int(count.max(initial=0))):
-        state, q, ids = next_point(state, p)
+        state, q, ids = next_point(state, p, wc)
         has = k < count
         delta = (base + q) * np.asarray(p.axis_scale)
         d = np.where(has, metric_length(delta, p), np.inf)
@@ -409,7 +416,7 @@ def feature_points(cells: np.ndarray, p: Params):
     state, count = point_count(state, p, wc)
     pos, ids, which = [], [], []
     for k in range(int(count.max(initial=0))):
-        state, q, idk = next_point(state, p)
+        state, q, idk = next_point(state, p, wc)
         has = np.nonzero(k < count)[0]
         pos.append(c4[has, : p.dim] + q[has, : p.dim])
         ids.append(idk[has])

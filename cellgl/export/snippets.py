@@ -63,7 +63,10 @@ TARGETS: dict[str, Target] = {t.name: t for t in (
            "AddShaderSourceDirectoryMapping), then in a Material Custom node: Include File Paths "
            "/Project/cellgl.ush, Code 'return cellgl_texture(UV);', input UV, output Float 4."),
     Target("wgsl", "wgsl", "WGSL (WebGPU)", ".wgsl",
-           "Paste into your WGSL module and call cellgl_texture(uv) (f32 vectors)."),
+           "Paste into your WGSL module and call cellgl_texture(uv) (f32 vectors). cellgl_texture (and "
+           "cellgl_texture3, if present) uses fwidth, so it works only in fragment shaders; in compute "
+           "or vertex shaders call cellgl_texture_filtered(uv, duv) and delete the file from the "
+           "comment 'Fragment (pixel) shaders only' to the end."),
 )}
 
 #: target names that are refused, with the reason

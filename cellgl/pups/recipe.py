@@ -342,6 +342,11 @@ class PupsRecipe:
         g = d.get("pups", {})
         if not isinstance(g, dict):
             raise _err("pups", g, "a JSON object", "expected an object, got")
+        if not g:
+            held = ", ".join(repr(k) for k in d)
+            raise RecipeError(f"{where}: no PUPs parameter set (it holds only {held}); accepted: a "
+                              "'pups' section with at least its 'pattern' (`cellgl presets pups-cow` prints a "
+                              "whole recipe to start from)")
         return cls(g, d.get("name", "custom"), d.get("doc", ""), d.get("outputs", ["color"]))
 
     def to_json(self) -> str:

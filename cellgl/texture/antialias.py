@@ -51,11 +51,11 @@ def smoothscale(w) -> np.ndarray:
 def feature_frequency(values) -> float:
     """Feature points per basis unit along a line, ``dist_scale * density^(1/dim)``: the inverse
     of the mean spacing of an octave-0 feature (``density_max`` with a density map: the finest
-    features; 1 point per cell for the jitter distribution)."""
+    features; 1 point per cell for the jitter and blender distributions)."""
     from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT
 
     dim = int(values["dimension"])
-    if values["distribution"] == "jitter":
+    if values["distribution"] in ("jitter", "blender"):
         density = 1.0
     elif values["distribution"] == "worley1996":
         density = 2.5          # the mean of the book's population table (cellgl.reference)

@@ -37,7 +37,9 @@ FRACTAL_MODES = ("none", "sum", "qin", "qin_cube", "min")
 #: colour-ramp interpolation, in GLSL order (CELL_TEX_RAMP_*)
 RAMP_MODES = ("linear", "spline")
 NORMAL_CONVENTIONS = ("opengl", "directx")
-DISTRIBUTIONS = ("poisson", "jitter", "worley1996")
+DISTRIBUTIONS = ("poisson", "jitter", "worley1996", "blender")
+#: smooth F1: log-sum-exp over every point, or Blender's polynomial fold (cellgl.basis.features)
+SMOOTH_MODES = ("exp", "polynomial")
 #: spatially varying feature density (cellgl.basis.density): the map of a texture, in uv
 DENSITY_MAPS = ("none", "ramp_x", "ramp_y", "radial", "image")
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
@@ -104,7 +106,8 @@ PARAMS: tuple[Param, ...] = (
     Param("dimension", "int", 2, 2, 4, "dimension of the basis: 2 (image plane), 3 (solid: uv plus z), "
           "4 (solid plus time)", "basis", compile_time=True),
     Param("distribution", "enum", "poisson", None, None, "feature points: poisson (Worley: Poisson count per "
-          "cell), jitter (one per cell), worley1996 (the book's program, 3D only)", "basis",
+          "cell), jitter (one per cell), worley1996 (the book's program, 3D only), blender (Blender's Voronoi "
+          "node: its hash, one point per cell, jitter as Randomness; seed 0)", "basis",
           choices=DISTRIBUTIONS, compile_time=True),
     Param("metric", "enum", "euclidean", None, None, "distance metric (manhattan: Worley's ship-hull "
           "channels)", "basis", choices=METRICS, compile_time=True),
@@ -128,7 +131,8 @@ PARAMS: tuple[Param, ...] = (
     Param("density_center_y", "float", 0.5, -100.0, 100.0, "radial: v of the centre", "basis", derived=True),
     Param("density_radius", "float", 0.5, 0.001, 100.0, "radial: distance (in u units) where the map "
           "reaches 1", "basis", derived=True),
-    Param("jitter", "float", 1.0, 0.0, 1.0, "displacement of the point from the cell centre (jitter)", "basis"),
+    Param("jitter", "float", 1.0, 0.0, 1.0, "displacement of the point from the cell centre (jitter); "
+          "Blender's Randomness (blender)", "basis"),
     Param("min_points", "int", 1, 0, 16, "poisson: fewest points per cell (Worley: 1)", "basis"),
     Param("max_points", "int", 9, 1, 16, "poisson: most points per cell (Worley: 9)", "basis"),
     Param("seed", "int", 0, 0, 2 ** 32 - 1, "random seed of the feature points and the noise", "basis",
@@ -152,8 +156,13 @@ PARAMS: tuple[Param, ...] = (
           "smoothness)", "combination"),
     Param("c_nsphere", "float", 0.0, -64.0, 64.0, "weight of the n-sphere radius: half the distance from "
           "the F1 point to its nearest other point (Euclidean metric only)", "combination"),
-    Param("smoothness", "float", 0.0, 0.0, 0.25, "k of smooth F1, in cells (0: F1 itself); with cell_mix "
-          "the cell value and the cell_image position blend the same way", "combination"),
+    Param("smoothness", "float", 0.0, 0.0, 1.0, "k of smooth F1, in cells (0: F1 itself; at most 0.25 with "
+          "smooth exp); with cell_mix the cell value and the cell_image position blend the same way",
+          "combination"),
+    Param("smooth", "enum", "exp", None, None, "smooth F1: exp (-k log sum exp(-F_j / k) over every point, "
+          "exact) or polynomial (Blender's Voronoi node: its running polynomial smooth minimum over the "
+          "5^d cells around the sample's, k = smoothness / 2)", "combination", choices=SMOOTH_MODES,
+          compile_time=True),
     Param("range_lo", "float", 0.0, -1e6, 1e6, "value mapped to 0 (measured: 0.5th percentile; "
           "see cellgl.texture.measure_range)", "combination"),
     Param("range_hi", "float", 1.0, -1e6, 1e6, "value mapped to 1 (measured: 99.5th percentile)",

@@ -16,7 +16,8 @@ one-line doc. On disk it is JSON, one section per parameter group::
       "outputs": ["color"]
     }
 
-Sections and keys may be left out (the table's defaults apply). Coefficients may also be given
+Sections and keys may be left out (the table's defaults apply), but a recipe that sets no value at
+all (``{}``, ``{"name": "x"}``) is refused: ``Recipe()`` is the all-defaults recipe. Coefficients may also be given
 one by one (``"c12": 1.0``). Reading is strict: an unknown key, a wrong type or a value out of
 range raises :class:`RecipeError` naming the field path, the bad value and what is accepted.
 
@@ -292,10 +293,12 @@ class Recipe:
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
                 raise _err(k, d[k], "a string", "expected a string, got")
-        base = cls(values, ramp if ramp is not None else DEFAULT_RAMP, d.get("name", "custom"),
-                   d.get("doc", ""), _outputs(d.get("outputs", ["color"]), "outputs"), density_image=image,
-                   cell_image=cimage)
+        outputs = _outputs(d.get("outputs", ["color"]), "outputs")
         variants = d.get("variants", [])
+        if not values and ramp is None and image is None and cimage is None and not variants:
+            _refuse_empty(d, where, GROUPS)
+        base = cls(values, ramp if ramp is not None else DEFAULT_RAMP, d.get("name", "custom"),
+                   d.get("doc", ""), outputs, density_image=image, cell_image=cimage)
         if not isinstance(variants, list):
             raise _err("variants", variants, "a list of partial recipes", "expected a list, got")
         out = []
@@ -401,6 +404,15 @@ def _coefficients(key: str, value, path: str) -> dict:
     return out
 
 
+def _refuse_empty(d: dict, where: str, sections) -> None:
+    """A recipe that sets no parameter is a mistake (a mistyped or truncated file), not a request
+    for the defaults (those are ``Recipe()``): refuse it, naming what it holds."""
+    held = f"it holds only {', '.join(repr(k) for k in d)}" if d else "it is empty"
+    raise RecipeError(f"{where}: no parameter set ({held}); accepted: at least one "
+                      f"value in one of the sections {', '.join(sections)} (`cellgl presets flagstone` "
+                      "prints a whole recipe to start from)")
+
+
 def _read_groups(d: dict, base=None):
     values: dict = {}
     ramp = image = cimage = None
@@ -464,6 +476,14 @@ def _check(r: Recipe) -> None:
     if v["distribution"] == "worley1996" and v["dimension"] != 3:
         raise RecipeError(f"basis.distribution: 'worley1996' needs basis.dimension 3, got "
                           f"{v['dimension']}; accepted: poisson, jitter for dimension 2 and 4")
+    if v["distribution"] == "blender" and v["seed"] != 0:
+        raise RecipeError(f"basis.seed: {v['seed']!r} with basis.distribution 'blender' (Blender's points "
+                          "have no seed; move the texture with domain.offset_x/offset_y instead); "
+                          "accepted: seed 0")
+    if v["smooth"] == "exp" and v["smoothness"] > 0.25:
+        raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
+                          "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "
+                          "'polynomial' for up to 1")
     if not v["range_hi"] > v["range_lo"]:
         raise RecipeError(f"combination.range_hi: {v['range_hi']} must exceed combination.range_lo "
                           f"({v['range_lo']})")

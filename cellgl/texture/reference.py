@@ -305,7 +305,8 @@ def texture_combination(s: np.ndarray, t: dict, octave: int, n: int):
         from cellgl.basis.features import features
 
         names = ("edge",) * fl["edge"] + ("smooth_F1",) * fl["smooth"] + ("nsphere",) * fl["nsphere"]
-        x = features(cell, fr, p, F * t["dist_scale"], D, I, exact, names, t["smoothness"] * t["dist_scale"])
+        x = features(cell, fr, p, F * t["dist_scale"], D, I, exact, names, t["smoothness"] * t["dist_scale"],
+                     smooth=t["smooth"])
         ds = t["dist_scale"]
         v += (t["c_edge"] * x["edge"] + t["c_smooth"] * x["smooth_F"] + t["c_nsphere"] * x["nsphere"]) / ds
         grad += t["c_edge"] * x["edge_grad"] + t["c_smooth"] * x["smooth_grad"]

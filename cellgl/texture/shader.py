@@ -286,7 +286,8 @@ def defines(recipe, channels=()) -> dict:
         CELL_ORBIT=int(domain.orbit(v)),
         CELL_ANISO=int(domain.aniso(v)),
         CELL_EDGE=int(v["c_edge"] != 0.0),
-        CELL_SMOOTH=int(v["smoothness"] > 0.0 and (v["c_smooth"] != 0.0 or v["cell_mix"] != 0.0)),
+        CELL_SMOOTH=int(v["smoothness"] > 0.0 and (v["c_smooth"] != 0.0 or v["cell_mix"] != 0.0))
+        * (2 if v["smooth"] == "polynomial" else 1),
         CELL_NSPHERE=int(v["c_nsphere"] != 0.0),
         CELL_FEATURE_MAX_RING=feature_max_ring(v["dimension"]),
         CELL_TEX_CELL_IMAGE=int(v["cell_color"] == "image"),

@@ -137,7 +137,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     r.loops += count + 1;
     for (int k = 0; k < count; k++) {
         uint id;
-        vec4 q = cell_next_point(state, p, id);
+        vec4 q = cell_next_point(state, c, p, id);
         vec4 delta = _cell_axis_scale(base + q, p);
         _cell_insert(r, cell_metric_length(delta, p.minkowski_p), delta, id);
     }

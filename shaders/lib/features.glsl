@@ -33,8 +33,9 @@
 // walks together stay inside the budget.
 //
 // Requires: cellular.glsl. Macros: those of cellular.glsl, CELL_EDGE,
-// CELL_SMOOTH, CELL_NSPHERE (0 or 1; all 0: nothing below is compiled and
-// cell_search is untouched), CELL_FEATURE_MAX_RING.
+// CELL_SMOOTH, CELL_NSPHERE (0 or 1; CELL_SMOOTH 2: smooth F1 as Blender's
+// Voronoi node folds it, _cell_poly_smooth below; all 0: nothing below is
+// compiled and cell_search is untouched), CELL_FEATURE_MAX_RING.
 
 #include "cellular.glsl"
 
@@ -118,7 +119,7 @@ float _cell_walk_reach(_CellWalk w)
 #if CELL_EDGE
     reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
 #endif
-#if CELL_SMOOTH
+#if CELL_SMOOTH == 1
     reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
 #endif
     // A margin for rounding: visiting more is always safe.
@@ -152,7 +153,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
         }
     }
 #endif
-#if CELL_SMOOTH
+#if CELL_SMOOTH == 1
     float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
     if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
         float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
@@ -173,7 +174,7 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     w.loops += count + 1;
     for (int k = 0; k < count; k++) {
         uint id;
-        vec4 q = cell_next_point(state, p, id);
+        vec4 q = cell_next_point(state, c, p, id);
         _cell_walk_point(w, base + q, id, o, q, p);
     }
 }
@@ -222,6 +223,83 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     return float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
 }
 
+#if CELL_SMOOTH == 2
+// Smooth F1 as Blender's Voronoi node folds it (CELL_SMOOTH 2): a running
+// polynomial smooth minimum over the 5^d block of cells around the sample's,
+// in the node's order (x fastest, then y, z, w), starting from 8:
+//     h = smoothstep(0, 1, 1/2 + (s - d) / (2 k)),  c = k h (1 - h),
+//     s <- mix(s, d, h) - c,
+// with k = smoothness / 2; the point's position and cell colour are folded with
+// the same h and c / (1 + 3 k) (and the cell value, for the texture layer). The fold depends on the order (a point far
+// from the sample, visited before the nearest one, can still pull s down), so
+// it is the node's definition over the node's window, not a minimum over all
+// points. Its gradient is carried along by the chain rule. smoothness 0: the
+// hard minimum (the first point of least distance).
+float _cell_smoothstep_slope(float t)
+{
+    return (t > 0.0 && t < 1.0) ? 6.0 * t * (1.0 - t) : 0.0;
+}
+
+void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, float smoothness)
+{
+    float k = 0.5 * smoothness;
+    float s = 8.0;
+    vec4 gs = vec4(0.0);            // d s / d sample
+    vec4 pos = vec4(0.0);           // folded point position, relative to the sample's cell
+    vec4 col = vec4(0.0);           // folded cell colour and cell value (cell_id_value)
+#if CELL_DIM >= 4
+    for (int v = -2; v <= 2; v++)
+#else
+    for (int v = 0; v <= 0; v++)
+#endif
+#if CELL_DIM >= 3
+    for (int z = -2; z <= 2; z++)
+#else
+    for (int z = 0; z <= 0; z++)
+#endif
+    for (int y = -2; y <= 2; y++)
+    for (int x = -2; x <= 2; x++) {
+        ivec4 o4 = ivec4(x, y, z, v);
+        ivec4 c = cell_wrap(cell + o4, p.period);
+        uint state = cell_cell_seed(c, p.seed);
+        int count = cell_point_count_at(state, c, p);
+        for (int j = 0; j < count; j++) {
+            uint id;
+            vec4 q = cell_dims(vec4(o4) + cell_next_point(state, c, p, id));
+            vec4 delta = q - f;
+            float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+            vec4 gd = cell_metric_gradient(delta, d, p.minkowski_p);
+            float h, dh_ds;
+            if (k > 0.0) {
+                float t = 0.5 + 0.5 * (s - d) / k;
+                h = smoothstep(0.0, 1.0, t);
+                dh_ds = _cell_smoothstep_slope(t) * 0.5 / k;     // d h / d (s - d)
+            } else {
+                h = d < s ? 1.0 : 0.0;
+                dh_ds = 0.0;
+            }
+            float c0 = k * h * (1.0 - h);
+            // d s_new = (1 - h) ds + h dd + ((d - s) - k (1 - 2 h)) dh, dh = dh_ds (ds - dd)
+            vec4 gh = dh_ds * (gs - gd);
+            gs = (1.0 - h) * gs + h * gd + ((d - s) - k * (1.0 - 2.0 * h)) * gh;
+            s = mix(s, d, h) - c0;
+            float c1 = c0 / (1.0 + 3.0 * k);
+#if CELL_DIST == CELL_DIST_BLENDER
+            vec4 cc = vec4(cell_blender_color(c), cell_id_value(id));
+#else
+            vec4 cc = cell_id_attribute(id);
+#endif
+            col = mix(col, cc, h) - c1;
+            pos = mix(pos, q, h) - c1;
+        }
+    }
+    o.smooth_F = s;
+    o.smooth_delta = cell_dims(pos - f);
+    o.smooth_grad = cell_dims(gs);
+    o.smooth_attr = col;
+}
+#endif
+
 // The features of the sample (cell, f) whose cell_search() result is r;
 // smoothness: k of smooth F1 in lattice units (>= 0).
 CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
@@ -254,7 +332,9 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     o.smooth_grad = cell_metric_gradient(r.delta[0], r.F[0], p.minkowski_p);
     o.smooth_attr = cell_id_attribute(r.id[0]);
     o.nsphere = 0.0;
-#if CELL_SMOOTH
+#if CELL_SMOOTH == 2
+    _cell_poly_smooth(o, cell, f, p, smoothness);
+#elif CELL_SMOOTH
     if (w.wsum > 0.0) {
         float inv = 1.0 / w.wsum;
         o.smooth_F = w.F1 - w.k * log(w.wsum);

@@ -99,7 +99,130 @@ ivec4 cell_wrap(ivec4 c, ivec4 period)
 #endif
 }
 
-#if CELL_DIST == CELL_DIST_WORLEY1996
+#if CELL_DIST == CELL_DIST_BLENDER
+// Compiled only for distribution "blender" (other recipes' shader text is unchanged).
+// Bob Jenkins' lookup3 hash of 1..4 uint32 words, as Blender's Voronoi node
+// hashes the float bits of a cell's coordinates (distribution "blender";
+// cellgl/basis/population.py jenkins_hash is the NumPy twin). A rotation, the
+// three-word final mix, and the mix that absorbs the first three of four words.
+uint _cell_rot(uint x, int k)
+{
+    return (x << uint(k)) | (x >> uint(32 - k));
+}
+
+uint _cell_jenkins_final(uint a, uint b, uint c)
+{
+    c ^= b; c -= _cell_rot(b, 14);
+    a ^= c; a -= _cell_rot(c, 11);
+    b ^= a; b -= _cell_rot(a, 25);
+    c ^= b; c -= _cell_rot(b, 16);
+    a ^= c; a -= _cell_rot(c, 4);
+    b ^= a; b -= _cell_rot(a, 14);
+    c ^= b; c -= _cell_rot(b, 24);
+    return c;
+}
+
+uint cell_jenkins1(uint x)
+{
+    uint s = 0xdeadbeefu + 17u;          // seed: 0xdeadbeef + 4 n + 13, n words
+    return _cell_jenkins_final(s + x, s, s);
+}
+
+uint cell_jenkins2(uint x, uint y)
+{
+    uint s = 0xdeadbeefu + 21u;
+    return _cell_jenkins_final(s + x, s + y, s);
+}
+
+uint cell_jenkins3(uint x, uint y, uint z)
+{
+    uint s = 0xdeadbeefu + 25u;
+    return _cell_jenkins_final(s + x, s + y, s + z);
+}
+
+uint cell_jenkins4(uint x, uint y, uint z, uint w)
+{
+    uint s = 0xdeadbeefu + 29u;
+    uint a = s + x;
+    uint b = s + y;
+    uint c = s + z;
+    a -= c; a ^= _cell_rot(c, 4);  c += b;
+    b -= a; b ^= _cell_rot(a, 6);  a += c;
+    c -= b; c ^= _cell_rot(b, 8);  b += a;
+    a -= c; a ^= _cell_rot(c, 16); c += b;
+    b -= a; b ^= _cell_rot(a, 19); a += c;
+    c -= b; c ^= _cell_rot(b, 4);  b += a;
+    return _cell_jenkins_final(a + w, b, c);
+}
+
+// A uint32 hash as Blender's float in [0, 1]: float(h) rounded to float32, / 2^32.
+float cell_unit_float(uint h)
+{
+    return float(h) * (1.0 / 4294967296.0);
+}
+
+// Blender's Voronoi node: the float bits of an integer cell's coordinates.
+uvec4 _cell_blender_words(ivec4 c)
+{
+    return floatBitsToUint(vec4(c));
+}
+
+// Blender's point in cell c before Randomness, each coordinate in [0, 1]
+// (CELL_DIM coordinates; x from the hash of the coordinates, the others from
+// the coordinates with 1.0 or 2.0 appended, or rotated in 4D).
+vec4 cell_blender_point(ivec4 c)
+{
+    uvec4 k = _cell_blender_words(c);
+    const uint one = 0x3f800000u;     // float bits of 1.0
+    const uint two = 0x40000000u;     // and of 2.0
+#if CELL_DIM == 2
+    return vec4(cell_unit_float(cell_jenkins2(k.x, k.y)), cell_unit_float(cell_jenkins3(k.x, k.y, one)),
+                0.0, 0.0);
+#elif CELL_DIM == 3
+    return vec4(cell_unit_float(cell_jenkins3(k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, one)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, two)), 0.0);
+#else
+    return vec4(cell_unit_float(cell_jenkins4(k.x, k.y, k.z, k.w)),
+                cell_unit_float(cell_jenkins4(k.w, k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins4(k.z, k.w, k.x, k.y)),
+                cell_unit_float(cell_jenkins4(k.y, k.z, k.w, k.x)));
+#endif
+}
+
+// Blender's colour of cell c (the node's Color output for a point in it).
+vec3 cell_blender_color(ivec4 c)
+{
+    uvec4 k = _cell_blender_words(c);
+    const uint one = 0x3f800000u;
+    const uint two = 0x40000000u;
+#if CELL_DIM == 2
+    return vec3(cell_unit_float(cell_jenkins2(k.x, k.y)), cell_unit_float(cell_jenkins3(k.x, k.y, one)),
+                cell_unit_float(cell_jenkins3(k.x, k.y, two)));
+#elif CELL_DIM == 3
+    return vec3(cell_unit_float(cell_jenkins3(k.x, k.y, k.z)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, one)),
+                cell_unit_float(cell_jenkins4(k.x, k.y, k.z, two)));
+#else
+    return vec3(cell_unit_float(cell_jenkins4(k.x, k.y, k.z, k.w)),
+                cell_unit_float(cell_jenkins4(k.z, k.x, k.w, k.y)),
+                cell_unit_float(cell_jenkins4(k.w, k.z, k.y, k.x)));
+#endif
+}
+
+// The cell's point ID: the first hash of its coordinates (cell_blender_point's x).
+uint cell_cell_seed(ivec4 c, uint seed)
+{
+    uvec4 k = _cell_blender_words(c);
+#if CELL_DIM == 2
+    return cell_jenkins2(k.x, k.y);
+#elif CELL_DIM == 3
+    return cell_jenkins3(k.x, k.y, k.z);
+#else
+    return cell_jenkins4(k.x, k.y, k.z, k.w);
+#endif
+}
+#elif CELL_DIST == CELL_DIST_WORLEY1996
 // The book's cube seed: 702395077 x + 915488749 y + 2120969693 z (mod 2^32),
 // plus the cellgl seed times an odd constant (0 leaves the original untouched).
 uint cell_cell_seed(ivec4 c, uint seed)
@@ -132,7 +255,7 @@ int cell_point_count(inout uint state, CellParams p)
     int count = _cell_w96_table[state >> 24];
     state = 1402024253u * state + 586950981u;
     return count;
-#elif CELL_DIST == CELL_DIST_JITTER
+#elif CELL_DIST == CELL_DIST_JITTER || CELL_DIST == CELL_DIST_BLENDER
     return 1;
 #else
     // count = min_points + #{k in [min_points, max_points) : u >= thresholds[k]},
@@ -223,12 +346,16 @@ vec4 cell_orbit(vec4 f, uint id, CellParams p)
 }
 #endif
 
-// The next feature point of the stream: its ID, and its position relative to
-// the cell's lower corner, each coordinate in [0, 1].
-vec4 cell_next_point(inout uint state, CellParams p, out uint id)
+// The next feature point of the stream of (wrapped) cell c: its ID, and its
+// position relative to the cell's lower corner, each coordinate in [0, 1].
+vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
 {
     vec4 f = vec4(0.0);
-#if CELL_DIST == CELL_DIST_WORLEY1996
+#if CELL_DIST == CELL_DIST_BLENDER
+    // Blender: the hash times Randomness (p.jitter), a float32 product as in the node.
+    id = state;
+    f = cell_blender_point(c) * p.jitter;
+#elif CELL_DIST == CELL_DIST_WORLEY1996
     id = state;
     state = 1402024253u * state + 586950981u;
     f.x = (float(state) + 0.5) * (1.0 / 4294967296.0);

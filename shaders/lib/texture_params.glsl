@@ -19,7 +19,7 @@
 struct CellTextureParams {
     float minkowski_p;          // exponent of the minkowski metric
     float density;              // mean feature points per cell (poisson; unused with a density_map)
-    float jitter;               // displacement of the point from the cell centre (jitter)
+    float jitter;               // displacement of the point from the cell centre (jitter); Blender's Randomness (blender)
     int min_points;             // poisson: fewest points per cell (Worley: 1)
     int max_points;             // poisson: most points per cell (Worley: 9)
     uint seed;                  // random seed of the feature points and the noise
@@ -52,7 +52,7 @@ struct CellTextureParams {
     float c_edge;               // weight of the distance to the cell's border (exact, Euclidean metric only; Blender's Distance to Edge)
     float c_smooth;             // weight of smooth F1 (-k log sum exp(-F_j / k), k = smoothness)
     float c_nsphere;            // weight of the n-sphere radius: half the distance from the F1 point to its nearest other point (Euclidean metric only)
-    float smoothness;           // k of smooth F1, in cells (0: F1 itself); with cell_mix the cell value and the cell_image position blend the same way
+    float smoothness;           // k of smooth F1, in cells (0: F1 itself; at most 0.25 with smooth exp); with cell_mix the cell value and the cell_image position blend the same way
     float range_lo;             // value mapped to 0 (measured: 0.5th percentile; see cellgl.texture.measure_range)
     float range_hi;             // value mapped to 1 (measured: 99.5th percentile)
     int fractal;                // none; sum (Worley: sum gain^i b(lac^i x)); qin (sum gain^i |0.5 - b(lac^i x)|); qin_cube (its cube, Qin's wrinkle bump); normalised to [0, 1]; min (Blender's distance-to-edge fractal: min_i v(lac^i x) / lac^i, then normalised; gain unused)
