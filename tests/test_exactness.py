@@ -25,6 +25,7 @@ DISTS = {
     "sparse": dict(density=0.25, min_points=0),
     "jitter": dict(distribution="jitter", jitter=0.7),
     "worley1996": dict(distribution="worley1996"),
+    "blender": dict(distribution="blender", jitter=0.8),
 }
 #: cells of margin around the sample box holding every point that can matter
 REACH = {2: 9, 3: 8, 4: 7}
