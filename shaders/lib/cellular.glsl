@@ -162,19 +162,26 @@ float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
 #endif
 }
 
-// The offset of cell i (0 <= i < product of n) of the window lo .. lo + n - 1,
-// in the order of nested x, y, z, w loops (w fastest). The windows are walked
-// by one flat loop: one pass per cell, where nested loops of run-time length
-// would also spend a pass on every exit of the inner loops.
-ivec4 cell_window_cell(int i, ivec4 lo, ivec4 n)
+// The cell after o in the window lo .. hi, in the order of nested x, y, z, w
+// loops (w fastest); start from lo - (0, 0, 0, 1). The windows are walked by
+// one flat loop: one pass per cell, where nested loops of run-time length
+// would also spend a pass on every exit of the inner loops. (An odometer, not
+// a division of the pass index: integer division is slow on SIMD CPUs.)
+ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
 {
-    ivec4 o;
-    o.w = lo.w + i % n.w;
-    i /= n.w;
-    o.z = lo.z + i % n.z;
-    i /= n.z;
-    o.y = lo.y + i % n.y;
-    o.x = lo.x + i / n.y;
+    o.w += 1;
+    if (o.w > hi.w) {
+        o.w = lo.w;
+        o.z += 1;
+    }
+    if (o.z > hi.z) {
+        o.z = lo.z;
+        o.y += 1;
+    }
+    if (o.y > hi.y) {
+        o.y = lo.y;
+        o.x += 1;
+    }
     return o;
 }
 
@@ -257,6 +264,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #endif
         ivec4 n = hi - lo + 1;
         int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = lo - ivec4(0, 0, 0, 1);
         r.loops += 1;
         for (int i = 0; i < cells; i++) {
             if (!cell_budget_left(r.loops)) {
@@ -264,7 +272,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
                 break;
             }
             r.loops += 1;
-            ivec4 o = cell_window_cell(i, lo, n);
+            o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
                 && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {

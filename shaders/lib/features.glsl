@@ -204,6 +204,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
         ivec4 n = hi - lo + 1;
         int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = lo - ivec4(0, 0, 0, 1);
         w.loops += 1;
         for (int i = 0; i < cells; i++) {
             if (!cell_budget_left(w.loops)) {
@@ -211,7 +212,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
                 return false;
             }
             w.loops += 1;
-            ivec4 o = cell_window_cell(i, lo, n);
+            o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
                 && _cell_box_distance(o, f, p)
