@@ -85,10 +85,11 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
     "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
     "view": (_add_view, _lazy("viewer.cli", "run")),
-    "export": (_lazy("cellgl.export.snippets", "add_parser"), _lazy("cellgl.export.snippets", "run_cli")),
+    "export": (_lazy("cellgl.export.cli", "add_parser"), _lazy("cellgl.export.cli", "run_cli")),
     "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
     "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
     "voronoi": (_lazy("cellgl.voronoi_cli", "add_parser"), _lazy("cellgl.voronoi_cli", "run_cli")),
+    "blender": (_lazy("cellgl.blender.scene", "add_parser"), _lazy("cellgl.blender.scene", "run_cli")),
 }
 
 

@@ -23,12 +23,13 @@ from cellgl.export import translate
 
 REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
 REQUIRE_WGSL = os.environ.get("CELLGL_REQUIRE_WGSL", "").strip().lower() in ("1", "true", "yes")
+REQUIRE_BLENDER = os.environ.get("CELLGL_REQUIRE_BLENDER", "").strip().lower() in ("1", "true", "yes")
 GLSLANG = shutil.which("glslangValidator")
 
 
 def _missing(what: str, required: bool | None = None):
     if REQUIRE if required is None else required:
-        pytest.fail(f"CELLGL_REQUIRE_GPU=1 but {what} is missing", pytrace=False)
+        pytest.fail(f"CELLGL_REQUIRE_GPU/_WGSL/_BLENDER=1 but {what} is missing", pytrace=False)
     pytest.skip(f"{what} is missing")
 
 
@@ -185,6 +186,15 @@ def compile_snippet(tmp_path, target: str, text: str) -> None:
     elif d == "wgsl":
         wgsl_validate(text + "\n@fragment\nfn cellgl_main(@builtin(position) pos: vec4<f32>) "
                       "-> @location(0) vec4<f32>\n{\n    return cellgl_texture(pos.xy / 64.0);\n}\n")
+    elif d == "osl":
+        # Cycles' OSL compiler (bpy, the [blender] extra); renders: tests/test_blender.py
+        try:
+            from cellgl.blender import osl_compile
+            from cellgl.blender.runtime import BlenderMissing
+
+            osl_compile(text)
+        except BlenderMissing:
+            _missing("bpy (the [blender] extra, Cycles' OSL compiler)", REQUIRE_BLENDER)
     else:  # pragma: no cover
         raise AssertionError(target)
 

@@ -22,7 +22,7 @@ LAYERS = (
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
     ("front ends", ("cellgl.export", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.formats",
-                    "cellgl.dask")),
+                    "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
     ("viewer", ("viewer",)),
     ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli", "cellgl.voronoi_cli")),

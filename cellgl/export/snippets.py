@@ -15,12 +15,13 @@ GLSL ES, Godot, HLSL and WGSL are generated mechanically from the same specialis
 from __future__ import annotations
 
 import json
+import re
 import textwrap
 from dataclasses import dataclass, field
 
 from cellgl._version import __version__
 from cellgl.gl import glsl
-from cellgl.export import translate
+from cellgl.export import compiler, translate
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
 
@@ -67,6 +68,10 @@ TARGETS: dict[str, Target] = {t.name: t for t in (
            "cellgl_texture3, if present) uses fwidth, so it works only in fragment shaders; in compute "
            "or vertex shaders call cellgl_texture_filtered(uv, duv) and delete the file from the "
            "comment 'Fragment (pixel) shaders only' to the end."),
+    Target("osl", "osl", "Open Shading Language (Blender Cycles, Arnold, RenderMan, Houdini)", ".osl",
+           "Save as cellgl_<name>.osl and load it as a shader (Blender: Script node, Cycles with Open "
+           "Shading Language on; docs/engines.md): Vector in, Color, Fac, F1..F4, Value, CellColor, "
+           "CellValue, IDLow/IDHigh and a bump Normal out."),
 )}
 
 #: target names that are refused, with the reason
@@ -102,6 +107,13 @@ class Program:
     solid: bool = False
     uniforms: list[tuple[str, str, object]] = field(default_factory=list)
     filtered: bool = False
+    kind: str = "cellular texture"
+    command: str = ""
+    signatures: tuple = ()
+    entries: tuple = ()
+    #: the target-specific tails (``shadertoy``: mainImage, ``godot``: fragment(), ``unity``: the
+    #: Custom Function wrapper, HLSL); default: those of cellgl_texture
+    tails: dict = field(default_factory=dict)
 
 
 def check_target(target: str) -> Target:
@@ -120,13 +132,45 @@ def check_target(target: str) -> Target:
 
 
 def library_code(prog: Program) -> str:
-    """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left."""
+    """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left,
+    only what the entry points reach (:mod:`cellgl.export.fold`). Cached per program: the
+    targets of one recipe share it."""
+    key = (tuple(prog.files), tuple(sorted((k, str(v)) for k, v in prog.defines.items())), prog.params,
+           prog.entry, tuple(prog.entries))
+    if key not in _CODE_CACHE:
+        if len(_CODE_CACHE) > 64:
+            _CODE_CACHE.clear()
+        _CODE_CACHE[key] = _library_code(prog)
+    return _CODE_CACHE[key]
+
+
+_CODE_CACHE: dict = {}
+
+
+def specialised_code(prog: Program) -> str:
+    """The library of ``prog`` with its compile-time choices resolved and names prefixed, its
+    run-time values still the loader's named constants (the OSL target turns those into shader
+    parameters, so it takes this code, not a constant-folded one)."""
     src = glsl.resolve_library(prog.files)
     text = src.text + "\n" + prog.params + "\n" + prog.entry
     text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
     text = translate.specialise(text, prog.defines, name="snippet")
     text, _ = translate.prefix_names(text, overrides=_OVERRIDES)
     return _tidy(text)
+
+
+def _library_code(prog: Program) -> str:
+    entries = prog.entries or [n for n in ENTRY_POINTS
+                               if re.search(rf"\b{n}\s*\(", prog.entry.replace("cell_", "cellgl_"))]
+    text = compiler.compile_glsl(specialised_code(prog), entries, structs=_CONSTANT_STRUCTS)
+    return _tidy(text)
+
+
+#: the functions a snippet may export (the reachability pass starts from those it defines)
+ENTRY_POINTS = ("cellgl_texture", "cellgl_texture_filtered", "cellgl_texture3", "cellgl_texture3_filtered")
+#: parameter structs that only ever hold their loader's values: scalarised away (reach.scalarise)
+_CONSTANT_STRUCTS = (("CellglTextureParams", "cellgl_texture_params_load"), ("CellglParams", "cellgl_params_load"),
+                     ("CellglParams", "cellgl_tex_basis_"))
 
 
 def _tidy(text: str) -> str:
@@ -143,55 +187,80 @@ def _comment(text: str, mark: str = "//") -> str:
     return "\n".join(f"{mark} {ln}".rstrip() for ln in text.split("\n"))
 
 
-def _header(prog: Program, target: Target, uniforms: bool) -> str:
-    recipe = json.dumps(prog.recipe, indent=1, sort_keys=False) if prog.recipe is not None else "{}"
-    entry = [
-        "vec4 cellgl_texture(vec2 uv)   uv in [0,1]^2 -> the RGBA `cellgl bake` writes for the "
-        "pixel centred at uv" + (" (fragment shaders: the pixel size from fwidth(uv))" if prog.filtered else ""),
-    ]
-    if prog.filtered:
-        entry.append("vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)   the same for a pixel of size duv in uv "
+def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> str:
+    entry = list(prog.signatures) if prog.signatures else [
+        "vec4 cellgl_texture(vec2 uv): the RGBA `cellgl bake` writes for the pixel centred at uv in "
+        "[0,1]^2 (v = 0: top row)" + ("; fragment shaders (pixel size from fwidth(uv))" if prog.filtered else "")]
+    if prog.filtered and not prog.signatures:
+        entry.append("vec4 cellgl_texture_filtered(vec2 uv, vec2 duv): the same for a pixel of size duv "
                      "(a W x H bake: (1/W, 1/H)); any stage")
-    if prog.solid:
-        entry.append("vec4 cellgl_texture3(vec3 p)   p = (u, v, z) in texture space (solid texturing; z = 0: the image)")
-        entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)   the same for a pixel spanning dp; any stage")
-    if target.dialect == "hlsl":
-        entry = [e.replace("vec4", "float4").replace("vec3", "float3").replace("vec2", "float2") for e in entry]
-    if target.dialect == "wgsl":
-        entry = [e.replace("vec4 cellgl_texture(vec2 uv)", "fn cellgl_texture(uv: vec2<f32>) -> vec4<f32>")
-                  .replace("vec4 cellgl_texture3(vec3 p)", "fn cellgl_texture3(p: vec3<f32>) -> vec4<f32>")
-                  .replace("vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)",
-                           "fn cellgl_texture_filtered(uv: vec2<f32>, duv: vec2<f32>) -> vec4<f32>")
-                  .replace("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)",
-                           "fn cellgl_texture3_filtered(p: vec3<f32>, dp: vec3<f32>) -> vec4<f32>")
-                 for e in entry]
+    if prog.solid and not prog.signatures:
+        entry.append("vec4 cellgl_texture3(vec3 p): p = (u, v, z) in texture space (solid texturing; z = 0: "
+                     "the image)")
+        entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp): the same for a pixel spanning dp; any stage")
+    entry = [_signature(e, target.dialect) for e in entry]
+    command = prog.command or f"cellgl export {prog.title}"
+    if target.dialect == "osl":
+        entry = [f"shader cellgl_{prog.title}(point Vector, <the recipe's values>, output color Color, "
+                 "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
+                 "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
     lines = [
-        f"cellgl {__version__}: cellular texture '{prog.title}' for {target.title}.",
-        f"Generated by `cellgl export {prog.title} --target {target.name}"
-        f"{' --uniforms' if uniforms else ''}` from cellgl's shaders/lib; re-export instead of editing.",
-        "",
-        "Entry points:",
+        f"cellgl {__version__}: {prog.kind} '{prog.title}' for {target.title}; exact (the same values as "
+        + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + ").",
+        f"Regenerate (do not edit): {command} --target {target.name}{' --uniforms' if uniforms else ''}",
         *("  " + e for e in entry),
-        "",
-        *textwrap.wrap(target.how, 94),
+        *textwrap.wrap(_how(target, prog), 96),
     ]
-    settings = ", ".join(f"{k}={v}" for k, v in prog.defines.items()
-                         if k.startswith("CELL_") and not k.startswith(("CELL_METRIC_", "CELL_DIST_")))
-    lines += ["", "Compile-time settings resolved in this code (comments may name them):",
-              *textwrap.wrap(settings, 94)]
     if uniforms and prog.uniforms:
-        lines += ["", "Uniforms (set them to these values to reproduce the recipe):"]
+        used = set(re.findall(r"\bcellgl_(\w+)", code)) if code else None
+        lines += ["Uniforms (set them to these values to reproduce the recipe):"]
         for typ, name, value in prog.uniforms:
-            lines.append(f"  {typ} cellgl_{name} = {_fmt_value(value)}")
+            if used is None or name in used:
+                lines.append(f"  {typ} cellgl_{name} = {_fmt_value(value)}")
         if any(name == "origin_cell" for _, name, _ in prog.uniforms):
-            lines += [""] + textwrap.wrap(
+            lines += textwrap.wrap(
                 "offset_x/offset_y/offset_z/time act only through the split origins origin_cell + "
                 "origin_frac (and noise_cell + noise_frac), octave i = floor and rest of "
                 "lacunarity^i * (offset_x, offset_y, offset_z, time) times dist_scale (times "
                 "noise_frequency), computed in double precision: recompute them to animate "
-                "(docs/engines.md).", 94)
-    lines += ["", "Recipe:", *recipe.split("\n")]
+                "(docs/engines.md).", 96)
+    recipe = json.dumps(prog.recipe, separators=(",", ":")) if prog.recipe is not None else "{}"
+    lines += ["Recipe: " + recipe]
     return _comment("\n".join(lines)) + "\n"
+
+
+def _how(target: Target, prog: Program) -> str:
+    """The target's paragraph on where to paste and what to call, for this program's entry."""
+    if not prog.entries:
+        return target.how
+    entry = prog.entries[0]
+    # a basis function has no fwidth: leave out what the texture's how says about it
+    how = " ".join(x for x in re.split(r"(?<=\.) ", target.how)
+                   if "fwidth" not in x and "Fragment (pixel)" not in x)
+    how = how.replace("mainImage shows the texture stretched over the viewport",
+                      "mainImage shows it, 8 cells per screen height")
+    how = re.sub(r"cellgl_texture\((uv|UV)\)", entry + "(p)", how)
+    size = {"vec2": 2, "vec3": 3}.get(prog.signatures[0].split()[0], 1) if prog.signatures else 4
+    how = how.replace("output Float 4", f"output Float {size}")
+    return how.replace("cellgl_texture", entry).replace("input UV", "input p").replace("(UV, out Out)", "(p, out Out)")
+
+
+_SIG_WGSL = {"vec2": "vec2<f32>", "vec3": "vec3<f32>", "vec4": "vec4<f32>", "float": "f32", "uint": "u32",
+             "int": "i32"}
+
+
+def _signature(e: str, dialect: str) -> str:
+    """An entry line ``TYPE name(TYPE a, ...): what`` in the target's spelling."""
+    if dialect == "hlsl":
+        return re.sub(r"\b(vec|ivec|uvec)([234])\b",
+                      lambda m: {"vec": "float", "ivec": "int", "uvec": "uint"}[m.group(1)] + m.group(2), e)
+    if dialect == "wgsl":
+        m = re.match(r"(\w+) (\w+)\(([^)]*)\)(.*)$", e, re.S)
+        if m:
+            ret, name, args, rest = m.groups()
+            params = ", ".join(f"{a.split()[1]}: {_SIG_WGSL[a.split()[0]]}" for a in args.split(",") if a.strip())
+            return f"fn {name}({params}) -> {_SIG_WGSL[ret]}{rest}"
+    return e
 
 
 def _fmt_value(v) -> str:
@@ -205,23 +274,27 @@ def _fmt_value(v) -> str:
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`)."""
     tgt = check_target(target)
-    code = library_code(prog)
-    head = _header(prog, tgt, uniforms)
+    code = library_code(prog) if tgt.dialect != "osl" else specialised_code(prog)
+    head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
     if d == "glsl":
         body = code
     elif d == "gles":
         body = translate.add_highp(code)
         if tgt.name == "shadertoy":
-            body += _SHADERTOY_MAIN
+            body += prog.tails.get("shadertoy", _SHADERTOY_MAIN)
     elif d == "godot":
-        body = _godot(code, tgt.name)
+        body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
     elif d == "hlsl":
-        body = translate.to_hlsl(code) + _UNITY_WRAPPER
+        body = translate.to_hlsl(code) + prog.tails.get("unity", _UNITY_WRAPPER)
         if tgt.name == "unreal":
             body = "#pragma once\n\n" + body
     elif d == "wgsl":
         body = translate.to_wgsl(code)
+    elif d == "osl":
+        from cellgl.export.osl import osl_shader
+
+        body = osl_shader(prog, code)
     else:  # pragma: no cover
         raise AssertionError(d)
     return head + "\n" + body
@@ -245,16 +318,16 @@ void cellgl_texture_float(float2 UV, out float4 Out)
 """
 
 
-def _godot(code: str, name: str) -> str:
+_GODOT_FRAGMENT = "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
+
+
+def _godot(code: str, name: str, fragment: str = _GODOT_FRAGMENT) -> str:
     # Godot compiles its shaders with highp defaults (precision highp float/int), so the code
     # needs no qualifiers.
     body = code
     if name == "godotinc":
         return body
-    return (
-        "shader_type canvas_item;\n\n" + body +
-        "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
-    )
+    return "shader_type canvas_item;\n\n" + body + fragment
 
 
 # --------------------------------------------------------------------------------------------
@@ -287,6 +360,9 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
         Unknown or refused target, or a recipe the target cannot express.
     """
     tgt = check_target(target)
+    if uniforms and tgt.dialect == "osl":
+        raise ExportError("--uniforms is not supported for OSL: the shader's parameters are already "
+                          "its run-time values; export OSL with constants")
     if uniforms and tgt.dialect == "wgsl":
         raise ExportError("--uniforms is not supported for WGSL (uniforms need a bind group "
                           "layout of your renderer); export WGSL with constants")
@@ -428,60 +504,3 @@ def basis_program(p, n: int = 4, frequency: float = 8.0) -> Program:
     )
     return Program(files=["lib/cellular.glsl"], defines=d, params=params, entry=entry,
                    title="basis", recipe={"basis": "F1..F4", "frequency": frequency})
-
-
-# --------------------------------------------------------------------------------------------
-# command line: cellgl export PRESET_OR_RECIPE --target TARGET [-o FILE]
-# --------------------------------------------------------------------------------------------
-
-
-def add_parser(sub):
-    """Declare ``cellgl export`` on the CLI's subparsers."""
-    p = sub.add_parser(
-        "export", help="write a self-contained shader snippet of a recipe (GLSL, GLSL ES, "
-        "Godot, HLSL, WGSL)",
-        description="Export a recipe as a shader snippet whose cellgl_texture(uv) returns the "
-        "pixels `cellgl bake` writes. See docs/engines.md.")
-    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", help="a preset name or a recipe JSON file")
-    p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
-                   help="one of: " + ", ".join(TARGETS) + " (default glsl)")
-    p.add_argument("-o", "--output", metavar="FILE", default=None,
-                   help="write to FILE (atomically) instead of standard output")
-    p.add_argument("--uniforms", action="store_true",
-                   help="declare the recipe's run-time values as cellgl_<name> uniforms instead of "
-                   "constants")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a recipe parameter (repeatable)")
-    return p
-
-
-def run_cli(args) -> int:
-    """Run ``cellgl export``; returns the exit status."""
-    import os
-    import sys
-
-    from cellgl.io.tempfiles import check_output
-
-    check_target(args.target)
-    if args.output is not None:  # before the work: a missing or read-only directory, a long name
-        check_output(os.path.abspath(args.output))
-    recipe = _load(args.recipe, args.sets)
-    text = export(recipe, args.target, uniforms=args.uniforms)
-    if args.output is None:
-        sys.stdout.write(text)
-        return 0
-    from cellgl.io.formats import atomic_path
-
-    with atomic_path(os.path.abspath(args.output)) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-    return 0
-
-
-def _load(recipe, sets=()):
-    from cellgl.recipes import load_recipe
-
-    r = load_recipe(recipe)
-    if sets:
-        r = r.set_from_strings(list(sets))
-    return r

@@ -35,11 +35,20 @@
 // Requires: hash.glsl, metric.glsl, points.glsl.
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
 //         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO,
+//         CELL_RING1_PRUNE (default: 1 but for the jitter distribution),
 //         CELL_LOOP_BUDGET (loop iterations one invocation may spend).
 
 #include "hash.glsl"
 #include "metric.glsl"
 #include "points.glsl"
+
+#ifndef CELL_RING1_PRUNE
+#if CELL_DIST == CELL_DIST_JITTER
+#define CELL_RING1_PRUNE 0
+#else
+#define CELL_RING1_PRUNE 1
+#endif
+#endif
 
 #ifndef CELL_LOOP_BUDGET
 // 6144 per invocation: the 8 invocations of one llvmpipe SIMD vector (AVX2)
@@ -199,8 +208,11 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 
     // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block.
     // Constant loop bounds, so the compiler unrolls the block into
-    // straight-line SIMD code; a cell is skipped when its nearest possible
-    // point is no closer than the current F_n.
+    // straight-line SIMD code. With CELL_RING1_PRUNE a cell is skipped when
+    // its nearest possible point is no closer than the current F_n (skipping
+    // never changes the result: such a point could not be inserted); the
+    // jitter distribution visits all 3^d, its one point per cell costing less
+    // than the test.
     if (!spent) {
         _cell_visit(r, cell, f, ivec4(0), p);
     }
@@ -218,7 +230,11 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #endif
     {
         ivec4 o = ivec4(x, y, z, w);
+#if CELL_RING1_PRUNE
         if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+#else
+        if (any(notEqual(o, ivec4(0)))) {
+#endif
             if (cell_budget_left(r.loops)) {
                 _cell_visit(r, cell, f, o, p);
             } else {

@@ -8,7 +8,7 @@ Pure text, no GL. Three steps turn the resolved ``shaders/lib`` sources into a s
    every macro name in the code is replaced by its value, so no directive and no macro is left.
 2. :func:`prefix_names` -- every top-level name (function, struct, global constant) gets the
    ``cellgl_`` prefix (structs ``Cellgl``), so nothing unprefixed leaks into the user's shader.
-3. :func:`to_hlsl` / :func:`to_wgsl` -- token-level translation of the specialised GLSL into
+3. :func:`to_hlsl` / :func:`to_wgsl` / :func:`to_osl` -- token-level translation of the specialised GLSL into
    another dialect; :func:`add_highp` pins GLSL ES declarations to ``highp``.
 
 The translators cover the GLSL subset the library is written in (see DESIGN.md): scalars,
@@ -19,6 +19,7 @@ construct, instead of emitting text that would not compile.
 from __future__ import annotations
 
 from cellgl.export.translate.hlsl import HLSL_FUNCS, to_hlsl
+from cellgl.export.translate.osl import to_osl
 from cellgl.export.translate.names import (
            add_highp,
            prefix_names,
@@ -30,4 +31,4 @@ from cellgl.export.translate.tokens import TranslateError, tokenize
 from cellgl.export.translate.wgsl import to_wgsl
 
 __all__ = ["TranslateError", "tokenize", "specialise", "top_level_names", "prefix_names", "prefixed", "add_highp",
-           "to_hlsl", "to_wgsl", "HLSL_FUNCS"]
+           "to_hlsl", "to_wgsl", "to_osl", "HLSL_FUNCS"]

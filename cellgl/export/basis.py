@@ -1,0 +1,156 @@
+"""Basis-only snippets: ``cellgl export --basis f1f2 --dim 3`` gives ``vec2 cellgl_f1f2(vec3 p)``.
+
+One function of the cellular basis at a point ``p`` in cells (one cell per unit, as
+:func:`cellgl.cellular`), in the style of the small noise libraries: no texture, no colour, the
+exact search of ``shaders/lib/cellular.glsl`` specialised to the parameters (metric,
+distribution, density, jitter, seed, ...) and cut down to what the function reaches
+(:mod:`cellgl.export.fold`). The values equal ``cellgl.cellular(points, ...)`` with the same
+parameters.
+
+========== =============================== ==================================================
+basis      GLSL signature (dim 3)          value
+========== =============================== ==================================================
+f1         ``float cellgl_f1(vec3 p)``     F1, the distance to the nearest feature point
+f1f2       ``vec2 cellgl_f1f2(vec3 p)``    (F1, F2)
+f1f2f3     ``vec3 cellgl_f1f2f3(vec3 p)``  (F1, F2, F3)
+f1f2f3f4   ``vec4 cellgl_f1f2f3f4(vec3 p)`` (F1, F2, F3, F4)
+edge       ``float cellgl_edge(vec3 p)``   distance to the edge of the Voronoi cell (Euclidean)
+cellid     ``uint cellgl_cellid(vec3 p)``  ID of the nearest feature point (``id[..., 0]``)
+========== =============================== ==================================================
+"""
+from __future__ import annotations
+
+from cellgl.export.snippets import ExportError, Program, _glsl_float, check_target, export_program
+
+__all__ = ["BASES", "basis_export", "basis_program"]
+
+#: basis name -> (number of F's searched, GLSL return type, what it returns)
+BASES: dict[str, tuple[int, str, str]] = {
+    "f1": (1, "float", "F1, the distance to the nearest feature point"),
+    "f1f2": (2, "vec2", "(F1, F2), the distances to the two nearest feature points"),
+    "f1f2f3": (3, "vec3", "(F1, F2, F3)"),
+    "f1f2f3f4": (4, "vec4", "(F1, F2, F3, F4)"),
+    "edge": (1, "float", "the distance to the edge of p's Voronoi cell (Euclidean)"),
+    "cellid": (1, "uint", "the ID of the nearest feature point (cellgl.cellular's id[..., 0])"),
+}
+
+_VEC = {2: "vec2", 3: "vec3", 4: "vec4"}
+_CELL = {2: "ivec4(ivec2(fl), 0, 0)", 3: "ivec4(ivec3(fl), 0)", 4: "ivec4(fl)"}
+_FRAC = {2: "vec4(p - fl, 0.0, 0.0)", 3: "vec4(p - fl, 0.0)", 4: "p - fl"}
+_RET = {"f1": "r.F[0]", "f1f2": "vec2(r.F[0], r.F[1])", "f1f2f3": "vec3(r.F[0], r.F[1], r.F[2])",
+        "f1f2f3f4": "vec4(r.F[0], r.F[1], r.F[2], r.F[3])", "cellid": "r.id[0]",
+        "edge": "cell_features(cell, f, P, r, 0.0).edge"}
+
+
+def _check(basis: str, dim) -> tuple[str, int]:
+    key = str(basis).strip().lower()
+    if key not in BASES:
+        raise ExportError(f"unknown basis {basis!r}; expected one of: {', '.join(BASES)}")
+    if dim not in (2, 3, 4) or isinstance(dim, bool):
+        raise ExportError(f"dim must be 2, 3 or 4, got {dim!r}")
+    return key, int(dim)
+
+
+def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution="poisson", density=3.0,
+                  jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0) -> Program:
+    """The :class:`~cellgl.export.snippets.Program` of one basis function (see :data:`BASES`)."""
+    from cellgl.basis.core import make_params
+    from cellgl.basis.enums import Distribution, Metric
+    from cellgl.basis.features import defines as feature_defines
+    from cellgl.basis.gpu import defines_for
+
+    key, dim = _check(basis, dim)
+    p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
+                    min_points=min_points, max_points=max_points, minkowski_p=minkowski_p, seed=seed)
+    if p.distribution == Distribution.WORLEY1996:
+        raise ExportError("distribution 'worley1996' cannot be exported as a basis snippet (its "
+                          "positions are rescaled in double precision first); use poisson or jitter")
+    if key == "edge" and p.metric != Metric.EUCLIDEAN:
+        raise ExportError(f"basis 'edge' is Euclidean only, got metric {p.metric.name.lower()!r}")
+    n, ret, what = BASES[key]
+    defines = defines_for(p, n)
+    defines.update(feature_defines(("edge",) if key == "edge" else (), dim))
+    thresholds = ", ".join(f"{int(t)}u" for t in p.thresholds)
+    params = (
+        "// The basis parameters.\n"
+        f"const uint cell_seed = {int(p.seed)}u;\n"
+        f"const float cell_jitter = {_glsl_float(p.jitter)};\n"
+        f"const int cell_min_points = {int(p.min_points)};\n"
+        f"const int cell_max_points = {int(p.max_points)};\n"
+        f"const uint cell_thresholds[{len(p.thresholds)}] = uint[{len(p.thresholds)}]({thresholds});\n"
+        f"const float cell_minkowski_p = {_glsl_float(p.minkowski_p)};\n"
+        "CellParams cell_params_load()\n{\n    CellParams q;\n    q.seed = cell_seed;\n"
+        "    q.jitter = cell_jitter;\n    q.min_points = cell_min_points;\n"
+        "    q.max_points = cell_max_points;\n"
+        f"    for (int k = 0; k < {len(p.thresholds)}; k++) {{\n"
+        "        q.thresholds[k] = cell_thresholds[k];\n    }\n"
+        "    q.period = ivec4(0);\n    q.minkowski_p = cell_minkowski_p;\n    return q;\n}\n"
+    )
+    vec = _VEC[dim]
+    name = f"cell_{key}"
+    entry = (
+        f"// {what[0].upper() + what[1:]}, at p in cells.\n"
+        f"{ret} {name}({vec} p)\n{{\n"
+        f"    {vec} fl = floor(p);\n"
+        f"    ivec4 cell = {_CELL[dim]};\n"
+        f"    vec4 f = {_FRAC[dim]};\n"
+        f"    CellResult r = cell_search(cell, f, cell_params_load());\n"
+        f"    return {_RET[key].replace('P', 'cell_params_load()')};\n}}\n"
+    )
+    options = dict(metric=p.metric.name.lower(), distribution=p.distribution.name.lower(),
+                   density=p.density, jitter=p.jitter, seed=p.seed, min_points=p.min_points,
+                   max_points=p.max_points, minkowski_p=p.minkowski_p)
+    command = f"cellgl export --basis {key} --dim {dim}" + "".join(
+        f" --{k.replace('_', '-')} {v}" for k, v in options.items() if v != _DEFAULTS[k])
+    files = ["lib/features.glsl"] if key == "edge" else ["lib/cellular.glsl"]
+    return Program(files=files, defines=defines, params=params, entry=entry, title=key,
+                   recipe=dict(basis=key, dim=dim, **options), kind="cellular basis",
+                   command=command, signatures=(f"{ret} cellgl_{key}({vec} p): {what}; p in cells",),
+                   entries=(f"cellgl_{key}",), tails=_tails(key, dim, ret))
+
+
+_DEFAULTS = dict(metric="euclidean", distribution="poisson", density=3.0, jitter=1.0, seed=0,
+                 min_points=1, max_points=9, minkowski_p=3.0)
+
+
+def _tails(key: str, dim: int, ret: str) -> dict:
+    """Shadertoy mainImage, Godot fragment() and the Unity Custom Function wrapper."""
+    show = {"float": "v", "vec2": "v.y - v.x", "vec3": "v.x", "vec4": "v.x",
+            "uint": "float(v & 255u) / 255.0"}[ret]
+    at = {2: "uv", 3: "vec3(uv, T)", 4: "vec4(uv, T, 0.0)"}[dim]
+    hlsl_ret = {"vec2": "float2", "vec3": "float3", "vec4": "float4"}.get(ret, ret)
+    hlsl_p = f"float{dim}"
+    return {
+        "shadertoy": ("\n// Shadertoy entry: 8 cells per screen height.\n"
+                      "void mainImage(out vec4 fragColor, in vec2 fragCoord)\n{\n"
+                      "    vec2 uv = fragCoord / iResolution.y * 8.0;\n"
+                      f"    {ret} v = cellgl_{key}({at.replace('T', '0.25 * iTime')});\n"
+                      f"    fragColor = vec4(vec3({show}), 1.0);\n}}\n"),
+        "godot": ("\nvoid fragment()\n{\n    vec2 uv = UV * 8.0;\n"
+                  f"    {ret} v = cellgl_{key}({at.replace('T', '0.25 * TIME')});\n"
+                  f"    COLOR = vec4(vec3({show}), 1.0);\n}}\n"),
+        "unity": (f"\n// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_{key}).\n"
+                  f"void cellgl_{key}_float({hlsl_p} P, out {hlsl_ret} Out)\n{{\n"
+                  f"    Out = cellgl_{key}(P);\n}}\n"),
+    }
+
+
+def basis_export(basis: str, dim: int = 2, target: str = "glsl", **params) -> str:
+    """The snippet of one basis function for ``target``.
+
+    Parameters
+    ----------
+    basis : str
+        One of :data:`BASES`: ``f1``, ``f1f2``, ``f1f2f3``, ``f1f2f3f4``, ``edge``, ``cellid``.
+    dim : int
+        2, 3 or 4: the function takes a ``vec2``, ``vec3`` or ``vec4`` in cells.
+    target : str
+        As :func:`cellgl.export.snippets.export`.
+    **params
+        ``metric``, ``distribution`` (poisson or jitter), ``density``, ``jitter``, ``seed``,
+        ``min_points``, ``max_points``, ``minkowski_p``, as :func:`cellgl.cellular`.
+    """
+    if check_target(target).dialect == "osl":
+        raise ExportError("--basis snippets are not available for --target osl: an OSL shader is a "
+                          "whole texture (export a recipe, e.g. cellgl export f1 --target osl)")
+    return export_program(basis_program(basis, dim, **params), target)

@@ -1,0 +1,88 @@
+"""``cellgl export``: the command line of :mod:`cellgl.export.snippets` (recipes) and
+:mod:`cellgl.export.basis` (``--basis``)."""
+from __future__ import annotations
+
+from cellgl.export.basis import basis_export
+from cellgl.export.snippets import TARGETS, ExportError, check_target, export
+
+__all__ = ["add_parser", "run_cli"]
+
+
+# --------------------------------------------------------------------------------------------
+# command line: cellgl export PRESET_OR_RECIPE --target TARGET [-o FILE]
+# --------------------------------------------------------------------------------------------
+
+
+def add_parser(sub):
+    """Declare ``cellgl export`` on the CLI's subparsers."""
+    p = sub.add_parser(
+        "export", help="write a self-contained shader snippet of a recipe (GLSL, GLSL ES, "
+        "Godot, HLSL, WGSL)",
+        description="Export a recipe as a shader snippet whose cellgl_texture(uv) returns the "
+        "pixels `cellgl bake` writes. See docs/engines.md.")
+    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", nargs="?", default=None,
+                   help="a preset name or a recipe JSON file (not with --basis)")
+    b = p.add_argument_group("basis-only snippets (one function of the cellular basis, no texture)")
+    b.add_argument("--basis", default=None, metavar="NAME",
+                   help="f1, f1f2, f1f2f3, f1f2f3f4, edge or cellid: e.g. --basis f1f2 --dim 3 gives "
+                   "vec2 cellgl_f1f2(vec3 p), the values of cellgl.cellular")
+    b.add_argument("--dim", type=int, default=2, help="2, 3 or 4: the point type (default 2)")
+    b.add_argument("--metric", default="euclidean", help="euclidean, manhattan, chebyshev, minkowski")
+    b.add_argument("--distribution", default="poisson", help="poisson or jitter")
+    b.add_argument("--density", type=float, default=3.0, help="mean points per cell (poisson)")
+    b.add_argument("--jitter", type=float, default=1.0, help="jitter in [0, 1] (jitter distribution)")
+    b.add_argument("--seed", type=int, default=0)
+    b.add_argument("--min-points", type=int, default=1)
+    b.add_argument("--max-points", type=int, default=9)
+    b.add_argument("--minkowski-p", type=float, default=3.0)
+    p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
+                   help="one of: " + ", ".join(TARGETS) + " (default glsl)")
+    p.add_argument("-o", "--output", metavar="FILE", default=None,
+                   help="write to FILE (atomically) instead of standard output")
+    p.add_argument("--uniforms", action="store_true",
+                   help="declare the recipe's run-time values as cellgl_<name> uniforms instead of "
+                   "constants")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
+                   help="override a recipe parameter (repeatable)")
+    return p
+
+
+def run_cli(args) -> int:
+    """Run ``cellgl export``; returns the exit status."""
+    import os
+    import sys
+
+    from cellgl.io.tempfiles import check_output
+
+    check_target(args.target)
+    if (args.basis is None) == (args.recipe is None):
+        raise ExportError("give either a preset / recipe file or --basis NAME (not both)")
+    if args.basis is not None and (args.uniforms or args.sets):
+        raise ExportError("--uniforms and --set apply to recipes, not to --basis snippets")
+    if args.output is not None:  # before the work: a missing or read-only directory, a long name
+        check_output(os.path.abspath(args.output))
+    if args.basis is not None:
+        text = basis_export(args.basis, args.dim, args.target, metric=args.metric,
+                            distribution=args.distribution, density=args.density, jitter=args.jitter,
+                            seed=args.seed, min_points=args.min_points, max_points=args.max_points,
+                            minkowski_p=args.minkowski_p)
+    else:
+        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms)
+    if args.output is None:
+        sys.stdout.write(text)
+        return 0
+    from cellgl.io.formats import atomic_path
+
+    with atomic_path(os.path.abspath(args.output)) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+    return 0
+
+
+def _load(recipe, sets=()):
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe(recipe)
+    if sets:
+        r = r.set_from_strings(list(sets))
+    return r

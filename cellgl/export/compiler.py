@@ -1,0 +1,375 @@
+"""The snippet compiler: :func:`compile_glsl` turns the specialised, prefixed GLSL of a snippet
+into the code its entry points need, and nothing else.
+
+Passes, repeated until the text stops changing:
+
+1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
+2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
+   elements of constant arrays read at a literal index;
+3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
+   (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
+4. one-line functions inlined; parameters a function never reads dropped; ``out`` parameters
+   whose results every caller ignores turned into locals; struct fields never read removed;
+5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
+
+Then every declaration comes after what it uses, and the comments are tidied
+(:func:`cellgl.export.reach.tidy_comments`). The output is GLSL of the same subset, for the same
+translators (:mod:`cellgl.export.translate`).
+"""
+from __future__ import annotations
+
+import re
+
+from cellgl.export.fold import _literal, constants, fold
+from cellgl.export.reach import (
+    Item,
+    _code_idx,
+    _drop_fields,
+    _drop_struct_args,
+    _match,
+    _split_args,
+    parse,
+    reach,
+    scalarise,
+    tidy_comments,
+    unparse,
+)
+from cellgl.export.simplify import _DECL_TYPES
+from cellgl.export.translate.tokens import Tok, tokenize
+
+__all__ = ["compile_glsl"]
+
+
+def _array_elements(items: list[Item]) -> list[Item]:
+    """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
+    arrays read at a literal index, where the element is short."""
+    arrays = {}
+    for it in items:
+        c = it.code()
+        if it.kind == "variable" and c[:1] == ["const"] and len(c) > 8 and c[3] == "[" and c[6] == "=":
+            toks, code = it.toks, _code_idx(it.toks)
+            op = c.index("(", 7)
+            cl = _match(toks, code, op)
+            arrays[c[2]] = ["".join(t.text for t in toks[code[a]:code[b - 1] + 1]).strip()
+                            for a, b in _split_args(toks, code, op, cl)]
+    if not arrays:
+        return items
+    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[(\d+)\]")
+
+    def elem(m):
+        vals = arrays[m.group(1)]
+        k = int(m.group(2))
+        return vals[k] if k < len(vals) and len(vals[k]) <= 40 else m.group()
+
+    out = []
+    for it in items:
+        if it.kind == "function":
+            it = Item(it.kind, it.name, tokenize(pat.sub(elem, "".join(t.text for t in it.toks))), it.comment)
+        out.append(it)
+    return out
+
+
+def _one_liners(items: list[Item], keep) -> dict[str, tuple[list[str], str]]:
+    """``{name: (parameter names, returned expression)}`` of the functions whose body is one short
+    ``return`` using each parameter at most once."""
+    out = {}
+    for it in items:
+        if it.kind != "function" or it.name in keep:
+            continue
+        toks, code = it.toks, _code_idx(it.toks)
+        w = [toks[i].text for i in code]
+        op = w.index("(")
+        cl = _match(toks, code, op)
+        if w[cl + 1:cl + 3] != ["{", "return"] or w[-2:] != [";", "}"] or w.count(";") != 1:
+            continue
+        params = [w[b - 1] for a, b in _split_args(toks, code, op, cl)]
+        expr = "".join(t.text for t in toks[code[cl + 3]:code[len(w) - 2]]).strip()
+        ids = re.findall(r"\b[A-Za-z_]\w*\b", expr)
+        if len(expr) > 72 or any(ids.count(p) > 1 for p in params) or it.name in ids:
+            continue
+        out[it.name] = (params, expr)
+    return out
+
+
+def _inline(items: list[Item], keep) -> list[Item]:
+    small = _one_liners(items, keep)
+    if not small:
+        return items
+    out = []
+    for it in items:
+        toks = it.toks
+        if it.kind == "function":
+            for _ in range(50):
+                new = _inline_once(toks, small, it.name)
+                if new is None:
+                    break
+                toks = new
+        out.append(Item(it.kind, it.name, toks, it.comment))
+    return out
+
+
+def _simple(arg: str) -> bool:
+    return re.fullmatch(r"[\w.]+(\[[^\[\]]*\])*[\w.]*|\w+\([^()]*\)", arg.strip()) is not None
+
+
+def _inline_once(toks: list[Tok], small: dict, own: str) -> list[Tok] | None:
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    first_call = w.index("(") - 1 if "(" in w else -1
+    for n in range(len(w) - 1):
+        if w[n] in small and w[n + 1] == "(" and n != first_call and (n == 0 or w[n - 1] != "."):
+            params, expr = small[w[n]]
+            cl = _match(toks, code, n + 1)
+            args = ["".join(t.text for t in toks[code[a]:code[b - 1] + 1]).strip()
+                    for a, b in _split_args(toks, code, n + 1, cl)]
+            if len(args) != len(params):
+                return None
+            env = {p: (a if _simple(a) else f"({a})") for p, a in zip(params, args)}
+            body = re.sub(r"\b[A-Za-z_]\w*\b", lambda m: env.get(m.group(), m.group()), expr)
+            if not _simple(body):
+                body = f"({body})"
+            return tokenize("".join(t.text for t in toks[:code[n]]) + body
+                            + "".join(t.text for t in toks[code[cl] + 1:]))
+    return None
+
+
+def _inline_constants(items: list[Item], env: dict[str, str]) -> list[Item]:
+    """Write the constants that decide code shape (0, 1, integers, booleans) into the code."""
+    pick = {k: v for k, v in env.items()
+            if v in ("true", "false") or re.fullmatch(r"-?\d+u?", v) or _literal(v) in (0, 1)}
+    out = []
+    for it in items:
+        if it.kind != "function":
+            out.append(it)
+            continue
+        text = "".join((f"({pick[t.text]})" if pick[t.text].startswith("-") else pick[t.text])
+                       if t.kind == "id" and t.text in pick else t.text for t in it.toks)
+        out.append(Item(it.kind, it.name, tokenize(text), it.comment))
+    return out
+
+
+def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) -> str:
+    """The middle end: keep what ``entries`` reach, scalarise ``structs`` (``[(struct,
+    loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners,
+    repeat until nothing changes."""
+    items = reach([it for it in parse(text) if it.kind != "other"], entries)
+    for _ in range(8):
+        before = unparse(items)
+        for struct, loader in structs:
+            items = scalarise(items, struct, loader)
+        if fold_constants:
+            env = constants(items)
+            items = _inline_constants(items, env)
+            items = _array_elements(items)
+            items = fold(items, env)
+        items = _inline(items, set(entries))
+        items = _drop_unused_params(items, set(entries))
+        items = _drop_unused_outs(items, set(entries))
+        items = _dead_fields(items)
+        items = reach(items, entries)
+        if unparse(items) == before:
+            break
+    return unparse(tidy_comments(_ordered(items)))
+
+
+def _params(it: Item):
+    toks, code = it.toks, _code_idx(it.toks)
+    w = [toks[i].text for i in code]
+    op = w.index("(")
+    cl = _match(toks, code, op)
+    return [w[a:b] for a, b in _split_args(toks, code, op, cl)], w[cl + 1:]
+
+
+def _drop_unused_params(items: list[Item], keep) -> list[Item]:
+    """Drop the parameters a function never reads (its callers' arguments with them)."""
+
+    impure = {it.name for it in items if it.kind == "function"
+              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    for it in items:
+        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
+            continue
+        params, body = _params(it)
+        for k, words in enumerate(params):
+            if not words or words[-1] in body or set(words) & {"out", "inout"} or words[-1] == "]":
+                continue
+            takes = {it.name: (k, words[-1])}
+            new = []
+            for x in items:
+                toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
+                if toks is None or (x.kind == "function" and _impure_arg(x, toks, impure)):
+                    break
+                new.append(Item(x.kind, x.name, toks, x.comment))
+            else:
+                return _drop_unused_params(new, keep)
+    return items
+
+
+def _drop_unused_outs(items: list[Item], keep) -> list[Item]:
+    """An ``out`` parameter whose argument is, at every call, a local used nowhere else becomes a
+    local of the function (whose stores the dead-store pass then removes)."""
+
+    for it in items:
+        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
+            continue
+        params, _ = _params(it)
+        for k, words in enumerate(params):
+            if words[:1] != ["out"] or len(words) != 3:
+                continue
+            calls_ok, n_calls = True, 0
+            for x in items:
+                if x.kind != "function" or x is it:
+                    continue
+                toks, code = x.toks, _code_idx(x.toks)
+                w = [toks[i].text for i in code]
+                for m in range(len(w) - 1):
+                    if w[m] == it.name and w[m + 1] == "(":
+                        n_calls += 1
+                        cl = _match(toks, code, m + 1)
+                        args = _split_args(toks, code, m + 1, cl)
+                        a, b = args[k]
+                        if b - a != 1 or w.count(w[a]) != 2 or w[_decl_at(w, w[a])] not in _DECL_TYPES:
+                            calls_ok = False
+            if not calls_ok or not n_calls:
+                continue
+            takes = {it.name: (k, words[-1])}
+            new = []
+            for x in items:
+                toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
+                if x is it:
+                    text = "".join(t.text for t in toks)
+                    text = text.replace("{", "{\n    " + words[1] + " " + words[2] + ";", 1)
+                    toks = tokenize(text)
+                new.append(Item(x.kind, x.name, toks, x.comment))
+            return _drop_unused_outs(new, keep)
+    return items
+
+
+def _decl_at(w: list[str], name: str) -> int:
+    return next((m - 1 for m in range(1, len(w)) if w[m] == name), 0)
+
+
+def _impure_arg(x: Item, toks: list[Tok], impure: set[str]) -> bool:
+    """Whether dropping arguments removed a call to a function with out parameters."""
+    before = [t.text for t in x.toks if t.kind == "id"]
+    after = [t.text for t in toks if t.kind == "id"]
+    return any(before.count(f) != after.count(f) for f in impure)
+
+
+def _dead_fields(items: list[Item]) -> list[Item]:
+    """Remove struct fields that are written (``o.f = ...;``) but never read, and those writes."""
+    code = "\n".join("".join(t.text for t in it.toks if t.kind != "comment") for it in items)
+    impure = {it.name for it in items if it.kind == "function"
+              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    out = items
+    for st in [it for it in items if it.kind == "struct"]:
+        body = "".join(t.text for t in st.toks if t.kind != "comment")
+        fields = re.findall(r"\b(\w+)\s*(?:\[\s*\w+\s*\])?\s*;", body)
+        holders = set(re.findall(rf"\b{st.name}\s+(\w+)\s*[;,)=]", code))
+        dead = set()
+        if not holders:
+            continue
+        names = "|".join(sorted(holders))
+        others = {v for t, v in re.findall(r"\b(Cellgl\w+)\s+(\w+)\b", code) if t != st.name} - holders
+        access = {}                          # field -> [(base, is a store)]
+        for m in re.finditer(r"\.([A-Za-z_]\w*)", code):
+            if m.group(1) not in fields:
+                continue
+            base = re.search(r"(\w*)\s*$", code[max(0, m.start() - 40):m.start()]).group(1)
+            store = re.match(r"(?:\s*\[[^\]]*\])?\s*=(?!=)", code[m.end():m.end() + 40]) is not None
+            access.setdefault(m.group(1), []).append((base, store))
+        for f in fields:
+            reads = [b for b, store in access.get(f, ()) if not store and b not in others]
+            stores = re.findall(rf"(?<![\w.])(?:{names})\.{f}(?:\s*\[[^\]]*\])?\s*=(?!=)[^;]*;", code) \
+                if f in access else []
+            writes = len(stores)
+            if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure) \
+                    and not all(_effects_unused(items, x, impure) for x in stores):
+                continue
+            if writes and not reads:
+                dead.add(f)
+        if not dead or len(dead) == len(fields):
+            continue
+
+        new = []
+        for it in out:
+            if it is st:
+                new.append(_drop_fields(it, dead))
+            elif it.kind == "function":
+                t = "".join(x.text for x in it.toks)
+                for f in dead:
+                    t = re.sub(rf"\n[ \t]*(?:{'|'.join(holders)})\.{f}(?:\s*\[[^\]]*\])?\s*=[^;]*;[^\n]*(?=\n)", "", t)
+                new.append(Item(it.kind, it.name, tokenize(t), it.comment))
+            else:
+                new.append(it)
+        out = new
+    return out
+
+
+def _effects_unused(items: list[Item], store: str, impure: set[str]) -> bool:
+    """Whether the calls in ``store`` (a statement ``o.f = ...;``) only change locals of the
+    function it is in that nothing reads after it: then the statement can go whole."""
+    sigs = {it.name: _params(it)[0] for it in items if it.kind == "function" and it.name in impure}
+    for it in items:
+        if it.kind != "function":
+            continue
+        text = "".join(t.text for t in it.toks if t.kind != "comment")
+        at = text.find(store)
+        if at < 0:
+            continue
+        before, after = text[:at], text[at + len(store):]
+        toks = tokenize(store)
+        code = _code_idx(toks)
+        w = [toks[i].text for i in code]
+        for n in range(len(w) - 1):
+            if w[n] in sigs and w[n + 1] == "(":
+                cl = _match(toks, code, n + 1)
+                for k, (a, b) in enumerate(_split_args(toks, code, n + 1, cl)):
+                    if k >= len(sigs[w[n]]) or not set(sigs[w[n]][k]) & {"out", "inout"}:
+                        continue
+                    name = w[a]
+                    if b - a != 1 or not re.search(rf"\b\w+\s+{name}\s*;", before) \
+                            or re.search(rf"\b{name}\b", after) or _in_a_loop(before):
+                        return False
+        return True
+    return False
+
+
+def _in_a_loop(before: str) -> bool:
+    """Whether the end of ``before`` (a function's text) is inside a loop body."""
+    depth, k = 0, len(before)
+    while k > 0:
+        k -= 1
+        if before[k] == "}":
+            depth += 1
+        elif before[k] == "{":
+            if depth == 0:
+                head = before[:k].rstrip()
+                if head.endswith(")") and re.search(r"\b(for|while)\s*\([^{};]*(;[^{};]*){0,2}\)$", head):
+                    return True
+            else:
+                depth -= 1
+    return False
+
+
+def _ordered(items: list[Item]) -> list[Item]:
+    """Items in their order, each moved after what it uses (the recipe's constants come after
+    the library in the source, but the library now reads them)."""
+    by_name = {}
+    for it in items:
+        by_name.setdefault(it.name, []).append(it)
+    out, done, busy = [], set(), set()
+
+    def visit(it):
+        if id(it) in done or id(it) in busy:
+            return
+        busy.add(id(it))
+        for u in sorted(it.uses(), key=lambda n: min(items.index(x) for x in by_name[n]) if n in by_name else 0):
+            for dep in by_name.get(u, ()):
+                visit(dep)
+        busy.discard(id(it))
+        done.add(id(it))
+        out.append(it)
+
+    for it in items:
+        visit(it)
+    return out

@@ -1,0 +1,191 @@
+"""The OSL shader of a texture recipe: ``cellgl export PRESET --target osl``.
+
+:func:`cellgl.export.translate.to_osl` turns the specialised library into OSL functions; this
+module writes the ``shader`` block around them: the recipe's directly-read values as parameters
+with defaults and slider metadata (label, min, max, help), the texture coordinate input and the
+outputs a node network wires (Color, Fac, the basis values, the cell's colour, value and ID, a
+bump Normal).
+
+Coordinates. ``Vector`` (x, y, z) maps to cellgl's texture space (u, v, z) = (x, 1 - y, z): OSL
+hosts put v = 0 at the bottom of an image, cellgl's bakes at the top row. With ``Vector`` from a
+UV map spanning [0, 1]^2, the pixel centred at ``Vector`` gets what ``cellgl bake`` writes for
+the pixel centred at (u, v); the pixel footprint comes from the derivatives of ``Vector`` (the
+band limit of the octaves, like a bake's 1 / size). Unconnected, ``Vector`` is the object's
+generated texture coordinates, as with Blender's own texture nodes (renderers without that
+attribute: the surface's ``(u, v)``).
+"""
+from __future__ import annotations
+
+import re
+
+from cellgl.export.translate import to_osl
+
+__all__ = ["EXPOSED_EXCLUDED", "exposed_params", "osl_shader"]
+
+#: run-time values that are *not* shader parameters: the CPU derives other constants from them
+#: in double precision (the split lattice origins, the Poisson table, the noise lattices) or they
+#: are integers wider than OSL's int; re-export with ``--set`` to change them
+EXPOSED_EXCLUDED = frozenset({
+    "density", "offset_x", "offset_y", "offset_z", "time", "lacunarity", "noise_frequency",
+    "warp_frequency", "seed", "fractal", "normal_convention", "ramp_mode",
+})
+
+#: the shader's outputs: (OSL type, name, default, what it is)
+OUTPUTS = (
+    ("color", "Color", "0", "the RGB `cellgl bake` writes (its alpha is 1)"),
+    ("float", "Fac", "0", "the height in [0, 1] (the bake's height channel)"),
+    ("float", "F1", "0", "distance to the nearest feature point, in cells (octave 0)"),
+    ("float", "F2", "0", "... the second nearest"),
+    ("float", "F3", "0", "... the third nearest"),
+    ("float", "F4", "0", "... the fourth nearest"),
+    ("float", "Value", "0", "the recipe's combination at octave 0, before its range mapping"),
+    ("color", "CellColor", "0", "a random colour per cell (the ID's hash, 8 bits per channel)"),
+    ("float", "CellValue", "0", "a random value per cell in [0, 1)"),
+    ("float", "IDLow", "0", "the cell's 32-bit feature point ID: its low 16 bits (exact integer)"),
+    ("float", "IDHigh", "0", "... and its high 16 bits"),
+    ("normal", "Normal", "N", "the shading normal bumped by the height (strength: the recipe's bump)"),
+)
+
+
+def exposed_params(prog, code: str):
+    """``[(Param, value)]`` of the values of ``prog`` (a texture :class:`Program`; ``code``: its
+    specialised GLSL) that become OSL shader parameters: the run-time scalars the specialised
+    code reads directly (a weight of F5 in a recipe computing F1..F2 would be a slider that does
+    nothing)."""
+    from cellgl.texture.params import PARAMS_BY_NAME
+
+    n = int(prog.defines.get("CELL_N", 4))
+    reads = re.sub(r"^\s*t\.(\w+) = cellgl_\1;$", "", code, flags=re.M)    # the loader's copies
+    used = set(re.findall(r"\.\s*(\w+)", reads))
+    out = []
+    for typ, name, value in prog.uniforms:
+        p = PARAMS_BY_NAME.get(name)
+        if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \
+                or isinstance(value, (list, tuple)) or name not in used:
+            continue
+        m = re.fullmatch(r"c(\d)(\d)?", name)
+        if m and any(int(d) > n for d in m.groups() if d):
+            continue
+        out.append((p, value))
+    return out
+
+
+#: OSL standard-library names a parameter would shadow (oslc warns): such a parameter gets a
+#: trailing underscore (its label stays the plain name)
+_OSL_STD = frozenset({"bump", "displace", "noise", "mix", "step", "smoothstep", "clamp", "min", "max",
+                      "area", "filterwidth", "transform", "length", "distance", "color", "point"})
+
+
+def _pname(name: str) -> str:
+    return name + "_" if name in _OSL_STD else name
+
+
+def _lit(v, typ: str) -> str:
+    if typ == "float":
+        r = repr(float(v))
+        return r if any(c in r for c in ".en") else r + ".0"
+    return str(int(v))
+
+
+def _label(name: str) -> str:
+    return name.replace("_", " ").capitalize()
+
+
+def _quote(s: str) -> str:
+    return s.replace("\\", "\\\\").replace('"', "'")
+
+
+def osl_shader(prog, code: str) -> str:
+    """The OSL text of texture program ``prog``: ``code`` (its specialised GLSL) translated,
+    plus the ``shader`` block."""
+    if not prog.filtered:
+        return _basis_shader(prog, code)
+    params = exposed_params(prog, code)
+    names = ["cellgl_" + p.name for p, _ in params]
+    lib = to_osl(code, params=names, drop=("cellgl_texture", "cellgl_texture3", "cellgl_texture_filtered",
+                                           "cellgl_texture3_filtered"))
+    shader_name = "cellgl_" + "".join(c if c.isalnum() else "_" for c in prog.title)
+    lines = [f"shader {shader_name}(", '    point Vector = point(0, 0, 0) [[ string label = "Vector", '
+             'string help = "Texture coordinate: (x, y) in [0, 1]^2 spans the bake, z the solid depth '
+             '(unconnected: generated coordinates)" ]],']
+    for p, value in params:
+        typ = "float" if p.type == "float" else "int"
+        lo, hi = (0, 1) if p.type == "bool" else (p.lo, p.hi)
+        meta = [f'string label = "{_label(p.name)}"', f"{typ} min = {_lit(lo, typ)}",
+                f"{typ} max = {_lit(hi, typ)}", f'string help = "{_quote(p.doc)}"']
+        if p.type == "bool":
+            meta.append('string widget = "checkBox"')
+        lines.append(f"    {typ} {_pname(p.name)} = {_lit(value, typ)} [[ {', '.join(meta)} ]],")
+    for typ, name, default, doc in OUTPUTS:
+        lines.append(f'    output {typ} {name} = {default} [[ string help = "{_quote(doc)}" ]],')
+    lines[-1] = lines[-1].rstrip(",")
+    z = "q[2]" if prog.solid else "0.0"
+    lines += [
+        ")",
+        "{",
+        "    point q0 = Vector;",
+        "    // unconnected: generated coordinates (Cycles), else the surface's (u, v)",
+        "    if (!isconnected(Vector) && !getattribute(\"geom:generated\", q0))",
+        "        q0 = point(u, v, 0);",
+        "    // cellgl's texture space: v = 0 at the top row of a bake",
+        "    vector q = vector(q0[0], 1.0 - q0[1], q0[2]);",
+        "    // the pixel's extent along each axis, whichever directions the host's two screen",
+        "    // differentials take (Cycles: diagonals of the pixel)",
+        "    vector ddx = Dx(q);",
+        "    vector ddy = Dy(q);",
+        "    vector dq = vector(hypot(ddx[0], ddy[0]), hypot(ddx[1], ddy[1]), hypot(ddx[2], ddy[2]));",
+        f"    CellglTextureParams t = cellgl_texture_params_load({', '.join(_pname(p.name) for p, _ in params)});",
+        f"    CellglTexel x = cellgl_texture_at_filtered(cellgl_vec3(q[0], q[1], {z}), "
+        f"cellgl_vec3(dq[0], dq[1], {'dq[2]' if prog.solid else '0.0'}), t);",
+        "    Color = color(x.color_.x, x.color_.y, x.color_.z);",
+        "    Fac = x.height;",
+        "    F1 = x.F.x;",
+        "    F2 = x.F.y;",
+        "    F3 = x.F.z;",
+        "    F4 = x.F.w;",
+        "    Value = x.value;",
+        "    cellgl_vec3 cc = cellgl_id_color(x.id);",
+        "    CellColor = color(cc.x, cc.y, cc.z);",
+        "    CellValue = x.cell.w;",
+        "    IDLow = float(x.id & 65535);",
+        "    IDHigh = float((x.id >> 16) & 65535);",
+        "    // bump: the height in texture units (bump per cell), its screen derivatives, and the",
+        "    // surface gradient of the shading point (q holds the flip of v)",
+        "    cellgl_vec3 g = cellgl_texture_grad_uvz(x, t);",
+        "    vector guv = vector(g.x, g.y, g.z) * (t.bump / t.frequency);",
+        "    float hx = dot(guv, ddx);",
+        "    float hy = dot(guv, ddy);",
+        "    vector dpdx = Dx(P);",
+        "    vector dpdy = Dy(P);",
+        "    vector r1 = cross(dpdy, N);",
+        "    vector r2 = cross(N, dpdx);",
+        "    float det = dot(dpdx, r1);",
+        "    vector sg = (det < 0.0 ? -1.0 : 1.0) * (hx * r1 + hy * r2);",
+        "    Normal = det == 0.0 ? N : normalize(abs(det) * N - sg);",
+        "}",
+    ]
+    return lib + "\n" + "\n".join(lines) + "\n"
+
+
+def _basis_shader(prog, code: str) -> str:
+    """The shader of a program whose ``cellgl_texture(vec2 uv)`` returns four values (the bare
+    basis: F1..F4), with no parameters: outputs F1..F4 at uv = (x, 1 - y) of ``Vector``."""
+    lib = to_osl(code)
+    return lib + "\n" + "\n".join([
+        "shader cellgl_basis(",
+        "    point Vector = point(0, 0, 0),",
+        "    output float F1 = 0,",
+        "    output float F2 = 0,",
+        "    output float F3 = 0,",
+        "    output float F4 = 0)",
+        "{",
+        "    point q0 = Vector;",
+        "    if (!isconnected(Vector))",
+        '        getattribute("geom:generated", q0);',
+        "    cellgl_vec4 f = cellgl_texture(cellgl_vec2(q0[0], 1.0 - q0[1]));",
+        "    F1 = f.x;",
+        "    F2 = f.y;",
+        "    F3 = f.z;",
+        "    F4 = f.w;",
+        "}",
+    ]) + "\n"

@@ -1,0 +1,250 @@
+"""Statement-level simplification for the snippet compiler (:mod:`cellgl.export.compiler`).
+
+Inside one function: dead locals (declared, never read), dead stores (a local only ever
+written; the last store to a local that is not read again), declarations split one per line,
+and arithmetic identities that hold exactly in float arithmetic (``x * 1.0``, ``x - 0.0``,
+``x += 0.0 * y;``, ``mix(a, b, 0.0)``). A right-hand side that calls a function with ``out``
+parameters is never removed.
+"""
+from __future__ import annotations
+
+import re
+
+from cellgl.export.reach import _code_idx, _match, _split_args, _stmt_end
+from cellgl.export.translate.tokens import Tok, tokenize
+
+__all__ = []
+
+
+def _top_comma(words: list[str]) -> bool:
+    depth = 0
+    for x in words:
+        depth += x in ("(", "[")
+        depth -= x in (")", "]")
+        if x == "," and depth == 0:
+            return True
+    return False
+
+
+def _dead_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """Remove one ``TYPE x = expr;`` (or ``TYPE x;``) whose x is never used, expr calling no
+    function with out parameters."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    types = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec4", "uvec4"}
+    for n in range(2, len(w) - 2):
+        if w[n - 1] in types and w[n - 2] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n]) \
+                and w[n + 1] in ("=", ";", "["):
+            end = w.index(";", n)
+            if w.count(w[n]) != 1 or _top_comma(w[n:end]) or any(x in impure for x in w[n:end]):
+                continue
+            start = code[n - 1]
+            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+                start -= 1
+            if start > 0 and toks[start - 1].kind == "ws":
+                start -= 1
+            return toks[:start] + toks[code[end] + 1:]
+    return None
+
+
+_DECL_TYPES = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec4"}
+
+
+def _split_declarators(toks: list[Tok]) -> list[Tok] | None:
+    """``vec4 a = x, b;`` -> ``vec4 a = x;`` and ``vec4 b;`` on their own lines."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(1, len(w) - 2):
+        if w[n] in _DECL_TYPES and w[n - 1] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n + 1]) \
+                and w[n + 2] in ("=", ","):
+            end = _stmt_end(toks, code, w, n)
+            parts, depth, start = [], 0, n + 1
+            for m in range(n + 1, end):
+                depth += w[m] in ("(", "[")
+                depth -= w[m] in (")", "]")
+                if w[m] == "," and depth == 0:
+                    parts.append((start, m))
+                    start = m + 1
+            if not parts:
+                continue
+            parts.append((start, end))
+            ind = toks[code[n] - 1].text.rsplit("\n", 1)[-1] if toks[code[n] - 1].kind == "ws" else ""
+            text = f"\n{ind}".join(w[n] + " " + "".join(toks[i].text for i in range(code[a], code[b - 1] + 1)).strip()
+                                   + ";" for a, b in parts)
+            return tokenize("".join(t.text for t in toks[:code[n]]) + text
+                            + "".join(t.text for t in toks[code[end] + 1:]))
+    return None
+
+
+_STORE = {"=", "+=", "-=", "*=", "/="}
+
+
+def _dead_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """Remove a local that is only ever written (``x = ...;``, ``x.y += ...;``, ``x[0] = ...;``),
+    with its declaration and those statements (their right-hand sides call nothing with out
+    parameters)."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 2):
+        if not ((w[n - 1] in _DECL_TYPES or w[n - 1].startswith("Cellgl")) and w[n - 2] in (";", "{", "}")
+                and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] in ("=", ";", "[")):
+            continue
+        name = w[n]
+        decl_end = _stmt_end(toks, code, w, n - 1)
+        if any(x in impure for x in w[n:decl_end]):
+            continue
+        spans = [(n - 1, decl_end)]
+        ok = True
+        m = decl_end + 1
+        while m < len(w):
+            if w[m] != name or w[m - 1] == ".":
+                m += 1
+                continue
+            if w[m - 1] not in (";", "{", "}"):
+                ok = False
+                break
+            k = m + 1
+            while k < len(w) and (w[k] == "." or w[k - 1] == "." or w[k] == "["):
+                k = _match(toks, code, k) + 1 if w[k] == "[" else k + 1
+            end = _stmt_end(toks, code, w, m)
+            if k >= len(w) or w[k] not in _STORE or any(x in impure for x in w[m:end]):
+                ok = False
+                break
+            spans.append((m, end))
+            m = end + 1
+        if not ok:
+            continue
+        out = list(toks)
+        kill = set()
+        for a, b in spans:
+            start = code[a]
+            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+                start -= 1
+            if start > 0 and toks[start - 1].kind == "ws":
+                start -= 1
+            kill.update(range(start, code[b] + 1))
+        return [t for i, t in enumerate(out) if i not in kill]
+    return None
+
+
+def _loop_bodies(toks, code, w) -> set[int]:
+    """Code positions of the '{' that open loop bodies."""
+    out = set()
+    for n, x in enumerate(w):
+        if x in ("for", "while") and n + 1 < len(w) and w[n + 1] == "(":
+            cl = _match(toks, code, n + 1)
+            if cl + 1 < len(w) and w[cl + 1] == "{":
+                out.add(cl + 1)
+            elif cl + 1 < len(w) and w[cl + 1] in ("for",):
+                out |= {cl + 1}
+    return out
+
+
+def _in_loop(toks, code, w, m, loops) -> bool:
+    depth = 0
+    for k in range(m - 1, -1, -1):
+        if w[k] == "}":
+            depth += 1
+        elif w[k] == "{":
+            if depth == 0:
+                if k in loops:
+                    return True
+            else:
+                depth -= 1
+        elif w[k] == "for" and depth == 0:
+            return True                       # the body of a for without braces
+    return False
+
+
+def _last_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """Remove a store ``x op= ...;`` to a local after which x is never read (outside loops)."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    loops = None
+    op = w.index("(") if "(" in w else 0
+    cl = _match(toks, code, op) if op else 0
+    params = set(w[op:cl])
+    for m in range(cl + 1, len(w) - 2):
+        if w[m - 1] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[m]) and w[m + 1] in _STORE \
+                and w[m] not in params and w[m + 1] != "=":
+            end = _stmt_end(toks, code, w, m)
+            if w[m] in w[end + 1:] or any(x in impure for x in w[m:end]):
+                continue
+            if loops is None:
+                loops = _loop_bodies(toks, code, w)
+            if _in_loop(toks, code, w, m, loops):
+                continue
+            start = code[m]
+            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+                start -= 1
+            if start > 0 and toks[start - 1].kind == "ws":
+                start -= 1
+            return toks[:start] + toks[code[end] + 1:]
+    return None
+
+
+_ZERO = r"(?:0\.0|0\.|0)"
+
+
+_ONE = r"(?:1\.0|1\.|1)"
+
+
+def _arithmetic(toks: list[Tok]) -> list[Tok]:
+    text = "".join(t.text for t in toks)
+    for _ in range(10):
+        old = text
+        # integer arithmetic in an index
+        text = re.sub(r"\[\s*(\d+(?:\s*[-+*]\s*\d+)+)\s*\]",
+                      lambda m: f"[{eval(m.group(1), {'__builtins__': {}}, {})}]", text)
+        # statements that add zero or multiply by one
+        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[-+]=\s*{_ZERO}\s*\*([^;{{}}]*);[^\n]*(?=\n)",
+                      lambda m: m.group() if _top_sum(m.group(1)) else "", text)
+        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[-+]=\s*\(?{_ZERO}\)?\s*;[^\n]*(?=\n)", "", text)
+        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[*/]=\s*\(?{_ONE}\)?\s*;[^\n]*(?=\n)", "", text)
+        text = _mix(text)
+        # a zero term of a sum: (0.0 * x + y) -> (y), y + 0.0 * x -> y (x a name, field or index)
+        text = re.sub(r"(?<=[(=+])(\s*)0\.0 \* [\w.\[\]]+ \+ ", r"\1", text)
+        text = re.sub(r" \+ 0\.0 \* [\w.\[\]]+(?=\s*[);,+\-])", "", text)
+        text = re.sub(r"\n[ \t]*\{\s*\}[ \t]*(?=\n)", "", text)          # an empty block
+        text = re.sub(r"\n[ \t]*if \((?:[^;{}()]|\([^;{}()]*\))*\) \{\s*\}[ \t]*(?=\n)", "", text)
+        # x * 1.0, x / 1.0, x - 0.0, x + 0.0 (floats: the same value; the snippet compiles as GLSL
+        # ES, which has no implicit int -> float, so x is a float)
+        text = re.sub(r"(?<=[\w)\]])\s*[*/]\s*1\.0(?![\w.(\[])", "", text)
+        text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
+        text = re.sub(r"(?<=[\w)\]])\s*[-+]\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
+        if text == old:
+            break
+    return tokenize(text)
+
+
+def _top_sum(expr: str) -> bool:
+    """Whether ``expr`` has a + or - outside parentheses (then 0.0 * expr is not all of it)."""
+    depth = 0
+    for ch in re.sub(r"[eE][-+]\d", "", expr):
+        depth += ch in "(["
+        depth -= ch in ")]"
+        if ch in "+-" and depth == 0:
+            return True
+    return False
+
+
+def _mix(text: str) -> str:
+    """``mix(a, b, 0.0)`` -> ``(a)``, ``mix(a, b, 1.0)`` -> ``(b)``."""
+    toks = tokenize(text)
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(len(w) - 1):
+        if w[n] == "mix" and w[n + 1] == "(" and (n == 0 or w[n - 1] != "."):
+            cl = _match(toks, code, n + 1)
+            args = _split_args(toks, code, n + 1, cl)
+            if len(args) != 3:
+                continue
+            t = "".join(w[args[2][0]:args[2][1]])
+            pick = 0 if re.fullmatch(_ZERO, t) else 1 if re.fullmatch(_ONE, t) else None
+            if pick is None:
+                continue
+            a, b = args[pick]
+            inner = "".join(t2.text for t2 in toks[code[a]:code[b - 1] + 1])
+            return _mix("".join(x.text for x in toks[:code[n]]) + "(" + inner.strip() + ")"
+                        + "".join(x.text for x in toks[code[cl] + 1:]))
+    return text

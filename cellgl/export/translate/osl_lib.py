@@ -1,0 +1,320 @@
+"""Helpers of the OSL translation (:mod:`cellgl.export.translate.osl`): the GLSL types OSL
+lacks as structs, and the functions generated for them (operators, constructors, component
+access, built-ins) and for unsigned 32-bit arithmetic on OSL's signed ``int``; each one is
+generated once, when the translation first needs it."""
+from __future__ import annotations
+
+import re
+
+from cellgl.export.translate.tokens import TranslateError
+
+_VEC_RE = re.compile(r"([biu]?)vec([234])$")
+_COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
+_SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
+_XYZW = "xyzw"
+_CMP = {"<", ">", "<=", ">=", "==", "!="}
+_RELATIONAL = {"lessThan": "<", "lessThanEqual": "<=", "greaterThan": ">", "greaterThanEqual": ">=",
+               "equal": "==", "notEqual": "!="}
+#: component-wise built-ins: name -> OSL scalar function (arguments of the first's type)
+_ELEMENTWISE = {"abs": "abs", "floor": "floor", "ceil": "ceil", "sqrt": "sqrt", "exp": "exp",
+                "log": "log", "sign": "sign", "min": "min", "max": "max", "clamp": "clamp",
+                "pow": "pow", "round": "round", "trunc": "trunc", "sin": "sin", "cos": "cos",
+                "fract": "cellgl_fract", "mod": "mod", "mix": "mix", "step": "step",
+                "smoothstep": "smoothstep", "inversesqrt": "inversesqrt", "exp2": "exp2",
+                "log2": "log2", "tan": "tan", "atan": "atan"}
+#: OSL keywords and global names that are legal GLSL identifiers
+OSL_RESERVED = {
+    "P", "I", "N", "Ng", "u", "v", "dPdu", "dPdv", "Ps", "time", "dtime", "dPdtime", "Ci",
+    "color", "point", "vector", "normal", "matrix", "string", "closure", "output", "shader",
+    "surface", "displacement", "volume", "illuminate", "illuminance", "emit", "public", "private",
+    "class", "const", "export", "import", "extern", "friend", "inline", "template", "typedef",
+    "union", "virtual", "cellgl_fract", "mod", "and", "or", "not", "lambda", "auto", "char",
+    "double", "enum", "long", "short", "signed", "unsigned", "sizeof", "static", "switch", "case",
+    "default", "goto", "mutable", "namespace", "new", "operator", "protected", "this", "throw",
+    "try", "catch", "using", "volatile", "bool", "uint", "world", "object", "camera", "raster",
+    "screen", "ndc", "common", "shader_type",
+}
+
+
+def _vec(t: str):
+    """``(component type, n)`` of a GLSL vector type, or None."""
+    m = _VEC_RE.fullmatch(t) if isinstance(t, str) else None
+    return (_COMP[m.group(1)], int(m.group(2))) if m else None
+
+
+def _osl_scalar(t: str) -> str:
+    return {"float": "float", "int": "int", "uint": "int", "bool": "int", "void": "void"}.get(t, t)
+
+
+def _int_lit(v: int) -> str:
+    """A 32-bit pattern as an OSL int literal (OSL's lexer has no unsigned or > 2^31 - 1)."""
+    v &= 0xFFFFFFFF
+    if v >= 0x80000000:
+        v -= 1 << 32
+    return f"({v})" if v < 0 else str(v)
+
+
+def _same(p, t) -> bool:
+    """Whether an argument of GLSL type ``t`` matches a parameter of type ``p`` exactly (arrays:
+    by element type), for overload resolution."""
+    if isinstance(p, tuple) or isinstance(t, tuple):
+        return isinstance(p, tuple) and isinstance(t, tuple) and _same(p[0], t[0])
+    return p == t
+
+
+_OPNAME = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "mod", "&": "and", "|": "or",
+           "^": "xor", "<<": "shl", ">>": "shr", "<": "lt", ">": "gt", "<=": "le", ">=": "ge",
+           "==": "eq", "!=": "ne"}
+
+
+class _OslLib:
+    """The generated-helper half of the translator (mixed into its tree walker)."""
+
+    helpers: dict
+    vec_structs: set
+    structs: dict
+
+    def osl_type(self, t: str) -> str:
+        v = _vec(t)
+        if v:
+            self.vec_struct(t)
+            return "cellgl_" + t
+        if t in self.structs:
+            return t
+        return _osl_scalar(t)
+
+    def vec_struct(self, t: str) -> None:
+        if t in self.vec_structs:
+            return
+        self.vec_structs.add(t)
+        comp, n = _vec(t)
+        fields = " ".join(f"{_osl_scalar(comp)} {c};" for c in _XYZW[:n])
+        self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
+
+    def helper(self, name: str, code) -> str:
+        if name not in self.helpers:
+            self.helpers[name] = code() if callable(code) else code
+        return name
+
+    def conv(self, expr: str, src: str, dst: str) -> str:
+        """Scalar conversion of ``expr`` (OSL text of GLSL type ``src``) to GLSL type ``dst``."""
+        if src == dst or (src in ("int", "uint") and dst in ("int", "uint")):
+            return expr
+        if dst == "float":
+            if src == "uint":
+                return f"{self.u2f()}({expr})"
+            return f"float({expr})"
+        if dst == "bool":
+            return f"({expr} != 0)"
+        if src == "bool":
+            return expr
+        if dst == "int":
+            return f"int({expr})"
+        if dst == "uint":
+            return f"{self.f2u()}({expr})"
+        raise TranslateError(f"OSL translation: no conversion from {src} to {dst}")
+
+    def u2f(self) -> str:
+        return self.helper("cellgl_u2f", (
+            "// float(uint): the top 24 bits exactly, then one rounding with the low 8.\n"
+            "float cellgl_u2f(int a) { return float((a >> 8) & 16777215) * 256.0 + float(a & 255); }"))
+
+    def f2u(self) -> str:
+        return self.helper("cellgl_f2u", (
+            "// uint(float) for 0 <= x < 2^32.\n"
+            "int cellgl_f2u(float x) { return x >= 2147483648.0 ? int(x - 2147483648.0) ^ (1 << 31) : int(x); }"))
+
+    def float_bits(self) -> str:
+        """``floatBitsToUint`` (OSL has no bit casts): the IEEE 754 fields of a finite float
+        computed exactly (powers of two multiply and divide exactly; log2 only guesses the
+        exponent, which is then corrected). -0.0 gives the bits of +0.0."""
+        return self.helper("cellgl_float_bits", (
+            "// 2^e, exactly (binary powering of 2 or 1/2), |e| < 256.\n"
+            "float cellgl_pow2(int e)\n{\n"
+            "    float b = e < 0 ? 0.5 : 2.0;\n"
+            "    int n = abs(e);\n"
+            "    float p = 1.0;\n"
+            "    for (int i = 0; i < 8; i++) {\n"
+            "        if ((n >> i) & 1)\n"
+            "            p *= b;\n"
+            "        b *= b;\n"
+            "    }\n"
+            "    return p;\n}\n\n"
+            "// floatBitsToUint(x) for finite x: sign, biased exponent, mantissa.\n"
+            "int cellgl_float_bits(float x)\n{\n"
+            "    if (x == 0.0)\n"
+            "        return 0;\n"
+            "    int s = x < 0.0 ? (1 << 31) : 0;\n"
+            "    float a = abs(x);\n"
+            "    int e = clamp(int(floor(log2(a))), -149, 127);\n"
+            "    float p = cellgl_pow2(e);\n"
+            "    if (p > a) {\n"
+            "        e -= 1;\n"
+            "        p = cellgl_pow2(e);\n"
+            "    } else if (e < 127 && p * 2.0 <= a) {\n"
+            "        e += 1;\n"
+            "        p = cellgl_pow2(e);\n"
+            "    }\n"
+            "    if (e < -126)           // subnormal: a = m 2^-149\n"
+            "        return s | int(a * cellgl_pow2(126) * 8388608.0);\n"
+            "    return s | ((e + 127) << 23) | int((a / p - 1.0) * 8388608.0);\n}"))
+
+    def scalar_op(self, op: str, a: str, b: str, t: str) -> str:
+        """``a op b`` for scalars of GLSL type ``t`` (both operands already of that type)."""
+        if t == "uint":
+            if op == ">>":
+                name = self.helper("cellgl_srl", (
+                    "// uint >>: a logical right shift of the int's bits.\n"
+                    "int cellgl_srl(int a, int s) { return s == 0 ? a : (a >> s) & ((1 << (32 - s)) - 1); }"))
+                return f"{name}({a}, {b})"
+            if op in ("<", ">", "<=", ">="):
+                return f"(({a}) ^ (1 << 31)) {op} (({b}) ^ (1 << 31))"
+            if op in ("/", "%"):
+                self.helper("cellgl_udiv", (
+                    "// uint / and %, by long division on the int's bits.\n"
+                    "int cellgl_udiv(int a, int b)\n{\n"
+                    "    if (b < 0)          // b >= 2^31: the quotient is 0 or 1\n"
+                    "        return (a ^ (1 << 31)) >= (b ^ (1 << 31)) ? 1 : 0;\n"
+                    "    int q = 0; int r = 0;\n"
+                    "    for (int i = 31; i >= 0; i--) {\n"
+                    "        r = (r << 1) | ((a >> i) & 1);\n"
+                    "        if ((r ^ (1 << 31)) >= (b ^ (1 << 31))) { r -= b; q |= 1 << i; }\n"
+                    "    }\n    return q;\n}\n"
+                    "int cellgl_umod(int a, int b) { return a - cellgl_udiv(a, b) * b; }"))
+                return f"{'cellgl_udiv' if op == '/' else 'cellgl_umod'}({a}, {b})"
+        if op == "^^":
+            return f"(({a}) != ({b}))"
+        return f"({a} {op} {b})"
+
+    def vec_binary(self, op: str, ta: str, tb: str) -> tuple[str, str]:
+        """Name and result type of the generated component-wise ``op`` on ``ta``, ``tb``."""
+        va, vb = _vec(ta), _vec(tb)
+        n = (va or vb)[1]
+        comp = (va or vb)[0]
+        cmp = op in _CMP
+        rt = ("b" if cmp else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
+        name = f"cellgl_{_OPNAME[op]}_{ta}_{tb}"
+
+        def code():
+            oa, ob, ort = self.osl_type(ta), self.osl_type(tb), self.osl_type(rt)
+            parts = []
+            for c in _XYZW[:n]:
+                x = f"a.{c}" if va else "a"
+                y = f"b.{c}" if vb else "b"
+                parts.append(self.scalar_op(op, x, y, comp))
+            return f"{ort} {name}({oa} a, {ob} b) {{ return {ort}({', '.join(parts)}); }}"
+        self.helper(name, code)
+        return name, rt
+
+    # ------------------------------------------------------------------ expressions
+
+    def size(self, node) -> str:
+        """An array size: an integer constant expression, folded (OSL wants a literal)."""
+        def ev(x):
+            if x[0] == "num" and re.fullmatch(r"\d+[uU]?", x[1]):
+                return int(x[1].rstrip("uU"))
+            if x[0] == "paren":
+                return ev(x[1])
+            if x[0] == "binary" and x[1] in ("+", "-", "*", "<<"):
+                a, b = ev(x[2]), ev(x[3])
+                return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x[1]]
+            raise TranslateError("OSL translation: an array size that is not an integer constant")
+        return str(ev(node))
+
+    def vec_get(self, t: str) -> str:
+        comp, n = _vec(t)
+        ot, oc = self.osl_type(t), _osl_scalar(comp)
+        name = f"cellgl_get_{t}"
+        body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(_XYZW[:n - 1]))
+        return self.helper(name, f"{oc} {name}({ot} a, int i) {{ {body} return a.{_XYZW[n - 1]}; }}")
+
+    def vec_set(self, t: str) -> str:
+        comp, n = _vec(t)
+        ot, oc = self.osl_type(t), _osl_scalar(comp)
+        name = f"cellgl_set_{t}"
+        body = " else ".join(f"if (i == {j}) a.{c} = x;" for j, c in enumerate(_XYZW[:n - 1]))
+        return self.helper(name, f"void {name}(output {ot} a, int i, {oc} x) {{ {body} else a.{_XYZW[n - 1]} = x; }}")
+
+    def any_all(self, fn: str, bt: str) -> str:
+        _, n = _vec(bt)
+        ot = self.osl_type(bt)
+        name = f"cellgl_{fn}_{bt}"
+        j = " || " if fn == "any" else " && "
+        return self.helper(name, f"int {name}({ot} a) {{ return {j.join(f'a.{c}' for c in _XYZW[:n])}; }}")
+
+    def call_builtin(self, fn: str, args: list):
+        ev = [self.ex(a) for a in args]
+        types = [t for _, t in ev]
+        ss = [s for s, _ in ev]
+        if fn in _RELATIONAL:
+            name, rt = self.vec_binary(_RELATIONAL[fn], types[0], types[1])
+            return f"{name}({ss[0]}, {ss[1]})", rt
+        if fn in ("any", "all"):
+            return f"{self.any_all(fn, types[0])}({ss[0]})", "bool"
+        if fn in ("dot", "length", "distance", "normalize"):
+            t = types[0]
+            v = _vec(t)
+            if not v:
+                if fn == "dot":
+                    return f"({ss[0]} * {ss[1]})", "float"
+                if fn == "normalize":
+                    return f"sign({ss[0]})", "float"
+                return (f"abs({ss[0]})" if fn == "length" else f"abs({ss[0]} - {ss[1]})"), "float"
+            ot = self.osl_type(t)
+            dot = f"cellgl_dot_{t}"
+            self.helper(dot, f"float {dot}({ot} a, {ot} b) {{ return "
+                        + " + ".join(f"a.{c} * b.{c}" for c in _XYZW[:v[1]]) + "; }")
+            if fn == "dot":
+                return f"{dot}({ss[0]}, {ss[1]})", "float"
+            if fn == "length":
+                return f"sqrt({dot}({ss[0]}, {ss[0]}))", "float"
+            if fn == "distance":
+                sub, _ = self.vec_binary("-", t, t)
+                name = self.helper(f"cellgl_distance_{t}", f"float cellgl_distance_{t}({ot} a, {ot} b) "
+                                   f"{{ {ot} d = {sub}(a, b); return sqrt({dot}(d, d)); }}")
+                return f"{name}({ss[0]}, {ss[1]})", "float"
+            mul, _ = self.vec_binary("*", t, "float")
+            name = self.helper(f"cellgl_normalize_{t}", f"{ot} cellgl_normalize_{t}({ot} a) "
+                               f"{{ return {mul}(a, 1.0 / sqrt({dot}(a, a))); }}")
+            return f"{name}({ss[0]})", t
+        if fn in ("floatBitsToUint", "floatBitsToInt"):
+            self.float_bits()
+            t = types[0]
+            v = _vec(t)
+            if not v:
+                return f"cellgl_float_bits({ss[0]})", "uint" if fn.endswith("Uint") else "int"
+            rt = ("u" if fn.endswith("Uint") else "i") + f"vec{v[1]}"
+            ot, ort = self.osl_type(t), self.osl_type(rt)
+            name = f"cellgl_{fn}_{t}"
+            self.helper(name, f"{ort} {name}({ot} a) {{ return {ort}("
+                        + ", ".join(f"cellgl_float_bits(a.{c})" for c in _XYZW[:v[1]]) + "); }")
+            return f"{name}({ss[0]})", rt
+        if fn == "fract":
+            self.helper("cellgl_fract", "float cellgl_fract(float x) { return x - floor(x); }")
+        if fn == "atan" and len(ss) == 2:
+            fn = "atan2"
+        if fn in _ELEMENTWISE or fn == "atan2":
+            osl = _ELEMENTWISE.get(fn, fn)
+            vt = next((t for t in types if _vec(t)), None)
+            if vt is None:
+                rt = types[-1] if fn in ("step", "smoothstep") else types[0]
+                if rt == "uint" and fn in ("min", "max", "clamp"):
+                    raise TranslateError(f"OSL translation: {fn}() of uint")
+                if "float" in types:
+                    ss = [self.conv(s, t, "float") for s, t in zip(ss, types)]
+                    rt = "float"
+                return f"{osl}({', '.join(ss)})", rt
+            v = _vec(vt)
+            name = f"cellgl_{fn}_" + "_".join(types)
+
+            def code():
+                ot = self.osl_type(vt)
+                plist = ", ".join(f"{self.osl_type(t)} a{j}" for j, t in enumerate(types))
+                parts = []
+                for c in _XYZW[:v[1]]:
+                    parts.append(f"{osl}(" + ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}"
+                                                       for j, t in enumerate(types)) + ")")
+                return f"{ot} {name}({plist}) {{ return {ot}({', '.join(parts)}); }}"
+            self.helper(name, code)
+            return f"{name}({', '.join(ss)})", vt
+        raise TranslateError(f"OSL translation: function {fn!r} has no OSL translation")
