@@ -325,3 +325,13 @@ def test_pups_loop_budget_is_known_before_the_dispatch(ctx, monkeypatch):
     monkeypatch.setattr(pups_gpu, "DRIVER_LOOP_LIMIT", max(seen))
     with pytest.raises(ValueError, match="past the driver's limit"):
         cellgl.render("pups-giraffe", 64, 64)
+
+
+@pytest.mark.parametrize("target", ["glsl", "hlsl", "wgsl"])
+def test_snippets_carry_and_document_the_bound(target):
+    """Exported snippets stop their searches at the same bound and say so in a comment."""
+    from cellgl.export import export
+
+    text = export("f1", target)
+    assert "6144" in text
+    assert "LOOP_BUDGET" in text and "llvmpipe" in text

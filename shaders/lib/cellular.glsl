@@ -61,10 +61,11 @@
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
 #define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
-// Whether a search that has spent `loops` iterations may take one more step.
-bool cell_budget_left(int loops)
+// Whether a search that has spent `loops` passes must stop (one more step
+// could pass CELL_LOOP_BUDGET).
+bool cell_budget_spent(int loops)
 {
-    return loops <= CELL_LOOP_BUDGET - CELL_LOOP_STEP;
+    return loops > CELL_LOOP_BUDGET - CELL_LOOP_STEP;
 }
 
 struct CellResult {
@@ -72,7 +73,7 @@ struct CellResult {
     vec4 delta[CELL_N];   // feature point - sample (components past CELL_DIM are 0)
     uint id[CELL_N];      // feature point IDs
     bool exact;           // false if the ring cap or the loop budget was reached
-    int loops;            // loop iterations spent so far (see "Loop budget" above)
+    int loops;            // loop passes spent so far (cell_search_budget)
 };
 
 // A vector in the units distances are measured in (CELL_ANISO: axes weighted).
@@ -194,7 +195,11 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
     return o;
 }
 
-// cell_search with `loops` iterations already spent by this invocation.
+// Search flagged inexact at CELL_LOOP_BUDGET (6144) loop passes: llvmpipe cuts loops silently.
+// cell_search for an invocation that has already spent `loops` loop passes:
+// it stops, flagged inexact, before the invocation's count reaches
+// CELL_LOOP_BUDGET (6144 unless defined), since drivers cut longer loops
+// without a word (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
 CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 {
     CellResult r;
@@ -204,7 +209,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         r.id[k] = 0u;
     }
     r.loops = loops;
-    bool spent = !cell_budget_left(r.loops);
+    bool spent = cell_budget_spent(r.loops);
 
     // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block.
     // Constant loop bounds, so the compiler unrolls the block into
@@ -235,10 +240,10 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #else
         if (any(notEqual(o, ivec4(0)))) {
 #endif
-            if (cell_budget_left(r.loops)) {
-                _cell_visit(r, cell, f, o, p);
-            } else {
+            if (cell_budget_spent(r.loops)) {
                 spent = true;
+            } else {
+                _cell_visit(r, cell, f, o, p);
             }
         }
     }
@@ -283,7 +288,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         ivec4 o = lo - ivec4(0, 0, 0, 1);
         r.loops += 1;
         for (int i = 0; i < cells; i++) {
-            if (!cell_budget_left(r.loops)) {
+            if (cell_budget_spent(r.loops)) {
                 spent = true;
                 break;
             }
@@ -307,6 +312,8 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     return r;
 }
 
+// The CELL_N nearest feature points of the sample (cell, f); flagged inexact
+// rather than cut past CELL_LOOP_BUDGET loop passes (cell_search_budget).
 CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 {
     return cell_search_budget(cell, f, p, 0);

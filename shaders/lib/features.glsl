@@ -188,7 +188,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     for (int a = 0; a < CELL_DIM; a++) {
         m = min(m, min(f[a], 1.0 - f[a]));
     }
-    if (!cell_budget_left(w.loops)) {
+    if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
     }
@@ -207,7 +207,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         ivec4 o = lo - ivec4(0, 0, 0, 1);
         w.loops += 1;
         for (int i = 0; i < cells; i++) {
-            if (!cell_budget_left(w.loops)) {
+            if (cell_budget_spent(w.loops)) {
                 w.spent = true;
                 return false;
             }
