@@ -125,7 +125,8 @@ def test_scalarise_leaves_a_struct_written_elsewhere_alone():
 # --------------------------------------------------------------------------------------------
 
 #: lines of `cellgl export f1` (glsl), of every preset in every target, of a basis snippet
-F1_LIMIT, PRESET_LIMIT, BASIS_LIMIT, EDGE_LIMIT = 340, 600, 220, 330
+#: (issue 21: the loop budget, its count, the window odometer and their comments, adds ~30 lines)
+F1_LIMIT, PRESET_LIMIT, BASIS_LIMIT, EDGE_LIMIT = 380, 640, 260, 385
 
 
 def test_f1_snippet_is_short():
