@@ -65,8 +65,9 @@ def defines(outputs, dim: int, smooth: str = "exp") -> dict:
     exponential smooth minimum, 2: Blender's polynomial fold)."""
     f = flags(outputs)
     mode = (2 if smooth == "polynomial" else 1) if f["smooth"] else 0
+    extra = bool(set(outputs) & {"smooth_grad", "smooth_position", "smooth_color"})
     return dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=mode, CELL_NSPHERE=int(f["nsphere"]),
-                CELL_FEATURE_MAX_RING=feature_max_ring(dim))
+                CELL_SMOOTH_EXTRA=int(extra), CELL_FEATURE_MAX_RING=feature_max_ring(dim))
 
 
 # --------------------------------------------------------------------------- per ID

@@ -42,6 +42,16 @@
 #include "metric.glsl"
 #include "points.glsl"
 
+// The n-sphere radius alone (features.glsl) needs only the cell of the F1 point
+// and its position in it: the search keeps them instead of a second walk.
+#ifdef CELL_NSPHERE
+#if CELL_NSPHERE && !CELL_EDGE && !CELL_SMOOTH
+#define CELL_TRACK_F1_CELL 1
+#endif
+#endif
+#ifndef CELL_TRACK_F1_CELL
+#define CELL_TRACK_F1_CELL 0
+#endif
 #ifndef CELL_RING1_PRUNE
 #if CELL_DIST == CELL_DIST_JITTER
 #define CELL_RING1_PRUNE 0
@@ -72,6 +82,10 @@ struct CellResult {
     float F[CELL_N];      // distances, ascending (true distances after cell_search)
     vec4 delta[CELL_N];   // feature point - sample (components past CELL_DIM are 0)
     uint id[CELL_N];      // feature point IDs
+#if CELL_TRACK_F1_CELL
+    ivec4 o1;             // the F1 point's cell, as an offset from the sample's
+    vec4 q1;              // and its position in that cell
+#endif
     bool exact;           // false if the ring cap or the loop budget was reached
     int loops;            // loop passes spent so far (cell_search_budget)
 };
@@ -149,7 +163,14 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
         uint id;
         vec4 q = cell_next_point(state, c, p, id);
         vec4 delta = _cell_axis_scale(base + q, p);
-        _cell_insert(r, cell_metric_length(delta, p.minkowski_p), delta, id);
+        float d = cell_metric_length(delta, p.minkowski_p);
+#if CELL_TRACK_F1_CELL
+        if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
+            r.o1 = o;
+            r.q1 = q;
+        }
+#endif
+        _cell_insert(r, d, delta, id);
     }
 }
 
@@ -208,6 +229,10 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         r.delta[k] = vec4(0.0);
         r.id[k] = 0u;
     }
+#if CELL_TRACK_F1_CELL
+    r.o1 = ivec4(0);
+    r.q1 = vec4(0.0);
+#endif
     r.loops = loops;
     bool spent = cell_budget_spent(r.loops);
 

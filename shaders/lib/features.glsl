@@ -48,6 +48,12 @@
 #ifndef CELL_NSPHERE
 #define CELL_NSPHERE 0
 #endif
+#ifndef CELL_SMOOTH_EXTRA
+// 0: only smooth F1 itself is wanted; its offset, gradient and attribute are
+// not accumulated (they stay those of the F1 point), a shader specialised per
+// requested output.
+#define CELL_SMOOTH_EXTRA 1
+#endif
 
 // The colour of the cell of feature point `id`: bytes 0, 8 and 16 of its hash,
 // each / 255 (the false colour of `cellgl bake --channels id`).
@@ -158,9 +164,11 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
     if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
         float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
         w.wsum += wt;
+#if CELL_SMOOTH_EXTRA
         w.wdelta += wt * delta;
         w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
         w.wattr += wt * cell_id_attribute(id);
+#endif
     }
 #endif
 }
@@ -193,8 +201,67 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         return false;
     }
     _cell_walk_cell(w, cell, f, ivec4(0), p);
+    // Ring 1 as a block of constant bounds, unrolled into straight-line SIMD
+    // code as in cell_search (most walks end in it); the same cells in the same
+    // order as the window loop below would visit, each under the same test.
+    // Constant loops spend no loop passes: only the visits are counted.
+    if (m >= _cell_walk_reach(w)) {
+        return true;
+    }
+    for (int x = -1; x <= 1; x++)
+    for (int y = -1; y <= 1; y++)
+#if CELL_DIM >= 3
+    for (int z = -1; z <= 1; z++)
+#else
+    for (int z = 0; z <= 0; z++)
+#endif
+#if CELL_DIM >= 4
+    for (int v = -1; v <= 1; v++)
+#else
+    for (int v = 0; v <= 0; v++)
+#endif
+    {
+        ivec4 o = ivec4(x, y, z, v);
+        if (any(notEqual(o, ivec4(0)))
+            && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
+            if (cell_budget_spent(w.loops)) {
+                w.spent = true;
+                return false;
+            }
+            _cell_walk_cell(w, cell, f, o, p);
+        }
+    }
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+    if (!w.around) {
+        // Smooth F1 alone: the reach F1 + cutoff k does not change during the
+        // walk, so rings 2 .. R (the last the ring loop would enter) are one
+        // window loop, each cell under the same test.
+        float reach = _cell_walk_reach(w);
+        int last = int(ceil(min(reach - m, float(CELL_FEATURE_MAX_RING))));
+        ivec4 lo, hi;
+        cell_ring_window(last, min(reach, float(last + 2)), f, lo, hi);
+        ivec4 n = hi - lo + 1;
+        int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = lo - ivec4(0, 0, 0, 1);
+        w.loops += 1;             // the pass that leaves the window loop
+        for (int i = 0; i < cells; i++) {
+            if (cell_budget_spent(w.loops)) {
+                w.spent = true;
+                return false;
+            }
+            w.loops += 1;
+            o = cell_window_next(o, lo, hi);
+            ivec4 ao = abs(o);
+            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2
+                && _cell_box_distance(o, f, p) < cell_metric_term(reach, p.minkowski_p)) {
+                _cell_walk_cell(w, cell, f, o, p);
+            }
+        }
+        return float(last) + m >= reach;
+    }
+#endif
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = 1; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    for (int ring = 2; ring <= CELL_FEATURE_MAX_RING; ring++) {
         w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
@@ -269,7 +336,6 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
             vec4 q = cell_dims(vec4(o4) + cell_next_point(state, c, p, id));
             vec4 delta = q - f;
             float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-            vec4 gd = cell_metric_gradient(delta, d, p.minkowski_p);
             float h, dh_ds;
             if (k > 0.0) {
                 float t = 0.5 + 0.5 * (s - d) / k;
@@ -280,10 +346,14 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
                 dh_ds = 0.0;
             }
             float c0 = k * h * (1.0 - h);
+#if CELL_SMOOTH_EXTRA
+            vec4 gd = cell_metric_gradient(delta, d, p.minkowski_p);
             // d s_new = (1 - h) ds + h dd + ((d - s) - k (1 - 2 h)) dh, dh = dh_ds (ds - dd)
             vec4 gh = dh_ds * (gs - gd);
             gs = (1.0 - h) * gs + h * gd + ((d - s) - k * (1.0 - 2.0 * h)) * gh;
+#endif
             s = mix(s, d, h) - c0;
+#if CELL_SMOOTH_EXTRA
             float c1 = c0 / (1.0 + 3.0 * k);
 #if CELL_DIST == CELL_DIST_BLENDER
             vec4 cc = vec4(cell_blender_color(c), cell_id_value(id));
@@ -292,12 +362,15 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
 #endif
             col = mix(col, cc, h) - c1;
             pos = mix(pos, q, h) - c1;
+#endif
         }
     }
     o.smooth_F = s;
+#if CELL_SMOOTH_EXTRA
     o.smooth_delta = cell_dims(pos - f);
     o.smooth_grad = cell_dims(gs);
     o.smooth_attr = col;
+#endif
 }
 #endif
 
@@ -325,7 +398,15 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.spent = false;
 
     CellFeatures o;
+#if CELL_TRACK_F1_CELL
+    // n-sphere radius alone: the search already knows the F1 point's cell.
+    w.found = true;
+    w.o1 = r.o1;
+    w.q1 = r.q1;
+    o.exact = r.exact;
+#else
     o.exact = r.exact && _cell_walk(w, cell, f, p);
+#endif
     o.edge = max(w.edge, 0.0);
     o.edge_grad = -w.edge_n;
     o.smooth_F = r.F[0];
@@ -339,9 +420,11 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     if (w.wsum > 0.0) {
         float inv = 1.0 / w.wsum;
         o.smooth_F = w.F1 - w.k * log(w.wsum);
+#if CELL_SMOOTH_EXTRA
         o.smooth_delta = w.wdelta * inv;
         o.smooth_grad = w.wgrad * inv;
         o.smooth_attr = w.wattr * inv;
+#endif
     }
 #endif
 #if CELL_NSPHERE

@@ -1,0 +1,93 @@
+#!/usr/bin/env python
+"""Exact F1 + F2 from cellgl against FastNoiseLite's approximate Distance2, interleaved.
+
+The same scattered points (uniform in [0, 64)^d, 1e6 by default) go to both, round by round
+(FastNoiseLite, then each cellgl distribution), and the table gives the median rate of each and
+the median of the per-round ratios cellgl / FastNoiseLite, so a change of load on a shared machine
+hits both sides alike. FastNoiseLite: Cellular, Euclidean, Distance2 (F1 and F2 in one loop),
+jitter 1, frequency 1, one thread (pyfastnoiselite). cellgl: ``cellgl.cellular(points, n=2,
+outputs=("F",))`` on the GPU, float64 points in, F read back (jitter 1, and poisson at the default
+density 3). See benchmarks/README.md for what FastNoiseLite does not search.
+
+    python benchmarks/bench_vs_fnl.py [--points 1e6] [--repeats 7] [--dims 2 3]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+import numpy as np
+
+_REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+if _REPO not in sys.path:
+    sys.path.insert(0, _REPO)
+
+
+def fnl(n: int):
+    from pyfastnoiselite.pyfastnoiselite import (CellularDistanceFunction, CellularReturnType,
+                                                 FastNoiseLite, NoiseType)
+
+    f = FastNoiseLite(0)
+    f.noise_type = NoiseType.NoiseType_Cellular
+    f.cellular_distance_function = CellularDistanceFunction.CellularDistanceFunction_Euclidean
+    f.cellular_return_type = (CellularReturnType.CellularReturnType_Distance if n == 1
+                              else CellularReturnType.CellularReturnType_Distance2)
+    f.cellular_jitter = 1.0
+    f.frequency = 1.0
+    return f
+
+
+def timed(fn) -> float:
+    t0 = time.perf_counter()
+    fn()
+    return time.perf_counter() - t0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--points", type=float, default=1e6)
+    ap.add_argument("--repeats", type=int, default=7, help="interleaved rounds (medians reported)")
+    ap.add_argument("--dims", type=int, nargs="+", default=[3, 2], choices=(2, 3))
+    ap.add_argument("--n", type=int, default=2, choices=(1, 2), help="1: F1, 2: F1 and F2")
+    a = ap.parse_args()
+    import cellgl
+
+    N = int(a.points)
+    rng = np.random.default_rng(0)
+    load0 = os.getloadavg()[0]
+    rows = []
+    for d in a.dims:
+        pts = rng.uniform(0.0, 64.0, (N, d))
+        coords = np.ascontiguousarray(pts.T, dtype=np.float32)
+        f = fnl(a.n)
+        calls = {"FastNoiseLite": lambda: f.gen_from_coords(coords)}
+        for dist in ("jitter", "poisson"):
+            calls[f"cellgl {dist}"] = (lambda dist=dist: np.asarray(cellgl.cellular(
+                pts, n=a.n, distribution=dist, jitter=1.0, seed=0, outputs=("F",)).F))
+        for fn in calls.values():
+            fn()                                     # warm-up (compiles the shaders)
+        t = {k: [] for k in calls}
+        for _ in range(a.repeats):
+            for k, fn in calls.items():
+                t[k].append(timed(fn))
+        base = t["FastNoiseLite"]
+        for k in calls:
+            ratios = [b / x for b, x in zip(base, t[k])]
+            rows.append((d, k, N / statistics.median(t[k]) / 1e6, statistics.median(ratios),
+                         min(ratios), max(ratios)))
+    load1 = os.getloadavg()[0]
+    what = "F1 + F2" if a.n == 2 else "F1"
+    print(f"{what}, {N} scattered points, median of {a.repeats} interleaved rounds; "
+          f"load {load0:.1f} -> {load1:.1f} (1 min), {os.cpu_count()} cores")
+    print("| dim | library | Ms/s | x FastNoiseLite (median, min-max) |")
+    print("| --- | --- | ---: | ---: |")
+    for d, k, rate, r, lo, hi in rows:
+        print(f"| {d}D | {k} | {rate:.2f} | {r:.2f} ({lo:.2f}-{hi:.2f}) |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
