@@ -27,6 +27,7 @@ from cellgl.export.reach import (
     _drop_fields,
     _drop_struct_args,
     _match,
+    _sig_end,
     _split_args,
     parse,
     reach,
@@ -54,10 +55,15 @@ def _array_elements(items: list[Item]) -> list[Item]:
                             for a, b in _split_args(toks, code, op, cl)]
     if not arrays:
         return items
-    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[(\d+)\]")
+    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[([^\[\]=;]*)\]")
 
     def elem(m):
         vals = arrays[m.group(1)]
+        if len(set(vals)) == 1 and re.fullmatch(r"[\w\s+\-*]*", m.group(2)) and "++" not in m.group(2) \
+                and "--" not in m.group(2):
+            return vals[0]                   # every element the same: any index reads it
+        if not m.group(2).strip().isdigit():
+            return m.group()
         k = int(m.group(2))
         return vals[k] if k < len(vals) and len(vals[k]) <= 40 else m.group()
 
@@ -164,6 +170,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
             items = fold(items, env)
         items = _inline(items, set(entries))
         items = _drop_unused_params(items, set(entries))
+        items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))
         items = _dead_fields(items)
         items = reach(items, entries)
@@ -201,6 +208,60 @@ def _drop_unused_params(items: list[Item], keep) -> list[Item]:
                 new.append(Item(x.kind, x.name, toks, x.comment))
             else:
                 return _drop_unused_params(new, keep)
+    return items
+
+
+_CONST_ARG = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?|[iu]?vec[234]\(\s*-?[\d.]+u?(?:\s*,\s*-?[\d.]+u?)*\s*\)")
+
+
+def _constant_args(items: list[Item], keep) -> list[Item]:
+    """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
+    becomes that literal in the body, and the argument goes."""
+    impure = {it.name for it in items if it.kind == "function"
+              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    for it in items:
+        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
+            continue
+        params, body = _params(it)
+        for k, words in enumerate(params):
+            if len(words) != 2 or words[0] in ("out", "inout"):
+                continue
+            name = words[1]
+            text = " ".join(body)
+            if re.search(rf"(\+\+|--)\s*{name}\b|\b{name}\s*(\.\s*\w+|\[[^\]]*\])?\s*([-+*/]?=(?!=)|\+\+|--)", text) \
+                    or (any(f in body for f in impure) and re.search(rf"[(,]\s*{name}\s*[,)]", text)):
+                continue
+            seen = set()
+            for x in items:
+                if x.kind != "function":
+                    continue
+                toks, code = x.toks, _code_idx(x.toks)
+                w = [toks[i].text for i in code]
+                for m in range(2 if x is it else 0, len(w) - 1):
+                    if w[m] == it.name and w[m + 1] == "(" and (m == 0 or w[m - 1] != "."):
+                        cl = _match(toks, code, m + 1)
+                        args = _split_args(toks, code, m + 1, cl)
+                        a, b = args[k] if k < len(args) else (0, 0)
+                        seen.add("".join(t.text for t in toks[code[a]:code[b - 1] + 1]).strip() if b else None)
+            if len(seen) != 1 or None in seen or not _CONST_ARG.fullmatch(next(iter(seen))):
+                continue
+            value = next(iter(seen))
+            value = f"({value})" if value.startswith("-") else value
+            takes = {it.name: (k, name)}
+            new = []
+            for x in items:
+                toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
+                if toks is None:
+                    break
+                if x is it:
+                    head = "".join(t.text for t in toks[:_sig_end(toks)])
+                    rest = tokenize("".join(t.text for t in toks[_sig_end(toks):]))
+                    rest = "".join(value if t.kind == "id" and t.text == name and (j == 0 or rest[j - 1].text != ".")
+                                   else t.text for j, t in enumerate(rest))
+                    toks = tokenize(head + rest)
+                new.append(Item(x.kind, x.name, toks, x.comment))
+            else:
+                return _constant_args(new, keep)
     return items
 
 
