@@ -176,7 +176,9 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
         items = reach(items, entries)
         if unparse(items) == before:
             break
-    return unparse(tidy_comments(_ordered(items)))
+    text = unparse(tidy_comments(_ordered(items)))
+    # the opening brace of a function or of a loop nest on the line that opens it
+    return re.sub(r"(?m)^([ \t]*)((?:[\w\[\]]+ )+\w+\([^;{}\n]*\)|for \([^\n]*\))\n\1\{$", r"\1\2 {", text)
 
 
 def _params(it: Item):
@@ -229,7 +231,7 @@ def _constant_args(items: list[Item], keep) -> list[Item]:
             name = words[1]
             text = " ".join(body)
             if re.search(rf"(\+\+|--)\s*{name}\b|\b{name}\s*(\.\s*\w+|\[[^\]]*\])?\s*([-+*/]?=(?!=)|\+\+|--)", text) \
-                    or (any(f in body for f in impure) and re.search(rf"[(,]\s*{name}\s*[,)]", text)):
+                    or any(re.search(rf"\b{f}\s*\([^;]*[(,]\s*{name}\s*[,)]", text) for f in impure if f in body):
                 continue
             seen = set()
             for x in items:

@@ -279,6 +279,13 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
         text = re.sub(r"(?<=[\w)\]])\s*[-+]\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
         text = _LITERAL_VEC.sub(_member, text)
+        # unsigned literals: uint(0) -> 0u, 0u * 1013u -> 0u, (0u + x) -> (x), (0u) -> 0u
+        text = re.sub(r"\buint\((\d+)\)", r"\1u", text)
+        text = re.sub(r"(?<![\w.*/%\s])(\s*)\b(\d+)u\s*\*\s*(\d+)u\b(?!\s*[*/%])",
+                      lambda m: f"{m.group(1)}{int(m.group(2)) * int(m.group(3)) % 2 ** 32}u", text)
+        text = re.sub(r"(?<![/%]\s)(?<![/%])\b0u\s*\*\s*(?:0x[0-9a-fA-F]+|\d+)u\b", "0u", text)
+        text = re.sub(r"(?<=[(=,])(\s*)0u\s*\+\s*", r"\1", text)
+        text = re.sub(r"(?<![\w\]])\((\d+u?|\d+\.\d+)\)", r"\1", text)
         # a zero vector added: vec4(0.0, 0.0, 0.0, 0.0) + s -> s
         text = re.sub(rf"(?<=[(=,])(\s*){_ZERO_VEC}\s*\+\s*", r"\1", text)
         text = re.sub(rf"\s*\+\s*{_ZERO_VEC}(?=\s*[);,])", "", text)
