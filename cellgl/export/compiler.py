@@ -130,6 +130,8 @@ def _inline_once(toks: list[Tok], small: dict, own: str) -> list[Tok] | None:
                     for a, b in _split_args(toks, code, n + 1, cl)]
             if len(args) != len(params):
                 return None
+            if any(not _simple(a) and re.search(rf"\b{p}\s*\.", expr) for p, a in zip(params, args)):
+                continue                      # (a + b).xy: keep the call (translators drop such parentheses)
             env = {p: (a if _simple(a) else f"({a})") for p, a in zip(params, args)}
             body = re.sub(r"\b[A-Za-z_]\w*\b", lambda m: env.get(m.group(), m.group()), expr)
             if not _simple(body):
@@ -348,7 +350,9 @@ def _dead_fields(items: list[Item]) -> list[Item]:
             if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure) \
                     and not all(_effects_unused(items, x, impure) for x in stores):
                 continue
-            if writes and not reads:
+            # reads that only feed stores to the same field (r.F[1] = r.F[0]) keep nothing alive
+            own = sum(len(re.findall(rf"\.{f}\b", x)) - 1 for x in stores)
+            if writes and len(reads) <= own:
                 dead.add(f)
         if not dead or len(dead) == len(fields):
             continue
