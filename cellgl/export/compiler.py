@@ -351,7 +351,7 @@ def _dead_fields(items: list[Item]) -> list[Item]:
                     and not all(_effects_unused(items, x, impure) for x in stores):
                 continue
             # reads that only feed stores to the same field (r.F[1] = r.F[0]) keep nothing alive
-            own = sum(len(re.findall(rf"\.{f}\b", x)) - 1 for x in stores)
+            own = sum(len(re.findall(rf"(?<![\w.])(?:{names})\.{f}\b", x)) - 1 for x in stores)
             if writes and len(reads) <= own:
                 dead.add(f)
         if not dead or len(dead) == len(fields):

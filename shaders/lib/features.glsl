@@ -190,8 +190,17 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
         for (int x = lo.x; x <= hi.x; x++)
         for (int y = lo.y; y <= hi.y; y++)
+#if CELL_DIM >= 3
         for (int z = lo.z; z <= hi.z; z++)
-        for (int v = lo.w; v <= hi.w; v++) {
+#else
+        for (int z = 0; z <= 0; z++)
+#endif
+#if CELL_DIM >= 4
+        for (int v = lo.w; v <= hi.w; v++)
+#else
+        for (int v = 0; v <= 0; v++)
+#endif
+        {
             ivec4 o = ivec4(x, y, z, v);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
