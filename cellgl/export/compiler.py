@@ -178,9 +178,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
         items = reach(items, entries)
         if unparse(items) == before:
             break
-    text = unparse(tidy_comments(_ordered(items)))
-    # the opening brace of a function or of a loop nest on the line that opens it
-    return re.sub(r"(?m)^([ \t]*)((?:[\w\[\]]+ )+\w+\([^;{}\n]*\)|for \([^\n]*\))\n\1\{$", r"\1\2 {", text)
+    return unparse(tidy_comments(_ordered(items)))
 
 
 def _params(it: Item):

@@ -297,7 +297,12 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
         body = osl_shader(prog, code)
     else:  # pragma: no cover
         raise AssertionError(d)
-    return head + "\n" + body
+    return head + "\n" + (body if d == "osl" else _braces(body))
+
+
+def _braces(text: str) -> str:
+    """The opening brace of a function, a loop nest or a block on the line that opens it."""
+    return re.sub(r"(?m)^([ \t]*)((?![#/])\S[^\n]*[^\s;{},])\n\1\{$", r"\1\2 {", text)
 
 
 _SHADERTOY_MAIN = """
