@@ -125,7 +125,9 @@ def test_scalarise_leaves_a_struct_written_elsewhere_alone():
 # --------------------------------------------------------------------------------------------
 
 #: lines of `cellgl export f1` (glsl), of every preset in every target, of a basis snippet
-F1_LIMIT, PRESET_LIMIT, BASIS_LIMIT, EDGE_LIMIT = 340, 600, 220, 330
+#: (issue 18 asks 200 for f1 and 150 for a basis snippet; these are what the compiler reaches now,
+#: with a few lines of slack for library changes)
+F1_LIMIT, PRESET_LIMIT, BASIS_LIMIT, EDGE_LIMIT = 260, 600, 192, 300
 
 
 def test_f1_snippet_is_short():
@@ -134,8 +136,13 @@ def test_f1_snippet_is_short():
     assert len(lines) <= F1_LIMIT
     assert sum(ln.startswith("// Recipe: {") for ln in lines) == 1       # the recipe on one line
     code = snippet_code(text)
-    for gone in ("noise", "warp", "w96", "density_thresholds", "orbit", "CellglTextureParams"):
+    for gone in ("noise", "warp", "w96", "density_thresholds", "orbit", "CellglTextureParams",
+                 # arrays of equal entries, ramp keys past the two used, members of constant
+                 # vectors, helpers that zero components, constant arguments, copies
+                 "cellgl_origin_cell", "cellgl_origin_frac", "cellgl_ramp", ").w", ").rgb",
+                 "cellgl_dims", "CellglParams", "0u +", "float term = ", "float index = "):
         assert gone not in code, gone
+    assert not re.search(r"^\{", code, re.M)                 # braces open on their line
 
 
 #: OSL takes the unfolded specialised code (its recipe values stay shader parameters): not yet
@@ -153,8 +160,9 @@ def test_every_preset_fits(target):
 @pytest.mark.parametrize("target", FOLDED_TARGETS)
 def test_every_basis_fits(target):
     for b in BASES:
-        n = len(basis_export(b, 3, target).splitlines())
-        assert n <= (EDGE_LIMIT if b == "edge" else BASIS_LIMIT), (b, n)
+        for dim in (2, 3, 4):
+            n = len(basis_export(b, dim, target).splitlines())
+            assert n <= (EDGE_LIMIT if b == "edge" else BASIS_LIMIT), (b, dim, n)
 
 
 def test_docs_table_is_current():
