@@ -21,7 +21,7 @@ LAYERS = (
     ("texture", ("cellgl.texture",)),
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
-    ("front ends", ("cellgl.export", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.formats",
+    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.formats",
                     "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
     ("viewer", ("viewer",)),

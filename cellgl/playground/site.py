@@ -1,0 +1,219 @@
+"""``cellgl playground -o DIR``: a static web page to try every texture preset in the browser.
+
+The site is plain HTML + JavaScript with no server and no build step: it opens from
+``file://`` (Chromium cannot ``fetch()`` local files, so every datum is a ``.js`` file loaded
+with ``<script src>``) and from any static host. It holds
+
+* ``index.html``, ``playground.js``, ``playground.css`` (``cellgl/playground/static``);
+* ``data/site.js``: the parameter table (ranges, defaults, docs), every exportable preset (its
+  values, ramp, a thumbnail rendered now, its variant) and the mean probe's sample points;
+* ``variants/<id>.js``: one shader variant each (:mod:`cellgl.playground.variants`), loaded
+  when the page needs it.
+
+The page renders with WebGL2 (WebGPU for the WGSL snippet where the browser has it), runs
+every run-time value through the exported snippet's ``cellgl_<name>`` uniforms, and computes
+the derived ones (Poisson table, split origins, octave mean, ...) as the Python does; the
+browser tests (``tests/test_playground.py``) hold the canvas to ``cellgl bake``.
+"""
+from __future__ import annotations
+
+import base64
+import io
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from cellgl._version import __version__
+from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
+from cellgl.playground import variants as V
+from cellgl.recipes import is_pups, list_presets, load_recipe, render
+from cellgl.texture import params as P
+
+__all__ = ["build_site", "add_parser", "run_cli", "STATIC"]
+
+STATIC = Path(__file__).resolve().parent / "static"
+#: the mean probe's samples (cellgl.texture.reference.octave_mean: 4096 points, rng seed 20001)
+MEAN_SAMPLES = 4096
+MEAN_SEED = 20001
+THUMB = 72
+
+#: slider ranges where the schema's range is far wider than anyone drags (the number box next
+#: to the slider still takes the whole schema range)
+SOFT = {"offset_x": (-16.0, 16.0), "offset_y": (-16.0, 16.0), "offset_z": (-4.0, 4.0), "time": (0.0, 8.0),
+        "orbit_phase": (0.0, 1.0), "range_lo": (-2.0, 2.0), "range_hi": (-2.0, 2.0), "seed": (0, 999),
+        "density_start": (-1.0, 2.0), "density_end": (-1.0, 2.0), "density_center_x": (-0.5, 1.5),
+        "density_center_y": (-0.5, 1.5), "density_radius": (0.01, 2.0), "frequency": (0.5, 64.0),
+        "aspect": (0.1, 8.0), "bump": (0.0, 32.0), "minkowski_p": (0.25, 16.0), "level_lo": (-1.0, 2.0),
+        "level_hi": (-1.0, 2.0), "c_noise": (-4.0, 4.0), "c_edge": (-8.0, 8.0), "c_smooth": (-8.0, 8.0),
+        "c_nsphere": (-8.0, 8.0), "stretch_x": (0.25, 16.0), "stretch_y": (0.25, 16.0), "stretch_z": (0.25, 16.0),
+        **{n: (-4.0, 4.0) for n in P.LINEAR + P.PRODUCTS}}
+
+#: parameters the page cannot change for a recipe with a density map: the map's integer encoding
+#: per octave (cellgl.basis.density) is computed by Python, for the preset's values only
+DENSITY_FROZEN = ("density_map", "density_min", "density_max", "density_start", "density_end",
+                  "density_center_x", "density_center_y", "density_radius", "frequency", "aspect",
+                  "offset_x", "offset_y", "offset_z", "time", "lacunarity", "dimension", "tileable")
+
+
+def _param_table() -> list[dict]:
+    out = []
+    for p in P.PARAMS:
+        d = {"name": p.name, "type": p.type, "default": p.default, "lo": p.lo, "hi": p.hi, "doc": p.doc,
+             "group": p.group, "compile_time": p.compile_time, "derived": p.derived}
+        if p.choices:
+            d["choices"] = list(p.choices)
+        if p.lo is not None:
+            lo, hi = SOFT.get(p.name, (p.lo, p.hi))
+            d["soft"] = [max(lo, p.lo), min(hi, p.hi)]
+        out.append(d)
+    return out
+
+
+def _thumb(r) -> str:
+    from PIL import Image
+
+    rgba = render(r, THUMB, THUMB)["color"]
+    img = Image.fromarray((np.clip(rgba[..., :3], 0, 1) * 255 + 0.5).astype(np.uint8), "RGB")
+    buf = io.BytesIO()
+    img.save(buf, "PNG", optimize=True)
+    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
+
+
+def _mean_points() -> dict:
+    """The probe points of cellgl.texture.reference.octave_mean, as float32 base64: ``plane``
+    (2D: a 1000-cell square), ``solid`` (3D/4D: a 100-cell cube), ``uv`` (density maps)."""
+    out = {}
+    for name, side, k in (("plane", 1000.0, 2), ("solid", 100.0, 3), ("uv", 1.0, 2)):
+        pts = np.zeros((MEAN_SAMPLES, 4), dtype=np.float32)
+        pts[:, :k] = np.random.default_rng(MEAN_SEED).uniform(0.0, side, size=(MEAN_SAMPLES, k))
+        out[name] = base64.b64encode(pts.tobytes()).decode()
+    return out
+
+
+def _preset_entry(r, source: str, thumbs: bool) -> dict:
+    prog = V.texture_program(r, uniforms=True)
+    vals = {k: v for k, v in r.values.items()}
+    fixed = {}
+    if r.values["density_map"] != "none":
+        fixed = {n: v for _, n, v in prog.uniforms if n.startswith("density_")}
+    return {"name": r.name, "source": source, "doc": r.doc, "values": vals, "ramp": [list(k) for k in r.ramp],
+            "variant": V.variant_id(V.variant_key(prog.defines)), "fixed_uniforms": fixed,
+            "octave_mean": float(dict((n, v) for _, n, v in prog.uniforms)["octave_mean"]),
+            "thumb": _thumb(r) if thumbs else None}
+
+
+def _js(name: str, obj) -> str:
+    return f"{name}({json.dumps(obj, separators=(',', ':'))});\n"
+
+
+def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool = True, log=None) -> dict:
+    """Write the playground site into ``out_dir`` (created; files replaced atomically).
+
+    Parameters
+    ----------
+    out_dir : str or path
+    presets : list of str, optional
+        Preset names or recipe JSON files (default: every cellular preset; PUPs presets are not
+        exportable). The page's commands name them as given.
+    thumbs : bool
+        Render a thumbnail of each preset.
+    neighbours : bool
+        Ship the variants one compile-time choice away from each preset (else only its own).
+
+    Returns
+    -------
+    dict: ``{"presets": [names], "refused": {name: reason}, "variants": count}``.
+    """
+    from cellgl.io.formats import atomic_path
+
+    out = Path(out_dir)
+    names = presets if presets is not None else [n for n, _ in list_presets()]
+    entries, refused, recipes = [], {}, {}
+    for name in names:
+        r = load_recipe(name)
+        if is_pups(r):
+            refused[name] = "PUPs recipe: a snippet would need the control points and their Delaunay axes as buffers"
+            continue
+        why = V.exportable(r)
+        if why:
+            refused[name] = why.split(": ", 1)[-1].split(";")[0]
+            continue
+        recipes[name] = r
+        entries.append(_preset_entry(r, str(name), thumbs))
+        if log:
+            log(f"preset {name}")
+    if not entries:
+        raise ValueError("no preset to show: " + "; ".join(f"{n}: {why}" for n, why in refused.items())
+                         + " (accepted: cellular texture presets, `cellgl presets`)")
+    todo = {}
+    for r in recipes.values():
+        for n in (V.neighbours(r) if neighbours else [r]):
+            try:
+                key = V.variant_key(V.texture_program(n, uniforms=True).defines)
+            except ValueError:
+                continue
+            todo.setdefault(key, n)
+    (out / "variants").mkdir(parents=True, exist_ok=True)
+    (out / "data").mkdir(parents=True, exist_ok=True)
+    vids = {}
+    for key, r in todo.items():
+        vid = V.variant_id(key)
+        vids[key] = vid
+        texts = V.variant_texts(r)
+        texts["id"] = vid
+        _write(out / "variants" / f"{vid}.js", _js("cellglVariant", texts), atomic_path)
+    site = {"version": __version__, "params": _param_table(), "presets": entries, "refused": refused,
+            "variants": vids, "key_macros": list(V.KEY_MACROS), "density_frozen": list(DENSITY_FROZEN),
+            "consts": {"max_points": MAX_POINTS, "w96": W96_DENSITY_ADJUSTMENT,
+                       "max_octaves": int(math.ceil(P.PARAMS_BY_NAME["octaves"].hi)),
+                       "ramp_keys": P.MAX_RAMP_KEYS, "mean_samples": MEAN_SAMPLES},
+            "mean_points": _mean_points()}
+    _write(out / "data" / "site.js", _js("cellglSite", site), atomic_path)
+    for f in ("index.html", "playground.js", "playground.css"):
+        _write(out / f, (STATIC / f).read_text(encoding="utf-8"), atomic_path)
+    return {"presets": [e["name"] for e in entries], "refused": refused, "variants": len(todo)}
+
+
+def _write(path: Path, text: str, atomic_path) -> None:
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text, encoding="utf-8", newline="\n")
+
+
+# --------------------------------------------------------------------------------------------
+# command line: cellgl playground -o DIR
+# --------------------------------------------------------------------------------------------
+
+
+def add_parser(sub):
+    """Declare ``cellgl playground`` on the CLI's subparsers."""
+    p = sub.add_parser(
+        "playground", help="write a static web page to try every texture preset in the browser",
+        description="Write a static site (HTML + JavaScript, no server: open DIR/index.html, also "
+        "from file://) with every texture preset, its parameters as sliders, 2D / tiled / animated "
+        "views and buttons that copy the snippet or the `cellgl bake` command. See docs/playground.md.")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory to write (created)")
+    p.add_argument("--preset", dest="presets", action="append", default=None, metavar="NAME",
+                   help="only these presets or recipe .json files (repeatable; default: every preset)")
+    p.add_argument("--no-thumbnails", action="store_true", help="skip rendering the preset thumbnails")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
+    return p
+
+
+def run_cli(args) -> int:
+    """Run ``cellgl playground``; returns the exit status."""
+    t0 = time.perf_counter()
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--output {str(out)!r} exists and is not a directory")
+    log = None if args.quiet else (lambda s: print(s, file=sys.stderr))
+    res = build_site(out, args.presets, thumbs=not args.no_thumbnails, log=log)
+    if not args.quiet:
+        for name, why in res["refused"].items():
+            print(f"skipped {name}: {why}", file=sys.stderr)
+    print(f"wrote {out / 'index.html'}: {len(res['presets'])} presets, {res['variants']} shader variants "
+          f"({time.perf_counter() - t0:.1f} s)")
+    return 0

@@ -1,0 +1,386 @@
+"""The web playground (``cellgl playground``) in a real browser: Debian's headless Chromium driven
+by selenium, the site opened from ``file://`` with the network off (WebGL2 on SwiftShader).
+
+For every preset the page offers: its canvas equals ``cellgl bake`` at the same size within
+1/255; after three sliders move it equals ``cellgl bake --set`` with the values the page
+reports; the GLSL ES and three.js snippets it copies compile and render the same pixels; the
+``cellgl bake`` command it copies runs and writes that image. One browser session serves all
+presets (64 x 64 canvases). A missing Chromium skips unless CELLGL_REQUIRE_GPU is set (CI).
+"""
+from __future__ import annotations
+
+import base64
+import importlib.util
+import os
+import re
+import shlex
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cellgl.recipes import is_pups, list_presets, load_recipe
+
+ROOT = Path(__file__).resolve().parents[1]
+SIZE = 64
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+DRIVER = shutil.which("chromedriver")
+REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--proxy-server=127.0.0.1:9",
+         "--enable-unsafe-webgpu", "--use-webgpu-adapter=swiftshader",
+         "--window-size=1400,900")
+
+
+def _texture_presets():
+    from cellgl.playground.variants import exportable
+
+    out = []
+    for name, _ in list_presets():
+        r = load_recipe(name)
+        if not is_pups(r) and exportable(r) is None:
+            out.append(name)
+    return out
+
+
+PRESETS = _texture_presets()
+
+
+def _export_helpers():
+    spec = importlib.util.spec_from_file_location("_cellgl_test_export", ROOT / "tests" / "test_export.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def site(tmp_path_factory):
+    from cellgl.playground import build_site
+
+    out = tmp_path_factory.mktemp("playground")
+    res = build_site(out)
+    assert res["presets"] == PRESETS
+    return out
+
+
+@pytest.fixture(scope="module")
+def page(site, tmp_path_factory):
+    if CHROMIUM is None or DRIVER is None:
+        if REQUIRE:
+            pytest.fail("chromium and chromium-driver are required (CELLGL_REQUIRE_GPU=1); .ci/setup installs them")
+        pytest.skip("no chromium / chromedriver (apt install chromium chromium-driver)")
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        if REQUIRE:
+            pytest.fail("selenium is required (the test extra)")
+        pytest.skip("no selenium")
+    opts = webdriver.ChromeOptions()
+    opts.binary_location = CHROMIUM
+    for f in FLAGS:
+        opts.add_argument(f)
+    opts.add_argument(f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}")
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(options=opts, service=Service(DRIVER))
+    driver.set_script_timeout(240)
+    try:
+        driver.get((site / "index.html").as_uri() + f"?size={SIZE}")
+        driver.execute_async_script("arguments[arguments.length - 1](window.cellglPlayground.idle())")
+        yield driver
+    finally:
+        driver.quit()
+
+
+def call(driver, js: str):
+    """Run ``js`` (an expression, may be a promise) in the page and return its value."""
+    return driver.execute_async_script(
+        f"const done = arguments[arguments.length - 1];"
+        f"Promise.resolve().then(() => {js}).then(done, (e) => done({{__error: String(e && e.stack || e)}}));")
+
+
+def ok(value):
+    assert not (isinstance(value, dict) and "__error" in value), value.get("__error")
+    return value
+
+
+def pixels(b64: str) -> np.ndarray:
+    return np.frombuffer(base64.b64decode(b64), np.uint8).reshape(SIZE, SIZE, 4)
+
+
+def bake(tmp_path, name, sets=(), stem="bake") -> np.ndarray:
+    from PIL import Image
+
+    from cellgl.io.bake import bake as bake_file
+
+    path = tmp_path / f"{stem}.png"
+    bake_file(name, path, size=(SIZE, SIZE), sets=list(sets), progress=False)
+    return np.asarray(Image.open(path).convert("RGBA"))
+
+
+def assert_close(got: np.ndarray, want: np.ndarray, what: str):
+    diff = np.abs(got[..., :3].astype(int) - want[..., :3].astype(int))
+    assert diff.max() <= 1, f"{what}: {int((diff > 1).any(axis=-1).sum())} pixels differ by more than 1/255 " \
+                            f"(max {diff.max()})"
+
+
+def move_sliders(driver, name: str) -> list[str]:
+    """Drag three of the preset's sliders (set the range input and fire its input event, as a
+    drag does); returns the names moved."""
+    v = load_recipe(name).values
+    # (Blender's points have no seed: move them instead)
+    picks = ["offset_y" if v["distribution"] == "blender" else "seed",
+             "jitter" if v["density_map"] != "none" else "frequency"]
+    if v["fractal"] != "none" and v["fractal"] != "min":
+        picks.append("gain")
+    elif v["density_map"] != "none":
+        picks.append("level_hi")
+    else:
+        picks.append("c2")           # from 0 on F1 presets: n = 2, another shader variant
+    for i, p in enumerate(picks):
+        ok(call(driver, f"""(() => {{
+            const el = document.getElementById("p-{p}");
+            const lo = Number(el.min), hi = Number(el.max);
+            el.value = String(lo + (hi - lo) * {0.31 + 0.17 * i});
+            el.dispatchEvent(new Event("input", {{bubbles: true}}));
+            return window.cellglPlayground.idle();
+        }})()"""))
+    return picks
+
+
+THREE_STUB = """(() => {
+    const text = window.cellglPlayground.copyText("threejs");
+    const body = text.replace(/^import .*$/m, "").replace("export const", "const");
+    const THREE = { GLSL3: "300 es", ShaderMaterial: class { constructor(o) { Object.assign(this, o); } } };
+    const m = new Function("THREE", body + "\\nreturn cellglMaterial;")(THREE);
+    // three.js's GLSL3 ShaderMaterial prefix (#version, precision); vUv from a full-screen triangle
+    const frag = m.fragmentShader.replace("in vec2 vUv;", "");
+    return { glslVersion: m.glslVersion, vertex: m.vertexShader, frag };
+})()"""
+
+
+@pytest.mark.parametrize("name", PRESETS)
+def test_preset_in_the_browser_equals_the_bake(page, tmp_path, name):
+    from cellgl.export.snippets import texture_program
+    from cellgl.playground.variants import variant_id, variant_key
+
+    st = ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    assert st["error"] is None and st["missing"] is None, st
+    want_key = variant_key(texture_program(load_recipe(name), uniforms=True).defines)
+    assert st["key"] == want_key and st["variant"] == variant_id(want_key)
+    assert st["command"] == f"cellgl bake {name} -o {name}.png --size {SIZE}x{SIZE}"
+    assert_close(pixels(call(page, "window.cellglPlayground.pixels()")), bake(tmp_path, name), f"{name} canvas")
+
+    moved = move_sliders(page, name)
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    assert st["error"] is None and st["missing"] is None, st
+    assert sorted(s.split("=")[0] for s in st["sets"]) == sorted(moved), st["sets"]
+    want = bake(tmp_path, name, st["sets"], "moved")
+    shown = pixels(call(page, "window.cellglPlayground.pixels()"))
+    assert_close(shown, want, f"{name} after --set {' '.join(st['sets'])}")
+    assert np.abs(shown.astype(int) - bake(tmp_path, name)).max() > 8, "the sliders changed nothing"
+
+    # the copied GLSL ES snippet compiles and renders the same pixels
+    gles = ok(call(page, "window.cellglPlayground.copyText('gles')"))
+    assert not re.search(r"^uniform ", gles, re.M) and "cellgl_texture_filtered" in gles
+    got = pixels(ok(call(page, f"window.cellglPlayground.renderSnippet({gles!r})")))
+    assert_close(got, want, f"{name} copied GLSL ES")
+    # ... and the three.js material's fragment shader too
+    three = ok(call(page, THREE_STUB))
+    assert three["glslVersion"] == "300 es" and "projectionMatrix" in three["vertex"]
+    # three.js adds #version and precision; vUv as the full-screen quad interpolates it
+    frag = ("#version 300 es\nprecision highp float;\nprecision highp int;\n"
+            f"vec2 pg_vuv() {{ return (floor(gl_FragCoord.xy) + 0.5) / {SIZE}.0; }}\n#define vUv pg_vuv()\n"
+            + three["frag"])
+    got = pixels(ok(call(page, f"window.cellglPlayground.renderFragment({frag!r})")))
+    assert_close(got, want, f"{name} copied three.js fragment shader")
+
+    # the copied command runs and writes the same image
+    from PIL import Image
+
+    from cellgl.cli import main
+
+    argv = shlex.split(st["command"])
+    assert argv[:3] == ["cellgl", "bake", name]
+    cwd = os.getcwd()
+    os.chdir(tmp_path)
+    try:
+        assert main(argv[1:]) == 0
+    finally:
+        os.chdir(cwd)
+    ran = np.asarray(Image.open(tmp_path / f"{name}.png").convert("RGBA"))
+    np.testing.assert_array_equal(ran, want)
+
+
+@pytest.mark.parametrize("name", [p for p in ("f1", "crumple", "density") if p in PRESETS])
+def test_copied_wgsl_hlsl_godot_snippets_compile(page, tmp_path, name):
+    helpers = _export_helpers()
+    ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    move_sliders(page, name)
+    for target in ("wgsl", "hlsl", "godot"):
+        text = ok(call(page, f"window.cellglPlayground.copyText({target!r})"))
+        assert f"--target {target}" in text and " --set seed=" in text
+        if target == "godot":   # the exporter's own fragment(), as compile_snippet expects it
+            text += "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
+        helpers.compile_snippet(tmp_path, target, text)
+
+
+def test_tiled_and_animated_views(page):
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    flat = call(page, "window.cellglPlayground.pixels()")
+    page.find_element("css selector", "#views button[data-view=tiled]").click()
+    st = ok(call(page, "window.cellglPlayground.idle()"))
+    assert st["view"] == "tiled" and st["error"] is None
+    tiled = pixels(call(page, "window.cellglPlayground.pixels()"))
+    assert (tiled != pixels(flat)).any()
+    # 3 x 3 copies: the texture repeats every SIZE / 3 pixels (a third of a pixel off per copy)
+    k, t = SIZE // 3, tiled[..., :3].astype(int)
+    same = np.abs(t[:k, :k] - t[k:2 * k, k:2 * k]).mean()
+    other = np.abs(t[:k, :k] - t[:k, k // 2:k // 2 + k]).mean()
+    assert same < other / 2, (same, other)
+    page.find_element("css selector", "#views button[data-view=anim]").click()
+    a = ok(call(page, "new Promise((r) => setTimeout(r, 300)).then(() => window.cellglPlayground.state())"))
+    first = call(page, "window.cellglPlayground.pixels()")
+    b = ok(call(page, "new Promise((r) => setTimeout(r, 900)).then(() => window.cellglPlayground.state())"))
+    assert b["error"] is None and b["rendered"] > a["rendered"]
+    assert call(page, "window.cellglPlayground.pixels()") != first
+    assert any(s.startswith("offset_x=") for s in b["sets"]), b["sets"]   # the command follows the frame
+    page.find_element("css selector", "#views button[data-view='2d']").click()
+    ok(call(page, "window.cellglPlayground.idle()"))
+
+
+def test_page_works_offline_and_names_what_it_leaves_out(page, site):
+    logs = [e for e in page.get_log("browser") if e["level"] == "SEVERE"]
+    assert not logs, logs
+    note = page.find_element("id", "refused").text
+    pups = [n for n, _ in list_presets() if n.startswith("pups-")]
+    if pups:
+        assert f"the {len(pups)} PUPs presets" in note
+    assert "stained-glass" in note or "stained-glass" in PRESETS
+    # every file the page loads is in the site: nothing from the network
+    html = (site / "index.html").read_text()
+    assert "http://" not in html and "https://" not in html
+
+
+def test_screenshot(page, tmp_path):
+    """The docs' screenshot (docs/screenshots/playground.png; CELLGL_UPDATE_DOCS=1 rewrites it)."""
+    from PIL import Image
+
+    page.set_window_size(1400, 900)
+    url = page.current_url.split("?")[0]
+    page.get(url + "?size=256&preset=flagstone")
+    ok(call(page, "window.cellglPlayground.idle()"))
+    ok(call(page, """(() => { const el = document.getElementById("p-frequency");
+        el.value = "6"; el.dispatchEvent(new Event("input", {bubbles: true}));
+        return window.cellglPlayground.idle(); })()"""))
+    shot = tmp_path / "playground.png"
+    page.save_screenshot(str(shot))
+    img = Image.open(shot).convert("RGB")
+    assert img.size[0] >= 1200
+    # the canvas shows the texture (not the empty checkerboard)
+    assert np.asarray(img).std() > 20
+    doc = ROOT / "docs" / "screenshots" / "playground.png"
+    if os.environ.get("CELLGL_UPDATE_DOCS") == "1":
+        img.resize((img.size[0] * 3 // 4, img.size[1] * 3 // 4), Image.LANCZOS).quantize(128).save(doc, optimize=True)
+    assert doc.is_file() and doc.stat().st_size < 400_000
+    page.get(url + f"?size={SIZE}")        # as the other tests expect it
+    ok(call(page, "window.cellglPlayground.idle()"))
+
+
+def test_page_warns_where_the_recipe_check_refuses(page):
+    from cellgl.texture.schema import RecipeError
+
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    for name, value in (("max_points", 3), ("min_points", 5)):
+        ok(call(page, f"""(() => {{ const el = document.getElementById("p-{name}");
+            el.value = "{value}"; el.dispatchEvent(new Event("input", {{bubbles: true}}));
+            return window.cellglPlayground.idle(); }})()"""))
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    assert st["problems"] == ["min_points exceeds max_points"], st["problems"]
+    assert page.find_element("id", "notice").is_displayed()
+    with pytest.raises(RecipeError, match="min_points"):
+        load_recipe("f1").set_from_strings(st["sets"])
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    assert ok(call(page, "window.cellglPlayground.state()"))["problems"] == []
+
+
+def _wgsl_consts(text: str) -> tuple[str, dict]:
+    """A WGSL snippet's code with its ``const cellgl_*`` values cut out, and those values."""
+    values = {}
+
+    def cut(m):
+        body = m.group(3)
+        while re.search(r"<[^<>]*>", body):
+            body = re.sub(r"<[^<>]*>", "", body)
+        body = re.sub(r"vec\d|array", "", body)
+        values[m.group(1)] = [float(x) for x in re.findall(r"-?\d+(?:\.\d*)?(?:e[-+]?\d+)?", body)]
+        return f"const cellgl_{m.group(1)}: {m.group(2)} = ...;"
+
+    code = re.sub(r"^const cellgl_(\w+): ([^=]+) = (.*);$", cut, text.split("\n\n", 1)[1], flags=re.M)
+    return code, values
+
+
+@pytest.mark.parametrize("name", [p for p in ("f1", "crumple", "wood-grain", "density", "qin-marble")
+                                  if p in PRESETS])
+def test_copied_wgsl_equals_the_exporter(page, name):
+    """The page writes the current values into the WGSL snippet; with the values it reports,
+    ``cellgl export --target wgsl --set ...`` gives the same code and the same numbers (the
+    octave mean, measured on the GPU in the page, to 1e-5; Poisson thresholds to 1 in 2^32)."""
+    from cellgl.export import export
+
+    ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    move_sliders(page, name)
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    page_code, page_vals = _wgsl_consts(ok(call(page, "window.cellglPlayground.copyText('wgsl')")))
+    py_code, py_vals = _wgsl_consts(export(load_recipe(name).set_from_strings(st["sets"]), "wgsl"))
+    assert page_code == py_code
+    assert page_vals.keys() == py_vals.keys()
+    for k, want in py_vals.items():
+        tol = 1e-5 if k == "octave_mean" else 1 if "thresholds" in k else 0
+        np.testing.assert_allclose(page_vals[k], want, rtol=0, atol=tol, err_msg=k)
+
+
+@pytest.mark.parametrize("name", [p for p in ("f1", "flagstone", "wood-grain") if p in PRESETS])
+def test_webgpu_renders_the_copied_wgsl_as_the_bake(page, tmp_path, name):
+    """Where the browser offers WebGPU (headless Chromium here: SwiftShader's adapter), the
+    WebGPU renderer draws the WGSL snippet the page copies; it gives the bake's pixels."""
+    assert call(page, "window.cellglPlayground.webgpu()") is True
+    ok(call(page, f"window.cellglPlayground.select({name!r})"))
+    move_sliders(page, name)
+    st = ok(call(page, "window.cellglPlayground.state()"))
+    got = pixels(ok(call(page, "window.cellglPlayground.webgpuPixels()")))
+    assert_close(got, bake(tmp_path, name, st["sets"]), f"{name} WebGPU")
+    page.find_element("id", "use-webgpu").click()
+    st = ok(call(page, "window.cellglPlayground.idle()"))
+    assert st["error"] is None, st["error"]
+    assert page.find_element("id", "gpuview").is_displayed()
+    page.find_element("css selector", "#renderer button[data-r=webgl2]").click()
+    ok(call(page, "window.cellglPlayground.idle()"))
+
+
+def test_site_files_and_refusals(tmp_path):
+    """Without a browser: the site a recipe file gives (its commands name the file), every
+    preset's variant file present, and a clear error when no preset can be shown."""
+    import json
+
+    from cellgl.cli import main
+    from cellgl.playground import build_site
+
+    recipe = tmp_path / "my recipe.json"
+    load_recipe("f2").replace(frequency=5.0).save(recipe)
+    out = tmp_path / "site"
+    res = build_site(out, [str(recipe), "hull"], thumbs=False, neighbours=False)
+    assert res["presets"] == ["f2", "hull"] and res["variants"] == 2
+    text = (out / "data" / "site.js").read_text()
+    site = json.loads(text[text.index("(") + 1:text.rindex(")")])
+    assert [p["source"] for p in site["presets"]] == [str(recipe), "hull"]
+    assert site["presets"][0]["values"]["frequency"] == 5.0
+    for p in site["presets"]:
+        assert (out / "variants" / f"{p['variant']}.js").is_file()
+    for f in ("index.html", "playground.js", "playground.css"):
+        assert (out / f).stat().st_size > 1000
+    with pytest.raises(ValueError, match="no preset to show: pups-cow: PUPs"):
+        build_site(tmp_path / "none", ["pups-cow"])
+    assert main(["playground", "-o", str(tmp_path / "none"), "--preset", "stained-glass", "-q"]) == 2
