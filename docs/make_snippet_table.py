@@ -50,8 +50,7 @@ def table() -> str:
         rows.append(f"| {name} | " + " | ".join(cell(snippets.export(name, t)) for t in targets) + " |")
     for b in BASES:
         rows.append(f"| `--basis {b} --dim 3` | "
-                    + " | ".join(cell(basis_export(b, 3, t)) if snippets.TARGETS[t].dialect != "osl"
-                                 else "n/a" for t in targets) + " |")
+                    + " | ".join(cell(basis_export(b, 3, t)) for t in targets) + " |")
     return "\n".join([head, rule, *rows])
 
 

@@ -292,9 +292,19 @@ def _main(target: str, basis: str, dim: int) -> str:
             f"cellgl_out = vec4(float({x})); }}\n")
 
 
-def test_basis_snippet_refused_for_osl():
-    with pytest.raises(export.ExportError, match="not available for --target osl"):
-        basis_export("f1", 2, "osl")
+def test_basis_snippet_for_osl_is_a_shader_of_the_basis_alone():
+    """OSL basis exports (compiled and rendered in tests/test_blender.py): the folded code of the
+    basis, no texture machinery, a shader with Vector (and W in 4D) in and the basis out."""
+    text = basis_export("f1f2", 4, "osl")
+    assert re.search(r"^shader cellgl_basis_f1f2\(\n    point Vector = .*\n    float W = 0 .*\n"
+                     r"    output float F1 = 0,\n    output float F2 = 0\n\)", text, re.M), text[-800:]
+    assert "cellgl_f1f2(cellgl_vec4(q[0], q[1], q[2], W))" in text
+    code = re.sub(r"//[^\n]*", "", text)
+    for gone in ("cellgl_texture", "CellglTextureParams", "noise", "cellgl_dims("):
+        assert gone not in code, gone
+    assert len(text.splitlines()) < 320
+    assert "shader cellgl_basis_cellid(point Vector, output float IDLow, output float IDHigh)" \
+        in basis_export("cellid", 2, "osl")
 
 
 @pytest.mark.parametrize("target", FOLDED_TARGETS)

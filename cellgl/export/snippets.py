@@ -200,7 +200,11 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
         entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp): the same for a pixel spanning dp; any stage")
     entry = [_signature(e, target.dialect) for e in entry]
     command = prog.command or f"cellgl export {prog.title}"
-    if target.dialect == "osl":
+    if target.dialect == "osl" and prog.entries:
+        from cellgl.export.osl import basis_signature
+
+        entry = [basis_signature(prog)]
+    elif target.dialect == "osl":
         entry = [f"shader cellgl_{prog.title}(point Vector, <the recipe's values>, output color Color, "
                  "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
                  "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
@@ -233,6 +237,9 @@ def _how(target: Target, prog: Program) -> str:
     """The target's paragraph on where to paste and what to call, for this program's entry."""
     if not prog.entries:
         return target.how
+    if target.dialect == "osl":
+        return (f"Save as cellgl_basis_{prog.title}.osl and load it as a shader (Blender: Script node, "
+                "Cycles with Open Shading Language on; docs/engines.md).")
     entry = prog.entries[0]
     # a basis function has no fwidth: leave out what the texture's how says about it
     how = " ".join(x for x in re.split(r"(?<=\.) ", target.how)
@@ -274,9 +281,13 @@ def _fmt_value(v) -> str:
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`)."""
     tgt = check_target(target)
-    code = library_code(prog) if tgt.dialect != "osl" else specialised_code(prog)
+    # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
+    # snippet has none, so it takes the folded code like every other target
+    code = library_code(prog) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
     head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
+    if d in ("glsl", "gles", "godot"):
+        code = _braces(code)
     if d == "glsl":
         body = code
     elif d == "gles":
@@ -286,22 +297,23 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     elif d == "godot":
         body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
     elif d == "hlsl":
-        body = translate.to_hlsl(code) + prog.tails.get("unity", _UNITY_WRAPPER)
+        body = _braces(translate.to_hlsl(code)) + prog.tails.get("unity", _UNITY_WRAPPER)
         if tgt.name == "unreal":
             body = "#pragma once\n\n" + body
     elif d == "wgsl":
-        body = translate.to_wgsl(code)
+        body = _braces(translate.to_wgsl(code))
     elif d == "osl":
         from cellgl.export.osl import osl_shader
 
         body = osl_shader(prog, code)
     else:  # pragma: no cover
         raise AssertionError(d)
-    return head + "\n" + (body if d == "osl" else _braces(body))
+    return head + "\n" + body
 
 
 def _braces(text: str) -> str:
-    """The opening brace of a function, a loop nest or a block on the line that opens it."""
+    """The opening brace of a function, a loop nest or a block on the line that opens it (the
+    targets' own tails, e.g. Godot's fragment(), keep theirs)."""
     return re.sub(r"(?m)^([ \t]*)((?![#/])\S[^\n]*[^\s;{},])\n\1\{$", r"\1\2 {", text)
 
 
