@@ -274,32 +274,30 @@ def test_osl_basis_snippets_compile_and_give_cellulars_values(tmp_path):
     import json
 
     from cellgl import cellular
-    from cellgl.export.basis import BASES, basis_export
 
     n, S, z = 24, 4.0, 0.37
-    texts = {(b, d): basis_export(b, d, "osl") for b in BASES for d in (2, 3, 4)}
-    lib = {k: t[:t.index("\nshader cellgl_basis_")] for k, t in texts.items()}
-    wrap = {
-        "f1f2": lib["f1f2", 3] + "\nshader t(point Vector = point(0), output color Color = 0)\n{\n"
+    wrap = {        # a shader around the exported functions that writes them into Color
+        ("f1f2", 3): "\nshader t(point Vector = point(0), output color Color = 0)\n{\n"
         f"    cellgl_vec2 f = cellgl_f1f2(cellgl_vec3(Vector[0] * {S}, Vector[1] * {S}, {z}));\n"
         "    Color = color(f.x, f.y, 0.0);\n}\n",
-        "cellid": lib["cellid", 2] + "\nshader t(point Vector = point(0), output color Color = 0)\n{\n"
+        ("cellid", 2): "\nshader t(point Vector = point(0), output color Color = 0)\n{\n"
         f"    int id = cellgl_cellid(cellgl_vec2(Vector[0] * {S}, Vector[1] * {S}));\n"
         "    Color = color(float(id & 65535), float((id >> 16) & 65535), 0.0);\n}\n",
     }
     code = ("import json\nfrom cellgl.blender import import_bpy, osl_compile, compile_script_node\n"
             "from cellgl.blender.scene import build_scene, set_script, render_scene\n"
-            f"texts = {list(texts.values())!r}\n"
-            "for t in texts:\n    osl_compile(t)\n"
+            "from cellgl.export.basis import BASES, basis_export\n"
+            "texts = {(b, d): basis_export(b, d, 'osl') for b in BASES for d in (2, 3, 4)}\n"
+            "for t in texts.values():\n    osl_compile(t)\n"
             f"scene = build_scene('f1', {n})\n"
-            + "".join(f"set_script(scene, {w!r})\nrender_scene(scene, {str(tmp_path / (k + '.exr'))!r})\n"
-                      for k, w in wrap.items())
+            + "".join(f"t = texts[{k!r}]\nset_script(scene, t[:t.index('\\nshader cellgl_basis_')] + {w!r})\n"
+                      f"render_scene(scene, {str(tmp_path / (k[0] + '.exr'))!r})\n" for k, w in wrap.items())
             + "bpy = import_bpy()\nmat = bpy.data.materials.new('m'); mat.use_nodes = True\nout = {}\n"
-            f"for name, t in {[(f'{b}{d}', texts[b, d]) for b, d in [('f1f2f3', 3), ('edge', 2), ('cellid', 4)]]!r}:\n"
+            "for b, d in [('f1f2f3', 3), ('edge', 2), ('cellid', 4)]:\n"
             "    node = mat.node_tree.nodes.new('ShaderNodeScript'); node.mode = 'INTERNAL'\n"
-            "    node.script = bpy.data.texts.new(name); node.script.write(t)\n"
+            "    node.script = bpy.data.texts.new(b); node.script.write(texts[b, d])\n"
             "    compile_script_node(node)\n"
-            "    out[name] = [[s.identifier for s in node.inputs], [s.identifier for s in node.outputs]]\n"
+            "    out[f'{b}{d}'] = [[s.identifier for s in node.inputs], [s.identifier for s in node.outputs]]\n"
             "print(json.dumps(out))\n")
     proc = _python(code)
     assert proc.returncode == 0, proc.stderr[-4000:]
