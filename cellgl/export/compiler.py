@@ -5,11 +5,12 @@ Passes, repeated until the text stops changing:
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
 2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
-   elements of constant arrays read at a literal index;
+   elements of constant arrays read at a literal index (or at any index, when all are equal);
 3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
    (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
-4. one-line functions inlined; parameters a function never reads dropped; ``out`` parameters
-   whose results every caller ignores turned into locals; struct fields never read removed;
+4. one-line functions inlined; parameters a function never reads dropped, and those every call
+   passes the same literal written into the body; ``out`` parameters whose results every caller
+   ignores turned into locals; struct fields never read (or only copied into themselves) removed;
 5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
 Then every declaration comes after what it uses, and the comments are tidied

@@ -3,7 +3,9 @@
 Inside one function: dead locals (declared, never read), dead stores (a local only ever
 written; the last store to a local that is not read again), declarations split one per line,
 and arithmetic identities that hold exactly in float arithmetic (``x * 1.0``, ``x - 0.0``,
-``x += 0.0 * y;``, ``mix(a, b, 0.0)``). A right-hand side that calls a function with ``out``
+``x += 0.0 * y;``, ``mix(a, b, 0.0)``, ``vec4(0.0) + v``), members of literal vectors
+(``vec4(0.0, 0.0, 0.0, 1.0).w``), unsigned literal products, copies (``float y = x;``) and the
+bare blocks an unrolled loop leaves. A right-hand side that calls a function with ``out``
 parameters is never removed.
 """
 from __future__ import annotations
