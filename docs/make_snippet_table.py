@@ -48,9 +48,14 @@ def table() -> str:
 
     for name in presets():
         rows.append(f"| {name} | " + " | ".join(cell(snippets.export(name, t)) for t in targets) + " |")
+    def basis_cell(b: str, t: str) -> str:
+        try:
+            return cell(basis_export(b, 3, t))
+        except snippets.ExportError:         # --basis is refused for some targets (OSL)
+            return "-"
+
     for b in BASES:
-        rows.append(f"| `--basis {b} --dim 3` | "
-                    + " | ".join(cell(basis_export(b, 3, t)) for t in targets) + " |")
+        rows.append(f"| `--basis {b} --dim 3` | " + " | ".join(basis_cell(b, t) for t in targets) + " |")
     return "\n".join([head, rule, *rows])
 
 

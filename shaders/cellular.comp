@@ -5,7 +5,8 @@
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
 // CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, CELL_ORBIT,
 // CELL_ANISO, and those of lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE,
-// CELL_FEATURE_MAX_RING).
+// CELL_FEATURE_MAX_RING); CELL_LOOP_BUDGET (lib/cellular.glsl), CELL_LOOP_PROBE
+// (1: measure the loop budget, see below).
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -70,6 +71,24 @@ layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
 layout(std430, binding = 5) writeonly buffer OutGrad { float out_grad[]; };
 layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_index[]; };
+
+// The driver's own loop limit (docs/exactness.md). llvmpipe counts the loop
+// passes of a whole SIMD vector of invocations against one limiter; once it is
+// spent, every loop still to come runs exactly one pass. This loop of
+// u_loop_canary (= 2) passes therefore runs twice unless the limiter ran out
+// somewhere in the invocation: then the sample is flagged, whatever the search's
+// own count said. (Its length is a uniform, so the compiler cannot unroll it.)
+uniform int u_loop_canary;
+#ifndef CELL_LOOP_PROBE
+#define CELL_LOOP_PROBE 0
+#endif
+#if CELL_LOOP_PROBE
+// Measurement build (cellgl.basis.gpu.loop_probe): per sample the search's own count
+// and what the driver's limiter had left: a loop of u_loop_probe passes (far
+// more than any limiter) runs until the limiter stops it.
+uniform int u_loop_probe;
+layout(std430, binding = 8) writeonly buffer LoopProbe { int loop_probe[]; };
+#endif
 
 void main()
 {
@@ -168,9 +187,11 @@ void main()
 #endif
     }
     bool exact = r.exact;
+    int loops = r.loops;
 #if CELL_FEATURES
     CellFeatures x = cell_features(cell, frac, p, r, u_smoothness);
     exact = x.exact;
+    loops = x.loops;
     uint b = i * uint(CELL_FEATURE_STRIDE);
     out_features[b] = x.edge * u_out_scale;
     out_features[b + 1u] = x.nsphere * u_out_scale;
@@ -182,6 +203,19 @@ void main()
         out_features[b + 12u + uint(a)] = x.smooth_grad[a];
         out_features[b + 16u + uint(a)] = x.smooth_attr[a];
     }
+#endif
+    int canary = 0;
+    for (int k = 0; k < u_loop_canary; k++) {
+        canary += 1;
+    }
+    exact = exact && canary == u_loop_canary;
+#if CELL_LOOP_PROBE
+    int left = 0;
+    for (int k = 0; k < u_loop_probe; k++) {
+        left += 1;
+    }
+    loop_probe[2u * i] = loops;
+    loop_probe[2u * i + 1u] = left;
 #endif
     if (!exact) {
         inexact_index[atomicAdd(inexact_count, 1u)] = i;

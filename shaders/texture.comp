@@ -6,6 +6,7 @@
 //   CELL_TEX_SUPERSAMPLE  n: average an n x n grid of sub-pixel centres (grid only; 1: none)
 //   CELL_TEX_OUT          bit mask of the outputs written: 1 colour, 2 height + normal,
 //                         4 F1..F4, 8 gradient + value, 16 id
+//   CELL_LOOP_PROBE       1: measure the driver's loop budget (cellgl/texture/dispatch.py)
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -31,6 +32,20 @@ layout(std430, binding = 2) writeonly buffer OutAux { vec4 out_aux[]; };    // h
 layout(std430, binding = 3) writeonly buffer OutF { vec4 out_F[]; };        // F1..F4, octave 0
 layout(std430, binding = 4) writeonly buffer OutGrad { vec4 out_grad[]; };  // dh/du, dh/dv, dh/dz, value
 layout(std430, binding = 5) writeonly buffer OutId { uint out_id[]; };
+
+// The driver's own loop limit (docs/exactness.md; as in cellular.comp): llvmpipe stops
+// every loop of a SIMD vector of invocations once 65535 loop passes were spent in it, and
+// then each loop still to come runs once. This loop of u_loop_canary (= 2) passes runs
+// twice unless that happened: otherwise the sample is counted, and cellgl raises.
+uniform int u_loop_canary;
+layout(std430, binding = 9) buffer LoopCut { uint loop_cut_count; };     // 6, 7: the cell and density images
+#ifndef CELL_LOOP_PROBE
+#define CELL_LOOP_PROBE 0
+#endif
+#if CELL_LOOP_PROBE
+uniform int u_loop_probe;       // far more passes than any limiter: runs until it stops it
+layout(std430, binding = 10) writeonly buffer LoopProbe { int loop_probe[]; };
+#endif
 
 #define CELL_TEX_WANT(bit) ((CELL_TEX_OUT & (bit)) != 0)
 
@@ -106,6 +121,20 @@ void main()
 #endif
 #if CELL_TEX_WANT(16)
     out_id[i] = c.id;
+#endif
+    int canary = 0;
+    for (int k = 0; k < u_loop_canary; k++) {
+        canary += 1;
+    }
+    if (canary != u_loop_canary) {
+        atomicAdd(loop_cut_count, 1u);
+    }
+#if CELL_LOOP_PROBE
+    int left = 0;
+    for (int k = 0; k < u_loop_probe; k++) {
+        left += 1;
+    }
+    loop_probe[i] = left;
 #endif
 }
 #undef CELL_TEX_WANT

@@ -552,3 +552,15 @@ def test_cli_export(tmp_path, capsys):
     assert "WebGL1" in capsys.readouterr().err
     assert main(["export", "flagstone", "--target", "nope"]) == 2
     assert "expected one of: glsl, gles" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("preset", ["flagstone", "qin-marble", "blender-voronoi"])
+def test_unfolded_snippet_keeps_named_constants_and_the_bake(ctx, preset):
+    """``fold=False`` (``cellgl export --no-fold``): the recipe's values stay named constants a
+    user can edit, only reached code is emitted, and the pixels are the bake's."""
+    text = export.export(preset, "glsl", fold=False)
+    assert re.search(r"^const float cellgl_frequency = ", text, re.M)
+    assert len(text.splitlines()) < 1.5 * len(export.export(preset, "glsl").splitlines()) + 150
+    W, H = 64, 48
+    got = render_snippet(ctx, snippet_code(text), W, H)
+    np.testing.assert_allclose(got, _bake(preset, W, H), rtol=0, atol=2e-5)

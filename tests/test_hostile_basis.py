@@ -155,7 +155,8 @@ def test_minkowski_below_the_bound_is_flagged_not_wrong(ctx, dim):
     """Below the bound the cap is reached: the flag says so for most samples (it is not silent)."""
     rng = np.random.default_rng(7)
     pts = rng.uniform(0.0, 100.0, (500, dim))
-    r = cellgl.cellular(pts, 4, metric="minkowski", minkowski_p=0.25, density=1.0, outputs=("F",))
+    with pytest.warns(RuntimeWarning, match="minkowski_p below 1"):
+        r = cellgl.cellular(pts, 4, metric="minkowski", minkowski_p=0.25, density=1.0, outputs=("F",))
     assert (~r.exact).mean() > 0.9
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cellgl.basis import features as _features
+from cellgl.basis import passes as _passes
 from cellgl.basis import reference
 from cellgl.basis.arrays import real_array, refuse_masked
 from cellgl.basis.density import encode as _encode_density
@@ -248,40 +249,6 @@ def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> Ce
                           **{k: get(k, t) for k, t in tails.items()})
 
 
-def _basis_outputs(outs, blender: bool = False) -> tuple[str, ...]:
-    """The F1..Fn outputs the search must produce for ``outs`` (the features' position and
-    colour come from the F1 offset and ID; Blender's colour from the F1 cell, found from both)."""
-    need = set(outs)
-    if "position" in need or ("color" in need and blender):
-        need.add("delta")
-    if "color" in need:
-        need.add("id")
-    return tuple(o for o in ("F", "delta", "id", "grad") if o in need) or ("F",)
-
-
-def _numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
-                  smooth="exp") -> tuple[dict, np.ndarray]:
-    F, D, I, exact = reference.search(cells, fr, p, n)
-    out = {}
-    inv = 1.0 / p.scale
-    basis = _basis_outputs(outputs, p.distribution == Distribution.BLENDER)
-    if "F" in basis:
-        out["F"] = (F * inv).astype(np.float32)
-    w = np.asarray(p.axis_scale[: p.dim])         # anisotropic: D is weighted
-    if "delta" in basis:
-        out["delta"] = (D[..., : p.dim] / w * inv).astype(np.float32)
-    if "id" in basis:
-        out["id"] = I
-    if "grad" in basis:
-        out["grad"] = (reference.metric_gradient(D[..., : p.dim], F, p) * w).astype(np.float32)
-    if set(outputs) & set(_features.OUTPUTS):
-        feats = _features.features(cells, fr, p, F, D, I, exact, outputs, smoothness * p.scale,
-                                   smooth=smooth)
-        exact = feats["exact"]
-        _features.finish(out, feats, positions, p.scale, p.dim, outputs, p.distribution == Distribution.BLENDER)
-    return out, exact
-
-
 def _gpu_finish(out: dict, outs, positions, p) -> None:
     """Turn the GPU's feature record into the requested feature outputs."""
     if set(outs) & set(_features.OUTPUTS):
@@ -363,20 +330,29 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     _check_stretch_features(p, outs)
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, pts, smooth)
+        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, pts, smooth)
+        _passes.warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
         _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
-        out, exact = gpu.search_points(pts, p, n, _gpu_outputs(outs, p), smoothness * p.scale, smooth)
+        out, passes = _passes.gpu_passes(
+            lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p)
         _gpu_finish(out, outs, pts, p)
+        exact = np.logical_and.reduce([ok for _, ok in passes])
+        if not exact.all():
+            def where(rows):
+                cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])
+                return cells, fr, pts[rows]
+            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness, smooth)
+            _passes.warn_inexact(exact, p)
     return _finish(out, exact, (len(pts),), p, n, outs)
 
 
 def _gpu_outputs(outs, p: reference.Params) -> tuple[str, ...]:
     """What the compute shader is asked for: the basis outputs ``outs`` need, and the feature
     outputs (which become its feature record)."""
-    return (_basis_outputs(outs, p.distribution == Distribution.BLENDER)
+    return (_passes.basis_outputs(outs, p.distribution == Distribution.BLENDER)
             + tuple(o for o in outs if o in _features.OUTPUTS))
 
 
@@ -455,7 +431,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         positions = pts / p.scale if p.scale != 1.0 else pts
     if backend == "numpy":
         cells, fr = split(pts)
-        out, exact = _numpy_search(cells, fr, p, n, outs, smoothness, positions, smooth)
+        out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, positions, smooth)
+        _passes.warn_inexact(exact, p)
     else:
         from cellgl.basis import gpu
 
@@ -465,9 +442,24 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         ofrac[:dim] = org - np.floor(org)
         sp4 = np.zeros(4)
         sp4[:dim] = spc
-        out, exact = gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, _gpu_outputs(outs, p),
-                                     smoothness * p.scale, smooth)
+        out, passes = _passes.gpu_passes(
+            lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o, smoothness * p.scale, smooth),
+            outs, total, p)
         _gpu_finish(out, outs, positions, p)
+        exact = np.logical_and.reduce([ok for _, ok in passes])
+        if not exact.all():
+            def where(rows):
+                # sample index -> position, as the shader computes it (cellular.comp, CELL_GRID)
+                idx = np.stack(np.unravel_index(rows, shape_xyzw[::-1])[::-1], axis=1).astype(np.float64)
+                pos = ofrac[:dim] + sp4[:dim] * idx[:, :dim]
+                fl = np.floor(pos)
+                cells = np.zeros((len(rows), 4), dtype=np.int64)
+                cells[:, :dim] = ocell[:dim] + fl.astype(np.int64)
+                fr = np.zeros((len(rows), 4))
+                fr[:, :dim] = pos - fl
+                return cells, fr, None if positions is None else positions[rows]
+            exact = _passes.fallback(out, passes, where, p, n, outs, smoothness, smooth)
+            _passes.warn_inexact(exact, p)
     return _finish(out, exact, shape, p, n, outs)
 
 

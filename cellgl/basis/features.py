@@ -17,6 +17,7 @@ walk (rings of cells, each skipped when its nearest possible point is beyond the
 """
 from __future__ import annotations
 
+import functools
 import itertools
 
 import numpy as np
@@ -36,8 +37,16 @@ BIG = ref.BIG
 
 
 def feature_max_ring(dim: int) -> int:
-    """CELL_FEATURE_MAX_RING: rings a feature walk may visit before it reports inexact."""
-    return {2: 12, 3: 8, 4: 5}[dim]
+    """CELL_FEATURE_MAX_RING: rings a feature walk may visit before it reports inexact (on the GPU
+    the loop budget, ``CELL_LOOP_BUDGET``, usually stops it first; docs/exactness.md)."""
+    return {2: 24, 3: 12, 4: 7}[dim]
+
+
+#: the walks, each run in a pass of its own on the GPU, and the outputs each serves
+FAMILIES = {"edge": ("edge", "edge_grad"), "nsphere": ("nsphere",),
+            "smooth": ("smooth_F1", "smooth_position", "smooth_grad", "smooth_color")}
+#: the columns of the GPU's feature record (:func:`unpack`) each walk writes
+COLUMNS = {"edge": [0, 4, 5, 6, 7], "nsphere": [1], "smooth": [2] + list(range(8, 20))}
 
 
 def flags(outputs) -> dict:
@@ -83,7 +92,9 @@ def id_attribute(ids) -> np.ndarray:
 # --------------------------------------------------------------------------- the walks
 
 def _visit(w: dict, rows, cells, f, o, p: ref.Params):
-    """``_cell_walk_cell`` at offset o (4,) for the given rows."""
+    """``_cell_walk_cell`` at offset o (4,), or one offset per row (len(rows), 4), for the given
+    rows (a row may come more than once, with different offsets)."""
+    o = np.broadcast_to(np.asarray(o, dtype=np.int64), (len(rows), 4))
     wc = ref.wrap(cells[rows] + o, p.period)
     state = ref.cell_seed(wc, p)
     state, count = ref.point_count(state, p, wc)
@@ -91,7 +102,7 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     for k in range(int(count.max(initial=0))):
         state, q, ids = ref.next_point(state, p, wc)
         has = k < count
-        _point(w, rows[has], base[has] + q[has], ids[has], o, q[has], p)
+        _point(w, rows[has], base[has] + q[has], ids[has], o[has], q[has], p)
 
 
 def _reach(w: dict, rows, on: dict) -> np.ndarray:
@@ -109,7 +120,8 @@ def _reach(w: dict, rows, on: dict) -> np.ndarray:
 
 
 def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
-    """``_cell_walk_point`` for one candidate per row."""
+    """``_cell_walk_point`` for candidates of the given rows (several candidates of one row
+    allowed: minima and sums are taken with ``np.minimum.at`` / ``np.add.at``)."""
     on = w["on"]
     delta = delta.copy()
     delta[:, p.dim:] = 0.0
@@ -117,18 +129,24 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
     e2 = (e * e).sum(axis=1)
     mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
     if w["around"]:
-        w["nn"][rows] = np.where(mine, w["nn"][rows], np.minimum(w["nn"][rows], np.sqrt(e2)))
+        np.minimum.at(w["nn"], rows, np.where(mine, np.inf, np.sqrt(e2)))
         return
     hit = rows[mine]
     w["found"][hit] = True
-    w["o1"][hit] = o
+    w["o1"][hit] = o[mine]
     w["q1"][hit] = q[mine]
     if on["edge"]:
         ok = ~mine & (e2 > 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             inv = 1.0 / np.sqrt(e2)
             b = (0.5 * (delta + w["d1"][rows]) * e).sum(axis=1) * inv
-        better = ok & (b < w["edge"][rows])
+        # the nearest plane of each row among its candidates, then against the best so far
+        cand = np.nonzero(ok)[0]
+        cand = cand[np.lexsort((b[cand], rows[cand]))]
+        first = np.ones(len(cand), dtype=bool)
+        first[1:] = rows[cand][1:] != rows[cand][:-1]
+        cand = cand[first]
+        better = cand[b[cand] < w["edge"][rows[cand]]]
         r = rows[better]
         w["edge"][r] = b[better]
         w["edge_n"][r] = e[better] * inv[better, None]
@@ -142,17 +160,24 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             wt = np.where(mine, 1.0, np.exp((F1 - d) / k) if k > 0 else 0.0)
         r, wt, dl, dd = rows[take], wt[take], delta[take], d[take]
-        w["wsum"][r] += wt
-        w["wdelta"][r] += wt[:, None] * dl
+        np.add.at(w["wsum"], r, wt)
+        np.add.at(w["wdelta"], r, wt[:, None] * dl)
         g = np.zeros_like(dl)
         g[:, : p.dim] = ref.metric_gradient(dl[:, : p.dim], dd, p)
-        w["wgrad"][r] += wt[:, None] * g
-        w["wattr"][r] += wt[:, None] * id_attribute(ids[take])
+        np.add.at(w["wgrad"], r, wt[:, None] * g)
+        np.add.at(w["wattr"], r, wt[:, None] * id_attribute(ids[take]))
 
 
-def _offsets(ring: int, dim: int):
+@functools.lru_cache(maxsize=64)
+def _offsets(ring: int, dim: int) -> np.ndarray:
+    """The cell offsets (K, 4) of ring ``ring`` (Chebyshev), in the shader's order."""
     rng = [range(-ring, ring + 1)] * dim + [range(0, 1)] * (4 - dim)
-    return [np.array(o, dtype=np.int64) for o in itertools.product(*rng) if max(abs(v) for v in o) == ring]
+    out = np.array([o for o in itertools.product(*rng) if max(abs(v) for v in o) == ring], dtype=np.int64)
+    out.flags.writeable = False
+    return out
+
+
+_PAIRS = 1 << 22    #: (sample, offset) pairs tested at once by the vectorised walk
 
 
 def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
@@ -170,15 +195,19 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
         if len(rows) == 0:
             return np.ones(N, dtype=bool)
         lo, hi = ref.ring_window(ring, np.minimum(_reach(w, rows, on), ring + 2.0), f[rows], p.dim)
-        for o in _offsets(ring, p.dim):
-            inside = np.all((o >= lo) & (o <= hi), axis=1)
-            sel = rows[inside]
-            if len(sel) == 0:
-                continue
-            near = ref._box_distance(np.broadcast_to(o, (len(sel), 4)), f[sel], p) \
-                < ref.metric_term(_reach(w, sel, on), p)
+        # All (sample, cell) pairs of the ring at once, with the reach at the start of the ring
+        # (the shader's shrinks as it goes: visiting more is always safe, and every sum and
+        # minimum is over points, each taken or not by its own distance).
+        offs = _offsets(ring, p.dim)
+        step = max(1, _PAIRS // len(offs))
+        for c in range(0, len(rows), step):
+            rs = rows[c:c + step]
+            inside = np.all((offs[None] >= lo[c:c + step, None]) & (offs[None] <= hi[c:c + step, None]), axis=2)
+            ri, ki = np.nonzero(inside)
+            sel, o = rs[ri], offs[ki]
+            near = ref._box_distance(o, f[sel], p) < ref.metric_term(_reach(w, sel, on), p)
             if near.any():
-                _visit(w, sel[near], cells, f, o, p)
+                _visit(w, sel[near], cells, f, o[near], p)
     return max_ring + m >= _reach(w, every, on)
 
 

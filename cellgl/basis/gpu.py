@@ -20,6 +20,10 @@ _CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
 _MAX_GROUPS = 65535
 
 
+#: llvmpipe's loop limiter (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
+DRIVER_LOOP_LIMIT = 65535
+
+
 def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: str = "exp") -> dict:
     """The compile-time macros of ``shaders/cellular.comp`` for these parameters."""
     d = glsl_defines()
@@ -70,6 +74,7 @@ def _set_params(prog, p: Params):
     _set(prog, "u_orbit_radius", float(p.orbit_radius))
     _set(prog, "u_orbit_turn", int(p.orbit_turn))
     _set(prog, "u_axis_scale", tuple(float(v) for v in p.axis_scale))
+    _set(prog, "u_loop_canary", 2)
     set_density(prog, p.density_map)
 
 
@@ -285,3 +290,36 @@ def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):
             for y0 in range(0, Y, ny):
                 cy, cz = min(ny, Y - y0), min(nz, Z - z0)
                 yield (0, y0, z0, w, X, cy), ((w * Z + z0) * Y + y0) * X, (gx, cy, cz)
+
+
+@gl_call
+def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0,
+               budget: int | None = None, smooth: str = "exp") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Measure the loop budget of :func:`search_points` (the measurement build of
+    ``shaders/cellular.comp``, ``CELL_LOOP_PROBE``): per sample the search's own count of loop
+    iterations (``CellResult.loops``), the iterations the driver's limiter counted for the sample's
+    SIMD vector of invocations (llvmpipe; :data:`DRIVER_LOOP_LIMIT` minus what it had left at the
+    end), and whether the sample was flagged inexact. ``budget`` overrides ``CELL_LOOP_BUDGET``."""
+    ctx = context.get_context()
+    d = defines_for(p, n, outputs, grid=False, smooth=smooth)
+    d["CELL_LOOP_PROBE"] = 1
+    if budget is not None:
+        d["CELL_LOOP_BUDGET"] = int(budget)
+    prog = context.compute_program("cellular.comp", d)
+    _set_params(prog, p)
+    _set(prog, "u_smoothness", float(smoothness))
+    _set(prog, "u_scale", float(p.scale))
+    _set(prog, "u_loop_probe", 1 << 30)
+    outputs = _buffers(outputs)
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
+    N = len(pts)
+    if N > _chunk_size(n, p.dim, outputs):
+        raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs)} samples, got {N}")
+    out = _alloc(N, n, p.dim, outputs)
+    inexact = np.zeros(N, dtype=bool)
+    _storage(ctx, 0, pts.nbytes).write(pts)
+    probe = _storage(ctx, 8, 8 * N)
+    _run(prog, ctx, N, n, p.dim, outputs, out, 0, inexact)
+    raw = np.frombuffer(probe.read(8 * N), dtype=np.int32).reshape(N, 2).astype(np.int64)
+    # the canary loop (2 passes) ran before the probe
+    return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], inexact

@@ -272,9 +272,11 @@ def _visit(F, D, I, cells, f, o, p: Params):
 
 def max_ring_default(dim: int, axis_scale=(1.0,)) -> int:
     """CELL_MAX_RING: rings searched before a result is marked inexact (times the ratio of the
-    largest to the smallest axis weight, rounded up, for anisotropic distances: at most 64)."""
+    largest to the smallest axis weight, rounded up, for anisotropic distances: at most 64).
+    On the GPU the loop budget (``CELL_LOOP_BUDGET``) usually stops a search first; the flagged
+    samples are then searched again here, up to these rings (docs/exactness.md)."""
     ratio = max(axis_scale[:dim]) / min(axis_scale[:dim])
-    return min(64, {2: 8, 3: 5, 4: 3}[dim] * math.ceil(ratio - 1e-9))
+    return min(64, {2: 24, 3: 12, 4: 7}[dim] * math.ceil(ratio - 1e-9))
 
 
 def _box_distance(o: np.ndarray, f: np.ndarray, p: Params) -> np.ndarray:

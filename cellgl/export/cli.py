@@ -42,6 +42,9 @@ def add_parser(sub):
     p.add_argument("--uniforms", action="store_true",
                    help="declare the recipe's run-time values as cellgl_<name> uniforms instead of "
                    "constants")
+    p.add_argument("--no-fold", dest="fold", action="store_false",
+                   help="keep the recipe's values as named const declarations (to edit by hand) "
+                   "instead of folding them into the code")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
                    help="override a recipe parameter (repeatable)")
     return p
@@ -67,7 +70,7 @@ def run_cli(args) -> int:
                             seed=args.seed, min_points=args.min_points, max_points=args.max_points,
                             minkowski_p=args.minkowski_p)
     else:
-        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms)
+        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold)
     if args.output is None:
         sys.stdout.write(text)
         return 0

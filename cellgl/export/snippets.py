@@ -131,16 +131,17 @@ def check_target(target: str) -> Target:
 # --------------------------------------------------------------------------------------------
 
 
-def library_code(prog: Program) -> str:
+def library_code(prog: Program, fold: bool = True) -> str:
     """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left,
-    only what the entry points reach (:mod:`cellgl.export.fold`). Cached per program: the
+    only what the entry points reach (:mod:`cellgl.export.fold`); ``fold=False`` keeps the
+    recipe's values as the named constants they are declared as. Cached per program: the
     targets of one recipe share it."""
     key = (tuple(prog.files), tuple(sorted((k, str(v)) for k, v in prog.defines.items())), prog.params,
-           prog.entry, tuple(prog.entries))
+           prog.entry, tuple(prog.entries), fold)
     if key not in _CODE_CACHE:
         if len(_CODE_CACHE) > 64:
             _CODE_CACHE.clear()
-        _CODE_CACHE[key] = _library_code(prog)
+        _CODE_CACHE[key] = _library_code(prog, fold)
     return _CODE_CACHE[key]
 
 
@@ -159,10 +160,16 @@ def specialised_code(prog: Program) -> str:
     return _tidy(text)
 
 
-def _library_code(prog: Program) -> str:
-    entries = prog.entries or [n for n in ENTRY_POINTS
-                               if re.search(rf"\b{n}\s*\(", prog.entry.replace("cell_", "cellgl_"))]
-    text = compiler.compile_glsl(specialised_code(prog), entries, structs=_CONSTANT_STRUCTS)
+def entry_points(prog: Program) -> list[str]:
+    """The functions the reachability pass starts from: ``prog.entries``, or else those of
+    :data:`ENTRY_POINTS` that the program's entry code defines."""
+    return list(prog.entries) or [n for n in ENTRY_POINTS
+                                  if re.search(rf"\b{n}\s*\(", prog.entry.replace("cell_", "cellgl_"))]
+
+
+def _library_code(prog: Program, fold: bool) -> str:
+    text = compiler.compile_glsl(specialised_code(prog), entry_points(prog), structs=_CONSTANT_STRUCTS,
+                                 fold_constants=fold)
     return _tidy(text)
 
 
@@ -278,12 +285,13 @@ def _fmt_value(v) -> str:
     return str(v)
 
 
-def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False) -> str:
-    """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`)."""
+def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True) -> str:
+    """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
+    recipe's values stay named constants (see :func:`export`)."""
     tgt = check_target(target)
     # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
     # snippet has none, so it takes the folded code like every other target
-    code = library_code(prog) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
+    code = library_code(prog, fold) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
     head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
     if d in ("glsl", "gles", "godot"):
@@ -352,7 +360,7 @@ def _godot(code: str, name: str, fragment: str = _GODOT_FRAGMENT) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
+def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool = True) -> str:
     """Export ``recipe`` as a self-contained shader snippet.
 
     Parameters
@@ -365,6 +373,10 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
     uniforms : bool
         Declare the recipe's run-time values as ``cellgl_<name>`` uniforms instead of baking
         them in as constants.
+    fold : bool
+        True (the default): the recipe's values are folded into the code, which keeps only what
+        they use. False: they stay named ``const cellgl_<name>`` declarations at the top of the
+        code (still only what the entry points reach), to edit by hand; the same pixels.
 
     Returns
     -------
@@ -384,7 +396,7 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False) -> str:
         raise ExportError("--uniforms is not supported for WGSL (uniforms need a bind group "
                           "layout of your renderer); export WGSL with constants")
     prog = texture_program(recipe, uniforms=uniforms)
-    return export_program(prog, target, uniforms=uniforms)
+    return export_program(prog, target, uniforms=uniforms, fold=fold)
 
 
 def _refuse_pups(r) -> None:

@@ -15,7 +15,7 @@ from __future__ import annotations
 import hashlib
 from dataclasses import replace
 
-from cellgl.export.snippets import ExportError, export, export_program, texture_program
+from cellgl.export.snippets import ExportError, entry_points, export, export_program, texture_program
 from cellgl.recipes import load_recipe
 from cellgl.texture.params import PARAMS_BY_NAME
 
@@ -98,12 +98,16 @@ def variant_texts(recipe) -> dict:
     without the exporter's header comment. Also ``uniforms``: ``[[glsl type, name], ...]``."""
     r = load_recipe(recipe)
     prog = texture_program(r, uniforms=True)
-    live = replace(prog, entry=prog.entry + PROBE_ENTRY)
+    # the probe is one more entry point of the live variant (the exporter keeps only what its
+    # entry points reach)
+    live = replace(prog, entry=prog.entry + PROBE_ENTRY,
+                   entries=(*entry_points(prog), "cellgl_playground_probe"))
     out = {"key": variant_key(prog.defines),
            "live": _body(export_program(live, "gles", uniforms=True))}
     for t in ("gles", "godot", "hlsl"):
         out[t] = _body(export_program(prog, t, uniforms=True))
-    out["wgsl"] = _body(export(r, "wgsl"))
+    # named constants (fold=False): the page writes the current values into them
+    out["wgsl"] = _body(export(r, "wgsl", fold=False))
     out["uniforms"] = [[t, n] for t, n, _ in prog.uniforms]
     return out
 

@@ -68,6 +68,34 @@ def _cell_stream(packed: PupsPacked):
                    packed.axes_scaled)
 
 
+#: llvmpipe's loop limiter per SIMD vector (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
+DRIVER_LOOP_LIMIT = 65535
+#: invocations of one llvmpipe SIMD vector (AVX2: 8 x 32 bit; the bound assumes they all differ)
+SIMD_LANES = 8
+
+
+def loop_budget(packed: PupsPacked, group_cells: bool) -> int:
+    """The most loop passes (llvmpipe's count, docs/exactness.md) one SIMD vector of pixels can
+    spend in ``cell_pups_eval``: a grid cell of c candidates with p axis pairs runs c passes of
+    the candidate loop, each with p + 1 of the axis loop, plus the exits: c (p + 2) + 1. A work
+    group inside one grid cell (``group_cells``) runs it once for all its lanes; otherwise the
+    lanes of a vector may lie in up to :data:`SIMD_LANES` different cells."""
+    cells, _ = _cell_stream(packed)
+    if not len(cells):
+        return 0
+    per = cells[:, 1].astype(np.int64) * (cells[:, 2].astype(np.int64) + 2) + 1
+    return int(per.max()) * (1 if group_cells else SIMD_LANES)
+
+
+def _check_budget(packed: PupsPacked, group_cells: bool) -> None:
+    """Refuse a candidate grid whose loops the driver could cut (clear error, no wrong pixels)."""
+    need = loop_budget(packed, group_cells)
+    if need >= DRIVER_LOOP_LIMIT:
+        raise ValueError(f"PUPs: a candidate-grid cell needs up to {need} loop passes per SIMD vector, "
+                           f"past the driver's limit of {DRIVER_LOOP_LIMIT} (Mesa llvmpipe): lower the "
+                           "point density or the support size (docs/exactness.md)")
+
+
 def _gpu_buffers(packed: PupsPacked):
     """Pack the candidate grid for the shaders (std430 bytes: cell headers, records)."""
     cells, rec = _cell_stream(packed)
@@ -84,6 +112,7 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     data = _gpu_buffers(packed)
     if group_cells:
         defines["CELL_PUPS_GROUP_CELLS"] = 1
+    _check_budget(packed, group_cells)
     prog = _compute_program(defines)
     t1 = time.perf_counter()
     w, h = packed.width, packed.height
@@ -118,6 +147,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     from cellgl.gl.context import program
     ctx = _context()
     prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
+    _check_budget(packed, False)
     w, h = packed.width, packed.height
     data = _gpu_buffers(packed)
     bufs = [ctx.buffer(d) for d in data]

@@ -13,6 +13,9 @@ Where the time goes, and what this module does about it (``benchmarks/bench_text
   :data:`MAX_BAKED` programs are kept.
 * **Only the outputs asked for** are written (``CELL_TEX_OUT``) and read back, from storage
   buffers reused across calls instead of five fresh ones per dispatch.
+
+The driver's loop limit (docs/exactness.md): ``texture.comp`` counts the samples whose loops
+llvmpipe cut (its canary); :func:`run` raises :class:`LoopLimitError` rather than return them.
 """
 from __future__ import annotations
 
@@ -22,7 +25,17 @@ import numpy as np
 
 from cellgl.gl.threads import gl_call
 
-__all__ = ["MAX_BAKED", "run", "output_mask"]
+__all__ = ["MAX_BAKED", "LoopLimitError", "run", "output_mask"]
+
+#: llvmpipe's loop limiter (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
+DRIVER_LOOP_LIMIT = 65535
+
+
+class LoopLimitError(ValueError):
+    """The driver cut the loops of some samples (llvmpipe's 65535 loop passes per SIMD vector):
+    their values would be wrong, so none are returned. A ValueError: the request is too heavy for
+    the driver (fewer octaves, less supersampling or a smaller smoothness serve it); the command
+    line reports it as a user error."""
 
 _CHUNK = 1 << 20            # samples per dispatch
 #: baked programs kept (least recently used dropped)
@@ -93,12 +106,15 @@ def _buffer(ctx, binding: int, nbytes: int):
 
 @gl_call
 def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1, pan=None,
-        pan_only: bool = False) -> dict:
+        pan_only: bool = False, probe: bool = False) -> dict:
     """Dispatch texture.comp over ``count`` samples and return ``{channel: array}`` (flat, one row
     per sample). ``setup(prog, first, n)`` sets the entry's own uniforms and returns buffers to
     release after the chunk; ``supersample``: n of the n x n sub-pixel grid (grid only); ``pan``
     (du, dv, dz): added to the samples' texture position in float64, through the split origins;
-    ``pan_only``: the last call ran this recipe with the same channels (only the pan changed)."""
+    ``pan_only``: the last call ran this recipe with the same channels (only the pan changed);
+    ``probe``: the measurement build, adding ``"loops"``: the loop passes llvmpipe counted for each
+    sample's SIMD vector (benchmarks/loop_budget.py). Raises :class:`LoopLimitError` if the driver
+    cut any sample's loops."""
     from cellgl.gl import context
     from cellgl.texture import shader as texture
 
@@ -108,7 +124,14 @@ def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1
     d = texture.defines(recipe, channels)
     d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=local_size, CELL_TEX_OUT=mask,
              CELL_TEX_SUPERSAMPLE=int(supersample))
+    # No loop budget of the search's own (cellular.glsl): a texture invocation searches once per
+    # octave and sub-sample and reports no per-sample flag; the canary below reports the driver's.
+    d["CELL_LOOP_BUDGET"] = 1 << 30
+    if probe:
+        d["CELL_LOOP_PROBE"] = 1
     prog = _program(recipe, d, pan, pan_only)
+    cut = 0
+    loops = np.empty(count, np.int64) if probe else None
     out = {}
     for name, (binding, size, bit, _) in _OUTPUTS.items():
         if mask & bit:
@@ -118,16 +141,28 @@ def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1
         n = min(_CHUNK, count - start)
         bufs = {name: _buffer(ctx, _OUTPUTS[name][0], n * _OUTPUTS[name][1]) for name in out}
         extra = setup(prog, start, n)
-        for name, value in (("u_count", n), ("u_first", start)):
+        for name, value in (("u_count", n), ("u_first", start), ("u_loop_canary", 2), ("u_loop_probe", 1 << 30)):
             if name in prog:
                 prog[name].value = value
+        flag = _buffer(ctx, 9, 4)        # texture.comp's LoopCut (6, 7: the cell and density images)
+        flag.write(b"\0\0\0\0")
+        pbuf = _buffer(ctx, 10, 4 * n) if probe else None
         prog.run(group_x=(n + local_size - 1) // local_size)
         ctx.memory_barrier()
         for name, buf in bufs.items():
             buf.read_into(out[name][start:start + n], size=n * _OUTPUTS[name][1])
+        cut += int(np.frombuffer(flag.read(4), dtype=np.uint32)[0])
+        if probe:
+            left = np.frombuffer(pbuf.read(4 * n), dtype=np.int32)
+            loops[start:start + n] = DRIVER_LOOP_LIMIT - 2 - left
         for b in extra:
             b.release()
-    res = {}
+    if cut:
+        raise LoopLimitError(
+            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa llvmpipe allows 65535 loop "
+            "passes per SIMD vector of samples): their values would be wrong, so none are returned. "
+            "Use fewer octaves, less supersampling or a smaller smoothness (docs/exactness.md)")
+    res = {} if loops is None else {"loops": loops}
     for c in channels:
         if c == "color":
             res[c] = out["color"]

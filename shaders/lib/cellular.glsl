@@ -12,6 +12,17 @@
 //   * if ring CELL_MAX_RING is finished without that guarantee, the result is
 //     marked inexact (CellResult.exact = false) instead of being silently wrong.
 //
+// Loop budget. Drivers cut or kill long shaders: Mesa's llvmpipe stops every
+// loop of an invocation once 65535 loop iterations were spent in it (all
+// loops together, per SIMD vector of invocations; docs/exactness.md), other
+// GPUs have watchdogs. So the search counts its loop iterations in
+// CellResult.loops, as llvmpipe does (each pass through a loop whose length
+// is not a compile-time constant, plus one for the pass that leaves it), and
+// stops, marking the result inexact, rather than go past CELL_LOOP_BUDGET.
+// cell_features() (features.glsl) continues the same count. A caller that
+// searches several times in one invocation passes the count on
+// (cell_search_budget) so the bound holds for the invocation as a whole.
+//
 // The sample is given as an integer cell plus a float fraction in [0, 1), so
 // precision does not depend on the distance from the origin.
 //
@@ -24,7 +35,8 @@
 // Requires: hash.glsl, metric.glsl, points.glsl.
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
 //         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO,
-//         CELL_RING1_PRUNE (default: 1 but for the jitter distribution).
+//         CELL_RING1_PRUNE (default: 1 but for the jitter distribution),
+//         CELL_LOOP_BUDGET (loop iterations one invocation may spend).
 
 #include "hash.glsl"
 #include "metric.glsl"
@@ -38,11 +50,30 @@
 #endif
 #endif
 
+#ifndef CELL_LOOP_BUDGET
+// 6144 per invocation: the 8 invocations of one llvmpipe SIMD vector (AVX2)
+// then spend at most 49152 of its 65535 together, the rest is margin for the
+// caller's own loops. Measured in docs/exactness.md; a search needing more is
+// flagged (cellgl recomputes it with the NumPy reference).
+#define CELL_LOOP_BUDGET 6144
+#endif
+// The most one step of a search loop can spend: one pass of a window loop and
+// the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
+#define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
+
+// Whether a search that has spent `loops` passes must stop (one more step
+// could pass CELL_LOOP_BUDGET).
+bool cell_budget_spent(int loops)
+{
+    return loops > CELL_LOOP_BUDGET - CELL_LOOP_STEP;
+}
+
 struct CellResult {
     float F[CELL_N];      // distances, ascending (true distances after cell_search)
     vec4 delta[CELL_N];   // feature point - sample (components past CELL_DIM are 0)
     uint id[CELL_N];      // feature point IDs
-    bool exact;           // false only if the search cap was reached
+    bool exact;           // false if the ring cap or the loop budget was reached
+    int loops;            // loop passes spent so far (cell_search_budget)
 };
 
 // A vector in the units distances are measured in (CELL_ANISO: axes weighted).
@@ -113,6 +144,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     uint state = cell_cell_seed(c, p.seed);
     int count = cell_point_count_at(state, c, p);
     vec4 base = vec4(o) - f;
+    r.loops += count + 1;
     for (int k = 0; k < count; k++) {
         uint id;
         vec4 q = cell_next_point(state, c, p, id);
@@ -140,7 +172,35 @@ float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
 #endif
 }
 
-CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
+// The cell after o in the window lo .. hi, in the order of nested x, y, z, w
+// loops (w fastest); start from lo - (0, 0, 0, 1). The windows are walked by
+// one flat loop: one pass per cell, where nested loops of run-time length
+// would also spend a pass on every exit of the inner loops. (An odometer, not
+// a division of the pass index: integer division is slow on SIMD CPUs.)
+ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
+{
+    o.w += 1;
+    if (o.w > hi.w) {
+        o.w = lo.w;
+        o.z += 1;
+    }
+    if (o.z > hi.z) {
+        o.z = lo.z;
+        o.y += 1;
+    }
+    if (o.y > hi.y) {
+        o.y = lo.y;
+        o.x += 1;
+    }
+    return o;
+}
+
+// Search flagged inexact at CELL_LOOP_BUDGET (6144) loop passes: llvmpipe cuts loops silently.
+// cell_search for an invocation that has already spent `loops` loop passes:
+// it stops, flagged inexact, before the invocation's count reaches
+// CELL_LOOP_BUDGET (6144 unless defined), since drivers cut longer loops
+// without a word (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
+CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 {
     CellResult r;
     for (int k = 0; k < CELL_N; k++) {
@@ -148,6 +208,8 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
         r.delta[k] = vec4(0.0);
         r.id[k] = 0u;
     }
+    r.loops = loops;
+    bool spent = cell_budget_spent(r.loops);
 
     // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block.
     // Constant loop bounds, so the compiler unrolls the block into
@@ -156,7 +218,9 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
     // never changes the result: such a point could not be inserted); the
     // jitter distribution visits all 3^d, its one point per cell costing less
     // than the test.
-    _cell_visit(r, cell, f, ivec4(0), p);
+    if (!spent) {
+        _cell_visit(r, cell, f, ivec4(0), p);
+    }
     for (int x = -1; x <= 1; x++)
     for (int y = -1; y <= 1; y++)
 #if CELL_DIM >= 3
@@ -176,7 +240,11 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 #else
         if (any(notEqual(o, ivec4(0)))) {
 #endif
-            _cell_visit(r, cell, f, o, p);
+            if (cell_budget_spent(r.loops)) {
+                spent = true;
+            } else {
+                _cell_visit(r, cell, f, o, p);
+            }
         }
     }
 
@@ -192,7 +260,9 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
     // pruned by its nearest possible distance.
     r.exact = false;
     int ring = 2;
-    for (; ring <= CELL_MAX_RING; ring++) {
+    r.loops += 1;                 // the pass that leaves the ring loop
+    for (; ring <= CELL_MAX_RING && !spent; ring++) {
+        r.loops += 1;
         if (_cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
             r.exact = true;
             break;
@@ -213,20 +283,17 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
 #else
         cell_ring_window(ring, reach, f, lo, hi);
 #endif
-        for (int x = lo.x; x <= hi.x; x++)
-        for (int y = lo.y; y <= hi.y; y++)
-#if CELL_DIM >= 3
-        for (int z = lo.z; z <= hi.z; z++)
-#else
-        for (int z = 0; z <= 0; z++)
-#endif
-#if CELL_DIM >= 4
-        for (int w = lo.w; w <= hi.w; w++)
-#else
-        for (int w = 0; w <= 0; w++)
-#endif
-        {
-            ivec4 o = ivec4(x, y, z, w);
+        ivec4 n = hi - lo + 1;
+        int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = lo - ivec4(0, 0, 0, 1);
+        r.loops += 1;
+        for (int i = 0; i < cells; i++) {
+            if (cell_budget_spent(r.loops)) {
+                spent = true;
+                break;
+            }
+            r.loops += 1;
+            o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
                 && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
@@ -234,11 +301,20 @@ CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
             }
         }
     }
-    if (ring > CELL_MAX_RING) {
+    if (spent) {
+        r.exact = false;          // stopped by the loop budget: a nearer point may be missed
+    } else if (ring > CELL_MAX_RING) {
         r.exact = _cell_ring_bound(float(CELL_MAX_RING), m, ma, p) >= r.F[CELL_N - 1];
     }
     for (int k = 0; k < CELL_N; k++) {
         r.F[k] = cell_metric_finish(r.F[k], p.minkowski_p);
     }
     return r;
+}
+
+// The CELL_N nearest feature points of the sample (cell, f); flagged inexact
+// rather than cut past CELL_LOOP_BUDGET loop passes (cell_search_budget).
+CellResult cell_search(ivec4 cell, vec4 f, CellParams p)
+{
+    return cell_search_budget(cell, f, p, 0);
 }

@@ -27,7 +27,10 @@
 // The walks go ring by ring (Chebyshev rings of cells, as cell_search), skip
 // every cell whose nearest possible point is beyond the current reach, stop
 // once a whole ring is beyond it, and report CellFeatures.exact = false instead
-// of a wrong answer if CELL_FEATURE_MAX_RING rings were not enough.
+// of a wrong answer if CELL_FEATURE_MAX_RING rings were not enough, or if the
+// loop budget (CELL_LOOP_BUDGET, cellular.glsl) ran out: the walks continue the
+// count of the cell_search() they follow (CellFeatures.loops), so search and
+// walks together stay inside the budget.
 //
 // Requires: cellular.glsl. Macros: those of cellular.glsl, CELL_EDGE,
 // CELL_SMOOTH, CELL_NSPHERE (0 or 1; CELL_SMOOTH 2: smooth F1 as Blender's
@@ -79,7 +82,8 @@ struct CellFeatures {
     vec4 smooth_grad;    // d smooth_F / d sample
     vec4 smooth_attr;    // weighted mean of cell_id_attribute
     float nsphere;       // n-sphere radius (CELL_NSPHERE)
-    bool exact;          // false if a walk reached CELL_FEATURE_MAX_RING
+    bool exact;          // false if a walk reached CELL_FEATURE_MAX_RING or the loop budget
+    int loops;           // loop iterations spent by the search and the walks
 };
 
 // State of one walk. Around the sample (around = false): the F1 point's offset
@@ -101,6 +105,8 @@ struct _CellWalk {
     ivec4 o1;
     vec4 q1;
     float nn;
+    int loops;       // loop iterations spent (cellular.glsl, "Loop budget")
+    bool spent;      // the walk stopped at the loop budget
 };
 
 // True distance from the walk's centre beyond which no point matters (now).
@@ -165,6 +171,7 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     uint state = cell_cell_seed(c, p.seed);
     int count = cell_point_count_at(state, c, p);
     vec4 base = vec4(o) - f;
+    w.loops += count + 1;
     for (int k = 0; k < count; k++) {
         uint id;
         vec4 q = cell_next_point(state, c, p, id);
@@ -173,35 +180,39 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
 }
 
 // Visit every cell around (cell, f) that can hold a point within the reach;
-// returns whether the walk finished before CELL_FEATURE_MAX_RING rings.
+// returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
+// inside the loop budget (w.spent: it stopped at the budget).
 bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 {
     float m = 1.0;
     for (int a = 0; a < CELL_DIM; a++) {
         m = min(m, min(f[a], 1.0 - f[a]));
     }
+    if (cell_budget_spent(w.loops)) {
+        w.spent = true;
+        return false;
+    }
     _cell_walk_cell(w, cell, f, ivec4(0), p);
+    w.loops += 1;                 // the pass that leaves the ring loop
     for (int ring = 1; ring <= CELL_FEATURE_MAX_RING; ring++) {
+        w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
             return true;
         }
         ivec4 lo, hi;
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
-        for (int x = lo.x; x <= hi.x; x++)
-        for (int y = lo.y; y <= hi.y; y++)
-#if CELL_DIM >= 3
-        for (int z = lo.z; z <= hi.z; z++)
-#else
-        for (int z = 0; z <= 0; z++)
-#endif
-#if CELL_DIM >= 4
-        for (int v = lo.w; v <= hi.w; v++)
-#else
-        for (int v = 0; v <= 0; v++)
-#endif
-        {
-            ivec4 o = ivec4(x, y, z, v);
+        ivec4 n = hi - lo + 1;
+        int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = lo - ivec4(0, 0, 0, 1);
+        w.loops += 1;
+        for (int i = 0; i < cells; i++) {
+            if (cell_budget_spent(w.loops)) {
+                w.spent = true;
+                return false;
+            }
+            w.loops += 1;
+            o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
                 && _cell_box_distance(o, f, p)
@@ -310,6 +321,8 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.o1 = ivec4(0);
     w.q1 = vec4(0.0);
     w.nn = 3.0e38;
+    w.loops = r.loops;
+    w.spent = false;
 
     CellFeatures o;
     o.exact = r.exact && _cell_walk(w, cell, f, p);
@@ -338,13 +351,15 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     v.around = true;
     v.d1 = vec4(0.0);
     v.nn = 3.0e38;
-    if (w.found) {
-        o.exact = o.exact && _cell_walk(v, cell + w.o1, w.q1, p);
+    if (w.found && o.exact) {
+        o.exact = _cell_walk(v, cell + w.o1, w.q1, p);
         o.nsphere = 0.5 * v.nn;
     } else {
         o.exact = false;
     }
+    w.loops = v.loops;
 #endif
+    o.loops = w.loops;
     return o;
 }
 

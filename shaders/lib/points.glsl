@@ -75,13 +75,21 @@ const int _cell_w96_table[256] = int[256](
 
 // Wrap a cell onto the periodic lattice (axes with period 0 are not wrapped).
 // Compiled only when CELL_PERIODIC is 1, so ordinary textures pay nothing.
-// Callers keep |c| well below 2^24 (the sample's own cell is wrapped first),
-// so the float quotient is exact enough; the two fix-ups absorb its rounding.
+// Exact for every int32 cell: the float32 quotient c / m is off by up to
+// |c| 2^-23 + 1 (float(c) itself rounds once |c| > 2^24), so one reduction
+// r = c - m floor(c / m) leaves |r| <= 2^8 + 2m for |c| < 2^31; a second
+// reduction of that small r has a quotient off by at most 1, which the two
+// fix-ups absorb. (One reduction alone gave wrong cells past |c| ~ 10^8.)
+ivec4 _cell_wrap_step(ivec4 c, ivec4 m)
+{
+    return c - m * ivec4(floor(vec4(c) / vec4(m)));
+}
+
 ivec4 cell_wrap(ivec4 c, ivec4 period)
 {
 #if CELL_PERIODIC
     ivec4 m = max(period, ivec4(1));
-    ivec4 w = c - m * ivec4(floor(vec4(c) / vec4(m)));
+    ivec4 w = _cell_wrap_step(_cell_wrap_step(c, m), m);
     w += m * ivec4(lessThan(w, ivec4(0)));
     w -= m * ivec4(greaterThanEqual(w, m));
     bvec4 on = greaterThan(period, ivec4(0));

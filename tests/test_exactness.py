@@ -1,0 +1,337 @@
+"""exact=True never lies (issue 21; docs/exactness.md).
+
+Every answer of :func:`cellgl.cellular` / :func:`cellgl.cellular_grid` flagged exact is checked
+against a brute force written here: every feature point of a block of cells around the samples
+(the point process itself from :func:`cellgl.feature_points`), then the n nearest by sorting all
+distances, and the features by their definitions. The matrix covers dimensions x distributions x
+metrics x n up to 8 x the feature walks (smooth up to the largest smoothness) x period x sample
+magnitudes up to 5e8. Then the loop budget: a tiny ``CELL_LOOP_BUDGET`` makes the GPU flag
+samples, which must come back exact after the fallback, never wrong; a huge one lets llvmpipe's
+own limiter cut loops, which the canary must catch. And the two reproducers of the issue.
+"""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import cellgl
+from cellgl.basis import core, gpu
+
+METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
+DISTS = {
+    "poisson": {},
+    "sparse": dict(density=0.25, min_points=0),
+    "jitter": dict(distribution="jitter", jitter=0.7),
+    "worley1996": dict(distribution="worley1996"),
+    "blender": dict(distribution="blender", jitter=0.8),
+}
+#: cells of margin around the sample box holding every point that can matter
+REACH = {2: 9, 3: 8, 4: 7}
+SPAN = 1.5          #: the samples fill [base, base + SPAN)^d
+TOL = 2e-4
+
+
+def _distances(diff: np.ndarray, metric: str, p: float = 3.0) -> np.ndarray:
+    a = np.abs(diff)
+    if metric == "euclidean":
+        return np.sqrt((a * a).sum(-1))
+    if metric == "manhattan":
+        return a.sum(-1)
+    if metric == "chebyshev":
+        return a.max(-1)
+    return (a ** p).sum(-1) ** (1.0 / p)
+
+
+def _block(dim: int, base: float, kw: dict):
+    """Every feature point within REACH cells of the sample box, relative to ``base`` (sample
+    units), and the sample-unit distance from the box to the block's border."""
+    scale = 0.398150 if kw.get("distribution") == "worley1996" else 1.0
+    r = REACH[dim]
+    lo = int(np.floor((base - r) * scale))
+    hi = int(np.floor((base + SPAN + r) * scale))
+    axes = [np.arange(lo, hi + 1)] * dim
+    cells = np.stack(np.meshgrid(*axes, indexing="ij"), -1).reshape(-1, dim)
+    keep = {k: v for k, v in kw.items() if k not in ("metric", "minkowski_p")}
+    fp = cellgl.feature_points(cells, **keep)
+    return fp.positions - base, r - 1.0 / scale
+
+
+def _samples(dim: int, base: float, count: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """Samples at ``base + u`` (float64, as a user passes them) and the same relative to base."""
+    u = np.random.default_rng(seed).uniform(0.0, SPAN, (count, dim))
+    x = base + u
+    return x, x - base
+
+
+def _brute(rel: np.ndarray, pts: np.ndarray, n: int, metric: str, k: float = 0.0) -> dict:
+    """F1..Fn, edge, n-sphere radius and smooth F1 (smoothness k, no cut-off) by testing every
+    point, per sample."""
+    F, edge, nsphere, smooth = [], [], [], []
+    for x in rel:
+        diff = pts - x
+        d = _distances(diff, metric)
+        order = np.argsort(d)
+        F.append(d[order[:n]])
+        p1 = pts[order[0]]
+        e = pts - p1
+        el = np.sqrt((e * e).sum(-1))
+        other = el > 0
+        b = (((0.5 * (pts + p1) - x) * e).sum(-1)[other]) / el[other]
+        edge.append(b.min())
+        nsphere.append(0.5 * el[other].min())
+        d1 = d[order[0]]
+        smooth.append(d1 - k * np.log(np.exp(-(d - d1) / k).sum()) if k > 0 else d1)
+    return dict(F=np.array(F), edge=np.array(edge), nsphere=np.array(nsphere), smooth_F1=np.array(smooth))
+
+
+def _check(name, got, want, exact, limit=None, reach=None):
+    """Zero samples wrong while flagged exact; every sample exact (the fallback served them)."""
+    assert exact.all(), f"{name}: {(~exact).sum()} samples flagged inexact"
+    if reach is not None:        # the brute force itself must have seen every point that matters
+        assert np.all((want.max(axis=-1) if want.ndim > 1 else want) < reach), f"{name}: block too small"
+    err = np.abs(np.asarray(got, np.float64) - want)
+    bad = (err > TOL).reshape(len(err), -1).any(1) & exact
+    assert not bad.any(), f"{name}: {bad.sum()} samples wrong while flagged exact (max error {err.max():.3g})"
+
+
+MAGNITUDES = (0.0, -30001.0, 499999999.0)
+
+
+@pytest.mark.parametrize("base", MAGNITUDES, ids=["0", "-3e4", "5e8"])
+@pytest.mark.parametrize("periodic", [False, True], ids=["free", "period"])
+@pytest.mark.parametrize("dist", list(DISTS))
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_basis_matrix(ctx, dim, dist, periodic, base):
+    """F1..F8 of every metric, and grad/ids consistent with them, against the brute force."""
+    if dist == "worley1996" and dim != 3:
+        pytest.skip("worley1996 is 3D only")
+    kw = dict(DISTS[dist])
+    if periodic:
+        kw["period"] = (5, 7, 3, 4)[:dim]
+    x, rel = _samples(dim, base, 24, seed=dim)
+    for metric in METRICS:
+        mkw = dict(kw, metric=metric)
+        pts, reach = _block(dim, base, mkw)
+        want = _brute(rel, pts, 8, metric)
+        n = 8 if metric != "chebyshev" else 3          # n below 8 too
+        r = cellgl.cellular(x, n, outputs=("F",), **mkw)
+        _check(f"{dim}D {dist} {metric} period={periodic} base={base}", r.F, want["F"][:, :n], r.exact,
+               reach=reach)
+
+
+@pytest.mark.parametrize("smoothness", [0.05, 0.25])
+@pytest.mark.parametrize("dist", ["poisson", "sparse", "jitter"])
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_features_matrix(ctx, dim, dist, smoothness):
+    """edge, n-sphere radius and smooth F1 (up to the largest smoothness), asked together, with a
+    period and far from the origin, against the brute force."""
+    base = 499999999.0 if dim == 2 else 12345.0
+    kw = dict(DISTS[dist], period=(6, 5, 4, 3)[:dim] if dim != 3 else None)
+    x, rel = _samples(dim, base, 16 if dim == 4 else 24, seed=10 + dim)
+    pts, reach = _block(dim, base, kw)
+    want = _brute(rel, pts, 1, "euclidean", smoothness)
+    assert np.all(want["F"][:, 0] + 16 * smoothness < reach), "block too small for smooth F1"
+    r = cellgl.cellular(x, 1, outputs=("edge", "nsphere", "smooth_F1"), smoothness=smoothness, **kw)
+    name = f"{dim}D {dist} k={smoothness}"
+    _check(name + " edge", r.edge, want["edge"], r.exact)
+    _check(name + " nsphere", r.nsphere, want["nsphere"], r.exact)
+    _check(name + " smooth_F1", r.smooth_F1, want["smooth_F1"], r.exact)
+
+
+@pytest.mark.parametrize("metric", ["manhattan", "minkowski"])
+def test_smooth_other_metrics_at_the_largest_smoothness(ctx, metric):
+    x, rel = _samples(3, 77.0, 16, seed=5)
+    pts, reach = _block(3, 77.0, {})
+    want = _brute(rel, pts, 1, metric, 0.25)
+    r = cellgl.cellular(x, 1, metric=metric, outputs=("smooth_F1",), smoothness=0.25)
+    _check(f"smooth {metric}", r.smooth_F1, want["smooth_F1"], r.exact)
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_stretch_and_density_map(ctx, dim):
+    """Stretched cells (weighted distance, w_a = g / s_a with g the geometric mean of the s_a) and a
+    density ramp (0.2 .. 12 points per cell, empty cells allowed), F1..F8, against the brute force."""
+    base = 20000.0
+    x, rel = _samples(dim, base, 24, seed=20 + dim)
+    s = np.array([3.0, 0.5, 1.0, 2.0][:dim])
+    w = np.exp(np.log(s).mean()) / s
+    pts, reach = _block(dim, base, {})
+    want = np.sort([_distances((pts - xi) * w, "euclidean") for xi in rel], axis=1)[:, :8]
+    r = cellgl.cellular(x, 8, stretch=list(s), outputs=("F",))
+    _check(f"{dim}D stretch", r.F, want, r.exact, reach=reach * w.min())
+    dm = cellgl.DensityMap("ramp", axis=0, start=base - 3, end=base + 3, density_min=0.2, density_max=12.0)
+    kw = dict(density_map=dm, min_points=0, max_points=16)
+    pts, reach = _block(dim, base, kw)
+    want = _brute(rel, pts, 8, "euclidean")
+    r = cellgl.cellular(x, 8, outputs=("F",), **kw)
+    _check(f"{dim}D density map", r.F, want["F"], r.exact, reach=reach)
+
+
+def test_grid_matrix_far_and_periodic(ctx):
+    """cellular_grid (positions made on the GPU) at 5e8 with a period, against the brute force."""
+    base = 499999999.0
+    g = cellgl.cellular_grid((5, 6), origin=(base, base), spacing=0.25, n=8, period=(5, 7),
+                             outputs=("F", "edge"))
+    ys, xs = np.mgrid[0:5, 0:6]
+    rel = np.stack([xs.ravel() * 0.25, ys.ravel() * 0.25], 1)
+    pts, reach = _block(2, base, dict(period=(5, 7)))
+    want = _brute(rel, pts, 8, "euclidean")
+    _check("grid F", g.F.reshape(-1, 8), want["F"], g.exact.ravel(), reach=reach)
+    _check("grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
+
+
+# ------------------------------------------------------------------ the loop budget
+
+
+def _with_budget(monkeypatch, budget: int) -> None:
+    """Compile every cellular.comp of this test with CELL_LOOP_BUDGET = budget."""
+    orig = gpu.defines_for
+    monkeypatch.setattr(gpu, "defines_for", lambda *a, **k: {**orig(*a, **k), "CELL_LOOP_BUDGET": budget})
+
+
+@pytest.mark.parametrize("outputs", [("F",), ("nsphere", "smooth_F1")])
+def test_tiny_budget_flags_then_recomputes_never_wrong(ctx, monkeypatch, outputs):
+    """With a budget of 60 loop iterations most searches stop early: the GPU flags them (never a
+    wrong value flagged exact), and what reaches the user is the fallback's exact answer."""
+    _with_budget(monkeypatch, 60)
+    dim = 3
+    x, rel = _samples(dim, 1000.0, 48, seed=3)
+    pts, reach = _block(dim, 1000.0, {})
+    want = _brute(rel, pts, 4, "euclidean", 0.1)
+    p = core.make_params(dim)
+    raw, exact = gpu.search_points(x, p, 4, core._gpu_outputs(outputs, p), 0.1)
+    assert (~exact).mean() > 0.5, "a budget of 60 must stop most searches"
+    if "F" in raw:
+        ok = exact
+        assert np.all(np.abs(raw["F"][ok] - want["F"][ok]) < TOL), "wrong while flagged exact"
+    r = cellgl.cellular(x, 4, outputs=outputs, smoothness=0.1)
+    if "F" in outputs:
+        _check("tiny budget F", r.F, want["F"], r.exact)
+    else:
+        _check("tiny budget nsphere", r.nsphere, want["nsphere"], r.exact)
+        _check("tiny budget smooth", r.smooth_F1, want["smooth_F1"], r.exact)
+
+
+def test_tiny_budget_on_a_grid(ctx, monkeypatch):
+    """cellular_grid (positions made on the GPU) with a budget of 40: the flagged samples come back
+    from the fallback at their grid positions, equal to the brute force."""
+    _with_budget(monkeypatch, 40)
+    base = 100000.0
+    g = cellgl.cellular_grid((3, 4, 5), origin=(base + 0.3, base + 0.1, base + 0.7), spacing=0.3, n=4,
+                             outputs=("F", "edge"))
+    zs, ys, xs = np.mgrid[0:3, 0:4, 0:5]
+    rel = np.stack([0.3 + 0.3 * xs.ravel(), 0.1 + 0.3 * ys.ravel(), 0.7 + 0.3 * zs.ravel()], 1)
+    assert rel.max() <= SPAN
+    pts, reach = _block(3, base, {})
+    want = _brute(rel, pts, 4, "euclidean")
+    _check("tiny budget grid F", g.F.reshape(-1, 4), want["F"], g.exact.ravel(), reach=reach)
+    _check("tiny budget grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
+
+
+def test_driver_cut_is_caught_by_the_canary(ctx, monkeypatch):
+    """With the budget lifted (10^6), 4D smooth F1 at k = 0.25 spends more than llvmpipe's 65535
+    loop passes per SIMD vector: the driver cuts loops silently, and the canary flags exactly those
+    samples (then recomputed). Where the driver is not llvmpipe nothing is cut: all exact."""
+    dim = 4
+    x, rel = _samples(dim, 0.0, 24, seed=4)
+    p = core.make_params(dim)
+    own, driver, flagged = gpu.loop_probe(x, p, 1, ("smooth_F1",), 0.25, budget=10 ** 6)
+    cut = driver >= gpu.DRIVER_LOOP_LIMIT - 3
+    np.testing.assert_array_equal(flagged, cut)
+    assert np.all(own[~flagged] < gpu.DRIVER_LOOP_LIMIT)
+    _with_budget(monkeypatch, 10 ** 6)
+    pts, reach = _block(dim, 0.0, {})
+    want = _brute(rel, pts, 1, "euclidean", 0.25)
+    raw, exact = gpu.search_points(x, p, 1, ("smooth_F1",), 0.25)
+    np.testing.assert_array_equal(~exact, cut)
+    got = raw["features"][:, 2]
+    assert np.all(np.abs(got[exact] - want["smooth_F1"][exact]) < TOL)
+
+
+def test_default_budget_stays_inside_the_driver_limit(ctx):
+    """The heaviest paths at the default budget: no SIMD vector reaches llvmpipe's limit."""
+    rng = np.random.default_rng(9)
+    for dim, kw, outs, k, n in [(4, {}, ("smooth_F1",), 0.25, 1),
+                                (4, dict(metric="minkowski", minkowski_p=0.25), ("F",), 0.0, 8),
+                                (3, dict(metric="minkowski", minkowski_p=0.5), ("smooth_F1",), 0.25, 1)]:
+        p = core.make_params(dim, **kw)
+        own, driver, flagged = gpu.loop_probe(rng.uniform(-9, 9, (256, dim)), p, n, outs, k)
+        assert own.max() <= 6144
+        assert driver.max() < gpu.DRIVER_LOOP_LIMIT // 2, (dim, kw, outs, driver.max())
+
+
+# ------------------------------------------------------------------ the issue's reproducers
+
+
+def test_reproducer_nsphere_with_smooth_is_the_same_as_alone(ctx):
+    X = np.random.default_rng(1).uniform(-10, 10, (400, 4)).astype("float32")
+    g = cellgl.cellular(X, 1, outputs=("nsphere", "smooth_F1"), smoothness=0.25)
+    r = cellgl.cellular(X, 1, outputs=("nsphere",))
+    assert g.exact.all() and r.exact.all()
+    np.testing.assert_array_equal(g.nsphere, r.nsphere)
+    s = cellgl.cellular(X, 1, outputs=("smooth_F1",), smoothness=0.25)
+    np.testing.assert_array_equal(g.smooth_F1, s.smooth_F1)
+
+
+@pytest.mark.parametrize("dist,period", [("jitter", (5, 7)), ("poisson", (4, 4))])
+@pytest.mark.parametrize("mag", [1e8, 3e8, 2.0 ** 30 - 1])
+def test_reproducer_period_far_from_the_origin(ctx, dist, period, mag):
+    """With a period, a sample gives the same bits as its wrapped position, at every magnitude
+    the API accepts (the float wrap lost cells past ~1e8)."""
+    X = np.random.default_rng(0).uniform(-mag, mag, (2000, 2))
+    a = cellgl.cellular(X, 2, distribution=dist, jitter=0.7, period=period, outputs=("F", "id"))
+    b = cellgl.cellular(np.stack([X[:, 0] % period[0], X[:, 1] % period[1]], 1), 2, distribution=dist,
+                        jitter=0.7, period=period, outputs=("F", "id"))
+    np.testing.assert_array_equal(a.F, b.F)
+    np.testing.assert_array_equal(a.id, b.id)
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_sparse_poisson_is_served_exactly(ctx, dim):
+    """Sparse Poisson (density 0.25, no minimum): no sample flagged (13-16 % were, in 4D)."""
+    X = np.random.default_rng(2).uniform(-50, 50, (3000, dim))
+    r = cellgl.cellular(X, 4, density=0.25, min_points=0, outputs=("F",))
+    assert r.exact.mean() == 1.0
+
+
+# ------------------------------------------------------------------ textures and PUPs
+
+
+def test_texture_cut_by_the_driver_raises(ctx):
+    """A texture whose loops llvmpipe would cut (smooth F1 at k = 0.25, 8 octaves, 16 samples per
+    pixel: far past 65535 loop passes per SIMD vector) is refused with LoopLimitError, never
+    returned with wrong pixels; a shipped smooth preset is served."""
+    from cellgl.texture.dispatch import LoopLimitError
+
+    r = cellgl.load_recipe("f1").replace(smoothness=0.25, c_smooth=1.0, c1=0.0, octaves=8.0, fractal="sum")
+    with pytest.raises(LoopLimitError, match="cut the loops"):
+        cellgl.render(r, 4096, 4096, tile_w=16, tile_h=4, samples=16)
+    assert np.isfinite(cellgl.render(cellgl.load_recipe("hammered"), 16, 16)["color"]).all()
+
+
+def test_pups_loop_budget_is_known_before_the_dispatch(ctx, monkeypatch):
+    """PUPs: the loop passes of a candidate grid are computed on the CPU; a grid past the driver's
+    limit is refused with a clear error."""
+    from cellgl.pups import gpu as pups_gpu
+
+    seen = []
+    orig = pups_gpu._check_budget
+    monkeypatch.setattr(pups_gpu, "_check_budget", lambda packed, g: seen.append(
+        pups_gpu.loop_budget(packed, g)) or orig(packed, g))
+    cellgl.render("pups-giraffe", 64, 64)
+    assert seen and 0 < max(seen) < pups_gpu.DRIVER_LOOP_LIMIT
+    monkeypatch.setattr(pups_gpu, "DRIVER_LOOP_LIMIT", max(seen))
+    with pytest.raises(ValueError, match="past the driver's limit"):
+        cellgl.render("pups-giraffe", 64, 64)
+
+
+@pytest.mark.parametrize("target", ["glsl", "hlsl", "wgsl"])
+def test_snippets_carry_and_document_the_bound(target):
+    """Exported snippets stop their searches at the same bound and say so in a comment."""
+    from cellgl.export import export
+
+    text = export("f1", target)
+    assert "6144" in text
+    assert "LOOP_BUDGET" in text and "llvmpipe" in text
