@@ -264,3 +264,52 @@ def test_osl_unsigned_arithmetic_is_bit_exact(tmp_path):
     k = np.arange(n * n).reshape(n, n) * 7919 + 13
     want = _uint_reference(k).astype(np.int64)
     assert np.count_nonzero(got != want) == 0, np.argwhere(got != want)[:5]
+
+
+def test_osl_basis_snippets_compile_and_give_cellulars_values(tmp_path):
+    """``cellgl export --basis ... --target osl``: every basis and dimension compiles with Cycles'
+    compiler; the shader's sockets are Vector (+ W in 4D) in and the basis values out; rendered by
+    Cycles, F1, F2 (3D) and the cell ID halves (2D) are those of ``cellgl.cellular``."""
+    _need_bpy()
+    import json
+
+    from cellgl import cellular
+
+    n, S, z = 24, 4.0, 0.37
+    wrap = {        # a shader around the exported functions that writes them into Color
+        ("f1f2", 3): "\nshader t(point Vector = point(0), output color Color = 0)\n{\n"
+        f"    cellgl_vec2 f = cellgl_f1f2(cellgl_vec3(Vector[0] * {S}, Vector[1] * {S}, {z}));\n"
+        "    Color = color(f.x, f.y, 0.0);\n}\n",
+        ("cellid", 2): "\nshader t(point Vector = point(0), output color Color = 0)\n{\n"
+        f"    int id = cellgl_cellid(cellgl_vec2(Vector[0] * {S}, Vector[1] * {S}));\n"
+        "    Color = color(float(id & 65535), float((id >> 16) & 65535), 0.0);\n}\n",
+    }
+    code = ("import json\nfrom cellgl.blender import import_bpy, osl_compile, compile_script_node\n"
+            "from cellgl.blender.scene import build_scene, set_script, render_scene\n"
+            "from cellgl.export.basis import BASES, basis_export\n"
+            "texts = {(b, d): basis_export(b, d, 'osl') for b in BASES for d in (2, 3, 4)}\n"
+            "for t in texts.values():\n    osl_compile(t)\n"
+            f"scene = build_scene('f1', {n})\n"
+            + "".join(f"t = texts[{k!r}]\nset_script(scene, t[:t.index('\\nshader cellgl_basis_')] + {w!r})\n"
+                      f"render_scene(scene, {str(tmp_path / (k[0] + '.exr'))!r})\n" for k, w in wrap.items())
+            + "bpy = import_bpy()\nmat = bpy.data.materials.new('m'); mat.use_nodes = True\nout = {}\n"
+            "for b, d in [('f1f2f3', 3), ('edge', 2), ('cellid', 4)]:\n"
+            "    node = mat.node_tree.nodes.new('ShaderNodeScript'); node.mode = 'INTERNAL'\n"
+            "    node.script = bpy.data.texts.new(b); node.script.write(texts[b, d])\n"
+            "    compile_script_node(node)\n"
+            "    out[f'{b}{d}'] = [[s.identifier for s in node.inputs], [s.identifier for s in node.outputs]]\n"
+            "print(json.dumps(out))\n")
+    proc = _python(code)
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    sockets = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert sockets == {"f1f2f33": [["Vector"], ["F1", "F2", "F3"]], "edge2": [["Vector"], ["Distance"]],
+                       "cellid4": [["Vector", "W"], ["IDLow", "IDHigh"]]}
+    c = (np.arange(n) + 0.5) / n
+    x, y = np.meshgrid(c * S, (1.0 - c) * S)               # EXR row 0 = top = Vector y near 1
+    px = _read_exr(tmp_path / "f1f2.exr")
+    want = cellular(np.stack([x.ravel(), y.ravel(), np.full(x.size, z)], 1), 2).F.reshape(n, n, 2)
+    np.testing.assert_allclose(px[..., :2], want, atol=1e-4)
+    px = _read_exr(tmp_path / "cellid.exr")
+    got = px[..., 0].astype(np.int64) + 65536 * px[..., 1].astype(np.int64)
+    ids = cellular(np.stack([x.ravel(), y.ravel()], 1), 1).id[:, 0].reshape(n, n).astype(np.int64)
+    assert np.mean(got == ids) > 0.98, np.mean(got == ids)     # (a sample on a cell border may flip)

@@ -372,6 +372,23 @@ def test_uniforms_header_reproduces_the_bake(ctx, preset):
     np.testing.assert_allclose(got, _bake(preset, W, H), atol=2e-6)
 
 
+@pytest.mark.parametrize("preset", ["f1", "flagstone", "hammered"])
+def test_uniforms_header_types_are_the_declared_types(preset):
+    """The header's type of each uniform is the type the snippet declares it with (vec4 values
+    such as axis_scale were listed as vec4[4], ivec4 warp_cell as ivec4[4])."""
+    text = export.export(preset, "glsl", uniforms=True)
+    code = snippet_code(text)
+    declared = {n: t + (f"[{a}]" if a else "")
+                for t, n, a in re.findall(r"^uniform (\w+) (cellgl_\w+)(?:\[(\d+)\])?;", code, re.M)}
+    listed = dict((n, t) for t, n in re.findall(r"^//   ([a-z]+[0-9]?(?:\[\d+\])?) (cellgl_\w+) = ", text, re.M))
+    assert declared, text[:400]
+    for name, typ in declared.items():
+        assert listed.get(name) == typ, (name, listed.get(name), typ)
+    assert listed["cellgl_warp_cell"] == "ivec4" and listed["cellgl_ramp"] == "vec4[16]"
+    types = {n: t for t, n, _ in export.texture_program(preset).uniforms}
+    assert (types["axis_scale"], types["warp_cell"], types["origin_cell"]) == ("vec4", "ivec4", "ivec4[8]")
+
+
 def test_wgsl_uniforms_refused():
     with pytest.raises(export.ExportError, match="--uniforms is not supported for WGSL"):
         export.export("flagstone", "wgsl", uniforms=True)

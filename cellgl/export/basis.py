@@ -150,7 +150,5 @@ def basis_export(basis: str, dim: int = 2, target: str = "glsl", **params) -> st
         ``metric``, ``distribution`` (poisson or jitter), ``density``, ``jitter``, ``seed``,
         ``min_points``, ``max_points``, ``minkowski_p``, as :func:`cellgl.cellular`.
     """
-    if check_target(target).dialect == "osl":
-        raise ExportError("--basis snippets are not available for --target osl: an OSL shader is a "
-                          "whole texture (export a recipe, e.g. cellgl export f1 --target osl)")
+    check_target(target)
     return export_program(basis_program(basis, dim, **params), target)

@@ -5,11 +5,12 @@ Passes, repeated until the text stops changing:
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
 2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
-   elements of constant arrays read at a literal index;
+   elements of constant arrays read at a literal index (or at any index, when all are equal);
 3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
    (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
-4. one-line functions inlined; parameters a function never reads dropped; ``out`` parameters
-   whose results every caller ignores turned into locals; struct fields never read removed;
+4. one-line functions inlined; parameters a function never reads dropped, and those every call
+   passes the same literal written into the body; ``out`` parameters whose results every caller
+   ignores turned into locals; struct fields never read (or only copied into themselves) removed;
 5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
 Then every declaration comes after what it uses, and the comments are tidied
@@ -27,6 +28,7 @@ from cellgl.export.reach import (
     _drop_fields,
     _drop_struct_args,
     _match,
+    _sig_end,
     _split_args,
     parse,
     reach,
@@ -54,10 +56,15 @@ def _array_elements(items: list[Item]) -> list[Item]:
                             for a, b in _split_args(toks, code, op, cl)]
     if not arrays:
         return items
-    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[(\d+)\]")
+    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[([^\[\]=;]*)\]")
 
     def elem(m):
         vals = arrays[m.group(1)]
+        if len(set(vals)) == 1 and re.fullmatch(r"[\w\s+\-*]*", m.group(2)) and "++" not in m.group(2) \
+                and "--" not in m.group(2):
+            return vals[0]                   # every element the same: any index reads it
+        if not m.group(2).strip().isdigit():
+            return m.group()
         k = int(m.group(2))
         return vals[k] if k < len(vals) and len(vals[k]) <= 40 else m.group()
 
@@ -124,6 +131,8 @@ def _inline_once(toks: list[Tok], small: dict, own: str) -> list[Tok] | None:
                     for a, b in _split_args(toks, code, n + 1, cl)]
             if len(args) != len(params):
                 return None
+            if any(not _simple(a) and re.search(rf"\b{p}\s*\.", expr) for p, a in zip(params, args)):
+                continue                      # (a + b).xy: keep the call (translators drop such parentheses)
             env = {p: (a if _simple(a) else f"({a})") for p, a in zip(params, args)}
             body = re.sub(r"\b[A-Za-z_]\w*\b", lambda m: env.get(m.group(), m.group()), expr)
             if not _simple(body):
@@ -164,6 +173,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
             items = fold(items, env)
         items = _inline(items, set(entries))
         items = _drop_unused_params(items, set(entries))
+        items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))
         items = _dead_fields(items)
         items = reach(items, entries)
@@ -201,6 +211,60 @@ def _drop_unused_params(items: list[Item], keep) -> list[Item]:
                 new.append(Item(x.kind, x.name, toks, x.comment))
             else:
                 return _drop_unused_params(new, keep)
+    return items
+
+
+_CONST_ARG = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?|[iu]?vec[234]\(\s*-?[\d.]+u?(?:\s*,\s*-?[\d.]+u?)*\s*\)")
+
+
+def _constant_args(items: list[Item], keep) -> list[Item]:
+    """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
+    becomes that literal in the body, and the argument goes."""
+    impure = {it.name for it in items if it.kind == "function"
+              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    for it in items:
+        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
+            continue
+        params, body = _params(it)
+        for k, words in enumerate(params):
+            if len(words) != 2 or words[0] in ("out", "inout"):
+                continue
+            name = words[1]
+            text = " ".join(body)
+            if re.search(rf"(\+\+|--)\s*{name}\b|\b{name}\s*(\.\s*\w+|\[[^\]]*\])?\s*([-+*/]?=(?!=)|\+\+|--)", text) \
+                    or any(re.search(rf"\b{f}\s*\([^;]*[(,]\s*{name}\s*[,)]", text) for f in impure if f in body):
+                continue
+            seen = set()
+            for x in items:
+                if x.kind != "function":
+                    continue
+                toks, code = x.toks, _code_idx(x.toks)
+                w = [toks[i].text for i in code]
+                for m in range(2 if x is it else 0, len(w) - 1):
+                    if w[m] == it.name and w[m + 1] == "(" and (m == 0 or w[m - 1] != "."):
+                        cl = _match(toks, code, m + 1)
+                        args = _split_args(toks, code, m + 1, cl)
+                        a, b = args[k] if k < len(args) else (0, 0)
+                        seen.add("".join(t.text for t in toks[code[a]:code[b - 1] + 1]).strip() if b else None)
+            if len(seen) != 1 or None in seen or not _CONST_ARG.fullmatch(next(iter(seen))):
+                continue
+            value = next(iter(seen))
+            value = f"({value})" if value.startswith("-") else value
+            takes = {it.name: (k, name)}
+            new = []
+            for x in items:
+                toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
+                if toks is None:
+                    break
+                if x is it:
+                    head = "".join(t.text for t in toks[:_sig_end(toks)])
+                    rest = tokenize("".join(t.text for t in toks[_sig_end(toks):]))
+                    rest = "".join(value if t.kind == "id" and t.text == name and (j == 0 or rest[j - 1].text != ".")
+                                   else t.text for j, t in enumerate(rest))
+                    toks = tokenize(head + rest)
+                new.append(Item(x.kind, x.name, toks, x.comment))
+            else:
+                return _constant_args(new, keep)
     return items
 
 
@@ -285,7 +349,9 @@ def _dead_fields(items: list[Item]) -> list[Item]:
             if any(re.search(rf"\b{g}\b", x) for x in stores for g in impure) \
                     and not all(_effects_unused(items, x, impure) for x in stores):
                 continue
-            if writes and not reads:
+            # reads that only feed stores to the same field (r.F[1] = r.F[0]) keep nothing alive
+            own = sum(len(re.findall(rf"(?<![\w.])(?:{names})\.{f}\b", x)) - 1 for x in stores)
+            if writes and len(reads) <= own:
                 dead.add(f)
         if not dead or len(dead) == len(fields):
             continue

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 
 from cellgl.export.reach import Item, _code_idx, _match, _stmt_end
-from cellgl.export.simplify import _arithmetic, _dead_local, _dead_store, _last_store, _split_declarators
+from cellgl.export.simplify import _arithmetic, _bare_block, _copy_local, _dead_local, _dead_store, _last_store, _split_declarators
 from cellgl.export.translate.tokens import Tok, tokenize
 
 __all__ = ["constants", "fold"]
@@ -147,6 +147,10 @@ def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
                 new = _last_store(toks, impure)
             if new is None:
                 new = _loop_range(toks, local)
+            if new is None:
+                new = _bare_block(toks)
+            if new is None:
+                new = _copy_local(toks, impure)
             if new is None:
                 break
             toks = new
@@ -401,10 +405,16 @@ def _loop_range(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
             continue
         body_end = _match(toks, code, cl + 1)
         body = w[cl + 2:body_end]
-        if body.count(";") != 1:
+        scan = len(body) - 3
+        if body[:2] == ["if", "("] and "else" not in body:
+            icl = _match(toks, code, cl + 3) - (cl + 2)       # the guard of an if that is the whole body
+            if body[icl + 1] != "{" or _match(toks, code, cl + 2 + icl + 1) != body_end - 1:
+                continue
+            scan = icl - 3
+        elif body.count(";") != 1:
             continue
         new_lo, new_hi, drop = lo, hi, []
-        for k in range(len(body) - 3):
+        for k in range(scan):
             seg = body[k:k + 4]
             if seg[0] in ("(", "&&") and seg[1] == var and seg[2] in (">=", "<") and isinstance(
                     _literal(env.get(seg[3], seg[3])), int) and body[k + 4] == "&&":

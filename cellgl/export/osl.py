@@ -98,6 +98,8 @@ def _quote(s: str) -> str:
 def osl_shader(prog, code: str) -> str:
     """The OSL text of texture program ``prog``: ``code`` (its specialised GLSL) translated,
     plus the ``shader`` block."""
+    if prog.entries:
+        return _basis_function_shader(prog, code)
     if not prog.filtered:
         return _basis_shader(prog, code)
     params = exposed_params(prog, code)
@@ -189,3 +191,58 @@ def _basis_shader(prog, code: str) -> str:
         "    F4 = f.w;",
         "}",
     ]) + "\n"
+
+
+#: a basis function's outputs: its GLSL return type -> [(OSL output, component)]
+_BASIS_OUTPUTS = {"float": None, "vec2": ["F1", "F2"], "vec3": ["F1", "F2", "F3"],
+                  "vec4": ["F1", "F2", "F3", "F4"]}
+
+
+def _basis_outputs(prog) -> list[str]:
+    key = prog.recipe["basis"]
+    ret = re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    if key == "cellid":
+        return ["IDLow", "IDHigh"]
+    return _BASIS_OUTPUTS[ret] or ["Distance" if key == "edge" else "F1"]
+
+
+def basis_signature(prog) -> str:
+    """The header's line for the shader of a basis snippet."""
+    key, dim = prog.recipe["basis"], int(prog.recipe["dim"])
+    outs = ", ".join(f"output float {o}" for o in _basis_outputs(prog))
+    return (f"shader cellgl_basis_{key}(point Vector{', float W' if dim == 4 else ''}, {outs}): "
+            f"{prog.signatures[0].split(': ', 1)[1].split('; ')[0]}, at Vector"
+            f"{' (with W)' if dim == 4 else ''} in cells"
+            + ("; the ID in two exact 16-bit halves" if key == "cellid" else ""))
+
+
+def _basis_function_shader(prog, code: str) -> str:
+    """The shader of a basis snippet (``cellgl export --basis f1f2 --dim 3 --target osl``):
+    ``Vector`` in cells (unconnected: the object's generated coordinates; a 4D basis adds ``W``),
+    outputs F1.. (``f1``..``f1f2f3f4``), ``Distance`` (``edge``) or ``CellID`` (``cellid``: the
+    nearest feature point's 32-bit ID as ``IDLow`` / ``IDHigh``, 16 bits each, exact)."""
+    key = prog.recipe["basis"]
+    dim = int(prog.recipe["dim"])
+    fn = prog.entries[0]
+    ret = re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    lib = to_osl(code)
+    arg = {2: "cellgl_vec2(q[0], q[1])", 3: "cellgl_vec3(q[0], q[1], q[2])",
+           4: "cellgl_vec4(q[0], q[1], q[2], W)"}[dim]
+    ins = ['    point Vector = point(0, 0, 0) [[ string label = "Vector", string help = "The sample '
+           'point in cells (unconnected: generated coordinates)" ]],']
+    if dim == 4:
+        ins.append('    float W = 0 [[ string label = "W", string help = "The fourth coordinate, in cells" ]],')
+    outs = _basis_outputs(prog)
+    if key == "cellid":
+        body = ["    int id = " + fn + "(" + arg + ");", "    IDLow = float(id & 65535);",
+                "    IDHigh = float((id >> 16) & 65535);"]
+    elif _BASIS_OUTPUTS[ret] is None:
+        body = [f"    {outs[0]} = {fn}({arg});"]
+    else:
+        body = [f"    cellgl_{ret} f = {fn}({arg});"] + [f"    {o} = f.{'xyzw'[k]};" for k, o in enumerate(outs)]
+    lines = [f"shader cellgl_basis_{key}("] + ins + [f"    output float {o} = 0," for o in outs]
+    lines[-1] = lines[-1].rstrip(",")
+    lines += [")", "{", "    point q = Vector;",
+              "    if (!isconnected(Vector) && !getattribute(\"geom:generated\", q))",
+              "        q = P;"] + body + ["}"]
+    return lib + "\n" + "\n".join(lines) + "\n"

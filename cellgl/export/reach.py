@@ -22,6 +22,7 @@ was (the pass is skipped), so the result is always the library's own code, only 
 from __future__ import annotations
 
 import re
+import textwrap
 from dataclasses import dataclass, field
 
 from cellgl.export.translate.tokens import Tok, tokenize
@@ -113,25 +114,41 @@ def _item(toks: list[Tok], comment: list[Tok]) -> Item:
     return Item("other", "", list(toks), comment)
 
 
-def tidy_comments(items: list[Item], lines: int = 3) -> list[Item]:
-    """A declaration keeps the first sentence of the comment right above it (when longer than
-    ``lines`` lines: its first line); comment lines and blank lines inside function bodies go
-    (trailing comments on code lines stay)."""
+def tidy_comments(items: list[Item], width: int = 100) -> list[Item]:
+    """A declaration keeps the first sentence of the comment right above it, wrapped to
+    ``width`` columns (a sentence longer than two lines: up to its first colon or semicolon);
+    comment lines and blank lines inside function bodies go (trailing comments on code lines
+    stay)."""
     out = []
     for it in items:
-        com = "".join(t.text for t in it.comment).strip("\n").split("\n") if it.comment else []
-        end = next((k for k, ln in enumerate(com) if ln.rstrip().endswith(".")), len(com) - 1)
-        com = com[:end + 1] if end < lines else com[:1]
-        if com and len(com) == 1 and not com[0].rstrip().endswith((".", ":")) and end >= 1:
-            com[0] = com[0].rstrip() + " ..."
-        comment = tokenize("\n".join(com) + "\n") if com else []
+        com = [ln.strip()[2:].strip() for ln in "".join(t.text for t in it.comment).split("\n")
+               if ln.strip().startswith("//")] if it.comment else []
+        text = " ".join(x for x in com if x)
+        m = re.search(r"(?<!\b[A-Z])(?<!\be\.g)(?<!\bi\.e)\.(?=\s+[A-Z`(]|\s*$)", text)
+        text = text[:m.end()] if m else text
+        if len(text) > 2 * (width - 3):
+            cut = _clause_end(text)
+            text = text[:cut].rstrip(" ,") + "." if 0 < cut < 2 * (width - 3) else text
+        comment = tokenize("\n".join("// " + ln for ln in textwrap.wrap(text, width - 3)) + "\n") if text else []
         toks = it.toks
         if it.kind == "function":
-            text = "".join(t.text for t in toks).split("\n")
-            text = [ln for ln in text if ln.strip() and not ln.strip().startswith("//")]
-            toks = tokenize("\n".join(text))
+            body = "".join(t.text for t in toks).split("\n")
+            body = [ln for ln in body if ln.strip() and not ln.strip().startswith("//")]
+            toks = tokenize("\n".join(body))
         out.append(Item(it.kind, it.name, toks, comment))
     return out
+
+
+def _clause_end(text: str) -> int:
+    """Where the first clause of ``text`` ends: its first colon or semicolon outside
+    parentheses (0: none)."""
+    depth = 0
+    for k, ch in enumerate(text):
+        depth += ch in "(["
+        depth -= ch in ")]"
+        if ch in ":;" and depth == 0 and text[k + 1:k + 2] == " ":
+            return k
+    return 0
 
 
 def unparse(items: list[Item]) -> str:

@@ -3,7 +3,9 @@
 Inside one function: dead locals (declared, never read), dead stores (a local only ever
 written; the last store to a local that is not read again), declarations split one per line,
 and arithmetic identities that hold exactly in float arithmetic (``x * 1.0``, ``x - 0.0``,
-``x += 0.0 * y;``, ``mix(a, b, 0.0)``). A right-hand side that calls a function with ``out``
+``x += 0.0 * y;``, ``mix(a, b, 0.0)``, ``vec4(0.0) + v``), members of literal vectors
+(``vec4(0.0, 0.0, 0.0, 1.0).w``), unsigned literal products, copies (``float y = x;``) and the
+bare blocks an unrolled loop leaves. A right-hand side that calls a function with ``out``
 parameters is never removed.
 """
 from __future__ import annotations
@@ -77,6 +79,72 @@ def _split_declarators(toks: list[Tok]) -> list[Tok] | None:
 
 
 _STORE = {"=", "+=", "-=", "*=", "/="}
+
+
+def _copy_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """``float y = (x);`` with x a local or parameter, neither x nor y assigned afterwards (nor
+    passed to a function with out parameters) -> every y becomes x."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 3):
+        if not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and w[n + 1] == "="):
+            continue
+        end = w.index(";", n)
+        src = [x for x in w[n + 2:end] if x not in "()"]
+        if len(src) != 1 or not re.fullmatch(r"[A-Za-z_]\w*", src[0]) or w[n + 2:end].count("(") != w[n + 2:end].count(")"):
+            continue
+        x, y = src[0], w[n]
+        if w.count(y) < 2 or any(f in impure for f in w[end:]) or any(w[k] in (x, y) and (k + 1 < len(w) and w[k + 1] in _ASSIGN_OPS or w[k - 1] in ("++", "--", "."))
+                                 for k in range(end + 1, len(w))):
+            continue
+        if any(w[k] in (x, y) and w[k + 1] in ("[", ".") and _assigned(toks, code, w, k) for k in range(end + 1, len(w) - 1)):
+            continue
+        start = code[n - 1]
+        while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+            start -= 1
+        if start > 0 and toks[start - 1].kind == "ws":
+            start -= 1
+        rest = [Tok("id", x) if t.kind == "id" and t.text == y and toks[code[end] + 1 + j - 1].text != "." else t
+                for j, t in enumerate(toks[code[end] + 1:])]
+        return toks[:start] + rest
+    return None
+
+
+_ASSIGN_OPS = {"=", "+=", "-=", "*=", "/=", "%=", "<<=", ">>=", "&=", "|=", "^=", "++", "--"}
+
+
+def _assigned(toks, code, w, k) -> bool:
+    """Whether ``w[k]`` followed by an index or a field is the target of an assignment."""
+    while k + 1 < len(w) and w[k + 1] in ("[", "."):
+        k = _match(toks, code, k + 1) if w[k + 1] == "[" else k + 2
+    return k + 1 < len(w) and w[k + 1] in _ASSIGN_OPS
+
+
+def _bare_block(toks: list[Tok]) -> list[Tok] | None:
+    """``{ stmts }`` standing alone (what an unrolled loop leaves) -> ``stmts``, one indent
+    less, when no name it declares is used outside it."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(1, len(w) - 1):
+        if w[n] != "{" or w[n - 1] not in (";", "{", "}"):
+            continue
+        m = _match(toks, code, n)
+        depth, declared = 0, set()
+        for k in range(n + 1, m):
+            depth += w[k] == "{"
+            depth -= w[k] == "}"
+            if depth == 0 and (w[k] in _DECL_TYPES or w[k].startswith("Cellgl")) and w[k - 1] in (";", "{", "}") \
+                    and re.fullmatch(r"[A-Za-z_]\w*", w[k + 1]):
+                declared.add(w[k + 1])
+        if any(x in declared for x in w[:n] + w[m + 1:]):
+            continue
+        before = "".join(t.text for t in toks[:code[n]])
+        inner = "".join(t.text for t in toks[code[n] + 1:code[m]])
+        after = "".join(t.text for t in toks[code[m] + 1:])
+        before = re.sub(r"\n[ \t]*$", "", before)
+        inner = re.sub(r"\n[ \t]*$", "", inner.replace("\n    ", "\n"))
+        return tokenize(before + inner + after)
+    return None
 
 
 def _dead_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
@@ -212,9 +280,41 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(r"(?<=[\w)\]])\s*[*/]\s*1\.0(?![\w.(\[])", "", text)
         text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
         text = re.sub(r"(?<=[\w)\]])\s*[-+]\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
+        text = _LITERAL_VEC.sub(_member, text)
+        # unsigned literals: uint(0) -> 0u, 0u * 1013u -> 0u, (0u + x) -> (x), (0u) -> 0u
+        text = re.sub(r"\buint\((\d+)\)", r"\1u", text)
+        text = re.sub(r"(?<![\w.*/%\s])(\s*)\b(\d+)u\s*\*\s*(\d+)u\b(?!\s*[*/%])",
+                      lambda m: f"{m.group(1)}{int(m.group(2)) * int(m.group(3)) % 2 ** 32}u", text)
+        text = re.sub(r"(?<![/%]\s)(?<![/%])\b0u\s*\*\s*(?:0x[0-9a-fA-F]+|\d+)u\b", "0u", text)
+        text = re.sub(r"(?<=[(=,])(\s*)0u\s*\+\s*", r"\1", text)
+        text = re.sub(r"(?<![\w\]])\((\d+u?|\d+\.\d+)\)", r"\1", text)
+        # a zero vector added: vec4(0.0, 0.0, 0.0, 0.0) + s -> s
+        text = re.sub(rf"(?<=[(=,])(\s*){_ZERO_VEC}\s*\+\s*", r"\1", text)
+        text = re.sub(rf"\s*\+\s*{_ZERO_VEC}(?=\s*[);,])", "", text)
+        text = re.sub(r"\n[ \t]*(\w+)\s*=\s*\(*\1\)*\s*;[^\n]*(?=\n)", "", text)   # x = x;
         if text == old:
             break
     return tokenize(text)
+
+
+_NUM = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?"
+_ZERO_VEC = r"\bi?vec[234]\(\s*(?:0\.0|0)(?:\s*,\s*(?:0\.0|0))*\s*\)"
+_LITERAL_VEC = re.compile(rf"\b(i?vec[234])\(\s*({_NUM}(?:\s*,\s*{_NUM})*)\s*\)\.([xyzw]+|[rgba]+)\b(?!\s*\()")
+
+
+def _member(m: re.Match) -> str:
+    """``vec4(0.0, 0.0, 0.0, 1.0).w`` -> ``1.0``; ``vec4(1.0).rgb`` -> ``vec3(1.0)``."""
+    args = [a.strip() for a in m.group(2).split(",")]
+    size = int(m.group(1)[-1])
+    if len(args) == 1:
+        args = args * size
+    if len(args) != size:
+        return m.group()
+    picked = [args["xyzw".find(c) if c in "xyzw" else "rgba".find(c)] for c in m.group(3)]
+    if len(picked) == 1:
+        return picked[0]
+    typ = m.group(1)[:-1] + str(len(picked))
+    return f"{typ}({picked[0]})" if len(set(picked)) == 1 else f"{typ}({', '.join(picked)})"
 
 
 def _top_sum(expr: str) -> bool:

@@ -207,7 +207,11 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
         entry.append("vec4 cellgl_texture3_filtered(vec3 p, vec3 dp): the same for a pixel spanning dp; any stage")
     entry = [_signature(e, target.dialect) for e in entry]
     command = prog.command or f"cellgl export {prog.title}"
-    if target.dialect == "osl":
+    if target.dialect == "osl" and prog.entries:
+        from cellgl.export.osl import basis_signature
+
+        entry = [basis_signature(prog)]
+    elif target.dialect == "osl":
         entry = [f"shader cellgl_{prog.title}(point Vector, <the recipe's values>, output color Color, "
                  "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
                  "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
@@ -240,6 +244,9 @@ def _how(target: Target, prog: Program) -> str:
     """The target's paragraph on where to paste and what to call, for this program's entry."""
     if not prog.entries:
         return target.how
+    if target.dialect == "osl":
+        return (f"Save as cellgl_basis_{prog.title}.osl and load it as a shader (Blender: Script node, "
+                "Cycles with Open Shading Language on; docs/engines.md).")
     entry = prog.entries[0]
     # a basis function has no fwidth: leave out what the texture's how says about it
     how = " ".join(x for x in re.split(r"(?<=\.) ", target.how)
@@ -282,9 +289,13 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
     recipe's values stay named constants (see :func:`export`)."""
     tgt = check_target(target)
-    code = library_code(prog, fold) if tgt.dialect != "osl" else specialised_code(prog)
+    # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
+    # snippet has none, so it takes the folded code like every other target
+    code = library_code(prog, fold) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
     head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
+    if d in ("glsl", "gles", "godot"):
+        code = _braces(code)
     if d == "glsl":
         body = code
     elif d == "gles":
@@ -294,11 +305,11 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     elif d == "godot":
         body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
     elif d == "hlsl":
-        body = translate.to_hlsl(code) + prog.tails.get("unity", _UNITY_WRAPPER)
+        body = _braces(translate.to_hlsl(code)) + prog.tails.get("unity", _UNITY_WRAPPER)
         if tgt.name == "unreal":
             body = "#pragma once\n\n" + body
     elif d == "wgsl":
-        body = translate.to_wgsl(code)
+        body = _braces(translate.to_wgsl(code))
     elif d == "osl":
         from cellgl.export.osl import osl_shader
 
@@ -306,6 +317,12 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     else:  # pragma: no cover
         raise AssertionError(d)
     return head + "\n" + body
+
+
+def _braces(text: str) -> str:
+    """The opening brace of a function, a loop nest or a block on the line that opens it (the
+    targets' own tails, e.g. Godot's fragment(), keep theirs)."""
+    return re.sub(r"(?m)^([ \t]*)((?![#/])\S[^\n]*[^\s;{},])\n\1\{$", r"\1\2 {", text)
 
 
 _SHADERTOY_MAIN = """
@@ -472,9 +489,9 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
         )
     # every uniform the values fill, the density map's included: a header line without its type
     # would leave a client that reads `type name = value` with that uniform at 0
-    decl_types = {n: t for t, n, _ in texture._uniform_decls("") + texture._uniform_decls("", True)}
-    ulist = [(decl_types[k[2:]] + (f"[{len(v)}]" if isinstance(v, (list, tuple)) else ""), k[2:], v)
-             for k, v in vals.items()]
+    # (the declared type: a vec4 value is a tuple too, but only a declared array is an array)
+    decl = {n: (t, bool(arr)) for t, n, arr in texture._uniform_decls("") + texture._uniform_decls("", True)}
+    ulist = [(decl[k[2:]][0] + (f"[{len(v)}]" if decl[k[2:]][1] else ""), k[2:], v) for k, v in vals.items()]
     return Program(files=["lib/texture.glsl"], defines=defines, params=params, entry=entry,
                    title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist, filtered=True)
 

@@ -11,24 +11,24 @@
 // to zero.
 vec4 cell_dims(vec4 v)
 {
-#if CELL_DIM < 4
-    v.w = 0.0;
-#endif
-#if CELL_DIM < 3
-    v.z = 0.0;
-#endif
+#if CELL_DIM == 2
+    return vec4(v.xy, 0.0, 0.0);
+#elif CELL_DIM == 3
+    return vec4(v.xyz, 0.0);
+#else
     return v;
+#endif
 }
 
 ivec4 cell_dims_i(ivec4 v)
 {
-#if CELL_DIM < 4
-    v.w = 0;
-#endif
-#if CELL_DIM < 3
-    v.z = 0;
-#endif
+#if CELL_DIM == 2
+    return ivec4(v.xy, 0, 0);
+#elif CELL_DIM == 3
+    return ivec4(v.xyz, 0);
+#else
     return v;
+#endif
 }
 
 // Internal-unit length of a single axis component x.
