@@ -190,11 +190,16 @@ def _params(it: Item):
     return [w[a:b] for a, b in _split_args(toks, code, op, cl)], w[cl + 1:]
 
 
+def _impure_functions(items: list[Item]) -> set[str]:
+    """The functions with an ``out`` or ``inout`` parameter (a call to them writes its arguments)."""
+    return {it.name for it in items if it.kind == "function"
+            and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+
+
 def _drop_unused_params(items: list[Item], keep) -> list[Item]:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
 
-    impure = {it.name for it in items if it.kind == "function"
-              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    impure = _impure_functions(items)
     for it in items:
         if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
             continue
@@ -220,8 +225,7 @@ _CONST_ARG = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?|[iu]?vec[234]\(\s*-
 def _constant_args(items: list[Item], keep) -> list[Item]:
     """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
     becomes that literal in the body, and the argument goes."""
-    impure = {it.name for it in items if it.kind == "function"
-              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    impure = _impure_functions(items)
     for it in items:
         if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
             continue
@@ -322,8 +326,7 @@ def _impure_arg(x: Item, toks: list[Tok], impure: set[str]) -> bool:
 def _dead_fields(items: list[Item]) -> list[Item]:
     """Remove struct fields that are written (``o.f = ...;``) but never read, and those writes."""
     code = "\n".join("".join(t.text for t in it.toks if t.kind != "comment") for it in items)
-    impure = {it.name for it in items if it.kind == "function"
-              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
+    impure = _impure_functions(items)
     out = items
     for st in [it for it in items if it.kind == "struct"]:
         body = "".join(t.text for t in st.toks if t.kind != "comment")
