@@ -29,6 +29,7 @@ import numpy as np
 
 from cellgl._version import __version__
 from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
+from cellgl.basis.reference import max_ring_default
 from cellgl.playground import variants as V
 from cellgl.recipes import is_pups, list_presets, load_recipe, render
 from cellgl.texture import params as P
@@ -170,7 +171,10 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
             "variants": vids, "key_macros": list(V.KEY_MACROS), "density_frozen": list(DENSITY_FROZEN),
             "consts": {"max_points": MAX_POINTS, "w96": W96_DENSITY_ADJUSTMENT,
                        "max_octaves": int(math.ceil(P.PARAMS_BY_NAME["octaves"].hi)),
-                       "ramp_keys": P.MAX_RAMP_KEYS, "mean_samples": MEAN_SAMPLES},
+                       "ramp_keys": P.MAX_RAMP_KEYS, "mean_samples": MEAN_SAMPLES,
+                       # CELL_MAX_RING of isotropic cells per dimension (the page scales it by
+                       # the stretch ratio as cellgl.basis.reference.max_ring_default does)
+                       "max_ring": {d: max_ring_default(d) for d in (2, 3, 4)}},
             "mean_points": _mean_points()}
     _write(out / "data" / "site.js", _js("cellglSite", site), atomic_path)
     for f in ("index.html", "playground.js", "playground.css"):

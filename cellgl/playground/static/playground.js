@@ -114,7 +114,7 @@
     const d = {
       CELL_DIM: v.dimension, CELL_N: neededN(v), CELL_METRIC: P.metric.choices.indexOf(v.metric),
       CELL_DIST: P.distribution.choices.indexOf(v.distribution),
-      CELL_MAX_RING: Math.min(64, { 2: 8, 3: 5, 4: 3 }[v.dimension] * Math.ceil(ratio - 1e-9)),
+      CELL_MAX_RING: Math.min(64, SITE.consts.max_ring[v.dimension] * Math.ceil(ratio - 1e-9)),
       CELL_PERIODIC: v.tileable ? 1 : 0, CELL_DENSITY_MAP: dmap, CELL_ORBIT: v.orbit_radius > 0 ? 1 : 0,
       CELL_ANISO: as.some((x) => x !== 1) ? 1 : 0, CELL_EDGE: v.c_edge !== 0 ? 1 : 0,
       CELL_SMOOTH: v.smoothness > 0 && (v.c_smooth !== 0 || v.cell_mix !== 0) ? (v.smooth === "polynomial" ? 2 : 1) : 0,
