@@ -56,6 +56,16 @@ class Item:
 # --------------------------------------------------------------------------------------------
 
 
+def _line_start(toks: list, start: int) -> int:
+    """Token index ``start`` moved back over the indentation before it and the line break before
+    that, so that cutting from there removes a whole statement line."""
+    while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
+        start -= 1
+    if start > 0 and toks[start - 1].kind == "ws":
+        start -= 1
+    return start
+
+
 def parse(text: str) -> list[Item]:
     """Split GLSL text into its top-level declarations (each with its leading comment block)."""
     toks = tokenize(text)
@@ -354,10 +364,7 @@ def _drop_local(toks: list[Tok], struct: str, pname: str) -> list[Tok]:
                 return toks
             end = w.index(";", n)
             start = code[n]
-            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
-                start -= 1
-            if start > 0 and toks[start - 1].kind == "ws":
-                start -= 1
+            start = _line_start(toks, start)
             return toks[:start] + toks[code[end] + 1:]
     return toks
 

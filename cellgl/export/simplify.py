@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 
-from cellgl.export.reach import _code_idx, _match, _split_args, _stmt_end
+from cellgl.export.reach import _code_idx, _line_start, _match, _split_args, _stmt_end
 from cellgl.export.translate.tokens import Tok, tokenize
 
 __all__ = []
@@ -41,10 +41,7 @@ def _dead_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
             if w.count(w[n]) != 1 or _top_comma(w[n:end]) or any(x in impure for x in w[n:end]):
                 continue
             start = code[n - 1]
-            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
-                start -= 1
-            if start > 0 and toks[start - 1].kind == "ws":
-                start -= 1
+            start = _line_start(toks, start)
             return toks[:start] + toks[code[end] + 1:]
     return None
 
@@ -100,10 +97,7 @@ def _copy_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
         if any(w[k] in (x, y) and w[k + 1] in ("[", ".") and _assigned(toks, code, w, k) for k in range(end + 1, len(w) - 1)):
             continue
         start = code[n - 1]
-        while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
-            start -= 1
-        if start > 0 and toks[start - 1].kind == "ws":
-            start -= 1
+        start = _line_start(toks, start)
         rest = [Tok("id", x) if t.kind == "id" and t.text == y and toks[code[end] + 1 + j - 1].text != "." else t
                 for j, t in enumerate(toks[code[end] + 1:])]
         return toks[:start] + rest
@@ -186,10 +180,7 @@ def _dead_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
         kill = set()
         for a, b in spans:
             start = code[a]
-            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
-                start -= 1
-            if start > 0 and toks[start - 1].kind == "ws":
-                start -= 1
+            start = _line_start(toks, start)
             kill.update(range(start, code[b] + 1))
         return [t for i, t in enumerate(out) if i not in kill]
     return None
@@ -243,10 +234,7 @@ def _last_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
             if _in_loop(toks, code, w, m, loops):
                 continue
             start = code[m]
-            while start > 0 and toks[start - 1].kind == "ws" and "\n" not in toks[start - 1].text:
-                start -= 1
-            if start > 0 and toks[start - 1].kind == "ws":
-                start -= 1
+            start = _line_start(toks, start)
             return toks[:start] + toks[code[end] + 1:]
     return None
 
