@@ -88,7 +88,7 @@ float entry(float x)
 
 
 def test_compiler_keeps_only_what_the_entry_reaches():
-    out = compiler.compile_glsl(_LIB, ["entry"], structs=[("P", "load")])
+    out = compiler.compile_glsl(_LIB, ["entry", "scale"], structs=[("P", "load")])
     assert "entry" in out and "scale" in out
     for gone in ("unused", "k_unused", "k_also_unused", "struct P", "load()", "t.mode", "dead",
                  "k_mode", "y = unused"):

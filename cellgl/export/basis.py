@@ -129,7 +129,7 @@ def _tails(key: str, dim: int, ret: str) -> dict:
         "godot": ("\nvoid fragment()\n{\n    vec2 uv = UV * 8.0;\n"
                   f"    {ret} v = cellgl_{key}({at.replace('T', '0.25 * TIME')});\n"
                   f"    COLOR = vec4(vec3({show}), 1.0);\n}}\n"),
-        "unity": (f"\n// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_{key}).\n"
+        "unity": (f"// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_{key}).\n"
                   f"void cellgl_{key}_float({hlsl_p} P, out {hlsl_ret} Out)\n{{\n"
                   f"    Out = cellgl_{key}(P);\n}}\n"),
     }

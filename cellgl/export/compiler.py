@@ -22,6 +22,7 @@ from __future__ import annotations
 import re
 
 from cellgl.export.fold import _literal, constants, fold
+from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
     Item,
     _code_idx,
@@ -172,6 +173,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
             items = _array_elements(items)
             items = fold(items, env)
         items = _inline(items, set(entries))
+        items = inline_once(items, set(entries) | {loader for _, loader in structs})
         items = _drop_unused_params(items, set(entries))
         items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))
@@ -179,7 +181,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
         items = reach(items, entries)
         if unparse(items) == before:
             break
-    return unparse(tidy_comments(_ordered(items)))
+    return unparse(tidy_comments(_ordered(items)), blank=False)
 
 
 def _params(it: Item):

@@ -124,7 +124,7 @@ def _item(toks: list[Tok], comment: list[Tok]) -> Item:
     return Item("other", "", list(toks), comment)
 
 
-def tidy_comments(items: list[Item], width: int = 100) -> list[Item]:
+def tidy_comments(items: list[Item], width: int = 110) -> list[Item]:
     """A declaration keeps the first sentence of the comment right above it, wrapped to
     ``width`` columns (a sentence longer than two lines: up to its first colon or semicolon);
     comment lines and blank lines inside function bodies go (trailing comments on code lines
@@ -161,16 +161,16 @@ def _clause_end(text: str) -> int:
     return 0
 
 
-def unparse(items: list[Item]) -> str:
+def unparse(items: list[Item], blank: bool = True) -> str:
     """The text of ``items``, one blank line between declarations (consecutive one-line
-    variables stay together)."""
+    variables stay together); ``blank=False``: none (a declaration's comment line sets it off)."""
     out: list[str] = []
     prev = None
     for it in items:
         body = it.text().strip("\n")
         one_line = it.kind == "variable" and "\n" not in "".join(t.text for t in it.toks).strip()
         if out:
-            out.append("\n" if (one_line and prev) else "\n\n")
+            out.append("\n" if (one_line and prev) or not blank else "\n\n")
         out.append(body)
         prev = one_line
     return "".join(out) + "\n"

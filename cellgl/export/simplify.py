@@ -277,7 +277,9 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(r"(?<=[(=,])(\s*)0u\s*\+\s*", r"\1", text)
         text = re.sub(r"(?<![\w\]])\((\d+u?|\d+\.\d+)\)", r"\1", text)
         # a zero vector added: vec4(0.0, 0.0, 0.0, 0.0) + s -> s
-        text = re.sub(rf"(?<=[(=,])(\s*){_ZERO_VEC}\s*\+\s*", r"\1", text)
+        text = re.sub(rf"(?<=[(=,])(\s*)\(?{_ZERO_VEC}\)?\s*\+\s*", r"\1", text)
+        # an empty last branch of an if chain (conditions without side effects)
+        text = re.sub(r"\}\s*else(?: if \((?:[^;{}()=]|[<>!=]=|\([^;{}()]*\))*\))? \{\s*\}(?!\s*else)", "}", text)
         text = re.sub(rf"\s*\+\s*{_ZERO_VEC}(?=\s*[);,])", "", text)
         text = re.sub(r"\n[ \t]*(\w+)\s*=\s*\(*\1\)*\s*;[^\n]*(?=\n)", "", text)   # x = x;
         if text == old:
@@ -336,3 +338,26 @@ def _mix(text: str) -> str:
             return _mix("".join(x.text for x in toks[:code[n]]) + "(" + inner.strip() + ")"
                         + "".join(x.text for x in toks[code[cl] + 1:]))
     return text
+
+
+def _merge_declaration(toks: list[Tok]) -> list[Tok] | None:
+    """``T x; ... x = e;`` (x unused between, in the same block) -> ``... T x = e;``."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 2):
+        if not ((w[n - 1] in _DECL_TYPES or w[n - 1].startswith("Cellgl")) and w[n - 2] in (";", "{", "}")
+                and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] == ";"):
+            continue
+        depth, k = 0, n + 2
+        while k < len(w) and w[k] != w[n] and depth >= 0:
+            depth += (w[k] == "{") - (w[k] == "}")
+            k += 1
+        if k + 1 >= len(w) or depth != 0 or w[k - 1] not in (";", "{", "}") or w[k + 1] != "=":
+            continue
+        end = _stmt_end(toks, code, w, k)
+        if w[n] in w[k + 2:end]:
+            continue
+        start = _line_start(toks, code[n - 1])
+        return (toks[:start] + toks[code[n + 1] + 1:code[k]] + [Tok("id", w[n - 1]), Tok("ws", " ")]
+                + toks[code[k]:])
+    return None

@@ -216,11 +216,11 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
                  "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
                  "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
     lines = [
-        f"cellgl {__version__}: {prog.kind} '{prog.title}' for {target.title}; exact (the same values as "
-        + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + ").",
-        f"Regenerate (do not edit): {command} --target {target.name}{' --uniforms' if uniforms else ''}",
+        f"cellgl {__version__} {prog.kind} '{prog.title}', exact (the same values as "
+        + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + "). Regenerate (do not edit): "
+        f"{command} --target {target.name}{' --uniforms' if uniforms else ''}",
         *("  " + e for e in entry),
-        *textwrap.wrap(_how(target, prog), 96),
+        *textwrap.wrap(f"{target.title}: {_how(target, prog)[:1].lower()}{_how(target, prog)[1:]}", 110),
     ]
     if uniforms and prog.uniforms:
         used = set(re.findall(r"\bcellgl_(\w+)", code)) if code else None
@@ -305,9 +305,9 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     elif d == "godot":
         body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
     elif d == "hlsl":
-        body = _braces(translate.to_hlsl(code)) + prog.tails.get("unity", _UNITY_WRAPPER)
+        body = _braces(translate.to_hlsl(code) + prog.tails.get("unity", _UNITY_WRAPPER).lstrip("\n"))
         if tgt.name == "unreal":
-            body = "#pragma once\n\n" + body
+            body = "#pragma once\n" + body
     elif d == "wgsl":
         body = _braces(translate.to_wgsl(code))
     elif d == "osl":
