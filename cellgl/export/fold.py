@@ -25,7 +25,9 @@ from cellgl.export.simplify import (
     _copy_local,
     _dead_local,
     _dead_store,
+    _forward_literal,
     _last_store,
+    _loop_variable,
     _merge_declaration,
     _split_declarators,
 )
@@ -162,6 +164,10 @@ def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
                 new = _copy_local(toks, impure)
             if new is None:
                 new = _merge_declaration(toks)
+            if new is None:
+                new = _forward_literal(toks)
+            if new is None:
+                new = _loop_variable(toks)
             if new is None:
                 break
             toks = new

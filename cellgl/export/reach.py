@@ -124,7 +124,7 @@ def _item(toks: list[Tok], comment: list[Tok]) -> Item:
     return Item("other", "", list(toks), comment)
 
 
-def tidy_comments(items: list[Item], width: int = 110) -> list[Item]:
+def tidy_comments(items: list[Item], width: int = 120) -> list[Item]:
     """A declaration keeps the first sentence of the comment right above it, wrapped to
     ``width`` columns (a sentence longer than two lines: up to its first colon or semicolon);
     comment lines and blank lines inside function bodies go (trailing comments on code lines
