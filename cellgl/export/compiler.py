@@ -34,6 +34,7 @@ from cellgl.export.reach import (
     parse,
     reach,
     scalarise,
+    strip_body_comments,
     tidy_comments,
     unparse,
 )
@@ -247,6 +248,8 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
     loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners,
     repeat until nothing changes."""
     items = reach([it for it in parse(text) if it.kind != "other"], entries)
+    items = [Item(it.kind, it.name, strip_body_comments(it.toks), it.comment) if it.kind == "function" else it
+             for it in items]
     for _ in range(8):
         before = unparse(items)
         for struct, loader in structs:

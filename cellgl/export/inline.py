@@ -17,13 +17,16 @@ The values do not change: the statements run in the same order on the same value
 from __future__ import annotations
 
 import re
+import textwrap
 
-from cellgl.export.reach import Item, _code_idx, _match, _split_args
+from cellgl.export.reach import Item, _code_idx, _match, _split_args, first_sentence
 from cellgl.export.translate.tokens import GLSL_TYPES, tokenize
 
 __all__ = ["inline_once"]
 
 _STARTS = (";", "{", "}")
+#: a body of this many lines keeps its function's comment where it is inlined
+_COMMENTED = 20
 _ASSIGN = r"(?:[-+*/%&|^]|<<|>>)?=(?!=)|\+\+|--"
 
 
@@ -257,6 +260,9 @@ def _inline_call(f: Item, x: Item, m: int, impure: set[str]):
         return "".join(outs)
 
     lines = [f"{t} {rename.get(p, p)} = {a};" for t, p, a in prelude]
+    if f.comment and body.count("\n") >= _COMMENTED:
+        # a long body keeps the first sentence of its function's comment
+        lines[:0] = ["// " + ln for ln in textwrap.wrap(first_sentence(_text(f.comment), 120), 116)]
     for ln in sub(body).split("\n"):
         if not ln.strip() or ln.strip().startswith("//"):
             continue
