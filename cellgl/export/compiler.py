@@ -22,6 +22,7 @@ from __future__ import annotations
 import re
 
 from cellgl.export.fold import _literal, constants, fold
+from cellgl.export.fields import constant_fields
 from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
     Item,
@@ -83,6 +84,11 @@ def _one_liners(items: list[Item], keep) -> dict[str, tuple[list[str], str]]:
     ``return`` (or straight-line stores to locals and parameters ending in one, substituted
     forward: ``x = abs(x); return x * x;`` -> ``x * x``)."""
     out = {}
+    calls: dict[str, int] = {}
+    for it in items:
+        if it.kind == "function":
+            for m in re.finditer(r"(?<![\w.])([A-Za-z_]\w*)\s*\(", "".join(t.text for t in it.toks)):
+                calls[m.group(1)] = calls.get(m.group(1), 0) + 1
     for it in items:
         if it.kind != "function" or it.name in keep:
             continue
@@ -101,6 +107,8 @@ def _one_liners(items: list[Item], keep) -> dict[str, tuple[list[str], str]]:
         ids = re.findall(r"\b[A-Za-z_]\w*\b", expr)
         if len(expr) > 72 or it.name in ids:
             continue
+        if len(expr) > 48 and calls.get(it.name, 0) > 2:       # (its definition counts once)
+            continue                          # a long expression stays one function where it is used often
         out[it.name] = (params, expr)
     return out
 
@@ -265,6 +273,8 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
         items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))
         items = _dead_fields(items)
+        if fold_constants:
+            items = constant_fields(items)
         items = reach(items, entries)
         if unparse(items) == before:
             break

@@ -319,7 +319,7 @@ def _balanced(e: str) -> bool:
 
 
 def _redundant_parens(text: str) -> str:
-    """``((e))`` -> ``(e)``, ``f((e))`` -> ``f(e)``, ``x = (e);`` -> ``x = e;``."""
+    """``((e))`` -> ``(e)``, ``f((e))`` -> ``f(e)``, ``x = (e);`` -> ``x = e;``, ``return (e);``."""
     toks = tokenize(text)
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
@@ -330,8 +330,8 @@ def _redundant_parens(text: str) -> str:
         cl = _match(toks, code, n)
         if w[n + 1] == "(" and _match(toks, code, n + 1) == cl - 1:
             drop |= {code[n + 1], code[cl - 1]}
-        elif n > 0 and w[n - 1] == "=" and cl + 1 < len(w) and w[cl + 1] == ";" and "?" not in w[n:cl] \
-                and "," not in w[n:cl]:
+        elif n > 0 and w[n - 1] in ("=", "return") and cl + 1 < len(w) and w[cl + 1] == ";" \
+                and "?" not in w[n:cl] and "," not in w[n:cl]:
             drop |= {code[n], code[cl]}
     if not drop:
         return text
