@@ -8,13 +8,17 @@ Passes, repeated until the text stops changing:
    elements of constant arrays read at a literal index (or at any index, when all are equal);
 3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
    (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
-4. one-line functions inlined; parameters a function never reads dropped, and those every call
-   passes the same literal written into the body; ``out`` parameters whose results every caller
-   ignores turned into locals; struct fields never read (or only copied into themselves) removed;
+4. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
+   into one), and every function called once (:mod:`cellgl.export.inline`); parameters a function
+   never reads dropped, and those every call passes the same literal written into the body;
+   ``out`` parameters whose results every caller ignores turned into locals; struct fields never
+   read (or only copied into themselves) removed, those holding one literal everywhere folded
+   (:mod:`cellgl.export.fields`);
 5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
-Then every declaration comes after what it uses, and the comments are tidied
-(:func:`cellgl.export.reach.tidy_comments`). The output is GLSL of the same subset, for the same
+Then every declaration comes after what it uses, the comments are tidied
+(:func:`cellgl.export.reach.tidy_comments`) and statements the library splits over lines are
+joined where they fit. The output is GLSL of the same subset, for the same
 translators (:mod:`cellgl.export.translate`).
 """
 from __future__ import annotations

@@ -34,10 +34,13 @@ def constant_fields(items: list[Item]) -> list[Item]:
             continue
         home, decl = locals_[0]
         var = decl.group(1)
+        stores: dict[str, list] = {}
+        for it in funcs:
+            for m in re.finditer(r"(?<![\w.])\w+\s*\.\s*(\w+)\s*(?:\[[^\]]*\])?\s*(?:[-+*/%&|^]|<<|>>)?=(?!=)",
+                                 texts[id(it)]):
+                stores.setdefault(m.group(1), []).append(it)
         for f in fields:
-            stores = [(it, m) for it in funcs for m in re.finditer(rf"(?<![\w.])\w+\s*\.\s*{f}\s*(\[[^\]]*\])?\s*"
-                                                                     r"([-+*/%&|^]|<<|>>)?=(?!=)", texts[id(it)])]
-            if len(stores) != 1 or stores[0][0] is not home:
+            if len(stores.get(f, ())) != 1 or stores[f][0] is not home:
                 continue
             text = texts[id(home)]
             m = re.search(rf"(?<=[;{{}}])(\s*){var}\s*\.\s*{f}\s*=\s*({_LIT})\s*;", text)

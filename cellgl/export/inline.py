@@ -38,9 +38,10 @@ def _is_type(word: str) -> bool:
     return word in GLSL_TYPES or word.startswith("Cellgl")
 
 
-def _calls(items: list[Item], name: str):
-    """(item, code position) of every call of ``name``."""
-    out = []
+def _calls(items: list[Item]) -> dict[str, list]:
+    """{function name: [(item, code position) of every call]}."""
+    names = {it.name for it in items if it.kind == "function"}
+    out: dict[str, list] = {}
     for x in items:
         if x.kind != "function":
             continue
@@ -48,8 +49,8 @@ def _calls(items: list[Item], name: str):
         w = [toks[i].text for i in code]
         first = w.index("(") - 1 if "(" in w else -1
         for m in range(len(w) - 1):
-            if w[m] == name and w[m + 1] == "(" and (m == 0 or w[m - 1] != ".") and not (x.name == name and m == first):
-                out.append((x, m))
+            if w[m] in names and w[m + 1] == "(" and (m == 0 or w[m - 1] != ".") and m != first:
+                out.setdefault(w[m], []).append((x, m))
     return out
 
 
@@ -59,10 +60,11 @@ def inline_once(items: list[Item], keep) -> list[Item]:
     for it in items:
         count[it.name] = count.get(it.name, 0) + 1
     impure = _out_positions(items)
+    calls = _calls(items)
     for f in items:
         if f.kind != "function" or f.name in keep or count[f.name] != 1:
             continue
-        sites = _calls(items, f.name)
+        sites = calls.get(f.name, [])
         if len(sites) != 1 or sites[0][0] is f:
             continue
         x, m = sites[0]
