@@ -142,9 +142,9 @@ def tidy_comments(items: list[Item], width: int = 120) -> list[Item]:
 
 def strip_body_comments(toks, keep: bool = False):
     """A function's tokens without blank lines and (``keep=False``) comment lines."""
-    body = "".join(t.text for t in toks).split("\n")
-    body = [ln for ln in body if ln.strip() and (keep or not ln.strip().startswith("//"))]
-    return tokenize("\n".join(body))
+    lines = "".join(t.text for t in toks).split("\n")
+    body = [ln for ln in lines if ln.strip() and (keep or not ln.strip().startswith("//"))]
+    return toks if len(body) == len(lines) else tokenize("\n".join(body))
 
 
 def first_sentence(comment: str, width: int) -> str:

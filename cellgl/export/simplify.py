@@ -320,6 +320,8 @@ def _balanced(e: str) -> bool:
 
 def _redundant_parens(text: str) -> str:
     """``((e))`` -> ``(e)``, ``f((e))`` -> ``f(e)``, ``x = (e);`` -> ``x = e;``, ``return (e);``."""
+    if not re.search(r"\(\s*\(|(?:=|\breturn)\s*\(", text):
+        return text
     toks = tokenize(text)
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
