@@ -27,6 +27,8 @@ __all__ = ["inline_once"]
 _STARTS = (";", "{", "}")
 #: a body of this many lines keeps its function's comment where it is inlined
 _COMMENTED = 20
+#: functions that stay functions where called once: the hash, the first thing a reader looks for
+KEEP = ("cellgl_hash_u32",)
 _ASSIGN = r"(?:[-+*/%&|^]|<<|>>)?=(?!=)|\+\+|--"
 
 
@@ -62,7 +64,7 @@ def inline_once(items: list[Item], keep) -> list[Item]:
     impure = _out_positions(items)
     calls = _calls(items)
     for f in items:
-        if f.kind != "function" or f.name in keep or count[f.name] != 1:
+        if f.kind != "function" or f.name in keep or f.name in KEEP or count[f.name] != 1:
             continue
         sites = calls.get(f.name, [])
         if len(sites) != 1 or sites[0][0] is f:
