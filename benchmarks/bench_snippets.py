@@ -6,8 +6,8 @@ Each snippet's GLSL is pasted into a fragment shader that covers an S x S target
 a compact *approximate* 3x3 jitter F1 written for this benchmark (one point per cell, the 9
 cells around the sample, no pruning, no exactness guarantee: the usual shader-toy cellular
 noise). ``ratio`` = (snippet Mpx/s) / (compact Mpx/s): 1.0 is as fast as the approximate
-snippet; it is the median of the per-round ratios (each round renders every row once, one
-after the other), which a change of load on a shared machine moves far less than the rates.
+snippet. The compact snippet is rendered before every row (so its median time samples the load
+over the whole run, as the rows' do).
 
 Rows: the basis snippets (``cellgl export --basis ...``: f1 with the jitter and the poisson
 distribution, f1f2, edge), F1 texture recipes with both distributions, and every exportable
@@ -28,7 +28,9 @@ length depends on the search's answer, edge distance or smooth F1, it is not eve
 Timings are medians of ``--repeats`` renders after one warm-up render (which compiles), the rows
 interleaved so that a change of load on a shared machine hits every row alike. With
 ``--compare``, each snippet that has an older version gets a column ``new / old``: the median of
-the per-round speed ratios of the two. The load average is printed with the table.
+the per-round speed ratios of the two, rendered one right after the other. The load average is
+printed with the table: above about 2 on two cores, short renders (small ``--size``, fast rows)
+wait for the scheduler and the ratios of fast rows drift by 20% or more.
 """
 from __future__ import annotations
 
@@ -150,14 +152,16 @@ def rows(names: list[str], compare: str | None = None, stub: bool = False):
 
 
 def ratios(times: list[list[float]], old: list[bool]) -> list[tuple[float, float | None]]:
-    """Per row: the median of its per-round speed ratios to row 0 (the compact snippet) and, for a
-    row followed by its older version (``old[k + 1]``), to that version (else None)."""
+    """Per row: its median time over the compact snippet's (row 0), and, for a row followed by
+    its older version (``old[k + 1]``), the median per-round speed ratio to that version, the
+    two rendered one after the other (else None)."""
+    ref = statistics.median(times[0])
     out = []
     for k, t in enumerate(times):
         vs_old = None
         if k + 1 < len(times) and old[k + 1] and not old[k]:
             vs_old = statistics.median(o / n for o, n in zip(times[k + 1], t))
-        out.append((statistics.median(c / x for c, x in zip(times[0], t)), vs_old))
+        out.append((ref / statistics.median(t), vs_old))
     return out
 
 
@@ -193,12 +197,19 @@ def main(argv=None) -> int:
 
     for _, _, vao in progs:             # warm-up: compiles the shader
         render(vao)
+    def timed(vao):
+        t0 = time.perf_counter()
+        render(vao)
+        return time.perf_counter() - t0
+
+    # The compact snippet is rendered before every row, not once per round, so that its time
+    # (the median of all those renders) samples the load over the whole run like the rows do.
     times = [[] for _ in progs]
     for _ in range(args.repeats):
         for k, (_, _, vao) in enumerate(progs):
-            t0 = time.perf_counter()
-            render(vao)
-            times[k].append(time.perf_counter() - t0)
+            if k:
+                times[0].append(timed(progs[0][2]))
+                times[k].append(timed(vao))
     med = [statistics.median(t) for t in times]
     rel = ratios(times, [old for _, _, old in table])
     load = os.getloadavg()
