@@ -255,10 +255,10 @@ def _inline_constants(items: list[Item], env: dict[str, str]) -> list[Item]:
     return out
 
 
-def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) -> str:
+def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> str:
     """The middle end: keep what ``entries`` reach, scalarise ``structs`` (``[(struct,
-    loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners,
-    repeat until nothing changes."""
+    loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners
+    and functions called once (but those named in ``keep``), repeat until nothing changes."""
     items = reach([it for it in parse(text) if it.kind != "other"], entries)
     items = [Item(it.kind, it.name, strip_body_comments(it.toks), it.comment) if it.kind == "function" else it
              for it in items]
@@ -272,7 +272,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
             items = _array_elements(items)
             items = fold(items, env)
         items = _inline(items, set(entries))
-        items = inline_once(items, set(entries) | {loader for _, loader in structs})
+        items = inline_once(items, set(entries) | set(keep) | {loader for _, loader in structs})
         items = _drop_unused_params(items, set(entries))
         items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))

@@ -30,6 +30,7 @@ from cellgl.export.simplify import (
     _loop_variable,
     _merge_declaration,
     _split_declarators,
+    _store_into_next,
 )
 from cellgl.export.translate.tokens import Tok, tokenize
 
@@ -168,6 +169,8 @@ def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
                 new = _forward_literal(toks)
             if new is None:
                 new = _loop_variable(toks)
+            if new is None:
+                new = _store_into_next(toks, impure)
             if new is None:
                 break
             toks = new

@@ -266,7 +266,7 @@ def _inline_call(f: Item, x: Item, m: int, impure: set[str]):
     lines = [f"{t} {rename.get(p, p)} = {a};" for t, p, a in prelude]
     if f.comment and body.count("\n") >= _COMMENTED:
         # a long body keeps the first sentence of its function's comment
-        lines[:0] = ["// " + ln for ln in textwrap.wrap(first_sentence(_text(f.comment), 120), 116)]
+        lines[:0] = ["// " + ln for ln in textwrap.wrap(first_sentence(_text(f.comment), 116), 113)]
     for ln in sub(body).split("\n"):
         if not ln.strip() or ln.strip().startswith("//"):
             continue

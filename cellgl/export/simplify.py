@@ -274,7 +274,7 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
                       lambda m: (f"{m.group(1)} * {m.group(1)}" if re.fullmatch(r"[\w.\[\]]+", m.group(1))
                                  else f"({_unwrap(m.group(1))}) * ({_unwrap(m.group(1))})"), text)
         # a product in a sum needs no parentheses
-        text = re.sub(r"(?<=[-+(=,] )\(([\w.\[\]]+ \* [\w.\[\]]+)\)(?=\s*[-+);,])", r"\1", text)
+        text = re.sub(r"(?:(?<=[-+(=,] )|(?<=\())\(([\w.\[\]]+ \* [\w.\[\]]+)\)(?=\s*[-+);,])", r"\1", text)
         text = _redundant_parens(text)
         # a comparison of integer literals (sums of them)
         text = re.sub(r"(?<=[=(!] )(\(?)(-?\d+(?: [-+*] \d+)*) (<=|>=|<|>|==|!=) (-?\d+(?: [-+*] \d+)*)\)?(?=\s*[;),&|])",
@@ -320,7 +320,7 @@ def _balanced(e: str) -> bool:
 
 def _redundant_parens(text: str) -> str:
     """``((e))`` -> ``(e)``, ``f((e))`` -> ``f(e)``, ``x = (e);`` -> ``x = e;``, ``return (e);``."""
-    if not re.search(r"\(\s*\(|(?:=|\breturn)\s*\(", text):
+    if not re.search(r"[(=,]\s*\(|\breturn\s*\(", text):
         return text
     toks = tokenize(text)
     code = _code_idx(toks)
@@ -335,6 +335,9 @@ def _redundant_parens(text: str) -> str:
         elif n > 0 and w[n - 1] in ("=", "return") and cl + 1 < len(w) and w[cl + 1] == ";" \
                 and "?" not in w[n:cl] and "," not in w[n:cl]:
             drop |= {code[n], code[cl]}
+        elif n > 0 and w[n - 1] in ("(", "=", ",", "return") and cl + 1 < len(w) and w[cl + 1] in ("+", "-") \
+                and not _top_level_ops("".join(w[n + 1:cl])) - {"+", "-", "*", "/"}:
+            drop |= {code[n], code[cl]}           # (a + b) + c: the left operand of a sum
     if not drop:
         return text
     return "".join(t.text for i, t in enumerate(toks) if i not in drop)
@@ -493,3 +496,49 @@ def _loop_variable(toks: list[Tok]) -> list[Tok] | None:
                 return (toks[:start] + toks[code[d_end] + 1:code[f + 1] + 1] + tokenize(decl)
                         + toks[code[f + 2]:])
     return None
+
+
+def _store_into_next(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);`` (a a name, or y read
+    without a field or index)."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 6):
+        if not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n])
+                and w[n + 1] == "="):
+            continue
+        end = _stmt_end(toks, code, w, n)
+        y = w[n]
+        if end + 3 >= len(w) or w[end + 1] != y or w[end + 2] != "=" or y in w[n + 2:end]:
+            continue
+        end2 = _stmt_end(toks, code, w, end + 1)
+        rhs = w[end + 3:end2]
+        if rhs.count(y) != 1 or any(x in impure for x in w[n:end2]):
+            continue
+        k = end + 3 + rhs.index(y)
+        a = _unwrap("".join(t.text for t in toks[code[n + 2]:code[end]]).strip())
+        simple = re.fullmatch(r"[A-Za-z_]\w*|[\w.]+\([^()]*\)", a) is not None
+        if not simple and (w[k + 1] in (".", "[") or k > 0 and w[k - 1] == "."):
+            continue
+        top = _top_level_ops(a)
+        left, right = w[k - 1], w[k + 1]
+        bare = simple or (left in ("(", ",", "=") and right in (")", ",", ";")) \
+            or (not top - {"*", "/"} and left in ("(", ",", "=", "+") and right in (")", ",", ";", "+", "-")) \
+            or (not top - {"+", "-", "*", "/"} and left in ("(", ",", "=") and right in ("+", "-"))
+        rhs_text = ("".join(t.text for t in toks[code[end + 3]:code[k]]) + (a if bare else f"({a})")
+                    + "".join(t.text for t in toks[code[k] + 1:code[end2]]))
+        start = _line_start(toks, code[end + 1])
+        return toks[:code[n + 2]] + tokenize(rhs_text.strip()) + toks[code[end]:start] + toks[code[end2] + 1:]
+    return None
+
+
+def _top_level_ops(e: str) -> set[str]:
+    depth, ops = 0, set()
+    for t in tokenize(e):
+        if t.text in "([":
+            depth += 1
+        elif t.text in ")]":
+            depth -= 1
+        elif depth == 0 and t.kind == "op" and t.text != ".":
+            ops.add(t.text)
+    return ops

@@ -168,8 +168,10 @@ def entry_points(prog: Program) -> list[str]:
 
 
 def _library_code(prog: Program, fold: bool) -> str:
+    # a texture keeps its search one function (benchmarks/bench_snippets.py --stub-search swaps
+    # its body); a basis snippet is little more than the search, written into its entry point
     text = compiler.compile_glsl(specialised_code(prog), entry_points(prog), structs=_CONSTANT_STRUCTS,
-                                 fold_constants=fold)
+                                 fold_constants=fold, keep=() if prog.entries else ("cellgl_search_budget",))
     return _tidy(text)
 
 
