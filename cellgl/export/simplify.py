@@ -335,9 +335,10 @@ def _redundant_parens(text: str) -> str:
         elif n > 0 and w[n - 1] in ("=", "return") and cl + 1 < len(w) and w[cl + 1] == ";" \
                 and "?" not in w[n:cl] and "," not in w[n:cl]:
             drop |= {code[n], code[cl]}
-        elif n > 0 and w[n - 1] in ("(", "=", ",", "return") and cl + 1 < len(w) and w[cl + 1] in ("+", "-") \
+        elif n > 0 and w[n - 1] in ("(", "=", ",", "return") and cl + 1 < len(w) \
+                and w[cl + 1] in ("+", "-", "<", ">", "<=", ">=", "==", "!=") \
                 and not _top_level_ops("".join(w[n + 1:cl])) - {"+", "-", "*", "/"}:
-            drop |= {code[n], code[cl]}           # (a + b) + c: the left operand of a sum
+            drop |= {code[n], code[cl]}           # (a + b) + c, (a * b) >= c: arithmetic on the left
     if not drop:
         return text
     return "".join(t.text for i, t in enumerate(toks) if i not in drop)
