@@ -377,16 +377,28 @@ vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
     // x and y from the two halves of u; z and w from a second word derived from
     // u; the ID from a third (computed only when a caller uses it).
     id = cell_hash_u32(u ^ 0x5bd1e995u);
-    f.x = cell_u16(u >> 16);
-    f.y = cell_u16(u & 0xffffu);
 #if CELL_DIM >= 3
     uint v = (u ^ (u >> 15)) * 0x2c1b3c6du;
     v ^= v >> 12;
+#endif
+#if CELL_DIST == CELL_DIST_JITTER
+    // 0.5 + jitter (cell_u16(k) - 0.5) for the 16-bit values k (-0.5 on unused
+    // axes), the same bits in two operations fewer per axis: cell_u16(k) - 0.5
+    // is (k - 32767.5) / 65536 exactly, and a power-of-two scale commutes with
+    // rounding.
+    vec4 k = vec4(float(int(u >> 16)), float(int(u & 0xffffu)), -0.5, -0.5);
+#if CELL_DIM >= 3
+    k.z = float(int(v >> 16));
+    k.w = float(int(v & 0xffffu));
+#endif
+    f = 0.5 + (p.jitter * (1.0 / 65536.0)) * (k - 32767.5);
+#else
+    f.x = cell_u16(u >> 16);
+    f.y = cell_u16(u & 0xffffu);
+#if CELL_DIM >= 3
     f.z = cell_u16(v >> 16);
     f.w = cell_u16(v & 0xffffu);
 #endif
-#if CELL_DIST == CELL_DIST_JITTER
-    f = 0.5 + p.jitter * (f - 0.5);
 #endif
 #endif
 #if CELL_ORBIT
