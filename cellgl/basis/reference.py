@@ -242,11 +242,16 @@ def _block_offsets(dim: int):
     return offs
 
 
-def _ring1_side(f: np.ndarray, dim: int) -> np.ndarray:
+#: distributions whose ring 1 the GPU visits whole, in the table's own order (CELL_RING1_PRUNE 0)
+_RING1_UNPRUNED = (Distribution.JITTER,)
+
+
+def _ring1_side(f: np.ndarray, p: Params) -> np.ndarray:
     """Per sample and axis, the sign that maps :func:`_block_offsets` onto the lattice: +1 where
-    the (float32, as on the GPU) fraction is below 0.5 (the near face is below), else -1."""
+    the (float32, as on the GPU) fraction is below 0.5 (the near face is below), else -1; all +1
+    in 4D and for the distributions the GPU does not prune in ring 1 (CELL_RING1_PRUNE)."""
     side = np.where(f.astype(np.float32) < 0.5, 1, -1).astype(np.int64)
-    if dim > 3:
+    if p.dim > 3 or p.distribution in _RING1_UNPRUNED:
         side[:] = 1
     side[:, 3] = 1
     return side
@@ -342,7 +347,7 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
 
     every = np.arange(N)
     visit(every, (0, 0, 0, 0))
-    side = _ring1_side(f, p.dim)
+    side = _ring1_side(f, p)
     for o in _block_offsets(p.dim):
         visit(every, np.asarray(o, dtype=np.int64) * side)
 

@@ -202,8 +202,9 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     }
 }
 
-// _cell_visit for a cell of ring 1, unless CELL_RING1_PRUNE prunes it or the
-// loop budget is spent (then `spent` is set).
+// _cell_visit for a cell of ring 1, unless it is pruned (CELL_RING1_PRUNE: no
+// point in it can be closer than F_n) or the loop budget is spent (then
+// `spent` is set).
 void _cell_visit_ring1(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p, inout bool spent)
 {
 #if CELL_RING1_PRUNE
@@ -293,8 +294,12 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         _cell_visit(r, cell, f, ivec4(0), p);
     }
 #if CELL_DIM <= 3
+#if CELL_RING1_PRUNE
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
+#else
+    const ivec4 side = ivec4(1);   // no pruning: the order does not matter
+#endif
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
         _cell_visit_ring1(r, cell, f, _cell_ring1[t] * side, p, spent);
     }

@@ -12,7 +12,8 @@
 // CELL_DENSITY_MAP (CELL_DMAP_NONE, _RAMP, _RADIAL, _IMAGE: spatially varying
 // density, poisson only; cellgl/basis/density.py), CELL_ORBIT (1: loopable
 // animation, the points orbit inside their cells; cell_orbit), CELL_ANISO (1:
-// anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl).
+// anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl),
+// CELL_JITTER_UNIFORM (1: jitter is a uniform; cell_next_point).
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
@@ -22,6 +23,11 @@
 #endif
 #ifndef CELL_ANISO
 #define CELL_ANISO 0
+#endif
+#ifndef CELL_JITTER_UNIFORM
+// 1: jitter is a run-time value (a uniform), not a constant the compiler folds
+// (cell_next_point picks the cheaper form; both give the same bits).
+#define CELL_JITTER_UNIFORM 0
 #endif
 #define CELL_DENSITY_LEVELS 16
 
@@ -381,11 +387,11 @@ vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
     uint v = (u ^ (u >> 15)) * 0x2c1b3c6du;
     v ^= v >> 12;
 #endif
-#if CELL_DIST == CELL_DIST_JITTER
+#if CELL_DIST == CELL_DIST_JITTER && CELL_JITTER_UNIFORM
     // 0.5 + jitter (cell_u16(k) - 0.5) for the 16-bit values k (-0.5 on unused
-    // axes), the same bits in two operations fewer per axis: cell_u16(k) - 0.5
-    // is (k - 32767.5) / 65536 exactly, and a power-of-two scale commutes with
-    // rounding.
+    // axes), the same bits in two operations fewer per axis while jitter is a
+    // run-time value: cell_u16(k) - 0.5 is (k - 32767.5) / 65536 exactly, and
+    // a power-of-two scale commutes with rounding.
     vec4 k = vec4(float(int(u >> 16)), float(int(u & 0xffffu)), -0.5, -0.5);
 #if CELL_DIM >= 3
     k.z = float(int(v >> 16));
@@ -398,6 +404,10 @@ vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
 #if CELL_DIM >= 3
     f.z = cell_u16(v >> 16);
     f.w = cell_u16(v & 0xffffu);
+#endif
+#if CELL_DIST == CELL_DIST_JITTER
+    // (A constant jitter of 1 may fold away: 0.5 + (x - 0.5) is x exactly here.)
+    f = 0.5 + p.jitter * (f - 0.5);
 #endif
 #endif
 #endif
