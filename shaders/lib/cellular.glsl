@@ -88,14 +88,13 @@ const ivec4 _cell_ring1[8] = ivec4[8](
 #elif CELL_DIM == 3
 #define CELL_RING1_CELLS 26
 const ivec4 _cell_ring1[26] = ivec4[26](
-    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0),
-    ivec4(-1, -1, 0, 0), ivec4(-1, 0, -1, 0), ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0),
-    ivec4(0, 0, 1, 0), ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0),
-    ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0), ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0),
-    ivec4(1, -1, 0, 0), ivec4(1, 0, -1, 0),
-    ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0),
-    ivec4(0, 1, 1, 0), ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0),
-    ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0), ivec4(1, 1, -1, 0), ivec4(1, 1, 1, 0)
+    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0), ivec4(-1, -1, 0, 0),
+    ivec4(-1, 0, -1, 0), ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0), ivec4(0, 0, 1, 0),
+    ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0), ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0),
+    ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0), ivec4(1, -1, 0, 0), ivec4(1, 0, -1, 0),
+    ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0), ivec4(0, 1, 1, 0),
+    ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0), ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0),
+    ivec4(1, 1, -1, 0), ivec4(1, 1, 1, 0)
 );
 #endif
 
@@ -202,25 +201,6 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     }
 }
 
-// _cell_visit for a cell of ring 1, unless it is pruned (CELL_RING1_PRUNE: no
-// point in it can be closer than F_n) or the loop budget is spent (then
-// `spent` is set).
-void _cell_visit_ring1(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p, inout bool spent)
-{
-#if CELL_RING1_PRUNE
-    bool near = _cell_box_distance(o, f, p) < r.F[CELL_N - 1];
-#else
-    bool near = true;
-#endif
-    if (near) {
-        if (cell_budget_spent(r.loops)) {
-            spent = true;
-        } else {
-            _cell_visit(r, cell, f, o, p);
-        }
-    }
-}
-
 // Internal-unit lower bound on the distance to any point beyond `rings` full
 // rings of cells around the sample's: such a point's offset is +-(rings + 1)
 // on some axis a, so it is at least rings + (distance to the nearer face of
@@ -293,15 +273,27 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     if (!spent) {
         _cell_visit(r, cell, f, ivec4(0), p);
     }
-#if CELL_DIM <= 3
-#if CELL_RING1_PRUNE
+#if CELL_DIM <= 3 && CELL_RING1_PRUNE
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
-#else
-    const ivec4 side = ivec4(1);   // no pruning: the order does not matter
-#endif
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        _cell_visit_ring1(r, cell, f, _cell_ring1[t] * side, p, spent);
+        ivec4 o = _cell_ring1[t] * side;
+        if (_cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+            if (cell_budget_spent(r.loops)) {
+                spent = true;
+            } else {
+                _cell_visit(r, cell, f, o, p);
+            }
+        }
+    }
+#elif CELL_DIM <= 3
+    for (int t = 0; t < CELL_RING1_CELLS; t++) {
+        ivec4 o = _cell_ring1[t];      // no pruning: the order does not matter
+        if (cell_budget_spent(r.loops)) {
+            spent = true;
+        } else {
+            _cell_visit(r, cell, f, o, p);
+        }
     }
 #else
     for (int x = -1; x <= 1; x++)
@@ -309,8 +301,16 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     for (int z = -1; z <= 1; z++)
     for (int w = -1; w <= 1; w++) {
         ivec4 o = ivec4(x, y, z, w);
+#if CELL_RING1_PRUNE
+        if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+#else
         if (any(notEqual(o, ivec4(0)))) {
-            _cell_visit_ring1(r, cell, f, o, p, spent);
+#endif
+            if (cell_budget_spent(r.loops)) {
+                spent = true;
+            } else {
+                _cell_visit(r, cell, f, o, p);
+            }
         }
     }
 #endif
