@@ -44,7 +44,6 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: s
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
         CELL_ORBIT=int(p.orbit),
         CELL_ANISO=int(p.aniso),
-        CELL_JITTER_UNIFORM=1,      # u_jitter (lib/points.glsl)
     )
     d.update(_features.defines(outputs, p.dim, smooth))
     return d
