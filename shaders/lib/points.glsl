@@ -13,7 +13,8 @@
 // density, poisson only; cellgl/basis/density.py), CELL_ORBIT (1: loopable
 // animation, the points orbit inside their cells; cell_orbit), CELL_ANISO (1:
 // anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl),
-// CELL_JITTER_UNIFORM (1: jitter is a uniform; cell_next_point).
+// CELL_JITTER_UNIFORM (1: jitter is a uniform; cell_next_point), CELL_COUNT_CONST
+// (1: CELL_MIN_POINTS, CELL_MAX_COUNT constant; cell_point_count).
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
@@ -23,6 +24,12 @@
 #endif
 #ifndef CELL_ANISO
 #define CELL_ANISO 0
+#endif
+#ifndef CELL_COUNT_CONST
+// 1: CELL_MIN_POINTS and CELL_MAX_COUNT are min_points and max_points as
+// constants (cellgl/basis/gpu.py), so the count's loop runs over only the
+// thresholds that can count (the same count, fewer compares per cell).
+#define CELL_COUNT_CONST 0
 #endif
 #ifndef CELL_JITTER_UNIFORM
 // 1: jitter is a run-time value (a uniform), not a constant the compiler folds
@@ -268,10 +275,18 @@ int cell_point_count(inout uint state, CellParams p)
     // u = the cell's hash. A fixed-length loop with constant indices once
     // unrolled, so the table stays in registers.
     uint u = state;
+#if CELL_COUNT_CONST
+    // min_points and max_points known at compile time: only the compares that count.
+    int count = CELL_MIN_POINTS;
+    for (int k = CELL_MIN_POINTS; k < CELL_MAX_COUNT; k++) {
+        count += u >= p.thresholds[k] ? 1 : 0;
+    }
+#else
     int count = p.min_points;
     for (int k = 0; k < CELL_MAX_POINTS; k++) {
         count += (k >= p.min_points && k < p.max_points && u >= p.thresholds[k]) ? 1 : 0;
     }
+#endif
     return count;
 #endif
 }
