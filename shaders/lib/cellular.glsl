@@ -276,13 +276,29 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #if CELL_DIM <= 3 && CELL_RING1_PRUNE
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
-    for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        ivec4 o = _cell_ring1[t] * side;
-        if (_cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+    // The cells' nearest possible distances in visiting order, and the least of
+    // each tail: the walk leaves its loop once no cell left can beat F_n. A
+    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
+    // runs while any lane of the vector needs it, a lane that left a loop costs
+    // nothing.
+    float box[CELL_RING1_CELLS];
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = 3.0e38;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        box[t] = _cell_box_distance(_cell_ring1[t] * side, f, p);
+        rest[t] = min(rest[t + 1], box[t]);
+    }
+    r.loops += 1;                 // the pass that leaves the loop
+    for (int t = 0; t < CELL_RING1_CELLS && !spent; t++) {
+        if (rest[t] >= r.F[CELL_N - 1]) {
+            break;
+        }
+        r.loops += 1;
+        if (box[t] < r.F[CELL_N - 1]) {
             if (cell_budget_spent(r.loops)) {
                 spent = true;
             } else {
-                _cell_visit(r, cell, f, o, p);
+                _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
             }
         }
     }
