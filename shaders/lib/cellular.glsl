@@ -186,18 +186,27 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     int count = cell_point_count_at(state, c, p);
     vec4 base = vec4(o) - f;
     r.loops += count + 1;
-    for (int k = 0; k < count; k++) {
-        uint id;
-        vec4 q = cell_next_point(state, c, p, id);
-        vec4 delta = _cell_axis_scale(base + q, p);
-        float d = cell_metric_length(delta, p.minkowski_p);
+    // Tested at the end of each pass: on SIMD CPUs (llvmpipe) an `if` does not
+    // branch, it masks, so a loop whose lanes all leave at its top still runs
+    // its body once more under an empty mask; this way a cell of k points costs k.
+    if (count > 0) {
+        for (int k = 0; ; ) {
+            uint id;
+            vec4 q = cell_next_point(state, c, p, id);
+            vec4 delta = _cell_axis_scale(base + q, p);
+            float d = cell_metric_length(delta, p.minkowski_p);
 #if CELL_TRACK_F1_CELL
-        if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
-            r.o1 = o;
-            r.q1 = q;
-        }
+            if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
+                r.o1 = o;
+                r.q1 = q;
+            }
 #endif
-        _cell_insert(r, d, delta, id);
+            _cell_insert(r, d, delta, id);
+            k++;
+            if (k >= count) {
+                break;
+            }
+        }
     }
 }
 
@@ -288,11 +297,9 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         box[t] = _cell_box_distance(_cell_ring1[t] * side, f, p);
         rest[t] = min(rest[t + 1], box[t]);
     }
-    r.loops += 1;                 // the pass that leaves the loop
-    for (int t = 0; t < CELL_RING1_CELLS && !spent; t++) {
-        if (rest[t] >= r.F[CELL_N - 1]) {
-            break;
-        }
+    // Tested at the end of each pass, as the point loop (_cell_visit).
+    r.loops += 1;
+    for (int t = 0; ; ) {
         r.loops += 1;
         if (box[t] < r.F[CELL_N - 1]) {
             if (cell_budget_spent(r.loops)) {
@@ -300,6 +307,10 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             } else {
                 _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
             }
+        }
+        t++;
+        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+            break;
         }
     }
 #elif CELL_DIM <= 3
