@@ -10,6 +10,7 @@
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
+#define CELL_JITTER_UNIFORM 1      // jitter is u_jitter (lib/points.glsl picks its cheaper form)
 #include "lib/features.glsl"
 
 #define CELL_FEATURES (CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE)

@@ -107,6 +107,38 @@ def test_gpu_equals_brute_force_sparse(ctx):
     assert (g.id[ok] != ids[ok]).sum() == 0
 
 
+def test_ring1_order_is_the_references():
+    """The GPU's nearest-first ring 1 table (shaders/lib/cellular.glsl) is the order the NumPy
+    reference visits: it decides which of two equal distances comes first."""
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "shaders" / "lib" / "cellular.glsl").read_text()
+    for dim, count in ((2, 8), (3, 26)):
+        m = re.search(r"const ivec4 _cell_ring1\[%d\] = ivec4\[%d\]\((.*?)\n\);" % (count, count), text, re.S)
+        table = [tuple(int(v) for v in e.split(",")) for e in re.findall(r"ivec4\(([-\d, ]+)\)", m.group(1))]
+        assert table == reference._block_offsets(dim)
+        # every neighbour once, the near faces first
+        assert len(set(table)) == count and all(any(o) for o in table)
+        assert table[:dim] == [tuple(-1 if b == a else 0 for b in range(4)) for a in range(dim)]
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dist", ["jitter", "poisson"])
+def test_equal_distances_in_the_references_order(ctx, dim, dist):
+    """Samples on cell faces and centres with points at the cell centres (jitter 0) or, for
+    poisson, samples on the faces of a point process: many distances tie exactly; the GPU lists
+    the tied points in the reference's order (same IDs in the same places)."""
+    rng = np.random.default_rng(11)
+    pts = np.round(rng.uniform(-6.0, 6.0, (3000, dim)) * 2.0) / 2.0
+    kw = dict(distribution=dist, jitter=0.0) if dist == "jitter" else dict(distribution=dist)
+    g = cellgl.cellular(pts, 3, outputs=("F", "id"), **kw)
+    r = cellgl.cellular(pts, 3, outputs=("F", "id"), backend="numpy", **kw)
+    np.testing.assert_allclose(g.F, r.F, rtol=1e-6, atol=1e-6)
+    if dist == "jitter":
+        assert (np.diff(g.F, axis=1) == 0).any(axis=1).mean() > 0.5      # ties are the common case
+    assert (g.id != r.id).sum() == 0
+
+
 def test_cap_is_reported_not_silent(ctx):
     """A very sparse process outruns the search cap: those samples say so (flag and warning), on
     both backends."""

@@ -26,10 +26,11 @@ def _not_real(v) -> bool:
     return isinstance(v, (bool, np.bool_)) or not isinstance(v, (numbers.Real, np.integer, np.floating))
 
 
-def real_array(name: str, value, expected: str) -> np.ndarray:
+def real_array(name: str, value, expected: str, copy: bool = True) -> np.ndarray:
     """``value`` as a float64 array, refusing what is not a real number (bool, complex, datetime,
     timedelta, strings, bytes, records, masked entries) with a ValueError naming ``name``, the
-    dtype found and ``expected`` (the accepted shape), instead of a silent cast or a raw TypeError."""
+    dtype found and ``expected`` (the accepted shape), instead of a silent cast or a raw TypeError.
+    ``copy=False``: a float64 ndarray comes back as it is (the caller must not write to it)."""
     refuse_masked(name, value)
     try:
         arr = np.asarray(value)
@@ -45,6 +46,6 @@ def real_array(name: str, value, expected: str) -> np.ndarray:
         raise ValueError(f"{name} must hold real numbers (integers or floats) {expected}; got dtype "
                          f"{arr.dtype} (bool, complex, datetime and text are not numbers here)")
     try:
-        return arr.astype(np.float64)
+        return arr.astype(np.float64, copy=copy)
     except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be a numeric array {expected}: {exc}") from None

@@ -202,7 +202,7 @@ def _check_n_backend(n, backend):
 
 
 def _points(points) -> np.ndarray:
-    pts = real_array("points", points, "of shape (N, d), d in 2..4")
+    pts = real_array("points", points, "of shape (N, d), d in 2..4", copy=False)     # read only
     if pts.ndim != 2 or pts.shape[1] not in (2, 3, 4):
         raise ValueError(f"points must have shape (N, d) with d in 2..4, got shape {pts.shape}")
     if pts.shape[0] == 0:

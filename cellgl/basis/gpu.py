@@ -44,6 +44,10 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: s
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
         CELL_ORBIT=int(p.orbit),
         CELL_ANISO=int(p.aniso),
+        # min_points, max_points as constants: the count compares only what can count
+        CELL_COUNT_CONST=1,
+        CELL_MIN_POINTS=int(p.min_points),
+        CELL_MAX_COUNT=int(p.max_points),
     )
     d.update(_features.defines(outputs, p.dim, smooth))
     return d
@@ -67,7 +71,8 @@ def _set_params(prog, p: Params):
     _set(prog, "u_min_points", int(p.min_points))
     _set(prog, "u_max_points", int(p.max_points))
     if "u_thresholds" in prog:
-        prog["u_thresholds"].write(p.thresholds.astype(np.uint32).tobytes())
+        u = prog["u_thresholds"]         # the compiler may trim the array to the entries in use
+        u.write(p.thresholds[: getattr(u, "array_length", len(p.thresholds))].astype(np.uint32).tobytes())
     _set(prog, "u_period", tuple(int(v) for v in p.period))
     _set(prog, "u_minkowski_p", float(p.minkowski_p))
     _set(prog, "u_out_scale", float(1.0 / p.scale))

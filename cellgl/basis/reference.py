@@ -232,9 +232,29 @@ def metric_gradient(delta: np.ndarray, F: np.ndarray, p: Params) -> np.ndarray:
 # --------------------------------------------------------------------------- cellular.glsl
 
 def _block_offsets(dim: int):
-    """Offsets of ring 1 in the GPU's loop order (x outermost, -1..1)."""
+    """Offsets of ring 1 in the GPU's loop order: 4D x outermost, -1..1; 2D and 3D nearest first
+    (``_cell_ring1`` of cellular.glsl: -1 is the neighbour across the nearer face of an axis,
+    sorted by the number of far axes, then of near ones; :func:`_ring1_side` flips the axes)."""
     rng = [range(-1, 2)] * dim + [range(0, 1)] * (4 - dim)
-    return [o for o in itertools.product(*rng) if any(o)]
+    offs = [o for o in itertools.product(*rng) if any(o)]
+    if dim <= 3:
+        offs.sort(key=lambda o: (sum(v == 1 for v in o), sum(v == -1 for v in o)))   # stable
+    return offs
+
+
+#: distributions whose ring 1 the GPU visits whole, in the table's own order (CELL_RING1_PRUNE 0)
+_RING1_UNPRUNED = (Distribution.JITTER,)
+
+
+def _ring1_side(f: np.ndarray, p: Params) -> np.ndarray:
+    """Per sample and axis, the sign that maps :func:`_block_offsets` onto the lattice: +1 where
+    the (float32, as on the GPU) fraction is below 0.5 (the near face is below), else -1; all +1
+    in 4D and for the distributions the GPU does not prune in ring 1 (CELL_RING1_PRUNE)."""
+    side = np.where(f.astype(np.float32) < 0.5, 1, -1).astype(np.int64)
+    if p.dim > 3 or p.distribution in _RING1_UNPRUNED:
+        side[:] = 1
+    side[:, 3] = 1
+    return side
 
 
 def _ring_offsets(ring: int, dim: int):
@@ -327,8 +347,9 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
 
     every = np.arange(N)
     visit(every, (0, 0, 0, 0))
+    side = _ring1_side(f, p)
     for o in _block_offsets(p.dim):
-        visit(every, o)
+        visit(every, np.asarray(o, dtype=np.int64) * side)
 
     fd = f[:, : p.dim]
     m = np.minimum(fd, 1.0 - fd).min(axis=1)

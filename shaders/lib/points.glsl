@@ -12,7 +12,9 @@
 // CELL_DENSITY_MAP (CELL_DMAP_NONE, _RAMP, _RADIAL, _IMAGE: spatially varying
 // density, poisson only; cellgl/basis/density.py), CELL_ORBIT (1: loopable
 // animation, the points orbit inside their cells; cell_orbit), CELL_ANISO (1:
-// anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl).
+// anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl),
+// CELL_JITTER_UNIFORM (1: jitter is a uniform; cell_next_point), CELL_COUNT_CONST
+// (1: CELL_MIN_POINTS, CELL_MAX_COUNT constant; cell_point_count).
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
@@ -22,6 +24,17 @@
 #endif
 #ifndef CELL_ANISO
 #define CELL_ANISO 0
+#endif
+#ifndef CELL_COUNT_CONST
+// 1: CELL_MIN_POINTS and CELL_MAX_COUNT are min_points and max_points as
+// constants (cellgl/basis/gpu.py), so the count's loop runs over only the
+// thresholds that can count (the same count, fewer compares per cell).
+#define CELL_COUNT_CONST 0
+#endif
+#ifndef CELL_JITTER_UNIFORM
+// 1: jitter is a run-time value (a uniform), not a constant the compiler folds
+// (cell_next_point picks the cheaper form; both give the same bits).
+#define CELL_JITTER_UNIFORM 0
 #endif
 #define CELL_DENSITY_LEVELS 16
 
@@ -262,10 +275,18 @@ int cell_point_count(inout uint state, CellParams p)
     // u = the cell's hash. A fixed-length loop with constant indices once
     // unrolled, so the table stays in registers.
     uint u = state;
+#if CELL_COUNT_CONST
+    // min_points and max_points known at compile time: only the compares that count.
+    int count = CELL_MIN_POINTS;
+    for (int k = CELL_MIN_POINTS; k < CELL_MAX_COUNT; k++) {
+        count += u >= p.thresholds[k] ? 1 : 0;
+    }
+#else
     int count = p.min_points;
     for (int k = 0; k < CELL_MAX_POINTS; k++) {
         count += (k >= p.min_points && k < p.max_points && u >= p.thresholds[k]) ? 1 : 0;
     }
+#endif
     return count;
 #endif
 }
@@ -377,16 +398,32 @@ vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
     // x and y from the two halves of u; z and w from a second word derived from
     // u; the ID from a third (computed only when a caller uses it).
     id = cell_hash_u32(u ^ 0x5bd1e995u);
-    f.x = cell_u16(u >> 16);
-    f.y = cell_u16(u & 0xffffu);
 #if CELL_DIM >= 3
     uint v = (u ^ (u >> 15)) * 0x2c1b3c6du;
     v ^= v >> 12;
+#endif
+#if CELL_DIST == CELL_DIST_JITTER && CELL_JITTER_UNIFORM
+    // 0.5 + jitter (cell_u16(k) - 0.5) for the 16-bit values k (-0.5 on unused
+    // axes), the same bits in two operations fewer per axis while jitter is a
+    // run-time value: cell_u16(k) - 0.5 is (k - 32767.5) / 65536 exactly, and
+    // a power-of-two scale commutes with rounding.
+    vec4 k = vec4(float(int(u >> 16)), float(int(u & 0xffffu)), -0.5, -0.5);
+#if CELL_DIM >= 3
+    k.z = float(int(v >> 16));
+    k.w = float(int(v & 0xffffu));
+#endif
+    f = 0.5 + (p.jitter * (1.0 / 65536.0)) * (k - 32767.5);
+#else
+    f.x = cell_u16(u >> 16);
+    f.y = cell_u16(u & 0xffffu);
+#if CELL_DIM >= 3
     f.z = cell_u16(v >> 16);
     f.w = cell_u16(v & 0xffffu);
 #endif
 #if CELL_DIST == CELL_DIST_JITTER
+    // (A constant jitter of 1 may fold away: 0.5 + (x - 0.5) is x exactly here.)
     f = 0.5 + p.jitter * (f - 0.5);
+#endif
 #endif
 #endif
 #if CELL_ORBIT
