@@ -88,13 +88,12 @@ const ivec4 _cell_ring1[8] = ivec4[8](
 #elif CELL_DIM == 3
 #define CELL_RING1_CELLS 26
 const ivec4 _cell_ring1[26] = ivec4[26](
-    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0), ivec4(-1, -1, 0, 0),
-    ivec4(-1, 0, -1, 0), ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0), ivec4(0, 0, 1, 0),
-    ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0), ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0),
-    ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0), ivec4(1, -1, 0, 0), ivec4(1, 0, -1, 0),
-    ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0), ivec4(0, 1, 1, 0),
-    ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0), ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0),
-    ivec4(1, 1, -1, 0), ivec4(1, 1, 1, 0)
+    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0), ivec4(-1, -1, 0, 0), ivec4(-1, 0, -1, 0),
+    ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0), ivec4(0, 0, 1, 0), ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0),
+    ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0), ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0), ivec4(1, -1, 0, 0),
+    ivec4(1, 0, -1, 0), ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0), ivec4(0, 1, 1, 0),
+    ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0), ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0), ivec4(1, 1, -1, 0),
+    ivec4(1, 1, 1, 0)
 );
 #endif
 
@@ -114,7 +113,7 @@ struct CellResult {
     vec4 q1;              // and its position in that cell
 #endif
     bool exact;           // false if the ring cap or the loop budget was reached
-    int loops;            // loop passes spent so far (cell_search_budget)
+    int loops;            // loop passes so far: a search stops at CELL_LOOP_BUDGET, as llvmpipe cuts loops silently
 };
 
 // A vector in the units distances are measured in (CELL_ANISO: axes weighted).
@@ -131,15 +130,22 @@ vec4 _cell_axis_scale(vec4 v, CellParams p)
 // nearest point of the cell at offset o.
 float _cell_box_distance(ivec4 o, vec4 f, CellParams p)
 {
-    vec4 g = vec4(0.0);
-    for (int a = 0; a < CELL_DIM; a++) {
-        if (o[a] > 0) {
-            g[a] = float(o[a]) - f[a];
-        } else if (o[a] < 0) {
-            g[a] = float(-o[a] - 1) + f[a];
-        }
-    }
+    // Per axis o - f above, -o - 1 + f below (the larger), 0 in the sample's own slab.
+    vec4 g = max(max(vec4(o) - f, vec4(-o - 1) + f), vec4(0.0));
     return cell_metric_length(_cell_axis_scale(g, p), p.minkowski_p);
+}
+
+// The sample's distance to the nearest face of its own cell (f: its fraction).
+float cell_face_distance(vec4 f)
+{
+    vec4 g = min(f, 1.0 - f);
+#if CELL_DIM == 2
+    return min(g.x, g.y);
+#elif CELL_DIM == 3
+    return min(min(g.x, g.y), g.z);
+#else
+    return min(min(g.x, g.y), min(g.z, g.w));
+#endif
 }
 
 // Insert one candidate (internal-unit distance d) into the sorted lists.
@@ -170,12 +176,8 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
 // sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
 void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
 {
-    lo = ivec4(0);
-    hi = ivec4(0);
-    for (int a = 0; a < CELL_DIM; a++) {
-        hi[a] = min(ring, int(ceil(reach + f[a])) - 1);
-        lo[a] = -min(ring, int(ceil(reach + 1.0 - f[a])) - 1);
-    }
+    hi = cell_dims_i(min(ivec4(ring), ivec4(ceil(reach + f)) - 1));
+    lo = -cell_dims_i(min(ivec4(ring), ivec4(ceil(reach + 1.0 - f)) - 1));
 }
 
 // Test every feature point of the cell at offset o from the sample's cell.
@@ -189,7 +191,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     // Tested at the end of each pass: on SIMD CPUs (llvmpipe) an `if` does not
     // branch, it masks, so a loop whose lanes all leave at its top still runs
     // its body once more under an empty mask; this way a cell of k points costs k.
-    if (count > 0) {
+    if (cell_min_count(p) > 0 || count > 0) {
         for (int k = 0; ; ) {
             uint id;
             vec4 q = cell_next_point(state, c, p, id);
@@ -229,22 +231,42 @@ float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
 #endif
 }
 
-// The cell after o in the window lo .. hi, in the order of nested x, y, z, w
-// loops (w fastest); start from lo - (0, 0, 0, 1). The windows are walked by
-// one flat loop: one pass per cell, where nested loops of run-time length
-// would also spend a pass on every exit of the inner loops. (An odometer, not
-// a division of the pass index: integer division is slow on SIMD CPUs.)
+// The cells of the window lo .. hi in the order of nested x, y, z, w loops
+// (the last axis fastest): cell_window_first(lo), then cell_window_next for
+// each. The windows are walked by one flat loop: one pass per cell, where
+// nested loops of run-time length would also spend a pass on every exit of the
+// inner loops. (An odometer, not a division of the pass index: integer
+// division is slow on SIMD CPUs.)
+ivec4 cell_window_first(ivec4 lo)
+{
+#if CELL_DIM >= 4
+    return lo - ivec4(0, 0, 0, 1);
+#elif CELL_DIM == 3
+    return lo - ivec4(0, 0, 1, 0);
+#else
+    return lo - ivec4(0, 1, 0, 0);
+#endif
+}
+
 ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
 {
+#if CELL_DIM >= 4
     o.w += 1;
     if (o.w > hi.w) {
         o.w = lo.w;
         o.z += 1;
     }
+#elif CELL_DIM == 3
+    o.z += 1;
+#else
+    o.y += 1;
+#endif
+#if CELL_DIM >= 3
     if (o.z > hi.z) {
         o.z = lo.z;
         o.y += 1;
     }
+#endif
     if (o.y > hi.y) {
         o.y = lo.y;
         o.x += 1;
@@ -254,9 +276,9 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
 
 // Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
 // cell_search for an invocation that has already spent `loops` loop passes:
-// it stops, flagged inexact, before the invocation's count reaches
-// CELL_LOOP_BUDGET (6144 unless defined), since drivers cut longer loops
-// without a word (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
+// it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
+// (6144 unless defined), since drivers cut longer loops without a word
+// (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
 CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 {
     CellResult r;
@@ -270,7 +292,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     r.q1 = vec4(0.0);
 #endif
     r.loops = loops;
-    bool spent = cell_budget_spent(r.loops);
+    bool spent = cell_budget_spent(loops);
 
     // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block
     // (2D, 3D: nearest first, _cell_ring1). Constant loop bounds, so the
@@ -290,21 +312,17 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // run-time loop on purpose: in straight-line SIMD code a pruned cell still
     // runs while any lane of the vector needs it, a lane that left a loop costs
     // nothing.
-    float box[CELL_RING1_CELLS];
     float rest[CELL_RING1_CELLS + 1];
     rest[CELL_RING1_CELLS] = 3.0e38;
     for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        box[t] = _cell_box_distance(_cell_ring1[t] * side, f, p);
-        rest[t] = min(rest[t + 1], box[t]);
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1[t] * side, f, p));
     }
     // Tested at the end of each pass, as the point loop (_cell_visit).
-    r.loops += 1;
     for (int t = 0; ; ) {
         r.loops += 1;
-        if (box[t] < r.F[CELL_N - 1]) {
-            if (cell_budget_spent(r.loops)) {
-                spent = true;
-            } else {
+        if (_cell_box_distance(_cell_ring1[t] * side, f, p) < r.F[CELL_N - 1]) {
+            spent = cell_budget_spent(r.loops);      // the count only grows
+            if (!spent) {
                 _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
             }
         }
@@ -342,11 +360,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     }
 #endif
 
-    // Distance from the sample to the nearest face of its own cell.
-    float m = 1.0;
-    for (int a = 0; a < CELL_DIM; a++) {
-        m = min(m, min(f[a], 1.0 - f[a]));
-    }
+    float m = cell_face_distance(f);
     vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
 
     // Rings 2, 3, ...: only while a point in the ring could still be closer
@@ -379,7 +393,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #endif
         ivec4 n = hi - lo + 1;
         int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = lo - ivec4(0, 0, 0, 1);
+        ivec4 o = cell_window_first(lo);
         r.loops += 1;
         for (int i = 0; i < cells; i++) {
             if (cell_budget_spent(r.loops)) {

@@ -192,10 +192,7 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
 // inside the loop budget (w.spent: it stopped at the budget).
 bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 {
-    float m = 1.0;
-    for (int a = 0; a < CELL_DIM; a++) {
-        m = min(m, min(f[a], 1.0 - f[a]));
-    }
+    float m = cell_face_distance(f);
     if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
@@ -242,7 +239,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         cell_ring_window(last, min(reach, float(last + 2)), f, lo, hi);
         ivec4 n = hi - lo + 1;
         int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = lo - ivec4(0, 0, 0, 1);
+        ivec4 o = cell_window_first(lo);
         w.loops += 1;             // the pass that leaves the window loop
         for (int i = 0; i < cells; i++) {
             if (cell_budget_spent(w.loops)) {
@@ -271,7 +268,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
         ivec4 n = hi - lo + 1;
         int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = lo - ivec4(0, 0, 0, 1);
+        ivec4 o = cell_window_first(lo);
         w.loops += 1;
         for (int i = 0; i < cells; i++) {
             if (cell_budget_spent(w.loops)) {

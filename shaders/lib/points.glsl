@@ -328,6 +328,18 @@ int cell_density_level(ivec4 c, CellParams p)
 }
 #endif
 
+// The fewest points a cell can hold (the count's lower bound).
+int cell_min_count(CellParams p)
+{
+#if CELL_DIST == CELL_DIST_WORLEY1996
+    return 0;
+#elif CELL_DIST == CELL_DIST_JITTER || CELL_DIST == CELL_DIST_BLENDER
+    return 1;
+#else
+    return p.min_points;
+#endif
+}
+
 // cell_point_count for the cell `cell` (wrapped): with a density map the count
 // is drawn from the cell's own row of the threshold table.
 int cell_point_count_at(inout uint state, ivec4 cell, CellParams p)
@@ -418,6 +430,8 @@ vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
     f.y = cell_u16(u & 0xffffu);
 #if CELL_DIM >= 3
     f.z = cell_u16(v >> 16);
+#endif
+#if CELL_DIM >= 4
     f.w = cell_u16(v & 0xffffu);
 #endif
 #if CELL_DIST == CELL_DIST_JITTER
