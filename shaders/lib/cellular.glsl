@@ -71,31 +71,22 @@
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
 #define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
-// Ring 1 nearest first (2D, 3D): the offsets of the 3^d block but the sample's
-// own cell, per axis -1 for the neighbour across the face the sample is nearer
-// to and +1 for the one across the far face (cell_search_budget flips each axis
-// per sample), sorted by the number of far axes, then of near ones: the near
-// faces, edges and corner first. F_n then shrinks early, and more of the later
-// cells are pruned (a SIMD vector runs a cell's point loop while any of its
-// samples needs that cell). The order decides only which of two exactly equal
-// distances comes first (cellgl/basis/reference.py visits in the same order).
+// Ring 1 nearest first (2D, 3D), offsets packed as x + 1 | (y + 1) << 2 | (z + 1) << 4.
+// Per axis -1 is the neighbour across the face the sample is nearer to and +1
+// the one across the far face (cell_search_budget flips each axis per sample);
+// sorted by the number of far axes, then of near ones: the near faces, edges
+// and corner first. F_n then shrinks early, and more of the later cells are
+// pruned (a SIMD vector runs a cell's point loop while any of its samples needs
+// that cell). The order decides only which of two exactly equal distances comes
+// first (cellgl/basis/reference.py visits in the same order). The compiler
+// folds the unpacking in the unrolled loop.
 #if CELL_DIM == 2
 #define CELL_RING1_CELLS 8
-const ivec4 _cell_ring1[8] = ivec4[8](
-    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(-1, -1, 0, 0), ivec4(0, 1, 0, 0),
-    ivec4(1, 0, 0, 0), ivec4(-1, 1, 0, 0), ivec4(1, -1, 0, 0), ivec4(1, 1, 0, 0)
-);
+const int _cell_ring1[8] = int[8](20, 17, 16, 25, 22, 24, 18, 26);
 #elif CELL_DIM == 3
 #define CELL_RING1_CELLS 26
-const ivec4 _cell_ring1[26] = ivec4[26](
-    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0), ivec4(-1, -1, 0, 0),
-    ivec4(-1, 0, -1, 0), ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0), ivec4(0, 0, 1, 0),
-    ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0), ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0),
-    ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0), ivec4(1, -1, 0, 0), ivec4(1, 0, -1, 0),
-    ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0), ivec4(0, 1, 1, 0),
-    ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0), ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0),
-    ivec4(1, 1, -1, 0), ivec4(1, 1, 1, 0)
-);
+const int _cell_ring1[26] = int[26](20, 17, 5, 16, 4, 1, 0, 37, 25, 22, 36, 24, 33, 9, 18,
+                                     6, 32, 8, 2, 41, 38, 26, 40, 34, 10, 42);
 #endif
 
 // Whether a search that has spent `loops` passes must stop (one more step
@@ -243,7 +234,7 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
     return o;
 }
 
-// Search flagged inexact at CELL_LOOP_BUDGET (6144) loops, as llvmpipe cuts loops silently.
+// Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
 // cell_search for an invocation that has already spent `loops` loop passes:
 // it stops, flagged inexact, before the invocation's count reaches
 // CELL_LOOP_BUDGET (6144 unless defined), since drivers cut longer loops
@@ -277,7 +268,8 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        ivec4 o = _cell_ring1[t] * side;
+        int e = _cell_ring1[t];
+        ivec4 o = ivec4(((ivec3(e) >> ivec3(0, 2, 4)) & 3) - 1, 0) * side;
         if (_cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
             if (cell_budget_spent(r.loops)) {
                 spent = true;
@@ -288,7 +280,8 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     }
 #elif CELL_DIM <= 3
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        ivec4 o = _cell_ring1[t];      // no pruning: the order does not matter
+        int e = _cell_ring1[t];        // no pruning: the order does not matter
+        ivec4 o = ivec4(((ivec3(e) >> ivec3(0, 2, 4)) & 3) - 1, 0);
         if (cell_budget_spent(r.loops)) {
             spent = true;
         } else {
