@@ -269,7 +269,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
         int e = _cell_ring1[t];
-        ivec4 o = ivec4(((ivec3(e) >> ivec3(0, 2, 4)) & 3) - 1, 0) * side;
+        ivec4 o = (ivec4(e & 3, (e >> 2) & 3, (e >> 4) & 3, 1) - 1) * side;
         if (_cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
             if (cell_budget_spent(r.loops)) {
                 spent = true;
@@ -281,7 +281,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #elif CELL_DIM <= 3
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
         int e = _cell_ring1[t];        // no pruning: the order does not matter
-        ivec4 o = ivec4(((ivec3(e) >> ivec3(0, 2, 4)) & 3) - 1, 0);
+        ivec4 o = ivec4(e & 3, (e >> 2) & 3, (e >> 4) & 3, 1) - 1;
         if (cell_budget_spent(r.loops)) {
             spent = true;
         } else {
