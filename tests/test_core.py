@@ -114,9 +114,8 @@ def test_ring1_order_is_the_references():
 
     text = (Path(__file__).resolve().parents[1] / "shaders" / "lib" / "cellular.glsl").read_text()
     for dim, count in ((2, 8), (3, 26)):
-        m = re.search(r"const int _cell_ring1\[%d\] = int\[%d\]\((.*?)\);" % (count, count), text, re.S)
-        codes = [int(e) for e in m.group(1).split(",")]     # x + 1 | (y + 1) << 2 | (z + 1) << 4
-        table = [((e & 3) - 1, (e >> 2 & 3) - 1, (e >> 4 & 3) - 1, 0) for e in codes]
+        m = re.search(r"const ivec4 _cell_ring1\[%d\] = ivec4\[%d\]\((.*?)\n\);" % (count, count), text, re.S)
+        table = [tuple(int(v) for v in e.split(",")) for e in re.findall(r"ivec4\(([-\d, ]+)\)", m.group(1))]
         assert table == reference._block_offsets(dim)
         # every neighbour once, the near faces first
         assert len(set(table)) == count and all(any(o) for o in table)

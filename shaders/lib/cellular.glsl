@@ -71,22 +71,31 @@
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
 #define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
-// Ring 1 nearest first (2D, 3D), offsets packed as x + 1 | (y + 1) << 2 | (z + 1) << 4.
-// Per axis -1 is the neighbour across the face the sample is nearer to and +1
-// the one across the far face (cell_search_budget flips each axis per sample);
-// sorted by the number of far axes, then of near ones: the near faces, edges
-// and corner first. F_n then shrinks early, and more of the later cells are
-// pruned (a SIMD vector runs a cell's point loop while any of its samples needs
-// that cell). The order decides only which of two exactly equal distances comes
-// first (cellgl/basis/reference.py visits in the same order). The compiler
-// folds the unpacking in the unrolled loop.
+// Ring 1 nearest first (2D, 3D): the offsets of the 3^d block but the sample's
+// own cell, per axis -1 for the neighbour across the face the sample is nearer
+// to and +1 for the one across the far face (cell_search_budget flips each axis
+// per sample), sorted by the number of far axes, then of near ones: the near
+// faces, edges and corner first. F_n then shrinks early, and more of the later
+// cells are pruned (a SIMD vector runs a cell's point loop while any of its
+// samples needs that cell). The order decides only which of two exactly equal
+// distances comes first (cellgl/basis/reference.py visits in the same order).
 #if CELL_DIM == 2
 #define CELL_RING1_CELLS 8
-const int _cell_ring1[8] = int[8](20, 17, 16, 25, 22, 24, 18, 26);
+const ivec4 _cell_ring1[8] = ivec4[8](
+    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(-1, -1, 0, 0), ivec4(0, 1, 0, 0),
+    ivec4(1, 0, 0, 0), ivec4(-1, 1, 0, 0), ivec4(1, -1, 0, 0), ivec4(1, 1, 0, 0)
+);
 #elif CELL_DIM == 3
 #define CELL_RING1_CELLS 26
-const int _cell_ring1[26] = int[26](20, 17, 5, 16, 4, 1, 0, 37, 25, 22, 36, 24, 33, 9, 18,
-                                     6, 32, 8, 2, 41, 38, 26, 40, 34, 10, 42);
+const ivec4 _cell_ring1[26] = ivec4[26](
+    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0), ivec4(-1, -1, 0, 0),
+    ivec4(-1, 0, -1, 0), ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0), ivec4(0, 0, 1, 0),
+    ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0), ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0),
+    ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0), ivec4(1, -1, 0, 0), ivec4(1, 0, -1, 0),
+    ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0), ivec4(0, 1, 1, 0),
+    ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0), ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0),
+    ivec4(1, 1, -1, 0), ivec4(1, 1, 1, 0)
+);
 #endif
 
 // Whether a search that has spent `loops` passes must stop (one more step
@@ -177,18 +186,27 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     int count = cell_point_count_at(state, c, p);
     vec4 base = vec4(o) - f;
     r.loops += count + 1;
-    for (int k = 0; k < count; k++) {
-        uint id;
-        vec4 q = cell_next_point(state, c, p, id);
-        vec4 delta = _cell_axis_scale(base + q, p);
-        float d = cell_metric_length(delta, p.minkowski_p);
+    // Tested at the end of each pass: on SIMD CPUs (llvmpipe) an `if` does not
+    // branch, it masks, so a loop whose lanes all leave at its top still runs
+    // its body once more under an empty mask; this way a cell of k points costs k.
+    if (count > 0) {
+        for (int k = 0; ; ) {
+            uint id;
+            vec4 q = cell_next_point(state, c, p, id);
+            vec4 delta = _cell_axis_scale(base + q, p);
+            float d = cell_metric_length(delta, p.minkowski_p);
 #if CELL_TRACK_F1_CELL
-        if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
-            r.o1 = o;
-            r.q1 = q;
-        }
+            if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
+                r.o1 = o;
+                r.q1 = q;
+            }
 #endif
-        _cell_insert(r, d, delta, id);
+            _cell_insert(r, d, delta, id);
+            k++;
+            if (k >= count) {
+                break;
+            }
+        }
     }
 }
 
@@ -267,21 +285,37 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #if CELL_DIM <= 3 && CELL_RING1_PRUNE
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
-    for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        int e = _cell_ring1[t];
-        ivec4 o = (ivec4(e & 3, (e >> 2) & 3, (e >> 4) & 3, 1) - 1) * side;
-        if (_cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+    // The cells' nearest possible distances in visiting order, and the least of
+    // each tail: the walk leaves its loop once no cell left can beat F_n. A
+    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
+    // runs while any lane of the vector needs it, a lane that left a loop costs
+    // nothing.
+    float box[CELL_RING1_CELLS];
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = 3.0e38;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        box[t] = _cell_box_distance(_cell_ring1[t] * side, f, p);
+        rest[t] = min(rest[t + 1], box[t]);
+    }
+    // Tested at the end of each pass, as the point loop (_cell_visit).
+    r.loops += 1;
+    for (int t = 0; ; ) {
+        r.loops += 1;
+        if (box[t] < r.F[CELL_N - 1]) {
             if (cell_budget_spent(r.loops)) {
                 spent = true;
             } else {
-                _cell_visit(r, cell, f, o, p);
+                _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
             }
+        }
+        t++;
+        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+            break;
         }
     }
 #elif CELL_DIM <= 3
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        int e = _cell_ring1[t];        // no pruning: the order does not matter
-        ivec4 o = ivec4(e & 3, (e >> 2) & 3, (e >> 4) & 3, 1) - 1;
+        ivec4 o = _cell_ring1[t];      // no pruning: the order does not matter
         if (cell_budget_spent(r.loops)) {
             spent = true;
         } else {
