@@ -14,10 +14,20 @@ layout(local_size_x = CELL_LOCAL_SIZE) in;
 
 #define CELL_FEATURES (CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE)
 #if CELL_FEATURES
-// Per sample CELL_FEATURE_STRIDE floats (cellgl/basis/features.py unpacks them): edge,
-// n-sphere radius, smooth F1, 0, edge gradient (4), smooth delta (4), smooth
-// gradient (4), smooth attribute (colour, value).
+// Per sample CELL_FEATURE_STRIDE floats (cellgl/basis/features.py, layout() and
+// unpack()): only the fields the pass was asked for, each at its column
+// CELL_FO_<FIELD> (-1: not written): edge, edge gradient (4), n-sphere radius,
+// smooth F1, smooth delta (4), smooth gradient (4), smooth attribute (colour, value).
+#ifndef CELL_FEATURE_STRIDE
 #define CELL_FEATURE_STRIDE 20
+#define CELL_FO_EDGE 0
+#define CELL_FO_EDGE_GRAD 4
+#define CELL_FO_NSPHERE 1
+#define CELL_FO_SMOOTH_F 2
+#define CELL_FO_SMOOTH_DELTA 8
+#define CELL_FO_SMOOTH_GRAD 12
+#define CELL_FO_SMOOTH_ATTR 16
+#endif
 uniform float u_smoothness;    // k of smooth F1, lattice units
 layout(std430, binding = 1) writeonly buffer OutFeatures { float out_features[]; };
 #endif
@@ -193,15 +203,28 @@ void main()
     exact = x.exact;
     loops = x.loops;
     uint b = i * uint(CELL_FEATURE_STRIDE);
-    out_features[b] = x.edge * u_out_scale;
-    out_features[b + 1u] = x.nsphere * u_out_scale;
-    out_features[b + 2u] = x.smooth_F * u_out_scale;
-    out_features[b + 3u] = 0.0;
+#if CELL_FO_EDGE >= 0
+    out_features[b + uint(CELL_FO_EDGE)] = x.edge * u_out_scale;
+#endif
+#if CELL_FO_NSPHERE >= 0
+    out_features[b + uint(CELL_FO_NSPHERE)] = x.nsphere * u_out_scale;
+#endif
+#if CELL_FO_SMOOTH_F >= 0
+    out_features[b + uint(CELL_FO_SMOOTH_F)] = x.smooth_F * u_out_scale;
+#endif
     for (int a = 0; a < 4; a++) {
-        out_features[b + 4u + uint(a)] = x.edge_grad[a];
-        out_features[b + 8u + uint(a)] = x.smooth_delta[a] * u_out_scale;
-        out_features[b + 12u + uint(a)] = x.smooth_grad[a];
-        out_features[b + 16u + uint(a)] = x.smooth_attr[a];
+#if CELL_FO_EDGE_GRAD >= 0
+        out_features[b + uint(CELL_FO_EDGE_GRAD + a)] = x.edge_grad[a];
+#endif
+#if CELL_FO_SMOOTH_DELTA >= 0
+        out_features[b + uint(CELL_FO_SMOOTH_DELTA + a)] = x.smooth_delta[a] * u_out_scale;
+#endif
+#if CELL_FO_SMOOTH_GRAD >= 0
+        out_features[b + uint(CELL_FO_SMOOTH_GRAD + a)] = x.smooth_grad[a];
+#endif
+#if CELL_FO_SMOOTH_ATTR >= 0
+        out_features[b + uint(CELL_FO_SMOOTH_ATTR + a)] = x.smooth_attr[a];
+#endif
     }
 #endif
     int canary = 0;
