@@ -167,6 +167,12 @@ void main()
     p.axis_scale = u_axis_scale;
 #endif
 
+#if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE && !CELL_OUT_F && !CELL_OUT_DELTA && !CELL_OUT_ID && !CELL_OUT_GRAD
+    // The polynomial smooth F1 pass: a fixed block, no search (features.glsl).
+    CellFeatures x = cell_poly_features(cell, frac, p, u_smoothness);
+    bool exact = x.exact;
+    int loops = x.loops;
+#else
     CellResult r = cell_search(cell, frac, p);
 
     for (int k = 0; k < CELL_N; k++) {
@@ -202,6 +208,9 @@ void main()
     CellFeatures x = cell_features(cell, frac, p, r, u_smoothness);
     exact = x.exact;
     loops = x.loops;
+#endif
+#endif
+#if CELL_FEATURES
     uint b = i * uint(CELL_FEATURE_STRIDE);
 #if CELL_FO_EDGE >= 0
     out_features[b + uint(CELL_FO_EDGE)] = x.edge * u_out_scale;

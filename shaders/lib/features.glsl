@@ -374,6 +374,26 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
 }
 #endif
 
+#if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE
+// Smooth F1 as Blender's node folds it, alone: a fixed block of cells, so it
+// needs neither cell_search() nor a walk (a caller that wants no F1..Fn skips
+// the search). Always exact: the fold over its window is the definition.
+CellFeatures cell_poly_features(ivec4 cell, vec4 f, CellParams p, float smoothness)
+{
+    CellFeatures o;
+    o.edge = 0.0;
+    o.edge_grad = vec4(0.0);
+    o.nsphere = 0.0;
+    o.smooth_delta = vec4(0.0);
+    o.smooth_grad = vec4(0.0);
+    o.smooth_attr = vec4(0.0);
+    o.exact = true;
+    o.loops = 0;
+    _cell_poly_smooth(o, cell, f, p, smoothness);
+    return o;
+}
+#endif
+
 // The features of the sample (cell, f) whose cell_search() result is r;
 // smoothness: k of smooth F1 in lattice units (>= 0).
 CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
@@ -404,8 +424,10 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.o1 = r.o1;
     w.q1 = r.q1;
     o.exact = r.exact;
-#else
+#elif CELL_EDGE || CELL_SMOOTH == 1 || CELL_NSPHERE
     o.exact = r.exact && _cell_walk(w, cell, f, p);
+#else
+    o.exact = r.exact;            // the polynomial fold alone needs no walk
 #endif
     o.edge = max(w.edge, 0.0);
     o.edge_grad = -w.edge_n;
