@@ -79,10 +79,6 @@ vec4 cell_id_attribute(uint id)
 #if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
 
 #define CELL_SMOOTH_CUTOFF 16.0
-#ifndef CELL_WALK_RING2
-// 1: ring 2 of the walks (not smooth F1's alone) unrolled as a constant block.
-#define CELL_WALK_RING2 0
-#endif
 
 struct CellFeatures {
     float edge;          // distance to the cell's border (CELL_EDGE)
@@ -267,45 +263,8 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         return float(last) + m >= reach;
     }
 #endif
-    int first = 2;
-#if CELL_WALK_RING2
-    // Ring 2 as a constant block too (2D: 16 cells; the walks of distance to
-    // edge and the n-sphere radius mostly end in it), the cells in the ring
-    // loop's order. No early exit inside: a loop with one unrolls.
-    if (1.0 + m >= _cell_walk_reach(w)) {
-        return true;
-    }
-    for (int x = -2; x <= 2; x++)
-    for (int y = -2; y <= 2; y++)
-#if CELL_DIM >= 3
-    for (int z = -2; z <= 2; z++)
-#else
-    for (int z = 0; z <= 0; z++)
-#endif
-#if CELL_DIM >= 4
-    for (int v = -2; v <= 2; v++)
-#else
-    for (int v = 0; v <= 0; v++)
-#endif
-    {
-        ivec4 o = ivec4(x, y, z, v);
-        ivec4 ao = abs(o);
-        if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == 2
-            && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
-            if (cell_budget_spent(w.loops)) {
-                w.spent = true;
-            } else {
-                _cell_walk_cell(w, cell, f, o, p);
-            }
-        }
-    }
-    if (w.spent) {
-        return false;
-    }
-    first = 3;
-#endif
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = first; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    for (int ring = 2; ring <= CELL_FEATURE_MAX_RING; ring++) {
         w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
