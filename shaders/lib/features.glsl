@@ -187,6 +187,47 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     }
 }
 
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
+// The ball of radius `reach` (Euclidean) around the sample (fraction f), in
+// rings up to `last`: the cells are walked in window order (axis 0 slowest),
+// each axis over the range its prefix leaves, t = sqrt(reach^2 - the prefix's
+// squared box distance) (widened for rounding, and holding 0 so that no range
+// is empty). Sets axes `from` .. CELL_DIM - 1 of o to the start of their
+// ranges, given o's axes before `from`.
+void _cell_ball_reset(inout ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, float reach, int last, int from)
+{
+    float r2 = reach * reach;
+    float s = 0.0;
+    for (int a = 0; a < CELL_DIM; a++) {
+        if (a >= from) {
+            float t = sqrt(max(r2 - s, 0.0)) * 1.000001 + 1e-6;
+            hi[a] = clamp(int(ceil(t + f[a])) - 1, 0, last);
+            lo[a] = -clamp(int(ceil(t + 1.0 - f[a])) - 1, 0, last);
+            o[a] = lo[a];
+        }
+        float g = o[a] > 0 ? float(o[a]) - f[a] : (o[a] < 0 ? float(-o[a] - 1) + f[a] : 0.0);
+        s += g * g;
+    }
+}
+
+// The first cell of the row after o's in the ball (o.x > hi.x once all rows
+// were passed): the axes before the last counted on, the later ones reset.
+ivec4 _cell_ball_next_row(ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, float reach, int last)
+{
+    bool carry = true;
+    int from = CELL_DIM - 1;
+    for (int a = CELL_DIM - 2; a >= 0; a--) {
+        if (carry) {
+            o[a] += 1;
+            carry = a > 0 && o[a] > hi[a];
+            from = carry ? from : a + 1;
+        }
+    }
+    _cell_ball_reset(o, lo, hi, f, reach, last, from);
+    return o;
+}
+#endif
+
 // Visit every cell around (cell, f) that can hold a point within the reach;
 // returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
 // inside the loop budget (w.spent: it stopped at the budget).
@@ -241,6 +282,42 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         // window loop, each cell under the same test.
         float reach = _cell_walk_reach(w);
         int last = int(ceil(min(reach - m, float(CELL_FEATURE_MAX_RING))));
+#if CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
+        if (last >= 4) {
+            // A wide reach: only the cells of its ball, row by row, not the whole
+            // (2 last + 1)^d window (the ball is 0.79 of the square, 0.52 of the
+            // cube, 0.31 in 4D): llvmpipe runs the body of an `if` even when no
+            // lane takes it, so a skipped cell of the window costs as much as a
+            // visited one. The same cells in the same order as the window, each
+            // under the same test (the ranges, _cell_ball_reset, hold every cell
+            // it passes). For a narrow reach the rows' own cost outweighs that:
+            // measured 0.73-0.89x the time at k = 0.25, 1.04-1.12x at k = 0.1
+            // with rows from ring 3 (llvmpipe, 2D and 3D).
+            ivec4 lo, hi;
+            ivec4 o = ivec4(0);
+            _cell_ball_reset(o, lo, hi, f, reach, last, 0);
+            w.loops += 1;             // the pass that leaves the loop over the rows
+            while (o.x <= hi.x && !w.spent) {
+                w.loops += 2;         // this pass, and the one that leaves the row
+                // One row: the last axis over its range, given the row's other axes.
+                for (int z = lo[CELL_DIM - 1]; z <= hi[CELL_DIM - 1]; z++) {
+                    if (cell_budget_spent(w.loops)) {
+                        w.spent = true;
+                        break;
+                    }
+                    w.loops += 1;
+                    o[CELL_DIM - 1] = z;
+                    ivec4 ao = abs(o);
+                    if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2
+                        && _cell_box_distance(o, f, p) < cell_metric_term(reach, p.minkowski_p)) {
+                        _cell_walk_cell(w, cell, f, o, p);
+                    }
+                }
+                o = _cell_ball_next_row(o, lo, hi, f, reach, last);
+            }
+            return !w.spent && float(last) + m >= reach;
+        }
+#endif
         ivec4 lo, hi;
         cell_ring_window(last, min(reach, float(last + 2)), f, lo, hi);
         ivec4 n = hi - lo + 1;
@@ -250,7 +327,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         for (int i = 0; i < cells; i++) {
             if (cell_budget_spent(w.loops)) {
                 w.spent = true;
-                return false;
+                break;
             }
             w.loops += 1;
             o = cell_window_next(o, lo, hi);
@@ -260,7 +337,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
                 _cell_walk_cell(w, cell, f, o, p);
             }
         }
-        return float(last) + m >= reach;
+        return !w.spent && float(last) + m >= reach;
     }
 #endif
     w.loops += 1;                 // the pass that leaves the ring loop
