@@ -29,7 +29,8 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: s
     d = glsl_defines()
     d.update(
         CELL_DIM=p.dim,
-        CELL_N=n,
+        # a feature pass needs F1 alone: its walks read r.F[0], delta[0], id[0]
+        CELL_N=n if set(outputs) & {"F", "delta", "id", "grad"} else 1,
         CELL_METRIC=int(p.metric),
         CELL_DIST=int(p.distribution),
         CELL_MAX_POINTS=MAX_POINTS,
