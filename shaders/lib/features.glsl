@@ -244,8 +244,12 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     _cell_walk_cell(w, cell, f, ivec4(0), p);
     // Ring 1 as a block of constant bounds, unrolled into straight-line SIMD
     // code as in cell_search (most walks end in it); the same cells in the same
-    // order as the window loop below would visit, each under the same test.
-    // Constant loops spend no loop passes: only the visits are counted.
+    // order as the window loop below would visit, every one of them: llvmpipe
+    // runs the body of an `if` even when no lane takes it, so testing a cell
+    // against the reach costs more than it saves (a point beyond the reach
+    // changes nothing: its plane is further than the nearest, its smooth
+    // weight is cut, it is further than the nearest neighbour). Constant
+    // loops spend no loop passes: only the visits are counted.
     if (m >= _cell_walk_reach(w)) {
         return true;
     }
@@ -263,8 +267,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 #endif
     {
         ivec4 o = ivec4(x, y, z, v);
-        if (any(notEqual(o, ivec4(0)))
-            && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
+        if (any(notEqual(o, ivec4(0)))) {
             if (cell_budget_spent(w.loops)) {
                 w.spent = true;
             } else {
