@@ -6,7 +6,8 @@ Each snippet's GLSL is pasted into a fragment shader that covers an S x S target
 a compact *approximate* 3x3 jitter F1 written for this benchmark (one point per cell, the 9
 cells around the sample, no pruning, no exactness guarantee: the usual shader-toy cellular
 noise). ``ratio`` = (snippet Mpx/s) / (compact Mpx/s): 1.0 is as fast as the approximate
-snippet.
+snippet. The compact snippet is rendered before every row (so its median time samples the load
+over the whole run, as the rows' do).
 
 Rows: the basis snippets (``cellgl export --basis ...``: f1 with the jitter and the poisson
 distribution, f1f2, edge), F1 texture recipes with both distributions, and every exportable
@@ -15,10 +16,21 @@ preset (``cellgl export PRESET``, its ``cellgl_texture(uv)``).
     python benchmarks/bench_snippets.py                   # everything, 1024^2, median of 5
     python benchmarks/bench_snippets.py --size 512 --repeats 3 f1 flagstone
     python benchmarks/bench_snippets.py --compare old/ f1     # also old/f1.glsl (an older export)
+    python benchmarks/bench_snippets.py --stub-search flagstone   # and flagstone minus its search
+
+``--stub-search`` adds, after each texture row, the same snippet with the body of its cellular
+search (``cellgl_search_budget``) replaced by a few operations on the sample's cell and
+fraction: the rate of everything else (the texture layer: noise, warp, fractal sum, colour,
+features' own passes), i.e. the most the snippet could reach with a free search. The pixels of
+that row are meaningless; only its time is (and where a feature runs passes of its own whose
+length depends on the search's answer, edge distance or smooth F1, it is not even that).
 
 Timings are medians of ``--repeats`` renders after one warm-up render (which compiles), the rows
-interleaved so that a change of load on a shared machine hits every row alike. The load average
-is printed with the table.
+interleaved so that a change of load on a shared machine hits every row alike. With
+``--compare``, each snippet that has an older version gets a column ``new / old``: the median of
+the per-round speed ratios of the two, rendered one right after the other. The load average is
+printed with the table: above about 2 on two cores, short renders (small ``--size``, fast rows)
+wait for the scheduler and the ratios of fast rows drift by 20% or more.
 """
 from __future__ import annotations
 
@@ -75,8 +87,32 @@ def _frag(body: str, call: str) -> str:
             f"    bench_out = {call};\n}}\n")
 
 
-def rows(names: list[str], compare: str | None = None):
-    """``[(label, fragment shader)]``: the compact reference first."""
+def stub_search(code: str) -> str | None:
+    """``code`` with its cellgl_search_budget body replaced by a stand-in that fills every field
+    of CellglResult from the cell and the fraction (so nothing downstream folds to a constant);
+    None without one."""
+    import re
+
+    m = re.search(r"CellglResult cellgl_search_budget\(ivec4 cell, vec4 f,[^)]*\) \{\n", code)
+    if not m:
+        return None
+    end = code.index("\n}\n", m.end())
+    struct = code[code.index("struct CellglResult"):]
+    struct = struct[:struct.index("};")]
+    n = int(re.search(r"float F\[(\d+)\]", struct).group(1))
+    body = ["    CellglResult r;", "    r.loops = loops;"]
+    for k in range(n):
+        body.append(f"    r.F[{k}] = f.x * {k + 1}.0 + f.y;")
+        if "delta[" in struct:
+            body.append(f"    r.delta[{k}] = f.yxzw * {k + 1}.0 - 0.5;")
+        if "id[" in struct:
+            body.append(f"    r.id[{k}] = uint(cell.x * {k + 3} + cell.y);")
+    body.append("    return r;")
+    return code[:m.end()] + "\n".join(body) + code[end:]
+
+
+def rows(names: list[str], compare: str | None = None, stub: bool = False):
+    """``[(label, fragment shader, is an older version)]``: the compact reference first."""
     from cellgl.export import snippets
     from cellgl.export.basis import basis_export
     from cellgl.recipes import list_presets, load_recipe
@@ -84,7 +120,7 @@ def rows(names: list[str], compare: str | None = None):
     def code(text):
         return text.split("\n\n", 1)[1]
 
-    out = [("compact 3x3 jitter F1 (approximate)", _frag(COMPACT, "vec4(vec3(bench_f1(uv * 8.0)), 1.0)"))]
+    out = [("compact 3x3 jitter F1 (approximate)", _frag(COMPACT, "vec4(vec3(bench_f1(uv * 8.0)), 1.0)"), False)]
     basis = [("basis f1, jitter", "f1", dict(distribution="jitter")),
              ("basis f1, poisson", "f1", {}),
              ("basis f1f2, poisson", "f1f2", {}),
@@ -94,7 +130,7 @@ def rows(names: list[str], compare: str | None = None):
             call = {"f1": "vec4(vec3(cellgl_f1(uv * 8.0)), 1.0)",
                     "f1f2": "vec4(cellgl_f1f2(uv * 8.0), 0.0, 1.0)",
                     "edge": "vec4(vec3(cellgl_edge(uv * 8.0)), 1.0)"}[b]
-            out.append((label, _frag(code(basis_export(b, 2, "glsl", **kw)), call)))
+            out.append((label, _frag(code(basis_export(b, 2, "glsl", **kw)), call), False))
     presets = [n for n, _ in list_presets() if not n.startswith("pups-")
                and load_recipe(n).values["cell_color"] != "image"
                and load_recipe(n).values["density_map"] != "image"]
@@ -103,11 +139,29 @@ def rows(names: list[str], compare: str | None = None):
     for label, r in recipes:
         if names and label.split(",")[0] not in names:
             continue
-        out.append((label, _frag(code(snippets.export(r, "glsl")), "cellgl_texture(uv)")))
+        text = code(snippets.export(r, "glsl"))
+        out.append((label, _frag(text, "cellgl_texture(uv)"), False))
         old = os.path.join(compare, label.replace(", distribution=", "-") + ".glsl") if compare else None
         if old and os.path.exists(old):
             with open(old, encoding="utf-8") as f:
-                out.append((f"{label} ({old})", _frag(code(f.read()), "cellgl_texture(uv)")))
+                out.append((f"{label} ({old})", _frag(code(f.read()), "cellgl_texture(uv)"), True))
+        stubbed = stub_search(text) if stub else None
+        if stubbed:
+            out.append((f"{label}, search stubbed", _frag(stubbed, "cellgl_texture(uv)"), False))
+    return out
+
+
+def ratios(times: list[list[float]], old: list[bool]) -> list[tuple[float, float | None]]:
+    """Per row: its median time over the compact snippet's (row 0), and, for a row followed by
+    its older version (``old[k + 1]``), the median per-round speed ratio to that version, the
+    two rendered one after the other (else None)."""
+    ref = statistics.median(times[0])
+    out = []
+    for k, t in enumerate(times):
+        vs_old = None
+        if k + 1 < len(times) and old[k + 1] and not old[k]:
+            vs_old = statistics.median(o / n for o, n in zip(times[k + 1], t))
+        out.append((ref / statistics.median(t), vs_old))
     return out
 
 
@@ -119,6 +173,8 @@ def main(argv=None) -> int:
     ap.add_argument("--compare", metavar="DIR", default=None,
                     help="also time DIR/PRESET.glsl (GLSL snippets of the same presets exported by "
                     "another cellgl version; f1 with distribution=jitter: DIR/f1-jitter.glsl)")
+    ap.add_argument("--stub-search", action="store_true",
+                    help="also time each texture snippet with its cellular search stubbed out")
     args = ap.parse_args(argv)
 
     from cellgl.gl import context
@@ -128,7 +184,8 @@ def main(argv=None) -> int:
     tex = ctx.texture((S, S), 4)
     fbo = ctx.framebuffer(color_attachments=[tex])
     progs = []
-    for label, frag in rows(args.names, args.compare):
+    table = rows(args.names, args.compare, args.stub_search)
+    for label, frag, _ in table:
         prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
         prog["size"].value = (float(S), float(S))
         progs.append((label, prog, ctx.vertex_array(prog, [])))
@@ -140,20 +197,30 @@ def main(argv=None) -> int:
 
     for _, _, vao in progs:             # warm-up: compiles the shader
         render(vao)
+    def timed(vao):
+        t0 = time.perf_counter()
+        render(vao)
+        return time.perf_counter() - t0
+
+    # The compact snippet is rendered before every row, not once per round, so that its time
+    # (the median of all those renders) samples the load over the whole run like the rows do.
     times = [[] for _ in progs]
     for _ in range(args.repeats):
         for k, (_, _, vao) in enumerate(progs):
-            t0 = time.perf_counter()
-            render(vao)
-            times[k].append(time.perf_counter() - t0)
+            if k:
+                times[0].append(timed(progs[0][2]))
+                times[k].append(timed(vao))
     med = [statistics.median(t) for t in times]
+    rel = ratios(times, [old for _, _, old in table])
     load = os.getloadavg()
     print(f"{S}x{S} fragment shader, median of {args.repeats}; load average {load[0]:.2f} "
           f"{load[1]:.2f} {load[2]:.2f}; {ctx.info.get('GL_RENDERER', '?')}")
-    print("| snippet | Mpx/s | ratio to compact |")
-    print("| --- | ---: | ---: |")
-    for (label, _, _), t in zip(progs, med):
-        print(f"| {label} | {S * S / t / 1e6:.1f} | {med[0] / t:.2f} |")
+    cmp = args.compare is not None
+    print("| snippet | Mpx/s | ratio to compact |" + (" new / old |" if cmp else ""))
+    print("| --- | ---: | ---: |" + (" ---: |" if cmp else ""))
+    for (label, _, _), t, (r, vs_old) in zip(progs, med, rel):
+        extra = (f" {vs_old:.2f} |" if vs_old is not None else " |") if cmp else ""
+        print(f"| {label} | {S * S / t / 1e6:.1f} | {r:.2f} |{extra}")
     return 0
 
 

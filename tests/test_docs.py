@@ -11,8 +11,6 @@ The second half tests the runner itself on small made-up documents.
 from __future__ import annotations
 
 import os
-import shutil
-import subprocess
 import time
 from pathlib import Path
 
@@ -20,6 +18,7 @@ import pytest
 
 import docs_runner as dr
 from docs_runner import Block, BlockFailed, DocError, DocSession
+from xvfb import xvfb_display
 
 ROOT = dr.ROOT
 
@@ -51,26 +50,8 @@ def display():
     if os.environ.get("DISPLAY"):
         yield os.environ["DISPLAY"]
         return
-    xvfb = shutil.which("Xvfb")
-    if not xvfb:
-        yield None
-        return
-    r, w = os.pipe()
-    proc = subprocess.Popen([xvfb, "-displayfd", str(w), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
-                            pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    os.close(w)
-    num, deadline = b"", time.time() + 20
-    while time.time() < deadline and not num.endswith(b"\n"):
-        chunk = os.read(r, 16)
-        if not chunk:
-            break
-        num += chunk
-    os.close(r)
-    try:
-        yield ":" + num.decode().strip() if num.strip() else None
-    finally:
-        proc.terminate()
-        proc.wait(10)
+    with xvfb_display() as disp:
+        yield disp
 
 
 @pytest.fixture(scope="module")

@@ -10,12 +10,12 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 import cellgl
+from xvfb import xvfb_display
 
 pytest.importorskip("imgui_bundle")
 pytest.importorskip("glfw")
@@ -51,32 +51,16 @@ def display():
     if os.environ.get("DISPLAY"):
         yield os.environ["DISPLAY"]
         return
-    xvfb = shutil.which("Xvfb")
-    if not xvfb:
+    if not shutil.which("Xvfb"):
         _unavailable("no DISPLAY and no Xvfb (apt-get install xvfb)")
-    r, w = os.pipe()
-    proc = subprocess.Popen([xvfb, "-displayfd", str(w), "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
-                            pass_fds=(w,), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    os.close(w)
-    num = b""
-    deadline = time.time() + 20
-    while time.time() < deadline and not num.endswith(b"\n"):
-        chunk = os.read(r, 16)
-        if not chunk:
-            break
-        num += chunk
-    os.close(r)
-    if not num.strip():
-        proc.kill()
-        _unavailable("Xvfb did not start")
-    disp = ":" + num.decode().strip()
-    os.environ["DISPLAY"] = disp
-    try:
-        yield disp
-    finally:
-        del os.environ["DISPLAY"]
-        proc.terminate()
-        proc.wait(10)
+    with xvfb_display() as disp:
+        if disp is None:
+            _unavailable("Xvfb did not start")
+        os.environ["DISPLAY"] = disp
+        try:
+            yield disp
+        finally:
+            del os.environ["DISPLAY"]
 
 
 @pytest.fixture(scope="module")

@@ -20,15 +20,16 @@
 // Requires: hash.glsl, points.glsl (cell_wrap). Macros: CELL_DIM (2..4).
 // Only the first CELL_DIM coordinates are used.
 
-// Gradient at lattice corner c: 4 components from two hashes of (c, seed).
+// Gradient at lattice corner c: 4 components from two hashes of (c, seed), each
+// 2 cell_u16(v) - 1 as one multiply-add (every step exact in float32: the same bits).
 vec4 _cell_noise_gradient(ivec4 c, uint seed)
 {
     uint h = seed * 0x165667b1u + 0x9e3779b9u + uint(c.x) * 0x8da6b343u + uint(c.y) * 0xd8163841u
            + uint(c.z) * 0xcb1ab31fu + uint(c.w) * 0x27d4eb2fu;
     h = cell_hash_u32(h);
     uint h2 = cell_hash_u32(h ^ 0x68e31da4u);
-    vec4 g = vec4(cell_u16(h >> 16), cell_u16(h & 0xffffu), cell_u16(h2 >> 16), cell_u16(h2 & 0xffffu));
-    return g * 2.0 - 1.0;
+    vec4 v = vec4(float(int(h >> 16)), float(int(h & 0xffffu)), float(int(h2 >> 16)), float(int(h2 & 0xffffu)));
+    return v * (1.0 / 32768.0) + (1.0 / 65536.0 - 1.0);
 }
 
 // Gradient noise at lattice position cell + f (f: any float offset, small); grad
