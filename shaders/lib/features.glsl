@@ -282,7 +282,10 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     if (!w.around) {
         // Smooth F1 alone: the reach F1 + cutoff k does not change during the
         // walk, so rings 2 .. R (the last the ring loop would enter) are one
-        // window loop, each cell under the same test.
+        // window loop. No test of a cell against the reach (it costs, llvmpipe
+        // runs the skipped cell anyway): each point's own cut-off decides, and
+        // a cell beyond the reach holds no point under it, so the same points
+        // are summed in the same order.
         float reach = _cell_walk_reach(w);
         int last = int(ceil(min(reach - m, float(CELL_FEATURE_MAX_RING))));
 #if CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
@@ -291,9 +294,9 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             // (2 last + 1)^d window (the ball is 0.79 of the square, 0.52 of the
             // cube, 0.31 in 4D): llvmpipe runs the body of an `if` even when no
             // lane takes it, so a skipped cell of the window costs as much as a
-            // visited one. The same cells in the same order as the window, each
-            // under the same test (the ranges, _cell_ball_reset, hold every cell
-            // it passes). For a narrow reach the rows' own cost outweighs that:
+            // visited one. The window's cells within the reach, in its order
+            // (the ranges, _cell_ball_reset, hold every one of them). For a
+            // narrow reach the rows' own cost outweighs that:
             // measured 0.73-0.89x the time at k = 0.25, 1.04-1.12x at k = 0.1
             // with rows from ring 3 (llvmpipe, 2D and 3D).
             ivec4 lo, hi;
@@ -311,8 +314,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
                     w.loops += 1;
                     o[CELL_DIM - 1] = z;
                     ivec4 ao = abs(o);
-                    if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2
-                        && _cell_box_distance(o, f, p) < cell_metric_term(reach, p.minkowski_p)) {
+                    if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
                         _cell_walk_cell(w, cell, f, o, p);
                     }
                 }
@@ -335,8 +337,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             w.loops += 1;
             o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
-            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2
-                && _cell_box_distance(o, f, p) < cell_metric_term(reach, p.minkowski_p)) {
+            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
                 _cell_walk_cell(w, cell, f, o, p);
             }
         }
