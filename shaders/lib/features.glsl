@@ -187,6 +187,36 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     }
 }
 
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+// _cell_walk_cell for smooth F1 alone in rings 2, 3, ...: a point there is
+// summed as _cell_walk_point sums it, without its tests for the other walks.
+// The F1 point (only there when the search needed ring 2) has d == F1 to the
+// bit (the same sum of the same terms), so it is told by its ID and distance.
+void _cell_walk_far_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+{
+    ivec4 c = cell_wrap(cell + o, p.period);
+    uint state = cell_cell_seed(c, p.seed);
+    int count = cell_point_count_at(state, c, p);
+    vec4 base = vec4(o) - f;
+    w.loops += count + 1;
+    for (int k = 0; k < count; k++) {
+        uint id;
+        vec4 delta = cell_dims(base + cell_next_point(state, c, p, id));
+        float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+        bool is_p1 = id == w.id1 && d == w.F1;
+        if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
+            float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
+            w.wsum += wt;
+#if CELL_SMOOTH_EXTRA
+            w.wdelta += wt * delta;
+            w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
+            w.wattr += wt * cell_id_attribute(id);
+#endif
+        }
+    }
+}
+#endif
+
 #if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
 // The ball of radius `reach` (Euclidean) around the sample (fraction f), in
 // rings up to `last`: the cells are walked in window order (axis 0 slowest),
@@ -305,18 +335,20 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             w.loops += 1;             // the pass that leaves the loop over the rows
             while (o.x <= hi.x && !w.spent) {
                 w.loops += 2;         // this pass, and the one that leaves the row
-                // One row: the last axis over its range, given the row's other axes.
-                for (int z = lo[CELL_DIM - 1]; z <= hi[CELL_DIM - 1]; z++) {
+                // One row: the last axis over its range, given the row's other
+                // axes, over the block of rings 0 and 1 (visited before).
+                ivec4 ao = abs(o);
+                ao[CELL_DIM - 1] = 0;
+                bool inner = max(max(ao.x, ao.y), max(ao.z, ao.w)) <= 1;
+                int z = inner ? (lo[CELL_DIM - 1] >= -1 ? 2 : lo[CELL_DIM - 1]) : lo[CELL_DIM - 1];
+                for (; z <= hi[CELL_DIM - 1]; z = (inner && z == -2) ? 2 : z + 1) {
                     if (cell_budget_spent(w.loops)) {
                         w.spent = true;
                         break;
                     }
                     w.loops += 1;
                     o[CELL_DIM - 1] = z;
-                    ivec4 ao = abs(o);
-                    if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
-                        _cell_walk_cell(w, cell, f, o, p);
-                    }
+                    _cell_walk_far_cell(w, cell, f, o, p);
                 }
                 o = _cell_ball_next_row(o, lo, hi, f, reach, last);
             }
@@ -338,7 +370,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
-                _cell_walk_cell(w, cell, f, o, p);
+                _cell_walk_far_cell(w, cell, f, o, p);
             }
         }
         return !w.spent && float(last) + m >= reach;
