@@ -10,6 +10,9 @@
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
+#if !CELL_OUT_F && !CELL_OUT_DELTA && !CELL_OUT_ID && !CELL_OUT_GRAD
+#define CELL_FEATURE_PASS 1      // a feature pass (cellgl.basis.passes): no F1..Fn written
+#endif
 #include "lib/features.glsl"
 
 #define CELL_FEATURES (CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE)
@@ -167,7 +170,7 @@ void main()
     p.axis_scale = u_axis_scale;
 #endif
 
-#if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE && !CELL_OUT_F && !CELL_OUT_DELTA && !CELL_OUT_ID && !CELL_OUT_GRAD
+#if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE && defined(CELL_FEATURE_PASS)
     // The polynomial smooth F1 pass: a fixed block, no search (features.glsl).
     CellFeatures x = cell_poly_features(cell, frac, p, u_smoothness);
     bool exact = x.exact;

@@ -187,7 +187,17 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     }
 }
 
-#if CELL_SMOOTH == 1 && !CELL_EDGE
+#ifndef CELL_WALK_FAST
+// 1: the smooth walk's specialised loops below (a pass of cellular.comp; the
+// textures and the exported snippets keep the shorter general code).
+#ifdef CELL_FEATURE_PASS
+#define CELL_WALK_FAST 1
+#else
+#define CELL_WALK_FAST 0
+#endif
+#endif
+
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST
 // _cell_walk_cell for smooth F1 alone in rings 2, 3, ...: a point there is
 // summed as _cell_walk_point sums it, without its tests for the other walks.
 // The F1 point (only there when the search needed ring 2) has d == F1 to the
@@ -217,7 +227,7 @@ void _cell_walk_far_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellPar
 }
 #endif
 
-#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
 // The ball of radius `reach` (Euclidean) around the sample (fraction f), in
 // rings up to `last`: the cells are walked in window order (axis 0 slowest),
 // each axis over the range its prefix leaves, t = sqrt(reach^2 - the prefix's
@@ -298,15 +308,11 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     {
         ivec4 o = ivec4(x, y, z, v);
         if (any(notEqual(o, ivec4(0)))) {
-            if (cell_budget_spent(w.loops)) {
-                w.spent = true;
-            } else {
+            w.spent = w.spent || cell_budget_spent(w.loops);
+            if (!w.spent) {
                 _cell_walk_cell(w, cell, f, o, p);
             }
         }
-    }
-    if (w.spent) {
-        return false;
     }
 #if CELL_SMOOTH == 1 && !CELL_EDGE
     if (!w.around) {
@@ -318,7 +324,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         // are summed in the same order.
         float reach = _cell_walk_reach(w);
         int last = int(ceil(min(reach - m, float(CELL_FEATURE_MAX_RING))));
-#if CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
+#if CELL_WALK_FAST && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
         if (last >= 4) {
             // A wide reach: only the cells of its ball, row by row, not the whole
             // (2 last + 1)^d window (the ball is 0.79 of the square, 0.52 of the
@@ -370,7 +376,11 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             o = cell_window_next(o, lo, hi);
             ivec4 ao = abs(o);
             if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
+#if CELL_WALK_FAST
                 _cell_walk_far_cell(w, cell, f, o, p);
+#else
+                _cell_walk_cell(w, cell, f, o, p);
+#endif
             }
         }
         return !w.spent && float(last) + m >= reach;
@@ -381,7 +391,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
-            return true;
+            return !w.spent;
         }
         ivec4 lo, hi;
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
@@ -404,7 +414,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             }
         }
     }
-    return float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
+    return !w.spent && float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
 }
 
 #if CELL_SMOOTH == 2
