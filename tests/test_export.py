@@ -173,14 +173,16 @@ def compile_snippet(tmp_path, target: str, text: str) -> None:
         # Godot's language is GLSL ES 3.00 plus its own header and fragment(); the code between
         # is checked as GLSL ES (Godot itself is not available to the tests).
         body = text.replace("shader_type canvas_item;", "")
-        body = re.sub(r"void fragment\(\)\n\{\n    COLOR = cellgl_texture\(UV\);\n\}\n", "", body)
+        body = re.sub(r"void fragment\(\)\s*\{\n    COLOR = cellgl_texture\(UV\);\n\}\n", "", body)
         # Godot declares highp defaults; the gles snippet must work with mediump defaults.
         prec = ("precision highp float;\nprecision highp int;\n" if d == "godot"
                 else "precision mediump float;\n")
         glslang(tmp_path, f"{target}.frag", "#version 300 es\n" + prec + body + _GLSL_MAIN)
     elif d == "hlsl":
+        # the Unity wrapper (hlsl; Unreal's .ush has none)
+        wrap = "cellgl_texture_float(pos.xy / 64.0, c)" if target == "hlsl" else "c = cellgl_texture(pos.xy / 64.0)"
         main = ("float4 main(float4 pos : SV_Position) : SV_Target\n"
-                "{\n    float4 c;\n    cellgl_texture_float(pos.xy / 64.0, c);\n"
+                f"{{\n    float4 c;\n    {wrap};\n"
                 "    return c + cellgl_texture(pos.yx / 64.0);\n}\n")
         glslang(tmp_path, f"{target}.hlsl", text + main, "-D", "-V", "-e", "main", "-S", "frag")
     elif d == "wgsl":

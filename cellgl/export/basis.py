@@ -117,19 +117,18 @@ def _tails(key: str, dim: int, ret: str) -> dict:
     """Shadertoy mainImage, Godot fragment() and the Unity Custom Function wrapper."""
     show = {"float": "v", "vec2": "v.y - v.x", "vec3": "v.x", "vec4": "v.x",
             "uint": "float(v & 255u) / 255.0"}[ret]
-    at = {2: "uv", 3: "vec3(uv, T)", 4: "vec4(uv, T, 0.0)"}[dim]
+    at = {2: "uv", 3: "vec3(uv, T)", 4: "vec4(uv, T, 0.0)"}[dim]    # uv: 8 cells per unit
     hlsl_ret = {"vec2": "float2", "vec3": "float3", "vec4": "float4"}.get(ret, ret)
     hlsl_p = f"float{dim}"
     return {
-        "shadertoy": ("\n// Shadertoy entry: 8 cells per screen height.\n"
-                      "void mainImage(out vec4 fragColor, in vec2 fragCoord)\n{\n"
-                      "    vec2 uv = fragCoord / iResolution.y * 8.0;\n"
-                      f"    {ret} v = cellgl_{key}({at.replace('T', '0.25 * iTime')});\n"
+        "shadertoy": ("// Shadertoy entry: 8 cells per screen height.\n"
+                      "void mainImage(out vec4 fragColor, in vec2 fragCoord) {\n"
+                      f"    {ret} v = cellgl_{key}({at.replace('uv', 'fragCoord / iResolution.y * 8.0').replace('T', '0.25 * iTime')});\n"
                       f"    fragColor = vec4(vec3({show}), 1.0);\n}}\n"),
-        "godot": ("\nvoid fragment()\n{\n    vec2 uv = UV * 8.0;\n"
-                  f"    {ret} v = cellgl_{key}({at.replace('T', '0.25 * TIME')});\n"
+        "godot": ("void fragment() {\n"
+                  f"    {ret} v = cellgl_{key}({at.replace('uv', 'UV * 8.0').replace('T', '0.25 * TIME')});\n"
                   f"    COLOR = vec4(vec3({show}), 1.0);\n}}\n"),
-        "unity": (f"\n// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_{key}).\n"
+        "unity": (f"// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_{key}).\n"
                   f"void cellgl_{key}_float({hlsl_p} P, out {hlsl_ret} Out)\n{{\n"
                   f"    Out = cellgl_{key}(P);\n}}\n"),
     }

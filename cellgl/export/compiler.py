@@ -8,13 +8,17 @@ Passes, repeated until the text stops changing:
    elements of constant arrays read at a literal index (or at any index, when all are equal);
 3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
    (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
-4. one-line functions inlined; parameters a function never reads dropped, and those every call
-   passes the same literal written into the body; ``out`` parameters whose results every caller
-   ignores turned into locals; struct fields never read (or only copied into themselves) removed;
+4. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
+   into one), and every function called once (:mod:`cellgl.export.inline`); parameters a function
+   never reads dropped, and those every call passes the same literal written into the body;
+   ``out`` parameters whose results every caller ignores turned into locals; struct fields never
+   read (or only copied into themselves) removed, those holding one literal everywhere folded
+   (:mod:`cellgl.export.fields`);
 5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
-Then every declaration comes after what it uses, and the comments are tidied
-(:func:`cellgl.export.reach.tidy_comments`). The output is GLSL of the same subset, for the same
+Then every declaration comes after what it uses, the comments are tidied
+(:func:`cellgl.export.reach.tidy_comments`) and statements the library splits over lines are
+joined where they fit. The output is GLSL of the same subset, for the same
 translators (:mod:`cellgl.export.translate`).
 """
 from __future__ import annotations
@@ -22,6 +26,8 @@ from __future__ import annotations
 import re
 
 from cellgl.export.fold import _literal, constants, fold
+from cellgl.export.fields import constant_fields
+from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
     Item,
     _code_idx,
@@ -33,6 +39,7 @@ from cellgl.export.reach import (
     parse,
     reach,
     scalarise,
+    strip_body_comments,
     tidy_comments,
     unparse,
 )
@@ -78,8 +85,14 @@ def _array_elements(items: list[Item]) -> list[Item]:
 
 def _one_liners(items: list[Item], keep) -> dict[str, tuple[list[str], str]]:
     """``{name: (parameter names, returned expression)}`` of the functions whose body is one short
-    ``return`` using each parameter at most once."""
+    ``return`` (or straight-line stores to locals and parameters ending in one, substituted
+    forward: ``x = abs(x); return x * x;`` -> ``x * x``)."""
     out = {}
+    calls: dict[str, int] = {}
+    for it in items:
+        if it.kind == "function":
+            for m in re.finditer(r"(?<![\w.])([A-Za-z_]\w*)\s*\(", "".join(t.text for t in it.toks)):
+                calls[m.group(1)] = calls.get(m.group(1), 0) + 1
     for it in items:
         if it.kind != "function" or it.name in keep:
             continue
@@ -87,15 +100,91 @@ def _one_liners(items: list[Item], keep) -> dict[str, tuple[list[str], str]]:
         w = [toks[i].text for i in code]
         op = w.index("(")
         cl = _match(toks, code, op)
-        if w[cl + 1:cl + 3] != ["{", "return"] or w[-2:] != [";", "}"] or w.count(";") != 1:
+        if w[cl + 1] != "{" or w[-2:] != [";", "}"] or "return" not in w:
             continue
         params = [w[b - 1] for a, b in _split_args(toks, code, op, cl)]
-        expr = "".join(t.text for t in toks[code[cl + 3]:code[len(w) - 2]]).strip()
-        ids = re.findall(r"\b[A-Za-z_]\w*\b", expr)
-        if len(expr) > 72 or any(ids.count(p) > 1 for p in params) or it.name in ids:
+        if any(set(w[a:b]) & {"out", "inout"} or w[b - 1] == "]" for a, b in _split_args(toks, code, op, cl)):
             continue
+        expr = _forward(toks, code, w, cl + 2, params)
+        if expr is None:
+            continue
+        ids = re.findall(r"\b[A-Za-z_]\w*\b", expr)
+        if len(expr) > 72 or it.name in ids:
+            continue
+        if len(expr) > 48 and calls.get(it.name, 0) > 2:       # (its definition counts once)
+            continue                          # a long expression stays one function where it is used often
         out[it.name] = (params, expr)
     return out
+
+
+def _forward(toks, code, w, start: int, params: list[str]) -> str | None:
+    """The returned expression of the straight-line body ``w[start:]`` with every local and
+    parameter store substituted forward (None: not straight-line)."""
+    env: dict[str, str] = {}
+    k = start
+    while k < len(w) - 1:
+        end = w.index(";", k)
+        stmt = w[k:end]
+        if "{" in stmt or "}" in stmt or "?" in stmt:
+            return None
+        text = "".join(t.text for t in toks[code[k]:code[end]]).strip()
+        if stmt[0] == "return":
+            return _substitute(text[len("return"):].strip(), env)
+        if len(stmt) > 2 and stmt[0] in _DECL_TYPES and stmt[2] == "=":
+            name, rhs = stmt[1], text.split("=", 1)[1].strip()
+        elif len(stmt) > 1 and stmt[0] in params + list(env) and stmt[1] == "=":
+            name, rhs = stmt[0], text.split("=", 1)[1].strip()
+        else:
+            return None
+        env[name] = _substitute(rhs, env)
+        k = end + 1
+    return None
+
+
+def _substitute(expr: str, env: dict[str, str]) -> str:
+    """``expr`` with the names of ``env`` replaced by their expressions (parenthesised where the
+    neighbours need it: a product or a left operand of a sum goes in bare)."""
+    toks = tokenize(expr)
+    code = _code_idx(toks)
+    out = []
+    for j, i in enumerate(code):
+        t = toks[i]
+        if t.kind == "id" and t.text in env and (j == 0 or toks[code[j - 1]].text != "."):
+            e = _strip_parens(env[t.text])
+            left = toks[code[j - 1]].text if j else "("
+            right = toks[code[j + 1]].text if j + 1 < len(code) else ")"
+            top = _top_ops(e)
+            bare = _simple(e) or (left in ("(", ",", "=") and right in (")", ",")) \
+                or (not top - {"*", "/"} and left in ("(", ",", "=", "+") and right in (")", ",", "+", "-")) \
+                or (not top - {"+", "-", "*", "/"} and left in ("(", ",", "=") and right in ("+", "-"))
+            out.append((i, e if bare else f"({e})"))
+    text = [t.text for t in toks]
+    for i, e in out:
+        text[i] = e
+    return "".join(text).strip()
+
+
+def _strip_parens(e: str) -> str:
+    while e.startswith("(") and e.endswith(")"):
+        toks = tokenize(e)
+        code = _code_idx(toks)
+        if _match(toks, code, 0) != len(code) - 1:
+            break
+        e = e[1:-1].strip()
+    return e
+
+
+def _top_ops(e: str) -> set[str]:
+    toks = tokenize(e)
+    depth, ops = 0, set()
+    for t in toks:
+        if t.text in "([":
+            depth += 1
+        elif t.text in ")]":
+            depth -= 1
+        elif depth == 0 and t.kind == "op" and t.text not in (".",):
+            ops.add(t.text)
+    return ops
 
 
 def _inline(items: list[Item], keep) -> list[Item]:
@@ -119,6 +208,13 @@ def _simple(arg: str) -> bool:
     return re.fullmatch(r"[\w.]+(\[[^\[\]]*\])*[\w.]*|\w+\([^()]*\)", arg.strip()) is not None
 
 
+def _cheap(arg: str) -> bool:
+    """An argument that may be written twice: a name, field, literal, or a short sum of those
+    and of casts."""
+    return _simple(arg) and "(" not in arg or (len(arg) <= 24 and re.fullmatch(r"[\w.\s+\-*()]*", arg) is not None
+                                               and set(re.findall(r"(\w+)\s*\(", arg)) <= {"float", "int", "uint"})
+
+
 def _inline_once(toks: list[Tok], small: dict, own: str) -> list[Tok] | None:
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
@@ -133,6 +229,8 @@ def _inline_once(toks: list[Tok], small: dict, own: str) -> list[Tok] | None:
                 return None
             if any(not _simple(a) and re.search(rf"\b{p}\s*\.", expr) for p, a in zip(params, args)):
                 continue                      # (a + b).xy: keep the call (translators drop such parentheses)
+            if any(len(re.findall(rf"\b{p}\b", expr)) > 1 and not _cheap(a) for p, a in zip(params, args)):
+                continue                      # an argument the expression reads twice: compute it once
             env = {p: (a if _simple(a) else f"({a})") for p, a in zip(params, args)}
             body = re.sub(r"\b[A-Za-z_]\w*\b", lambda m: env.get(m.group(), m.group()), expr)
             if not _simple(body):
@@ -157,11 +255,13 @@ def _inline_constants(items: list[Item], env: dict[str, str]) -> list[Item]:
     return out
 
 
-def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) -> str:
+def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> str:
     """The middle end: keep what ``entries`` reach, scalarise ``structs`` (``[(struct,
-    loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners,
-    repeat until nothing changes."""
+    loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners
+    and functions called once (but those named in ``keep``), repeat until nothing changes."""
     items = reach([it for it in parse(text) if it.kind != "other"], entries)
+    items = [Item(it.kind, it.name, strip_body_comments(it.toks), it.comment) if it.kind == "function" else it
+             for it in items]
     for _ in range(8):
         before = unparse(items)
         for struct, loader in structs:
@@ -172,14 +272,44 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True) ->
             items = _array_elements(items)
             items = fold(items, env)
         items = _inline(items, set(entries))
+        items = inline_once(items, set(entries) | set(keep) | {loader for _, loader in structs})
         items = _drop_unused_params(items, set(entries))
         items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))
         items = _dead_fields(items)
+        if fold_constants:
+            items = constant_fields(items)
         items = reach(items, entries)
         if unparse(items) == before:
             break
-    return unparse(tidy_comments(_ordered(items)))
+    return _join_lines(unparse(tidy_comments(_ordered(items)), blank=False))
+
+
+def _join_lines(text: str, width: int = 110) -> str:
+    """A statement the library splits over lines on one line where it fits in ``width``
+    columns."""
+    lines = text.split("\n")
+    out: list[str] = []
+    k = 0
+    while k < len(lines):
+        ln = lines[k]
+        s = ln.strip()
+        header = re.match(r"(for|if|while|else)\b", s) and s.endswith(")") and s.count("(") == s.count(")")
+        if not s or "//" in s or s.endswith((";", "{", "}")) or header or s.startswith("#"):
+            out.append(ln)
+            k += 1
+            continue
+        j, joined = k, ln.rstrip()
+        while j + 1 < len(lines) and not joined.endswith((";", "{")) and "//" not in lines[j + 1]:
+            j += 1
+            joined += " " + lines[j].strip()
+        if joined.endswith((";", "{")) and len(joined) <= width:
+            out.append(joined)
+            k = j + 1
+        else:
+            out.append(ln)
+            k += 1
+    return "\n".join(out)
 
 
 def _params(it: Item):

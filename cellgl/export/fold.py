@@ -19,7 +19,19 @@ from __future__ import annotations
 import re
 
 from cellgl.export.reach import Item, _code_idx, _match, _stmt_end
-from cellgl.export.simplify import _arithmetic, _bare_block, _copy_local, _dead_local, _dead_store, _last_store, _split_declarators
+from cellgl.export.simplify import (
+    _arithmetic,
+    _bare_block,
+    _copy_local,
+    _dead_local,
+    _dead_store,
+    _forward_literal,
+    _last_store,
+    _loop_variable,
+    _merge_declaration,
+    _split_declarators,
+    _store_into_next,
+)
 from cellgl.export.translate.tokens import Tok, tokenize
 
 __all__ = ["constants", "fold"]
@@ -151,6 +163,14 @@ def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
                 new = _bare_block(toks)
             if new is None:
                 new = _copy_local(toks, impure)
+            if new is None:
+                new = _merge_declaration(toks)
+            if new is None:
+                new = _forward_literal(toks)
+            if new is None:
+                new = _loop_variable(toks)
+            if new is None:
+                new = _store_into_next(toks, impure)
             if new is None:
                 break
             toks = new

@@ -124,29 +124,40 @@ def _item(toks: list[Tok], comment: list[Tok]) -> Item:
     return Item("other", "", list(toks), comment)
 
 
-def tidy_comments(items: list[Item], width: int = 100) -> list[Item]:
+def tidy_comments(items: list[Item], width: int = 120) -> list[Item]:
     """A declaration keeps the first sentence of the comment right above it, wrapped to
     ``width`` columns (a sentence longer than two lines: up to its first colon or semicolon);
-    comment lines and blank lines inside function bodies go (trailing comments on code lines
-    stay)."""
+    blank lines inside function bodies go (the library's comment lines there went before the
+    passes, :func:`strip_body_comments`; those left are inlined functions' own)."""
     out = []
     for it in items:
-        com = [ln.strip()[2:].strip() for ln in "".join(t.text for t in it.comment).split("\n")
-               if ln.strip().startswith("//")] if it.comment else []
-        text = " ".join(x for x in com if x)
-        m = re.search(r"(?<!\b[A-Z])(?<!\be\.g)(?<!\bi\.e)\.(?=\s+[A-Z`(]|\s*$)", text)
-        text = text[:m.end()] if m else text
-        if len(text) > 2 * (width - 3):
-            cut = _clause_end(text)
-            text = text[:cut].rstrip(" ,") + "." if 0 < cut < 2 * (width - 3) else text
+        text = first_sentence("".join(t.text for t in it.comment), width) if it.comment else ""
         comment = tokenize("\n".join("// " + ln for ln in textwrap.wrap(text, width - 3)) + "\n") if text else []
         toks = it.toks
         if it.kind == "function":
-            body = "".join(t.text for t in toks).split("\n")
-            body = [ln for ln in body if ln.strip() and not ln.strip().startswith("//")]
-            toks = tokenize("\n".join(body))
+            toks = strip_body_comments(toks, keep=True)
         out.append(Item(it.kind, it.name, toks, comment))
     return out
+
+
+def strip_body_comments(toks, keep: bool = False):
+    """A function's tokens without blank lines and (``keep=False``) comment lines."""
+    lines = "".join(t.text for t in toks).split("\n")
+    body = [ln for ln in lines if ln.strip() and (keep or not ln.strip().startswith("//"))]
+    return toks if len(body) == len(lines) else tokenize("\n".join(body))
+
+
+def first_sentence(comment: str, width: int) -> str:
+    """The first sentence of a ``//`` comment block (a sentence longer than two lines: up to its
+    first colon or semicolon)."""
+    com = [ln.strip()[2:].strip() for ln in comment.split("\n") if ln.strip().startswith("//")]
+    text = " ".join(x for x in com if x)
+    m = re.search(r"(?<!\b[A-Z])(?<!\be\.g)(?<!\bi\.e)\.(?=\s+[A-Z`(]|\s+[a-z]+_\w+|\s*$)", text)
+    text = text[:m.end()] if m else text
+    if len(text) > 2 * (width - 3):
+        cut = _clause_end(text)
+        text = text[:cut].rstrip(" ,") + "." if 0 < cut < 2 * (width - 3) else text
+    return text
 
 
 def _clause_end(text: str) -> int:
@@ -161,16 +172,16 @@ def _clause_end(text: str) -> int:
     return 0
 
 
-def unparse(items: list[Item]) -> str:
+def unparse(items: list[Item], blank: bool = True) -> str:
     """The text of ``items``, one blank line between declarations (consecutive one-line
-    variables stay together)."""
+    variables stay together); ``blank=False``: none (a declaration's comment line sets it off)."""
     out: list[str] = []
     prev = None
     for it in items:
         body = it.text().strip("\n")
         one_line = it.kind == "variable" and "\n" not in "".join(t.text for t in it.toks).strip()
         if out:
-            out.append("\n" if (one_line and prev) else "\n\n")
+            out.append("\n" if (one_line and prev) or not blank else "\n\n")
         out.append(body)
         prev = one_line
     return "".join(out) + "\n"

@@ -269,6 +269,17 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
         text = re.sub(r"(?<=[\w)\]])\s*[-+]\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
         text = _LITERAL_VEC.sub(_member, text)
+        # |x| * |x| = x * x exactly
+        text = re.sub(rf"\babs\(({_BAL})\) \* abs\(\1\)",
+                      lambda m: (f"{m.group(1)} * {m.group(1)}" if re.fullmatch(r"[\w.\[\]]+", m.group(1))
+                                 else f"({_unwrap(m.group(1))}) * ({_unwrap(m.group(1))})"), text)
+        # a product in a sum needs no parentheses
+        text = re.sub(r"(?:(?<=[-+(=,] )|(?<=\())\(([\w.\[\]]+ \* [\w.\[\]]+)\)(?=\s*[-+);,])", r"\1", text)
+        text = _redundant_parens(text)
+        # a comparison of integer literals (sums of them)
+        text = re.sub(r"(?<=[=(!] )(\(?)(-?\d+(?: [-+*] \d+)*) (<=|>=|<|>|==|!=) (-?\d+(?: [-+*] \d+)*)\)?(?=\s*[;),&|])",
+                      lambda m: m.group() if m.group(1) and not m.group().endswith(")") else
+                      str(eval(f"{m.group(2)} {m.group(3)} {m.group(4)}", {"__builtins__": {}}, {})).lower(), text)
         # unsigned literals: uint(0) -> 0u, 0u * 1013u -> 0u, (0u + x) -> (x), (0u) -> 0u
         text = re.sub(r"\buint\((\d+)\)", r"\1u", text)
         text = re.sub(r"(?<![\w.*/%\s])(\s*)\b(\d+)u\s*\*\s*(\d+)u\b(?!\s*[*/%])",
@@ -277,12 +288,60 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(r"(?<=[(=,])(\s*)0u\s*\+\s*", r"\1", text)
         text = re.sub(r"(?<![\w\]])\((\d+u?|\d+\.\d+)\)", r"\1", text)
         # a zero vector added: vec4(0.0, 0.0, 0.0, 0.0) + s -> s
-        text = re.sub(rf"(?<=[(=,])(\s*){_ZERO_VEC}\s*\+\s*", r"\1", text)
+        text = re.sub(rf"(?<=[(=,])(\s*)\(?{_ZERO_VEC}\)?\s*\+\s*", r"\1", text)
+        # an empty last branch of an if chain (conditions without side effects)
+        text = re.sub(r"\}\s*else(?: if \((?:[^;{}()=]|[<>!=]=|\([^;{}()]*\))*\))? \{\s*\}(?!\s*else)", "}", text)
         text = re.sub(rf"\s*\+\s*{_ZERO_VEC}(?=\s*[);,])", "", text)
         text = re.sub(r"\n[ \t]*(\w+)\s*=\s*\(*\1\)*\s*;[^\n]*(?=\n)", "", text)   # x = x;
         if text == old:
             break
     return tokenize(text)
+
+
+_BAL = r"(?:[^()]|\((?:[^()]|\([^()]*\))*\))+"
+
+
+def _unwrap(e: str) -> str:
+    while e.startswith("(") and e.endswith(")") and re.fullmatch(rf"\(({_BAL})\)", e) \
+            and _balanced(e[1:-1]):
+        e = e[1:-1]
+    return e
+
+
+def _balanced(e: str) -> bool:
+    depth = 0
+    for ch in e:
+        depth += ch == "("
+        depth -= ch == ")"
+        if depth < 0:
+            return False
+    return depth == 0
+
+
+def _redundant_parens(text: str) -> str:
+    """``((e))`` -> ``(e)``, ``f((e))`` -> ``f(e)``, ``x = (e);`` -> ``x = e;``, ``return (e);``."""
+    if not re.search(r"[(=,]\s*\(|\breturn\s*\(", text):
+        return text
+    toks = tokenize(text)
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    drop: set[int] = set()
+    for n in range(len(w) - 1):
+        if w[n] != "(":
+            continue
+        cl = _match(toks, code, n)
+        if w[n + 1] == "(" and _match(toks, code, n + 1) == cl - 1:
+            drop |= {code[n + 1], code[cl - 1]}
+        elif n > 0 and w[n - 1] in ("=", "return") and cl + 1 < len(w) and w[cl + 1] == ";" \
+                and "?" not in w[n:cl] and "," not in w[n:cl]:
+            drop |= {code[n], code[cl]}
+        elif n > 0 and w[n - 1] in ("(", "=", ",", "return") and cl + 1 < len(w) \
+                and w[cl + 1] in ("+", "-", "<", ">", "<=", ">=", "==", "!=") \
+                and not _top_level_ops("".join(w[n + 1:cl])) - {"+", "-", "*", "/"}:
+            drop |= {code[n], code[cl]}           # (a + b) + c, (a * b) >= c: arithmetic on the left
+    if not drop:
+        return text
+    return "".join(t.text for i, t in enumerate(toks) if i not in drop)
 
 
 _NUM = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?"
@@ -336,3 +395,151 @@ def _mix(text: str) -> str:
             return _mix("".join(x.text for x in toks[:code[n]]) + "(" + inner.strip() + ")"
                         + "".join(x.text for x in toks[code[cl] + 1:]))
     return text
+
+
+def _merge_declaration(toks: list[Tok]) -> list[Tok] | None:
+    """``T x; ... x = e;`` (x unused between, in the same block) -> ``... T x = e;``."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 2):
+        if not ((w[n - 1] in _DECL_TYPES or w[n - 1].startswith("Cellgl")) and w[n - 2] in (";", "{", "}")
+                and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] == ";"):
+            continue
+        depth, k = 0, n + 2
+        while k < len(w) and w[k] != w[n] and depth >= 0:
+            depth += (w[k] == "{") - (w[k] == "}")
+            k += 1
+        if k + 1 >= len(w) or depth != 0 or w[k - 1] not in (";", "{", "}") or w[k + 1] != "=":
+            continue
+        end = _stmt_end(toks, code, w, k)
+        if w[n] in w[k + 2:end]:
+            continue
+        start = _line_start(toks, code[n - 1])
+        return (toks[:start] + toks[code[n + 1] + 1:code[k]] + [Tok("id", w[n - 1]), Tok("ws", " ")]
+                + toks[code[k]:])
+    return None
+
+
+_LIT = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?|true|false")
+
+
+def _forward_literal(toks: list[Tok]) -> list[Tok] | None:
+    """``x = 0; bool b = x > 9; if (!b) {`` -> ``bool b = 0 > 9; if (!b) {``: a literal just
+    stored (``x`` a local or a field) read by the next straight-line statements or ``if``
+    condition, before anything writes it."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(1, len(w) - 4):
+        if w[n - 1] not in (";", "{", "}") and not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}")):
+            continue
+        k = n + 1
+        target = [w[n]]
+        while k + 1 < len(w) and w[k] == ".":
+            target += [".", w[k + 1]]
+            k += 2
+        if not re.fullmatch(r"[A-Za-z_]\w*", w[n]) or w[k] != "=" or k + 2 >= len(w) or w[k + 2] != ";" \
+                or not _LIT.fullmatch(w[k + 1]):
+            continue
+        lit, s = w[k + 1], k + 3
+        while s < len(w) and w[s] not in ("}",):
+            if w[s] == "if" and w[s + 1] == "(":
+                lo, hi = s + 2, _match(toks, code, s + 1)
+            else:
+                if w[s] in ("for", "while", "{", "return", "else", "do", "break", "continue"):
+                    break
+                end = _stmt_end(toks, code, w, s)
+                eq = next((j for j in range(s, end) if w[j] in _ASSIGN_OPS), None)
+                if eq is None or "{" in w[s:end] or any(re.fullmatch(r"\w+", x) and x not in _DECL_TYPES
+                                                        and j + 1 < end and w[j + 1] == "(" and x not in _PURE
+                                                        for j, x in enumerate(w[s:end], s)):
+                    break
+                if w[s:s + len(target)] == target and w[s + len(target)] in _ASSIGN_OPS:
+                    break
+                lo, hi = eq + 1, end
+            hits = [j for j in range(lo, hi - len(target) + 1) if w[j:j + len(target)] == target
+                    and (j == 0 or w[j - 1] != ".") and (j + len(target) >= len(w) or w[j + len(target)] not in (".", "["))]
+            if any(w[j + len(target)] in _ASSIGN_OPS for j in hits):
+                break
+            if hits:
+                j = hits[0]
+                return toks[:code[j]] + [Tok("num", lit)] + toks[code[j + len(target) - 1] + 1:]
+            if w[s] == "if":
+                break
+            s = hi + 1
+    return None
+
+
+_PURE = {"abs", "min", "max", "floor", "sqrt", "clamp", "mix", "float", "int", "uint", "vec2", "vec3", "vec4",
+         "ivec2", "ivec3", "ivec4", "uvec4", "dot", "length", "ceil", "fract", "sign", "step", "smoothstep",
+         "any", "all", "notEqual", "equal", "pow", "exp", "log", "inversesqrt"}
+
+
+def _loop_variable(toks: list[Tok]) -> list[Tok] | None:
+    """``int i = 2; ... for (; i <= 9; i++) {...}`` with i unused after the loop (nor between)
+    -> ``... for (int i = 2; i <= 9; i++) {...}``."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for f in range(len(w) - 3):
+        if w[f] != "for" or w[f + 1] != "(" or w[f + 2] != ";":
+            continue
+        cl = _match(toks, code, f + 1)
+        end = _stmt_end(toks, code, w, f)
+        names = {x for x in w[f + 3:cl] if re.fullmatch(r"[A-Za-z_]\w*", x)}
+        for n in range(f - 1, 1, -1):
+            if w[n] in ("{", "}"):
+                break
+            if w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and w[n] in names and w[n + 1] == "=":
+                x, d_end = w[n], w.index(";", n)
+                if x in w[d_end + 1:f] or x in w[end + 1:]:
+                    break
+                decl = "".join(t.text for t in toks[code[n - 1]:code[d_end]]).strip()
+                start = _line_start(toks, code[n - 1])
+                return (toks[:start] + toks[code[d_end] + 1:code[f + 1] + 1] + tokenize(decl)
+                        + toks[code[f + 2]:])
+    return None
+
+
+def _store_into_next(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
+    """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);`` (a a name, or y read
+    without a field or index)."""
+    code = _code_idx(toks)
+    w = [toks[i].text for i in code]
+    for n in range(2, len(w) - 6):
+        if not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n])
+                and w[n + 1] == "="):
+            continue
+        end = _stmt_end(toks, code, w, n)
+        y = w[n]
+        if end + 3 >= len(w) or w[end + 1] != y or w[end + 2] != "=" or y in w[n + 2:end]:
+            continue
+        end2 = _stmt_end(toks, code, w, end + 1)
+        rhs = w[end + 3:end2]
+        if rhs.count(y) != 1 or any(x in impure for x in w[n:end2]):
+            continue
+        k = end + 3 + rhs.index(y)
+        a = _unwrap("".join(t.text for t in toks[code[n + 2]:code[end]]).strip())
+        simple = re.fullmatch(r"[A-Za-z_]\w*|[\w.]+\([^()]*\)", a) is not None
+        if not simple and (w[k + 1] in (".", "[") or k > 0 and w[k - 1] == "."):
+            continue
+        top = _top_level_ops(a)
+        left, right = w[k - 1], w[k + 1]
+        bare = simple or (left in ("(", ",", "=") and right in (")", ",", ";")) \
+            or (not top - {"*", "/"} and left in ("(", ",", "=", "+") and right in (")", ",", ";", "+", "-")) \
+            or (not top - {"+", "-", "*", "/"} and left in ("(", ",", "=") and right in ("+", "-"))
+        rhs_text = ("".join(t.text for t in toks[code[end + 3]:code[k]]) + (a if bare else f"({a})")
+                    + "".join(t.text for t in toks[code[k] + 1:code[end2]]))
+        start = _line_start(toks, code[end + 1])
+        return toks[:code[n + 2]] + tokenize(rhs_text.strip()) + toks[code[end]:start] + toks[code[end2] + 1:]
+    return None
+
+
+def _top_level_ops(e: str) -> set[str]:
+    depth, ops = 0, set()
+    for t in tokenize(e):
+        if t.text in "([":
+            depth += 1
+        elif t.text in ")]":
+            depth -= 1
+        elif depth == 0 and t.kind == "op" and t.text != ".":
+            ops.add(t.text)
+    return ops

@@ -168,8 +168,10 @@ def entry_points(prog: Program) -> list[str]:
 
 
 def _library_code(prog: Program, fold: bool) -> str:
+    # a texture keeps its search one function (benchmarks/bench_snippets.py --stub-search swaps
+    # its body); a basis snippet is little more than the search, written into its entry point
     text = compiler.compile_glsl(specialised_code(prog), entry_points(prog), structs=_CONSTANT_STRUCTS,
-                                 fold_constants=fold)
+                                 fold_constants=fold, keep=() if prog.entries else ("cellgl_search_budget",))
     return _tidy(text)
 
 
@@ -216,11 +218,11 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
                  "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
                  "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
     lines = [
-        f"cellgl {__version__}: {prog.kind} '{prog.title}' for {target.title}; exact (the same values as "
-        + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + ").",
-        f"Regenerate (do not edit): {command} --target {target.name}{' --uniforms' if uniforms else ''}",
+        f"cellgl {__version__} {prog.kind} '{prog.title}' for {target.title}, exact (the same values as "
+        + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + "). Regenerate (do not edit): "
+        f"{command} --target {target.name}{' --uniforms' if uniforms else ''}",
         *("  " + e for e in entry),
-        *textwrap.wrap(_how(target, prog), 96),
+        *textwrap.wrap(_how(target, prog), 116),
     ]
     if uniforms and prog.uniforms:
         used = set(re.findall(r"\bcellgl_(\w+)", code)) if code else None
@@ -236,7 +238,8 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
                 "noise_frequency), computed in double precision: recompute them to animate "
                 "(docs/engines.md).", 96)
     recipe = json.dumps(prog.recipe, separators=(",", ":")) if prog.recipe is not None else "{}"
-    lines += ["Recipe: " + recipe]
+    if not prog.signatures:                  # a basis snippet's command holds its parameters
+        lines += ["Recipe: " + recipe]
     return _comment("\n".join(lines)) + "\n"
 
 
@@ -251,10 +254,12 @@ def _how(target: Target, prog: Program) -> str:
     # a basis function has no fwidth: leave out what the texture's how says about it
     how = " ".join(x for x in re.split(r"(?<=\.) ", target.how)
                    if "fwidth" not in x and "Fragment (pixel)" not in x)
+    how = how.replace("(canvas_item: a Sprite2D / TextureRect shows the texture on its UV)",
+                      "(canvas_item; fragment() shows it, 8 cells per UV unit)")
     how = how.replace("mainImage shows the texture stretched over the viewport",
                       "mainImage shows it, 8 cells per screen height")
     how = re.sub(r"cellgl_texture\((uv|UV)\)", entry + "(p)", how)
-    size = {"vec2": 2, "vec3": 3}.get(prog.signatures[0].split()[0], 1) if prog.signatures else 4
+    size = {"vec2": 2, "vec3": 3, "vec4": 4}.get(prog.signatures[0].split()[0], 1) if prog.signatures else 4
     how = how.replace("output Float 4", f"output Float {size}")
     return how.replace("cellgl_texture", entry).replace("input UV", "input p").replace("(UV, out Out)", "(p, out Out)")
 
@@ -301,13 +306,14 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     elif d == "gles":
         body = translate.add_highp(code)
         if tgt.name == "shadertoy":
-            body += prog.tails.get("shadertoy", _SHADERTOY_MAIN)
+            body += _braces(prog.tails.get("shadertoy", _SHADERTOY_MAIN).lstrip("\n"))
     elif d == "godot":
         body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
     elif d == "hlsl":
-        body = _braces(translate.to_hlsl(code)) + prog.tails.get("unity", _UNITY_WRAPPER)
+        body = _braces(translate.to_hlsl(code) + ("" if tgt.name == "unreal" else
+                                                   prog.tails.get("unity", _UNITY_WRAPPER).lstrip("\n")))
         if tgt.name == "unreal":
-            body = "#pragma once\n\n" + body
+            body = "#pragma once\n" + body
     elif d == "wgsl":
         body = _braces(translate.to_wgsl(code))
     elif d == "osl":
@@ -320,8 +326,7 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
 
 
 def _braces(text: str) -> str:
-    """The opening brace of a function, a loop nest or a block on the line that opens it (the
-    targets' own tails, e.g. Godot's fragment(), keep theirs)."""
+    """The opening brace of a function, a loop nest or a block on the line that opens it."""
     return re.sub(r"(?m)^([ \t]*)((?![#/])\S[^\n]*[^\s;{},])\n\1\{$", r"\1\2 {", text)
 
 
@@ -352,7 +357,7 @@ def _godot(code: str, name: str, fragment: str = _GODOT_FRAGMENT) -> str:
     body = code
     if name == "godotinc":
         return body
-    return "shader_type canvas_item;\n\n" + body + fragment
+    return "shader_type canvas_item;\n" + body + _braces(fragment.lstrip("\n"))
 
 
 # --------------------------------------------------------------------------------------------

@@ -216,7 +216,7 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
     return o;
 }
 
-// Search flagged inexact at CELL_LOOP_BUDGET (6144) loops, as llvmpipe cuts loops silently.
+// Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
 // cell_search for an invocation that has already spent `loops` loop passes:
 // it stops, flagged inexact, before the invocation's count reaches
 // CELL_LOOP_BUDGET (6144 unless defined), since drivers cut longer loops

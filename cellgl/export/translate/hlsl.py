@@ -79,7 +79,7 @@ def _hlsl_mod_helpers() -> str:
         lines.append(f"{t} cellgl_mod({t} x, {t} y) {{ return x - y * floor(x / y); }}")
         if t != "float":
             lines.append(f"{t} cellgl_mod({t} x, float y) {{ return x - y * floor(x / y); }}")
-    return "\n".join(lines) + "\n\n"
+    return "\n".join(lines) + "\n"
 
 
 def to_hlsl(text: str) -> str:

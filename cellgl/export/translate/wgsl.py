@@ -241,7 +241,6 @@ class _WgslEmitter:
                     out.append(f"{kw} {self.name(name)}: {self.type_(typ, size)} = {self.e(init)};")
             elif k == "func":
                 out += self.func(item)
-            out.append("")
         return "\n".join(out)
 
     def func(self, item) -> list[str]:
@@ -317,5 +316,5 @@ def to_wgsl(text: str) -> str:
     body = em.emit()
     if em.uses_mod:
         body = ("// GLSL mod(): x - y * floor(x / y).\n"
-                "fn cellgl_mod(x: f32, y: f32) -> f32 { return x - y * floor(x / y); }\n\n" + body)
+                "fn cellgl_mod(x: f32, y: f32) -> f32 { return x - y * floor(x / y); }\n" + body)
     return body.rstrip() + "\n"
