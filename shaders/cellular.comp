@@ -11,14 +11,27 @@
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
 #define CELL_JITTER_UNIFORM 1      // jitter is u_jitter (lib/points.glsl picks its cheaper form)
+#if !CELL_OUT_F && !CELL_OUT_DELTA && !CELL_OUT_ID && !CELL_OUT_GRAD
+#define CELL_FEATURE_PASS 1      // a feature pass (cellgl.basis.passes): no F1..Fn written
+#endif
 #include "lib/features.glsl"
 
 #define CELL_FEATURES (CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE)
 #if CELL_FEATURES
-// Per sample CELL_FEATURE_STRIDE floats (cellgl/basis/features.py unpacks them): edge,
-// n-sphere radius, smooth F1, 0, edge gradient (4), smooth delta (4), smooth
-// gradient (4), smooth attribute (colour, value).
+// Per sample CELL_FEATURE_STRIDE floats (cellgl/basis/features.py, layout() and
+// unpack()): only the fields the pass was asked for, each at its column
+// CELL_FO_<FIELD> (-1: not written): edge, edge gradient (4), n-sphere radius,
+// smooth F1, smooth delta (4), smooth gradient (4), smooth attribute (colour, value).
+#ifndef CELL_FEATURE_STRIDE
 #define CELL_FEATURE_STRIDE 20
+#define CELL_FO_EDGE 0
+#define CELL_FO_EDGE_GRAD 4
+#define CELL_FO_NSPHERE 1
+#define CELL_FO_SMOOTH_F 2
+#define CELL_FO_SMOOTH_DELTA 8
+#define CELL_FO_SMOOTH_GRAD 12
+#define CELL_FO_SMOOTH_ATTR 16
+#endif
 uniform float u_smoothness;    // k of smooth F1, lattice units
 layout(std430, binding = 1) writeonly buffer OutFeatures { float out_features[]; };
 #endif
@@ -158,6 +171,12 @@ void main()
     p.axis_scale = u_axis_scale;
 #endif
 
+#if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE && defined(CELL_FEATURE_PASS)
+    // The polynomial smooth F1 pass: a fixed block, no search (features.glsl).
+    CellFeatures x = cell_poly_features(cell, frac, p, u_smoothness);
+    bool exact = x.exact;
+    int loops = x.loops;
+#else
     CellResult r = cell_search(cell, frac, p);
 
     for (int k = 0; k < CELL_N; k++) {
@@ -193,16 +212,32 @@ void main()
     CellFeatures x = cell_features(cell, frac, p, r, u_smoothness);
     exact = x.exact;
     loops = x.loops;
+#endif
+#endif
+#if CELL_FEATURES
     uint b = i * uint(CELL_FEATURE_STRIDE);
-    out_features[b] = x.edge * u_out_scale;
-    out_features[b + 1u] = x.nsphere * u_out_scale;
-    out_features[b + 2u] = x.smooth_F * u_out_scale;
-    out_features[b + 3u] = 0.0;
+#if CELL_FO_EDGE >= 0
+    out_features[b + uint(CELL_FO_EDGE)] = x.edge * u_out_scale;
+#endif
+#if CELL_FO_NSPHERE >= 0
+    out_features[b + uint(CELL_FO_NSPHERE)] = x.nsphere * u_out_scale;
+#endif
+#if CELL_FO_SMOOTH_F >= 0
+    out_features[b + uint(CELL_FO_SMOOTH_F)] = x.smooth_F * u_out_scale;
+#endif
     for (int a = 0; a < 4; a++) {
-        out_features[b + 4u + uint(a)] = x.edge_grad[a];
-        out_features[b + 8u + uint(a)] = x.smooth_delta[a] * u_out_scale;
-        out_features[b + 12u + uint(a)] = x.smooth_grad[a];
-        out_features[b + 16u + uint(a)] = x.smooth_attr[a];
+#if CELL_FO_EDGE_GRAD >= 0
+        out_features[b + uint(CELL_FO_EDGE_GRAD + a)] = x.edge_grad[a];
+#endif
+#if CELL_FO_SMOOTH_DELTA >= 0
+        out_features[b + uint(CELL_FO_SMOOTH_DELTA + a)] = x.smooth_delta[a] * u_out_scale;
+#endif
+#if CELL_FO_SMOOTH_GRAD >= 0
+        out_features[b + uint(CELL_FO_SMOOTH_GRAD + a)] = x.smooth_grad[a];
+#endif
+#if CELL_FO_SMOOTH_ATTR >= 0
+        out_features[b + uint(CELL_FO_SMOOTH_ATTR + a)] = x.smooth_attr[a];
+#endif
     }
 #endif
     int canary = 0;

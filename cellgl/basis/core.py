@@ -252,8 +252,7 @@ def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> Ce
 def _gpu_finish(out: dict, outs, positions, p) -> None:
     """Turn the GPU's feature record into the requested feature outputs."""
     if set(outs) & set(_features.OUTPUTS):
-        raw = out.pop("features", None)
-        feats = _features.unpack(raw, p.dim) if raw is not None else {}
+        feats = out.pop("features", {})        # unpacked by the passes (cellgl.basis.passes)
         _features.finish(out, feats, positions, 1.0, p.dim, outs, p.distribution == Distribution.BLENDER)
 
 

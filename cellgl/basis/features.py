@@ -32,7 +32,6 @@ OUTPUTS = ("edge", "edge_grad", "nsphere", "position", "color",
 EUCLIDEAN_ONLY = ("edge", "edge_grad", "nsphere")
 SMOOTH_CUTOFF = 16.0        #: CELL_SMOOTH_CUTOFF: weights below e^-16 are left out
 SMOOTHNESS_MAX = 0.25       #: largest smoothness k (cells): the walk then reaches F1 + 4
-STRIDE = 20                 #: CELL_FEATURE_STRIDE: floats per sample in the GPU record
 BIG = ref.BIG
 
 
@@ -45,8 +44,9 @@ def feature_max_ring(dim: int) -> int:
 #: the walks, each run in a pass of its own on the GPU, and the outputs each serves
 FAMILIES = {"edge": ("edge", "edge_grad"), "nsphere": ("nsphere",),
             "smooth": ("smooth_F1", "smooth_position", "smooth_grad", "smooth_color")}
-#: the columns of the GPU's feature record (:func:`unpack`) each walk writes
-COLUMNS = {"edge": [0, 4, 5, 6, 7], "nsphere": [1], "smooth": [2] + list(range(8, 20))}
+#: the fields of the GPU's per-sample feature record in their order, and their widths in floats
+FIELDS = (("edge", 1), ("edge_grad", 4), ("nsphere", 1), ("smooth_F", 1), ("smooth_delta", 4),
+          ("smooth_grad", 4), ("smooth_attr", 4))
 
 
 def flags(outputs) -> dict:
@@ -60,14 +60,41 @@ def flags(outputs) -> dict:
 SMOOTH_MODES = ("exp", "polynomial")   #: smooth F1: log-sum-exp (exact), or Blender's polynomial fold
 
 
+def layout(outputs) -> dict:
+    """The GPU's per-sample feature record for these outputs (only what they need, so a pass
+    writes and reads back no more): ``{field: first column}`` of :data:`FIELDS`, and
+    ``"stride"``, the floats per sample (0: no walk)."""
+    f = flags(outputs)
+    extra = bool(set(outputs) & {"smooth_grad", "smooth_position", "smooth_color"})
+    on = {"edge": f["edge"], "edge_grad": "edge_grad" in outputs, "nsphere": f["nsphere"],
+          "smooth_F": f["smooth"], "smooth_delta": extra, "smooth_grad": extra, "smooth_attr": extra}
+    out, col = {}, 0
+    for name, width in FIELDS:
+        if on[name]:
+            out[name] = col
+            col += width
+    out["stride"] = col
+    return out
+
+
+def stride(outputs) -> int:
+    """CELL_FEATURE_STRIDE: floats per sample in the GPU's feature record for ``outputs``."""
+    return layout(outputs)["stride"]
+
+
 def defines(outputs, dim: int, smooth: str = "exp") -> dict:
     """The macros of ``shaders/lib/features.glsl`` for these outputs (``CELL_SMOOTH`` 1: the
-    exponential smooth minimum, 2: Blender's polynomial fold)."""
+    exponential smooth minimum, 2: Blender's polynomial fold), and the record's layout
+    (``CELL_FEATURE_STRIDE``, ``CELL_FO_<FIELD>``: a field's first column, -1 if not written)."""
     f = flags(outputs)
     mode = (2 if smooth == "polynomial" else 1) if f["smooth"] else 0
     extra = bool(set(outputs) & {"smooth_grad", "smooth_position", "smooth_color"})
-    return dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=mode, CELL_NSPHERE=int(f["nsphere"]),
-                CELL_SMOOTH_EXTRA=int(extra), CELL_FEATURE_MAX_RING=feature_max_ring(dim))
+    lay = layout(outputs)
+    out = dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=mode, CELL_NSPHERE=int(f["nsphere"]),
+               CELL_SMOOTH_EXTRA=int(extra), CELL_FEATURE_MAX_RING=feature_max_ring(dim),
+               CELL_FEATURE_STRIDE=lay["stride"])
+    out.update({"CELL_FO_" + name.upper(): lay.get(name, -1) for name, _ in FIELDS})
+    return out
 
 
 # --------------------------------------------------------------------------- per ID
@@ -322,10 +349,15 @@ def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float
     return out
 
 
-def unpack(raw: np.ndarray, dim: int) -> dict:
-    """The GPU's per-sample record (N, STRIDE) float32 as :func:`features` names it."""
-    return dict(edge=raw[:, 0], nsphere=raw[:, 1], smooth_F=raw[:, 2], edge_grad=raw[:, 4:4 + dim],
-                smooth_delta=raw[:, 8:8 + dim], smooth_grad=raw[:, 12:12 + dim], smooth_attr=raw[:, 16:20])
+def unpack(raw: np.ndarray, outputs, dim: int) -> dict:
+    """The GPU's per-sample record (N, :func:`stride`) float32 of a pass for ``outputs``, as
+    :func:`features` names it (views of ``raw``, no copies)."""
+    out = {}
+    for name, col in layout(outputs).items():
+        if name != "stride":
+            width = dict(FIELDS)[name]
+            out[name] = raw[:, col] if width == 1 else raw[:, col:col + (dim if name != "smooth_attr" else 4)]
+    return out
 
 
 SMOOTHNESS_MAX_POLY = 1.0  #: largest smoothness of the polynomial fold (the node's socket range)
@@ -361,14 +393,19 @@ def finish(out: dict, feats: dict, positions: np.ndarray, scale: float, dim: int
     (``blender``: distribution 'blender', whose ``color`` is Blender's colour of the F1 cell)."""
     inv = 1.0 / scale
     f32 = np.float32
+
+    def scaled(a):
+        # x * 1.0 is x: the GPU's float32 record is taken as it is (no copy when contiguous)
+        return np.ascontiguousarray(a, f32) if inv == 1.0 else (np.asarray(a, np.float64) * inv).astype(f32)
+
     if "edge" in want:
-        out["edge"] = (np.asarray(feats["edge"], np.float64) * inv).astype(f32)
+        out["edge"] = scaled(feats["edge"])
     if "edge_grad" in want:
         out["edge_grad"] = np.asarray(feats["edge_grad"][:, :dim]).astype(f32)
     if "nsphere" in want:
-        out["nsphere"] = (np.asarray(feats["nsphere"], np.float64) * inv).astype(f32)
+        out["nsphere"] = scaled(feats["nsphere"])
     if "smooth_F1" in want:
-        out["smooth_F1"] = (np.asarray(feats["smooth_F"], np.float64) * inv).astype(f32)
+        out["smooth_F1"] = scaled(feats["smooth_F"])
     if "smooth_grad" in want:
         out["smooth_grad"] = np.asarray(feats["smooth_grad"][:, :dim]).astype(f32)
     if "smooth_position" in want:

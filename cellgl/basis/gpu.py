@@ -29,7 +29,8 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: s
     d = glsl_defines()
     d.update(
         CELL_DIM=p.dim,
-        CELL_N=n,
+        # a feature pass needs F1 alone: its walks read r.F[0], delta[0], id[0]
+        CELL_N=n if set(outputs) & {"F", "delta", "id", "grad"} else 1,
         CELL_METRIC=int(p.metric),
         CELL_DIST=int(p.distribution),
         CELL_MAX_POINTS=MAX_POINTS,
@@ -149,9 +150,9 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     return out[:, 0], out[:, 1]
 
 
-def _chunk_size(n: int, dim: int, outputs) -> int:
+def _chunk_size(n: int, dim: int, outputs, stride: int = 0) -> int:
     per = 4 * n * (dim if ("delta" in outputs or "grad" in outputs) else 1)
-    per = max(per, 4 * _features.STRIDE if "features" in outputs else 0)
+    per = max(per, 4 * stride if "features" in outputs else 0)
     return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
 
 
@@ -173,12 +174,12 @@ def _storage(ctx, binding: int, nbytes: int):
 
 
 def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
-         groups=None):
+         groups=None, stride: int = 0):
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
     1D dispatch) and copy results into ``out[start:start + count]``."""
     bufs = {}
     sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim,
-             "features": 4 * _features.STRIDE}
+             "features": 4 * stride}
     binding = {"F": 2, "delta": 3, "id": 4, "grad": 5, "features": 1}
     for name in outputs:
         bufs[name] = _storage(ctx, binding[name], count * sizes[name])
@@ -200,13 +201,13 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
         inexact[start + idx.astype(np.int64)] = True
 
 
-def _alloc(N: int, n: int, dim: int, outputs) -> dict:
+def _alloc(N: int, n: int, dim: int, outputs, stride: int = 0) -> dict:
     out = {}
     for name in outputs:
         if name in ("delta", "grad"):
             out[name] = np.empty((N, n, dim), dtype=np.float32)
         elif name == "features":
-            out[name] = np.empty((N, _features.STRIDE), dtype=np.float32)
+            out[name] = np.empty((N, stride), dtype=np.float32)
         else:
             out[name] = np.empty((N, n), dtype=np.uint32 if name == "id" else np.float32)
     return out
@@ -227,18 +228,18 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False, smooth=smooth))
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
-    outputs = _buffers(outputs)
+    stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
     _set(prog, "u_scale", float(p.scale))
     N = len(pts)
-    out = _alloc(N, n, p.dim, outputs)
+    out = _alloc(N, n, p.dim, outputs, stride)
     inexact = np.zeros(N, dtype=bool)
-    step = _chunk_size(n, p.dim, outputs)
+    step = _chunk_size(n, p.dim, outputs, stride)
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
         count = min(step, N - start)
         chunk = pts[start:start + count]
         _storage(ctx, 0, chunk.nbytes).write(chunk)
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact)
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, stride=stride)
     return out, ~inexact
 
 
@@ -255,19 +256,19 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True, smooth=smooth))
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
-    outputs = _buffers(outputs)
+    stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
     _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
     _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))      # dvec4: float64
     _set(prog, "u_spacing", tuple(float(v) for v in spacing))
     X, Y, Z, W = (int(v) for v in shape_xyzw)
     N = X * Y * Z * W
-    out = _alloc(N, n, p.dim, outputs)
+    out = _alloc(N, n, p.dim, outputs, stride)
     inexact = np.zeros(N, dtype=bool)
-    for slab, start, groups in _grid_slabs(X, Y, Z, W, _chunk_size(n, p.dim, outputs)):
+    for slab, start, groups in _grid_slabs(X, Y, Z, W, _chunk_size(n, p.dim, outputs, stride)):
         _set(prog, "u_slab", slab[:4])
         _set(prog, "u_slab_size", slab[4:])
         count = slab[4] * slab[5] * groups[2]
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, groups=groups)
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, groups=groups, stride=stride)
     return out, ~inexact
 
 
@@ -315,16 +316,16 @@ def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 
     _set(prog, "u_smoothness", float(smoothness))
     _set(prog, "u_scale", float(p.scale))
     _set(prog, "u_loop_probe", 1 << 30)
-    outputs = _buffers(outputs)
+    stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     N = len(pts)
-    if N > _chunk_size(n, p.dim, outputs):
-        raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs)} samples, got {N}")
-    out = _alloc(N, n, p.dim, outputs)
+    if N > _chunk_size(n, p.dim, outputs, stride):
+        raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs, stride)} samples, got {N}")
+    out = _alloc(N, n, p.dim, outputs, stride)
     inexact = np.zeros(N, dtype=bool)
     _storage(ctx, 0, pts.nbytes).write(pts)
     probe = _storage(ctx, 8, 8 * N)
-    _run(prog, ctx, N, n, p.dim, outputs, out, 0, inexact)
+    _run(prog, ctx, N, n, p.dim, outputs, out, 0, inexact, stride=stride)
     raw = np.frombuffer(probe.read(8 * N), dtype=np.int32).reshape(N, 2).astype(np.int64)
     # the canary loop (2 passes) ran before the probe
     return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], inexact

@@ -59,7 +59,8 @@ def gpu_passes(run, outs, N: int, p) -> tuple[dict, list]:
     position and colour need), then one per feature walk (edge, n-sphere, smooth), each with the
     whole loop budget (``CELL_LOOP_BUDGET``) to itself. So a sample gets the same bits, and the
     same exact flag, whatever else was asked with it. ``run(outputs)`` dispatches one pass and
-    returns ``({name: array}, exact)``; the walks' records are merged into ``"features"``.
+    returns ``({name: array}, exact)``; the walks' records, unpacked (:func:`cellgl.basis.features.unpack`),
+    are merged into ``"features"``.
     Returns the outputs and, per pass, (the output names it serves, its exact flags)."""
     fams = _features.flags(outs)
     out, passes = {}, []
@@ -67,14 +68,15 @@ def gpu_passes(run, outs, N: int, p) -> tuple[dict, list]:
         out, exact = run(basis_outputs(outs, p.distribution == Distribution.BLENDER))
         passes.append((_BASIS_NAMES, exact))
     if any(fams.values()):
-        record = np.zeros((N, _features.STRIDE), dtype=np.float32)
+        feats = {}
         for fam, on in fams.items():
             if on:
-                got, ok = run(tuple(o for o in outs if o in _features.FAMILIES[fam]))
-                cols = _features.COLUMNS[fam]
-                record[:, cols] = got["features"][:, cols]
+                wanted = tuple(o for o in outs if o in _features.FAMILIES[fam])
+                got, ok = run(wanted)
+                # each pass's record holds only its own fields: views into it, no copies
+                feats.update(_features.unpack(got["features"], wanted, p.dim))
                 passes.append((_features.FAMILIES[fam], ok))
-        out["features"] = record
+        out["features"] = feats
     return out, passes
 
 
