@@ -172,12 +172,21 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
     }
 }
 
+// 1 on the axes of the dimension, 0 past them.
+#if CELL_DIM >= 4
+const ivec4 _cell_axes = ivec4(1, 1, 1, 1);
+#elif CELL_DIM == 3
+const ivec4 _cell_axes = ivec4(1, 1, 1, 0);
+#else
+const ivec4 _cell_axes = ivec4(1, 1, 0, 0);
+#endif
+
 // The window of ring `ring` that a point within true distance `reach` of the
 // sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
 void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
 {
-    hi = cell_dims_i(min(ivec4(ring), ivec4(ceil(reach + f)) - 1));
-    lo = -cell_dims_i(min(ivec4(ring), ivec4(ceil(reach + 1.0 - f)) - 1));
+    hi = min(ivec4(ring), ivec4(ceil(reach + f)) - 1) * _cell_axes;
+    lo = -min(ivec4(ring), ivec4(ceil(reach + 1.0 - f)) - 1) * _cell_axes;
 }
 
 // Test every feature point of the cell at offset o from the sample's cell.
