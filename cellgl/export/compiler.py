@@ -30,6 +30,7 @@ from cellgl.export.fields import constant_fields
 from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
     Item,
+    _call_args,
     _code_idx,
     _drop_fields,
     _drop_struct_args,
@@ -519,16 +520,13 @@ def _effects_unused(items: list[Item], store: str, impure: set[str]) -> bool:
         toks = tokenize(store)
         code = _code_idx(toks)
         w = [toks[i].text for i in code]
-        for n in range(len(w) - 1):
-            if w[n] in sigs and w[n + 1] == "(":
-                cl = _match(toks, code, n + 1)
-                for k, (a, b) in enumerate(_split_args(toks, code, n + 1, cl)):
-                    if k >= len(sigs[w[n]]) or not set(sigs[w[n]][k]) & {"out", "inout"}:
-                        continue
-                    name = w[a]
-                    if b - a != 1 or not re.search(rf"\b\w+\s+{name}\s*;", before) \
-                            or re.search(rf"\b{name}\b", after) or _in_a_loop(before):
-                        return False
+        for fn, k, a, b in _call_args(toks, code, sigs):
+            if k >= len(sigs[fn]) or not set(sigs[fn][k]) & {"out", "inout"}:
+                continue
+            name = w[a]
+            if b - a != 1 or not re.search(rf"\b\w+\s+{name}\s*;", before) \
+                    or re.search(rf"\b{name}\b", after) or _in_a_loop(before):
+                return False
         return True
     return False
 

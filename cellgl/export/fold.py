@@ -21,6 +21,7 @@ import re
 from cellgl.export.reach import Item, _code_idx, _match, _stmt_end
 from cellgl.export.simplify import (
     _arithmetic,
+    _balanced,
     _bare_block,
     _copy_local,
     _dead_local,
@@ -97,16 +98,6 @@ def _evaluate(words: list[str], env: dict[str, str]):
     if words[:1] == ["("] and words[-1:] == [")"] and _balanced(words[1:-1]):
         return _evaluate(words[1:-1], env)
     return None
-
-
-def _balanced(words: list[str]) -> bool:
-    depth = 0
-    for s in words:
-        depth += s == "("
-        depth -= s == ")"
-        if depth < 0:
-            return False
-    return depth == 0
 
 
 def _evaluate_all(words: list[str], env: dict[str, str]):

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 import textwrap
 
-from cellgl.export.reach import Item, _code_idx, _match, _split_args, first_sentence
+from cellgl.export.reach import Item, _call_args, _code_idx, _match, _split_args, first_sentence
 from cellgl.export.translate.tokens import GLSL_TYPES, tokenize
 
 __all__ = ["inline_once"]
@@ -86,13 +86,7 @@ def _written(body: str, name: str, outs: dict[str, set[int]]) -> bool:
     toks = tokenize(body)
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
-    for n in range(len(w) - 1):
-        if w[n] in outs and w[n + 1] == "(":
-            cl = _match(toks, code, n + 1)
-            for k, (a, b) in enumerate(_split_args(toks, code, n + 1, cl)):
-                if k in outs[w[n]] and name in w[a:b]:
-                    return True
-    return False
+    return any(k in outs[fn] and name in w[a:b] for fn, k, a, b in _call_args(toks, code, outs))
 
 
 def _out_positions(items: list[Item]) -> dict[str, set[int]]:

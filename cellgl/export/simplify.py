@@ -308,7 +308,8 @@ def _unwrap(e: str) -> str:
     return e
 
 
-def _balanced(e: str) -> bool:
+def _balanced(e) -> bool:
+    """Whether the parentheses among ``e`` (a string, or a list of words) pair up in order."""
     depth = 0
     for ch in e:
         depth += ch == "("

@@ -132,6 +132,23 @@ float _cell_walk_reach(_CellWalk w)
     return reach * 1.000001 + 1e-6;
 }
 
+#if CELL_SMOOTH == 1
+// Smooth F1 (exp): add the point at true distance d (delta, id) to the sums when its weight
+// exp(-(d - F1) / k) is inside the cut-off; the F1 point itself (is_p1) weighs 1.
+void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p1, CellParams p)
+{
+    if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
+        float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
+        w.wsum += wt;
+#if CELL_SMOOTH_EXTRA
+        w.wdelta += wt * delta;
+        w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
+        w.wattr += wt * cell_id_attribute(id);
+#endif
+    }
+}
+#endif
+
 void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, CellParams p)
 {
     delta = cell_dims(delta);
@@ -161,15 +178,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
 #endif
 #if CELL_SMOOTH == 1
     float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-    if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
-        float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
-        w.wsum += wt;
-#if CELL_SMOOTH_EXTRA
-        w.wdelta += wt * delta;
-        w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
-        w.wattr += wt * cell_id_attribute(id);
-#endif
-    }
+    _cell_smooth_add(w, delta, d, id, is_p1, p);
 #endif
 }
 
@@ -213,16 +222,7 @@ void _cell_walk_far_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellPar
         uint id;
         vec4 delta = cell_dims(base + cell_next_point(state, c, p, id));
         float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-        bool is_p1 = id == w.id1 && d == w.F1;
-        if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
-            float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
-            w.wsum += wt;
-#if CELL_SMOOTH_EXTRA
-            w.wdelta += wt * delta;
-            w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
-            w.wattr += wt * cell_id_attribute(id);
-#endif
-        }
+        _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
     }
 }
 #endif
