@@ -327,14 +327,19 @@ def _impure_functions(items: list[Item]) -> set[str]:
             and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
 
 
+def _rewritable(items: list[Item], keep):
+    """``(item, params, body)`` of every function whose signature a pass may change: defined once
+    (no overloads) and not an entry point in ``keep``."""
+    for it in items:
+        if it.kind == "function" and it.name not in keep and sum(x.name == it.name for x in items) == 1:
+            yield (it, *_params(it))
+
+
 def _drop_unused_params(items: list[Item], keep) -> list[Item]:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
 
     impure = _impure_functions(items)
-    for it in items:
-        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
-            continue
-        params, body = _params(it)
+    for it, params, body in _rewritable(items, keep):
         for k, words in enumerate(params):
             if not words or words[-1] in body or set(words) & {"out", "inout"} or words[-1] == "]":
                 continue
@@ -357,10 +362,7 @@ def _constant_args(items: list[Item], keep) -> list[Item]:
     """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
     becomes that literal in the body, and the argument goes."""
     impure = _impure_functions(items)
-    for it in items:
-        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
-            continue
-        params, body = _params(it)
+    for it, params, body in _rewritable(items, keep):
         for k, words in enumerate(params):
             if len(words) != 2 or words[0] in ("out", "inout"):
                 continue
@@ -407,10 +409,7 @@ def _drop_unused_outs(items: list[Item], keep) -> list[Item]:
     """An ``out`` parameter whose argument is, at every call, a local used nowhere else becomes a
     local of the function (whose stores the dead-store pass then removes)."""
 
-    for it in items:
-        if it.kind != "function" or it.name in keep or sum(x.name == it.name for x in items) != 1:
-            continue
-        params, _ = _params(it)
+    for it, params, _ in _rewritable(items, keep):
         for k, words in enumerate(params):
             if words[:1] != ["out"] or len(words) != 3:
                 continue
