@@ -75,15 +75,59 @@ uniform ivec4 u_slab;          // first sample of this slab
 uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
 #else
 uniform double u_scale;        // positions are multiplied by this first
-// Sample positions, float64, tightly packed (CELL_DIM values per sample).
+// Sample positions, float64, tightly packed (CELL_DIM values per sample), as the 32-bit words
+// of an unsigned integer texture 2^CELL_SAMPLE_ROW_BITS texels wide (cellgl/basis/gpu.py,
+// upload_samples): RGBA32UI in 2D and 4D (one and two texels per sample), RGB32UI in 3D
+// (two texels per sample). llvmpipe fetches a texel for every lane of a SIMD vector at once,
+// where it loads a storage buffer lane by lane (docs/performance.md).
 // They are split into an integer cell and a float32 fraction in double
 // precision, so a sample 10^6 cells from the origin is as exact as one at it.
-layout(std430, binding = 0) readonly buffer Samples { double sample_pos[]; };
+uniform usampler2D u_samples;
+uvec4 cell_sample_texel(uint k)
+{
+    return texelFetch(u_samples, ivec2(k & ((1u << CELL_SAMPLE_ROW_BITS) - 1u), k >> CELL_SAMPLE_ROW_BITS), 0);
+}
 #endif
+
+// Each sample's outputs are one contiguous row (F and id: CELL_N values, delta and grad:
+// CELL_N * CELL_DIM), stored as vectors of the widest size (4, 2 or 1) that divides the
+// row: llvmpipe stores to a storage buffer lane by lane, one loop per store whatever its width.
+#define CELL_ND (CELL_N * CELL_DIM)
+#if CELL_N % 4 == 0
+#define CELL_N_VEC 4
+#define CELL_N_ROW(a, j) vec4(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
+#define CELL_N_ROWU(a, j) uvec4(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
+layout(std430, binding = 2) writeonly buffer OutF { vec4 out_F[]; };
+layout(std430, binding = 4) writeonly buffer OutId { uvec4 out_id[]; };
+#elif CELL_N % 2 == 0
+#define CELL_N_VEC 2
+#define CELL_N_ROW(a, j) vec2(a[2 * (j)], a[2 * (j) + 1])
+#define CELL_N_ROWU(a, j) uvec2(a[2 * (j)], a[2 * (j) + 1])
+layout(std430, binding = 2) writeonly buffer OutF { vec2 out_F[]; };
+layout(std430, binding = 4) writeonly buffer OutId { uvec2 out_id[]; };
+#else
+#define CELL_N_VEC 1
+#define CELL_N_ROW(a, j) a[j]
+#define CELL_N_ROWU(a, j) a[j]
 layout(std430, binding = 2) writeonly buffer OutF { float out_F[]; };
-layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
+#endif
+#if CELL_ND % 4 == 0
+#define CELL_ND_VEC 4
+#define CELL_ND_ROW(a, j) vec4(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
+layout(std430, binding = 3) writeonly buffer OutDelta { vec4 out_delta[]; };
+layout(std430, binding = 5) writeonly buffer OutGrad { vec4 out_grad[]; };
+#elif CELL_ND % 2 == 0
+#define CELL_ND_VEC 2
+#define CELL_ND_ROW(a, j) vec2(a[2 * (j)], a[2 * (j) + 1])
+layout(std430, binding = 3) writeonly buffer OutDelta { vec2 out_delta[]; };
+layout(std430, binding = 5) writeonly buffer OutGrad { vec2 out_grad[]; };
+#else
+#define CELL_ND_VEC 1
+#define CELL_ND_ROW(a, j) a[j]
+layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
 layout(std430, binding = 5) writeonly buffer OutGrad { float out_grad[]; };
+#endif
 layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_index[]; };
 
 // The driver's own loop limit (docs/exactness.md). llvmpipe counts the loop
@@ -132,10 +176,30 @@ void main()
     if (i >= u_count) {
         return;
     }
+    dvec4 pos = dvec4(0.0LF);
+#if CELL_DIM == 2
+    uvec4 t0 = cell_sample_texel(i);
+    pos.xy = dvec2(packDouble2x32(t0.xy), packDouble2x32(t0.zw));
+#elif CELL_DIM == 3
+    uvec4 t0 = cell_sample_texel(2u * i);
+    uvec4 t1 = cell_sample_texel(2u * i + 1u);
+    pos.xyz = dvec3(packDouble2x32(t0.xy), packDouble2x32(uvec2(t0.z, t1.x)), packDouble2x32(t1.yz));
+#else
+    uvec4 t0 = cell_sample_texel(2u * i);
+    uvec4 t1 = cell_sample_texel(2u * i + 1u);
+    pos = dvec4(packDouble2x32(t0.xy), packDouble2x32(t0.zw), packDouble2x32(t1.xy), packDouble2x32(t1.zw));
+#endif
+    // Coordinates must lie within +-2^30 cells (cellgl.basis.core.COORD_LIMIT). One that does not
+    // (or NaN) is searched at 0 and its sample flagged: the library then finds it and raises
+    // (core._check_coords), as it would have before the dispatch.
+    bool in_range = true;
     cell = ivec4(0);
     frac = vec4(0.0);
     for (int a = 0; a < CELL_DIM; a++) {
-        double x = sample_pos[i * uint(CELL_DIM) + uint(a)] * u_scale;
+        double x = pos[a] * u_scale;
+        bool ok = abs(x) < 1073741824.0LF;
+        in_range = in_range && ok;
+        x = ok ? x : 0.0LF;
         double fl = floor(x);
         float fr = float(x - fl);
         // A fraction just below 1 can round up to 1.0 in float32.
@@ -179,33 +243,50 @@ void main()
 #else
     CellResult r = cell_search(cell, frac, p);
 
-    for (int k = 0; k < CELL_N; k++) {
-        uint o = i * uint(CELL_N) + uint(k);
 #if CELL_OUT_F
-        out_F[o] = r.F[k] * u_out_scale;
-#endif
-#if CELL_OUT_DELTA
-        for (int a = 0; a < CELL_DIM; a++) {
-#if CELL_ANISO
-            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] / u_axis_scale[a] * u_out_scale;
-#else
-            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] * u_out_scale;
-#endif
-        }
+    float row_F[CELL_N];
+    for (int k = 0; k < CELL_N; k++) {
+        row_F[k] = r.F[k] * u_out_scale;
+    }
+    for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
+        out_F[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROW(row_F, j);
+    }
 #endif
 #if CELL_OUT_ID
-        out_id[o] = r.id[k];
+    for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
+        out_id[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROWU(r.id, j);
+    }
+#endif
+#if CELL_OUT_DELTA
+    float row_delta[CELL_ND];
+    for (int k = 0; k < CELL_N; k++) {
+        for (int a = 0; a < CELL_DIM; a++) {
+#if CELL_ANISO
+            row_delta[k * CELL_DIM + a] = r.delta[k][a] / u_axis_scale[a] * u_out_scale;
+#else
+            row_delta[k * CELL_DIM + a] = r.delta[k][a] * u_out_scale;
+#endif
+        }
+    }
+    for (int j = 0; j < CELL_ND / CELL_ND_VEC; j++) {
+        out_delta[i * uint(CELL_ND / CELL_ND_VEC) + uint(j)] = CELL_ND_ROW(row_delta, j);
+    }
 #endif
 #if CELL_OUT_GRAD
+    float row_grad[CELL_ND];
+    for (int k = 0; k < CELL_N; k++) {
         vec4 g = cell_metric_gradient(r.delta[k], r.F[k], u_minkowski_p);
 #if CELL_ANISO
         g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
 #endif
         for (int a = 0; a < CELL_DIM; a++) {
-            out_grad[o * uint(CELL_DIM) + uint(a)] = g[a];
+            row_grad[k * CELL_DIM + a] = g[a];
         }
-#endif
     }
+    for (int j = 0; j < CELL_ND / CELL_ND_VEC; j++) {
+        out_grad[i * uint(CELL_ND / CELL_ND_VEC) + uint(j)] = CELL_ND_ROW(row_grad, j);
+    }
+#endif
     bool exact = r.exact;
     int loops = r.loops;
 #if CELL_FEATURES
@@ -245,6 +326,9 @@ void main()
         canary += 1;
     }
     exact = exact && canary == u_loop_canary;
+#if !CELL_GRID
+    exact = exact && in_range;
+#endif
 #if CELL_LOOP_PROBE
     int left = 0;
     for (int k = 0; k < u_loop_probe; k++) {

@@ -16,6 +16,8 @@ from cellgl.basis.enums import glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
 LOCAL_SIZE = 64
+#: the sample texture of :func:`search_points` is 2^_SAMPLE_ROW_BITS texels wide (cellular.comp)
+_SAMPLE_ROW_BITS = 12
 _CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
 _MAX_GROUPS = 65535
 
@@ -42,6 +44,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: s
         CELL_OUT_ID=int("id" in outputs),
         CELL_OUT_GRAD=int("grad" in outputs),
         CELL_LOCAL_SIZE=LOCAL_SIZE,
+        CELL_SAMPLE_ROW_BITS=_SAMPLE_ROW_BITS,
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
         CELL_ORBIT=int(p.orbit),
         CELL_ANISO=int(p.aniso),
@@ -173,6 +176,33 @@ def _storage(ctx, binding: int, nbytes: int):
     return buf
 
 
+def upload_samples(ctx, prog, pts: np.ndarray) -> None:
+    """Hand the float64 positions ``pts`` (count, d), C-contiguous, to ``prog`` (``cellular.comp``,
+    ``u_samples``) as the 32-bit words of an unsigned-integer texture, ``2^_SAMPLE_ROW_BITS`` texels
+    wide (RGBA32UI in 2D and 4D, RGB32UI in 3D: d / 2 or 2 texels per sample, no padding). The
+    texture is kept and reused across calls (grown when a chunk needs more rows)."""
+    count, dim = pts.shape
+    comps = 3 if dim == 3 else 4
+    texels = count * 2 * dim // comps
+    width = 1 << _SAMPLE_ROW_BITS
+    rows, tail = divmod(texels, width)
+    key = (id(ctx), "samples", comps)
+    tex = _pool.get(key)
+    if tex is None or tex.height < rows + 1:
+        if tex is not None:
+            tex.release()
+        tex = ctx.texture((width, max(rows + 1, (rows + 1) * 5 // 4)), comps, dtype="u4")
+        tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
+        _pool[key] = tex
+    words = pts.reshape(-1).view(np.uint32)
+    if rows:
+        tex.write(words[: rows * width * comps], viewport=(0, 0, width, rows))
+    if tail:
+        tex.write(words[rows * width * comps:], viewport=(0, rows, tail, 1))
+    tex.use(0)
+    _set(prog, "u_samples", 0)
+
+
 def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
          groups=None, stride: int = 0):
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
@@ -237,8 +267,7 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
         count = min(step, N - start)
-        chunk = pts[start:start + count]
-        _storage(ctx, 0, chunk.nbytes).write(chunk)
+        upload_samples(ctx, prog, pts[start:start + count])
         _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, stride=stride)
     return out, ~inexact
 
@@ -323,7 +352,7 @@ def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 
         raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs, stride)} samples, got {N}")
     out = _alloc(N, n, p.dim, outputs, stride)
     inexact = np.zeros(N, dtype=bool)
-    _storage(ctx, 0, pts.nbytes).write(pts)
+    upload_samples(ctx, prog, pts)
     probe = _storage(ctx, 8, 8 * N)
     _run(prog, ctx, N, n, p.dim, outputs, out, 0, inexact, stride=stride)
     raw = np.frombuffer(probe.read(8 * N), dtype=np.int32).reshape(N, 2).astype(np.int64)
