@@ -76,10 +76,9 @@ uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
 #else
 uniform double u_scale;        // positions are multiplied by this first
 // Sample positions, float64, tightly packed (CELL_DIM values per sample), as the 32-bit words
-// of an unsigned integer texture 2^CELL_SAMPLE_ROW_BITS texels wide (cellgl/basis/gpu.py,
-// upload_samples): RGBA32UI in 2D and 4D (one and two texels per sample), RGB32UI in 3D
-// (two texels per sample). llvmpipe fetches a texel for every lane of a SIMD vector at once,
-// where it loads a storage buffer lane by lane (docs/performance.md).
+// of an RGBA32UI texture 2^CELL_SAMPLE_ROW_BITS texels wide (cellgl/basis/gpu.py,
+// upload_samples): CELL_DIM / 2 texels per sample. llvmpipe fetches a texel for every lane of a
+// SIMD vector at once, where it loads a storage buffer lane by lane (docs/performance.md).
 // They are split into an integer cell and a float32 fraction in double
 // precision, so a sample 10^6 cells from the origin is as exact as one at it.
 uniform usampler2D u_samples;
@@ -181,9 +180,13 @@ void main()
     uvec4 t0 = cell_sample_texel(i);
     pos.xy = dvec2(packDouble2x32(t0.xy), packDouble2x32(t0.zw));
 #elif CELL_DIM == 3
-    uvec4 t0 = cell_sample_texel(2u * i);
-    uvec4 t1 = cell_sample_texel(2u * i + 1u);
-    pos.xyz = dvec3(packDouble2x32(t0.xy), packDouble2x32(uvec2(t0.z, t1.x)), packDouble2x32(t1.yz));
+    // a texel and a half per sample: an odd sample starts in the second half of texel 3i/2
+    uint k = (3u * i) >> 1;
+    uvec4 t0 = cell_sample_texel(k);
+    uvec4 t1 = cell_sample_texel(k + 1u);
+    bool odd = (i & 1u) != 0u;
+    pos.xyz = dvec3(packDouble2x32(odd ? t0.zw : t0.xy), packDouble2x32(odd ? t1.xy : t0.zw),
+                    packDouble2x32(odd ? t1.zw : t1.xy));
 #else
     uvec4 t0 = cell_sample_texel(2u * i);
     uvec4 t1 = cell_sample_texel(2u * i + 1u);

@@ -178,27 +178,27 @@ def _storage(ctx, binding: int, nbytes: int):
 
 def upload_samples(ctx, prog, pts: np.ndarray) -> None:
     """Hand the float64 positions ``pts`` (count, d), C-contiguous, to ``prog`` (``cellular.comp``,
-    ``u_samples``) as the 32-bit words of an unsigned-integer texture, ``2^_SAMPLE_ROW_BITS`` texels
-    wide (RGBA32UI in 2D and 4D, RGB32UI in 3D: d / 2 or 2 texels per sample, no padding). The
-    texture is kept and reused across calls (grown when a chunk needs more rows)."""
-    count, dim = pts.shape
-    comps = 3 if dim == 3 else 4
-    texels = count * 2 * dim // comps
+    ``u_samples``) as the 32-bit words of an RGBA32UI texture ``2^_SAMPLE_ROW_BITS`` texels wide,
+    d / 2 texels per sample, no padding between samples. The texture is kept and reused across
+    calls (grown when a chunk needs more rows)."""
+    words = pts.reshape(-1).view(np.uint32)
     width = 1 << _SAMPLE_ROW_BITS
-    rows, tail = divmod(texels, width)
-    key = (id(ctx), "samples", comps)
+    rows, tail = divmod(words.size, 4 * width)
+    key = (id(ctx), "samples")
     tex = _pool.get(key)
     if tex is None or tex.height < rows + 1:
         if tex is not None:
             tex.release()
-        tex = ctx.texture((width, max(rows + 1, (rows + 1) * 5 // 4)), comps, dtype="u4")
+        tex = ctx.texture((width, max(rows + 1, (rows + 1) * 5 // 4)), 4, dtype="u4")
         tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
         _pool[key] = tex
-    words = pts.reshape(-1).view(np.uint32)
     if rows:
-        tex.write(words[: rows * width * comps], viewport=(0, 0, width, rows))
+        tex.write(words[: rows * width * 4], viewport=(0, 0, width, rows))
     if tail:
-        tex.write(words[rows * width * comps:], viewport=(0, rows, tail, 1))
+        rest = words[rows * width * 4:]
+        if tail % 4:                         # 3D, an odd count: the last texel is half a sample
+            rest = np.concatenate([rest, np.zeros(4 - tail % 4, np.uint32)])
+        tex.write(rest, viewport=(0, rows, rest.size // 4, 1))
     tex.use(0)
     _set(prog, "u_samples", 0)
 
