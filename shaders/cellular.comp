@@ -88,45 +88,63 @@ uvec4 cell_sample_texel(uint k)
 }
 #endif
 
-// Each sample's outputs are one contiguous row (F and id: CELL_N values, delta and grad:
-// CELL_N * CELL_DIM), stored as vectors of the widest size (4, 2 or 1) that divides the
-// row: llvmpipe stores to a storage buffer lane by lane, one loop per store whatever its width.
-#define CELL_ND (CELL_N * CELL_DIM)
+// Each sample's outputs are one contiguous row (F and id: CELL_N values, delta and grad: CELL_N
+// vectors of CELL_DIM floats), stored as vectors of 2 or 4 where the row's layout allows:
+// llvmpipe stores to a storage buffer lane by lane, one loop per store whatever its width.
 #if CELL_N % 4 == 0
 #define CELL_N_VEC 4
-#define CELL_N_ROW(a, j) vec4(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
-#define CELL_N_ROWU(a, j) uvec4(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
+#define CELL_N_VEC_T vec4
+#define CELL_N_UVEC_T uvec4
+#define CELL_N_ROW(T, a, j) T(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
 layout(std430, binding = 2) writeonly buffer OutF { vec4 out_F[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uvec4 out_id[]; };
 #elif CELL_N % 2 == 0
 #define CELL_N_VEC 2
-#define CELL_N_ROW(a, j) vec2(a[2 * (j)], a[2 * (j) + 1])
-#define CELL_N_ROWU(a, j) uvec2(a[2 * (j)], a[2 * (j) + 1])
+#define CELL_N_VEC_T vec2
+#define CELL_N_UVEC_T uvec2
+#define CELL_N_ROW(T, a, j) T(a[2 * (j)], a[2 * (j) + 1])
 layout(std430, binding = 2) writeonly buffer OutF { vec2 out_F[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uvec2 out_id[]; };
 #else
 #define CELL_N_VEC 1
-#define CELL_N_ROW(a, j) a[j]
-#define CELL_N_ROWU(a, j) a[j]
+#define CELL_N_VEC_T float
+#define CELL_N_UVEC_T uint
+#define CELL_N_ROW(T, a, j) a[j]
 layout(std430, binding = 2) writeonly buffer OutF { float out_F[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
 #endif
-#if CELL_ND % 4 == 0
-#define CELL_ND_VEC 4
-#define CELL_ND_ROW(a, j) vec4(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
-layout(std430, binding = 3) writeonly buffer OutDelta { vec4 out_delta[]; };
-layout(std430, binding = 5) writeonly buffer OutGrad { vec4 out_grad[]; };
-#elif CELL_ND % 2 == 0
-#define CELL_ND_VEC 2
-#define CELL_ND_ROW(a, j) vec2(a[2 * (j)], a[2 * (j) + 1])
-layout(std430, binding = 3) writeonly buffer OutDelta { vec2 out_delta[]; };
-layout(std430, binding = 5) writeonly buffer OutGrad { vec2 out_grad[]; };
+// CELL_STORE_VECS(buf, v): the row of v(0), ..., v(CELL_N - 1) (vec4s, CELL_DIM components used)
+#if CELL_DIM == 4
+#define CELL_VEC_T vec4
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k++) { buf[i * uint(CELL_N) + uint(k)] = v(k); }
+#elif CELL_DIM == 2 && CELL_N % 2 == 0
+#define CELL_VEC_T vec4
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k += 2) { buf[i * uint(CELL_N / 2) + uint(k / 2)] = vec4(v(k).xy, v(k + 1).xy); }
+#elif CELL_DIM == 2
+#define CELL_VEC_T vec2
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k++) { buf[i * uint(CELL_N) + uint(k)] = v(k).xy; }
+#elif CELL_N % 2 == 0
+#define CELL_VEC_T vec2
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k += 2) { \
+        vec4 a_ = v(k), b_ = v(k + 1); \
+        uint o_ = i * uint(3 * CELL_N / 2) + uint(3 * k / 2); \
+        buf[o_] = a_.xy; buf[o_ + 1u] = vec2(a_.z, b_.x); buf[o_ + 2u] = b_.yz; \
+    }
 #else
-#define CELL_ND_VEC 1
-#define CELL_ND_ROW(a, j) a[j]
-layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
-layout(std430, binding = 5) writeonly buffer OutGrad { float out_grad[]; };
+#define CELL_VEC_T float
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k++) { \
+        vec4 a_ = v(k); \
+        for (int c_ = 0; c_ < 3; c_++) { buf[(i * uint(CELL_N) + uint(k)) * 3u + uint(c_)] = a_[c_]; } \
+    }
 #endif
+layout(std430, binding = 3) writeonly buffer OutDelta { CELL_VEC_T out_delta[]; };
+layout(std430, binding = 5) writeonly buffer OutGrad { CELL_VEC_T out_grad[]; };
+
 layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_index[]; };
 
 // The driver's own loop limit (docs/exactness.md). llvmpipe counts the loop
@@ -145,6 +163,17 @@ uniform int u_loop_canary;
 // more than any limiter) runs until the limiter stops it.
 uniform int u_loop_probe;
 layout(std430, binding = 8) writeonly buffer LoopProbe { int loop_probe[]; };
+#endif
+
+#if CELL_OUT_GRAD
+vec4 cell_out_grad(vec4 delta, float F)
+{
+    vec4 g = cell_metric_gradient(delta, F, u_minkowski_p);
+#if CELL_ANISO
+    g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
+#endif
+    return g;
+}
 #endif
 
 void main()
@@ -247,48 +276,26 @@ void main()
     CellResult r = cell_search(cell, frac, p);
 
 #if CELL_OUT_F
-    float row_F[CELL_N];
-    for (int k = 0; k < CELL_N; k++) {
-        row_F[k] = r.F[k] * u_out_scale;
-    }
     for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
-        out_F[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROW(row_F, j);
+        out_F[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROW(CELL_N_VEC_T, r.F, j) * u_out_scale;
     }
 #endif
 #if CELL_OUT_ID
     for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
-        out_id[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROWU(r.id, j);
+        out_id[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROW(CELL_N_UVEC_T, r.id, j);
     }
 #endif
 #if CELL_OUT_DELTA
-    float row_delta[CELL_ND];
-    for (int k = 0; k < CELL_N; k++) {
-        for (int a = 0; a < CELL_DIM; a++) {
 #if CELL_ANISO
-            row_delta[k * CELL_DIM + a] = r.delta[k][a] / u_axis_scale[a] * u_out_scale;
+#define CELL_DELTA_OUT(k) (r.delta[k] / u_axis_scale * u_out_scale)
 #else
-            row_delta[k * CELL_DIM + a] = r.delta[k][a] * u_out_scale;
+#define CELL_DELTA_OUT(k) (r.delta[k] * u_out_scale)
 #endif
-        }
-    }
-    for (int j = 0; j < CELL_ND / CELL_ND_VEC; j++) {
-        out_delta[i * uint(CELL_ND / CELL_ND_VEC) + uint(j)] = CELL_ND_ROW(row_delta, j);
-    }
+    CELL_STORE_VECS(out_delta, CELL_DELTA_OUT)
 #endif
 #if CELL_OUT_GRAD
-    float row_grad[CELL_ND];
-    for (int k = 0; k < CELL_N; k++) {
-        vec4 g = cell_metric_gradient(r.delta[k], r.F[k], u_minkowski_p);
-#if CELL_ANISO
-        g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
-#endif
-        for (int a = 0; a < CELL_DIM; a++) {
-            row_grad[k * CELL_DIM + a] = g[a];
-        }
-    }
-    for (int j = 0; j < CELL_ND / CELL_ND_VEC; j++) {
-        out_grad[i * uint(CELL_ND / CELL_ND_VEC) + uint(j)] = CELL_ND_ROW(row_grad, j);
-    }
+#define CELL_GRAD_OUT(k) cell_out_grad(r.delta[k], r.F[k])
+    CELL_STORE_VECS(out_grad, CELL_GRAD_OUT)
 #endif
     bool exact = r.exact;
     int loops = r.loops;
