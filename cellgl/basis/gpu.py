@@ -203,7 +203,7 @@ def upload_samples(ctx, prog, pts: np.ndarray) -> None:
     _set(prog, "u_samples", 0)
 
 
-def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
+def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, exact: np.ndarray,
          groups=None, stride: int = 0):
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
     1D dispatch) and copy results into ``out[start:start + count]``."""
@@ -228,7 +228,7 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
     if nbad:
         idx = np.frombuffer(flags.read(4 * nbad, offset=4), dtype=np.uint32)
-        inexact[start + idx.astype(np.int64)] = True
+        exact[start + idx.astype(np.int64)] = False
 
 
 def _alloc(N: int, n: int, dim: int, outputs, stride: int = 0) -> dict:
@@ -262,14 +262,14 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     _set(prog, "u_scale", float(p.scale))
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs, stride)
-    inexact = np.zeros(N, dtype=bool)
+    exact = np.ones(N, dtype=bool)
     step = _chunk_size(n, p.dim, outputs, stride)
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
         count = min(step, N - start)
         upload_samples(ctx, prog, pts[start:start + count])
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, stride=stride)
-    return out, ~inexact
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, stride=stride)
+    return out, exact
 
 
 @gl_call
@@ -292,13 +292,13 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     X, Y, Z, W = (int(v) for v in shape_xyzw)
     N = X * Y * Z * W
     out = _alloc(N, n, p.dim, outputs, stride)
-    inexact = np.zeros(N, dtype=bool)
+    exact = np.ones(N, dtype=bool)
     for slab, start, groups in _grid_slabs(X, Y, Z, W, _chunk_size(n, p.dim, outputs, stride)):
         _set(prog, "u_slab", slab[:4])
         _set(prog, "u_slab_size", slab[4:])
         count = slab[4] * slab[5] * groups[2]
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, groups=groups, stride=stride)
-    return out, ~inexact
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, groups=groups, stride=stride)
+    return out, exact
 
 
 def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):
@@ -351,10 +351,10 @@ def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 
     if N > _chunk_size(n, p.dim, outputs, stride):
         raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs, stride)} samples, got {N}")
     out = _alloc(N, n, p.dim, outputs, stride)
-    inexact = np.zeros(N, dtype=bool)
+    exact = np.ones(N, dtype=bool)
     upload_samples(ctx, prog, pts)
     probe = _storage(ctx, 8, 8 * N)
-    _run(prog, ctx, N, n, p.dim, outputs, out, 0, inexact, stride=stride)
+    _run(prog, ctx, N, n, p.dim, outputs, out, 0, exact, stride=stride)
     raw = np.frombuffer(probe.read(8 * N), dtype=np.int32).reshape(N, 2).astype(np.int64)
     # the canary loop (2 passes) ran before the probe
-    return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], inexact
+    return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], ~exact
