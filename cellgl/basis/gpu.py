@@ -18,6 +18,7 @@ from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 LOCAL_SIZE = 64
 #: the sample texture of :func:`search_points` is 2^_SAMPLE_ROW_BITS texels wide (cellular.comp)
 _SAMPLE_ROW_BITS = 12
+_TEXTURE_ROWS_MAX = 16384   #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
 _CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
 _MAX_GROUPS = 65535
 
@@ -184,12 +185,15 @@ def upload_samples(ctx, prog, pts: np.ndarray) -> None:
     words = pts.reshape(-1).view(np.uint32)
     width = 1 << _SAMPLE_ROW_BITS
     rows, tail = divmod(words.size, 4 * width)
+    if rows + 1 > _TEXTURE_ROWS_MAX:      # a chunk holds at most 2 * LOCAL_SIZE * _MAX_GROUPS texels
+        raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
+                           f"{_TEXTURE_ROWS_MAX} rows of {width}")
     key = (id(ctx), "samples")
     tex = _pool.get(key)
     if tex is None or tex.height < rows + 1:
         if tex is not None:
             tex.release()
-        tex = ctx.texture((width, max(rows + 1, (rows + 1) * 5 // 4)), 4, dtype="u4")
+        tex = ctx.texture((width, min(_TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
         tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
         _pool[key] = tex
     if rows:
