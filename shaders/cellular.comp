@@ -3,7 +3,7 @@
 // Thin: read the sample, call cell_search(), write what was asked for.
 // Macros (from cellgl/basis/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
-// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, CELL_ORBIT,
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_SAMPLE_ROW_BITS, CELL_DENSITY_MAP, CELL_ORBIT,
 // CELL_ANISO, and those of lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE,
 // CELL_FEATURE_MAX_RING); CELL_LOOP_BUDGET (lib/cellular.glsl), CELL_LOOP_PROBE
 // (1: measure the loop budget, see below).
@@ -210,9 +210,9 @@ void main()
     pos.xy = dvec2(packDouble2x32(t0.xy), packDouble2x32(t0.zw));
 #elif CELL_DIM == 3
     // a texel and a half per sample: an odd sample starts in the second half of texel 3i/2
-    uint k = (3u * i) >> 1;
-    uvec4 t0 = cell_sample_texel(k);
-    uvec4 t1 = cell_sample_texel(k + 1u);
+    uint first = (3u * i) >> 1;
+    uvec4 t0 = cell_sample_texel(first);
+    uvec4 t1 = cell_sample_texel(first + 1u);
     bool odd = (i & 1u) != 0u;
     pos.xyz = dvec3(packDouble2x32(odd ? t0.zw : t0.xy), packDouble2x32(odd ? t1.xy : t0.zw),
                     packDouble2x32(odd ? t1.zw : t1.xy));
