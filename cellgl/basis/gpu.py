@@ -163,11 +163,18 @@ def _chunk_size(n: int, dim: int, outputs, stride: int = 0) -> int:
 _pool: dict = {}
 
 
+def _held(key, ctx):
+    """The buffer or texture of ``_pool`` under ``key`` if it belongs to ``ctx`` (not to a context
+    gone since, whose id ``ctx`` now has), else None."""
+    obj = _pool.get(key)
+    return obj if obj is not None and obj.ctx is ctx else None
+
+
 def _storage(ctx, binding: int, nbytes: int):
     """A storage buffer of at least ``nbytes`` bound to ``binding``, reused across calls
     (allocating fresh tens-of-MB buffers every call costs as much as a small dispatch)."""
     key = (id(ctx), binding)
-    buf = _pool.get(key)
+    buf = _held(key, ctx)
     if buf is None or buf.size < nbytes:
         if buf is not None:
             buf.release()
@@ -189,7 +196,7 @@ def upload_samples(ctx, prog, pts: np.ndarray) -> None:
         raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
                            f"{_TEXTURE_ROWS_MAX} rows of {width}")
     key = (id(ctx), "samples")
-    tex = _pool.get(key)
+    tex = _held(key, ctx)
     if tex is None or tex.height < rows + 1:
         if tex is not None:
             tex.release()
