@@ -256,7 +256,7 @@ _RING1_UNPRUNED = (Distribution.JITTER,)
 def _ring1_offsets(f: np.ndarray, p: Params) -> np.ndarray:
     """Ring 1 per sample in the GPU's order, (len(block), N, 4) int64: :func:`_block_offsets`
     with rank k standing for the axis k-th nearest to its nearer face (ties: the lower axis
-    first) and -1 for the step across that face (the nearer face is below where the float32
+    first; stretched cells: axis k) and -1 for the step across that face (the nearer face is below where the float32
     fraction, as on the GPU, is under 0.5); the table as it is in 4D and for the distributions
     the GPU does not prune in ring 1 (CELL_RING1_PRUNE)."""
     block = np.asarray(_block_offsets(p.dim), dtype=np.int64)
@@ -265,7 +265,9 @@ def _ring1_offsets(f: np.ndarray, p: Params) -> np.ndarray:
         return np.broadcast_to(block[:, None, :], (len(block), n, 4))
     f32 = f[:, : p.dim].astype(np.float32)
     g = np.minimum(f32, np.float32(1.0) - f32)
-    if p.dim == 2:
+    if p.aniso:             # stretched cells: the axes as they are
+        rank = np.broadcast_to(np.arange(p.dim), (n, p.dim))
+    elif p.dim == 2:
         c = (g[:, 1] < g[:, 0]).astype(np.int64)
         rank = np.stack([c, 1 - c], axis=1)
     else:

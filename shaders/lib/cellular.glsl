@@ -89,8 +89,7 @@
 const int _cell_ring1[8] = int[8](0x558, 0x585, 0x588, 0x525, 0x528, 0x552, 0x582, 0x522);
 #elif CELL_DIM == 3
 #define CELL_RING1_CELLS 26
-const int _cell_ring1[26] = int[26](0x558, 0x585, 0x588, 0x855, 0x858, 0x885, 0x888, 0x255, 0x258, 0x285, 0x288,
-    0x525, 0x528, 0x825, 0x828, 0x552, 0x582, 0x852, 0x225, 0x882, 0x228, 0x252, 0x282, 0x522, 0x822, 0x222);
+const int _cell_ring1[26] = int[26](0x558, 0x585, 0x588, 0x855, 0x858, 0x885, 0x888, 0x255, 0x258, 0x285, 0x288, 0x525, 0x528, 0x825, 0x828, 0x552, 0x582, 0x852, 0x225, 0x882, 0x228, 0x252, 0x282, 0x522, 0x822, 0x222);
 #endif
 
 #if CELL_DIM <= 3
@@ -319,14 +318,22 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     }
 #if CELL_DIM <= 3 && CELL_RING1_PRUNE
     // The axes' ranks by the distance to their nearer face (ties: the lower axis
-    // first), and their flips (the nearer face above): the shifts of _cell_ring1_offset.
-#if CELL_DIM == 2
+    // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
+    // above): the shifts of _cell_ring1_offset, 4 rank + 2 if flipped.
+#if CELL_ANISO
+    ivec4 sh = ivec4(0, 4, 8, 12) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#elif CELL_DIM == 2
     int c = min(f, 1.0 - f).y < min(f, 1.0 - f).x ? 1 : 0;
-    ivec4 sh = 4 * ivec4(c, 1 - c, 2, 0) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+    ivec4 sh = 4 * ivec4(c, 1 - c, 2, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
 #else
     ivec3 c = ivec3(lessThan(min(f, 1.0 - f).yzz, min(f, 1.0 - f).xxy));     // y < x, z < x, z < y
-    ivec4 sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 0) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+    ivec4 sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
 #endif
+    // The sample in the frame of the table as listed: its distances to the near
+    // faces in rank order. A cell's box distance there has the same terms as on the
+    // lattice (summed in rank order), and for a constant t no decoding: the box
+    // distances of the 26 cells below cost a third of those on the lattice.
+    vec4 qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
     // The cells' nearest possible distances in visiting order, and the least of
     // each tail: the walk leaves its loop once no cell left can beat F_n. A
     // run-time loop on purpose: in straight-line SIMD code a pruned cell still
@@ -335,12 +342,12 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     float rest[CELL_RING1_CELLS + 1];
     rest[CELL_RING1_CELLS] = 3.0e38;
     for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, sh), f, p));
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
     }
     // Tested at the end of each pass, as the point loop (_cell_visit).
     for (int t = 0; ; ) {
         r.loops += 1;
-        if (_cell_box_distance(_cell_ring1_offset(t, sh), f, p) < r.F[CELL_N - 1]) {
+        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
             spent = cell_budget_spent(r.loops);      // the count only grows
             if (!spent) {
                 _cell_visit(r, cell, f, _cell_ring1_offset(t, sh), p);
