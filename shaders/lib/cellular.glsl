@@ -331,8 +331,8 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #endif
     // The sample in the frame of the table as listed: its distances to the near
     // faces in rank order. A cell's box distance there has the same terms as on the
-    // lattice (summed in rank order), and for a constant t no decoding: the box
-    // distances of the 26 cells below cost a third of those on the lattice.
+    // lattice (summed in rank order) and, for a constant t (the unrolled pass
+    // below), needs no decoding.
     vec4 qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
     // The cells' nearest possible distances in visiting order, and the least of
     // each tail: the walk leaves its loop once no cell left can beat F_n. A
