@@ -48,6 +48,11 @@
 #ifndef CELL_NSPHERE
 #define CELL_NSPHERE 0
 #endif
+#ifndef CELL_EDGE_ALONE
+// 1: cell_edge_alone() below, the distance to the edge without cell_search()
+// (the basis snippets, cellgl export --basis edge: one ring walker's code).
+#define CELL_EDGE_ALONE 0
+#endif
 #ifndef CELL_SMOOTH_EXTRA
 // 0: only smooth F1 itself is wanted; its offset, gradient and attribute are
 // not accumulated (they stay those of the F1 point), a shader specialised per
@@ -113,6 +118,9 @@ struct _CellWalk {
     float nn;
     int loops;       // loop iterations spent (cellular.glsl, "Loop budget")
     bool spent;      // the walk stopped at the loop budget
+#if CELL_EDGE_ALONE
+    bool nearest;    // finding the F1 point itself (cell_edge_alone): F1 in internal units
+#endif
 };
 
 // True distance from the walk's centre beyond which no point matters (now).
@@ -121,6 +129,11 @@ float _cell_walk_reach(_CellWalk w)
     if (w.around) {
         return w.nn;
     }
+#if CELL_EDGE_ALONE
+    if (w.nearest) {
+        return sqrt(w.F1) * 1.000001 + 1e-6;    // F1 in internal units, Euclidean (as CELL_EDGE)
+    }
+#endif
     float reach = w.F1;
 #if CELL_EDGE
     reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
@@ -192,6 +205,19 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     for (int k = 0; k < count; k++) {
         uint id;
         vec4 q = cell_next_point(state, c, p, id);
+#if CELL_EDGE_ALONE
+        if (w.nearest) {
+            // The nearest point as cell_search finds it: the least internal-unit distance.
+            vec4 delta = cell_dims(base + q);
+            float d = cell_metric_length(delta, p.minkowski_p);
+            if (d < w.F1) {
+                w.F1 = d;
+                w.d1 = delta;
+                w.id1 = id;
+            }
+            continue;
+        }
+#endif
         _cell_walk_point(w, base + q, id, o, q, p);
     }
 }
@@ -274,6 +300,12 @@ ivec4 _cell_ball_next_row(ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, float
 bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 {
     float m = cell_face_distance(f);
+#if CELL_EDGE_ALONE
+    // The snippet's shorter code: rings 0 and 1 are windows of the ring loop
+    // below too (the same points within the reach, so the same answer).
+    int first = 0;
+#else
+    int first = 2;
     if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
@@ -311,6 +343,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             }
         }
     }
+#endif
 #if CELL_SMOOTH == 1 && !CELL_EDGE
     if (!w.around) {
         // Smooth F1 alone: the reach F1 + cutoff k does not change during the
@@ -384,7 +417,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     }
 #endif
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = 2; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    for (int ring = first; ring <= CELL_FEATURE_MAX_RING; ring++) {
         w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
@@ -517,15 +550,15 @@ CellFeatures cell_poly_features(ivec4 cell, vec4 f, CellParams p, float smoothne
 }
 #endif
 
-// The features of the sample (cell, f) whose cell_search() result is r;
-// smoothness: k of smooth F1 in lattice units (>= 0).
-CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
+// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
+// F1), after `loops` loop passes.
+_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness)
 {
     _CellWalk w;
     w.around = false;
-    w.d1 = cell_dims(r.delta[0]);
-    w.id1 = r.id[0];
-    w.F1 = r.F[0];
+    w.d1 = d1;
+    w.id1 = id1;
+    w.F1 = F1;
     w.k = smoothness;
     w.edge = 3.0e38;
     w.edge_n = vec4(0.0);
@@ -537,9 +570,37 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.o1 = ivec4(0);
     w.q1 = vec4(0.0);
     w.nn = 3.0e38;
-    w.loops = r.loops;
+    w.loops = loops;
     w.spent = false;
+#if CELL_EDGE_ALONE
+    w.nearest = false;
+#endif
+    return w;
+}
 
+#if CELL_EDGE_ALONE
+// The distance to the edge alone (the basis snippets): the ring walk finds the
+// F1 point itself first (nearest mode: every cell that can hold a point nearer
+// than the nearest so far, the least internal-unit distance, as cell_search),
+// then walks around the sample for the edge; the same value as cell_search
+// and cell_features, in one walker's code.
+float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
+{
+    _CellWalk w = _cell_walk_start(vec4(0.0), 0u, 3.0e38, 0, 0.0);
+    w.nearest = true;
+    _cell_walk(w, cell, f, p);
+    w.nearest = false;
+    w.F1 = cell_metric_finish(w.F1, p.minkowski_p);
+    _cell_walk(w, cell, f, p);
+    return max(w.edge, 0.0);
+}
+#endif
+
+// The features of the sample (cell, f) whose cell_search() result is r;
+// smoothness: k of smooth F1 in lattice units (>= 0).
+CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
+{
+    _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness);
     CellFeatures o;
 #if CELL_TRACK_F1_CELL
     // n-sphere radius alone: the search already knows the F1 point's cell.
