@@ -196,10 +196,9 @@ def test_scalarise_leaves_a_struct_written_elsewhere_alone():
 # sizes: the limits of issue 18 and the table in docs/engines.md
 # --------------------------------------------------------------------------------------------
 
-#: lines of `cellgl export f1` (glsl), of every preset in every target, of a basis snippet:
-#: issue 18's goals (200, 600, 150); the edge basis (its second walk around the nearest point) is
-#: held to what the compiler reaches now, its goal of 150 still open
-F1_LIMIT, PRESET_LIMIT, BASIS_LIMIT, EDGE_LIMIT = 200, 600, 150, 310
+#: lines of `cellgl export f1` (glsl), of every preset in every target, of a basis snippet (the
+#: edge basis included): issue 18's goals
+F1_LIMIT, PRESET_LIMIT, BASIS_LIMIT = 200, 600, 150
 
 
 def test_f1_snippet_is_short():
@@ -234,7 +233,7 @@ def test_every_basis_fits(target):
     for b in BASES:
         for dim in (2, 3, 4):
             n = len(basis_export(b, dim, target).splitlines())
-            assert n <= (EDGE_LIMIT if b == "edge" else BASIS_LIMIT), (b, dim, n)
+            assert n <= BASIS_LIMIT, (b, dim, n)
 
 
 def test_docs_table_is_current():

@@ -119,7 +119,7 @@ struct _CellWalk {
     int loops;       // loop iterations spent (cellular.glsl, "Loop budget")
     bool spent;      // the walk stopped at the loop budget
 #if CELL_EDGE_ALONE
-    bool nearest;    // finding the F1 point itself (cell_edge_alone): F1 in internal units
+    bool nearest;    // the walk looks for the F1 point itself (F1 in internal units)
 #endif
 };
 
@@ -129,17 +129,15 @@ float _cell_walk_reach(_CellWalk w)
     if (w.around) {
         return w.nn;
     }
-#if CELL_EDGE_ALONE
-    if (w.nearest) {
-        return sqrt(w.F1) * 1.000001 + 1e-6;    // F1 in internal units, Euclidean (as CELL_EDGE)
-    }
-#endif
     float reach = w.F1;
 #if CELL_EDGE
     reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
 #endif
 #if CELL_SMOOTH == 1
     reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+#endif
+#if CELL_EDGE_ALONE
+    reach = w.nearest ? sqrt(w.F1) : reach;     // F1 in internal units, Euclidean (as CELL_EDGE)
 #endif
     // A margin for rounding: visiting more is always safe.
     return reach * 1.000001 + 1e-6;
@@ -193,6 +191,16 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
     float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
     _cell_smooth_add(w, delta, d, id, is_p1, p);
 #endif
+#if CELL_EDGE_ALONE
+    // Nearest mode: the F1 point as cell_search finds it, the least internal-unit
+    // distance (the edge above is then against a moving d1: cell_edge_alone resets it).
+    float dn = cell_metric_length(delta, p.minkowski_p);
+    if (w.nearest && dn < w.F1) {
+        w.F1 = dn;
+        w.d1 = delta;
+        w.id1 = id;
+    }
+#endif
 }
 
 void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
@@ -205,19 +213,6 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     for (int k = 0; k < count; k++) {
         uint id;
         vec4 q = cell_next_point(state, c, p, id);
-#if CELL_EDGE_ALONE
-        if (w.nearest) {
-            // The nearest point as cell_search finds it: the least internal-unit distance.
-            vec4 delta = cell_dims(base + q);
-            float d = cell_metric_length(delta, p.minkowski_p);
-            if (d < w.F1) {
-                w.F1 = d;
-                w.d1 = delta;
-                w.id1 = id;
-            }
-            continue;
-        }
-#endif
         _cell_walk_point(w, base + q, id, o, q, p);
     }
 }
@@ -294,8 +289,8 @@ ivec4 _cell_ball_next_row(ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, float
 }
 #endif
 
-// Visit every cell around (cell, f) that can hold a point within the reach;
-// returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
+// Visit every cell around (cell, f) that can hold a point within the reach.
+// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
 // inside the loop budget (w.spent: it stopped at the budget).
 bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 {
@@ -573,7 +568,7 @@ _CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothn
     w.loops = loops;
     w.spent = false;
 #if CELL_EDGE_ALONE
-    w.nearest = false;
+    w.nearest = F1 >= 3.0e38;    // no F1 point given: the walk finds it first
 #endif
     return w;
 }
@@ -587,10 +582,10 @@ _CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothn
 float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
 {
     _CellWalk w = _cell_walk_start(vec4(0.0), 0u, 3.0e38, 0, 0.0);
-    w.nearest = true;
     _cell_walk(w, cell, f, p);
     w.nearest = false;
     w.F1 = cell_metric_finish(w.F1, p.minkowski_p);
+    w.edge = 3.0e38;
     _cell_walk(w, cell, f, p);
     return max(w.edge, 0.0);
 }
