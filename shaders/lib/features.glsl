@@ -35,7 +35,8 @@
 // Requires: cellular.glsl. Macros: those of cellular.glsl, CELL_EDGE,
 // CELL_SMOOTH, CELL_NSPHERE (0 or 1; CELL_SMOOTH 2: smooth F1 as Blender's
 // Voronoi node folds it, _cell_poly_smooth below; all 0: nothing below is
-// compiled and cell_search is untouched), CELL_FEATURE_MAX_RING.
+// compiled and cell_search is untouched), CELL_FEATURE_MAX_RING,
+// CELL_EDGE_ALONE (1: cell_edge_alone, the walk finding the F1 point too).
 
 #include "cellular.glsl"
 
