@@ -77,8 +77,8 @@ def _depth(text: str, at: int) -> int:
 
 def void_results(items: list[Item], keep, impure: set[str]) -> list[Item]:
     """``T f(...)`` -> ``void f(...)`` where every call of ``f`` (not in ``keep``, defined once,
-    called at least once) is a statement ``f(...);`` and its returned values call nothing in
-    ``impure`` (functions that write their arguments)."""
+    called at least once) is a statement ``f(...);`` and its returned values write nothing (no
+    store, no call to a function in ``impure``, those that write their arguments)."""
     funcs = [it for it in items if it.kind == "function"]
     for f in funcs:
         sig = f.code()
@@ -96,7 +96,8 @@ def void_results(items: list[Item], keep, impure: set[str]) -> list[Item]:
                     and w[:m].count("(") == w[:m].count(")") and w[_match(toks, code, m + 1) + 1] == ";"
         body = _text(f).split("{", 1)[1]
         values = re.findall(r"\breturn\b([^;]*);", body)
-        if not calls or not alone or any(re.search(rf"\b{g}\s*\(", v) for v in values for g in impure):
+        if not calls or not alone or any(re.search(r"\+\+|--|(?<![=!<>])=(?!=)", v) for v in values) \
+                or any(re.search(rf"\b{g}\s*\(", v) for v in values for g in impure):
             continue
         t = "".join(x.text for x in f.toks)
         head, rest = t.split(f.name, 1)

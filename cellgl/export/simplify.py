@@ -511,8 +511,8 @@ def _store_into_next(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
             continue
         end = _stmt_end(toks, code, w, n)
         y = w[n]
-        if w[end + 1:end + 4] == ["return", y, ";"]:                  # T y = a; return y;
-            a = "".join(t.text for t in toks[code[n + 2]:code[end]]).strip()
+        if w[end + 1:end + 4] == ["return", y, ";"] and "," not in _top_level_ops(" ".join(w[n + 2:end])):
+            a = "".join(t.text for t in toks[code[n + 2]:code[end]]).strip()      # T y = a; return y;
             return toks[:code[n - 1]] + tokenize(f"return {a};") + toks[code[end + 3] + 1:]
         if end + 3 >= len(w) or w[end + 1] != y or w[end + 2] != "=" or y in w[n + 2:end]:
             continue

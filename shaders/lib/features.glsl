@@ -51,7 +51,8 @@
 #endif
 #ifndef CELL_EDGE_ALONE
 // 1: cell_edge_alone() below, the distance to the edge without cell_search()
-// (the basis snippets, cellgl export --basis edge: one ring walker's code).
+// (the basis snippets, cellgl export --basis edge: one ring walker's code);
+// with CELL_EDGE alone (no other feature), Euclidean.
 #define CELL_EDGE_ALONE 0
 #endif
 #ifndef CELL_SMOOTH_EXTRA
