@@ -167,6 +167,19 @@ float entry(float x)
 """
 
 
+
+def _assert_same_values(ctx, source: str, compiled: str, names, scale: float):
+    """The compiled program's entry(x) gives the original's values, and they are not all 0: both
+    run side by side in one fragment shader (the compiled names renamed *_new)."""
+    small = compiled
+    for name in names:
+        small = re.sub(rf"\b{name}\b", name + "_new", small)
+    full = source + "\nfloat entry_ref(float x)\n{\n    return entry(x);\n}\n"
+    got = render_snippet(ctx, full + "\n" + small, 8, 4,
+                         call=f"vec4(entry_ref(uv.x * {scale}), entry_new(uv.x * {scale}), 0.0, 1.0)")
+    np.testing.assert_array_equal(got[..., 0], got[..., 1])
+    assert np.all(got[..., 0] > 0.0)
+
 def test_inlining_functions_called_once_keeps_the_values(ctx):
     """Functions called once become their bodies (out / inout arguments written in place, the
     body's locals renamed where the caller has the name, a field that holds one literal folded);
@@ -175,14 +188,7 @@ def test_inlining_functions_called_once_keeps_the_values(ctx):
     assert "add_twice" not in out and "bump" not in out          # called once: inlined
     assert "sum3(" in out                                         # called twice: kept
     assert "mode" not in out and "-u" not in out                  # always false: folded away
-    small = out
-    for name in ("entry", "S", "sum3"):
-        small = re.sub(rf"\b{name}\b", name + "_new", small)
-    full = _INLINE + "\nfloat entry_ref(float x)\n{\n    return entry(x);\n}\n"
-    got = render_snippet(ctx, full + "\n" + small, 8, 4,
-                         call="vec4(entry_ref(uv.x * 9.0), entry_new(uv.x * 9.0), 0.0, 1.0)")
-    np.testing.assert_array_equal(got[..., 0], got[..., 1])
-    assert np.all(got[..., 0] > 0.0)
+    _assert_same_values(ctx, _INLINE, out, ("entry", "S", "sum3"), 9.0)
 
 
 _VOID = """
@@ -248,14 +254,7 @@ def test_results_nobody_reads_become_void(ctx):
     assert "stopped" not in out
     assert "bool again(" in out and "return w.best < 0.5;" in out
     assert "float y" not in out and ">=" not in out and ".on" not in out
-    small = out
-    for name in ("entry", "W", "walk", "again"):
-        small = re.sub(rf"\b{name}\b", name + "_new", small)
-    full = _VOID + "\nfloat entry_ref(float x)\n{\n    return entry(x);\n}\n"
-    got = render_snippet(ctx, full + "\n" + small, 8, 4,
-                         call="vec4(entry_ref(uv.x * 4.0), entry_new(uv.x * 4.0), 0.0, 1.0)")
-    np.testing.assert_array_equal(got[..., 0], got[..., 1])
-    assert np.all(got[..., 0] > 0.0)
+    _assert_same_values(ctx, _VOID, out, ("entry", "W", "walk", "again"), 4.0)
 
 
 def test_scalarise_leaves_a_struct_written_elsewhere_alone():
