@@ -79,6 +79,11 @@
 // cells are pruned (a SIMD vector runs a cell's point loop while any of its
 // samples needs that cell). The order decides only which of two exactly equal
 // distances comes first (cellgl/basis/reference.py visits in the same order).
+#if CELL_DIM <= 3
+#define _CELL_FIRST_WINDOW 2      // the first ring cell_search_budget walks as a window
+#else
+#define _CELL_FIRST_WINDOW 1
+#endif
 #if CELL_DIM == 2
 #define CELL_RING1_CELLS 8
 const ivec4 _cell_ring1[8] = ivec4[8](
@@ -283,6 +288,25 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
     return o;
 }
 
+// The window of ring `ring` of cell_search_budget: the cells that can hold a
+// point nearer than Fn (internal units; 3.0e38: none found yet, the whole ring).
+void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
+{
+    float reach = Fn < 3.0e38 ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
+#if CELL_ANISO
+    lo = ivec4(0);
+    hi = ivec4(0);
+    for (int a = 0; a < CELL_DIM; a++) {
+        // In lattice units on this axis (no point found yet: the whole ring).
+        float ra = Fn < 3.0e38 ? reach / p.axis_scale[a] : reach;
+        hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
+        lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
+    }
+#else
+    cell_ring_window(ring, reach, f, lo, hi);
+#endif
+}
+
 // Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
 // cell_search for an invocation that has already spent `loops` loop passes:
 // it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
@@ -303,50 +327,90 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     r.loops = loops;
     bool spent = cell_budget_spent(loops);
 
-    // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block
-    // (2D, 3D: nearest first, _cell_ring1). Constant loop bounds, so the
-    // compiler unrolls the block into straight-line SIMD code. With
-    // CELL_RING1_PRUNE a cell is skipped when its nearest possible point is no
-    // closer than the current F_n (skipping never changes the result: such a
-    // point could not be inserted); the jitter distribution visits all 3^d, its
-    // one point per cell costing less than the test.
+    // Ring 0, the sample's own cell.
     if (!spent) {
         _cell_visit(r, cell, f, ivec4(0), p);
     }
-#if CELL_DIM <= 3 && CELL_RING1_PRUNE
+    float m = cell_face_distance(f);
+    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
+
+    // Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
+    // then rings 2, 3, ... while a point there could still be closer than F_n,
+    // each ring's window of cells that can reach. A cell is skipped when its
+    // nearest possible point is no closer than the current F_n (skipping never
+    // changes the result: such a point could not be inserted). On llvmpipe an
+    // `if` does not branch and every loop runs at least one pass, under an
+    // empty mask if need be: a loop of their own for rings 2, 3, ..., which
+    // almost no sample needs, cost every SIMD vector a masked pass. So their
+    // loop is one whose first pass is ring 1's own work.
+    int ring = 1;
+#if CELL_RING1_PRUNE
+    // One pass of the outer loop per ring, of the inner one per cell.
+#if CELL_DIM <= 3
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
     // The cells' nearest possible distances in visiting order, and the least of
-    // each tail: the walk leaves its loop once no cell left can beat F_n. A
-    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
-    // runs while any lane of the vector needs it, a lane that left a loop costs
-    // nothing.
+    // each tail: ring 1 ends once no cell left can beat F_n. A run-time loop on
+    // purpose: in straight-line SIMD code a pruned cell still runs while any
+    // lane of the vector needs it, a lane that left a loop costs nothing.
     float rest[CELL_RING1_CELLS + 1];
     rest[CELL_RING1_CELLS] = 3.0e38;
     for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
         rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1[t] * side, f, p));
     }
-    // Tested at the end of each pass, as the point loop (_cell_visit).
-    for (int t = 0; ; ) {
+    int cells = CELL_RING1_CELLS;
+#else
+    int cells = 0;
+#endif
+    ivec4 lo = ivec4(0), hi = ivec4(0), o = ivec4(0);
+    for (;;) {
         r.loops += 1;
-        if (_cell_box_distance(_cell_ring1[t] * side, f, p) < r.F[CELL_N - 1]) {
+        if (ring >= _CELL_FIRST_WINDOW) {    // 4D: ring 1 too
+            _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
+            ivec4 n = hi - lo + 1;
+            cells = n.x * n.y * n.z * n.w;
+            o = cell_window_first(lo);
+        }
+        for (int t = 0; ; ) {
             spent = cell_budget_spent(r.loops);      // the count only grows
-            if (!spent) {
-                _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
+            r.loops += 1;
+#if CELL_DIM <= 3
+            o = ring == 1 ? _cell_ring1[min(t, CELL_RING1_CELLS - 1)] * side : cell_window_next(o, lo, hi);
+#else
+            o = cell_window_next(o, lo, hi);
+#endif
+            ivec4 ao = abs(o);
+            if (!spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+                _cell_visit(r, cell, f, o, p);
+            }
+            t++;
+#if CELL_DIM <= 3
+            if (t >= cells || spent || (ring == 1 && rest[min(t, CELL_RING1_CELLS)] >= r.F[CELL_N - 1])) {
+#else
+            if (t >= cells || spent) {
+#endif
+                break;
             }
         }
-        t++;
-        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+        ring++;
+        if (ring > CELL_MAX_RING || spent || _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
             break;
         }
     }
-#elif CELL_DIM <= 3
+#else
+    // Unpruned (a test costs more than jitter's one point per cell) and
+    // unrolled, but for the last cell (_cell_axes, all +1): the first pass of
+    // one flat loop over the cells of the rings (its windows' cells that are
+    // on the ring), which moves to the next ring after a window's last cell.
+#if CELL_DIM <= 3
+    // (A loop over the whole table: NIR unrolls a loop that indexes an array
+    // as long as its trip count.)
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        ivec4 o = _cell_ring1[t];      // no pruning: the order does not matter
         if (cell_budget_spent(r.loops)) {
             spent = true;
-        } else {
-            _cell_visit(r, cell, f, o, p);
+        } else if (t < CELL_RING1_CELLS - 1) {
+            _cell_visit(r, cell, f, _cell_ring1[t], p);
         }
     }
 #else
@@ -355,11 +419,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     for (int z = -1; z <= 1; z++)
     for (int w = -1; w <= 1; w++) {
         ivec4 o = ivec4(x, y, z, w);
-#if CELL_RING1_PRUNE
-        if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
-#else
-        if (any(notEqual(o, ivec4(0)))) {
-#endif
+        if (any(notEqual(o, ivec4(0))) && any(notEqual(o, _cell_axes))) {
             if (cell_budget_spent(r.loops)) {
                 spent = true;
             } else {
@@ -368,61 +428,32 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         }
     }
 #endif
-
-    float m = cell_face_distance(f);
-    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
-
-    // Rings 2, 3, ...: only while a point in the ring could still be closer
-    // than F_n; inside a ring only the window of cells that can reach, each
-    // pruned by its nearest possible distance.
-    r.exact = false;
-    int ring = 2;
-    r.loops += 1;                 // the pass that leaves the ring loop
-    for (; ring <= CELL_MAX_RING && !spent; ring++) {
+    ivec4 lo = _cell_axes, hi = lo, o = lo;
+    for (;;) {
+        spent = cell_budget_spent(r.loops);          // the count only grows
         r.loops += 1;
-        if (_cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
-            r.exact = true;
-            break;
+        ivec4 ao = abs(o);
+        if (!spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+            && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+            _cell_visit(r, cell, f, o, p);
         }
-        float reach = r.F[CELL_N - 1] < 3.0e38
-            ? cell_metric_finish(r.F[CELL_N - 1], p.minkowski_p) * 1.000001 + 1e-6
-            : float(ring + 2);
-        ivec4 lo, hi;
-#if CELL_ANISO
-        lo = ivec4(0);
-        hi = ivec4(0);
-        for (int a = 0; a < CELL_DIM; a++) {
-            // In lattice units on this axis (no point found yet: the whole ring).
-            float ra = r.F[CELL_N - 1] < 3.0e38 ? reach / p.axis_scale[a] : reach;
-            hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
-            lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
-        }
-#else
-        cell_ring_window(ring, reach, f, lo, hi);
-#endif
-        ivec4 n = hi - lo + 1;
-        int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = cell_window_first(lo);
-        r.loops += 1;
-        for (int i = 0; i < cells; i++) {
-            if (cell_budget_spent(r.loops)) {
-                spent = true;
+        o = cell_window_next(o, lo, hi);
+        if (o.x > hi.x) {
+            ring++;
+            if (ring > CELL_MAX_RING || _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
                 break;
             }
-            r.loops += 1;
-            o = cell_window_next(o, lo, hi);
-            ivec4 ao = abs(o);
-            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
-                _cell_visit(r, cell, f, o, p);
-            }
+            _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
+            o = lo;
+        }
+        if (spent) {
+            break;
         }
     }
-    if (spent) {
-        r.exact = false;          // stopped by the loop budget: a nearer point may be missed
-    } else if (ring > CELL_MAX_RING) {
-        r.exact = _cell_ring_bound(float(CELL_MAX_RING), m, ma, p) >= r.F[CELL_N - 1];
-    }
+#endif
+    // Rings 0 .. ring - 1 searched: exact unless a point beyond can be nearer,
+    // or the loop budget stopped the search (a nearer point may be missed).
+    r.exact = !spent && _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1];
     for (int k = 0; k < CELL_N; k++) {
         r.F[k] = cell_metric_finish(r.F[k], p.minkowski_p);
     }
