@@ -344,9 +344,9 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // almost no sample needs, cost every SIMD vector a masked pass. So their
     // loop is one whose first pass is ring 1's own work.
     int ring = 1;
-#if CELL_RING1_PRUNE
+#if CELL_RING1_PRUNE && CELL_DIM != 3
     // One pass of the outer loop per ring, of the inner one per cell.
-#if CELL_DIM <= 3
+#if CELL_DIM == 2
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
     // The cells' nearest possible distances in visiting order, and the least of
@@ -374,7 +374,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         for (int t = 0; ; ) {
             spent = cell_budget_spent(r.loops);      // the count only grows
             r.loops += 1;
-#if CELL_DIM <= 3
+#if CELL_DIM == 2
             o = ring == 1 ? _cell_ring1[min(t, CELL_RING1_CELLS - 1)] * side : cell_window_next(o, lo, hi);
 #else
             o = cell_window_next(o, lo, hi);
@@ -385,7 +385,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
                 _cell_visit(r, cell, f, o, p);
             }
             t++;
-#if CELL_DIM <= 3
+#if CELL_DIM == 2
             if (t >= cells || spent || (ring == 1 && rest[min(t, CELL_RING1_CELLS)] >= r.F[CELL_N - 1])) {
 #else
             if (t >= cells || spent) {
@@ -403,7 +403,34 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // unrolled, but for the last cell (_cell_axes, all +1): the first pass of
     // one flat loop over the cells of the rings (its windows' cells that are
     // on the ring), which moves to the next ring after a window's last cell.
-#if CELL_DIM <= 3
+#if CELL_RING1_PRUNE
+    // -1 in _cell_ring1 is the near side of each axis.
+    ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
+    // The cells' nearest possible distances in visiting order, and the least of
+    // each tail: ring 1 ends once no cell left can beat F_n (as above).
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = 3.0e38;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1[t] * side, f, p));
+    }
+    // Tested at the end of each pass, as the point loop (_cell_visit).
+    for (int t = 0; ; ) {
+        r.loops += 1;
+        if (_cell_box_distance(_cell_ring1[t] * side, f, p) < r.F[CELL_N - 1]) {
+            spent = cell_budget_spent(r.loops);      // the count only grows
+            if (!spent) {
+                _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
+            }
+        }
+        t++;
+        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+            break;
+        }
+    }
+    // The flat loop below from an empty first pass (3D: a ring 1 loop of its
+    // own and the flat loop cost less than the two nested loops over 26 cells).
+    ivec4 lo = ivec4(0), hi = lo, o = lo;
+#elif CELL_DIM <= 3
     // (A loop over the whole table: NIR unrolls a loop that indexes an array
     // as long as its trip count.)
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
@@ -413,6 +440,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             _cell_visit(r, cell, f, _cell_ring1[t], p);
         }
     }
+    ivec4 lo = _cell_axes, hi = lo, o = lo;
 #else
     for (int x = -1; x <= 1; x++)
     for (int y = -1; y <= 1; y++)
@@ -427,8 +455,8 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             }
         }
     }
-#endif
     ivec4 lo = _cell_axes, hi = lo, o = lo;
+#endif
     for (;;) {
         spent = cell_budget_spent(r.loops);          // the count only grows
         r.loops += 1;
