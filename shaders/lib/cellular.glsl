@@ -345,7 +345,8 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // loop is one whose first pass is ring 1's own work.
     int ring = 1;
 #if CELL_RING1_PRUNE && CELL_DIM != 3
-    // One pass of the outer loop per ring, of the inner one per cell.
+    // One pass of the outer loop per ring, of the inner one per cell (2D:
+    // ring 1 the table, 4D: a window like the others).
 #if CELL_DIM == 2
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
@@ -399,10 +400,12 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         }
     }
 #else
-    // Unpruned (a test costs more than jitter's one point per cell) and
-    // unrolled, but for the last cell (_cell_axes, all +1): the first pass of
-    // one flat loop over the cells of the rings (its windows' cells that are
-    // on the ring), which moves to the next ring after a window's last cell.
+    // One flat loop over the cells of the rings (the cells of each ring's
+    // window that are on the ring), on to the next ring after a window's last
+    // cell. Jitter: ring 1 unpruned (a test costs more than its one point per
+    // cell) and unrolled, but for its last cell (_cell_axes, all +1), the flat
+    // loop's first pass. 3D pruned: ring 1 a loop of its own, then the flat
+    // loop from an empty first pass (nested loops over 26 cells cost more).
 #if CELL_RING1_PRUNE
     // -1 in _cell_ring1 is the near side of each axis.
     ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
@@ -427,9 +430,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             break;
         }
     }
-    // The flat loop below from an empty first pass (3D: a ring 1 loop of its
-    // own and the flat loop cost less than the two nested loops over 26 cells).
-    ivec4 lo = ivec4(0), hi = lo, o = lo;
+    ivec4 lo = ivec4(0), hi = lo, o = lo;     // visits nothing (ring 0)
 #elif CELL_DIM <= 3
     // (A loop over the whole table: NIR unrolls a loop that indexes an array
     // as long as its trip count.)
