@@ -366,7 +366,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     ivec4 lo = ivec4(0), hi = ivec4(0), o = ivec4(0);
     for (;;) {
         r.loops += 1;
-        if (ring >= _CELL_FIRST_WINDOW) {    // 4D: ring 1 too
+        if (ring >= _CELL_FIRST_WINDOW) {    // its window (4D: ring 1 too)
             _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
             ivec4 n = hi - lo + 1;
             cells = n.x * n.y * n.z * n.w;
