@@ -16,6 +16,7 @@ preset (``cellgl export PRESET``, its ``cellgl_texture(uv)``).
     python benchmarks/bench_snippets.py                   # everything, 1024^2, median of 5
     python benchmarks/bench_snippets.py --size 512 --repeats 3 f1 flagstone
     python benchmarks/bench_snippets.py --compare old/ f1     # also old/f1.glsl (an older export)
+                                  # and old/basis-f1.glsl, old/basis-f1-jitter.glsl (--basis f1 --dim 2)
     python benchmarks/bench_snippets.py --stub-search flagstone   # and flagstone minus its search
 
 ``--stub-search`` adds, after each texture row, the same snippet with the body of its cellular
@@ -131,6 +132,10 @@ def rows(names: list[str], compare: str | None = None, stub: bool = False):
                     "f1f2": "vec4(cellgl_f1f2(uv * 8.0), 0.0, 1.0)",
                     "edge": "vec4(vec3(cellgl_edge(uv * 8.0)), 1.0)"}[b]
             out.append((label, _frag(code(basis_export(b, 2, "glsl", **kw)), call), False))
+            old = os.path.join(compare, f"basis-{b}" + ("-jitter" if kw else "") + ".glsl") if compare else None
+            if old and os.path.exists(old):
+                with open(old, encoding="utf-8") as f:
+                    out.append((f"{label} ({old})", _frag(code(f.read()), call), True))
     presets = [n for n, _ in list_presets() if not n.startswith("pups-")
                and load_recipe(n).values["cell_color"] != "image"
                and load_recipe(n).values["density_map"] != "image"]
@@ -172,7 +177,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--compare", metavar="DIR", default=None,
                     help="also time DIR/PRESET.glsl (GLSL snippets of the same presets exported by "
-                    "another cellgl version; f1 with distribution=jitter: DIR/f1-jitter.glsl)")
+                    "another cellgl version; f1 with distribution=jitter: DIR/f1-jitter.glsl; "
+                    "the 2D basis snippets: DIR/basis-NAME.glsl, DIR/basis-f1-jitter.glsl)")
     ap.add_argument("--stub-search", action="store_true",
                     help="also time each texture snippet with its cellular search stubbed out")
     args = ap.parse_args(argv)

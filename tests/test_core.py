@@ -109,17 +109,41 @@ def test_gpu_equals_brute_force_sparse(ctx):
 
 def test_ring1_order_is_the_references():
     """The GPU's nearest-first ring 1 table (shaders/lib/cellular.glsl) is the order the NumPy
-    reference visits: it decides which of two equal distances comes first."""
+    reference visits: it decides which of two equal distances comes first. Hex digit k of an
+    entry is the step on the axis of rank k: 8 for -1 (across the nearer face), 5 for 0, 2 for +1;
+    its low two bits hold the step + 1, its high two the flipped step + 1."""
     import re
 
     text = (Path(__file__).resolve().parents[1] / "shaders" / "lib" / "cellular.glsl").read_text()
     for dim, count in ((2, 8), (3, 26)):
-        m = re.search(r"const ivec4 _cell_ring1\[%d\] = ivec4\[%d\]\((.*?)\n\);" % (count, count), text, re.S)
-        table = [tuple(int(v) for v in e.split(",")) for e in re.findall(r"ivec4\(([-\d, ]+)\)", m.group(1))]
+        m = re.search(r"const int _cell_ring1\[%d\] = int\[%d\]\((.*?)\);" % (count, count), text, re.S)
+        codes = [int(v, 16) for v in re.findall(r"0x([0-9a-f]+)", m.group(1))]
+        assert len(codes) == count
+        table = [tuple(((c >> (4 * k)) & 3) - 1 for k in range(dim)) + (0,) * (4 - dim) for c in codes]
+        flipped = [tuple(((c >> (4 * k + 2)) & 3) - 1 for k in range(3)) for c in codes]
+        assert all(fl == tuple(-v for v in o[:3]) for fl, o in zip(flipped, table))
+        assert all(c >> (4 * dim) == (0x5 if dim == 2 else 0) for c in codes)
         assert table == reference._block_offsets(dim)
-        # every neighbour once, the near faces first
+        # every neighbour once, the near faces of the nearest axes first
         assert len(set(table)) == count and all(any(o) for o in table)
-        assert table[:dim] == [tuple(-1 if b == a else 0 for b in range(4)) for a in range(dim)]
+        assert table[:2] == [tuple(-1 if b == a else 0 for b in range(4)) for a in range(2)]
+
+
+def test_ring1_order_follows_the_sample():
+    """Per sample the reference visits ring 1 on axes ranked by the distance to their nearer face
+    (ties: the lower axis first), each step -1 across that face: the first cells are the nearest."""
+    from cellgl.basis import core
+
+    p = core.make_params(3)
+    f = np.array([[0.9, 0.2, 0.45, 0.0], [0.3, 0.3, 0.3, 0.0], [0.5, 0.5, 0.1, 0.0]])
+    offs = reference._ring1_offsets(f, p)
+    np.testing.assert_array_equal(offs[:3, 0], [[1, 0, 0, 0], [0, -1, 0, 0], [1, -1, 0, 0]])
+    np.testing.assert_array_equal(offs[:3, 1], [[-1, 0, 0, 0], [0, -1, 0, 0], [-1, -1, 0, 0]])
+    np.testing.assert_array_equal(offs[:3, 2], [[0, 0, -1, 0], [1, 0, 0, 0], [1, 0, -1, 0]])
+    box = reference._box_distance(offs, np.broadcast_to(f, offs.shape), p)
+    assert np.all(np.diff(box[:3], axis=0) >= 0)                 # the near faces, nearest first
+    for i in range(3):                  # every neighbour once
+        assert len(set(map(tuple, offs[:, i]))) == 26 and offs[:, i].any(axis=1).all()
 
 
 @pytest.mark.parametrize("dim", [2, 3])

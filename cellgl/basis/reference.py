@@ -233,12 +233,19 @@ def metric_gradient(delta: np.ndarray, F: np.ndarray, p: Params) -> np.ndarray:
 
 def _block_offsets(dim: int):
     """Offsets of ring 1 in the GPU's loop order: 4D x outermost, -1..1; 2D and 3D nearest first
-    (``_cell_ring1`` of cellular.glsl: -1 is the neighbour across the nearer face of an axis,
-    sorted by the number of far axes, then of near ones; :func:`_ring1_side` flips the axes)."""
+    (``_cell_ring1`` of cellular.glsl), on axes ranked by the sample's distance to their nearer
+    face (:func:`_ring1_offsets` maps them onto the lattice): -1 is the step across the nearer
+    face, and the order is that of the Euclidean box distances at the expected face distances of
+    the ranked axes (1/6, 1/3 in 2D; 1/8, 1/4, 3/8 in 3D), ties by fewer far steps."""
     rng = [range(-1, 2)] * dim + [range(0, 1)] * (4 - dim)
     offs = [o for o in itertools.product(*rng) if any(o)]
     if dim <= 3:
-        offs.sort(key=lambda o: (sum(v == 1 for v in o), sum(v == -1 for v in o)))   # stable
+        g = [(k + 1) / (2 * (dim + 1)) for k in range(dim)]       # dyadic: exact, so are ties
+
+        def key(o):
+            return (sum((g[a] if v < 0 else 1 - g[a]) ** 2 for a, v in enumerate(o[:dim]) if v),
+                    sum(v == 1 for v in o))
+        offs.sort(key=key)      # stable
     return offs
 
 
@@ -246,15 +253,31 @@ def _block_offsets(dim: int):
 _RING1_UNPRUNED = (Distribution.JITTER,)
 
 
-def _ring1_side(f: np.ndarray, p: Params) -> np.ndarray:
-    """Per sample and axis, the sign that maps :func:`_block_offsets` onto the lattice: +1 where
-    the (float32, as on the GPU) fraction is below 0.5 (the near face is below), else -1; all +1
-    in 4D and for the distributions the GPU does not prune in ring 1 (CELL_RING1_PRUNE)."""
-    side = np.where(f.astype(np.float32) < 0.5, 1, -1).astype(np.int64)
+def _ring1_offsets(f: np.ndarray, p: Params) -> np.ndarray:
+    """Ring 1 per sample in the GPU's order, (len(block), N, 4) int64: :func:`_block_offsets`
+    with rank k standing for the axis k-th nearest to its nearer face (ties: the lower axis
+    first; stretched cells: axis k) and -1 for the step across that face (the nearer face is below where the float32
+    fraction, as on the GPU, is under 0.5); the table as it is in 4D and for the distributions
+    the GPU does not prune in ring 1 (CELL_RING1_PRUNE)."""
+    block = np.asarray(_block_offsets(p.dim), dtype=np.int64)
+    n = len(f)
     if p.dim > 3 or p.distribution in _RING1_UNPRUNED:
-        side[:] = 1
-    side[:, 3] = 1
-    return side
+        return np.broadcast_to(block[:, None, :], (len(block), n, 4))
+    f32 = f[:, : p.dim].astype(np.float32)
+    g = np.minimum(f32, np.float32(1.0) - f32)
+    if p.aniso:             # stretched cells: the axes as they are
+        rank = np.broadcast_to(np.arange(p.dim), (n, p.dim))
+    elif p.dim == 2:
+        c = (g[:, 1] < g[:, 0]).astype(np.int64)
+        rank = np.stack([c, 1 - c], axis=1)
+    else:
+        cx, cy, cz = ((g[:, 1] < g[:, 0]).astype(np.int64), (g[:, 2] < g[:, 0]).astype(np.int64),
+                      (g[:, 2] < g[:, 1]).astype(np.int64))
+        rank = np.stack([cx + cy, 1 - cx + cz, 2 - cy - cz], axis=1)
+    side = np.where(f32 < 0.5, 1, -1).astype(np.int64)
+    out = np.zeros((len(block), n, 4), dtype=np.int64)
+    out[:, :, : p.dim] = block[:, rank] * side           # block[t, rank[i, a]]: axis a's step
+    return out
 
 
 def _ring_offsets(ring: int, dim: int):
@@ -347,9 +370,8 @@ def search(cells: np.ndarray, f: np.ndarray, p: Params, n: int, max_ring: int | 
 
     every = np.arange(N)
     visit(every, (0, 0, 0, 0))
-    side = _ring1_side(f, p)
-    for o in _block_offsets(p.dim):
-        visit(every, np.asarray(o, dtype=np.int64) * side)
+    for o in _ring1_offsets(f, p):
+        visit(every, o)
 
     fd = f[:, : p.dim]
     m = np.minimum(fd, 1.0 - fd).min(axis=1)

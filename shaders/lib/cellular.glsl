@@ -71,14 +71,19 @@
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
 #define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
-// Ring 1 nearest first (2D, 3D): the offsets of the 3^d block but the sample's
-// own cell, per axis -1 for the neighbour across the face the sample is nearer
-// to and +1 for the one across the far face (cell_search_budget flips each axis
-// per sample), sorted by the number of far axes, then of near ones: the near
-// faces, edges and corner first. F_n then shrinks early, and more of the later
-// cells are pruned (a SIMD vector runs a cell's point loop while any of its
-// samples needs that cell). The order decides only which of two exactly equal
-// distances comes first (cellgl/basis/reference.py visits in the same order).
+// Ring 1 nearest first (2D, 3D). The 3^d - 1 cells around the sample's own, in
+// the order of their box distances for a typical sample, on axes sorted by the
+// sample's distance to the nearer face (rank 0 the nearest). Per sample
+// (cell_search_budget) rank k stands for the axis that is k-th nearest to its
+// nearer face, and -1 for the step across that face. Hex digit k of an entry
+// (from the right) is rank k's step: 8 for -1 (near), 5 for 0, 2 for +1 (far);
+// a digit holds the step in its low two bits plus 1, and the flipped step in its
+// high two, so one shift (_cell_ring1_offset) maps it onto the lattice. The
+// order is that of the Euclidean box distances at the expected face distances
+// of the sorted axes (1/6, 1/3 in 2D; 1/8, 1/4, 3/8 in 3D), ties by fewer far
+// steps: F_n shrinks early, more of the later cells are pruned, and the loop
+// leaves sooner. The order decides only which of two exactly equal distances
+// comes first (cellgl/basis/reference.py visits in the same order).
 #if CELL_DIM <= 3
 #define _CELL_FIRST_WINDOW 2      // the first ring cell_search_budget walks as a window
 #else
@@ -86,20 +91,18 @@
 #endif
 #if CELL_DIM == 2
 #define CELL_RING1_CELLS 8
-const ivec4 _cell_ring1[8] = ivec4[8](
-    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(-1, -1, 0, 0), ivec4(0, 1, 0, 0),
-    ivec4(1, 0, 0, 0), ivec4(-1, 1, 0, 0), ivec4(1, -1, 0, 0), ivec4(1, 1, 0, 0)
-);
+const int _cell_ring1[8] = int[8](0x558, 0x585, 0x588, 0x525, 0x528, 0x552, 0x582, 0x522);
 #elif CELL_DIM == 3
 #define CELL_RING1_CELLS 26
-const ivec4 _cell_ring1[26] = ivec4[26](
-    ivec4(-1, 0, 0, 0), ivec4(0, -1, 0, 0), ivec4(0, 0, -1, 0), ivec4(-1, -1, 0, 0), ivec4(-1, 0, -1, 0),
-    ivec4(0, -1, -1, 0), ivec4(-1, -1, -1, 0), ivec4(0, 0, 1, 0), ivec4(0, 1, 0, 0), ivec4(1, 0, 0, 0),
-    ivec4(-1, 0, 1, 0), ivec4(-1, 1, 0, 0), ivec4(0, -1, 1, 0), ivec4(0, 1, -1, 0), ivec4(1, -1, 0, 0),
-    ivec4(1, 0, -1, 0), ivec4(-1, -1, 1, 0), ivec4(-1, 1, -1, 0), ivec4(1, -1, -1, 0), ivec4(0, 1, 1, 0),
-    ivec4(1, 0, 1, 0), ivec4(1, 1, 0, 0), ivec4(-1, 1, 1, 0), ivec4(1, -1, 1, 0), ivec4(1, 1, -1, 0),
-    ivec4(1, 1, 1, 0)
-);
+const int _cell_ring1[26] = int[26](0x558, 0x585, 0x588, 0x855, 0x858, 0x885, 0x888, 0x255, 0x258, 0x285, 0x288, 0x525, 0x528, 0x825, 0x828, 0x552, 0x582, 0x852, 0x225, 0x882, 0x228, 0x252, 0x282, 0x522, 0x822, 0x222);
+#endif
+
+#if CELL_DIM <= 3
+// The lattice offset of entry t of _cell_ring1 for a sample whose axes have the shifts sh: 4 rank + 2 if flipped.
+ivec4 _cell_ring1_offset(int t, ivec4 sh)
+{
+    return ivec4(_cell_ring1[t] >> sh.x & 3, _cell_ring1[t] >> sh.y & 3, _cell_ring1[t] >> sh.z & 3, 1) - 1;
+}
 #endif
 
 // Whether a search that has spent `loops` passes must stop (one more step
@@ -344,21 +347,39 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // almost no sample needs, cost every SIMD vector a masked pass. So their
     // loop is one whose first pass is ring 1's own work.
     int ring = 1;
+#if CELL_DIM <= 3 && CELL_RING1_PRUNE
+    // The axes' ranks by the distance to their nearer face (ties: the lower axis
+    // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
+    // above): the shifts of _cell_ring1_offset, 4 rank + 2 if flipped.
+#if CELL_ANISO
+    ivec4 sh = ivec4(0, 4, 8, 12) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#elif CELL_DIM == 2
+    int c = min(f, 1.0 - f).y < min(f, 1.0 - f).x ? 1 : 0;
+    ivec4 sh = 4 * ivec4(c, 1 - c, 2, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#else
+    ivec3 c = ivec3(lessThan(min(f, 1.0 - f).yzz, min(f, 1.0 - f).xxy));     // y < x, z < x, z < y
+    ivec4 sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#endif
+    // The sample in the frame of the table as listed: its distances to the near
+    // faces in rank order. A cell's box distance there has the same terms as on the
+    // lattice (summed in rank order) and, for a constant t (the unrolled pass
+    // below), needs no decoding.
+    vec4 qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
+    // The cells' nearest possible distances in visiting order, and the least of
+    // each tail: the walk leaves its loop once no cell left can beat F_n. A
+    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
+    // runs while any lane of the vector needs it, a lane that left a loop costs
+    // nothing.
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = 3.0e38;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
+    }
+#endif
 #if CELL_RING1_PRUNE && CELL_DIM != 3
     // One pass of the outer loop per ring, of the inner one per cell (2D:
     // ring 1 the table, 4D: a window like the others).
 #if CELL_DIM == 2
-    // -1 in _cell_ring1 is the near side of each axis.
-    ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
-    // The cells' nearest possible distances in visiting order, and the least of
-    // each tail: ring 1 ends once no cell left can beat F_n. A run-time loop on
-    // purpose: in straight-line SIMD code a pruned cell still runs while any
-    // lane of the vector needs it, a lane that left a loop costs nothing.
-    float rest[CELL_RING1_CELLS + 1];
-    rest[CELL_RING1_CELLS] = 3.0e38;
-    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1[t] * side, f, p));
-    }
     int cells = CELL_RING1_CELLS;
 #else
     int cells = 0;
@@ -376,7 +397,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             spent = cell_budget_spent(r.loops);      // the count only grows
             r.loops += 1;
 #if CELL_DIM == 2
-            o = ring == 1 ? _cell_ring1[min(t, CELL_RING1_CELLS - 1)] * side : cell_window_next(o, lo, hi);
+            o = ring == 1 ? _cell_ring1_offset(min(t, CELL_RING1_CELLS - 1), sh) : cell_window_next(o, lo, hi);
 #else
             o = cell_window_next(o, lo, hi);
 #endif
@@ -407,22 +428,13 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // loop's first pass. 3D pruned: ring 1 a loop of its own, then the flat
     // loop from an empty first pass (nested loops over 26 cells cost more).
 #if CELL_RING1_PRUNE
-    // -1 in _cell_ring1 is the near side of each axis.
-    ivec4 side = ivec4(f.x < 0.5 ? 1 : -1, f.y < 0.5 ? 1 : -1, f.z < 0.5 ? 1 : -1, 1);
-    // The cells' nearest possible distances in visiting order, and the least of
-    // each tail: ring 1 ends once no cell left can beat F_n (as above).
-    float rest[CELL_RING1_CELLS + 1];
-    rest[CELL_RING1_CELLS] = 3.0e38;
-    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1[t] * side, f, p));
-    }
     // Tested at the end of each pass, as the point loop (_cell_visit).
     for (int t = 0; ; ) {
         r.loops += 1;
-        if (_cell_box_distance(_cell_ring1[t] * side, f, p) < r.F[CELL_N - 1]) {
+        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
             spent = cell_budget_spent(r.loops);      // the count only grows
             if (!spent) {
-                _cell_visit(r, cell, f, _cell_ring1[t] * side, p);
+                _cell_visit(r, cell, f, _cell_ring1_offset(t, sh), p);
             }
         }
         t++;
@@ -438,7 +450,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         if (cell_budget_spent(r.loops)) {
             spent = true;
         } else if (t < CELL_RING1_CELLS - 1) {
-            _cell_visit(r, cell, f, _cell_ring1[t], p);
+            _cell_visit(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
         }
     }
     ivec4 lo = _cell_axes, hi = lo, o = lo;
