@@ -84,10 +84,19 @@
 // steps: F_n shrinks early, more of the later cells are pruned, and the loop
 // leaves sooner. The order decides only which of two exactly equal distances
 // comes first (cellgl/basis/reference.py visits in the same order).
-#if CELL_DIM <= 3
-#define _CELL_FIRST_WINDOW 2      // the first ring cell_search_budget walks as a window
+// How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
+// nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
+// jitter), or one flat loop over the cells of rings 2, 3, ... (2D jitter, 3D
+// pruned); and the first ring walked as a window (4D pruned: ring 1).
+#if (CELL_RING1_PRUNE && CELL_DIM != 3) || (!CELL_RING1_PRUNE && CELL_DIM >= 3)
+#define _CELL_NESTED 1
 #else
+#define _CELL_NESTED 0
+#endif
+#if CELL_DIM == 4 && CELL_RING1_PRUNE
 #define _CELL_FIRST_WINDOW 1
+#else
+#define _CELL_FIRST_WINDOW 2
 #endif
 #if CELL_DIM == 2
 #define CELL_RING1_CELLS 8
@@ -376,18 +385,67 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
     }
 #endif
-#if CELL_RING1_PRUNE && CELL_DIM != 3
-    // One pass of the outer loop per ring, of the inner one per cell (2D:
-    // ring 1 the table, 4D: a window like the others).
-#if CELL_DIM == 2
-    int cells = CELL_RING1_CELLS;
+    // The part of ring 1 before the loop below, and what is left of it, as
+    // `cells` passes over the window lo .. hi (or the table).
+#if CELL_RING1_PRUNE && CELL_DIM == 3
+    // Tested at the end of each pass, as the point loop (_cell_visit).
+    for (int t = 0; ; ) {
+        r.loops += 1;
+        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
+            spent = cell_budget_spent(r.loops);      // the count only grows
+            if (!spent) {
+                _cell_visit(r, cell, f, _cell_ring1_offset(t, sh), p);
+            }
+        }
+        t++;
+        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+            break;
+        }
+    }
+    ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
+#elif CELL_RING1_PRUNE && CELL_DIM == 2
+    int cells = CELL_RING1_CELLS;     // the table
+    ivec4 lo = ivec4(0), hi = lo;
+#elif CELL_RING1_PRUNE
+    int cells = 0;                    // 4D: ring 1 a window too, in the loop
+    ivec4 lo = ivec4(0), hi = lo;
 #else
-    int cells = 0;
+    // Unpruned (a test costs more than jitter's one point per cell) and
+    // unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
+#if CELL_DIM <= 3
+    // (A loop over the whole table: NIR unrolls a loop that indexes an array
+    // as long as its trip count.)
+    for (int t = 0; t < CELL_RING1_CELLS; t++) {
+        if (cell_budget_spent(r.loops)) {
+            spent = true;
+        } else if (t < CELL_RING1_CELLS - 1) {
+            _cell_visit(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
+        }
+    }
+#else
+    for (int x = -1; x <= 1; x++)
+    for (int y = -1; y <= 1; y++)
+    for (int z = -1; z <= 1; z++)
+    for (int w = -1; w <= 1; w++) {
+        ivec4 o = ivec4(x, y, z, w);
+        if (any(notEqual(o, ivec4(0))) && any(notEqual(o, _cell_axes))) {
+            if (cell_budget_spent(r.loops)) {
+                spent = true;
+            } else {
+                _cell_visit(r, cell, f, o, p);
+            }
+        }
+    }
 #endif
-    ivec4 lo = ivec4(0), hi = ivec4(0), o = ivec4(0);
+    int cells = 1;
+    ivec4 lo = _cell_axes, hi = lo;
+#endif
+#if _CELL_NESTED
+    // One pass of the outer loop per ring, of the inner one per cell.
+    ivec4 o = cell_window_first(lo);
     for (;;) {
         r.loops += 1;
-        if (ring >= _CELL_FIRST_WINDOW) {    // its window (4D: ring 1 too)
+        if (ring >= _CELL_FIRST_WINDOW) {    // its window (4D pruned: ring 1 too)
             _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
             ivec4 n = hi - lo + 1;
             cells = n.x * n.y * n.z * n.w;
@@ -396,7 +454,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         for (int t = 0; ; ) {
             spent = cell_budget_spent(r.loops);      // the count only grows
             r.loops += 1;
-#if CELL_DIM == 2
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
             o = ring == 1 ? _cell_ring1_offset(min(t, CELL_RING1_CELLS - 1), sh) : cell_window_next(o, lo, hi);
 #else
             o = cell_window_next(o, lo, hi);
@@ -407,7 +465,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
                 _cell_visit(r, cell, f, o, p);
             }
             t++;
-#if CELL_DIM == 2
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
             if (t >= cells || spent || (ring == 1 && rest[min(t, CELL_RING1_CELLS)] >= r.F[CELL_N - 1])) {
 #else
             if (t >= cells || spent) {
@@ -423,54 +481,10 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 #else
     // One flat loop over the cells of the rings (the cells of each ring's
     // window that are on the ring), on to the next ring after a window's last
-    // cell. Jitter: ring 1 unpruned (a test costs more than its one point per
-    // cell) and unrolled, but for its last cell (_cell_axes, all +1), the flat
-    // loop's first pass. 3D pruned: ring 1 a loop of its own, then the flat
-    // loop from an empty first pass (nested loops over 26 cells cost more).
-#if CELL_RING1_PRUNE
-    // Tested at the end of each pass, as the point loop (_cell_visit).
-    for (int t = 0; ; ) {
-        r.loops += 1;
-        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
-            spent = cell_budget_spent(r.loops);      // the count only grows
-            if (!spent) {
-                _cell_visit(r, cell, f, _cell_ring1_offset(t, sh), p);
-            }
-        }
-        t++;
-        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
-            break;
-        }
-    }
-    ivec4 lo = ivec4(0), hi = lo, o = lo;     // visits nothing (ring 0)
-#elif CELL_DIM <= 3
-    // (A loop over the whole table: NIR unrolls a loop that indexes an array
-    // as long as its trip count.)
-    for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        if (cell_budget_spent(r.loops)) {
-            spent = true;
-        } else if (t < CELL_RING1_CELLS - 1) {
-            _cell_visit(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
-        }
-    }
-    ivec4 lo = _cell_axes, hi = lo, o = lo;
-#else
-    for (int x = -1; x <= 1; x++)
-    for (int y = -1; y <= 1; y++)
-    for (int z = -1; z <= 1; z++)
-    for (int w = -1; w <= 1; w++) {
-        ivec4 o = ivec4(x, y, z, w);
-        if (any(notEqual(o, ivec4(0))) && any(notEqual(o, _cell_axes))) {
-            if (cell_budget_spent(r.loops)) {
-                spent = true;
-            } else {
-                _cell_visit(r, cell, f, o, p);
-            }
-        }
-    }
-    ivec4 lo = _cell_axes, hi = lo, o = lo;
-#endif
-    for (;;) {
+    // cell. (Tested at the top for the budget alone: a lane leaves at a ring's
+    // bound.)
+    ivec4 o = lo;
+    for (; !spent; ) {
         spent = cell_budget_spent(r.loops);          // the count only grows
         r.loops += 1;
         ivec4 ao = abs(o);
@@ -486,9 +500,6 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             }
             _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
             o = lo;
-        }
-        if (spent) {
-            break;
         }
     }
 #endif
