@@ -3,7 +3,7 @@
 // Thin: read the sample, call cell_search(), write what was asked for.
 // Macros (from cellgl/basis/gpu.py): CELL_DIM, CELL_N, CELL_METRIC, CELL_DIST,
 // CELL_MAX_POINTS, CELL_MAX_RING, CELL_GRID, CELL_OUT_F, CELL_OUT_DELTA,
-// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_DENSITY_MAP, CELL_ORBIT,
+// CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_SAMPLE_ROW_BITS, CELL_DENSITY_MAP, CELL_ORBIT,
 // CELL_ANISO, and those of lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE,
 // CELL_FEATURE_MAX_RING); CELL_LOOP_BUDGET (lib/cellular.glsl), CELL_LOOP_PROBE
 // (1: measure the loop budget, see below).
@@ -75,15 +75,76 @@ uniform ivec4 u_slab;          // first sample of this slab
 uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
 #else
 uniform double u_scale;        // positions are multiplied by this first
-// Sample positions, float64, tightly packed (CELL_DIM values per sample).
+// Sample positions, float64, tightly packed (CELL_DIM values per sample), as the 32-bit words
+// of an RGBA32UI texture 2^CELL_SAMPLE_ROW_BITS texels wide (cellgl/basis/gpu.py,
+// upload_samples): CELL_DIM / 2 texels per sample. llvmpipe fetches a texel for every lane of a
+// SIMD vector at once, where it loads a storage buffer lane by lane (docs/performance.md).
 // They are split into an integer cell and a float32 fraction in double
 // precision, so a sample 10^6 cells from the origin is as exact as one at it.
-layout(std430, binding = 0) readonly buffer Samples { double sample_pos[]; };
+uniform usampler2D u_samples;
+uvec4 cell_sample_texel(uint k)
+{
+    return texelFetch(u_samples, ivec2(k & ((1u << CELL_SAMPLE_ROW_BITS) - 1u), k >> CELL_SAMPLE_ROW_BITS), 0);
+}
 #endif
+
+// Each sample's outputs are one contiguous row (F and id: CELL_N values, delta and grad: CELL_N
+// vectors of CELL_DIM floats), stored as vectors of 2 or 4 where the row's layout allows:
+// llvmpipe stores to a storage buffer lane by lane, one loop per store whatever its width.
+#if CELL_N % 4 == 0
+#define CELL_N_VEC 4
+#define CELL_N_VEC_T vec4
+#define CELL_N_UVEC_T uvec4
+#define CELL_N_ROW(T, a, j) T(a[4 * (j)], a[4 * (j) + 1], a[4 * (j) + 2], a[4 * (j) + 3])
+layout(std430, binding = 2) writeonly buffer OutF { vec4 out_F[]; };
+layout(std430, binding = 4) writeonly buffer OutId { uvec4 out_id[]; };
+#elif CELL_N % 2 == 0
+#define CELL_N_VEC 2
+#define CELL_N_VEC_T vec2
+#define CELL_N_UVEC_T uvec2
+#define CELL_N_ROW(T, a, j) T(a[2 * (j)], a[2 * (j) + 1])
+layout(std430, binding = 2) writeonly buffer OutF { vec2 out_F[]; };
+layout(std430, binding = 4) writeonly buffer OutId { uvec2 out_id[]; };
+#else
+#define CELL_N_VEC 1
+#define CELL_N_VEC_T float
+#define CELL_N_UVEC_T uint
+#define CELL_N_ROW(T, a, j) a[j]
 layout(std430, binding = 2) writeonly buffer OutF { float out_F[]; };
-layout(std430, binding = 3) writeonly buffer OutDelta { float out_delta[]; };
 layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
-layout(std430, binding = 5) writeonly buffer OutGrad { float out_grad[]; };
+#endif
+// CELL_STORE_VECS(buf, v): the row of v(0), ..., v(CELL_N - 1) (vec4s, CELL_DIM components used)
+#if CELL_DIM == 4
+#define CELL_VEC_T vec4
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k++) { buf[i * uint(CELL_N) + uint(k)] = v(k); }
+#elif CELL_DIM == 2 && CELL_N % 2 == 0
+#define CELL_VEC_T vec4
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k += 2) { buf[i * uint(CELL_N / 2) + uint(k / 2)] = vec4(v(k).xy, v(k + 1).xy); }
+#elif CELL_DIM == 2
+#define CELL_VEC_T vec2
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k++) { buf[i * uint(CELL_N) + uint(k)] = v(k).xy; }
+#elif CELL_N % 2 == 0
+#define CELL_VEC_T vec2
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k += 2) { \
+        vec4 a_ = v(k), b_ = v(k + 1); \
+        uint o_ = i * uint(3 * CELL_N / 2) + uint(3 * k / 2); \
+        buf[o_] = a_.xy; buf[o_ + 1u] = vec2(a_.z, b_.x); buf[o_ + 2u] = b_.yz; \
+    }
+#else
+#define CELL_VEC_T float
+#define CELL_STORE_VECS(buf, v) \
+    for (int k = 0; k < CELL_N; k++) { \
+        vec4 a_ = v(k); \
+        for (int c_ = 0; c_ < 3; c_++) { buf[(i * uint(CELL_N) + uint(k)) * 3u + uint(c_)] = a_[c_]; } \
+    }
+#endif
+layout(std430, binding = 3) writeonly buffer OutDelta { CELL_VEC_T out_delta[]; };
+layout(std430, binding = 5) writeonly buffer OutGrad { CELL_VEC_T out_grad[]; };
+
 layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_index[]; };
 
 // The driver's own loop limit (docs/exactness.md). llvmpipe counts the loop
@@ -102,6 +163,17 @@ uniform int u_loop_canary;
 // more than any limiter) runs until the limiter stops it.
 uniform int u_loop_probe;
 layout(std430, binding = 8) writeonly buffer LoopProbe { int loop_probe[]; };
+#endif
+
+#if CELL_OUT_GRAD
+vec4 cell_out_grad(vec4 delta, float F)
+{
+    vec4 g = cell_metric_gradient(delta, F, u_minkowski_p);
+#if CELL_ANISO
+    g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
+#endif
+    return g;
+}
 #endif
 
 void main()
@@ -132,10 +204,34 @@ void main()
     if (i >= u_count) {
         return;
     }
+    dvec4 pos = dvec4(0.0LF);
+#if CELL_DIM == 2
+    uvec4 t0 = cell_sample_texel(i);
+    pos.xy = dvec2(packDouble2x32(t0.xy), packDouble2x32(t0.zw));
+#elif CELL_DIM == 3
+    // a texel and a half per sample: an odd sample starts in the second half of texel 3i/2
+    uint first = (3u * i) >> 1;
+    uvec4 t0 = cell_sample_texel(first);
+    uvec4 t1 = cell_sample_texel(first + 1u);
+    bool odd = (i & 1u) != 0u;
+    pos.xyz = dvec3(packDouble2x32(odd ? t0.zw : t0.xy), packDouble2x32(odd ? t1.xy : t0.zw),
+                    packDouble2x32(odd ? t1.zw : t1.xy));
+#else
+    uvec4 t0 = cell_sample_texel(2u * i);
+    uvec4 t1 = cell_sample_texel(2u * i + 1u);
+    pos = dvec4(packDouble2x32(t0.xy), packDouble2x32(t0.zw), packDouble2x32(t1.xy), packDouble2x32(t1.zw));
+#endif
+    // Coordinates must lie within +-2^30 cells (cellgl.basis.core.COORD_LIMIT). One that does not
+    // (or NaN) is searched at 0 and its sample flagged: the library then finds it and raises
+    // (core._check_coords), as it would have before the dispatch.
+    bool in_range = true;
     cell = ivec4(0);
     frac = vec4(0.0);
     for (int a = 0; a < CELL_DIM; a++) {
-        double x = sample_pos[i * uint(CELL_DIM) + uint(a)] * u_scale;
+        double x = pos[a] * u_scale;
+        bool ok = abs(x) < 1073741824.0LF;
+        in_range = in_range && ok;
+        x = ok ? x : 0.0LF;
         double fl = floor(x);
         float fr = float(x - fl);
         // A fraction just below 1 can round up to 1.0 in float32.
@@ -179,33 +275,28 @@ void main()
 #else
     CellResult r = cell_search(cell, frac, p);
 
-    for (int k = 0; k < CELL_N; k++) {
-        uint o = i * uint(CELL_N) + uint(k);
 #if CELL_OUT_F
-        out_F[o] = r.F[k] * u_out_scale;
-#endif
-#if CELL_OUT_DELTA
-        for (int a = 0; a < CELL_DIM; a++) {
-#if CELL_ANISO
-            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] / u_axis_scale[a] * u_out_scale;
-#else
-            out_delta[o * uint(CELL_DIM) + uint(a)] = r.delta[k][a] * u_out_scale;
-#endif
-        }
+    for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
+        out_F[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROW(CELL_N_VEC_T, r.F, j) * u_out_scale;
+    }
 #endif
 #if CELL_OUT_ID
-        out_id[o] = r.id[k];
+    for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
+        out_id[i * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_ROW(CELL_N_UVEC_T, r.id, j);
+    }
+#endif
+#if CELL_OUT_DELTA
+#if CELL_ANISO
+#define CELL_DELTA_OUT(k) (r.delta[k] / u_axis_scale * u_out_scale)
+#else
+#define CELL_DELTA_OUT(k) (r.delta[k] * u_out_scale)
+#endif
+    CELL_STORE_VECS(out_delta, CELL_DELTA_OUT)
 #endif
 #if CELL_OUT_GRAD
-        vec4 g = cell_metric_gradient(r.delta[k], r.F[k], u_minkowski_p);
-#if CELL_ANISO
-        g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
+#define CELL_GRAD_OUT(k) cell_out_grad(r.delta[k], r.F[k])
+    CELL_STORE_VECS(out_grad, CELL_GRAD_OUT)
 #endif
-        for (int a = 0; a < CELL_DIM; a++) {
-            out_grad[o * uint(CELL_DIM) + uint(a)] = g[a];
-        }
-#endif
-    }
     bool exact = r.exact;
     int loops = r.loops;
 #if CELL_FEATURES
@@ -245,6 +336,9 @@ void main()
         canary += 1;
     }
     exact = exact && canary == u_loop_canary;
+#if !CELL_GRID
+    exact = exact && in_range;
+#endif
 #if CELL_LOOP_PROBE
     int left = 0;
     for (int k = 0; k < u_loop_probe; k++) {

@@ -301,3 +301,57 @@ def test_masked_entries_are_refused():
 def test_density_image_of_the_wrong_type(image, rect):
     with pytest.raises(ValueError, match=r"(image must hold real numbers|rect must be a finite number|rect must be \(x0, y0, x1, y1\))"):
         cellgl.DensityMap("image", 0.5, 4.0, image=image, rect=rect)
+
+
+# ---------------------------------------------------------------- 7. sample positions as texels
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_positions_across_texture_rows_equal_the_reference(ctx, dim):
+    """The float64 positions reach the shader as the words of a texture 4096 texels wide (d / 2
+    texels per sample, 3D a texel and a half): an odd count crossing rows, far from the origin
+    (float32 positions would be cells off there), Fortran-ordered and float32 input all equal the
+    NumPy reference."""
+    rng = np.random.default_rng(dim)
+    N = 2 * 4096 + 3 if dim != 3 else 4096 + 1367        # 3D: 1.5 N texels, past a row
+    pts = 1e6 + 0.5 + rng.uniform(-40.0, 40.0, (N, dim))
+    pts[::2] *= -1.0
+    for given in (pts, np.asfortranarray(pts), pts.astype(np.float32)):
+        r = cellgl.cellular(given, 2, distribution="jitter", outputs=("F", "id"))
+        ref = _brute(np.asarray(given, np.float64), n=2, distribution="jitter")
+        assert (r.id == ref.id).mean() > 0.999
+        np.testing.assert_allclose(r.F, ref.F, atol=3e-6)
+        assert r.exact.all()
+
+
+def test_points_in_small_chunks_equal_one_dispatch(ctx, monkeypatch):
+    """Chunks of one call share the sample texture (each smaller than the last or not): split into
+    chunks of 128 samples, the bits equal one dispatch's."""
+    pts = np.random.default_rng(5).uniform(-9.0, 9.0, (1001, 3))
+    whole = cellgl.cellular(pts, 3, outputs=("F", "delta", "id"))
+    monkeypatch.setattr(gpu, "_MAX_GROUPS", 2)             # 128 samples per dispatch
+    parts = cellgl.cellular(pts, 3, outputs=("F", "delta", "id"))
+    for name in ("F", "delta", "id"):
+        assert getattr(parts, name).tobytes() == getattr(whole, name).tobytes(), name
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+@pytest.mark.parametrize("bad,match", [(np.nan, r"finite.*nan"), (-np.inf, r"finite.*-inf"),
+                                       (2.0 ** 30, r"within \+-2\^30 cells; got 1073741824\.0"),
+                                       (-1e300, r"within \+-2\^30 cells; got -1e\+300")])
+def test_bad_coordinate_anywhere_is_named(ctx, dim, bad, match):
+    """The shader checks the coordinates (no pass over the points before the dispatch): a bad one
+    in the last sample, in a later row of the sample texture or beside another still raises,
+    naming the first bad entry; the largest coordinate accepted passes."""
+    pts = np.random.default_rng(1).uniform(-5.0, 5.0, (9000, dim))
+    for rows in ([8999], [6000, 8000], [4096 * 2 // dim + 1]):
+        bent = pts.copy()
+        for k, row in enumerate(rows):
+            bent[row, (row + k) % dim] = bad
+        col = rows[0] % dim
+        with pytest.raises(ValueError, match=match) as err:
+            cellgl.cellular(bent, 2, distribution="jitter", outputs=("F",))
+        assert f"[{rows[0]}, {col}]" in str(err.value)
+    edge = pts.copy()
+    edge[-1, -1] = np.nextafter(2.0 ** 30, 0.0)
+    r = cellgl.cellular(edge, 2, distribution="jitter", outputs=("F",))
+    assert r.exact.all()

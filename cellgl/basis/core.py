@@ -334,11 +334,15 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     else:
         from cellgl.basis import gpu
 
-        _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
+        # The shader checks the coordinates (it flags a sample whose coordinate is NaN, infinite
+        # or beyond COORD_LIMIT): only when a sample comes back flagged are they checked here,
+        # for the same error as a check before the dispatch (no pass over the points otherwise).
         out, passes = _passes.gpu_passes(
             lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p)
+        exact = passes[0][1] if len(passes) == 1 else np.logical_and.reduce([ok for _, ok in passes])
+        if not exact.all():
+            _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
         _gpu_finish(out, outs, pts, p)
-        exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():
             def where(rows):
                 cells, fr = split(pts[rows] * p.scale if p.scale != 1.0 else pts[rows])

@@ -16,6 +16,9 @@ from cellgl.basis.enums import glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
 LOCAL_SIZE = 64
+#: the sample texture of :func:`search_points` is 2^_SAMPLE_ROW_BITS texels wide (cellular.comp)
+_SAMPLE_ROW_BITS = 12
+_TEXTURE_ROWS_MAX = 16384   #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
 _CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
 _MAX_GROUPS = 65535
 
@@ -42,6 +45,7 @@ def defines_for(p: Params, n: int, outputs=("F",), grid: bool = False, smooth: s
         CELL_OUT_ID=int("id" in outputs),
         CELL_OUT_GRAD=int("grad" in outputs),
         CELL_LOCAL_SIZE=LOCAL_SIZE,
+        CELL_SAMPLE_ROW_BITS=_SAMPLE_ROW_BITS,
         CELL_DENSITY_MAP=0 if p.density_map is None else int(p.density_map.kind),
         CELL_ORBIT=int(p.orbit),
         CELL_ANISO=int(p.aniso),
@@ -159,11 +163,18 @@ def _chunk_size(n: int, dim: int, outputs, stride: int = 0) -> int:
 _pool: dict = {}
 
 
+def _held(key, ctx):
+    """The buffer or texture of ``_pool`` under ``key`` if it belongs to ``ctx`` (not to a context
+    gone since, whose id ``ctx`` now has), else None."""
+    obj = _pool.get(key)
+    return obj if obj is not None and obj.ctx is ctx else None
+
+
 def _storage(ctx, binding: int, nbytes: int):
     """A storage buffer of at least ``nbytes`` bound to ``binding``, reused across calls
     (allocating fresh tens-of-MB buffers every call costs as much as a small dispatch)."""
     key = (id(ctx), binding)
-    buf = _pool.get(key)
+    buf = _held(key, ctx)
     if buf is None or buf.size < nbytes:
         if buf is not None:
             buf.release()
@@ -173,7 +184,37 @@ def _storage(ctx, binding: int, nbytes: int):
     return buf
 
 
-def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, inexact: np.ndarray,
+def upload_samples(ctx, prog, pts: np.ndarray) -> None:
+    """Hand the float64 positions ``pts`` (count, d), C-contiguous, to ``prog`` (``cellular.comp``,
+    ``u_samples``) as the 32-bit words of an RGBA32UI texture ``2^_SAMPLE_ROW_BITS`` texels wide,
+    d / 2 texels per sample, no padding between samples. The texture is kept and reused across
+    calls (grown when a chunk needs more rows)."""
+    words = pts.reshape(-1).view(np.uint32)
+    width = 1 << _SAMPLE_ROW_BITS
+    rows, tail = divmod(words.size, 4 * width)
+    if rows + 1 > _TEXTURE_ROWS_MAX:      # a chunk holds at most 2 * LOCAL_SIZE * _MAX_GROUPS texels
+        raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
+                           f"{_TEXTURE_ROWS_MAX} rows of {width}")
+    key = (id(ctx), "samples")
+    tex = _held(key, ctx)
+    if tex is None or tex.height < rows + 1:
+        if tex is not None:
+            tex.release()
+        tex = ctx.texture((width, min(_TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
+        tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
+        _pool[key] = tex
+    if rows:
+        tex.write(words[: rows * width * 4], viewport=(0, 0, width, rows))
+    if tail:
+        rest = words[rows * width * 4:]
+        if tail % 4:                         # 3D, an odd count: the last texel is half a sample
+            rest = np.concatenate([rest, np.zeros(4 - tail % 4, np.uint32)])
+        tex.write(rest, viewport=(0, rows, rest.size // 4, 1))
+    tex.use(0)
+    _set(prog, "u_samples", 0)
+
+
+def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, exact: np.ndarray,
          groups=None, stride: int = 0):
     """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
     1D dispatch) and copy results into ``out[start:start + count]``."""
@@ -198,7 +239,7 @@ def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int
     nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
     if nbad:
         idx = np.frombuffer(flags.read(4 * nbad, offset=4), dtype=np.uint32)
-        inexact[start + idx.astype(np.int64)] = True
+        exact[start + idx.astype(np.int64)] = False
 
 
 def _alloc(N: int, n: int, dim: int, outputs, stride: int = 0) -> dict:
@@ -232,15 +273,14 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     _set(prog, "u_scale", float(p.scale))
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs, stride)
-    inexact = np.zeros(N, dtype=bool)
+    exact = np.ones(N, dtype=bool)
     step = _chunk_size(n, p.dim, outputs, stride)
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
         count = min(step, N - start)
-        chunk = pts[start:start + count]
-        _storage(ctx, 0, chunk.nbytes).write(chunk)
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, stride=stride)
-    return out, ~inexact
+        upload_samples(ctx, prog, pts[start:start + count])
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, stride=stride)
+    return out, exact
 
 
 @gl_call
@@ -263,13 +303,13 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     X, Y, Z, W = (int(v) for v in shape_xyzw)
     N = X * Y * Z * W
     out = _alloc(N, n, p.dim, outputs, stride)
-    inexact = np.zeros(N, dtype=bool)
+    exact = np.ones(N, dtype=bool)
     for slab, start, groups in _grid_slabs(X, Y, Z, W, _chunk_size(n, p.dim, outputs, stride)):
         _set(prog, "u_slab", slab[:4])
         _set(prog, "u_slab_size", slab[4:])
         count = slab[4] * slab[5] * groups[2]
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, inexact, groups=groups, stride=stride)
-    return out, ~inexact
+        _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, groups=groups, stride=stride)
+    return out, exact
 
 
 def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):
@@ -322,10 +362,10 @@ def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 
     if N > _chunk_size(n, p.dim, outputs, stride):
         raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs, stride)} samples, got {N}")
     out = _alloc(N, n, p.dim, outputs, stride)
-    inexact = np.zeros(N, dtype=bool)
-    _storage(ctx, 0, pts.nbytes).write(pts)
+    exact = np.ones(N, dtype=bool)
+    upload_samples(ctx, prog, pts)
     probe = _storage(ctx, 8, 8 * N)
-    _run(prog, ctx, N, n, p.dim, outputs, out, 0, inexact, stride=stride)
+    _run(prog, ctx, N, n, p.dim, outputs, out, 0, exact, stride=stride)
     raw = np.frombuffer(probe.read(8 * N), dtype=np.int32).reshape(N, 2).astype(np.int64)
     # the canary loop (2 passes) ran before the probe
-    return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], inexact
+    return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], ~exact

@@ -39,7 +39,7 @@ _CELL = {2: "ivec4(ivec2(fl), 0, 0)", 3: "ivec4(ivec3(fl), 0)", 4: "ivec4(fl)"}
 _FRAC = {2: "vec4(p - fl, 0.0, 0.0)", 3: "vec4(p - fl, 0.0)", 4: "p - fl"}
 _RET = {"f1": "r.F[0]", "f1f2": "vec2(r.F[0], r.F[1])", "f1f2f3": "vec3(r.F[0], r.F[1], r.F[2])",
         "f1f2f3f4": "vec4(r.F[0], r.F[1], r.F[2], r.F[3])", "cellid": "r.id[0]",
-        "edge": "cell_features(cell, f, P, r, 0.0).edge"}
+        "edge": "cell_edge_alone(cell, f, P)"}
 
 
 def _check(basis: str, dim) -> tuple[str, int]:
@@ -70,6 +70,7 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
     n, ret, what = BASES[key]
     defines = defines_for(p, n)
     defines.update(feature_defines(("edge",) if key == "edge" else (), dim))
+    defines["CELL_EDGE_ALONE"] = int(key == "edge")      # features.glsl: the edge without cell_search
     thresholds = ", ".join(f"{int(t)}u" for t in p.thresholds)
     params = (
         "// The basis parameters.\n"
@@ -94,8 +95,8 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
         f"    {vec} fl = floor(p);\n"
         f"    ivec4 cell = {_CELL[dim]};\n"
         f"    vec4 f = {_FRAC[dim]};\n"
-        f"    CellResult r = cell_search(cell, f, cell_params_load());\n"
-        f"    return {_RET[key].replace('P', 'cell_params_load()')};\n}}\n"
+        + ("" if key == "edge" else "    CellResult r = cell_search(cell, f, cell_params_load());\n")
+        + f"    return {_RET[key].replace('P', 'cell_params_load()')};\n}}\n"
     )
     options = dict(metric=p.metric.name.lower(), distribution=p.distribution.name.lower(),
                    density=p.density, jitter=p.jitter, seed=p.seed, min_points=p.min_points,

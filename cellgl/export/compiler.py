@@ -11,7 +11,8 @@ Passes, repeated until the text stops changing:
 4. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
    into one), and every function called once (:mod:`cellgl.export.inline`); parameters a function
    never reads dropped, and those every call passes the same literal written into the body;
-   ``out`` parameters whose results every caller ignores turned into locals; struct fields never
+   ``out`` parameters whose results every caller ignores turned into locals, and return values
+   (:func:`cellgl.export.fields.void_results`); struct fields never
    read (or only copied into themselves) removed, those holding one literal everywhere folded
    (:mod:`cellgl.export.fields`);
 5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
@@ -26,7 +27,7 @@ from __future__ import annotations
 import re
 
 from cellgl.export.fold import _literal, constants, fold
-from cellgl.export.fields import constant_fields
+from cellgl.export.fields import constant_fields, void_results
 from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
     Item,
@@ -277,6 +278,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
         items = _drop_unused_params(items, set(entries))
         items = _constant_args(items, set(entries))
         items = _drop_unused_outs(items, set(entries))
+        items = void_results(items, set(entries), _impure_functions(items))
         items = _dead_fields(items)
         if fold_constants:
             items = constant_fields(items)

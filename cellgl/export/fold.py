@@ -247,6 +247,12 @@ def _fold_once(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
                     continue
             keep = (cl + 1, then_end) if v else else_part
             return _splice(toks, code, n, end, keep)
+        if s == "=" and ";" in w[n:]:
+            end = w.index(";", n)           # a stored condition of literals: b = 3.0e38 >= 3.0e38;
+            v = _evaluate_all(w[n + 1:end], env)
+            if isinstance(v, bool) and end - n > 2:
+                return tokenize("".join(t.text for t in toks[:code[n] + 1]) + (" true" if v else " false")
+                    + "".join(t.text for t in toks[code[end]:]))
         if s == "?":
             lo = _ternary_start(w, n)
             v = _evaluate(w[lo:n], env)

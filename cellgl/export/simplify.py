@@ -334,7 +334,7 @@ def _redundant_parens(text: str) -> str:
         if w[n + 1] == "(" and _match(toks, code, n + 1) == cl - 1:
             drop |= {code[n + 1], code[cl - 1]}
         elif n > 0 and w[n - 1] in ("=", "return") and cl + 1 < len(w) and w[cl + 1] == ";" \
-                and "?" not in w[n:cl] and "," not in w[n:cl]:
+                and "?" not in w[n:cl] and "," not in _top_level_ops(" ".join(w[n + 1:cl])):
             drop |= {code[n], code[cl]}
         elif n > 0 and w[n - 1] in ("(", "=", ",", "return") and cl + 1 < len(w) \
                 and w[cl + 1] in ("+", "-", "<", ">", "<=", ">=", "==", "!=") \
@@ -502,7 +502,7 @@ def _loop_variable(toks: list[Tok]) -> list[Tok] | None:
 
 def _store_into_next(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
     """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);`` (a a name, or y read
-    without a field or index)."""
+    without a field or index); ``T y = a; return y;`` -> ``return a;``."""
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
     for n in range(2, len(w) - 6):
@@ -511,6 +511,9 @@ def _store_into_next(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
             continue
         end = _stmt_end(toks, code, w, n)
         y = w[n]
+        if w[end + 1:end + 4] == ["return", y, ";"] and "," not in _top_level_ops(" ".join(w[n + 2:end])):
+            a = "".join(t.text for t in toks[code[n + 2]:code[end]]).strip()      # T y = a; return y;
+            return toks[:code[n - 1]] + tokenize(f"return {a};") + toks[code[end + 3] + 1:]
         if end + 3 >= len(w) or w[end + 1] != y or w[end + 2] != "=" or y in w[n + 2:end]:
             continue
         end2 = _stmt_end(toks, code, w, end + 1)

@@ -35,7 +35,8 @@
 // Requires: cellular.glsl. Macros: those of cellular.glsl, CELL_EDGE,
 // CELL_SMOOTH, CELL_NSPHERE (0 or 1; CELL_SMOOTH 2: smooth F1 as Blender's
 // Voronoi node folds it, _cell_poly_smooth below; all 0: nothing below is
-// compiled and cell_search is untouched), CELL_FEATURE_MAX_RING.
+// compiled and cell_search is untouched), CELL_FEATURE_MAX_RING,
+// CELL_EDGE_ALONE (1: cell_edge_alone, the walk finding the F1 point too).
 
 #include "cellular.glsl"
 
@@ -47,6 +48,12 @@
 #endif
 #ifndef CELL_NSPHERE
 #define CELL_NSPHERE 0
+#endif
+#ifndef CELL_EDGE_ALONE
+// 1: cell_edge_alone() below, the distance to the edge without cell_search()
+// (the basis snippets, cellgl export --basis edge: one ring walker's code);
+// with CELL_EDGE alone (no other feature), Euclidean.
+#define CELL_EDGE_ALONE 0
 #endif
 #ifndef CELL_SMOOTH_EXTRA
 // 0: only smooth F1 itself is wanted; its offset, gradient and attribute are
@@ -113,6 +120,9 @@ struct _CellWalk {
     float nn;
     int loops;       // loop iterations spent (cellular.glsl, "Loop budget")
     bool spent;      // the walk stopped at the loop budget
+#if CELL_EDGE_ALONE
+    bool nearest;    // the walk looks for the F1 point itself (F1 in internal units)
+#endif
 };
 
 // True distance from the walk's centre beyond which no point matters (now).
@@ -127,6 +137,9 @@ float _cell_walk_reach(_CellWalk w)
 #endif
 #if CELL_SMOOTH == 1
     reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+#endif
+#if CELL_EDGE_ALONE
+    reach = w.nearest ? sqrt(w.F1) : reach;     // F1 in internal units, Euclidean (as CELL_EDGE)
 #endif
     // A margin for rounding: visiting more is always safe.
     return reach * 1.000001 + 1e-6;
@@ -179,6 +192,16 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
 #if CELL_SMOOTH == 1
     float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
     _cell_smooth_add(w, delta, d, id, is_p1, p);
+#endif
+#if CELL_EDGE_ALONE
+    // Nearest mode: the F1 point as cell_search finds it, the least internal-unit
+    // distance (the edge above is then against a moving d1: cell_edge_alone resets it).
+    float dn = cell_metric_length(delta, p.minkowski_p);
+    if (w.nearest && dn < w.F1) {
+        w.F1 = dn;
+        w.d1 = delta;
+        w.id1 = id;
+    }
 #endif
 }
 
@@ -268,12 +291,18 @@ ivec4 _cell_ball_next_row(ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, float
 }
 #endif
 
-// Visit every cell around (cell, f) that can hold a point within the reach;
-// returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
+// Visit every cell around (cell, f) that can hold a point within the reach.
+// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
 // inside the loop budget (w.spent: it stopped at the budget).
 bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 {
     float m = cell_face_distance(f);
+#if CELL_EDGE_ALONE
+    // The snippet's shorter code: rings 0 and 1 are windows of the ring loop
+    // below too (the same points within the reach, so the same answer).
+    int first = 0;
+#else
+    int first = 2;
     if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
@@ -311,6 +340,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             }
         }
     }
+#endif
 #if CELL_SMOOTH == 1 && !CELL_EDGE
     if (!w.around) {
         // Smooth F1 alone: the reach F1 + cutoff k does not change during the
@@ -384,7 +414,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     }
 #endif
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = 2; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    for (int ring = first; ring <= CELL_FEATURE_MAX_RING; ring++) {
         w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
@@ -517,15 +547,15 @@ CellFeatures cell_poly_features(ivec4 cell, vec4 f, CellParams p, float smoothne
 }
 #endif
 
-// The features of the sample (cell, f) whose cell_search() result is r;
-// smoothness: k of smooth F1 in lattice units (>= 0).
-CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
+// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
+// F1), after `loops` loop passes.
+_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness)
 {
     _CellWalk w;
     w.around = false;
-    w.d1 = cell_dims(r.delta[0]);
-    w.id1 = r.id[0];
-    w.F1 = r.F[0];
+    w.d1 = d1;
+    w.id1 = id1;
+    w.F1 = F1;
     w.k = smoothness;
     w.edge = 3.0e38;
     w.edge_n = vec4(0.0);
@@ -537,9 +567,37 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.o1 = ivec4(0);
     w.q1 = vec4(0.0);
     w.nn = 3.0e38;
-    w.loops = r.loops;
+    w.loops = loops;
     w.spent = false;
+#if CELL_EDGE_ALONE
+    w.nearest = F1 >= 3.0e38;    // no F1 point given: the walk finds it first
+#endif
+    return w;
+}
 
+#if CELL_EDGE_ALONE
+// The distance to the edge alone (the basis snippets): the ring walk finds the
+// F1 point itself first (nearest mode: every cell that can hold a point nearer
+// than the nearest so far, the least internal-unit distance, as cell_search),
+// then walks around the sample for the edge; the same value as cell_search
+// and cell_features, in one walker's code.
+float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
+{
+    _CellWalk w = _cell_walk_start(vec4(0.0), 0u, 3.0e38, 0, 0.0);
+    _cell_walk(w, cell, f, p);
+    w.nearest = false;
+    w.F1 = cell_metric_finish(w.F1, p.minkowski_p);
+    w.edge = 3.0e38;
+    _cell_walk(w, cell, f, p);
+    return max(w.edge, 0.0);
+}
+#endif
+
+// The features of the sample (cell, f) whose cell_search() result is r;
+// smoothness: k of smooth F1 in lattice units (>= 0).
+CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
+{
+    _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness);
     CellFeatures o;
 #if CELL_TRACK_F1_CELL
     // n-sphere radius alone: the search already knows the F1 point's cell.
