@@ -84,6 +84,7 @@
 // steps: F_n shrinks early, more of the later cells are pruned, and the loop
 // leaves sooner. The order decides only which of two exactly equal distances
 // comes first (cellgl/basis/reference.py visits in the same order).
+
 // How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
 // nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
 // jitter), or one flat loop over the cells of rings 2, 3, ... (2D jitter, 3D
@@ -353,8 +354,9 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // changes the result: such a point could not be inserted). On llvmpipe an
     // `if` does not branch and every loop runs at least one pass, under an
     // empty mask if need be: a loop of their own for rings 2, 3, ..., which
-    // almost no sample needs, cost every SIMD vector a masked pass. So their
-    // loop is one whose first pass is ring 1's own work.
+    // almost no sample needs, cost every SIMD vector a masked pass. So they
+    // are walked by a loop whose first pass is ring 1's own work (3D pruned:
+    // a flat loop entered from an empty pass, the cheapest to enter).
     int ring = 1;
 #if CELL_DIM <= 3 && CELL_RING1_PRUNE
     // The axes' ranks by the distance to their nearer face (ties: the lower axis
