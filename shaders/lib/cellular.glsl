@@ -71,20 +71,6 @@
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
 #define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
-// Ring 1 nearest first (2D, 3D). The 3^d - 1 cells around the sample's own, in
-// the order of their box distances for a typical sample, on axes sorted by the
-// sample's distance to the nearer face (rank 0 the nearest). Per sample
-// (cell_search_budget) rank k stands for the axis that is k-th nearest to its
-// nearer face, and -1 for the step across that face. Hex digit k of an entry
-// (from the right) is rank k's step: 8 for -1 (near), 5 for 0, 2 for +1 (far);
-// a digit holds the step in its low two bits plus 1, and the flipped step in its
-// high two, so one shift (_cell_ring1_offset) maps it onto the lattice. The
-// order is that of the Euclidean box distances at the expected face distances
-// of the sorted axes (1/6, 1/3 in 2D; 1/8, 1/4, 3/8 in 3D), ties by fewer far
-// steps: F_n shrinks early, more of the later cells are pruned, and the loop
-// leaves sooner. The order decides only which of two exactly equal distances
-// comes first (cellgl/basis/reference.py visits in the same order).
-
 // How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
 // nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
 // jitter), or one flat loop over the cells of rings 2, 3, ... (2D jitter, 3D
@@ -99,6 +85,20 @@
 #else
 #define _CELL_FIRST_WINDOW 2
 #endif
+
+// Ring 1 nearest first (2D, 3D). The 3^d - 1 cells around the sample's own, in
+// the order of their box distances for a typical sample, on axes sorted by the
+// sample's distance to the nearer face (rank 0 the nearest). Per sample
+// (cell_search_budget) rank k stands for the axis that is k-th nearest to its
+// nearer face, and -1 for the step across that face. Hex digit k of an entry
+// (from the right) is rank k's step: 8 for -1 (near), 5 for 0, 2 for +1 (far);
+// a digit holds the step in its low two bits plus 1, and the flipped step in its
+// high two, so one shift (_cell_ring1_offset) maps it onto the lattice. The
+// order is that of the Euclidean box distances at the expected face distances
+// of the sorted axes (1/6, 1/3 in 2D; 1/8, 1/4, 3/8 in 3D), ties by fewer far
+// steps: F_n shrinks early, more of the later cells are pruned, and the loop
+// leaves sooner. The order decides only which of two exactly equal distances
+// comes first (cellgl/basis/reference.py visits in the same order).
 #if CELL_DIM == 2
 #define CELL_RING1_CELLS 8
 const int _cell_ring1[8] = int[8](0x558, 0x585, 0x588, 0x525, 0x528, 0x552, 0x582, 0x522);
