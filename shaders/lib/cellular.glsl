@@ -71,6 +71,21 @@
 // the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
 #define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
+// How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
+// nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
+// jitter), or one flat loop over the cells of rings 2, 3, ... (2D jitter, 3D
+// pruned); and the first ring walked as a window (4D pruned: ring 1).
+#if (CELL_RING1_PRUNE && CELL_DIM != 3) || (!CELL_RING1_PRUNE && CELL_DIM >= 3)
+#define _CELL_NESTED 1
+#else
+#define _CELL_NESTED 0
+#endif
+#if CELL_DIM == 4 && CELL_RING1_PRUNE
+#define _CELL_FIRST_WINDOW 1
+#else
+#define _CELL_FIRST_WINDOW 2
+#endif
+
 // Ring 1 nearest first (2D, 3D). The 3^d - 1 cells around the sample's own, in
 // the order of their box distances for a typical sample, on axes sorted by the
 // sample's distance to the nearer face (rank 0 the nearest). Per sample
@@ -286,6 +301,25 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
     return o;
 }
 
+// The window of ring `ring` of cell_search_budget: the cells that can hold a
+// point nearer than Fn (internal units; 3.0e38: none found yet, the whole ring).
+void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
+{
+    float reach = Fn < 3.0e38 ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
+#if CELL_ANISO
+    lo = ivec4(0);
+    hi = ivec4(0);
+    for (int a = 0; a < CELL_DIM; a++) {
+        // In lattice units on this axis (no point found yet: the whole ring).
+        float ra = Fn < 3.0e38 ? reach / p.axis_scale[a] : reach;
+        hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
+        lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
+    }
+#else
+    cell_ring_window(ring, reach, f, lo, hi);
+#endif
+}
+
 // Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
 // cell_search for an invocation that has already spent `loops` loop passes:
 // it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
@@ -306,16 +340,24 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     r.loops = loops;
     bool spent = cell_budget_spent(loops);
 
-    // Ring 0, the sample's own cell, then ring 1, the rest of the 3^d block
-    // (2D, 3D: nearest first, _cell_ring1). Constant loop bounds, so the
-    // compiler unrolls the block into straight-line SIMD code. With
-    // CELL_RING1_PRUNE a cell is skipped when its nearest possible point is no
-    // closer than the current F_n (skipping never changes the result: such a
-    // point could not be inserted); the jitter distribution visits all 3^d, its
-    // one point per cell costing less than the test.
+    // Ring 0, the sample's own cell.
     if (!spent) {
         _cell_visit(r, cell, f, ivec4(0), p);
     }
+    float m = cell_face_distance(f);
+    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
+
+    // Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
+    // then rings 2, 3, ... while a point there could still be closer than F_n,
+    // each ring's window of cells that can reach. A cell is skipped when its
+    // nearest possible point is no closer than the current F_n (skipping never
+    // changes the result: such a point could not be inserted). On llvmpipe an
+    // `if` does not branch and every loop runs at least one pass, under an
+    // empty mask if need be: a loop of their own for rings 2, 3, ..., which
+    // almost no sample needs, cost every SIMD vector a masked pass. So they
+    // are walked by a loop whose first pass is ring 1's own work (3D pruned:
+    // a flat loop entered from an empty pass, the cheapest to enter).
+    int ring = 1;
 #if CELL_DIM <= 3 && CELL_RING1_PRUNE
     // The axes' ranks by the distance to their nearer face (ties: the lower axis
     // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
@@ -344,6 +386,10 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
         rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
     }
+#endif
+    // The part of ring 1 before the loop below, and what is left of it, as
+    // `cells` passes over the window lo .. hi (or the table).
+#if CELL_RING1_PRUNE && CELL_DIM == 3
     // Tested at the end of each pass, as the point loop (_cell_visit).
     for (int t = 0; ; ) {
         r.loops += 1;
@@ -358,13 +404,24 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             break;
         }
     }
-#elif CELL_DIM <= 3
+    ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
+#elif CELL_RING1_PRUNE && CELL_DIM == 2
+    int cells = CELL_RING1_CELLS;     // the table
+    ivec4 lo = ivec4(0), hi = lo;
+#elif CELL_RING1_PRUNE
+    int cells = 0;                    // 4D: ring 1 a window too, in the loop
+    ivec4 lo = ivec4(0), hi = lo;
+#else
+    // Unpruned (a test costs more than jitter's one point per cell) and
+    // unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
+#if CELL_DIM <= 3
+    // (A loop over the whole table: NIR unrolls a loop that indexes an array
+    // as long as its trip count.)
     for (int t = 0; t < CELL_RING1_CELLS; t++) {
-        ivec4 o = _cell_ring1_offset(t, ivec4(0, 4, 8, 0));      // as listed (the reference's order on ties)
         if (cell_budget_spent(r.loops)) {
             spent = true;
-        } else {
-            _cell_visit(r, cell, f, o, p);
+        } else if (t < CELL_RING1_CELLS - 1) {
+            _cell_visit(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
         }
     }
 #else
@@ -373,11 +430,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     for (int z = -1; z <= 1; z++)
     for (int w = -1; w <= 1; w++) {
         ivec4 o = ivec4(x, y, z, w);
-#if CELL_RING1_PRUNE
-        if (any(notEqual(o, ivec4(0))) && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
-#else
-        if (any(notEqual(o, ivec4(0)))) {
-#endif
+        if (any(notEqual(o, ivec4(0))) && any(notEqual(o, _cell_axes))) {
             if (cell_budget_spent(r.loops)) {
                 spent = true;
             } else {
@@ -386,61 +439,75 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         }
     }
 #endif
-
-    float m = cell_face_distance(f);
-    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
-
-    // Rings 2, 3, ...: only while a point in the ring could still be closer
-    // than F_n; inside a ring only the window of cells that can reach, each
-    // pruned by its nearest possible distance.
-    r.exact = false;
-    int ring = 2;
-    r.loops += 1;                 // the pass that leaves the ring loop
-    for (; ring <= CELL_MAX_RING && !spent; ring++) {
-        r.loops += 1;
-        if (_cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
-            r.exact = true;
-            break;
-        }
-        float reach = r.F[CELL_N - 1] < 3.0e38
-            ? cell_metric_finish(r.F[CELL_N - 1], p.minkowski_p) * 1.000001 + 1e-6
-            : float(ring + 2);
-        ivec4 lo, hi;
-#if CELL_ANISO
-        lo = ivec4(0);
-        hi = ivec4(0);
-        for (int a = 0; a < CELL_DIM; a++) {
-            // In lattice units on this axis (no point found yet: the whole ring).
-            float ra = r.F[CELL_N - 1] < 3.0e38 ? reach / p.axis_scale[a] : reach;
-            hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
-            lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
-        }
-#else
-        cell_ring_window(ring, reach, f, lo, hi);
+    int cells = 1;
+    ivec4 lo = _cell_axes, hi = lo;
 #endif
-        ivec4 n = hi - lo + 1;
-        int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = cell_window_first(lo);
+#if _CELL_NESTED
+    // One pass of the outer loop per ring, of the inner one per cell.
+    ivec4 o = cell_window_first(lo);
+    for (;;) {
         r.loops += 1;
-        for (int i = 0; i < cells; i++) {
-            if (cell_budget_spent(r.loops)) {
-                spent = true;
-                break;
-            }
+        if (ring >= _CELL_FIRST_WINDOW) {    // its window (4D pruned: ring 1 too)
+            _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
+            ivec4 n = hi - lo + 1;
+            cells = n.x * n.y * n.z * n.w;
+            o = cell_window_first(lo);
+        }
+        for (int t = 0; ; ) {
+            spent = cell_budget_spent(r.loops);      // the count only grows
             r.loops += 1;
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+            o = ring == 1 ? _cell_ring1_offset(min(t, CELL_RING1_CELLS - 1), sh) : cell_window_next(o, lo, hi);
+#else
             o = cell_window_next(o, lo, hi);
+#endif
             ivec4 ao = abs(o);
-            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+            if (!spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
                 && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
                 _cell_visit(r, cell, f, o, p);
             }
+            t++;
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+            if (t >= cells || spent || (ring == 1 && rest[min(t, CELL_RING1_CELLS)] >= r.F[CELL_N - 1])) {
+#else
+            if (t >= cells || spent) {
+#endif
+                break;
+            }
+        }
+        ring++;
+        if (ring > CELL_MAX_RING || spent || _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
+            break;
         }
     }
-    if (spent) {
-        r.exact = false;          // stopped by the loop budget: a nearer point may be missed
-    } else if (ring > CELL_MAX_RING) {
-        r.exact = _cell_ring_bound(float(CELL_MAX_RING), m, ma, p) >= r.F[CELL_N - 1];
+#else
+    // One flat loop over the cells of the rings (the cells of each ring's
+    // window that are on the ring), on to the next ring after a window's last
+    // cell. (Tested at the top for the budget alone: a lane leaves at a ring's
+    // bound.)
+    ivec4 o = lo;
+    for (; !spent; ) {
+        spent = cell_budget_spent(r.loops);          // the count only grows
+        r.loops += 1;
+        ivec4 ao = abs(o);
+        if (!spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+            && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
+            _cell_visit(r, cell, f, o, p);
+        }
+        o = cell_window_next(o, lo, hi);
+        if (o.x > hi.x) {
+            ring++;
+            if (ring > CELL_MAX_RING || _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
+                break;
+            }
+            _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
+            o = lo;
+        }
     }
+#endif
+    // Rings 0 .. ring - 1 searched: exact unless a point beyond can be nearer,
+    // or the loop budget stopped the search (a nearer point may be missed).
+    r.exact = !spent && _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1];
     for (int k = 0; k < CELL_N; k++) {
         r.F[k] = cell_metric_finish(r.F[k], p.minkowski_p);
     }
