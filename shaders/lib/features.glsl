@@ -245,7 +245,15 @@ void _cell_walk_far_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellPar
         uint id;
         vec4 delta = cell_dims(base + cell_next_point(state, c, p, id));
         float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+#if CELL_SMOOTH_EXTRA
         _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
+#else
+        // Smooth F1 alone needs no ID: the F1 point (d == F1) weighs exp(0) = 1
+        // as is_p1 gives it, and with k = 0 the sum does not change S = F1.
+        if (d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
+            w.wsum += exp((w.F1 - d) / w.k);
+        }
+#endif
     }
 }
 #endif
@@ -365,16 +373,23 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             ivec4 lo, hi;
             ivec4 o = ivec4(0);
             _cell_ball_reset(o, lo, hi, f, reach, last, 0);
-            w.loops += 1;             // the pass that leaves the loop over the rows
-            while (o.x <= hi.x && !w.spent) {
-                w.loops += 2;         // this pass, and the one that leaves the row
+            //
+            // Both loops are tested at the bottom: no range is empty (the first
+            // row is o.x = lo.x, a row's range holds 0, and with reach > 3 a row
+            // through rings 0 and 1 reaches past them on both sides: its t >
+            // sqrt(9 - 3)), and a loop tested at the top runs its body once more,
+            // masked, on every exit (a cell's whole cost per row). The passes are
+            // counted as the top-tested loops would spend them (the same budget).
+            w.loops += 1;             // the pass that left the loop over the rows
+            do {
+                w.loops += 2;         // this pass, and the one that left the row
                 // One row: the last axis over its range, given the row's other
                 // axes, over the block of rings 0 and 1 (visited before).
                 ivec4 ao = abs(o);
                 ao[CELL_DIM - 1] = 0;
                 bool inner = max(max(ao.x, ao.y), max(ao.z, ao.w)) <= 1;
                 int z = inner ? (lo[CELL_DIM - 1] >= -1 ? 2 : lo[CELL_DIM - 1]) : lo[CELL_DIM - 1];
-                for (; z <= hi[CELL_DIM - 1]; z = (inner && z == -2) ? 2 : z + 1) {
+                do {
                     if (cell_budget_spent(w.loops)) {
                         w.spent = true;
                         break;
@@ -382,9 +397,10 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
                     w.loops += 1;
                     o[CELL_DIM - 1] = z;
                     _cell_walk_far_cell(w, cell, f, o, p);
-                }
+                    z = (inner && z == -2) ? 2 : z + 1;
+                } while (z <= hi[CELL_DIM - 1]);
                 o = _cell_ball_next_row(o, lo, hi, f, reach, last);
-            }
+            } while (o.x <= hi.x && !w.spent);
             return !w.spent && float(last) + m >= reach;
         }
 #endif
