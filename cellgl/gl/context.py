@@ -56,8 +56,9 @@ __all__ = [
 #: Accepted backend names, in the order tried.
 BACKENDS = ("egl", "glx", "osmesa")
 
-#: Minimum OpenGL version (compute shaders, SSBOs), as moderngl's version code.
-REQUIRED_GL = 430
+#: Minimum OpenGL version, as moderngl's version code: 3.3 core runs the fragment path;
+#: 4.3 adds compute shaders (cellgl.gl.path).
+REQUIRED_GL = 330
 
 _INSTALL_HINT = (
     "cellgl needs an OpenGL 4.3 (core) context for compute shaders. On Debian/Ubuntu install "
