@@ -27,16 +27,20 @@ PROG = "cellgl"
 
 
 def _add_info(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = sub.add_parser("info", help="show the OpenGL context: renderer, version, compute limits")
+    from cellgl.gl.platforms import ALL_BACKENDS
+
+    p = sub.add_parser("info", help="show the OpenGL context: backend, GL version, which GPU path "
+                       "runs (compute or fragment), renderer, compute limits")
     p.add_argument("--json", action="store_true", help="print one JSON object")
-    p.add_argument("--backend", choices=("egl", "glx", "osmesa"), default=None,
-                   help="force a context backend (default: $CELLGL_BACKEND, else egl, glx, osmesa)")
+    p.add_argument("--backend", choices=ALL_BACKENDS, default=None,
+                   help="force a context backend (default: $CELLGL_BACKEND, else the platform's: "
+                   "egl, glx, osmesa on Linux; wgl on Windows; cgl on macOS)")
     return p
 
 
 def _fmt(value: object) -> str:
     if isinstance(value, (tuple, list)):
-        return " ".join(str(v) for v in value)
+        return " ".join(str(v) for v in value) or "none"
     return "unknown" if value is None else str(value)
 
 

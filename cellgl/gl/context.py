@@ -1,16 +1,25 @@
-"""Headless OpenGL 4.3+ context and shader program cache.
+"""Headless OpenGL context (3.3 core and up) and shader program cache.
 
-One context per backend per process. Backends, in the order tried when none is named:
+One context per backend per process. The backends of each platform, in the order tried when
+none is named (:mod:`cellgl.gl.platforms`):
 
-``egl``
+``egl`` (Linux)
     glcontext's EGL backend (headless; Mesa llvmpipe or a GPU driver).
-``glx``
+``glx`` (Linux)
     glcontext's X11 backend, only when ``DISPLAY`` is set.
-``osmesa``
+``wgl`` (Windows)
+    Windows' own context API (glcontext's default backend there): the GPU driver's
+    ``opengl32.dll``, or Mesa's llvmpipe build named by ``GLCONTEXT_WIN_LIBGL``.
+``cgl`` (macOS)
+    Apple's OpenGL (glcontext's default backend there): 4.1 core, no compute shaders.
+``osmesa`` (everywhere)
     Mesa's off-screen library ``libOSMesa`` through a small ctypes loader, only when the library
     can be found.
 
-The environment variable ``CELLGL_BACKEND`` (``egl``, ``glx`` or ``osmesa``) forces one backend.
+The environment variable ``CELLGL_BACKEND`` forces one backend; a backend of another platform
+(``CELLGL_BACKEND=wgl`` on Linux) is a :class:`ContextError` that names this platform's.
+Which GPU path runs on the context (compute from OpenGL 4.3, fragment below it) is
+:func:`cellgl.gl.path.gpu_path`'s decision.
 
 Threads: one shared context per backend and process, and one lock. Every cellgl call that does
 GL work holds the lock and has the context current on the calling thread for its duration, then
@@ -38,7 +47,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa
+from cellgl.gl import glsl, osmesa, path, platforms
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -53,22 +62,16 @@ __all__ = [
     "program",
 ]
 
-#: Accepted backend names, in the order tried.
-BACKENDS = ("egl", "glx", "osmesa")
+#: Every accepted backend name (each platform has some of them: cellgl.gl.platforms).
+BACKENDS = platforms.ALL_BACKENDS
 
 #: Minimum OpenGL version, as moderngl's version code: 3.3 core runs the fragment path;
 #: 4.3 adds compute shaders (cellgl.gl.path).
 REQUIRED_GL = 330
 
-_INSTALL_HINT = (
-    "cellgl needs an OpenGL 4.3 (core) context for compute shaders. On Debian/Ubuntu install "
-    "Mesa's headless EGL driver: `apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri` "
-    "(or `apt-get install libosmesa6` and set CELLGL_BACKEND=osmesa)."
-)
-
 
 class ContextError(RuntimeError):
-    """No usable OpenGL 4.3 context could be created."""
+    """No usable OpenGL context (3.3 core or later) could be created."""
 
 
 _lock = threading.RLock()
@@ -93,12 +96,12 @@ _orphans: list = []
 deferred: list = []
 
 
-def _context_from_loader(loader, require: int) -> moderngl.Context:
-    """Wrap a loader object in a standalone moderngl.Context (moderngl 5.10+ internals)."""
+def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
+    """Wrap a loader object (None: glcontext's default backend) in a moderngl.Context
+    (moderngl 5.10+ internals)."""
     ctx = moderngl.Context.__new__(moderngl.Context)
-    ctx.mglo, ctx.version_code = moderngl.mgl.create_context(
-        glversion=require, mode="standalone", context=loader
-    )
+    settings = {"context": loader} if loader is not None else {}
+    ctx.mglo, ctx.version_code = moderngl.mgl.create_context(glversion=require, mode=mode, **settings)
     ctx._info = None
     ctx._extensions = None
     ctx.extra = None
@@ -122,6 +125,9 @@ def _context_from_loader(loader, require: int) -> moderngl.Context:
 def _create(backend: str) -> moderngl.Context:
     """A new context of ``backend``, current on this thread, on a display whose driver threads
     exist in this process (see :mod:`cellgl.gl.surfaceless`)."""
+    why = platforms.check_backend(backend)
+    if why:
+        raise ContextError(why)
     if backend == "egl":
         if "egl" not in _tainted:
             _opened.add("egl")
@@ -144,6 +150,9 @@ def _create(backend: str) -> moderngl.Context:
         path = osmesa.probe()
         _opened.add("osmesa")
         return _from_loader(osmesa.OSMesaLoader(library=path))
+    if backend in ("wgl", "cgl"):
+        _opened.add(backend)
+        return platforms.create_native(backend, REQUIRED_GL)
     raise _unknown_backend(backend)
 
 
@@ -293,42 +302,41 @@ def current(backend: str | None = None):
         yield get_context(backend)
 
 
-class _CurrentEGLLoader:
-    """GL entry points of whatever EGL context is current (a window's); creates nothing."""
+def window_api() -> str:
+    """``"egl"`` or ``"native"``: the context API for a window (the viewer's) in this process.
 
-    def __init__(self):
-        name = ctypes.util.find_library("EGL")
-        if not name:
-            raise ContextError("libEGL not found; " + _INSTALL_HINT)
-        self._egl = ctypes.CDLL(name)
-        self._egl.eglGetProcAddress.restype = ctypes.c_void_p
-        self._egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
-        self._egl.eglGetCurrentContext.restype = ctypes.c_void_p
-        if not self._egl.eglGetCurrentContext():
-            raise ContextError("no EGL context is current on this thread")
+    EGL on Linux when cellgl's headless context is (or will be) EGL: Mesa will not make a GLX
+    context current in a process that has already initialised EGL (``BadAccess`` in
+    ``X_GLXMakeCurrent``); with both on EGL they share the thread freely. Everywhere else the
+    platform's own API (GLX, WGL, NSGL): Windows has no EGL without ANGLE, macOS none at all.
+    """
+    if platforms.platform() != "linux":
+        return "native"
+    name = _default_backend or os.environ.get("CELLGL_BACKEND", "").strip().lower() or "egl"
+    return "egl" if name == "egl" else "native"
 
-    def load_opengl_function(self, name: str) -> int:
-        return self._egl.eglGetProcAddress(name.encode("ascii")) or 0
 
-    def __enter__(self):
-        pass
-
-    def __exit__(self, *args):
-        pass
-
-    def release(self) -> None:
-        pass
+def attach_current(require: int = REQUIRED_GL, api: str = "native") -> moderngl.Context:
+    """A moderngl.Context for the context current on this thread (a GLFW window's), with its
+    default framebuffer as ``screen``. ``api``: ``"egl"`` for a window made with
+    ``CONTEXT_CREATION_API = EGL_CONTEXT_API`` (see :func:`window_api`), ``"native"`` for one
+    of the platform's own API (glcontext's default backend detects it)."""
+    if api == "egl":
+        return attach_current_egl(require)
+    ctx = _context_from_loader(None, require, mode="detect")
+    ctx._screen = ctx.detect_framebuffer(0)
+    ctx.fbo = ctx.detect_framebuffer()
+    ctx.mglo.fbo = ctx.fbo.mglo
+    return ctx
 
 
 def attach_current_egl(require: int = REQUIRED_GL) -> moderngl.Context:
-    """A moderngl.Context for the EGL context current on this thread (a GLFW window made with
-    ``CONTEXT_CREATION_API = EGL_CONTEXT_API``), with its default framebuffer as ``screen``.
-
-    Windows use EGL rather than GLX because Mesa will not make a GLX context current in a
-    process that has already initialised EGL (cellgl's headless context): ``BadAccess`` in
-    ``X_GLXMakeCurrent``. With both on EGL they share the thread freely.
-    """
-    ctx = _context_from_loader(_CurrentEGLLoader(), require)
+    """As :func:`attach_current` for the EGL context current on this thread."""
+    try:
+        loader = platforms.CurrentEGLLoader()
+    except RuntimeError as exc:
+        raise ContextError(str(exc)) from None
+    ctx = _context_from_loader(loader, require)
     ctx._screen = ctx.detect_framebuffer(0)
     ctx.fbo = ctx.detect_framebuffer()
     ctx.mglo.fbo = ctx.fbo.mglo
@@ -336,13 +344,14 @@ def attach_current_egl(require: int = REQUIRED_GL) -> moderngl.Context:
 
 
 def get_context(backend: str | None = None) -> moderngl.Context:
-    """Return the process-wide headless OpenGL 4.3+ context.
+    """Return the process-wide headless OpenGL context (3.3 core or later).
 
     Parameters
     ----------
-    backend : {"egl", "glx", "osmesa"}, optional
-        Force a backend. Default: ``$CELLGL_BACKEND`` if set, else the first of
-        egl, glx (when ``DISPLAY`` is set), osmesa (when libOSMesa is found) that works.
+    backend : {"egl", "glx", "osmesa", "wgl", "cgl"}, optional
+        Force a backend. Default: ``$CELLGL_BACKEND`` if set, else the first that works of
+        the platform's: egl, glx (when ``DISPLAY`` is set), osmesa (when libOSMesa is found)
+        on Linux; wgl, osmesa on Windows; cgl, osmesa on macOS.
 
     Returns
     -------
@@ -358,7 +367,8 @@ def get_context(backend: str | None = None) -> moderngl.Context:
     ValueError
         Unknown backend name.
     ContextError
-        No backend gave an OpenGL 4.3 context; the message lists each backend tried.
+        No backend gave an OpenGL 3.3 core context (or the named backend is another
+        platform's); the message lists each backend tried, with why it failed.
     """
     global _default_backend
     if _pid != os.getpid():  # forked by a path that skipped the at-fork hook
@@ -371,11 +381,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
             else:
                 if _default_backend is not None:
                     return _take(_contexts[_default_backend], _default_backend)
-                candidates = ["egl"]
-                if os.environ.get("DISPLAY"):
-                    candidates.append("glx")
-                if ctypes.util.find_library("OSMesa"):
-                    candidates.append("osmesa")
+                candidates = [b for b in platforms.platform_backends() if _available(b)]
         else:
             if not isinstance(backend, str):
                 raise _unknown_backend(backend)
@@ -398,7 +404,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 _default_backend = name
             return _take(ctx, name)
 
-        skipped = [b for b in BACKENDS if b not in candidates]
+        skipped = [b for b in platforms.platform_backends() if b not in candidates]
         note = ""
         if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip() and skipped:
             reasons = {"glx": "DISPLAY not set", "osmesa": "libOSMesa not found"}
@@ -409,9 +415,18 @@ def get_context(backend: str | None = None) -> moderngl.Context:
             note += ("\n  driver settings in the environment: " + ", ".join(settings)
                      + " (unset them to let Mesa choose, or set GALLIUM_DRIVER=llvmpipe)")
         raise ContextError(
-            "could not create an OpenGL 4.3 context. Backends tried:\n"
-            + "\n".join(errors) + note + "\n" + _INSTALL_HINT
+            f"could not create an OpenGL context on {platforms.platform_name()}. Backends tried:\n"
+            + "\n".join(errors) + note + "\n" + platforms.install_hint()
         )
+
+
+def _available(backend: str) -> bool:
+    """Whether a backend of this platform is worth trying when none is named."""
+    if backend == "glx":
+        return bool(os.environ.get("DISPLAY"))
+    if backend == "osmesa":
+        return platforms.osmesa_library() is not None
+    return True
 
 
 def backend_name(ctx: moderngl.Context | None = None) -> str | None:
@@ -427,28 +442,8 @@ def backend_name(ctx: moderngl.Context | None = None) -> str | None:
 _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE = 0x8262
 
 
-def _get_proc(backend: str | None, name: str) -> int:
-    """Address of GL function ``name`` for the current context of ``backend`` (0 if unknown)."""
-    bname = name.encode("ascii")
-    try:
-        if backend == "osmesa":
-            lib = ctypes.CDLL(ctypes.util.find_library("OSMesa"))
-            fn = lib.OSMesaGetProcAddress
-        elif backend == "glx":
-            lib = ctypes.CDLL(ctypes.util.find_library("GL"))
-            fn = lib.glXGetProcAddressARB
-        else:
-            lib = ctypes.CDLL(ctypes.util.find_library("EGL"))
-            fn = lib.eglGetProcAddress
-        fn.restype = ctypes.c_void_p
-        fn.argtypes = [ctypes.c_char_p]
-        return fn(bname) or 0
-    except (OSError, AttributeError, TypeError):
-        return 0
-
-
 def _get_integer(ctx: moderngl.Context, pname: int) -> int | None:
-    addr = _get_proc(_backend_of.get(id(ctx)), "glGetIntegerv")
+    addr = platforms.get_proc(_backend_of.get(id(ctx)), "glGetIntegerv")
     if not addr:
         return None
     proto = ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.POINTER(ctypes.c_int))
@@ -466,7 +461,8 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
     Returns
     -------
     dict
-        Keys ``backend``, ``GL_VENDOR``, ``GL_RENDERER``, ``GL_VERSION``, ``gl_version_code``,
+        Keys ``backend``, ``path`` (the GPU path that runs: ``compute`` or ``fragment``,
+        :func:`cellgl.gl.path.gpu_path`), ``GL_VENDOR``, ``GL_RENDERER``, ``GL_VERSION``, ``gl_version_code``,
         ``GL_MAX_COMPUTE_WORK_GROUP_COUNT`` (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_SIZE``
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
         (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
@@ -479,6 +475,7 @@ def _info(ctx: moderngl.Context) -> dict:
     info = ctx.info
     return {
         "backend": _backend_of.get(id(ctx)),
+        "path": path.gpu_path(ctx),
         "GL_VENDOR": info.get("GL_VENDOR"),
         "GL_RENDERER": info.get("GL_RENDERER"),
         "GL_VERSION": info.get("GL_VERSION"),
@@ -558,21 +555,39 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
             ctx: moderngl.Context | None = None) -> moderngl.Program:
     """Compile and link (once, cached) a vertex + fragment program from ``shaders/``.
 
-    See :func:`compute_program` for ``defines``, ``ctx`` and errors.
+    See :func:`compute_program` for ``defines``, ``ctx`` and errors. The files' ``#version``
+    is lowered to :func:`glsl_version` of ``ctx`` (``__VERSION__`` tells the shader which).
     """
     ctx = ctx if ctx is not None else get_context()
     key = ("program", id(ctx), vertex, fragment, _defines_key(defines))
     with _lock:
         prog = _programs.get(key)
         if prog is None:
-            vs = glsl.load(vertex, defines)
-            fs = glsl.load(fragment, defines)
+            version = glsl_version(ctx)
+            vs = _lowered(glsl.load(vertex, defines), version)
+            fs = _lowered(glsl.load(fragment, defines), version)
             try:
                 prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
             except moderngl.Error as exc:
                 raise _program_error(vertex, fragment, exc, vs, fs) from None
             _programs[key] = prog
         return prog
+
+
+def glsl_version(ctx: moderngl.Context) -> int:
+    """The GLSL ``#version`` of vertex/fragment programs on ``ctx``: the shaders' own 430 from
+    OpenGL 4.3, else the context's (410 on macOS, 330 on OpenGL 3.3 core)."""
+    code = ctx.version_code
+    return next(v for v in (430, 420, 410, 400, 330) if code >= v or v == 330)
+
+
+def _lowered(src: glsl.Source, version: int) -> glsl.Source:
+    """``src`` with its ``#version N`` line (first line) set to ``version`` where N is higher."""
+    head, _, rest = src.text.partition("\n")
+    parts = head.split()
+    if parts[:1] == ["#version"] and len(parts) > 1 and parts[1].isdigit() and int(parts[1]) > version:
+        src = glsl.Source(f"#version {version}\n{rest}", src.line_map, src.files)
+    return src
 
 
 def _program_error(vertex, fragment, exc, vs, fs) -> glsl.ShaderError:

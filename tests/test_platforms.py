@@ -1,0 +1,206 @@
+"""Context selection on each desktop platform (cellgl.gl.platforms), tested here on Linux by
+patching ``sys.platform`` and glcontext's entry (``moderngl.create_context``, which calls
+glcontext's default backend: WGL on Windows, CGL on macOS)."""
+
+from __future__ import annotations
+
+import sys
+
+import pytest
+
+from cellgl.gl import context, osmesa, platforms
+
+
+class _FakeMglo:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *args):
+        return None
+
+
+class _FakeContext:
+    """What moderngl.create_context returns, as far as get_context looks at it."""
+
+    def __init__(self, version_code: int):
+        self.version_code = version_code
+        self.mglo = _FakeMglo()
+
+
+@pytest.fixture
+def clean_state(monkeypatch):
+    """get_context's process state, fresh and restored afterwards (the session's context and
+    its bookkeeping stay untouched)."""
+    for name, value in (("_contexts", {}), ("_backend_of", {}), ("_bound", {}), ("_opened", set()),
+                        ("_spare", {}), ("_private", set()), ("_default_backend", None)):
+        monkeypatch.setattr(context, name, value)
+    monkeypatch.delenv("CELLGL_BACKEND", raising=False)
+    monkeypatch.delenv("CELLGL_PATH", raising=False)
+    yield
+
+
+def _native(monkeypatch, outcomes: dict):
+    """Patch glcontext's entry: ``outcomes[require]`` is a version code to return, or an error
+    text to raise. Returns the list of calls (their keyword arguments)."""
+    calls = []
+
+    def create_context(**kwargs):
+        calls.append(kwargs)
+        out = outcomes[kwargs.get("require")]
+        if isinstance(out, str):
+            raise Exception(out)  # glcontext raises bare Exception
+        return _FakeContext(out)
+
+    import moderngl
+
+    monkeypatch.setattr(moderngl, "create_context", create_context)
+    return calls
+
+
+def _no_osmesa(monkeypatch):
+    monkeypatch.setattr(platforms, "osmesa_library", lambda: None)
+
+
+def test_platform_tables():
+    assert platforms.PLATFORM_BACKENDS["win32"][0] == "wgl"
+    assert platforms.PLATFORM_BACKENDS["darwin"][0] == "cgl"
+    assert platforms.PLATFORM_BACKENDS["linux"][:2] == ("egl", "glx")
+    assert set(context.BACKENDS) == {b for v in platforms.PLATFORM_BACKENDS.values() for b in v}
+
+
+@pytest.mark.parametrize("plat, key", [("win32", "win32"), ("cygwin", "linux"), ("darwin", "darwin"),
+                                       ("linux", "linux"), ("freebsd14", "linux")])
+def test_platform_key(monkeypatch, plat, key):
+    monkeypatch.setattr(sys, "platform", plat)
+    assert platforms.platform() == key
+
+
+def test_windows_tries_wgl_first_and_lists_every_backend(monkeypatch, clean_state):
+    monkeypatch.setattr(sys, "platform", "win32")
+    _no_osmesa(monkeypatch)
+    calls = _native(monkeypatch, {430: "wglCreateContextAttribsARB failed",
+                                  330: "wglCreateContextAttribsARB failed"})
+    with pytest.raises(context.ContextError) as info:
+        context.get_context()
+    msg = str(info.value)
+    lines = msg.splitlines()
+    assert "on Windows" in lines[0]
+    assert lines[1].startswith("  wgl: 4.3 core: wglCreateContextAttribsARB failed; 3.3 core:")
+    assert "  osmesa: skipped (libOSMesa not found)" in lines
+    assert "GLCONTEXT_WIN_LIBGL" in msg and "opengl32.dll" in msg
+    assert "apt-get" not in msg and "egl" not in msg.replace("GLCONTEXT", "")
+    # glcontext's default backend (WGL on Windows): no backend= argument, 4.3 core asked first
+    assert [c["require"] for c in calls] == [430, 330]
+    assert all(c.get("standalone") is True and "backend" not in c for c in calls)
+
+
+def test_windows_wgl_falls_back_to_33_core(monkeypatch, clean_state):
+    monkeypatch.setattr(sys, "platform", "win32")
+    _no_osmesa(monkeypatch)
+    calls = _native(monkeypatch, {430: "wglCreateContextAttribsARB failed", 330: 330})
+    ctx = context.get_context()
+    assert ctx.version_code == 330
+    assert context.backend_name(ctx) == "wgl"
+    assert [c["require"] for c in calls] == [430, 330]
+    assert context.get_context() is ctx  # cached
+
+
+def test_windows_wgl_with_compute_is_asked_once(monkeypatch, clean_state):
+    monkeypatch.setattr(sys, "platform", "win32")
+    calls = _native(monkeypatch, {430: 460})
+    ctx = context.get_context()
+    assert context.backend_name(ctx) == "wgl" and ctx.version_code == 460
+    assert [c["require"] for c in calls] == [430]
+
+
+def test_macos_tries_cgl_first(monkeypatch, clean_state):
+    monkeypatch.setattr(sys, "platform", "darwin")
+    calls = _native(monkeypatch, {330: 410})
+    ctx = context.get_context()
+    assert context.backend_name(ctx) == "cgl" and ctx.version_code == 410
+    # glcontext's darwin backend ignores the version and asks for GL4 core (4.1): one call,
+    # no backend= (glcontext's default on macOS is CGL)
+    assert len(calls) == 1 and "backend" not in calls[0] and calls[0]["standalone"] is True
+
+    from cellgl.gl import path
+
+    assert path.gpu_path(ctx) == "fragment"
+
+
+def test_macos_error_lists_cgl_and_osmesa(monkeypatch, clean_state):
+    monkeypatch.setattr(sys, "platform", "darwin")
+    monkeypatch.setattr(platforms, "osmesa_library", lambda: "/opt/mesa/libOSMesa.dylib")
+
+    def probe():
+        raise osmesa.OSMesaError("OSMesa (/opt/mesa/libOSMesa.dylib) could not create a core "
+                                 "profile 4.3 context in a probe process")
+
+    monkeypatch.setattr(osmesa, "probe", probe)
+    _native(monkeypatch, {330: "cannot choose pixel format"})
+    with pytest.raises(context.ContextError) as info:
+        context.get_context()
+    lines = str(info.value).splitlines()
+    assert "on macOS" in lines[0]
+    assert lines[1] == "  cgl: cannot choose pixel format"
+    assert lines[2].startswith("  osmesa: OSMesa (/opt/mesa/libOSMesa.dylib)")
+    assert "4.1 core" in str(info.value)
+
+
+@pytest.mark.parametrize("plat, name, own", [("darwin", "wgl", "cgl"), ("darwin", "egl", "cgl"),
+                                             ("win32", "cgl", "wgl"), ("linux", "wgl", "egl")])
+def test_another_platforms_backend_is_a_clear_error(monkeypatch, clean_state, plat, name, own):
+    monkeypatch.setattr(sys, "platform", plat)
+    calls = _native(monkeypatch, {})
+    monkeypatch.setenv("CELLGL_BACKEND", name)
+    with pytest.raises(context.ContextError) as info:
+        context.get_context()
+    msg = str(info.value)
+    assert f"{name}: {name} is the " in msg and "CELLGL_BACKEND" in msg and own in msg
+    assert calls == []  # nothing was created
+
+
+def test_unknown_names_still_value_errors():
+    with pytest.raises(ValueError, match=r"'metal'.*egl, glx, osmesa, wgl, cgl"):
+        context.get_context("metal")
+
+
+@pytest.mark.parametrize("plat, env, api", [("darwin", None, "native"), ("win32", None, "native"),
+                                            ("linux", None, "egl"), ("linux", "egl", "egl"),
+                                            ("linux", "glx", "native"), ("linux", "osmesa", "native")])
+def test_window_api(monkeypatch, clean_state, plat, env, api):
+    monkeypatch.setattr(sys, "platform", plat)
+    if env:
+        monkeypatch.setenv("CELLGL_BACKEND", env)
+    assert context.window_api() == api
+
+
+def test_window_api_follows_the_context_made(monkeypatch, clean_state):
+    monkeypatch.setattr(context, "_default_backend", "glx")
+    assert context.window_api() == "native"
+
+
+@pytest.mark.parametrize("code, version", [(460, 430), (430, 430), (420, 420), (410, 410),
+                                           (400, 400), (330, 330)])
+def test_glsl_version(code, version):
+    assert context.glsl_version(_FakeContext(code)) == version
+
+
+def test_cli_info_on_a_41_core_context_runs_the_fragment_path():
+    """`cellgl info` under Mesa's emulation of a Mac (4.1 core, no compute shaders)."""
+    import os
+    import subprocess
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parent.parent
+    env = dict(os.environ, PYTHONPATH=str(repo), MESA_GL_VERSION_OVERRIDE="4.1FC",
+               MESA_GLSL_VERSION_OVERRIDE="410", MESA_EXTENSION_OVERRIDE="-GL_ARB_compute_shader")
+    env.pop("CELLGL_PATH", None)
+    r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=repo, env=env,
+                       capture_output=True, text=True, timeout=120)
+    if r.returncode != 0 and "could not create" in r.stderr:
+        pytest.skip(f"no OpenGL context here: {r.stderr.strip()}")
+    assert r.returncode == 0, r.stderr
+    lines = dict(line.split(": ", 1) for line in r.stdout.splitlines())
+    assert lines["path"] == "fragment"
+    assert lines["GL_VERSION"].startswith("4.1 (Core Profile)")
+    assert lines["GL_MAX_COMPUTE_WORK_GROUP_SIZE"] == "none"
