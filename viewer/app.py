@@ -39,6 +39,10 @@ from .modes import MODE_LABELS, MODES, PANEL_WIDTH, PUPS_REFUSED_MODES
 
 __all__ = ["Viewer", "ViewerOptions", "MODES"]
 
+#: Core profile versions asked of GLFW, newest first: 4.3 (what the viewer asked for before,
+#: the same pixels), 4.1 (macOS), 3.3 (the least cellgl runs on). Most drivers give their
+#: newest core version for any of them.
+WINDOW_VERSIONS = ((4, 3), (4, 1), (3, 3))
 
 
 @dataclass
@@ -106,34 +110,47 @@ class Viewer:
         glfw.set_error_callback(lambda code, text: errors.append(
             text.decode(errors="replace") if isinstance(text, bytes) else str(text)))
         try:
-            self._open_window(w, h, hidden, errors)
+            api = self._open_window(w, h, hidden, errors)
         finally:
             glfw.set_error_callback(None)     # back to pyGLFW's default reporting
         self._take_context()
         glfw.swap_interval(1 if vsync and not hidden else 0)
-        self.ctx = context.attach_current_egl(430)
+        self.ctx = context.attach_current(context.REQUIRED_GL, api)
         self.hidden = hidden
 
-    def _open_window(self, w: int, h: int, hidden: bool, errors: list) -> None:
+    def _open_window(self, w: int, h: int, hidden: bool, errors: list) -> str:
+        """Open the window with a core forward-compatible context: the newest of
+        :data:`WINDOW_VERSIONS` the system gives (macOS: 4.1), on the context API that can share
+        the process with cellgl's headless context (:func:`cellgl.gl.context.window_api`: EGL on
+        Linux beside an EGL headless context, the platform's own API elsewhere). Returns the
+        API used ("egl" or "native")."""
         def why() -> str:
-            return f" ({'; '.join(errors)})" if errors else ""
+            return f" ({'; '.join(dict.fromkeys(errors))})" if errors else ""
 
         if not glfw.init():
             raise RuntimeError(f"GLFW could not initialise{why()}: no display? run under xvfb-run, or "
                                "use `cellgl bake` for headless output")
-        glfw.default_window_hints()
-        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 4)
-        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
-        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
-        glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
-        glfw.window_hint(glfw.VISIBLE, not hidden)
-        glfw.window_hint(glfw.SCALE_TO_MONITOR, False)
-        # EGL, like cellgl's headless context: Mesa refuses GLX once EGL is in the process.
-        glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API)
-        self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
-        if not self.window:
-            glfw.terminate()
-            raise RuntimeError(f"GLFW could not create an OpenGL 4.3 core window{why()}")
+        apis = [context.window_api()]
+        if apis[0] == "egl":
+            apis.append("native")   # no libEGL: then the headless context is not EGL either
+        for api in apis:
+            for major, minor in WINDOW_VERSIONS:
+                glfw.default_window_hints()
+                glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, major)
+                glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, minor)
+                glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+                glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
+                glfw.window_hint(glfw.VISIBLE, not hidden)
+                glfw.window_hint(glfw.SCALE_TO_MONITOR, False)
+                glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API if api == "egl"
+                                 else glfw.NATIVE_CONTEXT_API)
+                self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
+                if self.window:
+                    return api
+        glfw.terminate()
+        raise RuntimeError(f"GLFW could not create an OpenGL 3.3 (or later) core window{why()}; "
+                           "the viewer needs OpenGL 3.3 core (`cellgl info` shows what this "
+                           "machine has)")
 
     def _take_context(self) -> None:
         """Make the window's GL context current (cellgl's headless one may be)."""

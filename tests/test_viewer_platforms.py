@@ -1,0 +1,122 @@
+"""The viewer on OpenGL 4.3+, Apple's 4.1 core (no compute shaders) and 3.3 core: the same pixels.
+
+Mesa emulates the smaller contexts here (``MESA_GL_VERSION_OVERRIDE=4.1FC`` and friends, as on
+a Mac; ``3.3FC``). Each configuration runs in a child process under a display (``$DISPLAY`` or
+an Xvfb started here) and captures the viewer's own rendering of several views (2D texture,
+3x3 tiles, the 3D object, a cell image and a density image, which read storage buffers from
+GLSL 4.30 and integer textures below it) with the panel hidden. Nothing here calls compute:
+a hidden capture makes no readout, so these screenshots check the viewer alone.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from xvfb import xvfb_display
+
+pytest.importorskip("imgui_bundle")
+pytest.importorskip("glfw")
+
+REPO = Path(__file__).resolve().parent.parent
+SUNSET = REPO / "cellgl" / "presets" / "images" / "sunset.png"
+
+#: name -> (preset, mode, --set assignments)
+CASES = {
+    "flagstone-2d": ("flagstone", "2d", []),
+    "flagstone-tiled": ("flagstone", "tiled", []),
+    "flagstone-3d": ("flagstone", "3d", []),
+    "stained-glass": ("stained-glass", "2d", []),
+    "density-image": ("flagstone", "2d", [("density_image", str(SUNSET)), ("density_map", "image"),
+                                          ("min_points", "0")]),
+}
+
+#: GL configurations: name -> Mesa environment (empty: the context as it comes, 4.3 or later)
+CONFIGS = {
+    "native": {},
+    "4.1core": {"MESA_GL_VERSION_OVERRIDE": "4.1FC", "MESA_GLSL_VERSION_OVERRIDE": "410",
+                "MESA_EXTENSION_OVERRIDE": "-GL_ARB_compute_shader"},
+    "3.3core": {"MESA_GL_VERSION_OVERRIDE": "3.3FC", "MESA_GLSL_VERSION_OVERRIDE": "330",
+                "MESA_EXTENSION_OVERRIDE": "-GL_ARB_compute_shader"},
+}
+
+_CHILD = r"""
+import json, sys
+from viewer.app import Viewer, ViewerOptions
+out, cases = sys.argv[1], json.loads(sys.argv[2])
+report = {}
+for name, (preset, mode, sets) in cases.items():
+    v = Viewer(ViewerOptions(recipe=preset, mode=mode, size=(96, 96), sets=sets, panel=False,
+                             hidden=True))
+    try:
+        v.capture(f"{out}/{name}.png", frames=2)
+        report[name] = {"gl": v.ctx.version_code, "status": v.status}
+    finally:
+        v.close()
+print(json.dumps(report))
+"""
+
+
+def _require() -> bool:
+    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+
+
+@pytest.fixture(scope="module")
+def display():
+    if os.environ.get("DISPLAY"):
+        yield os.environ["DISPLAY"]
+        return
+    if not shutil.which("Xvfb"):
+        if _require():
+            pytest.fail("CELLGL_REQUIRE_GPU=1 but no DISPLAY and no Xvfb", pytrace=False)
+        pytest.skip("no DISPLAY and no Xvfb (apt-get install xvfb)")
+    with xvfb_display() as disp:
+        if disp is None:
+            pytest.skip("Xvfb did not start")
+        yield disp
+
+
+@pytest.fixture(scope="module")
+def shots(display, tmp_path_factory):
+    """config -> {case: (H, W, 3) uint8 screenshot}, and each child's report."""
+    from PIL import Image
+
+    images, reports = {}, {}
+    for config, mesa in CONFIGS.items():
+        out = tmp_path_factory.mktemp(config.replace(".", "_"))
+        env = dict(os.environ, DISPLAY=display, PYTHONPATH=str(REPO), **mesa)
+        for key in ("CELLGL_PATH", "CELLGL_BACKEND"):
+            env.pop(key, None)
+        r = subprocess.run([sys.executable, "-c", _CHILD, str(out), json.dumps(CASES)], cwd=REPO,
+                           env=env, capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, f"{config}: {r.stderr[-3000:]}"
+        reports[config] = json.loads(r.stdout.strip().splitlines()[-1])
+        images[config] = {name: np.asarray(Image.open(out / f"{name}.png").convert("RGB"))
+                          for name in CASES}
+    return images, reports
+
+
+def test_contexts_are_the_ones_emulated(shots):
+    _, reports = shots
+    assert all(r["gl"] >= 430 for r in reports["native"].values())
+    assert all(r["gl"] == 410 for r in reports["4.1core"].values())
+    assert all(r["gl"] == 330 for r in reports["3.3core"].values())
+
+
+@pytest.mark.parametrize("config", ["4.1core", "3.3core"])
+@pytest.mark.parametrize("case", list(CASES))
+def test_same_pixels_as_on_gl43(shots, config, case):
+    images, _ = shots
+    ref, got = images["native"][case], images[config][case]
+    assert ref.shape == got.shape == (96, 96, 3)
+    # a real picture, not a cleared target
+    assert len(np.unique(ref.reshape(-1, 3), axis=0)) > 8, case
+    diff = np.abs(ref.astype(int) - got.astype(int))
+    assert diff.max() == 0, f"{case} on {config}: {np.count_nonzero(diff.any(-1))} pixels differ"
