@@ -59,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     )
     try:
         viewer = Viewer(opts)
-    except RuntimeError as exc:  # no display / no GL 4.3 window: a user-facing error, not a trace
+    except RuntimeError as exc:  # no display / no GL 3.3 window: a user-facing error, not a trace
         import sys
 
         print(f"cellgl view: error: {exc}", file=sys.stderr)
