@@ -16,7 +16,7 @@ __all__ = ["OSMesaError", "OSMesaLoader", "probe", "DRIVER_ENV"]
 
 
 class OSMesaError(RuntimeError):
-    """libOSMesa is missing, crashed in the probe, or cannot give a 4.3 core context."""
+    """libOSMesa is missing, crashed in the probe, or cannot give a 3.3 (or later) core context."""
 
 
 _OSMESA_RGBA = 0x1908
@@ -31,10 +31,15 @@ _OSMESA_CONTEXT_MAJOR_VERSION = 0x36
 _OSMESA_CONTEXT_MINOR_VERSION = 0x37
 
 
+#: core profile versions asked of OSMesa, in order: 4.5 and 4.3 have compute shaders (llvmpipe
+#: gives 4.5), 4.1 and 3.3 run the fragment path (cellgl.gl.path)
+VERSIONS = ((4, 5), (4, 3), (4, 1), (3, 3))
+
+
 class OSMesaLoader:
     """A moderngl loader (``load_opengl_function``, ``release``) backed by libOSMesa.
 
-    Creates a core-profile context (4.5, else 4.3) and makes it current on a small RGBA pbuffer.
+    Creates a core-profile context (4.5, else 4.3, 4.1 or 3.3: :data:`VERSIONS`) and makes it current on a small RGBA pbuffer.
     """
 
     def __init__(self, width: int = 16, height: int = 16, library: str | None = None):
@@ -55,7 +60,7 @@ class OSMesaLoader:
 
         self._ctx = None
         tried = []
-        for major, minor in ((4, 5), (4, 3)):
+        for major, minor in VERSIONS:
             attribs = [
                 _OSMESA_FORMAT, _OSMESA_RGBA,
                 _OSMESA_DEPTH_BITS, 24,
@@ -75,8 +80,8 @@ class OSMesaLoader:
         if not self._ctx:
             raise OSMesaError(
                 f"OSMesa ({path}) could not create a core profile context of version "
-                f"{' or '.join(tried)}; cellgl needs OpenGL 4.3 (a gallium/llvmpipe OSMesa, "
-                "e.g. Mesa >= 20)"
+                f"{' or '.join(tried)}; cellgl needs OpenGL 3.3 core (4.3 for the compute path; a "
+                "gallium/llvmpipe OSMesa, e.g. Mesa >= 20)"
             )
         self._width, self._height = width, height
         self._buffer = ctypes.create_string_buffer(width * height * 4)
@@ -116,8 +121,11 @@ lib.OSMesaCreateContextAttribs.restype = ctypes.c_void_p
 lib.OSMesaCreateContextAttribs.argtypes = [ctypes.POINTER(ctypes.c_int), ctypes.c_void_p]
 lib.OSMesaMakeCurrent.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_int,
                                   ctypes.c_int]
-a = [0x22, 0x1908, 0x33, 0x34, 0x36, 4, 0x37, 3, 0]
-ctx = lib.OSMesaCreateContextAttribs((ctypes.c_int * len(a))(*a), None)
+for major, minor in ((4, 3), (3, 3)):
+    a = [0x22, 0x1908, 0x33, 0x34, 0x36, major, 0x37, minor, 0]
+    ctx = lib.OSMesaCreateContextAttribs((ctypes.c_int * len(a))(*a), None)
+    if ctx:
+        break
 if not ctx:
     sys.exit(3)
 buf = ctypes.create_string_buffer(16 * 16 * 4)
@@ -146,7 +154,7 @@ def probe() -> str:
     if res.returncode != 0:
         settings = ", ".join(f"{k}={v}" for k, v in env if v is not None)
         why = (f"crashed ({_signal_name(-res.returncode)})" if res.returncode < 0 else
-               "could not create a core profile 4.3 context" if res.returncode == 3 else
+               "could not create a core profile 3.3 (or later) context" if res.returncode == 3 else
                f"failed (exit status {res.returncode}: "
                f"{res.stderr.decode(errors='replace').strip()[-300:]})")
         hint = (f"; check the driver settings in the environment: {settings}" if settings else

@@ -31,7 +31,7 @@ _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT = 0x1
 
 class SurfacelessEGLLoader:
     """A moderngl loader (``load_opengl_function``, ``__enter__``/``__exit__``, ``release``)
-    owning a core-profile context (4.5, else 4.3) on the surfaceless EGL display.
+    owning a core-profile context (4.5, else 4.3, 4.1 or 3.3) on the surfaceless EGL display.
 
     Raises
     ------
@@ -76,7 +76,7 @@ class SurfacelessEGLLoader:
                 or n.value < 1:
             self._fail("eglChooseConfig(OpenGL, no surface)")
         self._ctx = None
-        for want in ((4, 5), (4, 3)):
+        for want in ((4, 5), (4, 3), (4, 1), (3, 3)):
             cattrs = (i * 7)(_EGL_CONTEXT_MAJOR_VERSION, want[0], _EGL_CONTEXT_MINOR_VERSION,
                              want[1], _EGL_CONTEXT_OPENGL_PROFILE_MASK,
                              _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, _EGL_NONE)
@@ -84,7 +84,7 @@ class SurfacelessEGLLoader:
             if self._ctx:
                 break
         if not self._ctx:
-            self._fail("eglCreateContext(OpenGL 4.3 core)")
+            self._fail("eglCreateContext(OpenGL 3.3 core or later)")
         self.__enter__()
 
     def _fail(self, what: str):
