@@ -142,6 +142,9 @@ class Viewer:
                 glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
                 glfw.window_hint(glfw.VISIBLE, not hidden)
                 glfw.window_hint(glfw.SCALE_TO_MONITOR, False)
+                # One framebuffer pixel per window point on macOS too: the view, the panel and
+                # the readout share ImGui's mouse coordinates (points) with the framebuffer.
+                glfw.window_hint(glfw.COCOA_RETINA_FRAMEBUFFER, False)
                 glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API if api == "egl"
                                  else glfw.NATIVE_CONTEXT_API)
                 self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
