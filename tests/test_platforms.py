@@ -155,8 +155,11 @@ def test_another_platforms_backend_is_a_clear_error(monkeypatch, clean_state, pl
     with pytest.raises(context.ContextError) as info:
         context.get_context()
     msg = str(info.value)
-    assert f"{name}: {name} is the " in msg and "CELLGL_BACKEND" in msg and own in msg
+    assert msg.startswith(f"CELLGL_BACKEND {name!r}: {name} is the ") and own in msg
+    assert "\n" not in msg  # one line: the setting and the fix
     assert calls == []  # nothing was created
+    with pytest.raises(context.ContextError, match=f"backend argument '{name}': {name} is the "):
+        context.get_context(name)
 
 
 def test_unknown_names_still_value_errors():

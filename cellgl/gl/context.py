@@ -182,6 +182,9 @@ def _check_name(name: str, origin: str) -> str:
             f"unknown OpenGL backend {name!r} (from {origin}); "
             f"accepted values: {', '.join(BACKENDS)}"
         )
+    why = platforms.check_backend(key)
+    if why:  # another platform's backend: one line naming the setting and the fix
+        raise ContextError(f"{origin} {name!r}: {why}")
     return key
 
 
