@@ -188,6 +188,7 @@ def test_glsl_version(code, version):
     assert context.glsl_version(_FakeContext(code)) == version
 
 
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Mesa's emulation runs on Linux")
 def test_cli_info_on_a_41_core_context_runs_the_fragment_path():
     """`cellgl info` under Mesa's emulation of a Mac (4.1 core, no compute shaders)."""
     import os
