@@ -208,3 +208,15 @@ def test_cli_info_on_a_41_core_context_runs_the_fragment_path():
     assert lines["path"] == "fragment"
     assert lines["GL_VERSION"].startswith("4.1 (Core Profile)")
     assert lines["GL_MAX_COMPUTE_WORK_GROUP_SIZE"] == "none"
+
+
+def test_lower_version_keeps_the_line_map():
+    from cellgl.gl import glsl
+
+    src = glsl.load("viewer_blit.frag")
+    low = glsl.lower_version(src, 410)
+    assert low.text.splitlines()[0] == "#version 410"
+    assert low.text.splitlines()[1:] == src.text.splitlines()[1:]
+    assert low.line_map == src.line_map
+    assert glsl.lower_version(low, 430).text == low.text       # never raised
+    assert glsl.lower_version(src, 430).text == src.text

@@ -567,8 +567,8 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
         prog = _programs.get(key)
         if prog is None:
             version = glsl_version(ctx)
-            vs = _lowered(glsl.load(vertex, defines), version)
-            fs = _lowered(glsl.load(fragment, defines), version)
+            vs = glsl.lower_version(glsl.load(vertex, defines), version)
+            fs = glsl.lower_version(glsl.load(fragment, defines), version)
             try:
                 prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
             except moderngl.Error as exc:
@@ -582,15 +582,6 @@ def glsl_version(ctx: moderngl.Context) -> int:
     OpenGL 4.3, else the context's (410 on macOS, 330 on OpenGL 3.3 core)."""
     code = ctx.version_code
     return next(v for v in (430, 420, 410, 400, 330) if code >= v or v == 330)
-
-
-def _lowered(src: glsl.Source, version: int) -> glsl.Source:
-    """``src`` with its ``#version N`` line (first line) set to ``version`` where N is higher."""
-    head, _, rest = src.text.partition("\n")
-    parts = head.split()
-    if parts[:1] == ["#version"] and len(parts) > 1 and parts[1].isdigit() and int(parts[1]) > version:
-        src = glsl.Source(f"#version {version}\n{rest}", src.line_map, src.files)
-    return src
 
 
 def _program_error(vertex, fragment, exc, vs, fs) -> glsl.ShaderError:

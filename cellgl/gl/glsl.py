@@ -31,6 +31,7 @@ __all__ = [
     "load",
     "resolve_library",
     "format_define",
+    "lower_version",
     "map_error",
 ]
 
@@ -234,6 +235,16 @@ def load(name: str, defines: Mapping[str, object] | None = None, *,
         line_map = list(src.line_map)
         line_map[insert_at:insert_at] = [(DEFINES_FILE, i + 1) for i in range(len(define_lines))]
         src = Source("\n".join(lines) + "\n", line_map, src.files)
+    return src
+
+
+def lower_version(src: Source, version: int) -> Source:
+    """``src`` with its ``#version N`` line (the first) set to ``version`` where N is higher
+    (a program compiled for the context's GLSL: ``__VERSION__`` tells the shader which)."""
+    head, _, rest = src.text.partition("\n")
+    parts = head.split()
+    if parts[:1] == ["#version"] and len(parts) > 1 and parts[1].isdigit() and int(parts[1]) > version:
+        src = Source(f"#version {version}\n{rest}", src.line_map, src.files)
     return src
 
 
