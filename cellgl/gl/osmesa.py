@@ -39,7 +39,8 @@ VERSIONS = ((4, 5), (4, 3), (4, 1), (3, 3))
 class OSMesaLoader:
     """A moderngl loader (``load_opengl_function``, ``release``) backed by libOSMesa.
 
-    Creates a core-profile context (4.5, else 4.3, 4.1 or 3.3: :data:`VERSIONS`) and makes it current on a small RGBA pbuffer.
+    Creates a core-profile context (4.5, else 4.3, 4.1 or 3.3: :data:`VERSIONS`) and makes it
+    current on a small RGBA pbuffer.
     """
 
     def __init__(self, width: int = 16, height: int = 16, library: str | None = None):
