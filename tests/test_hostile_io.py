@@ -173,7 +173,7 @@ def test_misconfigured_driver_is_an_error_not_a_segfault(backend):
     if r.returncode == 0:
         pytest.skip("this machine has a GPU the iris driver runs")
     assert r.returncode == 2, (r.returncode, r.stderr[-1000:])
-    assert "cellgl: error: could not create an OpenGL 4.3 context" in r.stderr
+    assert "cellgl: error: could not create an OpenGL context" in r.stderr
     assert "GALLIUM_DRIVER=iris" in r.stderr
     assert "Traceback" not in r.stderr
 
