@@ -8,6 +8,7 @@
 //              sets u_view.xy = 0, so a view far from the origin stays sharp
 //   u_channel  0 color, 1 height, 2 normal, 3 id (cell value), 4..7 F1..F4 (cellgl.texture.schema.CHANNELS)
 
+#include "storage.glsl"   // storage words from textures (CELL_STORAGE_ROW_BITS: the fragment path)
 #include "lib/texture.glsl"
 #include "texture_uniforms.glsl"
 

@@ -47,7 +47,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa, path, platforms
+from cellgl.gl import glsl, osmesa, path, platforms, words
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -559,9 +559,14 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
     """Compile and link (once, cached) a vertex + fragment program from ``shaders/``.
 
     See :func:`compute_program` for ``defines``, ``ctx`` and errors. The files' ``#version``
-    is lowered to :func:`glsl_version` of ``ctx`` (``__VERSION__`` tells the shader which).
+    is lowered to :func:`glsl_version` of ``ctx``; where the fragment path runs
+    (:func:`cellgl.gl.path.gpu_path`) ``CELL_STORAGE_ROW_BITS`` is defined and the samplers
+    ``u_storage_<binding>`` are set to their units: such programs read storage words from
+    textures (``shaders/storage.glsl``, :mod:`cellgl.gl.words`).
     """
     ctx = ctx if ctx is not None else get_context()
+    if path.gpu_path(ctx) == "fragment":
+        defines = {**(defines or {}), "CELL_STORAGE_ROW_BITS": words.ROW_BITS}
     key = ("program", id(ctx), vertex, fragment, _defines_key(defines))
     with _lock:
         prog = _programs.get(key)
@@ -573,6 +578,9 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
                 prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
             except moderngl.Error as exc:
                 raise _program_error(vertex, fragment, exc, vs, fs) from None
+            for unit in (5, 6, 7):   # the storage bindings read from textures (storage.glsl)
+                if f"u_storage_{unit}" in prog:
+                    prog[f"u_storage_{unit}"].value = unit
             _programs[key] = prog
         return prog
 

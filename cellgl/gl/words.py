@@ -1,19 +1,20 @@
-"""uint32 arrays as integer textures, where storage buffers are missing (GLSL below 4.30).
+"""uint32 arrays as integer textures, for programs that read storage words from textures.
 
-A shader hook that reads word ``index`` of an array reads a storage buffer from GLSL 4.30 and,
-below it (OpenGL 3.3 to 4.2, Apple's 4.1), texel ``(index & 4095, index >> 12)`` of an R32UI
-texture: :data:`ROW_BITS` words per row, the rows as many as needed. The largest arrays cellgl
-binds this way (a 4096 x 4096 cell or density image) make a 4096 x 4096 texture, within the
-texture size of every OpenGL 4.1 implementation (16384) and every real 3.3 one.
+A shader hook that reads word ``k`` of an array reads a storage buffer on the compute path and,
+in programs compiled with ``CELL_STORAGE_ROW_BITS`` (the fragment path: OpenGL 3.3 to 4.2, Apple's
+4.1, or ``CELLGL_PATH=fragment``), texel ``(k mod 4096, k / 4096)`` of an R32UI texture on the
+texture unit numbered like the buffer's binding (``shaders/storage.glsl``, ``u_storage_<binding>``).
+The largest arrays bound this way (a 4096 x 4096 cell or density image) make a 4096 x 4096
+texture, within the texture size of every OpenGL 4.1 implementation (16384).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["ROW_BITS", "glsl_fetch", "as_rows", "bind"]
+__all__ = ["ROW_BITS", "as_rows", "bind"]
 
-#: log2 of the words per texture row
+#: log2 of the words per texture row (shaders/storage.glsl's CELL_STORAGE_ROW_BITS)
 ROW_BITS = 12
 
 _GL_NEAREST = 0x2600
@@ -21,22 +22,13 @@ _GL_NEAREST = 0x2600
 _held: dict = {}
 
 
-def glsl_fetch(sampler: str, index: str) -> str:
-    """GLSL expression: word ``index`` (an int) of the array bound as ``sampler`` (usampler2D)."""
-    mask = (1 << ROW_BITS) - 1
-    return f"texelFetch({sampler}, ivec2(({index}) & {mask}, ({index}) >> {ROW_BITS}), 0).r"
-
-
 def as_rows(words) -> np.ndarray:
     """uint32 words as a (rows, 4096) array, zero-padded (what :func:`bind` uploads)."""
     flat = np.ascontiguousarray(words, dtype=np.uint32).ravel()
     width = 1 << ROW_BITS
-    rows = max(1, -(-flat.size // width))
-    if rows == 1:
-        width = max(1, flat.size)
-    out = np.zeros(rows * width, dtype=np.uint32)
+    out = np.zeros(max(1, -(-flat.size // width)) * width, dtype=np.uint32)
     out[: flat.size] = flat
-    return out.reshape(rows, width)
+    return out.reshape(-1, width)
 
 
 def bind(words, unit: int, ctx) -> None:

@@ -40,7 +40,6 @@ from cellgl.texture.params import (FRACTAL_MODES, MAX_RAMP_KEYS, NORMAL_CONVENTI
                      RAMP_MODES)
 from cellgl.texture.recipe import RecipeError, load_recipe, needed_n
 from cellgl.texture.images import BINDING as CELL_IMAGE_BINDING
-from cellgl.gl import words as words_mod
 from cellgl.basis.features import feature_max_ring
 from cellgl.basis.reference import MAX_POINTS, W96_DENSITY_ADJUSTMENT, max_ring_default, poisson_thresholds
 
@@ -168,29 +167,29 @@ def glsl_params_from_uniforms(prefix: str = "u_", function: str = "cell_texture_
     return "\n".join(lines) + "\n"
 
 
-def _word_hook(binding: int, block: str, name: str, function: str) -> str:
-    """GLSL of a hook ``uint <function>(int index)`` reading word ``index`` of an array: a
-    storage buffer at ``binding`` from GLSL 4.30, else the R32UI texture ``<name>_words``
-    (:mod:`cellgl.gl.words`, bound to texture unit ``binding`` by :func:`set_uniforms`)."""
-    return (f"#if __VERSION__ >= 430\n"
-            f"layout(std430, binding = {binding}) readonly buffer {block} {{ uint {name}[]; }};\n"
-            f"uint {function}(int index) {{ return {name}[index]; }}\n"
-            f"#else\n"
-            f"uniform usampler2D {name}_words;   // no storage buffers below GLSL 4.30\n"
-            f"uint {function}(int index) {{ return {words_mod.glsl_fetch(name + '_words', 'index')}; }}\n"
-            f"#endif\n")
-
-
 _DENSITY_IMAGE_HOOK = f"""
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
 // The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image):
 // the hook lib/points.glsl declares.
-{_word_hook(DENSITY_IMAGE_BINDING, "CellDensityImage", "u_density_image", "cell_density_image_level")}#endif
+#ifdef CELL_STORAGE_ROW_BITS
+// (the fragment path: the words in a texture on unit {DENSITY_IMAGE_BINDING}, shaders/storage.glsl)
+uint cell_density_image_level(int index) {{ return cell_storage_word(u_storage_{DENSITY_IMAGE_BINDING}, index); }}
+#else
+layout(std430, binding = {DENSITY_IMAGE_BINDING}) readonly buffer CellDensityImage {{ uint u_density_image[]; }};
+uint cell_density_image_level(int index) {{ return u_density_image[index]; }}
+#endif
+#endif
 
 #if CELL_TEX_CELL_IMAGE
 // The cell image as r | g << 8 | b << 16 per texel, row-major, row 0 at v = 0
 // (cellgl.texture.images.bind): the hook lib/texture.glsl declares.
-{_word_hook(CELL_IMAGE_BINDING, "CellImage", "u_cell_image", "cell_texture_image_texel")}#endif
+#ifdef CELL_STORAGE_ROW_BITS
+uint cell_texture_image_texel(int index) {{ return cell_storage_word(u_storage_{CELL_IMAGE_BINDING}, index); }}
+#else
+layout(std430, binding = {CELL_IMAGE_BINDING}) readonly buffer CellImage {{ uint u_cell_image[]; }};
+uint cell_texture_image_texel(int index) {{ return u_cell_image[index]; }}
+#endif
+#endif
 """
 
 
@@ -432,14 +431,14 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> Non
     recipe = load_recipe(recipe)
     if recipe.values["density_map"] == "image":
         levels = density_encodings(recipe, pan)[0].levels
-        if not _bind_words(prog, "u_density_image_words", levels, DENSITY_IMAGE_BINDING):
+        if not _bind_words(prog, levels, DENSITY_IMAGE_BINDING):
             from cellgl.basis.gpu import bind_density_image
 
             bind_density_image(levels, ctx=getattr(prog, "ctx", None))
     if recipe.values["cell_color"] == "image":
         from cellgl.texture.images import bind, pack
 
-        if not _bind_words(prog, "u_cell_image_words", pack(recipe.cell_pixels()), CELL_IMAGE_BINDING):
+        if not _bind_words(prog, pack(recipe.cell_pixels()), CELL_IMAGE_BINDING):
             bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
     values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan)
     for name, value in values.items():
@@ -453,16 +452,18 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> Non
             u.value = value
 
 
-def _bind_words(prog, name: str, words, unit: int) -> bool:
-    """Bind ``words`` as the integer texture ``name`` of ``prog`` (a program compiled below GLSL
-    4.30, see :func:`_word_hook`) on texture unit ``unit``; False when ``prog`` has no such
-    sampler (it reads a storage buffer)."""
+def _bind_words(prog, words, binding: int) -> bool:
+    """Where ``prog`` reads the storage words of ``binding`` from a texture (its sampler
+    ``u_storage_<binding>``: compiled with ``CELL_STORAGE_ROW_BITS``, shaders/storage.glsl),
+    upload them there (:func:`cellgl.gl.words.bind`) and return True; else False (a storage
+    buffer)."""
+    name = f"u_storage_{binding}"
     if name not in prog:
         return False
-    from cellgl.gl import context
+    from cellgl.gl import context, words as storage_words
 
-    words_mod.bind(words, unit, getattr(prog, "ctx", None) or context.get_context())
-    prog[name].value = unit
+    storage_words.bind(words, binding, getattr(prog, "ctx", None) or context.get_context())
+    prog[name].value = binding
     return True
 
 
