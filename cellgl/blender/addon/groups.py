@@ -190,6 +190,9 @@ def build_group(preset: str, seed: int | None = None, size: int = 1024, tileable
         mix.name = f"cellgl Switch {name}"
         mix.data_type = _MIX_TYPE[kind]
         mix.clamp_factor = False
+        for sock in mix.inputs:
+            if sock.name == "Factor":
+                sock.default_value = 0.0 if sock.type == "VALUE" else (0.0, 0.0, 0.0)
         mix.location = (300, 300 - 200 * i)
         tree.links.new(is_osl.outputs["IsOSL"], mix.inputs["Factor"])
     set_osl(tree, osl_text(preset, seed, tileable))
@@ -223,6 +226,13 @@ def _wire_outputs(tree) -> None:
         links.new(r, gout.inputs[name])
 
 
+def _float_text(v) -> str:
+    """The shortest text of float32 ``v`` (a socket's value): 0.8, not 0.800000011920929."""
+    import numpy as np
+
+    return str(np.float32(v))
+
+
 def group_values(node) -> list[str]:
     """``["name=value", ...]``: the parameters of group node ``node`` (its input sockets'
     values) as ``cellgl bake --set`` takes them, with the group's seed."""
@@ -240,7 +250,7 @@ def group_values(node) -> list[str]:
         elif isinstance(v, int):
             text = str(v)
         else:
-            text = repr(float(v))
+            text = _float_text(v)
         out.append(f"{name}={text}")
     return out
 
@@ -259,7 +269,7 @@ def group_values_defaults(node) -> list[str]:
             continue
         v = r.values[name]
         text = ("true" if v else "false") if isinstance(v, bool) else (str(v) if isinstance(v, int)
-                                                                      else repr(float(v)))
+                                                                      else _float_text(v))
         out.append(f"{name}={text}")
     return out
 

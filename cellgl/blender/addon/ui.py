@@ -59,7 +59,8 @@ def _active_group(context):
 
 def _values_hash(node) -> str:
     s = node.node_tree.cellgl
-    text = "|".join(groups.group_values(node) + [str(s.size), str(s.tileable), s.voronoi])
+    values = groups.group_values(node) if s.kind == "RECIPE" else []
+    text = "|".join(values + [str(s.size), str(s.tileable), s.voronoi])
     return hashlib.sha1(text.encode()).hexdigest()
 
 
@@ -76,9 +77,12 @@ def _job_for(node) -> dict:
 def bake_node(node, wait: bool) -> str:
     """Bake group node ``node``'s images (wait, or in the background); returns an error or ''."""
     tree = node.node_tree
-    if wait or bpy.app.background:
-        return jobs.run_sync(tree.name, _job_for(node), _values_hash(node))
-    jobs.start(tree.name, _job_for(node), _values_hash(node))
+    try:
+        if wait or bpy.app.background:
+            return jobs.run_sync(tree.name, _job_for(node), _values_hash(node))
+        jobs.start(tree.name, _job_for(node), _values_hash(node))
+    except Exception as exc:            # noqa: BLE001 - a report, never a console traceback
+        return f"cellgl bake: {type(exc).__name__}: {exc}"
     return ""
 
 
@@ -374,10 +378,10 @@ class CELLGL_PT_texture(bpy.types.Panel):
 
 # ------------------------------------------------------------------------------ re-bake on change
 
+@bpy.app.handlers.persistent
 def on_depsgraph(scene, depsgraph=None):
-    """depsgraph_update_post: re-bake the groups whose values changed (Re-bake on Change)."""
-    if bpy.app.background:
-        return
+    """depsgraph_update_post: re-bake the groups whose values changed (Re-bake on Change;
+    headless the bake waits)."""
     for mat in bpy.data.materials:
         tree = mat.node_tree
         if tree is None:
@@ -393,7 +397,9 @@ def on_depsgraph(scene, depsgraph=None):
             except (KeyError, AttributeError):
                 continue
             if h != s.baked_hash:
-                jobs.start(node.node_tree.name, _job_for(node), h)
+                err = bake_node(node, wait=False)
+                if err:
+                    s.status = err
 
 
 CLASSES = [CELLGL_PG_settings, CELLGL_OT_add_preset, CELLGL_OT_bake_image, CELLGL_OT_copy_snippet,

@@ -1,0 +1,182 @@
+"""Drive the Blender extension's add-on headless with the ``bpy`` module (run by
+tests/test_blender_addon.py in a subprocess: Blender's state stays out of the test process).
+
+``python tests/blender_addon_run.py OUTDIR SIZE PRESET [PRESET ...] [--eevee] [--all-ops]``
+
+Registers the add-on (the package on ``sys.path`` as the extension's wheels put it there), adds
+each preset through its operator into the scene of :func:`cellgl.blender.scene.build_scene`, bakes
+it, and renders the group's outputs through the OSL branch (Cycles, OSL on) and the image branch
+(Cycles' SVM; EEVEE with ``--eevee``): ``NAME.osl.png`` / ``NAME.img.png`` (Color),
+``NAME.osl.id.exr`` / ``NAME.img.id.exr`` (ID Low, ID High, Fac), ``NAME.osl.cell.exr`` /
+``NAME.img.cell.exr`` (Cell Color). ``--all-ops`` runs every other operator and the unregister
+checks; the facts go to ``OUTDIR/report.json``.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+
+
+def main(argv):
+    out, size, rest = argv[0], int(argv[1]), argv[2:]
+    eevee, all_ops = "--eevee" in rest, "--all-ops" in rest
+    presets = [a for a in rest if not a.startswith("--")]
+    from cellgl.blender.runtime import import_bpy
+    from cellgl.blender.scene import build_scene, render_scene
+
+    bpy = import_bpy()
+    import cellgl.blender.addon as addon
+
+    addon.register()
+    report = {"presets": {}}
+    scene = build_scene(presets[0], size)
+    obj = bpy.data.objects["cellgl_plane"]
+    bpy.context.view_layer.objects.active = obj
+    tree = bpy.data.materials["cellgl"].node_tree
+    emit = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    for name in presets:
+        res = bpy.ops.cellgl.add_preset(preset=name, bake=False)
+        node = tree.nodes.active
+        node.node_tree.cellgl.size = size
+        with bpy.context.temp_override(active_node=node):
+            res2 = bpy.ops.cellgl.bake_image(wait=True)
+        info = {"add": sorted(res), "bake": sorted(res2), "inputs": [s.name for s in node.inputs],
+                "outputs": [s.name for s in node.outputs], "status": node.node_tree.cellgl.status}
+        pack = tree.nodes.new("ShaderNodeCombineXYZ")
+        for i, o in enumerate(("ID Low", "ID High", "Fac")):
+            tree.links.new(node.outputs[o], pack.inputs[i])
+        branches = [("osl", "CYCLES", True), ("img", "CYCLES", False)]
+        if eevee:
+            branches.append(("eevee", "BLENDER_EEVEE_NEXT", False))
+        for tag, engine, osl in branches:
+            scene.render.engine = engine
+            scene.cycles.shading_system = osl
+            if engine != "CYCLES":
+                scene.eevee.taa_render_samples = 1
+            tree.links.new(node.outputs["Color"], emit.inputs["Color"])
+            render_scene(scene, os.path.join(out, f"{name}.{tag}.png"))
+            tree.links.new(pack.outputs[0], emit.inputs["Color"])
+            render_scene(scene, os.path.join(out, f"{name}.{tag}.id.exr"))
+            tree.links.new(node.outputs["Cell Color"], emit.inputs["Color"])
+            render_scene(scene, os.path.join(out, f"{name}.{tag}.cell.exr"))
+        scene.render.engine = "CYCLES"
+        tree.nodes.remove(pack)
+        report["presets"][name] = info
+    if all_ops:
+        report.update(_all_ops(bpy, addon, tree, out, size))
+    with open(os.path.join(out, "report.json"), "w") as f:
+        json.dump(report, f, indent=1)
+
+
+def _all_ops(bpy, addon, tree, out, size):
+    """Every other operator, the error path, the undo flags and unregistering."""
+    import numpy as np
+
+    from cellgl.blender.addon import groups, ui
+
+    r = {}
+    node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
+    s = node.node_tree.cellgl
+    for target in ("glsl", "osl", "hlsl"):
+        s.target = target
+        with bpy.context.temp_override(active_node=node):
+            r[f"snippet_{target}"] = sorted(bpy.ops.cellgl.copy_snippet())
+        r[f"clipboard_{target}"] = bpy.context.window_manager.clipboard[:400]
+    sock = next(x for x in node.inputs if x.name == "Frequency")
+    sock.default_value = 7.0
+    s.seed = 3
+    s.tileable = True
+    with bpy.context.temp_override(active_node=node):
+        r["bake_command"] = sorted(bpy.ops.cellgl.copy_bake_command())
+    r["clipboard_command"] = bpy.context.window_manager.clipboard
+    # re-bake on change: the handler bakes when a value changes (headless: it waits)
+    s.rebake = True
+    before = s.baked_hash
+    sock.default_value = 6.0
+    ui.on_depsgraph(bpy.context.scene)
+    r["rebaked"] = s.baked_hash != before and s.baked_hash == ui._values_hash(node)
+    s.rebake = False
+    # errors are reports, not tracebacks
+    preset = s.preset
+    s.preset = "no-such-preset"
+    try:
+        with bpy.context.temp_override(active_node=node):
+            bpy.ops.cellgl.bake_image(wait=True)
+        r["error"] = ""
+    except RuntimeError as exc:
+        r["error"] = str(exc)
+    s.preset = preset
+    r["bad_preset"] = ""
+    try:
+        bpy.ops.cellgl.add_preset(preset="pups-cow")
+    except RuntimeError as exc:
+        r["bad_preset"] = str(exc)
+    # the Voronoi drop-in
+    vor = tree.nodes.new("ShaderNodeTexVoronoi")
+    vor.voronoi_dimensions = "2D"
+    vor.inputs["Scale"].default_value = 4.0
+    emit = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    tree.links.new(vor.outputs["Distance"], emit.inputs["Strength"])
+    tree.nodes.active = vor
+    r["voronoi"] = sorted(bpy.ops.cellgl.voronoi_exact(size=32))
+    vnode = tree.nodes.active
+    r["voronoi_outputs"] = [x.name for x in vnode.outputs]
+    r["voronoi_linked"] = emit.inputs["Strength"].links[0].from_node == vnode
+    img = bpy.data.images[f"{vnode.node_tree.name} distance"]
+    px = np.empty(32 * 32 * 4, np.float32)
+    img.pixels.foreach_get(px)
+    np.save(os.path.join(out, "voronoi_distance.npy"), px.reshape(32, 32, 4)[::-1, :, 0])
+    emit.inputs["Strength"].default_value = 1.0
+    for link in list(emit.inputs["Strength"].links):
+        tree.links.remove(link)
+    r["undo_flags"] = {c.bl_idname: sorted(getattr(c, "bl_options", ())) for c in ui.CLASSES
+                       if c.__name__.startswith("CELLGL_OT")}
+    r["menus"] = {m.bl_label: [] for m in ui.FAMILY_MENUS}
+    for fam in ui.FAMILY_MENUS:
+        r["menus"][fam.bl_label] = [n for n, _ in groups.exportable_presets() if groups.family(n) == fam.bl_label]
+    # the packed images survive a save and reload
+    bpy.context.preferences.filepaths.save_version = 0
+    blend = os.path.join(out, "saved.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend, copy=True)
+    r["packed"] = sorted(i.name for i in bpy.data.images if i.packed_file is not None)
+    before = _footprint(bpy)
+    addon.unregister()
+    r["footprint_registered"] = before
+    r["footprint_unregistered"] = _footprint(bpy)
+    addon.register()                  # and again: registering twice in a session works
+    r["reregistered"] = hasattr(bpy.types, "CELLGL_OT_bake_image")
+    addon.unregister()
+    r["footprint_final"] = _footprint(bpy)
+    return r
+
+
+def _footprint(bpy):
+    """What the add-on leaves in Blender: classes, settings, menu entries, handlers, timers."""
+    from cellgl.blender.addon import jobs
+
+    draw_funcs = []
+    for menu in (bpy.types.NODE_MT_add, bpy.types.NODE_MT_context_menu):
+        for f in getattr(menu.draw, "_draw_funcs", []):
+            draw_funcs.append(f"{getattr(f, '__module__', '')}.{getattr(f, '__name__', '')}")
+    return {"classes": sorted(n for n in dir(bpy.types) if n.startswith("CELLGL_")),
+            "settings": hasattr(bpy.types.ShaderNodeTree, "cellgl"),
+            "menu_entries": sorted(f for f in draw_funcs if "cellgl" in f),
+            "handlers": sorted(f"{h.__module__}.{h.__name__}" for lst in
+                               (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.load_post)
+                               for h in lst if "cellgl" in getattr(h, "__module__", "")),
+            "timer": bpy.app.timers.is_registered(jobs.poll),
+            "ops": hasattr(bpy.ops.cellgl, "bake_image") and "bake_image" in dir(bpy.ops.cellgl)}
+
+
+if __name__ == "__main__":
+    try:
+        main(sys.argv[1:])
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+        sys.stderr.flush()
+        os._exit(1)
+    sys.stdout.flush()
+    os._exit(0)      # Blender's module prints leak reports at interpreter exit; the work is done
