@@ -21,6 +21,8 @@ __all__ = ["Job", "JOBS", "start", "run_sync", "cancel_all", "poll"]
 
 #: running jobs by node group name
 JOBS: dict[str, "Job"] = {}
+#: the values (hash) whose bake failed, by node group name: Re-bake on Change does not retry them
+FAILED: dict[str, str] = {}
 
 
 class Job:
@@ -100,8 +102,10 @@ def _apply(job: Job) -> str:
     try:
         arrays = job.result()
     except RuntimeError as exc:
+        FAILED[job.tree_name] = job.values_hash
         tree.cellgl.status = str(exc)
         return str(exc)
+    FAILED.pop(job.tree_name, None)
     if job.job["kind"] == "voronoi":
         groups.apply_voronoi_bake(tree, arrays)
     else:
@@ -177,5 +181,6 @@ def cancel_all() -> None:
     for job in list(JOBS.values()):
         job.kill()
     JOBS.clear()
+    FAILED.clear()
     if bpy.app.timers.is_registered(poll):
         bpy.app.timers.unregister(poll)

@@ -396,7 +396,7 @@ def on_depsgraph(scene, depsgraph=None):
                 h = _values_hash(node)
             except (KeyError, AttributeError):
                 continue
-            if h != s.baked_hash:
+            if h != s.baked_hash and jobs.FAILED.get(node.node_tree.name) != h:
                 err = bake_node(node, wait=False)
                 if err:
                     s.status = err
