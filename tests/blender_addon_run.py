@@ -21,16 +21,25 @@ import sys
 def main(argv):
     out, size, rest = argv[0], int(argv[1]), argv[2:]
     eevee, all_ops = "--eevee" in rest, "--all-ops" in rest
-    presets = [a for a in rest if not a.startswith("--")]
+    install = rest[rest.index("--install") + 1] if "--install" in rest else None
+    presets = [a for a in rest if not a.startswith("--") and a != install]
+    report = {"presets": {}}
     from cellgl.blender.runtime import import_bpy
     from cellgl.blender.scene import build_scene, render_scene
 
     bpy = import_bpy()
-    import cellgl.blender.addon as addon
+    scene = build_scene(presets[0], size)       # (factory settings: before the install)
+    if install:
+        # forget this tree's cellgl: the add-on and everything after import the extension's wheel
+        for m in [m for m in sys.modules if m == "cellgl" or m.startswith("cellgl.")]:
+            del sys.modules[m]
+        addon = _install(bpy, install, report)
+        report["installed"]["registered"] = hasattr(bpy.types, "CELLGL_OT_bake_image")
+    else:
+        import cellgl.blender.addon as module
 
-    addon.register()
-    report = {"presets": {}}
-    scene = build_scene(presets[0], size)
+        module.register()
+        addon = module
     obj = bpy.data.objects["cellgl_plane"]
     bpy.context.view_layer.objects.active = obj
     tree = bpy.data.materials["cellgl"].node_tree
@@ -43,6 +52,10 @@ def main(argv):
             res2 = bpy.ops.cellgl.bake_image(wait=True)
         info = {"add": sorted(res), "bake": sorted(res2), "inputs": [s.name for s in node.inputs],
                 "outputs": [s.name for s in node.outputs], "status": node.node_tree.cellgl.status}
+        item = next((i for i in node.node_tree.interface.items_tree if i.name == "Frequency"), None)
+        if item is not None:
+            info["frequency_socket"] = {"min": item.min_value, "max": item.max_value,
+                                        "default": item.default_value, "description": item.description}
         pack = tree.nodes.new("ShaderNodeCombineXYZ")
         for i, o in enumerate(("ID Low", "ID High", "Fac")):
             tree.links.new(node.outputs[o], pack.inputs[i])
@@ -69,6 +82,38 @@ def main(argv):
         json.dump(report, f, indent=1)
 
 
+class _Extension:
+    """register/unregister of the installed extension, through Blender's add-on machinery."""
+
+    def __init__(self, module):
+        self.module = module
+
+    def register(self):
+        import addon_utils
+
+        addon_utils.enable(self.module, default_set=True)
+
+    def unregister(self):
+        import addon_utils
+
+        addon_utils.disable(self.module, default_set=True)
+
+
+def _install(bpy, zip_file, report):
+    """Install the extension zip as Edit > Preferences > Get Extensions > Install from Disk does."""
+    import addon_utils
+
+    addon_utils.enable("bl_pkg", default_set=True)
+    res = bpy.ops.extensions.package_install_files(filepath=zip_file, repo="user_default",
+                                                   enable_on_install=True)
+    import cellgl
+
+    module = "bl_ext.user_default.cellgl"
+    report["installed"] = {"result": sorted(res), "module": module if module in sys.modules else "",
+                           "cellgl_file": cellgl.__file__}
+    return _Extension(module)
+
+
 def _all_ops(bpy, addon, tree, out, size):
     """Every other operator, the error path, the undo flags and unregistering."""
     import numpy as np
@@ -78,18 +123,19 @@ def _all_ops(bpy, addon, tree, out, size):
     r = {}
     node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
     s = node.node_tree.cellgl
+    r["snippet_texts"] = {}
     for target in ("glsl", "osl", "hlsl"):
         s.target = target
         with bpy.context.temp_override(active_node=node):
             r[f"snippet_{target}"] = sorted(bpy.ops.cellgl.copy_snippet())
-        r[f"clipboard_{target}"] = bpy.context.window_manager.clipboard[:400]
+        r["snippet_texts"][target] = groups.snippet_text(node, target)[-3000:]
     sock = next(x for x in node.inputs if x.name == "Frequency")
     sock.default_value = 7.0
     s.seed = 3
     s.tileable = True
     with bpy.context.temp_override(active_node=node):
         r["bake_command"] = sorted(bpy.ops.cellgl.copy_bake_command())
-    r["clipboard_command"] = bpy.context.window_manager.clipboard
+    r["bake_command_text"] = groups.bake_command_text(node)
     # re-bake on change: the handler bakes when a value changes (headless: it waits)
     s.rebake = True
     before = s.baked_hash

@@ -274,6 +274,25 @@ def group_values_defaults(node) -> list[str]:
     return out
 
 
+def snippet_text(node, target: str) -> str:
+    """The node's texture (preset, seed, values, tileable) as a ``target`` snippet (Copy Snippet)."""
+    from cellgl.blender.bakejob import recipe_for
+    from cellgl.export.snippets import export
+
+    s = node.node_tree.cellgl
+    return export(recipe_for(s.preset, group_values(node), s.tileable), target)
+
+
+def bake_command_text(node) -> str:
+    """``cellgl bake`` with the values that differ from the preset's (Copy Bake Command)."""
+    from cellgl.blender.bakejob import bake_command
+
+    s = node.node_tree.cellgl
+    defaults = set(group_values_defaults(node))
+    sets = [v for v in group_values(node) if v not in defaults]
+    return bake_command(s.preset, sets, s.size, s.tileable)
+
+
 def inactive_inputs(node) -> set[str]:
     """Names of the group node's inputs that do nothing at its current values (greyed in the
     panel), from the parameter table's derivation where cellgl has one."""

@@ -167,13 +167,6 @@ class CELLGL_OT_bake_image(bpy.types.Operator):
         return {"FINISHED"}
 
 
-def _recipe_of(node):
-    from cellgl.blender.bakejob import recipe_for
-
-    s = node.node_tree.cellgl
-    return recipe_for(s.preset, groups.group_values(node), s.tileable)
-
-
 class CELLGL_OT_copy_snippet(bpy.types.Operator):
     """Copy the texture with the node's values as shader code for the chosen target"""
 
@@ -186,14 +179,12 @@ class CELLGL_OT_copy_snippet(bpy.types.Operator):
         return node is not None and node.node_tree.cellgl.kind == "RECIPE"
 
     def execute(self, context):
-        from cellgl.export.snippets import export
-
         node = _active_group(context)
         target = node.node_tree.cellgl.target
         try:
-            text = export(_recipe_of(node), target)
+            text = groups.snippet_text(node, target)
         except Exception as exc:        # noqa: BLE001
-            self.report({"ERROR"}, f"cellgl export: {exc}")
+            self.report({"ERROR"}, f"cellgl export: {type(exc).__name__}: {exc}")
             return {"CANCELLED"}
         context.window_manager.clipboard = text
         self.report({"INFO"}, f"copied the {target} snippet ({len(text.splitlines())} lines)")
@@ -212,13 +203,12 @@ class CELLGL_OT_copy_bake_command(bpy.types.Operator):
         return node is not None and node.node_tree.cellgl.kind == "RECIPE"
 
     def execute(self, context):
-        from cellgl.blender.bakejob import bake_command
-
         node = _active_group(context)
-        s = node.node_tree.cellgl
-        defaults = set(groups.group_values_defaults(node))
-        sets = [v for v in groups.group_values(node) if v not in defaults]
-        text = bake_command(s.preset, sets, s.size, s.tileable)
+        try:
+            text = groups.bake_command_text(node)
+        except Exception as exc:        # noqa: BLE001
+            self.report({"ERROR"}, f"cellgl: {type(exc).__name__}: {exc}")
+            return {"CANCELLED"}
         context.window_manager.clipboard = text
         self.report({"INFO"}, text)
         return {"FINISHED"}
