@@ -91,9 +91,7 @@ def manifest_text(wheels, platforms) -> str:
 
 
 def _source_root() -> Path:
-    import cellgl
-
-    root = Path(cellgl.__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]          # cellgl/blender/extension.py
     if not (root / "pyproject.toml").is_file():
         raise ValueError(f"cellgl blender-extension builds the cellgl wheel from its source tree; "
                          f"{root} has no pyproject.toml (install cellgl from a checkout: pip install -e .)")
