@@ -128,7 +128,7 @@ def _all_ops(bpy, addon, tree, out, size):
         s.target = target
         with bpy.context.temp_override(active_node=node):
             r[f"snippet_{target}"] = sorted(bpy.ops.cellgl.copy_snippet())
-        r["snippet_texts"][target] = groups.snippet_text(node, target)[-3000:]
+        r["snippet_texts"][target] = groups.snippet_text(node, target)
     sock = next(x for x in node.inputs if x.name == "Frequency")
     sock.default_value = 7.0
     s.seed = 3
