@@ -99,6 +99,47 @@ class _Extension:
         addon_utils.disable(self.module, default_set=True)
 
 
+class _Layout:
+    """A stand-in for Blender's UILayout (the bpy module draws no UI): records what a panel or
+    menu draws, and whether it was greyed (``active = False``)."""
+
+    def __init__(self, log):
+        self.log, self.active, self.alert = log, True, False
+
+    def _sub(self, *a, **k):
+        sub = _Layout(self.log)
+        sub.active = self.active
+        return sub
+
+    column = row = box = split = _sub
+
+    def separator(self, *a, **k):
+        pass
+
+    def label(self, text="", **k):
+        self.log.append(["label", text, self.active])
+
+    def prop(self, data, attr, text=None, **k):
+        self.log.append(["prop", text if text is not None else attr, self.active])
+
+    def operator(self, idname, text=None, **k):
+        self.log.append(["operator", idname, text])
+        import types
+
+        return types.SimpleNamespace()
+
+    def menu(self, idname, **k):
+        self.log.append(["menu", idname])
+
+
+def _draw(cls, **context):
+    import types
+
+    log = []
+    cls.draw(types.SimpleNamespace(layout=_Layout(log)), types.SimpleNamespace(**context))
+    return log
+
+
 def _install(bpy, zip_file, report):
     """Install the extension zip as Edit > Preferences > Get Extensions > Install from Disk does."""
     import addon_utils
@@ -116,6 +157,8 @@ def _install(bpy, zip_file, report):
 
 def _all_ops(bpy, addon, tree, out, size):
     """Every other operator, the error path, the undo flags and unregistering."""
+    import types
+
     import numpy as np
 
     from cellgl.blender.addon import groups, ui
@@ -123,6 +166,14 @@ def _all_ops(bpy, addon, tree, out, size):
     r = {}
     node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
     s = node.node_tree.cellgl
+    r["inactive"] = groups.inactive_inputs(node)
+    space = types.SimpleNamespace(tree_type="ShaderNodeTree", edit_tree=tree)
+    r["panel"] = _draw(ui.CELLGL_PT_texture, active_node=node, space_data=space)
+    r["add_menu"] = _draw(ui.CELLGL_MT_add, space_data=space)
+    r["family_menu"] = _draw(ui.FAMILY_MENUS[0], space_data=space)
+    hook = []
+    ui.menu_draw(types.SimpleNamespace(layout=_Layout(hook)), types.SimpleNamespace(space_data=space))
+    r["add_hook"] = hook
     r["snippet_texts"] = {}
     for target in ("glsl", "osl", "hlsl"):
         s.target = target

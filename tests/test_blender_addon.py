@@ -234,6 +234,10 @@ def test_addon_operators_headless(installed_run):
     assert r["bake_command_text"] == ("cellgl bake flagstone -o flagstone.png --size 128 --set seed=3 "
                                       "--set frequency=7.0 --tileable")
     assert r["rebaked"]
+    from cellgl.texture import params
+
+    if hasattr(params, "inactive"):          # the panel greys these (flagstone is Euclidean)
+        assert "Minkowski p" in r["inactive"] and "Frequency" not in r["inactive"]
     assert "cellgl bake failed" in r["error"] and "no-such-preset" in r["error"]
     assert "has no OSL export" in r["bad_preset"]
     assert r["voronoi"] == ["FINISHED"] and r["voronoi_linked"]
@@ -241,6 +245,19 @@ def test_addon_operators_headless(installed_run):
     for op, flags in r["undo_flags"].items():
         if op in ("cellgl.add_preset", "cellgl.bake_image", "cellgl.voronoi_exact"):
             assert flags == ["REGISTER", "UNDO"], op
+    # the panel and the menus, drawn into a recording layout (the bpy module has no UI)
+    panel = r["panel"]
+    assert ["label", "Preset: flagstone", True] in panel
+    assert ["operator", "cellgl.bake_image", None] in panel and ["prop", "rebake", True] in panel
+    assert ["operator", "cellgl.copy_snippet", None] in panel
+    assert ["operator", "cellgl.copy_bake_command", None] in panel
+    assert ["prop", "Frequency", True] in panel
+    if r["inactive"]:
+        assert ["prop", "Minkowski p", False] in panel          # greyed
+    assert r["add_hook"] == [["menu", "CELLGL_MT_add"]]
+    assert [m[1] for m in r["add_menu"]] == ["CELLGL_MT_add_blender", "CELLGL_MT_add_qin_2000",
+                                             "CELLGL_MT_add_textures", "CELLGL_MT_add_worley_basis"]
+    assert r["family_menu"] == [["operator", "cellgl.add_preset", "blender-voronoi"]]
     assert r["menus"]["Qin 2000"][0] == "qin-cloud" and "flagstone" in r["menus"]["Textures"]
     assert sum(len(v) for v in r["menus"].values()) >= 25
     assert "cellgl flagstone Color" in r["packed"] and "cellgl flagstone Data" in r["packed"]

@@ -293,24 +293,25 @@ def bake_command_text(node) -> str:
     return bake_command(s.preset, sets, s.size, s.tileable)
 
 
-def inactive_inputs(node) -> set[str]:
-    """Names of the group node's inputs that do nothing at its current values (greyed in the
-    panel), from the parameter table's derivation where cellgl has one."""
+def inactive_inputs(node) -> dict[str, str]:
+    """``{input name: what turns it on}`` for the group node's inputs that do nothing at its
+    current values (greyed in the panel): :func:`cellgl.texture.params.inactive`, the parameter
+    table's one derivation, where this cellgl has it (else none)."""
     from cellgl.texture import params
 
-    derive = getattr(params, "inactive_params", None)
+    derive = getattr(params, "inactive", None)
     if derive is None:
-        return set()
+        return {}
     from cellgl.blender.bakejob import recipe_for
 
     s = node.node_tree.cellgl
     try:
-        r = recipe_for(s.preset, group_values(node), s.tileable)
-        dead = set(derive(r.values))
+        dead = dict(derive(recipe_for(s.preset, group_values(node), s.tileable)))
     except Exception:                  # noqa: BLE001 - greying is a hint, never an error
-        return set()
+        return {}
     script = node.node_tree.nodes["cellgl OSL"]
-    return {sock.name for sock in script.inputs if _param_name(sock.identifier) in dead}
+    return {sock.name: dead[_param_name(sock.identifier)] for sock in script.inputs
+            if _param_name(sock.identifier) in dead}
 
 
 def _image(tree, key: str, arr, is_float: bool):

@@ -45,6 +45,8 @@ class CELLGL_PG_settings(bpy.types.PropertyGroup):
     voronoi: StringProperty(name="Voronoi", description="the replaced node's settings (JSON)")
     baked_hash: StringProperty(name="Baked", description="the values of the last bake")
     status: StringProperty(name="Status", default="")
+    show_inactive: BoolProperty(name="Show Inactive", description="list the parameters that do nothing "
+                                "at the current values (greyed)", default=True)
 
 
 def _active_group(context):
@@ -334,9 +336,13 @@ class CELLGL_PT_texture(bpy.types.Panel):
             col.label(text=f"Preset: {s.preset}")
             col.prop(s, "seed")
             inactive = groups.inactive_inputs(node)
+            if inactive:
+                col.prop(s, "show_inactive")
             box = col.box()
             for sock in node.inputs:
                 if sock.name == "Vector" or sock.is_linked or not hasattr(sock, "default_value"):
+                    continue
+                if sock.name in inactive and not s.show_inactive:
                     continue
                 row = box.row()
                 row.active = sock.name not in inactive
