@@ -67,8 +67,10 @@ def main(argv):
             scene.cycles.shading_system = osl
             if engine != "CYCLES":
                 scene.eevee.taa_render_samples = 1
+                scene.render.filter_size = 0.0      # one sample at the pixel centre, as Cycles
             tree.links.new(node.outputs["Color"], emit.inputs["Color"])
             render_scene(scene, os.path.join(out, f"{name}.{tag}.png"))
+            render_scene(scene, os.path.join(out, f"{name}.{tag}.color.exr"))
             tree.links.new(pack.outputs[0], emit.inputs["Color"])
             render_scene(scene, os.path.join(out, f"{name}.{tag}.id.exr"))
             tree.links.new(node.outputs["Cell Color"], emit.inputs["Color"])

@@ -296,8 +296,26 @@ def test_addon_every_preset_both_branches(tmp_path):
 
 @pytest.mark.slow
 def test_addon_eevee_renders_the_image_branch(tmp_path):
-    """EEVEE (headless, Mesa's llvmpipe through EGL) takes the image branch: the bake."""
+    """EEVEE (headless: Mesa's llvmpipe through EGL) takes the image branch. What it can show
+    exactly: the cell colours (an 8-bit image read with Closest). Its film is half float, so the
+    IDs and Fac come back to half precision; its Linear image lookups go through the GPU's
+    mipmaps, so the colour is the bake filtered (measured for veins at 64 x 64: up to 59/255,
+    median 13/255; Cycles' lookups of the same image are exact)."""
     _need_bpy()
+    import cellgl
+    from cellgl.io.bake import bake
+    from cellgl.io.spec import id_colors
+
     _drive(tmp_path, [64, "veins", "--eevee"], timeout=1800)
-    bad = _compare(tmp_path, "veins", ("eevee",), 64)
-    assert not bad, "\n".join(bad)
+    ref = cellgl.render("veins", 64, 64, channels=("id", "height"))
+    ids = ref["id"].astype(np.uint32)
+    cell = np.round(_read_exr(tmp_path / "veins.eevee.cell.exr") * 255).astype(np.int64)
+    assert np.count_nonzero(np.any(cell != id_colors(ids), axis=-1)) == 0
+    idf = _read_exr(tmp_path / "veins.eevee.id.exr").astype(np.float64)
+    for got, want in ((idf[..., 0], ids & 0xFFFF), (idf[..., 1], ids >> 16)):
+        assert np.all(np.abs(got - want) <= np.maximum(want, 1) * 2.0 ** -10)
+    assert np.abs(idf[..., 2] - ref["height"]).max() < 4e-3
+    bake("veins", str(tmp_path / "bake.png"), size=64, progress=False)
+    want = np.asarray(Image.open(tmp_path / "bake.png").convert("RGB"), np.int16)
+    got = np.asarray(Image.open(tmp_path / "veins.eevee.png").convert("RGB"), np.int16)
+    assert np.median(np.abs(got - want).max(-1)) <= 20 and got.std() > 20

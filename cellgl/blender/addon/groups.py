@@ -327,6 +327,8 @@ def _image(tree, key: str, arr, is_float: bool):
         img = bpy.data.images.new(name, w, h, alpha=True, float_buffer=is_float)
     img.colorspace_settings.is_data = True
     img.colorspace_settings.name = "Non-Color"
+    if is_float:
+        img.use_half_precision = False     # EEVEE's GPU texture: IDs up to 65535 need float32
     rgba = np.ones((h, w, 4), np.float32)
     a = arr.astype(np.float32) / (1.0 if is_float else 255.0)
     rgba[..., :a.shape[-1]] = a

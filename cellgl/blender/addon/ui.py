@@ -11,10 +11,14 @@ from cellgl.blender.addon import groups, jobs
 __all__ = ["CLASSES", "menu_draw", "on_depsgraph", "register_settings", "unregister_settings"]
 
 
-def _targets(_self, _context):
+def _target_items():
     from cellgl.export.snippets import TARGETS
 
     return [(k, t.title, t.title) for k, t in TARGETS.items()]
+
+
+#: Copy Snippet's targets: a static list (Blender keeps no reference to dynamic enum strings)
+TARGET_ITEMS = _target_items()
 
 
 def _reexport(self, context):
@@ -41,7 +45,7 @@ class CELLGL_PG_settings(bpy.types.PropertyGroup):
                            "(frequencies rounded to whole cells)", default=False, update=_reexport)
     rebake: BoolProperty(name="Re-bake on Change", description="bake the images again whenever a "
                          "parameter changes", default=False)
-    target: EnumProperty(name="Target", description="the language of Copy Snippet", items=_targets)
+    target: EnumProperty(name="Target", description="the language of Copy Snippet", items=TARGET_ITEMS)
     voronoi: StringProperty(name="Voronoi", description="the replaced node's settings (JSON)")
     baked_hash: StringProperty(name="Baked", description="the values of the last bake")
     status: StringProperty(name="Status", default="")
