@@ -32,6 +32,7 @@ from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
 from cellgl.basis.reference import max_ring_default
 from cellgl.playground import variants as V
 from cellgl.recipes import is_pups, list_presets, load_recipe, render
+from cellgl.texture.schema import RecipeError
 from cellgl.texture import params as P
 
 __all__ = ["build_site", "add_parser", "run_cli", "STATIC"]
@@ -107,6 +108,28 @@ def _preset_entry(r, source: str, thumbs: bool) -> dict:
             "thumb": _thumb(r) if thumbs else None}
 
 
+def playground_presets() -> list[str]:
+    """The presets the page shows: the cellular ones the snippet exporter takes."""
+    from cellgl.texture.recipe import list_presets as cellular_presets
+
+    return [n for n, _ in cellular_presets() if V.exportable(load_recipe(n)) is None]
+
+
+def _check_names(names) -> None:
+    """RecipeError for a ``--preset`` that is neither a recipe file nor a preset, naming the
+    presets the page accepts (not the PUPs ones it refuses)."""
+    from cellgl.texture.recipe import is_path
+    from cellgl.texture.schema import _suggest
+
+    known = {n for n, _ in list_presets()}
+    for name in names:
+        if not is_path(name) and name.partition(":")[0] not in known:
+            shown = repr(name) if len(name) <= 80 else f"{name[:60]!r}... ({len(name)} characters)"
+            accepted = playground_presets()
+            raise RecipeError(f"--preset {shown}: unknown preset{_suggest(name, accepted)}; accepted: a recipe "
+                              ".json file or one of: " + ", ".join(accepted))
+
+
 def _js(name: str, obj) -> str:
     return f"{name}({json.dumps(obj, separators=(',', ':'))});\n"
 
@@ -132,10 +155,18 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     from cellgl.io.formats import atomic_path
 
     out = Path(out_dir)
-    names = presets if presets is not None else [n for n, _ in list_presets()]
-    entries, refused, recipes = [], {}, {}
+    if presets is None:
+        names = [n for n, _ in list_presets()]
+    else:
+        names = list(dict.fromkeys(str(n) for n in presets))     # a name given twice: once
+        _check_names(names)
+    entries, refused, recipes, sources = [], {}, {}, {}
     for name in names:
         r = load_recipe(name)
+        if r.name in sources:
+            raise RecipeError(f"--preset {name!r}: its recipe is named {r.name!r}, as is --preset "
+                              f"{sources[r.name]!r}'s; the page tells presets apart by name (rename one)")
+        sources[r.name] = name
         if is_pups(r):
             refused[name] = "PUPs recipe: a snippet would need the control points and their Delaunay axes as buffers"
             continue
@@ -169,6 +200,7 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
         _write(out / "variants" / f"{vid}.js", _js("cellglVariant", texts), atomic_path)
     site = {"version": __version__, "params": _param_table(), "presets": entries, "refused": refused,
             "variants": vids, "key_macros": list(V.KEY_MACROS), "density_frozen": list(DENSITY_FROZEN),
+            "active_when": P.ACTIVE_WHEN,
             "consts": {"max_points": MAX_POINTS, "w96": W96_DENSITY_ADJUSTMENT,
                        "max_octaves": int(math.ceil(P.PARAMS_BY_NAME["octaves"].hi)),
                        "ramp_keys": P.MAX_RAMP_KEYS, "mean_samples": MEAN_SAMPLES,
