@@ -226,6 +226,13 @@ def _all_ops(bpy, addon, tree, out, size):
     px = np.empty(32 * 32 * 4, np.float32)
     img.pixels.foreach_get(px)
     np.save(os.path.join(out, "voronoi_distance.npy"), px.reshape(32, 32, 4)[::-1, :, 0])
+    r["voronoi_inputs"] = [x.name for x in vnode.inputs]
+    vnode.inputs["Scale"].default_value = 6.0          # the group's sockets act at the next bake
+    with bpy.context.temp_override(active_node=vnode):
+        r["voronoi_rebake"] = sorted(bpy.ops.cellgl.bake_image(wait=True))
+    img = bpy.data.images[f"{vnode.node_tree.name} distance"]
+    img.pixels.foreach_get(px)
+    np.save(os.path.join(out, "voronoi_distance6.npy"), px.reshape(32, 32, 4)[::-1, :, 0])
     emit.inputs["Strength"].default_value = 1.0
     for link in list(emit.inputs["Strength"].links):
         tree.links.remove(link)

@@ -264,11 +264,14 @@ def test_addon_operators_headless(installed_run):
     # the Voronoi drop-in's Distance is cellgl.voronoi's at the pixel centres (y up)
     from cellgl.basis.voronoi import voronoi
 
-    got = np.load(out / "voronoi_distance.npy")
+    assert r["voronoi_inputs"] == ["Vector", "Scale", "Detail", "Roughness", "Lacunarity", "Randomness"]
+    assert r["voronoi_rebake"] == ["FINISHED"]
     c = (np.arange(32) + 0.5) / 32
     x, y = np.meshgrid(c, 1.0 - c)
-    want = voronoi(np.stack([x.ravel(), y.ravel()], 1).astype(np.float32), dimensions=2, scale=4.0).distance
-    np.testing.assert_allclose(got, want.reshape(32, 32), atol=1e-6)
+    pts = np.stack([x.ravel(), y.ravel()], 1).astype(np.float32)
+    for scale, npy in ((4.0, "voronoi_distance.npy"), (6.0, "voronoi_distance6.npy")):
+        want = voronoi(pts, dimensions=2, scale=scale).distance
+        np.testing.assert_allclose(np.load(out / npy), want.reshape(32, 32), atol=1e-6)
 
 
 def test_addon_unregister_leaves_nothing(installed_run):

@@ -358,33 +358,50 @@ VORONOI_OUTPUTS = (("Distance", "NodeSocketFloat", "distance"), ("Color", "NodeS
 
 
 def voronoi_settings(node) -> dict:
-    """cellgl.voronoi keywords from a Voronoi Texture node's settings and unlinked sockets."""
-    from cellgl.blender.bakejob import VORONOI_SOCKETS
-
+    """cellgl.voronoi keywords from a Voronoi Texture node's settings (its enums and checkbox;
+    the socket values are the group's inputs: :func:`voronoi_values`)."""
     feature = {"F1": "F1", "F2": "F2", "SMOOTH_F1": "smooth_F1", "DISTANCE_TO_EDGE": "distance_to_edge",
                "N_SPHERE_RADIUS": "n_sphere_radius"}[node.feature]
     metric = {"EUCLIDEAN": "euclidean", "MANHATTAN": "manhattan", "CHEBYCHEV": "chebyshev",
               "MINKOWSKI": "minkowski"}[node.distance]
-    out = {"dimensions": int(node.voronoi_dimensions[0]), "feature": feature, "metric": metric,
-           "normalize": bool(node.normalize)}
-    for sock in node.inputs:
-        if sock.enabled and sock.name in VORONOI_SOCKETS:
-            out[VORONOI_SOCKETS[sock.name]] = float(sock.default_value)
-    return out
+    return {"dimensions": int(node.voronoi_dimensions[0]), "feature": feature, "metric": metric,
+            "normalize": bool(node.normalize)}
 
 
-def build_voronoi_group(settings: dict, size: int):
-    """A group with a Voronoi Texture node's outputs, read from baked float images."""
-    tree = bpy.data.node_groups.new("cellgl Voronoi", "ShaderNodeTree")
+def voronoi_values(node) -> dict:
+    """cellgl.voronoi keywords from the socket values of ``node`` (the Voronoi Texture node, or
+    the drop-in group node, whose inputs have the same names)."""
+    from cellgl.blender.bakejob import VORONOI_SOCKETS
+
+    return {VORONOI_SOCKETS[x.name]: float(x.default_value) for x in node.inputs
+            if x.name in VORONOI_SOCKETS and getattr(x, "enabled", True)}
+
+
+def build_voronoi_group(vor, size: int):
+    """A group standing in for Voronoi Texture node ``vor``: its value sockets as inputs (their
+    values, ranges and tooltips; baked, so they act at the next bake), its outputs read from
+    baked float images."""
     import json
 
+    from cellgl.blender.bakejob import VORONOI_SOCKETS
+
+    tree = bpy.data.node_groups.new("cellgl Voronoi", "ShaderNodeTree")
     s = tree.cellgl
-    s.kind, s.preset, s.size, s.voronoi = "VORONOI", "voronoi", size, json.dumps(settings, sort_keys=True)
+    s.kind, s.preset, s.size = "VORONOI", "voronoi", size
+    s.voronoi = json.dumps(voronoi_settings(vor), sort_keys=True)
     gin, gout = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
     gin.location, gout.location = (-600, 0), (400, 0)
     vec = tree.interface.new_socket("Vector", in_out="INPUT", socket_type="NodeSocketVector")
     vec.hide_value = True
     vec.description = "texture coordinates: (0, 0)-(1, 1) spans the bake (connect a UV map)"
+    for sock in vor.inputs:
+        if sock.name not in VORONOI_SOCKETS or not sock.enabled:
+            continue
+        item = tree.interface.new_socket(sock.name, in_out="INPUT", socket_type="NodeSocketFloat")
+        prop = sock.bl_rna.properties["default_value"]
+        item.min_value, item.max_value = prop.hard_min, prop.hard_max
+        item.default_value = sock.default_value
+        item.description = f"the Voronoi node's {sock.name} (baked: changes act at the next bake)"
     for i, (name, kind, key) in enumerate(VORONOI_OUTPUTS):
         tree.interface.new_socket(name, in_out="OUTPUT", socket_type=kind)
         node = _image_node(tree, key, True, (-300, 300 - 300 * i))
@@ -404,8 +421,8 @@ def apply_voronoi_bake(tree, arrays: dict) -> None:
     n = tree.cellgl.size
     for _, _, key in VORONOI_OUTPUTS:
         a = arrays.get(key)
-        if a is None:
-            a = np.zeros((n, n, 1), np.float32)
-        if a.ndim == 2:
-            a = a[..., None]
-        _image(tree, key, a[..., :3], True)
+        a = np.zeros((n, n, 1), np.float32) if a is None else a
+        a = a[..., None] if a.ndim == 2 else a
+        pad = np.zeros(a.shape[:2] + (3,), np.float32)      # 2D positions: z = 0
+        pad[..., :min(3, a.shape[-1])] = a[..., :3]
+        _image(tree, key, pad, True)

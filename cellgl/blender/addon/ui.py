@@ -65,7 +65,8 @@ def _active_group(context):
 
 def _values_hash(node) -> str:
     s = node.node_tree.cellgl
-    values = groups.group_values(node) if s.kind == "RECIPE" else []
+    values = groups.group_values(node) if s.kind == "RECIPE" else \
+        [f"{k}={v!r}" for k, v in sorted(groups.voronoi_values(node).items())]
     text = "|".join(values + [str(s.size), str(s.tileable), s.voronoi])
     return hashlib.sha1(text.encode()).hexdigest()
 
@@ -75,7 +76,8 @@ def _job_for(node) -> dict:
 
     s = node.node_tree.cellgl
     if s.kind == "VORONOI":
-        return {"kind": "voronoi", "size": s.size, "sockets": json.loads(s.voronoi)}
+        return {"kind": "voronoi", "size": s.size,
+                "sockets": {**json.loads(s.voronoi), **groups.voronoi_values(node)}}
     return {"kind": "recipe", "recipe": s.preset, "sets": groups.group_values(node), "size": s.size,
             "tileable": s.tileable}
 
@@ -241,8 +243,7 @@ class CELLGL_OT_voronoi_exact(bpy.types.Operator):
     def execute(self, context):
         tree = _edit_tree(context)
         vor = tree.nodes.active
-        settings = groups.voronoi_settings(vor)
-        group = groups.build_voronoi_group(settings, self.size)
+        group = groups.build_voronoi_group(vor, self.size)
         node = tree.nodes.new("ShaderNodeGroup")
         node.node_tree = group
         node.label = "cellgl Voronoi"
@@ -353,6 +354,10 @@ class CELLGL_PT_texture(bpy.types.Panel):
                 row.prop(sock, "default_value", text=sock.name)
         else:
             col.label(text="Exact Voronoi (cellgl.voronoi)")
+            box = col.box()
+            for sock in node.inputs:
+                if sock.name != "Vector" and not sock.is_linked and hasattr(sock, "default_value"):
+                    box.prop(sock, "default_value", text=sock.name)
         col.separator()
         col.prop(s, "size")
         if s.kind == "RECIPE":
