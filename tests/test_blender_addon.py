@@ -25,7 +25,6 @@ import os
 import platform
 import subprocess
 import sys
-import tomllib
 import zipfile
 from pathlib import Path
 
@@ -101,6 +100,7 @@ def zip_path(tmp_path_factory):
 
 
 def test_extension_zip_layout(zip_path):
+    tomllib = pytest.importorskip("tomllib")          # Python 3.11+
     names = zipfile.ZipFile(zip_path).namelist()
     assert names[:2] == ["__init__.py", "blender_manifest.toml"]
     wheels = [n for n in names if n.startswith("wheels/")]
