@@ -439,3 +439,16 @@ def test_preset_arguments(tmp_path, monkeypatch, capsys):
     load_recipe("f2").replace(name="f1").save(other)
     with pytest.raises(ValueError, match="named 'f1'"):
         build_site(tmp_path / "two", ["f1", str(other)], thumbs=False, neighbours=False)
+
+
+def test_worker_processes_write_the_same_site(tmp_path):
+    """The variants exported in worker processes (``--jobs``) are the files one process writes."""
+    from cellgl.playground import build_site
+
+    sites = {}
+    for jobs in (1, 2):
+        out = tmp_path / f"j{jobs}"
+        res = build_site(out, ["f1", "hull"], thumbs=False, neighbours=False, jobs=jobs)
+        assert res["variants"] == 2
+        sites[jobs] = {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+    assert sites[1] == sites[2]
