@@ -226,12 +226,23 @@ def test_deterministic_and_seeded(ctx):
     assert np.mean(c.id == a.id) < 0.01
 
 
-def test_far_from_origin_is_as_accurate(ctx):
-    """10^6 cells out, float32 positions would be off by ~0.06; split positions are exact."""
-    pts = _pts(3, n=1000, lo=0, hi=4) + 1e6
-    g = cellgl.cellular(pts, 2, outputs=("F", "id"))
-    r = cellgl.cellular(pts, 2, outputs=("F", "id"), backend="numpy")
-    _assert_same(g, r)
+@pytest.mark.parametrize("where", ["points-1e6", "grid-1e4"])
+def test_far_from_origin_is_as_accurate(ctx, where):
+    """The basis far out, one place for both entry points (the texture far out:
+    tests/test_texture_precision.py; exact search bounds far out: tests/test_exactness.py).
+    points: 10^6 cells out, float32 positions would be off by ~0.06; split positions are exact.
+    grid: samples 1e4 cells from the grid origin (float32 positions erred by 7e-4 there)."""
+    if where == "points-1e6":
+        pts = _pts(3, n=1000, lo=0, hi=4) + 1e6
+        g = cellgl.cellular(pts, 2, outputs=("F", "id"))
+        r = cellgl.cellular(pts, 2, outputs=("F", "id"), backend="numpy")
+        _assert_same(g, r)
+        return
+    n_x = 30000
+    r = cellgl.cellular_grid((1, n_x), spacing=(0.3711, 1.0), n=2, outputs=("F",))
+    idx = np.arange(n_x - 50, n_x)
+    ref = cellgl.cellular(np.stack([idx * 0.3711, np.zeros(len(idx))], axis=1), 2, backend="numpy")
+    np.testing.assert_allclose(r.F[0, idx], ref.F, atol=3e-6)
 
 
 def test_grid_matches_points(ctx):

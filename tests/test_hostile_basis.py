@@ -55,17 +55,8 @@ def test_row_wider_than_4194240_samples(ctx):
 
 
 # ---------------------------------------------------------------- 3. grid positions far from the origin
+# (tests/test_core.py, test_far_from_origin_is_as_accurate[grid-1e4])
 
-def test_grid_far_from_its_origin_is_exact(ctx):
-    """Samples 1e4 cells from the grid origin (float32 positions erred by 7e-4 there)."""
-    n_x = 30000
-    r = cellgl.cellular_grid((1, n_x), spacing=(0.3711, 1.0), n=2, outputs=("F",))
-    idx = np.arange(n_x - 50, n_x)
-    ref = _brute(np.stack([idx * 0.3711, np.zeros(len(idx))], axis=1), n=2)
-    np.testing.assert_allclose(r.F[0, idx], ref.F, atol=3e-6)
-
-
-# ---------------------------------------------------------------- 3. feature_points overflow
 
 def test_feature_points_uint_cells_work():
     a = cellgl.feature_points(np.array([[3, 4], [5, 6]], dtype=np.uint64))
@@ -149,38 +140,7 @@ def test_huge_image_is_refused_from_its_header(tmp_path, monkeypatch, load, w, h
 
 
 # ---------------------------------------------------------------- 2. evaluate far from [0, 1] uv
-
-def _tiled_stained_glass():
-    return cellgl.load_recipe("stained-glass").tileable()[0]
-
-
-@pytest.mark.parametrize("base", [1e4, 1e6, 1e9])
-@pytest.mark.parametrize("preset", ["f1", "qin-cloud", "density", "stained-glass", _tiled_stained_glass])
-def test_evaluate_far_from_the_unit_square(ctx, base, preset):
-    """IDs equal the NumPy path's and distances agree to float32 tolerance at uv 1e4..1e9 (1% of the
-    IDs were wrong at 1e4, all at 1e9), points spread over several whole uv cells."""
-    rng = np.random.default_rng(int(base) % 97)
-    pts = base + rng.uniform(-1.5, 1.5, (600, 2))
-    preset = preset() if callable(preset) else preset
-    if preset == "density" and base > 2 ** 30 / 8:
-        # the GPU encodes the map relative to the panned origin in 32-bit integers: past 2^30
-        # cells it says so (the NumPy path has no such limit)
-        with pytest.raises(ValueError, match=r"basis.density_map: density map of octave 0"):
-            cellgl.evaluate(preset, pts, ("id",))
-        return
-    g = cellgl.evaluate(preset, pts, ("id", "F1", "color"))
-    n = cellgl.evaluate(preset, pts, ("id", "F1", "color"), backend="numpy")
-    assert (g["id"] == n["id"]).all()
-    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
-    np.testing.assert_allclose(g["color"], n["color"], atol=5e-5)
-
-
-def test_evaluate_far_in_z_for_a_solid_recipe(ctx):
-    pts = np.column_stack([np.full(200, 0.25), np.linspace(0.0, 1.0, 200), np.full(200, 3e5 + 0.5)])
-    g = cellgl.evaluate("qin-marble", pts, ("id", "F1"))
-    n = cellgl.evaluate("qin-marble", pts, ("id", "F1"), backend="numpy")
-    assert (g["id"] == n["id"]).all()
-    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
+# (tests/test_texture_precision.py, test_evaluate_far_away)
 
 
 # ---------------------------------------------------------------- 1. every basis dispatch within the limit
