@@ -34,8 +34,9 @@ from pathlib import Path
 from types import MappingProxyType
 
 from cellgl.texture import domain
+from cellgl.texture.schema import check_name_doc
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
-                                   check_channels, check_name_doc, parse_value, read_json)
+                                   check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
                      PRODUCTS)
 
