@@ -208,6 +208,7 @@ def installed_run(zip_path, tmp_path_factory):
     return out, _drive(out, [SIZE, "flagstone", "--all-ops"], zip_file=zip_path)
 
 
+@pytest.mark.slow
 def test_addon_installs_from_the_zip(installed_run):
     out, r = installed_run
     assert r["installed"]["module"] == "bl_ext.user_default.cellgl"
@@ -215,6 +216,7 @@ def test_addon_installs_from_the_zip(installed_run):
     assert str(out / "blender-user" / "extensions") in r["installed"]["cellgl_file"]
 
 
+@pytest.mark.slow
 def test_addon_osl_and_image_branches_render_the_bake(installed_run):
     out, r = installed_run
     info = r["presets"]["flagstone"]
@@ -227,6 +229,7 @@ def test_addon_osl_and_image_branches_render_the_bake(installed_run):
     assert not _compare(out, "flagstone", ("osl", "img"))
 
 
+@pytest.mark.slow
 def test_addon_operators_headless(installed_run):
     out, r = installed_run
     assert r["snippet_glsl"] == r["snippet_osl"] == ["FINISHED"]
@@ -274,6 +277,7 @@ def test_addon_operators_headless(installed_run):
         np.testing.assert_allclose(np.load(out / npy), want.reshape(32, 32), atol=1e-6)
 
 
+@pytest.mark.slow
 def test_addon_unregister_leaves_nothing(installed_run):
     _, r = installed_run
     reg = r["footprint_registered"]
