@@ -196,6 +196,26 @@ def _all_ops(bpy, addon, tree, out, size):
     ui.on_depsgraph(bpy.context.scene)
     r["rebaked"] = s.baked_hash != before and s.baked_hash == ui._values_hash(node)
     s.rebake = False
+    # the UI's path: the bake in the background, the timer polled by hand (headless Blender runs
+    # no timers), its progress seen, the result loaded; a failing one shows its message
+    import time
+
+    from cellgl.blender.addon import jobs
+
+    seen = []
+    s.size = 96
+    jobs.start(node.node_tree.name, ui._job_for(node), ui._values_hash(node))
+    r["async_timer"] = bpy.app.timers.is_registered(jobs.poll)
+    t0 = time.time()
+    while jobs.JOBS and time.time() - t0 < 300:
+        seen.append(round(next(iter(jobs.JOBS.values())).progress, 3))
+        time.sleep(0.05)
+        jobs.poll()
+    r["async_progress"] = sorted(set(seen))
+    r["async_status"] = s.status
+    r["async_size"] = list(bpy.data.images[f"{node.node_tree.name} Color"].size)
+    r["async_hash_ok"] = s.baked_hash == ui._values_hash(node)
+    s.size = size
     # errors are reports, not tracebacks
     preset = s.preset
     s.preset = "no-such-preset"

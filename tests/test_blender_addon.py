@@ -237,6 +237,8 @@ def test_addon_operators_headless(installed_run):
     assert r["bake_command_text"] == ("cellgl bake flagstone -o flagstone.png --size 128 --set seed=3 "
                                       "--set frequency=7.0 --tileable")
     assert r["rebaked"]
+    assert r["async_timer"] and r["async_status"] == "baked 96 x 96" and r["async_size"] == [96, 96]
+    assert r["async_hash_ok"] and r["async_progress"][0] < 1.0
     from cellgl.texture import params
 
     if hasattr(params, "inactive"):          # the panel greys these (flagstone is Euclidean)
