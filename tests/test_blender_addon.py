@@ -308,8 +308,9 @@ def test_addon_eevee_renders_the_image_branch(tmp_path):
     """EEVEE (headless: Mesa's llvmpipe through EGL) takes the image branch. What it can show
     exactly: the cell colours (an 8-bit image read with Closest). Its film is half float, so the
     IDs and Fac come back to half precision; its Linear image lookups go through the GPU's
-    mipmaps, so the colour is the bake filtered (measured for veins at 64 x 64: up to 59/255,
-    median 13/255; Cycles' lookups of the same image are exact)."""
+    texture filtering (mipmaps), so the colour is the bake filtered (veins at 64 x 64: up to
+    59/255, median 13/255; with the Color node set to Closest EEVEE gives the bake within 1/255,
+    measured once; Cycles' lookups of the Linear image are exact)."""
     _need_bpy()
     import cellgl
     from cellgl.io.bake import bake
