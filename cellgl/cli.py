@@ -84,7 +84,7 @@ def _lazy(module: str, name: str) -> Callable:
 #: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
 #: cellgl/io/bake_cli.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/snippets.py
 #: (docs/engines.md), cellgl/recipes.py (docs/textures.md), cellgl/dask/cli.py (docs/scale.md),
-#: cellgl/voronoi_cli.py (docs/blender.md), cellgl/playground/site.py (docs/playground.md).
+#: cellgl/voronoi_cli.py and cellgl/blender/extension.py (docs/blender.md), cellgl/playground/site.py (docs/playground.md).
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
     "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
@@ -94,6 +94,8 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
     "voronoi": (_lazy("cellgl.voronoi_cli", "add_parser"), _lazy("cellgl.voronoi_cli", "run_cli")),
     "blender": (_lazy("cellgl.blender.scene", "add_parser"), _lazy("cellgl.blender.scene", "run_cli")),
+    "blender-extension": (_lazy("cellgl.blender.extension", "add_parser"),
+                          _lazy("cellgl.blender.extension", "run_cli")),
     "playground": (_lazy("cellgl.playground.site", "add_parser"), _lazy("cellgl.playground.site", "run_cli")),
 }
 

@@ -12,11 +12,6 @@ import os
 import pytest
 
 
-def pytest_configure(config):
-    config.addinivalue_line("markers", "gpu: needs an OpenGL 4.3 context (the ctx fixture)")
-    config.addinivalue_line("markers", "slow: slow test (builds or installs things); runs by default")
-
-
 def pytest_collection_modifyitems(config, items):
     for item in items:
         if "ctx" in getattr(item, "fixturenames", ()):

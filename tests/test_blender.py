@@ -84,6 +84,7 @@ def cycles_renders(tmp_path_factory):
     return out, names
 
 
+@pytest.mark.slow
 def test_cycles_renders_every_exportable_preset_as_the_bake(cycles_renders, tmp_path):
     from cellgl.io.bake import bake
 
@@ -109,6 +110,7 @@ def test_cycles_renders_every_exportable_preset_as_the_bake(cycles_renders, tmp_
     assert not bad, "\n".join(bad)
 
 
+@pytest.mark.slow
 def test_blend_file_renders_as_is_to_the_bake(tmp_path):
     _need_bpy()
     blend = tmp_path / "f4.blend"
@@ -154,6 +156,7 @@ def test_missing_bpy_names_the_extra():
     assert "pip install 'cellgl[blender]'" in proc.stdout
 
 
+@pytest.mark.slow
 def test_osl_export_compiles_in_cycles():
     """Every exportable preset's OSL compiles with Cycles' own OSL compiler and the Script node
     gets the parameters and outputs the export declares."""
@@ -241,6 +244,7 @@ def _uint_reference(k: np.ndarray) -> np.ndarray:
     return r
 
 
+@pytest.mark.slow
 def test_osl_unsigned_arithmetic_is_bit_exact(tmp_path):
     """The uint emulation on OSL's int (logical >>, unsigned < and >=, / and %, uint <-> float,
     floatBitsToUint, wrapping *): a GLSL function of the library's dialect, translated and run by Cycles per
@@ -266,6 +270,7 @@ def test_osl_unsigned_arithmetic_is_bit_exact(tmp_path):
     assert np.count_nonzero(got != want) == 0, np.argwhere(got != want)[:5]
 
 
+@pytest.mark.slow
 def test_osl_basis_snippets_compile_and_give_cellulars_values(tmp_path):
     """``cellgl export --basis ... --target osl``: every basis and dimension compiles with Cycles'
     compiler; the shader's sockets are Vector (+ W in 4D) in and the basis values out; rendered by

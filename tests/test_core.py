@@ -1,6 +1,7 @@
 """The cellular basis: GPU vs NumPy reference vs brute force, invariants, bad input."""
 from __future__ import annotations
 
+import datetime
 import itertools
 from pathlib import Path
 
@@ -225,12 +226,23 @@ def test_deterministic_and_seeded(ctx):
     assert np.mean(c.id == a.id) < 0.01
 
 
-def test_far_from_origin_is_as_accurate(ctx):
-    """10^6 cells out, float32 positions would be off by ~0.06; split positions are exact."""
-    pts = _pts(3, n=1000, lo=0, hi=4) + 1e6
-    g = cellgl.cellular(pts, 2, outputs=("F", "id"))
-    r = cellgl.cellular(pts, 2, outputs=("F", "id"), backend="numpy")
-    _assert_same(g, r)
+@pytest.mark.parametrize("where", ["points-1e6", "grid-1e4"])
+def test_far_from_origin_is_as_accurate(ctx, where):
+    """The basis far out, one place for both entry points (the texture far out:
+    tests/test_texture_precision.py; exact search bounds far out: tests/test_exactness.py).
+    points: 10^6 cells out, float32 positions would be off by ~0.06; split positions are exact.
+    grid: samples 1e4 cells from the grid origin (float32 positions erred by 7e-4 there)."""
+    if where == "points-1e6":
+        pts = _pts(3, n=1000, lo=0, hi=4) + 1e6
+        g = cellgl.cellular(pts, 2, outputs=("F", "id"))
+        r = cellgl.cellular(pts, 2, outputs=("F", "id"), backend="numpy")
+        _assert_same(g, r)
+        return
+    n_x = 30000
+    r = cellgl.cellular_grid((1, n_x), spacing=(0.3711, 1.0), n=2, outputs=("F",))
+    idx = np.arange(n_x - 50, n_x)
+    ref = cellgl.cellular(np.stack([idx * 0.3711, np.zeros(len(idx))], axis=1), 2, backend="numpy")
+    np.testing.assert_allclose(r.F[0, idx], ref.F, atol=3e-6)
 
 
 def test_grid_matches_points(ctx):
@@ -324,12 +336,43 @@ def test_poisson_population_statistics():
     (lambda: cellgl.cellular(np.zeros((3, 2)), min_points=5, max_points=2), r"min_points \(5\)"),
     (lambda: cellgl.cellular(np.zeros((3, 2)), max_points=17), r"max_points must be in \[1, 16\]"),
     (lambda: cellgl.cellular(np.zeros((3, 2)), jitter=1.5), r"jitter must be in \[0"),
+    # period: one place for every bad period (range, length, type, text)
     (lambda: cellgl.cellular(np.zeros((3, 2)), period=[-1, 2]), r"period must be in"),
     (lambda: cellgl.cellular(np.zeros((3, 2)), period=[1, 2, 3]), r"sequence of 2"),
+    *((lambda bad=bad: cellgl.cellular([[0.5, 0.5]], 1, period=bad), r"period must be")
+      for bad in (2.5, "4", [1.5, 2], object())),
+    *((lambda bad=bad: cellgl.cellular([[0.5, 0.5]], 1, period=bad),
+       r"period must be an integer or a sequence of 2 integers.*'22'") for bad in ("22", b"22")),
+    # points and cells of the wrong type
+    *((lambda bad=bad: cellgl.cellular(bad, 1), r"points must hold real numbers") for bad in (
+        np.array([[1 + 2j, 0.5]]),                                      # complex: was cast silently
+        np.array([[True, False]]),                                      # bool
+        np.array([[np.datetime64("2020-01-01"), np.datetime64("2020-01-02")]]),
+        [[datetime.date(2020, 1, 1), 0.5]], [["1", "2"]])),
+    (lambda: cellgl.evaluate("f1", np.array([[0.5 + 1j, 0.5]])), r"points must hold real numbers"),
+    *((lambda bad=bad: cellgl.feature_points(bad), r"cells must hold") for bad in (
+        [["a", "b"]], np.array([[1.5, 2.0]]), np.array([[True, False]]), [[np.nan, 0.0]])),
+    *((lambda c=c: cellgl.feature_points(np.array([[c, 0]], dtype=np.asarray(c).dtype if isinstance(
+        c, np.generic) else None)), r"cells must lie within \+-2\^30")
+      for c in (np.uint64(2 ** 63), np.int64(-2 ** 63), np.uint64(2 ** 64 - 1), 2 ** 40)),
+    *((lambda bad=bad: cellgl.cellular([[0.5, 0.5]], 1, outputs=bad), r"outputs must") for bad in (None, 3)),
+    *((lambda bad=bad: cellgl.evaluate("f1", [[0.5, 0.5]], bad), "channels must be a name or a sequence of names")
+      for bad in (None, 3, object())),
+    *((lambda bad=bad: cellgl.render("f1", 4, 4, channels=bad, backend="numpy"),
+       "channels must be a name or a sequence of names") for bad in (None, 3, object())),
+    *((lambda i=i, r=r: cellgl.DensityMap("image", 0.5, 4.0, image=i, rect=r),
+       r"(image must hold real numbers|rect must be a finite number|rect must be \(x0, y0, x1, y1\))") for i, r in (
+        (np.full((2, 2), 0.5 + 0.5j), (0, 0, 1, 1)),      # complex: the imaginary part was dropped
+        (np.array([[True, False]]), (0, 0, 1, 1)),        # bool: cast to 0/1
+        (np.full((2, 2), 0.5), (0, 0, True, 1)),
+        (np.full((2, 2), 0.5), ((0, 0), (1, 1))))),
     (lambda: cellgl.cellular([[3e9, 0.0]]), r"2\^30"),
     (lambda: cellgl.cellular([["a", "b"]]), r"points must hold real numbers"),
     (lambda: cellgl.cellular_grid((0, 4)), r"positive ints"),
     (lambda: cellgl.cellular_grid((4,)), r"2..4"),
+    *((lambda bad=bad: cellgl.cellular_grid(bad, backend="numpy"), "shape must be a tuple of 2..4 positive ints")
+      for bad in ((2.5, 4), (4.0, 4), (True, 4), "ab", 7)),
+    (lambda: cellgl.cellular_grid((2, 2), origin=(1j, 0.0), backend="numpy"), "origin must hold real numbers"),
     (lambda: cellgl.cellular_grid((4, 4), spacing=(1, -1)), r"spacing must be > 0"),
     (lambda: cellgl.cellular_grid((4, 4), origin=(0, np.nan)), r"origin must be finite"),
     (lambda: cellgl.feature_points(np.zeros((2, 5), int)), r"shape \(M, d\)"),

@@ -70,6 +70,7 @@ def test_to_dask_is_render_in_blocks(ctx):
     assert np.array_equal(a[70:90, 95:130].compute(scheduler="sync"), ref["height"][70:90, 95:130])
 
 
+@pytest.mark.slow
 def test_to_dask_on_worker_processes(cluster, ctx):
     a = to_dask("polka", (600, 700), chunks=256, channels="normal", sets=["seed=3"])
     with distributed.Client(cluster) as client:
@@ -127,6 +128,7 @@ def test_import_cellgl_stays_light():
     assert out.stdout.strip() == "cellgl.dask.blocks"
 
 
+@pytest.mark.slow
 def test_map_tasks_keeps_order_and_raises(cluster, monkeypatch):
     import math
 
@@ -159,6 +161,7 @@ def _chunk_files(store: Path) -> dict[str, bytes]:
             for p in sorted((store / "height").rglob("*")) if p.is_file()}
 
 
+@pytest.mark.slow
 def test_zarr_bake_on_two_workers_equals_render(cluster, big_ref, tmp_path):
     out = tmp_path / "f1.zarr"
     res = bake_zarr("f1", out, size=BIG, channels=["height"], chunk=CHUNK, scheduler=cluster,
@@ -181,6 +184,7 @@ def test_zarr_bake_on_two_workers_equals_render(cluster, big_ref, tmp_path):
     assert (g[CHECKSUMS][:] != 0).all()
 
 
+@pytest.mark.slow
 def test_zarr_bake_killed_and_rerun(big_ref, tmp_path):
     """SIGKILL a real `cellgl bake ... .zarr` mid-run; the rerun renders only what is missing
     or damaged and ends with the same bytes as an uninterrupted bake."""
@@ -220,6 +224,7 @@ def test_zarr_bake_killed_and_rerun(big_ref, tmp_path):
     assert _chunk_files(out) == files
 
 
+@pytest.mark.slow
 def test_zarr_bake_partial_chunks_and_channels(cluster, tmp_path, ctx):
     out = tmp_path / "p.zarr"
     bake_zarr("flagstone", out, size="100x70", channels="color,id", chunk=32, scheduler=cluster,
@@ -280,6 +285,7 @@ def test_scheduler_flag_needs_zarr(tmp_path, capsys):
 # --------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 def test_sweep_bakes_each_variation(cluster, tmp_path, ctx):
     out = tmp_path / "sw"
     sets = ["seed=8..11", "metric=euclidean|manhattan", "frequency=6"]

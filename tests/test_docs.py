@@ -84,6 +84,7 @@ def _needs_display(block: Block) -> bool:
     return block.interactive or "cellgl view" in block.text() or "python -m viewer" in block.text()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("block", RUNNABLE, ids=[b.id for b in RUNNABLE])
 def test_doc_block(block, sessions):
     if block.skip is not None:

@@ -225,10 +225,8 @@ def wgsl_validate(text: str) -> None:
     wgpu_device().create_shader_module(code=text)   # raises with naga's message if invalid
 
 
-@pytest.mark.parametrize("target", list(export.TARGETS))
-@pytest.mark.parametrize("basis", list(BASES))
-def test_basis_snippet_compiles(tmp_path, basis, target):
-    compile_snippet(tmp_path, target, basis_snippet(basis, target))
+# (a basis snippet compiling in every target: tests/test_export_compiler.py,
+# test_basis_snippet_compiles, for these programs and the named basis functions alike)
 
 
 # --------------------------------------------------------------------------------------------

@@ -19,7 +19,10 @@ from cellgl.export.basis import BASES, basis_export
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_export import (  # noqa: E402
+    BASES as PROGRAM_BASES,
     PRESETS,
+    basis_snippet,
+    compile_snippet,
     glslang,
     render_snippet,
     run_snippet,
@@ -458,9 +461,18 @@ def test_basis_snippet_for_osl_is_a_shader_of_the_basis_alone():
         in basis_export("cellid", 2, "osl")
 
 
-@pytest.mark.parametrize("target", FOLDED_TARGETS)
-@pytest.mark.parametrize("basis", list(BASES))
-def test_basis_snippet_compiles(tmp_path, basis, target):
+#: every basis snippet and target: the named basis functions (``cellgl export --basis``: every
+#: target but OSL, whose basis shader tests/test_blender.py compiles) and the machinery's bare
+#: programs of tests/test_export.py (``basis_program``: every target)
+BASIS_SNIPPETS = ([("function", b, t) for b in BASES for t in FOLDED_TARGETS]
+                  + [("program", b, t) for b in PROGRAM_BASES for t in export.TARGETS])
+
+
+@pytest.mark.parametrize("kind, basis, target", BASIS_SNIPPETS, ids=["-".join(c) for c in BASIS_SNIPPETS])
+def test_basis_snippet_compiles(tmp_path, kind, basis, target):
+    if kind == "program":
+        compile_snippet(tmp_path, target, basis_snippet(basis, target))
+        return
     dim = 3
     text = basis_export(basis, dim, target)
     d = export.TARGETS[target].dialect

@@ -3,7 +3,6 @@ the wrong type, Minkowski exponents below 1, huge density images (issue 10). Eac
 before its fix."""
 from __future__ import annotations
 
-import datetime
 import struct
 import zlib
 
@@ -56,23 +55,7 @@ def test_row_wider_than_4194240_samples(ctx):
 
 
 # ---------------------------------------------------------------- 3. grid positions far from the origin
-
-def test_grid_far_from_its_origin_is_exact(ctx):
-    """Samples 1e4 cells from the grid origin (float32 positions erred by 7e-4 there)."""
-    n_x = 30000
-    r = cellgl.cellular_grid((1, n_x), spacing=(0.3711, 1.0), n=2, outputs=("F",))
-    idx = np.arange(n_x - 50, n_x)
-    ref = _brute(np.stack([idx * 0.3711, np.zeros(len(idx))], axis=1), n=2)
-    np.testing.assert_allclose(r.F[0, idx], ref.F, atol=3e-6)
-
-
-# ---------------------------------------------------------------- 3. feature_points overflow
-
-@pytest.mark.parametrize("cell", [np.uint64(2 ** 63), np.int64(-2 ** 63), np.uint64(2 ** 64 - 1), 2 ** 40])
-def test_feature_points_refuses_integers_past_the_range(cell):
-    arr = np.array([[cell, 0]], dtype=np.asarray(cell).dtype if isinstance(cell, np.generic) else None)
-    with pytest.raises(ValueError, match=r"cells must lie within \+-2\^30"):
-        cellgl.feature_points(arr)
+# (tests/test_core.py, test_far_from_origin_is_as_accurate[grid-1e4])
 
 
 def test_feature_points_uint_cells_work():
@@ -82,52 +65,7 @@ def test_feature_points_uint_cells_work():
 
 
 # ---------------------------------------------------------------- 11. wrong types get ValueError
-
-@pytest.mark.parametrize("bad", [
-    np.array([[1 + 2j, 0.5]]),                                          # complex: was cast silently
-    np.array([[True, False]]),                                          # bool
-    np.array([[np.datetime64("2020-01-01"), np.datetime64("2020-01-02")]]),
-    [[datetime.date(2020, 1, 1), 0.5]],
-    [["1", "2"]],
-])
-def test_points_of_the_wrong_type(bad):
-    with pytest.raises(ValueError, match="points must hold real numbers"):
-        cellgl.cellular(bad, 1)
-
-
-def test_texture_points_of_the_wrong_type():
-    with pytest.raises(ValueError, match="points must hold real numbers"):
-        cellgl.evaluate("f1", np.array([[0.5 + 1j, 0.5]]))
-
-
-@pytest.mark.parametrize("cells", [[["a", "b"]], np.array([[1.5, 2.0]]), np.array([[True, False]]),
-                                   [[np.nan, 0.0]]])
-def test_feature_points_refuses_non_integers(cells):
-    with pytest.raises(ValueError, match="cells must hold"):
-        cellgl.feature_points(cells)
-
-
-@pytest.mark.parametrize("period", [2.5, "4", [1.5, 2], object()])
-def test_bad_period(period):
-    with pytest.raises(ValueError, match="period must be"):
-        cellgl.cellular([[0.5, 0.5]], 1, period=period)
-
-
-@pytest.mark.parametrize("outputs", [None, 3])
-def test_bad_outputs(outputs):
-    with pytest.raises(ValueError, match="outputs must"):
-        cellgl.cellular([[0.5, 0.5]], 1, outputs=outputs)
-
-
-@pytest.mark.parametrize("shape", [(2.5, 4), (4.0, 4), (True, 4), "ab", 7])
-def test_bad_grid_shape(shape):
-    with pytest.raises(ValueError, match="shape must be a tuple of 2..4 positive ints"):
-        cellgl.cellular_grid(shape, backend="numpy")
-
-
-def test_bad_grid_origin_type():
-    with pytest.raises(ValueError, match="origin must hold real numbers"):
-        cellgl.cellular_grid((2, 2), origin=(1j, 0.0), backend="numpy")
+# (in tests/test_core.py's table of bad input, test_bad_input_is_a_clear_error)
 
 
 # ---------------------------------------------------------------- 13. Minkowski p < 1: the true bound
@@ -202,38 +140,7 @@ def test_huge_image_is_refused_from_its_header(tmp_path, monkeypatch, load, w, h
 
 
 # ---------------------------------------------------------------- 2. evaluate far from [0, 1] uv
-
-def _tiled_stained_glass():
-    return cellgl.load_recipe("stained-glass").tileable()[0]
-
-
-@pytest.mark.parametrize("base", [1e4, 1e6, 1e9])
-@pytest.mark.parametrize("preset", ["f1", "qin-cloud", "density", "stained-glass", _tiled_stained_glass])
-def test_evaluate_far_from_the_unit_square(ctx, base, preset):
-    """IDs equal the NumPy path's and distances agree to float32 tolerance at uv 1e4..1e9 (1% of the
-    IDs were wrong at 1e4, all at 1e9), points spread over several whole uv cells."""
-    rng = np.random.default_rng(int(base) % 97)
-    pts = base + rng.uniform(-1.5, 1.5, (600, 2))
-    preset = preset() if callable(preset) else preset
-    if preset == "density" and base > 2 ** 30 / 8:
-        # the GPU encodes the map relative to the panned origin in 32-bit integers: past 2^30
-        # cells it says so (the NumPy path has no such limit)
-        with pytest.raises(ValueError, match=r"basis.density_map: density map of octave 0"):
-            cellgl.evaluate(preset, pts, ("id",))
-        return
-    g = cellgl.evaluate(preset, pts, ("id", "F1", "color"))
-    n = cellgl.evaluate(preset, pts, ("id", "F1", "color"), backend="numpy")
-    assert (g["id"] == n["id"]).all()
-    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
-    np.testing.assert_allclose(g["color"], n["color"], atol=5e-5)
-
-
-def test_evaluate_far_in_z_for_a_solid_recipe(ctx):
-    pts = np.column_stack([np.full(200, 0.25), np.linspace(0.0, 1.0, 200), np.full(200, 3e5 + 0.5)])
-    g = cellgl.evaluate("qin-marble", pts, ("id", "F1"))
-    n = cellgl.evaluate("qin-marble", pts, ("id", "F1"), backend="numpy")
-    assert (g["id"] == n["id"]).all()
-    np.testing.assert_allclose(g["F1"], n["F1"], atol=2e-6)
+# (tests/test_texture_precision.py, test_evaluate_far_away)
 
 
 # ---------------------------------------------------------------- 1. every basis dispatch within the limit
@@ -264,20 +171,6 @@ def test_cell_counts_dispatches_stay_within_the_group_limit(ctx, monkeypatch):
 
 # ---------------------------------------------------------------- 11. more values of the wrong type
 
-@pytest.mark.parametrize("channels", [None, 3, object()])
-def test_texture_channels_not_a_sequence(channels):
-    with pytest.raises(ValueError, match="channels must be a name or a sequence of names"):
-        cellgl.evaluate("f1", [[0.5, 0.5]], channels)
-    with pytest.raises(ValueError, match="channels must be a name or a sequence of names"):
-        cellgl.render("f1", 4, 4, channels=channels, backend="numpy")
-
-
-@pytest.mark.parametrize("period", ["22", b"22"])
-def test_period_as_text(period):
-    with pytest.raises(ValueError, match=r"period must be an integer or a sequence of 2 integers.*'22'"):
-        cellgl.cellular([[0.5, 0.5]], 1, period=period)
-
-
 def test_masked_entries_are_refused():
     """A masked entry has no value: its hidden data was used as a coordinate."""
     pts = np.ma.masked_array([[0.5, 0.5], [9.0, 0.25]], mask=[[0, 0], [1, 0]])
@@ -290,17 +183,6 @@ def test_masked_entries_are_refused():
     # nothing masked: the values are used
     ok = cellgl.cellular(np.ma.masked_array([[0.5, 0.5]], mask=False), 1, backend="numpy")
     assert ok.F[0, 0] == cellgl.cellular([[0.5, 0.5]], 1, backend="numpy").F[0, 0]
-
-
-@pytest.mark.parametrize("image,rect", [
-    (np.full((2, 2), 0.5 + 0.5j), (0, 0, 1, 1)),        # complex: the imaginary part was dropped
-    (np.array([[True, False]]), (0, 0, 1, 1)),          # bool: cast to 0/1
-    (np.full((2, 2), 0.5), (0, 0, True, 1)),
-    (np.full((2, 2), 0.5), ((0, 0), (1, 1))),
-])
-def test_density_image_of_the_wrong_type(image, rect):
-    with pytest.raises(ValueError, match=r"(image must hold real numbers|rect must be a finite number|rect must be \(x0, y0, x1, y1\))"):
-        cellgl.DensityMap("image", 0.5, 4.0, image=image, rect=rect)
 
 
 # ---------------------------------------------------------------- 7. sample positions as texels

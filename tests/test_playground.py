@@ -161,6 +161,7 @@ THREE_STUB = """(() => {
 })()"""
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", PRESETS)
 def test_preset_in_the_browser_equals_the_bake(page, tmp_path, name):
     from cellgl.export.snippets import texture_program
@@ -214,6 +215,7 @@ def test_preset_in_the_browser_equals_the_bake(page, tmp_path, name):
     np.testing.assert_array_equal(ran, want)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [p for p in ("f1", "crumple", "density") if p in PRESETS])
 def test_copied_wgsl_hlsl_godot_snippets_compile(page, tmp_path, name):
     helpers = _export_helpers()
@@ -227,6 +229,7 @@ def test_copied_wgsl_hlsl_godot_snippets_compile(page, tmp_path, name):
         helpers.compile_snippet(tmp_path, target, text)
 
 
+@pytest.mark.slow
 def test_tiled_and_animated_views(page):
     ok(call(page, "window.cellglPlayground.select('f1')"))
     flat = call(page, "window.cellglPlayground.pixels()")
@@ -251,6 +254,7 @@ def test_tiled_and_animated_views(page):
     ok(call(page, "window.cellglPlayground.idle()"))
 
 
+@pytest.mark.slow
 def test_page_works_offline_and_names_what_it_leaves_out(page, site):
     logs = [e for e in page.get_log("browser") if e["level"] == "SEVERE"]
     assert not logs, logs
@@ -264,6 +268,7 @@ def test_page_works_offline_and_names_what_it_leaves_out(page, site):
     assert "http://" not in html and "https://" not in html
 
 
+@pytest.mark.slow
 def test_screenshot(page, tmp_path):
     """The docs' screenshot (docs/screenshots/playground.png; CELLGL_UPDATE_DOCS=1 rewrites it)."""
     from PIL import Image
@@ -289,6 +294,7 @@ def test_screenshot(page, tmp_path):
     ok(call(page, "window.cellglPlayground.idle()"))
 
 
+@pytest.mark.slow
 def test_page_warns_where_the_recipe_check_refuses(page):
     from cellgl.texture.schema import RecipeError
 
@@ -322,6 +328,7 @@ def _wgsl_consts(text: str) -> tuple[str, dict]:
     return code, values
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [p for p in ("f1", "crumple", "wood-grain", "density", "qin-marble")
                                   if p in PRESETS])
 def test_copied_wgsl_equals_the_exporter(page, name):
@@ -342,6 +349,7 @@ def test_copied_wgsl_equals_the_exporter(page, name):
         np.testing.assert_allclose(page_vals[k], want, rtol=0, atol=tol, err_msg=k)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", [p for p in ("f1", "flagstone", "wood-grain") if p in PRESETS])
 def test_webgpu_renders_the_copied_wgsl_as_the_bake(page, tmp_path, name):
     """Where the browser offers WebGPU (headless Chromium here: SwiftShader's adapter), the
@@ -384,3 +392,72 @@ def test_site_files_and_refusals(tmp_path):
     with pytest.raises(ValueError, match="no preset to show: pups-cow: PUPs"):
         build_site(tmp_path / "none", ["pups-cow"])
     assert main(["playground", "-o", str(tmp_path / "none"), "--preset", "stained-glass", "-q"]) == 2
+
+
+#: values the page's inactive() is held to cellgl.texture.params.inactive at (on every preset)
+INACTIVE_CASES = ({}, {"metric": "minkowski"}, {"distribution": "jitter"}, {"distribution": "blender", "seed": 0},
+                  {"density_map": "radial"}, {"density_map": "ramp_y", "distribution": "poisson"},
+                  {"dimension": 4}, {"dimension": 3, "fractal": "min"}, {"c_smooth": 0.5, "smoothness": 0.1},
+                  {"cell_mix": 0.3, "smoothness": 0.0}, {"warp_amount": 1.5, "noise_color": 0.2},
+                  {"c_noise": 1.0, "orbit_radius": 0.2})
+
+
+@pytest.mark.slow
+def test_inactive_parameters_are_greyed_as_python_says(page):
+    """The page greys out (and disables) the parameters that change nothing, with the reason
+    as tooltip: the rules of cellgl.texture.params.ACTIVE_WHEN, the same words as in Python."""
+    from cellgl.texture.params import inactive
+
+    for name in PRESETS:
+        values = load_recipe(name).values
+        got = ok(call(page, f"(() => {{ window.cellglPlayground.select({name!r}); "
+                            f"return {list(INACTIVE_CASES)!r}.map((c) => window.cellglPlayground.inactive(c)); }})()"
+                      .replace("True", "true").replace("False", "false")))
+        for case, page_says in zip(INACTIVE_CASES, got):
+            assert page_says == inactive({**values, **case}), (name, case)
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+    row = ok(call(page, """(() => { const r = document.getElementById("p-minkowski_p").closest(".param");
+        return { cls: r.className, title: r.title, disabled: document.getElementById("p-minkowski_p").disabled }; })()"""))
+    assert "inactive" in row["cls"] and row["disabled"], row
+    assert row["title"].startswith("inactive: needs metric minkowski\n"), row["title"]
+    ok(call(page, """(() => { const el = document.getElementById("p-metric");
+        el.value = "minkowski"; el.dispatchEvent(new Event("input", {bubbles: true}));
+        return window.cellglPlayground.idle(); })()"""))
+    row = ok(call(page, """(() => { const r = document.getElementById("p-minkowski_p").closest(".param");
+        return { cls: r.className, title: r.title, disabled: document.getElementById("p-minkowski_p").disabled }; })()"""))
+    assert "inactive" not in row["cls"] and not row["disabled"] and not row["title"].startswith("inactive"), row
+    ok(call(page, "window.cellglPlayground.select('f1')"))
+
+
+def test_preset_arguments(tmp_path, monkeypatch, capsys):
+    """``--preset f1 --preset f1`` does the work once; an unknown ``--preset`` lists what the
+    page accepts (no pups-*, which it refuses); two recipes with one name are refused."""
+    from cellgl.cli import main
+    from cellgl.playground import build_site, site as site_mod
+
+    made = []
+    real = site_mod._preset_entry
+    monkeypatch.setattr(site_mod, "_preset_entry", lambda r, *a, **k: made.append(r.name) or real(r, *a, **k))
+    res = build_site(tmp_path / "one", ["f1", "f1"], thumbs=False, neighbours=False)
+    assert res["presets"] == ["f1"] and made == ["f1"]
+    assert main(["playground", "-o", str(tmp_path / "x"), "--preset", "nope", "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "--preset 'nope': unknown preset" in err and "pups-" not in err
+    assert "flagstone" in err and "stained-glass" not in err       # refused by the exporter
+    other = tmp_path / "other.json"
+    load_recipe("f2").replace(name="f1").save(other)
+    with pytest.raises(ValueError, match="named 'f1'"):
+        build_site(tmp_path / "two", ["f1", str(other)], thumbs=False, neighbours=False)
+
+
+def test_worker_processes_write_the_same_site(tmp_path):
+    """The variants exported in worker processes (``--jobs``) are the files one process writes."""
+    from cellgl.playground import build_site
+
+    sites = {}
+    for jobs in (1, 2):
+        out = tmp_path / f"j{jobs}"
+        res = build_site(out, ["f1", "hull"], thumbs=False, neighbours=False, jobs=jobs)
+        assert res["variants"] == 2
+        sites[jobs] = {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+    assert sites[1] == sites[2]

@@ -162,3 +162,28 @@ def test_docs_parameter_table_is_current():
     spec.loader.exec_module(mod)
     text = (root / "docs" / "textures.md").read_text()
     assert mod.render(text) == text, "run: PYTHONPATH=. python docs/make_params_table.py"
+
+
+@pytest.mark.parametrize("kind", ["f1", "pups-cow"])
+def test_name_and_doc_have_a_sane_size(tmp_path, capsys, kind):
+    """A 10 MB name gave a 31 MB snippet: names are one line of <= 64 characters, docs <= 4096
+    characters, however the recipe arrives (a file, ``replace``, ``--set``)."""
+    from cellgl.cli import main
+    from cellgl.recipes import load_recipe
+    from cellgl.texture.schema import MAX_DOC, MAX_NAME
+
+    r = load_recipe(kind)
+    assert r.replace(name="é" * MAX_NAME, doc="d" * MAX_DOC).name == "é" * MAX_NAME
+    for kw, words in ((dict(name="n" * 10_000_000), ["name: 10000000 characters", "at most 64"]),
+                      (dict(name="a\nb"), ["control character", "one line"]),
+                      (dict(doc="d" * (MAX_DOC + 1)), ["doc: 4097 characters", "at most 4096"])):
+        with pytest.raises(RecipeError) as exc:
+            r.replace(**kw)
+        assert all(w in str(exc.value) for w in words), str(exc.value)
+        assert len(str(exc.value)) < 300
+    d = json.loads(r.to_json())
+    d["name"] = "x" * 100
+    path = tmp_path / "long.json"
+    path.write_text(json.dumps(d))
+    assert main(["export", str(path), "--target", "gles"]) == 2
+    assert "name: 100 characters" in capsys.readouterr().err

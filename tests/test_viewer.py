@@ -106,7 +106,9 @@ def _drag(v, name, frac0, frac1, steps=6):
     xa, xb = x0 + frac0 * (x1 - x0), x0 + frac1 * (x1 - x0)
     events = [(xa, y, False), (xa, y, True)]
     events += [(xa + (xb - xa) * k / steps, y, True) for k in range(1, steps + 1)]
-    events += [(xb, y, False), (xb + 400, y, False)]
+    # release, then rest in the panel beside the widget (over the view the readout grows a line
+    # and moves the panel under the next drag)
+    events += [(xb, y, False), (v.view_rect[0] - 4, y, False)]
     scales = []
     for ev in events:
         v.script_mouse([ev])
@@ -377,4 +379,27 @@ def test_anim_mode_loops_orbiting_points(viewer):
     assert 0.0 < viewer.model.get("orbit_phase") < 1.0
     _settle(viewer)
     assert np.abs(_view(viewer, viewer.grab()).astype(int) - first).max() > 30, "the points did not move"
+    _reset(viewer)
+
+
+def test_inactive_parameters_are_greyed_out(viewer):
+    """A slider that changes nothing (cellgl.texture.params.inactive) is greyed out and takes no
+    input, as Blender's node hides its Exponent socket unless the metric is Minkowski."""
+    from cellgl.texture.params import inactive
+
+    _reset(viewer)
+    viewer.model.set("metric", "euclidean")
+    _settle(viewer)
+    assert viewer.inactive_widgets == inactive(viewer.model.recipe)
+    assert viewer.inactive_widgets["minkowski_p"] == "needs metric minkowski"
+    for name in ("c_edge", "c_smooth", "c_nsphere", "smoothness"):   # the whole combination is shown
+        assert name in viewer.widget_rects, name
+    p0, v0 = viewer.model.get("minkowski_p"), viewer.model.version
+    _drag(viewer, "minkowski_p", 0.25, 0.75)
+    assert viewer.model.get("minkowski_p") == p0 and viewer.model.version == v0, "a greyed slider moved"
+    viewer.model.set("metric", "minkowski")
+    _settle(viewer)
+    assert "minkowski_p" not in viewer.inactive_widgets
+    _drag(viewer, "minkowski_p", 0.25, 0.75)
+    assert viewer.model.get("minkowski_p") != p0, "the live slider did not move"
     _reset(viewer)

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl.gl import context
-from cellgl.texture.params import PARAMS
+from cellgl.texture.params import PARAMS, inactive
 from cellgl.recipes import list_presets, load_recipe
 from cellgl.texture.recipe import Recipe
 
@@ -82,6 +82,12 @@ class Model:
             used = set(self.recipe.names())
             return tuple(p for p in PUPS_PARAMS if p.name in used)
         return PARAMS
+
+    def inactive(self) -> dict[str, str]:
+        """``{name: what turns it on}`` of the parameters that change nothing now
+        (:func:`cellgl.texture.params.inactive`; a PUPs recipe shows only the entries its
+        pattern uses, so none)."""
+        return {} if self.is_pups else inactive(self.recipe)
 
     # ----------------------------------------------------------------------------------------
     # values

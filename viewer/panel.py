@@ -7,6 +7,11 @@ c_i row and the 4 x 4 c_ij matrix) and the colour ramp as a list of keys with co
 they are still one widget per table entry. Each widget's rectangle is recorded in
 ``viewer.widget_rects[name]`` (window pixels: x0, y0, x1, y1) so the tests can aim simulated
 mouse drags at it.
+
+A parameter that changes nothing with the current values (:func:`cellgl.texture.params.inactive`:
+``minkowski_p`` unless the metric is Minkowski, ``stretch_z`` in 2D, ...) is drawn greyed out and
+takes no input; its tooltip says what turns it on. ``viewer.inactive_widgets`` holds this
+frame's ``{name: reason}``.
 """
 
 from __future__ import annotations
@@ -37,6 +42,16 @@ def _is_log(p) -> bool:
     return p.type == "float" and p.lo is not None and p.lo > 0 and p.hi / p.lo >= 100
 
 
+def _inactive(viewer, name: str) -> str | None:
+    return getattr(viewer, "inactive_widgets", {}).get(name)
+
+
+def _tooltip(p, why: str | None, text: str) -> None:
+    """The hovered widget's tooltip (also over a greyed-out one): ``why`` first, if inactive."""
+    if imgui.is_item_hovered(imgui.HoveredFlags_.allow_when_disabled.value) and text:
+        imgui.set_tooltip(f"inactive: {why}\n{text}" if why else text)
+
+
 def param_widget(viewer, p, label: str | None = None, width: float | None = None) -> bool:
     """One widget for table entry ``p``; returns True if the value changed this frame."""
     model = viewer.model
@@ -45,7 +60,32 @@ def param_widget(viewer, p, label: str | None = None, width: float | None = None
     wid = f"{label}##{p.name}"
     if width is not None:
         imgui.set_next_item_width(width)
-    changed = False
+    why = _inactive(viewer, p.name)
+    if why:
+        imgui.begin_disabled()
+    try:
+        changed, new = _widget(p, wid, value)
+    finally:
+        if why:
+            imgui.end_disabled()
+    if changed is None:
+        return False
+    _record(viewer, p.name)
+    _tooltip(p, why, f"{p.name}: {p.doc}\n{p.range_text()}"
+             + ("\n(compile-time: recompiles the shader)" if p.compile_time else "") if p.doc else "")
+    if changed and not why:
+        try:
+            model.set(p.name, new)
+        except ValueError as exc:
+            viewer.status = str(exc)
+            return False
+        return True
+    return False
+
+
+def _widget(p, wid: str, value):
+    """The ImGui widget of one table entry: (changed, new value); (None, None) for none."""
+    changed, new = False, value
     if p.type == "float":
         lo, hi = float(p.lo), float(p.hi)
         if hi - lo > 1000 and not _is_log(p):
@@ -73,18 +113,8 @@ def param_widget(viewer, p, label: str | None = None, width: float | None = None
         new = tuple(float(v) for v in new)
     else:  # pragma: no cover - the table's types are closed
         imgui.text(f"{p.name}: {value!r}")
-        return False
-    _record(viewer, p.name)
-    if imgui.is_item_hovered() and p.doc:
-        imgui.set_item_tooltip(f"{p.name}: {p.doc}\n{p.range_text()}"
-                               + ("\n(compile-time: recompiles the shader)" if p.compile_time else ""))
-    if changed:
-        try:
-            model.set(p.name, new)
-        except ValueError as exc:
-            viewer.status = str(exc)
-            return False
-    return changed
+        return None, None
+    return changed, new
 
 
 def _coefficients(viewer) -> None:
@@ -102,20 +132,24 @@ def _coefficients(viewer) -> None:
                 imgui.same_line()
             name = PRODUCTS[i * 4 + j]
             _drag_coef(viewer, by_name[name], f"##{name}", w, f"{name} %.3g")
-    for name in ("c_noise", "range_lo", "range_hi"):
-        if name in by_name:
-            param_widget(viewer, by_name[name])
+    for p in viewer.model.params:       # c_noise, the cell features, smoothness, the range
+        if p.group == "combination" and p.name not in _STRUCTURED:
+            param_widget(viewer, p)
     if hasattr(viewer.model, "measure_range") and imgui.button("measure range"):
         viewer.model.measure_range()
 
 
 def _drag_coef(viewer, p, wid, width, fmt) -> None:
     imgui.set_next_item_width(width)
+    why = _inactive(viewer, p.name)
+    if why:
+        imgui.begin_disabled()
     changed, new = imgui.drag_float(wid, float(viewer.model.get(p.name)), 0.01, float(p.lo), float(p.hi), fmt)
+    if why:
+        imgui.end_disabled()
     _record(viewer, p.name)
-    if imgui.is_item_hovered():
-        imgui.set_item_tooltip(p.doc)
-    if changed:
+    _tooltip(p, why, p.doc)
+    if changed and not why:
         viewer.model.set(p.name, new)
 
 
@@ -234,6 +268,7 @@ def draw_panel(viewer) -> None:
              | imgui.WindowFlags_.no_collapse.value | imgui.WindowFlags_.no_title_bar.value)
     imgui.begin("cellgl", None, flags)
     imgui.push_item_width(-110)
+    viewer.inactive_widgets = viewer.model.inactive()
     _preset_picker(viewer)
     _view_section(viewer)
     _readouts(viewer)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["import_bpy", "compile_script_node", "osl_compile", "BlenderMissing"]
+__all__ = ["import_bpy", "enable_osl_compiler", "compile_script_node", "osl_compile", "BlenderMissing"]
 
 
 class BlenderMissing(ImportError):
@@ -48,9 +48,15 @@ def import_bpy():
                 sys.path.append(site)
     import addon_utils
 
-    addon_utils.enable("cycles", default_set=True, persistent=True)
+    if not addon_utils.check("cycles")[1]:      # inside Blender it is on already
+        addon_utils.enable("cycles", default_set=True, persistent=True)
     _READY = True
     return bpy
+
+
+def enable_osl_compiler():
+    """:func:`import_bpy` under the name the add-on's ``register`` uses."""
+    return import_bpy()
 
 
 def _cycles_osl():

@@ -21,6 +21,7 @@ import base64
 import io
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -32,6 +33,8 @@ from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
 from cellgl.basis.reference import max_ring_default
 from cellgl.playground import variants as V
 from cellgl.recipes import is_pups, list_presets, load_recipe, render
+from cellgl.texture.schema import RecipeError
+from cellgl import texture
 from cellgl.texture import params as P
 
 __all__ = ["build_site", "add_parser", "run_cli", "STATIC"]
@@ -107,11 +110,34 @@ def _preset_entry(r, source: str, thumbs: bool) -> dict:
             "thumb": _thumb(r) if thumbs else None}
 
 
+def playground_presets() -> list[str]:
+    """The presets the page shows: the cellular ones the snippet exporter takes."""
+    from cellgl.texture.recipe import list_presets as cellular_presets
+
+    return [n for n, _ in cellular_presets() if V.exportable(load_recipe(n)) is None]
+
+
+def _check_names(names) -> None:
+    """RecipeError for a ``--preset`` that is neither a recipe file nor a preset, naming the
+    presets the page accepts (not the PUPs ones it refuses)."""
+    from cellgl.texture.recipe import is_path
+    from cellgl.texture.schema import _suggest
+
+    known = {n for n, _ in list_presets()}
+    for name in names:
+        if not is_path(name) and name.partition(":")[0] not in known:
+            shown = repr(name) if len(name) <= 80 else f"{name[:60]!r}... ({len(name)} characters)"
+            accepted = playground_presets()
+            raise RecipeError(f"--preset {shown}: unknown preset{_suggest(name, accepted)}; accepted: a recipe "
+                              ".json file or one of: " + ", ".join(accepted))
+
+
 def _js(name: str, obj) -> str:
     return f"{name}({json.dumps(obj, separators=(',', ':'))});\n"
 
 
-def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool = True, log=None) -> dict:
+def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool = True, log=None,
+               jobs: int | None = None) -> dict:
     """Write the playground site into ``out_dir`` (created; files replaced atomically).
 
     Parameters
@@ -124,6 +150,9 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
         Render a thumbnail of each preset.
     neighbours : bool
         Ship the variants one compile-time choice away from each preset (else only its own).
+    jobs : int, optional
+        Processes exporting the variants (default: :func:`default_jobs`, the CPUs available;
+        1: in this process). The files are the same whatever the number.
 
     Returns
     -------
@@ -132,10 +161,18 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     from cellgl.io.formats import atomic_path
 
     out = Path(out_dir)
-    names = presets if presets is not None else [n for n, _ in list_presets()]
-    entries, refused, recipes = [], {}, {}
+    if presets is None:
+        names = [n for n, _ in list_presets()]
+    else:
+        names = list(dict.fromkeys(str(n) for n in presets))     # a name given twice: once
+        _check_names(names)
+    refused, recipes, sources = {}, {}, {}
     for name in names:
         r = load_recipe(name)
+        if r.name in sources:
+            raise RecipeError(f"--preset {name!r}: its recipe is named {r.name!r}, as is --preset "
+                              f"{sources[r.name]!r}'s; the page tells presets apart by name (rename one)")
+        sources[r.name] = name
         if is_pups(r):
             refused[name] = "PUPs recipe: a snippet would need the control points and their Delaunay axes as buffers"
             continue
@@ -144,31 +181,34 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
             refused[name] = why.split(": ", 1)[-1].split(";")[0]
             continue
         recipes[name] = r
-        entries.append(_preset_entry(r, str(name), thumbs))
-        if log:
-            log(f"preset {name}")
-    if not entries:
+    if not recipes:
         raise ValueError("no preset to show: " + "; ".join(f"{n}: {why}" for n, why in refused.items())
                          + " (accepted: cellular texture presets, `cellgl presets`)")
-    todo = {}
+    todo = {}           # variant key -> the first recipe that needs it (its defines: no export yet)
     for r in recipes.values():
         for n in (V.neighbours(r) if neighbours else [r]):
-            try:
-                key = V.variant_key(V.texture_program(n, uniforms=True).defines)
-            except ValueError:
-                continue
-            todo.setdefault(key, n)
+            todo.setdefault(V.variant_key(texture.defines(n)), n)
     (out / "variants").mkdir(parents=True, exist_ok=True)
     (out / "data").mkdir(parents=True, exist_ok=True)
     vids = {}
-    for key, r in todo.items():
-        vid = V.variant_id(key)
-        vids[key] = vid
-        texts = V.variant_texts(r)
-        texts["id"] = vid
-        _write(out / "variants" / f"{vid}.js", _js("cellglVariant", texts), atomic_path)
+    with _Exports(list(todo.items()), jobs) as results:
+        # the thumbnails (GL) here while the worker processes export the variants
+        entries = []
+        for name, r in recipes.items():
+            entries.append(_preset_entry(r, str(name), thumbs))
+            if log:
+                log(f"preset {name}")
+        for key, texts in results:
+            if texts is None:               # the exporter refuses this neighbour: not shipped
+                continue
+            vid = vids[key] = V.variant_id(key)
+            texts["id"] = vid
+            _write(out / "variants" / f"{vid}.js", _js("cellglVariant", texts), atomic_path)
+        if log:
+            log(f"{len(vids)} shader variants")
     site = {"version": __version__, "params": _param_table(), "presets": entries, "refused": refused,
             "variants": vids, "key_macros": list(V.KEY_MACROS), "density_frozen": list(DENSITY_FROZEN),
+            "active_when": P.ACTIVE_WHEN,
             "consts": {"max_points": MAX_POINTS, "w96": W96_DENSITY_ADJUSTMENT,
                        "max_octaves": int(math.ceil(P.PARAMS_BY_NAME["octaves"].hi)),
                        "ramp_keys": P.MAX_RAMP_KEYS, "mean_samples": MEAN_SAMPLES,
@@ -179,7 +219,49 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     _write(out / "data" / "site.js", _js("cellglSite", site), atomic_path)
     for f in ("index.html", "playground.js", "playground.css"):
         _write(out / f, (STATIC / f).read_text(encoding="utf-8"), atomic_path)
-    return {"presets": [e["name"] for e in entries], "refused": refused, "variants": len(todo)}
+    return {"presets": [e["name"] for e in entries], "refused": refused, "variants": len(vids)}
+
+
+def _variant(item):
+    """``(key, variant texts)`` of one ``(key, recipe)``; texts None if the exporter refuses it
+    (a worker process's job)."""
+    key, r = item
+    try:
+        return key, V.variant_texts(r)
+    except ValueError:
+        return key, None
+
+
+class _Exports:
+    """The variants' exports, in ``todo``'s order: in ``jobs`` worker processes (started with
+    ``spawn``, so no GL context crosses a fork; the exporter needs none), or here for one."""
+
+    def __init__(self, todo, jobs):
+        self.items = list(todo)
+        self.jobs = max(1, min(int(jobs or default_jobs()), len(self.items)))
+        self.pool = None
+
+    def __enter__(self):
+        if self.jobs == 1:
+            return map(_variant, self.items)
+        import multiprocessing
+
+        self.pool = multiprocessing.get_context("spawn").Pool(self.jobs)
+        return self.pool.imap(_variant, self.items, chunksize=1)
+
+    def __exit__(self, *exc):
+        if self.pool is not None:
+            (self.pool.close if exc[0] is None else self.pool.terminate)()
+            self.pool.join()
+        return False
+
+
+def default_jobs() -> int:
+    """Worker processes for the exports: the CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:          # macOS, Windows
+        return os.cpu_count() or 1
 
 
 def _write(path: Path, text: str, atomic_path) -> None:
@@ -203,6 +285,8 @@ def add_parser(sub):
     p.add_argument("--preset", dest="presets", action="append", default=None, metavar="NAME",
                    help="only these presets or recipe .json files (repeatable; default: every preset)")
     p.add_argument("--no-thumbnails", action="store_true", help="skip rendering the preset thumbnails")
+    p.add_argument("--jobs", "-j", type=int, default=None, metavar="N",
+                   help="processes exporting the shader variants (default: the CPUs available)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress lines")
     return p
 
@@ -214,7 +298,9 @@ def run_cli(args) -> int:
     if out.exists() and not out.is_dir():
         raise ValueError(f"--output {str(out)!r} exists and is not a directory")
     log = None if args.quiet else (lambda s: print(s, file=sys.stderr))
-    res = build_site(out, args.presets, thumbs=not args.no_thumbnails, log=log)
+    if args.jobs is not None and args.jobs < 1:
+        raise ValueError(f"--jobs {args.jobs}: accepted: 1 or more processes")
+    res = build_site(out, args.presets, thumbs=not args.no_thumbnails, log=log, jobs=args.jobs)
     if not args.quiet:
         for name, why in res["refused"].items():
             print(f"skipped {name}: {why}", file=sys.stderr)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from cellgl.pups.points import DEFAULT_DOMAIN, _check_domain, _check_positive, _rng
 
@@ -319,6 +318,8 @@ def space_giraffe(centres, *, n_range=(10, 20), domain=DEFAULT_DOMAIN, periodic=
     lo, hi = (int(v) for v in n_range)
     if not 3 <= lo <= hi:
         raise ValueError(f"n_range must satisfy 3 <= lo <= hi, got {n_range!r}")
+    from scipy.spatial import cKDTree     # here: `import cellgl` needs no SciPy (Blender's extension)
+
     rng = _rng(seed)
     x0, y0, x1, y1 = domain
     if periodic:

@@ -6,7 +6,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import Delaunay
 
 from cellgl.pups.points import PupsPoints, _check_positive
 
@@ -52,6 +51,8 @@ _SHIFTS = np.array([(0, 0), (-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1)
 
 def _delaunay_edges(points: PupsPoints):
     """Return (owner, neighbour, axis vector) arrays of every directed Delaunay edge."""
+    from scipy.spatial import Delaunay     # here: `import cellgl` needs no SciPy (Blender's extension)
+
     pos = points.positions
     n = pos.shape[0]
     if points.periodic:

@@ -30,7 +30,8 @@ from types import MappingProxyType
 import numpy as np
 
 from cellgl.texture.params import Param
-from cellgl.texture.schema import VERSION, RecipeError, _coerce, _err, _suggest, parse_value, read_json
+from cellgl.texture.schema import (VERSION, RecipeError, _coerce, _err, _suggest, check_name_doc, parse_value,
+                                   read_json)
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
            "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for",
@@ -200,8 +201,7 @@ class PupsRecipe:
                                   f"{', '.join(used)}")
         self._values = {k: vals[k] for k in used if k != "image"}
         self.image = image
-        self.name = str(name)
-        self.doc = str(doc)
+        self.name, self.doc = check_name_doc(str(name), str(doc))
         if isinstance(outputs, str):
             outputs = [outputs]
         if not isinstance(outputs, (list, tuple)) or not outputs:

@@ -23,10 +23,11 @@ encoding per octave, :mod:`cellgl.basis.density`; ``orbit_phase``: the integer `
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 __all__ = ["Param", "PARAMS", "PARAMS_BY_NAME", "GROUPS", "LINEAR", "PRODUCTS", "N_LINEAR",
-           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES", "DENSITY_MAPS"]
+           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES", "DENSITY_MAPS", "ACTIVE_WHEN", "inactive"]
 
 N_LINEAR = 8            #: linear coefficients c1..c8 (F1..F8)
 N_PRODUCT = 4           #: product coefficients c_ij for i, j <= 4
@@ -232,6 +233,108 @@ assert all(p.group in GROUPS for p in PARAMS)
 #: the uniform a derived parameter reaches the shader through (default: the density map's)
 _DERIVED_UNIFORM = {"orbit_phase": "u_orbit_turn", "stretch_x": "u_axis_scale", "stretch_y": "u_axis_scale",
                     "stretch_z": "u_axis_scale"}
+
+# ---- when a parameter takes effect (the viewer, the playground and the Blender panel grey out
+# the others, as Blender's node hides its Exponent socket unless the metric is Minkowski)
+
+def _in(name: str, *values) -> tuple:
+    return ((name, "in", values),)
+
+
+def _nonzero(*names: str) -> tuple:
+    return tuple((n, "!=", 0) for n in names)
+
+
+#: name -> the requirements under which the parameter changes the texture. Each requirement is a
+#: tuple of alternatives ``(name, op, value)``, one of which must hold (``op``: ``"in"`` (a
+#: tuple of values), ``"not in"``, ``"!="``, ``">"`` or ``">="``); every requirement must hold.
+#: A parameter not named here always takes effect. Every ``c_i`` and ``c_ij`` does: a non-zero
+#: one raises ``CELL_N`` itself (:func:`cellgl.texture.recipe.needed_n`). The page ships this
+#: table as data (``cellgl.playground``), so the rules are written once.
+ACTIVE_WHEN: dict[str, tuple] = {
+    "minkowski_p": (_in("metric", "minkowski"),),
+    "density": (_in("distribution", "poisson"), _in("density_map", "none")),
+    "density_map": (_in("distribution", "poisson"),),
+    **{n: (_in("distribution", "poisson"), (("density_map", "not in", ("none",)),))
+       for n in ("density_min", "density_max")},
+    **{n: (_in("distribution", "poisson"), _in("density_map", "ramp_x", "ramp_y"))
+       for n in ("density_start", "density_end")},
+    **{n: (_in("distribution", "poisson"), _in("density_map", "radial"))
+       for n in ("density_center_x", "density_center_y", "density_radius")},
+    "jitter": (_in("distribution", "jitter", "blender"),),
+    "min_points": (_in("distribution", "poisson"),),
+    "max_points": (_in("distribution", "poisson"),),
+    "seed": ((("distribution", "not in", ("blender",)),),),
+    "stretch_z": ((("dimension", ">=", 3),),),
+    "orbit_phase": ((("orbit_radius", ">", 0),),),
+    "c_edge": (_in("metric", "euclidean"),),
+    "c_nsphere": (_in("metric", "euclidean"),),
+    "smoothness": (_nonzero("c_smooth", "cell_mix"),),
+    "smooth": (_nonzero("c_smooth", "cell_mix"), (("smoothness", ">", 0),)),
+    "octaves": ((("fractal", "not in", ("none",)),),),
+    "lacunarity": ((("fractal", "not in", ("none",)),),),
+    "gain": (_in("fractal", "sum", "qin", "qin_cube"),),
+    "offset_z": ((("dimension", ">=", 3),),),
+    "time": (_in("dimension", 4),),
+    "warp_frequency": (_nonzero("warp_amount"),),
+    "warp_octaves": (_nonzero("warp_amount"),),
+    "noise_frequency": (_nonzero("c_noise", "noise_color"),),
+    "noise_octaves": (_nonzero("noise_color"),),
+    "cell_color": ((("cell_mix", ">", 0),),),
+}
+
+
+def _holds(v, name: str, op: str, arg) -> bool:
+    x = v[name] if name in v else PARAMS_BY_NAME[name].default
+    if op == "in":
+        return x in arg
+    if op == "not in":
+        return x not in arg
+    if op == "!=":
+        return x != arg
+    if op == ">":
+        return x > arg
+    if op == ">=":
+        return x >= arg
+    raise ValueError(f"ACTIVE_WHEN: unknown operator {op!r}; accepted: in, not in, !=, >, >=")
+
+
+def _say(name: str, op: str, arg) -> str:
+    if op == "in":
+        return f"{name} {' or '.join(str(a) for a in arg)}"
+    if op == "not in":
+        return f"{name} other than {' or '.join(str(a) for a in arg)}"
+    if op == "!=" and arg == 0:
+        return f"{name} not 0"
+    if op == ">=":
+        return f"{name} {arg} or more"
+    return f"{name} {op} {arg}"
+
+
+def inactive(values) -> dict[str, str]:
+    """The parameters that change nothing with these values, each with what turns it on.
+
+    Parameters
+    ----------
+    values : mapping or Recipe
+        Parameter values by name (a recipe's ``values``, or a recipe itself); names left out
+        take their table default.
+
+    Returns
+    -------
+    dict
+        ``{name: reason}`` for every inactive parameter, in table order; ``reason`` reads
+        ``"needs metric minkowski"``: the requirements of :data:`ACTIVE_WHEN` that do not
+        hold, joined by ", and".
+    """
+    v = values if isinstance(values, Mapping) else values.values
+    out = {}
+    for name, reqs in ACTIVE_WHEN.items():
+        unmet = [req for req in reqs if not any(_holds(v, *alt) for alt in req)]
+        if unmet:
+            out[name] = "needs " + ", and ".join(" or ".join(_say(*alt) for alt in req) for req in unmet)
+    return {p.name: out[p.name] for p in PARAMS if p.name in out}
+
 
 #: the default ramp: black to white
 DEFAULT_RAMP = ((0.0, 0.0, 0.0, 0.0), (1.0, 1.0, 1.0, 1.0))

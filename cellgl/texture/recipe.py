@@ -34,6 +34,7 @@ from pathlib import Path
 from types import MappingProxyType
 
 from cellgl.texture import domain
+from cellgl.texture.schema import check_name_doc
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
                                    check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
@@ -126,8 +127,7 @@ class Recipe:
             if k not in PARAMS_BY_NAME:
                 raise RecipeError(f"{k}: unknown parameter{_suggest(k, PARAMS_BY_NAME)}")
             vals[k] = _coerce(PARAMS_BY_NAME[k], v, f"{PARAMS_BY_NAME[k].group}.{k}")
-        self.name = str(name)
-        self.doc = str(doc)
+        self.name, self.doc = check_name_doc(str(name), str(doc))
         self._values = vals
         self.ramp = _ramp(ramp, "color.ramp")
         self.outputs = _outputs(outputs, "outputs")

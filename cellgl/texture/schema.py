@@ -12,7 +12,8 @@ import numbers
 
 from cellgl.texture.params import Param
 
-__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "parse_value", "read_json"]
+__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "check_name_doc", "parse_value", "read_json",
+           "MAX_NAME", "MAX_DOC"]
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
@@ -64,6 +65,31 @@ def read_json(path) -> object:
         raise RecipeError(f"{path}: JSON nested too deeply (a recipe is a few levels deep)") from None
     except RecipeError as exc:
         raise RecipeError(f"{path}: {exc}") from None
+
+
+#: longest recipe name (it names files, shader functions and page entries; presets use <= 24)
+MAX_NAME = 64
+#: longest recipe doc string, in characters (it is copied into every snippet's header)
+MAX_DOC = 4096
+
+
+def check_name_doc(name, doc) -> tuple[str, str]:
+    """A recipe's ``name`` and ``doc``, checked: strings, the name one line of at most
+    :data:`MAX_NAME` characters, the doc at most :data:`MAX_DOC`; RecipeError otherwise."""
+    for key, value in (("name", name), ("doc", doc)):
+        if not isinstance(value, str):
+            raise _err(key, value, "a string", "expected a string, got")
+    if len(name) > MAX_NAME:
+        raise RecipeError(f"name: {len(name)} characters ({_shown(name[:24])}...); accepted: at most "
+                          f"{MAX_NAME} characters")
+    bad = next((c for c in name if ord(c) < 32 or 127 <= ord(c) < 160), None)
+    if bad is not None:
+        raise RecipeError(f"name: {_shown(name)} holds the control character {bad!r}; accepted: one line "
+                          f"of at most {MAX_NAME} printable characters")
+    if len(doc) > MAX_DOC:
+        raise RecipeError(f"doc: {len(doc)} characters ({_shown(doc[:24])}...); accepted: at most "
+                          f"{MAX_DOC} characters")
+    return name, doc
 
 
 def _shown(value) -> str:

@@ -106,6 +106,35 @@
     for (let i = 1; i <= 4; i++) for (let j = 1; j <= 4; j++) if (v["c" + i + j] !== 0) n = Math.max(n, i, j);
     return n;
   }
+  // cellgl.texture.params.inactive: which parameters change nothing now, and what turns each on.
+  // The rules are data (SITE.active_when: cellgl.texture.params.ACTIVE_WHEN); this evaluates
+  // them and words the reasons as the Python does (held to it by tests/test_playground.py).
+  function holds(v, name, op, arg) {
+    const x = name in v ? v[name] : P[name].default;
+    if (op === "in") return arg.includes(x);
+    if (op === "not in") return !arg.includes(x);
+    if (op === "!=") return x !== arg;
+    if (op === ">") return x > arg;
+    if (op === ">=") return x >= arg;
+    throw new Error("active_when: unknown operator " + op);
+  }
+  function say(name, op, arg) {
+    if (op === "in") return name + " " + arg.join(" or ");
+    if (op === "not in") return name + " other than " + arg.join(" or ");
+    if (op === "!=" && arg === 0) return name + " not 0";
+    if (op === ">=") return name + " " + arg + " or more";
+    return name + " " + op + " " + arg;
+  }
+  function inactive(v) {
+    const out = {};
+    SITE.params.forEach((p) => {
+      const reqs = SITE.active_when[p.name];
+      if (!reqs) return;
+      const unmet = reqs.filter((req) => !req.some((a) => holds(v, a[0], a[1], a[2])));
+      if (unmet.length) out[p.name] = "needs " + unmet.map((req) => req.map((a) => say(a[0], a[1], a[2])).join(" or ")).join(", and ");
+    });
+    return out;
+  }
   // cellgl.texture.shader.defines: the macros that pick a variant (cellgl.playground.variants.KEY_MACROS)
   function variantKey(v) {
     const as = axisScale(v).slice(0, v.dimension);
@@ -649,7 +678,8 @@ void main()
       }
       const row = document.createElement("div");
       row.className = "param";
-      row.title = p.doc + (p.compile_time ? " (compile-time: switches the shader variant)" : "");
+      row.dataset.doc = p.doc + (p.compile_time ? " (compile-time: switches the shader variant)" : "");
+      row.title = row.dataset.doc;
       const label = `<label for="p-${p.name}">${p.name}${p.compile_time ? ' <i class="ct">#</i>' : ""}</label>`;
       if (p.type === "enum" || p.type === "bool" || p.name === "dimension") {
         const opts = p.type === "enum" ? p.choices : p.type === "bool" ? ["false", "true"] : ["2", "3", "4"];
@@ -684,7 +714,19 @@ void main()
   function setValue(name, x, from) {
     state.values[name] = x;
     syncControl(name, from);
+    syncInactive();
     requestRender();
+  }
+  // grey out (and disable) what changes nothing now, as Blender's node hides such sockets; the
+  // tooltip says what turns it on
+  function syncInactive() {
+    const off = inactive(state.values);
+    Object.keys(controls).forEach((name) => {
+      const row = controls[name], why = off[name];
+      row.classList.toggle("inactive", !!why);
+      row.title = why ? "inactive: " + why + "\n" + row.dataset.doc : row.dataset.doc;
+      row.querySelectorAll("input, select").forEach((el) => { el.disabled = frozen(name) || !!why; });
+    });
   }
   function syncControl(name, from) {
     const row = controls[name], p = P[name], x = state.values[name];
@@ -705,6 +747,7 @@ void main()
     $("preset-doc").textContent = PRESETS[name].doc;
     document.querySelectorAll("#gallery .thumb").forEach((t) => t.classList.toggle("on", t.dataset.name === name));
     Object.keys(controls).forEach((n) => syncControl(n));
+    syncInactive();
     if (history.replaceState) {
       const q = new URLSearchParams(location.search);
       q.set("preset", name);
@@ -799,6 +842,7 @@ void main()
                sets: setList(state.shown || state.values), command: bakeCommand(state.shown || state.values),
                rendered: state.rendered || 0, problems: state.problems || [] };
     },
+    inactive: (values) => inactive(Object.assign({}, state.values, values || {})),
     // RGBA bytes of the canvas, rows from the top, base64
     pixels() {
       const n = canvas.width, h = canvas.height;
