@@ -1,0 +1,154 @@
+"""The cellular basis on the fragment path (``shaders/cellular.frag``; :mod:`cellgl.gl.dispatch`).
+
+:mod:`cellgl.basis.gpu` hands its calls here where the context has no compute shaders (or
+``CELL_PATH=fragment``). The same ``shaders/lib`` code runs once per fragment, and gives the same
+bits as ``cellular.comp``:
+
+* **Positions.** cellular.comp splits each position into an integer cell and a float32 fraction in
+  float64; OpenGL 3.3 has no doubles, so the same split runs here in NumPy (IEEE float64, the same
+  operations in the same order) and the cells and fractions go in as textures. A grid is
+  separable: each axis's cells and fractions are one table (``origin + spacing * index``, as the
+  compute entry computes it), looked up per sample.
+* **Outputs.** Each sample's rows (F, id, delta, grad, the feature record) are spread over render
+  targets of 4 channels (:func:`cellgl.gl.dispatch.slots`), location 0 being the exact flag;
+  where they exceed the draw buffers, several draws each write a part and every draw's flag counts.
+* **Exactness.** The loop budget and the canary of cellular.comp are the same code; positions
+  beyond +-2^30 cells are searched at 0 and flagged, as there.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from cellgl.gl import context
+from cellgl.gl import dispatch
+
+#: samples per upload and read-back (a multiple of dispatch.WIDTH)
+CHUNK = 1 << 19
+_COORD_LIMIT = 1073741824.0
+
+
+def split_points(pts: np.ndarray, scale: float, dim: int):
+    """cellular.comp's split of positions ``pts`` (N, dim) float64 times ``scale``: (cell int32
+    (N, 4), fraction float32 (N, 4), in range (N,) bool)."""
+    n = len(pts)
+    cell = np.zeros((n, 4), np.int32)
+    frac = np.zeros((n, 4), np.float32)
+    x = pts[:, :dim] * np.float64(scale)
+    with np.errstate(invalid="ignore"):
+        ok = np.abs(x) < _COORD_LIMIT
+    x = np.where(ok, x, 0.0)
+    fl = np.floor(x)
+    fr = (x - fl).astype(np.float32)
+    up = fr >= 1.0
+    cell[:, :dim] = fl.astype(np.int32) + up
+    frac[:, :dim] = np.where(up, np.float32(0.0), fr)
+    return cell, frac, ok.all(axis=1)
+
+
+def axis_tables(shape_xyzw, origin_cell, origin_frac, spacing):
+    """Per axis, the integer cell and float32 fraction of every grid index (cellular.comp's
+    ``u_origin_frac + u_spacing * idx`` in float64): (cells int32, fractions float32, offsets (4,))
+    with axis a's entries from offsets[a]."""
+    cells, fracs, offsets, at = [], [], [], 0
+    for a in range(4):
+        idx = np.arange(int(shape_xyzw[a]), dtype=np.float64)
+        pos = np.float64(origin_frac[a]) + np.float64(spacing[a]) * idx
+        fl = np.floor(pos)
+        fr = (pos - fl).astype(np.float32)
+        up = fr >= 1.0
+        cells.append((int(origin_cell[a]) + fl.astype(np.int64) + up).astype(np.int32))
+        fracs.append(np.where(up, np.float32(0.0), fr))
+        offsets.append(at)
+        at += len(idx)
+    return np.concatenate(cells), np.concatenate(fracs), offsets
+
+
+def _layout(outputs, n: int, dim: int, stride: int):
+    """(name, kind, components per sample) of each output buffer."""
+    size = {"F": n, "id": n, "delta": n * dim, "grad": n * dim, "features": stride}
+    return [(name, "u" if name == "id" else "f", size[name]) for name in outputs]
+
+
+def _passes(layout, ctx):
+    """The draws: each a list of slots (name, kind, first component), at most draw buffers - 1."""
+    per = dispatch.draw_buffers(ctx) - 1
+    all_slots = dispatch.slots(layout)
+    return [all_slots[i:i + per] for i in range(0, len(all_slots), per)]
+
+
+def _pass_defines(slots, layout) -> dict:
+    """CELL_FRAG_DECL and CELL_FRAG_WRITE of one draw."""
+    length = {name: size for name, _, size in layout}
+    decl = ["layout(location = 0) out uint o_exact;"]
+    write = []
+    for loc, (name, kind, first) in enumerate(slots, start=1):
+        vec = "uvec4" if kind == "u" else "vec4"
+        zero = "0u" if kind == "u" else "0.0"
+        decl.append(f"layout(location = {loc}) out {vec} o_{loc};")
+        comps = [f"row_{name}[{first + c}]" if first + c < length[name] else zero for c in range(4)]
+        write.append(f"o_{loc} = {vec}({', '.join(comps)});")
+    return {"CELL_FRAG_DECL": " ".join(decl), "CELL_FRAG_WRITE": " ".join(write)}
+
+
+def _set(prog, name, value):
+    if name in prog:
+        prog[name].value = value
+
+
+def run(defines: dict, set_params, count: int, outputs, n: int, dim: int, stride: int,
+        out: dict, exact: np.ndarray, inputs) -> None:
+    """Evaluate ``count`` samples into ``out`` (arrays as cellgl.basis.gpu._alloc) and ``exact``.
+    ``set_params(prog)`` sets the parameter uniforms; ``inputs(prog, start, m)`` uploads chunk
+    ``[start, start + m)``'s positions (and returns its in-range flags or None)."""
+    ctx = context.get_context()
+    layout = _layout(outputs, n, dim, stride)
+    passes = _passes(layout, ctx) or [[]]
+    progs = []
+    for slots in passes:
+        d = dict(defines)
+        d.update(_pass_defines(slots, layout))
+        prog = dispatch.program("cellular.frag", d)
+        set_params(prog)
+        _set(prog, "u_loop_canary", 2)
+        progs.append(prog)
+    for start in range(0, count, CHUNK):
+        m = min(CHUNK, count - start)
+        ok = None
+        for prog, slots in zip(progs, passes):
+            ok = inputs(prog, start, m)
+            formats = [(1, "u4")] + [(4, "u4" if kind == "u" else "f4") for _, kind, _ in slots]
+            res = dispatch.draw(prog, m, formats, ctx)
+            exact[start:start + m] &= res[0][:, 0] != 0
+            for (name, _, first), data in zip(slots, res[1:]):
+                dest = out[name][start:start + m].reshape(m, -1)
+                k = min(4, dest.shape[1] - first)
+                dest[:, first:first + k] = data[:, :k].view(dest.dtype)
+        if ok is not None:
+            exact[start:start + m] &= ok
+
+
+def points_inputs(pts: np.ndarray, scale: float, dim: int):
+    """``inputs`` of :func:`run` for sample positions ``pts`` (N, dim) float64."""
+    def inputs(prog, start, m):
+        cell, frac, ok = split_points(pts[start:start + m], scale, dim)
+        ctx = context.get_context()
+        dispatch.input_texture(ctx, 0, cell)
+        dispatch.input_texture(ctx, 1, frac)
+        return ok
+    return inputs
+
+
+def grid_inputs(shape_xyzw, origin_cell, origin_frac, spacing):
+    """``inputs`` of :func:`run` for a grid (as cellgl.basis.gpu.search_grid)."""
+    cells, fracs, offsets = axis_tables(shape_xyzw, origin_cell, origin_frac, spacing)
+    width = 1 << dispatch.STORAGE_ROW_BITS
+
+    def inputs(prog, start, m):
+        ctx = context.get_context()
+        dispatch.input_texture(ctx, 0, cells.reshape(-1, 1), width)
+        dispatch.input_texture(ctx, 1, fracs.reshape(-1, 1), width)
+        _set(prog, "u_grid", tuple(int(v) for v in shape_xyzw))
+        _set(prog, "u_axis_offset", tuple(offsets))
+        _set(prog, "u_first", int(start))
+        return None
+    return inputs
