@@ -103,8 +103,12 @@ def _gpu_buffers(packed: PupsPacked):
 
 
 def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    from cellgl.gl import dispatch
+
     t0 = time.perf_counter()
     ctx = _context()
+    if dispatch.path(ctx) == "fragment":
+        return _evaluate_samples(packed, mode, epsilon, timings)
     c = packed.values.shape[1]
     labels = mode == PupsMode.LABEL
     defines = {"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)}
@@ -136,6 +140,38 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
         b.release()
     t4 = time.perf_counter()
     timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
+    return vals, labs
+
+
+def _evaluate_samples(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    """pups.comp's work on the fragment path (``shaders/pups_samples.frag``, :mod:`cellgl.gl.dispatch`):
+    the candidate grid in RGBA32UI textures, pixel s of the image sample s of the draws. The
+    lanes of a SIMD vector may lie in different grid cells (no work groups): the loop budget is
+    checked for that."""
+    from cellgl.gl import dispatch
+
+    t0 = time.perf_counter()
+    ctx = _context()
+    c = packed.values.shape[1]
+    _check_budget(packed, False)
+    prog = dispatch.program("pups_samples.frag", {"CELL_PUPS_MODE": int(mode)})
+    cells, rec = _cell_stream(packed)
+    t1 = time.perf_counter()
+    width = 1 << dispatch.STORAGE_ROW_BITS
+    for unit, words in ((0, cells), (1, rec)):
+        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
+        dispatch.input_texture(ctx, unit, words if len(words) else np.zeros((1, 4), np.uint32), width)
+    w, h = packed.width, packed.height
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]), ("u_epsilon", epsilon)):
+        if name in prog:
+            prog[name] = v
+    t2 = time.perf_counter()
+    (out,) = dispatch.draw(prog, w * h, [(4, "f4")], ctx)
+    t3 = time.perf_counter()
+    vals = out[:, :c].reshape(h, w, c).copy()
+    labs = out[:, 3].view(np.int32).reshape(h, w).copy() if mode == PupsMode.LABEL else None
+    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=time.perf_counter() - t3)
     return vals, labs
 
 
