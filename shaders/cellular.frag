@@ -71,6 +71,15 @@ uniform sampler2D u_in1;
 #endif
 
 uniform int u_loop_canary;     // 2: the driver's loop limit (cellular.comp)
+#ifndef CELL_LOOP_PROBE
+#define CELL_LOOP_PROBE 0
+#endif
+#if CELL_LOOP_PROBE
+// Measurement build (cellgl.basis.gpu.loop_probe), as cellular.comp's: the search's own count
+// and what the driver's limiter had left, at location CELL_FRAG_PROBE_LOC.
+uniform int u_loop_probe;
+layout(location = CELL_FRAG_PROBE_LOC) out ivec4 o_probe;
+#endif
 
 CELL_FRAG_DECL
 
@@ -137,6 +146,7 @@ void main()
 #if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE && defined(CELL_FEATURE_PASS)
     CellFeatures x = cell_poly_features(cell, frac, p, u_smoothness);
     bool exact = x.exact;
+    int loops = x.loops;
 #else
     CellResult r = cell_search(cell, frac, p);
     float row_F[CELL_N];
@@ -164,9 +174,11 @@ void main()
 #endif
     }
     bool exact = r.exact;
+    int loops = r.loops;
 #if CELL_FEATURES
     CellFeatures x = cell_features(cell, frac, p, r, u_smoothness);
     exact = x.exact;
+    loops = x.loops;
 #endif
 #endif
 #if CELL_FEATURES
@@ -204,5 +216,12 @@ void main()
     }
     exact = exact && canary == u_loop_canary;
     o_exact = exact ? 1u : 0u;
+#if CELL_LOOP_PROBE
+    int left = 0;
+    for (int k = 0; k < u_loop_probe; k++) {
+        left += 1;
+    }
+    o_probe = ivec4(loops, left, 0, 0);
+#endif
     CELL_FRAG_WRITE
 }

@@ -365,9 +365,19 @@ def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 
     end), and whether the sample was flagged inexact. ``budget`` overrides ``CELL_LOOP_BUDGET``."""
     ctx = context.get_context()
     d = defines_for(p, n, outputs, grid=False, smooth=smooth)
-    d["CELL_LOOP_PROBE"] = 1
     if budget is not None:
         d["CELL_LOOP_BUDGET"] = int(budget)
+    if dispatch.path(ctx) == "fragment":
+        stride, outputs = _features.stride(outputs), _buffers(outputs)
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+        N = len(pts)
+        out = _alloc(N, n, p.dim, outputs, stride)
+        exact = np.ones(N, dtype=bool)
+        raw = np.zeros((N, 2), np.int64)
+        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
+                         gpu_fragment.points_inputs(pts, p.scale, p.dim), probe=raw)
+        return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], ~exact
+    d["CELL_LOOP_PROBE"] = 1
     prog = context.compute_program("cellular.comp", d)
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))

@@ -96,28 +96,39 @@ def _set(prog, name, value):
 
 
 def run(defines: dict, set_params, count: int, outputs, n: int, dim: int, stride: int,
-        out: dict, exact: np.ndarray, inputs) -> None:
+        out: dict, exact: np.ndarray, inputs, probe: np.ndarray | None = None) -> None:
     """Evaluate ``count`` samples into ``out`` (arrays as cellgl.basis.gpu._alloc) and ``exact``.
     ``set_params(prog)`` sets the parameter uniforms; ``inputs(prog, start, m)`` uploads chunk
-    ``[start, start + m)``'s positions (and returns its in-range flags or None)."""
+    ``[start, start + m)``'s positions (and returns its in-range flags or None). ``probe``
+    (count, 2) int: the measurement build (``CELL_LOOP_PROBE``): the search's own loop count and
+    what the driver's limiter had left, from the first draw."""
     ctx = context.get_context()
     layout = _layout(outputs, n, dim, stride)
     passes = _passes(layout, ctx) or [[]]
+    if probe is not None and len(passes[0]) == dispatch.draw_buffers(ctx) - 1:
+        passes = [passes[0][:-1], passes[0][-1:]] + passes[1:]   # room for the probe's target
     progs = []
-    for slots in passes:
+    for i, slots in enumerate(passes):
         d = dict(defines)
         d.update(_pass_defines(slots, layout))
+        if probe is not None and i == 0:
+            d.update(CELL_LOOP_PROBE=1, CELL_FRAG_PROBE_LOC=len(slots) + 1)
         prog = dispatch.program("cellular.frag", d)
         set_params(prog)
         _set(prog, "u_loop_canary", 2)
+        _set(prog, "u_loop_probe", 1 << 30)
         progs.append(prog)
     for start in range(0, count, CHUNK):
         m = min(CHUNK, count - start)
         ok = None
-        for prog, slots in zip(progs, passes):
+        for i, (prog, slots) in enumerate(zip(progs, passes)):
             ok = inputs(prog, start, m)
             formats = [(1, "u4")] + [(4, "u4" if kind == "u" else "f4") for _, kind, _ in slots]
+            if probe is not None and i == 0:
+                formats.append((4, "i4"))
             res = dispatch.draw(prog, m, formats, ctx)
+            if probe is not None and i == 0:
+                probe[start:start + m] = res.pop()[:, :2]
             exact[start:start + m] &= res[0][:, 0] != 0
             for (name, _, first), data in zip(slots, res[1:]):
                 dest = out[name][start:start + m].reshape(m, -1)
