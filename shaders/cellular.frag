@@ -63,6 +63,8 @@ uniform isampler2D u_in0;      // axis tables: integer cell
 uniform sampler2D u_in1;       // axis tables: float32 fraction
 uniform uvec4 u_grid;          // samples along x, y, z, w
 uniform ivec4 u_axis_offset;
+uniform ivec4 u_axis_cell;     // index 0 of each axis's table
+uniform vec4 u_axis_frac;
 uniform uint u_first;
 #else
 // Sample i at texel (i mod width, i / width): its integer cell and float32 fraction.
@@ -104,15 +106,17 @@ void main()
     uint rest = s / u_grid.x;
     uint r2 = rest / u_grid.y;
     ivec4 idx = ivec4(int(s - rest * u_grid.x), int(rest - r2 * u_grid.y), int(r2 % u_grid.z), int(r2 / u_grid.z));
-    for (int a = 0; a < 4; a++) {
-        int k = u_axis_offset[a] + idx[a];
-        ivec2 t = CELL_STORAGE_TEXEL(k);
+    cell = u_axis_cell;            // the axes past CELL_DIM (one sample long)
+    frac = u_axis_frac;
+    for (int a = 0; a < CELL_DIM; a++) {
+        ivec2 t = CELL_STORAGE_TEXEL(u_axis_offset[a] + idx[a]);
         cell[a] = texelFetch(u_in0, t, 0).r;
         frac[a] = texelFetch(u_in1, t, 0).r;
     }
 #else
-    cell = texelFetch(u_in0, xy, 0);
-    frac = texelFetch(u_in1, xy, 0);
+    // CELL_DIM components per texel (a missing alpha reads 1): the rest are 0
+    cell = texelFetch(u_in0, xy, 0) * ivec4(greaterThan(ivec4(CELL_DIM), ivec4(0, 1, 2, 3)));
+    frac = texelFetch(u_in1, xy, 0) * vec4(greaterThan(ivec4(CELL_DIM), ivec4(0, 1, 2, 3)));
 #endif
 
     CellParams p;

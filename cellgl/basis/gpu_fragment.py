@@ -29,20 +29,26 @@ _COORD_LIMIT = 1073741824.0
 
 def split_points(pts: np.ndarray, scale: float, dim: int):
     """cellular.comp's split of positions ``pts`` (N, dim) float64 times ``scale``: (cell int32
-    (N, 4), fraction float32 (N, 4), in range (N,) bool)."""
-    n = len(pts)
-    cell = np.zeros((n, 4), np.int32)
-    frac = np.zeros((n, 4), np.float32)
+    (N, dim), fraction float32 (N, dim), in range (N,) bool). Out of range (|x| >= 2^30 cells, or
+    NaN): searched at 0 and flagged, as there."""
     x = pts[:, :dim] * np.float64(scale)
-    with np.errstate(invalid="ignore"):
-        ok = np.abs(x) < _COORD_LIMIT
-    x = np.where(ok, x, 0.0)
+    lo, hi = (x.min(), x.max()) if x.size else (0.0, 0.0)
+    if -_COORD_LIMIT < lo and hi < _COORD_LIMIT:        # False for NaN: the careful way below
+        ok = np.ones(len(x), bool)
+    else:
+        with np.errstate(invalid="ignore"):
+            inside = np.abs(x) < _COORD_LIMIT
+        x[~inside] = 0.0
+        ok = inside.all(axis=1)
     fl = np.floor(x)
-    fr = (x - fl).astype(np.float32)
-    up = fr >= 1.0
-    cell[:, :dim] = fl.astype(np.int32) + up
-    frac[:, :dim] = np.where(up, np.float32(0.0), fr)
-    return cell, frac, ok.all(axis=1)
+    np.subtract(x, fl, out=x)
+    frac = x.astype(np.float32)                         # float64 -> float32, to nearest
+    cell = fl.astype(np.int32)
+    up = frac >= 1.0                                    # a fraction just below 1 rounds up to 1
+    if up.any():
+        cell += up
+        frac[up] = 0.0
+    return cell, frac, ok
 
 
 def axis_tables(shape_xyzw, origin_cell, origin_frac, spacing):
@@ -160,6 +166,8 @@ def grid_inputs(shape_xyzw, origin_cell, origin_frac, spacing):
         dispatch.input_texture(ctx, 1, fracs.reshape(-1, 1), width)
         _set(prog, "u_grid", tuple(int(v) for v in shape_xyzw))
         _set(prog, "u_axis_offset", tuple(offsets))
+        _set(prog, "u_axis_cell", tuple(int(cells[o]) for o in offsets))
+        _set(prog, "u_axis_frac", tuple(float(fracs[o]) for o in offsets))
         _set(prog, "u_first", int(start))
         return None
     return inputs
