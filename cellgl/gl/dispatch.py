@@ -31,10 +31,10 @@ __all__ = ["WIDTH", "TILE_SAMPLES", "STORAGE_ROW_BITS", "path", "program", "bind
 
 #: width of the fragment path's render targets, in samples
 WIDTH = 1024
-#: most samples one draw covers (docs/fragment-path.md: 256 rows of WIDTH). The heaviest pass
-#: measured here (a 3D F4 with every feature) costs ~20 us per sample on two llvmpipe cores,
-#: ~5 s for a tile; a discrete GPU runs it ~1000x faster (~5 ms), an integrated one ~100x (~50 ms):
-#: far under the ~2 s after which Windows (TDR) and macOS reset the GPU.
+#: most samples one draw covers (docs/fragment-path.md, "Tiles"): 256 rows of WIDTH. The loop
+#: budget bounds a sample's work (~6144 cell visits): the worst tile is ~20 ms on a discrete GPU,
+#: ~200 ms on a small integrated one, 10x under the ~2 s after which Windows (TDR) and macOS
+#: reset the GPU.
 TILE_SAMPLES = 1 << 18
 #: storage textures are 2^STORAGE_ROW_BITS words wide (shaders/storage.glsl)
 STORAGE_ROW_BITS = 12
