@@ -344,3 +344,16 @@ def test_renders_without_compute_equal_the_compute_path(compute, monkeypatch, tm
     assert sorted(got) == sorted(want)
     for k in want:
         assert np.asarray(want[k]).tobytes() == got[k].tobytes(), k
+
+
+def test_cell_counts_same_bits(compute, monkeypatch):
+    """gpu.cell_counts (the density tests' GPU twin) on both paths, with a density image."""
+    dm = cellgl.DensityMap("image", 0.5, 12.0, image=np.random.default_rng(4).uniform(0, 1, (19, 31)),
+                           rect=(-3.3, -4.0, 11.7, 9.1))
+    p = core.make_params(2, density_map=dm, min_points=0, max_points=16)
+    cells = np.zeros((3000, 4), np.int64)
+    cells[:, :2] = np.random.default_rng(5).integers(-40, 40, (3000, 2))
+    a, b = _both(monkeypatch, lambda: gpu.cell_counts(cells, p))
+    for x, y in zip(a, b):
+        np.testing.assert_array_equal(x, y)
+    assert len(np.unique(a[1])) >= 2

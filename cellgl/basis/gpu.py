@@ -124,9 +124,20 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
     ctx = context.get_context()
     d = defines_for(p, 1)
+    cells = np.ascontiguousarray(cells, dtype=np.int32)
+    if dispatch.path(ctx) == "fragment":
+        prog = dispatch.program("cell_counts.frag", d)
+        _set_params(prog, p)
+        parts = []
+        for first in range(0, len(cells), gpu_fragment.CHUNK):
+            chunk = cells[first:first + gpu_fragment.CHUNK]
+            dispatch.input_texture(ctx, 0, chunk)
+            (res,) = dispatch.draw(prog, len(chunk), [(4, "i4")], ctx)
+            parts.append(res[:, :2].astype(np.int64))
+        out = np.concatenate(parts) if parts else np.zeros((0, 2), np.int64)
+        return out[:, 0], out[:, 1]
     prog = context.compute_program("cell_counts.comp", d)
     _set_params(prog, p)
-    cells = np.ascontiguousarray(cells, dtype=np.int32)
     parts = []
     step = LOCAL_SIZE * _MAX_GROUPS      # one dispatch's worth (a larger one would be dropped)
     for first in range(0, len(cells), step):
