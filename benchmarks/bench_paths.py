@@ -5,7 +5,8 @@ One process, one context with compute shaders; every round runs each case once o
 (``CELLGL_PATH=compute`` / ``fragment``, alternating which goes first) after a warm-up call
 (compiles). The table gives per case the samples, the median wall time per sample on each path
 in nanoseconds, and the median of the per-round speed ratios compute time / fragment time
-(1: as fast; above 1: the fragment path is faster), with their min-max. Also whether both paths'
+(1: as fast; above 1: the fragment path is faster) of the process CPU time (all threads, llvmpipe's
+included: the steadier measure on a shared machine), with their min-max, and of the wall time. Also whether both paths'
 answers were bit-identical. The load average is printed with the table.
 
     python benchmarks/bench_paths.py                  # every case, 5 rounds
@@ -47,10 +48,11 @@ def _cases(quick: bool) -> dict:
 
 
 def _timed(path: str, fn):
+    """(wall seconds, process CPU seconds (all threads: llvmpipe's too), the answer)."""
     os.environ["CELLGL_PATH"] = path
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     out = fn()
-    return time.perf_counter() - t, out
+    return time.perf_counter() - t, time.process_time() - c, out
 
 
 def main(argv=None) -> int:
@@ -73,24 +75,28 @@ def main(argv=None) -> int:
     rows = []
     for name in names:
         count, fn = cases[name]
-        _, a = _timed("compute", fn)
-        _, b = _timed("fragment", fn)
+        a = _timed("compute", fn)[2]
+        b = _timed("fragment", fn)[2]
         same = np.asarray(a).tobytes() == np.asarray(b).tobytes()
-        tc, tf = [], []
+        t = {"compute": [], "fragment": []}
         for r in range(args.rounds):
             order = ("compute", "fragment") if r % 2 == 0 else ("fragment", "compute")
             for path in order:
-                (tc if path == "compute" else tf).append(_timed(path, fn)[0])
-        ratios = [c / f for c, f in zip(tc, tf)]
-        rows.append((name, count, statistics.median(tc) / count * 1e9, statistics.median(tf) / count * 1e9,
-                     statistics.median(ratios), min(ratios), max(ratios), same))
+                t[path].append(_timed(path, fn)[:2])
+        cpu = [c[1] / f[1] for c, f in zip(t["compute"], t["fragment"])]
+        wall = [c[0] / f[0] for c, f in zip(t["compute"], t["fragment"])]
+        rows.append((name, count, statistics.median(x[0] for x in t["compute"]) / count * 1e9,
+                     statistics.median(x[0] for x in t["fragment"]) / count * 1e9,
+                     statistics.median(cpu), min(cpu), max(cpu), statistics.median(wall), same))
         print(f"  {name}: done", flush=True)
     os.environ.pop("CELLGL_PATH", None)
     print(f"\n{ctx.info['GL_RENDERER']}, {args.rounds} rounds, load average {os.getloadavg()[0]:.2f}")
-    print("| case | samples | compute ns/sample | fragment ns/sample | compute / fragment time (min-max) | same bits |")
-    print("|---|---:|---:|---:|---|---|")
-    for name, count, nc, nf, med, lo, hi, same in rows:
-        print(f"| {name} | {count} | {nc:.0f} | {nf:.0f} | {med:.2f} ({lo:.2f}-{hi:.2f}) | {'yes' if same else 'NO'} |")
+    print("| case | samples | compute ns/sample | fragment ns/sample | compute / fragment, CPU time (min-max) "
+          "| wall | same bits |")
+    print("|---|---:|---:|---:|---|---:|---|")
+    for name, count, nc, nf, med, lo, hi, wall, same in rows:
+        print(f"| {name} | {count} | {nc:.0f} | {nf:.0f} | {med:.2f} ({lo:.2f}-{hi:.2f}) | {wall:.2f} "
+              f"| {'yes' if same else 'NO'} |")
     return 0
 
 

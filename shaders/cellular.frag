@@ -7,6 +7,7 @@
 //   CELL_FRAG_WIDTH       width of the render targets: fragment (x, y) is sample y * width + x
 //   CELL_FRAG_DECL        the output declarations of this draw (location 0: the exact flag)
 //   CELL_FRAG_WRITE       their assignments, from the rows below (cellgl/basis/gpu_fragment.py)
+//   CELL_FRAG_GRID_AXES   (grids) the axes up to the last one longer than one sample
 // The split of a position into cell and fraction is cellular.comp's, done in float64 on the CPU
 // (OpenGL 3.3 has no doubles): the same bits.
 
@@ -104,8 +105,15 @@ void main()
 #if CELL_GRID
     uint s = u_first + uint(xy.y) * uint(CELL_FRAG_WIDTH) + uint(xy.x);
     uint rest = s / u_grid.x;
+#if CELL_FRAG_GRID_AXES <= 2      // the axes past the second are one sample long: no division
+    ivec4 idx = ivec4(int(s - rest * u_grid.x), int(rest), 0, 0);
+#elif CELL_FRAG_GRID_AXES == 3
+    uint r2 = rest / u_grid.y;
+    ivec4 idx = ivec4(int(s - rest * u_grid.x), int(rest - r2 * u_grid.y), int(r2), 0);
+#else
     uint r2 = rest / u_grid.y;
     ivec4 idx = ivec4(int(s - rest * u_grid.x), int(rest - r2 * u_grid.y), int(r2 % u_grid.z), int(r2 / u_grid.z));
+#endif
     cell = u_axis_cell;            // the axes past CELL_DIM (one sample long)
     frac = u_axis_frac;
     for (int a = 0; a < CELL_DIM; a++) {

@@ -319,6 +319,7 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
             raise ValueError(f"a grid of {N} samples is too large for the fragment path (at most 2^32 - 1)")
         out = _alloc(N, n, p.dim, outputs, stride)
         exact = np.ones(N, dtype=bool)
+        d["CELL_FRAG_GRID_AXES"] = max([1] + [a + 1 for a, e in enumerate((X, Y, Z, W)) if e > 1])
         gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
                          gpu_fragment.grid_inputs(shape_xyzw, origin_cell, origin_frac, spacing))
         return out, exact

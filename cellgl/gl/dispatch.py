@@ -194,6 +194,7 @@ def draw(prog, count: int, formats, ctx=None, before_tile=None) -> list[np.ndarr
         vao.render(mode=ctx.TRIANGLES, vertices=3)
     out = []
     for k, (comps, dt) in enumerate(formats):
-        raw = fbo.read(viewport=(0, 0, WIDTH, rows), components=comps, attachment=k, dtype=dt)
-        out.append(np.frombuffer(raw, dtype=np.dtype(dt)).reshape(-1, comps)[:count])
+        data = np.empty((rows * WIDTH, comps), np.dtype(dt))      # read straight into the array
+        fbo.read_into(data, viewport=(0, 0, WIDTH, rows), components=comps, attachment=k, dtype=dt)
+        out.append(data[:count])
     return out
