@@ -60,17 +60,19 @@ uniform float u_out_scale;     // distances and deltas are multiplied by this
 #if CELL_GRID
 // Sample i = u_first + fragment index of the grid u_grid (x fastest); axis a's cell and fraction
 // of index v at word u_axis_offset[a] + v of the tables (cellgl/basis/gpu_fragment.py).
-uniform isampler2D u_in0;      // axis tables: integer cell
-uniform sampler2D u_in1;       // axis tables: float32 fraction
+uniform isampler2D u_in0;      // axis tables: integer cell, float32 fraction (its bits)
 uniform uvec4 u_grid;          // samples along x, y, z, w
 uniform ivec4 u_axis_offset;
 uniform ivec4 u_axis_cell;     // index 0 of each axis's table
 uniform vec4 u_axis_frac;
 uniform uint u_first;
 #else
-// Sample i at texel (i mod width, i / width): its integer cell and float32 fraction.
+// Sample i at texel (i mod width, i / width): its integer cell and float32 fraction; in 2D one
+// texel holds both (cell.xy, the fraction's bits).
 uniform isampler2D u_in0;
+#if CELL_DIM > 2
 uniform sampler2D u_in1;
+#endif
 #endif
 
 uniform int u_loop_canary;     // 2: the driver's loop limit (cellular.comp)
@@ -117,14 +119,20 @@ void main()
     cell = u_axis_cell;            // the axes past CELL_DIM (one sample long)
     frac = u_axis_frac;
     for (int a = 0; a < CELL_DIM; a++) {
-        ivec2 t = CELL_STORAGE_TEXEL(u_axis_offset[a] + idx[a]);
-        cell[a] = texelFetch(u_in0, t, 0).r;
-        frac[a] = texelFetch(u_in1, t, 0).r;
+        ivec2 e = texelFetch(u_in0, CELL_STORAGE_TEXEL(u_axis_offset[a] + idx[a]), 0).rg;
+        cell[a] = e.x;
+        frac[a] = intBitsToFloat(e.y);
     }
 #else
     // CELL_DIM components per texel (a missing alpha reads 1): the rest are 0
+#if CELL_DIM == 2
+    ivec4 t = texelFetch(u_in0, xy, 0);
+    cell = ivec4(t.xy, 0, 0);
+    frac = vec4(intBitsToFloat(t.zw), 0.0, 0.0);
+#else
     cell = texelFetch(u_in0, xy, 0) * ivec4(greaterThan(ivec4(CELL_DIM), ivec4(0, 1, 2, 3)));
     frac = texelFetch(u_in1, xy, 0) * vec4(greaterThan(ivec4(CELL_DIM), ivec4(0, 1, 2, 3)));
+#endif
 #endif
 
     CellParams p;

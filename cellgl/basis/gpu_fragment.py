@@ -6,9 +6,10 @@ bits as ``cellular.comp``:
 
 * **Positions.** cellular.comp splits each position into an integer cell and a float32 fraction in
   float64; OpenGL 3.3 has no doubles, so the same split runs here in NumPy (IEEE float64, the same
-  operations in the same order) and the cells and fractions go in as textures. A grid is
-  separable: each axis's cells and fractions are one table (``origin + spacing * index``, as the
-  compute entry computes it), looked up per sample.
+  operations in the same order) and the cells and fractions go in as textures (in 2D one RGBA32I
+  texel: the cell and the fraction's bits). A grid is separable: each axis's cells and fractions
+  are one table (``origin + spacing * index``, as the compute entry computes it; RG32I texels),
+  looked up per sample.
 * **Outputs.** Each sample's rows (F, id, delta, grad, the feature record) are spread over render
   targets of 4 channels (:func:`cellgl.gl.dispatch.slots`), location 0 being the exact flag;
   where they exceed the draw buffers, several draws each write a part and every draw's flag counts.
@@ -149,8 +150,11 @@ def points_inputs(pts: np.ndarray, scale: float, dim: int):
     def inputs(prog, start, m):
         cell, frac, ok = split_points(pts[start:start + m], scale, dim)
         ctx = context.get_context()
-        dispatch.input_texture(ctx, 0, cell)
-        dispatch.input_texture(ctx, 1, frac)
+        if dim == 2:                    # one texel: the cell and the fraction's bits
+            dispatch.input_texture(ctx, 0, np.concatenate([cell, frac.view(np.int32)], axis=1))
+        else:
+            dispatch.input_texture(ctx, 0, cell)
+            dispatch.input_texture(ctx, 1, frac)
         return ok
     return inputs
 
@@ -158,12 +162,12 @@ def points_inputs(pts: np.ndarray, scale: float, dim: int):
 def grid_inputs(shape_xyzw, origin_cell, origin_frac, spacing):
     """``inputs`` of :func:`run` for a grid (as cellgl.basis.gpu.search_grid)."""
     cells, fracs, offsets = axis_tables(shape_xyzw, origin_cell, origin_frac, spacing)
+    table = np.stack([cells, fracs.view(np.int32)], axis=1)      # RG32I: cell, the fraction's bits
     width = 1 << dispatch.STORAGE_ROW_BITS
 
     def inputs(prog, start, m):
         ctx = context.get_context()
-        dispatch.input_texture(ctx, 0, cells.reshape(-1, 1), width)
-        dispatch.input_texture(ctx, 1, fracs.reshape(-1, 1), width)
+        dispatch.input_texture(ctx, 0, table, width)
         _set(prog, "u_grid", tuple(int(v) for v in shape_xyzw))
         _set(prog, "u_axis_offset", tuple(offsets))
         _set(prog, "u_axis_cell", tuple(int(cells[o]) for o in offsets))
