@@ -357,3 +357,21 @@ def test_cell_counts_same_bits(compute, monkeypatch):
     for x, y in zip(a, b):
         np.testing.assert_array_equal(x, y)
     assert len(np.unique(a[1])) >= 2
+
+
+def test_outputs_past_the_draw_buffers_take_several_draws(ctx):
+    """4D F1..F8 with delta, id, gradient and every feature needs 25 four-channel targets: with 8
+    draw buffers (one for the exact flag) that is 4 draws, each slot in exactly one (the same-bits
+    test of CASES[8] runs it)."""
+    from cellgl.basis import features, gpu_fragment
+    from cellgl.gl import dispatch
+
+    outputs = gpu._buffers(core._gpu_outputs(BASIS + FEATURES, core.make_params(4)))
+    layout = gpu_fragment._layout(outputs, 8, 4, features.stride(core._gpu_outputs(BASIS + FEATURES,
+                                                                                   core.make_params(4))))
+    passes = gpu_fragment._passes(layout, ctx)
+    per = dispatch.draw_buffers(ctx) - 1
+    slots = [s for p in passes for s in p]
+    assert len(passes) == -(-len(slots) // per) >= 2
+    assert all(len(p) <= per for p in passes)
+    assert slots == dispatch.slots(layout)

@@ -21,6 +21,8 @@ fragment path (OpenGL 3.3 core and up, Apple's 4.1 core included; :mod:`cellgl.g
 """
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
 from cellgl.gl import context, glsl
@@ -155,20 +157,32 @@ def slots(outputs) -> list[list[tuple[str, str, int]]]:
     return out
 
 
+#: render-target sets kept per context (least recently used released): a chunk's set of 8
+#: RGBA32 targets is 8 x 16 MB
+MAX_TARGETS = 4
+
+
 def _target(ctx, formats, rows: int):
     """A framebuffer of len(formats) attachments WIDTH x rows (or taller), kept per context and
-    formats."""
-    key = (id(ctx), "fbo", tuple(formats))
-    held = _targets.get(key)
+    formats (the last :data:`MAX_TARGETS`)."""
+    held_all = _targets.setdefault((id(ctx), "fbos"), OrderedDict())
+    key = tuple(formats)
+    held = held_all.get(key)
     if held is None or held[0] is not ctx or held[1] < rows:
         height = max(rows, 8)
         texs = [ctx.texture((WIDTH, height), c, dtype=dt) for c, dt in formats]
         fbo = ctx.framebuffer(color_attachments=texs)
-        fbo.use()
+        fbo.use()            # bound before the old ones go (moderngl restores the last binding)
         if held is not None and held[0] is ctx:
             for o in held[2]:
                 o.release()
-        held = _targets[key] = (ctx, height, [fbo] + texs)
+        held = held_all[key] = (ctx, height, [fbo] + texs)
+        while len(held_all) > MAX_TARGETS:
+            old = held_all.popitem(last=False)[1]
+            if old[0] is ctx:
+                for o in old[2]:
+                    o.release()
+    held_all.move_to_end(key)
     return held[2][0]
 
 
