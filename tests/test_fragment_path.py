@@ -360,9 +360,10 @@ def test_cell_counts_same_bits(compute, monkeypatch):
 
 
 def test_outputs_past_the_draw_buffers_take_several_draws(ctx):
-    """4D F1..F8 with delta, id, gradient and every feature needs 25 four-channel targets: with 8
-    draw buffers (one for the exact flag) that is 4 draws, each slot in exactly one (the same-bits
-    test of CASES[8] runs it)."""
+    """4D F1..F8 with delta, id, gradient and a feature record in one pass needs 25 four-channel
+    targets: with 8 draw buffers (one for the exact flag) that is 4 draws, each slot in exactly
+    one. (``cellular`` runs the feature walks as passes of their own: CASES[8]'s basis pass has 20
+    targets, 3 draws, compared bit for bit above.)"""
     from cellgl.basis import features, gpu_fragment
     from cellgl.gl import dispatch
 
