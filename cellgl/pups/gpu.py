@@ -143,6 +143,18 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     return vals, labs
 
 
+def _grid_textures(ctx, packed: PupsPacked) -> None:
+    """The candidate grid (:func:`_cell_stream`) as RGBA32UI textures on units 0 (cell headers) and
+    1 (records), 2^STORAGE_ROW_BITS texels wide: what the fragment entries read (OpenGL 3.3 has
+    no storage buffers)."""
+    from cellgl.gl import dispatch
+
+    width = 1 << dispatch.STORAGE_ROW_BITS
+    for unit, words in zip((0, 1), _cell_stream(packed)):
+        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
+        dispatch.input_texture(ctx, unit, words if len(words) else np.zeros((1, 4), np.uint32), width)
+
+
 def _evaluate_samples(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
     """pups.comp's work on the fragment path (``shaders/pups_samples.frag``, :mod:`cellgl.gl.dispatch`):
     the candidate grid in RGBA32UI textures, pixel s of the image sample s of the draws. The
@@ -155,12 +167,9 @@ def _evaluate_samples(packed: PupsPacked, mode: PupsMode, epsilon: float, timing
     c = packed.values.shape[1]
     _check_budget(packed, False)
     prog = dispatch.program("pups_samples.frag", {"CELL_PUPS_MODE": int(mode)})
-    cells, rec = _cell_stream(packed)
+    _cell_stream(packed)
     t1 = time.perf_counter()
-    width = 1 << dispatch.STORAGE_ROW_BITS
-    for unit, words in ((0, cells), (1, rec)):
-        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
-        dispatch.input_texture(ctx, unit, words if len(words) else np.zeros((1, 4), np.uint32), width)
+    _grid_textures(ctx, packed)
     w, h = packed.width, packed.height
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
                     ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]), ("u_epsilon", epsilon)):
@@ -180,15 +189,13 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
 
     Returns float32 (H, W, 4): rgb value, alpha the label as a float.
     """
-    from cellgl.gl.context import program
+    from cellgl.gl import dispatch
+
     ctx = _context()
-    prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
+    prog = dispatch.program("pups.frag", {"CELL_PUPS_MODE": int(mode)})
     _check_budget(packed, False)
     w, h = packed.width, packed.height
-    data = _gpu_buffers(packed)
-    bufs = [ctx.buffer(d) for d in data]
-    for binding, b in enumerate(bufs):
-        b.bind_to_storage_buffer(binding)
+    _grid_textures(ctx, packed)
     fbo, tex = float_target(_fragment_target, ctx, w, h)["objects"]
     vao = ctx.vertex_array(prog, [])
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
@@ -200,8 +207,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     fbo.viewport = (0, 0, w, h)
     vao.render(mode=ctx.TRIANGLES, vertices=3)
     out = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(h, w, 4)
-    for o in bufs + [vao]:
-        o.release()
+    vao.release()
     return out.copy()
 
 
