@@ -1,7 +1,8 @@
-#version 430
-// cellgl: PUPs texture in a fragment shader (viewer). Same buffers and uniforms as
-// shaders/pups.comp; pixel (i, j) of the render target is pixel (i, j) of the compute
-// output. Thin entry: read the buffers, call shaders/lib/pups.glsl, write.
+#version 330 core
+// cellgl: PUPs texture in a fragment shader (viewer). Same data and uniforms as
+// shaders/pups.comp, its storage buffers as RGBA32UI textures 2^CELL_STORAGE_ROW_BITS texels
+// wide (cellgl/gl/dispatch.py); pixel (i, j) of the render target is pixel (i, j) of the compute
+// output. Thin entry: read the candidate grid, call shaders/lib/pups.glsl, write.
 //
 // Output: rgb = value (mode as in pups.comp: CELL_PUPS_MODE 0 interpolated, 1 heaviest
 // point, 2 weighted sum), a = label of the heaviest point as a float (-1: none).
@@ -11,8 +12,9 @@
 #endif
 #define CELL_PUPS_FETCH 1
 
-layout(std430, binding = 0) readonly buffer PupsCells { uvec4 cells[]; };    // per grid cell
-layout(std430, binding = 1) readonly buffer PupsStream { uvec4 records[]; }; // candidates
+uniform usampler2D u_in0;  // the grid cells' headers
+uniform usampler2D u_in1;  // the candidate records
+#define CELL_PUPS_TEXEL(k) ivec2(int(uint(k) & ((1u << CELL_STORAGE_ROW_BITS) - 1u)), int(uint(k) >> CELL_STORAGE_ROW_BITS))
 
 uniform ivec2 u_size;
 uniform vec2 u_origin;
@@ -21,10 +23,9 @@ uniform int u_tile;
 uniform int u_grid_w;
 uniform float u_epsilon;
 
-in vec2 v_uv;
 layout(location = 0) out vec4 frag_color;
 
-uvec4 cell_pups_fetch(uint k) { return records[k]; }
+uvec4 cell_pups_fetch(uint k) { return texelFetch(u_in1, CELL_PUPS_TEXEL(k), 0); }
 
 #include "lib/pups.glsl"
 
@@ -33,7 +34,7 @@ void main()
     ivec2 px = min(ivec2(gl_FragCoord.xy), u_size - 1);
     vec2 u = u_origin + vec2(px) * u_pixel;
     int cell = (px.y / u_tile) * u_grid_w + px.x / u_tile;
-    CellPupsAcc acc = cell_pups_eval(u, cells[cell], u_epsilon);
+    CellPupsAcc acc = cell_pups_eval(u, texelFetch(u_in0, CELL_PUPS_TEXEL(cell), 0), u_epsilon);
 #if CELL_PUPS_MODE == 1
     vec4 v = acc.best;
 #elif CELL_PUPS_MODE == 2

@@ -1,4 +1,4 @@
-#version 430
+#version 330 core
 // cellgl: PUPs by rasterisation, fragment stage (see shaders/pups_raster.vert). Weights pixel
 // (i, j) for one control point with shaders/lib/pups.glsl, from the point's flat inputs
 // alone (no buffer reads), and writes (w * value, w); the render target (RGBA32F) adds the

@@ -1,4 +1,4 @@
-#version 430
+#version 330 core
 // cellgl: PUPs by rasterisation (cellgl.pups, method="raster"). Per control point (or
 // periodic copy) the triangles of a convex polygon that holds every pixel centre of its
 // support (cellgl.pups._raster_polygons: the support cut by the axes, pushed out by a pixel,

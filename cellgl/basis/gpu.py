@@ -10,7 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl.gl import context
+from cellgl.gl import dispatch
 from cellgl.basis import features as _features
+from cellgl.basis import gpu_fragment
 from cellgl.gl.threads import gl_call
 from cellgl.basis.enums import glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
@@ -88,9 +90,6 @@ def _set_params(prog, p: Params):
     set_density(prog, p.density_map)
 
 
-_bound_buffers: dict = {}
-
-
 def set_density(prog, enc) -> None:
     """Set the density-map uniforms of ``prog`` (``u_density_*``) from a
     :class:`cellgl.basis.density.DensityEncoding` and bind its image levels to storage buffer 7."""
@@ -114,16 +113,9 @@ def bind_density_image(levels, ctx=None) -> None:
 
 def bind_storage(words, binding: int, ctx=None) -> None:
     """Upload uint32 ``words`` (cached by content, one buffer per context and binding) and bind
-    them to storage buffer ``binding`` of ``ctx`` (default: cellgl's context)."""
-    ctx = ctx or context.get_context()
-    data = np.ascontiguousarray(words, dtype=np.uint32).tobytes()
-    key = (hash(data), len(data))
-    held = _bound_buffers.get((id(ctx), binding))
-    if held is None or held[0] != key or held[2] is not ctx:
-        if held is not None and held[2] is ctx:
-            held[1].release()
-        held = _bound_buffers[(id(ctx), binding)] = (key, ctx.buffer(data), ctx)
-    held[1].bind_to_storage_buffer(binding)
+    them to storage buffer ``binding`` of ``ctx`` (default: cellgl's context), or on the fragment
+    path to texture unit ``binding`` (:func:`cellgl.gl.dispatch.bind_words`)."""
+    dispatch.bind_words(words, binding, ctx)
 
 
 @gl_call
@@ -132,9 +124,20 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
     ctx = context.get_context()
     d = defines_for(p, 1)
+    cells = np.ascontiguousarray(cells, dtype=np.int32)
+    if dispatch.path(ctx) == "fragment":
+        prog = dispatch.program("cell_counts.frag", d)
+        _set_params(prog, p)
+        parts = []
+        for first in range(0, len(cells), gpu_fragment.CHUNK):
+            chunk = cells[first:first + gpu_fragment.CHUNK]
+            dispatch.input_texture(ctx, 0, chunk)
+            (res,) = dispatch.draw(prog, len(chunk), [(4, "i4")], ctx)
+            parts.append(res[:, :2].astype(np.int64))
+        out = np.concatenate(parts) if parts else np.zeros((0, 2), np.int64)
+        return out[:, 0], out[:, 1]
     prog = context.compute_program("cell_counts.comp", d)
     _set_params(prog, p)
-    cells = np.ascontiguousarray(cells, dtype=np.int32)
     parts = []
     step = LOCAL_SIZE * _MAX_GROUPS      # one dispatch's worth (a larger one would be dropped)
     for first in range(0, len(cells), step):
@@ -152,6 +155,14 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
         ob.release()
     out = np.concatenate(parts)
     return out[:, 0], out[:, 1]
+
+
+def _fragment_params(p: Params, smoothness: float):
+    """``set_params`` of :func:`cellgl.basis.gpu_fragment.run`: the uniforms of ``p``."""
+    def set_params(prog):
+        _set_params(prog, p)
+        _set(prog, "u_smoothness", float(smoothness))
+    return set_params
 
 
 def _chunk_size(n: int, dim: int, outputs, stride: int = 0) -> int:
@@ -266,14 +277,20 @@ def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float
     ``"features"``, its per-sample record, to the result.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=False, smooth=smooth))
-    _set_params(prog, p)
-    _set(prog, "u_smoothness", float(smoothness))
+    d = defines_for(p, n, outputs, grid=False, smooth=smooth)
     stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
-    _set(prog, "u_scale", float(p.scale))
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs, stride)
     exact = np.ones(N, dtype=bool)
+    if dispatch.path(ctx) == "fragment":
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
+                         gpu_fragment.points_inputs(pts, p.scale, p.dim))
+        return out, exact
+    prog = context.compute_program("cellular.comp", d)
+    _set_params(prog, p)
+    _set(prog, "u_smoothness", float(smoothness))
+    _set(prog, "u_scale", float(p.scale))
     step = _chunk_size(n, p.dim, outputs, stride)
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     for start in range(0, N, step):
@@ -293,10 +310,22 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     Returns flat arrays in x-fastest order, as :func:`search_points`.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True, smooth=smooth))
+    d = defines_for(p, n, outputs, grid=True, smooth=smooth)
+    stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
+    if dispatch.path(ctx) == "fragment":
+        X, Y, Z, W = (int(v) for v in shape_xyzw)
+        N = X * Y * Z * W
+        if N >= 1 << 32:
+            raise ValueError(f"a grid of {N} samples is too large for the fragment path (at most 2^32 - 1)")
+        out = _alloc(N, n, p.dim, outputs, stride)
+        exact = np.ones(N, dtype=bool)
+        d["CELL_FRAG_GRID_AXES"] = max([1] + [a + 1 for a, e in enumerate((X, Y, Z, W)) if e > 1])
+        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
+                         gpu_fragment.grid_inputs(shape_xyzw, origin_cell, origin_frac, spacing))
+        return out, exact
+    prog = context.compute_program("cellular.comp", d)
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
-    stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
     _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
     _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))      # dvec4: float64
     _set(prog, "u_spacing", tuple(float(v) for v in spacing))
@@ -348,9 +377,19 @@ def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 
     end), and whether the sample was flagged inexact. ``budget`` overrides ``CELL_LOOP_BUDGET``."""
     ctx = context.get_context()
     d = defines_for(p, n, outputs, grid=False, smooth=smooth)
-    d["CELL_LOOP_PROBE"] = 1
     if budget is not None:
         d["CELL_LOOP_BUDGET"] = int(budget)
+    if dispatch.path(ctx) == "fragment":
+        stride, outputs = _features.stride(outputs), _buffers(outputs)
+        pts = np.ascontiguousarray(pts, dtype=np.float64)
+        N = len(pts)
+        out = _alloc(N, n, p.dim, outputs, stride)
+        exact = np.ones(N, dtype=bool)
+        raw = np.zeros((N, 2), np.int64)
+        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
+                         gpu_fragment.points_inputs(pts, p.scale, p.dim), probe=raw)
+        return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], ~exact
+    d["CELL_LOOP_PROBE"] = 1
     prog = context.compute_program("cellular.comp", d)
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))

@@ -47,7 +47,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa, path, platforms, words
+from cellgl.gl import glsl, osmesa, path, platforms
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -562,11 +562,11 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
     is lowered to :func:`glsl_version` of ``ctx``; where the fragment path runs
     (:func:`cellgl.gl.path.gpu_path`) ``CELL_STORAGE_ROW_BITS`` is defined and the samplers
     ``u_storage_<binding>`` are set to their units: such programs read storage words from
-    textures (``shaders/storage.glsl``, :mod:`cellgl.gl.words`).
+    textures (``shaders/storage.glsl``, :func:`cellgl.gl.dispatch.bind_words`).
     """
     ctx = ctx if ctx is not None else get_context()
     if path.gpu_path(ctx) == "fragment":
-        defines = {**(defines or {}), "CELL_STORAGE_ROW_BITS": words.ROW_BITS}
+        defines = {**(defines or {}), "CELL_STORAGE_ROW_BITS": path.STORAGE_ROW_BITS}
     key = ("program", id(ctx), vertex, fragment, _defines_key(defines))
     with _lock:
         prog = _programs.get(key)

@@ -19,6 +19,12 @@ PATHS = ("compute", "fragment")
 #: moderngl's version code of the first OpenGL with compute shaders.
 COMPUTE_GL = 430
 
+#: On the fragment path, what the compute entries read from a storage buffer (density-image
+#: levels, cell-colour images, PUPs control points) is an R32UI texture 2^STORAGE_ROW_BITS words
+#: wide on the texture unit numbered like the buffer's binding (``shaders/storage.glsl``). A
+#: 4096 x 4096 image makes a 4096 x 4096 texture, within every OpenGL 4.1 implementation's 16384.
+STORAGE_ROW_BITS = 12
+
 
 def has_compute(ctx) -> bool:
     """True when ``ctx`` (a moderngl context) runs compute shaders."""

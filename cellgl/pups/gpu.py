@@ -103,8 +103,12 @@ def _gpu_buffers(packed: PupsPacked):
 
 
 def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    from cellgl.gl import dispatch
+
     t0 = time.perf_counter()
     ctx = _context()
+    if dispatch.path(ctx) == "fragment":
+        return _evaluate_samples(packed, mode, epsilon, timings)
     c = packed.values.shape[1]
     labels = mode == PupsMode.LABEL
     defines = {"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)}
@@ -139,20 +143,59 @@ def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: d
     return vals, labs
 
 
+def _grid_textures(ctx, packed: PupsPacked) -> None:
+    """The candidate grid (:func:`_cell_stream`) as RGBA32UI textures on units 0 (cell headers) and
+    1 (records), 2^STORAGE_ROW_BITS texels wide: what the fragment entries read (OpenGL 3.3 has
+    no storage buffers)."""
+    from cellgl.gl import dispatch
+
+    width = 1 << dispatch.STORAGE_ROW_BITS
+    for unit, words in zip((0, 1), _cell_stream(packed)):
+        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
+        dispatch.input_texture(ctx, unit, words if len(words) else np.zeros((1, 4), np.uint32), width)
+
+
+def _evaluate_samples(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+    """pups.comp's work on the fragment path (``shaders/pups_samples.frag``, :mod:`cellgl.gl.dispatch`):
+    the candidate grid in RGBA32UI textures, pixel s of the image sample s of the draws. The
+    lanes of a SIMD vector may lie in different grid cells (no work groups): the loop budget is
+    checked for that."""
+    from cellgl.gl import dispatch
+
+    t0 = time.perf_counter()
+    ctx = _context()
+    c = packed.values.shape[1]
+    _check_budget(packed, False)
+    prog = dispatch.program("pups_samples.frag", {"CELL_PUPS_MODE": int(mode)})
+    _cell_stream(packed)
+    t1 = time.perf_counter()
+    _grid_textures(ctx, packed)
+    w, h = packed.width, packed.height
+    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]), ("u_epsilon", epsilon)):
+        if name in prog:
+            prog[name] = v
+    t2 = time.perf_counter()
+    (out,) = dispatch.draw(prog, w * h, [(4, "f4")], ctx)
+    t3 = time.perf_counter()
+    vals = out[:, :c].reshape(h, w, c).copy()
+    labs = out[:, 3].view(np.int32).reshape(h, w).copy() if mode == PupsMode.LABEL else None
+    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=time.perf_counter() - t3)
+    return vals, labs
+
+
 def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     """The viewer's path: ``shaders/pups.frag`` into an RGBA32F target.
 
     Returns float32 (H, W, 4): rgb value, alpha the label as a float.
     """
-    from cellgl.gl.context import program
+    from cellgl.gl import dispatch
+
     ctx = _context()
-    prog = program("fullscreen.vert", "pups.frag", {"CELL_PUPS_MODE": int(mode)})
+    prog = dispatch.program("pups.frag", {"CELL_PUPS_MODE": int(mode)})
     _check_budget(packed, False)
     w, h = packed.width, packed.height
-    data = _gpu_buffers(packed)
-    bufs = [ctx.buffer(d) for d in data]
-    for binding, b in enumerate(bufs):
-        b.bind_to_storage_buffer(binding)
+    _grid_textures(ctx, packed)
     fbo, tex = float_target(_fragment_target, ctx, w, h)["objects"]
     vao = ctx.vertex_array(prog, [])
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
@@ -164,8 +207,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
     fbo.viewport = (0, 0, w, h)
     vao.render(mode=ctx.TRIANGLES, vertices=3)
     out = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(h, w, 4)
-    for o in bufs + [vao]:
-        o.release()
+    vao.release()
     return out.copy()
 
 

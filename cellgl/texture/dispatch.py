@@ -65,25 +65,32 @@ def _program(recipe, defines: dict, pan=None, pan_only=False):
     """texture.comp for ``recipe`` with ``defines``: baked (constants, LRU-cached) or with uniforms
     (always with a ``pan``: one program serves every pan, where baking would compile per pan;
     ``pan_only``: the program's other uniforms are already this recipe's)."""
-    from cellgl.gl import context
+    from cellgl.gl import context, dispatch
     from cellgl.texture import shader as texture
 
     ctx = context.get_context()
+    fragment = dispatch.path(ctx) == "fragment"
     if not BAKE_CONSTANTS or pan is not None:
-        prog = context.compute_program("texture.comp", defines)
+        if fragment:
+            prog = dispatch.program(_FRAGMENT_ENTRY, defines)
+        else:
+            prog = context.compute_program("texture.comp", defines)
         texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan,
                              pan_only=pan_only and pan is not None)
         return prog
     consts = texture.glsl_baked_uniforms_file(recipe)
-    key = (tuple(sorted(defines.items())), consts)
+    key = (tuple(sorted(defines.items())), consts, fragment)
     # one LRU per context: a program is released only while its own context is current
     baked = _baked.setdefault(id(ctx), OrderedDict())
     prog = baked.get(key)
     if prog is not None:
         baked.move_to_end(key)
     else:
-        prog = context.compute_program("texture.comp", defines, files={"texture_uniforms.glsl": consts},
-                                       cache=False)
+        files = {"texture_uniforms.glsl": consts}
+        if fragment:
+            prog = dispatch.program(_FRAGMENT_ENTRY, defines, files=files, cache=False)
+        else:
+            prog = context.compute_program("texture.comp", defines, files=files, cache=False)
         baked[key] = prog
         while len(baked) > MAX_BAKED:
             baked.popitem(last=False)[1].release()
@@ -129,7 +136,10 @@ def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1
     d["CELL_LOOP_BUDGET"] = 1 << 30
     if probe:
         d["CELL_LOOP_PROBE"] = 1
+    fragment = _fragment(d, mask, probe)
     prog = _program(recipe, d, pan, pan_only)
+    if fragment:
+        return _unpack(channels, _run_fragment(prog, mask, count, setup), None)
     cut = 0
     loops = np.empty(count, np.int64) if probe else None
     out = {}
@@ -157,11 +167,82 @@ def run(recipe, channels, count: int, setup, *, grid: bool, supersample: int = 1
             loops[start:start + n] = DRIVER_LOOP_LIMIT - 2 - left
         for b in extra:
             b.release()
+    _check_cut(cut, count)
+    return _unpack(channels, out, loops)
+
+
+def _check_cut(cut: int, count: int) -> None:
     if cut:
         raise LoopLimitError(
             f"the GPU driver cut the loops of {cut} of {count} samples (Mesa llvmpipe allows 65535 loop "
             "passes per SIMD vector of samples): their values would be wrong, so none are returned. "
             "Use fewer octaves, less supersampling or a smaller smoothness (docs/exactness.md)")
+
+
+#: the fragment path's entry (cellgl.gl.dispatch): texture.comp's work in a fragment program
+_FRAGMENT_ENTRY = "texture_samples.frag"
+
+
+def _fragment(d: dict, mask: int, probe: bool) -> bool:
+    """True on the fragment path; then adds its defines to ``d``: the render target of each
+    output asked for (``CELL_TEX_LOC_*``; location 0 is the canary)."""
+    from cellgl.gl import dispatch
+
+    if dispatch.path() != "fragment":
+        return False
+    if probe:
+        raise ValueError("the loop probe (benchmarks/loop_budget.py) measures the compute path; "
+                         "unset CELLGL_PATH or run it where OpenGL 4.3 is")
+    loc = 1
+    for name, (_, _, bit, _) in _OUTPUTS.items():
+        d[f"CELL_TEX_WANT_{name.upper()}"] = int(bool(mask & bit))
+        if mask & bit:
+            d[f"CELL_TEX_LOC_{name.upper()}"] = loc
+            loc += 1
+    return True
+
+
+def _run_fragment(prog, mask: int, count: int, setup) -> dict:
+    """texture_samples.frag over ``count`` samples in chunks (as :func:`run`); the outputs by name."""
+    from cellgl.gl import dispatch
+
+    names = [name for name, (_, _, bit, _) in _OUTPUTS.items() if mask & bit]
+    formats = [(1, "u4")] + [(1, "u4") if name == "id" else (4, "f4") for name in names]
+    out = {name: np.empty((count,) if name == "id" else (count, 4), np.uint32 if name == "id" else np.float32)
+           for name in names}
+    cut = 0
+    for start in range(0, count, _CHUNK):
+        n = min(_CHUNK, count - start)
+        extra = setup(prog, start, n)
+        for name, value in (("u_first", start), ("u_loop_canary", 2)):
+            if name in prog:
+                prog[name].value = value
+        res = dispatch.draw(prog, n, formats)
+        cut += int(np.count_nonzero(res[0][:, 0] == 0))
+        for name, data in zip(names, res[1:]):
+            out[name][start:start + n] = data[:, 0] if name == "id" else data
+        for b in extra:
+            b.release()
+    _check_cut(cut, count)
+    return out
+
+
+def bind_points(p4: np.ndarray) -> list:
+    """Hand the points (n, 4) float32 (u, v, z, -) of a chunk to the entry: storage buffer 0
+    (texture.comp) or texture unit 0 (the fragment path). Returns what to release after the chunk."""
+    from cellgl.gl import context, dispatch
+
+    ctx = context.get_context()
+    if dispatch.path(ctx) == "fragment":
+        dispatch.input_texture(ctx, 0, np.ascontiguousarray(p4, np.float32))
+        return []
+    b = ctx.buffer(np.ascontiguousarray(p4, np.float32).tobytes())
+    b.bind_to_storage_buffer(0)
+    return [b]
+
+
+def _unpack(channels, out: dict, loops) -> dict:
+    """The channels asked for from the output buffers."""
     res = {} if loops is None else {"loops": loops}
     for c in channels:
         if c == "color":

@@ -85,17 +85,14 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
         from cellgl.texture import reference as texture_reference
 
         return texture_reference.evaluate(recipe, pts, outputs, duvz)
-    from cellgl.gl import context
 
     def setup_for(local):
         def setup(prog, start, n):
             p4 = np.zeros((n, 4), np.float32)
             p4[:, :3] = local[start:start + n]
-            b = context.get_context().buffer(p4.tobytes())  # inside dispatch.run's cellgl call
-            b.bind_to_storage_buffer(0)
             if "u_filter_width" in prog:
                 prog["u_filter_width"].value = tuple(float(c) for c in duvz)
-            return [b]
+            return dispatch.bind_points(p4)         # inside dispatch.run's cellgl call
         return setup
 
     # The shader adds the sample's texture position to the split origins in float32, which holds

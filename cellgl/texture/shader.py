@@ -430,16 +430,13 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> Non
     """
     recipe = load_recipe(recipe)
     if recipe.values["density_map"] == "image":
-        levels = density_encodings(recipe, pan)[0].levels
-        if not _bind_words(prog, levels, DENSITY_IMAGE_BINDING):
-            from cellgl.basis.gpu import bind_density_image
+        from cellgl.basis.gpu import bind_density_image
 
-            bind_density_image(levels, ctx=getattr(prog, "ctx", None))
+        bind_density_image(density_encodings(recipe, pan)[0].levels, ctx=getattr(prog, "ctx", None))
     if recipe.values["cell_color"] == "image":
-        from cellgl.texture.images import bind, pack
+        from cellgl.texture.images import bind
 
-        if not _bind_words(prog, pack(recipe.cell_pixels()), CELL_IMAGE_BINDING):
-            bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
+        bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
     values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan)
     for name, value in values.items():
         if name not in prog:
@@ -450,21 +447,6 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> Non
             u.write(np.asarray(value[:n], dtype=_UNIFORM_DTYPES.get(name, np.float32)).tobytes())
         else:
             u.value = value
-
-
-def _bind_words(prog, words, binding: int) -> bool:
-    """Where ``prog`` reads the storage words of ``binding`` from a texture (its sampler
-    ``u_storage_<binding>``: compiled with ``CELL_STORAGE_ROW_BITS``, shaders/storage.glsl),
-    upload them there (:func:`cellgl.gl.words.bind`) and return True; else False (a storage
-    buffer)."""
-    name = f"u_storage_{binding}"
-    if name not in prog:
-        return False
-    from cellgl.gl import context, words as storage_words
-
-    storage_words.bind(words, binding, getattr(prog, "ctx", None) or context.get_context())
-    prog[name].value = binding
-    return True
 
 
 def set_view(prog, recipe, uv0, extent) -> None:

@@ -1,0 +1,117 @@
+#version 330 core
+// cellgl fragment entry (the fragment path, cellgl/gl/dispatch.py): a texture recipe over a pixel
+// grid (bakes) or a point list, as shaders/texture.comp computes it, for OpenGL 3.3 core and up
+// without compute shaders. Thin: sample i of this chunk is fragment (i mod width, i / width);
+// compute its texture-space point and footprint, call cell_texture_filtered() (once, or over a
+// grid of sub-pixels), write the channels asked for to render targets.
+// Macros (cellgl/texture/dispatch.py): those of texture.comp, CELL_FRAG_WIDTH and
+//   CELL_TEX_LOC_COLOR, _AUX, _F, _GRAD, _ID: the render target of each output written
+//   (location 0: 1 where the driver's loop limit left the sample alone, the canary).
+
+#include "storage.glsl"
+#include "lib/texture.glsl"
+#include "texture_uniforms.glsl"
+
+uniform uint u_first;           // index of this chunk's first sample
+
+#if CELL_TEX_GRID
+uniform ivec2 u_size;           // the full image, W x H
+uniform ivec2 u_origin;         // first pixel of the tile (x0, y0)
+uniform ivec2 u_tile;           // tile width, height
+uniform int u_depth;            // volume slices along z (0: one image at z = 0)
+#else
+uniform sampler2D u_in0;        // the points (u, v, z, -), sample i at texel (i mod width, i / width)
+uniform vec3 u_filter_width;    // footprint of every point in texture space (0: point samples)
+#endif
+uniform int u_loop_canary;      // 2 (texture.comp)
+
+layout(location = 0) out uint o_canary;
+#if CELL_TEX_WANT_COLOR
+layout(location = CELL_TEX_LOC_COLOR) out vec4 o_color;
+#endif
+#if CELL_TEX_WANT_AUX
+layout(location = CELL_TEX_LOC_AUX) out vec4 o_aux;
+#endif
+#if CELL_TEX_WANT_F
+layout(location = CELL_TEX_LOC_F) out vec4 o_F;
+#endif
+#if CELL_TEX_WANT_GRAD
+layout(location = CELL_TEX_LOC_GRAD) out vec4 o_grad;
+#endif
+#if CELL_TEX_WANT_ID
+layout(location = CELL_TEX_LOC_ID) out uint o_id;
+#endif
+
+void main()
+{
+    ivec2 xy = ivec2(gl_FragCoord.xy);
+    CellTextureParams t = cell_texture_params_load();
+#if CELL_TEX_GRID
+    // x fastest, then y (rows, top first), then z slices.
+    uint s = u_first + uint(xy.y) * uint(CELL_FRAG_WIDTH) + uint(xy.x);
+    int x = int(s % uint(u_tile.x));
+    uint rest = s / uint(u_tile.x);
+    int y = int(rest % uint(u_tile.y));
+    int k = int(rest / uint(u_tile.y));
+    vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
+                  (float(u_origin.y + y) + 0.5) / float(u_size.y),
+                  u_depth > 0 ? (float(k) + 0.5) / float(u_depth) : 0.0);
+    vec3 duvz = vec3(1.0 / float(u_size.x), 1.0 / float(u_size.y), 0.0);
+#else
+    vec3 p = texelFetch(u_in0, xy, 0).xyz;
+    vec3 duvz = u_filter_width;
+#endif
+    vec4 local = cell_texture_local(p, t);
+#if CELL_TEX_GRID && CELL_TEX_SUPERSAMPLE > 1
+    // Supersampling as texture.comp: sub-pixel centres x fastest; colour, height and gradient
+    // averaged, normals summed and renormalised; ID, F1..F4 and the value of the pixel centre.
+    const int n = CELL_TEX_SUPERSAMPLE;
+    float r = cell_texture_footprint(vec3(duvz.xy / float(n), duvz.z), t);
+    vec4 color = vec4(0.0), grad = vec4(0.0);
+    float height = 0.0;
+    vec3 normal = vec3(0.0);
+    for (int sy = 0; sy < n; sy++)
+    for (int sx = 0; sx < n; sx++) {
+        vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
+        CellTexel c = cell_texture_filtered(cell_texture_local(p + vec3(off * duvz.xy, 0.0), t), r, t);
+        color += c.color;
+        height += c.height;
+        normal += c.normal;
+        grad += c.grad;
+    }
+    float inv = 1.0 / float(n * n);
+    color *= inv;
+    height *= inv;
+    grad *= inv;
+    normal = normalize(normal);
+#if CELL_TEX_WANT_F || CELL_TEX_WANT_GRAD || CELL_TEX_WANT_ID
+    CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
+#endif
+#else
+    CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
+    vec4 color = c.color, grad = c.grad;
+    float height = c.height;
+    vec3 normal = c.normal;
+#endif
+#if CELL_TEX_WANT_COLOR
+    o_color = color;
+#endif
+#if CELL_TEX_WANT_AUX
+    o_aux = vec4(height, normal * 0.5 + 0.5);
+#endif
+#if CELL_TEX_WANT_F
+    o_F = c.F;
+#endif
+#if CELL_TEX_WANT_GRAD
+    c.grad = grad;
+    o_grad = vec4(cell_texture_grad_uvz(c, t), c.value);
+#endif
+#if CELL_TEX_WANT_ID
+    o_id = c.id;
+#endif
+    int canary = 0;
+    for (int k = 0; k < u_loop_canary; k++) {
+        canary += 1;
+    }
+    o_canary = canary == u_loop_canary ? 1u : 0u;
+}
