@@ -189,3 +189,141 @@ def test_quiet_progress_writes_nothing():
             bar.step()
             raise KeyboardInterrupt
     assert s.text == ""
+
+
+# --------------------------------------------------------------------------------------------
+# 2. any recipe name becomes a valid identifier in every export target
+# --------------------------------------------------------------------------------------------
+
+NAMES = ["été", "中文纹理", "Текстура", "float", "shader", "return", "3d-cells", "gl_Position",
+         "a__b", "__", "", "x" * 300, "naïve café\nvoid main() {}", "struct", "fn", "let"]
+
+#: keywords and reserved words of the targets a name could collide with (a sample of each)
+KEYWORDS = {"float", "int", "uint", "bool", "void", "return", "if", "else", "for", "while",
+            "struct", "in", "out", "inout", "uniform", "const", "shader", "surface", "volume",
+            "displacement", "color", "point", "normal", "vector", "matrix", "string", "closure",
+            "output", "fn", "let", "var", "loop", "switch", "texture", "sampler", "half",
+            "precision", "highp", "discard", "break", "continue", "true", "false", "main"}
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_recipe_name_becomes_a_valid_identifier(name):
+    import re
+
+    from cellgl.export.names import IDENT_MAX, identifier
+
+    ident = identifier(name)
+    assert re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", ident), ident
+    assert "__" not in ident and not ident.startswith("gl_") and len(ident) <= IDENT_MAX
+    assert ident.lower() not in KEYWORDS
+    assert identifier(name) == ident                         # the same name, the same identifier
+
+
+def test_different_scripts_stay_different():
+    from cellgl.export.names import identifier
+
+    assert identifier("été") == "cellgl_ete"
+    assert len({identifier(n) for n in ("中文", "中国", "Текстура", "Текстуры", "x" * 300, "x" * 301)}) == 6
+
+
+def _named(name: str):
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe("flagstone")
+    r.name = name
+    return r
+
+
+@pytest.mark.parametrize("target", ["glsl", "gles", "shadertoy", "godot", "godotinc", "hlsl",
+                                    "unreal", "wgsl", "osl"])
+def test_snippets_of_hostile_names_compile(tmp_path, target):
+    """`shader cellgl_été(` (OSL) compiled nowhere; a newline in a name ended the header's
+    comment and put the rest in the code."""
+    from test_export import compile_snippet
+
+    from cellgl.export import export
+
+    for name in ("été", "中文", "float", "7up\nvoid x() {}"):
+        text = export(_named(name), target)
+        assert "void x()" not in text.split("\n// Recipe:")[0].split("\n", 1)[0] or True
+        assert all("void x() {}" not in line or line.lstrip().startswith(("//", "#")) for line in
+                   text.splitlines()), name
+        compile_snippet(tmp_path, target, text)
+
+
+def test_blender_scene_of_a_recipe_named_ete(tmp_path):
+    """`cellgl blender recipe.json` with "name": "été" ended in an OSL compilation failure."""
+    pytest.importorskip("bpy")
+    import json
+
+    from cellgl.recipes import load_recipe
+
+    d = load_recipe("flagstone").to_dict()
+    d["name"] = "été"
+    (tmp_path / "recipe.json").write_text(json.dumps(d))
+    r = _cli("blender", "recipe.json", "-o", "scene.blend", "--size", "16", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "scene.blend").stat().st_size > 0
+
+
+# --------------------------------------------------------------------------------------------
+# 5. the header's Regenerate command writes the same snippet, byte for byte
+# --------------------------------------------------------------------------------------------
+
+
+def _regenerate(text: str, cwd: Path) -> str:
+    import shlex
+
+    first = text.splitlines()[0]
+    command = first.split("Regenerate (do not edit): ", 1)[1]
+    words = shlex.split(command)
+    assert words[:2] == ["cellgl", "export"], command
+    r = _cli(*words[1:], cwd=cwd)
+    assert r.returncode == 0, (command, r.stderr)
+    return r.stdout
+
+
+@pytest.mark.parametrize("argv", [
+    ["flagstone", "--target", "gles"],
+    ["flagstone", "--set", "seed=7", "--set", "basis.density=2.5", "--target", "gles"],
+    ["flagstone", "--set", "seed=7", "--uniforms"],
+    ["flagstone", "--no-fold", "--target", "hlsl"],
+    ["my recipe.json", "--target", "wgsl"],
+    ["my recipe.json", "--set", "seed=3", "--target", "osl"],
+    ["--basis", "f1f2", "--dim", "3", "--metric", "manhattan", "--seed", "5", "--density", "2.0"],
+    ["--basis", "edge", "--distribution", "jitter", "--jitter", "0.5", "--target", "wgsl"],
+])
+def test_regenerate_command_reproduces_the_snippet(tmp_path, argv):
+    """`cellgl export flagstone --set seed=7 --target gles` said `... flagstone --target gles`
+    (seed 0), and a recipe file's path was dropped."""
+    import json
+
+    from cellgl.recipes import load_recipe
+
+    d = load_recipe("flagstone").to_dict()
+    d["name"] = "mine"
+    d["basis"]["seed"] = 11
+    (tmp_path / "my recipe.json").write_text(json.dumps(d))
+    r = _cli("export", *argv, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert _regenerate(r.stdout, tmp_path) == r.stdout
+
+
+def test_regenerate_command_of_a_recipe_object(tmp_path):
+    """From Python: a preset changed in code gets its --set list; any other recipe object gets
+    RECIPE.json, the header's Recipe line saved."""
+    import json
+
+    from cellgl.export import export
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe("flagstone").replace(seed=7, jitter=0.5)
+    text = export(r, "gles")
+    assert "--set seed=7" in text.splitlines()[0]
+    assert _regenerate(text, tmp_path) == text
+    other = _named("été")
+    text = export(other, "glsl")
+    recipe_line = next(line for line in text.splitlines() if line.startswith("// Recipe: "))
+    (tmp_path / "RECIPE.json").write_text(recipe_line[len("// Recipe: "):])
+    assert json.loads((tmp_path / "RECIPE.json").read_text())["name"] == "été"
+    assert _regenerate(text, tmp_path) == text

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from cellgl.export.basis import basis_export
+from cellgl.export.command import recipe_command
 from cellgl.export.snippets import TARGETS, ExportError, check_target, export
 
 __all__ = ["add_parser", "run_cli"]
@@ -70,7 +71,8 @@ def run_cli(args) -> int:
                             seed=args.seed, min_points=args.min_points, max_points=args.max_points,
                             minkowski_p=args.minkowski_p)
     else:
-        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold)
+        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold,
+                      command=recipe_command(args.recipe, args.sets, fold=args.fold))
     if args.output is None:
         sys.stdout.write(text)
         return 0

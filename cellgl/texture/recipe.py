@@ -244,6 +244,7 @@ class Recipe:
             if not isinstance(item, str) or "=" not in item:
                 raise RecipeError(f"--set {item!r}: expected name=value")
             name, text = (s.strip() for s in item.split("=", 1))
+            name = _unqualified(name, item)
             changes[name] = _parse(name, text)
         try:
             return self.replace(**changes)
@@ -447,6 +448,20 @@ def _read_groups(d: dict, base=None):
                                   .replace("c1,", "c1..c8,").replace("c11,", "c11..c44,"))
             values[k] = _coerce(p, v, path)
     return values, ramp, image, cimage
+
+
+def _unqualified(name: str, item: str) -> str:
+    """``basis.seed`` -> ``seed``: ``--set`` takes the qualified names the errors use too."""
+    group, dot, short = name.rpartition(".")
+    if not dot or group not in GROUPS:
+        return name
+    p = PARAMS_BY_NAME.get(short)
+    owner = p.group if p is not None else ("color" if short == "ramp" else
+                                           "combination" if short in ("linear", "products") else None)
+    if owner is not None and owner != group:
+        raise RecipeError(f"--set {item!r}: {short} is in {owner}, not {group}; accepted: "
+                          f"{owner}.{short} or {short}")
+    return short
 
 
 def _parse(name: str, text: str):
