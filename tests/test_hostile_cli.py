@@ -245,7 +245,6 @@ def test_snippets_of_hostile_names_compile(tmp_path, target):
 
     for name in ("été", "中文", "float", "7up\nvoid x() {}"):
         text = export(_named(name), target)
-        assert "void x()" not in text.split("\n// Recipe:")[0].split("\n", 1)[0] or True
         assert all("void x() {}" not in line or line.lstrip().startswith(("//", "#")) for line in
                    text.splitlines()), name
         compile_snippet(tmp_path, target, text)
