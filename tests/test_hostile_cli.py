@@ -326,3 +326,119 @@ def test_regenerate_command_of_a_recipe_object(tmp_path):
     (tmp_path / "RECIPE.json").write_text(recipe_line[len("// Recipe: "):])
     assert json.loads((tmp_path / "RECIPE.json").read_text())["name"] == "été"
     assert _regenerate(text, tmp_path) == text
+
+
+# --------------------------------------------------------------------------------------------
+# 7. one meaning per option name; 8. plain help with every default and accepted value
+# --------------------------------------------------------------------------------------------
+
+
+def _help(*argv) -> str:
+    r = _cli(*argv, "--help")
+    assert r.returncode == 0, r.stderr
+    return r.stdout
+
+
+def test_voronoi_output_is_the_file_and_size_takes_wxh(ctx, tmp_path):
+    """`cellgl voronoi --output v.png` was refused (the socket), `--size 128x64` too."""
+    r = _cli("voronoi", "--output", str(tmp_path / "v.png"), "--size", "12x8", "--socket", "color",
+             "--dimensions", "2")
+    assert r.returncode == 0, r.stderr
+    from PIL import Image
+
+    with Image.open(tmp_path / "v.png") as im:
+        assert im.size == (12, 8) and im.mode == "RGB"
+    for argv in (["--size", "0x8"], ["--size", "8x8x8"], ["--size", "ax8"]):
+        r = _cli("voronoi", "-o", str(tmp_path / "w.png"), *argv)
+        assert r.returncode == 2 and "accepted W or WxH" in r.stderr, r.stderr
+
+
+def test_an_option_name_means_one_thing_across_subcommands():
+    """--output is where the output goes (a file; a folder for sweep) wherever it exists; a socket
+    or anything else has its own name."""
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    for name, p in sub.choices.items():
+        for a in p._actions:
+            if "--output" in a.option_strings:
+                assert "-o" in a.option_strings and a.metavar in ("FILE", "FILE.blend", "DIR"), (name, a)
+
+
+def test_help_is_plain_text_with_defaults_and_every_accepted_value():
+    from cellgl.basis.enums import Distribution, Metric
+    from cellgl.basis.voronoi import FEATURES
+    from cellgl.export.snippets import TARGETS
+
+    top = _help()
+    for t in TARGETS:
+        assert t in top, t                     # osl, unreal, shadertoy were missing
+    v = _help("voronoi")
+    assert "``" not in v and ":func:" not in v and ":mod:" not in v
+    assert "1, 2, 3 or 4 (default 3)" in v     # --dimensions
+    for word in [m.name.lower() for m in Metric] + [d.name.lower() for d in Distribution] + list(FEATURES):
+        assert word in v, word
+    assert "0..15" in v and "0..1000" in v      # detail, lacunarity: the ranges voronoi() checks
+    e = " ".join(_help("export").split())
+    assert "blender" in e.split("--distribution NAME", 2)[-1].split("--density")[0]
+    for t in TARGETS:
+        assert t in e
+    for text in (top, v, e):
+        assert "``" not in text and ":func:" not in text
+
+
+# --------------------------------------------------------------------------------------------
+# 9. error messages that name the right thing
+# --------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--detail", "15", "--lacunarity", "1000"], "detail 15 x lacunarity 1000"),
+    (["--w", "nan", "--dimensions", "4"], "--w nan: accepted a finite number"),
+    (["--scale", "inf"], "--scale inf: accepted a finite number"),
+])
+def test_voronoi_cli_errors_name_the_option(ctx, tmp_path, argv, needle):
+    r = _cli("voronoi", "-o", str(tmp_path / "v.png"), "--size", "8", *argv)
+    assert r.returncode == 2 and needle in r.stderr and r.stderr.count("\n") == 1, r.stderr
+    assert not (tmp_path / "v.png").exists()
+
+
+def test_voronoi_output_directory_is_named(tmp_path):
+    """It named the hidden temporary file; bake says the output is a directory."""
+    r = _cli("voronoi", "-o", str(tmp_path) + "/", "--size", "8")
+    assert r.returncode == 2 and f"output '{tmp_path}' is a directory" in r.stderr, r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_voronoi_api_errors():
+    import numpy as np
+
+    import cellgl
+
+    pts = np.zeros((2, 3))
+    with pytest.raises(ValueError, match=r"w must be a number or have shape \(2,\)"):
+        cellgl.voronoi(pts, dimensions=4, w=np.zeros(3), backend="numpy")
+    with pytest.raises(ValueError, match=r"w must be finite; w\[1\] is nan"):
+        cellgl.voronoi(pts, dimensions=4, w=[0.0, float("nan")], backend="numpy")
+    with pytest.raises(TypeError, match=r"voronoi\(\) got an unexpected keyword argument 'foo'"):
+        cellgl.voronoi(pts, foo=1, backend="numpy")
+    with pytest.raises(ValueError, match="detail 3 x lacunarity 1000"):
+        cellgl.voronoi(pts + 1e3, detail=3, lacunarity=1000, backend="numpy")
+    r = cellgl.voronoi(pts, dimensions=4, w=np.array([0.25, 0.5]), backend="numpy")
+    assert r.distance.shape == (2,)
+
+
+def test_set_takes_the_qualified_name_the_errors_use(capsys):
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe("flagstone")
+    assert r.set_from_strings(["basis.seed=2"]) == r.set_from_strings(["seed=2"])
+    with pytest.raises(ValueError, match="seed is in basis, not color"):
+        r.set_from_strings(["color.seed=2"])
+    with pytest.raises(ValueError, match=r"basis\.density"):
+        r.set_from_strings(["basis.density=-1"])
+
+
+def test_export_without_an_argument_says_what_to_give(capsys):
+    assert cli.main(["export"]) == 2
+    err = capsys.readouterr().err
+    assert "nothing to export" in err and "not both" not in err and "cellgl presets" in err
