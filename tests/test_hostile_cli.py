@@ -442,3 +442,47 @@ def test_export_without_an_argument_says_what_to_give(capsys):
     assert cli.main(["export"]) == 2
     err = capsys.readouterr().err
     assert "nothing to export" in err and "not both" not in err and "cellgl presets" in err
+
+
+# --------------------------------------------------------------------------------------------
+# 4. distribution="blender" beyond 2^24 cells: Blender's hash repeats; a warning, and jitter
+# --------------------------------------------------------------------------------------------
+
+
+def _image_colours(x0: float, distribution: str) -> int:
+    import warnings
+
+    import numpy as np
+
+    import cellgl
+
+    u = (np.arange(64) + 0.5) / 64 * 8.0
+    pts = np.stack(np.meshgrid(x0 + u, u), -1).reshape(-1, 2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        r = cellgl.voronoi(pts, dimensions=2, distribution=distribution, backend="numpy")
+    return len(np.unique(r.color, axis=0))
+
+
+def test_blender_points_repeat_far_out_and_warn(ctx):
+    import numpy as np
+
+    import cellgl
+    from cellgl.basis.population import BLENDER_HASH_LIMIT
+
+    near, far = _image_colours(0.0, "blender"), _image_colours(1e7, "blender")
+    assert near > 3 * far                    # the repeat is real (and Blender's): the warning's reason
+    assert _image_colours(1e7, "jitter") > near / 2              # the exact alternative does not
+    inside = np.array([[BLENDER_HASH_LIMIT / 5 - 1.0, 0.5, 0.5]])   # Scale 5: just inside
+    with __import__("warnings").catch_warnings():
+        __import__("warnings").simplefilter("error", RuntimeWarning)
+        cellgl.voronoi(inside, backend="numpy")
+        cellgl.voronoi(inside * 50, distribution="jitter", backend="numpy")
+    for pts, dims in ((inside * 2, 3), (np.array([1e7]), 1)):
+        with pytest.warns(RuntimeWarning, match=r"beyond 2\^24 .* distribution 'jitter'"):
+            cellgl.voronoi(pts, dimensions=dims, backend="numpy")
+    with pytest.warns(RuntimeWarning, match=r"beyond 2\^24"):
+        cellgl.cellular(np.array([[2.0 ** 25, 0.5]]), n=1, distribution="blender", backend="numpy")
+    with pytest.warns(RuntimeWarning, match=r"beyond 2\^24"):
+        cellgl.cellular_grid((2, 2), origin=(2.0 ** 25, 0.0), n=1, distribution="blender",
+                             backend="numpy")

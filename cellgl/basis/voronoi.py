@@ -30,7 +30,7 @@ import numpy as np
 from cellgl.basis import core
 from cellgl.basis.arrays import real_array
 from cellgl.basis.enums import Distribution, Metric, parse_enum
-from cellgl.basis.population import blender_color, blender_owner_cells
+from cellgl.basis.population import blender_color, blender_owner_cells, warn_blender_far
 
 __all__ = ["VoronoiResult", "voronoi", "FEATURES"]
 
@@ -172,6 +172,7 @@ def _octave_1d(coord, feature, kw, smoothness):
     """1D (Blender's points only): every point within reach is in the 7 cells around the
     sample's (one point per cell, in [c, c + 1])."""
     x = coord[:, 0]
+    warn_blender_far(float(np.abs(x).max()), stacklevel=4)
     c0 = np.floor(x).astype(np.int64)
     offs = np.arange(-3, 4)
     cells = c0[:, None] + offs[None, :]
@@ -206,6 +207,7 @@ def _octave_1d(coord, feature, kw, smoothness):
 
 def _edge_1d(coord, randomness):
     x = coord[:, 0]
+    warn_blender_far(float(np.abs(x).max()), stacklevel=4)
     c0 = np.floor(x).astype(np.int64)
     cells = c0[:, None] + np.arange(-3, 4)[None, :]
     q = _points_1d(cells.ravel(), randomness).reshape(cells.shape)
