@@ -144,6 +144,10 @@ class Terminated(BaseException):
 _UNWIND = ("SIGINT", "SIGTERM", "SIGHUP")
 
 
+#: the signal received while the command runs (at most one: later ones are ignored)
+_received: list[int] = []
+
+
 def _raise(exc: BaseException):
     raise exc
 
@@ -155,6 +159,7 @@ def _on_signal(signum, frame):
         sig = getattr(signal, name, None)
         if sig is not None:
             signal.signal(sig, signal.SIG_IGN)
+    _received[:] = [signum]
     exc = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
     gl = sys.modules.get("cellgl.gl.context")
     if gl is not None and getattr(gl._tls, "depth", 0) > 0:
@@ -230,35 +235,50 @@ def main(argv: Sequence[str] | None = None) -> int:
     the process with :func:`os._exit` once everything is unwound; called with a list (a test,
     another program) it returns the status instead."""
     program = argv is None
+    _received.clear()
     with _signals_unwind(), warnings.catch_warnings():
         warnings.showwarning = _warning_line
         try:
             args = build_parser().parse_args(argv)
             status = int(args._run(args) or 0)
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
-            return status
-        except _user_errors() as exc:
-            return _error(str(exc))
-        except KeyboardInterrupt:
-            # Unwound: temporary files are gone (a progress line says "interrupted").
-            return _leave(130) if program else 130
-        except Terminated as exc:
-            return _leave(128 + exc.signum) if program else 128 + exc.signum
-        except BrokenPipeError:
-            # Output piped into e.g. `head`: stop quietly, as other command line tools do.
+        except SystemExit:
+            raise               # --help, usage errors (argparse)
+        except BaseException as exc:  # noqa: BLE001 - every outcome is an exit status
+            status = _status(exc)
+    if _received:
+        # A signal came: whatever it turned into (KeyboardInterrupt; an ImportError when it hit a
+        # C extension's import; nothing, if some library swallowed it), the command stopped on
+        # it. Unwound: temporary files are gone (a progress line says "interrupted").
+        status = 128 + _received[0]
+        return _leave(status) if program else status
+    return status
+
+
+def _status(exc: BaseException) -> int:
+    """The exit status of a command that raised ``exc`` (its message printed)."""
+    if _received or isinstance(exc, KeyboardInterrupt):
+        _received[:] = _received or [signal.SIGINT]
+        return 128 + _received[0]
+    if isinstance(exc, Terminated):
+        return 128 + exc.signum
+    if isinstance(exc, _user_errors()):
+        return _error(str(exc))
+    if isinstance(exc, BrokenPipeError):
+        # Output piped into e.g. `head`: stop quietly, as other command line tools do.
+        _quiet_stdout()
+        return 0
+    if isinstance(exc, OSError):
+        if exc.filename is None:
             _quiet_stdout()
-            return 0
-        except OSError as exc:
-            if exc.filename is None:
-                _quiet_stdout()
-            return _error(_os_error(exc))
-        except RecursionError:
-            return _error("input nested too deeply")
-        except Exception as exc:  # noqa: BLE001 - the last resort: a message, not a traceback
-            if os.environ.get("CELLGL_DEBUG", "").strip() not in ("", "0"):
-                raise
-            return _error(f"internal error: {type(exc).__name__}: {exc} (CELLGL_DEBUG=1 shows "
-                          "the traceback; please report it)", status=1)
+        return _error(_os_error(exc))
+    if isinstance(exc, RecursionError):
+        return _error("input nested too deeply")
+    if not isinstance(exc, Exception) or os.environ.get("CELLGL_DEBUG", "").strip() not in ("", "0"):
+        raise exc
+    # the last resort: a message, not a traceback
+    return _error(f"internal error: {type(exc).__name__}: {exc} (CELLGL_DEBUG=1 shows "
+                  "the traceback; please report it)", status=1)
 
 
 if __name__ == "__main__":  # pragma: no cover

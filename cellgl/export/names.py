@@ -2,7 +2,7 @@
 safe inside a ``//`` comment.
 
 :func:`identifier` is the one place a name becomes code (the OSL ``shader cellgl_<name>``). Its
-result is ``cellgl_`` followed by lower-case ASCII letters, digits and single underscores, at
+result is ``cellgl_`` followed by ASCII letters, digits and single underscores, at
 most :data:`IDENT_MAX` characters. The ``cellgl_`` prefix is what makes it valid in every target
 (GLSL 3.30/4.x and ES 3.00, Shadertoy, Godot, HLSL, Unreal, WGSL, OSL): it starts with a
 letter, is no keyword or reserved word of any of them (none begins ``cellgl_``), never begins
@@ -30,7 +30,7 @@ def _ascii(name: str) -> str:
     out = []
     for ch in unicodedata.normalize("NFKD", name):
         if ch.isascii():
-            out.append(ch.lower() if ch.isalnum() else "_")
+            out.append(ch if ch.isalnum() else "_")
         elif unicodedata.combining(ch):
             continue                                  # an accent of the letter before
         elif ch.isalnum():
