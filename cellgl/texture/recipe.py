@@ -37,7 +37,7 @@ from cellgl.texture import domain
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
                                    check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
-                     PRODUCTS)
+                     PRODUCTS, unqualified)
 
 __all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS", "check_channels",
            "needed_n"]
@@ -244,7 +244,10 @@ class Recipe:
             if not isinstance(item, str) or "=" not in item:
                 raise RecipeError(f"--set {item!r}: expected name=value")
             name, text = (s.strip() for s in item.split("=", 1))
-            name = _unqualified(name, item)
+            try:
+                name = unqualified(name, item)
+            except ValueError as exc:
+                raise RecipeError(str(exc)) from None
             changes[name] = _parse(name, text)
         try:
             return self.replace(**changes)
@@ -448,20 +451,6 @@ def _read_groups(d: dict, base=None):
                                   .replace("c1,", "c1..c8,").replace("c11,", "c11..c44,"))
             values[k] = _coerce(p, v, path)
     return values, ramp, image, cimage
-
-
-def _unqualified(name: str, item: str) -> str:
-    """``basis.seed`` -> ``seed``: ``--set`` takes the qualified names the errors use too."""
-    group, dot, short = name.rpartition(".")
-    if not dot or group not in GROUPS:
-        return name
-    p = PARAMS_BY_NAME.get(short)
-    owner = p.group if p is not None else ("color" if short == "ramp" else
-                                           "combination" if short in ("linear", "products") else None)
-    if owner is not None and owner != group:
-        raise RecipeError(f"--set {item!r}: {short} is in {owner}, not {group}; accepted: "
-                          f"{owner}.{short} or {short}")
-    return short
 
 
 def _parse(name: str, text: str):
