@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-from typing import TYPE_CHECKING
 
+TYPE_CHECKING = False   # (not typing's: importing typing would slow the command's start)
 from cellgl._version import __version__
 
 #: public name -> the module that defines it

@@ -117,6 +117,34 @@ def test_in_process_main_returns_130_on_ctrl_c(monkeypatch, tmp_path):
     assert cli.main(["info"]) == 130
 
 
+def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
+    """A Ctrl-C that hit a C extension's import was printed by it and swallowed: the bake went
+    on to the end (exit 130 then, the outputs complete). The next tile or frame raises it again."""
+    from cellgl.io.bake import _Progress
+
+    steps = []
+
+    def swallowing(args):
+        try:
+            signal.raise_signal(signal.SIGINT)       # the CLI's handler raises KeyboardInterrupt
+            time.sleep(0.01)
+        except KeyboardInterrupt:
+            pass                                     # ... which something swallows
+        bar = _Progress(10, "baking x.png", False)
+        for _ in range(10):
+            bar.step()
+            steps.append(1)
+        return 0
+
+    monkeypatch.setitem(cli._COMMANDS, "info", (cli._add_info, swallowing))
+    assert cli.main(["info"]) == 130
+    assert steps == []
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
+    from cellgl.io import bake
+
+    assert bake.pending == []                        # nothing left for a later bake
+
+
 # --------------------------------------------------------------------------------------------
 # 3. cellgl view without the [viewer] extra
 # --------------------------------------------------------------------------------------------
