@@ -46,7 +46,7 @@ if TYPE_CHECKING:  # pragma: no cover - for type checkers and editors
 def __getattr__(name: str):
     # The first public name used loads what this package used to import eagerly (so that
     # cellgl.basis.core, cellgl.texture, ... are bound as before); cellgl.dask stays optional.
-    if name.startswith("__"):
+    if name.startswith("_"):     # private: a submodule being imported, or nothing
         raise AttributeError(f"module 'cellgl' has no attribute {name!r}")
     for export, module in _EXPORTS.items():
         if export != "to_dask" and export not in globals():

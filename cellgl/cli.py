@@ -17,6 +17,8 @@ import threading
 import warnings
 from collections.abc import Callable, Sequence
 
+from cellgl import _interrupt
+
 __all__ = ["main", "build_parser"]
 
 PROG = "cellgl"
@@ -161,9 +163,7 @@ def _on_signal(signum, frame):
             signal.signal(sig, signal.SIG_IGN)
     _received[:] = [signum]
     exc = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
-    bake = sys.modules.get("cellgl.io.bake")
-    if bake is not None:     # raised again at the next tile or frame if this raise is swallowed
-        bake.pending[:] = [exc]
+    _interrupt.pending[:] = [exc]    # raised again at the next tile or frame if this is swallowed
     gl = sys.modules.get("cellgl.gl.context")
     if gl is not None and getattr(gl._tls, "depth", 0) > 0:
         # inside a GL call: raised as it returns (an exception in the middle of GL work has
@@ -249,9 +249,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise               # --help, usage errors (argparse)
         except BaseException as exc:  # noqa: BLE001 - every outcome is an exit status
             status = _status(exc)
-    bake = sys.modules.get("cellgl.io.bake")
-    if bake is not None:
-        bake.pending.clear()
+    _interrupt.pending.clear()
     if _received:
         # A signal came: whatever it turned into (KeyboardInterrupt; an ImportError when it hit a
         # C extension's import; nothing, if some library swallowed it), the command stopped on

@@ -140,9 +140,9 @@ def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
     assert cli.main(["info"]) == 130
     assert steps == []
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
-    from cellgl.io import bake
+    from cellgl import _interrupt
 
-    assert bake.pending == []                        # nothing left for a later bake
+    assert _interrupt.pending == []                  # nothing left for a later bake
 
 
 # --------------------------------------------------------------------------------------------

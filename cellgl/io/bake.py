@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl import _interrupt
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, human_size
 from cellgl.texture import antialias
 
@@ -111,11 +112,6 @@ def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tup
 # --------------------------------------------------------------------------------------------
 
 
-#: a Ctrl-C (or SIGTERM) the command line received, raised again at the next step of a progress
-#: bar in case the first raise was swallowed (a C extension's import has printed it and gone on)
-pending: list = []
-
-
 class _Progress:
     """A progress bar on stderr. On a terminal one line redrawn in place (``\\r``, at most four
     times a second); elsewhere (a log, a pipe) a plain line at every tenth of the work; nothing
@@ -140,8 +136,7 @@ class _Progress:
         return f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s"
 
     def step(self) -> None:
-        if pending:
-            raise pending.pop()
+        _interrupt.check()      # a Ctrl-C the first raise of which was swallowed
         self.done += 1
         if not self.enabled:
             return
