@@ -1,23 +1,67 @@
-"""cellgl: cellular texture basis functions (Worley, Qin, PUPs) on the GPU."""
+"""cellgl: cellular texture basis functions (Worley, Qin, PUPs) on the GPU.
+
+The public names load on first use (PEP 562), so that ``import cellgl.cli`` -- the ``cellgl``
+command -- starts with the standard library only: a Ctrl-C while it starts is handled as one
+during a command (exit 130, no traceback), and ``cellgl --help`` is quick.
+"""
 from __future__ import annotations
 
+import importlib
+import importlib.util
+
+TYPE_CHECKING = False   # (not typing's: importing typing would slow the command's start)
 from cellgl._version import __version__
 
-from cellgl.basis.core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
-from cellgl.basis.density import DensityMap
-from cellgl.basis.enums import Distribution, Metric
-from cellgl.basis.voronoi import VoronoiResult, voronoi
-from cellgl.recipes import evaluate, list_presets, load_recipe, render
-from cellgl.texture.recipe import Recipe, RecipeError
+#: public name -> the module that defines it
+_EXPORTS = {
+    "CellularResult": "cellgl.basis.core",
+    "FeaturePoints": "cellgl.basis.core",
+    "cellular": "cellgl.basis.core",
+    "cellular_grid": "cellgl.basis.core",
+    "feature_points": "cellgl.basis.core",
+    "DensityMap": "cellgl.basis.density",
+    "Distribution": "cellgl.basis.enums",
+    "Metric": "cellgl.basis.enums",
+    "VoronoiResult": "cellgl.basis.voronoi",
+    "voronoi": "cellgl.basis.voronoi",
+    "evaluate": "cellgl.recipes",
+    "list_presets": "cellgl.recipes",
+    "load_recipe": "cellgl.recipes",
+    "render": "cellgl.recipes",
+    "Recipe": "cellgl.texture.recipe",
+    "RecipeError": "cellgl.texture.recipe",
+    "to_dask": "cellgl.dask",
+}
+
+if TYPE_CHECKING:  # pragma: no cover - for type checkers and editors
+    from cellgl.basis.core import CellularResult, FeaturePoints, cellular, cellular_grid, feature_points
+    from cellgl.basis.density import DensityMap
+    from cellgl.basis.enums import Distribution, Metric
+    from cellgl.basis.voronoi import VoronoiResult, voronoi
+    from cellgl.dask import to_dask
+    from cellgl.recipes import evaluate, list_presets, load_recipe, render
+    from cellgl.texture.recipe import Recipe, RecipeError
 
 
 def __getattr__(name: str):
-    # cellgl.to_dask loads cellgl.dask (and dask itself) only when first used
+    # The first public name used loads what this package used to import eagerly (so that
+    # cellgl.basis.core, cellgl.texture, ... are bound as before); cellgl.dask stays optional.
+    if name.startswith("_"):     # private: a submodule being imported, or nothing
+        raise AttributeError(f"module 'cellgl' has no attribute {name!r}")
+    for export, module in _EXPORTS.items():
+        if export != "to_dask" and export not in globals():
+            globals()[export] = getattr(importlib.import_module(module), export)
+    if name in globals():
+        return globals()[name]
     if name == "to_dask":
-        from cellgl.dask import to_dask
-
-        return to_dask
+        return importlib.import_module("cellgl.dask").to_dask
+    if importlib.util.find_spec(f"cellgl.{name}") is not None:
+        return importlib.import_module(f"cellgl.{name}")
     raise AttributeError(f"module 'cellgl' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
 
 
 __all__ = [

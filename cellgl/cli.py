@@ -14,7 +14,10 @@ import os
 import signal
 import sys
 import threading
+import warnings
 from collections.abc import Callable, Sequence
+
+from cellgl import _interrupt
 
 __all__ = ["main", "build_parser"]
 
@@ -69,6 +72,22 @@ def _add_view(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "view", help="interactive viewer (GLFW + Dear ImGui); --screenshot FILE for a headless capture"))
 
 
+#: the modules of the [viewer] extra (pyproject.toml)
+VIEWER_EXTRA = ("imgui_bundle", "glfw")
+
+
+def _run_view(args: argparse.Namespace) -> int:
+    """``cellgl view``; without the [viewer] extra, one line saying how to install it."""
+    try:
+        importlib.import_module("viewer.app")
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").partition(".")[0] not in VIEWER_EXTRA:
+            raise
+        raise ValueError(f"cellgl view needs the viewer extra (no module {exc.name!r}): "
+                         "pip install 'cellgl[viewer]'") from None
+    return importlib.import_module("viewer.cli").run(args)
+
+
 def _lazy(module: str, name: str) -> Callable:
     """``module.name``, imported when first called (a command's dependencies load only when it runs)."""
     def call(*args):
@@ -88,7 +107,7 @@ def _lazy(module: str, name: str) -> Callable:
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
     "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
-    "view": (_add_view, _lazy("viewer.cli", "run")),
+    "view": (_add_view, _run_view),
     "export": (_lazy("cellgl.export.cli", "add_parser"), _lazy("cellgl.export.cli", "run_cli")),
     "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
     "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
@@ -112,10 +131,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
-    from cellgl.gl.context import ContextError
-    from cellgl.gl.glsl import ShaderError
-
-    return (ValueError, ContextError, ShaderError)
+    """ValueError and cellgl's GL errors (those of modules loaded: this imports nothing)."""
+    errors: list[type[BaseException]] = [ValueError]
+    for module, name in (("cellgl.gl.context", "ContextError"), ("cellgl.gl.glsl", "ShaderError")):
+        if module in sys.modules:
+            errors.append(getattr(sys.modules[module], name))
+    return tuple(errors)
 
 
 class Terminated(BaseException):
@@ -127,34 +148,68 @@ class Terminated(BaseException):
         self.signum = signum
 
 
-def _raise(signum: int):
-    raise Terminated(signum)
+#: the signals turned into an exception while a command runs (SIGINT: KeyboardInterrupt)
+_UNWIND = ("SIGINT", "SIGTERM", "SIGHUP")
 
 
-def _raise_terminated(signum, frame):
+#: the signal received while the command runs (at most one: later ones are ignored)
+_received: list[int] = []
+
+
+def _raise(exc: BaseException):
+    raise exc
+
+
+def _on_signal(signum, frame):
+    """The first of SIGINT/SIGTERM/SIGHUP raises (KeyboardInterrupt or :class:`Terminated`);
+    later ones are ignored, so that a second Ctrl-C cannot cut the clean-up short."""
+    for name in _UNWIND:
+        sig = getattr(signal, name, None)
+        if sig is not None:
+            signal.signal(sig, signal.SIG_IGN)
+    _received[:] = [signum]
+    exc = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
+    _interrupt.pending[:] = [exc]    # raised again at the next tile or frame if this is swallowed
     gl = sys.modules.get("cellgl.gl.context")
     if gl is not None and getattr(gl._tls, "depth", 0) > 0:
         # inside a GL call: raised as it returns (an exception in the middle of GL work has
         # been seen to crash the driver at exit)
-        gl.deferred[:] = [lambda: _raise(signum)]
+        gl.deferred[:] = [lambda: _raise(exc)]
         return
-    _raise(signum)
+    raise exc
 
 
 @contextlib.contextmanager
 def _signals_unwind():
-    """SIGTERM and SIGHUP raise :class:`Terminated` while the command runs (main thread only)."""
+    """SIGINT, SIGTERM and SIGHUP raise while the command runs (main thread only)."""
     old = {}
     if threading.current_thread() is threading.main_thread():
-        for name in ("SIGTERM", "SIGHUP"):
+        for name in _UNWIND:
             sig = getattr(signal, name, None)
-            if sig is not None:
-                old[sig] = signal.signal(sig, _raise_terminated)
+            if sig is not None and signal.getsignal(sig) is not signal.SIG_IGN:
+                old[sig] = signal.signal(sig, _on_signal)
     try:
         yield
     finally:
         for sig, handler in old.items():
             signal.signal(sig, handler)
+
+
+def _leave(status: int):
+    """Exit now with ``status``, output flushed, without the interpreter's teardown: after a
+    signal it would release GL state (Mesa's threads) the signal may have interrupted, which
+    has crashed in libpython (SIGSEGV, exit 139) at exit."""
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    os._exit(status)
+
+
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """``warnings.showwarning`` of the command line: one ``cellgl: warning: ...`` line."""
+    stream = sys.stderr if file is None else file
+    with contextlib.suppress(Exception):
+        stream.write(f"{PROG}: warning: {' '.join(str(message).split())}\n")
 
 
 def _error(message: str, status: int = 2) -> int:
@@ -183,40 +238,57 @@ def _quiet_stdout() -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit status (0 ok, 1 internal error, 2 usage or user
     error, 128 + N on signal N: 130 Ctrl-C, 143 SIGTERM, 129 SIGHUP). Never a traceback unless
-    ``CELLGL_DEBUG=1``."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    with _signals_unwind():
+    ``CELLGL_DEBUG=1``.
+
+    As the program (``argv`` None: the ``cellgl`` command, ``python -m cellgl``) a signal ends
+    the process with :func:`os._exit` once everything is unwound; called with a list (a test,
+    another program) it returns the status instead."""
+    program = argv is None
+    _received.clear()
+    with _signals_unwind(), warnings.catch_warnings():
+        warnings.showwarning = _warning_line
         try:
+            args = build_parser().parse_args(argv)
             status = int(args._run(args) or 0)
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
-            return status
-        except _user_errors() as exc:
-            return _error(str(exc))
-        except KeyboardInterrupt:
-            return 130
-        except Terminated as exc:
-            # Unwound: temporary files are gone. Leave without the interpreter's teardown, which
-            # would release GL state the signal may have interrupted mid-call (a rare SIGSEGV).
-            for stream in (sys.stdout, sys.stderr):
-                with contextlib.suppress(Exception):
-                    stream.flush()
-            os._exit(128 + exc.signum)
-        except BrokenPipeError:
-            # Output piped into e.g. `head`: stop quietly, as other command line tools do.
+        except SystemExit:
+            raise               # --help, usage errors (argparse)
+        except BaseException as exc:  # noqa: BLE001 - every outcome is an exit status
+            status = _status(exc)
+    _interrupt.pending.clear()
+    if _received:
+        # A signal came: whatever it turned into (KeyboardInterrupt; an ImportError when it hit a
+        # C extension's import; nothing, if some library swallowed it), the command stopped on
+        # it. Unwound: temporary files are gone (a progress line says "interrupted").
+        status = 128 + _received[0]
+        return _leave(status) if program else status
+    return status
+
+
+def _status(exc: BaseException) -> int:
+    """The exit status of a command that raised ``exc`` (its message printed)."""
+    if _received or isinstance(exc, KeyboardInterrupt):
+        _received[:] = _received or [signal.SIGINT]
+        return 128 + _received[0]
+    if isinstance(exc, Terminated):
+        return 128 + exc.signum
+    if isinstance(exc, _user_errors()):
+        return _error(str(exc))
+    if isinstance(exc, BrokenPipeError):
+        # Output piped into e.g. `head`: stop quietly, as other command line tools do.
+        _quiet_stdout()
+        return 0
+    if isinstance(exc, OSError):
+        if exc.filename is None:
             _quiet_stdout()
-            return 0
-        except OSError as exc:
-            if exc.filename is None:
-                _quiet_stdout()
-            return _error(_os_error(exc))
-        except RecursionError:
-            return _error("input nested too deeply")
-        except Exception as exc:  # noqa: BLE001 - the last resort: a message, not a traceback
-            if os.environ.get("CELLGL_DEBUG", "").strip() not in ("", "0"):
-                raise
-            return _error(f"internal error: {type(exc).__name__}: {exc} (CELLGL_DEBUG=1 shows "
-                          "the traceback; please report it)", status=1)
+        return _error(_os_error(exc))
+    if isinstance(exc, RecursionError):
+        return _error("input nested too deeply")
+    if not isinstance(exc, Exception) or os.environ.get("CELLGL_DEBUG", "").strip() not in ("", "0"):
+        raise exc
+    # the last resort: a message, not a traceback
+    return _error(f"internal error: {type(exc).__name__}: {exc} (CELLGL_DEBUG=1 shows "
+                  "the traceback; please report it)", status=1)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -111,15 +111,15 @@ def check_file(path: Path) -> str | None:
 
 
 def named_outputs(command: str) -> list[str]:
-    """The files a shell command says it writes: ``-o FILE``, ``> FILE``. (Not ``--output``:
-    ``cellgl voronoi --output color`` names a socket.)"""
+    """The files a shell command says it writes: ``-o FILE``, ``--output FILE``, ``> FILE``
+    (``--output`` is the output file in every cellgl command)."""
     try:
         words = shlex.split(command, comments=True)
     except ValueError:
         return []
     out = []
     for k, w in enumerate(words):
-        if w in ("-o", ">", "1>") and k + 1 < len(words):
+        if w in ("-o", "--output", ">", "1>") and k + 1 < len(words):
             out.append(words[k + 1])
         elif w.startswith(">") and len(w) > 1 and not w.startswith(">&") and not w.startswith(">>"):
             out.append(w[1:])

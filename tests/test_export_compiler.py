@@ -514,7 +514,7 @@ def test_cli_basis(capsys):
                       (["--basis", "edge", "--metric", "manhattan"], "Euclidean only"),
                       (["--basis", "f1", "--distribution", "worley1996", "--dim", "3"], "worley1996"),
                       (["--basis", "f1", "--density", "99"], "density must be in"),
-                      (["f1", "--basis", "f1"], "not both"), ([], "not both")):
+                      (["f1", "--basis", "f1"], "not both"), ([], "nothing to export")):
         assert main(["export", *args]) == 2
         assert msg in capsys.readouterr().err
 

@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: the layers, bottom first: a module may import modules of its own layer or below, never above.
 #: Each entry is a module or a package prefix (every module under it).
 LAYERS = (
-    ("files", ("cellgl._version", "cellgl.io.formats", "cellgl.io.tempfiles")),
+    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl.io.formats", "cellgl.io.tempfiles")),
     ("gl", ("cellgl.gl",)),
     ("basis", ("cellgl.basis",)),
     ("texture", ("cellgl.texture",)),

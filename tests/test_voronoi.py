@@ -326,7 +326,7 @@ def test_cli_voronoi(ctx, tmp_path, capsys):
     from cellgl.cli import main
 
     out = tmp_path / "d.npy"
-    assert main(["voronoi", "-o", str(out), "--size", "16", "8", "--dimensions", "2", "--feature", "F2",
+    assert main(["voronoi", "-o", str(out), "--size", "16x8", "--dimensions", "2", "--feature", "F2",
                  "--detail", "1.5", "--backend", "numpy"]) == 0
     img = np.load(out)
     assert img.shape == (8, 16)
@@ -335,9 +335,9 @@ def test_cli_voronoi(ctx, tmp_path, capsys):
     want = cellgl.voronoi(pts, dimensions=2, feature="F2", detail=1.5, backend="numpy").distance
     np.testing.assert_array_equal(img.ravel(), want)
     png = tmp_path / "c.png"
-    assert main(["voronoi", "-o", str(png), "--size", "8", "--output", "color"]) == 0
+    assert main(["voronoi", "-o", str(png), "--size", "8", "--socket", "color"]) == 0
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert main(["voronoi", "-o", str(tmp_path / "x.png"), "--dimensions", "1", "--output", "position"]) == 2
+    assert main(["voronoi", "-o", str(tmp_path / "x.png"), "--dimensions", "1", "--socket", "position"]) == 2
     assert "has no such output" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
 

@@ -32,7 +32,8 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("recipe", nargs="?", default=None, metavar="PRESET_OR_RECIPE",
                    help="preset name or recipe JSON file (default: the first preset)")
     p.add_argument("--mode", choices=MODES, default="2d",
-                   help="initial view: 2d texture, 3d lit object, 3x3 tiled, 4D animation")
+                   help="initial view: 2d texture, 3d lit object, 3x3 tiled, 4D animation "
+                        "(default %(default)s)")
     p.add_argument("--shape", choices=SHAPES, default="sphere", help="3D object (default sphere)")
     p.add_argument("--size", type=_size, default=(1280, 800), metavar="WxH",
                    help="window size in pixels (default 1280x800)")

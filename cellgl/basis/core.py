@@ -20,6 +20,7 @@ from cellgl.basis import reference
 from cellgl.basis.arrays import real_array, refuse_masked
 from cellgl.basis.density import encode as _encode_density
 from cellgl.basis.enums import Distribution, Metric, parse_enum
+from cellgl.basis.population import warn_blender_far
 
 __all__ = ["CellularResult", "FeaturePoints", "cellular", "cellular_grid", "feature_points", "make_params"]
 
@@ -327,6 +328,8 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
                     stretch=stretch, orbit_radius=orbit_radius, orbit_phase=orbit_phase)
     smoothness = _features.check(outs, p.metric, smoothness, smooth)
     _check_stretch_features(p, outs)
+    if p.distribution == Distribution.BLENDER and len(pts):
+        warn_blender_far(float(np.abs(pts).max()) * p.scale)   # NaN: no warning, an error below
     if backend == "numpy":
         cells, fr = split(pts * p.scale if p.scale != 1.0 else pts)
         out, exact = _passes.numpy_search(cells, fr, p, n, outs, smoothness, pts, smooth)
@@ -425,6 +428,8 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
     far = org + spc * (np.array(shape_xyzw[:dim]) - 1)
     if np.any(np.abs(far) >= COORD_LIMIT) or np.any(np.abs(org) >= COORD_LIMIT):
         raise ValueError("grid extends beyond +-2^30 cells; move origin closer to 0")
+    if p.distribution == Distribution.BLENDER:
+        warn_blender_far(float(max(np.abs(far).max(), np.abs(org).max())))
     positions = None
     if backend == "numpy" or {"position", "smooth_position"} & set(outs) \
             or ("color" in outs and p.distribution == Distribution.BLENDER):

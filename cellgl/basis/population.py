@@ -144,6 +144,26 @@ def unit_float(h) -> np.ndarray:
 
 _ONE, _TWO = 0x3F800000, 0x40000000      # float bits of 1.0 and 2.0
 
+#: Blender hashes a cell's coordinates as float32, whose 24-bit mantissa holds every integer
+#: only below 2^24: from there on neighbouring cells hash alike (2^25, 2^25 + 1 and 2^25 + 2 get
+#: one point and one ID), in Blender as here. docs/blender.md, "Far from the origin".
+BLENDER_HASH_LIMIT = 2.0 ** 24
+_BLENDER_REACH = 3.0    #: cells beyond the sample's whose points the node's window reads
+
+
+def warn_blender_far(extent: float, stacklevel: int = 3) -> None:
+    """RuntimeWarning if samples ``extent`` cells from the origin (the largest |coordinate|,
+    in cells) read cells Blender's float hash cannot tell apart."""
+    if extent + _BLENDER_REACH >= BLENDER_HASH_LIMIT:
+        import warnings
+
+        warnings.warn(
+            f"distribution 'blender' at {extent:.4g} cells from the origin: beyond 2^24 = 16777216 "
+            "cells Blender's float hash gives neighbouring cells the same point and ID (as Blender "
+            "itself does), so the cells repeat; for distinct cells there (not Blender's points) use "
+            "distribution 'jitter' (one point per cell, integer hash, exact to +-2^30 cells)",
+            RuntimeWarning, stacklevel=stacklevel)
+
 
 def blender_cell_words(cells, dim: int) -> list:
     """The float bits of each cell coordinate (cells (N, >= dim) int)."""

@@ -30,7 +30,7 @@ import numpy as np
 from cellgl.basis import core
 from cellgl.basis.arrays import real_array
 from cellgl.basis.enums import Distribution, Metric, parse_enum
-from cellgl.basis.population import blender_color, blender_owner_cells
+from cellgl.basis.population import blender_color, blender_owner_cells, warn_blender_far
 
 __all__ = ["VoronoiResult", "voronoi", "FEATURES"]
 
@@ -38,6 +38,10 @@ __all__ = ["VoronoiResult", "voronoi", "FEATURES"]
 FEATURES = ("F1", "F2", "smooth_F1", "distance_to_edge", "n_sphere_radius")
 DETAIL_MAX = 15.0              #: the node clamps Detail to [0, 15]
 LACUNARITY_MAX = 1000.0        #: the node's Lacunarity soft range
+#: accepted range of each float socket (the command line's help shows these)
+RANGES = {"exponent": (0.25, 64.0), "scale": (0.0, 1e6), "detail": (0.0, DETAIL_MAX),
+          "roughness": (0.0, 1.0), "lacunarity": (0.0, LACUNARITY_MAX), "randomness": (0.0, 1.0),
+          "smoothness": (0.0, 1.0)}
 
 
 @dataclass
@@ -84,9 +88,42 @@ def _coords(points, dimensions, w) -> np.ndarray:
                          f"{dimensions}, got shape {pts.shape}")
     pts = pts[:, :dimensions].astype(np.float64)
     if dimensions == 4 and cols == 3:
-        wv = np.broadcast_to(np.asarray(w, dtype=np.float64), (len(pts),))
+        wv = real_array("w", w, f"a number or of shape ({len(pts)},), one per point")
+        if wv.ndim > 1 or wv.size not in (1, len(pts)):
+            raise ValueError(f"w must be a number or have shape ({len(pts)},), one per point; got "
+                             f"shape {wv.shape}")
+        if not np.isfinite(wv).all():
+            raise ValueError(f"w must be finite; w[{int(np.argmax(~np.isfinite(wv.ravel())))}] is "
+                             f"{wv.ravel()[~np.isfinite(wv.ravel())][0]}")
+        wv = np.broadcast_to(wv.reshape(-1), (len(pts),))
         pts = np.concatenate([pts, wv[:, None]], axis=1)
     return pts
+
+
+#: keywords of cellular() that voronoi() sets from its own sockets
+_OWN = {"points", "n", "outputs", "smoothness", "smooth", "backend", "metric", "distribution",
+        "jitter", "minkowski_p"}
+
+
+def _check_basis(basis: dict) -> None:
+    import inspect
+
+    accepted = [k for k in inspect.signature(core.cellular).parameters if k not in _OWN]
+    for k in basis:
+        if k not in accepted:
+            raise TypeError(f"voronoi() got an unexpected keyword argument {k!r}; accepted besides "
+                            f"the node's sockets: {', '.join(accepted)}")
+
+
+def _check_reach(coord: np.ndarray, octaves: int, lacunarity: float, detail: float) -> None:
+    """The last octave samples coord * lacunarity^(octaves - 1): it must stay within +-2^30 cells."""
+    if octaves <= 1 or lacunarity <= 1.0 or not len(coord):
+        return
+    top = float(np.max(np.abs(coord))) * lacunarity ** (octaves - 1)
+    if top >= core.COORD_LIMIT:
+        raise ValueError(f"detail {detail:g} x lacunarity {lacunarity:g}: the last octave samples "
+                         f"|coordinate| x scale x lacunarity^{octaves - 1} = {top:.4g} cells, beyond "
+                         f"the +-2^30 accepted; lower detail, lacunarity or scale")
 
 
 def _max_distance(metric: Metric, exponent: float, dim: int, randomness: float) -> float:
@@ -135,6 +172,7 @@ def _octave_1d(coord, feature, kw, smoothness):
     """1D (Blender's points only): every point within reach is in the 7 cells around the
     sample's (one point per cell, in [c, c + 1])."""
     x = coord[:, 0]
+    warn_blender_far(float(np.abs(x).max()), stacklevel=4)
     c0 = np.floor(x).astype(np.int64)
     offs = np.arange(-3, 4)
     cells = c0[:, None] + offs[None, :]
@@ -169,6 +207,7 @@ def _octave_1d(coord, feature, kw, smoothness):
 
 def _edge_1d(coord, randomness):
     x = coord[:, 0]
+    warn_blender_far(float(np.abs(x).max()), stacklevel=4)
     c0 = np.floor(x).astype(np.int64)
     cells = c0[:, None] + np.arange(-3, 4)[None, :]
     q = _points_1d(cells.ravel(), randomness).reshape(cells.shape)
@@ -230,17 +269,18 @@ def voronoi(points, dimensions=3, feature="F1", metric="euclidean", exponent=0.5
     dist = parse_enum(Distribution, distribution, "distribution")
     if dimensions == 1 and dist != Distribution.BLENDER:
         raise ValueError(f"dimensions=1 needs distribution 'blender', got {dist.name.lower()!r}")
-    exponent = _real("exponent", exponent, 0.25, 64.0)
-    scale = _real("scale", scale, 0.0, 1e6)
-    detail = _real("detail", detail, 0.0, DETAIL_MAX)
-    roughness = _real("roughness", roughness, 0.0, 1.0)
-    lacunarity = _real("lacunarity", lacunarity, 0.0, LACUNARITY_MAX)
-    randomness = _real("randomness", randomness, 0.0, 1.0)
-    smoothness = _real("smoothness", smoothness, 0.0, 1.0)
+    exponent = _real("exponent", exponent, *RANGES["exponent"])
+    scale = _real("scale", scale, *RANGES["scale"])
+    detail = _real("detail", detail, *RANGES["detail"])
+    roughness = _real("roughness", roughness, *RANGES["roughness"])
+    lacunarity = _real("lacunarity", lacunarity, *RANGES["lacunarity"])
+    randomness = _real("randomness", randomness, *RANGES["randomness"])
+    smoothness = _real("smoothness", smoothness, *RANGES["smoothness"])
     if not isinstance(normalize, (bool, np.bool_)):
         raise ValueError(f"normalize must be True or False, got {normalize!r}")
     if backend not in core.BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; expected one of: {', '.join(core.BACKENDS)}")
+    _check_basis(basis)
     coord = _coords(points, dimensions, w) * scale
     N = len(coord)
     euclid = feature in ("distance_to_edge", "n_sphere_radius")
@@ -261,6 +301,7 @@ def voronoi(points, dimensions=3, feature="F1", metric="euclidean", exponent=0.5
     zero = detail == 0.0 or roughness == 0.0 or lacunarity == 0.0
     octaves = 1 if zero else int(math.ceil(detail)) + 1
     rmd = detail - math.floor(detail)
+    _check_reach(coord, octaves, lacunarity, detail)
     amp, sc = 1.0, 1.0
     exact = np.ones(N, bool)
 

@@ -194,7 +194,7 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
     have = _check_manifest(outdir, request)
     t0 = time.perf_counter()
     bar = _bake._Progress(len(items), f"sweep {outdir.name}", progress, unit="files")
-    try:
+    with bar:   # the line ends; "interrupted" after Ctrl-C
         with cluster_client(scheduler, workers, threads) as client:
             if not have:   # only once there is a cluster to fill it
                 outdir.mkdir(exist_ok=True)
@@ -202,8 +202,6 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
                     tmp.write_text(json.dumps(request, indent=1, sort_keys=True) + "\n")
             done = map_tasks(client, _sweep_task, items, job, on_done=lambda _: bar.step(),
                              key="cellgl-sweep")
-    finally:
-        bar.close()
     secs = time.perf_counter() - t0
     baked = int(sum(done))
     log(f"sweep {outdir}: {len(items)} variations ({baked} baked, {len(items) - baked} "

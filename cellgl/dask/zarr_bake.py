@@ -204,7 +204,7 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
         + 8 * sum(samples(c) for c in layout.channels))
     blocks = layout.blocks()
     bar = _bake._Progress(len(blocks), f"baking {path.name}", progress, unit="chunks")
-    try:
+    with bar:   # the line ends; "interrupted" after Ctrl-C
         with cluster_client(scheduler, workers, threads, per_task) as client:
             if resume:
                 log(f"{path} exists: resuming (chunks already written are checked, not "
@@ -214,8 +214,6 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
             done = map_tasks(client, _chunk_task, blocks, layout, str(path.resolve()),
                              json.dumps(meta, sort_keys=True), on_done=lambda _: bar.step(),
                              key="cellgl-zarr-chunk")
-    finally:
-        bar.close()
     secs = time.perf_counter() - t0
     rendered = int(sum(done))
     summary = {"path": path, "chunks": len(blocks), "rendered": rendered,

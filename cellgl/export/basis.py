@@ -20,6 +20,7 @@ cellid     ``uint cellgl_cellid(vec3 p)``  ID of the nearest feature point (``id
 """
 from __future__ import annotations
 
+from cellgl.basis.enums import Distribution
 from cellgl.export.snippets import ExportError, Program, _glsl_float, check_target, export_program
 
 __all__ = ["BASES", "basis_export", "basis_program"]
@@ -34,6 +35,8 @@ BASES: dict[str, tuple[int, str, str]] = {
     "cellid": (1, "uint", "the ID of the nearest feature point (cellgl.cellular's id[..., 0])"),
 }
 
+#: distributions a basis snippet cannot express (see basis_program's refusal)
+BASIS_REFUSED = (Distribution.WORLEY1996,)
 _VEC = {2: "vec2", 3: "vec3", 4: "vec4"}
 _CELL = {2: "ivec4(ivec2(fl), 0, 0)", 3: "ivec4(ivec3(fl), 0)", 4: "ivec4(fl)"}
 _FRAC = {2: "vec4(p - fl, 0.0, 0.0)", 3: "vec4(p - fl, 0.0)", 4: "p - fl"}
@@ -62,7 +65,7 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
     key, dim = _check(basis, dim)
     p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p, seed=seed)
-    if p.distribution == Distribution.WORLEY1996:
+    if p.distribution in BASIS_REFUSED:
         raise ExportError("distribution 'worley1996' cannot be exported as a basis snippet (its "
                           "positions are rescaled in double precision first); use poisson or jitter")
     if key == "edge" and p.metric != Metric.EUCLIDEAN:

@@ -2,7 +2,8 @@
 :mod:`cellgl.export.basis` (``--basis``)."""
 from __future__ import annotations
 
-from cellgl.export.basis import basis_export
+from cellgl.export.basis import BASES, BASIS_REFUSED, basis_export
+from cellgl.export.command import recipe_command
 from cellgl.export.snippets import TARGETS, ExportError, check_target, export
 
 __all__ = ["add_parser", "run_cli"]
@@ -15,28 +16,39 @@ __all__ = ["add_parser", "run_cli"]
 
 def add_parser(sub):
     """Declare ``cellgl export`` on the CLI's subparsers."""
+    from cellgl.basis.enums import Distribution, Metric
+
+    names = ", ".join(TARGETS)
     p = sub.add_parser(
-        "export", help="write a self-contained shader snippet of a recipe (GLSL, GLSL ES, "
-        "Godot, HLSL, WGSL)",
+        "export", help=f"write a self-contained shader snippet of a recipe ({names})",
         description="Export a recipe as a shader snippet whose cellgl_texture(uv) returns the "
-        "pixels `cellgl bake` writes. See docs/engines.md.")
+        "pixels `cellgl bake` writes, for one of: " + "; ".join(
+            f"{t.name}: {t.title}" for t in TARGETS.values()) + ". See docs/engines.md.")
     p.add_argument("recipe", metavar="PRESET_OR_RECIPE", nargs="?", default=None,
                    help="a preset name or a recipe JSON file (not with --basis)")
     b = p.add_argument_group("basis-only snippets (one function of the cellular basis, no texture)")
     b.add_argument("--basis", default=None, metavar="NAME",
-                   help="f1, f1f2, f1f2f3, f1f2f3f4, edge or cellid: e.g. --basis f1f2 --dim 3 gives "
+                   help=", ".join(BASES) + ": e.g. --basis f1f2 --dim 3 gives "
                    "vec2 cellgl_f1f2(vec3 p), the values of cellgl.cellular")
-    b.add_argument("--dim", type=int, default=2, help="2, 3 or 4: the point type (default 2)")
-    b.add_argument("--metric", default="euclidean", help="euclidean, manhattan, chebyshev, minkowski")
-    b.add_argument("--distribution", default="poisson", help="poisson or jitter")
-    b.add_argument("--density", type=float, default=3.0, help="mean points per cell (poisson)")
-    b.add_argument("--jitter", type=float, default=1.0, help="jitter in [0, 1] (jitter distribution)")
-    b.add_argument("--seed", type=int, default=0)
-    b.add_argument("--min-points", type=int, default=1)
-    b.add_argument("--max-points", type=int, default=9)
-    b.add_argument("--minkowski-p", type=float, default=3.0)
+    b.add_argument("--dim", type=int, default=2,
+                   help="2, 3 or 4: the point type (default %(default)s)")
+    metrics = [m.name.lower() for m in Metric]
+    b.add_argument("--metric", default="euclidean", metavar="METRIC",
+                   help=", ".join(metrics) + " (default %(default)s)")
+    dists = [d.name.lower() for d in Distribution if d not in BASIS_REFUSED]
+    b.add_argument("--distribution", default="poisson", metavar="NAME",
+                   help=", ".join(dists) + " (default %(default)s)")
+    b.add_argument("--density", type=float, default=3.0,
+                   help="mean points per cell, poisson (default %(default)s)")
+    b.add_argument("--jitter", type=float, default=1.0,
+                   help="spread of the points in [0, 1], jitter and blender (default %(default)s)")
+    b.add_argument("--seed", type=int, default=0, help="(default %(default)s)")
+    b.add_argument("--min-points", type=int, default=1, help="poisson (default %(default)s)")
+    b.add_argument("--max-points", type=int, default=9, help="poisson (default %(default)s)")
+    b.add_argument("--minkowski-p", type=float, default=3.0,
+                   help="exponent of the minkowski metric (default %(default)s)")
     p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
-                   help="one of: " + ", ".join(TARGETS) + " (default glsl)")
+                   help="one of: " + names + " (default glsl)")
     p.add_argument("-o", "--output", metavar="FILE", default=None,
                    help="write to FILE (atomically) instead of standard output")
     p.add_argument("--uniforms", action="store_true",
@@ -58,8 +70,11 @@ def run_cli(args) -> int:
     from cellgl.io.tempfiles import check_output
 
     check_target(args.target)
-    if (args.basis is None) == (args.recipe is None):
-        raise ExportError("give either a preset / recipe file or --basis NAME (not both)")
+    if args.basis is None and args.recipe is None:
+        raise ExportError("nothing to export: give a preset name (`cellgl presets` lists them), a "
+                          "recipe .json file, or --basis NAME (one of: " + ", ".join(BASES) + ")")
+    if args.basis is not None and args.recipe is not None:
+        raise ExportError(f"give either {args.recipe!r} or --basis {args.basis}, not both")
     if args.basis is not None and (args.uniforms or args.sets):
         raise ExportError("--uniforms and --set apply to recipes, not to --basis snippets")
     if args.output is not None:  # before the work: a missing or read-only directory, a long name
@@ -70,7 +85,8 @@ def run_cli(args) -> int:
                             seed=args.seed, min_points=args.min_points, max_points=args.max_points,
                             minkowski_p=args.minkowski_p)
     else:
-        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold)
+        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold,
+                      command=recipe_command(args.recipe, args.sets, fold=args.fold))
     if args.output is None:
         sys.stdout.write(text)
         return 0

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import re
 
+from cellgl.export.names import identifier
 from cellgl.export.translate import to_osl
 
 __all__ = ["EXPOSED_EXCLUDED", "exposed_params", "osl_shader"]
@@ -106,7 +107,7 @@ def osl_shader(prog, code: str) -> str:
     names = ["cellgl_" + p.name for p, _ in params]
     lib = to_osl(code, params=names, drop=("cellgl_texture", "cellgl_texture3", "cellgl_texture_filtered",
                                            "cellgl_texture3_filtered"))
-    shader_name = "cellgl_" + "".join(c if c.isalnum() else "_" for c in prog.title)
+    shader_name = identifier(prog.title)
     lines = [f"shader {shader_name}(", '    point Vector = point(0, 0, 0) [[ string label = "Vector", '
              'string help = "Texture coordinate: (x, y) in [0, 1]^2 spans the bake, z the solid depth '
              '(unconnected: generated coordinates)" ]],']

@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from cellgl._version import __version__
 from cellgl.gl import glsl
 from cellgl.export import compiler, translate
+from cellgl.export.command import command_for
+from cellgl.export.names import comment_text, identifier
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
 
@@ -214,13 +216,13 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
 
         entry = [basis_signature(prog)]
     elif target.dialect == "osl":
-        entry = [f"shader cellgl_{prog.title}(point Vector, <the recipe's values>, output color Color, "
+        entry = [f"shader {identifier(prog.title)}(point Vector, <the recipe's values>, output color Color, "
                  "output float Fac, ..., output normal Normal): Vector (x, y) in [0,1]^2 -> the RGB "
                  "`cellgl bake` writes for the pixel centred at (u, v) = (x, 1 - y)"]
     lines = [
-        f"cellgl {__version__} {prog.kind} '{prog.title}' for {target.title}, exact (the same values as "
+        f"cellgl {__version__} {prog.kind} '{comment_text(prog.title)}' for {target.title}, exact (the same values as "
         + ("cellgl.cellular" if prog.signatures else "`cellgl bake`") + "). Regenerate (do not edit): "
-        f"{command} --target {target.name}{' --uniforms' if uniforms else ''}",
+        f"{comment_text(command)} --target {target.name}{' --uniforms' if uniforms else ''}",
         *("  " + e for e in entry),
         *textwrap.wrap(_how(target, prog), 116),
     ]
@@ -365,7 +367,8 @@ def _godot(code: str, name: str, fragment: str = _GODOT_FRAGMENT) -> str:
 # --------------------------------------------------------------------------------------------
 
 
-def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool = True) -> str:
+def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
+           command: str | None = None) -> str:
     """Export ``recipe`` as a self-contained shader snippet.
 
     Parameters
@@ -382,6 +385,9 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool =
         True (the default): the recipe's values are folded into the code, which keeps only what
         they use. False: they stay named ``const cellgl_<name>`` declarations at the top of the
         code (still only what the entry points reach), to edit by hand; the same pixels.
+    command : str, optional
+        The header's "Regenerate" command up to ``--target`` (the CLI passes what it was given;
+        default: derived from ``recipe`` by :func:`cellgl.export.command.command_for`).
 
     Returns
     -------
@@ -401,6 +407,7 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool =
         raise ExportError("--uniforms is not supported for WGSL (uniforms need a bind group "
                           "layout of your renderer); export WGSL with constants")
     prog = texture_program(recipe, uniforms=uniforms)
+    prog.command = command if command is not None else command_for(recipe, fold=fold)
     return export_program(prog, target, uniforms=uniforms, fold=fold)
 
 

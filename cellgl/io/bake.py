@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl import _interrupt
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, human_size
 from cellgl.texture import antialias
 
@@ -112,33 +113,69 @@ def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tup
 
 
 class _Progress:
+    """A progress bar on stderr. On a terminal one line redrawn in place (``\\r``, at most four
+    times a second); elsewhere (a log, a pipe) a plain line at every tenth of the work; nothing
+    when not ``enabled`` (``--quiet``) or for a single step. Used as ``with bar:`` the line is
+    ended on leaving, with "interrupted" after Ctrl-C or a terminating signal."""
+
     def __init__(self, total: int, label: str, enabled: bool, stream=None, unit: str = "tiles"):
         self.total, self.label, self.done, self.unit = total, label, 0, unit
         self.enabled = enabled and total > 1
         self.stream = stream or sys.stderr
+        try:
+            self.tty = self.stream.isatty()
+        except (AttributeError, ValueError, OSError):
+            self.tty = False
         self.t0 = time.perf_counter()
         self.last = -1.0
+        self.drawn = 0    # 0 nothing written, 1 a line in progress (terminal), 2 lines ended
+
+    def _text(self) -> str:
+        secs = time.perf_counter() - self.t0
+        eta = secs / self.done * (self.total - self.done)
+        return f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s"
 
     def step(self) -> None:
+        _interrupt.check()      # a Ctrl-C the first raise of which was swallowed
         self.done += 1
         if not self.enabled:
             return
-        now = time.perf_counter()
-        if self.done < self.total and now - self.last < 0.25:
-            return  # redraw at most four times a second, and always at the end
-        self.last = now
-        width = 30
-        fill = width * self.done // self.total
-        secs = time.perf_counter() - self.t0
-        eta = secs / self.done * (self.total - self.done)
-        self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] "
-                          f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s ")
+        if self.tty:
+            now = time.perf_counter()
+            if self.done < self.total and now - self.last < 0.25:
+                return  # redraw at most four times a second, and always at the end
+            self.last = now
+            width = 30
+            fill = width * self.done // self.total
+            self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] {self._text()} ")
+            self.drawn = 1
+        else:
+            if 10 * self.done // self.total == 10 * (self.done - 1) // self.total:
+                return  # a line at every tenth, and at the end
+            self.stream.write(f"{self.label}: {self._text()}\n")
+            self.drawn = 2
         self.stream.flush()
 
-    def close(self) -> None:
-        if self.enabled and self.done:
-            self.stream.write("\n")
+    def close(self, exc: BaseException | None = None) -> None:
+        """End the line; say "interrupted" if ``exc`` is a Ctrl-C or a terminating signal."""
+        if not self.enabled or not self.drawn:
+            return
+        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated"
+        try:
+            if self.drawn == 1:
+                self.stream.write(" interrupted\n" if stopped else "\n")
+            elif stopped:
+                self.stream.write(f"{self.label}: interrupted at {self.done}/{self.total} {self.unit}\n")
             self.stream.flush()
+        except (OSError, ValueError):
+            pass
+        self.drawn = 0
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, kind, exc, tb) -> None:
+        self.close(exc)
 
 
 # --------------------------------------------------------------------------------------------
@@ -383,6 +420,11 @@ def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: 
     bar = _Progress(plan.count, f"baking {out.path.name}", progress)
     meta = _meta(recipe, out, plan)
     tiles = _render_tiles(recipe, out, plan, bar)
+    with bar:
+        _write(tmp, tiles, out, ext, plan, meta)
+
+
+def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> None:
     try:
         if ext == ".png":
             (e,) = out.encodings
@@ -400,8 +442,6 @@ def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: 
         if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
             raise BakeError(f"cannot write {out.path}: {exc.strerror}") from None
         raise
-    finally:
-        bar.close()
 
 
 def _shape(e: _Encoding, plan: _Plan) -> tuple[int, ...]:

@@ -14,13 +14,12 @@ an animated file is written to a temporary name and renamed.
 from __future__ import annotations
 
 import os
-import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from cellgl.io.spec import BakeError, _check_size, parse_channels, parse_size
+from cellgl.io.tempfiles import scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
@@ -82,7 +81,7 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
         Bad frame count, fps, extension or channels, or a recipe that does not move. Nothing
         is written.
     """
-    from cellgl.io.bake import _check_path, _load, bake
+    from cellgl.io.bake import _check_path, _load, _Progress, bake
 
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
@@ -94,15 +93,17 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
         raise BakeError(f"output directory {str(parent)!r} does not exist")
     recipe = _load(recipe_or_name, sets, tileable)
     _check(frames, fps, recipe, ext, channels)
-    with tempfile.TemporaryDirectory(prefix=f".{path.stem}.", suffix=".frames", dir=parent) as tmp:
-        tmp = Path(tmp)
+    bar = _Progress(frames, f"baking {path.name}", progress, unit="frames")
+    # the folder is swept by a later bake if this one is killed
+    with scratch_dir(path) as tmp, bar:
         if ext in ANIMATED:
-            return [_animated(recipe, path, tmp, frames, fps, size, progress)]
+            return [_animated(recipe, path, tmp, frames, fps, size, bar)]
         names = []
         for k in range(frames):
             target = tmp / f"{path.stem}_{k:04d}{path.suffix}"
             names += bake(frame_recipe(recipe, k, frames), target, size=size, channels=channels,
-                          bit_depth=bit_depth, progress=progress, **bake_kw)
+                          bit_depth=bit_depth, progress=progress and frames == 1, **bake_kw)
+            bar.step()
         return _move_all(names, parent)
 
 
@@ -124,7 +125,7 @@ def _move_all(files: list[Path], parent: Path) -> list[Path]:
     return [d for _, d in done]
 
 
-def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, progress: bool) -> Path:
+def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bar) -> Path:
     from PIL import Image
 
     from cellgl import recipes
@@ -141,10 +142,7 @@ def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, prog
     for k in range(frames):
         rgb = recipes.render(frame_recipe(recipe, k, frames), w, h, channels=("color",))["color"][..., :3]
         images.append(Image.fromarray(np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8), "RGB"))
-        if progress:
-            print(f"\rframe {k + 1}/{frames}", end="", flush=True, file=sys.stderr)
-    if progress:
-        print(file=sys.stderr)
+        bar.step()
     duration = int(round(1000.0 / fps))
     part = tmp / f"{path.stem}{path.suffix}"
     kw = dict(save_all=True, append_images=images[1:], duration=duration, loop=0)

@@ -3,7 +3,8 @@ all together or not at all, with their disk space reserved up front.
 
 A temporary file lives next to its destination and is named
 ``.<stem>.cellgl-<pid>@<host>.<random>.<kind><ext>`` (``kind`` ``part`` for a file that becomes an
-output, ``spool`` for scratch data), never more than 255 bytes whatever the destination's name (the
+output, ``spool`` for scratch data; a folder ``.<stem>.cellgl-<pid>@<host>.<random>.frames`` holds
+the frames of an animation until all are done), never more than 255 bytes whatever the destination's name (the
 stem is shortened). A process killed mid-write (SIGKILL, a power cut) cannot delete its own; the
 next write into that directory on the same host removes those whose process is gone
 (:func:`sweep_stale`). SIGTERM and SIGHUP are turned into an exception by the command line, so they
@@ -22,13 +23,13 @@ import socket
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-__all__ = ["atomic_paths", "scratch_path", "sweep_stale", "reserve", "temp_name", "human_size",
+__all__ = ["atomic_paths", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
            "check_output", "NAME_MAX"]
 
 NAME_MAX = 255  #: bytes in one file name on every common filesystem
 _EXT_MAX = 32   #: longest extension kept on a temporary name
 _HOST = re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:40] or "host"
-_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:part|spool)(?:\..*)?$")
+_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:(?:part|spool)(?:\..*)?|frames)$")
 
 
 def human_size(n: int) -> str:
@@ -83,7 +84,10 @@ def sweep_stale(directory: str | os.PathLike) -> list[Path]:
             continue
         if not _alive(int(m.group(1))):
             with contextlib.suppress(OSError):
-                os.unlink(entry.path)
+                if entry.is_dir(follow_symlinks=False):
+                    shutil.rmtree(entry.path)
+                else:
+                    os.unlink(entry.path)
                 removed.append(Path(entry.path))
     return removed
 
@@ -151,6 +155,32 @@ def scratch_path(directory: str | os.PathLike, suffix: str = "") -> Iterator[Pat
     finally:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def scratch_dir(dest: str | os.PathLike, kind: str = "frames") -> Iterator[Path]:
+    """Yield a fresh hidden folder beside ``dest`` (named as the module doc says, so that a later
+    run sweeps it if this process is killed); it is deleted with its contents on leaving,
+    always. Stale temporary files and folders of dead processes there are removed first."""
+    dest = Path(dest)
+    parent = dest.parent if str(dest.parent) else Path(".")
+    sweep_stale(parent)
+    for _ in range(100):
+        tmp = parent / temp_name(dest, kind, "")
+        try:
+            os.mkdir(tmp, 0o700)
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot create a folder there: {exc.strerror}",
+                          str(dest)) from None
+        break
+    else:
+        raise FileExistsError(errno.EEXIST, "no free temporary name", str(parent))
+    try:
+        yield tmp
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
 
 
 def reserve(path: str | os.PathLike, nbytes: int) -> None:

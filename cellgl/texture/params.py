@@ -360,3 +360,17 @@ def markdown_table() -> str:
         doc = doc.replace("|", "\\|")
         lines.append(f"| {p.group} | `{name}` | {p.type} | `{default}` | {p.range_text()} | {kind} | {doc} |")
     return "\n".join(lines) + "\n"
+
+
+def unqualified(name: str, item: str) -> str:
+    """``basis.seed`` -> ``seed``: ``--set`` takes the qualified names the errors use too."""
+    group, dot, short = name.rpartition(".")
+    if not dot or group not in GROUPS:
+        return name
+    p = PARAMS_BY_NAME.get(short)
+    owner = p.group if p is not None else ("color" if short == "ramp" else
+                                           "combination" if short in ("linear", "products") else None)
+    if owner is not None and owner != group:
+        raise ValueError(f"--set {item!r}: {short} is in {owner}, not {group}; accepted: "
+                         f"{owner}.{short} or {short}")
+    return short

@@ -38,7 +38,7 @@ from cellgl.texture.schema import check_name_doc
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
                                    check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
-                     PRODUCTS)
+                     PRODUCTS, unqualified)
 
 __all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS", "check_channels",
            "needed_n"]
@@ -244,6 +244,10 @@ class Recipe:
             if not isinstance(item, str) or "=" not in item:
                 raise RecipeError(f"--set {item!r}: expected name=value")
             name, text = (s.strip() for s in item.split("=", 1))
+            try:
+                name = unqualified(name, item)
+            except ValueError as exc:
+                raise RecipeError(str(exc)) from None
             changes[name] = _parse(name, text)
         try:
             return self.replace(**changes)
