@@ -403,7 +403,7 @@ def test_an_option_name_means_one_thing_across_subcommands():
     for name, p in sub.choices.items():
         for a in p._actions:
             if "--output" in a.option_strings:
-                assert "-o" in a.option_strings and a.metavar in ("FILE", "FILE.blend", "DIR"), (name, a)
+                assert "-o" in a.option_strings and a.metavar in ("FILE", "FILE.blend", "FILE.zip", "DIR"), (name, a)
 
 
 def test_help_is_plain_text_with_defaults_and_every_accepted_value():
