@@ -20,6 +20,7 @@ import pytest
 from cellgl.export import snippets as export
 from cellgl.basis import core
 from cellgl.export import translate
+from tiers import quick_few
 
 REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
 REQUIRE_WGSL = os.environ.get("CELLGL_REQUIRE_WGSL", "").strip().lower() in ("1", "true", "yes")
@@ -311,13 +312,15 @@ def _presets() -> list[str]:
 PRESETS = _presets()
 #: a spread of features for the GLSL ES renders (fractal modes, metrics, splines, noise, 3D; domain
 #: warp, stretched cells and orbiting points: caustics, wood-grain)
+#: every target's sweep in the default tier (tests/tiers.py): 2D and 3D, fractal, density map, warp
+QUICK_PRESETS = [p for p in ("f1", "flagstone", "qin-marble", "density", "caustics") if p in PRESETS]
 GLES_PRESETS = [p for p in ("flagstone", "hull", "qin-marble", "qin-wrinkle", "craters", "worley-gallery",
                             "edge-cracks", "hammered", "caustics", "wood-grain")
                 if p in PRESETS]
 
 
 @pytest.mark.parametrize("target", list(export.TARGETS))
-@pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.parametrize("preset", quick_few(PRESETS, QUICK_PRESETS))
 def test_preset_compiles(tmp_path, preset, target):
     text = export.export(preset, target)
     assert f"cellular texture '{preset}'" in text
@@ -400,14 +403,14 @@ def _bake(preset: str, W: int, H: int, **kw) -> np.ndarray:
     return texture.render(preset, W, H, channels=("color",), **kw)["color"]
 
 
-@pytest.mark.parametrize("preset", PRESETS)
+@pytest.mark.parametrize("preset", quick_few(PRESETS, QUICK_PRESETS))
 def test_glsl_snippet_reproduces_the_bake(ctx, preset):
     W, H = 64, 48
     got = render_snippet(ctx, snippet_code(export.export(preset, "glsl")), W, H)
     np.testing.assert_allclose(got, _bake(preset, W, H), rtol=0, atol=2e-5)
 
 
-@pytest.mark.parametrize("preset", GLES_PRESETS)
+@pytest.mark.parametrize("preset", quick_few(GLES_PRESETS, ("flagstone", "qin-marble", "caustics")))
 def test_gles_snippet_reproduces_the_bake(ctx, preset):
     # Desktop GL cannot run GLSL ES: the ES snippet's code (compiled as ES 3.00 by
     # test_preset_compiles) is rendered unchanged in a #version 330 shader.
@@ -496,7 +499,7 @@ RUN_PRESETS = GLES_PRESETS
 
 
 @pytest.mark.parametrize("target", ["wgsl", "hlsl"])
-@pytest.mark.parametrize("preset", RUN_PRESETS)
+@pytest.mark.parametrize("preset", quick_few(RUN_PRESETS, ("flagstone", "qin-marble")))
 def test_wgsl_hlsl_snippet_reproduces_the_bake(tmp_path, preset, target):
     W, H = 32, 24
     got = run_snippet(tmp_path, target, export.export(preset, target), W, H)
