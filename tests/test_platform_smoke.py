@@ -28,6 +28,7 @@ import pytest
 
 import cellgl
 from cellgl.gl import context, path, platforms
+from test_export import render_snippet
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -81,41 +82,6 @@ def test_bake_writes_the_same_bytes_twice(ctx, tmp_path):
     assert img.shape[:2] == (64, 64) and len(np.unique(img.reshape(-1, img.shape[-1]), axis=0)) > 16
 
 
-_VERT = """#version 330 core
-void main()
-{
-    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
-}
-"""
-
-
-def _render_snippet(ctx, code: str, width: int, height: int) -> np.ndarray:
-    """``cellgl_texture(uv)`` of a GLSL snippet at every pixel centre, rows top to bottom."""
-    frag = ("#version 330 core\n" + code + "uniform vec2 size;\nout vec4 cellgl_out;\n"
-            "void main() { cellgl_out = cellgl_texture(gl_FragCoord.xy / size); }\n")
-    prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
-    prog["size"].value = (float(width), float(height))
-    key = (id(ctx), width, height)
-    if key not in _TARGETS:   # kept for the session: releasing a bound framebuffer upsets moderngl
-        tex = ctx.texture((width, height), 4, dtype="f4")
-        _TARGETS[key] = (ctx.framebuffer(color_attachments=[tex]), tex)
-    fbo = _TARGETS[key][0]
-    vao = ctx.vertex_array(prog, [])
-    try:
-        fbo.use()
-        fbo.clear()
-        vao.render(mode=ctx.TRIANGLES, vertices=3)
-        data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
-        return data.reshape(height, width, 4).copy()
-    finally:
-        vao.release()
-        prog.release()
-
-
-_TARGETS: dict = {}
-
-
 @pytest.mark.parametrize("target", ["glsl", "gles"])
 def test_snippet_reproduces_the_bake(ctx, target):
     from cellgl import texture
@@ -128,7 +94,7 @@ def test_snippet_reproduces_the_bake(ctx, target):
     if target == "gles":   # GLSL ES 3.00 code compiles as desktop GLSL 3.30 minus its precision lines
         code = "\n".join(line for line in code.splitlines() if not line.startswith("precision "))
     W, H = 48, 32
-    got = _render_snippet(ctx, code, W, H)
+    got = render_snippet(ctx, code, W, H)
     ref = texture.render("flagstone", W, H, channels=("color",))["color"]
     np.testing.assert_allclose(got, ref, rtol=0, atol=2e-5)
 

@@ -175,11 +175,11 @@ class CELLGL_OT_bake_image(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class CELLGL_OT_copy_snippet(bpy.types.Operator):
-    """Copy the texture with the node's values as shader code for the chosen target"""
+class _CopyText:
+    """An operator that copies a text made from the active cellgl recipe node to the clipboard:
+    ``make_text(node)`` makes it, ``done_message(node, text)`` reports it; errors become Blender reports."""
 
-    bl_idname = "cellgl.copy_snippet"
-    bl_label = "Copy Snippet"
+    error_prefix = "cellgl"
 
     @classmethod
     def poll(cls, context):
@@ -188,38 +188,41 @@ class CELLGL_OT_copy_snippet(bpy.types.Operator):
 
     def execute(self, context):
         node = _active_group(context)
-        target = node.node_tree.cellgl.target
         try:
-            text = groups.snippet_text(node, target)
+            text = self.make_text(node)
         except Exception as exc:        # noqa: BLE001
-            self.report({"ERROR"}, f"cellgl export: {type(exc).__name__}: {exc}")
+            self.report({"ERROR"}, f"{self.error_prefix}: {type(exc).__name__}: {exc}")
             return {"CANCELLED"}
         context.window_manager.clipboard = text
-        self.report({"INFO"}, f"copied the {target} snippet ({len(text.splitlines())} lines)")
+        self.report({"INFO"}, self.done_message(node, text))
         return {"FINISHED"}
 
 
-class CELLGL_OT_copy_bake_command(bpy.types.Operator):
+class CELLGL_OT_copy_snippet(_CopyText, bpy.types.Operator):
+    """Copy the texture with the node's values as shader code for the chosen target"""
+
+    bl_idname = "cellgl.copy_snippet"
+    bl_label = "Copy Snippet"
+    error_prefix = "cellgl export"
+
+    def make_text(self, node):
+        return groups.snippet_text(node, node.node_tree.cellgl.target)
+
+    def done_message(self, node, text):
+        return f"copied the {node.node_tree.cellgl.target} snippet ({len(text.splitlines())} lines)"
+
+
+class CELLGL_OT_copy_bake_command(_CopyText, bpy.types.Operator):
     """Copy the cellgl bake command line that writes this texture with the node's values"""
 
     bl_idname = "cellgl.copy_bake_command"
     bl_label = "Copy Bake Command"
 
-    @classmethod
-    def poll(cls, context):
-        node = _active_group(context)
-        return node is not None and node.node_tree.cellgl.kind == "RECIPE"
+    def make_text(self, node):
+        return groups.bake_command_text(node)
 
-    def execute(self, context):
-        node = _active_group(context)
-        try:
-            text = groups.bake_command_text(node)
-        except Exception as exc:        # noqa: BLE001
-            self.report({"ERROR"}, f"cellgl: {type(exc).__name__}: {exc}")
-            return {"CANCELLED"}
-        context.window_manager.clipboard = text
-        self.report({"INFO"}, text)
-        return {"FINISHED"}
+    def done_message(self, node, text):
+        return text
 
 
 class CELLGL_OT_voronoi_exact(bpy.types.Operator):
