@@ -32,22 +32,31 @@
 // and the ring bounds above are taken in those units, per axis, so the answer
 // is still exactly that of a brute-force search under the weighted metric.
 //
-// Requires: hash.glsl, metric.glsl, points.glsl.
+// Requires: walk.glsl (included; with it hash.glsl, metric.glsl, points.glsl).
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
 //         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO,
 //         CELL_RING1_PRUNE (default: 1 but for the jitter distribution),
-//         CELL_LOOP_BUDGET (loop iterations one invocation may spend).
+//         CELL_LOOP_BUDGET (loop iterations one invocation may spend),
+//         CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE (the features of features.glsl
+//         wanted; default 0: here only whether the search tracks the F1
+//         point's cell for the n-sphere radius alone), CELL_TRACK_F1_CELL
+//         (derived from those unless defined: 1 for the n-sphere radius alone).
 
-#include "hash.glsl"
-#include "metric.glsl"
-#include "points.glsl"
+#include "walk.glsl"
 
+#ifndef CELL_EDGE
+#define CELL_EDGE 0
+#endif
+#ifndef CELL_SMOOTH
+#define CELL_SMOOTH 0
+#endif
+#ifndef CELL_NSPHERE
+#define CELL_NSPHERE 0
+#endif
 // The n-sphere radius alone (features.glsl) needs only the cell of the F1 point
 // and its position in it: the search keeps them instead of a second walk.
-#ifdef CELL_NSPHERE
 #if CELL_NSPHERE && !CELL_EDGE && !CELL_SMOOTH
 #define CELL_TRACK_F1_CELL 1
-#endif
 #endif
 #ifndef CELL_TRACK_F1_CELL
 #define CELL_TRACK_F1_CELL 0
@@ -59,17 +68,6 @@
 #define CELL_RING1_PRUNE 1
 #endif
 #endif
-
-#ifndef CELL_LOOP_BUDGET
-// 6144 per invocation: the 8 invocations of one llvmpipe SIMD vector (AVX2)
-// then spend at most 49152 of its 65535 together, the rest is margin for the
-// caller's own loops. Measured in docs/exactness.md; a search needing more is
-// flagged (cellgl recomputes it with the NumPy reference).
-#define CELL_LOOP_BUDGET 6144
-#endif
-// The most one step of a search loop can spend: one pass of a window loop and
-// the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
-#define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
 // How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
 // nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
@@ -115,13 +113,6 @@ ivec4 _cell_ring1_offset(int t, ivec4 sh)
 }
 #endif
 
-// Whether a search that has spent `loops` passes must stop (one more step
-// could pass CELL_LOOP_BUDGET).
-bool cell_budget_spent(int loops)
-{
-    return loops > CELL_LOOP_BUDGET - CELL_LOOP_STEP;
-}
-
 struct CellResult {
     float F[CELL_N];      // distances, ascending (true distances after cell_search)
     vec4 delta[CELL_N];   // feature point - sample (components past CELL_DIM are 0)
@@ -133,38 +124,6 @@ struct CellResult {
     bool exact;           // false if the ring cap or the loop budget was reached
     int loops;            // loop passes so far: a search stops at CELL_LOOP_BUDGET, as llvmpipe cuts loops silently
 };
-
-// A vector in the units distances are measured in (CELL_ANISO: axes weighted).
-vec4 _cell_axis_scale(vec4 v, CellParams p)
-{
-#if CELL_ANISO
-    return v * p.axis_scale;
-#else
-    return v;
-#endif
-}
-
-// Internal-unit distance from the sample (fraction f of its cell) to the
-// nearest point of the cell at offset o.
-float _cell_box_distance(ivec4 o, vec4 f, CellParams p)
-{
-    // Per axis o - f above, -o - 1 + f below (the larger), 0 in the sample's own slab.
-    vec4 g = max(max(vec4(o) - f, vec4(-o - 1) + f), vec4(0.0));
-    return cell_metric_length(_cell_axis_scale(g, p), p.minkowski_p);
-}
-
-// The sample's distance to the nearest face of its own cell (f: its fraction).
-float cell_face_distance(vec4 f)
-{
-    vec4 g = min(f, 1.0 - f);
-#if CELL_DIM == 2
-    return min(g.x, g.y);
-#elif CELL_DIM == 3
-    return min(min(g.x, g.y), g.z);
-#else
-    return min(min(g.x, g.y), min(g.z, g.w));
-#endif
-}
 
 // Insert one candidate (internal-unit distance d) into the sorted lists.
 // Strict comparisons: of two equal distances the one found first stays first.
@@ -190,29 +149,12 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
     }
 }
 
-// 1 on the axes of the dimension, 0 past them.
-#if CELL_DIM >= 4
-const ivec4 _cell_axes = ivec4(1, 1, 1, 1);
-#elif CELL_DIM == 3
-const ivec4 _cell_axes = ivec4(1, 1, 1, 0);
-#else
-const ivec4 _cell_axes = ivec4(1, 1, 0, 0);
-#endif
-
-// The window of ring `ring` that a point within true distance `reach` of the
-// sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
-void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
-{
-    hi = min(ivec4(ring), ivec4(ceil(reach + f)) - 1) * _cell_axes;
-    lo = -min(ivec4(ring), ivec4(ceil(reach + 1.0 - f)) - 1) * _cell_axes;
-}
-
 // Test every feature point of the cell at offset o from the sample's cell.
 void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
-    ivec4 c = cell_wrap(cell + o, p.period);
-    uint state = cell_cell_seed(c, p.seed);
-    int count = cell_point_count_at(state, c, p);
+    ivec4 c;
+    uint state;
+    int count = _cell_open(cell, o, p, c, state);
     vec4 base = vec4(o) - f;
     r.loops += count + 1;
     // Tested at the end of each pass: on SIMD CPUs (llvmpipe) an `if` does not
@@ -239,79 +181,17 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     }
 }
 
-// Internal-unit lower bound on the distance to any point beyond `rings` full
-// rings of cells around the sample's: such a point's offset is +-(rings + 1)
-// on some axis a, so it is at least rings + (distance to the nearer face of
-// the sample's cell on a) away, m the least of those. Weighted (CELL_ANISO):
-// the least over the axes of axis_scale[a] rings + ma[a], ma = axis_scale *
-// (the per-axis face distances).
-float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
-{
-#if CELL_ANISO
-    float b = 3.0e38;
-    for (int a = 0; a < CELL_DIM; a++) {
-        b = min(b, cell_metric_term(p.axis_scale[a] * rings + ma[a], p.minkowski_p));
-    }
-    return b;
-#else
-    return cell_metric_term(rings + m, p.minkowski_p);
-#endif
-}
-
-// The cells of the window lo .. hi in the order of nested x, y, z, w loops
-// (the last axis fastest): cell_window_first(lo), then cell_window_next for
-// each. The windows are walked by one flat loop: one pass per cell, where
-// nested loops of run-time length would also spend a pass on every exit of the
-// inner loops. (An odometer, not a division of the pass index: integer
-// division is slow on SIMD CPUs.)
-ivec4 cell_window_first(ivec4 lo)
-{
-#if CELL_DIM >= 4
-    return lo - ivec4(0, 0, 0, 1);
-#elif CELL_DIM == 3
-    return lo - ivec4(0, 0, 1, 0);
-#else
-    return lo - ivec4(0, 1, 0, 0);
-#endif
-}
-
-ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
-{
-#if CELL_DIM >= 4
-    o.w += 1;
-    if (o.w > hi.w) {
-        o.w = lo.w;
-        o.z += 1;
-    }
-#elif CELL_DIM == 3
-    o.z += 1;
-#else
-    o.y += 1;
-#endif
-#if CELL_DIM >= 3
-    if (o.z > hi.z) {
-        o.z = lo.z;
-        o.y += 1;
-    }
-#endif
-    if (o.y > hi.y) {
-        o.y = lo.y;
-        o.x += 1;
-    }
-    return o;
-}
-
 // The window of ring `ring` of cell_search_budget: the cells that can hold a
-// point nearer than Fn (internal units; 3.0e38: none found yet, the whole ring).
+// point nearer than Fn (internal units; CELL_FAR: none found yet, the whole ring).
 void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
 {
-    float reach = Fn < 3.0e38 ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
+    float reach = Fn < CELL_FAR ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
 #if CELL_ANISO
     lo = ivec4(0);
     hi = ivec4(0);
     for (int a = 0; a < CELL_DIM; a++) {
         // In lattice units on this axis (no point found yet: the whole ring).
-        float ra = Fn < 3.0e38 ? reach / p.axis_scale[a] : reach;
+        float ra = Fn < CELL_FAR ? reach / p.axis_scale[a] : reach;
         hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
         lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
     }
@@ -329,7 +209,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 {
     CellResult r;
     for (int k = 0; k < CELL_N; k++) {
-        r.F[k] = 3.0e38;
+        r.F[k] = CELL_FAR;
         r.delta[k] = vec4(0.0);
         r.id[k] = 0u;
     }
@@ -382,7 +262,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // runs while any lane of the vector needs it, a lane that left a loop costs
     // nothing.
     float rest[CELL_RING1_CELLS + 1];
-    rest[CELL_RING1_CELLS] = 3.0e38;
+    rest[CELL_RING1_CELLS] = CELL_FAR;
     for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
         rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
     }
