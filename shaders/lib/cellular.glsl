@@ -40,7 +40,8 @@
 //         CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE (the features of features.glsl
 //         wanted; default 0: here only whether the search tracks the F1
 //         point's cell for the n-sphere radius alone), CELL_TRACK_F1_CELL
-//         (derived from those unless defined: 1 for the n-sphere radius alone).
+//         (derived from those unless defined: 1 for the n-sphere radius alone),
+//         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache).
 
 #include "walk.glsl"
 
@@ -149,6 +150,21 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
     }
 }
 
+// What the search does per feature point: the point q (ID id) of the cell at
+// offset o, base = o - f, becomes a candidate.
+void _cell_visit_point(inout CellResult r, vec4 base, ivec4 o, vec4 q, uint id, CellParams p)
+{
+    vec4 delta = _cell_axis_scale(base + q, p);
+    float d = cell_metric_length(delta, p.minkowski_p);
+#if CELL_TRACK_F1_CELL
+    if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
+        r.o1 = o;
+        r.q1 = q;
+    }
+#endif
+    _cell_insert(r, d, delta, id);
+}
+
 // Test every feature point of the cell at offset o from the sample's cell.
 void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
@@ -164,15 +180,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
         for (int k = 0; ; ) {
             uint id;
             vec4 q = cell_next_point(state, c, p, id);
-            vec4 delta = _cell_axis_scale(base + q, p);
-            float d = cell_metric_length(delta, p.minkowski_p);
-#if CELL_TRACK_F1_CELL
-            if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
-                r.o1 = o;
-                r.q1 = q;
-            }
-#endif
-            _cell_insert(r, d, delta, id);
+            _cell_visit_point(r, base, o, q, id, p);
             k++;
             if (k >= count) {
                 break;
@@ -180,6 +188,38 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
         }
     }
 }
+
+#if CELL_SHARED_CELLS
+#define _CELL_VISIT_NEAR _cell_visit_near
+// _cell_visit for a cell of rings 0 and 1 (offset o: -1..1 on every axis):
+// read from the workgroup's cache of cells where it has them (a grid on the
+// compute path, walk.glsl), the same points in the same order as hashing
+// gives them; hashed otherwise. Same count of loop passes either way.
+void _cell_visit_near(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+{
+    if (cell_shared_on()) {
+        int count;
+        int slot = cell_shared_open(cell, o, count);
+        vec4 base = vec4(o) - f;
+        r.loops += count + 1;
+        if (cell_min_count(p) > 0 || count > 0) {
+            for (int k = 0; ; ) {
+                uint id;
+                vec4 q = cell_shared_point(slot, k, id);
+                _cell_visit_point(r, base, o, q, id, p);
+                k++;
+                if (k >= count) {
+                    break;
+                }
+            }
+        }
+    } else {
+        _cell_visit(r, cell, f, o, p);
+    }
+}
+#else
+#define _CELL_VISIT_NEAR _cell_visit
+#endif
 
 // The window of ring `ring` of cell_search_budget: the cells that can hold a
 // point nearer than Fn (internal units; CELL_FAR: none found yet, the whole ring).
@@ -222,7 +262,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
 
     // Ring 0, the sample's own cell.
     if (!spent) {
-        _cell_visit(r, cell, f, ivec4(0), p);
+        _CELL_VISIT_NEAR(r, cell, f, ivec4(0), p);
     }
     float m = cell_face_distance(f);
     vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
@@ -276,7 +316,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
             spent = cell_budget_spent(r.loops);      // the count only grows
             if (!spent) {
-                _cell_visit(r, cell, f, _cell_ring1_offset(t, sh), p);
+                _CELL_VISIT_NEAR(r, cell, f, _cell_ring1_offset(t, sh), p);
             }
         }
         t++;
@@ -301,7 +341,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         if (cell_budget_spent(r.loops)) {
             spent = true;
         } else if (t < CELL_RING1_CELLS - 1) {
-            _cell_visit(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
+            _CELL_VISIT_NEAR(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
         }
     }
 #else
@@ -314,7 +354,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             if (cell_budget_spent(r.loops)) {
                 spent = true;
             } else {
-                _cell_visit(r, cell, f, o, p);
+                _CELL_VISIT_NEAR(r, cell, f, o, p);
             }
         }
     }

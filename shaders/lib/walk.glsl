@@ -22,7 +22,9 @@
 //
 // Requires: hash.glsl, metric.glsl, points.glsl (included).
 // Macros: CELL_DIM (2..4), CELL_METRIC, CELL_ANISO, CELL_MAX_POINTS,
-//         CELL_LOOP_BUDGET (loop iterations one invocation may spend).
+//         CELL_LOOP_BUDGET (loop iterations one invocation may spend),
+//         CELL_SHARED_CELLS (1: a cache of cells computed ahead, below; only
+//         a compute entry that provides it defines it).
 
 #include "hash.glsl"
 #include "metric.glsl"
@@ -211,3 +213,24 @@ int _cell_open(ivec4 cell, ivec4 o, CellParams p, out ivec4 c, out uint state)
     state = cell_cell_seed(c, p.seed);
     return cell_point_count_at(state, c, p);
 }
+
+#ifndef CELL_SHARED_CELLS
+#define CELL_SHARED_CELLS 0
+#endif
+#if CELL_SHARED_CELLS
+// A second cell source: cells computed ahead. On a grid the samples of one
+// compute workgroup are neighbours and visit almost the same cells; the
+// workgroup hashes the cells of rings 0 and 1 around all of its samples once,
+// into shared memory (shaders/cellular.comp), and the search reads them there
+// (cellular.glsl, _cell_visit_near). The points are those the hash gives, in
+// its order: the same answers, bit for bit. Provided by the entry point (this
+// library declares no shared memory: its fragment-shader users cannot):
+//   cell_shared_on()     whether the cache holds rings 0 and 1 of every sample
+//                        of this workgroup (the same value for all of them);
+//   cell_shared_open     the slot of the cell at offset o (-1..1 per axis)
+//                        from the sample's `cell`, and its point count;
+//   cell_shared_point    point k of a slot: its position in its cell, its ID.
+bool cell_shared_on();
+int cell_shared_open(ivec4 cell, ivec4 o, out int count);
+vec4 cell_shared_point(int slot, int k, out uint id);
+#endif
