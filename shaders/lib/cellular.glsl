@@ -12,16 +12,9 @@
 //   * if ring CELL_MAX_RING is finished without that guarantee, the result is
 //     marked inexact (CellResult.exact = false) instead of being silently wrong.
 //
-// Loop budget. Drivers cut or kill long shaders: Mesa's llvmpipe stops every
-// loop of an invocation once 65535 loop iterations were spent in it (all
-// loops together, per SIMD vector of invocations; docs/exactness.md), other
-// GPUs have watchdogs. So the search counts its loop iterations in
-// CellResult.loops, as llvmpipe does (each pass through a loop whose length
-// is not a compile-time constant, plus one for the pass that leaves it), and
-// stops, marking the result inexact, rather than go past CELL_LOOP_BUDGET.
-// cell_features() (features.glsl) continues the same count. A caller that
-// searches several times in one invocation passes the count on
-// (cell_search_budget) so the bound holds for the invocation as a whole.
+// Loop budget (walk.glsl): the search counts its loop passes in
+// CellResult.loops and stops, flagged inexact, before CELL_LOOP_BUDGET;
+// cell_features() (features.glsl) continues the same count.
 //
 // The sample is given as an integer cell plus a float fraction in [0, 1), so
 // precision does not depend on the distance from the origin.
@@ -240,12 +233,33 @@ void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo,
 #endif
 }
 
-// Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
-// cell_search for an invocation that has already spent `loops` loop passes:
-// it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
-// (6144 unless defined), since drivers cut longer loops without a word
-// (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
-CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
+#if CELL_DIM <= 3 && CELL_RING1_PRUNE
+// The order of ring 1 for the sample (fraction f): the shifts sh of
+// _cell_ring1_offset and the sample in the frame of the table (qn).
+void _cell_ring1_order(vec4 f, out ivec4 sh, out vec4 qn)
+{
+    // The axes' ranks by the distance to their nearer face (ties: the lower axis
+    // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
+    // above): the shifts of _cell_ring1_offset, 4 rank + 2 if flipped.
+#if CELL_ANISO
+    sh = ivec4(0, 4, 8, 12) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#elif CELL_DIM == 2
+    int c = min(f, 1.0 - f).y < min(f, 1.0 - f).x ? 1 : 0;
+    sh = 4 * ivec4(c, 1 - c, 2, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#else
+    ivec3 c = ivec3(lessThan(min(f, 1.0 - f).yzz, min(f, 1.0 - f).xxy));     // y < x, z < x, z < y
+    sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#endif
+    // The sample in the frame of the table as listed: its distances to the near
+    // faces in rank order. A cell's box distance there has the same terms as on the
+    // lattice (summed in rank order) and, for a constant t (the unrolled pass
+    // below), needs no decoding.
+    qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
+}
+#endif
+
+// A search result with nothing found yet, after `loops` loop passes.
+CellResult _cell_result_start(int loops)
 {
     CellResult r;
     for (int k = 0; k < CELL_N; k++) {
@@ -258,82 +272,25 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     r.q1 = vec4(0.0);
 #endif
     r.loops = loops;
-    bool spent = cell_budget_spent(loops);
+    return r;
+}
 
-    // Ring 0, the sample's own cell.
-    if (!spent) {
-        _CELL_VISIT_NEAR(r, cell, f, ivec4(0), p);
-    }
-    float m = cell_face_distance(f);
-    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
+// Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
+// then rings 2, 3, ... while a point there could still be closer than F_n,
+// each ring's window of cells that can reach. A cell is skipped when its
+// nearest possible point is no closer than the current F_n (skipping never
+// changes the result: such a point could not be inserted). On llvmpipe an
+// `if` does not branch and every loop runs at least one pass, under an
+// empty mask if need be: a loop of their own for rings 2, 3, ..., which
+// almost no sample needs, cost every SIMD vector a masked pass. So they
+// are walked by a loop whose first pass is ring 1's own work (3D pruned:
+// a flat loop entered from an empty pass, the cheapest to enter).
 
-    // Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
-    // then rings 2, 3, ... while a point there could still be closer than F_n,
-    // each ring's window of cells that can reach. A cell is skipped when its
-    // nearest possible point is no closer than the current F_n (skipping never
-    // changes the result: such a point could not be inserted). On llvmpipe an
-    // `if` does not branch and every loop runs at least one pass, under an
-    // empty mask if need be: a loop of their own for rings 2, 3, ..., which
-    // almost no sample needs, cost every SIMD vector a masked pass. So they
-    // are walked by a loop whose first pass is ring 1's own work (3D pruned:
-    // a flat loop entered from an empty pass, the cheapest to enter).
-    int ring = 1;
-#if CELL_DIM <= 3 && CELL_RING1_PRUNE
-    // The axes' ranks by the distance to their nearer face (ties: the lower axis
-    // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
-    // above): the shifts of _cell_ring1_offset, 4 rank + 2 if flipped.
-#if CELL_ANISO
-    ivec4 sh = ivec4(0, 4, 8, 12) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
-#elif CELL_DIM == 2
-    int c = min(f, 1.0 - f).y < min(f, 1.0 - f).x ? 1 : 0;
-    ivec4 sh = 4 * ivec4(c, 1 - c, 2, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
-#else
-    ivec3 c = ivec3(lessThan(min(f, 1.0 - f).yzz, min(f, 1.0 - f).xxy));     // y < x, z < x, z < y
-    ivec4 sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
-#endif
-    // The sample in the frame of the table as listed: its distances to the near
-    // faces in rank order. A cell's box distance there has the same terms as on the
-    // lattice (summed in rank order) and, for a constant t (the unrolled pass
-    // below), needs no decoding.
-    vec4 qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
-    // The cells' nearest possible distances in visiting order, and the least of
-    // each tail: the walk leaves its loop once no cell left can beat F_n. A
-    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
-    // runs while any lane of the vector needs it, a lane that left a loop costs
-    // nothing.
-    float rest[CELL_RING1_CELLS + 1];
-    rest[CELL_RING1_CELLS] = CELL_FAR;
-    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
-    }
-#endif
-    // The part of ring 1 before the loop below, and what is left of it, as
-    // `cells` passes over the window lo .. hi (or the table).
-#if CELL_RING1_PRUNE && CELL_DIM == 3
-    // Tested at the end of each pass, as the point loop (_cell_visit).
-    for (int t = 0; ; ) {
-        r.loops += 1;
-        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
-            spent = cell_budget_spent(r.loops);      // the count only grows
-            if (!spent) {
-                _CELL_VISIT_NEAR(r, cell, f, _cell_ring1_offset(t, sh), p);
-            }
-        }
-        t++;
-        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
-            break;
-        }
-    }
-    ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
-#elif CELL_RING1_PRUNE && CELL_DIM == 2
-    int cells = CELL_RING1_CELLS;     // the table
-    ivec4 lo = ivec4(0), hi = lo;
-#elif CELL_RING1_PRUNE
-    int cells = 0;                    // 4D: ring 1 a window too, in the loop
-    ivec4 lo = ivec4(0), hi = lo;
-#else
-    // Unpruned (a test costs more than jitter's one point per cell) and
-    // unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
+#if !CELL_RING1_PRUNE
+// Unpruned (a test costs more than jitter's one point per cell) and
+// unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
+void _cell_search_ring1_all(inout CellResult r, ivec4 cell, vec4 f, CellParams p, inout bool spent)
+{
 #if CELL_DIM <= 3
     // (A loop over the whole table: NIR unrolls a loop that indexes an array
     // as long as its trip count.)
@@ -359,11 +316,29 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         }
     }
 #endif
-    int cells = 1;
-    ivec4 lo = _cell_axes, hi = lo;
+}
 #endif
+
 #if _CELL_NESTED
-    // One pass of the outer loop per ring, of the inner one per cell.
+// Rings `ring`, ring + 1, ... of cell_search_budget as nested loops: one pass of the
+// outer loop per ring, of the inner one per cell (the first pass: what is left of
+// ring 1, `cells` passes over the window lo .. hi or, 2D, the table in the order sh).
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
+                         inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells, ivec4 sh, vec4 qn)
+#else
+void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
+                         inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells)
+#endif
+{
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+    // The table's least box distance of each tail (as cell_search_budget's 3D ring 1).
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = CELL_FAR;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
+    }
+#endif
     ivec4 o = cell_window_first(lo);
     for (;;) {
         r.loops += 1;
@@ -400,11 +375,15 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             break;
         }
     }
+}
 #else
-    // One flat loop over the cells of the rings (the cells of each ring's
-    // window that are on the ring), on to the next ring after a window's last
-    // cell. (Tested at the top for the budget alone: a lane leaves at a ring's
-    // bound.)
+// Rings `ring`, ring + 1, ... of cell_search_budget as one flat loop over the
+// cells of the rings (the cells of each ring's window that are on the ring), on
+// to the next ring after a window's last cell. (Tested at the top for the budget
+// alone: a lane leaves at a ring's bound.)
+void _cell_search_flat(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
+                       inout bool spent, inout ivec4 lo, inout ivec4 hi)
+{
     ivec4 o = lo;
     for (; !spent; ) {
         spent = cell_budget_spent(r.loops);          // the count only grows
@@ -424,6 +403,79 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             o = lo;
         }
     }
+}
+#endif
+
+// Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
+// cell_search for an invocation that has already spent `loops` loop passes:
+// it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
+// (6144 unless defined), since drivers cut longer loops without a word
+// (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
+CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
+{
+    CellResult r = _cell_result_start(loops);
+    bool spent = cell_budget_spent(loops);
+
+    // Ring 0, the sample's own cell.
+    if (!spent) {
+        _CELL_VISIT_NEAR(r, cell, f, ivec4(0), p);
+    }
+    float m = cell_face_distance(f);
+    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
+
+    // Ring 1, then rings 2, 3, ... (_cell_search_nested, _cell_search_flat).
+    int ring = 1;
+#if CELL_DIM <= 3 && CELL_RING1_PRUNE
+    ivec4 sh;
+    vec4 qn;
+    _cell_ring1_order(f, sh, qn);
+#endif
+    // The part of ring 1 before the loop below, and what is left of it, as
+    // `cells` passes over the window lo .. hi (or the table).
+#if CELL_RING1_PRUNE && CELL_DIM == 3
+    // The cells' nearest possible distances in visiting order, and the least of
+    // each tail: the walk leaves its loop once no cell left can beat F_n. A
+    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
+    // runs while any lane of the vector needs it, a lane that left a loop costs
+    // nothing. Tested at the end of each pass, as the point loop (_cell_visit).
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = CELL_FAR;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
+    }
+    for (int t = 0; ; ) {
+        r.loops += 1;
+        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
+            spent = cell_budget_spent(r.loops);      // the count only grows
+            if (!spent) {
+                _CELL_VISIT_NEAR(r, cell, f, _cell_ring1_offset(t, sh), p);
+            }
+        }
+        t++;
+        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+            break;
+        }
+    }
+    ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
+#elif CELL_RING1_PRUNE && CELL_DIM == 2
+    int cells = CELL_RING1_CELLS;     // the table
+    ivec4 lo = ivec4(0), hi = lo;
+#elif CELL_RING1_PRUNE
+    int cells = 0;                    // 4D: ring 1 a window too, in the loop
+    ivec4 lo = ivec4(0), hi = lo;
+#else
+    _cell_search_ring1_all(r, cell, f, p, spent);
+    int cells = 1;
+    ivec4 lo = _cell_axes, hi = lo;
+#endif
+#if _CELL_NESTED
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+    _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells, sh, qn);
+#else
+    _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells);
+#endif
+#else
+    _cell_search_flat(r, cell, f, p, m, ma, ring, spent, lo, hi);
 #endif
     // Rings 0 .. ring - 1 searched: exact unless a point beyond can be nearer,
     // or the loop budget stopped the search (a nearer point may be missed).

@@ -1,14 +1,13 @@
 // cellgl: the cell walker's pieces, shared by every walk over cells.
 //
 // Every walk (cell_search in cellular.glsl; the edge, smooth, n-sphere and
-// edge-alone walks in features.glsl; the polynomial smooth fold) is the same
+// edge-alone walks in feature_walk.glsl; the polynomial smooth fold) is the same
 // thing: cells around a sample, ring by ring (Chebyshev rings of cells) or
 // window by window, each cell opened once (_cell_open: its wrapped lattice
 // cell, its hash state, its point count) and its feature points handed to
 // what the walk does per point. This file holds what they share:
 //   * the sentinel CELL_FAR ("nothing found yet", greater than any distance);
-//   * the loop budget (CELL_LOOP_BUDGET, cell_budget_spent; cellular.glsl,
-//     "Loop budget", and docs/exactness.md);
+//   * the loop budget (CELL_LOOP_BUDGET, cell_budget_spent; below);
 //   * the geometry of rings and windows: a cell's box distance, the sample's
 //     face distance, the window of a ring within a reach, the lower bound on
 //     everything past a ring, the odometer that walks a window in one flat
@@ -16,6 +15,18 @@
 //   * the cell source (_cell_open): the per-cell setup, written once. It
 //     hashes the cell (points.glsl); it is the seam where a source that reads
 //     cells computed ahead (a workgroup's shared cache on grids) goes.
+//
+// Loop budget. Drivers cut or kill long shaders: Mesa's llvmpipe stops every
+// loop of an invocation once 65535 loop iterations were spent in it (all
+// loops together, per SIMD vector of invocations; docs/exactness.md), other
+// GPUs have watchdogs. So the search counts its loop iterations in
+// CellResult.loops, as llvmpipe does (each pass through a loop whose length
+// is not a compile-time constant, plus one for the pass that leaves it), and
+// stops, marking the result inexact, rather than go past CELL_LOOP_BUDGET.
+// cell_features() (features.glsl) continues the same count. A caller that
+// searches several times in one invocation passes the count on
+// (cell_search_budget) so the bound holds for the invocation as a whole.
+//
 // The loops themselves keep the shapes measured on llvmpipe
 // (docs/performance.md): tested at the bottom where they run at least once,
 // no loop of their own for a stage almost no sample reaches.
