@@ -1,7 +1,8 @@
 """The snippet compiler: :func:`compile_glsl` turns the specialised, prefixed GLSL of a snippet
 into the code its entry points need, and nothing else.
 
-Passes, repeated until the text stops changing:
+Passes, repeated until the text stops changing (the fixed point; :data:`MAX_ROUNDS` rounds
+without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
 2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
@@ -46,9 +47,13 @@ from cellgl.export.reach import (
     unparse,
 )
 from cellgl.export.simplify import _DECL_TYPES
-from cellgl.export.translate.tokens import Tok, tokenize
+from cellgl.export.translate.tokens import Tok, TranslateError, tokenize
 
-__all__ = ["compile_glsl"]
+__all__ = ["compile_glsl", "MAX_ROUNDS"]
+
+#: rounds of the passes after which :func:`compile_glsl` gives up (it stops at the first round that
+#: changes nothing, the fixed point; the library's presets settle in under 20)
+MAX_ROUNDS = 64
 
 
 def _array_elements(items: list[Item]) -> list[Item]:
@@ -264,7 +269,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
     items = reach([it for it in parse(text) if it.kind != "other"], entries)
     items = [Item(it.kind, it.name, strip_body_comments(it.toks), it.comment) if it.kind == "function" else it
              for it in items]
-    for _ in range(8):
+    for _ in range(MAX_ROUNDS):
         before = unparse(items)
         for struct, loader in structs:
             items = scalarise(items, struct, loader)
@@ -285,6 +290,9 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
         items = reach(items, entries)
         if unparse(items) == before:
             break
+    else:
+        raise TranslateError(f"the snippet compiler did not settle in {MAX_ROUNDS} rounds of its passes "
+                             f"(entry points {', '.join(entries)}): a pass undoes another")
     return _join_lines(unparse(tidy_comments(_ordered(items)), blank=False))
 
 

@@ -66,7 +66,7 @@ def constant_fields(items: list[Item]) -> list[Item]:
                 holders = set(re.findall(rf"\b{name}\s+(\w+)", t))
                 if holders:
                     t = re.sub(rf"(?<![\w.])({'|'.join(sorted(holders))})\s*\.\s*{f}\b", lit, t)
-                new.append(Item(it.kind, it.name, tokenize(t), it.comment))
+                new.append(it if t == "".join(x.text for x in it.toks) else Item(it.kind, it.name, tokenize(t), it.comment))
             return constant_fields(new)
     return items
 

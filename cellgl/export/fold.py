@@ -185,7 +185,7 @@ def _local_constants(toks: list[Tok], env: dict[str, str]) -> dict[str, str]:
             v = _evaluate(w[n + 2:end], env)
             if v is None or w.count(w[n]) < 1:
                 continue
-            uses = [m for m in range(len(w)) if w[m] == w[n] and m != n]
+            uses = [m for m in range(len(w)) if w[m] == w[n] and m != n and w[m - 1] != "."]   # (not o.w)
             if any((m + 1 < len(w) and w[m + 1] in _ASSIGN) or w[m - 1] in ("++", "--")
                    or _argument(w, m) for m in uses):
                 continue
