@@ -288,12 +288,11 @@ def test_f1_snippet_is_short():
     assert not re.search(r"^\{", code, re.M)                 # braces open on their line
 
 
-#: OSL takes the unfolded specialised code (its recipe values stay shader parameters): not yet
-#: reached/folded, so it is held to no size limit yet
+#: the targets a --basis export exists for (OSL's basis shader: tests/test_blender.py)
 FOLDED_TARGETS = [t for t in export.TARGETS if export.TARGETS[t].dialect != "osl"]
 
 
-@pytest.mark.parametrize("target", FOLDED_TARGETS)
+@pytest.mark.parametrize("target", list(export.TARGETS))
 def test_every_preset_fits(target):
     sizes = {p: len(export.export(p, target).splitlines()) for p in PRESETS}
     worst = max(sizes, key=sizes.get)

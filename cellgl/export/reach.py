@@ -193,7 +193,19 @@ def unparse(items: list[Item], blank: bool = True) -> str:
 
 
 def _code_idx(toks: list[Tok]) -> list[int]:
-    return [i for i, t in enumerate(toks) if t.kind not in ("ws", "comment")]
+    """Indices of the code tokens of ``toks`` (remembered per list: the passes scan the same
+    unchanged functions again and again; a list is never changed in place once scanned)."""
+    hit = _CODE_IDX.get(id(toks))
+    if hit is not None and hit[0] is toks and hit[1] == len(toks):
+        return hit[2]
+    code = [i for i, t in enumerate(toks) if t.kind not in ("ws", "comment")]
+    if len(_CODE_IDX) > 1000:
+        _CODE_IDX.clear()
+    _CODE_IDX[id(toks)] = (toks, len(toks), code)        # (the list is held: its id is not reused)
+    return code
+
+
+_CODE_IDX: dict[int, tuple] = {}
 
 
 def _match(toks: list[Tok], code: list[int], n: int) -> int:
