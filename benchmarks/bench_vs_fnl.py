@@ -14,6 +14,12 @@ uses one core, llvmpipe two, so on an idle 2-core machine the wall-time ratio ap
 CPU-time ratio; on a loaded one the CPU-time ratio is the steadier of the two.
 
     python benchmarks/bench_vs_fnl.py [--points 1e6] [--repeats 7] [--dims 2 3]
+
+``--grid S``: instead of scattered points, the S x S grid slice of [0, 64)^2 (3D: at z = 0.37),
+pixel centres, spacing 64 / S: FastNoiseLite gets their coordinates, cellgl calls
+``cellgl.cellular_grid`` (the grid path of the compute shader, where a workgroup's samples are
+neighbours). ``--cache on|off|both``: cellgl's workgroup-shared cell cache on the grid path
+(``CELLGL_CELL_CACHE``; docs/performance.md), both: a row each.
 """
 from __future__ import annotations
 
@@ -44,6 +50,24 @@ def fnl(n: int):
     return f
 
 
+def _with_cache(call, cache):
+    """``call`` with CELLGL_CELL_CACHE set to ``cache`` (None: as the environment has it)."""
+    if cache is None:
+        return call
+
+    def run():
+        old = os.environ.get("CELLGL_CELL_CACHE")
+        os.environ["CELLGL_CELL_CACHE"] = cache
+        try:
+            return call()
+        finally:
+            if old is None:
+                os.environ.pop("CELLGL_CELL_CACHE")
+            else:
+                os.environ["CELLGL_CELL_CACHE"] = old
+    return run
+
+
 def timed(fn) -> tuple[float, float]:
     """(wall seconds, CPU seconds of this process: every thread, llvmpipe's included)."""
     t0, c0 = time.perf_counter(), time.process_time()
@@ -57,6 +81,9 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=7, help="interleaved rounds (medians reported)")
     ap.add_argument("--dims", type=int, nargs="+", default=[3, 2], choices=(2, 3))
     ap.add_argument("--n", type=int, default=2, choices=(1, 2), help="1: F1, 2: F1 and F2")
+    ap.add_argument("--grid", type=int, default=0, help="S: an S x S grid slice instead of points")
+    ap.add_argument("--cache", default="default", choices=("default", "on", "off", "both"),
+                    help="the grid path's shared cell cache (CELLGL_CELL_CACHE)")
     a = ap.parse_args()
     import cellgl
 
@@ -64,14 +91,31 @@ def main() -> int:
     rng = np.random.default_rng(0)
     load0 = os.getloadavg()[0]
     rows = []
+    caches = {"default": [None], "on": ["1"], "off": ["0"], "both": ["0", "1"]}[a.cache]
     for d in a.dims:
-        pts = rng.uniform(0.0, 64.0, (N, d))
-        coords = np.ascontiguousarray(pts.T, dtype=np.float32)
+        if a.grid:
+            S, h = a.grid, 64.0 / a.grid
+            origin = (h / 2, h / 2) + ((0.37,) if d == 3 else ())
+            shape = (S, S) if d == 2 else (1, S, S)
+            N = S * S
+            yy, xx = np.meshgrid(origin[1] + h * np.arange(S), origin[0] + h * np.arange(S), indexing="ij")
+            coords = np.stack([xx.ravel(), yy.ravel()] + ([np.full(N, 0.37)] if d == 3 else [])).astype(np.float32)
+        else:
+            pts = rng.uniform(0.0, 64.0, (N, d))
+            coords = np.ascontiguousarray(pts.T, dtype=np.float32)
         f = fnl(a.n)
         calls = {"FastNoiseLite": lambda: f.gen_from_coords(coords)}
         for dist in ("jitter", "poisson"):
-            calls[f"cellgl {dist}"] = (lambda dist=dist: np.asarray(cellgl.cellular(
-                pts, n=a.n, distribution=dist, jitter=1.0, seed=0, outputs=("F",)).F))
+            for cache in caches:
+                name = f"cellgl {dist}" + ("" if cache is None else f" cache {'on' if cache == '1' else 'off'}")
+                if a.grid:
+                    call = (lambda dist=dist, shape=shape, origin=origin, h=h: np.asarray(cellgl.cellular_grid(
+                        shape, origin=origin, spacing=h, n=a.n, distribution=dist, jitter=1.0, seed=0,
+                        outputs=("F",)).F))
+                else:
+                    call = (lambda dist=dist: np.asarray(cellgl.cellular(
+                        pts, n=a.n, distribution=dist, jitter=1.0, seed=0, outputs=("F",)).F))
+                calls[name] = _with_cache(call, cache)
         for fn in calls.values():
             fn()                                     # warm-up (compiles the shaders)
         t = {k: [] for k in calls}
@@ -86,7 +130,8 @@ def main() -> int:
                          min(ratios), max(ratios), cpu))
     load1 = os.getloadavg()[0]
     what = "F1 + F2" if a.n == 2 else "F1"
-    print(f"{what}, {N} scattered points, median of {a.repeats} interleaved rounds; "
+    where = f"a {a.grid}^2 grid slice" if a.grid else f"{N} scattered points"
+    print(f"{what}, {where}, median of {a.repeats} interleaved rounds; "
           f"load {load0:.1f} -> {load1:.1f} (1 min), {os.cpu_count()} cores")
     print("| dim | library | Ms/s | x FastNoiseLite (median, min-max) | x FastNoiseLite, CPU time |")
     print("| --- | --- | ---: | ---: | ---: |")

@@ -6,7 +6,8 @@
 // CELL_OUT_ID, CELL_OUT_GRAD, CELL_LOCAL_SIZE, CELL_SAMPLE_ROW_BITS, CELL_DENSITY_MAP, CELL_ORBIT,
 // CELL_ANISO, and those of lib/features.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE,
 // CELL_FEATURE_MAX_RING); CELL_LOOP_BUDGET (lib/cellular.glsl), CELL_LOOP_PROBE
-// (1: measure the loop budget, see below).
+// (1: measure the loop budget, see below); CELL_SHARED_CELLS (grids: rings 0 and 1 from the
+// workgroup's cell cache below, lib/walk.glsl), CELL_CACHE_NX (its cells along x, at most).
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -73,6 +74,22 @@ uniform dvec4 u_origin_frac;
 uniform dvec4 u_spacing;
 uniform ivec4 u_slab;          // first sample of this slab
 uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
+
+// Grid sample idx: its integer cell and float32 fraction.
+void cell_grid_sample(ivec4 idx, out ivec4 cell, out vec4 frac)
+{
+    dvec4 pos = u_origin_frac + u_spacing * dvec4(idx);
+    dvec4 fl = floor(pos);
+    cell = u_origin_cell + ivec4(fl);
+    frac = vec4(pos - fl);
+    // A fraction just below 1 can round up to 1.0 in float32.
+    for (int a = 0; a < 4; a++) {
+        if (frac[a] >= 1.0) {
+            cell[a] += 1;
+            frac[a] = 0.0;
+        }
+    }
+}
 #else
 uniform double u_scale;        // positions are multiplied by this first
 // Sample positions, float64, tightly packed (CELL_DIM values per sample), as the 32-bit words
@@ -176,11 +193,142 @@ vec4 cell_out_grad(vec4 delta, float F)
 }
 #endif
 
+// The basis parameters, from the uniforms.
+CellParams cell_load_params()
+{
+    CellParams p;
+    p.seed = u_seed;
+    p.jitter = u_jitter;
+    p.min_points = u_min_points;
+    p.max_points = u_max_points;
+    for (int k = 0; k < CELL_MAX_POINTS; k++) {
+        p.thresholds[k] = u_thresholds[k];
+    }
+    p.period = u_period;
+    p.minkowski_p = u_minkowski_p;
+#if CELL_DENSITY_MAP != CELL_DMAP_NONE
+    for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
+        p.density_thresholds[k] = u_density_thresholds[k];
+    }
+    for (int a = 0; a < 4; a++) {
+        p.density_axis[a] = u_density_axis[a];
+    }
+    p.density_info = u_density_info;
+#endif
+#if CELL_ORBIT
+    p.orbit_radius = u_orbit_radius;
+    p.orbit_turn = u_orbit_turn;
+#endif
+#if CELL_ANISO
+    p.axis_scale = u_axis_scale;
+#endif
+    return p;
+}
+
+#if CELL_GRID && CELL_SHARED_CELLS
+// The workgroup's cell cache (lib/walk.glsl, "A second cell source"). The CELL_LOCAL_SIZE
+// invocations of a workgroup are consecutive samples of one grid row: their cells differ only
+// along x, from the first sample's to the last's. The cache holds the cells of rings 0 and 1
+// around all of them: x from the first's - 1 to the last's + 1 (at most CELL_CACHE_NX), 3 on
+// each other axis, at slot ((x * 3 + y) * 3 + z) * 3 + w (the axes of the dimension, each
+// from the block's low corner), up to CELL_CACHE_POINTS points a slot: the count, then the
+// positions and IDs in the hash's order (structure of arrays).
+#if CELL_DIST == CELL_DIST_JITTER || CELL_DIST == CELL_DIST_BLENDER
+#define CELL_CACHE_POINTS 1
+#elif CELL_COUNT_CONST && CELL_DIST == CELL_DIST_POISSON && CELL_DENSITY_MAP == CELL_DMAP_NONE
+#define CELL_CACHE_POINTS CELL_MAX_COUNT
+#else
+#define CELL_CACHE_POINTS CELL_MAX_POINTS
+#endif
+#define CELL_CACHE_ROW (CELL_DIM == 2 ? 3 : (CELL_DIM == 3 ? 9 : 27))   // slots per x
+#define CELL_CACHE_CELLS (CELL_CACHE_NX * CELL_CACHE_ROW)
+shared int s_cell_count[CELL_CACHE_CELLS];
+shared vec4 s_cell_q[CELL_CACHE_CELLS * CELL_CACHE_POINTS];
+shared uint s_cell_id[CELL_CACHE_CELLS * CELL_CACHE_POINTS];
+// The block's low corner and whether it fits (the same for the whole workgroup: from the
+// uniforms and the workgroup's ID alone).
+ivec4 cell_cache_lo;
+bool cell_cache_fits;
+
+bool cell_shared_on()
+{
+    return cell_cache_fits;
+}
+
+int _cell_cache_slot(ivec4 s)
+{
+#if CELL_DIM == 2
+    return s.x * 3 + s.y;
+#elif CELL_DIM == 3
+    return (s.x * 3 + s.y) * 3 + s.z;
+#else
+    return ((s.x * 3 + s.y) * 3 + s.z) * 3 + s.w;
+#endif
+}
+
+int cell_shared_open(ivec4 cell, ivec4 o, out int count)
+{
+    int slot = _cell_cache_slot(cell + o - cell_cache_lo);
+    count = s_cell_count[slot];
+    return slot;
+}
+
+vec4 cell_shared_point(int slot, int k, out uint id)
+{
+    id = s_cell_id[slot * CELL_CACHE_POINTS + k];
+    return s_cell_q[slot * CELL_CACHE_POINTS + k];
+}
+
+// Fill the cache: every invocation hashes every CELL_LOCAL_SIZE-th cell of the block
+// (_cell_open, cell_next_point: what the search would do), then the workgroup meets.
+void cell_cache_fill(CellParams p)
+{
+    ivec4 first = ivec4(u_slab.x + int(gl_WorkGroupID.x) * CELL_LOCAL_SIZE, u_slab.y + int(gl_WorkGroupID.y),
+                        u_slab.z + int(gl_WorkGroupID.z), u_slab.w);
+    ivec4 last = first;
+    last.x = min(first.x + CELL_LOCAL_SIZE, u_slab.x + u_slab_size.x) - 1;
+    ivec4 c0, c1;
+    vec4 f0, f1;
+    cell_grid_sample(first, c0, f0);
+    cell_grid_sample(last, c1, f1);
+    cell_cache_lo = min(c0, c1) - _cell_axes;
+    int nx = max(c0.x, c1.x) + 1 - cell_cache_lo.x + 1;
+    cell_cache_fits = nx <= CELL_CACHE_NX && all(equal(c0.yzw, c1.yzw));
+    if (cell_cache_fits) {
+        int cells = nx * CELL_CACHE_ROW;
+        for (int t = int(gl_LocalInvocationIndex); t < cells; t += CELL_LOCAL_SIZE) {
+            ivec4 o = ivec4(t / CELL_CACHE_ROW, 0, 0, 0);
+#if CELL_DIM == 2
+            o.y = t % 3;
+#elif CELL_DIM == 3
+            o.yz = ivec2(t / 3 % 3, t % 3);
+#else
+            o.yzw = ivec3(t / 9 % 3, t / 3 % 3, t % 3);
+#endif
+            ivec4 c;
+            uint state;
+            int count = _cell_open(cell_cache_lo, o, p, c, state);
+            s_cell_count[t] = count;
+            for (int k = 0; k < count; k++) {
+                uint id;
+                s_cell_q[t * CELL_CACHE_POINTS + k] = cell_next_point(state, c, p, id);
+                s_cell_id[t * CELL_CACHE_POINTS + k] = id;
+            }
+        }
+    }
+    memoryBarrierShared();
+    barrier();
+}
+#endif
+
 void main()
 {
     ivec4 cell;
     vec4 frac;
 #if CELL_GRID
+#if CELL_SHARED_CELLS
+    cell_cache_fill(cell_load_params());      // before any invocation leaves
+#endif
     uvec3 g = gl_GlobalInvocationID;
     if (g.x >= uint(u_slab_size.x)) {
         return;
@@ -188,17 +336,7 @@ void main()
     // Output index within the slab, x fastest.
     uint i = (g.z * uint(u_slab_size.y) + g.y) * uint(u_slab_size.x) + g.x;
     ivec4 idx = ivec4(u_slab.x + int(g.x), u_slab.y + int(g.y), u_slab.z + int(g.z), u_slab.w);
-    dvec4 pos = u_origin_frac + u_spacing * dvec4(idx);
-    dvec4 fl = floor(pos);
-    cell = u_origin_cell + ivec4(fl);
-    frac = vec4(pos - fl);
-    // A fraction just below 1 can round up to 1.0 in float32.
-    for (int a = 0; a < 4; a++) {
-        if (frac[a] >= 1.0) {
-            cell[a] += 1;
-            frac[a] = 0.0;
-        }
-    }
+    cell_grid_sample(idx, cell, frac);
 #else
     uint i = gl_GlobalInvocationID.x;
     if (i >= u_count) {
@@ -240,32 +378,7 @@ void main()
     }
 #endif
 
-    CellParams p;
-    p.seed = u_seed;
-    p.jitter = u_jitter;
-    p.min_points = u_min_points;
-    p.max_points = u_max_points;
-    for (int k = 0; k < CELL_MAX_POINTS; k++) {
-        p.thresholds[k] = u_thresholds[k];
-    }
-    p.period = u_period;
-    p.minkowski_p = u_minkowski_p;
-#if CELL_DENSITY_MAP != CELL_DMAP_NONE
-    for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {
-        p.density_thresholds[k] = u_density_thresholds[k];
-    }
-    for (int a = 0; a < 4; a++) {
-        p.density_axis[a] = u_density_axis[a];
-    }
-    p.density_info = u_density_info;
-#endif
-#if CELL_ORBIT
-    p.orbit_radius = u_orbit_radius;
-    p.orbit_turn = u_orbit_turn;
-#endif
-#if CELL_ANISO
-    p.axis_scale = u_axis_scale;
-#endif
+    CellParams p = cell_load_params();
 
 #if CELL_SMOOTH == 2 && !CELL_EDGE && !CELL_NSPHERE && defined(CELL_FEATURE_PASS)
     // The polynomial smooth F1 pass: a fixed block, no search (features.glsl).

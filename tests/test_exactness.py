@@ -182,6 +182,32 @@ def test_grid_matrix_far_and_periodic(ctx):
     _check("grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
 
 
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_grid_cell_cache_gives_the_same_bits(ctx, monkeypatch, dim):
+    """The workgroup-shared cell cache (CELLGL_CELL_CACHE=1, grids) answers with the same bits as
+    hashing every cell: every distribution, periodic and far from the origin, fine and coarse
+    spacings (a workgroup over a few cells and over many), a grid narrower than a workgroup."""
+    dists = ["jitter", "poisson", "blender"] + (["worley1996"] if dim == 3 else [])
+    for dist, (shape_x, spacing), (period, base) in itertools.product(
+            dists, [(150, 0.05), (70, 0.2)], [(None, 0.0), ((5, 7, 6, 4)[:dim], 123456789.0)]):
+        if dist == "blender" and period is not None:
+            continue
+        shape = (3,) * (dim - 1) + (shape_x,)
+        kw = dict(origin=(base,) * dim, spacing=spacing, n=3, distribution=dist, period=period,
+                  seed=0 if dist == "blender" else 5, outputs=("F", "delta", "id"))
+        p = core.make_params(dim, distribution=dist, seed=kw["seed"])
+        monkeypatch.setenv("CELLGL_CELL_CACHE", "1")
+        fits = gpu.cell_cache_defines(p, spacing).get("CELL_SHARED_CELLS") == 1
+        # fine spacing: on, but for 4D Poisson (27 cells a slot of x, 9 points each: over 32 KiB)
+        assert fits or spacing > 0.1 or (dim == 4 and dist == "poisson"), (dist, spacing)
+        on = cellgl.cellular_grid(shape, **kw)
+        monkeypatch.setenv("CELLGL_CELL_CACHE", "0")
+        assert gpu.cell_cache_defines(p, spacing) == {}
+        off = cellgl.cellular_grid(shape, **kw)
+        for k in ("F", "delta", "id", "exact"):
+            assert np.array_equal(getattr(on, k), getattr(off, k)), (dist, spacing, period, k)
+
+
 # ------------------------------------------------------------------ the loop budget
 
 

@@ -3,6 +3,7 @@ imports only go down the layers of docs/architecture.md (lazy imports inside fun
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -148,3 +149,90 @@ def test_modules_stay_small():
     """No module past ~600 lines (the house rule; split by idea, not by count)."""
     big = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 620}
     assert not big, f"modules over 620 lines: {big}"
+
+
+# --------------------------------------------------------------------------------------------
+# the shader library (shaders/lib): small files, short functions, honest headers (issue 31)
+# --------------------------------------------------------------------------------------------
+
+LIB = ROOT / "shaders" / "lib"
+#: generated files (their generator's table is the documentation)
+GENERATED = {"texture_params.glsl"}
+#: functions still over the cap, with the reason; the list only shrinks
+LONG_FUNCTIONS = {
+    # the texture layer's octave loop (texture.glsl); not part of issue 31's walker
+    "cell_texture_filtered": 130,
+}
+
+
+def _glsl_functions(text: str):
+    """(name, lines) of every function defined at the top level of a library file."""
+    lines = text.split("\n")
+    i = 0
+    while i < len(lines):
+        m = re.match(r"^[A-Za-z_][\w\[\]]*\s+(\w+)\s*\(", lines[i])
+        if m and not lines[i].rstrip().endswith(";"):
+            j = i
+            while j < len(lines) and lines[j] != "}":
+                j += 1
+            yield m.group(1), j - i + 1
+            i = j
+        i += 1
+
+
+def _glsl_header(text: str) -> str:
+    out = []
+    for ln in text.split("\n"):
+        if not ln.startswith("//"):
+            break
+        out.append(ln)
+    return "\n".join(out)
+
+
+def test_glsl_library_files_stay_small():
+    """No shaders/lib file past 500 lines, no function past ~80 (beside the Python cap)."""
+    big = {p.name: n for p in LIB.glob("*.glsl") if (n := len(p.read_text().splitlines())) > 500}
+    assert not big, f"shaders/lib files over 500 lines: {big}"
+    long = {f"{p.name}:{name}": n for p in LIB.glob("*.glsl") for name, n in _glsl_functions(p.read_text())
+            if n > LONG_FUNCTIONS.get(name, 80)}
+    assert not long, f"shaders/lib functions over 80 lines: {long}"
+
+
+def _named(name: str, macro: str, seen=()) -> bool:
+    """Whether the header of lib file ``name`` names ``macro``, itself or through "those of X.glsl"."""
+    head = _glsl_header((LIB / name).read_text())
+    if re.search(rf"\b{macro}\b", head):
+        return True
+    return any(other not in seen and _named(other, macro, seen + (name,))
+               for other in re.findall(r"those of (\w+\.glsl)", head))
+
+
+def test_glsl_library_headers_name_their_macros_and_includes():
+    """Each library file lists every macro its directives read, and #includes every lib file its
+    header says it requires (so it compiles included alone)."""
+    missing = []
+    for p in sorted(LIB.glob("*.glsl")):
+        if p.name in GENERATED:
+            continue
+        text = p.read_text()
+        defaults = set(re.findall(r"^#ifndef\s+(\w+)", text, re.M))
+        own = set(re.findall(r"^#define\s+(\w+)", text, re.M)) - defaults
+        read = {m for ln in text.split("\n") if re.match(r"\s*#\s*(if|elif|ifdef|ifndef)\b", ln)
+                for m in re.findall(r"\bCELL_\w+", ln)}
+        for m in sorted(read - own):
+            if not m.startswith(("CELL_DIST_", "CELL_METRIC_", "CELL_DMAP_", "CELL_TEX_")) and not _named(p.name, m):
+                missing.append(f"{p.name}: {m}")
+        req = re.search(r"Requires: ([^.]*)", _glsl_header(text))
+        included = set(re.findall(r'^#include "(\w+\.glsl)"', text, re.M))
+        for r in re.findall(r"(\w+\.glsl)", req.group(1) if req else ""):
+            if (LIB / r).exists() and r not in included and r != p.name:
+                # a file may require one that a file it includes includes
+                if not any(r in re.findall(r'^#include "(\w+\.glsl)"', (LIB / i).read_text(), re.M) for i in included):
+                    missing.append(f"{p.name}: requires {r} without including it")
+    assert not missing, "\n".join(missing)
+
+
+def test_glsl_sentinel_is_named_once():
+    """The "nothing found yet" distance is CELL_FAR (walk.glsl), not a literal written everywhere."""
+    hits = {p.name: p.read_text().count("3.0e38") for p in LIB.glob("*.glsl")}
+    assert {k: v for k, v in hits.items() if v} == {"walk.glsl": 1}

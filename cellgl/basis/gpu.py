@@ -7,12 +7,15 @@ back.
 """
 from __future__ import annotations
 
+import math
+import os
+
 import numpy as np
 
 from cellgl.gl import context
 from cellgl.basis import features as _features
 from cellgl.gl.threads import gl_call
-from cellgl.basis.enums import glsl_defines
+from cellgl.basis.enums import Distribution, glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
 LOCAL_SIZE = 64
@@ -293,7 +296,9 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     Returns flat arrays in x-fastest order, as :func:`search_points`.
     """
     ctx = context.get_context()
-    prog = context.compute_program("cellular.comp", defines_for(p, n, outputs, grid=True, smooth=smooth))
+    d = defines_for(p, n, outputs, grid=True, smooth=smooth)
+    d.update(cell_cache_defines(p, float(spacing[0])))
+    prog = context.compute_program("cellular.comp", d)
     _set_params(prog, p)
     _set(prog, "u_smoothness", float(smoothness))
     stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
@@ -310,6 +315,27 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
         count = slab[4] * slab[5] * groups[2]
         _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, groups=groups, stride=stride)
     return out, exact
+
+
+#: the shared memory a workgroup's cell cache may take (GL's guaranteed minimum)
+_CACHE_BYTES = 32768
+
+
+def cell_cache_defines(p: Params, spacing_x: float) -> dict:
+    """The macros of the workgroup-shared cell cache of ``shaders/cellular.comp`` on a grid of
+    this x spacing (lattice units): ``{}`` where it is off. A workgroup's LOCAL_SIZE samples span
+    at most ceil((LOCAL_SIZE - 1) |spacing|) + 2 cells along x (a fraction rounding up to the next
+    cell included), ring 1 adds one on each side. ``CELLGL_CELL_CACHE=1``: on where it fits;
+    off by default (on llvmpipe it costs 2-5x: docs/performance.md, "The cell cache")."""
+    if os.environ.get("CELLGL_CELL_CACHE", "0") != "1" or p.density_map is not None:
+        return {}
+    nx = math.ceil((LOCAL_SIZE - 1) * abs(spacing_x)) + 4
+    single = int(p.distribution) in (int(Distribution.JITTER), int(Distribution.BLENDER))
+    points = 1 if single else (int(p.max_points) if int(p.distribution) == int(Distribution.POISSON) else MAX_POINTS)
+    cells = nx * 3 ** (p.dim - 1)
+    if cells * (4 + 20 * points) > _CACHE_BYTES:
+        return {}
+    return dict(CELL_SHARED_CELLS=1, CELL_CACHE_NX=nx)
 
 
 def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):

@@ -12,16 +12,9 @@
 //   * if ring CELL_MAX_RING is finished without that guarantee, the result is
 //     marked inexact (CellResult.exact = false) instead of being silently wrong.
 //
-// Loop budget. Drivers cut or kill long shaders: Mesa's llvmpipe stops every
-// loop of an invocation once 65535 loop iterations were spent in it (all
-// loops together, per SIMD vector of invocations; docs/exactness.md), other
-// GPUs have watchdogs. So the search counts its loop iterations in
-// CellResult.loops, as llvmpipe does (each pass through a loop whose length
-// is not a compile-time constant, plus one for the pass that leaves it), and
-// stops, marking the result inexact, rather than go past CELL_LOOP_BUDGET.
-// cell_features() (features.glsl) continues the same count. A caller that
-// searches several times in one invocation passes the count on
-// (cell_search_budget) so the bound holds for the invocation as a whole.
+// Loop budget (walk.glsl): the search counts its loop passes in
+// CellResult.loops and stops, flagged inexact, before CELL_LOOP_BUDGET;
+// cell_features() (features.glsl) continues the same count.
 //
 // The sample is given as an integer cell plus a float fraction in [0, 1), so
 // precision does not depend on the distance from the origin.
@@ -32,22 +25,32 @@
 // and the ring bounds above are taken in those units, per axis, so the answer
 // is still exactly that of a brute-force search under the weighted metric.
 //
-// Requires: hash.glsl, metric.glsl, points.glsl.
+// Requires: walk.glsl (included; with it hash.glsl, metric.glsl, points.glsl).
 // Macros: CELL_DIM (2..4), CELL_N (1..8), CELL_METRIC, CELL_DIST,
 //         CELL_MAX_POINTS, CELL_MAX_RING, CELL_DENSITY_MAP, CELL_ANISO,
 //         CELL_RING1_PRUNE (default: 1 but for the jitter distribution),
-//         CELL_LOOP_BUDGET (loop iterations one invocation may spend).
+//         CELL_LOOP_BUDGET (loop iterations one invocation may spend),
+//         CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE (the features of features.glsl
+//         wanted; default 0: here only whether the search tracks the F1
+//         point's cell for the n-sphere radius alone), CELL_TRACK_F1_CELL
+//         (derived from those unless defined: 1 for the n-sphere radius alone),
+//         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache).
 
-#include "hash.glsl"
-#include "metric.glsl"
-#include "points.glsl"
+#include "walk.glsl"
 
+#ifndef CELL_EDGE
+#define CELL_EDGE 0
+#endif
+#ifndef CELL_SMOOTH
+#define CELL_SMOOTH 0
+#endif
+#ifndef CELL_NSPHERE
+#define CELL_NSPHERE 0
+#endif
 // The n-sphere radius alone (features.glsl) needs only the cell of the F1 point
 // and its position in it: the search keeps them instead of a second walk.
-#ifdef CELL_NSPHERE
 #if CELL_NSPHERE && !CELL_EDGE && !CELL_SMOOTH
 #define CELL_TRACK_F1_CELL 1
-#endif
 #endif
 #ifndef CELL_TRACK_F1_CELL
 #define CELL_TRACK_F1_CELL 0
@@ -59,17 +62,6 @@
 #define CELL_RING1_PRUNE 1
 #endif
 #endif
-
-#ifndef CELL_LOOP_BUDGET
-// 6144 per invocation: the 8 invocations of one llvmpipe SIMD vector (AVX2)
-// then spend at most 49152 of its 65535 together, the rest is margin for the
-// caller's own loops. Measured in docs/exactness.md; a search needing more is
-// flagged (cellgl recomputes it with the NumPy reference).
-#define CELL_LOOP_BUDGET 6144
-#endif
-// The most one step of a search loop can spend: one pass of a window loop and
-// the point loop of one cell (up to CELL_MAX_POINTS points, plus its exit).
-#define CELL_LOOP_STEP (CELL_MAX_POINTS + 2)
 
 // How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
 // nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
@@ -115,13 +107,6 @@ ivec4 _cell_ring1_offset(int t, ivec4 sh)
 }
 #endif
 
-// Whether a search that has spent `loops` passes must stop (one more step
-// could pass CELL_LOOP_BUDGET).
-bool cell_budget_spent(int loops)
-{
-    return loops > CELL_LOOP_BUDGET - CELL_LOOP_STEP;
-}
-
 struct CellResult {
     float F[CELL_N];      // distances, ascending (true distances after cell_search)
     vec4 delta[CELL_N];   // feature point - sample (components past CELL_DIM are 0)
@@ -133,38 +118,6 @@ struct CellResult {
     bool exact;           // false if the ring cap or the loop budget was reached
     int loops;            // loop passes so far: a search stops at CELL_LOOP_BUDGET, as llvmpipe cuts loops silently
 };
-
-// A vector in the units distances are measured in (CELL_ANISO: axes weighted).
-vec4 _cell_axis_scale(vec4 v, CellParams p)
-{
-#if CELL_ANISO
-    return v * p.axis_scale;
-#else
-    return v;
-#endif
-}
-
-// Internal-unit distance from the sample (fraction f of its cell) to the
-// nearest point of the cell at offset o.
-float _cell_box_distance(ivec4 o, vec4 f, CellParams p)
-{
-    // Per axis o - f above, -o - 1 + f below (the larger), 0 in the sample's own slab.
-    vec4 g = max(max(vec4(o) - f, vec4(-o - 1) + f), vec4(0.0));
-    return cell_metric_length(_cell_axis_scale(g, p), p.minkowski_p);
-}
-
-// The sample's distance to the nearest face of its own cell (f: its fraction).
-float cell_face_distance(vec4 f)
-{
-    vec4 g = min(f, 1.0 - f);
-#if CELL_DIM == 2
-    return min(g.x, g.y);
-#elif CELL_DIM == 3
-    return min(min(g.x, g.y), g.z);
-#else
-    return min(min(g.x, g.y), min(g.z, g.w));
-#endif
-}
 
 // Insert one candidate (internal-unit distance d) into the sorted lists.
 // Strict comparisons: of two equal distances the one found first stays first.
@@ -190,29 +143,27 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
     }
 }
 
-// 1 on the axes of the dimension, 0 past them.
-#if CELL_DIM >= 4
-const ivec4 _cell_axes = ivec4(1, 1, 1, 1);
-#elif CELL_DIM == 3
-const ivec4 _cell_axes = ivec4(1, 1, 1, 0);
-#else
-const ivec4 _cell_axes = ivec4(1, 1, 0, 0);
-#endif
-
-// The window of ring `ring` that a point within true distance `reach` of the
-// sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
-void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
+// What the search does per feature point: the point q (ID id) of the cell at
+// offset o, base = o - f, becomes a candidate.
+void _cell_visit_point(inout CellResult r, vec4 base, ivec4 o, vec4 q, uint id, CellParams p)
 {
-    hi = min(ivec4(ring), ivec4(ceil(reach + f)) - 1) * _cell_axes;
-    lo = -min(ivec4(ring), ivec4(ceil(reach + 1.0 - f)) - 1) * _cell_axes;
+    vec4 delta = _cell_axis_scale(base + q, p);
+    float d = cell_metric_length(delta, p.minkowski_p);
+#if CELL_TRACK_F1_CELL
+    if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
+        r.o1 = o;
+        r.q1 = q;
+    }
+#endif
+    _cell_insert(r, d, delta, id);
 }
 
 // Test every feature point of the cell at offset o from the sample's cell.
 void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
-    ivec4 c = cell_wrap(cell + o, p.period);
-    uint state = cell_cell_seed(c, p.seed);
-    int count = cell_point_count_at(state, c, p);
+    ivec4 c;
+    uint state;
+    int count = _cell_open(cell, o, p, c, state);
     vec4 base = vec4(o) - f;
     r.loops += count + 1;
     // Tested at the end of each pass: on SIMD CPUs (llvmpipe) an `if` does not
@@ -222,15 +173,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
         for (int k = 0; ; ) {
             uint id;
             vec4 q = cell_next_point(state, c, p, id);
-            vec4 delta = _cell_axis_scale(base + q, p);
-            float d = cell_metric_length(delta, p.minkowski_p);
-#if CELL_TRACK_F1_CELL
-            if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
-                r.o1 = o;
-                r.q1 = q;
-            }
-#endif
-            _cell_insert(r, d, delta, id);
+            _cell_visit_point(r, base, o, q, id, p);
             k++;
             if (k >= count) {
                 break;
@@ -239,79 +182,49 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     }
 }
 
-// Internal-unit lower bound on the distance to any point beyond `rings` full
-// rings of cells around the sample's: such a point's offset is +-(rings + 1)
-// on some axis a, so it is at least rings + (distance to the nearer face of
-// the sample's cell on a) away, m the least of those. Weighted (CELL_ANISO):
-// the least over the axes of axis_scale[a] rings + ma[a], ma = axis_scale *
-// (the per-axis face distances).
-float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
+#if CELL_SHARED_CELLS
+#define _CELL_VISIT_NEAR _cell_visit_near
+// _cell_visit for a cell of rings 0 and 1 (offset o: -1..1 on every axis):
+// read from the workgroup's cache of cells where it has them (a grid on the
+// compute path, walk.glsl), the same points in the same order as hashing
+// gives them; hashed otherwise. Same count of loop passes either way.
+void _cell_visit_near(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
-#if CELL_ANISO
-    float b = 3.0e38;
-    for (int a = 0; a < CELL_DIM; a++) {
-        b = min(b, cell_metric_term(p.axis_scale[a] * rings + ma[a], p.minkowski_p));
+    if (cell_shared_on()) {
+        int count;
+        int slot = cell_shared_open(cell, o, count);
+        vec4 base = vec4(o) - f;
+        r.loops += count + 1;
+        if (cell_min_count(p) > 0 || count > 0) {
+            for (int k = 0; ; ) {
+                uint id;
+                vec4 q = cell_shared_point(slot, k, id);
+                _cell_visit_point(r, base, o, q, id, p);
+                k++;
+                if (k >= count) {
+                    break;
+                }
+            }
+        }
+    } else {
+        _cell_visit(r, cell, f, o, p);
     }
-    return b;
-#else
-    return cell_metric_term(rings + m, p.minkowski_p);
-#endif
 }
-
-// The cells of the window lo .. hi in the order of nested x, y, z, w loops
-// (the last axis fastest): cell_window_first(lo), then cell_window_next for
-// each. The windows are walked by one flat loop: one pass per cell, where
-// nested loops of run-time length would also spend a pass on every exit of the
-// inner loops. (An odometer, not a division of the pass index: integer
-// division is slow on SIMD CPUs.)
-ivec4 cell_window_first(ivec4 lo)
-{
-#if CELL_DIM >= 4
-    return lo - ivec4(0, 0, 0, 1);
-#elif CELL_DIM == 3
-    return lo - ivec4(0, 0, 1, 0);
 #else
-    return lo - ivec4(0, 1, 0, 0);
+#define _CELL_VISIT_NEAR _cell_visit
 #endif
-}
-
-ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
-{
-#if CELL_DIM >= 4
-    o.w += 1;
-    if (o.w > hi.w) {
-        o.w = lo.w;
-        o.z += 1;
-    }
-#elif CELL_DIM == 3
-    o.z += 1;
-#else
-    o.y += 1;
-#endif
-#if CELL_DIM >= 3
-    if (o.z > hi.z) {
-        o.z = lo.z;
-        o.y += 1;
-    }
-#endif
-    if (o.y > hi.y) {
-        o.y = lo.y;
-        o.x += 1;
-    }
-    return o;
-}
 
 // The window of ring `ring` of cell_search_budget: the cells that can hold a
-// point nearer than Fn (internal units; 3.0e38: none found yet, the whole ring).
+// point nearer than Fn (internal units; CELL_FAR: none found yet, the whole ring).
 void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
 {
-    float reach = Fn < 3.0e38 ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
+    float reach = Fn < CELL_FAR ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
 #if CELL_ANISO
     lo = ivec4(0);
     hi = ivec4(0);
     for (int a = 0; a < CELL_DIM; a++) {
         // In lattice units on this axis (no point found yet: the whole ring).
-        float ra = Fn < 3.0e38 ? reach / p.axis_scale[a] : reach;
+        float ra = Fn < CELL_FAR ? reach / p.axis_scale[a] : reach;
         hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
         lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
     }
@@ -320,16 +233,37 @@ void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo,
 #endif
 }
 
-// Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
-// cell_search for an invocation that has already spent `loops` loop passes:
-// it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
-// (6144 unless defined), since drivers cut longer loops without a word
-// (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
-CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
+#if CELL_DIM <= 3 && CELL_RING1_PRUNE
+// The order of ring 1 for the sample (fraction f): the shifts sh of
+// _cell_ring1_offset and the sample in the frame of the table (qn).
+void _cell_ring1_order(vec4 f, out ivec4 sh, out vec4 qn)
+{
+    // The axes' ranks by the distance to their nearer face (ties: the lower axis
+    // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
+    // above): the shifts of _cell_ring1_offset, 4 rank + 2 if flipped.
+#if CELL_ANISO
+    sh = ivec4(0, 4, 8, 12) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#elif CELL_DIM == 2
+    int c = min(f, 1.0 - f).y < min(f, 1.0 - f).x ? 1 : 0;
+    sh = 4 * ivec4(c, 1 - c, 2, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#else
+    ivec3 c = ivec3(lessThan(min(f, 1.0 - f).yzz, min(f, 1.0 - f).xxy));     // y < x, z < x, z < y
+    sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
+#endif
+    // The sample in the frame of the table as listed: its distances to the near
+    // faces in rank order. A cell's box distance there has the same terms as on the
+    // lattice (summed in rank order) and, for a constant t (the unrolled pass
+    // below), needs no decoding.
+    qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
+}
+#endif
+
+// A search result with nothing found yet, after `loops` loop passes.
+CellResult _cell_result_start(int loops)
 {
     CellResult r;
     for (int k = 0; k < CELL_N; k++) {
-        r.F[k] = 3.0e38;
+        r.F[k] = CELL_FAR;
         r.delta[k] = vec4(0.0);
         r.id[k] = 0u;
     }
@@ -338,82 +272,25 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     r.q1 = vec4(0.0);
 #endif
     r.loops = loops;
-    bool spent = cell_budget_spent(loops);
+    return r;
+}
 
-    // Ring 0, the sample's own cell.
-    if (!spent) {
-        _cell_visit(r, cell, f, ivec4(0), p);
-    }
-    float m = cell_face_distance(f);
-    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
+// Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
+// then rings 2, 3, ... while a point there could still be closer than F_n,
+// each ring's window of cells that can reach. A cell is skipped when its
+// nearest possible point is no closer than the current F_n (skipping never
+// changes the result: such a point could not be inserted). On llvmpipe an
+// `if` does not branch and every loop runs at least one pass, under an
+// empty mask if need be: a loop of their own for rings 2, 3, ..., which
+// almost no sample needs, cost every SIMD vector a masked pass. So they
+// are walked by a loop whose first pass is ring 1's own work (3D pruned:
+// a flat loop entered from an empty pass, the cheapest to enter).
 
-    // Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
-    // then rings 2, 3, ... while a point there could still be closer than F_n,
-    // each ring's window of cells that can reach. A cell is skipped when its
-    // nearest possible point is no closer than the current F_n (skipping never
-    // changes the result: such a point could not be inserted). On llvmpipe an
-    // `if` does not branch and every loop runs at least one pass, under an
-    // empty mask if need be: a loop of their own for rings 2, 3, ..., which
-    // almost no sample needs, cost every SIMD vector a masked pass. So they
-    // are walked by a loop whose first pass is ring 1's own work (3D pruned:
-    // a flat loop entered from an empty pass, the cheapest to enter).
-    int ring = 1;
-#if CELL_DIM <= 3 && CELL_RING1_PRUNE
-    // The axes' ranks by the distance to their nearer face (ties: the lower axis
-    // first; stretched cells, CELL_ANISO: as they are) and flips (the nearer face
-    // above): the shifts of _cell_ring1_offset, 4 rank + 2 if flipped.
-#if CELL_ANISO
-    ivec4 sh = ivec4(0, 4, 8, 12) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
-#elif CELL_DIM == 2
-    int c = min(f, 1.0 - f).y < min(f, 1.0 - f).x ? 1 : 0;
-    ivec4 sh = 4 * ivec4(c, 1 - c, 2, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
-#else
-    ivec3 c = ivec3(lessThan(min(f, 1.0 - f).yzz, min(f, 1.0 - f).xxy));     // y < x, z < x, z < y
-    ivec4 sh = 4 * ivec4(c.x + c.y, 1 - c.x + c.z, 2 - c.y - c.z, 3) + 2 - 2 * ivec4(lessThan(f, vec4(0.5)));
-#endif
-    // The sample in the frame of the table as listed: its distances to the near
-    // faces in rank order. A cell's box distance there has the same terms as on the
-    // lattice (summed in rank order) and, for a constant t (the unrolled pass
-    // below), needs no decoding.
-    vec4 qn = vec4(dot(vec4(equal(sh / 4, ivec4(0))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(1))), min(f, 1.0 - f)), dot(vec4(equal(sh / 4, ivec4(2))), min(f, 1.0 - f)), 0.0);
-    // The cells' nearest possible distances in visiting order, and the least of
-    // each tail: the walk leaves its loop once no cell left can beat F_n. A
-    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
-    // runs while any lane of the vector needs it, a lane that left a loop costs
-    // nothing.
-    float rest[CELL_RING1_CELLS + 1];
-    rest[CELL_RING1_CELLS] = 3.0e38;
-    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
-    }
-#endif
-    // The part of ring 1 before the loop below, and what is left of it, as
-    // `cells` passes over the window lo .. hi (or the table).
-#if CELL_RING1_PRUNE && CELL_DIM == 3
-    // Tested at the end of each pass, as the point loop (_cell_visit).
-    for (int t = 0; ; ) {
-        r.loops += 1;
-        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
-            spent = cell_budget_spent(r.loops);      // the count only grows
-            if (!spent) {
-                _cell_visit(r, cell, f, _cell_ring1_offset(t, sh), p);
-            }
-        }
-        t++;
-        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
-            break;
-        }
-    }
-    ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
-#elif CELL_RING1_PRUNE && CELL_DIM == 2
-    int cells = CELL_RING1_CELLS;     // the table
-    ivec4 lo = ivec4(0), hi = lo;
-#elif CELL_RING1_PRUNE
-    int cells = 0;                    // 4D: ring 1 a window too, in the loop
-    ivec4 lo = ivec4(0), hi = lo;
-#else
-    // Unpruned (a test costs more than jitter's one point per cell) and
-    // unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
+#if !CELL_RING1_PRUNE
+// Unpruned (a test costs more than jitter's one point per cell) and
+// unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
+void _cell_search_ring1_all(inout CellResult r, ivec4 cell, vec4 f, CellParams p, inout bool spent)
+{
 #if CELL_DIM <= 3
     // (A loop over the whole table: NIR unrolls a loop that indexes an array
     // as long as its trip count.)
@@ -421,7 +298,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         if (cell_budget_spent(r.loops)) {
             spent = true;
         } else if (t < CELL_RING1_CELLS - 1) {
-            _cell_visit(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
+            _CELL_VISIT_NEAR(r, cell, f, _cell_ring1_offset(t, ivec4(0, 4, 8, 0)), p);      // as listed (the reference's order on ties)
         }
     }
 #else
@@ -434,16 +311,34 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             if (cell_budget_spent(r.loops)) {
                 spent = true;
             } else {
-                _cell_visit(r, cell, f, o, p);
+                _CELL_VISIT_NEAR(r, cell, f, o, p);
             }
         }
     }
 #endif
-    int cells = 1;
-    ivec4 lo = _cell_axes, hi = lo;
+}
 #endif
+
 #if _CELL_NESTED
-    // One pass of the outer loop per ring, of the inner one per cell.
+// Rings `ring`, ring + 1, ... of cell_search_budget as nested loops: one pass of the
+// outer loop per ring, of the inner one per cell (the first pass: what is left of
+// ring 1, `cells` passes over the window lo .. hi or, 2D, the table in the order sh).
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
+                         inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells, ivec4 sh, vec4 qn)
+#else
+void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
+                         inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells)
+#endif
+{
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+    // The table's least box distance of each tail (as cell_search_budget's 3D ring 1).
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = CELL_FAR;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
+    }
+#endif
     ivec4 o = cell_window_first(lo);
     for (;;) {
         r.loops += 1;
@@ -480,11 +375,15 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             break;
         }
     }
+}
 #else
-    // One flat loop over the cells of the rings (the cells of each ring's
-    // window that are on the ring), on to the next ring after a window's last
-    // cell. (Tested at the top for the budget alone: a lane leaves at a ring's
-    // bound.)
+// Rings `ring`, ring + 1, ... of cell_search_budget as one flat loop over the
+// cells of the rings (the cells of each ring's window that are on the ring), on
+// to the next ring after a window's last cell. (Tested at the top for the budget
+// alone: a lane leaves at a ring's bound.)
+void _cell_search_flat(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
+                       inout bool spent, inout ivec4 lo, inout ivec4 hi)
+{
     ivec4 o = lo;
     for (; !spent; ) {
         spent = cell_budget_spent(r.loops);          // the count only grows
@@ -504,6 +403,79 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
             o = lo;
         }
     }
+}
+#endif
+
+// Exact: ring r = 2, 3, ... is searched while (r - 1) + m < F_n (m: distance to the cell's nearest face).
+// cell_search for an invocation that has already spent `loops` loop passes:
+// it stops, flagged inexact, before the invocation's count reaches CELL_LOOP_BUDGET
+// (6144 unless defined), since drivers cut longer loops without a word
+// (llvmpipe: 65535 passes per SIMD vector; docs/exactness.md).
+CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
+{
+    CellResult r = _cell_result_start(loops);
+    bool spent = cell_budget_spent(loops);
+
+    // Ring 0, the sample's own cell.
+    if (!spent) {
+        _CELL_VISIT_NEAR(r, cell, f, ivec4(0), p);
+    }
+    float m = cell_face_distance(f);
+    vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
+
+    // Ring 1, then rings 2, 3, ... (_cell_search_nested, _cell_search_flat).
+    int ring = 1;
+#if CELL_DIM <= 3 && CELL_RING1_PRUNE
+    ivec4 sh;
+    vec4 qn;
+    _cell_ring1_order(f, sh, qn);
+#endif
+    // The part of ring 1 before the loop below, and what is left of it, as
+    // `cells` passes over the window lo .. hi (or the table).
+#if CELL_RING1_PRUNE && CELL_DIM == 3
+    // The cells' nearest possible distances in visiting order, and the least of
+    // each tail: the walk leaves its loop once no cell left can beat F_n. A
+    // run-time loop on purpose: in straight-line SIMD code a pruned cell still
+    // runs while any lane of the vector needs it, a lane that left a loop costs
+    // nothing. Tested at the end of each pass, as the point loop (_cell_visit).
+    float rest[CELL_RING1_CELLS + 1];
+    rest[CELL_RING1_CELLS] = CELL_FAR;
+    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
+        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
+    }
+    for (int t = 0; ; ) {
+        r.loops += 1;
+        if (_cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p) < r.F[CELL_N - 1]) {
+            spent = cell_budget_spent(r.loops);      // the count only grows
+            if (!spent) {
+                _CELL_VISIT_NEAR(r, cell, f, _cell_ring1_offset(t, sh), p);
+            }
+        }
+        t++;
+        if (t >= CELL_RING1_CELLS || spent || rest[t] >= r.F[CELL_N - 1]) {
+            break;
+        }
+    }
+    ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
+#elif CELL_RING1_PRUNE && CELL_DIM == 2
+    int cells = CELL_RING1_CELLS;     // the table
+    ivec4 lo = ivec4(0), hi = lo;
+#elif CELL_RING1_PRUNE
+    int cells = 0;                    // 4D: ring 1 a window too, in the loop
+    ivec4 lo = ivec4(0), hi = lo;
+#else
+    _cell_search_ring1_all(r, cell, f, p, spent);
+    int cells = 1;
+    ivec4 lo = _cell_axes, hi = lo;
+#endif
+#if _CELL_NESTED
+#if CELL_DIM == 2 && CELL_RING1_PRUNE
+    _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells, sh, qn);
+#else
+    _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells);
+#endif
+#else
+    _cell_search_flat(r, cell, f, p, m, ma, ring, spent, lo, hi);
 #endif
     // Rings 0 .. ring - 1 searched: exact unless a point beyond can be nearer,
     // or the loop budget stopped the search (a nearer point may be missed).

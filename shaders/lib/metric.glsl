@@ -6,6 +6,8 @@
 //
 // CELL_METRIC selects the metric at compile time (values from
 // cellgl.basis.enums.Metric: CELL_METRIC_EUCLIDEAN, _MANHATTAN, _CHEBYSHEV, _MINKOWSKI).
+//
+// Macros: CELL_DIM (2..4), CELL_METRIC.
 
 // A CELL_DIM-dimensional value in a 4-vector: the components past CELL_DIM set
 // to zero.

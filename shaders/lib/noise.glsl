@@ -17,8 +17,11 @@
 // float64, so the noise 10^6 cells from the origin is as sharp as at it;
 // cell_noise / cell_noise_fractal take a float position (|x| up to ~10^4).
 //
-// Requires: hash.glsl, points.glsl (cell_wrap). Macros: CELL_DIM (2..4).
+// Requires: hash.glsl, points.glsl (cell_wrap; included). Macros: CELL_DIM (2..4).
 // Only the first CELL_DIM coordinates are used.
+
+#include "hash.glsl"
+#include "points.glsl"
 
 // Gradient at lattice corner c: 4 components from two hashes of (c, seed), each
 // 2 cell_u16(v) - 1 as one multiply-add (every step exact in float32: the same bits).

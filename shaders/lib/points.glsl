@@ -14,7 +14,10 @@
 // animation, the points orbit inside their cells; cell_orbit), CELL_ANISO (1:
 // anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl),
 // CELL_JITTER_UNIFORM (1: jitter is a uniform; cell_next_point), CELL_COUNT_CONST
-// (1: CELL_MIN_POINTS, CELL_MAX_COUNT constant; cell_point_count).
+// (1: CELL_MIN_POINTS, CELL_MAX_COUNT constant; cell_point_count), CELL_PERIODIC
+// (1: a tileable texture; cell_wrap).
+
+#include "hash.glsl"
 
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0

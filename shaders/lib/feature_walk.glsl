@@ -1,0 +1,427 @@
+// cellgl: the walks of the cell features (features.glsl) around a sample.
+//
+// After cell_search() has found the F1 point, the features walk the cells
+// again (walk.glsl: the ring geometry, the cell source): ring 0 and ring 1 as
+// one unrolled block, then ring by ring within a reach that shrinks as the
+// walk goes (_cell_walk_rings), or, for smooth F1 alone, whose reach does not
+// change, one window loop (_cell_walk_smooth) or the rows of a Euclidean ball
+// (_cell_walk_ball, a wide reach). What a walk does per feature point is
+// _cell_walk_point (edge, smooth, n-sphere, edge alone) or
+// _cell_walk_far_cell's sum (smooth F1 alone, rings 2 and on); features.glsl
+// explains the maths and the bounds that keep every walk exact.
+//
+// Requires: cellular.glsl (included; with it walk.glsl).
+// Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
+// which walks), CELL_FEATURE_MAX_RING, CELL_EDGE_ALONE, CELL_SMOOTH_EXTRA,
+// CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined: a pass of
+// cellular.comp).
+
+#include "cellular.glsl"
+
+#ifndef CELL_EDGE_ALONE
+// 1: cell_edge_alone() below, the distance to the edge without cell_search()
+// (the basis snippets, cellgl export --basis edge: one ring walker's code);
+// with CELL_EDGE alone (no other feature), Euclidean.
+#define CELL_EDGE_ALONE 0
+#endif
+#ifndef CELL_SMOOTH_EXTRA
+// 0: only smooth F1 itself is wanted; its offset, gradient and attribute are
+// not accumulated (they stay those of the F1 point), a shader specialised per
+// requested output.
+#define CELL_SMOOTH_EXTRA 1
+#endif
+
+// The colour of the cell of feature point `id`: bytes 0, 8 and 16 of its hash,
+// each / 255 (the false colour of `cellgl bake --channels id`).
+vec3 cell_id_color(uint id)
+{
+    uint h = cell_hash_u32(id);
+    return vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) * (1.0 / 255.0);
+}
+
+// A value in [0, 1) constant over the cell of feature point `id` (the texture
+// layer's per-cell ramp index).
+float cell_id_value(uint id)
+{
+    return float(cell_hash_u32(id ^ 0x2545f491u) >> 8) * (1.0 / 16777216.0);
+}
+
+// Everything smooth F1 averages per feature point: (colour, value).
+vec4 cell_id_attribute(uint id)
+{
+    return vec4(cell_id_color(id), cell_id_value(id));
+}
+
+#if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
+
+#define CELL_SMOOTH_CUTOFF 16.0
+
+// State of one walk. Around the sample (around = false): the F1 point's offset
+// d1 and ID, and the sums of the features; around the F1 point (around = true,
+// d1 = 0): the distance to its nearest other point.
+struct _CellWalk {
+    bool around;
+    vec4 d1;
+    uint id1;
+    float F1;
+    float k;
+    float edge;
+    vec4 edge_n;
+    float wsum;
+    vec4 wdelta;
+    vec4 wgrad;
+    vec4 wattr;
+    bool found;      // the F1 point was seen: its cell offset o1, position q1 in it
+    ivec4 o1;
+    vec4 q1;
+    float nn;
+    int loops;       // loop iterations spent (cellular.glsl, "Loop budget")
+    bool spent;      // the walk stopped at the loop budget
+#if CELL_EDGE_ALONE
+    bool nearest;    // the walk looks for the F1 point itself (F1 in internal units)
+#endif
+};
+
+// True distance from the walk's centre beyond which no point matters (now).
+float _cell_walk_reach(_CellWalk w)
+{
+    if (w.around) {
+        return w.nn;
+    }
+    float reach = w.F1;
+#if CELL_EDGE
+    reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
+#endif
+#if CELL_SMOOTH == 1
+    reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+#endif
+#if CELL_EDGE_ALONE
+    reach = w.nearest ? sqrt(w.F1) : reach;     // F1 in internal units, Euclidean (as CELL_EDGE)
+#endif
+    // A margin for rounding: visiting more is always safe.
+    return reach * 1.000001 + 1e-6;
+}
+
+#if CELL_SMOOTH == 1
+// Smooth F1 (exp): add the point at true distance d (delta, id) to the sums when its weight
+// exp(-(d - F1) / k) is inside the cut-off; the F1 point itself (is_p1) weighs 1.
+void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p1, CellParams p)
+{
+    if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
+        float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
+        w.wsum += wt;
+#if CELL_SMOOTH_EXTRA
+        w.wdelta += wt * delta;
+        w.wgrad += wt * cell_metric_gradient(delta, d, p.minkowski_p);
+        w.wattr += wt * cell_id_attribute(id);
+#endif
+    }
+}
+#endif
+
+void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, CellParams p)
+{
+    delta = cell_dims(delta);
+    vec4 e = delta - w.d1;                  // pj - p1
+    float e2 = dot(e, e);
+    bool is_p1 = id == w.id1 && e2 < 1e-10;
+    if (w.around) {
+        if (!is_p1) {
+            w.nn = min(w.nn, sqrt(e2));
+        }
+        return;
+    }
+    if (is_p1) {
+        w.found = true;
+        w.o1 = o;
+        w.q1 = q;
+    }
+#if CELL_EDGE
+    if (!is_p1 && e2 > 0.0) {
+        float inv = inversesqrt(e2);
+        float b = dot(0.5 * (delta + w.d1), e) * inv;
+        if (b < w.edge) {
+            w.edge = b;
+            w.edge_n = e * inv;
+        }
+    }
+#endif
+#if CELL_SMOOTH == 1
+    float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+    _cell_smooth_add(w, delta, d, id, is_p1, p);
+#endif
+#if CELL_EDGE_ALONE
+    // Nearest mode: the F1 point as cell_search finds it, the least internal-unit
+    // distance (the edge above is then against a moving d1: cell_edge_alone resets it).
+    float dn = cell_metric_length(delta, p.minkowski_p);
+    if (w.nearest && dn < w.F1) {
+        w.F1 = dn;
+        w.d1 = delta;
+        w.id1 = id;
+    }
+#endif
+}
+
+void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+{
+    ivec4 c;
+    uint state;
+    int count = _cell_open(cell, o, p, c, state);
+    vec4 base = vec4(o) - f;
+    w.loops += count + 1;
+    for (int k = 0; k < count; k++) {
+        uint id;
+        vec4 q = cell_next_point(state, c, p, id);
+        _cell_walk_point(w, base + q, id, o, q, p);
+    }
+}
+
+#ifndef CELL_WALK_FAST
+// 1: the smooth walk's specialised loops below (a pass of cellular.comp; the
+// textures and the exported snippets keep the shorter general code).
+#ifdef CELL_FEATURE_PASS
+#define CELL_WALK_FAST 1
+#else
+#define CELL_WALK_FAST 0
+#endif
+#endif
+
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST
+// _cell_walk_cell for smooth F1 alone in rings 2, 3, ...: a point there is
+// summed as _cell_walk_point sums it, without its tests for the other walks.
+// The F1 point (only there when the search needed ring 2) has d == F1 to the
+// bit (the same sum of the same terms), so it is told by its ID and distance.
+void _cell_walk_far_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+{
+    ivec4 c;
+    uint state;
+    int count = _cell_open(cell, o, p, c, state);
+    vec4 base = vec4(o) - f;
+    w.loops += count + 1;
+    for (int k = 0; k < count; k++) {
+        uint id;
+        vec4 delta = cell_dims(base + cell_next_point(state, c, p, id));
+        float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+#if CELL_SMOOTH_EXTRA
+        _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
+#else
+        // Smooth F1 alone needs no ID: the F1 point (d == F1) weighs exp(0) = 1
+        // as is_p1 gives it, and with k = 0 the sum does not change S = F1.
+        if (d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
+            w.wsum += exp((w.F1 - d) / w.k);
+        }
+#endif
+    }
+}
+#endif
+
+// Visit, ring by ring, every cell that can hold a point within the reach.
+// From ring `first` on, each ring's window within the reach (which shrinks as the walk
+// goes), until a whole ring is beyond it; returns as _cell_walk.
+bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first)
+{
+    float m = cell_face_distance(f);
+    w.loops += 1;                 // the pass that leaves the ring loop
+    for (int ring = first; ring <= CELL_FEATURE_MAX_RING; ring++) {
+        w.loops += 1;
+        float reach = _cell_walk_reach(w);
+        if (float(ring - 1) + m >= reach) {
+            return !w.spent;
+        }
+        ivec4 lo, hi;
+        cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
+        ivec4 n = hi - lo + 1;
+        int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = cell_window_first(lo);
+        w.loops += 1;
+        for (int i = 0; i < cells; i++) {
+            if (cell_budget_spent(w.loops)) {
+                w.spent = true;
+                return false;
+            }
+            w.loops += 1;
+            o = cell_window_next(o, lo, hi);
+            ivec4 ao = abs(o);
+            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                && _cell_box_distance(o, f, p)
+                   < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
+                _cell_walk_cell(w, cell, f, o, p);
+            }
+        }
+    }
+    return !w.spent && float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
+}
+
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+#if CELL_WALK_FAST && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
+// Smooth F1 alone with a wide reach (last >= 4 rings): only the cells of its
+// ball, row by row, not the whole (2 last + 1)^d window (the ball is 0.79 of
+// the square, 0.52 of the cube, 0.31 in 4D): llvmpipe runs the body of an `if`
+// even when no lane takes it, so a skipped cell of the window costs as much as
+// a visited one. The window's cells within the reach, in its order (the ranges,
+// _cell_ball_reset, hold every one of them). For a narrow reach the rows' own
+// cost outweighs that: measured 0.73-0.89x the time at k = 0.25, 1.04-1.12x at
+// k = 0.1 with rows from ring 3 (llvmpipe, 2D and 3D).
+bool _cell_walk_ball(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float m, float reach, int last)
+{
+    ivec4 lo, hi;
+    ivec4 o = ivec4(0);
+    _cell_ball_reset(o, lo, hi, f, reach, last, 0);
+    //
+    // Both loops are tested at the bottom: no range is empty (the first
+    // row is o.x = lo.x, a row's range holds 0, and with reach > 3 a row
+    // through rings 0 and 1 reaches past them on both sides: its t >
+    // sqrt(9 - 3)), and a loop tested at the top runs its body once more,
+    // masked, on every exit (a cell's whole cost per row). The passes are
+    // counted as the top-tested loops would spend them (the same budget).
+    w.loops += 1;             // the pass that left the loop over the rows
+    do {
+        w.loops += 2;         // this pass, and the one that left the row
+        // One row: the last axis over its range, given the row's other
+        // axes, over the block of rings 0 and 1 (visited before).
+        ivec4 ao = abs(o);
+        ao[CELL_DIM - 1] = 0;
+        bool inner = max(max(ao.x, ao.y), max(ao.z, ao.w)) <= 1;
+        int z = inner ? (lo[CELL_DIM - 1] >= -1 ? 2 : lo[CELL_DIM - 1]) : lo[CELL_DIM - 1];
+        do {
+            if (cell_budget_spent(w.loops)) {
+                w.spent = true;
+                break;
+            }
+            w.loops += 1;
+            o[CELL_DIM - 1] = z;
+            _cell_walk_far_cell(w, cell, f, o, p);
+            z = (inner && z == -2) ? 2 : z + 1;
+        } while (z <= hi[CELL_DIM - 1]);
+        o = _cell_ball_next_row(o, lo, hi, f, reach, last);
+    } while (o.x <= hi.x && !w.spent);
+    return !w.spent && float(last) + m >= reach;
+}
+#endif
+
+// Smooth F1 alone, rings 2 .. R (the last the ring loop would enter): the
+// reach F1 + cutoff k does not change during the walk, so they are one window
+// loop. No test of a cell against the reach (it costs, llvmpipe runs the
+// skipped cell anyway): each point's own cut-off decides, and a cell beyond
+// the reach holds no point under it, so the same points are summed in the
+// same order. m: the sample's face distance; returns as _cell_walk.
+bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float m)
+{
+    float reach = _cell_walk_reach(w);
+    int last = int(ceil(min(reach - m, float(CELL_FEATURE_MAX_RING))));
+#if CELL_WALK_FAST && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
+    if (last >= 4) {
+        return _cell_walk_ball(w, cell, f, p, m, reach, last);
+    }
+#endif
+    ivec4 lo, hi;
+    cell_ring_window(last, min(reach, float(last + 2)), f, lo, hi);
+    ivec4 n = hi - lo + 1;
+    int cells = n.x * n.y * n.z * n.w;
+    ivec4 o = cell_window_first(lo);
+    w.loops += 1;             // the pass that leaves the window loop
+    for (int i = 0; i < cells; i++) {
+        if (cell_budget_spent(w.loops)) {
+            w.spent = true;
+            break;
+        }
+        w.loops += 1;
+        o = cell_window_next(o, lo, hi);
+        ivec4 ao = abs(o);
+        if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
+#if CELL_WALK_FAST
+            _cell_walk_far_cell(w, cell, f, o, p);
+#else
+            _cell_walk_cell(w, cell, f, o, p);
+#endif
+        }
+    }
+    return !w.spent && float(last) + m >= reach;
+}
+#endif
+
+// Visit every cell around (cell, f) that can hold a point within the reach.
+// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
+// inside the loop budget (w.spent: it stopped at the budget).
+bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
+{
+    float m = cell_face_distance(f);
+#if CELL_EDGE_ALONE
+    // The snippet's shorter code: rings 0 and 1 are windows of the ring loop
+    // too (the same points within the reach, so the same answer).
+    return _cell_walk_rings(w, cell, f, p, 0);
+#else
+    if (cell_budget_spent(w.loops)) {
+        w.spent = true;
+        return false;
+    }
+    _cell_walk_cell(w, cell, f, ivec4(0), p);
+    // Ring 1 as a block of constant bounds, unrolled into straight-line SIMD
+    // code as in cell_search (most walks end in it); the same cells in the same
+    // order as the window loop below would visit, every one of them: llvmpipe
+    // runs the body of an `if` even when no lane takes it, so testing a cell
+    // against the reach costs more than it saves (a point beyond the reach
+    // changes nothing: its plane is further than the nearest, its smooth
+    // weight is cut, it is further than the nearest neighbour). Constant
+    // loops spend no loop passes: only the visits are counted.
+    if (m >= _cell_walk_reach(w)) {
+        return true;
+    }
+    for (int x = -1; x <= 1; x++)
+    for (int y = -1; y <= 1; y++)
+#if CELL_DIM >= 3
+    for (int z = -1; z <= 1; z++)
+#else
+    for (int z = 0; z <= 0; z++)
+#endif
+#if CELL_DIM >= 4
+    for (int v = -1; v <= 1; v++)
+#else
+    for (int v = 0; v <= 0; v++)
+#endif
+    {
+        ivec4 o = ivec4(x, y, z, v);
+        if (any(notEqual(o, ivec4(0)))) {
+            w.spent = w.spent || cell_budget_spent(w.loops);
+            if (!w.spent) {
+                _cell_walk_cell(w, cell, f, o, p);
+            }
+        }
+    }
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+    if (!w.around) {
+        return _cell_walk_smooth(w, cell, f, p, m);
+    }
+#endif
+    return _cell_walk_rings(w, cell, f, p, 2);
+#endif
+}
+// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
+// F1), after `loops` loop passes.
+_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness)
+{
+    _CellWalk w;
+    w.around = false;
+    w.d1 = d1;
+    w.id1 = id1;
+    w.F1 = F1;
+    w.k = smoothness;
+    w.edge = CELL_FAR;
+    w.edge_n = vec4(0.0);
+    w.wsum = 0.0;
+    w.wdelta = vec4(0.0);
+    w.wgrad = vec4(0.0);
+    w.wattr = vec4(0.0);
+    w.found = false;
+    w.o1 = ivec4(0);
+    w.q1 = vec4(0.0);
+    w.nn = CELL_FAR;
+    w.loops = loops;
+    w.spent = false;
+#if CELL_EDGE_ALONE
+    w.nearest = F1 >= CELL_FAR;    // no F1 point given: the walk finds it first
+#endif
+    return w;
+}
+
+#endif
