@@ -141,3 +141,146 @@ def test_the_driver_raises_when_the_passes_do_not_settle(monkeypatch):
     monkeypatch.setattr(compiler, "reach", growing)
     with pytest.raises(TranslateError, match=f"did not settle in {compiler.MAX_ROUNDS} rounds"):
         compiler.compile_glsl("float entry(float x) {\n    return x;\n}\n", ["entry"])
+
+
+# --------------------------------------------------------------------------------------------
+# reachability, scalarising, parameters, inlining, void results, dead stores
+# --------------------------------------------------------------------------------------------
+
+_STRUCT = """struct P {
+    float gain;
+    int mode;
+};
+const float k_gain = 2.0;
+const int k_mode = 1;
+P load()
+{
+    P t;
+    t.gain = k_gain;
+    t.mode = k_mode;
+    return t;
+}
+float scale(float x, P t)
+{
+    return x * t.gain + float(t.mode);
+}
+float unused(float x)
+{
+    return x;
+}
+float entry(float x)
+{
+    return scale(x, load());
+}
+"""
+
+
+def test_reach_keeps_what_the_entry_uses():
+    from cellgl.export.reach import reach
+
+    kept = reach(parse(_STRUCT), ["entry"])
+    assert [it.name for it in kept] == ["P", "k_gain", "k_mode", "load", "scale", "entry"]
+
+
+def test_scalarise_reads_the_loaders_values_directly():
+    from cellgl.export.reach import reach, scalarise
+
+    out = unparse(scalarise(reach(parse(_STRUCT), ["entry"]), "P", "load"))
+    assert out.endswith("""float scale(float x)
+{
+    return x * k_gain + float(k_mode);
+}
+
+float entry(float x)
+{
+    return scale(x);
+}
+""")
+
+
+_PARAMS = """float f(float x, float y, int k)
+{
+    return x * float(k);
+}
+float entry(float a)
+{
+    return f(a, 2.0, 3) + f(a * a, 1.0, 3);
+}
+"""
+
+
+def test_parameters_never_read_go_and_constant_arguments_move_in():
+    dropped = compiler._drop_unused_params(parse(_PARAMS), {"entry"})
+    assert unparse(dropped) == """float f(float x, int k)
+{
+    return x * float(k);
+}
+
+float entry(float a)
+{
+    return f(a, 3) + f(a * a, 3);
+}
+"""
+    assert unparse(compiler._constant_args(dropped, {"entry"})) == """float f(float x)
+{
+    return x * float(3);
+}
+
+float entry(float a)
+{
+    return f(a) + f(a * a);
+}
+"""
+
+
+def test_a_function_called_once_is_inlined():
+    from cellgl.export.inline import inline_once
+
+    src = """void g(inout float v, float x)
+{
+    v += x;
+    v *= 0.5;
+}
+float entry(float a)
+{
+    float v = a;
+    g(v, 3.0);
+    return v;
+}
+"""
+    assert unparse(inline_once(parse(src), {"entry"})) == """float entry(float a)
+{
+    float v = a;
+    v += 3.0;
+    v *= 0.5;
+    return v;
+}
+"""
+
+
+def test_a_result_no_call_reads_becomes_void():
+    from cellgl.export.fields import void_results
+
+    items = parse("""float h(inout float w, float x)
+{
+    w = w + x;
+    return w * 2.0;
+}
+float entry(float a)
+{
+    float w = a;
+    h(w, 1.0);
+    h(w, 2.0);
+    return w;
+}
+""")
+    out = unparse(void_results(items, {"entry"}, compiler._impure_functions(items)))
+    assert out.startswith("void h(inout float w, float x)\n{\n    w = w + x;\n}\n")
+
+
+def test_a_local_only_written_goes():
+    from cellgl.export.simplify import _dead_store
+
+    toks = tokenize("float entry(float a)\n{\n    float b = a * 2.0;\n    float c = a + 1.0;\n"
+                    "    c = a - 1.0;\n    return b;\n}\n")
+    assert _text(_dead_store(toks, set())) == "float entry(float a)\n{\n    float b = a * 2.0;\n    return b;\n}\n"

@@ -340,8 +340,11 @@ def _impure_functions(items: list[Item]) -> set[str]:
 def _rewritable(items: list[Item], keep):
     """``(item, params, body)`` of every function whose signature a pass may change: defined once
     (no overloads) and not an entry point in ``keep``."""
+    count: dict[str, int] = {}
     for it in items:
-        if it.kind == "function" and it.name not in keep and sum(x.name == it.name for x in items) == 1:
+        count[it.name] = count.get(it.name, 0) + 1
+    for it in items:
+        if it.kind == "function" and it.name not in keep and count[it.name] == 1:
             yield (it, *_params(it))
 
 
@@ -356,6 +359,9 @@ def _drop_unused_params(items: list[Item], keep) -> list[Item]:
             takes = {it.name: (k, words[-1])}
             new = []
             for x in items:
+                if x is not it and it.name not in x.uses():
+                    new.append(x)                 # no call of it here
+                    continue
                 toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
                 if toks is None or (x.kind == "function" and _impure_arg(x, toks, impure)):
                     break
@@ -383,7 +389,7 @@ def _constant_args(items: list[Item], keep) -> list[Item]:
                 continue
             seen = set()
             for x in items:
-                if x.kind != "function":
+                if x.kind != "function" or (x is not it and it.name not in x.uses()):
                     continue
                 toks, code = x.toks, _code_idx(x.toks)
                 w = [toks[i].text for i in code]
@@ -400,6 +406,9 @@ def _constant_args(items: list[Item], keep) -> list[Item]:
             takes = {it.name: (k, name)}
             new = []
             for x in items:
+                if x is not it and it.name not in x.uses():
+                    new.append(x)                 # no call of it here
+                    continue
                 toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
                 if toks is None:
                     break

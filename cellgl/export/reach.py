@@ -45,7 +45,12 @@ class Item:
         return [t.text for t in self.toks if t.kind not in ("ws", "comment")]
 
     def uses(self) -> set[str]:
-        return {t.text for t in self.toks if t.kind == "id"} - {self.name}
+        key = (id(self.toks), len(self.toks))
+        cached = self.__dict__.get("_uses")
+        if cached is None or cached[0] != key or cached[2] is not self.toks:
+            cached = (key, {t.text for t in self.toks if t.kind == "id"} - {self.name}, self.toks)
+            self.__dict__["_uses"] = cached
+        return cached[1]
 
     def text(self) -> str:
         return "".join(t.text for t in self.comment) + "".join(t.text for t in self.toks)
