@@ -130,13 +130,15 @@ void cell_osl_texture(vec3 p, vec3 dp, out vec3 color, out float height, out flo
 """
 
 
-def folded_code(prog, params) -> tuple[str, list]:
+def folded_code(prog, params, specialise, structs) -> tuple[str, list]:
     """The GLSL of ``prog`` for OSL, folded like every other target's but for the recipe values
     in ``params`` (``[(Param, value)]``, :func:`exposed_params`), which stay named constants the
-    shader passes in as its parameters; and those of ``params`` the folded code still reads."""
+    shader passes in as its parameters; and those of ``params`` the folded code still reads.
+    ``specialise``: the program's specialised GLSL (:func:`cellgl.export.snippets.specialised_code`),
+    ``structs``: the parameter structs to scalarise."""
     from dataclasses import replace
 
-    from cellgl.export import compiler, snippets
+    from cellgl.export import compiler
 
     sliders = {"cell_" + p.name for p, _ in params}
     lines, consts = [], {}
@@ -146,8 +148,8 @@ def folded_code(prog, params) -> tuple[str, list]:
             consts["cellgl_" + w[2][len("cell_"):]] = ln.replace(" cell_", " cellgl_", 1)
             ln = f"uniform {w[1]} {w[2]};"            # not a constant for the compiler: not folded
         lines.append(ln)
-    text = snippets.specialised_code(replace(prog, params="\n".join(lines), entry=prog.entry + _ENTRY))
-    code = compiler.compile_glsl(text, ["cellgl_osl_texture"], structs=snippets._CONSTANT_STRUCTS,
+    text = specialise(replace(prog, params="\n".join(lines), entry=prog.entry + _ENTRY))
+    code = compiler.compile_glsl(text, ["cellgl_osl_texture"], structs=structs,
                                  keep=("cellgl_search_budget",))
     out, kept = [], set()
     for ln in code.split("\n"):
@@ -159,15 +161,15 @@ def folded_code(prog, params) -> tuple[str, list]:
     return "\n".join(out), [(p, v) for p, v in params if "cellgl_" + p.name in kept]
 
 
-def osl_shader(prog, code: str) -> str:
+def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
     """The OSL text of texture program ``prog``: its GLSL (``code``: the specialised library)
-    folded for the recipe but for the sliders (:func:`folded_code`), translated, plus the
-    ``shader`` block."""
+    folded for the recipe but for the sliders (:func:`folded_code`, with ``specialise`` and
+    ``structs``), translated, plus the ``shader`` block."""
     if prog.entries:
         return _basis_function_shader(prog, code)
     if not prog.filtered:
         return _basis_shader(prog, code)
-    glsl, params = folded_code(prog, exposed_params(prog, code))
+    glsl, params = folded_code(prog, exposed_params(prog, code), specialise, structs)
     names = ["cellgl_" + p.name for p, _ in params]
     passed: dict = {}
     lib = to_osl(glsl, params=names, passed=passed)
