@@ -93,3 +93,31 @@ def test_osl_refusals():
         export("stained-glass", "osl")
     with pytest.raises(ExportError, match="uniforms"):
         export("f1", "osl", uniforms=True)
+
+
+def test_osl_is_folded_but_for_exactly_its_sliders():
+    """The OSL shader is folded like the other targets (only what the outputs reach, the recipe's
+    other values written in), and its parameters are exactly the recipe values the folded code
+    still reads: every slider is read (passed down to the functions that use it), and a value
+    that is not a slider is no function's parameter."""
+    from cellgl.export import osl, snippets
+
+    for name in ("flagstone", "edge-cracks", "f1"):
+        text = export(name, "osl")
+        head = text[text.index("\nshader cellgl_"):]
+        body = text[text.index("\nstruct "):text.index("\nshader cellgl_")]
+        sliders = re.findall(r"^    (?:float|int) (\w+) = [^\[\n]*\[\[", head, re.M)
+        prog = snippets.texture_program(name)
+        exposed = osl.exposed_params(prog, snippets.specialised_code(prog))
+        _, kept = osl.folded_code(prog, exposed, snippets.specialised_code, snippets._CONSTANT_STRUCTS)
+        assert [osl._pname(p.name) for p, _ in kept] == sliders
+        for s in sliders:
+            assert re.search(rf"\bcellgl_{s.rstrip('_')}\b", body), (name, s)       # each one is read
+        for typ, pname, _ in prog.uniforms:
+            if pname not in [p.name for p, _ in kept]:      # folded in, or a named constant
+                assert not re.search(rf"[(,] *(?:float|int) cellgl_{pname}\b", body), (name, pname)
+        assert "cellgl_texture_params_load" not in body and "CellglTextureParams" not in body
+    # a term switched off in the recipe is no slider (its code folds away)
+    flag = export("flagstone", "osl")
+    code = flag[flag.index("\nstruct "):]
+    assert "warp_amount" not in code and "c_noise" not in code

@@ -1,7 +1,8 @@
 """The snippet compiler: :func:`compile_glsl` turns the specialised, prefixed GLSL of a snippet
 into the code its entry points need, and nothing else.
 
-Passes, repeated until the text stops changing:
+Passes, repeated until the text stops changing (the fixed point; :data:`MAX_ROUNDS` rounds
+without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
 2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
@@ -46,9 +47,13 @@ from cellgl.export.reach import (
     unparse,
 )
 from cellgl.export.simplify import _DECL_TYPES
-from cellgl.export.translate.tokens import Tok, tokenize
+from cellgl.export.translate.tokens import Tok, TranslateError, tokenize
 
-__all__ = ["compile_glsl"]
+__all__ = ["compile_glsl", "MAX_ROUNDS"]
+
+#: rounds of the passes after which :func:`compile_glsl` gives up (it stops at the first round that
+#: changes nothing, the fixed point; the library's presets settle in under 20)
+MAX_ROUNDS = 64
 
 
 def _array_elements(items: list[Item]) -> list[Item]:
@@ -264,7 +269,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
     items = reach([it for it in parse(text) if it.kind != "other"], entries)
     items = [Item(it.kind, it.name, strip_body_comments(it.toks), it.comment) if it.kind == "function" else it
              for it in items]
-    for _ in range(8):
+    for _ in range(MAX_ROUNDS):
         before = unparse(items)
         for struct, loader in structs:
             items = scalarise(items, struct, loader)
@@ -285,6 +290,9 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
         items = reach(items, entries)
         if unparse(items) == before:
             break
+    else:
+        raise TranslateError(f"the snippet compiler did not settle in {MAX_ROUNDS} rounds of its passes "
+                             f"(entry points {', '.join(entries)}): a pass undoes another")
     return _join_lines(unparse(tidy_comments(_ordered(items)), blank=False))
 
 
@@ -332,8 +340,11 @@ def _impure_functions(items: list[Item]) -> set[str]:
 def _rewritable(items: list[Item], keep):
     """``(item, params, body)`` of every function whose signature a pass may change: defined once
     (no overloads) and not an entry point in ``keep``."""
+    count: dict[str, int] = {}
     for it in items:
-        if it.kind == "function" and it.name not in keep and sum(x.name == it.name for x in items) == 1:
+        count[it.name] = count.get(it.name, 0) + 1
+    for it in items:
+        if it.kind == "function" and it.name not in keep and count[it.name] == 1:
             yield (it, *_params(it))
 
 
@@ -348,6 +359,9 @@ def _drop_unused_params(items: list[Item], keep) -> list[Item]:
             takes = {it.name: (k, words[-1])}
             new = []
             for x in items:
+                if x is not it and it.name not in x.uses():
+                    new.append(x)                 # no call of it here
+                    continue
                 toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
                 if toks is None or (x.kind == "function" and _impure_arg(x, toks, impure)):
                     break
@@ -375,7 +389,7 @@ def _constant_args(items: list[Item], keep) -> list[Item]:
                 continue
             seen = set()
             for x in items:
-                if x.kind != "function":
+                if x.kind != "function" or (x is not it and it.name not in x.uses()):
                     continue
                 toks, code = x.toks, _code_idx(x.toks)
                 w = [toks[i].text for i in code]
@@ -392,6 +406,9 @@ def _constant_args(items: list[Item], keep) -> list[Item]:
             takes = {it.name: (k, name)}
             new = []
             for x in items:
+                if x is not it and it.name not in x.uses():
+                    new.append(x)                 # no call of it here
+                    continue
                 toks = _drop_struct_args(x.toks, takes, "", skip_sig=x is it)
                 if toks is None:
                     break

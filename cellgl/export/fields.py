@@ -28,26 +28,42 @@ def _text(it: Item) -> str:
 
 
 def constant_fields(items: list[Item]) -> list[Item]:
+    """Fold the fields of one-literal structs (module docstring), one field at a time, until none
+    is left."""
+    texts: dict[int, tuple] = {}
+    while True:
+        new = _constant_field(items, texts)
+        if new is None:
+            return items
+        items = new
+
+
+def _constant_field(items: list[Item], texts: dict[int, tuple]) -> list[Item] | None:
+    """``items`` with one constant field folded (None: there is none); ``texts`` caches the
+    comment-free text of the items by identity (unchanged items are kept as they are)."""
     funcs = [it for it in items if it.kind == "function"]
-    texts = {id(it): _text(it) for it in funcs}
+    for it in funcs:
+        if texts.get(id(it), (None,))[0] is not it:      # (the item is held: its id is not reused)
+            texts[id(it)] = (it, _text(it))
+    text_of = {id(it): texts[id(it)][1] for it in funcs}
     for st in [it for it in items if it.kind == "struct"]:
         body = _text(st)
         fields = re.findall(r"\b(\w+)\s*;", body)
         name = st.name
-        locals_ = [(it, m) for it in funcs for m in re.finditer(rf"(?<=[;{{}}])\s*{name}\s+(\w+)\s*;", texts[id(it)])]
-        if len(locals_) != 1 or any(re.search(rf"\b{name}\s*\(", texts[id(it)]) for it in funcs):
+        locals_ = [(it, m) for it in funcs for m in re.finditer(rf"(?<=[;{{}}])\s*{name}\s+(\w+)\s*;", text_of[id(it)])]
+        if len(locals_) != 1 or any(re.search(rf"\b{name}\s*\(", text_of[id(it)]) for it in funcs):
             continue
         home, decl = locals_[0]
         var = decl.group(1)
         stores: dict[str, list] = {}
         for it in funcs:
             for m in re.finditer(r"(?<![\w.])\w+\s*\.\s*(\w+)\s*(?:\[[^\]]*\])?\s*(?:[-+*/%&|^]|<<|>>)?=(?!=)",
-                                 texts[id(it)]):
+                                 text_of[id(it)]):
                 stores.setdefault(m.group(1), []).append(it)
         for f in fields:
             if len(stores.get(f, ())) != 1 or stores[f][0] is not home:
                 continue
-            text = texts[id(home)]
+            text = text_of[id(home)]
             m = re.search(rf"(?<=[;{{}}])(\s*){var}\s*\.\s*{f}\s*=\s*({_LIT})\s*;", text)
             if not m or m.start() < decl.end() or _depth(text, decl.end()) != _depth(text, m.start()):
                 continue
@@ -66,9 +82,9 @@ def constant_fields(items: list[Item]) -> list[Item]:
                 holders = set(re.findall(rf"\b{name}\s+(\w+)", t))
                 if holders:
                     t = re.sub(rf"(?<![\w.])({'|'.join(sorted(holders))})\s*\.\s*{f}\b", lit, t)
-                new.append(Item(it.kind, it.name, tokenize(t), it.comment))
-            return constant_fields(new)
-    return items
+                new.append(it if t == "".join(x.text for x in it.toks) else Item(it.kind, it.name, tokenize(t), it.comment))
+            return new
+    return None
 
 
 def _depth(text: str, at: int) -> int:

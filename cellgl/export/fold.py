@@ -127,47 +127,66 @@ def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
     impure = {it.name for it in items if it.kind == "function"
               and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
     out = []
+    key = (tuple(sorted(env.items())), tuple(sorted(impure)))
     for it in items:
         if it.kind != "function":
             out.append(it)
             continue
-        toks = it.toks
-        for _ in range(200):
-            local = dict(env)
-            local.update(_local_constants(toks, env))
-            new = _fold_once(toks, local)
-            if new is None:
-                new = _fold_loop(toks, local)
-            if new is None:
-                new = _substitute_locals(toks, env)
-            if new is None:
-                new = _dead_local(toks, impure)
-            if new is None:
-                new = _split_declarators(toks)
-            if new is None:
-                new = _dead_store(toks, impure)
-            if new is None:
-                new = _last_store(toks, impure)
-            if new is None:
-                new = _loop_range(toks, local)
-            if new is None:
-                new = _bare_block(toks)
-            if new is None:
-                new = _copy_local(toks, impure)
-            if new is None:
-                new = _merge_declaration(toks)
-            if new is None:
-                new = _forward_literal(toks)
-            if new is None:
-                new = _loop_variable(toks)
-            if new is None:
-                new = _store_into_next(toks, impure)
-            if new is None:
-                break
-            toks = new
-        toks = _arithmetic(toks)
+        text = "".join(t.text for t in it.toks)
+        done = _FOLDED.get((text, key))
+        if done is not None:                  # the same function under the same constants
+            out.append(it if done == text else Item(it.kind, it.name, tokenize(done), it.comment))
+            continue
+        toks = _fold_function(it.toks, env, impure)
+        if len(_FOLDED) > 4096:
+            _FOLDED.clear()
+        _FOLDED[(text, key)] = "".join(t.text for t in toks)
         out.append(Item(it.kind, it.name, toks, it.comment))
     return out
+
+
+#: ``{(function text, (constants, impure functions)): folded text}``: the driver's rounds (and a
+#: process's exports) fold most functions again unchanged
+_FOLDED: dict = {}
+
+
+def _fold_function(toks: list[Tok], env: dict[str, str], impure: set[str]) -> list[Tok]:
+    """One function's tokens, its constant conditions, loops and locals folded (to a fixed point
+    of the steps below, at most 200 of them)."""
+    for _ in range(200):
+        local = dict(env)
+        local.update(_local_constants(toks, env))
+        new = _fold_once(toks, local)
+        if new is None:
+            new = _fold_loop(toks, local)
+        if new is None:
+            new = _substitute_locals(toks, env)
+        if new is None:
+            new = _dead_local(toks, impure)
+        if new is None:
+            new = _split_declarators(toks)
+        if new is None:
+            new = _dead_store(toks, impure)
+        if new is None:
+            new = _last_store(toks, impure)
+        if new is None:
+            new = _loop_range(toks, local)
+        if new is None:
+            new = _bare_block(toks)
+        if new is None:
+            new = _copy_local(toks, impure)
+        if new is None:
+            new = _merge_declaration(toks)
+        if new is None:
+            new = _forward_literal(toks)
+        if new is None:
+            new = _loop_variable(toks)
+        if new is None:
+            new = _store_into_next(toks, impure)
+        if new is None:
+            break
+        toks = new
+    return _arithmetic(toks)
 
 
 _ASSIGN = {"=", "+=", "-=", "*=", "/=", "%=", "<<=", ">>=", "&=", "|=", "^=", "++", "--"}
@@ -185,7 +204,7 @@ def _local_constants(toks: list[Tok], env: dict[str, str]) -> dict[str, str]:
             v = _evaluate(w[n + 2:end], env)
             if v is None or w.count(w[n]) < 1:
                 continue
-            uses = [m for m in range(len(w)) if w[m] == w[n] and m != n]
+            uses = [m for m in range(len(w)) if w[m] == w[n] and m != n and w[m - 1] != "."]   # (not o.w)
             if any((m + 1 < len(w) and w[m + 1] in _ASSIGN) or w[m - 1] in ("++", "--")
                    or _argument(w, m) for m in uses):
                 continue

@@ -21,7 +21,7 @@ import re
 from cellgl.export.names import identifier
 from cellgl.export.translate import to_osl
 
-__all__ = ["EXPOSED_EXCLUDED", "exposed_params", "osl_shader"]
+__all__ = ["EXPOSED_EXCLUDED", "TERM_SWITCHES", "exposed_params", "folded_code", "osl_shader"]
 
 #: run-time values that are *not* shader parameters: the CPU derives other constants from them
 #: in double precision (the split lattice origins, the Poisson table, the noise lattices) or they
@@ -30,6 +30,12 @@ EXPOSED_EXCLUDED = frozenset({
     "density", "offset_x", "offset_y", "offset_z", "time", "lacunarity", "noise_frequency",
     "warp_frequency", "seed", "fractal", "normal_convention", "ramp_mode",
 })
+
+#: weights and amounts that switch a term of the texture on (and the weights c1 .. c44 of the
+#: distances and their products): at 0 in the recipe they are not sliders (the term's code folds away, as in every other target); re-export with ``--set`` to
+#: turn one on
+TERM_SWITCHES = frozenset({"c_noise", "c_edge", "c_smooth", "c_nsphere", "smoothness", "warp_amount",
+                           "noise_color"})
 
 #: the shader's outputs: (OSL type, name, default, what it is)
 OUTPUTS = (
@@ -61,11 +67,12 @@ def exposed_params(prog, code: str):
     out = []
     for typ, name, value in prog.uniforms:
         p = PARAMS_BY_NAME.get(name)
-        if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \
-                or isinstance(value, (list, tuple)) or name not in used:
-            continue
-        m = re.fullmatch(r"c(\d)(\d)?", name)
+        m = re.fullmatch(r"c(\d)(\d)?", name)              # a weight of F_i or of F_i F_j
         if m and any(int(d) > n for d in m.groups() if d):
+            continue
+        if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \
+                or isinstance(value, (list, tuple)) or name not in used \
+                or ((name in TERM_SWITCHES or m) and value == 0):
             continue
         out.append((p, value))
     return out
@@ -96,17 +103,78 @@ def _quote(s: str) -> str:
     return s.replace("\\", "\\\\").replace('"', "'")
 
 
-def osl_shader(prog, code: str) -> str:
-    """The OSL text of texture program ``prog``: ``code`` (its specialised GLSL) translated,
-    plus the ``shader`` block."""
+#: the GLSL function the shader block calls: everything the outputs read of the texture, so that
+#: the snippet compiler folds the recipe into one entry point (the sliders stay its parameters)
+_ENTRY = """
+// What the OSL shader reads of the texture at p = (u, v, z) in texture space, band-limited to
+// a pixel spanning dp: the texel, the cell's colour and ID (its 16-bit halves), and the
+// height's gradient in texture units times the bump per cell.
+void cell_osl_texture(vec3 p, vec3 dp, out vec3 color, out float height, out float F1, out float F2,
+                      out float F3, out float F4, out float value, out vec3 cell_color, out float cell_value,
+                      out float id_low, out float id_high, out vec3 grad)
+{
+    CellTextureParams t = cell_texture_params_load();
+    CellTexel x = cell_texture_at_filtered(p, dp, t);
+    color = x.color.rgb;
+    height = x.height;
+    F1 = x.F.x;
+    F2 = x.F.y;
+    F3 = x.F.z;
+    F4 = x.F.w;
+    value = x.value;
+    cell_color = cell_id_color(x.id);
+    cell_value = x.cell.w;
+    id_low = float(x.id & 65535u);
+    id_high = float(x.id >> 16);
+    grad = cell_texture_grad_uvz(x, t) * (t.bump / t.frequency);
+}
+"""
+
+
+def folded_code(prog, params, specialise, structs) -> tuple[str, list]:
+    """The GLSL of ``prog`` for OSL, folded like every other target's but for the recipe values
+    in ``params`` (``[(Param, value)]``, :func:`exposed_params`), which stay named constants the
+    shader passes in as its parameters; and those of ``params`` the folded code still reads.
+    ``specialise``: the program's specialised GLSL (:func:`cellgl.export.snippets.specialised_code`),
+    ``structs``: the parameter structs to scalarise."""
+    from dataclasses import replace
+
+    from cellgl.export import compiler
+
+    sliders = {"cell_" + p.name for p, _ in params}
+    lines, consts = [], {}
+    for ln in prog.params.split("\n"):
+        w = ln.split()
+        if len(w) >= 4 and w[0] == "const" and w[2] in sliders and w[3] == "=":
+            consts["cellgl_" + w[2][len("cell_"):]] = ln.replace(" cell_", " cellgl_", 1)
+            ln = f"uniform {w[1]} {w[2]};"            # not a constant for the compiler: not folded
+        lines.append(ln)
+    text = specialise(replace(prog, params="\n".join(lines), entry=prog.entry + _ENTRY))
+    code = compiler.compile_glsl(text, ["cellgl_osl_texture"], structs=structs,
+                                 keep=("cellgl_search_budget",))
+    out, kept = [], set()
+    for ln in code.split("\n"):
+        w = ln.split()
+        if len(w) == 3 and w[0] == "uniform" and w[2].rstrip(";") in consts:
+            kept.add(w[2].rstrip(";"))
+            ln = consts[w[2].rstrip(";")]                 # a value to_osl turns into a parameter
+        out.append(ln)
+    return "\n".join(out), [(p, v) for p, v in params if "cellgl_" + p.name in kept]
+
+
+def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
+    """The OSL text of texture program ``prog``: its GLSL (``code``: the specialised library)
+    folded for the recipe but for the sliders (:func:`folded_code`, with ``specialise`` and
+    ``structs``), translated, plus the ``shader`` block."""
     if prog.entries:
         return _basis_function_shader(prog, code)
     if not prog.filtered:
         return _basis_shader(prog, code)
-    params = exposed_params(prog, code)
+    glsl, params = folded_code(prog, exposed_params(prog, code), specialise, structs)
     names = ["cellgl_" + p.name for p, _ in params]
-    lib = to_osl(code, params=names, drop=("cellgl_texture", "cellgl_texture3", "cellgl_texture_filtered",
-                                           "cellgl_texture3_filtered"))
+    passed: dict = {}
+    lib = to_osl(glsl, params=names, passed=passed)
+    args = ", ".join(_pname(g[len("cellgl_"):]) for g in passed["cellgl_osl_texture"])
     shader_name = identifier(prog.title)
     lines = [f"shader {shader_name}(", '    point Vector = point(0, 0, 0) [[ string label = "Vector", '
              'string help = "Texture coordinate: (x, y) in [0, 1]^2 spans the bake, z the solid depth '
@@ -132,30 +200,20 @@ def osl_shader(prog, code: str) -> str:
         "        q0 = point(u, v, 0);",
         "    // cellgl's texture space: v = 0 at the top row of a bake",
         "    vector q = vector(q0[0], 1.0 - q0[1], q0[2]);",
-        "    // the pixel's extent along each axis, whichever directions the host's two screen",
-        "    // differentials take (Cycles: diagonals of the pixel)",
+        "    // the pixel's extent along each axis (Cycles' two differentials: the pixel's diagonals)",
         "    vector ddx = Dx(q);",
         "    vector ddy = Dy(q);",
         "    vector dq = vector(hypot(ddx[0], ddy[0]), hypot(ddx[1], ddy[1]), hypot(ddx[2], ddy[2]));",
-        f"    CellglTextureParams t = cellgl_texture_params_load({', '.join(_pname(p.name) for p, _ in params)});",
-        f"    CellglTexel x = cellgl_texture_at_filtered(cellgl_vec3(q[0], q[1], {z}), "
-        f"cellgl_vec3(dq[0], dq[1], {'dq[2]' if prog.solid else '0.0'}), t);",
-        "    Color = color(x.color_.x, x.color_.y, x.color_.z);",
-        "    Fac = x.height;",
-        "    F1 = x.F.x;",
-        "    F2 = x.F.y;",
-        "    F3 = x.F.z;",
-        "    F4 = x.F.w;",
-        "    Value = x.value;",
-        "    cellgl_vec3 cc = cellgl_id_color(x.id);",
+        "    cellgl_vec3 c;",
+        "    cellgl_vec3 cc;",
+        "    cellgl_vec3 g;",
+        f"    cellgl_osl_texture(cellgl_vec3(q[0], q[1], {z}), cellgl_vec3(dq[0], dq[1], "
+        f"{'dq[2]' if prog.solid else '0.0'}), c, Fac, F1, F2, F3, F4, Value, cc, CellValue, IDLow, IDHigh, g"
+        f"{', ' + args if args else ''});",
+        "    Color = color(c.x, c.y, c.z);",
         "    CellColor = color(cc.x, cc.y, cc.z);",
-        "    CellValue = x.cell.w;",
-        "    IDLow = float(x.id & 65535);",
-        "    IDHigh = float((x.id >> 16) & 65535);",
-        "    // bump: the height in texture units (bump per cell), its screen derivatives, and the",
-        "    // surface gradient of the shading point (q holds the flip of v)",
-        "    cellgl_vec3 g = cellgl_texture_grad_uvz(x, t);",
-        "    vector guv = vector(g.x, g.y, g.z) * (t.bump / t.frequency);",
+        "    // bump: the height's gradient g (texture units) on the pixel, and the surface gradient",
+        "    vector guv = vector(g.x, g.y, g.z);",
         "    float hx = dot(guv, ddx);",
         "    float hy = dot(guv, ddy);",
         "    vector dpdx = Dx(P);",

@@ -45,7 +45,12 @@ class Item:
         return [t.text for t in self.toks if t.kind not in ("ws", "comment")]
 
     def uses(self) -> set[str]:
-        return {t.text for t in self.toks if t.kind == "id"} - {self.name}
+        key = (id(self.toks), len(self.toks))
+        cached = self.__dict__.get("_uses")
+        if cached is None or cached[0] != key or cached[2] is not self.toks:
+            cached = (key, {t.text for t in self.toks if t.kind == "id"} - {self.name}, self.toks)
+            self.__dict__["_uses"] = cached
+        return cached[1]
 
     def text(self) -> str:
         return "".join(t.text for t in self.comment) + "".join(t.text for t in self.toks)
@@ -193,7 +198,19 @@ def unparse(items: list[Item], blank: bool = True) -> str:
 
 
 def _code_idx(toks: list[Tok]) -> list[int]:
-    return [i for i, t in enumerate(toks) if t.kind not in ("ws", "comment")]
+    """Indices of the code tokens of ``toks`` (remembered per list: the passes scan the same
+    unchanged functions again and again; a list is never changed in place once scanned)."""
+    hit = _CODE_IDX.get(id(toks))
+    if hit is not None and hit[0] is toks and hit[1] == len(toks):
+        return hit[2]
+    code = [i for i, t in enumerate(toks) if t.kind not in ("ws", "comment")]
+    if len(_CODE_IDX) > 1000:
+        _CODE_IDX.clear()
+    _CODE_IDX[id(toks)] = (toks, len(toks), code)        # (the list is held: its id is not reused)
+    return code
+
+
+_CODE_IDX: dict[int, tuple] = {}
 
 
 def _match(toks: list[Tok], code: list[int], n: int) -> int:

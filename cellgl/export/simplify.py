@@ -252,22 +252,18 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         # integer arithmetic in an index
         text = re.sub(r"\[\s*(\d+(?:\s*[-+*]\s*\d+)+)\s*\]",
                       lambda m: f"[{eval(m.group(1), {'__builtins__': {}}, {})}]", text)
-        # statements that add zero or multiply by one
-        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[-+]=\s*{_ZERO}\s*\*([^;{{}}]*);[^\n]*(?=\n)",
-                      lambda m: m.group() if _top_sum(m.group(1)) else "", text)
-        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[-+]=\s*\(?{_ZERO}\)?\s*;[^\n]*(?=\n)", "", text)
+        # statements that subtract zero or multiply by one (x - 0.0 == x for every x, -0.0 and
+        # NaN included; x + 0.0 is not: -0.0 + 0.0 is +0.0, and 0.0 * y is NaN for an infinite y)
+        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*-=\s*\(?{_ZERO}\)?\s*;[^\n]*(?=\n)", "", text)
         text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[*/]=\s*\(?{_ONE}\)?\s*;[^\n]*(?=\n)", "", text)
         text = _mix(text)
-        # a zero term of a sum: (0.0 * x + y) -> (y), y + 0.0 * x -> y (x a name, field or index)
-        text = re.sub(r"(?<=[(=+])(\s*)0\.0 \* [\w.\[\]]+ \+ ", r"\1", text)
-        text = re.sub(r" \+ 0\.0 \* [\w.\[\]]+(?=\s*[);,+\-])", "", text)
         text = re.sub(r"\n[ \t]*\{\s*\}[ \t]*(?=\n)", "", text)          # an empty block
         text = re.sub(r"\n[ \t]*if \((?:[^;{}()]|\([^;{}()]*\))*\) \{\s*\}[ \t]*(?=\n)", "", text)
-        # x * 1.0, x / 1.0, x - 0.0, x + 0.0 (floats: the same value; the snippet compiles as GLSL
-        # ES, which has no implicit int -> float, so x is a float)
+        # x * 1.0, x / 1.0, x - 0.0 (floats: the same value for every x; the snippet compiles as
+        # GLSL ES, which has no implicit int -> float, so x is a float)
         text = re.sub(r"(?<=[\w)\]])\s*[*/]\s*1\.0(?![\w.(\[])", "", text)
         text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
-        text = re.sub(r"(?<=[\w)\]])\s*[-+]\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
+        text = re.sub(r"(?<=[\w)\]])\s*-\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
         text = _LITERAL_VEC.sub(_member, text)
         # |x| * |x| = x * x exactly
         text = re.sub(rf"\babs\(({_BAL})\) \* abs\(\1\)",
@@ -287,11 +283,10 @@ def _arithmetic(toks: list[Tok]) -> list[Tok]:
         text = re.sub(r"(?<![/%]\s)(?<![/%])\b0u\s*\*\s*(?:0x[0-9a-fA-F]+|\d+)u\b", "0u", text)
         text = re.sub(r"(?<=[(=,])(\s*)0u\s*\+\s*", r"\1", text)
         text = re.sub(r"(?<![\w\]])\((\d+u?|\d+\.\d+)\)", r"\1", text)
-        # a zero vector added: vec4(0.0, 0.0, 0.0, 0.0) + s -> s
-        text = re.sub(rf"(?<=[(=,])(\s*)\(?{_ZERO_VEC}\)?\s*\+\s*", r"\1", text)
+        # an integer zero vector added: ivec4(0, 0, 0, 0) + c -> c (integers: exact)
+        text = re.sub(rf"(?<=[(=,])(\s*)\(?{_ZERO_IVEC}\)?\s*\+\s*", r"\1", text)
         # an empty last branch of an if chain (conditions without side effects)
         text = re.sub(r"\}\s*else(?: if \((?:[^;{}()=]|[<>!=]=|\([^;{}()]*\))*\))? \{\s*\}(?!\s*else)", "}", text)
-        text = re.sub(rf"\s*\+\s*{_ZERO_VEC}(?=\s*[);,])", "", text)
         text = re.sub(r"\n[ \t]*(\w+)\s*=\s*\(*\1\)*\s*;[^\n]*(?=\n)", "", text)   # x = x;
         if text == old:
             break
@@ -346,7 +341,7 @@ def _redundant_parens(text: str) -> str:
 
 
 _NUM = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?"
-_ZERO_VEC = r"\bi?vec[234]\(\s*(?:0\.0|0)(?:\s*,\s*(?:0\.0|0))*\s*\)"
+_ZERO_IVEC = r"\b[iu]vec[234]\(\s*0u?(?:\s*,\s*0u?)*\s*\)"
 _LITERAL_VEC = re.compile(rf"\b(i?vec[234])\(\s*({_NUM}(?:\s*,\s*{_NUM})*)\s*\)\.([xyzw]+|[rgba]+)\b(?!\s*\()")
 
 
@@ -365,19 +360,9 @@ def _member(m: re.Match) -> str:
     return f"{typ}({picked[0]})" if len(set(picked)) == 1 else f"{typ}({', '.join(picked)})"
 
 
-def _top_sum(expr: str) -> bool:
-    """Whether ``expr`` has a + or - outside parentheses (then 0.0 * expr is not all of it)."""
-    depth = 0
-    for ch in re.sub(r"[eE][-+]\d", "", expr):
-        depth += ch in "(["
-        depth -= ch in ")]"
-        if ch in "+-" and depth == 0:
-            return True
-    return False
-
-
 def _mix(text: str) -> str:
-    """``mix(a, b, 0.0)`` -> ``(a)``, ``mix(a, b, 1.0)`` -> ``(b)``."""
+    """``mix(a, b, 0.0)`` -> ``(a)``; ``mix(a, b, 1.0)`` -> ``(b)`` only where ``a`` is a
+    literal (``a * 0.0`` is NaN for an infinite ``a``)."""
     toks = tokenize(text)
     code = _code_idx(toks)
     w = [toks[i].text for i in code]
@@ -389,6 +374,8 @@ def _mix(text: str) -> str:
                 continue
             t = "".join(w[args[2][0]:args[2][1]])
             pick = 0 if re.fullmatch(_ZERO, t) else 1 if re.fullmatch(_ONE, t) else None
+            if pick == 1 and not re.fullmatch(_NUM, "".join(w[args[0][0]:args[0][1]])):
+                continue
             if pick is None:
                 continue
             a, b = args[pick]

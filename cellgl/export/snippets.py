@@ -321,7 +321,7 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     elif d == "osl":
         from cellgl.export.osl import osl_shader
 
-        body = osl_shader(prog, code)
+        body = osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
     else:  # pragma: no cover
         raise AssertionError(d)
     return head + "\n" + body

@@ -15,7 +15,8 @@ expression, and
 * turns ``bool`` into ``int``, ``inout``/``out`` parameters into ``output`` ones (an input that
   the body assigns is copied into a local), array constructors into initialiser lists, and
   global constants into locals of the functions that read them (``params`` names the ones a
-  caller passes instead: they become parameters of the functions that read them).
+  caller passes instead: they become parameters of the functions that read them and of their
+  callers).
 
 Anything outside the subset raises :class:`TranslateError` naming the construct.
 """
@@ -42,6 +43,7 @@ class _Osl(_OslLib):
         self.globals: dict[str, tuple] = {}      # name -> (type, size, init node)
         self.scopes: list[dict] = []
         self.drop = set(drop)
+        self.passed: dict[str, list] = {}        # function -> the parameters it takes (see params)
 
     # ------------------------------------------------------------------ types
     def lookup(self, name: str):
@@ -393,6 +395,8 @@ class _Osl(_OslLib):
         elif isinstance(node, tuple) and node:
             if node[0] == "id" and node[1] in self.globals:
                 out.add(node[1])
+            elif node[0] == "call" and node[1] in self.passed:
+                out.update(self.passed[node[1]])        # the callee's parameters pass through
             for c in node[1:]:
                 if isinstance(c, (tuple, list)):
                     self.globals_used(c, out)
@@ -406,8 +410,12 @@ class _Osl(_OslLib):
             self.emit_item(item, funcs_out, overloads)
             new = [c for n, c in self.helpers.items() if n not in known and not n.startswith("struct ")]
             funcs_out[before:before] = new
-        head = "\n\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
-        return head + "\n\n" + "\n\n".join(funcs_out) + "\n"
+        head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
+        body = funcs_out[:1]
+        for prev, c in zip(funcs_out, funcs_out[1:]):      # no blank line between functions (as GLSL)
+            body.append("\n" + c)
+        return _braces(head + "\n" + "".join(body) + "\n")
+
 
     def emit_item(self, item, funcs_out: list, overloads: dict) -> None:
         k = item[0]
@@ -442,6 +450,7 @@ class _Osl(_OslLib):
             used: set = set()
             self.globals_used(body, used)
             passed = [g for g in self.params if g in used]
+            self.passed[name] = passed
             n = overloads.get(name, 0)
             overloads[name] = n + 1
             oname = self.name(name) if n == 0 else f"{name}_{n}"
@@ -501,7 +510,7 @@ class _Osl(_OslLib):
         return out
 
 
-def to_osl(text: str, *, params=(), drop=()) -> str:
+def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
     """Translate specialised, prefixed GLSL (library subset) into OSL functions and structs.
 
     Parameters
@@ -513,10 +522,31 @@ def to_osl(text: str, *, params=(), drop=()) -> str:
         function that reads one gets it as an extra trailing parameter, in this order.
     drop : sequence of str
         Functions to leave out (e.g. fragment-only entry points that use ``fwidth``).
+    passed : dict, optional
+        Filled with ``{function: [the names of params it takes, in order]}`` (a function takes
+        those it reads and those its callees take).
 
     Returns
     -------
     str
         OSL text (helpers first, then the library in its order); no ``shader`` block.
     """
-    return _Osl(text, params, drop).emit()
+    osl = _Osl(text, params, drop)
+    out = osl.emit()
+    if passed is not None:
+        passed.update(osl.passed)
+    return out
+
+
+def _braces(text: str) -> str:
+    """A line holding only ``{`` joined to the statement or signature above it (as the other
+    targets print their blocks)."""
+    out: list[str] = []
+    for ln in text.split("\n"):
+        prev = out[-1] if out else ""
+        if ln.strip() == "{" and prev.strip() and "//" not in prev \
+                and len(prev) - len(prev.lstrip()) == len(ln) - len(ln.lstrip()):
+            out[-1] = prev + " {"
+        else:
+            out.append(ln)
+    return "\n".join(out)

@@ -35,17 +35,27 @@ class Tok:
 
 
 def tokenize(text: str) -> list[Tok]:
-    """Split GLSL text (no directives) into tokens: comment, ws, num, id, op."""
-    out: list[Tok] = []
-    pos = 0
-    while pos < len(text):
-        m = _TOKEN_RE.match(text, pos)
-        if not m:
-            line = text.count("\n", 0, pos) + 1
-            raise TranslateError(f"line {line}: unexpected character {text[pos]!r}")
-        out.append(Tok(m.lastgroup, m.group()))
-        pos = m.end()
-    return out
+    """Split GLSL text (no directives) into tokens: comment, ws, num, id, op (new :class:`Tok`
+    objects each call, which callers may change; the split itself is remembered per text: the
+    compiler's passes re-read the functions they did not change)."""
+    split = _SPLITS.get(text)
+    if split is None:
+        split = []
+        pos = 0
+        while pos < len(text):
+            m = _TOKEN_RE.match(text, pos)
+            if not m:
+                line = text.count("\n", 0, pos) + 1
+                raise TranslateError(f"line {line}: unexpected character {text[pos]!r}")
+            split.append((m.lastgroup, m.group()))
+            pos = m.end()
+        if len(_SPLITS) >= 20000:
+            _SPLITS.clear()
+        _SPLITS[text] = split
+    return [Tok(k, t) for k, t in split]
+
+
+_SPLITS: dict[str, list[tuple[str, str]]] = {}
 
 
 def _join(toks: list[Tok]) -> str:

@@ -1,8 +1,9 @@
-"""Step 3b, first half: a parser of the GLSL subset the library uses, into a small tree the
-WGSL emitter walks."""
+"""Step 3b, first half: the WGSL and OSL emitters' view of :mod:`cellgl.export.syntax`'s typed
+tree (nested tuples: ``("binary", op, left, right)``, ...), and WGSL's names."""
 from __future__ import annotations
 
-from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError, tokenize
+from cellgl.export import syntax as st
+from cellgl.export.translate.tokens import TranslateError
 
 # --------------------------------------------------------------------------------------------
 # 3b. WGSL: a small parser of the library subset, then an emitter
@@ -35,320 +36,89 @@ WGSL_RESERVED = {
     "using", "varying", "virtual", "volatile", "wgsl", "writeonly", "sample", "line", "point",
 }
 
-_ASSIGN_OPS = {"=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>="}
-_BINARY_PREC = [("||",), ("^^",), ("&&",), ("|",), ("^",), ("&",), ("==", "!="),
-                ("<", ">", "<=", ">="), ("<<", ">>"), ("+", "-"), ("*", "/", "%")]
-_PREC_OF = {op: level for level, ops in enumerate(_BINARY_PREC) for op in ops}
+_PREC_OF = st.PRECEDENCE
+
+
+def _e(x):
+    """The tuple of an expression node."""
+    if x is None:
+        return None
+    if isinstance(x, st.Num):
+        return ("num", x.text)
+    if isinstance(x, st.Name):
+        return ("id", x.name)
+    if isinstance(x, st.Paren):
+        return ("paren", _e(x.inner))
+    if isinstance(x, st.Member):
+        return ("member", _e(x.base), x.name)
+    if isinstance(x, st.Index):
+        return ("index", _e(x.base), _e(x.index))
+    if isinstance(x, st.Unary):
+        return ("unary", x.op, _e(x.operand))
+    if isinstance(x, st.IncDec):
+        return ("postinc" if x.postfix else "preinc", x.op, _e(x.operand))
+    if isinstance(x, st.Binary):
+        return ("binary", x.op, _e(x.left), _e(x.right))
+    if isinstance(x, st.Assign):
+        return ("assign", x.op, _e(x.target), _e(x.value))
+    if isinstance(x, st.Ternary):
+        return ("ternary", _e(x.cond), _e(x.then), _e(x.other))
+    if isinstance(x, st.Ctor):
+        return ("ctor", x.type, [_e(a) for a in x.args])
+    if isinstance(x, st.ArrayCtor):
+        return ("arrctor", x.type, _e(x.size), [_e(a) for a in x.args])
+    if isinstance(x, st.Call):
+        return ("call", x.func, [_e(a) for a in x.args])
+    raise TranslateError(f"unexpected node {x!r}")
+
+
+def _decls(ds) -> list:
+    return [(d.name, _e(d.size), _e(d.init)) for d in ds]
+
+
+def _s(s):
+    """The tuple of a statement node (comments first, a trailing one as ``("trail", text)``)."""
+    com = list(s.comments)
+    if isinstance(s, st.Block):
+        return ("block", com, [_s(x) for x in s.body])
+    if isinstance(s, st.If):
+        return ("if", com, _e(s.cond), _s(s.then), None if s.other is None else _s(s.other))
+    if isinstance(s, st.For):
+        return ("for", com, None if s.init is None else _s(s.init), _e(s.cond), _e(s.step), _s(s.body))
+    if isinstance(s, st.While):
+        return ("while", com, _e(s.cond), _s(s.body))
+    if isinstance(s, st.Return):
+        return ("return", com, _e(s.value))
+    if isinstance(s, st.Jump):
+        return (s.kind, com)
+    if s.trail:
+        com.append(("trail", s.trail))
+    if isinstance(s, st.Decl):
+        return ("decl", com, s.const, s.type, _decls(s.declarators))
+    return ("expr", com, _e(s.expr))
 
 
 class _Parser:
-    """Recursive descent over code tokens; comments are attached to the next statement."""
+    """The parse of ``text`` (:func:`cellgl.export.syntax.parse`) as the emitters' tuples:
+    ``unit()`` lists ``("struct", comments, name, [[comments, type, name, size, trail]])``,
+    ``("gdecl", comments, qualifiers, type, declarators)`` and ``("func", comments, return type,
+    name, [(mode, type, name, size)], statements)`` (prototypes left out: WGSL and OSL need
+    none); ``structs`` names the structs."""
 
     def __init__(self, text: str):
-        self.toks: list[tuple[str, str, list[str]]] = []   # (kind, text, comments before it)
-        self.trail: dict[int, str] = {}     # token index -> comment on the rest of its line
-        pending: list[str] = []
-        newline = True
-        for t in tokenize(text):
-            if t.kind == "comment" and not newline and self.toks and t.text.startswith("//") \
-                    and len(self.toks) - 1 not in self.trail:
-                self.trail[len(self.toks) - 1] = t.text
-                continue
-            if t.kind != "ws":
-                newline = False
-            elif "\n" in t.text:
-                newline = True
-            if t.kind == "comment":
-                pending.append(t.text)
-            elif t.kind == "ws":
-                if t.text.count("\n") >= 2 and pending and pending[-1] != "":
-                    pending.append("")          # keep one blank line between comment blocks
-            else:
-                self.toks.append((t.kind, t.text, pending))
-                pending = []
-        self.trailing = pending
-        self.i = 0
-        self.structs: set[str] = set()
-        self.line = 0
+        self.tree = st.parse(text)
+        self.structs = {it.name for it in self.tree.items if isinstance(it, st.Struct)}
 
-    # token helpers
-    def peek(self, k: int = 0) -> str:
-        j = self.i + k
-        return self.toks[j][1] if j < len(self.toks) else ""
-
-    def kind(self, k: int = 0) -> str:
-        j = self.i + k
-        return self.toks[j][0] if j < len(self.toks) else ""
-
-    def comments(self) -> list[str]:
-        return self.toks[self.i][2] if self.i < len(self.toks) else []
-
-    def take(self, want: str | None = None) -> str:
-        if self.i >= len(self.toks):
-            raise TranslateError(f"unexpected end of shader text (expected {want!r})")
-        t = self.toks[self.i][1]
-        if want is not None and t != want:
-            ctx = " ".join(x[1] for x in self.toks[max(0, self.i - 8): self.i + 4])
-            raise TranslateError(f"WGSL translation: expected {want!r}, got {t!r} near: {ctx}")
-        self.i += 1
-        return t
-
-    def is_type(self, k: int = 0) -> bool:
-        t = self.peek(k)
-        return t in GLSL_TYPES or t in self.structs
-
-    # top level
     def unit(self) -> list:
         out = []
-        while self.i < len(self.toks):
-            com = self.comments()
-            if self.peek() == "struct":
-                self.take()
-                name = self.take()
-                self.structs.add(name)
-                self.take("{")
-                members = []
-                while self.peek() != "}":
-                    mcom = self.comments()
-                    while self.peek() in ("highp", "mediump", "lowp"):
-                        self.take()
-                    typ = self.take()
-                    while True:
-                        mname = self.take()
-                        size = self.array_size()
-                        members.append([mcom, typ, mname, size, ""])
-                        mcom = []
-                        if self.peek() == ",":
-                            self.take()
-                            continue
-                        break
-                    self.take(";")
-                    members[-1][4] = self.trail.get(self.i - 1, "")
-                self.take("}")
-                self.take(";")
-                out.append(("struct", com, name, members))
-                continue
-            quals = []
-            while self.peek() in ("const", "uniform", "highp", "mediump", "lowp"):
-                quals.append(self.take())
-            typ = self.take()
-            if self.peek() == "[":
-                raise TranslateError("WGSL translation: array types in 'T[N] name' form are not supported")
-            name = self.take()
-            if self.peek() == "(":
-                self.take("(")
-                params = []
-                while self.peek() != ")":
-                    mode = "in"
-                    while self.peek() in ("in", "out", "inout", "const", "highp", "mediump", "lowp"):
-                        q = self.take()
-                        if q in ("out", "inout"):
-                            mode = q
-                    ptyp = self.take()
-                    pname = self.take()
-                    psize = self.array_size()
-                    params.append((mode, ptyp, pname, psize))
-                    if self.peek() == ",":
-                        self.take()
-                if params == [("in", "void", ")", None)]:
-                    params = []
-                self.take(")")
-                if self.peek() == ";":
-                    self.take()
-                    continue                    # prototype: WGSL needs none
-                body = self.block()
-                out.append(("func", com, typ, name, params, body))
-                continue
-            decls = self.declarators(name)
-            self.take(";")
-            out.append(("gdecl", com, quals, typ, decls))
+        for it in self.tree.items:
+            com = list(it.comments)
+            if isinstance(it, st.Struct):
+                out.append(("struct", com, it.name,
+                            [[f.comments, f.type, f.name, _e(f.size), f.trail] for f in it.fields]))
+            elif isinstance(it, st.Global):
+                out.append(("gdecl", com, list(it.quals), it.type, _decls(it.declarators)))
+            elif it.body is not None:
+                params = [(p.mode, p.type, p.name, _e(p.size)) for p in it.params]
+                out.append(("func", com, it.ret, it.name, params, [_s(x) for x in it.body.body]))
         return out
-
-    def array_size(self):
-        if self.peek() == "[":
-            self.take("[")
-            e = self.expr()
-            self.take("]")
-            return e
-        return None
-
-    def declarators(self, first: str) -> list:
-        decls = []
-        name = first
-        while True:
-            size = self.array_size()
-            init = None
-            if self.peek() == "=":
-                self.take()
-                init = self.assign_expr()
-            decls.append((name, size, init))
-            if self.peek() != ",":
-                return decls
-            self.take(",")
-            name = self.take()
-
-    # statements
-    def block(self) -> list:
-        self.take("{")
-        out = []
-        while self.peek() != "}":
-            out.append(self.statement())
-        self.take("}")
-        return out
-
-    def statement(self):
-        com = self.comments()
-        t = self.peek()
-        if t == "{":
-            return ("block", com, self.block())
-        if t == "if":
-            self.take()
-            self.take("(")
-            c = self.expr()
-            self.take(")")
-            a = self.statement()
-            b = None
-            if self.peek() == "else":
-                self.take()
-                b = self.statement()
-            return ("if", com, c, a, b)
-        if t == "for":
-            self.take()
-            self.take("(")
-            init = None if self.peek() == ";" else self.simple_statement()
-            self.take(";")
-            cond = None if self.peek() == ";" else self.expr()
-            self.take(";")
-            step = None if self.peek() == ")" else self.expr()
-            self.take(")")
-            body = self.statement()
-            return ("for", com, init, cond, step, body)
-        if t == "while":
-            self.take()
-            self.take("(")
-            c = self.expr()
-            self.take(")")
-            return ("while", com, c, self.statement())
-        if t == "return":
-            self.take()
-            e = None if self.peek() == ";" else self.expr()
-            self.take(";")
-            return ("return", com, e)
-        if t in ("break", "continue", "discard"):
-            self.take()
-            self.take(";")
-            return (t, com)
-        if t == ";":
-            self.take()
-            return ("block", com, [])
-        s = self.simple_statement()
-        self.take(";")
-        trail = self.trail.get(self.i - 1)
-        if trail:
-            com = com + [("trail", trail)]
-        return (s[0], com) + s[2:]
-
-    def simple_statement(self):
-        quals = []
-        while self.peek() in ("const", "highp", "mediump", "lowp"):
-            quals.append(self.take())
-        if self.is_type() and self.kind(1) == "id":
-            typ = self.take()
-            name = self.take()
-            return ("decl", [], "const" in quals, typ, self.declarators(name))
-        return ("expr", [], self.expr())
-
-    # expressions: nodes are tuples
-    def expr(self):
-        e = self.assign_expr()
-        if self.peek() == ",":
-            raise TranslateError("WGSL translation: the comma operator is not supported")
-        return e
-
-    def assign_expr(self):
-        lhs = self.ternary()
-        if self.peek() in _ASSIGN_OPS:
-            op = self.take()
-            return ("assign", op, lhs, self.assign_expr())
-        return lhs
-
-    def ternary(self):
-        c = self.binary(0)
-        if self.peek() == "?":
-            self.take()
-            a = self.assign_expr()
-            self.take(":")
-            b = self.assign_expr()
-            return ("ternary", c, a, b)
-        return c
-
-    def binary(self, level: int):
-        if level == len(_BINARY_PREC):
-            return self.unary()
-        e = self.binary(level + 1)
-        while self.peek() in _BINARY_PREC[level]:
-            op = self.take()
-            e = ("binary", op, e, self.binary(level + 1))
-        return e
-
-    def unary(self):
-        t = self.peek()
-        if t in ("-", "+", "!", "~"):
-            self.take()
-            return ("unary", t, self.unary())
-        if t in ("++", "--"):
-            self.take()
-            return ("preinc", t, self.unary())
-        return self.postfix()
-
-    def postfix(self):
-        e = self.primary()
-        while True:
-            t = self.peek()
-            if t == "[":
-                self.take()
-                idx = self.expr()
-                self.take("]")
-                e = ("index", e, idx)
-            elif t == ".":
-                self.take()
-                e = ("member", e, self.take())
-            elif t in ("++", "--"):
-                self.take()
-                e = ("postinc", t, e)
-            else:
-                return e
-
-    def args(self) -> list:
-        self.take("(")
-        out = []
-        while self.peek() != ")":
-            out.append(self.assign_expr())
-            if self.peek() == ",":
-                self.take()
-        self.take(")")
-        return out
-
-    def primary(self):
-        k, t = self.kind(), self.peek()
-        if k == "num":
-            self.take()
-            return ("num", t)
-        if t == "(":
-            self.take()
-            e = self.expr()
-            self.take(")")
-            return ("paren", e)
-        if k == "id":
-            self.take()
-            if self.peek() == "[" and (t in GLSL_TYPES or t in self.structs):
-                self.take("[")
-                size = self.expr()
-                self.take("]")
-                return ("arrctor", t, size, self.args())
-            if self.peek() == "(":
-                if t in GLSL_TYPES or t in self.structs:
-                    return ("ctor", t, self.args())
-                return ("call", t, self.args())
-            return ("id", t)
-        raise TranslateError(f"WGSL translation: unexpected {t!r}")

@@ -1,0 +1,557 @@
+"""The typed syntax tree of the preprocessed GLSL the snippets are made of, its parser and its
+GLSL printer.
+
+The GLSL is the library's subset after specialisation (:mod:`cellgl.export.translate`: no
+directive, no macro): structs, global constants and uniforms, functions (and prototypes), the
+statements ``{}``, declarations, expressions, ``if``/``else``, ``for``, ``while``, ``return``,
+``break``/``continue``/``discard``, and the expressions of GLSL without the comma operator.
+
+Comments stay on their nodes: the comment lines above a top-level declaration, a statement or a
+struct member are its ``comments`` (``""`` for a blank line between comment blocks), a ``//``
+comment after a statement on its line its ``trail``. ``print_glsl`` writes a tree back as
+GLSL (:mod:`cellgl.export.printer`: 4-space indentation, the comments where they were,
+parentheses as written: a :class:`Paren` is the source's own).
+
+:func:`parsed_library` caches the tree of a specialised library per process: an export parses
+each library text once.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError, tokenize
+
+__all__ = ["parse", "parsed_library", "Unit", "Struct", "Field", "Function", "Param",
+           "Global", "Declarator", "Block", "Decl", "ExprStmt", "If", "For", "While", "Return", "Jump",
+           "Num", "Name", "Call", "Ctor", "ArrayCtor", "Unary", "IncDec", "Binary", "Assign", "Ternary",
+           "Index", "Member", "Paren"]
+
+
+# --------------------------------------------------------------------------------------------
+# nodes
+# --------------------------------------------------------------------------------------------
+
+@dataclass
+class Num:
+    text: str                       # as written: 1.0, 0x9e3779b9u, 3e-5
+
+
+@dataclass
+class Name:
+    name: str
+
+
+@dataclass
+class Call:
+    func: str
+    args: list
+
+
+@dataclass
+class Ctor:
+    type: str                       # vec4(...), CellglResult(...)
+    args: list
+
+
+@dataclass
+class ArrayCtor:
+    type: str                       # float[3](a, b, c)
+    size: object
+    args: list
+
+
+@dataclass
+class Unary:
+    op: str                         # - + ! ~
+    operand: object
+
+
+@dataclass
+class IncDec:
+    op: str                         # ++ --
+    operand: object
+    postfix: bool
+
+
+@dataclass
+class Binary:
+    op: str
+    left: object
+    right: object
+
+
+@dataclass
+class Assign:
+    op: str                         # = += -= ...
+    target: object
+    value: object
+
+
+@dataclass
+class Ternary:
+    cond: object
+    then: object
+    other: object
+
+
+@dataclass
+class Index:
+    base: object
+    index: object
+
+
+@dataclass
+class Member:
+    base: object
+    name: str
+
+
+@dataclass
+class Paren:
+    inner: object
+
+
+@dataclass
+class Declarator:
+    name: str
+    size: object = None             # an array's size expression
+    init: object = None
+
+
+@dataclass
+class Block:
+    body: list
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Decl:
+    type: str
+    declarators: list
+    const: bool = False
+    comments: list = field(default_factory=list)
+    trail: str = ""
+
+
+@dataclass
+class ExprStmt:
+    expr: object
+    comments: list = field(default_factory=list)
+    trail: str = ""
+
+
+@dataclass
+class If:
+    cond: object
+    then: object
+    other: object = None
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class For:
+    init: object                    # Decl, ExprStmt or None
+    cond: object
+    step: object
+    body: object
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class While:
+    cond: object
+    body: object
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Return:
+    value: object = None
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Jump:
+    kind: str                       # break continue discard
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Field:
+    type: str
+    name: str
+    size: object = None
+    comments: list = field(default_factory=list)
+    trail: str = ""
+
+
+@dataclass
+class Struct:
+    name: str
+    fields: list
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Param:
+    mode: str                       # in out inout
+    type: str
+    name: str
+    size: object = None
+    const: bool = False
+
+
+@dataclass
+class Function:
+    ret: str
+    name: str
+    params: list
+    body: Block | None              # None: a prototype
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Global:
+    quals: list                     # const, uniform (precision qualifiers dropped)
+    type: str
+    declarators: list
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Unit:
+    items: list
+    trailing: list = field(default_factory=list)     # comments after the last item
+
+
+# --------------------------------------------------------------------------------------------
+# parser: recursive descent over the code tokens
+# --------------------------------------------------------------------------------------------
+
+_ASSIGN_OPS = {"=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>="}
+BINARY_PRECEDENCE = [("||",), ("^^",), ("&&",), ("|",), ("^",), ("&",), ("==", "!="),
+                     ("<", ">", "<=", ">="), ("<<", ">>"), ("+", "-"), ("*", "/", "%")]
+PRECEDENCE = {op: level for level, ops in enumerate(BINARY_PRECEDENCE) for op in ops}
+_PRECISION = ("highp", "mediump", "lowp")
+
+
+class _Parser:
+    def __init__(self, text: str):
+        self.toks: list[tuple[str, str, list[str]]] = []   # (kind, text, comments before it)
+        self.trail: dict[int, str] = {}     # token index -> comment on the rest of its line
+        pending: list[str] = []
+        newline = True
+        for t in tokenize(text):
+            if t.kind == "comment" and not newline and self.toks and t.text.startswith("//") \
+                    and len(self.toks) - 1 not in self.trail:
+                self.trail[len(self.toks) - 1] = t.text
+                continue
+            if t.kind != "ws":
+                newline = False
+            elif "\n" in t.text:
+                newline = True
+            if t.kind == "comment":
+                pending.append(t.text)
+            elif t.kind == "ws":
+                if t.text.count("\n") >= 2 and pending and pending[-1] != "":
+                    pending.append("")          # one blank line between comment blocks
+            else:
+                self.toks.append((t.kind, t.text, pending))
+                pending = []
+        self.trailing = pending
+        self.i = 0
+        self.structs: set[str] = set()
+
+    def peek(self, k: int = 0) -> str:
+        j = self.i + k
+        return self.toks[j][1] if j < len(self.toks) else ""
+
+    def kind(self, k: int = 0) -> str:
+        j = self.i + k
+        return self.toks[j][0] if j < len(self.toks) else ""
+
+    def comments(self) -> list[str]:
+        return list(self.toks[self.i][2]) if self.i < len(self.toks) else []
+
+    def take(self, want: str | None = None) -> str:
+        if self.i >= len(self.toks):
+            raise TranslateError(f"unexpected end of shader text (expected {want!r})")
+        t = self.toks[self.i][1]
+        if want is not None and t != want:
+            ctx = " ".join(x[1] for x in self.toks[max(0, self.i - 8): self.i + 4])
+            raise TranslateError(f"GLSL syntax: expected {want!r}, got {t!r} near: {ctx}")
+        self.i += 1
+        return t
+
+    def is_type(self, k: int = 0) -> bool:
+        t = self.peek(k)
+        return t in GLSL_TYPES or t in self.structs
+
+    # top level
+    def unit(self) -> Unit:
+        out = []
+        while self.i < len(self.toks):
+            com = self.comments()
+            if self.peek() == "struct":
+                out.append(self.struct(com))
+                continue
+            quals = []
+            while self.peek() in ("const", "uniform", "in", "out", "flat") + _PRECISION:
+                q = self.take()
+                if q not in _PRECISION:
+                    quals.append(q)
+            typ = self.take()
+            if self.peek() == "[":
+                raise TranslateError(f"GLSL syntax: array types in 'T[N] name' form are not supported ({typ}[...])")
+            name = self.take()
+            if self.peek() == "(":
+                out.append(self.function(com, typ, name))
+                continue
+            decls = self.declarators(name)
+            self.take(";")
+            out.append(Global(quals, typ, decls, com))
+        return Unit(out, self.trailing)
+
+    def struct(self, com) -> Struct:
+        self.take("struct")
+        name = self.take()
+        self.structs.add(name)
+        self.take("{")
+        fields = []
+        while self.peek() != "}":
+            fcom = self.comments()
+            while self.peek() in _PRECISION:
+                self.take()
+            typ = self.take()
+            while True:
+                fields.append(Field(typ, self.take(), self.array_size(), fcom))
+                fcom = []
+                if self.peek() != ",":
+                    break
+                self.take(",")
+            self.take(";")
+            fields[-1].trail = self.trail.get(self.i - 1, "")
+        self.take("}")
+        self.take(";")
+        return Struct(name, fields, com)
+
+    def function(self, com, ret: str, name: str) -> Function:
+        self.take("(")
+        params = []
+        while self.peek() != ")":
+            mode, const = "in", False
+            while self.peek() in ("in", "out", "inout", "const") + _PRECISION:
+                q = self.take()
+                if q in ("out", "inout"):
+                    mode = q
+                const = const or q == "const"
+            ptyp = self.take()
+            if ptyp == "void" and self.peek() == ")":
+                break
+            params.append(Param(mode, ptyp, self.take(), self.array_size(), const))
+            if self.peek() == ",":
+                self.take()
+        self.take(")")
+        if self.peek() == ";":
+            self.take()
+            return Function(ret, name, params, None, com)
+        return Function(ret, name, params, self.block(), com)
+
+    def array_size(self):
+        if self.peek() != "[":
+            return None
+        self.take("[")
+        e = self.expr()
+        self.take("]")
+        return e
+
+    def declarators(self, first: str) -> list:
+        decls = []
+        name = first
+        while True:
+            size = self.array_size()
+            init = None
+            if self.peek() == "=":
+                self.take()
+                init = self.assign_expr()
+            decls.append(Declarator(name, size, init))
+            if self.peek() != ",":
+                return decls
+            self.take(",")
+            name = self.take()
+
+    # statements
+    def block(self, com=None) -> Block:
+        self.take("{")
+        out = []
+        while self.peek() != "}":
+            out.append(self.statement())
+        self.take("}")
+        return Block(out, com or [])
+
+    def statement(self):
+        com = self.comments()
+        t = self.peek()
+        if t == "{":
+            return self.block(com)
+        if t == "if":
+            self.take()
+            self.take("(")
+            c = self.expr()
+            self.take(")")
+            a = self.statement()
+            b = None
+            if self.peek() == "else":
+                self.take()
+                b = self.statement()
+            return If(c, a, b, com)
+        if t == "for":
+            self.take()
+            self.take("(")
+            init = None if self.peek() == ";" else self.simple_statement()
+            self.take(";")
+            cond = None if self.peek() == ";" else self.expr()
+            self.take(";")
+            step = None if self.peek() == ")" else self.expr()
+            self.take(")")
+            return For(init, cond, step, self.statement(), com)
+        if t == "while":
+            self.take()
+            self.take("(")
+            c = self.expr()
+            self.take(")")
+            return While(c, self.statement(), com)
+        if t == "return":
+            self.take()
+            e = None if self.peek() == ";" else self.expr()
+            self.take(";")
+            return Return(e, com)
+        if t in ("break", "continue", "discard"):
+            self.take()
+            self.take(";")
+            return Jump(t, com)
+        if t == ";":
+            self.take()
+            return Block([], com)
+        s = self.simple_statement()
+        self.take(";")
+        s.comments = com
+        s.trail = self.trail.get(self.i - 1, "")
+        return s
+
+    def simple_statement(self):
+        const = False
+        while self.peek() in ("const",) + _PRECISION:
+            const = const or self.take() == "const"
+        if self.is_type() and self.kind(1) == "id":
+            typ = self.take()
+            return Decl(typ, self.declarators(self.take()), const)
+        return ExprStmt(self.expr())
+
+    # expressions
+    def expr(self):
+        e = self.assign_expr()
+        if self.peek() == ",":
+            raise TranslateError("GLSL syntax: the comma operator is not supported")
+        return e
+
+    def assign_expr(self):
+        lhs = self.ternary()
+        if self.peek() in _ASSIGN_OPS:
+            op = self.take()
+            return Assign(op, lhs, self.assign_expr())
+        return lhs
+
+    def ternary(self):
+        c = self.binary(0)
+        if self.peek() == "?":
+            self.take()
+            a = self.assign_expr()
+            self.take(":")
+            return Ternary(c, a, self.assign_expr())
+        return c
+
+    def binary(self, level: int):
+        if level == len(BINARY_PRECEDENCE):
+            return self.unary()
+        e = self.binary(level + 1)
+        while self.peek() in BINARY_PRECEDENCE[level]:
+            op = self.take()
+            e = Binary(op, e, self.binary(level + 1))
+        return e
+
+    def unary(self):
+        t = self.peek()
+        if t in ("-", "+", "!", "~"):
+            self.take()
+            return Unary(t, self.unary())
+        if t in ("++", "--"):
+            self.take()
+            return IncDec(t, self.unary(), False)
+        return self.postfix()
+
+    def postfix(self):
+        e = self.primary()
+        while True:
+            t = self.peek()
+            if t == "[":
+                self.take()
+                idx = self.expr()
+                self.take("]")
+                e = Index(e, idx)
+            elif t == ".":
+                self.take()
+                e = Member(e, self.take())
+            elif t in ("++", "--"):
+                self.take()
+                e = IncDec(t, e, True)
+            else:
+                return e
+
+    def args(self) -> list:
+        self.take("(")
+        out = []
+        while self.peek() != ")":
+            out.append(self.assign_expr())
+            if self.peek() == ",":
+                self.take()
+        self.take(")")
+        return out
+
+    def primary(self):
+        k, t = self.kind(), self.peek()
+        if k == "num":
+            self.take()
+            return Num(t)
+        if t == "(":
+            self.take()
+            e = self.expr()
+            self.take(")")
+            return Paren(e)
+        if k == "id":
+            self.take()
+            if self.peek() == "[" and self.is_type(-1):
+                self.take("[")
+                size = self.expr()
+                self.take("]")
+                return ArrayCtor(t, size, self.args())
+            if self.peek() == "(":
+                if t in GLSL_TYPES or t in self.structs:
+                    return Ctor(t, self.args())
+                return Call(t, self.args())
+            return Name(t)
+        raise TranslateError(f"GLSL syntax: unexpected {t!r}")
+
+
+def parse(text: str) -> Unit:
+    """The tree of ``text`` (preprocessed GLSL); :class:`TranslateError` names what it cannot
+    read."""
+    return _Parser(text).unit()
+
+
+@lru_cache(maxsize=64)
+def parsed_library(text: str) -> Unit:
+    """:func:`parse` of a library text, cached per process (the tree is shared: copy it before
+    changing it)."""
+    return parse(text)

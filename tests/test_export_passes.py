@@ -1,0 +1,286 @@
+"""The snippet compiler's passes one by one (cellgl/export/), each on a small GLSL input with the
+exact text it must give: beside the end-to-end tests (tests/test_export.py,
+tests/test_export_compiler.py), which check that whole snippets compute what the bakes do."""
+from __future__ import annotations
+
+import pytest
+
+from cellgl.export import compiler
+from cellgl.export.fold import _local_constants, fold
+from cellgl.export.reach import parse, unparse
+from cellgl.export.simplify import _arithmetic
+from cellgl.export.translate.tokens import TranslateError, tokenize
+
+
+def _text(toks) -> str:
+    return "".join(t.text for t in toks)
+
+
+# --------------------------------------------------------------------------------------------
+# identities: only those that hold for every IEEE-754 value
+# --------------------------------------------------------------------------------------------
+
+_IDENTITIES = """float f(float x, float y, vec4 s, ivec4 c) {
+    x *= 1.0;
+    x -= 0.0;
+    x += 0.0;
+    x += 0.0 * y;
+    float a = x * 1.0 + y - 0.0;
+    float b = x + 0.0;
+    float m = mix(x, y, 0.0);
+    float n = mix(x, y, 1.0);
+    float k = mix(2.0, y, 1.0);
+    vec4 q = vec4(0.0, 0.0, 0.0, 0.0) + s;
+    ivec4 d = ivec4(0, 0, 0, 0) + c;
+    float e = abs(x) * abs(x);
+    return a + b + m + n + k + q.x + float(d.x) + e;
+}
+"""
+
+
+def test_identities_hold_for_every_ieee754_value():
+    """Rewritten: x * 1.0, x *= 1.0, x - 0.0, x -= 0.0, mix(a, b, 0.0), mix(2.0, b, 1.0) (a
+    finite literal), |x| |x|, integer zero vectors added. Kept: x + 0.0 and x += 0.0 (-0.0 + 0.0
+    is +0.0), x += 0.0 * y (NaN for an infinite y), mix(x, y, 1.0) (x * 0.0: NaN for an
+    infinite x), a float zero vector added (-0.0 again)."""
+    out = _text(_arithmetic(tokenize(_IDENTITIES)))
+    assert out == """float f(float x, float y, vec4 s, ivec4 c) {
+    x += 0.0;
+    x += 0.0 * y;
+    float a = x + y;
+    float b = x + 0.0;
+    float m = x;
+    float n = mix(x, y, 1.0);
+    float k = y;
+    vec4 q = vec4(0.0, 0.0, 0.0, 0.0) + s;
+    ivec4 d = c;
+    float e = x * x;
+    return a + b + m + n + k + q.x + float(d.x) + e;
+}
+"""
+
+
+@pytest.mark.parametrize("x", [0.0, -0.0, 1.5, -2.25, float("inf"), float("-inf"), float("nan"), 5e-324])
+def test_the_kept_forms_are_not_identities_but_the_rewritten_are(x):
+    """The reason, in numbers (NumPy float32, as the GPU computes). (``mix(a, b, 0.0)`` -> ``a``
+    is rewritten as issue 30 rules, the blend weight 0 selecting ``a``; GLSL's formula
+    a (1 - t) + b t would give +0.0 for a = -0.0 and NaN for an infinite b.)"""
+    np = pytest.importorskip("numpy")
+    f = np.float32
+    same = lambda a, b: np.array(a, np.float32).tobytes() == np.array(b, np.float32).tobytes() \
+        or (np.isnan(a) and np.isnan(b))                       # noqa: E731
+    with np.errstate(all="ignore"):
+        assert same(f(x) * f(1.0), f(x)) and same(f(x) - f(0.0), f(x)) and same(f(x) / f(1.0), f(x))
+        assert same(abs(f(x)) * abs(f(x)), f(x) * f(x))
+    with np.errstate(all="ignore"):
+        assert not same(f(-0.0) + f(0.0), f(-0.0))                      # x + 0.0
+        assert not same(f(1.0) + f(0.0) * f(np.inf), f(1.0))            # x + 0.0 * y
+        assert not same(f(np.inf) * f(0.0) + f(1.0) * f(1.0), f(1.0))   # mix(inf, 1, 1.0)
+
+
+# --------------------------------------------------------------------------------------------
+# constant folding of locals
+# --------------------------------------------------------------------------------------------
+
+
+def test_a_field_named_like_a_local_does_not_stop_its_folding():
+    """``o.w`` passed to a call is a field read, not the local ``w`` (which may be an out
+    argument): ``w`` = 1.0 for good is still a constant."""
+    toks = tokenize("""void f(inout vec4 o) {
+    float w = 1.0;
+    o.x += w;
+    o.y = g(o.w, 2.0);
+}""")
+    assert _local_constants(toks, {}) == {"w": "1.0"}
+    assert _local_constants(tokenize("void f(inout vec4 o) {\n    float w = 1.0;\n    g(w);\n}"), {}) == {}
+
+
+def test_fold_removes_the_branch_a_constant_condition_rules_out():
+    items = parse("""const int k_mode = 1;
+float f(float x) {
+    if (k_mode == 0) {
+        x = 2.0 * x;
+    } else {
+        x += 1.5;
+    }
+    return x;
+}
+""")
+    out = unparse(fold(items, {"k_mode": "1"}))
+    assert out == """const int k_mode = 1;
+
+float f(float x) {
+    x += 1.5;
+    return x;
+}
+"""
+
+
+# --------------------------------------------------------------------------------------------
+# the pass driver: a fixed point, or an error
+# --------------------------------------------------------------------------------------------
+
+
+def test_the_driver_stops_at_the_fixed_point():
+    src = "float g(float x) {\n    return x * 2.0;\n}\nfloat entry(float x) {\n    return g(x) - 0.0;\n}\n"
+    out = compiler.compile_glsl(src, ["entry"])
+    assert compiler.compile_glsl(out, ["entry"]) == out          # a second run changes nothing
+    assert out == "float entry(float x) {\n    return x * 2.0;\n}\n"
+
+
+def test_the_driver_raises_when_the_passes_do_not_settle(monkeypatch):
+    """A pass that changes the code every round (here: a stand-in for reachability that adds a
+    declaration each time) makes the driver raise, naming its round limit."""
+    import itertools
+
+    from cellgl.export import reach as reach_mod
+    rounds = itertools.count()
+
+    def growing(items, entries):
+        return reach_mod.reach(items, entries) + parse(f"const float k_{next(rounds)} = 1.0;\n")
+    monkeypatch.setattr(compiler, "reach", growing)
+    with pytest.raises(TranslateError, match=f"did not settle in {compiler.MAX_ROUNDS} rounds"):
+        compiler.compile_glsl("float entry(float x) {\n    return x;\n}\n", ["entry"])
+
+
+# --------------------------------------------------------------------------------------------
+# reachability, scalarising, parameters, inlining, void results, dead stores
+# --------------------------------------------------------------------------------------------
+
+_STRUCT = """struct P {
+    float gain;
+    int mode;
+};
+const float k_gain = 2.0;
+const int k_mode = 1;
+P load()
+{
+    P t;
+    t.gain = k_gain;
+    t.mode = k_mode;
+    return t;
+}
+float scale(float x, P t)
+{
+    return x * t.gain + float(t.mode);
+}
+float unused(float x)
+{
+    return x;
+}
+float entry(float x)
+{
+    return scale(x, load());
+}
+"""
+
+
+def test_reach_keeps_what_the_entry_uses():
+    from cellgl.export.reach import reach
+
+    kept = reach(parse(_STRUCT), ["entry"])
+    assert [it.name for it in kept] == ["P", "k_gain", "k_mode", "load", "scale", "entry"]
+
+
+def test_scalarise_reads_the_loaders_values_directly():
+    from cellgl.export.reach import reach, scalarise
+
+    out = unparse(scalarise(reach(parse(_STRUCT), ["entry"]), "P", "load"))
+    assert out.endswith("""float scale(float x)
+{
+    return x * k_gain + float(k_mode);
+}
+
+float entry(float x)
+{
+    return scale(x);
+}
+""")
+
+
+_PARAMS = """float f(float x, float y, int k)
+{
+    return x * float(k);
+}
+float entry(float a)
+{
+    return f(a, 2.0, 3) + f(a * a, 1.0, 3);
+}
+"""
+
+
+def test_parameters_never_read_go_and_constant_arguments_move_in():
+    dropped = compiler._drop_unused_params(parse(_PARAMS), {"entry"})
+    assert unparse(dropped) == """float f(float x, int k)
+{
+    return x * float(k);
+}
+
+float entry(float a)
+{
+    return f(a, 3) + f(a * a, 3);
+}
+"""
+    assert unparse(compiler._constant_args(dropped, {"entry"})) == """float f(float x)
+{
+    return x * float(3);
+}
+
+float entry(float a)
+{
+    return f(a) + f(a * a);
+}
+"""
+
+
+def test_a_function_called_once_is_inlined():
+    from cellgl.export.inline import inline_once
+
+    src = """void g(inout float v, float x)
+{
+    v += x;
+    v *= 0.5;
+}
+float entry(float a)
+{
+    float v = a;
+    g(v, 3.0);
+    return v;
+}
+"""
+    assert unparse(inline_once(parse(src), {"entry"})) == """float entry(float a)
+{
+    float v = a;
+    v += 3.0;
+    v *= 0.5;
+    return v;
+}
+"""
+
+
+def test_a_result_no_call_reads_becomes_void():
+    from cellgl.export.fields import void_results
+
+    items = parse("""float h(inout float w, float x)
+{
+    w = w + x;
+    return w * 2.0;
+}
+float entry(float a)
+{
+    float w = a;
+    h(w, 1.0);
+    h(w, 2.0);
+    return w;
+}
+""")
+    out = unparse(void_results(items, {"entry"}, compiler._impure_functions(items)))
+    assert out.startswith("void h(inout float w, float x)\n{\n    w = w + x;\n}\n")
+
+
+def test_a_local_only_written_goes():
+    from cellgl.export.simplify import _dead_store
+
+    toks = tokenize("float entry(float a)\n{\n    float b = a * 2.0;\n    float c = a + 1.0;\n"
+                    "    c = a - 1.0;\n    return b;\n}\n")
+    assert _text(_dead_store(toks, set())) == "float entry(float a)\n{\n    float b = a * 2.0;\n    return b;\n}\n"
