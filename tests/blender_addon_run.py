@@ -169,6 +169,7 @@ def _all_ops(bpy, addon, tree, out, size):
     node = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
     s = node.node_tree.cellgl
     r["inactive"] = groups.inactive_inputs(node)
+    r["group_inputs"] = [sock.name for sock in node.inputs]
     space = types.SimpleNamespace(tree_type="ShaderNodeTree", edit_tree=tree)
     r["panel"] = _draw(ui.CELLGL_PT_texture, active_node=node, space_data=space)
     r["add_menu"] = _draw(ui.CELLGL_MT_add, space_data=space)

@@ -241,8 +241,14 @@ def test_addon_operators_headless(installed_run):
     assert r["async_hash_ok"] and r["async_progress"][0] < 1.0
     from cellgl.texture import params
 
-    if hasattr(params, "inactive"):          # the panel greys these (flagstone is Euclidean)
-        assert "Minkowski p" in r["inactive"] and "Frequency" not in r["inactive"]
+    # flagstone is Euclidean: its OSL shader folds Minkowski p away (no slider that does nothing);
+    # an input the table calls inactive at the current values is greyed in the panel
+    assert "Minkowski p" not in r["group_inputs"] and "Frequency" in r["group_inputs"]
+    from cellgl.texture.recipe import load_recipe
+
+    dead = params.inactive(load_recipe("flagstone").values)
+    assert "minkowski_p" in dead and "frequency" not in dead
+    assert set(r["inactive"]) <= set(r["group_inputs"]) and "Frequency" not in r["inactive"]
     assert "cellgl bake failed" in r["error"] and "no-such-preset" in r["error"]
     assert "has no OSL export" in r["bad_preset"]
     assert r["voronoi"] == ["FINISHED"] and r["voronoi_linked"]

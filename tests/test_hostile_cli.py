@@ -67,7 +67,9 @@ def _interrupt_loop(tmp_path: Path, runs: int, seed: int) -> None:
         status, err, left = _interrupt_frames(d, delay)
         statuses.append(status)
         assert "Traceback" not in err, (i, delay, err[-2000:])
-        if status == 0:
+        if status in (0, -signal.SIGINT):
+            # done before the signal, or the signal landed as the process ended, after every
+            # frame was written (a shell reports a death by SIGINT as 130 too): the whole output
             assert len(left) == 48 and not any(n.startswith(".") for n in left), (i, delay, left)
             continue
         assert status == 130, (i, delay, status, err[-2000:])
