@@ -1,6 +1,6 @@
 """The one place the test suite makes an OpenGL context.
 
-``ctx`` is session-scoped. Where no GL 4.3 context can be made the GPU tests skip, unless
+``ctx`` is session-scoped. Where no OpenGL 3.3 core context can be made the GPU tests skip, unless
 ``CELLGL_REQUIRE_GPU=1`` (set by ``.ci/run``), which turns the skip into a failure. Every test
 that uses ``ctx`` has the GL error state checked before and after it.
 """
@@ -31,8 +31,8 @@ def ctx():
         return context.get_context()
     except (context.ContextError, ValueError) as exc:
         if _require_gpu():
-            pytest.fail(f"CELLGL_REQUIRE_GPU=1 but no OpenGL 4.3 context: {exc}", pytrace=False)
-        pytest.skip(f"no OpenGL 4.3 context: {exc}")
+            pytest.fail(f"CELLGL_REQUIRE_GPU=1 but no OpenGL 3.3 core context: {exc}", pytrace=False)
+        pytest.skip(f"no OpenGL 3.3 core context: {exc}")
 
 
 @pytest.fixture(autouse=True)
