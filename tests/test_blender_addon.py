@@ -18,7 +18,6 @@ import base64
 import csv
 import hashlib
 import importlib.metadata
-import importlib.util
 import io
 import json
 import os
@@ -34,17 +33,10 @@ from PIL import Image
 
 from cellgl.blender import extension
 
-REQUIRE = os.environ.get("CELLGL_REQUIRE_BLENDER", "").strip().lower() in ("1", "true", "yes")
+from test_blender import _need_bpy
+
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = 128
-
-
-def _need_bpy():
-    if importlib.util.find_spec("bpy") is None:
-        if REQUIRE:
-            pytest.fail("CELLGL_REQUIRE_BLENDER=1 but bpy (the [blender] extra) is not installed",
-                        pytrace=False)
-        pytest.skip("bpy (the [blender] extra) is not installed")
 
 
 def _local_platform() -> str:
