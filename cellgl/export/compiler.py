@@ -46,7 +46,10 @@ from cellgl.export.reach import (
     tidy_comments,
     unparse,
 )
+from cellgl.export.printer import print_glsl
 from cellgl.export.simplify import _DECL_TYPES
+from cellgl.export.syntax import parse as parse_tree
+from cellgl.export.tree import Context
 from cellgl.export.translate.tokens import Tok, TranslateError, tokenize
 
 __all__ = ["compile_glsl", "MAX_ROUNDS"]
@@ -287,6 +290,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
         items = _dead_fields(items)
         if fold_constants:
             items = constant_fields(items)
+        items = on_tree(items, _tree_round, entries, keep)
         items = reach(items, entries)
         if unparse(items) == before:
             break
@@ -294,6 +298,28 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
         raise TranslateError(f"the snippet compiler did not settle in {MAX_ROUNDS} rounds of its passes "
                              f"(entry points {', '.join(entries)}): a pass undoes another")
     return _join_lines(unparse(tidy_comments(_ordered(items)), blank=False))
+
+
+#: the passes that work on the tree (:mod:`cellgl.export.tree`), run in this order once a round
+TREE_PASSES: list = []
+
+
+def _tree_round(unit, ctx) -> bool:
+    changed = False
+    for p in TREE_PASSES:
+        ctx.refresh(unit)
+        changed = p(unit, ctx) or changed
+    return changed
+
+
+def on_tree(items: list[Item], pass_, entries=(), keep=()) -> list[Item]:
+    """Run the tree pass ``pass_`` (see :mod:`cellgl.export.tree`) on the text items of the
+    driver: the bridge while passes move from text to the tree."""
+    unit = parse_tree(unparse(items))
+    ctx = Context(tuple(entries), frozenset(keep)).refresh(unit)
+    if not pass_(unit, ctx):
+        return items
+    return [it for it in parse(print_glsl(unit)) if it.kind != "other"]
 
 
 def _join_lines(text: str, width: int = 110) -> str:
