@@ -272,26 +272,21 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
     items = reach([it for it in parse(text) if it.kind != "other"], entries)
     items = [Item(it.kind, it.name, strip_body_comments(it.toks), it.comment) if it.kind == "function" else it
              for it in items]
+    ctx = Context(tuple(entries), frozenset(set(keep) | {loader for _, loader in structs}),
+                  structs=tuple(structs), fold_constants=fold_constants)
     for _ in range(MAX_ROUNDS):
         before = unparse(items)
-        for struct, loader in structs:
-            items = scalarise(items, struct, loader)
-        if fold_constants:
-            env = constants(items)
-            items = _inline_constants(items, env)
-            items = _array_elements(items)
-            items = fold(items, env)
-        items = _inline(items, set(entries))
-        items = inline_once(items, set(entries) | set(keep) | {loader for _, loader in structs})
-        items = _drop_unused_params(items, set(entries))
-        items = _constant_args(items, set(entries))
-        items = _drop_unused_outs(items, set(entries))
-        items = void_results(items, set(entries), _impure_functions(items))
-        items = _dead_fields(items)
-        if fold_constants:
-            items = constant_fields(items)
-        items = on_tree(items, _tree_round, entries, keep)
-        items = reach(items, entries)
+        k = 0
+        while k < len(ROUND):
+            if getattr(ROUND[k], "tree_pass", False):
+                group = []
+                while k < len(ROUND) and getattr(ROUND[k], "tree_pass", False):
+                    group.append(ROUND[k])
+                    k += 1
+                items = on_tree(items, group, ctx)
+            else:
+                items = ROUND[k](items, ctx)
+                k += 1
         if unparse(items) == before:
             break
     else:
@@ -300,26 +295,54 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
     return _join_lines(unparse(tidy_comments(_ordered(items)), blank=False))
 
 
-#: the passes that work on the tree (:mod:`cellgl.export.tree`), run in this order once a round
-TREE_PASSES: list = []
-
-
-def _tree_round(unit, ctx) -> bool:
+def on_tree(items: list[Item], passes, ctx: Context) -> list[Item]:
+    """Run the tree passes ``passes`` (see :mod:`cellgl.export.tree`) in order on the text items
+    of the driver: the bridge while passes move from text to the tree."""
+    unit = parse_tree(unparse(items))
     changed = False
-    for p in TREE_PASSES:
+    for p in passes:
         ctx.refresh(unit)
         changed = p(unit, ctx) or changed
-    return changed
-
-
-def on_tree(items: list[Item], pass_, entries=(), keep=()) -> list[Item]:
-    """Run the tree pass ``pass_`` (see :mod:`cellgl.export.tree`) on the text items of the
-    driver: the bridge while passes move from text to the tree."""
-    unit = parse_tree(unparse(items))
-    ctx = Context(tuple(entries), frozenset(keep)).refresh(unit)
-    if not pass_(unit, ctx):
+    if not changed:
         return items
     return [it for it in parse(print_glsl(unit)) if it.kind != "other"]
+
+
+# one round of the passes, in order: a text pass is ``(items, ctx) -> items``, a tree pass (marked
+# by :func:`cellgl.export.tree.tree_pass`) is ``(unit, ctx) -> changed``; consecutive tree passes
+# share one parse
+
+
+def _scalarise(items, ctx):
+    for struct, loader in ctx.structs:
+        items = scalarise(items, struct, loader)
+    return items
+
+
+def _fold(items, ctx):
+    if not ctx.fold_constants:
+        return items
+    env = constants(items)
+    return fold(_array_elements(_inline_constants(items, env)), env)
+
+
+def _constant_fields(items, ctx):
+    return constant_fields(items) if ctx.fold_constants else items
+
+
+ROUND = [
+    _scalarise,
+    _fold,
+    lambda items, ctx: _inline(items, set(ctx.entries)),
+    lambda items, ctx: inline_once(items, set(ctx.entries) | ctx.keep),
+    lambda items, ctx: _drop_unused_params(items, set(ctx.entries)),
+    lambda items, ctx: _constant_args(items, set(ctx.entries)),
+    lambda items, ctx: _drop_unused_outs(items, set(ctx.entries)),
+    lambda items, ctx: void_results(items, set(ctx.entries), _impure_functions(items)),
+    lambda items, ctx: _dead_fields(items),
+    _constant_fields,
+    lambda items, ctx: reach(items, ctx.entries),
+]
 
 
 def _join_lines(text: str, width: int = 110) -> str:

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, fields
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
-__all__ = ["children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
+__all__ = ["tree_pass", "children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
            "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS"]
 
 #: expression node classes
@@ -30,6 +30,13 @@ _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Fiel
 _SKIP = {"comments", "trail", "trailing"}
 _CHILD_FIELDS: dict[type, tuple[str, ...]] = {
     t: tuple(f.name for f in fields(t) if f.name not in _SKIP) for t in _NODE_TYPES}
+
+
+def tree_pass(fn):
+    """Mark ``fn`` as a tree pass ``(unit, ctx) -> changed`` (the driver's round mixes them with
+    the text passes not yet moved)."""
+    fn.tree_pass = True
+    return fn
 
 
 def children(node):
@@ -106,6 +113,8 @@ class Context:
 
     entries: tuple = ()
     keep: frozenset = frozenset()
+    structs: tuple = ()                                # ((struct, loader), ...) to scalarise
+    fold_constants: bool = True                        # False: the recipe's values stay named constants
     functions: dict = field(default_factory=dict)      # name -> Function with a body
     globals_: set = field(default_factory=set)
     impure: set = field(default_factory=set)
