@@ -7,19 +7,15 @@ that uses ``ctx`` has the GL error state checked before and after it.
 
 from __future__ import annotations
 
-import os
-
 import pytest
+
+from xvfb import require_gpu
 
 
 def pytest_collection_modifyitems(config, items):
     for item in items:
         if "ctx" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.gpu)
-
-
-def _require_gpu() -> bool:
-    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
 
 
 @pytest.fixture(scope="session")
@@ -30,7 +26,7 @@ def ctx():
     try:
         return context.get_context()
     except (context.ContextError, ValueError) as exc:
-        if _require_gpu():
+        if require_gpu():
             pytest.fail(f"CELLGL_REQUIRE_GPU=1 but no OpenGL 3.3 core context: {exc}", pytrace=False)
         pytest.skip(f"no OpenGL 3.3 core context: {exc}")
 

@@ -10,7 +10,6 @@ The second half tests the runner itself on small made-up documents.
 """
 from __future__ import annotations
 
-import os
 import time
 from pathlib import Path
 
@@ -18,7 +17,7 @@ import pytest
 
 import docs_runner as dr
 from docs_runner import Block, BlockFailed, DocError, DocSession
-from xvfb import xvfb_display
+from xvfb import require_gpu, some_display
 
 ROOT = dr.ROOT
 
@@ -40,17 +39,10 @@ for _b in RUNNABLE:
     BY_DOC.setdefault(_b.doc, []).append(_b)
 
 
-def _require() -> bool:
-    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
-
-
 @pytest.fixture(scope="module")
 def display():
     """$DISPLAY, or an Xvfb started here for the blocks that open windows (None: no display)."""
-    if os.environ.get("DISPLAY"):
-        yield os.environ["DISPLAY"]
-        return
-    with xvfb_display() as disp:
+    with some_display(missing_ok=True) as disp:
         yield disp
 
 
@@ -90,7 +82,7 @@ def test_doc_block(block, sessions):
     if block.skip is not None:
         pytest.skip(f"{block.id}: {block.skip}")
     if _needs_display(block) and not sessions.display:
-        if _require():
+        if require_gpu():
             pytest.fail(f"{block.id}: needs a display: no DISPLAY and no Xvfb", pytrace=False)
         pytest.skip(f"{block.id}: needs a display (no DISPLAY, no Xvfb)")
     s = sessions(block.doc)

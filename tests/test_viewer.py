@@ -7,7 +7,6 @@ the tests skip, unless ``CELLGL_REQUIRE_GPU=1`` (``.ci/run``), which makes that 
 from __future__ import annotations
 
 import os
-import shutil
 import subprocess
 import sys
 
@@ -15,7 +14,7 @@ import numpy as np
 import pytest
 
 import cellgl
-from xvfb import xvfb_display
+from xvfb import some_display, unavailable
 
 pytest.importorskip("imgui_bundle")
 pytest.importorskip("glfw")
@@ -35,32 +34,11 @@ def _preset():
 PRESET = _preset()
 
 
-def _require() -> bool:
-    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
-
-
-def _unavailable(msg: str):
-    if _require():
-        pytest.fail(f"CELLGL_REQUIRE_GPU=1 but {msg}", pytrace=False)
-    pytest.skip(msg)
-
-
 @pytest.fixture(scope="module")
 def display():
     """A usable X display: $DISPLAY, or an Xvfb started here (stopped afterwards)."""
-    if os.environ.get("DISPLAY"):
-        yield os.environ["DISPLAY"]
-        return
-    if not shutil.which("Xvfb"):
-        _unavailable("no DISPLAY and no Xvfb (apt-get install xvfb)")
-    with xvfb_display() as disp:
-        if disp is None:
-            _unavailable("Xvfb did not start")
-        os.environ["DISPLAY"] = disp
-        try:
-            yield disp
-        finally:
-            del os.environ["DISPLAY"]
+    with some_display(export=True) as disp:
+        yield disp
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +48,7 @@ def viewer(display):
     try:
         v = Viewer(ViewerOptions(recipe=PRESET, size=SIZE, hidden=True))
     except RuntimeError as exc:
-        _unavailable(f"no OpenGL window: {exc}")
+        unavailable(f"no OpenGL window: {exc}")
     yield v
     v.close()
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -25,7 +24,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from xvfb import xvfb_display
+from xvfb import require_gpu, some_display, xvfb_display
 
 pytest.importorskip("imgui_bundle")
 pytest.importorskip("glfw")
@@ -71,22 +70,9 @@ print(json.dumps(report))
 """
 
 
-def _require() -> bool:
-    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
-
-
 @pytest.fixture(scope="module")
 def display():
-    if os.environ.get("DISPLAY"):
-        yield os.environ["DISPLAY"]
-        return
-    if not shutil.which("Xvfb"):
-        if _require():
-            pytest.fail("CELLGL_REQUIRE_GPU=1 but no DISPLAY and no Xvfb", pytrace=False)
-        pytest.skip("no DISPLAY and no Xvfb (apt-get install xvfb)")
-    with xvfb_display() as disp:
-        if disp is None:
-            pytest.skip("Xvfb did not start")
+    with some_display() as disp:
         yield disp
 
 
@@ -180,7 +166,7 @@ def test_readout_and_actions_match_gl43(display, tmp_path):
             env.pop(key, None)
         env.update(mesa)
         r = _run_child([_ACTIONS_CHILD, str(out)], env)
-        if r.returncode != 0 and config != "native" and _NO_FRAGMENT_PATH in r.stderr and not _require():
+        if r.returncode != 0 and config != "native" and _NO_FRAGMENT_PATH in r.stderr and not require_gpu():
             pytest.skip(f"{config}: the compute entry points have no fragment path in this tree "
                         f"({r.stderr.strip().splitlines()[-1]})")
         assert r.returncode == 0, f"{config}: {r.stderr[-3000:]}"

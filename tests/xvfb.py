@@ -1,4 +1,5 @@
-"""A private X display for the tests that open windows (the viewer, the docs' viewer blocks)."""
+"""A private X display for the tests that open windows (the viewer, the docs' viewer blocks),
+and what those tests do when there is none."""
 from __future__ import annotations
 
 import contextlib
@@ -32,3 +33,39 @@ def xvfb_display(timeout: float = 20.0):
     finally:
         proc.terminate()
         proc.wait(10)
+
+
+def require_gpu() -> bool:
+    """``CELLGL_REQUIRE_GPU=1``: a missing context or display fails the test instead of skipping
+    it (the GPU CI jobs)."""
+    return os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
+
+
+def unavailable(msg: str):
+    """Skip the test for ``msg``; fail it under ``CELLGL_REQUIRE_GPU=1``."""
+    import pytest
+
+    if require_gpu():
+        pytest.fail(f"CELLGL_REQUIRE_GPU=1 but {msg}", pytrace=False)
+    pytest.skip(msg)
+
+
+@contextlib.contextmanager
+def some_display(missing_ok: bool = False, export: bool = False):
+    """$DISPLAY, or an Xvfb started for the block. Without one: ``None`` with ``missing_ok``,
+    else :func:`unavailable`. ``export``: set $DISPLAY to the Xvfb for the block."""
+    if os.environ.get("DISPLAY"):
+        yield os.environ["DISPLAY"]
+        return
+    with xvfb_display() as disp:
+        if disp is None and not missing_ok:
+            unavailable("no DISPLAY and no Xvfb (apt-get install xvfb)" if not shutil.which("Xvfb")
+                        else "Xvfb did not start")
+        if disp is None or not export:
+            yield disp
+            return
+        os.environ["DISPLAY"] = disp
+        try:
+            yield disp
+        finally:
+            del os.environ["DISPLAY"]
