@@ -278,12 +278,14 @@ _SLOTS = {S.If: ("then", "other"), S.For: ("body",), S.While: ("body",)}
 
 def rewrite(root, fn):
     """:func:`transform` where ``fn`` may also return a list of statements (or ``[]``) for a
-    statement that is an ``if``'s branch or a loop's body: it becomes a block there."""
+    statement that is an ``if``'s branch or a loop's body: they become a block there (an empty
+    ``else`` goes)."""
     def g(n):
         for a in _SLOTS.get(type(n), ()):
             v = getattr(n, a)
             if isinstance(v, list):
-                setattr(n, a, v[0] if len(v) == 1 else (None if not v and a == "other" else S.Block(v)))
+                setattr(n, a, None if not v and a == "other" else v[0] if len(v) == 1 and isinstance(v[0], S.Block)
+                        else S.Block(v))
         return fn(n)
     return transform(root, g)
 
