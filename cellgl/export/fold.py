@@ -57,9 +57,10 @@ _M32 = 1 << 32
 def _f32(x: float):
     """``x`` rounded to binary32, or None where it overflows (GLSL gives inf: not folded)."""
     try:
-        return struct.unpack("f", struct.pack("f", x))[0]
+        f = struct.unpack("f", struct.pack("f", x))[0]
     except OverflowError:
         return None
+    return None if math.isinf(f) or math.isnan(f) else f
 
 
 def _int(v: int) -> int:
