@@ -8,7 +8,6 @@ round until a round changes nothing, or raises after ``max_rounds``.
 """
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass, field, fields
 
 from cellgl.export import syntax as S
@@ -28,6 +27,7 @@ ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=")
 
 _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Field, S.Function,
                                           S.Param, S.Global)
+_NODE_SET = frozenset(_NODE_TYPES)
 _SKIP = {"comments", "trail", "trailing"}
 _CHILD_FIELDS: dict[type, tuple[str, ...]] = {
     t: tuple(f.name for f in fields(t) if f.name not in _SKIP) for t in _NODE_TYPES}
@@ -44,11 +44,11 @@ def children(node):
     """The direct child nodes of ``node``, in source order."""
     for name in _CHILD_FIELDS.get(type(node), ()):
         v = getattr(node, name)
-        if isinstance(v, list):
+        if type(v) is list:
             for x in v:
-                if isinstance(x, _NODE_TYPES):
+                if type(x) in _NODE_SET:
                     yield x
-        elif isinstance(v, _NODE_TYPES):
+        elif type(v) in _NODE_SET:
             yield v
 
 
@@ -69,28 +69,42 @@ def transform(node, fn):
     splices several nodes in). Returns ``fn(node)``."""
     for name in _CHILD_FIELDS.get(type(node), ()):
         v = getattr(node, name)
-        if isinstance(v, list):
-            out = []
+        if type(v) is list:
+            out, same = [], True
             for x in v:
-                if not isinstance(x, _NODE_TYPES):
+                if type(x) not in _NODE_SET:
                     out.append(x)
                     continue
                 y = transform(x, fn)
+                if y is x:
+                    out.append(x)
+                    continue
+                same = False
                 if y is None:
                     continue
                 if isinstance(y, list):
                     out.extend(y)
                 else:
                     out.append(y)
-            v[:] = out
-        elif isinstance(v, _NODE_TYPES):
-            setattr(node, name, transform(v, fn))
+            if not same:
+                v[:] = out
+        elif type(v) in _NODE_SET:
+            y = transform(v, fn)
+            if y is not v:
+                setattr(node, name, y)
     return fn(node)
 
 
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
-    return copy.deepcopy(node)
+    t = type(node)
+    if t is list:
+        return [clone(x) for x in node]
+    if t not in _NODE_SET:
+        return node                      # str, None: immutable
+    out = object.__new__(t)
+    out.__dict__ = {k: clone(v) for k, v in node.__dict__.items()}
+    return out
 
 
 def root_name(e) -> str | None:
