@@ -360,7 +360,7 @@ def _substitute(fn, sub) -> bool:
 def inline_constants(fn: S.Function, facts: Facts) -> bool:
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
-    pick = {k: literal(v) for k, v in facts.genv.items() if _shape(v) and k not in facts.declared}
+    pick = {k: literal(v) for k, v in facts.genv.items() if _shape(v) and k not in facts.declared and k in facts.occ}
     if not pick:
         return False
     return _substitute(fn, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
@@ -371,7 +371,7 @@ def array_elements(fn: S.Function, facts: Facts) -> bool:
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
     effects or calls) where all elements are the same."""
-    arrays = {k: v for k, v in facts.garrays.items() if k not in facts.declared}
+    arrays = {k: v for k, v in facts.garrays.items() if k not in facts.declared and k in facts.occ}
     if not arrays:
         return False
 
@@ -460,7 +460,9 @@ def local_constants(fn: S.Function, facts: Facts) -> bool:
     elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
     env, arrays = facts.constants
     pick = {k: literal(v) for k, v in env.items() if k not in facts.genv and _shape(v)
-            and (v[0] != "uint" or v[1] in (0, 1))}       # (other unsigned values: hash constants, named)
+            and (v[0] != "uint" or v[1] in (0, 1))       # (other unsigned values: hash constants, named)
+            and any(role == "read" for _, role in facts.occ.get(k, ()))}
+    arrays = {k: v for k, v in arrays.items() if any(role == "read" for _, role in facts.occ.get(k, ()))}
     if not pick and not arrays:
         return False
 
@@ -523,6 +525,8 @@ def constant_loops(fn: S.Function, facts: Facts) -> bool:
     the counter replaced by its first value."""
     env, ctx = facts.env, facts.ctx
     changed = False
+    if not any(isinstance(n, S.For) for n in facts.nodes):
+        return False
 
     def unroll(n):
         nonlocal changed
@@ -623,20 +627,19 @@ def fold(unit: S.Unit, ctx: Context) -> bool:
     changed = False
     for fn in list(ctx.functions.values()):
         text = "\n".join(item_glsl(fn))
-        done = _FOLDED.get((text, key))
-        if done is None:
-            done = _fold_function(fn, Facts(fn, genv, garrays, ctx), passes)
+        if (text, key) not in _FOLDED:
             if len(_FOLDED) > 4096:
                 _FOLDED.clear()
-            _FOLDED[(text, key)] = done = (done, "\n".join(item_glsl(fn)) == text)
-        body, same = done
-        if not same:
-            fn.body = clone(body)
+            body = _fold_function(fn, Facts(fn, genv, garrays, ctx), passes)
+            _FOLDED[(text, key)] = None if body is None or "\n".join(item_glsl(fn)) == text else body
+            changed = changed or _FOLDED[(text, key)] is not None
+        elif _FOLDED[(text, key)] is not None:
+            fn.body = clone(_FOLDED[(text, key)])
             changed = True
     return changed
 
 
-#: ``{(function text, (constants, impure functions, signatures)): (folded body, unchanged)}``: the
+#: ``{(function text, (constants, impure functions, signatures)): folded body (None: unchanged)}``: the
 #: driver's rounds (and a process's exports) fold most functions again unchanged
 _FOLDED: dict = {}
 
@@ -644,14 +647,15 @@ _FOLDED: dict = {}
 MAX_ROUNDS = 64
 
 
-def _fold_function(fn: S.Function, facts: Facts, passes) -> S.Block:
-    for _ in range(MAX_ROUNDS):
+def _fold_function(fn: S.Function, facts: Facts, passes) -> S.Block | None:
+    """``fn``'s body folded (a copy), or None where nothing changed."""
+    for rounds in range(MAX_ROUNDS):
         changed = []
         for p in passes:
             if p(fn, facts):
                 changed.append(p.__name__)
                 facts = Facts(fn, facts.genv, facts.garrays, facts.ctx)
         if not changed:
-            return clone(fn.body)
+            return clone(fn.body) if rounds else None
     raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still changing: "
                          f"{', '.join(changed)}): a pass undoes another")

@@ -131,11 +131,12 @@ def last_stores(fn: S.Function, facts: Facts) -> bool:
         for s in b.body:
             t, e = _store(s)
             r = _root(t) if t is not None else None
-            if r is None or id(s) in facts.in_loops or not _pure_store(e, facts.ctx) or not (
-                    r.name in facts.types and facts.params.get(r.name, S.Param("in", "", "")).mode == "in"):
+            if r is None or r.name not in facts.types or id(s) in facts.in_loops \
+                    or r.name in facts.params and facts.params[r.name].mode != "in":
                 continue
             end = last[id(s)]
-            if any(role in ("read", "update") and pos[id(n)] > end for n, role in facts.occ[r.name]):
+            if any(role in ("read", "update") and pos[id(n)] > end for n, role in facts.occ[r.name]) \
+                    or not _pure_store(e, facts.ctx):
                 continue
             _drop(b.body, s)
             return True
@@ -287,10 +288,12 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
     (``x`` a local or a field) read in its place by the next straight-line statements and
     ``if`` condition, up to anything that writes it."""
     ctx, changed = facts.ctx, False
+    pos, last = facts.order
     for b in facts.blocks:
         for k, s in enumerate(b.body):
             target, lit = _literal_store(s)
-            if target is None:
+            if target is None or not any(role == "read" and pos[id(n)] > last[id(s)]
+                                         for n, role in facts.occ.get(target[0], ())):
                 continue
             for t in b.body[k + 1:]:
                 if isinstance(t, S.If):
