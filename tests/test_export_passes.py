@@ -13,6 +13,7 @@ from cellgl.export.reach import parse, unparse
 from cellgl.export.syntax import parse as parse_tree
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.tree import Context
+from cellgl.export.values import value
 
 
 def _run(tree_pass, src: str, entries=("f",)) -> str:
@@ -146,7 +147,7 @@ float f(float x) {
 def test_values_are_computed_as_glsl_does():
     """32-bit integers wrap, floats are binary32 (2^24 + 1 rounds to 2^24), integer division of
     negatives and float overflow are left alone."""
-    e = lambda text: F.value(parse_tree(f"bool b = {text};").items[0].declarators[0].init, {})   # noqa: E731
+    e = lambda text: value(parse_tree(f"bool b = {text};").items[0].declarators[0].init, {})   # noqa: E731
     assert e("2147483647 + 1") == ("int", -2147483648)
     assert e("0xffffffffu * 3u") == ("uint", 4294967293)
     assert e("16777217.0 == 16777216.0") == ("bool", True)

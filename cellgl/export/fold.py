@@ -17,184 +17,23 @@ passes evaluate what they make constant:
   bounding the loop;
 * :func:`loop_ranges` -- a loop whose body is guarded by ``k >= A && k < B`` runs over [A, B).
 
-Values are evaluated as GLSL computes them: integers wrap at 32 bits, floats are binary32 (each
-operation rounded to float32). Float arithmetic is evaluated only to decide conditions; no float
-result is written into the code but the literals 0.0 and 1.0 a constant holds.
+Values are evaluated as GLSL computes them (:mod:`cellgl.export.values`). Float arithmetic is
+evaluated only to decide conditions; no float result is written into the code but the literals
+0.0 and 1.0 a constant holds.
 """
 from __future__ import annotations
 
-import math
-import struct
 from functools import cached_property
 
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl
-from cellgl.export.tree import (
-    Context,
-    children,
-    clone,
-    is_pure,
-    occurrences,
-    paren,
-    rewrite,
-    transform,
-    tree_pass,
-    walk,
-    writes,
-)
+from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, tree_pass, walk
+from cellgl.export.tree import writes
+from cellgl.export.values import COMPARE, convert, literal, shape, value
 
-__all__ = ["fold", "FOLD", "Facts", "function_pass", "inline_constants", "array_elements", "constant_conditions", "local_constants", "constant_loops",
-           "loop_ranges", "value", "literal", "global_constants"]
-
-_M32 = 1 << 32
-
-
-# --------------------------------------------------------------------------------------------
-# values: ("bool", b), ("int", i), ("uint", u), ("float", binary32 as a Python float)
-# --------------------------------------------------------------------------------------------
-
-def _f32(x: float):
-    """``x`` rounded to binary32, or None where it overflows (GLSL gives inf: not folded)."""
-    try:
-        f = struct.unpack("f", struct.pack("f", x))[0]
-    except OverflowError:
-        return None
-    return None if math.isinf(f) or math.isnan(f) else f
-
-
-def _int(v: int) -> int:
-    v &= _M32 - 1
-    return v - _M32 if v >= 1 << 31 else v
-
-
-def _num(text: str):
-    t = text.lower()
-    if t.startswith("0x"):
-        return ("uint", int(t.rstrip("u"), 16) % _M32) if t.endswith("u") else ("int", _int(int(t, 16)))
-    if t.endswith("u"):
-        return "uint", int(t[:-1], 8 if len(t) > 2 and t[0] == "0" else 10) % _M32
-    if "." in t or "e" in t:
-        f = _f32(float(t.removesuffix("lf").removesuffix("f")))
-        return None if f is None else ("float", f)
-    return "int", _int(int(t, 8 if len(t) > 1 and t[0] == "0" else 10))
-
-
-def value(e, env: dict, ctx: Context | None = None):
-    """The value of the expression ``e`` of literals and the constants ``env`` (``{name:
-    value}``), or None. ``x || true`` is true and ``x && false`` false where ``x`` has no
-    effects (with ``ctx``: calls no function that writes its arguments)."""
-    if isinstance(e, S.Num):
-        return _num(e.text)
-    if isinstance(e, S.Name):
-        return ("bool", e.name == "true") if e.name in ("true", "false") else env.get(e.name)
-    if isinstance(e, S.Paren):
-        return value(e.inner, env, ctx)
-    if isinstance(e, S.Unary):
-        v = value(e.operand, env, ctx)
-        if v is None:
-            return None
-        t, x = v
-        if e.op == "!" and t == "bool":
-            return "bool", not x
-        if e.op == "-" and t in ("int", "uint", "float"):
-            return t, (-x if t == "float" else _int(-x) if t == "int" else -x % _M32)
-        if e.op == "~" and t in ("int", "uint"):
-            return t, _int(~x) if t == "int" else ~x % _M32
-        return v if e.op == "+" and t != "bool" else None
-    if isinstance(e, S.Ternary):
-        c = value(e.cond, env, ctx)
-        return None if c is None or c[0] != "bool" else value(e.then if c[1] else e.other, env, ctx)
-    if isinstance(e, S.Ctor) and len(e.args) == 1:
-        return _convert(e.type, value(e.args[0], env, ctx))
-    if isinstance(e, S.Binary):
-        return _binary(e, env, ctx)
-    return None
-
-
-def _convert(typ: str, v):
-    if v is None or typ not in ("int", "uint", "float", "bool"):
-        return None
-    t, x = v
-    if typ == "bool":
-        return "bool", bool(x)
-    if typ == "float":
-        return "float", (float(x) if t == "bool" else _f32(x))
-    if t == "float":
-        if math.isnan(x) or not (-2.0 ** 31 <= x < 2.0 ** 31) or (typ == "uint" and x < 0):
-            return None                  # out of range: undefined in GLSL
-        x = math.trunc(x)
-    return typ, (_int(int(x)) if typ == "int" else int(x) % _M32)
-
-
-_COMPARE = {"<": lambda a, b: a < b, ">": lambda a, b: a > b, "<=": lambda a, b: a <= b,
-            ">=": lambda a, b: a >= b, "==": lambda a, b: a == b, "!=": lambda a, b: a != b}
-
-
-def _binary(e, env, ctx):
-    op = e.op
-    a = value(e.left, env, ctx)
-    if op in ("&&", "||"):
-        absorb = op == "||"                      # true || x, false && x
-        if a is not None and a[0] == "bool" and a[1] == absorb:
-            return a
-        b = value(e.right, env, ctx)
-        if b is not None and b[0] == "bool" and b[1] == absorb and is_pure(e.left, ctx):
-            return b
-        return None if a is None or b is None else ("bool", a[1] or b[1] if absorb else a[1] and b[1])
-    b = value(e.right, env, ctx)
-    if a is None or b is None:
-        return None
-    (ta, x), (tb, y) = a, b
-    if op in ("<<", ">>") and ta in ("int", "uint") and tb in ("int", "uint") and 0 <= y < 32:
-        if op == "<<":
-            return ta, _int(x << y) if ta == "int" else (x << y) % _M32
-        return ta, x >> y
-    if ta != tb:
-        return None                              # no implicit conversions (GLSL ES)
-    if op in _COMPARE:
-        return ("bool", _COMPARE[op](x, y)) if ta != "bool" or op in ("==", "!=") else None
-    if op == "^^" and ta == "bool":
-        return "bool", x != y
-    if ta == "bool":
-        return None
-    if ta == "float":
-        if op in ("/",) and y == 0.0:
-            return None
-        r = {"+": lambda: x + y, "-": lambda: x - y, "*": lambda: x * y, "/": lambda: x / y}.get(op)
-        f = None if r is None else _f32(r())
-        return None if f is None else ("float", f)
-    if op in ("/", "%") and (y <= 0 or x < 0):
-        return None                              # negative or zero divisors: left to the compiler
-    r = {"+": x + y, "-": x - y, "*": x * y, "&": x & y, "|": x | y, "^": x ^ y}
-    if op in ("/", "%"):
-        r[op] = x // y if op == "/" else x % y
-    if op not in r:
-        return None
-    return ta, (_int(r[op]) if ta == "int" else r[op] % _M32)
-
-
-def literal(v):
-    """The GLSL literal node of the value ``v`` (None: a float other than 0.0 and 1.0, which stay
-    as written)."""
-    t, x = v
-    if t == "bool":
-        return S.Name("true" if x else "false")
-    if t == "uint":
-        return S.Num(f"{x}u")
-    if t == "int":
-        return S.Num(str(x)) if x >= 0 else (S.Paren(S.Unary("-", S.Num(str(-x)))) if x > -2 ** 31 else None)
-    if x in (0.0, 1.0) and math.copysign(1.0, x) > 0:
-        return S.Num(f"{x:.1f}")
-    return None
-
-
-def _shape(v) -> bool:
-    """Whether a constant decides the shape of the code (written into it): a boolean, an
-    integer, 0.0 or 1.0."""
-    return v is not None and literal(v) is not None
-
-
+__all__ = ["fold", "FOLD", "Facts", "function_pass", "inline_constants", "array_elements", "constant_conditions",
+           "local_constants", "constant_loops", "loop_ranges", "global_constants"]
 
 def global_constants(unit: S.Unit) -> dict:
     """``{name: value}`` of the global scalar constants initialised with a constant."""
@@ -203,7 +42,7 @@ def global_constants(unit: S.Unit) -> dict:
         if isinstance(it, S.Global) and "const" in it.quals:
             for d in it.declarators:
                 if d.size is None and d.init is not None:
-                    v = _convert(it.type, value(d.init, env))
+                    v = convert(it.type, value(d.init, env))
                     if v is not None and v[0] == it.type:
                         env[d.name] = v
     return env
@@ -237,17 +76,14 @@ class Facts:
     def order(self) -> tuple[dict, dict]:
         """``({id(node): position}, {id(node): the last position below it})``."""
         pos, last = {}, {}
-        stack = [(self.fn.body, False)]
-        k = 0
-        while stack:
-            n, done = stack.pop()
-            if done:
-                last[id(n)] = k - 1
-                continue
+
+        def visit(n, k):
             pos[id(n)] = k
-            k += 1
-            stack.append((n, True))
-            stack.extend((c, False) for c in reversed(list(children(n))))
+            for c in children(n):
+                k = visit(c, k + 1)
+            last[id(n)] = k
+            return k
+        visit(self.fn.body, 0)
         return pos, last
 
     @cached_property
@@ -311,7 +147,7 @@ class Facts:
                 if d.name not in self.once or d.name in stored or d.init is None or d.name in self.params:
                     continue
                 if d.size is None and node.type in ("int", "uint", "float", "bool"):
-                    v = _convert(node.type, value(d.init, local, self.ctx))
+                    v = convert(node.type, value(d.init, local, self.ctx))
                     if v is not None and v[0] == node.type:
                         local[d.name] = v
                 elif isinstance(d.init, S.ArrayCtor) and all(isinstance(a, S.Num) for a in d.init.args):
@@ -360,7 +196,7 @@ def _substitute(fn, sub) -> bool:
 def inline_constants(fn: S.Function, facts: Facts) -> bool:
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
-    pick = {k: literal(v) for k, v in facts.genv.items() if _shape(v) and k not in facts.declared and k in facts.occ}
+    pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
     if not pick:
         return False
     return _substitute(fn, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
@@ -395,7 +231,7 @@ def _fold_expr(n, env, ctx):
             return paren(n.then if c[1] else n.other)
         if expr_glsl(n.then) == expr_glsl(n.other) and is_pure(n.cond, ctx):
             return paren(n.then)
-    elif isinstance(n, S.Binary) and n.op in ("&&", "||", "^^") + tuple(_COMPARE) or \
+    elif isinstance(n, S.Binary) and n.op in ("&&", "||", "^^") + tuple(COMPARE) or \
             isinstance(n, S.Unary) and n.op == "!":
         v = value(n, env, ctx)
         if v is not None and v[0] == "bool" and is_pure(n, ctx):
@@ -459,7 +295,7 @@ def local_constants(fn: S.Function, facts: Facts) -> bool:
     """Write locals that hold a boolean, an integer, 0.0 or 1.0 for good into the code, and the
     elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
     env, arrays = facts.constants
-    pick = {k: literal(v) for k, v in env.items() if k not in facts.genv and _shape(v)
+    pick = {k: literal(v) for k, v in env.items() if k not in facts.genv and shape(v)
             and (v[0] != "uint" or v[1] in (0, 1))       # (other unsigned values: hash constants, named)
             and any(role == "read" for _, role in facts.occ.get(k, ()))}
     arrays = {k: v for k, v in arrays.items() if any(role == "read" for _, role in facts.occ.get(k, ()))}
@@ -477,24 +313,30 @@ def local_constants(fn: S.Function, facts: Facts) -> bool:
     return _substitute(fn, sub)
 
 
-def _loop_bounds(loop: S.For, env, ctx):
-    """``(var, first, count, early)`` of ``for (int v = A; v < B; v++)`` (or ``<=``, and ``>``,
-    ``>=`` with ``v--``) with A, B constant: the iterations it runs (bounded by an
-    ``if (v >= M) break;`` first in the body: ``early``, that statement), else None."""
+def _counter(loop: S.For, env, ctx):
+    """``(v, A, op, B, ++ or --)`` of ``for (int v = A; v op B; v++)`` with A and B constant."""
     init, cond, step = loop.init, loop.cond, loop.step
     if not (isinstance(init, S.Decl) and init.type == "int" and len(init.declarators) == 1
-            and init.declarators[0].init is not None and init.declarators[0].size is None):
+            and isinstance(cond, S.Binary) and isinstance(cond.left, S.Name) and isinstance(step, S.IncDec)
+            and isinstance(step.operand, S.Name) and init.declarators[0].size is None):
         return None
     var = init.declarators[0].name
-    if not (isinstance(cond, S.Binary) and isinstance(cond.left, S.Name) and cond.left.name == var
-            and isinstance(step, S.IncDec) and isinstance(step.operand, S.Name) and step.operand.name == var):
-        return None
     a, b = value(init.declarators[0].init, env, ctx), value(cond.right, env, ctx)
-    if a is None or b is None or a[0] != "int" or b[0] != "int":
+    if cond.left.name != var or step.operand.name != var or a is None or b is None or a[0] != "int" or b[0] != "int":
         return None
-    a, b, up, early = a[1], b[1], step.op == "++", None
+    return var, a[1], cond.op, b[1], step.op
+
+
+def _loop_bounds(loop: S.For, env, ctx):
+    """``(var, first, count, early)`` of a loop with a constant counter (:func:`_counter`): the
+    iterations it runs (bounded by an ``if (v >= M) break;`` first in the body: ``early``)."""
+    counter = _counter(loop, env, ctx)
+    if counter is None:
+        return None
+    var, a, op, b, step = counter
+    up, early = step == "++", None
     body = loop.body.body if isinstance(loop.body, S.Block) else [loop.body]
-    if up and cond.op in ("<", "<=") and body and isinstance(body[0], S.If) and body[0].other is None:
+    if up and op in ("<", "<=") and body and isinstance(body[0], S.If) and body[0].other is None:
         first = body[0]
         jump = first.then.body if isinstance(first.then, S.Block) else [first.then]
         c = first.cond
@@ -502,9 +344,8 @@ def _loop_bounds(loop: S.For, env, ctx):
                 and len(jump) == 1 and isinstance(jump[0], S.Jump) and jump[0].kind == "break":
             m = value(c.right, env, ctx)
             if m is not None and m[0] == "int":
-                b = min(b, m[1]) if cond.op == "<" else min(b, m[1] - 1)
-                early = first
-    count = ({"<": b - a, "<=": b - a + 1} if up else {">": a - b, ">=": a - b + 1}).get(cond.op)
+                b, early = (min(b, m[1]) if op == "<" else min(b, m[1] - 1)), first
+    count = ({"<": b - a, "<=": b - a + 1} if up else {">": a - b, ">=": a - b + 1}).get(op)
     return None if count is None else (var, a, count, early)
 
 
@@ -560,16 +401,10 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
     env, ctx = facts.env, facts.ctx
     changed = False
     for loop in [n for n in facts.nodes if isinstance(n, S.For)]:
-        init, cond, step = loop.init, loop.cond, loop.step
-        if not (isinstance(init, S.Decl) and init.type == "int" and len(init.declarators) == 1
-                and isinstance(cond, S.Binary) and cond.op == "<" and isinstance(cond.left, S.Name)
-                and isinstance(step, S.IncDec) and step.op == "++" and isinstance(step.operand, S.Name)):
+        counter = _counter(loop, env, ctx)
+        if counter is None or counter[2] != "<" or counter[4] != "++":
             continue
-        var = init.declarators[0].name
-        lo, hi = value(init.declarators[0].init, env, ctx), value(cond.right, env, ctx)
-        if cond.left.name != var or step.operand.name != var or lo is None or hi is None \
-                or lo[0] != "int" or hi[0] != "int":
-            continue
+        var, lo, _, hi, _ = counter
         body = loop.body.body if isinstance(loop.body, S.Block) else [loop.body]
         if len(body) != 1 or var in writes(loop.body, ctx):
             continue
@@ -584,7 +419,7 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
             continue
         c = holder.cond
         parts = _conjuncts(c.inner if isinstance(c, S.Paren) else c)
-        new_lo, new_hi, rest = lo[1], hi[1], []
+        new_lo, new_hi, rest = lo, hi, []
         for p in parts:
             v = value(p.right, env, ctx) if isinstance(p, S.Binary) else None
             if isinstance(p, S.Binary) and p.op in (">=", "<") and isinstance(p.left, S.Name) \
@@ -598,8 +433,8 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
         for p in rest[1:]:
             e = S.Binary("&&", e, p)
         holder.cond = S.Paren(e) if isinstance(c, S.Paren) else e
-        init.declarators[0].init = literal(("int", new_lo))
-        cond.right = literal(("int", max(new_lo, new_hi)))
+        loop.init.declarators[0].init = literal(("int", new_lo))
+        loop.cond.right = literal(("int", max(new_lo, new_hi)))
         changed = True
     return changed
 

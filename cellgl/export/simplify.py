@@ -28,9 +28,10 @@ Inside each function, with the def-use facts of :mod:`cellgl.export.tree`:
 from __future__ import annotations
 
 from cellgl.export import syntax as S
-from cellgl.export.fold import Facts, function_pass, value
+from cellgl.export.fold import Facts, function_pass
 from cellgl.export.printer import expr_glsl
 from cellgl.export.tree import ATOMS, clone, is_pure, paren, rewrite, transform, walk
+from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
            "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY"]
@@ -258,28 +259,17 @@ def _literal_store(s):
 
 
 def _forward(e, target, lit) -> tuple[object, bool]:
-    """``e`` with its reads of ``target`` (a path) replaced by ``lit``."""
-    hit = False
+    """``e`` with its reads of ``target`` (a path) replaced by ``lit`` (not below a member or an
+    index of it)."""
+    skip = {id(n.base) for n in walk(e) if isinstance(n, (S.Member, S.Index))}
+    hits = []
 
     def sub(n):
-        nonlocal hit
-        if isinstance(n, (S.Name, S.Member)) and _path(n) == target:
-            hit = True
+        if isinstance(n, (S.Name, S.Member)) and id(n) not in skip and _path(n) == target:
+            hits.append(n)
             return clone(lit)
         return n
-
-    def visit(n):                        # (not below a member or an index of the target)
-        if isinstance(n, (S.Name, S.Member)) and _path(n) == target:
-            return sub(n)
-        for name in ("base", "index", "inner", "operand", "left", "right", "cond", "then", "other", "value"):
-            c = getattr(n, name, None)
-            if c is not None and not isinstance(c, (str, list)):
-                setattr(n, name, visit(c))
-        for name in ("args",):
-            if isinstance(getattr(n, name, None), list):
-                setattr(n, name, [visit(a) for a in getattr(n, name)])
-        return n
-    return visit(e), hit
+    return transform(e, sub), bool(hits)
 
 
 @function_pass
