@@ -5,18 +5,18 @@ Passes, repeated until the text stops changing (the fixed point; :data:`MAX_ROUN
 without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
-2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
-   elements of constant arrays read at a literal index (or at any index, when all are equal);
-3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
-   (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
-4. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
+2. :func:`cellgl.export.fold.fold` (on the syntax tree, to its own fixed point) -- constants that
+   decide the shape of the code (0, 1, integers, switches) written into it, elements of constant
+   arrays, constant conditions, loops, locals (:mod:`cellgl.export.fold`); dead locals and stores,
+   copies, identities (:mod:`cellgl.export.simplify`);
+3. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
    into one), and every function called once (:mod:`cellgl.export.inline`); parameters a function
    never reads dropped, and those every call passes the same literal written into the body;
    ``out`` parameters whose results every caller ignores turned into locals, and return values
    (:func:`cellgl.export.fields.void_results`); struct fields never
    read (or only copied into themselves) removed, those holding one literal everywhere folded
    (:mod:`cellgl.export.fields`);
-5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
+4. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
 Then every declaration comes after what it uses, the comments are tidied
 (:func:`cellgl.export.reach.tidy_comments`) and statements the library splits over lines are
