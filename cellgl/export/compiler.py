@@ -5,18 +5,18 @@ Passes, repeated until the text stops changing (the fixed point; :data:`MAX_ROUN
 without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
-2. constants that decide the shape of the code (0, 1, integers, switches) are written into it, and
-   elements of constant arrays read at a literal index (or at any index, when all are equal);
-3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
-   (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
-4. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
+2. :func:`cellgl.export.fold.fold` (on the syntax tree, to its own fixed point) -- constants that
+   decide the shape of the code (0, 1, integers, switches) written into it, elements of constant
+   arrays, constant conditions, loops, locals (:mod:`cellgl.export.fold`); dead locals and stores,
+   copies, identities (:mod:`cellgl.export.simplify`);
+3. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
    into one), and every function called once (:mod:`cellgl.export.inline`); parameters a function
    never reads dropped, and those every call passes the same literal written into the body;
    ``out`` parameters whose results every caller ignores turned into locals, and return values
    (:func:`cellgl.export.fields.void_results`); struct fields never
    read (or only copied into themselves) removed, those holding one literal everywhere folded
    (:mod:`cellgl.export.fields`);
-5. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
+4. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
 Then every declaration comes after what it uses, the comments are tidied
 (:func:`cellgl.export.reach.tidy_comments`) and statements the library splits over lines are
@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import re
 
-from cellgl.export.fold import _literal, constants, fold
+from cellgl.export.fold import fold
 from cellgl.export.fields import constant_fields, void_results
 from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
@@ -47,7 +47,6 @@ from cellgl.export.reach import (
     unparse,
 )
 from cellgl.export.printer import print_glsl
-from cellgl.export.simplify import _DECL_TYPES
 from cellgl.export.syntax import parse as parse_tree
 from cellgl.export.tree import Context
 from cellgl.export.translate.tokens import Tok, TranslateError, tokenize
@@ -58,39 +57,7 @@ __all__ = ["compile_glsl", "MAX_ROUNDS"]
 #: changes nothing, the fixed point; the library's presets settle in under 20)
 MAX_ROUNDS = 64
 
-
-def _array_elements(items: list[Item]) -> list[Item]:
-    """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
-    arrays read at a literal index, where the element is short."""
-    arrays = {}
-    for it in items:
-        c = it.code()
-        if it.kind == "variable" and c[:1] == ["const"] and len(c) > 8 and c[3] == "[" and c[6] == "=":
-            toks, code = it.toks, _code_idx(it.toks)
-            op = c.index("(", 7)
-            cl = _match(toks, code, op)
-            arrays[c[2]] = ["".join(t.text for t in toks[code[a]:code[b - 1] + 1]).strip()
-                            for a, b in _split_args(toks, code, op, cl)]
-    if not arrays:
-        return items
-    pat = re.compile(r"\b(" + "|".join(map(re.escape, arrays)) + r")\[([^\[\]=;]*)\]")
-
-    def elem(m):
-        vals = arrays[m.group(1)]
-        if len(set(vals)) == 1 and re.fullmatch(r"[\w\s+\-*]*", m.group(2)) and "++" not in m.group(2) \
-                and "--" not in m.group(2):
-            return vals[0]                   # every element the same: any index reads it
-        if not m.group(2).strip().isdigit():
-            return m.group()
-        k = int(m.group(2))
-        return vals[k] if k < len(vals) and len(vals[k]) <= 40 else m.group()
-
-    out = []
-    for it in items:
-        if it.kind == "function":
-            it = Item(it.kind, it.name, tokenize(pat.sub(elem, "".join(t.text for t in it.toks))), it.comment)
-        out.append(it)
-    return out
+_DECL_TYPES = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec4"}
 
 
 def _one_liners(items: list[Item], keep) -> dict[str, tuple[list[str], str]]:
@@ -250,21 +217,6 @@ def _inline_once(toks: list[Tok], small: dict, own: str) -> list[Tok] | None:
     return None
 
 
-def _inline_constants(items: list[Item], env: dict[str, str]) -> list[Item]:
-    """Write the constants that decide code shape (0, 1, integers, booleans) into the code."""
-    pick = {k: v for k, v in env.items()
-            if v in ("true", "false") or re.fullmatch(r"-?\d+u?", v) or _literal(v) in (0, 1)}
-    out = []
-    for it in items:
-        if it.kind != "function":
-            out.append(it)
-            continue
-        text = "".join((f"({pick[t.text]})" if pick[t.text].startswith("-") else pick[t.text])
-                       if t.kind == "id" and t.text in pick else t.text for t in it.toks)
-        out.append(Item(it.kind, it.name, tokenize(text), it.comment))
-    return out
-
-
 def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> str:
     """The middle end: keep what ``entries`` reach, scalarise ``structs`` (``[(struct,
     loader)]``, see :func:`cellgl.export.reach.scalarise`), fold constants, inline one-liners
@@ -319,20 +271,13 @@ def _scalarise(items, ctx):
     return items
 
 
-def _fold(items, ctx):
-    if not ctx.fold_constants:
-        return items
-    env = constants(items)
-    return fold(_array_elements(_inline_constants(items, env)), env)
-
-
 def _constant_fields(items, ctx):
     return constant_fields(items) if ctx.fold_constants else items
 
 
 ROUND = [
     _scalarise,
-    _fold,
+    fold,
     lambda items, ctx: _inline(items, set(ctx.entries)),
     lambda items, ctx: inline_once(items, set(ctx.entries) | ctx.keep),
     lambda items, ctx: _drop_unused_params(items, set(ctx.entries)),

@@ -1,533 +1,496 @@
-"""The snippet compiler's folding passes (:mod:`cellgl.export.compiler` runs them).
+"""The snippet compiler's constant folding, on the syntax tree (:mod:`cellgl.export.compiler` runs
+the passes in its round).
 
-After :func:`cellgl.export.reach.scalarise` the recipe's values are plain constants in the code.
-These passes evaluate what they make constant, on tokens of the library's own GLSL:
+After :func:`cellgl.export.reach.scalarise` the recipe's values are global constants. These
+passes evaluate what they make constant:
 
-* conditions of ``if`` statements and ternaries (the branches not taken go), locals initialised
-  with a constant and never assigned again;
-* ``for`` loops with constant bounds: no iteration (removed), one iteration (the body, with the
-  counter replaced by its value), an early ``if (i >= M) break;`` (the bound becomes M);
-* a loop whose body is one statement guarded by ``k >= A && k < B`` runs over [A, B) only;
-* locals holding 0, 1, an integer or a boolean for good, and elements of local arrays of
-  literals, are written into the code.
+* :func:`inline_constants` -- the constants that decide the shape of the code (booleans,
+  integers, the floats 0.0 and 1.0) are written into it;
+* :func:`array_elements` -- elements of constant arrays read at a literal index (or at any
+  index, when all are equal);
+* :func:`constant_conditions` -- ``if`` statements, ternaries, ``&&``/``||`` and comparisons whose
+  value is known (the branches not taken go), integer indices;
+* :func:`local_constants` -- locals holding a boolean, an integer, 0.0 or 1.0 for good, and
+  elements of local arrays of literals, written into the code;
+* :func:`constant_loops` -- ``for`` loops with constant bounds: no iteration (removed), one
+  iteration (its body, the counter replaced by its value), an early ``if (i >= M) break;``
+  bounding the loop;
+* :func:`loop_ranges` -- a loop whose body is guarded by ``k >= A && k < B`` runs over [A, B).
 
-Dead code and identities are :mod:`cellgl.export.simplify`'s. Each pass leaves code it does not
-understand as it is.
+Values are evaluated as GLSL computes them (:mod:`cellgl.export.values`). Float arithmetic is
+evaluated only to decide conditions; no float result is written into the code but the literals
+0.0 and 1.0 a constant holds.
 """
 from __future__ import annotations
 
-import re
+from functools import cached_property
 
-from cellgl.export.reach import Item, _code_idx, _match, _stmt_end
-from cellgl.export.simplify import (
-    _arithmetic,
-    _balanced,
-    _bare_block,
-    _copy_local,
-    _dead_local,
-    _dead_store,
-    _forward_literal,
-    _last_store,
-    _loop_variable,
-    _merge_declaration,
-    _split_declarators,
-    _store_into_next,
-)
-from cellgl.export.translate.tokens import Tok, tokenize
+from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
+from cellgl.export import syntax as S
+from cellgl.export.printer import expr_glsl
+from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, tree_pass, walk
+from cellgl.export.tree import writes
+from cellgl.export.values import COMPARE, convert, literal, shape, value
 
-__all__ = ["constants", "fold"]
+__all__ = ["fold", "FOLD", "Facts", "function_pass", "inline_constants", "array_elements", "constant_conditions",
+           "local_constants", "constant_loops", "loop_ranges", "global_constants"]
 
-
-# --------------------------------------------------------------------------------------------
-# 2. constant folding of conditions
-# --------------------------------------------------------------------------------------------
-
-_LIT_RE = re.compile(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?|(\d+\.\d*|\.\d+|\d+)([eE][+-]?\d+)?[fF]?")
-
-
-def constants(items: list[Item]) -> dict[str, str]:
-    """``{name: literal}`` of the global scalar constants initialised with a literal."""
-    env = {}
-    for it in items:
-        if it.kind != "variable":
-            continue
-        c = it.code()
-        if c[:1] == ["const"] and len(c) >= 6 and c[3] == "=" and c[-1] == ";":
-            val = "".join(c[4:-1]).strip("()")
-            if _literal(val) is not None or val in ("true", "false"):
-                env[c[2]] = val
+def global_constants(unit: S.Unit) -> dict:
+    """``{name: value}`` of the global scalar constants initialised with a constant."""
+    env: dict = {}
+    for it in unit.items:
+        if isinstance(it, S.Global) and "const" in it.quals:
+            for d in it.declarators:
+                if d.size is None and d.init is not None:
+                    v = convert(it.type, value(d.init, env))
+                    if v is not None and v[0] == it.type:
+                        env[d.name] = v
     return env
 
 
-def _literal(s: str):
-    neg = s.startswith("-")
-    body = s[1:] if neg else s
-    m = _LIT_RE.fullmatch(body)
-    if not m:
-        return None
-    if m.group(1):
-        v = int(m.group(1), 0)
-    else:
-        v = float(body.rstrip("fF"))
-    return -v if neg else v
-
-
-_PY_OPS = {"&&": " and ", "||": " or ", "!": " not ", "==": "==", "!=": "!=", "<": "<", ">": ">", "/": "/",
-           "<=": "<=", ">=": ">=", "(": "(", ")": ")", "+": "+", "-": "-", "*": "*"}
-
-
-def _evaluate(words: list[str], env: dict[str, str]):
-    """The value of a condition of literals, known constants and operators, else None
-    (``x || true`` is true and ``x && false`` false whatever x is)."""
-    v = _evaluate_all(words, env)
-    if v is not None:
-        return v
-    for op, absorb in (("||", True), ("&&", False)):
-        parts, depth, start = [], 0, 0
-        for m, s in enumerate(words):
-            depth += s == "("
-            depth -= s == ")"
-            if s == op and depth == 0:
-                parts.append(words[start:m])
-                start = m + 1
-        if parts:
-            parts.append(words[start:])
-            vals = [_evaluate(p, env) for p in parts]
-            if any(x is not None and bool(x) == absorb for x in vals):
-                return absorb
-    if words[:1] == ["("] and words[-1:] == [")"] and _balanced(words[1:-1]):
-        return _evaluate(words[1:-1], env)
-    return None
-
-
-def _evaluate_all(words: list[str], env: dict[str, str]):
-    if "/" in words and any(isinstance(_literal(env.get(x, x)), int) for x in words):
-        return None                      # integer division: leave it to the compiler
-    py = []
-    for w in words:
-        if w in env:
-            w = env[w]
-        if w in ("true", "false"):
-            py.append(" True " if w == "true" else " False ")
-        elif w in _PY_OPS:
-            py.append(_PY_OPS[w])
-        else:
-            v = _literal(w)
-            if v is None:
-                return None
-            py.append(repr(v))
-    try:
-        return eval("".join(py), {"__builtins__": {}}, {})  # noqa: S307 - literals/operators only
-    except Exception:
-        return None
-
-
-def fold(items: list[Item], env: dict[str, str]) -> list[Item]:
-    """Remove the branches of ``if`` statements and ternaries whose condition is constant."""
-    impure = {it.name for it in items if it.kind == "function"
-              and re.search(r"\b(out|inout)\b", "".join(t.text for t in it.toks).split("{", 1)[0])}
-    out = []
-    key = (tuple(sorted(env.items())), tuple(sorted(impure)))
-    for it in items:
-        if it.kind != "function":
-            out.append(it)
-            continue
-        text = "".join(t.text for t in it.toks)
-        done = _FOLDED.get((text, key))
-        if done is not None:                  # the same function under the same constants
-            out.append(it if done == text else Item(it.kind, it.name, tokenize(done), it.comment))
-            continue
-        toks = _fold_function(it.toks, env, impure)
-        if len(_FOLDED) > 4096:
-            _FOLDED.clear()
-        _FOLDED[(text, key)] = "".join(t.text for t in toks)
-        out.append(Item(it.kind, it.name, toks, it.comment))
+def _global_arrays(unit: S.Unit) -> dict:
+    """``{name: (element nodes, their GLSL)}`` of the global constant arrays."""
+    out = {}
+    for it in unit.items:
+        if isinstance(it, S.Global) and "const" in it.quals:
+            for d in it.declarators:
+                if d.size is not None and isinstance(d.init, S.ArrayCtor):
+                    out[d.name] = (d.init.args, [expr_glsl(a) for a in d.init.args])
     return out
 
 
-#: ``{(function text, (constants, impure functions)): folded text}``: the driver's rounds (and a
-#: process's exports) fold most functions again unchanged
+class Facts:
+    """What the passes know of one function: its nodes in source order, blocks, declarations,
+    the occurrences of each name (:func:`cellgl.export.tree.occurrences`), the nodes inside
+    loops, and its constants (the globals' ``genv`` and its own). Computed when first asked;
+    a pass that changes the function makes a new one."""
+
+    def __init__(self, fn: S.Function, genv: dict, garrays: dict, ctx: Context):
+        self.fn, self.genv, self.garrays, self.ctx = fn, genv, garrays, ctx
+
+    @cached_property
+    def nodes(self) -> list:
+        return list(walk(self.fn.body))
+
+    @cached_property
+    def order(self) -> tuple[dict, dict]:
+        """``({id(node): position}, {id(node): the last position below it})``."""
+        pos, last = {}, {}
+
+        def visit(n, k):
+            pos[id(n)] = k
+            for c in children(n):
+                k = visit(c, k + 1)
+            last[id(n)] = k
+            return k
+        visit(self.fn.body, 0)
+        return pos, last
+
+    @cached_property
+    def blocks(self) -> list:
+        return [n for n in self.nodes if isinstance(n, S.Block)]
+
+    @cached_property
+    def declared(self) -> dict:
+        """``{name: times declared}`` (parameters included)."""
+        out: dict = {}
+        for p in self.fn.params:
+            out[p.name] = out.get(p.name, 0) + 1
+        for n in self.nodes:
+            if isinstance(n, S.Declarator):
+                out[n.name] = out.get(n.name, 0) + 1
+        return out
+
+    @cached_property
+    def once(self) -> set:
+        return {k for k, v in self.declared.items() if v == 1}
+
+    @cached_property
+    def params(self) -> dict:
+        return {p.name: p for p in self.fn.params}
+
+    @cached_property
+    def occ(self) -> dict:
+        return occurrences(self.fn.body, self.ctx)
+
+    @cached_property
+    def in_loops(self) -> set:
+        out = set()
+        for n in self.nodes:
+            if isinstance(n, (S.For, S.While)) and id(n) not in out:
+                out.update(id(x) for x in walk(n))
+        return out
+
+    @cached_property
+    def types(self) -> dict:
+        """``{name: type}`` of the scalars and vectors declared once (arrays: None)."""
+        out = {}
+        for p in self.fn.params:
+            out[p.name] = None if p.size is not None else p.type
+        for n in self.nodes:
+            if isinstance(n, S.Decl):
+                for d in n.declarators:
+                    out[d.name] = None if d.size is not None else n.type
+        return out
+
+    @cached_property
+    def constants(self) -> tuple[dict, dict]:
+        """``({name: value}, {array: [element nodes]})``: the globals' constants not shadowed, and
+        the locals declared once with a constant (or an array of literals) never written after."""
+        local = {k: v for k, v in self.genv.items() if k not in self.declared}
+        arrays: dict = {}
+        stored = {n for n, uses in self.occ.items() if any(role != "read" for _, role in uses)}
+        for node in self.nodes:
+            if not isinstance(node, S.Decl):
+                continue
+            for d in node.declarators:
+                if d.name not in self.once or d.name in stored or d.init is None or d.name in self.params:
+                    continue
+                if d.size is None and node.type in ("int", "uint", "float", "bool"):
+                    v = convert(node.type, value(d.init, local, self.ctx))
+                    if v is not None and v[0] == node.type:
+                        local[d.name] = v
+                elif isinstance(d.init, S.ArrayCtor) and all(isinstance(a, S.Num) for a in d.init.args):
+                    arrays[d.name] = d.init.args
+        return local, arrays
+
+    @property
+    def env(self) -> dict:
+        return self.constants[0]
+
+
+def function_pass(fpass):
+    """A tree pass (``(unit, ctx) -> changed``) running ``fpass(fn, facts) -> changed`` on every
+    function (``fpass`` stays its attribute ``function``: :func:`fold` runs it)."""
+    def run(unit: S.Unit, ctx: Context) -> bool:
+        if not ctx.fold_constants:
+            return False
+        genv, garrays = global_constants(unit), _global_arrays(unit)
+        changed = False
+        for fn in list(ctx.functions.values()):
+            changed = bool(fpass(fn, Facts(fn, genv, garrays, ctx))) or changed
+        return changed
+    run.__name__, run.__qualname__, run.__doc__ = fpass.__name__, fpass.__qualname__, fpass.__doc__
+    run.function = fpass
+    return tree_pass(run)
+
+
+# --------------------------------------------------------------------------------------------
+# passes
+# --------------------------------------------------------------------------------------------
+
+def _substitute(fn, sub) -> bool:
+    """``transform`` of ``fn``'s body by ``sub``; whether it replaced a node."""
+    changed = False
+
+    def g(n):
+        nonlocal changed
+        out = sub(n)
+        changed = changed or out is not n
+        return out
+    transform(fn.body, g)
+    return changed
+
+
+@function_pass
+def inline_constants(fn: S.Function, facts: Facts) -> bool:
+    """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
+    1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
+    pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
+    if not pick:
+        return False
+    return _substitute(fn, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
+
+
+@function_pass
+def array_elements(fn: S.Function, facts: Facts) -> bool:
+    """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
+    arrays read at a literal index where the element is short, or at any index (without
+    effects or calls) where all elements are the same."""
+    arrays = {k: v for k, v in facts.garrays.items() if k not in facts.declared and k in facts.occ}
+    if not arrays:
+        return False
+
+    def sub(n):
+        if isinstance(n, S.Index) and isinstance(n.base, S.Name) and n.base.name in arrays:
+            args, texts = arrays[n.base.name]
+            if len(set(texts)) == 1 and not any(isinstance(x, (S.Call, S.Assign, S.IncDec)) for x in walk(n.index)):
+                return paren(clone(args[0]))
+            k = value(n.index, {})
+            if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(args) and len(texts[k[1]]) <= 40:
+                return paren(clone(args[k[1]]))
+        return n
+    return _substitute(fn, sub)
+
+
+def _fold_expr(n, env, ctx):
+    """The expression node ``n`` with its constant parts folded (its children are already)."""
+    if isinstance(n, S.Ternary):
+        c = value(n.cond, env, ctx)
+        if c is not None and c[0] == "bool" and is_pure(n.cond, ctx):
+            return paren(n.then if c[1] else n.other)
+        if expr_glsl(n.then) == expr_glsl(n.other) and is_pure(n.cond, ctx):
+            return paren(n.then)
+    elif isinstance(n, S.Binary) and n.op in ("&&", "||", "^^") + tuple(COMPARE) or \
+            isinstance(n, S.Unary) and n.op == "!":
+        v = value(n, env, ctx)
+        if v is not None and v[0] == "bool" and is_pure(n, ctx):
+            return literal(v)
+        if isinstance(n, S.Binary) and n.op in ("&&", "||"):    # true && x -> x, false || x -> x
+            for a, b in ((n.left, n.right), (n.right, n.left)):
+                if value(a, env, ctx) == ("bool", n.op == "&&"):
+                    return paren(b)
+    elif isinstance(n, S.Index) and not isinstance(n.index, S.Num):
+        v = value(n.index, env, ctx)
+        if v is not None and v[0] in ("int", "uint") and v[1] >= 0:
+            return S.Index(n.base, literal(v))
+    elif isinstance(n, (S.Declarator, S.ArrayCtor)) and n.size is not None and not isinstance(n.size, S.Num):
+        v = value(n.size, env, ctx)
+        if v is not None and v[0] in ("int", "uint") and v[1] > 0:
+            n.size = literal(v)
+            return clone(n)
+    return n
+
+
+@function_pass
+def constant_conditions(fn: S.Function, facts: Facts) -> bool:
+    """Remove the branches of ``if`` statements and ternaries whose condition is constant, fold
+    conditions of literals (``3.0e38 >= 3.0e38`` -> ``true``), ``true && x`` -> ``x``, and
+    integer indices and array sizes (``rest[8 + 1]`` -> ``rest[9]``)."""
+    env, ctx = facts.env, facts.ctx
+    changed = False
+
+    def fold(n):
+        nonlocal changed
+        if isinstance(n, S.If):
+            c = value(n.cond, env, ctx)
+            out = _chosen(n, n.then if c[1] else n.other) if c is not None and c[0] == "bool" \
+                and is_pure(n.cond, ctx) else n
+        elif isinstance(n, S.While) and value(n.cond, env, ctx) == ("bool", False):
+            out = []
+        else:
+            out = _fold_expr(n, env, ctx)
+        changed = changed or out is not n
+        return out
+    rewrite(fn.body, fold)
+    return changed
+
+
+def _chosen(stmt, kept):
+    """What replaces the statement ``stmt`` by its part ``kept`` (a block's statements, spliced
+    unless it declares names; nothing for None), keeping ``stmt``'s comments."""
+    if kept is None:
+        out = []
+    elif isinstance(kept, S.Block) and not any(isinstance(s, S.Decl) for s in kept.body):
+        out = list(kept.body)
+    else:
+        out = [kept]
+    if out and stmt.comments:
+        out[0].comments = stmt.comments + out[0].comments
+    return out
+
+
+@function_pass
+def local_constants(fn: S.Function, facts: Facts) -> bool:
+    """Write locals that hold a boolean, an integer, 0.0 or 1.0 for good into the code, and the
+    elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
+    env, arrays = facts.constants
+    pick = {k: literal(v) for k, v in env.items() if k not in facts.genv and shape(v)
+            and (v[0] != "uint" or v[1] in (0, 1))       # (other unsigned values: hash constants, named)
+            and any(role == "read" for _, role in facts.occ.get(k, ()))}
+    arrays = {k: v for k, v in arrays.items() if any(role == "read" for _, role in facts.occ.get(k, ()))}
+    if not pick and not arrays:
+        return False
+
+    def sub(n):
+        if isinstance(n, S.Name) and n.name in pick:
+            return clone(pick[n.name])
+        if isinstance(n, S.Index) and isinstance(n.base, S.Name) and n.base.name in arrays:
+            k = value(n.index, env, facts.ctx)
+            if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(arrays[n.base.name]):
+                return clone(arrays[n.base.name][k[1]])
+        return n
+    return _substitute(fn, sub)
+
+
+def _counter(loop: S.For, env, ctx):
+    """``(v, A, op, B, ++ or --)`` of ``for (int v = A; v op B; v++)`` with A and B constant."""
+    init, cond, step = loop.init, loop.cond, loop.step
+    if not (isinstance(init, S.Decl) and init.type == "int" and len(init.declarators) == 1
+            and isinstance(cond, S.Binary) and isinstance(cond.left, S.Name) and isinstance(step, S.IncDec)
+            and isinstance(step.operand, S.Name) and init.declarators[0].size is None):
+        return None
+    var = init.declarators[0].name
+    a, b = value(init.declarators[0].init, env, ctx), value(cond.right, env, ctx)
+    if cond.left.name != var or step.operand.name != var or a is None or b is None or a[0] != "int" or b[0] != "int":
+        return None
+    return var, a[1], cond.op, b[1], step.op
+
+
+def _loop_bounds(loop: S.For, env, ctx):
+    """``(var, first, count, early)`` of a loop with a constant counter (:func:`_counter`): the
+    iterations it runs (bounded by an ``if (v >= M) break;`` first in the body: ``early``)."""
+    counter = _counter(loop, env, ctx)
+    if counter is None:
+        return None
+    var, a, op, b, step = counter
+    up, early = step == "++", None
+    body = loop.body.body if isinstance(loop.body, S.Block) else [loop.body]
+    if up and op in ("<", "<=") and body and isinstance(body[0], S.If) and body[0].other is None:
+        first = body[0]
+        jump = first.then.body if isinstance(first.then, S.Block) else [first.then]
+        c = first.cond
+        if isinstance(c, S.Binary) and c.op == ">=" and isinstance(c.left, S.Name) and c.left.name == var \
+                and len(jump) == 1 and isinstance(jump[0], S.Jump) and jump[0].kind == "break":
+            m = value(c.right, env, ctx)
+            if m is not None and m[0] == "int":
+                b, early = (min(b, m[1]) if op == "<" else min(b, m[1] - 1)), first
+    count = ({"<": b - a, "<=": b - a + 1} if up else {">": a - b, ">=": a - b + 1}).get(op)
+    return None if count is None else (var, a, count, early)
+
+
+def _jumps(node) -> bool:
+    """Whether ``node`` has a ``break`` or ``continue`` of the loop it is in (not of a nested loop)."""
+    if isinstance(node, S.Jump):
+        return node.kind in ("break", "continue")
+    if isinstance(node, S.Block):
+        return any(_jumps(s) for s in node.body)
+    if isinstance(node, S.If):
+        return _jumps(node.then) or (node.other is not None and _jumps(node.other))
+    return False
+
+
+@function_pass
+def constant_loops(fn: S.Function, facts: Facts) -> bool:
+    """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
+    the counter replaced by its first value."""
+    env, ctx = facts.env, facts.ctx
+    changed = False
+    if not any(isinstance(n, S.For) for n in facts.nodes):
+        return False
+
+    def unroll(n):
+        nonlocal changed
+        bounds = _loop_bounds(n, env, ctx) if isinstance(n, S.For) else None
+        if bounds is None:
+            return n
+        var, first, count, early = bounds
+        if count <= 0:
+            changed = True
+            return _chosen(n, None)
+        body = n.body if isinstance(n.body, S.Block) else S.Block([n.body])
+        body = S.Block([s for s in body.body if s is not early], n.comments + body.comments)
+        if count != 1 or var in writes(body, ctx) or _jumps(body):
+            return n
+        changed = True
+        lit = literal(("int", first))
+        return [transform(body, lambda x: clone(lit) if isinstance(x, S.Name) and x.name == var else x)]
+    rewrite(fn.body, unroll)
+    return changed
+
+
+def _conjuncts(e) -> list:
+    return _conjuncts(e.left) + _conjuncts(e.right) if isinstance(e, S.Binary) and e.op == "&&" else [e]
+
+
+@function_pass
+def loop_ranges(fn: S.Function, facts: Facts) -> bool:
+    """``for (int k = 0; k < 16; k++) { x += (k >= 1 && k < 9 && c) ? 1 : 0; }`` -> the loop over
+    1 <= k < 9 with ``c`` alone: a body that is one statement guarded by bounds on k (an ``if``
+    without ``else``, or an integer sum of ``guard ? e : 0``)."""
+    env, ctx = facts.env, facts.ctx
+    changed = False
+    for loop in [n for n in facts.nodes if isinstance(n, S.For)]:
+        counter = _counter(loop, env, ctx)
+        if counter is None or counter[2] != "<" or counter[4] != "++":
+            continue
+        var, lo, _, hi, _ = counter
+        body = loop.body.body if isinstance(loop.body, S.Block) else [loop.body]
+        if len(body) != 1 or var in writes(loop.body, ctx):
+            continue
+        s, holder = body[0], None
+        if isinstance(s, S.If) and s.other is None:
+            holder = s
+        elif isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "+=":
+            t = s.expr.value.inner if isinstance(s.expr.value, S.Paren) else s.expr.value
+            if isinstance(t, S.Ternary) and isinstance(t.other, S.Num) and t.other.text in ("0", "0u"):
+                holder = t
+        if holder is None:
+            continue
+        c = holder.cond
+        parts = _conjuncts(c.inner if isinstance(c, S.Paren) else c)
+        new_lo, new_hi, rest = lo, hi, []
+        for p in parts:
+            v = value(p.right, env, ctx) if isinstance(p, S.Binary) else None
+            if isinstance(p, S.Binary) and p.op in (">=", "<") and isinstance(p.left, S.Name) \
+                    and p.left.name == var and v is not None and v[0] == "int":
+                new_lo, new_hi = (max(new_lo, v[1]), new_hi) if p.op == ">=" else (new_lo, min(new_hi, v[1]))
+            else:
+                rest.append(p)
+        if not rest or len(rest) == len(parts):
+            continue
+        e = rest[0]
+        for p in rest[1:]:
+            e = S.Binary("&&", e, p)
+        holder.cond = S.Paren(e) if isinstance(c, S.Paren) else e
+        loop.init.declarators[0].init = literal(("int", new_lo))
+        loop.cond.right = literal(("int", max(new_lo, new_hi)))
+        changed = True
+    return changed
+
+
+#: the folding passes, in the order of :func:`fold`'s round
+FOLD = [inline_constants, array_elements, local_constants, constant_conditions, constant_loops, loop_ranges]
+
+
+@tree_pass
+def fold(unit: S.Unit, ctx: Context) -> bool:
+    """The passes of :data:`FOLD` and :data:`cellgl.export.simplify.SIMPLIFY`, function by
+    function, in order, round after round until a round changes nothing (they change no
+    signature, so ``ctx`` stays true); :class:`TranslateError` after :data:`MAX_ROUNDS` rounds.
+    Nothing with ``ctx.fold_constants`` false (the recipe's values stay as they are). A function
+    folded before under the same constants and signatures is not folded again."""
+    from cellgl.export.printer import item_glsl
+    from cellgl.export.simplify import SIMPLIFY
+    if not ctx.fold_constants:
+        return False
+    genv, garrays = global_constants(unit), _global_arrays(unit)
+    key = (tuple(sorted(genv.items())), tuple(sorted((k, tuple(v[1])) for k, v in garrays.items())),
+           tuple(sorted(ctx.impure)), tuple(sorted((f.name, tuple(p.mode for p in f.params))
+                                                    for f in ctx.functions.values())))
+    passes = [p.function for p in FOLD + SIMPLIFY]
+    changed = False
+    for fn in list(ctx.functions.values()):
+        text = "\n".join(item_glsl(fn))
+        if (text, key) not in _FOLDED:
+            if len(_FOLDED) > 4096:
+                _FOLDED.clear()
+            body = _fold_function(fn, Facts(fn, genv, garrays, ctx), passes)
+            _FOLDED[(text, key)] = None if body is None or "\n".join(item_glsl(fn)) == text else body
+            changed = changed or _FOLDED[(text, key)] is not None
+        elif _FOLDED[(text, key)] is not None:
+            fn.body = clone(_FOLDED[(text, key)])
+            changed = True
+    return changed
+
+
+#: ``{(function text, (constants, impure functions, signatures)): folded body (None: unchanged)}``: the
+#: driver's rounds (and a process's exports) fold most functions again unchanged
 _FOLDED: dict = {}
 
-
-def _fold_function(toks: list[Tok], env: dict[str, str], impure: set[str]) -> list[Tok]:
-    """One function's tokens, its constant conditions, loops and locals folded (to a fixed point
-    of the steps below, at most 200 of them)."""
-    for _ in range(200):
-        local = dict(env)
-        local.update(_local_constants(toks, env))
-        new = _fold_once(toks, local)
-        if new is None:
-            new = _fold_loop(toks, local)
-        if new is None:
-            new = _substitute_locals(toks, env)
-        if new is None:
-            new = _dead_local(toks, impure)
-        if new is None:
-            new = _split_declarators(toks)
-        if new is None:
-            new = _dead_store(toks, impure)
-        if new is None:
-            new = _last_store(toks, impure)
-        if new is None:
-            new = _loop_range(toks, local)
-        if new is None:
-            new = _bare_block(toks)
-        if new is None:
-            new = _copy_local(toks, impure)
-        if new is None:
-            new = _merge_declaration(toks)
-        if new is None:
-            new = _forward_literal(toks)
-        if new is None:
-            new = _loop_variable(toks)
-        if new is None:
-            new = _store_into_next(toks, impure)
-        if new is None:
-            break
-        toks = new
-    return _arithmetic(toks)
+#: rounds of the passes on one function after which :func:`fold` gives up
+MAX_ROUNDS = 64
 
 
-_ASSIGN = {"=", "+=", "-=", "*=", "/=", "%=", "<<=", ">>=", "&=", "|=", "^=", "++", "--"}
-
-
-def _local_constants(toks: list[Tok], env: dict[str, str]) -> dict[str, str]:
-    """Locals ``TYPE x = <constant>;`` never assigned, incremented or passed anywhere after."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    found = {}
-    for n in range(1, len(w) - 3):
-        if w[n - 1] in ("int", "uint", "float", "bool") and re.fullmatch(r"[A-Za-z_]\w*", w[n]) \
-                and w[n + 1] == "=" and (n < 2 or w[n - 2] in (";", "{", "}")):
-            end = w.index(";", n)
-            v = _evaluate(w[n + 2:end], env)
-            if v is None or w.count(w[n]) < 1:
-                continue
-            uses = [m for m in range(len(w)) if w[m] == w[n] and m != n and w[m - 1] != "."]   # (not o.w)
-            if any((m + 1 < len(w) and w[m + 1] in _ASSIGN) or w[m - 1] in ("++", "--")
-                   or _argument(w, m) for m in uses):
-                continue
-            found[w[n]] = _glsl_literal(v, w[n - 1])
-    return found
-
-
-def _argument(w: list[str], m: int) -> bool:
-    """Whether w[m] stands alone as an argument of a call (it may be an out parameter)."""
-    if m + 1 >= len(w) or w[m + 1] not in (")", ","):
-        return False
-    depth = 0
-    for k in range(m - 1, -1, -1):
-        if w[k] in (")", "]"):
-            depth += 1
-        elif w[k] in ("(", "["):
-            if depth == 0:
-                return w[k] == "(" and k > 0 and re.fullmatch(r"[A-Za-z_]\w*", w[k - 1]) is not None \
-                    and w[k - 1] not in ("if", "while", "for", "return")
-            depth -= 1
-        elif w[k] in (";", "{", "}"):
-            return False
-    return False
-
-
-def _glsl_literal(v, typ: str) -> str:
-    if typ == "bool" or isinstance(v, bool):
-        return "true" if v else "false"
-    if typ == "float":
-        return repr(float(v))
-    if typ == "uint":
-        return f"{int(v)}u"
-    return str(int(v))
-
-
-def _fold_once(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n, s in enumerate(w):
-        if s == "if" and n + 1 < len(w) and w[n + 1] == "(":
-            cl = _match(toks, code, n + 1)
-            v = _evaluate(w[n + 2:cl], env)
-            if v is None or w[cl + 1] != "{":
-                continue
-            then_end = _match(toks, code, cl + 1)
-            keep: tuple[int, int] | None     # code positions of the kept part, brackets included
-            end = then_end
-            else_part = None
-            if then_end + 1 < len(w) and w[then_end + 1] == "else":
-                if w[then_end + 2] == "{":
-                    e_end = _match(toks, code, then_end + 2)
-                    else_part = (then_end + 2, e_end)
-                    end = e_end
-                elif w[then_end + 2] == "if":
-                    e_end = _if_chain_end(toks, code, w, then_end + 2)
-                    else_part = (then_end + 2, e_end)
-                    end = e_end
-                else:
-                    continue
-            keep = (cl + 1, then_end) if v else else_part
-            return _splice(toks, code, n, end, keep)
-        if s == "=" and ";" in w[n:]:
-            end = w.index(";", n)           # a stored condition of literals: b = 3.0e38 >= 3.0e38;
-            v = _evaluate_all(w[n + 1:end], env)
-            if isinstance(v, bool) and end - n > 2:
-                return tokenize("".join(t.text for t in toks[:code[n] + 1]) + (" true" if v else " false")
-                    + "".join(t.text for t in toks[code[end]:]))
-        if s == "?":
-            lo = _ternary_start(w, n)
-            v = _evaluate(w[lo:n], env)
-            if v is None:
-                continue
-            colon, hi = _ternary_parts(w, n)
-            if colon is None:
-                continue
-            a = "".join(toks[code[m]].text + " " for m in range(n + 1, colon)).strip()
-            b = "".join(toks[code[m]].text + " " for m in range(colon + 1, hi)).strip()
-            pick = _respace(a if v else b)
-            return tokenize("".join(t.text for t in toks[:code[lo]]) + "(" + pick + ")"
-                            + "".join(t.text for t in toks[code[hi - 1] + 1:]))
-    return None
-
-
-def _respace(s: str) -> str:
-    s = re.sub(r"\s*([(\[.])\s*", r"\1", s)
-    s = re.sub(r"\s*([)\]])", r"\1", s)
-    return s.replace(" ,", ",")
-
-
-def _if_chain_end(toks, code, w, n) -> int:
-    cl = _match(toks, code, n + 1)
-    end = _match(toks, code, cl + 1)
-    if end + 1 < len(w) and w[end + 1] == "else":
-        if w[end + 2] == "{":
-            return _match(toks, code, end + 2)
-        return _if_chain_end(toks, code, w, end + 2)
-    return end
-
-
-def _ternary_start(w: list[str], q: int) -> int:
-    depth = 0
-    for m in range(q - 1, -1, -1):
-        s = w[m]
-        if s in ")]":
-            depth += 1
-        elif s in "([":
-            if depth == 0:
-                return m + 1
-            depth -= 1
-        elif depth == 0 and (s in (",", ";", "{", "}", "return", "?", ":") or s in _ASSIGN):
-            return m + 1
-    return 0
-
-
-def _ternary_parts(w: list[str], q: int):
-    depth, nest, colon = 0, 0, None
-    for m in range(q + 1, len(w)):
-        s = w[m]
-        if s in "([":
-            depth += 1
-        elif s in ")]":
-            if depth == 0:
-                return (colon, m) if colon is not None else (None, None)
-            depth -= 1
-        elif depth == 0 and s == "?":
-            nest += 1
-        elif depth == 0 and s == ":":
-            if nest:
-                nest -= 1
-            elif colon is None:
-                colon = m
-            else:
-                return colon, m
-        elif depth == 0 and s in (",", ";"):
-            return (colon, m) if colon is not None else (None, None)
-    return None, None
-
-
-def _splice(toks, code, start, end, keep) -> list[Tok]:
-    """Replace code positions start..end (a whole if statement) by the inside of ``keep``
-    (a braced block, dedented one level; kept as a block when it declares a name) or nothing."""
-    before = toks[:code[start]]
-    after = toks[code[end] + 1:]
-    if keep is None:
-        # drop the statement and the indentation/newline in front of it
-        while before and before[-1].kind == "ws" and "\n" not in before[-1].text:
-            before.pop()
-        if before and before[-1].kind == "ws":
-            before[-1] = Tok("ws", before[-1].text.rsplit("\n", 1)[0])
-            if not before[-1].text:
-                before.pop()
-        return before + after
-    a, b = keep
-    if toks[code[a]].text != "{":           # an else-if chain: keep it as it is
-        return before + toks[code[a]:code[b] + 1] + after
-    inner = toks[code[a] + 1:code[b]]
-    words = [t.text for t in inner if t.kind not in ("ws", "comment")]
-    declares = any(words[k] in ("int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec4", "uvec4")
-                   and k + 1 < len(words) and re.fullmatch(r"[A-Za-z_]\w*", words[k + 1])
-                   for k in range(len(words)))
-    if declares:
-        return before + toks[code[a]:code[b] + 1] + after
-    if start > 0 and toks[code[start - 1]].text == "else":   # `else if (true) {A}` -> `else {A}`
-        return before + toks[code[a]:code[b] + 1] + after
-    text = "".join(t.text for t in inner)
-    text = re.sub(r"\n    ", "\n", text).strip()
-    if not text:
-        return _splice(toks, code, start, end, None)
-    return before + tokenize(text) + after
-
-
-
-
-def _substitute_locals(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
-    """Write locals that hold 0, 1, an integer or a boolean for good into the code, and the
-    elements of local arrays initialised with literals and never assigned (``lin[0]`` -> 1.0)."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    local = {k: v for k, v in _local_constants(toks, env).items()
-             if v in ("true", "false") or re.fullmatch(r"-?\d+u?", v) or _literal(v) in (0, 1)}
-    arrays = {}
-    for n in range(1, len(w) - 6):
-        if w[n - 1] in ("float", "int", "uint") and w[n + 1] == "[" and w[n + 3:n + 7] == ["]", "=", w[n - 1], "["]:
-            end = w.index(";", n)
-            vals = [x for x in w[n + 10:end - 1] if x != ","]
-            if w[n + 9] == "(" and all(_literal(x) is not None for x in vals) \
-                    and not any(w[m] == w[n] and w[m + 1] == "[" and _assigned_index(w, m) for m in range(end, len(w))):
-                arrays[w[n]] = vals
-    out = list(toks)
-    changed = False
-    for m in range(1, len(w)):
-        decl = w[m - 1] in ("int", "uint", "float", "bool") or (m >= 2 and w[m - 1] == "," and False)
-        if w[m] in local and not decl and w[m - 1] != ".":
-            v = local[w[m]]
-            out[code[m]] = Tok("num", f"({v})" if v.startswith("-") else v)
-            changed = True
-        elif w[m] in arrays and m + 3 < len(w) and w[m + 1] == "[" and w[m + 3] == "]" and w[m + 2].isdigit() \
-                and w[m - 1] not in ("float", "int", "uint"):
-            k = int(w[m + 2])
-            if k < len(arrays[w[m]]):
-                out[code[m]] = Tok("num", arrays[w[m]][k])
-                for j in (1, 2, 3):
-                    out[code[m + j]] = Tok("ws", "")
-                changed = True
-    return tokenize("".join(t.text for t in out)) if changed else None
-
-
-def _assigned_index(w: list[str], m: int) -> bool:
-    depth = 0
-    for k in range(m + 1, len(w)):
-        depth += w[k] == "["
-        depth -= w[k] == "]"
-        if depth == 0:
-            return k + 1 < len(w) and w[k + 1] in _ASSIGN
-    return False
-
-
-def _loop_range(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
-    """``for (int k = 0; k < 16; k++) { x += (k >= 1 && k < 9 && c) ? 1 : 0; }`` -> the loop
-    over 1 <= k < 9 with ``c`` alone: a body that is one statement guarded by bounds on k."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(len(w) - 12):
-        if w[n:n + 3] != ["for", "(", "int"]:
-            continue
-        cl = _match(toks, code, n + 1)
-        var = w[n + 3]
-        head = w[n + 2:cl]
-        if len(head) != 11 or head[2] != "=" or head[4] != ";" or head[5:7] != [var, "<"] \
-                or head[8] != ";" or head[9:] != [var, "++"]:
-            continue
-        lo, hi = _literal(head[3]), _literal(head[7])
-        if not isinstance(lo, int) or not isinstance(hi, int) or w[cl + 1] != "{":
-            continue
-        body_end = _match(toks, code, cl + 1)
-        body = w[cl + 2:body_end]
-        scan = len(body) - 3
-        if body[:2] == ["if", "("] and "else" not in body:
-            icl = _match(toks, code, cl + 3) - (cl + 2)       # the guard of an if that is the whole body
-            if body[icl + 1] != "{" or _match(toks, code, cl + 2 + icl + 1) != body_end - 1:
-                continue
-            scan = icl - 3
-        elif body.count(";") != 1:
-            continue
-        new_lo, new_hi, drop = lo, hi, []
-        for k in range(scan):
-            seg = body[k:k + 4]
-            if seg[0] in ("(", "&&") and seg[1] == var and seg[2] in (">=", "<") and isinstance(
-                    _literal(env.get(seg[3], seg[3])), int) and body[k + 4] == "&&":
-                v = _literal(env.get(seg[3], seg[3]))
-                if seg[2] == ">=":
-                    new_lo = max(new_lo, v)
-                else:
-                    new_hi = min(new_hi, v)
-                drop.append(cl + 2 + k + 1)
-        if not drop:
-            continue
-        out = list(toks)
-        kill = set()
-        for m in drop:                        # "k >= 1 &&" (the bound and its &&)
-            kill.update(range(code[m], code[m + 3] + 1))
-            j = code[m + 3] + 1
-            while j < len(toks) and toks[j].kind == "ws":
-                kill.add(j)
-                j += 1
-        out[code[n + 5]] = Tok("num", str(new_lo))
-        out[code[n + 9]] = Tok("num", str(max(new_lo, new_hi)))
-        return tokenize("".join(t.text for i, t in enumerate(out) if i not in kill))
-    return None
-
-
-# --------------------------------------------------------------------------------------------
-# loops with constant bounds
-# --------------------------------------------------------------------------------------------
-
-
-def _fold_loop(toks: list[Tok], env: dict[str, str]) -> list[Tok] | None:
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n, s in enumerate(w):
-        if s != "for" or w[n + 1] != "(":
-            continue
-        cl = _match(toks, code, n + 1)
-        head = w[n + 2:cl]
-        if head.count(";") != 2 or head[:1] != ["int"] or len(head) < 4 or head[2] != "=":
-            continue
-        s1 = head.index(";")
-        s2 = head.index(";", s1 + 1)
-        var = head[1]
-        a = _evaluate(head[3:s1], env)
-        cond, step = head[s1 + 1:s2], head[s2 + 1:]
-        if a is None or len(cond) < 3 or cond[0] != var or step not in ([var, "++"], [var, "--"]):
-            continue
-        b = _evaluate(cond[2:], env)
-        if b is None or not isinstance(a, int) or not isinstance(b, int):
-            continue
-        up = step[1] == "++"
-        body_end = _stmt_end(toks, code, w, cl + 1)
-        # an early exit `if (i >= M) { break; }` first in the body bounds the loop
-        if up and cond[1] in ("<", "<=") and w[cl + 1] == "{" and w[cl + 2:cl + 6] == ["if", "(", var, ">="]:
-            icl = _match(toks, code, cl + 3)
-            m = _evaluate(w[cl + 6:icl], env)
-            if isinstance(m, int) and w[icl + 1:icl + 5] == ["{", "break", ";", "}"]:
-                b = min(b, m) if cond[1] == "<" else min(b, m - 1)
-        count = {"<": b - a, "<=": b - a + 1}.get(cond[1]) if up else {">": a - b, ">=": a - b + 1}.get(cond[1])
-        if count is None:
-            continue
-        if count <= 0:
-            return _splice(toks, code, n, body_end, None)
-        if count != 1:
-            continue
-        sub = list(toks)
-        for m in range(cl + 1, body_end + 1):
-            if w[m] == var and w[m - 1] != ".":
-                sub[code[m]] = Tok("num", str(a))
-        if w[cl + 1] == "{":
-            return tokenize("".join(t.text for t in _splice(sub, code, n, body_end, (cl + 1, body_end))))
-        before = "".join(t.text for t in sub[:code[n]])
-        stmt = "".join(t.text for t in sub[code[cl + 1]:code[body_end] + 1])
-        return tokenize(before + stmt + "".join(t.text for t in sub[code[body_end] + 1:]))
-    return None
-
-
-# --------------------------------------------------------------------------------------------
-# one-line functions
-# --------------------------------------------------------------------------------------------
+def _fold_function(fn: S.Function, facts: Facts, passes) -> S.Block | None:
+    """``fn``'s body folded (a copy), or None where nothing changed."""
+    for rounds in range(MAX_ROUNDS):
+        changed = []
+        for p in passes:
+            if p(fn, facts):
+                changed.append(p.__name__)
+                facts = Facts(fn, facts.genv, facts.garrays, facts.ctx)
+        if not changed:
+            return clone(fn.body) if rounds else None
+    raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still changing: "
+                         f"{', '.join(changed)}): a pass undoes another")

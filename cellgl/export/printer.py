@@ -94,7 +94,7 @@ def statement_glsl(s, ind: str = "") -> list[str]:
     out = _comments(s.comments, ind)
     trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
     if isinstance(s, Block):
-        return out + [ind + "{"] + [ln for x in s.body for ln in statement_glsl(x, ind + "    ")] + [ind + "}"]
+        return out + [ind + "{" + trail] + [ln for x in s.body for ln in statement_glsl(x, ind + "    ")] + [ind + "}"]
     if isinstance(s, (Decl, ExprStmt)):
         return out + [ind + _simple(s) + ";" + trail]
     if isinstance(s, Return):
@@ -111,7 +111,8 @@ def statement_glsl(s, ind: str = "") -> list[str]:
             first, *rest = statement_glsl(other, ind)
             return out[:-1] + [f"{ind}}} else {first.lstrip()}"] + rest
         if closed and isinstance(other, Block) and not other.comments:
-            return out[:-1] + [f"{ind}}} else {{"] + [ln for x in other.body for ln in statement_glsl(x, ind + "    ")] \
+            return out[:-1] + [f"{ind}}} else {{" + _trail(other)] \
+                + [ln for x in other.body for ln in statement_glsl(x, ind + "    ")] \
                 + [ind + "}"]
         return out + [ind + "else"] + statement_glsl(other, ind + "    ")
     if isinstance(s, For):
@@ -124,9 +125,14 @@ def statement_glsl(s, ind: str = "") -> list[str]:
     raise TypeError(f"not a statement node: {s!r}")
 
 
+def _trail(block) -> str:
+    return f"  {block.trail}" if block.trail else ""
+
+
 def _head(head: str, body, ind: str) -> list[str]:
     if isinstance(body, Block) and not body.comments:
-        return [f"{ind}{head} {{"] + [ln for x in body.body for ln in statement_glsl(x, ind + "    ")] + [ind + "}"]
+        return [f"{ind}{head} {{" + _trail(body)] + [ln for x in body.body for ln in statement_glsl(x, ind + "    ")] \
+            + [ind + "}"]
     return [ind + head] + statement_glsl(body, ind + "    ")
 
 
@@ -149,7 +155,7 @@ def item_glsl(it) -> list[str]:
         sig = f"{it.ret} {it.name}({params})"
         if it.body is None:
             return out + [sig + ";"]
-        return out + [sig, "{"] + [ln for x in it.body.body for ln in statement_glsl(x, "    ")] + ["}"]
+        return out + [sig, "{" + _trail(it.body)] + [ln for x in it.body.body for ln in statement_glsl(x, "    ")] + ["}"]
     raise TypeError(f"not a top-level node: {it!r}")
 
 

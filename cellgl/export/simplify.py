@@ -1,536 +1,526 @@
-"""Statement-level simplification for the snippet compiler (:mod:`cellgl.export.compiler`).
+"""The snippet compiler's simplification, on the syntax tree (:mod:`cellgl.export.compiler` runs
+the passes, after :mod:`cellgl.export.fold`'s, in its round).
 
-Inside one function: dead locals (declared, never read), dead stores (a local only ever
-written; the last store to a local that is not read again), declarations split one per line,
-and arithmetic identities that hold exactly in float arithmetic (``x * 1.0``, ``x - 0.0``,
-``x += 0.0 * y;``, ``mix(a, b, 0.0)``, ``vec4(0.0) + v``), members of literal vectors
-(``vec4(0.0, 0.0, 0.0, 1.0).w``), unsigned literal products, copies (``float y = x;``) and the
-bare blocks an unrolled loop leaves. A right-hand side that calls a function with ``out``
-parameters is never removed.
+Inside each function, with the def-use facts of :mod:`cellgl.export.tree`:
+
+* :func:`split_declarations` -- ``vec4 a = x, b;`` becomes one declaration per name;
+* :func:`dead_locals` -- a local never read goes, with every store to it (a store whose
+  right-hand side has effects stays);
+* :func:`last_stores` -- a store to a local that nothing reads afterwards (outside loops) goes;
+* :func:`copies` -- ``float y = x;`` with neither ``x`` nor ``y`` written afterwards: ``y`` is
+  ``x``;
+* :func:`bare_blocks` -- a block standing alone (what an unrolled loop leaves) is spliced into
+  its parent where the names it declares are used nowhere else;
+* :func:`merge_declarations` -- ``T x; ... x = e;`` -> ``... T x = e;``;
+* :func:`forward_literals` -- a literal just stored is read in its place by the next
+  straight-line statements (``x = 0; bool b = x > 9;`` -> ``bool b = 0 > 9;``);
+* :func:`loop_variables` -- ``int i = 2; for (; i < 9; i++)`` -> ``for (int i = 2; i < 9; i++)``;
+* :func:`store_into_next` -- ``T y = a; y = f(y);`` -> ``T y = f(a);``, ``T y = a; return y;`` ->
+  ``return a;``;
+* :func:`identities` -- rewrites that give the same value for every IEEE-754 input (``x * 1.0``,
+  ``x / 1.0``, ``x - 0.0``, ``x -= 0.0``, ``mix(a, b, 0.0)``, ``mix(2.0, b, 1.0)`` with a finite
+  literal, ``|x| * |x|``, members of literal vectors, integer literal arithmetic, integer zero
+  vectors added, empty branches). ``x + 0.0`` (``-0.0 + 0.0`` is ``+0.0``) and ``x + 0.0 * y``
+  (NaN for an infinite ``y``) are not rewritten;
+* :func:`parentheses` -- parentheses around an atom, in a statement's or an argument's place,
+  or around a product in a sum.
 """
 from __future__ import annotations
 
-import re
+from cellgl.export import syntax as S
+from cellgl.export.fold import Facts, function_pass
+from cellgl.export.printer import expr_glsl
+from cellgl.export.tree import ATOMS, clone, is_pure, paren, rewrite, transform, walk
+from cellgl.export.values import value
 
-from cellgl.export.reach import _code_idx, _line_start, _match, _split_args, _stmt_end
-from cellgl.export.translate.tokens import Tok, tokenize
-
-__all__ = []
+__all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
+           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY"]
 
 
-def _top_comma(words: list[str]) -> bool:
-    depth = 0
-    for x in words:
-        depth += x in ("(", "[")
-        depth -= x in (")", "]")
-        if x == "," and depth == 0:
+def _root(t):
+    """The Name node an assignment target stores into."""
+    while isinstance(t, (S.Index, S.Member, S.Paren)):
+        t = t.inner if isinstance(t, S.Paren) else t.base
+    return t if isinstance(t, S.Name) else None
+
+
+def _store(s):
+    """``(target, expression)`` of a statement that only stores (``x op= e;``, ``x++;``)."""
+    if isinstance(s, S.ExprStmt):
+        if isinstance(s.expr, S.Assign):
+            return s.expr.target, s.expr
+        if isinstance(s.expr, S.IncDec):
+            return s.expr.operand, s.expr
+    return None, None
+
+
+def _pure_store(expr, ctx) -> bool:
+    """Whether a store has no effect but the store: its value and indices have none."""
+    if isinstance(expr, S.IncDec):
+        return is_pure(expr.operand, ctx)
+    return is_pure(expr.value, ctx) and is_pure(expr.target, ctx)
+
+
+def _drop(body: list, s) -> None:
+    """Remove the statement ``s`` from ``body``, its comments moving to the next statement."""
+    k = next(i for i, x in enumerate(body) if x is s)
+    if s.comments and k + 1 < len(body):
+        body[k + 1].comments = s.comments + body[k + 1].comments
+    del body[k]
+
+
+def _single(s):
+    """The declarator of a declaration of one name (no array), else None."""
+    if isinstance(s, S.Decl) and len(s.declarators) == 1 and s.declarators[0].size is None:
+        return s.declarators[0]
+    return None
+
+
+@function_pass
+def split_declarations(fn: S.Function, facts: Facts) -> bool:
+    """``vec4 a = x, b;`` -> ``vec4 a = x;`` and ``vec4 b;``."""
+    changed = False
+    for b in facts.blocks:
+        out = []
+        for s in b.body:
+            if isinstance(s, S.Decl) and len(s.declarators) > 1:
+                parts = [S.Decl(s.type, [d], s.const) for d in s.declarators]
+                parts[0].comments, parts[-1].trail = s.comments, s.trail
+                out += parts
+                changed = True
+            else:
+                out.append(s)
+        b.body[:] = out
+    return changed
+
+
+@function_pass
+def dead_locals(fn: S.Function, facts: Facts) -> bool:
+    """Remove a local that is never read (``T x = e;``, ``x = ...;``, ``x.y += ...;``,
+    ``x[0] = ...;``): its declaration and the statements that store into it."""
+    ctx = facts.ctx
+    stores = {}                                   # id(root Name) -> (block, statement, expression)
+    for b in facts.blocks:
+        for s in b.body:
+            t, e = _store(s)
+            if t is not None and _root(t) is not None:
+                stores[id(_root(t))] = (b, s, e)
+    for b in facts.blocks:
+        for s in b.body:
+            if not (isinstance(s, S.Decl) and len(s.declarators) == 1):
+                continue
+            d = s.declarators[0]
+            if d.name not in facts.once or d.name in facts.params or (d.init is not None and not is_pure(d.init, ctx)):
+                continue
+            uses = facts.occ.get(d.name, [])
+            if all(role != "read" and id(n) in stores and _pure_store(stores[id(n)][2], ctx) for n, role in uses):
+                for n, _ in uses:
+                    sb, st, _ = stores[id(n)]
+                    if any(x is st for x in sb.body):
+                        _drop(sb.body, st)
+                _drop(b.body, s)
+                return True
+    return False
+
+
+@function_pass
+def last_stores(fn: S.Function, facts: Facts) -> bool:
+    """Remove a store ``x op= ...;`` to a local (or an ``in`` parameter) that nothing reads
+    afterwards, outside loops."""
+    pos, last = facts.order
+    for b in facts.blocks:
+        for s in b.body:
+            t, e = _store(s)
+            r = _root(t) if t is not None else None
+            if r is None or r.name not in facts.types or id(s) in facts.in_loops \
+                    or r.name in facts.params and facts.params[r.name].mode != "in":
+                continue
+            end = last[id(s)]
+            if any(role in ("read", "update") and pos[id(n)] > end for n, role in facts.occ[r.name]) \
+                    or not _pure_store(e, facts.ctx):
+                continue
+            _drop(b.body, s)
             return True
     return False
 
 
-def _dead_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
-    """Remove one ``TYPE x = expr;`` (or ``TYPE x;``) whose x is never used, expr calling no
-    function with out parameters."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    types = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec4", "uvec4"}
-    for n in range(2, len(w) - 2):
-        if w[n - 1] in types and w[n - 2] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n]) \
-                and w[n + 1] in ("=", ";", "["):
-            end = w.index(";", n)
-            if w.count(w[n]) != 1 or _top_comma(w[n:end]) or any(x in impure for x in w[n:end]):
+@function_pass
+def copies(fn: S.Function, facts: Facts) -> bool:
+    """``float y = x;`` (``x`` a variable of the same type), with ``y`` never written again and
+    ``x`` not after it: every ``y`` becomes ``x``."""
+    pos, _ = facts.order
+    for b in facts.blocks:
+        for s in b.body:
+            d = _single(s)
+            if d is None or d.init is None:
                 continue
-            start = code[n - 1]
-            start = _line_start(toks, start)
-            return toks[:start] + toks[code[end] + 1:]
-    return None
-
-
-_DECL_TYPES = {"int", "uint", "float", "bool", "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec4"}
-
-
-def _split_declarators(toks: list[Tok]) -> list[Tok] | None:
-    """``vec4 a = x, b;`` -> ``vec4 a = x;`` and ``vec4 b;`` on their own lines."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(1, len(w) - 2):
-        if w[n] in _DECL_TYPES and w[n - 1] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n + 1]) \
-                and w[n + 2] in ("=", ","):
-            end = _stmt_end(toks, code, w, n)
-            parts, depth, start = [], 0, n + 1
-            for m in range(n + 1, end):
-                depth += w[m] in ("(", "[")
-                depth -= w[m] in (")", "]")
-                if w[m] == "," and depth == 0:
-                    parts.append((start, m))
-                    start = m + 1
-            if not parts:
+            x = d.init
+            while isinstance(x, S.Paren):
+                x = x.inner
+            if not isinstance(x, S.Name) or d.name not in facts.once or x.name == d.name or d.name in facts.params:
                 continue
-            parts.append((start, end))
-            ind = toks[code[n] - 1].text.rsplit("\n", 1)[-1] if toks[code[n] - 1].kind == "ws" else ""
-            text = f"\n{ind}".join(w[n] + " " + "".join(toks[i].text for i in range(code[a], code[b - 1] + 1)).strip()
-                                   + ";" for a, b in parts)
-            return tokenize("".join(t.text for t in toks[:code[n]]) + text
-                            + "".join(t.text for t in toks[code[end] + 1:]))
-    return None
-
-
-_STORE = {"=", "+=", "-=", "*=", "/="}
-
-
-def _copy_local(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
-    """``float y = (x);`` with x a local or parameter, neither x nor y assigned afterwards (nor
-    passed to a function with out parameters) -> every y becomes x."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(2, len(w) - 3):
-        if not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and w[n + 1] == "="):
-            continue
-        end = w.index(";", n)
-        src = [x for x in w[n + 2:end] if x not in "()"]
-        if len(src) != 1 or not re.fullmatch(r"[A-Za-z_]\w*", src[0]) or w[n + 2:end].count("(") != w[n + 2:end].count(")"):
-            continue
-        x, y = src[0], w[n]
-        if w.count(y) < 2 or any(f in impure for f in w[end:]) or any(w[k] in (x, y) and (k + 1 < len(w) and w[k + 1] in _ASSIGN_OPS or w[k - 1] in ("++", "--", "."))
-                                 for k in range(end + 1, len(w))):
-            continue
-        if any(w[k] in (x, y) and w[k + 1] in ("[", ".") and _assigned(toks, code, w, k) for k in range(end + 1, len(w) - 1)):
-            continue
-        start = code[n - 1]
-        start = _line_start(toks, start)
-        rest = [Tok("id", x) if t.kind == "id" and t.text == y and toks[code[end] + 1 + j - 1].text != "." else t
-                for j, t in enumerate(toks[code[end] + 1:])]
-        return toks[:start] + rest
-    return None
-
-
-_ASSIGN_OPS = {"=", "+=", "-=", "*=", "/=", "%=", "<<=", ">>=", "&=", "|=", "^=", "++", "--"}
-
-
-def _assigned(toks, code, w, k) -> bool:
-    """Whether ``w[k]`` followed by an index or a field is the target of an assignment."""
-    while k + 1 < len(w) and w[k + 1] in ("[", "."):
-        k = _match(toks, code, k + 1) if w[k + 1] == "[" else k + 2
-    return k + 1 < len(w) and w[k + 1] in _ASSIGN_OPS
-
-
-def _bare_block(toks: list[Tok]) -> list[Tok] | None:
-    """``{ stmts }`` standing alone (what an unrolled loop leaves) -> ``stmts``, one indent
-    less, when no name it declares is used outside it."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(1, len(w) - 1):
-        if w[n] != "{" or w[n - 1] not in (";", "{", "}"):
-            continue
-        m = _match(toks, code, n)
-        depth, declared = 0, set()
-        for k in range(n + 1, m):
-            depth += w[k] == "{"
-            depth -= w[k] == "}"
-            if depth == 0 and (w[k] in _DECL_TYPES or w[k].startswith("Cellgl")) and w[k - 1] in (";", "{", "}") \
-                    and re.fullmatch(r"[A-Za-z_]\w*", w[k + 1]):
-                declared.add(w[k + 1])
-        if any(x in declared for x in w[:n] + w[m + 1:]):
-            continue
-        before = "".join(t.text for t in toks[:code[n]])
-        inner = "".join(t.text for t in toks[code[n] + 1:code[m]])
-        after = "".join(t.text for t in toks[code[m] + 1:])
-        before = re.sub(r"\n[ \t]*$", "", before)
-        inner = re.sub(r"\n[ \t]*$", "", inner.replace("\n    ", "\n"))
-        return tokenize(before + inner + after)
-    return None
-
-
-def _dead_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
-    """Remove a local that is only ever written (``x = ...;``, ``x.y += ...;``, ``x[0] = ...;``),
-    with its declaration and those statements (their right-hand sides call nothing with out
-    parameters)."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(2, len(w) - 2):
-        if not ((w[n - 1] in _DECL_TYPES or w[n - 1].startswith("Cellgl")) and w[n - 2] in (";", "{", "}")
-                and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] in ("=", ";", "[")):
-            continue
-        name = w[n]
-        decl_end = _stmt_end(toks, code, w, n - 1)
-        if any(x in impure for x in w[n:decl_end]):
-            continue
-        spans = [(n - 1, decl_end)]
-        ok = True
-        m = decl_end + 1
-        while m < len(w):
-            if w[m] != name or w[m - 1] == ".":
-                m += 1
+            typ = facts.types.get(x.name) if x.name in facts.declared else facts.genv.get(x.name, (None,))[0]
+            if typ != s.type or (x.name in facts.declared and x.name not in facts.once):
                 continue
-            if w[m - 1] not in (";", "{", "}"):
-                ok = False
-                break
-            k = m + 1
-            while k < len(w) and (w[k] == "." or w[k - 1] == "." or w[k] == "["):
-                k = _match(toks, code, k) + 1 if w[k] == "[" else k + 1
-            end = _stmt_end(toks, code, w, m)
-            if k >= len(w) or w[k] not in _STORE or any(x in impure for x in w[m:end]):
-                ok = False
-                break
-            spans.append((m, end))
-            m = end + 1
-        if not ok:
-            continue
-        out = list(toks)
-        kill = set()
-        for a, b in spans:
-            start = code[a]
-            start = _line_start(toks, start)
-            kill.update(range(start, code[b] + 1))
-        return [t for i, t in enumerate(out) if i not in kill]
-    return None
-
-
-def _loop_bodies(toks, code, w) -> set[int]:
-    """Code positions of the '{' that open loop bodies."""
-    out = set()
-    for n, x in enumerate(w):
-        if x in ("for", "while") and n + 1 < len(w) and w[n + 1] == "(":
-            cl = _match(toks, code, n + 1)
-            if cl + 1 < len(w) and w[cl + 1] == "{":
-                out.add(cl + 1)
-            elif cl + 1 < len(w) and w[cl + 1] in ("for",):
-                out |= {cl + 1}
-    return out
-
-
-def _in_loop(toks, code, w, m, loops) -> bool:
-    depth = 0
-    for k in range(m - 1, -1, -1):
-        if w[k] == "}":
-            depth += 1
-        elif w[k] == "{":
-            if depth == 0:
-                if k in loops:
-                    return True
-            else:
-                depth -= 1
-        elif w[k] == "for" and depth == 0:
-            return True                       # the body of a for without braces
+            at = pos[id(s)]
+            if x.name in facts.params and facts.params[x.name].mode == "in" and any(id(n) in facts.in_loops for n, _ in facts.occ.get(d.name, ())) \
+                    and id(s) not in facts.in_loops:
+                continue                     # (a parameter in a loop: its argument once inlined)
+            if any(role != "read" for _, role in facts.occ.get(d.name, ())) or any(
+                    role != "read" and pos[id(n)] > at for n, role in facts.occ.get(x.name, ())):
+                continue
+            name, old = x.name, d.name
+            _drop(b.body, s)
+            transform(fn.body, lambda n: S.Name(name) if isinstance(n, S.Name) and n.name == old else n)
+            return True
     return False
 
 
-def _last_store(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
-    """Remove a store ``x op= ...;`` to a local after which x is never read (outside loops)."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    loops = None
-    op = w.index("(") if "(" in w else 0
-    cl = _match(toks, code, op) if op else 0
-    params = set(w[op:cl])
-    for m in range(cl + 1, len(w) - 2):
-        if w[m - 1] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[m]) and w[m + 1] in _STORE \
-                and w[m] not in params and w[m + 1] != "=":
-            end = _stmt_end(toks, code, w, m)
-            if w[m] in w[end + 1:] or any(x in impure for x in w[m:end]):
+@function_pass
+def bare_blocks(fn: S.Function, facts: Facts) -> bool:
+    """``{ stmts }`` standing alone in a block -> ``stmts``, where no name it declares is used
+    outside it (an empty one goes)."""
+    pos, last = facts.order
+    for b in facts.blocks:
+        for k, s in enumerate(b.body):
+            if not isinstance(s, S.Block):
                 continue
-            if loops is None:
-                loops = _loop_bodies(toks, code, w)
-            if _in_loop(toks, code, w, m, loops):
+            names = {d.name for x in s.body if isinstance(x, S.Decl) for d in x.declarators}
+            lo, hi = pos[id(s)], last[id(s)]
+            if any(not lo <= pos[id(n)] <= hi for name in names for n, _ in facts.occ.get(name, ())) \
+                    or any(facts.declared.get(name, 0) > 1 for name in names):
                 continue
-            start = code[m]
-            start = _line_start(toks, start)
-            return toks[:start] + toks[code[end] + 1:]
-    return None
+            if s.body and s.comments:
+                s.body[0].comments = s.comments + s.body[0].comments
+            elif s.comments and k + 1 < len(b.body):
+                b.body[k + 1].comments = s.comments + b.body[k + 1].comments
+            b.body[k:k + 1] = s.body
+            return True
+    return False
 
 
-_ZERO = r"(?:0\.0|0\.|0)"
+def _mentions(node, name: str) -> bool:
+    return any(isinstance(n, S.Name) and n.name == name for n in walk(node))
 
 
-_ONE = r"(?:1\.0|1\.|1)"
-
-
-def _arithmetic(toks: list[Tok]) -> list[Tok]:
-    text = "".join(t.text for t in toks)
-    for _ in range(10):
-        old = text
-        # integer arithmetic in an index
-        text = re.sub(r"\[\s*(\d+(?:\s*[-+*]\s*\d+)+)\s*\]",
-                      lambda m: f"[{eval(m.group(1), {'__builtins__': {}}, {})}]", text)
-        # statements that subtract zero or multiply by one (x - 0.0 == x for every x, -0.0 and
-        # NaN included; x + 0.0 is not: -0.0 + 0.0 is +0.0, and 0.0 * y is NaN for an infinite y)
-        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*-=\s*\(?{_ZERO}\)?\s*;[^\n]*(?=\n)", "", text)
-        text = re.sub(rf"\n[ \t]*[\w.\[\]]+\s*[*/]=\s*\(?{_ONE}\)?\s*;[^\n]*(?=\n)", "", text)
-        text = _mix(text)
-        text = re.sub(r"\n[ \t]*\{\s*\}[ \t]*(?=\n)", "", text)          # an empty block
-        text = re.sub(r"\n[ \t]*if \((?:[^;{}()]|\([^;{}()]*\))*\) \{\s*\}[ \t]*(?=\n)", "", text)
-        # x * 1.0, x / 1.0, x - 0.0 (floats: the same value for every x; the snippet compiles as
-        # GLSL ES, which has no implicit int -> float, so x is a float)
-        text = re.sub(r"(?<=[\w)\]])\s*[*/]\s*1\.0(?![\w.(\[])", "", text)
-        text = re.sub(r"(?<=[(=,+\-])(\s*)1\.0\s*\*\s*(?=[\w(])", r"\1", text)
-        text = re.sub(r"(?<=[\w)\]])\s*-\s*0\.0(?=\s*[),;+\-]|\s*$)", "", text)
-        text = _LITERAL_VEC.sub(_member, text)
-        # |x| * |x| = x * x exactly
-        text = re.sub(rf"\babs\(({_BAL})\) \* abs\(\1\)",
-                      lambda m: (f"{m.group(1)} * {m.group(1)}" if re.fullmatch(r"[\w.\[\]]+", m.group(1))
-                                 else f"({_unwrap(m.group(1))}) * ({_unwrap(m.group(1))})"), text)
-        # a product in a sum needs no parentheses
-        text = re.sub(r"(?:(?<=[-+(=,] )|(?<=\())\(([\w.\[\]]+ \* [\w.\[\]]+)\)(?=\s*[-+);,])", r"\1", text)
-        text = _redundant_parens(text)
-        # a comparison of integer literals (sums of them)
-        text = re.sub(r"(?<=[=(!] )(\(?)(-?\d+(?: [-+*] \d+)*) (<=|>=|<|>|==|!=) (-?\d+(?: [-+*] \d+)*)\)?(?=\s*[;),&|])",
-                      lambda m: m.group() if m.group(1) and not m.group().endswith(")") else
-                      str(eval(f"{m.group(2)} {m.group(3)} {m.group(4)}", {"__builtins__": {}}, {})).lower(), text)
-        # unsigned literals: uint(0) -> 0u, 0u * 1013u -> 0u, (0u + x) -> (x), (0u) -> 0u
-        text = re.sub(r"\buint\((\d+)\)", r"\1u", text)
-        text = re.sub(r"(?<![\w.*/%\s])(\s*)\b(\d+)u\s*\*\s*(\d+)u\b(?!\s*[*/%])",
-                      lambda m: f"{m.group(1)}{int(m.group(2)) * int(m.group(3)) % 2 ** 32}u", text)
-        text = re.sub(r"(?<![/%]\s)(?<![/%])\b0u\s*\*\s*(?:0x[0-9a-fA-F]+|\d+)u\b", "0u", text)
-        text = re.sub(r"(?<=[(=,])(\s*)0u\s*\+\s*", r"\1", text)
-        text = re.sub(r"(?<![\w\]])\((\d+u?|\d+\.\d+)\)", r"\1", text)
-        # an integer zero vector added: ivec4(0, 0, 0, 0) + c -> c (integers: exact)
-        text = re.sub(rf"(?<=[(=,])(\s*)\(?{_ZERO_IVEC}\)?\s*\+\s*", r"\1", text)
-        # an empty last branch of an if chain (conditions without side effects)
-        text = re.sub(r"\}\s*else(?: if \((?:[^;{}()=]|[<>!=]=|\([^;{}()]*\))*\))? \{\s*\}(?!\s*else)", "}", text)
-        text = re.sub(r"\n[ \t]*(\w+)\s*=\s*\(*\1\)*\s*;[^\n]*(?=\n)", "", text)   # x = x;
-        if text == old:
-            break
-    return tokenize(text)
-
-
-_BAL = r"(?:[^()]|\((?:[^()]|\([^()]*\))*\))+"
-
-
-def _unwrap(e: str) -> str:
-    while e.startswith("(") and e.endswith(")") and re.fullmatch(rf"\(({_BAL})\)", e) \
-            and _balanced(e[1:-1]):
-        e = e[1:-1]
-    return e
-
-
-def _balanced(e) -> bool:
-    """Whether the parentheses among ``e`` (a string, or a list of words) pair up in order."""
-    depth = 0
-    for ch in e:
-        depth += ch == "("
-        depth -= ch == ")"
-        if depth < 0:
-            return False
-    return depth == 0
-
-
-def _redundant_parens(text: str) -> str:
-    """``((e))`` -> ``(e)``, ``f((e))`` -> ``f(e)``, ``x = (e);`` -> ``x = e;``, ``return (e);``."""
-    if not re.search(r"[(=,]\s*\(|\breturn\s*\(", text):
-        return text
-    toks = tokenize(text)
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    drop: set[int] = set()
-    for n in range(len(w) - 1):
-        if w[n] != "(":
-            continue
-        cl = _match(toks, code, n)
-        if w[n + 1] == "(" and _match(toks, code, n + 1) == cl - 1:
-            drop |= {code[n + 1], code[cl - 1]}
-        elif n > 0 and w[n - 1] in ("=", "return") and cl + 1 < len(w) and w[cl + 1] == ";" \
-                and "?" not in w[n:cl] and "," not in _top_level_ops(" ".join(w[n + 1:cl])):
-            drop |= {code[n], code[cl]}
-        elif n > 0 and w[n - 1] in ("(", "=", ",", "return") and cl + 1 < len(w) \
-                and w[cl + 1] in ("+", "-", "<", ">", "<=", ">=", "==", "!=") \
-                and not _top_level_ops("".join(w[n + 1:cl])) - {"+", "-", "*", "/"}:
-            drop |= {code[n], code[cl]}           # (a + b) + c, (a * b) >= c: arithmetic on the left
-    if not drop:
-        return text
-    return "".join(t.text for i, t in enumerate(toks) if i not in drop)
-
-
-_NUM = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?"
-_ZERO_IVEC = r"\b[iu]vec[234]\(\s*0u?(?:\s*,\s*0u?)*\s*\)"
-_LITERAL_VEC = re.compile(rf"\b(i?vec[234])\(\s*({_NUM}(?:\s*,\s*{_NUM})*)\s*\)\.([xyzw]+|[rgba]+)\b(?!\s*\()")
-
-
-def _member(m: re.Match) -> str:
-    """``vec4(0.0, 0.0, 0.0, 1.0).w`` -> ``1.0``; ``vec4(1.0).rgb`` -> ``vec3(1.0)``."""
-    args = [a.strip() for a in m.group(2).split(",")]
-    size = int(m.group(1)[-1])
-    if len(args) == 1:
-        args = args * size
-    if len(args) != size:
-        return m.group()
-    picked = [args["xyzw".find(c) if c in "xyzw" else "rgba".find(c)] for c in m.group(3)]
-    if len(picked) == 1:
-        return picked[0]
-    typ = m.group(1)[:-1] + str(len(picked))
-    return f"{typ}({picked[0]})" if len(set(picked)) == 1 else f"{typ}({', '.join(picked)})"
-
-
-def _mix(text: str) -> str:
-    """``mix(a, b, 0.0)`` -> ``(a)``; ``mix(a, b, 1.0)`` -> ``(b)`` only where ``a`` is a
-    literal (``a * 0.0`` is NaN for an infinite ``a``)."""
-    toks = tokenize(text)
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(len(w) - 1):
-        if w[n] == "mix" and w[n + 1] == "(" and (n == 0 or w[n - 1] != "."):
-            cl = _match(toks, code, n + 1)
-            args = _split_args(toks, code, n + 1, cl)
-            if len(args) != 3:
-                continue
-            t = "".join(w[args[2][0]:args[2][1]])
-            pick = 0 if re.fullmatch(_ZERO, t) else 1 if re.fullmatch(_ONE, t) else None
-            if pick == 1 and not re.fullmatch(_NUM, "".join(w[args[0][0]:args[0][1]])):
-                continue
-            if pick is None:
-                continue
-            a, b = args[pick]
-            inner = "".join(t2.text for t2 in toks[code[a]:code[b - 1] + 1])
-            return _mix("".join(x.text for x in toks[:code[n]]) + "(" + inner.strip() + ")"
-                        + "".join(x.text for x in toks[code[cl] + 1:]))
-    return text
-
-
-def _merge_declaration(toks: list[Tok]) -> list[Tok] | None:
+@function_pass
+def merge_declarations(fn: S.Function, facts: Facts) -> bool:
     """``T x; ... x = e;`` (x unused between, in the same block) -> ``... T x = e;``."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(2, len(w) - 2):
-        if not ((w[n - 1] in _DECL_TYPES or w[n - 1].startswith("Cellgl")) and w[n - 2] in (";", "{", "}")
-                and re.fullmatch(r"[A-Za-z_]\w*", w[n]) and w[n + 1] == ";"):
-            continue
-        depth, k = 0, n + 2
-        while k < len(w) and w[k] != w[n] and depth >= 0:
-            depth += (w[k] == "{") - (w[k] == "}")
-            k += 1
-        if k + 1 >= len(w) or depth != 0 or w[k - 1] not in (";", "{", "}") or w[k + 1] != "=":
-            continue
-        end = _stmt_end(toks, code, w, k)
-        if w[n] in w[k + 2:end]:
-            continue
-        start = _line_start(toks, code[n - 1])
-        return (toks[:start] + toks[code[n + 1] + 1:code[k]] + [Tok("id", w[n - 1]), Tok("ws", " ")]
-                + toks[code[k]:])
+    for b in facts.blocks:
+        for k, s in enumerate(b.body):
+            d = _single(s)
+            if d is None or d.init is not None or s.const:
+                continue
+            j = next((i for i in range(k + 1, len(b.body)) if _mentions(b.body[i], d.name)), None)
+            t = b.body[j] if j is not None else None
+            if isinstance(t, S.ExprStmt) and isinstance(t.expr, S.Assign) and t.expr.op == "=" \
+                    and isinstance(t.expr.target, S.Name) and t.expr.target.name == d.name \
+                    and not _mentions(t.expr.value, d.name):
+                b.body[j] = S.Decl(s.type, [S.Declarator(d.name, None, t.expr.value)], False,
+                                   s.comments + t.comments, t.trail)
+                del b.body[k]
+                return True
+    return False
+
+
+def _path(e):
+    """``['r', '.loops']`` of ``r.loops``; an index is ``'[]'`` (any element)."""
+    if isinstance(e, S.Name):
+        return [e.name]
+    if isinstance(e, S.Member):
+        p = _path(e.base)
+        return None if p is None else p + ["." + e.name]
+    if isinstance(e, S.Index):
+        p = _path(e.base)
+        return None if p is None else p + ["[]"]
+    if isinstance(e, S.Paren):
+        return _path(e.inner)
     return None
 
 
-_LIT = re.compile(r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?u?|true|false")
+def _overlap(a, b) -> bool:
+    n = min(len(a), len(b))
+    return all(x == y or "[]" in (x, y) for x, y in zip(a[:n], b[:n]))
 
 
-def _forward_literal(toks: list[Tok]) -> list[Tok] | None:
-    """``x = 0; bool b = x > 9; if (!b) {`` -> ``bool b = 0 > 9; if (!b) {``: a literal just
-    stored (``x`` a local or a field) read by the next straight-line statements or ``if``
-    condition, before anything writes it."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(1, len(w) - 4):
-        if w[n - 1] not in (";", "{", "}") and not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}")):
-            continue
-        k = n + 1
-        target = [w[n]]
-        while k + 1 < len(w) and w[k] == ".":
-            target += [".", w[k + 1]]
-            k += 2
-        if not re.fullmatch(r"[A-Za-z_]\w*", w[n]) or w[k] != "=" or k + 2 >= len(w) or w[k + 2] != ";" \
-                or not _LIT.fullmatch(w[k + 1]):
-            continue
-        lit, s = w[k + 1], k + 3
-        while s < len(w) and w[s] not in ("}",):
-            if w[s] == "if" and w[s + 1] == "(":
-                lo, hi = s + 2, _match(toks, code, s + 1)
-            else:
-                if w[s] in ("for", "while", "{", "return", "else", "do", "break", "continue"):
+def _literal_store(s):
+    """``(target path, literal)`` of ``x = LIT;``, ``x.f = LIT;`` or ``T x = LIT;``."""
+    if isinstance(s, S.Decl) and len(s.declarators) == 1 and s.declarators[0].size is None:
+        target, v = [s.declarators[0].name], s.declarators[0].init
+    elif isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "=":
+        target, v = _path(s.expr.target), s.expr.value
+        if target is None or "[]" in target:
+            return None, None
+    else:
+        return None, None
+    if isinstance(v, S.Num) or isinstance(v, S.Name) and v.name in ("true", "false"):
+        return target, v
+    return None, None
+
+
+def _forward(e, target, lit) -> tuple[object, bool]:
+    """``e`` with its reads of ``target`` (a path) replaced by ``lit`` (not below a member or an
+    index of it)."""
+    skip = {id(n.base) for n in walk(e) if isinstance(n, (S.Member, S.Index))}
+    hits = []
+
+    def sub(n):
+        if isinstance(n, (S.Name, S.Member)) and id(n) not in skip and _path(n) == target:
+            hits.append(n)
+            return clone(lit)
+        return n
+    return transform(e, sub), bool(hits)
+
+
+@function_pass
+def forward_literals(fn: S.Function, facts: Facts) -> bool:
+    """``x = 0; bool b = x > 9; if (!b) {`` -> ``bool b = 0 > 9; if (!b) {``: a literal just stored
+    (``x`` a local or a field) read in its place by the next straight-line statements and
+    ``if`` condition, up to anything that writes it."""
+    ctx, changed = facts.ctx, False
+    pos, last = facts.order
+    for b in facts.blocks:
+        for k, s in enumerate(b.body):
+            target, lit = _literal_store(s)
+            if target is None or not any(role == "read" and pos[id(n)] > last[id(s)]
+                                         for n, role in facts.occ.get(target[0], ())):
+                continue
+            for t in b.body[k + 1:]:
+                if isinstance(t, S.If):
+                    t.cond, hit = _forward(t.cond, target, lit)
+                    changed |= hit
                     break
-                end = _stmt_end(toks, code, w, s)
-                eq = next((j for j in range(s, end) if w[j] in _ASSIGN_OPS), None)
-                if eq is None or "{" in w[s:end] or any(re.fullmatch(r"\w+", x) and x not in _DECL_TYPES
-                                                        and j + 1 < end and w[j + 1] == "(" and x not in _PURE
-                                                        for j, x in enumerate(w[s:end], s)):
+                if isinstance(t, S.Decl) and all(d.size is None for d in t.declarators):
+                    if not all(d.init is None or is_pure(d.init, ctx) for d in t.declarators):
+                        break
+                    for d in t.declarators:
+                        if d.init is not None:
+                            d.init, hit = _forward(d.init, target, lit)
+                            changed |= hit
+                    if any(d.name == target[0] for d in t.declarators):
+                        break
+                    continue
+                into, e = _store(t)
+                if into is None or not _pure_store(e, ctx) or _path(into) is None or _overlap(_path(into), target):
                     break
-                if w[s:s + len(target)] == target and w[s + len(target)] in _ASSIGN_OPS:
-                    break
-                lo, hi = eq + 1, end
-            hits = [j for j in range(lo, hi - len(target) + 1) if w[j:j + len(target)] == target
-                    and (j == 0 or w[j - 1] != ".") and (j + len(target) >= len(w) or w[j + len(target)] not in (".", "["))]
-            if any(w[j + len(target)] in _ASSIGN_OPS for j in hits):
-                break
-            if hits:
-                j = hits[0]
-                return toks[:code[j]] + [Tok("num", lit)] + toks[code[j + len(target) - 1] + 1:]
-            if w[s] == "if":
-                break
-            s = hi + 1
-    return None
+                if isinstance(e, S.Assign):
+                    e.value, hit = _forward(e.value, target, lit)
+                    changed |= hit
+    return changed
 
 
-_PURE = {"abs", "min", "max", "floor", "sqrt", "clamp", "mix", "float", "int", "uint", "vec2", "vec3", "vec4",
-         "ivec2", "ivec3", "ivec4", "uvec4", "dot", "length", "ceil", "fract", "sign", "step", "smoothstep",
-         "any", "all", "notEqual", "equal", "pow", "exp", "log", "inversesqrt"}
-
-
-def _loop_variable(toks: list[Tok]) -> list[Tok] | None:
-    """``int i = 2; ... for (; i <= 9; i++) {...}`` with i unused after the loop (nor between)
+@function_pass
+def loop_variables(fn: S.Function, facts: Facts) -> bool:
+    """``int i = 2; ... for (; i <= 9; i++) {...}`` with ``i`` unused after the loop (nor between)
     -> ``... for (int i = 2; i <= 9; i++) {...}``."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for f in range(len(w) - 3):
-        if w[f] != "for" or w[f + 1] != "(" or w[f + 2] != ";":
-            continue
-        cl = _match(toks, code, f + 1)
-        end = _stmt_end(toks, code, w, f)
-        names = {x for x in w[f + 3:cl] if re.fullmatch(r"[A-Za-z_]\w*", x)}
-        for n in range(f - 1, 1, -1):
-            if w[n] in ("{", "}"):
+    pos, last = facts.order
+    for b in facts.blocks:
+        for k, f in enumerate(b.body):
+            if not isinstance(f, S.For) or f.init is not None:
+                continue
+            names = {n.name for part in (f.cond, f.step) if part is not None for n in walk(part)
+                     if isinstance(n, S.Name)}
+            for j in range(k - 1, -1, -1):
+                s = b.body[j]
+                d = _single(s)
+                if d is None or d.name not in names or d.init is None:
+                    continue
+                if d.name in facts.once and not any(_mentions(t, d.name) for t in b.body[j + 1:k]) \
+                        and not any(pos[id(n)] > last[id(f)] for n, _ in facts.occ.get(d.name, ())):
+                    del b.body[j]
+                    if s.comments:
+                        f.comments = s.comments + f.comments
+                    s.comments, s.trail = [], ""
+                    f.init = s
+                    return True
                 break
-            if w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and w[n] in names and w[n + 1] == "=":
-                x, d_end = w[n], w.index(";", n)
-                if x in w[d_end + 1:f] or x in w[end + 1:]:
-                    break
-                decl = "".join(t.text for t in toks[code[n - 1]:code[d_end]]).strip()
-                start = _line_start(toks, code[n - 1])
-                return (toks[:start] + toks[code[d_end] + 1:code[f + 1] + 1] + tokenize(decl)
-                        + toks[code[f + 2]:])
-    return None
+    return False
 
 
-def _store_into_next(toks: list[Tok], impure: set[str]) -> list[Tok] | None:
-    """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);`` (a a name, or y read
-    without a field or index); ``T y = a; return y;`` -> ``return a;``."""
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    for n in range(2, len(w) - 6):
-        if not (w[n - 1] in _DECL_TYPES and w[n - 2] in (";", "{", "}") and re.fullmatch(r"[A-Za-z_]\w*", w[n])
-                and w[n + 1] == "="):
-            continue
-        end = _stmt_end(toks, code, w, n)
-        y = w[n]
-        if w[end + 1:end + 4] == ["return", y, ";"] and "," not in _top_level_ops(" ".join(w[n + 2:end])):
-            a = "".join(t.text for t in toks[code[n + 2]:code[end]]).strip()      # T y = a; return y;
-            return toks[:code[n - 1]] + tokenize(f"return {a};") + toks[code[end + 3] + 1:]
-        if end + 3 >= len(w) or w[end + 1] != y or w[end + 2] != "=" or y in w[n + 2:end]:
-            continue
-        end2 = _stmt_end(toks, code, w, end + 1)
-        rhs = w[end + 3:end2]
-        if rhs.count(y) != 1 or any(x in impure for x in w[n:end2]):
-            continue
-        k = end + 3 + rhs.index(y)
-        a = _unwrap("".join(t.text for t in toks[code[n + 2]:code[end]]).strip())
-        simple = re.fullmatch(r"[A-Za-z_]\w*|[\w.]+\([^()]*\)", a) is not None
-        if not simple and (w[k + 1] in (".", "[") or k > 0 and w[k - 1] == "."):
-            continue
-        top = _top_level_ops(a)
-        left, right = w[k - 1], w[k + 1]
-        bare = simple or (left in ("(", ",", "=") and right in (")", ",", ";")) \
-            or (not top - {"*", "/"} and left in ("(", ",", "=", "+") and right in (")", ",", ";", "+", "-")) \
-            or (not top - {"+", "-", "*", "/"} and left in ("(", ",", "=") and right in ("+", "-"))
-        rhs_text = ("".join(t.text for t in toks[code[end + 3]:code[k]]) + (a if bare else f"({a})")
-                    + "".join(t.text for t in toks[code[k] + 1:code[end2]]))
-        start = _line_start(toks, code[end + 1])
-        return toks[:code[n + 2]] + tokenize(rhs_text.strip()) + toks[code[end]:start] + toks[code[end2] + 1:]
-    return None
+@function_pass
+def store_into_next(fn: S.Function, facts: Facts) -> bool:
+    """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);``; ``T y = a; return y;`` ->
+    ``return a;``."""
+    ctx = facts.ctx
+    for b in facts.blocks:
+        for k in range(len(b.body) - 1):
+            s, t = b.body[k], b.body[k + 1]
+            d = _single(s)
+            if d is None or d.init is None:
+                continue
+            y, a = d.name, d.init
+            if isinstance(t, S.Return) and isinstance(t.value, S.Name) and t.value.name == y:
+                if len(facts.occ.get(y, ())) == 1 and y in facts.once:
+                    t.value = a
+                    t.comments = s.comments + t.comments
+                    del b.body[k]
+                    return True
+                continue
+            if not (isinstance(t, S.ExprStmt) and isinstance(t.expr, S.Assign) and t.expr.op == "="
+                    and isinstance(t.expr.target, S.Name) and t.expr.target.name == y):
+                continue
+            v = t.expr.value
+            uses = [n for n in walk(v) if isinstance(n, S.Name) and n.name == y]
+            if len(uses) != 1 or _mentions(a, y) or not is_pure(a, ctx) or not is_pure(v, ctx):
+                continue
+            if not isinstance(a, ATOMS) and any(isinstance(p, (S.Member, S.Index)) and p.base is uses[0]
+                                                for p in walk(v)):
+                continue                     # (a + b).xy: kept
+            d.init = transform(v, lambda n: paren(a) if n is uses[0] else n)
+            s.trail = t.trail or s.trail
+            if t.comments:
+                s.comments = s.comments + t.comments
+            del b.body[k + 1]
+            return True
+    return False
 
 
-def _top_level_ops(e: str) -> set[str]:
-    depth, ops = 0, set()
-    for t in tokenize(e):
-        if t.text in "([":
-            depth += 1
-        elif t.text in ")]":
-            depth -= 1
-        elif depth == 0 and t.kind == "op" and t.text != ".":
-            ops.add(t.text)
-    return ops
+def _num(e, texts) -> bool:
+    return isinstance(e, S.Num) and e.text in texts
+
+
+_ZERO, _ONE = ("0.0", "0.", "0"), ("1.0", "1.", "1")
+
+
+def _identity(n, ctx):
+    """The node ``n`` rewritten by an identity (``n`` itself if none applies)."""
+    if isinstance(n, S.Binary):
+        if n.op in ("*", "/") and _num(n.right, ("1.0",)) or n.op == "-" and _num(n.right, ("0.0",)):
+            return n.left
+        if n.op == "*" and _num(n.left, ("1.0",)):
+            return n.right
+        if n.op == "*" and isinstance(n.left, S.Call) and isinstance(n.right, S.Call) \
+                and n.left.func == n.right.func == "abs" and len(n.left.args) == 1 \
+                and expr_glsl(n.left) == expr_glsl(n.right) and is_pure(n.left, ctx):
+            return S.Binary("*", paren(n.left.args[0]), paren(clone(n.left.args[0])))
+        if n.op in ("*", "+", "-") and all(isinstance(x, S.Num) and x.text.lower().endswith("u")
+                                           for x in (n.left, n.right)):
+            v = value(n, {})
+            return n if v is None else S.Num(f"{v[1]}u")
+        if n.op == "+" and isinstance(n.left, S.Num) and n.left.text == "0u":
+            return n.right
+        if n.op == "+" and isinstance(n.left, S.Ctor) and n.left.type[:-1] in ("ivec", "uvec") \
+                and all(_num(a, ("0", "0u")) for a in n.left.args):
+            return n.right
+    elif isinstance(n, S.Call) and n.func == "mix" and len(n.args) == 3:
+        if _num(n.args[2], _ZERO[:2]):
+            return paren(n.args[0])
+        if _num(n.args[2], _ONE[:2]) and isinstance(n.args[0], S.Num):
+            return paren(n.args[1])
+    elif isinstance(n, S.Member) and isinstance(n.base, S.Ctor) and n.base.type[:-1] in ("vec", "ivec") \
+            and n.base.args and all(isinstance(a, S.Num) for a in n.base.args):
+        size, args = int(n.base.type[-1]), [a.text for a in n.base.args]
+        args = args * size if len(args) == 1 else args
+        comps = [("xyzw".find(c) if c in "xyzw" else "rgba".find(c)) for c in n.name]
+        if len(args) != size or any(c < 0 or c >= size for c in comps):
+            return n
+        picked = [args[c] for c in comps]
+        if len(picked) == 1:
+            return S.Num(picked[0])
+        typ = n.base.type[:-1] + str(len(picked))
+        return S.Ctor(typ, [S.Num(picked[0])] if len(set(picked)) == 1 else [S.Num(p) for p in picked])
+    elif isinstance(n, S.Ctor) and n.type == "uint" and len(n.args) == 1 and isinstance(n.args[0], S.Num) \
+            and n.args[0].text.isdigit():
+        return S.Num(str(int(n.args[0].text)) + "u")
+    elif isinstance(n, S.ExprStmt) and isinstance(n.expr, S.Assign):
+        e = n.expr
+        if (e.op == "-=" and _num(e.value, _ZERO) or e.op in ("*=", "/=") and _num(e.value, _ONE)
+                or e.op == "=" and expr_glsl(e.target) == expr_glsl(e.value)) and is_pure(e.target, ctx):
+            return []
+    elif isinstance(n, S.If):
+        if n.other is not None and _empty(n.other) or isinstance(n.other, S.If) and n.other.other is None \
+                and _empty(n.other.then) and is_pure(n.other.cond, ctx):
+            return S.If(n.cond, n.then, None, n.comments)
+        if n.other is None and _empty(n.then) and is_pure(n.cond, ctx):
+            return []
+    return n
+
+
+def _empty(s) -> bool:
+    return isinstance(s, S.Block) and not s.body
+
+
+@function_pass
+def identities(fn: S.Function, facts: Facts) -> bool:
+    """Rewrite what gives the same value for every IEEE-754 input: ``x * 1.0``, ``1.0 * x``,
+    ``x / 1.0``, ``x - 0.0``, statements ``x -= 0.0;``, ``x *= 1.0;``, ``x = x;``,
+    ``mix(a, b, 0.0)`` -> ``a``, ``mix(2.0, b, 1.0)`` -> ``b`` (a finite literal), ``abs(x) *
+    abs(x)`` -> ``x * x``, ``vec4(0.0, 0.0, 0.0, 1.0).w`` -> ``1.0``, ``uint(3)`` -> ``3u``,
+    products and sums of unsigned literals, ``0u + x`` and ``ivec4(0, 0, 0, 0) + x`` -> ``x``,
+    empty blocks and branches (with conditions without effects)."""
+    changed = False
+
+    def fix(n):
+        nonlocal changed
+        out = _identity(n, facts.ctx)
+        changed = changed or out is not n
+        return out
+    rewrite(fn.body, fix)
+    return changed
+
+
+_ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}
+_COMPARISONS = ("<", ">", "<=", ">=", "==", "!=")
+
+
+@function_pass
+def parentheses(fn: S.Function, facts: Facts) -> bool:
+    """Drop parentheses that change nothing: around an atom, around a whole argument, index,
+    initialiser, stored value, returned value or condition (not a ternary), and around
+    arithmetic inside arithmetic or a comparison where precedence keeps the order
+    (``(a * b) + c``, ``(a + b) - c``, ``(a + b) < c``)."""
+    changed = False
+
+    def bare(p, top=False):
+        nonlocal changed
+        if not isinstance(p, S.Paren):
+            return p
+        e = p.inner
+        if isinstance(e, ATOMS) or top and not isinstance(e, (S.Ternary, S.Assign)):
+            changed = True
+            return bare(e, top)
+        return p
+
+    def fix(n):
+        if isinstance(n, (S.Call, S.Ctor, S.ArrayCtor)):
+            n.args = [bare(a, True) for a in n.args]
+        elif isinstance(n, S.Index):
+            n.index = bare(n.index, True)
+            n.base = bare(n.base)
+        elif isinstance(n, S.Member):
+            n.base = bare(n.base)
+        elif isinstance(n, S.Declarator) and n.init is not None:
+            n.init = bare(n.init, True)
+        elif isinstance(n, S.Assign):
+            n.value = bare(n.value, True)
+        elif isinstance(n, (S.Return,)) and n.value is not None:
+            n.value = bare(n.value, True)
+        elif isinstance(n, (S.If, S.While)):
+            n.cond = bare(n.cond, True)
+        elif isinstance(n, S.ExprStmt):
+            n.expr = bare(n.expr, True)
+        elif isinstance(n, S.Paren):
+            n.inner = bare(n.inner)
+        elif isinstance(n, (S.Unary, S.IncDec)):
+            n.operand = bare(n.operand)
+        elif isinstance(n, S.Ternary):
+            n.cond, n.then, n.other = bare(n.cond), bare(n.then), bare(n.other)
+        elif isinstance(n, S.Binary):
+            n.left, n.right = bare(n.left), bare(n.right)
+            if n.op in _ARITH or n.op in _COMPARISONS:
+                level = _ARITH.get(n.op, 0)
+                for side in ("left", "right"):
+                    p = getattr(n, side)
+                    if isinstance(p, S.Paren) and isinstance(p.inner, S.Binary) and p.inner.op in _ARITH:
+                        inner = _ARITH[p.inner.op]
+                        if inner > level or (inner == level and side == "left"):
+                            setattr(n, side, p.inner)
+                            changed = True
+        return n
+    transform(fn.body, fix)
+    return changed
+
+
+#: the simplification passes, in the order of the driver's round
+SIMPLIFY = [split_declarations, dead_locals, last_stores, copies, bare_blocks, merge_declarations,
+            forward_literals, loop_variables, store_into_next, identities, parentheses]

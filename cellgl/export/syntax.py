@@ -123,6 +123,7 @@ class Declarator:
 class Block:
     body: list
     comments: list = field(default_factory=list)
+    trail: str = ""                 # a comment after its opening brace
 
 
 @dataclass
@@ -384,11 +385,12 @@ class _Parser:
     # statements
     def block(self, com=None) -> Block:
         self.take("{")
+        trail = self.trail.get(self.i - 1, "")
         out = []
         while self.peek() != "}":
             out.append(self.statement())
         self.take("}")
-        return Block(out, com or [])
+        return Block(out, com or [], trail)
 
     def statement(self):
         com = self.comments()

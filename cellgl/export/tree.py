@@ -8,14 +8,14 @@ round until a round changes nothing, or raises after ``max_rounds``.
 """
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass, field, fields
 
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
 __all__ = ["tree_pass", "children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
-           "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS"]
+           "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS", "OUT_BUILTINS", "ATOMS", "is_pure",
+           "occurrences", "paren", "rewrite", "declared_once"]
 
 #: expression node classes
 EXPRESSIONS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Unary, S.IncDec, S.Binary, S.Assign,
@@ -27,6 +27,7 @@ ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=")
 
 _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Field, S.Function,
                                           S.Param, S.Global)
+_NODE_SET = frozenset(_NODE_TYPES)
 _SKIP = {"comments", "trail", "trailing"}
 _CHILD_FIELDS: dict[type, tuple[str, ...]] = {
     t: tuple(f.name for f in fields(t) if f.name not in _SKIP) for t in _NODE_TYPES}
@@ -43,11 +44,11 @@ def children(node):
     """The direct child nodes of ``node``, in source order."""
     for name in _CHILD_FIELDS.get(type(node), ()):
         v = getattr(node, name)
-        if isinstance(v, list):
+        if type(v) is list:
             for x in v:
-                if isinstance(x, _NODE_TYPES):
+                if type(x) in _NODE_SET:
                     yield x
-        elif isinstance(v, _NODE_TYPES):
+        elif type(v) in _NODE_SET:
             yield v
 
 
@@ -68,28 +69,42 @@ def transform(node, fn):
     splices several nodes in). Returns ``fn(node)``."""
     for name in _CHILD_FIELDS.get(type(node), ()):
         v = getattr(node, name)
-        if isinstance(v, list):
-            out = []
+        if type(v) is list:
+            out, same = [], True
             for x in v:
-                if not isinstance(x, _NODE_TYPES):
+                if type(x) not in _NODE_SET:
                     out.append(x)
                     continue
                 y = transform(x, fn)
+                if y is x:
+                    out.append(x)
+                    continue
+                same = False
                 if y is None:
                     continue
                 if isinstance(y, list):
                     out.extend(y)
                 else:
                     out.append(y)
-            v[:] = out
-        elif isinstance(v, _NODE_TYPES):
-            setattr(node, name, transform(v, fn))
+            if not same:
+                v[:] = out
+        elif type(v) in _NODE_SET:
+            y = transform(v, fn)
+            if y is not v:
+                setattr(node, name, y)
     return fn(node)
 
 
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
-    return copy.deepcopy(node)
+    t = type(node)
+    if t is list:
+        return [clone(x) for x in node]
+    if t not in _NODE_SET:
+        return node                      # str, None: immutable
+    out = object.__new__(t)
+    out.__dict__ = {k: clone(v) for k, v in node.__dict__.items()}
+    return out
 
 
 def root_name(e) -> str | None:
@@ -194,3 +209,108 @@ def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> int
     raise TranslateError(f"the snippet compiler did not settle in {max_rounds} rounds of its passes "
                          f"(entry points {', '.join(ctx.entries)}; still changing: {', '.join(changed)}): "
                          "a pass undoes another")
+
+
+# --------------------------------------------------------------------------------------------
+# small helpers of the passes: effects, occurrences with their roles, rewriting statements
+# --------------------------------------------------------------------------------------------
+
+#: built-in functions with ``out`` parameters: ``{name: {position: mode}}``
+OUT_BUILTINS = {"modf": {1: "out"}, "frexp": {1: "out"}, "uaddCarry": {2: "out"}, "usubBorrow": {2: "out"},
+                "umulExtended": {2: "out", 3: "out"}, "imulExtended": {2: "out", 3: "out"}}
+#: nodes that never need parentheses around them
+ATOMS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Member, S.Index, S.Paren)
+
+
+def _out_modes(call, ctx) -> dict:
+    f = ctx.functions.get(call.func) if ctx is not None else None
+    if f is not None:
+        return {k: p.mode for k, p in enumerate(f.params) if p.mode != "in"}
+    return OUT_BUILTINS.get(call.func, {})
+
+
+def is_pure(node, ctx: Context | None) -> bool:
+    """Whether evaluating ``node`` changes nothing: no assignment, ``++``/``--``, nor call of a
+    function that writes its arguments or globals (without ``ctx``: of any function)."""
+    for n in walk(node):
+        if isinstance(n, (S.Assign, S.IncDec)):
+            return False
+        if isinstance(n, S.Call) and (ctx is None or n.func in OUT_BUILTINS or n.func in ctx.impure):
+            return False
+    return True
+
+
+def occurrences(root, ctx: Context | None = None) -> dict:
+    """``{name: [(Name node, role), ...]}`` of every variable named below ``root``, in source
+    order. ``role``: ``"read"``; ``"store"`` (``x = ...``, or an ``out`` argument); ``"part"``
+    (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"`` (read and written:
+    ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
+    out: dict = {}
+
+    def target(t, role):
+        if isinstance(t, S.Name):
+            out.setdefault(t.name, []).append((t, role))
+        elif isinstance(t, S.Paren):
+            target(t.inner, role)
+        elif isinstance(t, (S.Member, S.Index)):
+            target(t.base, "part" if role == "store" else role)
+            if isinstance(t, S.Index):
+                visit(t.index)
+        else:
+            visit(t)
+
+    def visit(n):
+        if isinstance(n, S.Name):
+            out.setdefault(n.name, []).append((n, "read"))
+        elif isinstance(n, S.Assign):
+            target(n.target, "store" if n.op == "=" else "update")
+            visit(n.value)
+        elif isinstance(n, S.IncDec):
+            target(n.operand, "update")
+        elif isinstance(n, S.Call):
+            modes = _out_modes(n, ctx)
+            for k, a in enumerate(n.args):
+                if k in modes:
+                    target(a, "store" if modes[k] == "out" else "update")
+                else:
+                    visit(a)
+        else:
+            for c in children(n):
+                visit(c)
+
+    visit(root)
+    return out
+
+
+def paren(e):
+    """``e``, in parentheses unless it is an atom (a name, literal, call, member or index)."""
+    return e if isinstance(e, ATOMS) else S.Paren(e)
+
+
+_SLOTS = {S.If: ("then", "other"), S.For: ("body",), S.While: ("body",)}
+
+
+def rewrite(root, fn):
+    """:func:`transform` where ``fn`` may also return a list of statements (or ``[]``) for a
+    statement that is an ``if``'s branch or a loop's body: they become a block there (an empty
+    ``else`` goes)."""
+    def g(n):
+        for a in _SLOTS.get(type(n), ()):
+            v = getattr(n, a)
+            if isinstance(v, list):
+                setattr(n, a, None if not v and a == "other" else v[0] if len(v) == 1 and isinstance(v[0], S.Block)
+                        else S.Block(v))
+        return fn(n)
+    return transform(root, g)
+
+
+def declared_once(fn) -> set:
+    """The names declared exactly once in the function ``fn`` (parameters and locals)."""
+    seen: dict = {}
+    for p in fn.params:
+        seen[p.name] = seen.get(p.name, 0) + 1
+    for n in walk(fn.body):
+        if isinstance(n, S.Decl):
+            for d in n.declarators:
+                seen[d.name] = seen.get(d.name, 0) + 1
+    return {k for k, v in seen.items() if v == 1}
