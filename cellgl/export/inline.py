@@ -214,12 +214,7 @@ def _rewritable(unit: S.Unit, keep):
 
 def _short(unit: S.Unit, keep) -> dict:
     """``{name: (parameter names, expression)}`` of the functions short enough to inline."""
-    sites: dict[str, int] = {}
-    for it in unit.items:
-        if isinstance(it, S.Function) and it.body is not None:
-            for n in walk(it.body):
-                if isinstance(n, S.Call):
-                    sites[n.func] = sites.get(n.func, 0) + 1
+    sites = {k: len(v) for k, v in call_sites(unit).items()}
     out = {}
     for it in unit.items:
         if not isinstance(it, S.Function) or it.body is None or it.name in keep:
@@ -302,24 +297,29 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
     """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
+    count: dict[str, int] = {}
+    for it in unit.items:
+        if isinstance(it, S.Function):
+            count[it.name] = count.get(it.name, 0) + 1
+    index = call_sites(unit)
     changed = True
     any_change = False
     while changed:
         changed = False
-        count: dict[str, int] = {}
-        for it in unit.items:
-            if isinstance(it, S.Function):
-                count[it.name] = count.get(it.name, 0) + 1
-        index = call_sites(unit)
-        for f in list(unit.items):
+        for f in unit.items:
             if not isinstance(f, S.Function) or f.body is None or f.name in keep or count[f.name] != 1:
                 continue
             sites = index.get(f.name, [])
             if len(sites) != 1 or sites[0][0] is f:
                 continue
+            caller = sites[0][0]
             if _inline_call(f, *sites[0], ctx):
+                # (the context's facts stay a superset until the next pass refreshes them)
                 _remove(unit.items, f)
-                ctx.refresh(unit)
+                index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
+                for n in walk(caller.body):
+                    if isinstance(n, S.Call):
+                        index.setdefault(n.func, []).append((caller, n))
                 changed = any_change = True
                 break
     return any_change
@@ -339,6 +339,44 @@ def _call_statement(caller: S.Function, call: S.Call):
         if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "=" \
                 and s.expr.value is call and isinstance(s.expr.target, S.Name):
             return lst, s, "assign", s.expr.target.name, None
+    return None
+
+
+def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
+    """``(list, statement, "hoist", None, type)`` where ``call`` sits inside the expression of a
+    statement that may compute it first, into a local: evaluated every time the statement is
+    (not under ``&&``, ``||`` or ``?:``), and nothing else in the statement stores anything or
+    reads what the call writes."""
+    for lst, s in statement_lists(caller.body):
+        if not isinstance(s, (S.ExprStmt, S.Return)) and not (isinstance(s, S.Decl) and len(s.declarators) == 1):
+            continue
+        path = _path(s, call)
+        if path is None:
+            continue
+        if any(isinstance(a, S.Ternary) or (isinstance(a, S.Binary) and a.op in ("&&", "||")) for a in path):
+            return None
+        inside = {id(n) for n in walk(call)}
+        rest = [n for n in walk(s) if id(n) not in inside]
+        top = s.expr if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) else None
+        outs = {root_name(call.args[k]) for k in ctx.out_positions(call.func) if k < len(call.args)}
+        if any((isinstance(n, (S.Assign, S.IncDec)) and n is not top) or (isinstance(n, S.Call) and n.func in ctx.impure)
+               for n in rest) or outs & {n.name for n in rest if isinstance(n, S.Name)} \
+                or (isinstance(s, S.Decl) and s.declarators[0].name in names(call)):
+            return None
+        return lst, s, "hoist", None, f.ret
+    return None
+
+
+def _path(node, target) -> list | None:
+    """The nodes from ``node`` down to ``target`` (both included), or None."""
+    if node is target:
+        return [node]
+    from cellgl.export.tree import children
+
+    for c in children(node):
+        p = _path(c, target)
+        if p is not None:
+            return [node] + p
     return None
 
 
@@ -387,10 +425,17 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         if len(rets) != 1 or not body or body[-1] is not rets[0] or rets[0].value is None:
             return False
         ret, body = clone(rets[0].value), body[:-1]
-    site = _call_statement(caller, call)
+    site = _call_statement(caller, call) or _hoist_site(caller, call, f, ctx)
     if site is None:
         return False
     lst, stmt, form, target, typ = site
+    hoist = form == "hoist"
+    if hoist:
+        # T v = f(...) before the statement, which reads v: the body's returned local v, or a
+        # local named for the function (cellgl_noise_gradient_: gradient)
+        own = isinstance(ret, S.Name) and any(isinstance(s, S.Decl) and any(d.name == ret.name for d in s.declarators)
+                                               for s in body)
+        form, target = "decl", ret.name if own else [w for w in f.name.split("_") if w][-1]
     if (form != "stmt" and ret is None) or (form == "stmt" and ret is not None and calls(ret)):
         return False
     body = [clone(s) for s in body]
@@ -401,6 +446,10 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         return False                          # a local shadowing a parameter
     caller_names = names(caller) | calls(caller.body)
     body_ids = names(block) | (names(ret) if ret is not None else set()) | calls(block)
+    if hoist:
+        k, stem = 2, target
+        while target in caller_names or target in ctx.functions or (target in body_ids and not own):
+            target, k = f"{stem}{k}", k + 1
     written = writes(block, ctx)
     args = call.args
     out_bases = {root_name(a) for p, a in zip(f.params, args) if p.mode != "in"}
@@ -436,8 +485,10 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
             prelude.append((p, a))
             declared.add(p.name)
     rename: dict[str, str] = {}
+    if hoist and own and not (ret.name in declared and _decl_type(body, ret.name, prelude) == typ):
+        return False
     if form == "decl" and isinstance(ret, S.Name) and ret.name in declared and _decl_type(body, ret.name, prelude) == typ \
-            and sum(isinstance(n, S.Declarator) and n.name == target for n in walk(caller.body)) == 1 \
+            and sum(isinstance(n, S.Declarator) and n.name == target for n in walk(caller.body)) == (not hoist) \
             and not any(target in names(a) for a in args):
         rename[ret.name] = target
         ret = None
@@ -466,17 +517,21 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         elif form == "return":
             new.append(S.Return(r))
     if new:
-        lines = sum(len(statement_glsl(s)) for s in body)
-        head = list(stmt.comments)
+        lines = sum(not ln.lstrip().startswith("//") for s in body for ln in statement_glsl(s))
+        head = [] if hoist else list(stmt.comments)
         if f.comments and lines >= _COMMENTED:
             # a long body keeps the first sentence of its function's comment
             text = first_sentence("\n".join(c for c in f.comments if c), 116)
             head.append("\n".join("// " + ln for ln in textwrap.wrap(text, 113)))
         new[0].comments = head + list(new[0].comments)
-        if getattr(stmt, "trail", "") and hasattr(new[-1], "trail") and not new[-1].trail:
+        if not hoist and getattr(stmt, "trail", "") and hasattr(new[-1], "trail") and not new[-1].trail:
             new[-1].trail = stmt.trail
     k = next(i for i, s in enumerate(lst) if s is stmt)
-    lst[k:k + 1] = new
+    if hoist:
+        lst[k:k] = new
+        transform(stmt, lambda n: S.Name(target) if n is call else n)
+    else:
+        lst[k:k + 1] = new
     return True
 
 
