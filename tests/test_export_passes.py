@@ -490,3 +490,64 @@ float entry(float x)
     return r.d;
 }
 """
+
+
+def test_a_call_inside_an_expression_is_computed_first_and_inlined():
+    """Called once inside a statement's expression: a local named for the function (or the body's
+    returned local) takes its value just before the statement; not under && (which may skip it)."""
+    from cellgl.export.inline import inline_once
+
+    out = _tree_pass(inline_once, """vec4 cellgl_noise_gradient_(ivec4 c)
+{
+    vec4 v = vec4(c);
+    return v * 0.5 + 1.0;
+}
+float cellgl_twice(float x)
+{
+    float y = x + x;
+    return y;
+}
+float cellgl_skipped(float x)
+{
+    float y = x * x;
+    return y;
+}
+float entry(ivec4 c, float a)
+{
+    vec4 g = vec4(cellgl_noise_gradient_(c).xyz, 0.0);
+    bool b = a > 0.0 && cellgl_skipped(a) > 1.0;
+    return g.x * cellgl_twice(a) + float(b);
+}
+""")
+    assert out.endswith("""float entry(ivec4 c, float a)
+{
+    vec4 v = vec4(c);
+    vec4 gradient = v * 0.5 + 1.0;
+    vec4 g = vec4(gradient.xyz, 0.0);
+    bool b = a > 0.0 && cellgl_skipped(a) > 1.0;
+    float y = a + a;
+    return g.x * y + float(b);
+}
+""")
+
+
+def test_inlining_refuses_a_body_reading_a_global_the_caller_hides():
+    from cellgl.export.inline import inline_once, inline_short
+
+    src = """const float k = 2.0;
+
+float scaled(float x)
+{
+    float y = x * k;
+    return y;
+}
+
+float entry(float a)
+{
+    float k = a;
+    float r = scaled(a);
+    return r + k;
+}
+"""
+    assert _tree_pass(inline_once, src) == src
+    assert _tree_pass(inline_short, src) == src

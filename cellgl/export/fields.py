@@ -237,13 +237,16 @@ def constant_fields(unit: S.Unit, ctx: Context) -> bool:
     funcs = _functions(unit)
     members, _, ctors = _facts(funcs)
     stored = _stored_fields(funcs, ctx)
+    # a struct the entry points take or give, or a global holds, has values from outside
+    outside = {t for f in funcs if f.name in ctx.entries for t in [f.ret] + [p.type for p in f.params]} \
+        | {it.type for it in unit.items if isinstance(it, S.Global)}
     types: dict[int, dict] = {}
     changed, gone = False, set()
     for st in structs:
         made = [(f, lst, s) for f in funcs for lst, s in statement_lists(f.body)
                 if isinstance(s, S.Decl) and s.type == st.name and len(s.declarators) == 1
                 and s.declarators[0].init is None and s.declarators[0].size is None]
-        if len(made) != 1 or st.name in ctors:
+        if len(made) != 1 or st.name in ctors or st.name in outside:
             continue
         home, lst, decl = made[0]
         var = decl.declarators[0].name

@@ -259,13 +259,15 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
     if not small:
         return False
     changed = hit = False
+    hidden: set = set()
 
     def at(n):
         nonlocal hit
         if not isinstance(n, S.Call) or n.func not in small:
             return n
         params, expr = small[n.func]
-        if len(n.args) != len(params) or any(side_effects(a, ctx) for a in n.args):
+        if len(n.args) != len(params) or any(side_effects(a, ctx) for a in n.args) \
+                or (names(expr) - set(params)) & hidden:
             return n
         for p, a in zip(params, n.args):
             based = any(isinstance(x, (S.Member, S.Index)) and isinstance(_bare(x.base), S.Name)
@@ -279,6 +281,7 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 
     for f in unit.items:
         if isinstance(f, S.Function) and f.body is not None:
+            hidden = _declared(f)
             for _ in range(50):
                 hit = False
                 transform(f.body, at)
@@ -380,6 +383,11 @@ def _path(node, target) -> list | None:
     return None
 
 
+def _declared(fn: S.Function) -> set[str]:
+    """The parameters and locals of ``fn``."""
+    return {p.name for p in fn.params} | {n.name for n in walk(fn.body) if isinstance(n, S.Declarator)}
+
+
 def _lvalue(e) -> bool:
     """A variable, or a field or element (at a name or literal) of one."""
     while isinstance(e, (S.Member, S.Index)):
@@ -446,6 +454,8 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         return False                          # a local shadowing a parameter
     caller_names = names(caller) | calls(caller.body)
     body_ids = names(block) | (names(ret) if ret is not None else set()) | calls(block)
+    if (body_ids - declared - set(params)) & _declared(caller):
+        return False                          # the body reads a global the caller hides with a local
     if hoist:
         k, stem = 2, target
         while target in caller_names or target in ctx.functions or (target in body_ids and not own):
