@@ -15,8 +15,8 @@ syntax tree (:mod:`cellgl.export.tree`):
 from __future__ import annotations
 
 from cellgl.export import syntax as S
-from cellgl.export.inline import call_sites, parenthesise, statement_lists
-from cellgl.export.tree import Context, clone, root_name, transform, tree_pass, walk
+from cellgl.export.inline import call_sites, defined_once, literal, parenthesise, statement_lists
+from cellgl.export.tree import Context, calls, clone, transform, tree_pass, walk, writes
 
 __all__ = ["void_results", "dead_fields", "constant_fields"]
 
@@ -64,15 +64,11 @@ def void_results(unit: S.Unit, ctx: Context) -> bool:
     """``T f(...)`` -> ``void f(...)`` where every call of ``f`` (not an entry point, defined
     once, called at least once) is a statement ``f(...);`` and its returned values store nothing
     (no assignment, no call to a function with effects)."""
-    count: dict[str, int] = {}
-    for it in unit.items:
-        if isinstance(it, S.Function):
-            count[it.name] = count.get(it.name, 0) + 1
-    changed = False
+    once, changed = defined_once(unit), False
     index = call_sites(unit)
     alone = {id(s.expr): g for g in _functions(unit) for _, s in statement_lists(g.body) if isinstance(s, S.ExprStmt)}
     for f in _functions(unit):
-        if f.ret == "void" or f.name in ctx.entries or count[f.name] != 1:
+        if f.ret == "void" or f.name in ctx.entries or f.name not in once:
             continue
         sites = index.get(f.name, [])
         rets = [n for n in walk(f.body) if isinstance(n, S.Return)]
@@ -93,17 +89,6 @@ def void_results(unit: S.Unit, ctx: Context) -> bool:
 # fields never read
 # --------------------------------------------------------------------------------------------
 
-def _store(s, field: str, holders: set) -> bool:
-    """Whether the statement ``s`` is ``h.field = ...;`` or ``h.field[i] = ...;`` (``h`` in
-    ``holders``)."""
-    if not (isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "="):
-        return False
-    t = s.expr.target
-    if isinstance(t, S.Index):
-        t = t.base
-    return isinstance(t, S.Member) and t.name == field and isinstance(t.base, S.Name) and t.base.name in holders
-
-
 def _effects_unused(fn: S.Function, s, ctx: Context) -> bool:
     """Whether the calls in the store ``s`` change only locals of ``fn`` that nothing reads after
     it (and ``s`` is not in a loop): then the statement can go whole."""
@@ -117,10 +102,8 @@ def _effects_unused(fn: S.Function, s, ctx: Context) -> bool:
     for c in walk(s):
         if not isinstance(c, S.Call) or c.func not in ctx.impure:
             continue
-        g = ctx.functions.get(c.func)
-        outs = ctx.out_positions(c.func)
-        if g is None or not outs or any(isinstance(x, S.Call) and x.func in ctx.impure for x in walk(g.body)) \
-                or any(root_name(x.target) in ctx.globals_ for x in walk(g.body) if isinstance(x, S.Assign)):
+        g, outs = ctx.functions.get(c.func), ctx.out_positions(c.func)
+        if g is None or not outs or calls(g.body) & ctx.impure or writes(g.body) & ctx.globals_:
             return False
         for k in outs:
             a = c.args[k] if k < len(c.args) else None
@@ -201,12 +184,6 @@ def dead_fields(unit: S.Unit, ctx: Context) -> bool:
 # fields holding one literal
 # --------------------------------------------------------------------------------------------
 
-def _literal(e) -> bool:
-    if isinstance(e, S.Unary) and e.op == "-":
-        e = e.operand
-    return isinstance(e, S.Num) or (isinstance(e, S.Name) and e.name in ("true", "false"))
-
-
 def _stored_fields(funcs, ctx: Context) -> dict[str, int]:
     """field name -> how many stores reach a field of that name (assignments, ``++``, ``out``
     arguments)."""
@@ -257,7 +234,7 @@ def constant_fields(unit: S.Unit, ctx: Context) -> bool:
             store = next((s for s in lst[at + 1:] if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign)
                           and s.expr.op == "=" and isinstance(s.expr.target, S.Member)
                           and s.expr.target.name == fd.name and isinstance(s.expr.target.base, S.Name)
-                          and s.expr.target.base.name == var and _literal(s.expr.value)), None)
+                          and s.expr.target.base.name == var and literal(s.expr.value, False)), None)
             if store is None:
                 continue
             reads, ok = {}, True

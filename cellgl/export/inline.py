@@ -1,24 +1,17 @@
 """Inlining and the parameter passes of the snippet compiler (:mod:`cellgl.export.compiler`'s
 pass 4), transforms of the syntax tree (:mod:`cellgl.export.tree`):
 
-- :func:`inline_short`: a function whose body is one short ``return`` (or straight-line stores to
-  locals and parameters ending in one, substituted forward: ``x = abs(x); return x * x;`` ->
-  ``abs(x) * abs(x)``) becomes that expression at its calls;
-- :func:`inline_once`: a function called from one statement -- ``f(a, b);``, ``T v = f(a, b);``,
-  ``v = f(a, b);`` or ``return f(a, b);`` -- whose body returns only at its end becomes that
-  body in place of the call:
-
-  - an ``out`` / ``inout`` parameter becomes its argument (a variable, or a field or element of
-    one, that no other argument names: GLSL copies in and out, the inlined code writes in place);
-  - an ``in`` parameter the body never writes becomes its argument where the argument is a
-    name, a literal or a field, or is read once (a local copy otherwise: GLSL's ``in`` is a
-    copy); one the body writes gets a local copy, except in ``v = f(v, ...)`` returning that
-    parameter, where the body works on ``v`` itself;
-  - the body's locals are renamed where the caller uses the name;
-  - ``T v = f(...)`` returning a local of the body declares ``v`` where the body declared it;
-
-- :func:`drop_unused_params`: parameters a function never reads go, with their arguments;
-- :func:`constant_args`: a parameter every call passes the same literal becomes that literal;
+- :func:`inline_short`: a function whose body is one short ``return`` (or straight-line stores
+  ending in one, substituted forward: ``x = abs(x); return x * x;``) becomes that expression;
+- :func:`inline_once`: a function called once, from a statement (``f(a);``, ``T v = f(a);``,
+  ``v = f(a);``, ``return f(a);``, or any statement that may compute the call first into a local),
+  whose body returns only at its end, becomes that body in place of the call: an ``out`` /
+  ``inout`` parameter becomes its argument (a variable, or a field or element of one, that no
+  other argument names); an ``in`` parameter becomes its argument where that is a name, field or
+  literal, or read once outside loops, and a local copy otherwise (always where the body writes
+  it: GLSL's ``in`` is a copy); the body's locals are renamed where the caller uses the name;
+- :func:`drop_unused_params`, :func:`constant_args`: parameters a function never reads go, and
+  those every call passes the same literal become that literal;
 - :func:`drop_unused_outs`: an ``out`` parameter whose argument is, at every call, a local used
   nowhere else becomes a local of the function (whose stores the dead-store pass removes).
 
@@ -35,7 +28,7 @@ from cellgl.export.reach import first_sentence
 from cellgl.export.syntax import PRECEDENCE
 from cellgl.export.tree import EXPRESSIONS, Context, calls, clone, root_name, transform, tree_pass, walk, writes
 
-__all__ = ["KEEP", "inline_short", "inline_once", "drop_unused_params", "constant_args", "drop_unused_outs",
+__all__ = ["KEEP", "defined_once", "literal", "inline_short", "inline_once", "drop_unused_params", "constant_args", "drop_unused_outs",
            "substitute", "statement_lists", "call_sites", "names", "side_effects"]
 
 #: a body of this many lines keeps its function's comment where it is inlined
@@ -50,28 +43,21 @@ _VEC = {f"{p}vec{n}" for p in ("", "i", "u") for n in (2, 3, 4)}
 # --------------------------------------------------------------------------------------------
 
 def _prec(e) -> int:
-    if isinstance(e, S.Assign):
-        return 0
-    if isinstance(e, S.Ternary):
-        return 1
     if isinstance(e, S.Binary):
         return 2 + PRECEDENCE[e.op]
-    if isinstance(e, S.Unary) or (isinstance(e, S.IncDec) and not e.postfix):
-        return 20
-    return 30                                          # postfix and primary expressions
+    if isinstance(e, S.IncDec):
+        return 30 if e.postfix else 20
+    return {S.Assign: 0, S.Ternary: 1, S.Unary: 20}.get(type(e), 30)    # 30: postfix and primary
 
 
 def _need(parent, slot: str) -> int:
     """The least precedence an expression in ``parent``'s field ``slot`` may have without
-    parentheses (the tree's own grouping kept exactly)."""
+    parentheses (the tree's own grouping kept exactly; - -x would print as --x)."""
     if isinstance(parent, S.Binary):
-        p = 2 + PRECEDENCE[parent.op]
-        return p if slot == "left" else p + 1
+        return 2 + PRECEDENCE[parent.op] + (slot != "left")
     if isinstance(parent, (S.Unary, S.IncDec)) or (isinstance(parent, (S.Member, S.Index)) and slot == "base"):
-        return 30                                      # (- -x would print as --x)
-    if isinstance(parent, S.Ternary):
-        return 2 if slot == "cond" else 1
-    return 0
+        return 30
+    return (2 if slot == "cond" else 1) if isinstance(parent, S.Ternary) else 0
 
 
 def parenthesise(node):
@@ -116,13 +102,7 @@ def substitute(node, env: dict, rename: dict | None = None):
 
 def names(node) -> set[str]:
     """The variables named below ``node`` (read, written or declared)."""
-    out = set()
-    for n in walk(node):
-        if isinstance(n, (S.Name, S.Declarator, S.Param)):
-            out.add(n.name)
-    out.discard("true")
-    out.discard("false")
-    return out
+    return {n.name for n in walk(node) if isinstance(n, (S.Name, S.Declarator, S.Param))} - {"true", "false"}
 
 
 def _count(node, name: str) -> int:
@@ -136,41 +116,36 @@ def side_effects(e, ctx: Context) -> bool:
                for n in walk(e))
 
 
+def _flat(e) -> bool:
+    return not any(isinstance(n, (S.Call, S.Ctor, S.Paren)) for n in walk(e))
+
+
 def _simple(e) -> bool:
     """A name, literal, field or element of one, or a call on such arguments."""
-    if isinstance(e, (S.Name, S.Num)):
-        return True
-    if isinstance(e, S.Member):
-        return _simple(e.base) and not isinstance(e.base, (S.Call, S.Ctor))
-    if isinstance(e, S.Index):
+    if isinstance(e, (S.Member, S.Index)):
         return _simple(e.base) and not isinstance(e.base, (S.Call, S.Ctor)) \
-            and not any(isinstance(n, (S.Call, S.Ctor, S.Paren)) for n in walk(e.index))
-    if isinstance(e, (S.Call, S.Ctor)):
-        return all(not any(isinstance(n, (S.Call, S.Ctor, S.Paren)) for n in walk(a)) for a in e.args)
-    return False
+            and (isinstance(e, S.Member) or _flat(e.index))
+    return isinstance(e, (S.Name, S.Num)) or (isinstance(e, (S.Call, S.Ctor)) and all(_flat(a) for a in e.args))
 
 
 def _cheap(e) -> bool:
     """An argument that may be written twice: a name, field, literal, or a short sum of those
     and of casts."""
-    if _simple(e) and not any(isinstance(n, (S.Call, S.Ctor)) for n in walk(e)):
-        return True
-    return len(expr_glsl(e)) <= 24 and all(
+    return (_simple(e) and _flat(e)) or len(expr_glsl(e)) <= 24 and all(
         isinstance(n, (S.Name, S.Num, S.Member, S.Paren)) or (isinstance(n, S.Binary) and n.op in "+-*")
         or (isinstance(n, S.Unary) and n.op in "+-") or (isinstance(n, S.Ctor) and n.type in ("float", "int", "uint"))
         for n in walk(e))
 
 
-def _literal(e) -> bool:
-    """A number (``0u``, ``-1.5``) or a vector of numbers (``vec4(0.0, 0.0, 0.0, 0.0)``)."""
+def literal(e, vectors: bool = True) -> bool:
+    """A number (``0u``, ``-1.5``), ``true``/``false``, or (``vectors``) a vector of numbers
+    (``vec4(0.0, 0.0, 0.0, 0.0)``)."""
     e = _bare(e)
+    if isinstance(e, S.Ctor) and vectors:
+        return e.type in _VEC and all(literal(a, False) and not isinstance(a, S.Name) for a in e.args)
     if isinstance(e, S.Unary) and e.op == "-":
         e = e.operand
-    if isinstance(e, S.Num):
-        return True
-    return isinstance(e, S.Ctor) and e.type in _VEC and all(
-        isinstance(a, S.Num) or (isinstance(a, S.Unary) and a.op == "-" and isinstance(a.operand, S.Num))
-        for a in e.args)
+    return isinstance(e, S.Num) or (isinstance(e, S.Name) and e.name in ("true", "false"))
 
 
 # --------------------------------------------------------------------------------------------
@@ -186,6 +161,16 @@ def statement_lists(node):
                 yield n.body, s
 
 
+def defined_once(unit: S.Unit) -> dict:
+    """``{name: function}`` of the functions with a body and no other definition or prototype."""
+    count: dict[str, int] = {}
+    for it in unit.items:
+        if isinstance(it, S.Function):
+            count[it.name] = count.get(it.name, 0) + 1
+    return {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None
+            and count[it.name] == 1}
+
+
 def call_sites(unit: S.Unit) -> dict[str, list]:
     """``{name: [(function, call), ...]}``: every call in the bodies of ``unit``'s functions."""
     out: dict[str, list] = {}
@@ -195,17 +180,6 @@ def call_sites(unit: S.Unit) -> dict[str, list]:
                 if isinstance(n, S.Call):
                     out.setdefault(n.func, []).append((f, n))
     return out
-
-
-def _rewritable(unit: S.Unit, keep):
-    """The functions whose signature a pass may change: defined once (no overloads, no
-    prototype) and not in ``keep``."""
-    count: dict[str, int] = {}
-    for it in unit.items:
-        if isinstance(it, S.Function):
-            count[it.name] = count.get(it.name, 0) + 1
-    return [it for it in unit.items if isinstance(it, S.Function) and it.body is not None
-            and it.name not in keep and count[it.name] == 1]
 
 
 # --------------------------------------------------------------------------------------------
@@ -300,17 +274,13 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
     """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
-    count: dict[str, int] = {}
-    for it in unit.items:
-        if isinstance(it, S.Function):
-            count[it.name] = count.get(it.name, 0) + 1
-    index = call_sites(unit)
+    once, index = defined_once(unit), call_sites(unit)
     changed = True
     any_change = False
     while changed:
         changed = False
         for f in unit.items:
-            if not isinstance(f, S.Function) or f.body is None or f.name in keep or count[f.name] != 1:
+            if once.get(getattr(f, "name", None)) is not f or f.name in keep:
                 continue
             sites = index.get(f.name, [])
             if len(sites) != 1 or sites[0][0] is f:
@@ -353,11 +323,12 @@ def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
     for lst, s in statement_lists(caller.body):
         if not isinstance(s, (S.ExprStmt, S.Return)) and not (isinstance(s, S.Decl) and len(s.declarators) == 1):
             continue
-        path = _path(s, call)
-        if path is None:
+        if not any(n is call for n in walk(s)):
             continue
-        if any(isinstance(a, S.Ternary) or (isinstance(a, S.Binary) and a.op in ("&&", "||")) for a in path):
-            return None
+        maybe = [x for n in walk(s) for x in ([n.then, n.other] if isinstance(n, S.Ternary) else [n.right]
+                                              if isinstance(n, S.Binary) and n.op in ("&&", "||") else [])]
+        if any(n is call for x in maybe for n in walk(x)):
+            return None                       # evaluated only sometimes
         inside = {id(n) for n in walk(call)}
         rest = [n for n in walk(s) if id(n) not in inside]
         top = s.expr if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) else None
@@ -367,19 +338,6 @@ def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
                 or (isinstance(s, S.Decl) and s.declarators[0].name in names(call)):
             return None
         return lst, s, "hoist", None, f.ret
-    return None
-
-
-def _path(node, target) -> list | None:
-    """The nodes from ``node`` down to ``target`` (both included), or None."""
-    if node is target:
-        return [node]
-    from cellgl.export.tree import children
-
-    for c in children(node):
-        p = _path(c, target)
-        if p is not None:
-            return [node] + p
     return None
 
 
@@ -397,23 +355,11 @@ def _lvalue(e) -> bool:
     return isinstance(e, S.Name)
 
 
-def _loop_only(fn: S.Function, name: str, stmt) -> bool:
-    """Whether every use of ``name`` in ``fn`` is inside a ``for (T name ...)`` loop that does not
-    contain ``stmt``."""
-    loops = [n for n in walk(fn.body) if isinstance(n, S.For) and isinstance(n.init, S.Decl)
-             and any(d.name == name for d in n.init.declarators)]
-    if any(stmt is x for lp in loops for x in walk(lp)):
-        return False
-    inside = sum(isinstance(x, (S.Name, S.Declarator)) and x.name == name for lp in loops for x in walk(lp))
-    return inside == sum(isinstance(x, (S.Name, S.Declarator, S.Param)) and x.name == name for x in walk(fn))
-
-
-def _loop_var(body, name: str) -> bool:
-    """Whether ``name`` is declared only as a ``for`` loop's variable in ``body``."""
-    inits = {id(d) for n in walk(body) if isinstance(n, S.For) and isinstance(n.init, S.Decl)
-             for d in n.init.declarators}
-    decls = [n for n in walk(body) if isinstance(n, S.Declarator) and n.name == name]
-    return bool(decls) and all(id(d) in inits for d in decls)
+def _loop_vars(node) -> set[str]:
+    """The names declared below ``node`` only as ``for`` loops' variables."""
+    inits = {id(n.init) for n in walk(node) if isinstance(n, S.For)}
+    decls = [(id(s) in inits, d.name) for s in walk(node) if isinstance(s, S.Decl) for d in s.declarators]
+    return {n for loop, n in decls if loop} - {n for loop, n in decls if not loop}
 
 
 def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) -> bool:
@@ -503,11 +449,17 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         rename[ret.name] = target
         ret = None
         caller_names.discard(target)
-    taken = caller_names | body_ids | {n for a in subst.values() for n in names(a)}
+    # a loop's variable of the body clashes only with the arguments it reads, or a loop of the
+    # caller's around the call
+    arg_names = {n for a in subst.values() for n in names(a)}
+    taken = caller_names | body_ids | arg_names
+    loop_vars = _loop_vars(block) - {p.name for p, _ in prelude} - (_declared(caller) - _loop_vars(caller.body))
+    outer_loops = {d.name for n in walk(caller.body) if isinstance(n, S.For) and isinstance(n.init, S.Decl)
+                   and any(x is stmt for x in walk(n.body)) for d in n.init.declarators}
     for d in sorted(declared):
         if d in rename:
             continue
-        if d in caller_names and not (_loop_var(block, d) and _loop_only(caller, d, stmt)):
+        if d in caller_names and not (d in loop_vars and d not in arg_names and d not in outer_loops):
             k = 2
             while f"{d}{k}" in taken:
                 k += 1
@@ -563,78 +515,65 @@ def _decl_type(body: list, name: str, prelude: list) -> str | None:
 # parameters
 # --------------------------------------------------------------------------------------------
 
-def _drop_param(unit: S.Unit, f: S.Function, k: int, sites: list) -> None:
-    del f.params[k]
-    for _, c in sites:
-        del c.args[k]
+def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
+    """Call ``drop(f, k, sites)`` for each parameter ``k`` of each function ``f`` whose signature
+    may change (defined once, not an entry point; ``sites``: its calls elsewhere, each with an
+    argument per parameter); where it returns True, the parameter and its arguments go."""
+    index, changed = call_sites(unit), False
+    for f in defined_once(unit).values():
+        if f.name in ctx.entries:
+            continue
+        sites = index.get(f.name, [])
+        if any(len(c.args) != len(f.params) for _, c in sites):
+            continue
+        k = 0
+        while k < len(f.params):
+            if f.params[k].size is None and drop(f, k, [(g, c) for g, c in sites if g is not f]):
+                del f.params[k]
+                for _, c in sites:
+                    del c.args[k]
+                changed = True
+            else:
+                k += 1
+    return changed
 
 
 @tree_pass
 def drop_unused_params(unit: S.Unit, ctx: Context) -> bool:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
-    changed = False
-    index = call_sites(unit)
-    for f in _rewritable(unit, set(ctx.entries)):
-        k = 0
-        used = names(f.body)
-        while k < len(f.params):
-            p = f.params[k]
-            sites = index.get(f.name, [])
-            if p.mode != "in" or p.size is not None or p.name in used \
-                    or any(len(c.args) != len(f.params) or side_effects(c.args[k], ctx) for _, c in sites):
-                k += 1
-                continue
-            _drop_param(unit, f, k, sites)
-            changed = True
-    return changed
+    return _each_param(unit, ctx, lambda f, k, sites: f.params[k].mode == "in" and f.params[k].name not in
+                       names(f.body) and not any(side_effects(c.args[k], ctx) for _, c in sites))
 
 
 @tree_pass
 def constant_args(unit: S.Unit, ctx: Context) -> bool:
     """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
     becomes that literal in the body, and the argument goes."""
-    changed = False
-    index = call_sites(unit)
-    for f in _rewritable(unit, set(ctx.entries)):
-        k = 0
-        written = writes(f.body, ctx)
-        while k < len(f.params):
-            p = f.params[k]
-            sites = index.get(f.name, [])
-            if p.mode != "in" or p.size is not None or p.name in written or not sites \
-                    or any(len(c.args) != len(f.params) for _, c in sites):
-                k += 1
-                continue
-            seen = {expr_glsl(_bare(c.args[k])) for _, c in sites}
-            if len(seen) != 1 or not _literal(sites[0][1].args[k]):
-                k += 1
-                continue
-            value = _bare(sites[0][1].args[k])
-            _drop_param(unit, f, k, sites)
-            f.body = substitute(f.body, {p.name: value})
-            changed = True
-    return changed
+
+    def drop(f, k, sites):
+        p = f.params[k]
+        if p.mode != "in" or not sites or p.name in writes(f.body, ctx) or not literal(sites[0][1].args[k]) \
+                or len({expr_glsl(_bare(c.args[k])) for _, c in sites}) != 1:
+            return False
+        f.body = substitute(f.body, {p.name: _bare(sites[0][1].args[k])})
+        return True
+
+    return _each_param(unit, ctx, drop)
 
 
 @tree_pass
 def drop_unused_outs(unit: S.Unit, ctx: Context) -> bool:
     """An ``out`` parameter whose argument is, at every call, a local used nowhere else becomes a
     local of the function (whose stores the dead-store pass then removes)."""
-    changed = False
-    index = call_sites(unit)
-    for f in _rewritable(unit, set(ctx.entries)):
-        k = 0
-        while k < len(f.params):
-            p = f.params[k]
-            sites = [(g, c) for g, c in index.get(f.name, []) if g is not f]
-            if p.mode != "out" or p.size is not None or not sites \
-                    or not all(len(c.args) == len(f.params) and _lone_local(fn, c.args[k]) for fn, c in sites):
-                k += 1
-                continue
-            _drop_param(unit, f, k, sites)
-            f.body.body.insert(0, S.Decl(p.type, [S.Declarator(p.name)]))
-            changed = True
-    return changed
+
+    def drop(f, k, sites):
+        p = f.params[k]
+        if p.mode != "out" or not sites or not all(_lone_local(g, c.args[k]) for g, c in sites):
+            return False
+        f.body.body.insert(0, S.Decl(p.type, [S.Declarator(p.name)]))
+        return True
+
+    return _each_param(unit, ctx, drop)
 
 
 def _lone_local(fn: S.Function, arg) -> bool:
