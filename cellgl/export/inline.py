@@ -254,13 +254,13 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
         return substitute(clone(expr), dict(zip(params, n.args)))
 
     for f in unit.items:
-        if isinstance(f, S.Function) and f.body is not None:
-            hidden = _declared(f)
-            for _ in range(50):
-                hit = False
-                transform(f.body, at)
-                if not hit:
-                    break
+        if not isinstance(f, S.Function) or f.body is None:
+            continue
+        hidden, hit = _declared(f), True
+        while hit:                            # (an expression may call another short function)
+            hit = False
+            transform(f.body, at)
+            if hit:
                 parenthesise(f.body)
                 changed = True
     return changed
@@ -274,28 +274,22 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
     """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
-    once, index = defined_once(unit), call_sites(unit)
-    changed = True
-    any_change = False
-    while changed:
-        changed = False
+    once, index, changed = defined_once(unit), call_sites(unit), False
+    while True:
         for f in unit.items:
-            if once.get(getattr(f, "name", None)) is not f or f.name in keep:
-                continue
-            sites = index.get(f.name, [])
-            if len(sites) != 1 or sites[0][0] is f:
-                continue
-            caller = sites[0][0]
-            if _inline_call(f, *sites[0], ctx):
+            sites = index.get(getattr(f, "name", None), [])
+            if sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1 and sites[0][0] is not f \
+                    and _inline_call(f, *sites[0], ctx):
                 # (the context's facts stay a superset until the next pass refreshes them)
-                _remove(unit.items, f)
+                caller, changed = sites[0][0], True
+                unit.items[:] = [it for it in unit.items if it is not f]
                 index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
                 for n in walk(caller.body):
                     if isinstance(n, S.Call):
                         index.setdefault(n.func, []).append((caller, n))
-                changed = any_change = True
                 break
-    return any_change
+        else:
+            return changed
 
 
 def _call_statement(caller: S.Function, call: S.Call):
@@ -495,10 +489,6 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     else:
         lst[k:k + 1] = new
     return True
-
-
-def _remove(lst: list, x) -> None:
-    lst[:] = [y for y in lst if y is not x]
 
 
 def _decl_type(body: list, name: str, prelude: list) -> str | None:
