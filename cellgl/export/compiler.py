@@ -10,7 +10,8 @@ without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
 3. :func:`cellgl.export.fold.fold` -- constant conditions, loops, locals
    (:mod:`cellgl.export.simplify`: dead locals and stores, identities);
 4. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
-   into one), and every function called once (:mod:`cellgl.export.inline`); parameters a function
+   into one), and every function called once, also from inside an expression
+   (:mod:`cellgl.export.inline`: transforms of the syntax tree, as are the rest of 4); parameters a function
    never reads dropped, and those every call passes the same literal written into the body;
    ``out`` parameters whose results every caller ignores turned into locals, and return values
    (:func:`cellgl.export.fields.void_results`); struct fields never
