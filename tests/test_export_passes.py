@@ -260,21 +260,6 @@ float f(float x) {
 """)
 
 
-def test_a_local_only_written_goes():
-    assert _run(SP.dead_locals, """float f(float a) {
-    float b = a * 2.0;
-    float c = a + 1.0;
-    c = a - 1.0;
-    return b;
-}
-""") == """float f(float a)
-{
-    float b = a * 2.0;
-    return b;
-}
-"""
-
-
 def test_a_store_nothing_reads_afterwards_goes():
     """Not inside a loop (the next pass reads it)."""
     assert _run(SP.last_stores, """float f(float a) {
@@ -567,32 +552,63 @@ float entry(float x)
 """)
 
 
-_PARAMS = """float f(float x, float y, int k)
+# --------------------------------------------------------------------------------------------
+# inlining, parameters, results and fields: tree passes (cellgl/export/inline.py, fields.py)
+# --------------------------------------------------------------------------------------------
+
+def _tree_pass(p, src: str, entries=("entry",), **kw) -> str:
+    from cellgl.export.printer import print_glsl
+    from cellgl.export.syntax import parse as parse_tree
+    from cellgl.export.tree import Context
+
+    unit = parse_tree(src)
+    ctx = Context(tuple(entries), **kw).refresh(unit)
+    p(unit, ctx)
+    return print_glsl(unit)
+
+
+def test_short_functions_become_their_expression():
+    """Straight-line stores substituted forward; parentheses only where the grouping needs them;
+    an argument read twice is written twice only when cheap."""
+    from cellgl.export.inline import inline_short
+
+    out = _tree_pass(inline_short, """float sq(float x) { x = abs(x); return x * x; }
+float half_(float a, float b) { float t = a + b; return t * 0.5 - a; }
+float entry(float a, float b) { return sq(a + b) * 2.0 - half_(a * b, b) + sq(sin(a) * cos(b) + a); }
+""")
+    assert out.endswith("""float entry(float a, float b)
 {
-    return x * float(k);
+    return abs(a + b) * abs(a + b) * 2.0 - ((a * b + b) * 0.5 - a * b) + sq(sin(a) * cos(b) + a);
 }
-float entry(float a)
-{
-    return f(a, 2.0, 3) + f(a * a, 1.0, 3);
-}
-"""
+""")
 
 
 def test_parameters_never_read_go_and_constant_arguments_move_in():
-    dropped = compiler._drop_unused_params(parse(_PARAMS), {"entry"})
-    assert unparse(dropped) == """float f(float x, int k)
+    from cellgl.export.inline import constant_args, drop_unused_params
+
+    src = """float f(float x, float y, int k, vec2 v)
 {
-    return x * float(k);
+    return x * float(k) - v.x;
+}
+float entry(float a)
+{
+    return f(a, 2.0, 3, vec2(-1.0, 2.0)) + f(a * a, 1.0, 3, vec2(-1.0, 2.0));
+}
+"""
+    dropped = _tree_pass(drop_unused_params, src)
+    assert dropped == """float f(float x, int k, vec2 v)
+{
+    return x * float(k) - v.x;
 }
 
 float entry(float a)
 {
-    return f(a, 3) + f(a * a, 3);
+    return f(a, 3, vec2(-1.0, 2.0)) + f(a * a, 3, vec2(-1.0, 2.0));
 }
 """
-    assert unparse(compiler._constant_args(dropped, {"entry"})) == """float f(float x)
+    assert _tree_pass(constant_args, dropped) == """float f(float x)
 {
-    return x * float(3);
+    return x * float(3) - vec2(-1.0, 2.0).x;
 }
 
 float entry(float a)
@@ -602,37 +618,135 @@ float entry(float a)
 """
 
 
+def test_an_argument_with_effects_is_not_dropped():
+    from cellgl.export.inline import drop_unused_params
+
+    src = """float g(inout float w)
+{
+    w += 1.0;
+    return w;
+}
+
+float f(float x, float y)
+{
+    return x;
+}
+
+float entry(float a)
+{
+    float w = a;
+    return f(a, g(w)) + w;
+}
+"""
+    assert _tree_pass(drop_unused_params, src) == src
+
+
+def test_an_out_parameter_no_caller_reads_becomes_a_local():
+    from cellgl.export.inline import drop_unused_outs
+
+    assert _tree_pass(drop_unused_outs, """void g(float x, out float y, out float z)
+{
+    y = x * 2.0;
+    z = x + 1.0;
+}
+float entry(float a)
+{
+    float u, w;
+    g(a, u, w);
+    return w;
+}
+""") == """void g(float x, out float z)
+{
+    float y;
+    y = x * 2.0;
+    z = x + 1.0;
+}
+
+float entry(float a)
+{
+    float u, w;
+    g(a, w);
+    return w;
+}
+"""
+
+
 def test_a_function_called_once_is_inlined():
+    """An inout parameter writes its argument in place; an in parameter the body writes is a
+    copy (the caller's v does not change); the body's locals that clash are renamed; a short
+    argument read once goes in place."""
     from cellgl.export.inline import inline_once
 
-    src = """void g(inout float v, float x)
+    out = _tree_pass(inline_once, """void g(inout float v, float x)
 {
     v += x;
     v *= 0.5;
+}
+float h(float t, vec2 q, float s)
+{
+    float v = t * t;
+    t += q.x;
+    return v + t * s;
 }
 float entry(float a)
 {
     float v = a;
     g(v, 3.0);
-    return v;
+    float t = h(v, vec2(a, 1.0), a * 2.0);
+    return v + t;
 }
-"""
-    assert unparse(inline_once(parse(src), {"entry"})) == """float entry(float a)
+""")
+    assert out == """float entry(float a)
 {
     float v = a;
     v += 3.0;
     v *= 0.5;
-    return v;
+    float t2 = v;
+    vec2 q = vec2(a, 1.0);
+    float v2 = t2 * t2;
+    t2 += q.x;
+    float t = v2 + t2 * (a * 2.0);
+    return v + t;
 }
 """
+
+
+def test_inlining_refuses_an_early_return_and_a_shared_out_argument():
+    from cellgl.export.inline import inline_once
+
+    src = """float h(float x)
+{
+    if (x > 1.0) {
+        return 1.0;
+    }
+    return x;
+}
+
+void g(inout float v, inout float w)
+{
+    v += w;
+    w *= 2.0;
+}
+
+float entry(float a)
+{
+    float b = a;
+    g(b, b);
+    return h(b);
+}
+"""
+    assert _tree_pass(inline_once, src) == src
 
 
 def test_a_result_no_call_reads_becomes_void():
     from cellgl.export.fields import void_results
 
-    items = parse("""float h(inout float w, float x)
+    out = _tree_pass(void_results, """float h(inout float w, float x)
 {
     w = w + x;
+    if (w > 1.0) {
+        return 1.0;
+    }
     return w * 2.0;
 }
 float entry(float a)
@@ -643,5 +757,143 @@ float entry(float a)
     return w;
 }
 """)
-    out = unparse(void_results(items, {"entry"}, compiler._impure_functions(items)))
-    assert out.startswith("void h(inout float w, float x)\n{\n    w = w + x;\n}\n")
+    assert out.startswith("void h(inout float w, float x)\n{\n    w = w + x;\n    if (w > 1.0) {\n        return;\n    }\n}\n")
+
+
+def test_fields_never_read_go():
+    """F is read only by the stores to F; g.x is a vector's, not the struct's."""
+    from cellgl.export.fields import dead_fields
+
+    out = _tree_pass(dead_fields, """struct R {
+    float F[2];
+    vec2 g;
+    float x;
+};
+void step(inout R r, vec2 p)
+{
+    r.F[1] = r.F[0];
+    r.F[0] = p.x;
+    r.g = p;
+    r.x = 3.0;
+}
+vec2 entry(vec2 p)
+{
+    R r;
+    step(r, p);
+    vec2 g = p;
+    return r.g + g.x;
+}
+""")
+    assert out.startswith("""struct R {
+    vec2 g;
+};
+
+void step(inout R r, vec2 p)
+{
+    r.g = p;
+}
+""")
+
+
+def test_a_field_holding_one_literal_is_folded():
+    from cellgl.export.fields import constant_fields
+
+    out = _tree_pass(constant_fields, """struct R {
+    bool hit;
+    float d;
+};
+void step(inout R r, float x)
+{
+    if (!r.hit) {
+        r.d = x;
+    }
+}
+float entry(float x)
+{
+    R r;
+    r.hit = false;
+    r.d = 1.0;
+    step(r, x);
+    return r.d;
+}
+""")
+    assert out == """struct R {
+    float d;
+};
+
+void step(inout R r, float x)
+{
+    if (!false) {
+        r.d = x;
+    }
+}
+
+float entry(float x)
+{
+    R r;
+    r.d = 1.0;
+    step(r, x);
+    return r.d;
+}
+"""
+
+
+def test_a_call_inside_an_expression_is_computed_first_and_inlined():
+    """Called once inside a statement's expression: a local named for the function (or the body's
+    returned local) takes its value just before the statement; not under && (which may skip it)."""
+    from cellgl.export.inline import inline_once
+
+    out = _tree_pass(inline_once, """vec4 cellgl_noise_gradient_(ivec4 c)
+{
+    vec4 v = vec4(c);
+    return v * 0.5 + 1.0;
+}
+float cellgl_twice(float x)
+{
+    float y = x + x;
+    return y;
+}
+float cellgl_skipped(float x)
+{
+    float y = x * x;
+    return y;
+}
+float entry(ivec4 c, float a)
+{
+    vec4 g = vec4(cellgl_noise_gradient_(c).xyz, 0.0);
+    bool b = a > 0.0 && cellgl_skipped(a) > 1.0;
+    return g.x * cellgl_twice(a) + float(b);
+}
+""")
+    assert out.endswith("""float entry(ivec4 c, float a)
+{
+    vec4 v = vec4(c);
+    vec4 gradient = v * 0.5 + 1.0;
+    vec4 g = vec4(gradient.xyz, 0.0);
+    bool b = a > 0.0 && cellgl_skipped(a) > 1.0;
+    float y = a + a;
+    return g.x * y + float(b);
+}
+""")
+
+
+def test_inlining_refuses_a_body_reading_a_global_the_caller_hides():
+    from cellgl.export.inline import inline_once, inline_short
+
+    src = """const float k = 2.0;
+
+float scaled(float x)
+{
+    float y = x * k;
+    return y;
+}
+
+float entry(float a)
+{
+    float k = a;
+    float r = scaled(a);
+    return r + k;
+}
+"""
+    assert _tree_pass(inline_once, src) == src
+    assert _tree_pass(inline_short, src) == src

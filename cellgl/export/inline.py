@@ -1,306 +1,575 @@
-"""Inlining of the functions a snippet calls once (:mod:`cellgl.export.compiler`'s pass 4).
+"""Inlining and the parameter passes of the snippet compiler (:mod:`cellgl.export.compiler`'s
+pass 4), transforms of the syntax tree (:mod:`cellgl.export.tree`):
 
-A function called from one statement -- ``f(a, b);``, ``T v = f(a, b);``, ``v = f(a, b);`` or
-``return f(a, b);`` -- whose body returns only at its end, becomes that body in place of the
-call:
-
-- an ``out`` / ``inout`` parameter becomes its argument (a variable, or a field or element of
-  one, that no other argument names: GLSL copies in and out, the inlined code writes in place);
-- an ``in`` parameter the body never writes becomes its argument where the argument is a name,
-  a literal or a field (a local copy otherwise); one the body writes gets a local copy, except
-  in ``v = f(v, ...)`` returning that parameter, where the body works on ``v`` itself;
-- the body's locals are renamed where the caller uses the name;
-- ``T v = f(...)`` returning a local of the body declares ``v`` where the body declared it.
+- :func:`inline_short`: a function whose body is one short ``return`` (or straight-line stores
+  ending in one, substituted forward: ``x = abs(x); return x * x;``) becomes that expression;
+- :func:`inline_once`: a function called once, from a statement (``f(a);``, ``T v = f(a);``,
+  ``v = f(a);``, ``return f(a);``, or any statement that may compute the call first into a local),
+  whose body returns only at its end, becomes that body in place of the call: an ``out`` /
+  ``inout`` parameter becomes its argument (a variable, or a field or element of one, that no
+  other argument names); an ``in`` parameter becomes its argument where that is a name, field or
+  literal, or read once outside loops, and a local copy otherwise (always where the body writes
+  it: GLSL's ``in`` is a copy); the body's locals are renamed where the caller uses the name;
+- :func:`drop_unused_params`, :func:`constant_args`: parameters a function never reads go, and
+  those every call passes the same literal become that literal;
+- :func:`drop_unused_outs`: an ``out`` parameter whose argument is, at every call, a local used
+  nowhere else becomes a local of the function (whose stores the dead-store pass removes).
 
 The values do not change: the statements run in the same order on the same values.
 """
 from __future__ import annotations
 
-import re
 import textwrap
+from dataclasses import fields
 
-from cellgl.export.reach import Item, _call_args, _code_idx, _match, _split_args, first_sentence
-from cellgl.export.translate.tokens import GLSL_TYPES, tokenize
+from cellgl.export import syntax as S
+from cellgl.export.printer import expr_glsl, statement_glsl
+from cellgl.export.reach import first_sentence
+from cellgl.export.syntax import PRECEDENCE
+from cellgl.export.tree import EXPRESSIONS, Context, calls, clone, root_name, transform, tree_pass, walk, writes
 
-__all__ = ["inline_once"]
+__all__ = ["KEEP", "defined_once", "literal", "inline_short", "inline_once", "drop_unused_params", "constant_args", "drop_unused_outs",
+           "substitute", "statement_lists", "call_sites", "names", "side_effects"]
 
-_STARTS = (";", "{", "}")
 #: a body of this many lines keeps its function's comment where it is inlined
 _COMMENTED = 20
 #: functions that stay functions where called once: the hash, the first thing a reader looks for
 KEEP = ("cellgl_hash_u32",)
-_ASSIGN = r"(?:[-+*/%&|^]|<<|>>)?=(?!=)|\+\+|--"
+_VEC = {f"{p}vec{n}" for p in ("", "i", "u") for n in (2, 3, 4)}
 
 
-def _text(toks) -> str:
-    return "".join(t.text for t in toks)
+# --------------------------------------------------------------------------------------------
+# expressions: precedence, parentheses, substitution
+# --------------------------------------------------------------------------------------------
+
+def _prec(e) -> int:
+    if isinstance(e, S.Binary):
+        return 2 + PRECEDENCE[e.op]
+    if isinstance(e, S.IncDec):
+        return 30 if e.postfix else 20
+    return {S.Assign: 0, S.Ternary: 1, S.Unary: 20}.get(type(e), 30)    # 30: postfix and primary
 
 
-def _is_type(word: str) -> bool:
-    return word in GLSL_TYPES or word.startswith("Cellgl")
+def _need(parent, slot: str) -> int:
+    """The least precedence an expression in ``parent``'s field ``slot`` may have without
+    parentheses (the tree's own grouping kept exactly; - -x would print as --x)."""
+    if isinstance(parent, S.Binary):
+        return 2 + PRECEDENCE[parent.op] + (slot != "left")
+    if isinstance(parent, (S.Unary, S.IncDec)) or (isinstance(parent, (S.Member, S.Index)) and slot == "base"):
+        return 30
+    return (2 if slot == "cond" else 1) if isinstance(parent, S.Ternary) else 0
 
 
-def _calls(items: list[Item]) -> dict[str, list]:
-    """{function name: [(item, code position) of every call]}."""
-    names = {it.name for it in items if it.kind == "function"}
-    out: dict[str, list] = {}
-    for x in items:
-        if x.kind != "function":
-            continue
-        toks, code = x.toks, _code_idx(x.toks)
-        w = [toks[i].text for i in code]
-        first = w.index("(") - 1 if "(" in w else -1
-        for m in range(len(w) - 1):
-            if w[m] in names and w[m + 1] == "(" and (m == 0 or w[m - 1] != ".") and m != first:
-                out.setdefault(w[m], []).append((x, m))
-    return out
+def parenthesise(node):
+    """Wrap in parentheses every expression below ``node`` that its place needs grouped (after a
+    substitution: the tree is the meaning, the parentheses only its printing)."""
+    for f in fields(node):
+        v = getattr(node, f.name)
+        if isinstance(v, list):
+            for x in v:
+                if hasattr(x, "__dataclass_fields__"):
+                    parenthesise(x)
+        elif hasattr(v, "__dataclass_fields__"):
+            parenthesise(v)
+            if isinstance(v, EXPRESSIONS) and _prec(v) < _need(node, f.name):
+                setattr(node, f.name, S.Paren(v))
+    return node
 
 
-def inline_once(items: list[Item], keep) -> list[Item]:
-    """Inline every function (not in ``keep``) called exactly once, where that is safe."""
+def _bare(e):
+    while isinstance(e, S.Paren):
+        e = e.inner
+    return e
+
+
+def substitute(node, env: dict, rename: dict | None = None):
+    """``node`` (changed in place; the new root returned) with each name of ``env`` replaced by a
+    copy of its expression and each of ``rename`` renamed (declarations too)."""
+    rename = rename or {}
+
+    def sub(n):
+        if isinstance(n, S.Name):
+            if n.name in rename:
+                return S.Name(rename[n.name])
+            if n.name in env:
+                return clone(_bare(env[n.name]))
+        elif isinstance(n, S.Declarator) and n.name in rename:
+            n.name = rename[n.name]
+        return n
+
+    return parenthesise(transform(node, sub))
+
+
+def names(node) -> set[str]:
+    """The variables named below ``node`` (read, written or declared)."""
+    return {n.name for n in walk(node) if isinstance(n, (S.Name, S.Declarator, S.Param))} - {"true", "false"}
+
+
+def _count(node, name: str) -> int:
+    return sum(isinstance(n, S.Name) and n.name == name for n in walk(node))
+
+
+def side_effects(e, ctx: Context) -> bool:
+    """Whether evaluating ``e`` stores anything (an assignment, ``++``, a call to a function
+    with effects)."""
+    return any(isinstance(n, (S.Assign, S.IncDec)) or (isinstance(n, S.Call) and n.func in ctx.impure)
+               for n in walk(e))
+
+
+def _flat(e) -> bool:
+    return not any(isinstance(n, (S.Call, S.Ctor, S.Paren)) for n in walk(e))
+
+
+def _simple(e) -> bool:
+    """A name, literal, field or element of one, or a call on such arguments."""
+    if isinstance(e, (S.Member, S.Index)):
+        return _simple(e.base) and not isinstance(e.base, (S.Call, S.Ctor)) \
+            and (isinstance(e, S.Member) or _flat(e.index))
+    return isinstance(e, (S.Name, S.Num)) or (isinstance(e, (S.Call, S.Ctor)) and all(_flat(a) for a in e.args))
+
+
+def _cheap(e) -> bool:
+    """An argument that may be written twice: a name, field, literal, or a short sum of those
+    and of casts."""
+    return (_simple(e) and _flat(e)) or len(expr_glsl(e)) <= 24 and all(
+        isinstance(n, (S.Name, S.Num, S.Member, S.Paren)) or (isinstance(n, S.Binary) and n.op in "+-*")
+        or (isinstance(n, S.Unary) and n.op in "+-") or (isinstance(n, S.Ctor) and n.type in ("float", "int", "uint"))
+        for n in walk(e))
+
+
+def literal(e, vectors: bool = True) -> bool:
+    """A number (``0u``, ``-1.5``), ``true``/``false``, or (``vectors``) a vector of numbers
+    (``vec4(0.0, 0.0, 0.0, 0.0)``)."""
+    e = _bare(e)
+    if isinstance(e, S.Ctor) and vectors:
+        return e.type in _VEC and all(literal(a, False) and not isinstance(a, S.Name) for a in e.args)
+    if isinstance(e, S.Unary) and e.op == "-":
+        e = e.operand
+    return isinstance(e, S.Num) or (isinstance(e, S.Name) and e.name in ("true", "false"))
+
+
+# --------------------------------------------------------------------------------------------
+# where calls are
+# --------------------------------------------------------------------------------------------
+
+def statement_lists(node):
+    """``(list, statement)`` of every statement below ``node`` held in a block's list, outermost
+    first."""
+    for n in walk(node):
+        if isinstance(n, S.Block):
+            for s in n.body:
+                yield n.body, s
+
+
+def defined_once(unit: S.Unit) -> dict:
+    """``{name: function}`` of the functions with a body and no other definition or prototype."""
     count: dict[str, int] = {}
-    for it in items:
-        count[it.name] = count.get(it.name, 0) + 1
-    impure = _out_positions(items)
-    calls = _calls(items)
-    for f in items:
-        if f.kind != "function" or f.name in keep or f.name in KEEP or count[f.name] != 1:
-            continue
-        sites = calls.get(f.name, [])
-        if len(sites) != 1 or sites[0][0] is f:
-            continue
-        x, m = sites[0]
-        toks = _inline_call(f, x, m, impure)
-        if toks is None:
-            continue
-        new = [Item(x.kind, x.name, toks, x.comment) if it is x else it for it in items if it is not f]
-        return inline_once(new, keep)
-    return items
+    for it in unit.items:
+        if isinstance(it, S.Function):
+            count[it.name] = count.get(it.name, 0) + 1
+    return {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None
+            and count[it.name] == 1}
 
 
-def _written(body: str, name: str, outs: dict[str, set[int]]) -> bool:
-    """Whether ``body`` assigns ``name`` (or a field or element of it) or passes it to an ``out``
-    / ``inout`` parameter (``outs``: function -> positions of those)."""
-    if re.search(rf"(\+\+|--)\s*\b{name}\b|(?<![\w.]){name}\s*(\.\s*\w+|\[[^\]]*\])*\s*({_ASSIGN})", body):
-        return True
-    toks = tokenize(body)
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    return any(k in outs[fn] and name in w[a:b] for fn, k, a, b in _call_args(toks, code, outs))
-
-
-def _out_positions(items: list[Item]) -> dict[str, set[int]]:
-    out = {}
-    for it in items:
-        if it.kind != "function":
-            continue
-        toks, code = it.toks, _code_idx(it.toks)
-        w = [toks[i].text for i in code]
-        op = w.index("(")
-        pos = {k for k, (a, b) in enumerate(_split_args(toks, code, op, _match(toks, code, op)))
-               if w[a] in ("out", "inout")}
-        if pos:
-            out[it.name] = pos
+def call_sites(unit: S.Unit) -> dict[str, list]:
+    """``{name: [(function, call), ...]}``: every call in the bodies of ``unit``'s functions."""
+    out: dict[str, list] = {}
+    for f in unit.items:
+        if isinstance(f, S.Function) and f.body is not None:
+            for n in walk(f.body):
+                if isinstance(n, S.Call):
+                    out.setdefault(n.func, []).append((f, n))
     return out
 
 
-def _loop_only(toks, name: str, m: int) -> bool:
-    """Whether every use of ``name`` in the function ``toks`` is inside a ``for (T name ...)``
-    loop that does not contain code position ``m``."""
-    from cellgl.export.reach import _stmt_end
+# --------------------------------------------------------------------------------------------
+# short functions: their expression at every call
+# --------------------------------------------------------------------------------------------
 
-    code = _code_idx(toks)
-    w = [toks[i].text for i in code]
-    spans = []
-    for n in range(len(w) - 3):
-        if w[n] == "for" and w[n + 1] == "(" and w[n + 3] == name:
-            spans.append((n, _stmt_end(toks, code, w, n)))
-    if any(a <= m <= b for a, b in spans):
-        return False
-    return all(any(a <= k <= b for a, b in spans) for k in range(len(w)) if w[k] == name)
-
-
-def _inline_call(f: Item, x: Item, m: int, impure: set[str]):
-    ftoks, fcode = f.toks, _code_idx(f.toks)
-    fw = [ftoks[i].text for i in fcode]
-    op = fw.index("(")
-    cl = _match(ftoks, fcode, op)
-    if fw[cl + 1] != "{" or "discard" in fw or op != 2:
-        return None
-    ret_type = fw[0]
-    params = [fw[a:b] for a, b in _split_args(ftoks, fcode, op, cl)]
-    if params == [["void"]]:
-        params = []
-    if any(len(p) < 2 or p[-1] == "]" or not re.fullmatch(r"[A-Za-z_]\w*", p[-1]) for p in params):
-        return None
-    body_toks = ftoks[fcode[cl + 1] + 1:fcode[-1]]
-    bcode = _code_idx(body_toks)
-    bw = [body_toks[i].text for i in bcode]
-    # one return, the last statement (a void function: none)
-    ret_expr = None
-    nret = bw.count("return")
-    if ret_type == "void":
-        if bw[-2:] == ["return", ";"]:
-            body_toks, bcode, bw = body_toks[:bcode[-2]], bcode[:-2], bw[:-2]
-            nret -= 1
-        if nret:
-            return None
-    else:
-        if nret != 1 or ";" not in bw or bw[-1] != ";":
-            return None
-        k = len(bw) - 2
-        depth = 0
-        while k >= 0 and not (bw[k] == "return" and depth == 0):
-            depth += bw[k] in ")]"
-            depth -= bw[k] in "(["
-            k -= 1
-        if k < 0 or (k > 0 and bw[k - 1] not in _STARTS) or _block_depth(bw, k) != 0:
-            return None
-        ret_expr = _text(body_toks[bcode[k] + 1:bcode[-1]]).strip()
-        body_toks = body_toks[:bcode[k]]
-    # the call statement in the caller
-    toks, code = x.toks, _code_idx(x.toks)
-    w = [toks[i].text for i in code]
-    ccl = _match(toks, code, m + 1)
-    if ccl + 1 >= len(w) or w[ccl + 1] != ";":
-        return None
-    form, target, typ = None, None, None
-    if w[m - 1] in _STARTS:
-        form, start = "stmt", m
-    elif w[m - 1] == "return" and w[m - 2] in _STARTS:
-        form, start = "return", m - 1
-    elif w[m - 1] == "=" and re.fullmatch(r"[A-Za-z_]\w*", w[m - 2]):
-        if _is_type(w[m - 3]) and w[m - 4] in _STARTS:
-            form, start, target, typ = "decl", m - 3, w[m - 2], w[m - 3]
-        elif w[m - 3] in _STARTS:
-            form, start, target = "assign", m - 2, w[m - 2]
-    if form is None or (form != "stmt" and ret_expr is None):
-        return None
-    if form == "stmt" and ret_expr and re.search(r"\b\w+\s*\(", ret_expr):
-        return None
-    args = [_text(toks[code[a]:code[b - 1] + 1]).strip() for a, b in _split_args(toks, code, m + 1, ccl)]
-    if len(args) != len(params):
-        return None
-    caller_names = {t.text for t in toks if t.kind == "id"}
-    body = _text(body_toks)
-    body_ids = {t.text for t in body_toks if t.kind == "id"}
-    # the body's own declarations (locals, loop variables)
-    declared = set()
-    for k in range(1, len(bw) - 1):
-        if _is_type(bw[k - 1]) and re.fullmatch(r"[A-Za-z_]\w*", bw[k]) and bw[k + 1] in ("=", ";", "[", ",") \
-                and (k < 2 or bw[k - 2] in _STARTS + ("(", "const")):
-            declared.add(bw[k])
-    subst: dict[str, str] = {}
-    prelude: list[str] = []
-    out_bases = set()
-    for p, a in zip(params, args):
-        if p[0] in ("out", "inout"):
-            mm = re.fullmatch(r"([A-Za-z_]\w*)(?:\s*\.\s*\w+|\s*\[\s*\w+\s*\])*", a)
-            if not mm:
-                return None
-            out_bases.add(mm.group(1))
-    for p, a in zip(params, args):
-        qual = p[0] if p[0] in ("in", "out", "inout") else "in"
-        pname, ptype = p[-1], p[-2]
-        if qual != "in":
-            base = re.match(r"\w+", a).group()
-            if sum(re.search(rf"\b{base}\b", b2) is not None for b2 in args) != 1:
-                return None                  # the same variable in two arguments
-            subst[pname] = a
+def _short(unit: S.Unit, keep) -> dict:
+    """``{name: (parameter names, expression)}`` of the functions short enough to inline."""
+    sites = {k: len(v) for k, v in call_sites(unit).items()}
+    out = {}
+    for it in unit.items:
+        if not isinstance(it, S.Function) or it.body is None or it.name in keep:
             continue
-        arg_ids = set(re.findall(r"\b[A-Za-z_]\w*\b", a))
-        if _written(body, pname, impure):
-            if form == "assign" and a == target and ret_expr == pname and target not in out_bases \
-                    and sum(re.search(rf"\b{target}\b", b2) is not None for b2 in args) == 1:
-                subst[pname] = target
-                ret_expr = target
-                continue
-            prelude.append((ptype, pname, a))
-            declared.add(pname)
+        if any(p.mode != "in" or p.size is not None for p in it.params):
             continue
-        simple = re.fullmatch(r"[A-Za-z_]\w*(\s*\.\s*[A-Za-z_]\w*)*|-?\d+(\.\d*)?([eE][-+]?\d+)?u?", a)
-        uses = len(re.findall(rf"(?<![\w.]){pname}\b", body + " " + (ret_expr or "")))
-        if (simple or (uses <= 1 and not re.search(rf"(?<![\w.]){pname}\s*[.\[]", body + (ret_expr or "")))) \
-                and not (arg_ids & out_bases):
-            subst[pname] = a if simple else f"({a})"
+        expr = _forward(it.body.body, {p.name for p in it.params})
+        if expr is None or it.name in calls(expr):
+            continue
+        n = len(expr_glsl(expr))
+        if n > 72 or (n > 48 and sites.get(it.name, 0) > 1):
+            continue                          # a long expression stays one function where it is used often
+        out[it.name] = ([p.name for p in it.params], expr)
+    return out
+
+
+def _forward(body: list, params: set) -> object | None:
+    """The returned expression of the straight-line ``body`` with every local and parameter
+    store substituted forward (None: not straight-line)."""
+    env: dict = {}
+    for s in body:
+        if any(isinstance(n, S.Ternary) for n in walk(s)):
+            return None
+        if isinstance(s, S.Return) and s is body[-1] and s.value is not None:
+            return substitute(clone(s.value), env)
+        if isinstance(s, S.Decl) and not s.const and len(s.declarators) == 1 and s.declarators[0].size is None \
+                and s.declarators[0].init is not None:
+            name, value = s.declarators[0].name, s.declarators[0].init
+        elif isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "=" \
+                and isinstance(s.expr.target, S.Name) and (s.expr.target.name in params or s.expr.target.name in env):
+            name, value = s.expr.target.name, s.expr.value
         else:
-            prelude.append((ptype, pname, a))
-            declared.add(pname)
+            return None
+        env[name] = substitute(clone(value), env)
+    return None
+
+
+@tree_pass
+def inline_short(unit: S.Unit, ctx: Context) -> bool:
+    """Short functions (not the entry points) become their expression at their calls."""
+    small = _short(unit, set(ctx.entries))
+    if not small:
+        return False
+    changed = hit = False
+    hidden: set = set()
+
+    def at(n):
+        nonlocal hit
+        if not isinstance(n, S.Call) or n.func not in small:
+            return n
+        params, expr = small[n.func]
+        if len(n.args) != len(params) or any(side_effects(a, ctx) for a in n.args) \
+                or (names(expr) - set(params)) & hidden:
+            return n
+        for p, a in zip(params, n.args):
+            based = any(isinstance(x, (S.Member, S.Index)) and isinstance(_bare(x.base), S.Name)
+                        and _bare(x.base).name == p for x in walk(expr))
+            if based and not _simple(_bare(a)):
+                return n                      # (a + b).xy: keep the call
+            if _count(expr, p) > 1 and not _cheap(_bare(a)):
+                return n                      # an argument the expression reads twice: compute it once
+        hit = True
+        return substitute(clone(expr), dict(zip(params, n.args)))
+
+    for f in unit.items:
+        if not isinstance(f, S.Function) or f.body is None:
+            continue
+        hidden, hit = _declared(f), True
+        while hit:                            # (an expression may call another short function)
+            hit = False
+            transform(f.body, at)
+            if hit:
+                parenthesise(f.body)
+                changed = True
+    return changed
+
+
+# --------------------------------------------------------------------------------------------
+# functions called once: their body in place of the call
+# --------------------------------------------------------------------------------------------
+
+@tree_pass
+def inline_once(unit: S.Unit, ctx: Context) -> bool:
+    """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
+    keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
+    once, index, changed = defined_once(unit), call_sites(unit), False
+    while True:
+        for f in unit.items:
+            sites = index.get(getattr(f, "name", None), [])
+            if sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1 and sites[0][0] is not f \
+                    and _inline_call(f, *sites[0], ctx):
+                # (the context's facts stay a superset until the next pass refreshes them)
+                caller, changed = sites[0][0], True
+                unit.items[:] = [it for it in unit.items if it is not f]
+                index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
+                for n in walk(caller.body):
+                    if isinstance(n, S.Call):
+                        index.setdefault(n.func, []).append((caller, n))
+                break
+        else:
+            return changed
+
+
+def _call_statement(caller: S.Function, call: S.Call):
+    """``(list, statement, form, target, type)`` of the statement the call makes up: ``f(...);``
+    (form "stmt"), ``return f(...);``, ``T v = f(...);`` ("decl"), ``v = f(...);`` ("assign")."""
+    for lst, s in statement_lists(caller.body):
+        if isinstance(s, S.ExprStmt) and s.expr is call:
+            return lst, s, "stmt", None, None
+        if isinstance(s, S.Return) and s.value is call:
+            return lst, s, "return", None, None
+        if isinstance(s, S.Decl) and not s.const and len(s.declarators) == 1 and s.declarators[0].init is call \
+                and s.declarators[0].size is None:
+            return lst, s, "decl", s.declarators[0].name, s.type
+        if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "=" \
+                and s.expr.value is call and isinstance(s.expr.target, S.Name):
+            return lst, s, "assign", s.expr.target.name, None
+    return None
+
+
+def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
+    """``(list, statement, "hoist", None, type)`` where ``call`` sits inside the expression of a
+    statement that may compute it first, into a local: evaluated every time the statement is
+    (not under ``&&``, ``||`` or ``?:``), and nothing else in the statement stores anything or
+    reads what the call writes."""
+    for lst, s in statement_lists(caller.body):
+        if not isinstance(s, (S.ExprStmt, S.Return)) and not (isinstance(s, S.Decl) and len(s.declarators) == 1):
+            continue
+        if not any(n is call for n in walk(s)):
+            continue
+        maybe = [x for n in walk(s) for x in ([n.then, n.other] if isinstance(n, S.Ternary) else [n.right]
+                                              if isinstance(n, S.Binary) and n.op in ("&&", "||") else [])]
+        if any(n is call for x in maybe for n in walk(x)):
+            return None                       # evaluated only sometimes
+        inside = {id(n) for n in walk(call)}
+        rest = [n for n in walk(s) if id(n) not in inside]
+        top = s.expr if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) else None
+        outs = {root_name(call.args[k]) for k in ctx.out_positions(call.func) if k < len(call.args)}
+        if any((isinstance(n, (S.Assign, S.IncDec)) and n is not top) or (isinstance(n, S.Call) and n.func in ctx.impure)
+               for n in rest) or outs & {n.name for n in rest if isinstance(n, S.Name)} \
+                or (isinstance(s, S.Decl) and s.declarators[0].name in names(call)):
+            return None
+        return lst, s, "hoist", None, f.ret
+    return None
+
+
+def _declared(fn: S.Function) -> set[str]:
+    """The parameters and locals of ``fn``."""
+    return {p.name for p in fn.params} | {n.name for n in walk(fn.body) if isinstance(n, S.Declarator)}
+
+
+def _lvalue(e) -> bool:
+    """A variable, or a field or element (at a name or literal) of one."""
+    while isinstance(e, (S.Member, S.Index)):
+        if isinstance(e, S.Index) and not isinstance(e.index, (S.Name, S.Num)):
+            return False
+        e = e.base
+    return isinstance(e, S.Name)
+
+
+def _loop_vars(node) -> set[str]:
+    """The names declared below ``node`` only as ``for`` loops' variables."""
+    inits = {id(n.init) for n in walk(node) if isinstance(n, S.For)}
+    decls = [(id(s) in inits, d.name) for s in walk(node) if isinstance(s, S.Decl) for d in s.declarators]
+    return {n for loop, n in decls if loop} - {n for loop, n in decls if not loop}
+
+
+def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) -> bool:
+    if any(isinstance(n, S.Jump) and n.kind == "discard" for n in walk(f.body)) \
+            or any(p.size is not None for p in f.params) or len(call.args) != len(f.params):
+        return False
+    body = list(f.body.body)
+    rets = [n for n in walk(f.body) if isinstance(n, S.Return)]
+    ret = None
+    if f.ret == "void":
+        if body and isinstance(body[-1], S.Return) and body[-1].value is None:
+            body = body[:-1]
+            rets = rets[:-1]
+        if rets:
+            return False
+    else:
+        if len(rets) != 1 or not body or body[-1] is not rets[0] or rets[0].value is None:
+            return False
+        ret, body = clone(rets[0].value), body[:-1]
+    site = _call_statement(caller, call) or _hoist_site(caller, call, f, ctx)
+    if site is None:
+        return False
+    lst, stmt, form, target, typ = site
+    hoist = form == "hoist"
+    if hoist:
+        # T v = f(...) before the statement, which reads v: the body's returned local v, or a
+        # local named for the function (cellgl_noise_gradient_: gradient)
+        own = isinstance(ret, S.Name) and any(isinstance(s, S.Decl) and any(d.name == ret.name for d in s.declarators)
+                                               for s in body)
+        form, target = "decl", ret.name if own else [w for w in f.name.split("_") if w][-1]
+    if (form != "stmt" and ret is None) or (form == "stmt" and ret is not None and calls(ret)):
+        return False
+    body = [clone(s) for s in body]
+    block = S.Block(body)
+    params = [p.name for p in f.params]
+    declared = {n.name for n in walk(block) if isinstance(n, S.Declarator)}
+    if declared & set(params):
+        return False                          # a local shadowing a parameter
+    caller_names = names(caller) | calls(caller.body)
+    body_ids = names(block) | (names(ret) if ret is not None else set()) | calls(block)
+    if (body_ids - declared - set(params)) & _declared(caller):
+        return False                          # the body reads a global the caller hides with a local
+    if hoist:
+        k, stem = 2, target
+        while target in caller_names or target in ctx.functions or (target in body_ids and not own):
+            target, k = f"{stem}{k}", k + 1
+    written = writes(block, ctx)
+    args = call.args
+    out_bases = {root_name(a) for p, a in zip(f.params, args) if p.mode != "in"}
+    subst: dict = {}
+    prelude = []
+    for p, a in zip(f.params, args):
+        if p.mode != "in":
+            if not _lvalue(a) or sum(root_name(a) in names(b) for b in args) != 1:
+                return False                  # not a variable, or the same variable in two arguments
+            subst[p.name] = a
+            continue
+        arg_ids = names(a)
+        if p.name in written:
+            if form == "assign" and isinstance(a, S.Name) and a.name == target and isinstance(ret, S.Name) \
+                    and ret.name == p.name and target not in out_bases and sum(target in names(b) for b in args) == 1:
+                subst[p.name] = a
+                continue
+            prelude.append((p, a))
+            declared.add(p.name)
+            continue
+        b = _bare(a)
+        simple = _lvalue(b) and all(isinstance(x, (S.Name, S.Member)) for x in walk(b)) or isinstance(b, S.Num) \
+            or (isinstance(b, S.Unary) and b.op == "-" and isinstance(b.operand, S.Num))
+        uses = _count(block, p.name) + (_count(ret, p.name) if ret is not None else 0)
+        based = any(isinstance(x, (S.Member, S.Index)) and isinstance(x.base, S.Name) and x.base.name == p.name
+                    for x in walk(S.Block(block.body + ([S.Return(ret)] if ret is not None else []))))
+        looped = any(isinstance(x, (S.For, S.While)) and _count(x, p.name) for x in walk(block))
+        if (simple or (uses <= 1 and not based and not looped and not calls(a) & set(ctx.functions))) \
+                and not (arg_ids & out_bases) \
+                and not (arg_ids & written & ctx.globals_):
+            subst[p.name] = a
+        else:
+            prelude.append((p, a))
+            declared.add(p.name)
     rename: dict[str, str] = {}
-    if form == "decl" and ret_expr in declared and _decl_type(bw, ret_expr, prelude) == typ:
-        rename[ret_expr] = target
-        ret_expr = None
+    if hoist and own and not (ret.name in declared and _decl_type(body, ret.name, prelude) == typ):
+        return False
+    if form == "decl" and isinstance(ret, S.Name) and ret.name in declared and _decl_type(body, ret.name, prelude) == typ \
+            and sum(isinstance(n, S.Declarator) and n.name == target for n in walk(caller.body)) == (not hoist) \
+            and not any(target in names(a) for a in args):
+        rename[ret.name] = target
+        ret = None
         caller_names.discard(target)
-    taken = caller_names | body_ids | set(subst.values())
+    # a loop's variable of the body clashes only with the arguments it reads, or a loop of the
+    # caller's around the call
+    arg_names = {n for a in subst.values() for n in names(a)}
+    taken = caller_names | body_ids | arg_names
+    loop_vars = _loop_vars(block) - {p.name for p, _ in prelude} - (_declared(caller) - _loop_vars(caller.body))
+    outer_loops = {d.name for n in walk(caller.body) if isinstance(n, S.For) and isinstance(n.init, S.Decl)
+                   and any(x is stmt for x in walk(n.body)) for d in n.init.declarators}
     for d in sorted(declared):
         if d in rename:
             continue
-        if d in caller_names and not (_loop_var(bw, d) and _loop_only(toks, d, m)):
+        if d in caller_names and not (d in loop_vars and d not in arg_names and d not in outer_loops):
             k = 2
             while f"{d}{k}" in taken:
                 k += 1
             rename[d] = f"{d}{k}"
             taken.add(rename[d])
-    if form == "decl" and target in (body_ids - set(rename)) and target not in subst.values():
-        return None
-
-    def sub(text: str) -> str:
-        ts = tokenize(text)
-        outs = []
-        prev = ""
-        for t in ts:
-            if t.kind == "id" and prev != ".":
-                outs.append(rename.get(t.text) or subst.get(t.text, t.text))
-            else:
-                outs.append(t.text)
-            if t.kind not in ("ws", "comment"):
-                prev = t.text
-        return "".join(outs)
-
-    lines = [f"{t} {rename.get(p, p)} = {a};" for t, p, a in prelude]
-    if f.comment and body.count("\n") >= _COMMENTED:
-        # a long body keeps the first sentence of its function's comment
-        lines[:0] = ["// " + ln for ln in textwrap.wrap(first_sentence(_text(f.comment), 116), 113)]
-    for ln in sub(body).split("\n"):
-        if not ln.strip() or ln.strip().startswith("//"):
-            continue
-        lines.append(ln[4:] if ln.startswith("    ") else ln.lstrip())
-    if ret_expr is not None:
-        r = sub(ret_expr)
+    if form == "decl" and target in (body_ids - set(rename)) and not any(
+            isinstance(a, S.Name) and a.name == target for a in subst.values()):
+        return False
+    new = [S.Decl(p.type, [S.Declarator(rename.get(p.name, p.name), init=clone(_bare(a)))]) for p, a in prelude]
+    new += substitute(block, subst, rename).body
+    if ret is not None:
+        r = substitute(S.Return(ret), subst, rename).value
         if form == "decl":
-            lines.append(f"{typ} {target} = {r};")
-        elif form == "assign" and r != target:
-            lines.append(f"{target} = {r};")
+            new.append(S.Decl(typ, [S.Declarator(target, init=r)]))
+        elif form == "assign" and not (isinstance(r, S.Name) and r.name == target):
+            new.append(S.ExprStmt(S.Assign("=", S.Name(target), r)))
         elif form == "return":
-            lines.append(f"return {r};")
-    before = _text(toks[:code[start]])
-    indent = before.rsplit("\n", 1)[-1] if "\n" in before else ""
-    if indent.strip():
-        return None
-    after = _text(toks[code[ccl + 1] + 1:])
-    if not lines:
-        before = before[:len(before) - len(indent)].rstrip(" \t")
-        if before.endswith("\n"):
-            before = before[:-1]
-        return tokenize(before + after)
-    return tokenize(before + ("\n" + indent).join(lines) + after)
+            new.append(S.Return(r))
+    if new:
+        lines = sum(not ln.lstrip().startswith("//") for s in body for ln in statement_glsl(s))
+        head = [] if hoist else list(stmt.comments)
+        if f.comments and lines >= _COMMENTED:
+            # a long body keeps the first sentence of its function's comment
+            text = first_sentence("\n".join(c for c in f.comments if c), 116)
+            head.append("\n".join("// " + ln for ln in textwrap.wrap(text, 113)))
+        new[0].comments = head + list(new[0].comments)
+        if not hoist and getattr(stmt, "trail", "") and hasattr(new[-1], "trail") and not new[-1].trail:
+            new[-1].trail = stmt.trail
+    k = next(i for i, s in enumerate(lst) if s is stmt)
+    if hoist:
+        lst[k:k] = new
+        transform(stmt, lambda n: S.Name(target) if n is call else n)
+    else:
+        lst[k:k + 1] = new
+    return True
 
 
-def _block_depth(w: list[str], k: int) -> int:
-    return sum((x == "{") - (x == "}") for x in w[:k])
-
-
-def _loop_var(bw: list[str], name: str) -> bool:
-    """Whether ``name`` is declared only as a ``for`` loop's variable in the body ``bw``."""
-    decls = [k for k in range(2, len(bw)) if bw[k] == name and _is_type(bw[k - 1])]
-    return bool(decls) and all(bw[k - 2] == "(" and k > 2 and bw[k - 3] == "for" for k in decls)
-
-
-def _decl_type(bw: list[str], name: str, prelude: list) -> str | None:
-    for t, p, _ in prelude:
-        if p == name:
-            return t
-    for k in range(1, len(bw) - 1):
-        if bw[k] == name and _is_type(bw[k - 1]) and (k < 2 or bw[k - 2] in _STARTS) and _block_depth(bw, k) == 0:
-            return bw[k - 1]
+def _decl_type(body: list, name: str, prelude: list) -> str | None:
+    for p, _ in prelude:
+        if p.name == name:
+            return p.type
+    for s in body:
+        if isinstance(s, S.Decl) and any(d.name == name and d.size is None for d in s.declarators):
+            return s.type
     return None
+
+
+# --------------------------------------------------------------------------------------------
+# parameters
+# --------------------------------------------------------------------------------------------
+
+def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
+    """Call ``drop(f, k, sites)`` for each parameter ``k`` of each function ``f`` whose signature
+    may change (defined once, not an entry point; ``sites``: its calls elsewhere, each with an
+    argument per parameter); where it returns True, the parameter and its arguments go."""
+    index, changed = call_sites(unit), False
+    for f in defined_once(unit).values():
+        if f.name in ctx.entries:
+            continue
+        sites = index.get(f.name, [])
+        if any(len(c.args) != len(f.params) for _, c in sites):
+            continue
+        k = 0
+        while k < len(f.params):
+            if f.params[k].size is None and drop(f, k, [(g, c) for g, c in sites if g is not f]):
+                del f.params[k]
+                for _, c in sites:
+                    del c.args[k]
+                changed = True
+            else:
+                k += 1
+    return changed
+
+
+@tree_pass
+def drop_unused_params(unit: S.Unit, ctx: Context) -> bool:
+    """Drop the parameters a function never reads (its callers' arguments with them)."""
+    return _each_param(unit, ctx, lambda f, k, sites: f.params[k].mode == "in" and f.params[k].name not in
+                       names(f.body) and not any(side_effects(c.args[k], ctx) for _, c in sites))
+
+
+@tree_pass
+def constant_args(unit: S.Unit, ctx: Context) -> bool:
+    """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
+    becomes that literal in the body, and the argument goes."""
+
+    def drop(f, k, sites):
+        p = f.params[k]
+        if p.mode != "in" or not sites or p.name in writes(f.body, ctx) or not literal(sites[0][1].args[k]) \
+                or len({expr_glsl(_bare(c.args[k])) for _, c in sites}) != 1:
+            return False
+        f.body = substitute(f.body, {p.name: _bare(sites[0][1].args[k])})
+        return True
+
+    return _each_param(unit, ctx, drop)
+
+
+@tree_pass
+def drop_unused_outs(unit: S.Unit, ctx: Context) -> bool:
+    """An ``out`` parameter whose argument is, at every call, a local used nowhere else becomes a
+    local of the function (whose stores the dead-store pass then removes)."""
+
+    def drop(f, k, sites):
+        p = f.params[k]
+        if p.mode != "out" or not sites or not all(_lone_local(g, c.args[k]) for g, c in sites):
+            return False
+        f.body.body.insert(0, S.Decl(p.type, [S.Declarator(p.name)]))
+        return True
+
+    return _each_param(unit, ctx, drop)
+
+
+def _lone_local(fn: S.Function, arg) -> bool:
+    """Whether ``arg`` is a local of ``fn`` named only where it is declared and here."""
+    if not isinstance(arg, S.Name):
+        return False
+    decls = [d for s in walk(fn.body) if isinstance(s, S.Decl) for d in s.declarators if d.name == arg.name]
+    return len(decls) == 1 and decls[0].init is None and decls[0].size is None \
+        and sum(isinstance(n, (S.Name, S.Declarator, S.Param)) and n.name == arg.name for n in walk(fn)) == 2

@@ -246,18 +246,6 @@ def _split_args(toks: list[Tok], code: list[int], lo: int, hi: int) -> list[tupl
     return args
 
 
-def _call_args(toks: list[Tok], code: list[int], names) -> list[tuple[str, int, int, int]]:
-    """``(function, k, start, end)`` for argument k of every call to a function in ``names``:
-    code positions [start, end) of the argument (``code``: the code tokens of ``toks``)."""
-    w = [toks[i].text for i in code]
-    out = []
-    for n in range(len(w) - 1):
-        if w[n] in names and w[n + 1] == "(":
-            cl = _match(toks, code, n + 1)
-            out += [(w[n], k, a, b) for k, (a, b) in enumerate(_split_args(toks, code, n + 1, cl))]
-    return out
-
-
 def _stmt_end(toks, code, w, n) -> int:
     """Code position of the last token of the statement starting at ``n``."""
     if w[n] == "{":
