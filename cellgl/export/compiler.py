@@ -310,14 +310,21 @@ def text_passes(*passes):
     the tree to :mod:`cellgl.export.reach`'s top-level text items and back, while passes move to
     the tree (it goes with the last of them). Changed: the text changed."""
 
+    settled: list = [None]            # the text (and context) these passes last left as it was
+
     @tree_pass
     def bridged(unit: S.Unit, ctx: Context) -> bool:
-        items = [it for it in parse(print_glsl(unit)) if it.kind != "other"]
+        printed = print_glsl(unit)
+        key = (printed, ctx.entries, ctx.keep, ctx.structs, ctx.fold_constants)
+        if settled[0] == key:
+            return False                  # (the passes are functions of their input)
+        items = [it for it in parse(printed) if it.kind != "other"]
         before = unparse(items)
         for p in passes:
             items = p(items, ctx)
         after = unparse(items)
         if after == before:
+            settled[0] = key
             return False
         unit.items[:] = S.parse(after).items
         return True
