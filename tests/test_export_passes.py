@@ -9,7 +9,6 @@ from cellgl.export import compiler
 from cellgl.export import fold as F
 from cellgl.export import simplify as SP
 from cellgl.export.printer import print_glsl
-from cellgl.export.reach import parse, unparse
 from cellgl.export.syntax import parse as parse_tree
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.tree import Context
@@ -479,78 +478,30 @@ def test_the_driver_stops_at_the_fixed_point():
     src = "float g(float x) {\n    return x * 2.0;\n}\nfloat entry(float x) {\n    return g(x) - 0.0;\n}\n"
     out = compiler.compile_glsl(src, ["entry"])
     assert compiler.compile_glsl(out, ["entry"]) == out          # a second run changes nothing
-    assert out == "float entry(float x) {\n    return x * 2.0;\n}\n"
+    assert out == "float entry(float x)\n{\n    return x * 2.0;\n}\n"
 
 
 def test_the_driver_raises_when_the_passes_do_not_settle(monkeypatch):
-    """A pass that changes the code every round (here: a stand-in for reachability that adds a
-    declaration each time) makes the driver raise, naming its round limit."""
+    """A pass that changes the tree every round (here: one that adds a declaration each time)
+    makes the driver raise, naming its round limit and the pass."""
     import itertools
 
-    from cellgl.export import reach as reach_mod
+    from cellgl.export.syntax import parse as parse_tree
+    from cellgl.export.tree import tree_pass
     rounds = itertools.count()
 
-    def growing(items, entries):
-        return reach_mod.reach(items, entries) + parse(f"const float k_{next(rounds)} = 1.0;\n")
-    monkeypatch.setattr(compiler, "reach", growing)
-    with pytest.raises(TranslateError, match=f"did not settle in {compiler.MAX_ROUNDS} rounds"):
+    @tree_pass
+    def growing(unit, ctx):
+        unit.items += parse_tree(f"const float k_{next(rounds)} = 1.0;\n").items
+        return True
+    monkeypatch.setattr(compiler, "ROUND", compiler.ROUND + [growing])
+    with pytest.raises(TranslateError, match=f"did not settle in {compiler.MAX_ROUNDS} rounds.*growing"):
         compiler.compile_glsl("float entry(float x) {\n    return x;\n}\n", ["entry"])
 
 
 # --------------------------------------------------------------------------------------------
 # reachability, scalarising, parameters, inlining, void results, dead stores
 # --------------------------------------------------------------------------------------------
-
-_STRUCT = """struct P {
-    float gain;
-    int mode;
-};
-const float k_gain = 2.0;
-const int k_mode = 1;
-P load()
-{
-    P t;
-    t.gain = k_gain;
-    t.mode = k_mode;
-    return t;
-}
-float scale(float x, P t)
-{
-    return x * t.gain + float(t.mode);
-}
-float unused(float x)
-{
-    return x;
-}
-float entry(float x)
-{
-    return scale(x, load());
-}
-"""
-
-
-def test_reach_keeps_what_the_entry_uses():
-    from cellgl.export.reach import reach
-
-    kept = reach(parse(_STRUCT), ["entry"])
-    assert [it.name for it in kept] == ["P", "k_gain", "k_mode", "load", "scale", "entry"]
-
-
-def test_scalarise_reads_the_loaders_values_directly():
-    from cellgl.export.reach import reach, scalarise
-
-    out = unparse(scalarise(reach(parse(_STRUCT), ["entry"]), "P", "load"))
-    assert out.endswith("""float scale(float x)
-{
-    return x * k_gain + float(k_mode);
-}
-
-float entry(float x)
-{
-    return scale(x);
-}
-""")
-
 
 # --------------------------------------------------------------------------------------------
 # inlining, parameters, results and fields: tree passes (cellgl/export/inline.py, fields.py)
@@ -897,3 +848,183 @@ float entry(float a)
 """
     assert _tree_pass(inline_once, src) == src
     assert _tree_pass(inline_short, src) == src
+
+
+# --------------------------------------------------------------------------------------------
+# reachability, parameter structs, comments, order and lines (reach.py, compiler.py's driver)
+# --------------------------------------------------------------------------------------------
+
+_STRUCT = """struct P {
+    float gain;
+    int mode;
+};
+const float k_gain = 2.0;
+const int k_mode = 1;
+P load()
+{
+    P t;
+    t.gain = k_gain;
+    t.mode = k_mode;
+    return t;
+}
+float scale(float x, P t)
+{
+    return x * t.gain + float(t.mode);
+}
+float unused(float x)
+{
+    return x;
+}
+float entry(float x)
+{
+    return scale(x, load());
+}
+"""
+
+
+def _core_pass(fn, text, **ctx):
+    from cellgl.export.printer import print_glsl
+    from cellgl.export.syntax import parse as parse_tree
+    from cellgl.export.tree import Context
+
+    unit = parse_tree(text)
+    changed = fn(unit, Context(**ctx).refresh(unit))
+    return changed, print_glsl(unit)
+
+
+def test_reach_keeps_what_the_entry_uses():
+    from cellgl.export.reach import reach
+
+    changed, out = _core_pass(reach, _STRUCT, entries=("scale",))
+    assert changed and out == """struct P {
+    float gain;
+    int mode;
+};
+
+float scale(float x, P t)
+{
+    return x * t.gain + float(t.mode);
+}
+"""
+    assert _core_pass(reach, out, entries=("scale",)) == (False, out)
+
+
+def test_scalarise_reads_the_loaders_values_directly():
+    from cellgl.export.reach import scalarise
+
+    changed, out = _core_pass(scalarise, _STRUCT, structs=(("P", "load"),))
+    assert changed and out.endswith("""float scale(float x)
+{
+    return x * k_gain + float(k_mode);
+}
+
+float unused(float x)
+{
+    return x;
+}
+
+float entry(float x)
+{
+    return scale(x);
+}
+""")
+
+
+def test_scalarise_keeps_the_fields_the_loader_computes():
+    """A field the loader computes from its parameter stays in the struct (and the loader); the
+    others are read as the constants (an expression in parentheses) and leave both."""
+    from cellgl.export.reach import scalarise
+
+    src = _STRUCT.replace("t.mode = k_mode;", "t.mode = k_mode + m;").replace("P load()", "P load(int m)") \
+        .replace("load()", "load(2)").replace("const int k_mode", "const float k_off = 0.5;\nconst int k_mode") \
+        .replace("t.gain = k_gain;", "t.gain = k_gain * k_off;")
+    changed, out = _core_pass(scalarise, src, structs=(("P", "load"),))
+    assert changed and out.startswith("""struct P {
+    int mode;
+};
+
+const float k_gain = 2.0;
+
+const float k_off = 0.5;
+
+const int k_mode = 1;
+
+P load(int m)
+{
+    P t;
+    t.mode = k_mode + m;
+    return t;
+}
+
+float scale(float x, P t)
+{
+    return x * (k_gain * k_off) + float(t.mode);
+}
+""")
+    assert _core_pass(scalarise, out, structs=(("P", "load"),)) == (False, out)
+
+
+def test_scalarise_leaves_a_struct_stored_into_elsewhere_alone():
+    from cellgl.export.reach import scalarise
+
+    src = _STRUCT.replace("    return x * t.gain", "    t.gain = 1.0;\n    return x * t.gain")
+    assert _core_pass(scalarise, src, structs=(("P", "load"),))[0] is False
+    src = _STRUCT.replace("    return scale(x, load());", "    P q;\n    return scale(x, q);")
+    assert _core_pass(scalarise, src, structs=(("P", "load"),))[0] is False
+
+
+def test_comments_a_declaration_keeps_the_first_sentence_of_its_own():
+    from cellgl.export.printer import print_glsl
+    from cellgl.export.reach import strip_body_comments, tidy_comments
+    from cellgl.export.syntax import parse as parse_tree
+
+    unit = parse_tree("""// ---- a file banner
+
+// Scale x by the gain (e.g. 2). Then more words
+// that the snippet does not need.
+float scale(float x)
+{
+    // a comment line in the body
+    float y = x * 2.0;  // after the statement
+
+    return y;
+}
+// trailing
+""")
+    strip_body_comments(unit)
+    assert print_glsl(unit) == """// Scale x by the gain (e.g. 2). Then more words
+// that the snippet does not need.
+float scale(float x)
+{
+    float y = x * 2.0;  // after the statement
+    return y;
+}
+"""
+    tidy_comments(unit, width=30)
+    assert print_glsl(unit).startswith("// Scale x by the gain (e.g.\n// 2).\nfloat scale(float x)\n")
+
+
+def test_first_sentence_stops_at_a_clause_when_the_sentence_is_long():
+    from cellgl.export.reach import first_sentence
+
+    assert first_sentence("// The cell of p. Its id.", 120) == "The cell of p."
+    long = "// The cell: " + "word " * 60 + "end."
+    assert first_sentence(long, 40) == "The cell."
+
+
+def test_ordered_puts_each_declaration_after_what_it_uses():
+    from cellgl.export.syntax import parse as parse_tree
+
+    unit = parse_tree("float f(float x)\n{\n    return x * k;\n}\nconst float k = g;\nconst float g = 2.0;\n"
+                      "float h()\n{\n    return f(k);\n}\n")
+    assert compiler.glsl_text(type(unit)(compiler._ordered(unit.items))) == (
+        "const float g = 2.0;\nconst float k = g;\nfloat f(float x)\n{\n    return x * k;\n}\n"
+        "float h()\n{\n    return f(k);\n}\n")
+
+
+def test_a_statement_longer_than_the_width_is_broken_where_it_reads_well():
+    wrap = compiler._wrap
+    assert wrap("    x = f(aaaa, bbbb);", 30) == ["    x = f(aaaa, bbbb);"]
+    assert wrap("    x = f(aaaa, bbbb, cccc);", 24) == ["    x = f(aaaa, bbbb,", "          cccc);"]
+    assert wrap("    if (aaaa && bbbbbb && cccc) {", 26) == ["    if (aaaa && bbbbbb", "        && cccc) {"]
+    assert wrap("    x = 1.0;  // a long comment past the width", 20) == ["    x = 1.0;  // a long comment past the width"]

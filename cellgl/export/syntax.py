@@ -475,13 +475,22 @@ class _Parser:
         return c
 
     def binary(self, level: int):
-        if level == len(BINARY_PRECEDENCE):
-            return self.unary()
-        e = self.binary(level + 1)
-        while self.peek() in BINARY_PRECEDENCE[level]:
+        """The binary expression whose operators bind at ``level`` or tighter
+        (:data:`BINARY_PRECEDENCE`; precedence climbing, left-associative)."""
+        return self.climb(self.unary(), level)
+
+    def climb(self, left, level: int):
+        lv = PRECEDENCE.get(self.peek())
+        while lv is not None and lv >= level:
             op = self.take()
-            e = Binary(op, e, self.binary(level + 1))
-        return e
+            right = self.unary()
+            nxt = PRECEDENCE.get(self.peek())
+            while nxt is not None and nxt > lv:
+                right = self.climb(right, lv + 1)
+                nxt = PRECEDENCE.get(self.peek())
+            left = Binary(op, left, right)
+            lv = PRECEDENCE.get(self.peek())
+        return left
 
     def unary(self):
         t = self.peek()

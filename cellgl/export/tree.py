@@ -27,10 +27,11 @@ ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=")
 
 _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Field, S.Function,
                                           S.Param, S.Global)
-_NODE_SET = frozenset(_NODE_TYPES)
 _SKIP = {"comments", "trail", "trailing"}
+_NODE_SET = frozenset(_NODE_TYPES)
+#: the fields of each node class that may hold nodes (not its names, operators and flags)
 _CHILD_FIELDS: dict[type, tuple[str, ...]] = {
-    t: tuple(f.name for f in fields(t) if f.name not in _SKIP) for t in _NODE_TYPES}
+    t: tuple(f.name for f in fields(t) if f.name not in _SKIP and f.type not in ("str", "bool")) for t in _NODE_TYPES}
 
 
 def tree_pass(fn):
@@ -58,9 +59,15 @@ def walk(node):
     while stack:
         n = stack.pop()
         yield n
-        kids = list(children(n))
+        kids = []
+        for name in _CHILD_FIELDS.get(type(n), ()):
+            v = getattr(n, name)
+            if type(v) is list:
+                kids += [x for x in v if type(x) in _NODE_SET]
+            elif type(v) in _NODE_SET:
+                kids.append(v)
         kids.reverse()
-        stack.extend(kids)
+        stack += kids
 
 
 def transform(node, fn):
@@ -98,13 +105,18 @@ def transform(node, fn):
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
     t = type(node)
-    if t is list:
-        return [clone(x) for x in node]
     if t not in _NODE_SET:
-        return node                      # str, None: immutable
-    out = object.__new__(t)
-    out.__dict__ = {k: clone(v) for k, v in node.__dict__.items()}
-    return out
+        return copy.deepcopy(node)
+    new = t.__new__(t)
+    d = new.__dict__
+    for k, v in node.__dict__.items():
+        if type(v) is list:
+            d[k] = [clone(x) if type(x) in _NODE_SET else x for x in v]
+        elif type(v) in _NODE_SET:
+            d[k] = clone(v)
+        else:
+            d[k] = v
+    return new
 
 
 def root_name(e) -> str | None:
@@ -137,16 +149,17 @@ class Context:
     def refresh(self, unit: S.Unit) -> "Context":
         self.functions = {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None}
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}
-        direct = set()
+        direct, called = set(), {}
         for f in self.functions.values():
+            called[f.name] = calls(f.body)
             if any(p.mode != "in" for p in f.params) or writes(f.body, self) & self.globals_:
                 direct.add(f.name)
         impure, grew = set(direct), True
         while grew:
             grew = False
-            for f in self.functions.values():
-                if f.name not in impure and calls(f.body) & impure:
-                    impure.add(f.name)
+            for name, c in called.items():
+                if name not in impure and c & impure:
+                    impure.add(name)
                     grew = True
         self.impure = impure
         return self
@@ -198,11 +211,14 @@ def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> int
     """Run ``passes`` over ``unit`` round after round until a whole round changes nothing;
     return the number of rounds. Raises :class:`TranslateError` naming the passes still
     changing the tree after ``max_rounds`` rounds (a pass undoes another)."""
+    stale = True
     for rounds in range(1, max_rounds + 1):
         changed = []
         for p in passes:
-            ctx.refresh(unit)
-            if p(unit, ctx):
+            if stale:                     # (a pass that changed nothing left the facts true)
+                ctx.refresh(unit)
+            stale = bool(p(unit, ctx))
+            if stale:
                 changed.append(getattr(p, "__name__", repr(p)))
         if not changed:
             return rounds
