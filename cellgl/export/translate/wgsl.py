@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import re
 
-from cellgl.export.translate.hlsl import RELATIONAL
+from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.translate.wgsl_parser import (
     _PREC_OF,
@@ -259,7 +259,7 @@ class _WgslEmitter:
             else:
                 plist.append(f"{self.name(pname)}: {wt}")
         rt = "" if ret == "void" else f" -> {self.type_(ret)}"
-        out = [f"fn {self.name(name)}({', '.join(plist)}){rt}", "{"] + prologue
+        out = [f"fn {self.name(name)}({', '.join(plist)}){rt} {{"] + prologue
         for s in body:
             out += self.stmt(s, "    ", mutated)
         out.append("}")
@@ -301,8 +301,8 @@ def _find_mutated(node, out: set[str], sigs: dict) -> None:
             _find_mutated(child, out, sigs)
 
 
-def to_wgsl(text: str) -> str:
-    """Translate specialised, prefixed GLSL (library subset) into WGSL.
+def to_wgsl(text) -> str:
+    """Translate specialised, prefixed GLSL (library subset; its text or its tree) into WGSL.
 
     Declarations become ``var``/``let``/``const`` with WGSL types, ``out``/``inout`` parameters
     become ``ptr<function, T>`` (callers pass ``&x``), parameters that the body assigns are

@@ -99,14 +99,15 @@ def _s(s):
 
 
 class _Parser:
-    """The parse of ``text`` (:func:`cellgl.export.syntax.parse`) as the emitters' tuples:
+    """The parse of ``text`` (:func:`cellgl.export.syntax.parse`; or ``text`` is a tree) as the
+    emitters' tuples:
     ``unit()`` lists ``("struct", comments, name, [[comments, type, name, size, trail]])``,
     ``("gdecl", comments, qualifiers, type, declarators)`` and ``("func", comments, return type,
     name, [(mode, type, name, size)], statements)`` (prototypes left out: WGSL and OSL need
     none); ``structs`` names the structs."""
 
-    def __init__(self, text: str):
-        self.tree = st.parse(text)
+    def __init__(self, text):
+        self.tree = text if isinstance(text, st.Unit) else st.parse(text)
         self.structs = {it.name for it in self.tree.items if isinstance(it, st.Struct)}
 
     def unit(self) -> list:
