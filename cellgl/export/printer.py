@@ -41,8 +41,7 @@ from cellgl.export.syntax import (
 )
 from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError
 
-__all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "expr_glsl", "statement_glsl", "item_glsl",
-           "RELATIONAL", "operand"]
+__all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "RELATIONAL", "operand"]
 
 #: GLSL's component-wise relational functions and the infix operator each is (HLSL, WGSL, OSL)
 RELATIONAL = {
@@ -359,24 +358,6 @@ def print_target(unit: Unit, dialect: str) -> str:
     return DIALECTS[dialect]().unit(unit)
 
 
-_GLSL = Glsl()
-
-
-def expr_glsl(e) -> str:
-    """GLSL of an expression node."""
-    return _GLSL.expr(e)
-
-
-def statement_glsl(s, ind: str = "") -> list[str]:
-    """Lines of a statement node at indentation ``ind``."""
-    return _GLSL.statement(s, ind)
-
-
-def item_glsl(it) -> list[str]:
-    """Lines of a top-level node."""
-    return _GLSL.item(it)
-
-
 def print_glsl(unit: Unit) -> str:
-    """GLSL text of a tree: its items one blank line apart."""
-    return _GLSL.unit(unit)
+    """GLSL text of a tree: its items one blank line apart, a function's brace on its own line."""
+    return Glsl().unit(unit)
