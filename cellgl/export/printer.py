@@ -237,7 +237,7 @@ class Glsl:
     def unit(self, unit: Unit) -> str:
         """The text of a tree: its items (one blank line apart if ``blank``), then the comments
         after the last."""
-        parts = ["\n".join(self.item(it)) for it in unit.items]
+        parts = ["\n".join(lines) for lines in map(self.item, unit.items) if lines]
         if unit.trailing:
             parts.append("\n".join(self.comments(unit.trailing, "")))
         text = ("\n\n" if self.blank else "\n").join(parts) + "\n"
