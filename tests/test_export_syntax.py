@@ -257,3 +257,56 @@ def test_the_printers_keep_the_tree():
     before = st.parse(_TARGET_SRC)
     assert print_target(unit, "hlsl") == print_target(unit, "hlsl") and unit == before
     assert Glsl().unit(unit) == print_glsl(unit)
+
+
+def test_wgsl_printer_hooks():
+    # Wgsl (translate/wgsl.py): WGSL types and declarations, out/inout parameters as pointers
+    # (callers pass them on or take &x), an assigned parameter copied into a var, operands of
+    # mixed operators parenthesised, shift counts u32, loop bodies braced, ternaries as select,
+    # mod as a helper, the comments kept
+    from cellgl.export.translate.wgsl import to_wgsl
+
+    src = """struct P {
+    float a;  // the first
+};
+const float k = 2.0;
+void g(inout vec2 y, float s) {
+    y.x += s;
+}
+// Sums.
+float f(float x, out vec2 y) {
+    x *= k;  // scaled
+    y = vec2(x);
+    g(y, x);
+    bool b = x > 1.0 && x < 2.0 || x == 0.0;
+    uint h = 3u << uint(x) >> 2u;
+    for (int i = 0; i < 2; i++)
+        x += float(i);
+    return b ? -(x + 1.0) : mod(x, 2.0);
+}
+"""
+    assert to_wgsl(st.parse(src)) == """// GLSL mod(): x - y * floor(x / y).
+fn cellgl_mod(x: f32, y: f32) -> f32 { return x - y * floor(x / y); }
+struct P {
+    a: f32,  // the first
+};
+const k: f32 = 2.0;
+fn g(y: ptr<function, vec2<f32>>, s: f32) {
+    (*y).x += s;
+}
+// Sums.
+fn f(x_in: f32, y: ptr<function, vec2<f32>>) -> f32 {
+    var x: f32 = x_in;
+    x *= k;  // scaled
+    *y = vec2<f32>(x);
+    g(y, x);
+    var b: bool = ((x > 1.0) && (x < 2.0)) || (x == 0.0);
+    var h: u32 = (3u << u32(u32(x))) >> 2u;
+    for (var i: i32 = 0; i < 2; i++) {
+        x += f32(i);
+    }
+    return select(cellgl_mod(x, 2.0), -(x + 1.0), b);
+}
+"""
+    with pytest.raises(TranslateError, match="uniforms need bindings"):
+        to_wgsl(st.parse("uniform float u;"))
