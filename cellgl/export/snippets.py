@@ -9,8 +9,9 @@ the entry points
   is ``uv`` in [0, 1]^2;
 * ``vec4 cellgl_texture3(vec3 p)``: solid recipes only, object-space texturing.
 
-GLSL ES, Godot, HLSL and WGSL are generated mechanically from the same specialised GLSL
-(:mod:`cellgl.export.translate`), never from a second copy of the maths.
+Every target is printed from one syntax tree of the compiled GLSL (:mod:`cellgl.export.syntax`;
+GLSL, GLSL ES, Godot and HLSL by :mod:`cellgl.export.printer`, WGSL and OSL by
+:mod:`cellgl.export.translate`), never from a second copy of the maths.
 """
 from __future__ import annotations
 
