@@ -118,12 +118,11 @@ _DEFAULTS = dict(metric="euclidean", distribution="poisson", density=3.0, jitter
 
 
 def _tails(key: str, dim: int, ret: str) -> dict:
-    """Shadertoy mainImage, Godot fragment() and the Unity Custom Function wrapper."""
+    """Shadertoy mainImage, Godot fragment() and the Unity Custom Function wrapper (GLSL, printed
+    in the target's dialect)."""
     show = {"float": "v", "vec2": "v.y - v.x", "vec3": "v.x", "vec4": "v.x",
             "uint": "float(v & 255u) / 255.0"}[ret]
     at = {2: "uv", 3: "vec3(uv, T)", 4: "vec4(uv, T, 0.0)"}[dim]    # uv: 8 cells per unit
-    hlsl_ret = {"vec2": "float2", "vec3": "float3", "vec4": "float4"}.get(ret, ret)
-    hlsl_p = f"float{dim}"
     return {
         "shadertoy": ("// Shadertoy entry: 8 cells per screen height.\n"
                       "void mainImage(out vec4 fragColor, in vec2 fragCoord) {\n"
@@ -133,7 +132,7 @@ def _tails(key: str, dim: int, ret: str) -> dict:
                   f"    {ret} v = cellgl_{key}({at.replace('uv', 'UV * 8.0').replace('T', '0.25 * TIME')});\n"
                   f"    COLOR = vec4(vec3({show}), 1.0);\n}}\n"),
         "unity": (f"// Unity Shader Graph Custom Function node (Type: File, Name: cellgl_{key}).\n"
-                  f"void cellgl_{key}_float({hlsl_p} P, out {hlsl_ret} Out)\n{{\n"
+                  f"void cellgl_{key}_float(vec{dim} P, out {ret} Out)\n{{\n"
                   f"    Out = cellgl_{key}(P);\n}}\n"),
     }
 

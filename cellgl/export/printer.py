@@ -1,9 +1,18 @@
-"""GLSL text of :mod:`cellgl.export.syntax`'s tree: :func:`print_glsl` (4-space indentation,
-a block's brace on the line that opens it, except a function's; the comments where they were;
-parentheses as written)."""
+"""Shader text of :mod:`cellgl.export.syntax`'s tree: GLSL and the dialects printed like it.
+
+:class:`Glsl` prints GLSL (4-space indentation, a block's brace on the line that opens it, the
+comments where they were, parentheses as written); its hooks (:meth:`Glsl.type`,
+:meth:`Glsl.decl_type`, :meth:`Glsl.name`, :meth:`Glsl.call`, :meth:`Glsl.ctor`, ...) are where a
+dialect differs: :class:`Gles` pins declarations to ``highp``, :class:`Hlsl` spells types,
+built-ins, constructors and ``mod`` the HLSL way. Godot's shading language reads the library's
+GLSL subset as it is (its float and int defaults are highp), so Godot prints as :class:`Glsl`.
+:func:`print_target` prints a snippet's code for a target dialect; :func:`print_glsl` the
+compiler's text (an item per paragraph, a function's brace on its own line).
+"""
 from __future__ import annotations
 
 from cellgl.export.syntax import (
+    PRECEDENCE,
     ArrayCtor,
     Assign,
     Binary,
@@ -30,138 +39,344 @@ from cellgl.export.syntax import (
     Unit,
     While,
 )
+from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError
 
-__all__ = ["print_glsl", "expr_glsl", "statement_glsl", "item_glsl"]
+__all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "expr_glsl", "statement_glsl", "item_glsl",
+           "RELATIONAL", "operand"]
+
+#: GLSL's component-wise relational functions and the infix operator each is (HLSL, WGSL, OSL)
+RELATIONAL = {
+    "lessThan": "<", "lessThanEqual": "<=", "greaterThan": ">", "greaterThanEqual": ">=",
+    "equal": "==", "notEqual": "!=",
+}
 
 
-# --------------------------------------------------------------------------------------------
-# printer
-# --------------------------------------------------------------------------------------------
+def operand(e, text: str, op: str) -> str:
+    """``text`` (the printed ``e``) as an operand of the binary operator ``op``: in parentheses
+    where ``e`` binds no tighter than ``op`` (an assignment, a ternary, a looser operator)."""
+    if isinstance(e, (Assign, Ternary)) or (isinstance(e, Binary) and PRECEDENCE[e.op] <= PRECEDENCE[op]):
+        return f"({text})"
+    return text
+
+
+class Glsl:
+    """GLSL text of a tree. ``kr``: a function's opening brace on its signature line (the
+    snippets) rather than on its own line; ``blank``: a blank line between top-level items."""
+
+    def __init__(self, *, kr: bool = False, blank: bool = True):
+        self.kr = kr
+        self.blank = blank
+
+    # ---------------------------------------------------------------- hooks
+    def type(self, t: str) -> str:
+        """A type where it is used (constructors, casts)."""
+        return t
+
+    def decl_type(self, t: str) -> str:
+        """A type where it declares something (variables, parameters, members, results)."""
+        return self.type(t)
+
+    def name(self, n: str) -> str:
+        """A declared or referenced name."""
+        return n
+
+    def quals(self, quals: list) -> list:
+        """The qualifiers of a global (``const``, ``uniform``)."""
+        return quals
+
+    def call(self, e: Call) -> str:
+        return f"{self.name(e.func)}({self.args(e.args)})"
+
+    def ctor(self, e: Ctor) -> str:
+        return f"{self.type(e.type)}({self.args(e.args)})"
+
+    def array_ctor(self, e: ArrayCtor) -> str:
+        return f"{self.type(e.type)}[{self.expr(e.size)}]({self.args(e.args)})"
+
+    def jump(self, kind: str) -> str:
+        return kind + ";"
+
+    def prelude(self) -> list[str]:
+        """Lines before the first item, known once the items are printed (HLSL's helpers)."""
+        return []
+
+    # ---------------------------------------------------------------- expressions
+    def args(self, args: list) -> str:
+        return ", ".join(self.expr(a) for a in args)
+
+    def expr(self, e) -> str:
+        """The text of an expression node."""
+        if isinstance(e, Num):
+            return e.text
+        if isinstance(e, Name):
+            return self.name(e.name)
+        if isinstance(e, Paren):
+            return f"({self.expr(e.inner)})"
+        if isinstance(e, Call):
+            return self.call(e)
+        if isinstance(e, Ctor):
+            return self.ctor(e)
+        if isinstance(e, ArrayCtor):
+            return self.array_ctor(e)
+        if isinstance(e, Unary):
+            return e.op + self.expr(e.operand)
+        if isinstance(e, IncDec):
+            return self.expr(e.operand) + e.op if e.postfix else e.op + self.expr(e.operand)
+        if isinstance(e, Binary):
+            return f"{self.expr(e.left)} {e.op} {self.expr(e.right)}"
+        if isinstance(e, Assign):
+            return f"{self.expr(e.target)} {e.op} {self.expr(e.value)}"
+        if isinstance(e, Ternary):
+            return f"{self.expr(e.cond)} ? {self.expr(e.then)} : {self.expr(e.other)}"
+        if isinstance(e, Index):
+            return f"{self.expr(e.base)}[{self.expr(e.index)}]"
+        if isinstance(e, Member):
+            return f"{self.expr(e.base)}.{self.name(e.name)}"
+        raise TypeError(f"not an expression node: {e!r}")
+
+    # ---------------------------------------------------------------- statements
+    @staticmethod
+    def comments(com: list, ind: str) -> list[str]:
+        out = []
+        for c in com:
+            out += [ind + ln.strip() if ln.strip() else "" for ln in c.split("\n")] if c else [""]
+        return out
+
+    def declarators(self, typ: str, decls: list) -> str:
+        parts = []
+        for d in decls:
+            s = self.name(d.name) + (f"[{self.expr(d.size)}]" if d.size is not None else "")
+            parts.append(s + (f" = {self.expr(d.init)}" if d.init is not None else ""))
+        return f"{self.decl_type(typ)} {', '.join(parts)}"
+
+    def simple(self, s) -> str:
+        if isinstance(s, Decl):
+            return ("const " if s.const else "") + self.declarators(s.type, s.declarators)
+        return self.expr(s.expr)
+
+    def statement(self, s, ind: str = "") -> list[str]:
+        """Lines of a statement node at indentation ``ind``."""
+        out = self.comments(s.comments, ind)
+        trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
+        if isinstance(s, Block):
+            return out + [ind + "{" + _trail(s)] + self.body(s, ind) + [ind + "}"]
+        if isinstance(s, (Decl, ExprStmt)):
+            return out + [ind + self.simple(s) + ";" + trail]
+        if isinstance(s, Return):
+            return out + [ind + ("return;" if s.value is None else f"return {self.expr(s.value)};")]
+        if isinstance(s, Jump):
+            return out + [ind + self.jump(s.kind)]
+        if isinstance(s, If):
+            out += self.head(f"if ({self.expr(s.cond)})", s.then, ind)
+            other = s.other
+            if other is None:
+                return out
+            closed = out[-1] == ind + "}"
+            if closed and isinstance(other, If) and not other.comments:
+                first, *rest = self.statement(other, ind)
+                return out[:-1] + [f"{ind}}} else {first.lstrip()}"] + rest
+            if closed and isinstance(other, Block) and not other.comments:
+                return out[:-1] + [f"{ind}}} else {{" + _trail(other)] + self.body(other, ind) + [ind + "}"]
+            return out + [ind + "else"] + self.statement(other, ind + "    ")
+        if isinstance(s, For):
+            init = "" if s.init is None else self.simple(s.init)
+            cond = "" if s.cond is None else " " + self.expr(s.cond)
+            step = "" if s.step is None else " " + self.expr(s.step)
+            return out + self.head(f"for ({init};{cond};{step})", s.body, ind)
+        if isinstance(s, While):
+            return out + self.head(f"while ({self.expr(s.cond)})", s.body, ind)
+        raise TypeError(f"not a statement node: {s!r}")
+
+    def body(self, block: Block, ind: str) -> list[str]:
+        """The lines of a block's statements (a statement written on the line of the one before
+        it stays there, as the library pairs short ones)."""
+        out: list[str] = []
+        prev = None
+        for x in block.body:
+            lines = self.statement(x, ind + "    ")
+            if getattr(x, "same_line", False) and not x.comments and isinstance(prev, (Decl, ExprStmt)) \
+                    and not prev.trail:
+                out[-1] += " " + lines[0].lstrip()
+            else:
+                out += lines
+            prev = x
+        return out
+
+    def head(self, head: str, body, ind: str) -> list[str]:
+        if isinstance(body, Block) and not body.comments:
+            return [f"{ind}{head} {{" + _trail(body)] + self.body(body, ind) + [ind + "}"]
+        if isinstance(body, (For, While)) and not body.comments:       # a loop nest: one level
+            return [ind + head] + self.statement(body, ind)
+        return [ind + head] + self.statement(body, ind + "    ")
+
+    # ---------------------------------------------------------------- top level
+    def param(self, p) -> str:
+        return (("const " if p.const else "") + (p.mode + " " if p.mode != "in" else "")
+                + f"{self.decl_type(p.type)} {self.name(p.name)}"
+                + (f"[{self.expr(p.size)}]" if p.size is not None else ""))
+
+    def item(self, it) -> list[str]:
+        """Lines of a top-level node."""
+        out = self.comments(it.comments, "")
+        if isinstance(it, Struct):
+            out.append(f"struct {self.name(it.name)} {{")
+            for f in it.fields:
+                size = f"[{self.expr(f.size)}]" if f.size is not None else ""
+                out += self.comments(f.comments, "    ")
+                out.append(f"    {self.decl_type(f.type)} {self.name(f.name)}{size};" + (f"  {f.trail}" if f.trail else ""))
+            return out + ["};"]
+        if isinstance(it, Global):
+            return out + [" ".join(self.quals(it.quals) + [self.declarators(it.type, it.declarators)]) + ";"]
+        if isinstance(it, Function):
+            sig = f"{self.decl_type(it.ret)} {self.name(it.name)}({', '.join(self.param(p) for p in it.params)})"
+            if it.body is None:
+                return out + [sig + ";"]
+            opening = [sig + " {" + _trail(it.body)] if self.kr else [sig, "{" + _trail(it.body)]
+            return out + opening + self.body(it.body, "") + ["}"]
+        raise TypeError(f"not a top-level node: {it!r}")
+
+    def unit(self, unit: Unit) -> str:
+        """The text of a tree: its items (one blank line apart if ``blank``), then the comments
+        after the last."""
+        parts = ["\n".join(lines) for lines in map(self.item, unit.items) if lines]
+        if unit.trailing:
+            parts.append("\n".join(self.comments(unit.trailing, "")))
+        text = ("\n\n" if self.blank else "\n").join(parts) + "\n"
+        pre = self.prelude()
+        return "\n".join(pre) + "\n" + text if pre else text
+
+
+def _trail(block: Block) -> str:
+    return f"  {block.trail}" if block.trail else ""
+
+
+#: the GLSL types a GLSL ES declaration pins to highp
+_PRECISION_TYPES = GLSL_TYPES - {"void", "bool", "bvec2", "bvec3", "bvec4"}
+
+
+class Gles(Glsl):
+    """GLSL ES 3.00: every float, int and uint declaration ``highp`` (the default int precision
+    of ES fragment shaders is mediump, 16 bits on some GPUs, which would break the 32-bit hashes;
+    qualifying each declaration leaves the user's own ``precision`` statements alone)."""
+
+    def decl_type(self, t: str) -> str:
+        return f"highp {t}" if t in _PRECISION_TYPES else t
+
+
+class Hlsl(Glsl):
+    """HLSL (SM 4+/5, DXC and FXC): vector types renamed (``vec4`` -> ``float4``), one-argument
+    vector constructors as casts (``vec4(x)`` -> ``((float4)(x))``: splat or conversion), array
+    and struct constructors as initialiser lists, global ``const`` as ``static const``,
+    relational functions as operators, ``mod`` as a helper with GLSL's floor semantics (HLSL's
+    ``fmod`` truncates), built-ins renamed (:data:`FUNCS`), names HLSL reserves suffixed ``_``;
+    what has no translation (:data:`UNSUPPORTED`) raises :class:`TranslateError`."""
+
+    TYPES = {f"{g}vec{n}": f"{h}{n}" for g, h in (("", "float"), ("i", "int"), ("u", "uint"), ("b", "bool"))
+             for n in (2, 3, 4)}
+    #: GLSL built-in -> HLSL built-in (same arguments)
+    FUNCS = {"fract": "frac", "mix": "lerp", "inversesqrt": "rsqrt", "dFdx": "ddx", "dFdy": "ddy",
+             "floatBitsToUint": "asuint", "floatBitsToInt": "asint", "uintBitsToFloat": "asfloat",
+             "intBitsToFloat": "asfloat"}
+    #: identifiers HLSL (or its effect syntax) reserves that are legal GLSL names
+    RESERVED = {
+        "point", "line", "lineadj", "triangle", "triangleadj", "sample", "linear", "centroid",
+        "nointerpolation", "noperspective", "precise", "groupshared", "shared", "static", "unorm",
+        "snorm", "packoffset", "register", "vector", "matrix", "half", "double", "dword", "string",
+        "sampler", "compile", "pass", "technique", "row_major", "column_major", "export", "extern",
+        "globallycoherent", "interface", "namespace", "class", "typedef", "volatile", "inline",
+        "min16float", "min10float", "min16int", "min12int", "min16uint", "cbuffer", "tbuffer", "Buffer",
+        "asm", "template", "this", "unsigned", "auto", "catch", "char", "signed", "sizeof", "throw",
+        "try", "union", "using", "virtual",
+    }
+    #: GLSL constructs with no mechanical translation here
+    UNSUPPORTED = {"mat2", "mat3", "mat4", "sampler2D", "sampler3D", "texture", "texelFetch", "discard",
+                   "gl_FragCoord", "gl_FragColor"}
+
+    def __init__(self):
+        super().__init__(kr=True, blank=False)
+        self.uses_mod = False
+
+    def _check(self, n: str) -> str:
+        if n in self.UNSUPPORTED:
+            raise TranslateError(f"{n!r} has no HLSL translation in cellgl's exporter")
+        return n
+
+    def type(self, t: str) -> str:
+        return self.TYPES.get(self._check(t), t)
+
+    def name(self, n: str) -> str:
+        return n + "_" if self._check(n) in self.RESERVED else n
+
+    def quals(self, quals: list) -> list:
+        return ["static const" if q == "const" else q for q in quals]
+
+    def jump(self, kind: str) -> str:
+        return self._check(kind) + ";"
+
+    def call(self, e: Call) -> str:
+        f, args = self._check(e.func), e.args
+        if f in RELATIONAL:
+            if len(args) != 2:
+                raise TranslateError(f"{f} needs 2 arguments, got {len(args)}")
+            a, b = (operand(x, self.expr(x), RELATIONAL[f]) for x in args)
+            return f"({a} {RELATIONAL[f]} {b})"
+        if f == "atan" and len(args) == 2:
+            f = "atan2"
+        elif f == "mod":
+            f, self.uses_mod = "cellgl_mod", True
+        else:
+            f = self.FUNCS.get(f, self.name(f))
+        return f"{f}({self.args(args)})"
+
+    def ctor(self, e: Ctor) -> str:
+        if e.type not in GLSL_TYPES:                    # a struct: an initialiser list
+            return "{" + self.args(e.args) + "}"
+        if e.type in self.TYPES and len(e.args) == 1:   # a splat or a conversion: a cast
+            return f"(({self.type(e.type)})({self.expr(e.args[0])}))"
+        return super().ctor(e)
+
+    def array_ctor(self, e: ArrayCtor) -> str:
+        return "{" + self.args(e.args) + "}"
+
+    def prelude(self) -> list[str]:
+        if not self.uses_mod:
+            return []
+        lines = ["// GLSL mod(): x - y * floor(x / y) (HLSL's fmod truncates instead)."]
+        for t in ("float", "float2", "float3", "float4"):
+            for y in (t, "float") if t != "float" else (t,):
+                lines.append(f"{t} cellgl_mod({t} x, {y} y) {{ return x - y * floor(x / y); }}")
+        return lines
+
+
+#: the printer of each snippet dialect (Godot: GLSL's; see the module's text)
+DIALECTS = {"glsl": lambda: Glsl(kr=True, blank=False), "godot": lambda: Glsl(kr=True, blank=False),
+            "gles": lambda: Gles(kr=True, blank=False), "hlsl": Hlsl}
+
+
+def print_target(unit: Unit, dialect: str) -> str:
+    """The snippet text of ``unit`` in ``dialect`` (``glsl``, ``gles``, ``godot``, ``hlsl``):
+    items one after the other, a function's brace on its signature line."""
+    return DIALECTS[dialect]().unit(unit)
+
+
+def print_glsl(unit: Unit) -> str:
+    """GLSL text of a tree: its items one blank line apart, a function's brace on its own line."""
+    return Glsl().unit(unit)
+
+
+_GLSL = Glsl()
 
 
 def expr_glsl(e) -> str:
     """GLSL of an expression node."""
-    if isinstance(e, Num):
-        return e.text
-    if isinstance(e, Name):
-        return e.name
-    if isinstance(e, Paren):
-        return f"({expr_glsl(e.inner)})"
-    if isinstance(e, (Call, Ctor)):
-        return f"{e.func if isinstance(e, Call) else e.type}({', '.join(expr_glsl(a) for a in e.args)})"
-    if isinstance(e, ArrayCtor):
-        return f"{e.type}[{expr_glsl(e.size)}]({', '.join(expr_glsl(a) for a in e.args)})"
-    if isinstance(e, Unary):
-        return e.op + expr_glsl(e.operand)
-    if isinstance(e, IncDec):
-        return expr_glsl(e.operand) + e.op if e.postfix else e.op + expr_glsl(e.operand)
-    if isinstance(e, Binary):
-        return f"{expr_glsl(e.left)} {e.op} {expr_glsl(e.right)}"
-    if isinstance(e, Assign):
-        return f"{expr_glsl(e.target)} {e.op} {expr_glsl(e.value)}"
-    if isinstance(e, Ternary):
-        return f"{expr_glsl(e.cond)} ? {expr_glsl(e.then)} : {expr_glsl(e.other)}"
-    if isinstance(e, Index):
-        return f"{expr_glsl(e.base)}[{expr_glsl(e.index)}]"
-    if isinstance(e, Member):
-        return f"{expr_glsl(e.base)}.{e.name}"
-    raise TypeError(f"not an expression node: {e!r}")
-
-
-def _comments(com: list, ind: str) -> list[str]:
-    out = []
-    for c in com:
-        out += [ind + ln.strip() if ln.strip() else "" for ln in c.split("\n")] if c else [""]
-    return out
-
-
-def _declarators(typ: str, decls: list) -> str:
-    parts = []
-    for d in decls:
-        s = d.name + (f"[{expr_glsl(d.size)}]" if d.size is not None else "")
-        parts.append(s + (f" = {expr_glsl(d.init)}" if d.init is not None else ""))
-    return f"{typ} {', '.join(parts)}"
-
-
-def _simple(s) -> str:
-    if isinstance(s, Decl):
-        return ("const " if s.const else "") + _declarators(s.type, s.declarators)
-    return expr_glsl(s.expr)
+    return _GLSL.expr(e)
 
 
 def statement_glsl(s, ind: str = "") -> list[str]:
     """Lines of a statement node at indentation ``ind``."""
-    out = _comments(s.comments, ind)
-    trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
-    if isinstance(s, Block):
-        return out + [ind + "{" + trail] + [ln for x in s.body for ln in statement_glsl(x, ind + "    ")] + [ind + "}"]
-    if isinstance(s, (Decl, ExprStmt)):
-        return out + [ind + _simple(s) + ";" + trail]
-    if isinstance(s, Return):
-        return out + [ind + ("return;" if s.value is None else f"return {expr_glsl(s.value)};")]
-    if isinstance(s, Jump):
-        return out + [ind + s.kind + ";"]
-    if isinstance(s, If):
-        out += _head(f"if ({expr_glsl(s.cond)})", s.then, ind)
-        other = s.other
-        if other is None:
-            return out
-        closed = out[-1] == ind + "}"
-        if closed and isinstance(other, If) and not other.comments:
-            first, *rest = statement_glsl(other, ind)
-            return out[:-1] + [f"{ind}}} else {first.lstrip()}"] + rest
-        if closed and isinstance(other, Block) and not other.comments:
-            return out[:-1] + [f"{ind}}} else {{" + _trail(other)] \
-                + [ln for x in other.body for ln in statement_glsl(x, ind + "    ")] \
-                + [ind + "}"]
-        return out + [ind + "else"] + statement_glsl(other, ind + "    ")
-    if isinstance(s, For):
-        init = "" if s.init is None else _simple(s.init)
-        cond = "" if s.cond is None else " " + expr_glsl(s.cond)
-        step = "" if s.step is None else " " + expr_glsl(s.step)
-        return out + _head(f"for ({init};{cond};{step})", s.body, ind)
-    if isinstance(s, While):
-        return out + _head(f"while ({expr_glsl(s.cond)})", s.body, ind)
-    raise TypeError(f"not a statement node: {s!r}")
-
-
-def _trail(block) -> str:
-    return f"  {block.trail}" if block.trail else ""
-
-
-def _head(head: str, body, ind: str) -> list[str]:
-    if isinstance(body, Block) and not body.comments:
-        return [f"{ind}{head} {{" + _trail(body)] + [ln for x in body.body for ln in statement_glsl(x, ind + "    ")] \
-            + [ind + "}"]
-    return [ind + head] + statement_glsl(body, ind + "    ")
+    return _GLSL.statement(s, ind)
 
 
 def item_glsl(it) -> list[str]:
     """Lines of a top-level node."""
-    out = _comments(it.comments, "")
-    if isinstance(it, Struct):
-        out.append(f"struct {it.name} {{")
-        for f in it.fields:
-            size = f"[{expr_glsl(f.size)}]" if f.size is not None else ""
-            out += _comments(f.comments, "    ")
-            out.append(f"    {f.type} {f.name}{size};" + (f"  {f.trail}" if f.trail else ""))
-        return out + ["};"]
-    if isinstance(it, Global):
-        return out + [" ".join(it.quals + [_declarators(it.type, it.declarators)]) + ";"]
-    if isinstance(it, Function):
-        params = ", ".join((("const " if p.const else "") + (p.mode + " " if p.mode != "in" else "")
-                            + f"{p.type} {p.name}" + (f"[{expr_glsl(p.size)}]" if p.size is not None else ""))
-                           for p in it.params)
-        sig = f"{it.ret} {it.name}({params})"
-        if it.body is None:
-            return out + [sig + ";"]
-        return out + [sig, "{" + _trail(it.body)] + [ln for x in it.body.body for ln in statement_glsl(x, "    ")] + ["}"]
-    raise TypeError(f"not a top-level node: {it!r}")
-
-
-def print_glsl(unit: Unit) -> str:
-    """GLSL text of a tree: its items one blank line apart."""
-    parts = ["\n".join(item_glsl(it)) for it in unit.items]
-    if unit.trailing:
-        parts.append("\n".join(_comments(unit.trailing, "")))
-    return "\n\n".join(parts) + "\n"
+    return _GLSL.item(it)

@@ -9,8 +9,9 @@ the entry points
   is ``uv`` in [0, 1]^2;
 * ``vec4 cellgl_texture3(vec3 p)``: solid recipes only, object-space texturing.
 
-GLSL ES, Godot, HLSL and WGSL are generated mechanically from the same specialised GLSL
-(:mod:`cellgl.export.translate`), never from a second copy of the maths.
+Every target is printed from one syntax tree of the compiled GLSL (:mod:`cellgl.export.syntax`;
+GLSL, GLSL ES, Godot and HLSL by :mod:`cellgl.export.printer`, WGSL and OSL by
+:mod:`cellgl.export.translate`), never from a second copy of the maths.
 """
 from __future__ import annotations
 
@@ -24,6 +25,8 @@ from cellgl.gl import glsl
 from cellgl.export import compiler, translate
 from cellgl.export.command import command_for
 from cellgl.export.names import comment_text, identifier
+from cellgl.export.printer import print_target
+from cellgl.export.syntax import Global, parse, parsed_library
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
 
@@ -198,7 +201,9 @@ def _comment(text: str, mark: str = "//") -> str:
     return "\n".join(f"{mark} {ln}".rstrip() for ln in text.split("\n"))
 
 
-def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> str:
+def _header(prog: Program, target: Target, uniforms: bool, declared: set | None = None) -> str:
+    """The comment block on top of a snippet; ``declared``: the code's global names (the
+    uniforms listed are those of them)."""
     entry = list(prog.signatures) if prog.signatures else [
         "vec4 cellgl_texture(vec2 uv): the RGBA `cellgl bake` writes for the pixel centred at uv in "
         "[0,1]^2 (v = 0: top row)" + ("; fragment shaders (pixel size from fwidth(uv))" if prog.filtered else "")]
@@ -227,10 +232,9 @@ def _header(prog: Program, target: Target, uniforms: bool, code: str = "") -> st
         *textwrap.wrap(_how(target, prog), 116),
     ]
     if uniforms and prog.uniforms:
-        used = set(re.findall(r"\bcellgl_(\w+)", code)) if code else None
         lines += ["Uniforms (set them to these values to reproduce the recipe):"]
         for typ, name, value in prog.uniforms:
-            if used is None or name in used:
+            if declared is None or f"cellgl_{name}" in declared:
                 lines.append(f"  {typ} cellgl_{name} = {_fmt_value(value)}")
         if any(name == "origin_cell" for _, name, _ in prog.uniforms):
             lines += textwrap.wrap(
@@ -296,40 +300,27 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
     recipe's values stay named constants (see :func:`export`)."""
     tgt = check_target(target)
-    # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
-    # snippet has none, so it takes the folded code like every other target
-    code = library_code(prog, fold) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
-    head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
-    if d in ("glsl", "gles", "godot"):
-        code = _braces(code)
-    if d == "glsl":
-        body = code
-    elif d == "gles":
-        body = translate.add_highp(code)
-        if tgt.name == "shadertoy":
-            body += _braces(prog.tails.get("shadertoy", _SHADERTOY_MAIN).lstrip("\n"))
-    elif d == "godot":
-        body = _godot(code, tgt.name, prog.tails.get("godot", _GODOT_FRAGMENT))
-    elif d == "hlsl":
-        body = _braces(translate.to_hlsl(code) + ("" if tgt.name == "unreal" else
-                                                   prog.tails.get("unity", _UNITY_WRAPPER).lstrip("\n")))
-        if tgt.name == "unreal":
-            body = "#pragma once\n" + body
-    elif d == "wgsl":
-        body = _braces(translate.to_wgsl(code))
-    elif d == "osl":
+    if d == "osl":
+        # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
+        # snippet has none, so it takes the folded code like every other target
         from cellgl.export.osl import osl_shader
 
-        body = osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
-    else:  # pragma: no cover
-        raise AssertionError(d)
+        code = library_code(prog, fold) if prog.entries else specialised_code(prog)
+        return _header(prog, tgt, uniforms) + "\n" + osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
+    unit = parsed_library(library_code(prog, fold))     # the one parse; the printers only read it
+    head = _header(prog, tgt, uniforms, {d.name for it in unit.items if isinstance(it, Global) for d in it.declarators})
+    if d == "wgsl":
+        return head + "\n" + translate.to_wgsl(unit)
+    body = print_target(unit, d)
+    if tgt.name in _TAILS:
+        key, default, dialect = _TAILS[tgt.name]
+        body += print_target(parse(prog.tails.get(key, default)), dialect)
+    if tgt.name == "godot":
+        body = "shader_type canvas_item;\n" + body
+    elif tgt.name == "unreal":
+        body = "#pragma once\n" + body
     return head + "\n" + body
-
-
-def _braces(text: str) -> str:
-    """The opening brace of a function, a loop nest or a block on the line that opens it."""
-    return re.sub(r"(?m)^([ \t]*)((?![#/])\S[^\n]*[^\s;{},])\n\1\{$", r"\1\2 {", text)
 
 
 _SHADERTOY_MAIN = """
@@ -341,25 +332,21 @@ void mainImage(out vec4 fragColor, in vec2 fragCoord)
 }
 """
 
+# GLSL, printed as HLSL
 _UNITY_WRAPPER = """
 // Unity Shader Graph Custom Function node (Type: File, Name: cellgl_texture).
-void cellgl_texture_float(float2 UV, out float4 Out)
+void cellgl_texture_float(vec2 UV, out vec4 Out)
 {
     Out = cellgl_texture(UV);
 }
 """
 
-
+# Godot compiles its shaders with highp defaults (precision highp float/int): no qualifiers
 _GODOT_FRAGMENT = "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
 
-
-def _godot(code: str, name: str, fragment: str = _GODOT_FRAGMENT) -> str:
-    # Godot compiles its shaders with highp defaults (precision highp float/int), so the code
-    # needs no qualifiers.
-    body = code
-    if name == "godotinc":
-        return body
-    return "shader_type canvas_item;\n" + body + _braces(fragment.lstrip("\n"))
+#: target -> (its key in Program.tails, the default tail, the dialect it is printed in)
+_TAILS = {"shadertoy": ("shadertoy", _SHADERTOY_MAIN, "glsl"), "godot": ("godot", _GODOT_FRAGMENT, "glsl"),
+          "hlsl": ("unity", _UNITY_WRAPPER, "hlsl")}
 
 
 # --------------------------------------------------------------------------------------------

@@ -123,7 +123,7 @@ class Declarator:
 class Block:
     body: list
     comments: list = field(default_factory=list)
-    trail: str = ""                 # a comment after its opening brace
+    trail: str = ""                 # a // comment after its opening brace
 
 
 @dataclass
@@ -133,6 +133,7 @@ class Decl:
     const: bool = False
     comments: list = field(default_factory=list)
     trail: str = ""
+    same_line: bool = False         # written on the line of the statement before it
 
 
 @dataclass
@@ -140,6 +141,7 @@ class ExprStmt:
     expr: object
     comments: list = field(default_factory=list)
     trail: str = ""
+    same_line: bool = False         # written on the line of the statement before it
 
 
 @dataclass
@@ -241,8 +243,9 @@ class _Parser:
     def __init__(self, text: str):
         self.toks: list[tuple[str, str, list[str]]] = []   # (kind, text, comments before it)
         self.trail: dict[int, str] = {}     # token index -> comment on the rest of its line
+        self.inline: set[int] = set()       # the tokens that do not begin their line
         pending: list[str] = []
-        newline = True
+        newline = fresh = True              # fresh: no code token on this line yet
         for t in tokenize(text):
             if t.kind == "comment" and not newline and self.toks and t.text.startswith("//") \
                     and len(self.toks) - 1 not in self.trail:
@@ -251,15 +254,18 @@ class _Parser:
             if t.kind != "ws":
                 newline = False
             elif "\n" in t.text:
-                newline = True
+                newline = fresh = True
             if t.kind == "comment":
                 pending.append(t.text)
             elif t.kind == "ws":
                 if t.text.count("\n") >= 2 and pending and pending[-1] != "":
                     pending.append("")          # one blank line between comment blocks
             else:
+                if not fresh:
+                    self.inline.add(len(self.toks))
                 self.toks.append((t.kind, t.text, pending))
                 pending = []
+                fresh = False
         self.trailing = pending
         self.i = 0
         self.structs: set[str] = set()
@@ -436,10 +442,12 @@ class _Parser:
         if t == ";":
             self.take()
             return Block([], com)
+        same_line = self.i in self.inline and self.peek(-1) == ";"
         s = self.simple_statement()
         self.take(";")
         s.comments = com
         s.trail = self.trail.get(self.i - 1, "")
+        s.same_line = same_line
         return s
 
     def simple_statement(self):

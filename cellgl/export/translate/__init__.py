@@ -8,20 +8,19 @@ Pure text, no GL. Three steps turn the resolved ``shaders/lib`` sources into a s
    every macro name in the code is replaced by its value, so no directive and no macro is left.
 2. :func:`prefix_names` -- every top-level name (function, struct, global constant) gets the
    ``cellgl_`` prefix (structs ``Cellgl``), so nothing unprefixed leaks into the user's shader.
-3. :func:`to_hlsl` / :func:`to_wgsl` / :func:`to_osl` -- token-level translation of the specialised GLSL into
-   another dialect; :func:`add_highp` pins GLSL ES declarations to ``highp``.
+3. :func:`to_wgsl` / :func:`to_osl` -- translation of the specialised GLSL's tree
+   (:mod:`cellgl.export.syntax`) into WGSL and OSL; GLSL, GLSL ES, Godot and HLSL are printed
+   from the same tree by :mod:`cellgl.export.printer`.
 
 The translators cover the GLSL subset the library is written in (see DESIGN.md): scalars,
 vectors, structs, fixed-size arrays, ``in``/``out``/``inout`` parameters, for/if/else, ternaries,
-the built-ins in :data:`HLSL_FUNCS`. Anything else raises :class:`TranslateError` naming the
-construct, instead of emitting text that would not compile.
+the built-ins. Anything else raises :class:`TranslateError` naming the construct, instead of
+emitting text that would not compile.
 """
 from __future__ import annotations
 
-from cellgl.export.translate.hlsl import HLSL_FUNCS, to_hlsl
 from cellgl.export.translate.osl import to_osl
 from cellgl.export.translate.names import (
-           add_highp,
            prefix_names,
            prefixed,
            top_level_names,
@@ -30,5 +29,5 @@ from cellgl.export.translate.preprocess import specialise
 from cellgl.export.translate.tokens import TranslateError, tokenize
 from cellgl.export.translate.wgsl import to_wgsl
 
-__all__ = ["TranslateError", "tokenize", "specialise", "top_level_names", "prefix_names", "prefixed", "add_highp",
-           "to_hlsl", "to_wgsl", "to_osl", "HLSL_FUNCS"]
+__all__ = ["TranslateError", "tokenize", "specialise", "top_level_names", "prefix_names", "prefixed",
+           "to_wgsl", "to_osl"]

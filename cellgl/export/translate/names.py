@@ -1,17 +1,10 @@
-"""Step 2 of a snippet: :func:`prefix_names` gives every top-level name the ``cellgl_`` prefix;
-:func:`add_highp` pins GLSL ES declarations to ``highp``."""
+"""Step 2 of a snippet: :func:`prefix_names` gives every top-level name the ``cellgl_`` prefix."""
 from __future__ import annotations
 
 import re
 from collections.abc import Mapping
 
-from cellgl.export.translate.tokens import (
-    GLSL_TYPES,
-    TranslateError,
-    _code,
-    _join,
-    tokenize,
-)
+from cellgl.export.translate.tokens import TranslateError, _join, tokenize
 
 # --------------------------------------------------------------------------------------------
 # 2. top-level names and the prefix
@@ -128,30 +121,3 @@ def prefix_names(text: str, *, keep: set[str] = frozenset(),
         elif t.kind == "comment" and word is not None:
             t.text = word.sub(lambda m: mapping[m.group(1)], t.text)
     return _join(toks), mapping
-
-
-# --------------------------------------------------------------------------------------------
-# GLSL ES: highp everywhere
-# --------------------------------------------------------------------------------------------
-
-_PRECISION_TYPES = GLSL_TYPES - {"void", "bool", "bvec2", "bvec3", "bvec4"}
-
-
-def add_highp(text: str) -> str:
-    """Put ``highp`` before every declaration of a float/int/uint type (GLSL ES 3.00).
-
-    The ES default int precision in fragment shaders is ``mediump`` (16 bits on some GPUs),
-    which would break the 32-bit hashes; qualifying each declaration keeps the user's own
-    ``precision`` statements untouched.
-    """
-    toks = tokenize(text)
-    code = _code(toks)
-    for n, i in enumerate(code):
-        t = toks[i]
-        if t.kind != "id" or t.text not in _PRECISION_TYPES:
-            continue
-        nxt = toks[code[n + 1]] if n + 1 < len(code) else None
-        prv = toks[code[n - 1]].text if n else ""
-        if nxt is not None and nxt.kind == "id" and prv not in ("highp", "mediump", "lowp"):
-            t.text = "highp " + t.text
-    return _join(toks)

@@ -26,8 +26,7 @@ import re
 
 from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
 from cellgl.export.translate.tokens import TranslateError
-from cellgl.export.translate.wgsl import _find_mutated
-from cellgl.export.translate.wgsl_parser import _Parser
+from cellgl.export.translate.wgsl_parser import _find_mutated, _Parser
 
 __all__ = ["to_osl", "OSL_RESERVED"]
 

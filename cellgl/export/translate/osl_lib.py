@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import re
 
+from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
 
 _VEC_RE = re.compile(r"([biu]?)vec([234])$")
@@ -13,8 +14,6 @@ _COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
 _XYZW = "xyzw"
 _CMP = {"<", ">", "<=", ">=", "==", "!="}
-_RELATIONAL = {"lessThan": "<", "lessThanEqual": "<=", "greaterThan": ">", "greaterThanEqual": ">=",
-               "equal": "==", "notEqual": "!="}
 #: component-wise built-ins: name -> OSL scalar function (arguments of the first's type)
 _ELEMENTWISE = {"abs": "abs", "floor": "floor", "ceil": "ceil", "sqrt": "sqrt", "exp": "exp",
                 "log": "log", "sign": "sign", "min": "min", "max": "max", "clamp": "clamp",
@@ -246,8 +245,8 @@ class _OslLib:
         ev = [self.ex(a) for a in args]
         types = [t for _, t in ev]
         ss = [s for s, _ in ev]
-        if fn in _RELATIONAL:
-            name, rt = self.vec_binary(_RELATIONAL[fn], types[0], types[1])
+        if fn in RELATIONAL:
+            name, rt = self.vec_binary(RELATIONAL[fn], types[0], types[1])
             return f"{name}({ss[0]}, {ss[1]})", rt
         if fn in ("any", "all"):
             return f"{self.any_all(fn, types[0])}({ss[0]})", "bool"

@@ -1,320 +1,256 @@
-"""Step 3b, second half: the WGSL emitter over :mod:`cellgl.export.translate.wgsl_parser`'s tree."""
+"""WGSL printed from :mod:`cellgl.export.syntax`'s tree: :class:`Wgsl`, the hooks of
+:class:`cellgl.export.printer.Glsl` that WGSL spells differently."""
 from __future__ import annotations
 
-import re
-
-from cellgl.export.translate.hlsl import RELATIONAL
-from cellgl.export.translate.tokens import TranslateError
-from cellgl.export.translate.wgsl_parser import (
-    _PREC_OF,
-    WGSL_FUNCS,
-    WGSL_RESERVED,
-    WGSL_SCALARS,
-    _Parser,
+from cellgl.export.printer import RELATIONAL, Glsl
+from cellgl.export.syntax import (
+    ArrayCtor,
+    Assign,
+    Binary,
+    Block,
+    Call,
+    Ctor,
+    Decl,
+    ExprStmt,
+    For,
+    Function,
+    Global,
+    If,
+    IncDec,
+    Index,
+    Member,
+    Name,
+    Num,
+    Paren,
+    Struct,
+    Ternary,
+    Unary,
+    Unit,
+    While,
+    parse,
 )
+from cellgl.export.translate.tokens import TranslateError
+from cellgl.export.tree import root_name, walk
+
+WGSL_SCALARS = {"float": "f32", "int": "i32", "uint": "u32", "bool": "bool"}
+WGSL_FUNCS = {"inversesqrt": "inverseSqrt", "dFdx": "dpdx", "dFdy": "dpdy",
+              "floatBitsToUint": "bitcast<u32>", "floatBitsToInt": "bitcast<i32>",
+              "uintBitsToFloat": "bitcast<f32>", "intBitsToFloat": "bitcast<f32>"}
+#: WGSL keywords and reserved words that are legal GLSL identifiers
+WGSL_RESERVED = {
+    "alias", "const_assert", "continuing", "diagnostic", "enable", "fn", "let", "loop", "override",
+    "requires", "var", "ptr", "array", "atomic", "sampler", "texture_2d", "f32", "i32", "u32", "f16",
+    "vec2", "vec3", "vec4", "mat2x2", "mat3x3", "mat4x4", "bitcast", "select", "target", "type",
+    "self", "super", "unless", "where", "with", "yield", "as", "async", "await", "become", "cast",
+    "catch", "class", "co_await", "co_return", "co_yield", "coherent", "column_major", "common",
+    "compile", "compile_fragment", "concept", "const_cast", "consteval", "constexpr", "constinit",
+    "crate", "debugger", "decltype", "delete", "demote", "demote_to_helper", "do", "dynamic_cast",
+    "enum", "explicit", "export", "extends", "extern", "external", "fallthrough", "filter", "final",
+    "finally", "friend", "from", "fxgroup", "get", "goto", "groupshared", "highp", "impl",
+    "implements", "import", "inline", "instanceof", "interface", "layout", "lowp", "macro",
+    "macro_rules", "match", "mediump", "meta", "mod", "module", "move", "mut", "mutable",
+    "namespace", "new", "nil", "noexcept", "noinline", "nointerpolation", "noperspective", "null",
+    "nullptr", "of", "operator", "package", "packoffset", "partition", "pass", "patch",
+    "pixelfragment", "precise", "precision", "premerge", "priv", "protected", "pub", "public",
+    "readonly", "ref", "regardless", "register", "reinterpret_cast", "require", "resource",
+    "restrict", "self", "set", "shared", "sizeof", "smooth", "snorm", "static", "static_assert",
+    "static_cast", "std", "subroutine", "template", "this", "thread_local", "throw", "trait", "try",
+    "typedef", "typeid", "typename", "typeof", "union", "unorm", "unsafe", "unsized", "use",
+    "using", "varying", "virtual", "volatile", "wgsl", "writeonly", "sample", "line", "point",
+}
 
 
-def _wgsl_type(t: str) -> str:
-    if t in WGSL_SCALARS:
-        return WGSL_SCALARS[t]
-    m = re.fullmatch(r"([biu]?)vec([234])", t)
-    if m:
-        return f"vec{m.group(2)}<{ {'': 'f32', 'i': 'i32', 'u': 'u32', 'b': 'bool'}[m.group(1)] }>"
-    if t.startswith("mat"):
-        raise TranslateError(f"WGSL translation: matrix type {t!r} is not supported")
-    return t
+def _bare(e):
+    while isinstance(e, Paren):
+        e = e.inner
+    return e
 
 
-class _WgslEmitter:
-    def __init__(self, unit: list, structs: set[str]):
-        self.unit = unit
-        self.structs = structs
-        self.sigs = {f[3]: [p[0] for p in f[4]] for f in unit if f[0] == "func"}
-        self.ptrs: set[str] = set()     # pointer parameters of the current function
+class Wgsl(Glsl):
+    """WGSL: declarations ``var``/``let``/``const`` with WGSL types, ``out``/``inout`` parameters
+    ``ptr<function, T>`` (callers pass ``&x``), parameters that the body assigns copied into a
+    ``var``, ternaries as ``select()`` (the library's ternaries have no side effects), every
+    loop and branch body braced, and a binary operation inside another parenthesised (WGSL does
+    not allow mixing e.g. ``&&`` and ``||`` without them)."""
+
+    def __init__(self, unit: Unit):
+        super().__init__(kr=True, blank=False)
+        self.modes = {f.name: [p.mode for p in f.params] for f in unit.items if isinstance(f, Function)}
+        self.ptrs: set[str] = set()                 # the pointer parameters of the function printed
         self.uses_mod = False
+
+    def type(self, t: str, size=None) -> str:
+        if t.startswith("mat"):
+            raise TranslateError(f"WGSL translation: matrix type {t!r} is not supported")
+        base = WGSL_SCALARS.get(t, t)
+        if t[:-1].endswith("vec") and t[-1] in "234":
+            base = f"vec{t[-1]}<{ {'': 'f32', 'i': 'i32', 'u': 'u32', 'b': 'bool'}[t[:-4]] }>"
+        return f"array<{base}, {self.expr(size)}>" if size is not None else base
 
     def name(self, n: str) -> str:
         return n + "_" if n in WGSL_RESERVED else n
 
-    def type_(self, t: str, size=None) -> str:
-        base = _wgsl_type(t)
-        return f"array<{base}, {self.e(size)}>" if size is not None else base
-
     # expressions
-    def e(self, x, parent: int | None = None) -> str:
-        k = x[0]
-        if k == "num":
-            t = x[1]
-            if t[-1] in "fF" and not t.lower().startswith("0x"):
-                t = t[:-1]
-            return t
-        if k == "id":
-            n = self.name(x[1])
-            if x[1] in self.ptrs:
-                return f"(*{n})" if parent == 99 else f"*{n}"
-            return n
-        if k == "paren":
-            return self.e(x[1])             # binary children are parenthesised as needed
-        if k == "member":
-            return f"{self.e(x[1], 99)}.{x[2]}"
-        if k == "index":
-            return f"{self.e(x[1], 99)}[{self.e(x[2])}]"
-        if k == "unary":
-            return f"{x[1]}{self.e(x[2], 99)}"
-        if k in ("postinc", "preinc"):
-            return f"{self.e(x[2])}{x[1]}"
-        if k == "binary":
-            op, lhs, rhs = x[1], x[2], x[3]
-            if op == "^^":
-                op = "!="
-            a = self.operand(lhs, op)
-            b = self.operand(rhs, op, right=True)
-            if op in ("<<", ">>") and rhs[0] != "num":
-                b = f"u32({self.e(rhs)})"
-            return f"{a} {op} {b}"
-        if k == "ternary":
-            return f"select({self.e(x[3])}, {self.e(x[2])}, {self.e(x[1])})"
-        if k == "assign":
-            return f"{self.e(x[2])} {x[1]} {self.e(x[3])}"
-        if k == "ctor":
-            t, args = x[1], x[2]
-            return f"{_wgsl_type(t)}({', '.join(self.e(a) for a in args)})"
-        if k == "arrctor":
-            return (f"array<{_wgsl_type(x[1])}, {self.e(x[2])}>("
-                    + ", ".join(self.e(a) for a in x[3]) + ")")
-        if k == "call":
-            fn, args = x[1], x[2]
-            if fn in RELATIONAL:
-                return f"({self.operand(args[0], '<')} {RELATIONAL[fn]} {self.operand(args[1], '<', True)})"
-            if fn == "atan" and len(args) == 2:
-                fn = "atan2"
-            elif fn == "mod":
-                fn = "cellgl_mod"
-                self.uses_mod = True
-            elif fn in ("texture", "texelFetch"):
-                raise TranslateError(f"WGSL translation: {fn}() is not supported")
-            else:
-                fn = WGSL_FUNCS.get(fn, self.name(fn))
-            modes = self.sigs.get(x[1])
-            out = []
-            for n, a in enumerate(args):
-                if modes and modes[n] in ("out", "inout"):
-                    if a[0] != "id":
-                        raise TranslateError(
-                            f"WGSL translation: argument {n + 1} of {x[1]}() must be a variable")
-                    out.append(self.name(a[1]) if a[1] in self.ptrs else "&" + self.name(a[1]))
-                else:
-                    out.append(self.e(a))
-            return f"{fn}({', '.join(out)})"
-        raise AssertionError(k)
+    def tight(self, e) -> str:
+        """``e`` as the base of ``.``, ``[]`` or a unary operator."""
+        b = _bare(e)
+        s = self.expr(b)
+        return f"({s})" if isinstance(b, (Binary, Ternary, Assign)) or (isinstance(b, Name) and b.name in self.ptrs) else s
 
-    def operand(self, x, op: str, right: bool = False) -> str:
-        s = self.e(x)
-        if x[0] == "paren":
-            x = x[1]
-        if x[0] in ("binary", "assign"):
-            same = x[0] == "binary" and _PREC_OF[x[1]] == _PREC_OF[op] and op in "+*" and not right
-            if not same or x[1] != op:
-                return f"({s})"
-        if x[0] == "unary" and op in ("<<", ">>", "&", "|", "^"):
+    def operand(self, e, op: str, right: bool = False) -> str:
+        e = _bare(e)
+        s = self.expr(e)
+        if isinstance(e, (Binary, Assign)) and not (isinstance(e, Binary) and e.op == op and op in "+*" and not right):
             return f"({s})"
-        return s
+        return f"({s})" if isinstance(e, Unary) and op in ("<<", ">>", "&", "|", "^") else s
+
+    def expr(self, e) -> str:
+        if isinstance(e, Num):
+            return e.text[:-1] if e.text[-1] in "fF" and not e.text.lower().startswith("0x") else e.text
+        if isinstance(e, Name):
+            return ("*" if e.name in self.ptrs else "") + self.name(e.name)
+        if isinstance(e, Paren):
+            return self.expr(e.inner)                  # operands are parenthesised as needed
+        if isinstance(e, Member):
+            return f"{self.tight(e.base)}.{self.name(e.name)}"
+        if isinstance(e, Index):
+            return f"{self.tight(e.base)}[{self.expr(e.index)}]"
+        if isinstance(e, Unary):
+            return e.op + self.tight(e.operand)
+        if isinstance(e, IncDec):
+            return self.expr(e.operand) + e.op       # statements only in WGSL
+        if isinstance(e, Binary):
+            op = "!=" if e.op == "^^" else e.op
+            b = self.operand(e.right, op, True)
+            if op in ("<<", ">>") and not isinstance(_bare(e.right), Num):
+                b = f"u32({self.expr(e.right)})"
+            return f"{self.operand(e.left, op)} {op} {b}"
+        if isinstance(e, Ternary):
+            return f"select({self.expr(e.other)}, {self.expr(e.then)}, {self.expr(e.cond)})"
+        return super().expr(e)
+
+    def ctor(self, e: Ctor) -> str:
+        return f"{self.type(e.type)}({self.args(e.args)})"
+
+    def array_ctor(self, e: ArrayCtor) -> str:
+        return f"array<{self.type(e.type)}, {self.expr(e.size)}>({self.args(e.args)})"
+
+    def call(self, e: Call) -> str:
+        f, args = e.func, e.args
+        if f in RELATIONAL:
+            return f"({self.operand(args[0], '<')} {RELATIONAL[f]} {self.operand(args[1], '<', True)})"
+        if f == "atan" and len(args) == 2:
+            f = "atan2"
+        elif f == "mod":
+            f, self.uses_mod = "cellgl_mod", True
+        elif f in ("texture", "texelFetch"):
+            raise TranslateError(f"WGSL translation: {f}() is not supported")
+        else:
+            f = WGSL_FUNCS.get(f, self.name(f))
+        out = []
+        for n, (a, mode) in enumerate(zip(args, self.modes.get(e.func, ["in"] * len(args)))):
+            if mode == "in":
+                out.append(self.expr(a))
+            elif not isinstance(_bare(a), Name):
+                raise TranslateError(f"WGSL translation: argument {n + 1} of {e.func}() must be a variable")
+            else:
+                out.append(self.name(_bare(a).name) if _bare(a).name in self.ptrs else "&" + self.name(_bare(a).name))
+        return f"{f}({', '.join(out)})"
 
     # statements
-    def comments(self, com: list, ind: str) -> list[str]:
-        out = []
-        for c in com:
-            if isinstance(c, tuple):
-                continue                    # a trailing comment: see stmt()
-            if c == "":
-                if out:
-                    out.append("")
-                continue
-            for ln in c.split("\n"):
-                out.append(ind + ln.strip() if ln.strip() else "")
-        return out
+    def decls(self, s: Decl) -> list[str]:
+        return [f"var {self.name(d.name)}: {self.type(s.type, d.size)};" if d.init is None else
+                f"{'let' if s.const else 'var'} {self.name(d.name)}: {self.type(s.type, d.size)} = {self.expr(d.init)};"
+                for d in s.declarators]
 
-    def stmt(self, s, ind: str, mutated: set[str]) -> list[str]:
-        k, com = s[0], s[1]
-        out = self.comments(com, ind)
-        trail = [c[1] for c in com if isinstance(c, tuple)]
-        out += self._stmt(s, ind, mutated)
-        if trail:
-            out[-1] += "  " + trail[0]
-        return out
+    def braced(self, s, ind: str) -> list[str]:
+        if isinstance(s, Block):
+            return self.comments(s.comments, ind + "    ") + self.body(s, ind)
+        return self.statement(s, ind + "    ")
 
-    def _stmt(self, s, ind: str, mutated: set[str]) -> list[str]:
-        k = s[0]
-        out: list[str] = []
-        if k == "block":
-            out.append(ind + "{")
-            for t in s[2]:
-                out += self.stmt(t, ind + "    ", mutated)
-            out.append(ind + "}")
-        elif k == "decl":
-            out += [ind + d for d in self.decl(s[2], s[3], s[4], mutated)]
-        elif k == "expr":
-            out.append(ind + self.e(s[2]) + ";")
-        elif k == "return":
-            out.append(ind + ("return;" if s[2] is None else f"return {self.e(s[2])};"))
-        elif k in ("break", "continue", "discard"):
-            out.append(ind + k + ";")
-        elif k == "if":
-            out.append(f"{ind}if ({self.e(s[2])}) {{")
-            out += self.body(s[3], ind, mutated)
-            els = s[4]
-            while els is not None:
-                if els[0] == "if" and not els[1]:
-                    out.append(f"{ind}}} else if ({self.e(els[2])}) {{")
-                    out += self.body(els[3], ind, mutated)
-                    els = els[4]
-                else:
-                    out.append(ind + "} else {")
-                    out += self.body(els, ind, mutated)
-                    els = None
-            out.append(ind + "}")
-        elif k == "for":
+    def statement(self, s, ind: str = "") -> list[str]:
+        out = self.comments(s.comments, ind)
+        trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
+        if isinstance(s, Decl):
+            lines = [ind + d for d in self.decls(s)]
+            return out + lines[:-1] + [lines[-1] + trail]
+        if isinstance(s, If):
+            out.append(f"{ind}if ({self.expr(s.cond)}) {{" + _trail(s.then))
+            out += self.braced(s.then, ind)
+            other = s.other
+            while isinstance(other, If) and not other.comments:
+                out.append(f"{ind}}} else if ({self.expr(other.cond)}) {{" + _trail(other.then))
+                out += self.braced(other.then, ind)
+                other = other.other
+            if other is not None:
+                out += [f"{ind}}} else {{" + _trail(other)] + self.braced(other, ind)
+            return out + [ind + "}"]
+        if isinstance(s, For):
             init = ""
-            if s[2] is not None:
-                if s[2][0] == "decl":
-                    d = self.decl(s[2][2], s[2][3], s[2][4], mutated)
-                    if len(d) != 1:
-                        raise TranslateError("WGSL translation: one variable per for-loop initialiser")
-                    init = d[0][:-1]
-                else:
-                    init = self.e(s[2][2])
-            cond = "" if s[3] is None else self.e(s[3])
-            step = "" if s[4] is None else self.e(s[4])
-            out.append(f"{ind}for ({init}; {cond}; {step}) {{")
-            out += self.body(s[5], ind, mutated)
-            out.append(ind + "}")
-        elif k == "while":
-            out.append(f"{ind}while ({self.e(s[2])}) {{")
-            out += self.body(s[3], ind, mutated)
-            out.append(ind + "}")
-        else:  # pragma: no cover
-            raise AssertionError(k)
-        return out
-
-    def body(self, s, ind: str, mutated: set[str]) -> list[str]:
-        inner = ind + "    "
-        if s[0] == "block":
-            out = self.comments(s[1], inner)
-            for t in s[2]:
-                out += self.stmt(t, inner, mutated)
-            return out
-        return self.stmt(s, inner, mutated)
-
-    def decl(self, const: bool, typ: str, decls, mutated: set[str]) -> list[str]:
-        out = []
-        for name, size, init in decls:
-            kw = "let" if const else "var"
-            wt = self.type_(typ, size)
-            if init is None:
-                out.append(f"var {self.name(name)}: {wt};")
-            else:
-                out.append(f"{kw} {self.name(name)}: {wt} = {self.e(init)};")
-        return out
+            if isinstance(s.init, Decl):
+                if len(s.init.declarators) != 1:
+                    raise TranslateError("WGSL translation: one variable per for-loop initialiser")
+                init = self.decls(s.init)[0][:-1]
+            elif isinstance(s.init, ExprStmt):
+                init = self.expr(s.init.expr)
+            cond = "" if s.cond is None else self.expr(s.cond)
+            step = "" if s.step is None else self.expr(s.step)
+            return out + [f"{ind}for ({init}; {cond}; {step}) {{" + _trail(s.body)] + self.braced(s.body, ind) + [ind + "}"]
+        if isinstance(s, While):
+            return out + [f"{ind}while ({self.expr(s.cond)}) {{" + _trail(s.body)] + self.braced(s.body, ind) + [ind + "}"]
+        return super().statement(s, ind)
 
     # top level
-    def emit(self) -> str:
-        out: list[str] = []
-        for item in self.unit:
-            k, com = item[0], item[1]
-            out += self.comments(com, "")
-            if k == "struct":
-                out.append(f"struct {item[2]} {{")
-                for mcom, typ, mname, size, trail in item[3]:
-                    out += self.comments(mcom, "    ")
-                    out.append(f"    {self.name(mname)}: {self.type_(typ, size)},"
-                               + (f"  {trail}" if trail else ""))
-                out.append("};")
-            elif k == "gdecl":
-                quals, typ, decls = item[2], item[3], item[4]
-                for name, size, init in decls:
-                    if "uniform" in quals:
-                        raise TranslateError("WGSL translation: uniforms need bindings; "
-                                             "export WGSL with constants (without --uniforms)")
-                    if init is None:
-                        raise TranslateError(f"WGSL translation: global {name!r} needs a value")
-                    kw = "const" if "const" in quals else "var<private>"
-                    out.append(f"{kw} {self.name(name)}: {self.type_(typ, size)} = {self.e(init)};")
-            elif k == "func":
-                out += self.func(item)
-        return "\n".join(out)
-
-    def func(self, item) -> list[str]:
-        _, _, ret, name, params, body = item
-        self.ptrs = {p[2] for p in params if p[0] in ("out", "inout")}
-        mutated = set()
-        _find_mutated(body, mutated, self.sigs)
+    def item(self, it) -> list[str]:
+        out = self.comments(it.comments, "")
+        if isinstance(it, Struct):
+            out.append(f"struct {it.name} {{")
+            for f in it.fields:
+                out += self.comments(f.comments, "    ")
+                out.append(f"    {self.name(f.name)}: {self.type(f.type, f.size)}," + (f"  {f.trail}" if f.trail else ""))
+            return out + ["};"]
+        if isinstance(it, Global):
+            for d in it.declarators:
+                if "uniform" in it.quals:
+                    raise TranslateError("WGSL translation: uniforms need bindings; "
+                                         "export WGSL with constants (without --uniforms)")
+                if d.init is None:
+                    raise TranslateError(f"WGSL translation: global {d.name!r} needs a value")
+                kw = "const" if "const" in it.quals else "var<private>"
+                out.append(f"{kw} {self.name(d.name)}: {self.type(it.type, d.size)} = {self.expr(d.init)};")
+            return out
+        if it.body is None:
+            return []                                   # a prototype: WGSL needs none
+        self.ptrs = {p.name for p in it.params if p.mode != "in"}
+        mutated = {root_name(n.target if isinstance(n, Assign) else n.operand)
+                   for n in walk(it.body) if isinstance(n, (Assign, IncDec))}
+        mutated |= {root_name(a) for n in walk(it.body) if isinstance(n, Call)
+                    for a, m in zip(n.args, self.modes.get(n.func, ())) if m != "in"}
         plist, prologue = [], []
-        for mode, typ, pname, size in params:
-            wt = self.type_(typ, size)
-            if mode in ("out", "inout"):
-                plist.append(f"{self.name(pname)}: ptr<function, {wt}>")
-            elif pname in mutated:
-                plist.append(f"{self.name(pname)}_in: {wt}")
-                prologue.append(f"    var {self.name(pname)}: {wt} = {self.name(pname)}_in;")
+        for p in it.params:
+            t = self.type(p.type, p.size)
+            if p.mode != "in":
+                plist.append(f"{self.name(p.name)}: ptr<function, {t}>")
+            elif p.name in mutated:
+                plist.append(f"{self.name(p.name)}_in: {t}")
+                prologue.append(f"    var {self.name(p.name)}: {t} = {self.name(p.name)}_in;")
             else:
-                plist.append(f"{self.name(pname)}: {wt}")
-        rt = "" if ret == "void" else f" -> {self.type_(ret)}"
-        out = [f"fn {self.name(name)}({', '.join(plist)}){rt}", "{"] + prologue
-        for s in body:
-            out += self.stmt(s, "    ", mutated)
-        out.append("}")
+                plist.append(f"{self.name(p.name)}: {t}")
+        rt = "" if it.ret == "void" else f" -> {self.type(it.ret)}"
+        out += [f"fn {self.name(it.name)}({', '.join(plist)}){rt} {{" + _trail(it.body)] + prologue + self.body(it.body, "")
         self.ptrs = set()
-        return out
+        return out + ["}"]
+
+    def prelude(self) -> list[str]:
+        return ["// GLSL mod(): x - y * floor(x / y).",
+                "fn cellgl_mod(x: f32, y: f32) -> f32 { return x - y * floor(x / y); }"] if self.uses_mod else []
 
 
-def _root_name(x):
-    while x[0] in ("member", "index", "paren"):
-        x = x[1]
-    return x[1] if x[0] == "id" else None
+def _trail(block) -> str:
+    return f"  {block.trail}" if isinstance(block, Block) and block.trail else ""
 
 
-def _find_mutated(node, out: set[str], sigs: dict) -> None:
-    """Names assigned to (``x = ...``, ``x.y += ...``, ``x++``) or passed as out/inout."""
-    if isinstance(node, list):
-        for n in node:
-            _find_mutated(n, out, sigs)
-        return
-    if not isinstance(node, tuple) or not node:
-        return
-    k = node[0]
-    if k == "assign":
-        r = _root_name(node[2])
-        if r:
-            out.add(r)
-    elif k in ("postinc", "preinc"):
-        r = _root_name(node[2])
-        if r:
-            out.add(r)
-    elif k == "call" and node[1] in sigs:
-        for mode, a in zip(sigs[node[1]], node[2]):
-            if mode in ("out", "inout"):
-                r = _root_name(a)
-                if r:
-                    out.add(r)
-    for child in node[1:]:
-        if isinstance(child, (tuple, list)):
-            _find_mutated(child, out, sigs)
-
-
-def to_wgsl(text: str) -> str:
-    """Translate specialised, prefixed GLSL (library subset) into WGSL.
-
-    Declarations become ``var``/``let``/``const`` with WGSL types, ``out``/``inout`` parameters
-    become ``ptr<function, T>`` (callers pass ``&x``), parameters that the body assigns are
-    copied into a ``var``, ternaries become ``select()`` (the library's ternaries have no side
-    effects), brace-less loop bodies get braces, and binary operations inside others are
-    parenthesised (WGSL does not allow mixing e.g. ``&&`` and ``||`` without them).
-    """
-    p = _Parser(text)
-    unit = p.unit()
-    em = _WgslEmitter(unit, p.structs)
-    body = em.emit()
-    if em.uses_mod:
-        body = ("// GLSL mod(): x - y * floor(x / y).\n"
-                "fn cellgl_mod(x: f32, y: f32) -> f32 { return x - y * floor(x / y); }\n" + body)
-    return body.rstrip() + "\n"
+def to_wgsl(code) -> str:
+    """WGSL of specialised, prefixed GLSL (library subset): its tree, or its text."""
+    unit = code if isinstance(code, Unit) else parse(code)
+    return Wgsl(unit).unit(unit)

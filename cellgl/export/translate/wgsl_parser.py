@@ -1,42 +1,9 @@
-"""Step 3b, first half: the WGSL and OSL emitters' view of :mod:`cellgl.export.syntax`'s typed
-tree (nested tuples: ``("binary", op, left, right)``, ...), and WGSL's names."""
+"""The OSL emitter's view of :mod:`cellgl.export.syntax`'s typed tree (nested tuples:
+``("binary", op, left, right)``, ...)."""
 from __future__ import annotations
 
 from cellgl.export import syntax as st
 from cellgl.export.translate.tokens import TranslateError
-
-# --------------------------------------------------------------------------------------------
-# 3b. WGSL: a small parser of the library subset, then an emitter
-# --------------------------------------------------------------------------------------------
-
-WGSL_SCALARS = {"float": "f32", "int": "i32", "uint": "u32", "bool": "bool"}
-WGSL_FUNCS = {"inversesqrt": "inverseSqrt", "dFdx": "dpdx", "dFdy": "dpdy",
-              "floatBitsToUint": "bitcast<u32>", "floatBitsToInt": "bitcast<i32>",
-              "uintBitsToFloat": "bitcast<f32>", "intBitsToFloat": "bitcast<f32>"}
-#: WGSL keywords and reserved words that are legal GLSL identifiers
-WGSL_RESERVED = {
-    "alias", "const_assert", "continuing", "diagnostic", "enable", "fn", "let", "loop", "override",
-    "requires", "var", "ptr", "array", "atomic", "sampler", "texture_2d", "f32", "i32", "u32", "f16",
-    "vec2", "vec3", "vec4", "mat2x2", "mat3x3", "mat4x4", "bitcast", "select", "target", "type",
-    "self", "super", "unless", "where", "with", "yield", "as", "async", "await", "become", "cast",
-    "catch", "class", "co_await", "co_return", "co_yield", "coherent", "column_major", "common",
-    "compile", "compile_fragment", "concept", "const_cast", "consteval", "constexpr", "constinit",
-    "crate", "debugger", "decltype", "delete", "demote", "demote_to_helper", "do", "dynamic_cast",
-    "enum", "explicit", "export", "extends", "extern", "external", "fallthrough", "filter", "final",
-    "finally", "friend", "from", "fxgroup", "get", "goto", "groupshared", "highp", "impl",
-    "implements", "import", "inline", "instanceof", "interface", "layout", "lowp", "macro",
-    "macro_rules", "match", "mediump", "meta", "mod", "module", "move", "mut", "mutable",
-    "namespace", "new", "nil", "noexcept", "noinline", "nointerpolation", "noperspective", "null",
-    "nullptr", "of", "operator", "package", "packoffset", "partition", "pass", "patch",
-    "pixelfragment", "precise", "precision", "premerge", "priv", "protected", "pub", "public",
-    "readonly", "ref", "regardless", "register", "reinterpret_cast", "require", "resource",
-    "restrict", "self", "set", "shared", "sizeof", "smooth", "snorm", "static", "static_assert",
-    "static_cast", "std", "subroutine", "template", "this", "thread_local", "throw", "trait", "try",
-    "typedef", "typeid", "typename", "typeof", "union", "unorm", "unsafe", "unsized", "use",
-    "using", "varying", "virtual", "volatile", "wgsl", "writeonly", "sample", "line", "point",
-}
-
-_PREC_OF = st.PRECEDENCE
 
 
 def _e(x):
@@ -99,10 +66,10 @@ def _s(s):
 
 
 class _Parser:
-    """The parse of ``text`` (:func:`cellgl.export.syntax.parse`) as the emitters' tuples:
+    """The parse of ``text`` (:func:`cellgl.export.syntax.parse`) as the OSL emitter's tuples:
     ``unit()`` lists ``("struct", comments, name, [[comments, type, name, size, trail]])``,
     ``("gdecl", comments, qualifiers, type, declarators)`` and ``("func", comments, return type,
-    name, [(mode, type, name, size)], statements)`` (prototypes left out: WGSL and OSL need
+    name, [(mode, type, name, size)], statements)`` (prototypes left out: OSL needs
     none); ``structs`` names the structs."""
 
     def __init__(self, text: str):
@@ -122,3 +89,37 @@ class _Parser:
                 params = [(p.mode, p.type, p.name, _e(p.size)) for p in it.params]
                 out.append(("func", com, it.ret, it.name, params, [_s(x) for x in it.body.body]))
         return out
+
+
+def _root_name(x):
+    while x[0] in ("member", "index", "paren"):
+        x = x[1]
+    return x[1] if x[0] == "id" else None
+
+
+def _find_mutated(node, out: set[str], sigs: dict) -> None:
+    """Names assigned to (``x = ...``, ``x.y += ...``, ``x++``) or passed as out/inout."""
+    if isinstance(node, list):
+        for n in node:
+            _find_mutated(n, out, sigs)
+        return
+    if not isinstance(node, tuple) or not node:
+        return
+    k = node[0]
+    if k == "assign":
+        r = _root_name(node[2])
+        if r:
+            out.add(r)
+    elif k in ("postinc", "preinc"):
+        r = _root_name(node[2])
+        if r:
+            out.add(r)
+    elif k == "call" and node[1] in sigs:
+        for mode, a in zip(sigs[node[1]], node[2]):
+            if mode in ("out", "inout"):
+                r = _root_name(a)
+                if r:
+                    out.add(r)
+    for child in node[1:]:
+        if isinstance(child, (tuple, list)):
+            _find_mutated(child, out, sigs)
