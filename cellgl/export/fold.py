@@ -49,13 +49,17 @@ def global_constants(unit: S.Unit) -> dict:
 
 
 def _global_arrays(unit: S.Unit) -> dict:
-    """``{name: (element nodes, their GLSL)}`` of the global constant arrays."""
-    out = {}
+    """``{name: (element nodes, their GLSL)}`` of the global constant arrays, and ``{name: type}``
+    of the global scalars and vectors no function writes (constants, uniforms) under the key
+    None."""
+    out: dict = {None: {}}
     for it in unit.items:
-        if isinstance(it, S.Global) and "const" in it.quals:
+        if isinstance(it, S.Global) and ("const" in it.quals or "uniform" in it.quals):
             for d in it.declarators:
-                if d.size is not None and isinstance(d.init, S.ArrayCtor):
+                if d.size is not None and isinstance(d.init, S.ArrayCtor) and "const" in it.quals:
                     out[d.name] = (d.init.args, [expr_glsl(a) for a in d.init.args])
+                elif d.size is None:
+                    out[None][d.name] = it.type
     return out
 
 
@@ -207,7 +211,7 @@ def array_elements(fn: S.Function, facts: Facts) -> bool:
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
     effects or calls) where all elements are the same."""
-    arrays = {k: v for k, v in facts.garrays.items() if k not in facts.declared and k in facts.occ}
+    arrays = {k: v for k, v in facts.garrays.items() if k is not None and k not in facts.declared and k in facts.occ}
     if not arrays:
         return False
 
@@ -455,7 +459,8 @@ def fold(unit: S.Unit, ctx: Context) -> bool:
     if not ctx.fold_constants:
         return False
     genv, garrays = global_constants(unit), _global_arrays(unit)
-    key = (tuple(sorted(genv.items())), tuple(sorted((k, tuple(v[1])) for k, v in garrays.items())),
+    key = (tuple(sorted(genv.items())), tuple(sorted((k, tuple(v[1])) for k, v in garrays.items() if k is not None)),
+           tuple(sorted(garrays[None].items())),
            tuple(sorted(ctx.impure)), tuple(sorted((f.name, tuple(p.mode for p in f.params))
                                                     for f in ctx.functions.values())))
     passes = [p.function for p in FOLD + SIMPLIFY]
