@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import re
 
-from cellgl.export.fold import fold
+from cellgl.export.fold import FOLD, fold
 from cellgl.export.fields import constant_fields, void_results
 from cellgl.export.inline import inline_once
 from cellgl.export.reach import (
@@ -47,8 +47,9 @@ from cellgl.export.reach import (
     unparse,
 )
 from cellgl.export.printer import print_glsl
+from cellgl.export.simplify import SIMPLIFY
 from cellgl.export.syntax import parse as parse_tree
-from cellgl.export.tree import Context
+from cellgl.export.tree import Context, tree_pass
 from cellgl.export.translate.tokens import Tok, TranslateError, tokenize
 
 __all__ = ["compile_glsl", "MAX_ROUNDS"]
@@ -271,13 +272,19 @@ def _scalarise(items, ctx):
     return items
 
 
+@tree_pass
+def _fold(unit, ctx):
+    """The folding and simplification passes (:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`)."""
+    return fold(unit, ctx, FOLD + SIMPLIFY)
+
+
 def _constant_fields(items, ctx):
     return constant_fields(items) if ctx.fold_constants else items
 
 
 ROUND = [
     _scalarise,
-    fold,
+    _fold,
     lambda items, ctx: _inline(items, set(ctx.entries)),
     lambda items, ctx: inline_once(items, set(ctx.entries) | ctx.keep),
     lambda items, ctx: _drop_unused_params(items, set(ctx.entries)),

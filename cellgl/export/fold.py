@@ -27,7 +27,7 @@ from functools import cached_property
 
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
-from cellgl.export.printer import expr_glsl
+from cellgl.export.printer import expr_glsl, item_glsl
 from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, tree_pass, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
@@ -448,22 +448,21 @@ FOLD = [inline_constants, array_elements, local_constants, constant_conditions, 
 
 
 @tree_pass
-def fold(unit: S.Unit, ctx: Context) -> bool:
-    """The passes of :data:`FOLD` and :data:`cellgl.export.simplify.SIMPLIFY`, function by
-    function, in order, round after round until a round changes nothing (they change no
-    signature, so ``ctx`` stays true); :class:`TranslateError` after :data:`MAX_ROUNDS` rounds.
-    Nothing with ``ctx.fold_constants`` false (the recipe's values stay as they are). A function
-    folded before under the same constants and signatures is not folded again."""
-    from cellgl.export.printer import item_glsl
-    from cellgl.export.simplify import SIMPLIFY
+def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
+    """The function passes ``passes`` (:data:`FOLD` by default; the compiler adds
+    :data:`cellgl.export.simplify.SIMPLIFY`), function by function, in order, round after round
+    until a round changes nothing (they change no signature, so ``ctx`` stays true);
+    :class:`TranslateError` after :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
+    false (the recipe's values stay as they are). A function folded before under the same
+    constants and signatures is not folded again."""
     if not ctx.fold_constants:
         return False
+    passes = [p.function for p in (FOLD if passes is None else passes)]
     genv, garrays = global_constants(unit), _global_arrays(unit)
-    key = (tuple(sorted(genv.items())), tuple(sorted((k, tuple(v[1])) for k, v in garrays.items() if k is not None)),
-           tuple(sorted(garrays[None].items())),
-           tuple(sorted(ctx.impure)), tuple(sorted((f.name, tuple(p.mode for p in f.params))
-                                                    for f in ctx.functions.values())))
-    passes = [p.function for p in FOLD + SIMPLIFY]
+    key = (tuple(p.__name__ for p in passes), tuple(sorted(genv.items())),
+           tuple(sorted((k, tuple(v[1])) for k, v in garrays.items() if k is not None)),
+           tuple(sorted(garrays[None].items())), tuple(sorted(ctx.impure)),
+           tuple(sorted((f.name, tuple(p.mode for p in f.params)) for f in ctx.functions.values())))
     changed = False
     for fn in list(ctx.functions.values()):
         text = "\n".join(item_glsl(fn))
