@@ -120,7 +120,7 @@ void f(inout vec4 o) {
 def test_fold_removes_the_branch_a_constant_condition_rules_out():
     """The whole folding (the recipe's switch written in, the branch chosen, the dead local and
     the ternary gone)."""
-    assert _run(F.fold, """const int k_mode = 1;
+    assert _run(compiler._fold, """const int k_mode = 1;
 const float k_gain = 0.5;
 float f(float x) {
     if (k_mode == 0) {

@@ -29,11 +29,12 @@ from __future__ import annotations
 
 from cellgl.export import syntax as S
 from cellgl.export.fields import constant_fields, dead_fields, void_results
-from cellgl.export.fold import fold
+from cellgl.export.fold import FOLD, fold
 from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_params, inline_once, inline_short
 from cellgl.export.printer import item_glsl
 from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
-from cellgl.export.tree import Context, clone, fixed_point
+from cellgl.export.simplify import SIMPLIFY
+from cellgl.export.tree import Context, clone, fixed_point, tree_pass
 
 __all__ = ["compile_glsl", "compile_unit", "glsl_text", "ROUND", "MAX_ROUNDS"]
 
@@ -76,10 +77,16 @@ def glsl_text(unit: S.Unit, width: int = 120) -> str:
     return "".join(ln + "\n" for ln in out)
 
 
+@tree_pass
+def _fold(unit, ctx):
+    """The folding and simplification passes (:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`)."""
+    return fold(unit, ctx, FOLD + SIMPLIFY)
+
+
 # one round of the passes, in order: each is ``(unit, ctx) -> changed`` (:mod:`cellgl.export.tree`)
 ROUND = [
     scalarise,
-    fold,
+    _fold,
     inline_short,
     inline_once,
     drop_unused_params,

@@ -27,7 +27,7 @@ from functools import cached_property
 
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
-from cellgl.export.printer import expr_glsl
+from cellgl.export.printer import expr_glsl, item_glsl
 from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, tree_pass, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
@@ -49,13 +49,17 @@ def global_constants(unit: S.Unit) -> dict:
 
 
 def _global_arrays(unit: S.Unit) -> dict:
-    """``{name: (element nodes, their GLSL)}`` of the global constant arrays."""
-    out = {}
+    """``{name: (element nodes, their GLSL)}`` of the global constant arrays, and ``{name: type}``
+    of the global scalars and vectors no function writes (constants, uniforms) under the key
+    None."""
+    out: dict = {None: {}}
     for it in unit.items:
-        if isinstance(it, S.Global) and "const" in it.quals:
+        if isinstance(it, S.Global) and ("const" in it.quals or "uniform" in it.quals):
             for d in it.declarators:
-                if d.size is not None and isinstance(d.init, S.ArrayCtor):
+                if d.size is not None and isinstance(d.init, S.ArrayCtor) and "const" in it.quals:
                     out[d.name] = (d.init.args, [expr_glsl(a) for a in d.init.args])
+                elif d.size is None:
+                    out[None][d.name] = it.type
     return out
 
 
@@ -207,7 +211,7 @@ def array_elements(fn: S.Function, facts: Facts) -> bool:
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
     effects or calls) where all elements are the same."""
-    arrays = {k: v for k, v in facts.garrays.items() if k not in facts.declared and k in facts.occ}
+    arrays = {k: v for k, v in facts.garrays.items() if k is not None and k not in facts.declared and k in facts.occ}
     if not arrays:
         return False
 
@@ -444,21 +448,21 @@ FOLD = [inline_constants, array_elements, local_constants, constant_conditions, 
 
 
 @tree_pass
-def fold(unit: S.Unit, ctx: Context) -> bool:
-    """The passes of :data:`FOLD` and :data:`cellgl.export.simplify.SIMPLIFY`, function by
-    function, in order, round after round until a round changes nothing (they change no
-    signature, so ``ctx`` stays true); :class:`TranslateError` after :data:`MAX_ROUNDS` rounds.
-    Nothing with ``ctx.fold_constants`` false (the recipe's values stay as they are). A function
-    folded before under the same constants and signatures is not folded again."""
-    from cellgl.export.printer import item_glsl
-    from cellgl.export.simplify import SIMPLIFY
+def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
+    """The function passes ``passes`` (:data:`FOLD` by default; the compiler adds
+    :data:`cellgl.export.simplify.SIMPLIFY`), function by function, in order, round after round
+    until a round changes nothing (they change no signature, so ``ctx`` stays true);
+    :class:`TranslateError` after :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
+    false (the recipe's values stay as they are). A function folded before under the same
+    constants and signatures is not folded again."""
     if not ctx.fold_constants:
         return False
+    passes = [p.function for p in (FOLD if passes is None else passes)]
     genv, garrays = global_constants(unit), _global_arrays(unit)
-    key = (tuple(sorted(genv.items())), tuple(sorted((k, tuple(v[1])) for k, v in garrays.items())),
-           tuple(sorted(ctx.impure)), tuple(sorted((f.name, tuple(p.mode for p in f.params))
-                                                    for f in ctx.functions.values())))
-    passes = [p.function for p in FOLD + SIMPLIFY]
+    key = (tuple(p.__name__ for p in passes), tuple(sorted(genv.items())),
+           tuple(sorted((k, tuple(v[1])) for k, v in garrays.items() if k is not None)),
+           tuple(sorted(garrays[None].items())), tuple(sorted(ctx.impure)),
+           tuple(sorted((f.name, tuple(p.mode for p in f.params)) for f in ctx.functions.values())))
     changed = False
     for fn in list(ctx.functions.values()):
         text = "\n".join(item_glsl(fn))

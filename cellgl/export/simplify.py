@@ -159,7 +159,7 @@ def copies(fn: S.Function, facts: Facts) -> bool:
                 x = x.inner
             if not isinstance(x, S.Name) or d.name not in facts.once or x.name == d.name or d.name in facts.params:
                 continue
-            typ = facts.types.get(x.name) if x.name in facts.declared else facts.genv.get(x.name, (None,))[0]
+            typ = facts.types.get(x.name) if x.name in facts.declared else facts.garrays[None].get(x.name)
             if typ != s.type or (x.name in facts.declared and x.name not in facts.once):
                 continue
             at = pos[id(s)]
