@@ -384,9 +384,12 @@ class _Parser:
     # statements
     def block(self, com=None) -> Block:
         self.take("{")
+        trail = self.trail.get(self.i - 1)             # if (...) {  // a comment: on the first statement
         out = []
         while self.peek() != "}":
             out.append(self.statement())
+        if trail and out:
+            out[0].comments[:0] = [trail]
         self.take("}")
         return Block(out, com or [])
 
