@@ -113,3 +113,9 @@ def test_the_parse_of_a_library_text_is_cached():
     text = snippets.specialised_code(prog)
     assert st.parsed_library(text) is st.parsed_library(text)
     assert st.parsed_library(text) == st.parse(text)
+
+
+def test_a_comment_after_an_opening_brace_stays():
+    src = "float f(float x) {\n    if (x > 1.0) {    // its window\n        x = 2.0;\n    }\n    return x;\n}\n"
+    assert print_glsl(st.parse(src)) == ("float f(float x)\n{\n    if (x > 1.0) {\n        // its window\n"
+                                         "        x = 2.0;\n    }\n    return x;\n}\n")
