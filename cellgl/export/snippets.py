@@ -170,11 +170,22 @@ def entry_points(prog: Program) -> list[str]:
 
 
 def _library_code(prog: Program, fold: bool) -> str:
+    return code_text(compiled_unit(prog, fold))
+
+
+def compiled_unit(prog: Program, fold: bool = True, entries=None):
+    """The compiled tree of ``prog`` (:func:`cellgl.export.compiler.compile_unit`; yours to
+    change) for its entry points (or ``entries``): :func:`code_text` prints it as
+    :func:`library_code` does."""
     # a texture keeps its search one function (benchmarks/bench_snippets.py --stub-search swaps
     # its body); a basis snippet is little more than the search, written into its entry point
-    text = compiler.compile_glsl(specialised_code(prog), entry_points(prog), structs=_CONSTANT_STRUCTS,
+    return compiler.compile_unit(specialised_code(prog), entries or entry_points(prog), structs=_CONSTANT_STRUCTS,
                                  fold_constants=fold, keep=() if prog.entries else ("cellgl_search_budget",))
-    return _tidy(text)
+
+
+def code_text(unit) -> str:
+    """The GLSL text of a compiled tree, as :func:`library_code` gives it."""
+    return _tidy(compiler.glsl_text(unit))
 
 
 #: the functions a snippet may export (the reachability pass starts from those it defines)
@@ -292,13 +303,16 @@ def _fmt_value(v) -> str:
     return str(v)
 
 
-def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True) -> str:
+def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
+                   code: str | None = None) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
-    recipe's values stay named constants (see :func:`export`)."""
+    recipe's values stay named constants (see :func:`export`); ``code``: the compiled code to
+    print (default: :func:`library_code`'s)."""
     tgt = check_target(target)
     # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
     # snippet has none, so it takes the folded code like every other target
-    code = library_code(prog, fold) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
+    if code is None:
+        code = library_code(prog, fold) if tgt.dialect != "osl" or prog.entries else specialised_code(prog)
     head = _header(prog, tgt, uniforms, code)
     d = tgt.dialect
     if d in ("glsl", "gles", "godot"):
