@@ -173,11 +173,22 @@ def entry_points(prog: Program) -> list[str]:
 
 
 def _library_code(prog: Program, fold: bool) -> str:
+    return code_text(compiled_unit(prog, fold))
+
+
+def compiled_unit(prog: Program, fold: bool = True, entries=None):
+    """The compiled tree of ``prog`` (:func:`cellgl.export.compiler.compile_unit`; yours to
+    change) for its entry points (or ``entries``): :func:`code_text` prints it as
+    :func:`library_code` does."""
     # a texture keeps its search one function (benchmarks/bench_snippets.py --stub-search swaps
     # its body); a basis snippet is little more than the search, written into its entry point
-    text = compiler.compile_glsl(specialised_code(prog), entry_points(prog), structs=_CONSTANT_STRUCTS,
+    return compiler.compile_unit(specialised_code(prog), entries or entry_points(prog), structs=_CONSTANT_STRUCTS,
                                  fold_constants=fold, keep=() if prog.entries else ("cellgl_search_budget",))
-    return _tidy(text)
+
+
+def code_text(unit) -> str:
+    """The GLSL text of a compiled tree, as :func:`library_code` gives it."""
+    return _tidy(compiler.glsl_text(unit))
 
 
 #: the functions a snippet may export (the reachability pass starts from those it defines)
@@ -296,9 +307,11 @@ def _fmt_value(v) -> str:
     return str(v)
 
 
-def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True) -> str:
+def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
+                   code: str | None = None) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
-    recipe's values stay named constants (see :func:`export`)."""
+    recipe's values stay named constants (see :func:`export`); ``code``: the compiled code to
+    print (default: :func:`library_code`'s)."""
     tgt = check_target(target)
     d = tgt.dialect
     if d == "osl":
@@ -306,9 +319,9 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
         # snippet has none, so it takes the folded code like every other target
         from cellgl.export.osl import osl_shader
 
-        code = library_code(prog, fold) if prog.entries else specialised_code(prog)
+        code = code if code is not None else library_code(prog, fold) if prog.entries else specialised_code(prog)
         return _header(prog, tgt, uniforms) + "\n" + osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
-    unit = parsed_library(library_code(prog, fold))     # the one parse; the printers only read it
+    unit = parsed_library(library_code(prog, fold) if code is None else code)   # the one parse; the printers only read it
     head = _header(prog, tgt, uniforms, {d.name for it in unit.items if isinstance(it, Global) for d in it.declarators})
     if d == "wgsl":
         return head + "\n" + translate.to_wgsl(unit)

@@ -20,7 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import lru_cache
 
-from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError, tokenize
+from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError, split_tokens
 
 __all__ = ["parse", "parsed_library", "Unit", "Struct", "Field", "Function", "Param",
            "Global", "Declarator", "Block", "Decl", "ExprStmt", "If", "For", "While", "Return", "Jump",
@@ -246,24 +246,24 @@ class _Parser:
         self.inline: set[int] = set()       # the tokens that do not begin their line
         pending: list[str] = []
         newline = fresh = True              # fresh: no code token on this line yet
-        for t in tokenize(text):
-            if t.kind == "comment" and not newline and self.toks and t.text.startswith("//") \
+        for kind, tt in split_tokens(text):
+            if kind == "comment" and not newline and self.toks and tt.startswith("//") \
                     and len(self.toks) - 1 not in self.trail:
-                self.trail[len(self.toks) - 1] = t.text
+                self.trail[len(self.toks) - 1] = tt
                 continue
-            if t.kind != "ws":
+            if kind != "ws":
                 newline = False
-            elif "\n" in t.text:
+            elif "\n" in tt:
                 newline = fresh = True
-            if t.kind == "comment":
-                pending.append(t.text)
-            elif t.kind == "ws":
-                if t.text.count("\n") >= 2 and pending and pending[-1] != "":
+            if kind == "comment":
+                pending.append(tt)
+            elif kind == "ws":
+                if tt.count("\n") >= 2 and pending and pending[-1] != "":
                     pending.append("")          # one blank line between comment blocks
             else:
                 if not fresh:
                     self.inline.add(len(self.toks))
-                self.toks.append((t.kind, t.text, pending))
+                self.toks.append((kind, tt, pending))
                 pending = []
                 fresh = False
         self.trailing = pending

@@ -15,7 +15,16 @@ from __future__ import annotations
 import hashlib
 from dataclasses import replace
 
-from cellgl.export.snippets import ExportError, entry_points, export, export_program, texture_program
+from cellgl.export.reach import reached
+from cellgl.export.snippets import (
+    ExportError,
+    code_text,
+    compiled_unit,
+    entry_points,
+    export,
+    export_program,
+    texture_program,
+)
 from cellgl.recipes import load_recipe
 from cellgl.texture.params import PARAMS_BY_NAME
 
@@ -95,17 +104,22 @@ def variant_texts(recipe) -> dict:
     """The texts of ``recipe``'s variant: ``live`` (GLSL ES with uniforms and the mean probe: what
     the page renders), ``gles``, ``godot``, ``hlsl`` (with uniforms: the page writes the current
     values in as constants) and ``wgsl`` (constants: the page rewrites their values); each
-    without the exporter's header comment. Also ``uniforms``: ``[[glsl type, name], ...]``."""
+    without the exporter's header comment. Also ``uniforms``: ``[[glsl type, name], ...]``.
+
+    One compile gives the first four: the probe is one more entry point of the live variant, and
+    the others are that code reached from the texture's entry points only (what the probe alone
+    needs goes); the WGSL keeps the recipe's values named (``fold=False``), a second compile."""
     r = load_recipe(recipe)
     prog = texture_program(r, uniforms=True)
-    # the probe is one more entry point of the live variant (the exporter keeps only what its
-    # entry points reach)
-    live = replace(prog, entry=prog.entry + PROBE_ENTRY,
-                   entries=(*entry_points(prog), "cellgl_playground_probe"))
+    entries = entry_points(prog)
+    live = replace(prog, entry=prog.entry + PROBE_ENTRY)
+    unit = compiled_unit(live, entries=(*entries, "cellgl_playground_probe"))
     out = {"key": variant_key(prog.defines),
-           "live": _body(export_program(live, "gles", uniforms=True))}
+           "live": _body(export_program(live, "gles", uniforms=True, code=code_text(unit)))}
+    unit.items[:] = reached(unit.items, entries)
+    code = code_text(unit)
     for t in ("gles", "godot", "hlsl"):
-        out[t] = _body(export_program(prog, t, uniforms=True))
+        out[t] = _body(export_program(prog, t, uniforms=True, code=code))
     # named constants (fold=False): the page writes the current values into them
     out["wgsl"] = _body(export(r, "wgsl", fold=False))
     out["uniforms"] = [[t, n] for t, n, _ in prog.uniforms]

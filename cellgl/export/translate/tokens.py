@@ -38,21 +38,26 @@ def tokenize(text: str) -> list[Tok]:
     """Split GLSL text (no directives) into tokens: comment, ws, num, id, op (new :class:`Tok`
     objects each call, which callers may change; the split itself is remembered per text: the
     compiler's passes re-read the functions they did not change)."""
+    return [Tok(k, t) for k, t in split_tokens(text)]
+
+
+def split_tokens(text: str) -> list[tuple[str, str]]:
+    """``[(kind, text)]`` of :func:`tokenize` (shared: do not change it), remembered per text."""
     split = _SPLITS.get(text)
     if split is None:
-        split = []
-        pos = 0
-        while pos < len(text):
-            m = _TOKEN_RE.match(text, pos)
-            if not m:
-                line = text.count("\n", 0, pos) + 1
-                raise TranslateError(f"line {line}: unexpected character {text[pos]!r}")
-            split.append((m.lastgroup, m.group()))
-            pos = m.end()
+        split = [(m.lastgroup, m.group()) for m in _TOKEN_RE.finditer(text)]
+        if sum(len(t) for _, t in split) != len(text):      # a character no token matches
+            pos = 0
+            for _, t in split:
+                if not text.startswith(t, pos):
+                    break
+                pos += len(t)
+            line = text.count("\n", 0, pos) + 1
+            raise TranslateError(f"line {line}: unexpected character {text[pos]!r}")
         if len(_SPLITS) >= 20000:
             _SPLITS.clear()
         _SPLITS[text] = split
-    return [Tok(k, t) for k, t in split]
+    return split
 
 
 _SPLITS: dict[str, list[tuple[str, str]]] = {}
