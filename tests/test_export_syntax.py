@@ -310,3 +310,13 @@ fn f(x_in: f32, y: ptr<function, vec2<f32>>) -> f32 {
 """
     with pytest.raises(TranslateError, match="uniforms need bindings"):
         to_wgsl(st.parse("uniform float u;"))
+
+
+def test_the_tree_keeps_the_library_s_layout_marks():
+    # the comment after a block's brace is its trail; a statement on the line of the one before
+    # it is same_line (not one after a brace or an else)
+    (fn,) = st.parse("void f(int a) {  // one\n    a += 1; a -= 2;\n    if (a > 0) { a = 0; } else a = 1;\n}\n").items
+    assert fn.body.trail == "// one"
+    first, second, branch = fn.body.body
+    assert (first.same_line, second.same_line) == (False, True)
+    assert branch.then.body[0].same_line is False and branch.other.same_line is False

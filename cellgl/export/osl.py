@@ -18,8 +18,11 @@ from __future__ import annotations
 
 import re
 
+from cellgl.export import syntax as S
 from cellgl.export.names import identifier
+from cellgl.export.syntax import parsed_library
 from cellgl.export.translate import to_osl
+from cellgl.export.tree import walk
 
 __all__ = ["EXPOSED_EXCLUDED", "TERM_SWITCHES", "exposed_params", "folded_code", "osl_shader"]
 
@@ -62,8 +65,11 @@ def exposed_params(prog, code: str):
     from cellgl.texture.params import PARAMS_BY_NAME
 
     n = int(prog.defines.get("CELL_N", 4))
-    reads = re.sub(r"^\s*t\.(\w+) = cellgl_\1;$", "", code, flags=re.M)    # the loader's copies
-    used = set(re.findall(r"\.\s*(\w+)", reads))
+    nodes = list(walk(parsed_library(code)))
+    copies = {id(x.target) for x in nodes if isinstance(x, S.Assign) and isinstance(x.target, S.Member)
+              and x.target.base == S.Name("t")
+              and x.value == S.Name("cellgl_" + x.target.name)}       # the loader's t.x = cellgl_x
+    used = {x.name for x in nodes if isinstance(x, S.Member) and id(x) not in copies}
     out = []
     for typ, name, value in prog.uniforms:
         p = PARAMS_BY_NAME.get(name)

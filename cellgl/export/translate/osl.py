@@ -2,7 +2,7 @@
 
 OSL has ``float``, ``int`` (signed 32-bit), triples and structs, but no 2- or 4-component
 vectors, no unsigned integers, no ``bool`` and no file-scope variables. The translation is
-type-directed: :class:`_Osl` walks :mod:`wgsl_parser`'s tree, infers the GLSL type of every
+type-directed: :class:`_Osl` walks :mod:`cellgl.export.syntax`'s tree, infers the GLSL type of every
 expression, and
 
 * maps every GLSL vector type to a struct of scalars (``vec4`` -> ``cellgl_vec4 {x, y, z, w}``,
@@ -22,18 +22,17 @@ Anything outside the subset raises :class:`TranslateError` naming the construct.
 """
 from __future__ import annotations
 
-import re
-
+from cellgl.export import syntax as S
 from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
 from cellgl.export.translate.tokens import TranslateError
-from cellgl.export.translate.wgsl_parser import _find_mutated, _Parser
+from cellgl.export.tree import root_name, walk
 
 __all__ = ["to_osl", "OSL_RESERVED"]
 
 class _Osl(_OslLib):
     def __init__(self, text: str, params=(), drop=()):
-        p = _Parser(text)
-        self.unit = p.unit()
+        # prototypes left out: OSL needs none
+        self.unit = [it for it in S.parse(text).items if not (isinstance(it, S.Function) and it.body is None)]
         self.params = list(params)
         self.helpers: dict[str, str] = {}         # generated name -> code (in order)
         self.vec_structs: set[str] = set()
@@ -56,14 +55,13 @@ class _Osl(_OslLib):
 
     # ------------------------------------------------------------------ helpers
     def ex(self, x) -> tuple[str, object]:
-        k = x[0]
-        if k == "num":
-            t = x[1]
+        if isinstance(x, S.Num):
+            t = x.text
             if t.lower().startswith("0x"):
                 return _int_lit(int(t.rstrip("uU"), 16)), ("uint" if t[-1] in "uU" else "int")
             if t[-1] in "uU":
                 return _int_lit(int(t[:-1])), "uint"
-            if re.search(r"[.eE]", t) or t[-1] in "fF":
+            if "." in t or "e" in t.lower() or t[-1] in "fF":
                 t = t.rstrip("fF")
                 if t.endswith("."):
                     t += "0"
@@ -71,33 +69,32 @@ class _Osl(_OslLib):
                     t = "0" + t
                 return t, "float"
             return t, "int"
-        if k == "id":
-            if x[1] in ("true", "false"):
-                return ("1" if x[1] == "true" else "0"), "bool"
-            return self.name(x[1]), self.lookup(x[1])
-        if k == "paren":
-            s, t = self.ex(x[1])
+        if isinstance(x, S.Name):
+            if x.name in ("true", "false"):
+                return ("1" if x.name == "true" else "0"), "bool"
+            return self.name(x.name), self.lookup(x.name)
+        if isinstance(x, S.Paren):
+            s, t = self.ex(x.inner)
             return f"({s})", t
-        if k == "member":
-            s, t = self.ex(x[1])
-            base = x[1][1] if x[1][0] == "paren" else x[1]
-            if base[0] in ("call", "ctor") and len(x[2]) == 1 or (isinstance(t, str) and t in self.structs
-                                                                   and base[0] in ("call", "ctor")):
+        if isinstance(x, S.Member):
+            s, t = self.ex(x.base)
+            called = isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor))
+            if called and (len(x.name) == 1 or (isinstance(t, str) and t in self.structs)):
                 # OSL has no member access on a call's result: a getter
-                mt = self.structs[t][x[2]] if t in self.structs else _vec(t)[0]
-                m = self.name(x[2]) if t in self.structs else _XYZW[_SWZ[x[2]]]
+                mt = self.structs[t][x.name] if t in self.structs else _vec(t)[0]
+                m = self.name(x.name) if t in self.structs else _XYZW[_SWZ[x.name]]
                 ot = self.osl_type(t)
                 if isinstance(mt, tuple):
-                    raise TranslateError(f"OSL translation: array member {x[2]!r} of a call's result")
+                    raise TranslateError(f"OSL translation: array member {x.name!r} of a call's result")
                 name = f"cellgl_member_{ot}_{m}"
                 self.helper(name, f"{self.osl_type(mt)} {name}({ot} a) {{ return a.{m}; }}")
                 return f"{name}({s})", mt
             if isinstance(t, str) and t in self.structs:
-                return f"{s}.{self.name(x[2])}", self.structs[t][x[2]]
+                return f"{s}.{self.name(x.name)}", self.structs[t][x.name]
             v = _vec(t)
             if not v:
-                raise TranslateError(f"OSL translation: member {x[2]!r} of a {t}")
-            idx = [_SWZ[c] for c in x[2]]
+                raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
+            idx = [_SWZ[c] for c in x.name]
             if len(idx) == 1:
                 return f"{s}.{_XYZW[idx[0]]}", v[0]
             rt = t[:-1] + str(len(idx))
@@ -106,47 +103,47 @@ class _Osl(_OslLib):
             self.helper(name, lambda: f"{ort} {name}({ot} a) {{ return {ort}("
                         + ", ".join(f"a.{_XYZW[i]}" for i in idx) + "); }")
             return f"{name}({s})", rt
-        if k == "index":
-            s, t = self.ex(x[1])
-            i, ti = self.ex(x[2])
+        if isinstance(x, S.Index):
+            s, t = self.ex(x.base)
+            i, ti = self.ex(x.index)
             if isinstance(t, tuple):
                 return f"{s}[{i}]", t[0]
             v = _vec(t)
             if not v:
                 raise TranslateError(f"OSL translation: indexing a {t}")
             return f"{self.vec_get(t)}({s}, {i})", v[0]
-        if k == "unary":
-            s, t = self.ex(x[2])
+        if isinstance(x, S.Unary):
+            s, t = self.ex(x.operand)
             if _vec(t):
-                if x[1] != "-":
-                    raise TranslateError(f"OSL translation: unary {x[1]!r} on a {t}")
+                if x.op != "-":
+                    raise TranslateError(f"OSL translation: unary {x.op!r} on a {t}")
                 name, rt = self.vec_binary("-", _vec(t)[0], t)
                 return f"{name}({'0' if _vec(t)[0] != 'float' else '0.0'}, {s})", t
-            return f"{x[1]}{s}", t
-        if k in ("postinc", "preinc"):
-            s, t = self.ex(x[2])
-            return (f"{s}{x[1]}" if k == "postinc" else f"{x[1]}{s}"), t
-        if k == "binary":
-            return self.binary(x[1], x[2], x[3])
-        if k == "ternary":
-            c, _ = self.ex(x[1])
-            a, ta = self.ex(x[2])
-            b, tb = self.ex(x[3])
+            return f"{x.op}{s}", t
+        if isinstance(x, S.IncDec):
+            s, t = self.ex(x.operand)
+            return (f"{s}{x.op}" if x.postfix else f"{x.op}{s}"), t
+        if isinstance(x, S.Binary):
+            return self.binary(x.op, x.left, x.right)
+        if isinstance(x, S.Ternary):
+            c, _ = self.ex(x.cond)
+            a, ta = self.ex(x.then)
+            b, tb = self.ex(x.other)
             if ta in ("float", "int", "uint", "bool"):
                 return f"({c} ? {a} : {b})", ta
             ot = self.osl_type(ta)
             name = f"cellgl_select_{ot}"
             self.helper(name, f"{ot} {name}(int c, {ot} a, {ot} b) {{ if (c) return a; return b; }}")
             return f"{name}({c}, {a}, {b})", ta
-        if k == "assign":
-            return self.assign(x[1], x[2], x[3]), None
-        if k == "ctor":
-            return self.ctor(x[1], x[2])
-        if k == "arrctor":
+        if isinstance(x, S.Assign):
+            return self.assign(x.op, x.target, x.value), None
+        if isinstance(x, S.Ctor):
+            return self.ctor(x.type, x.args)
+        if isinstance(x, S.ArrayCtor):
             raise TranslateError("OSL translation: an array constructor outside a declaration")
-        if k == "call":
-            return self.call(x[1], x[2])
-        raise AssertionError(k)
+        if isinstance(x, S.Call):
+            return self.call(x.func, x.args)
+        raise AssertionError(x)
 
     def binary(self, op, lhs, rhs):
         a, ta = self.ex(lhs)
@@ -174,23 +171,22 @@ class _Osl(_OslLib):
         return s, ("bool" if op in _CMP or op == "^^" else t)
 
     def lvalue_is_vec_index(self, node):
-        if node[0] == "index":
-            _, t = self.ex(node[1])
+        if isinstance(node, S.Index):
+            _, t = self.ex(node.base)
             return _vec(t) is not None and not isinstance(t, tuple)
         return False
 
     def assign(self, op, lhs, rhs) -> str:
-        if lhs[0] == "paren":
-            lhs = lhs[1]
-        if lhs[0] == "member":
-            _, bt = self.ex(lhs[1])
-            if _vec(bt) and len(lhs[2]) > 1:
+        if isinstance(lhs, S.Paren):
+            lhs = lhs.inner
+        if isinstance(lhs, S.Member):
+            _, bt = self.ex(lhs.base)
+            if _vec(bt) and len(lhs.name) > 1:
                 raise TranslateError("OSL translation: assignment to a multi-component swizzle")
         if self.lvalue_is_vec_index(lhs):
-            base, bt = self.ex(lhs[1])
-            idx, _ = self.ex(lhs[2])
-            cur = ("index", lhs[1], lhs[2])
-            val = rhs if op == "=" else ("binary", op[:-1], cur, ("paren", rhs))
+            base, bt = self.ex(lhs.base)
+            idx, _ = self.ex(lhs.index)
+            val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
             v, tv = self.ex(val)
             v = self.conv(v, tv, _vec(bt)[0]) if isinstance(tv, str) and not _vec(tv) else v
             return f"{self.vec_set(bt)}({base}, {idx}, {v})"
@@ -204,7 +200,7 @@ class _Osl(_OslLib):
         base_op = op[:-1]
         _, tb = self.ex(rhs)
         if _vec(ta) or _vec(tb) or (ta == "uint" and base_op in (">>", "/", "%", "<", ">")):
-            b, _ = self.binary(base_op, lhs, ("paren", rhs))
+            b, _ = self.binary(base_op, lhs, S.Paren(rhs))
             return f"{a} = {b}"
         b, _ = self.ex(rhs)
         return f"{a} {op} {b}"
@@ -277,68 +273,62 @@ class _Osl(_OslLib):
 
     # ------------------------------------------------------------------ statements
     def stmt(self, s, ind: str) -> list[str]:
-        out = []
-        for c in s[1]:
-            if isinstance(c, tuple) or c == "":
-                continue
-            out += [ind + ln.strip() for ln in c.split("\n")]
-        k = s[0]
-        if k == "block":
+        out = [ind + ln.strip() for c in s.comments if c for ln in c.split("\n")]
+        if isinstance(s, S.Block):
             self.scopes.append({})
             out.append(ind + "{")
-            for t in s[2]:
+            for t in s.body:
                 out += self.stmt(t, ind + "    ")
             out.append(ind + "}")
             self.scopes.pop()
-        elif k == "decl":
-            out += [ind + d for d in self.decl(s[3], s[4])]
-        elif k == "expr":
-            e, _ = self.ex(s[2])
+        elif isinstance(s, S.Decl):
+            out += [ind + d for d in self.decl(s.type, s.declarators)]
+        elif isinstance(s, S.ExprStmt):
+            e, _ = self.ex(s.expr)
             out.append(ind + e + ";")
-        elif k == "return":
-            if s[2] is None:
+        elif isinstance(s, S.Return):
+            if s.value is None:
                 out.append(ind + "return;")
             else:
-                e, t = self.ex(s[2])
+                e, t = self.ex(s.value)
                 rt = self.ret
                 if isinstance(t, str) and not _vec(t) and not _vec(rt) and rt not in self.structs \
                         and t != rt and {t, rt} != {"int", "uint"}:
                     e = self.conv(e, t, rt)
                 out.append(ind + f"return {e};")
-        elif k in ("break", "continue"):
-            out.append(ind + k + ";")
-        elif k == "if":
-            c, _ = self.ex(s[2])
+        elif isinstance(s, S.Jump) and s.kind in ("break", "continue"):
+            out.append(ind + s.kind + ";")
+        elif isinstance(s, S.If):
+            c, _ = self.ex(s.cond)
             out.append(f"{ind}if ({c})")
-            out += self.body(s[3], ind)
-            if s[4] is not None:
+            out += self.body(s.then, ind)
+            if s.other is not None:
                 out.append(ind + "else")
-                out += self.body(s[4], ind)
-        elif k == "for":
+                out += self.body(s.other, ind)
+        elif isinstance(s, S.For):
             self.scopes.append({})
             init = ""
-            if s[2] is not None:
-                if s[2][0] == "decl":
-                    d = self.decl(s[2][3], s[2][4])
-                    if len(d) != 1:
-                        raise TranslateError("OSL translation: one variable per for-loop initialiser")
-                    init = d[0][:-1]
-                else:
-                    init, _ = self.ex(s[2][2])
-            cond = "" if s[3] is None else self.ex(s[3])[0]
-            step = "" if s[4] is None else self.ex(s[4])[0]
+            if isinstance(s.init, S.Decl):
+                d = self.decl(s.init.type, s.init.declarators)
+                if len(d) != 1:
+                    raise TranslateError("OSL translation: one variable per for-loop initialiser")
+                init = d[0][:-1]
+            elif s.init is not None:
+                init, _ = self.ex(s.init.expr)
+            cond = "" if s.cond is None else self.ex(s.cond)[0]
+            step = "" if s.step is None else self.ex(s.step)[0]
             out.append(f"{ind}for ({init}; {cond}; {step})")
-            out += self.body(s[5], ind)
+            out += self.body(s.body, ind)
             self.scopes.pop()
-        elif k == "while":
-            out.append(f"{ind}while ({self.ex(s[2])[0]})")
-            out += self.body(s[3], ind)
+        elif isinstance(s, S.While):
+            out.append(f"{ind}while ({self.ex(s.cond)[0]})")
+            out += self.body(s.body, ind)
         else:
-            raise TranslateError(f"OSL translation: statement {k!r}")
+            raise TranslateError(f"OSL translation: statement {getattr(s, 'kind', type(s).__name__)!r}")
         return out
 
     def body(self, s, ind: str) -> list[str]:
-        if s[0] == "block":
+        if isinstance(s, S.Block):
             return self.stmt(s, ind)
         self.scopes.append({})
         out = [ind + "{"] + self.stmt(s, ind + "    ") + [ind + "}"]
@@ -348,27 +338,27 @@ class _Osl(_OslLib):
     def decl(self, typ: str, decls) -> list[str]:
         out = []
         ot = self.osl_type(typ)
-        for name, size, init in decls:
+        for d in decls:
+            name, size, init = d.name, d.size, d.init
             n = self.name(name)
             if size is not None:
                 sz = self.size(size)
                 self.scopes[-1][name] = (typ, sz)
                 if init is None:
                     out.append(f"{ot} {n}[{sz}];")
-                elif init[0] == "arrctor":
-                    vals = [self.conv_to(a, typ) for a in init[3]]
+                elif isinstance(init, S.ArrayCtor):
+                    vals = [self.conv_to(a, typ) for a in init.args]
                     out.append(f"{ot} {n}[{sz}] = {{ {', '.join(vals)} }};")
                 else:
                     raise TranslateError(f"OSL translation: array {name!r} initialised from an expression")
                 continue
             self.scopes[-1][name] = typ
-            if init is not None and init[0] == "ctor" and init[1] in self.structs \
-                    and any(a[0] == "arrctor" for a in init[2]):
+            if isinstance(init, S.Ctor) and init.type in self.structs and any(isinstance(a, S.ArrayCtor) for a in init.args):
                 # a struct with array members: member by member (OSL has no array expressions)
                 out.append(f"{ot} {n};")
-                for (m, mt), a in zip(self.structs[typ].items(), init[2]):
-                    if a[0] == "arrctor":
-                        for j, e in enumerate(a[3]):
+                for (m, mt), a in zip(self.structs[typ].items(), init.args):
+                    if isinstance(a, S.ArrayCtor):
+                        for j, e in enumerate(a.args):
                             out.append(f"{n}.{self.name(m)}[{j}] = {self.conv_to(e, mt[0])};")
                     else:
                         out.append(f"{n}.{self.name(m)} = {self.conv_to(a, mt)};")
@@ -388,17 +378,11 @@ class _Osl(_OslLib):
 
     # ------------------------------------------------------------------ top level
     def globals_used(self, node, out: set) -> None:
-        if isinstance(node, list):
-            for n in node:
-                self.globals_used(n, out)
-        elif isinstance(node, tuple) and node:
-            if node[0] == "id" and node[1] in self.globals:
-                out.add(node[1])
-            elif node[0] == "call" and node[1] in self.passed:
-                out.update(self.passed[node[1]])        # the callee's parameters pass through
-            for c in node[1:]:
-                if isinstance(c, (tuple, list)):
-                    self.globals_used(c, out)
+        for n in walk(node):
+            if isinstance(n, S.Name) and n.name in self.globals:
+                out.add(n.name)
+            elif isinstance(n, S.Call) and n.func in self.passed:
+                out.update(self.passed[n.func])        # the callee's parameters pass through
 
     def emit(self) -> str:
         funcs_out: list[str] = []
@@ -417,77 +401,73 @@ class _Osl(_OslLib):
 
 
     def emit_item(self, item, funcs_out: list, overloads: dict) -> None:
-        k = item[0]
-        if k == "struct":
+        if isinstance(item, S.Struct):
             members = {}
-            lines = [f"struct {item[2]}", "{"]
-            for mcom, typ, mname, size, trail in item[3]:
-                ot = self.osl_type(typ)
-                if size is not None:
-                    sz = self.size(size)
-                    members[mname] = (typ, sz)
-                    lines.append(f"    {ot} {self.name(mname)}[{sz}];" + (f"  {trail}" if trail else ""))
+            lines = [f"struct {item.name}", "{"]
+            for f in item.fields:
+                ot = self.osl_type(f.type)
+                trail = f"  {f.trail}" if f.trail else ""
+                if f.size is not None:
+                    sz = self.size(f.size)
+                    members[f.name] = (f.type, sz)
+                    lines.append(f"    {ot} {self.name(f.name)}[{sz}];" + trail)
                 else:
-                    members[mname] = typ
-                    lines.append(f"    {ot} {self.name(mname)};" + (f"  {trail}" if trail else ""))
+                    members[f.name] = f.type
+                    lines.append(f"    {ot} {self.name(f.name)};" + trail)
             lines.append("};")
-            self.structs[item[2]] = members
-            funcs_out.append("\n".join(self.comment_lines(item[1]) + lines))
-        elif k == "gdecl":
-            quals, typ, decls = item[2], item[3], item[4]
-            if "uniform" in quals:
+            self.structs[item.name] = members
+            funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
+        elif isinstance(item, S.Global):
+            if "uniform" in item.quals:
                 raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
                                      "shader's parameters are OSL's uniforms)")
-            for name, size, init in decls:
-                if init is None:
-                    raise TranslateError(f"OSL translation: global {name!r} needs a value")
-                self.globals[name] = (typ, self.size(size) if size is not None else None, init)
-        elif k == "func":
-            _, com, ret, name, params, body = item
+            for d in item.declarators:
+                if d.init is None:
+                    raise TranslateError(f"OSL translation: global {d.name!r} needs a value")
+                self.globals[d.name] = (item.type, self.size(d.size) if d.size is not None else None, d.init)
+        else:
+            name = item.name
             if name in self.drop:
                 return
             used: set = set()
-            self.globals_used(body, used)
+            self.globals_used(item.body, used)
             passed = [g for g in self.params if g in used]
             self.passed[name] = passed
             n = overloads.get(name, 0)
             overloads[name] = n + 1
             oname = self.name(name) if n == 0 else f"{name}_{n}"
-            ptypes = [(t, s) if s is not None else t for _, t, _, s in params]
+            ptypes = [(p.type, self.size(p.size)) if p.size is not None else p.type for p in item.params]
             self.funcs.setdefault(name, []).append(
-                (ptypes, [m for m, _, _, _ in params], ret, oname, [self.name(g) for g in passed]))
-            funcs_out.append("\n".join(self.comment_lines(com) + self.func(item, oname, passed, used)))
+                (ptypes, [p.mode for p in item.params], item.ret, oname, [self.name(g) for g in passed]))
+            funcs_out.append("\n".join(self.comment_lines(item.comments) + self.func(item, oname, passed, used)))
 
-    def comment_lines(self, com) -> list[str]:
-        out = []
-        for c in com:
-            if isinstance(c, tuple) or c == "":
-                continue
-            out += [ln.strip() for ln in c.split("\n")]
-        return out
+    @staticmethod
+    def comment_lines(com) -> list[str]:
+        return [ln.strip() for c in com if c for ln in c.split("\n")]
 
     def func(self, item, oname: str, passed: list, used: set) -> list[str]:
-        _, _, ret, name, params, body = item
-        self.ret = ret
-        mutated: set = set()
-        sigs = {n: [m for m in c[0][1]] for n, c in self.funcs.items()}
-        _find_mutated(body, mutated, sigs)
+        self.ret = item.ret
+        modes = {n: c[0][1] for n, c in self.funcs.items()}
+        mutated = {root_name(n.target if isinstance(n, S.Assign) else n.operand)
+                   for n in walk(item.body) if isinstance(n, (S.Assign, S.IncDec))}
+        mutated |= {root_name(a) for n in walk(item.body) if isinstance(n, S.Call) and n.func in modes
+                    for a, m in zip(n.args, modes[n.func]) if m in ("out", "inout")}
         scope: dict = {}
         plist, prologue = [], []
-        for mode, typ, pname, size in params:
-            ot = self.osl_type(typ)
+        for p in item.params:
+            ot = self.osl_type(p.type)
             arr = ""
-            if size is not None:
-                arr = f"[{self.size(size)}]"
-                scope[pname] = (typ, self.size(size))
+            if p.size is not None:
+                arr = f"[{self.size(p.size)}]"
+                scope[p.name] = (p.type, self.size(p.size))
             else:
-                scope[pname] = typ
-            n = self.name(pname)
-            if mode in ("out", "inout"):
+                scope[p.name] = p.type
+            n = self.name(p.name)
+            if p.mode in ("out", "inout"):
                 plist.append(f"output {ot} {n}{arr}")
-            elif pname in mutated:
-                if size is not None:
-                    raise TranslateError(f"OSL translation: {name} assigns its array parameter {pname!r}")
+            elif p.name in mutated:
+                if p.size is not None:
+                    raise TranslateError(f"OSL translation: {item.name} assigns its array parameter {p.name!r}")
                 plist.append(f"{ot} {n}_in")
                 prologue.append(f"    {ot} {n} = {n}_in;")
             else:
@@ -499,10 +479,10 @@ class _Osl(_OslLib):
         for g in sorted(used - set(passed), key=list(self.globals).index):
             t, size, init = self.globals[g]
             self.scopes[0].pop(g, None)
-            d = self.decl(t, [(g, ("num", size) if size is not None else None, init)])
+            d = self.decl(t, [S.Declarator(g, S.Num(size) if size is not None else None, init)])
             prologue += ["    " + ln for ln in d]
-        out = [f"{self.osl_type(ret)} {oname}({', '.join(plist)})", "{"] + prologue
-        for s in body:
+        out = [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)})", "{"] + prologue
+        for s in item.body.body:
             out += self.stmt(s, "    ")
         out.append("}")
         self.scopes = []

@@ -4,12 +4,11 @@ access, built-ins) and for unsigned 32-bit arithmetic on OSL's signed ``int``; e
 generated once, when the translation first needs it."""
 from __future__ import annotations
 
-import re
 
+from cellgl.export import syntax as S
 from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
 
-_VEC_RE = re.compile(r"([biu]?)vec([234])$")
 _COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
 _XYZW = "xyzw"
@@ -37,8 +36,9 @@ OSL_RESERVED = {
 
 def _vec(t: str):
     """``(component type, n)`` of a GLSL vector type, or None."""
-    m = _VEC_RE.fullmatch(t) if isinstance(t, str) else None
-    return (_COMP[m.group(1)], int(m.group(2))) if m else None
+    if not isinstance(t, str) or t[-1:] not in ("2", "3", "4") or t[:-1] not in ("vec", "ivec", "uvec", "bvec"):
+        return None
+    return _COMP[t[:-4]], int(t[-1])
 
 
 def _osl_scalar(t: str) -> str:
@@ -210,13 +210,13 @@ class _OslLib:
     def size(self, node) -> str:
         """An array size: an integer constant expression, folded (OSL wants a literal)."""
         def ev(x):
-            if x[0] == "num" and re.fullmatch(r"\d+[uU]?", x[1]):
-                return int(x[1].rstrip("uU"))
-            if x[0] == "paren":
-                return ev(x[1])
-            if x[0] == "binary" and x[1] in ("+", "-", "*", "<<"):
-                a, b = ev(x[2]), ev(x[3])
-                return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x[1]]
+            if isinstance(x, S.Num) and x.text.rstrip("uU").isdigit():
+                return int(x.text.rstrip("uU"))
+            if isinstance(x, S.Paren):
+                return ev(x.inner)
+            if isinstance(x, S.Binary) and x.op in ("+", "-", "*", "<<"):
+                a, b = ev(x.left), ev(x.right)
+                return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x.op]
             raise TranslateError("OSL translation: an array size that is not an integer constant")
         return str(ev(node))
 
