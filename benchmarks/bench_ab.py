@@ -19,6 +19,13 @@ grid (``--size``^2 samples, distribution blender; cases ``2`` and ``3``, the dim
 
     python benchmarks/bench_ab.py --baseline /tmp/base --smooth 0.25 --rounds 5 3 2
 
+``--feature edge`` or ``--feature nsphere``: that feature alone on the same grid (distribution
+poisson; cases ``2`` and ``3``). ``--texture``: the cases are texture presets, each rendered at
+``--size``^2 pixels (``cellgl.render``, the colour), e.g.
+
+    python benchmarks/bench_ab.py --baseline /tmp/base --feature edge --rounds 5 3 2
+    python benchmarks/bench_ab.py --baseline /tmp/base --texture --size 512 flagstone rock
+
 Either way the table says whether both checkouts' answers (of the first call) are bit-identical.
 """
 from __future__ import annotations
@@ -47,6 +54,14 @@ calls = {}
 for name, (d, kw) in cases.items():
     if smooth is None:
         calls[name] = (lambda p=pts[d], kw=kw: cellgl.cellular(p, n=n, outputs=("F",), **kw).F)
+    elif smooth["kind"] == "texture":
+        calls[name] = (lambda rec=cellgl.load_recipe(name), s=smooth["size"]: cellgl.render(rec, s, s)["color"])
+    elif smooth["kind"] != "smooth":   # a feature alone on the same plane
+        size, h, out = smooth["size"], 32.0 / smooth["size"], smooth["kind"]
+        origin = (-16.0 + h / 2, -16.0 + h / 2) + ((0.37,) if d == 3 else ())
+        shape = (size, size) if d == 2 else (1, size, size)
+        calls[name] = (lambda shape=shape, origin=origin, h=h, out=out: getattr(cellgl.cellular_grid(
+            shape, origin=origin, spacing=h, n=1, outputs=(out,)), out))
     else:                   # bench_blender.py's plane: 32 cells across, z = 0.37 (3D)
         size, h = smooth["size"], 32.0 / smooth["size"]
         origin = (-16.0 + h / 2, -16.0 + h / 2) + ((0.37,) if d == 3 else ())
@@ -64,9 +79,12 @@ for line in sys.stdin:
 """
 
 
-def _cases(names: list[str], smooth: bool = False) -> dict:
+def _cases(names: list[str], smooth: bool = False, texture: bool = False) -> dict:
     out = {}
     for name in names:
+        if texture:
+            out[name] = (0, {})
+            continue
         if smooth:
             if name not in ("2", "3"):
                 raise ValueError(f"with --smooth a case is the dimension 2 or 3, got {name!r}")
@@ -104,14 +122,23 @@ def main(argv=None) -> int:
     ap.add_argument("--n", type=int, default=2, help="F1..Fn (default 2)")
     ap.add_argument("--smooth", type=float, default=None, metavar="K",
                     help="time smooth F1 (exp, smoothness K) on a grid instead; cases 2 and 3")
-    ap.add_argument("--size", type=int, default=1024, help="with --smooth: the grid's side (default 1024)")
+    ap.add_argument("--feature", choices=("edge", "nsphere"), default=None,
+                    help="time that feature alone on the grid instead; cases 2 and 3")
+    ap.add_argument("--texture", action="store_true", help="the cases are texture presets, rendered")
+    ap.add_argument("--size", type=int, default=1024,
+                    help="with --smooth/--feature: the grid's side, --texture: the image's (default 1024)")
     args = ap.parse_args(argv)
-    smooth = None if args.smooth is None else {"k": args.smooth, "size": args.size}
+    if sum(x is not None and x is not False for x in (args.smooth, args.feature, args.texture)) > 1:
+        ap.error("--smooth, --feature and --texture are exclusive")
+    smooth = (None if args.smooth is None and args.feature is None and not args.texture else
+              {"kind": "texture" if args.texture else (args.feature or "smooth"), "k": args.smooth, "size": args.size})
     if args.smooth is not None and not 0.0 <= args.smooth <= 0.25:
         ap.error(f"--smooth must be in [0, 0.25], got {args.smooth}")
+    if args.texture and args.cases == ["3p", "2p"]:
+        ap.error("--texture needs the presets to render, e.g. flagstone rock")
     try:
         cases = _cases(args.cases if args.cases != ["3p", "2p"] or smooth is None else ["3", "2"],
-                       smooth is not None)
+                       smooth is not None, args.texture)
     except ValueError as e:
         ap.error(str(e))
     this, bits_this = _start(_REPO, int(args.points), args.n, cases, smooth)
@@ -137,6 +164,8 @@ def main(argv=None) -> int:
             proc.stdin.close()
             proc.wait()
     what = (f"F1..F{args.n}, {int(args.points)} scattered points" if smooth is None else
+            f"texture presets rendered at {args.size}^2" if args.texture else
+            f"{args.feature} alone, {args.size}^2 grid, distribution poisson" if args.feature else
             f"smooth F1 (exp, k = {args.smooth:g}), {args.size}^2 grid, distribution blender")
     print(f"{what}, {args.rounds} interleaved rounds; "
           f"load {load0:.1f} -> {os.getloadavg()[0]:.1f} (1 min); this / {args.baseline}")

@@ -19,6 +19,9 @@ cellgl's modes: ``polynomial`` (the node's fold over its 5^d window, the node's 
 (log-sum-exp over every point that matters).
 
     python benchmarks/bench_blender.py [--size 1024] [--repeats 5] [--dims 2 3] [--quick]
+
+``--cache on|off|both``: cellgl's workgroup cell cache of grids (``CELLGL_CELL_CACHE``, off by
+default); ``both`` times cellgl both ways against the same node render, round by round.
 """
 from __future__ import annotations
 
@@ -178,7 +181,8 @@ def cases(dims, quick):
     return out
 
 
-def cellgl_call(size: int, d: int, kw: dict):
+def cellgl_call(size: int, d: int, kw: dict, cache: str | None = None):
+    """The cellgl side of a case; cache "0"/"1": CELLGL_CELL_CACHE for the call (None: as set)."""
     import cellgl
 
     span = 2.0 * SCALE                  # cells across the image, as the Blender plane
@@ -187,8 +191,17 @@ def cellgl_call(size: int, d: int, kw: dict):
     shape = (size, size) if d == 2 else (1, size, size)
 
     def call():
-        return cellgl.cellular_grid(shape, origin=origin, spacing=h, n=1, distribution="blender",
-                                    jitter=1.0, **kw)
+        old = os.environ.get("CELLGL_CELL_CACHE")
+        if cache is not None:
+            os.environ["CELLGL_CELL_CACHE"] = cache
+        try:
+            return cellgl.cellular_grid(shape, origin=origin, spacing=h, n=1, distribution="blender",
+                                        jitter=1.0, **kw)
+        finally:
+            if cache is not None:
+                os.environ.pop("CELLGL_CELL_CACHE", None)
+                if old is not None:
+                    os.environ["CELLGL_CELL_CACHE"] = old
 
     return call
 
@@ -202,18 +215,23 @@ def main() -> int:
                     help="only the cases whose label contains one of these (e.g. '2D distance')")
     ap.add_argument("--quick", action="store_true", help="fewer smoothness values")
     ap.add_argument("--blender-python", default=os.environ.get("CELLGL_BLENDER_PYTHON", sys.executable))
+    ap.add_argument("--cache", default="default", choices=("default", "on", "off", "both"),
+                    help="cellgl's workgroup cell cache of grids (CELLGL_CELL_CACHE)")
     a = ap.parse_args()
-    todo = [c for c in cases(a.dims, a.quick) if any(o in c[0] for o in a.only)]
+    caches = {"default": [None], "on": ["1"], "off": ["0"], "both": ["0", "1"]}[a.cache]
+    todo = [(label + ("" if c is None else f" (cache {'on' if c == '1' else 'off'})"), bcase, kw, c)
+            for label, bcase, kw in cases(a.dims, a.quick) if any(o in label for o in a.only)
+            for c in caches]
     samples = a.size * a.size
     load0 = os.getloadavg()
     blender = Blender(a.blender_python, a.size)
-    calls = {label: cellgl_call(a.size, int(label[0]), kw) for label, _, kw in todo}
-    for label, _, _ in todo:
+    calls = {label: cellgl_call(a.size, int(label[0]), kw, c) for label, _, kw, c in todo}
+    for label, *_ in todo:
         calls[label]()                                   # compile cellgl's shaders
-    times = {label: {"blender": [], "const": [], "cellgl": []} for label, _, _ in todo}
+    times = {label: {"blender": [], "const": [], "cellgl": []} for label, *_ in todo}
     try:
         for rnd in range(a.repeats):
-            for label, bcase, _ in todo:
+            for label, bcase, _, _ in todo:
                 t = times[label]
                 # A pause before each timed call: the other side's worker threads (Cycles' task
                 # pool spins a while after a render) must not eat into it.
@@ -234,7 +252,7 @@ def main() -> int:
           f"load {load0[0]:.1f} -> {load1[0]:.1f} (1 min), {os.cpu_count()} cores")
     print("| case | Blender node Ms/s | cellgl Ms/s | cellgl / Blender |")
     print("| --- | ---: | ---: | ---: |")
-    for label, _, _ in todo:
+    for label, *_ in todo:
         t = times[label]
         node = [b - c for b, c in zip(t["blender"], t["const"])]
         # per round ratio, then the median of the ratios (robust to load drifting between rounds)

@@ -5,10 +5,12 @@
 // one unrolled block, then ring by ring within a reach that shrinks as the
 // walk goes (_cell_walk_rings), or, for smooth F1 alone, whose reach does not
 // change, one window loop (_cell_walk_smooth) or the rows of a Euclidean ball
-// (_cell_walk_ball, a wide reach). What a walk does per feature point is
-// _cell_walk_point (edge, smooth, n-sphere, edge alone) or
-// _cell_walk_far_cell's sum (smooth F1 alone, rings 2 and on); features.glsl
-// explains the maths and the bounds that keep every walk exact.
+// (_cell_walk_ball, a wide reach). The ring walk and the smooth window share
+// one window loop (_cell_walk_window) and one cell visit (_cell_walk_cell);
+// what a walk does per feature point is _cell_walk_point (edge, smooth,
+// n-sphere, edge alone; smooth F1 alone in rings 2 and on, _CellWalk.far: the
+// sum alone, _cell_walk_far_point); features.glsl explains the maths and the
+// bounds that keep every walk exact.
 //
 // Requires: cellular.glsl (included; with it walk.glsl).
 // Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
@@ -29,6 +31,23 @@
 // not accumulated (they stay those of the F1 point), a shader specialised per
 // requested output.
 #define CELL_SMOOTH_EXTRA 1
+#endif
+
+#ifndef CELL_WALK_FAST
+// 1: the smooth walk's specialised loops below (a pass of cellular.comp; the
+// textures and the exported snippets keep the shorter general code).
+#ifdef CELL_FEATURE_PASS
+#define CELL_WALK_FAST 1
+#else
+#define CELL_WALK_FAST 0
+#endif
+#endif
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST
+// Smooth F1 alone, rings 2, 3, ... (_CellWalk.far): a point is summed without
+// the tests of the other walks.
+#define _CELL_FAR_SUM 1
+#else
+#define _CELL_FAR_SUM 0
 #endif
 
 // The colour of the cell of feature point `id`: bytes 0, 8 and 16 of its hash,
@@ -80,6 +99,9 @@ struct _CellWalk {
 #if CELL_EDGE_ALONE
     bool nearest;    // the walk looks for the F1 point itself (F1 in internal units)
 #endif
+#if _CELL_FAR_SUM
+    bool far;        // rings 2, 3, ... of smooth F1 alone: the sum alone (_cell_walk_far_point)
+#endif
 };
 
 // True distance from the walk's centre beyond which no point matters (now).
@@ -119,9 +141,37 @@ void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p
 }
 #endif
 
+#if _CELL_FAR_SUM
+// What smooth F1 alone does per point in rings 2, 3, ...: the sum of
+// _cell_walk_point. The F1 point (only there when the search needed ring 2)
+// has d == F1 to the bit (the same sum of the same terms), so it is told by
+// its ID and distance.
+void _cell_walk_far_point(inout _CellWalk w, vec4 delta, uint id, CellParams p)
+{
+    float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+#if CELL_SMOOTH_EXTRA
+    _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
+#else
+    // Smooth F1 alone needs no ID: the F1 point (d == F1) weighs exp(0) = 1
+    // as is_p1 gives it, and with k = 0 the sum does not change S = F1.
+    if (d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
+        w.wsum += exp((w.F1 - d) / w.k);
+    }
+#endif
+}
+#endif
+
+// What a walk does per feature point: the point q (ID id) of the cell at
+// offset o, delta = its offset from the walk's centre.
 void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, CellParams p)
 {
     delta = cell_dims(delta);
+#if _CELL_FAR_SUM
+    if (w.far) {
+        _cell_walk_far_point(w, delta, id, p);
+        return;
+    }
+#endif
     vec4 e = delta - w.d1;                  // pj - p1
     float e2 = dot(e, e);
     bool is_p1 = id == w.id1 && e2 < 1e-10;
@@ -162,6 +212,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
 #endif
 }
 
+// Every feature point of the cell at offset o (the cell source, walk.glsl).
 void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
 {
     ivec4 c;
@@ -176,44 +227,31 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     }
 }
 
-#ifndef CELL_WALK_FAST
-// 1: the smooth walk's specialised loops below (a pass of cellular.comp; the
-// textures and the exported snippets keep the shorter general code).
-#ifdef CELL_FEATURE_PASS
-#define CELL_WALK_FAST 1
-#else
-#define CELL_WALK_FAST 0
-#endif
-#endif
-
-#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST
-// _cell_walk_cell for smooth F1 alone in rings 2, 3, ...: a point there is
-// summed as _cell_walk_point sums it, without its tests for the other walks.
-// The F1 point (only there when the search needed ring 2) has d == F1 to the
-// bit (the same sum of the same terms), so it is told by its ID and distance.
-void _cell_walk_far_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams p)
+// The window loop of every walk: the cells of the window lo .. hi on ring
+// `ring` that can hold a point within the reach (pruned), or, unpruned, every
+// cell of it on ring `ring` or beyond (the reach fixed: each point's own test
+// decides). Stops at the loop budget (w.spent).
+void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec4 lo, ivec4 hi, int ring, bool pruned)
 {
-    ivec4 c;
-    uint state;
-    int count = _cell_open(cell, o, p, c, state);
-    vec4 base = vec4(o) - f;
-    w.loops += count + 1;
-    for (int k = 0; k < count; k++) {
-        uint id;
-        vec4 delta = cell_dims(base + cell_next_point(state, c, p, id));
-        float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-#if CELL_SMOOTH_EXTRA
-        _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
-#else
-        // Smooth F1 alone needs no ID: the F1 point (d == F1) weighs exp(0) = 1
-        // as is_p1 gives it, and with k = 0 the sum does not change S = F1.
-        if (d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
-            w.wsum += exp((w.F1 - d) / w.k);
+    ivec4 n = hi - lo + 1;
+    int cells = n.x * n.y * n.z * n.w;
+    ivec4 o = cell_window_first(lo);
+    w.loops += 1;             // the pass that leaves the window loop
+    for (int i = 0; i < cells; i++) {
+        if (cell_budget_spent(w.loops)) {
+            w.spent = true;
+            break;
         }
-#endif
+        w.loops += 1;
+        o = cell_window_next(o, lo, hi);
+        ivec4 ao = abs(o);
+        if (pruned ? max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                     && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
+                   : max(max(ao.x, ao.y), max(ao.z, ao.w)) >= ring) {
+            _cell_walk_cell(w, cell, f, o, p);
+        }
     }
 }
-#endif
 
 // Visit, ring by ring, every cell that can hold a point within the reach.
 // From ring `first` on, each ring's window within the reach (which shrinks as the walk
@@ -230,24 +268,7 @@ bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int f
         }
         ivec4 lo, hi;
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
-        ivec4 n = hi - lo + 1;
-        int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = cell_window_first(lo);
-        w.loops += 1;
-        for (int i = 0; i < cells; i++) {
-            if (cell_budget_spent(w.loops)) {
-                w.spent = true;
-                return false;
-            }
-            w.loops += 1;
-            o = cell_window_next(o, lo, hi);
-            ivec4 ao = abs(o);
-            if (max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                && _cell_box_distance(o, f, p)
-                   < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
-                _cell_walk_cell(w, cell, f, o, p);
-            }
-        }
+        _cell_walk_window(w, cell, f, p, lo, hi, ring, true);      // (once spent, each next window stops at once)
     }
     return !w.spent && float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
 }
@@ -267,6 +288,7 @@ bool _cell_walk_ball(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float 
     ivec4 lo, hi;
     ivec4 o = ivec4(0);
     _cell_ball_reset(o, lo, hi, f, reach, last, 0);
+    w.far = true;
     //
     // Both loops are tested at the bottom: no range is empty (the first
     // row is o.x = lo.x, a row's range holds 0, and with reach > 3 a row
@@ -290,7 +312,7 @@ bool _cell_walk_ball(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float 
             }
             w.loops += 1;
             o[CELL_DIM - 1] = z;
-            _cell_walk_far_cell(w, cell, f, o, p);
+            _cell_walk_cell(w, cell, f, o, p);
             z = (inner && z == -2) ? 2 : z + 1;
         } while (z <= hi[CELL_DIM - 1]);
         o = _cell_ball_next_row(o, lo, hi, f, reach, last);
@@ -316,26 +338,10 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 #endif
     ivec4 lo, hi;
     cell_ring_window(last, min(reach, float(last + 2)), f, lo, hi);
-    ivec4 n = hi - lo + 1;
-    int cells = n.x * n.y * n.z * n.w;
-    ivec4 o = cell_window_first(lo);
-    w.loops += 1;             // the pass that leaves the window loop
-    for (int i = 0; i < cells; i++) {
-        if (cell_budget_spent(w.loops)) {
-            w.spent = true;
-            break;
-        }
-        w.loops += 1;
-        o = cell_window_next(o, lo, hi);
-        ivec4 ao = abs(o);
-        if (max(max(ao.x, ao.y), max(ao.z, ao.w)) >= 2) {
-#if CELL_WALK_FAST
-            _cell_walk_far_cell(w, cell, f, o, p);
-#else
-            _cell_walk_cell(w, cell, f, o, p);
+#if _CELL_FAR_SUM
+    w.far = true;
 #endif
-        }
-    }
+    _cell_walk_window(w, cell, f, p, lo, hi, 2, false);
     return !w.spent && float(last) + m >= reach;
 }
 #endif
@@ -351,6 +357,9 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     // too (the same points within the reach, so the same answer).
     return _cell_walk_rings(w, cell, f, p, 0);
 #else
+#if _CELL_FAR_SUM
+    w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
+#endif
     if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
@@ -420,6 +429,9 @@ _CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothn
     w.spent = false;
 #if CELL_EDGE_ALONE
     w.nearest = F1 >= CELL_FAR;    // no F1 point given: the walk finds it first
+#endif
+#if _CELL_FAR_SUM
+    w.far = false;
 #endif
     return w;
 }

@@ -306,21 +306,16 @@ float cell_texture_footprint(vec3 duvz, CellTextureParams t)
     return max(d.x, max(d.y, d.z));
 }
 
-// The texture at basis position O + s: O = (offset_x, offset_y, offset_z, time),
-// carried split in t; s small (cell_texture_local); band-limited to a pixel of
-// footprint r basis units (cell_texture_footprint; 0: no band limit).
-CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
+// The fractal of the octaves at basis position s (after the warp), band-limited to
+// a pixel of footprint r basis units: G in [0, 1] before the levels, its gradient
+// dG; octave 0's ID, F1..F4, value and cell go into o.
+float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexel o, out vec4 dG)
 {
-    CellTexel o;
-    vec4 wj0 = vec4(0.0), wj1 = vec4(0.0), wj2 = vec4(0.0), wj3 = vec4(0.0);
-    if (t.warp_amount != 0.0) {
-        s = cell_texture_warp(s, t, wj0, wj1, wj2, wj3);
-    }
     int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
     bool qin = t.fractal == CELL_TEX_FRACTAL_QIN || t.fractal == CELL_TEX_FRACTAL_QIN_CUBE;
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
     float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
-    vec4 dG = vec4(0.0);
+    dG = vec4(0.0);
     // Feature spacings per pixel at octave 0 (times L^i at octave i).
     float spacings = t.antialias * t.feature_frequency * r;
     for (int i = 0; i < CELL_TEX_OCTAVES; i++) {
@@ -387,26 +382,13 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
         G /= total;
         dG /= total;
     }
-    if (t.fractal == CELL_TEX_FRACTAL_QIN_CUBE) {
-        dG *= 3.0 * G * G;
-        G = G * G * G;
-    }
-    if (t.invert != 0) {
-        G = 1.0 - G;
-        dG = -dG;
-    }
-    float lw = 1.0 / (t.level_hi - t.level_lo);
-    float h = (G - t.level_lo) * lw;
-    vec4 dh = dG * lw;
-    if (h < 0.0 || h > 1.0) {
-        h = clamp(h, 0.0, 1.0);
-        dh = vec4(0.0);
-    }
-    // Through the warp: dh/ds = (I + J)^T dh/ds' (J = 0 without one).
-    dh += dh.x * wj0 + dh.y * wj1 + dh.z * wj2 + dh.w * wj3;
-    o.height = h;
-    o.grad = dh;
+    return G;
+}
 
+// The colour and normal of the texel o at basis position s (after the warp) whose
+// height is h, its gradient dh.
+void _cell_texture_shade(inout CellTexel o, vec4 s, float h, vec4 dh, CellTextureParams t)
+{
     // Normal, y down (image rows) first.
     vec3 n = normalize(vec3(-t.bump * dh.x, -t.bump * dh.y, 1.0));
 
@@ -436,6 +418,40 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
     rgb *= mix(1.0, lambert, t.light);
     o.color = vec4(clamp(rgb, vec3(0.0), vec3(1.0)), 1.0);
     o.normal = t.normal_convention == CELL_TEX_NORMAL_OPENGL ? vec3(n.x, -n.y, n.z) : n;
+}
+
+// The texture at basis position O + s: O = (offset_x, offset_y, offset_z, time),
+// carried split in t; s small (cell_texture_local); band-limited to a pixel of
+// footprint r basis units (cell_texture_footprint; 0: no band limit).
+CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
+{
+    CellTexel o;
+    vec4 wj0 = vec4(0.0), wj1 = vec4(0.0), wj2 = vec4(0.0), wj3 = vec4(0.0);
+    if (t.warp_amount != 0.0) {
+        s = cell_texture_warp(s, t, wj0, wj1, wj2, wj3);
+    }
+    vec4 dG;
+    float G = _cell_texture_octaves(s, r, t, o, dG);
+    if (t.fractal == CELL_TEX_FRACTAL_QIN_CUBE) {
+        dG *= 3.0 * G * G;
+        G = G * G * G;
+    }
+    if (t.invert != 0) {
+        G = 1.0 - G;
+        dG = -dG;
+    }
+    float lw = 1.0 / (t.level_hi - t.level_lo);
+    float h = (G - t.level_lo) * lw;
+    vec4 dh = dG * lw;
+    if (h < 0.0 || h > 1.0) {
+        h = clamp(h, 0.0, 1.0);
+        dh = vec4(0.0);
+    }
+    // Through the warp: dh/ds = (I + J)^T dh/ds' (J = 0 without one).
+    dh += dh.x * wj0 + dh.y * wj1 + dh.z * wj2 + dh.w * wj3;
+    o.height = h;
+    o.grad = dh;
+    _cell_texture_shade(o, s, h, dh, t);
     return o;
 }
 
