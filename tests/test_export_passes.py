@@ -299,6 +299,30 @@ def test_a_copy_is_its_source():
     return a * a + t;
 }
 """
+    assert _run(SP.copies, """uniform int k_count;
+int f(int a) {
+    int n = k_count;
+    return a + n;
+}
+""").endswith("""int f(int a)
+{
+    return a + k_count;
+}
+""")
+
+
+def test_a_copy_of_a_parameter_read_in_a_loop_stays():
+    """(Inlined, the argument's expression would be computed in every pass of the loop.)"""
+    unit = parse_tree("""float f(float r) {
+    float s = r;
+    float t = 0.0;
+    for (int k = 0; k < 4; k++) {
+        t += s * float(k);
+    }
+    return t;
+}
+""")
+    assert not SP.copies(unit, Context(("f",)).refresh(unit))
 
 
 def test_a_bare_block_is_spliced_where_its_names_are_free():

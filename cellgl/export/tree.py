@@ -15,7 +15,7 @@ from cellgl.export.translate.tokens import TranslateError
 
 __all__ = ["tree_pass", "children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
            "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS", "OUT_BUILTINS", "ATOMS", "is_pure",
-           "occurrences", "paren", "rewrite", "declared_once"]
+           "occurrences", "paren", "rewrite"]
 
 #: expression node classes
 EXPRESSIONS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Unary, S.IncDec, S.Binary, S.Assign,
@@ -318,15 +318,3 @@ def rewrite(root, fn):
                         else S.Block(v))
         return fn(n)
     return transform(root, g)
-
-
-def declared_once(fn) -> set:
-    """The names declared exactly once in the function ``fn`` (parameters and locals)."""
-    seen: dict = {}
-    for p in fn.params:
-        seen[p.name] = seen.get(p.name, 0) + 1
-    for n in walk(fn.body):
-        if isinstance(n, S.Decl):
-            for d in n.declarators:
-                seen[d.name] = seen.get(d.name, 0) + 1
-    return {k for k, v in seen.items() if v == 1}
