@@ -32,7 +32,7 @@ from cellgl.export.fold import _literal, constants, fold
 from cellgl.export.fields import constant_fields, void_results
 from cellgl.export.inline import inline_once
 from cellgl.export import syntax as S
-from cellgl.export.printer import print_glsl, print_lines
+from cellgl.export.printer import item_glsl, print_lines
 from cellgl.export.reach import (
     Item,
     _call_args,
@@ -270,11 +270,9 @@ def _inline_constants(items: list[Item], env: dict[str, str]) -> list[Item]:
 
 
 def compile_unit(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> S.Unit:
-    """The middle end on the tree: the declarations ``entries`` reach in ``text`` (its parse is
-    cached per process, :func:`cellgl.export.syntax.parsed_library`; this copies only what is
-    reached), then :data:`ROUND` of passes to their fixed point (:func:`cellgl.export.tree.fixed_point`):
-    scalarise ``structs`` (``[(struct, loader)]``, :func:`cellgl.export.reach.scalarise`), fold
-    constants, inline one-liners and functions called once (but those named in ``keep``) ...
+    """The middle end on the tree: what ``entries`` reach in ``text`` (parsed once per process,
+    :func:`cellgl.export.syntax.parsed_library`; only that is copied), then :data:`ROUND` to its
+    fixed point: scalarise ``structs`` (``[(struct, loader)]``), fold, inline (but ``keep``) ...
     Returns the tree, every declaration after what it uses, its comments tidied."""
     unit = S.Unit([clone(it) for it in reached(S.parsed_library(text).items, entries)])
     strip_body_comments(unit)
@@ -287,9 +285,8 @@ def compile_unit(text: str, entries, structs=(), fold_constants: bool = True, ke
 
 
 def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> str:
-    """:func:`compile_unit` printed as GLSL: no blank line between declarations (a declaration's
-    comment sets it off), each statement on one line where it fits
-    (:func:`cellgl.export.printer.print_lines`)."""
+    """:func:`compile_unit` printed (:func:`cellgl.export.printer.print_lines`): no blank line
+    between declarations, each statement on one line where it fits."""
     return print_lines(compile_unit(text, entries, structs, fold_constants, keep))
 
 
@@ -302,7 +299,8 @@ def text_passes(*passes):
 
     @tree_pass
     def bridged(unit: S.Unit, ctx: Context) -> bool:
-        printed = print_glsl(unit)
+        texts = ["\n".join(item_glsl(it)) for it in unit.items]
+        printed = "\n\n".join(texts) + "\n"
         key = (printed, ctx.entries, ctx.keep, ctx.structs, ctx.fold_constants)
         if settled[0] == key:
             return False                  # (the passes are functions of their input)
@@ -310,11 +308,13 @@ def text_passes(*passes):
         before = unparse(items)
         for p in passes:
             items = p(items, ctx)
-        after = unparse(items)
-        if after == before:
+        if unparse(items) == before:
             settled[0] = key
             return False
-        unit.items[:] = S.parse(after).items
+        # a declaration the passes left as it was keeps its node; the others are parsed anew
+        structs, reuse = [it.name for it in items if it.kind == "struct"], dict(zip(texts, unit.items))
+        unit.items[:] = [x for it in items for x in ([reuse.pop(it.text().strip("\n"))] if it.text().strip("\n")
+                                                     in reuse else S.parse(it.text(), structs).items)]
         return True
 
     bridged.__name__ = "+".join(getattr(p, "__name__", "pass") for p in passes)

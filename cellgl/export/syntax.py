@@ -553,10 +553,12 @@ class _Parser:
         raise TranslateError(f"GLSL syntax: unexpected {t!r}")
 
 
-def parse(text: str) -> Unit:
+def parse(text: str, structs=()) -> Unit:
     """The tree of ``text`` (preprocessed GLSL); :class:`TranslateError` names what it cannot
-    read."""
-    return _Parser(text).unit()
+    read. ``structs``: struct types declared elsewhere (``text`` is a part of a module)."""
+    p = _Parser(text)
+    p.structs.update(structs)
+    return p.unit()
 
 
 @lru_cache(maxsize=64)
