@@ -1037,17 +1037,18 @@ def test_first_sentence_stops_at_a_clause_when_the_sentence_is_long():
 
 
 def test_ordered_puts_each_declaration_after_what_it_uses():
+    from cellgl.export.printer import print_lines
     from cellgl.export.syntax import parse as parse_tree
 
     unit = parse_tree("float f(float x)\n{\n    return x * k;\n}\nconst float k = g;\nconst float g = 2.0;\n"
                       "float h()\n{\n    return f(k);\n}\n")
-    assert compiler.glsl_text(type(unit)(compiler._ordered(unit.items))) == (
+    assert print_lines(type(unit)(compiler._ordered(unit.items))) == (
         "const float g = 2.0;\nconst float k = g;\nfloat f(float x)\n{\n    return x * k;\n}\n"
         "float h()\n{\n    return f(k);\n}\n")
 
 
 def test_a_statement_longer_than_the_width_is_broken_where_it_reads_well():
-    wrap = compiler._wrap
+    from cellgl.export.printer import _wrap as wrap
     assert wrap("    x = f(aaaa, bbbb);", 30) == ["    x = f(aaaa, bbbb);"]
     assert wrap("    x = f(aaaa, bbbb, cccc);", 24) == ["    x = f(aaaa, bbbb,", "          cccc);"]
     assert wrap("    if (aaaa && bbbbbb && cccc) {", 26) == ["    if (aaaa && bbbbbb", "        && cccc) {"]

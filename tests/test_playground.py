@@ -461,3 +461,18 @@ def test_worker_processes_write_the_same_site(tmp_path):
         assert res["variants"] == 2
         sites[jobs] = {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
     assert sites[1] == sites[2]
+
+
+def test_one_compile_gives_the_live_and_the_copied_texts(tmp_path):
+    """A variant's live GLSL ES (with the mean probe) and its copied GLSL ES, Godot and HLSL come
+    from one compile: the copied code is the live code without what only the probe reaches, and
+    it compiles."""
+    from cellgl.playground.variants import variant_texts
+
+    helpers = _export_helpers()
+    v = variant_texts("f1")
+    assert "cellgl_playground_probe" in v["live"] and "cellgl_playground_probe" not in v["gles"]
+    live_lines = set(v["live"].split("\n"))
+    assert all(ln in live_lines for ln in v["gles"].split("\n") if ln.strip())
+    helpers.compile_snippet(tmp_path, "gles", v["gles"])
+    helpers.compile_snippet(tmp_path, "hlsl", v["hlsl"])

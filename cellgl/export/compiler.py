@@ -31,12 +31,12 @@ from cellgl.export import syntax as S
 from cellgl.export.fields import constant_fields, dead_fields, void_results
 from cellgl.export.fold import FOLD, fold
 from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_params, inline_once, inline_short
-from cellgl.export.printer import item_glsl
+from cellgl.export.printer import print_lines
 from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
 from cellgl.export.simplify import SIMPLIFY
 from cellgl.export.tree import Context, clone, fixed_point, tree_pass
 
-__all__ = ["compile_glsl", "compile_unit", "glsl_text", "ROUND", "MAX_ROUNDS"]
+__all__ = ["compile_glsl", "compile_unit", "ROUND", "MAX_ROUNDS"]
 
 #: rounds of the passes after which :func:`compile_glsl` gives up (it stops at the first round that
 #: changes nothing, the fixed point; the library's presets settle in under 20)
@@ -61,20 +61,10 @@ def compile_unit(text: str, entries, structs=(), fold_constants: bool = True, ke
 
 
 def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> str:
-    """:func:`compile_unit` printed as GLSL: no blank line between declarations (a declaration's
-    comment sets it off), each statement on one line where it fits (:func:`glsl_text`)."""
-    return glsl_text(compile_unit(text, entries, structs, fold_constants, keep))
-
-
-def glsl_text(unit: S.Unit, width: int = 120) -> str:
-    """GLSL of the compiled ``unit``: :func:`cellgl.export.printer.item_glsl` of its
-    declarations, one after another; a statement or signature longer than ``width`` broken
-    (:func:`_wrap`; a global's initialiser, a table of values, stays on its line)."""
-    out = []
-    for it in unit.items:
-        for line in item_glsl(it):
-            out += [line] if isinstance(it, S.Global) else _wrap(line, width)
-    return "".join(ln + "\n" for ln in out)
+    """:func:`compile_unit` printed as GLSL (:func:`cellgl.export.printer.print_lines`): no blank
+    line between declarations (a declaration's comment sets it off), a statement broken only
+    where it does not fit."""
+    return print_lines(compile_unit(text, entries, structs, fold_constants, keep))
 
 
 @tree_pass
@@ -97,47 +87,6 @@ ROUND = [
     constant_fields,
     reach,
 ]
-
-
-def _wrap(line: str, width: int) -> list[str]:
-    """A printed line as lines of at most ``width`` columns where it can be: broken after a comma
-    inside brackets (the rest aligned after the bracket) or before a binary ``&&``, ``||``, ``+``
-    or ``-`` (the rest indented 4 more columns), in the outermost brackets that leave a break
-    that fits, as late as fits (or wherever gives fewer lines); a comment line stays whole."""
-    if len(line) <= width or "//" in line:
-        return [line]
-    ind = len(line) - len(line.lstrip())
-    cuts = []                                  # (where the rest starts, its column, bracket depth)
-    opens: list[int] = []
-    for k, ch in enumerate(line):
-        if ch in "([":
-            opens.append(k)
-        elif ch in ")]" and opens:
-            opens.pop()
-        elif ch == "," and line[k + 1:k + 2] == " ":
-            cuts.append((k + 2, opens[-1] + 1 if opens else ind + 4, len(opens)))
-        elif ch == " " and line[k + 1:k + 4] in ("&& ", "|| ") or line[k:k + 3] in (" + ", " - "):
-            cuts.append((k + 1, ind + 4, len(opens) + 1))
-    shallow, late = _fill(line, cuts, width, ind, True), _fill(line, cuts, width, ind, False)
-    return shallow if len(shallow) <= len(late) else late
-
-
-def _fill(line: str, cuts: list, width: int, ind: int, shallow: bool) -> list[str]:
-    """``line`` broken at ``cuts`` as late as fits, at the outermost depth that has a break that
-    fits (not ``shallow``: or one deeper)."""
-    out, start, prefix = [], 0, 0
-    while len(line) - start + prefix > width:
-        fit = [c for c in cuts if start < c[0] and c[0] - start + prefix <= width + 1]
-        if not fit:
-            break
-        depth = min(c[2] for c in fit) + (0 if shallow else 1)
-        cut, col, _ = [c for c in fit if c[2] <= depth][-1]
-        out.append(" " * prefix + line[start:cut].strip() if out else line[:cut].rstrip())
-        if len(out) == 1:
-            prefix = col if ind < col <= width // 2 else ind + 8
-        start = cut
-    out.append(" " * prefix + line[start:].strip() if out else line)
-    return out
 
 
 def _ordered(items: list) -> list:

@@ -41,7 +41,7 @@ from cellgl.export.syntax import (
 )
 from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError
 
-__all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "expr_glsl", "statement_glsl", "item_glsl",
+__all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "print_lines", "expr_glsl", "statement_glsl", "item_glsl",
            "RELATIONAL", "operand"]
 
 #: GLSL's component-wise relational functions and the infix operator each is (HLSL, WGSL, OSL)
@@ -380,3 +380,55 @@ def statement_glsl(s, ind: str = "") -> list[str]:
 def item_glsl(it) -> list[str]:
     """Lines of a top-level node."""
     return _GLSL.item(it)
+
+
+def print_lines(unit: Unit, width: int = 120) -> str:
+    """GLSL text of a compiled tree: :func:`item_glsl` of its items, one after another (no blank
+    line); a statement or signature longer than ``width`` broken (:func:`_wrap`; a global's
+    initialiser, a table of values, stays on its line)."""
+    out = []
+    for it in unit.items:
+        for line in item_glsl(it):
+            out += [line] if isinstance(it, Global) else _wrap(line, width)
+    return "".join(ln + "\n" for ln in out)
+
+
+def _wrap(line: str, width: int) -> list[str]:
+    """A printed line as lines of at most ``width`` columns where it can be: broken after a comma
+    inside brackets (the rest aligned after the bracket) or before a binary ``&&``, ``||``, ``+``
+    or ``-`` (the rest indented 4 more columns), in the outermost brackets that leave a break
+    that fits, as late as fits (or wherever gives fewer lines); a comment line stays whole."""
+    if len(line) <= width or "//" in line:
+        return [line]
+    ind = len(line) - len(line.lstrip())
+    cuts = []                                  # (where the rest starts, its column, bracket depth)
+    opens: list[int] = []
+    for k, ch in enumerate(line):
+        if ch in "([":
+            opens.append(k)
+        elif ch in ")]" and opens:
+            opens.pop()
+        elif ch == "," and line[k + 1:k + 2] == " ":
+            cuts.append((k + 2, opens[-1] + 1 if opens else ind + 4, len(opens)))
+        elif ch == " " and line[k + 1:k + 4] in ("&& ", "|| ") or line[k:k + 3] in (" + ", " - "):
+            cuts.append((k + 1, ind + 4, len(opens) + 1))
+    shallow, late = _fill(line, cuts, width, ind, True), _fill(line, cuts, width, ind, False)
+    return shallow if len(shallow) <= len(late) else late
+
+
+def _fill(line: str, cuts: list, width: int, ind: int, shallow: bool) -> list[str]:
+    """``line`` broken at ``cuts`` as late as fits, at the outermost depth that has a break that
+    fits (not ``shallow``: or one deeper)."""
+    out, start, prefix = [], 0, 0
+    while len(line) - start + prefix > width:
+        fit = [c for c in cuts if start < c[0] and c[0] - start + prefix <= width + 1]
+        if not fit:
+            break
+        depth = min(c[2] for c in fit) + (0 if shallow else 1)
+        cut, col, _ = [c for c in fit if c[2] <= depth][-1]
+        out.append(" " * prefix + line[start:cut].strip() if out else line[:cut].rstrip())
+        if len(out) == 1:
+            prefix = col if ind < col <= width // 2 else ind + 8
+        start = cut
+    out.append(" " * prefix + line[start:].strip() if out else line)
+    return out

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 from cellgl._version import __version__
 from cellgl.gl import glsl
 from cellgl.export import compiler, translate
+from cellgl.export.printer import print_lines
 from cellgl.export.command import command_for
 from cellgl.export.names import comment_text, identifier
 from cellgl.export.printer import print_target
@@ -188,7 +189,7 @@ def compiled_unit(prog: Program, fold: bool = True, entries=None):
 
 def code_text(unit) -> str:
     """The GLSL text of a compiled tree, as :func:`library_code` gives it."""
-    return _tidy(compiler.glsl_text(unit))
+    return _tidy(print_lines(unit))
 
 
 #: the functions a snippet may export (the reachability pass starts from those it defines)

@@ -563,14 +563,40 @@ class _Parser:
         raise TranslateError(f"GLSL syntax: unexpected {t!r}")
 
 
-def parse(text: str) -> Unit:
+def parse(text: str, structs=()) -> Unit:
     """The tree of ``text`` (preprocessed GLSL); :class:`TranslateError` names what it cannot
-    read."""
-    return _Parser(text).unit()
+    read. ``structs``: struct types declared elsewhere (``text`` is a part of a module)."""
+    p = _Parser(text)
+    p.structs.update(structs)
+    return p.unit()
 
 
 @lru_cache(maxsize=64)
 def parsed_library(text: str) -> Unit:
     """:func:`parse` of a library text, cached per process (the tree is shared: copy it before
-    changing it)."""
-    return parse(text)
+    changing it). Each top-level declaration is parsed once per process: the programs of one
+    library share most of their declarations' text (:func:`_declaration`)."""
+    split = split_tokens(text)
+    structs = frozenset(split[k + 2][1] for k in range(len(split) - 2)
+                        if split[k] == ("id", "struct") and split[k + 1][0] == "ws")
+    items, chunk, depth, k = [], [], 0, 0
+    while k < len(split):
+        kind, t = split[k]
+        chunk.append(t)
+        k += 1
+        depth += (t == "{") - (t == "}")
+        if depth == 0 and (t == ";" or t == "}" and next(x for c, x in split[k - len(chunk):k]
+                                                          if c not in ("ws", "comment")) != "struct"):
+            # the rest of the line (a comment after the declaration) goes with it
+            while k < len(split) and (split[k][0] == "comment" and split[k][1].startswith("//")
+                                      or split[k][0] == "ws" and "\n" not in split[k][1]):
+                chunk.append(split[k][1])
+                k += 1
+            items += _declaration("".join(chunk), structs).items
+            chunk = []
+    return Unit(items, _declaration("".join(chunk), structs).trailing)
+
+
+@lru_cache(maxsize=4096)
+def _declaration(text: str, structs: frozenset) -> Unit:
+    return parse(text, structs)
