@@ -35,8 +35,8 @@ _CHILD_FIELDS: dict[type, tuple[str, ...]] = {
 
 
 def tree_pass(fn):
-    """Mark ``fn`` as a tree pass ``(unit, ctx) -> changed`` (the driver's round mixes them with
-    the text passes not yet moved)."""
+    """Mark ``fn`` as a pass ``(unit, ctx) -> changed`` of the compiler's round
+    (:data:`cellgl.export.compiler.ROUND`, run by :func:`fixed_point`)."""
     fn.tree_pass = True
     return fn
 
