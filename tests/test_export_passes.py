@@ -511,10 +511,8 @@ def test_the_driver_raises_when_the_passes_do_not_settle(monkeypatch):
     import itertools
 
     from cellgl.export.syntax import parse as parse_tree
-    from cellgl.export.tree import tree_pass
     rounds = itertools.count()
 
-    @tree_pass
     def growing(unit, ctx):
         unit.items += parse_tree(f"const float k_{next(rounds)} = 1.0;\n").items
         return True
@@ -522,10 +520,6 @@ def test_the_driver_raises_when_the_passes_do_not_settle(monkeypatch):
     with pytest.raises(TranslateError, match=f"did not settle in {compiler.MAX_ROUNDS} rounds.*growing"):
         compiler.compile_glsl("float entry(float x) {\n    return x;\n}\n", ["entry"])
 
-
-# --------------------------------------------------------------------------------------------
-# reachability, scalarising, parameters, inlining, void results, dead stores
-# --------------------------------------------------------------------------------------------
 
 # --------------------------------------------------------------------------------------------
 # inlining, parameters, results and fields: tree passes (cellgl/export/inline.py, fields.py)

@@ -34,7 +34,7 @@ from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_pa
 from cellgl.export.printer import print_lines
 from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
 from cellgl.export.simplify import SIMPLIFY
-from cellgl.export.tree import Context, clone, fixed_point, tree_pass
+from cellgl.export.tree import Context, clone, fixed_point
 
 __all__ = ["compile_glsl", "compile_unit", "ROUND", "MAX_ROUNDS"]
 
@@ -67,7 +67,6 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
     return print_lines(compile_unit(text, entries, structs, fold_constants, keep))
 
 
-@tree_pass
 def _fold(unit, ctx):
     """The folding and simplification passes (:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`)."""
     return fold(unit, ctx, FOLD + SIMPLIFY)

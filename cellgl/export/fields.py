@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from cellgl.export import syntax as S
 from cellgl.export.inline import call_sites, defined_once, literal, parenthesise, statement_lists
-from cellgl.export.tree import Context, calls, clone, transform, tree_pass, walk, writes
+from cellgl.export.tree import Context, calls, clone, transform, walk, writes
 
 __all__ = ["void_results", "dead_fields", "constant_fields"]
 
@@ -59,7 +59,6 @@ def _of(member: S.Member, struct: str, types: dict) -> bool | None:
 # results no caller reads
 # --------------------------------------------------------------------------------------------
 
-@tree_pass
 def void_results(unit: S.Unit, ctx: Context) -> bool:
     """``T f(...)`` -> ``void f(...)`` where every call of ``f`` (not an entry point, defined
     once, called at least once) is a statement ``f(...);`` and its returned values store nothing
@@ -138,7 +137,6 @@ def _drop(lst: list, s) -> None:
     lst[:] = [x for x in lst if x is not s]
 
 
-@tree_pass
 def dead_fields(unit: S.Unit, ctx: Context) -> bool:
     """Remove the struct fields that are stored but never read, and those stores."""
     structs = [it for it in unit.items if isinstance(it, S.Struct)]
@@ -205,7 +203,6 @@ def _stored_fields(funcs, ctx: Context) -> dict[str, int]:
     return out
 
 
-@tree_pass
 def constant_fields(unit: S.Unit, ctx: Context) -> bool:
     """Fold the fields of one-literal structs (module docstring)."""
     structs = [it for it in unit.items if isinstance(it, S.Struct)]

@@ -28,7 +28,7 @@ from functools import cached_property
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, tree_pass, walk
+from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
@@ -176,7 +176,7 @@ def function_pass(fpass):
         return changed
     run.__name__, run.__qualname__, run.__doc__ = fpass.__name__, fpass.__qualname__, fpass.__doc__
     run.function = fpass
-    return tree_pass(run)
+    return run
 
 
 # --------------------------------------------------------------------------------------------
@@ -447,7 +447,6 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
 FOLD = [inline_constants, array_elements, local_constants, constant_conditions, constant_loops, loop_ranges]
 
 
-@tree_pass
 def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
     """The function passes ``passes`` (:data:`FOLD` by default; the compiler adds
     :data:`cellgl.export.simplify.SIMPLIFY`), function by function, in order, round after round

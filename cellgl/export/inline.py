@@ -26,7 +26,7 @@ from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, statement_glsl
 from cellgl.export.reach import first_sentence
 from cellgl.export.syntax import PRECEDENCE
-from cellgl.export.tree import EXPRESSIONS, Context, calls, clone, root_name, transform, tree_pass, walk, writes
+from cellgl.export.tree import EXPRESSIONS, Context, calls, clone, root_name, transform, walk, writes
 
 __all__ = ["KEEP", "defined_once", "literal", "inline_short", "inline_once", "drop_unused_params", "constant_args", "drop_unused_outs",
            "substitute", "statement_lists", "call_sites", "names", "side_effects"]
@@ -226,7 +226,6 @@ def _forward(body: list, params: set) -> object | None:
     return None
 
 
-@tree_pass
 def inline_short(unit: S.Unit, ctx: Context) -> bool:
     """Short functions (not the entry points) become their expression at their calls."""
     small = _short(unit, set(ctx.entries))
@@ -270,7 +269,6 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 # functions called once: their body in place of the call
 # --------------------------------------------------------------------------------------------
 
-@tree_pass
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
     """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
@@ -528,14 +526,12 @@ def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
     return changed
 
 
-@tree_pass
 def drop_unused_params(unit: S.Unit, ctx: Context) -> bool:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
     return _each_param(unit, ctx, lambda f, k, sites: f.params[k].mode == "in" and f.params[k].name not in
                        names(f.body) and not any(side_effects(c.args[k], ctx) for _, c in sites))
 
 
-@tree_pass
 def constant_args(unit: S.Unit, ctx: Context) -> bool:
     """A parameter that every call passes the same literal (``0u``, ``vec4(0.0, 0.0, 0.0, 0.0)``)
     becomes that literal in the body, and the argument goes."""
@@ -551,7 +547,6 @@ def constant_args(unit: S.Unit, ctx: Context) -> bool:
     return _each_param(unit, ctx, drop)
 
 
-@tree_pass
 def drop_unused_outs(unit: S.Unit, ctx: Context) -> bool:
     """An ``out`` parameter whose argument is, at every call, a local used nowhere else becomes a
     local of the function (whose stores the dead-store pass then removes)."""

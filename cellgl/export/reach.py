@@ -1,6 +1,6 @@
 """The snippet compiler's passes on what is kept: reachability, the parameter structs, comments.
 
-Tree passes (:func:`cellgl.export.tree.tree_pass`) over the :mod:`cellgl.export.syntax` tree of
+Tree passes (``(unit, ctx) -> changed``, :mod:`cellgl.export.tree`) over the :mod:`cellgl.export.syntax` tree of
 the specialised, prefixed GLSL of a snippet (see :mod:`cellgl.export.compiler`):
 
 1. :func:`scalarise` -- a parameter struct that only ever holds the values of its loader
@@ -22,7 +22,7 @@ import re
 import textwrap
 
 from cellgl.export import syntax as S
-from cellgl.export.tree import clone, transform, tree_pass, walk
+from cellgl.export.tree import clone, transform, walk
 
 __all__ = ["reach", "reached", "uses", "scalarise", "scalarise_struct", "strip_body_comments", "tidy_comments",
            "first_sentence"]
@@ -74,7 +74,6 @@ def reached(items: list, entries) -> list:
     return [it for it in items if any(n in seen for n in _names(it))]
 
 
-@tree_pass
 def reach(unit: S.Unit, ctx) -> bool:
     """Keep only the declarations the entry points ``ctx.entries`` reach."""
     kept = reached(unit.items, ctx.entries)
@@ -213,7 +212,6 @@ def _droppable(funcs, load, takes: dict, holders: dict) -> bool:
     return True
 
 
-@tree_pass
 def scalarise(unit: S.Unit, ctx) -> bool:
     """:func:`scalarise_struct` of every ``(struct, loader)`` of ``ctx.structs``."""
     changed = False

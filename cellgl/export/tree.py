@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, fields
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
-__all__ = ["tree_pass", "children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
+__all__ = ["children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
            "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS", "OUT_BUILTINS", "ATOMS", "is_pure",
            "occurrences", "paren", "rewrite"]
 
@@ -32,13 +32,6 @@ _NODE_SET = frozenset(_NODE_TYPES)
 #: the fields of each node class that may hold nodes (not its names, operators and flags)
 _CHILD_FIELDS: dict[type, tuple[str, ...]] = {
     t: tuple(f.name for f in fields(t) if f.name not in _SKIP and f.type not in ("str", "bool")) for t in _NODE_TYPES}
-
-
-def tree_pass(fn):
-    """Mark ``fn`` as a pass ``(unit, ctx) -> changed`` of the compiler's round
-    (:data:`cellgl.export.compiler.ROUND`, run by :func:`fixed_point`)."""
-    fn.tree_pass = True
-    return fn
 
 
 def children(node):

@@ -67,11 +67,6 @@ def _join(toks: list[Tok]) -> str:
     return "".join(t.text for t in toks)
 
 
-def _code(toks: list[Tok]) -> list[int]:
-    """Indices of the tokens that are code (not whitespace or comments)."""
-    return [i for i, t in enumerate(toks) if t.kind not in ("ws", "comment")]
-
-
 GLSL_TYPES = {
     "void", "bool", "int", "uint", "float",
     "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec2", "uvec3", "uvec4",
