@@ -11,34 +11,8 @@ compiler's text (an item per paragraph, a function's brace on its own line).
 """
 from __future__ import annotations
 
-from cellgl.export.syntax import (
-    PRECEDENCE,
-    ArrayCtor,
-    Assign,
-    Binary,
-    Block,
-    Call,
-    Ctor,
-    Decl,
-    ExprStmt,
-    For,
-    Function,
-    Global,
-    If,
-    IncDec,
-    Index,
-    Jump,
-    Member,
-    Name,
-    Num,
-    Paren,
-    Return,
-    Struct,
-    Ternary,
-    Unary,
-    Unit,
-    While,
-)
+from cellgl.export import syntax as S
+from cellgl.export.syntax import PRECEDENCE
 from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError
 
 __all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "print_lines", "expr_glsl", "statement_glsl", "item_glsl",
@@ -54,7 +28,7 @@ RELATIONAL = {
 def operand(e, text: str, op: str) -> str:
     """``text`` (the printed ``e``) as an operand of the binary operator ``op``: in parentheses
     where ``e`` binds no tighter than ``op`` (an assignment, a ternary, a looser operator)."""
-    if isinstance(e, (Assign, Ternary)) or (isinstance(e, Binary) and PRECEDENCE[e.op] <= PRECEDENCE[op]):
+    if isinstance(e, (S.Assign, S.Ternary)) or (isinstance(e, S.Binary) and PRECEDENCE[e.op] <= PRECEDENCE[op]):
         return f"({text})"
     return text
 
@@ -84,13 +58,13 @@ class Glsl:
         """The qualifiers of a global (``const``, ``uniform``)."""
         return quals
 
-    def call(self, e: Call) -> str:
+    def call(self, e: S.Call) -> str:
         return f"{self.name(e.func)}({self.args(e.args)})"
 
-    def ctor(self, e: Ctor) -> str:
+    def ctor(self, e: S.Ctor) -> str:
         return f"{self.type(e.type)}({self.args(e.args)})"
 
-    def array_ctor(self, e: ArrayCtor) -> str:
+    def array_ctor(self, e: S.ArrayCtor) -> str:
         return f"{self.type(e.type)}[{self.expr(e.size)}]({self.args(e.args)})"
 
     def jump(self, kind: str) -> str:
@@ -106,33 +80,10 @@ class Glsl:
 
     def expr(self, e) -> str:
         """The text of an expression node."""
-        if isinstance(e, Num):
-            return e.text
-        if isinstance(e, Name):
-            return self.name(e.name)
-        if isinstance(e, Paren):
-            return f"({self.expr(e.inner)})"
-        if isinstance(e, Call):
-            return self.call(e)
-        if isinstance(e, Ctor):
-            return self.ctor(e)
-        if isinstance(e, ArrayCtor):
-            return self.array_ctor(e)
-        if isinstance(e, Unary):
-            return e.op + self.expr(e.operand)
-        if isinstance(e, IncDec):
-            return self.expr(e.operand) + e.op if e.postfix else e.op + self.expr(e.operand)
-        if isinstance(e, Binary):
-            return f"{self.expr(e.left)} {e.op} {self.expr(e.right)}"
-        if isinstance(e, Assign):
-            return f"{self.expr(e.target)} {e.op} {self.expr(e.value)}"
-        if isinstance(e, Ternary):
-            return f"{self.expr(e.cond)} ? {self.expr(e.then)} : {self.expr(e.other)}"
-        if isinstance(e, Index):
-            return f"{self.expr(e.base)}[{self.expr(e.index)}]"
-        if isinstance(e, Member):
-            return f"{self.expr(e.base)}.{self.name(e.name)}"
-        raise TypeError(f"not an expression node: {e!r}")
+        show = _EXPR.get(type(e))
+        if show is None:
+            raise TypeError(f"not an expression node: {e!r}")
+        return show(self, e)
 
     # ---------------------------------------------------------------- statements
     @staticmethod
@@ -150,7 +101,7 @@ class Glsl:
         return f"{self.decl_type(typ)} {', '.join(parts)}"
 
     def simple(self, s) -> str:
-        if isinstance(s, Decl):
+        if isinstance(s, S.Decl):
             return ("const " if s.const else "") + self.declarators(s.type, s.declarators)
         return self.expr(s.expr)
 
@@ -158,43 +109,43 @@ class Glsl:
         """Lines of a statement node at indentation ``ind``."""
         out = self.comments(s.comments, ind)
         trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
-        if isinstance(s, Block):
+        if isinstance(s, S.Block):
             return out + [ind + "{" + _trail(s)] + self.body(s, ind) + [ind + "}"]
-        if isinstance(s, (Decl, ExprStmt)):
+        if isinstance(s, (S.Decl, S.ExprStmt)):
             return out + [ind + self.simple(s) + ";" + trail]
-        if isinstance(s, Return):
+        if isinstance(s, S.Return):
             return out + [ind + ("return;" if s.value is None else f"return {self.expr(s.value)};")]
-        if isinstance(s, Jump):
+        if isinstance(s, S.Jump):
             return out + [ind + self.jump(s.kind)]
-        if isinstance(s, If):
+        if isinstance(s, S.If):
             out += self.head(f"if ({self.expr(s.cond)})", s.then, ind)
             other = s.other
             if other is None:
                 return out
             closed = out[-1] == ind + "}"
-            if closed and isinstance(other, If) and not other.comments:
+            if closed and isinstance(other, S.If) and not other.comments:
                 first, *rest = self.statement(other, ind)
                 return out[:-1] + [f"{ind}}} else {first.lstrip()}"] + rest
-            if closed and isinstance(other, Block) and not other.comments:
+            if closed and isinstance(other, S.Block) and not other.comments:
                 return out[:-1] + [f"{ind}}} else {{" + _trail(other)] + self.body(other, ind) + [ind + "}"]
             return out + [ind + "else"] + self.statement(other, ind + "    ")
-        if isinstance(s, For):
+        if isinstance(s, S.For):
             init = "" if s.init is None else self.simple(s.init)
             cond = "" if s.cond is None else " " + self.expr(s.cond)
             step = "" if s.step is None else " " + self.expr(s.step)
             return out + self.head(f"for ({init};{cond};{step})", s.body, ind)
-        if isinstance(s, While):
+        if isinstance(s, S.While):
             return out + self.head(f"while ({self.expr(s.cond)})", s.body, ind)
         raise TypeError(f"not a statement node: {s!r}")
 
-    def body(self, block: Block, ind: str) -> list[str]:
+    def body(self, block: S.Block, ind: str) -> list[str]:
         """The lines of a block's statements (a statement written on the line of the one before
         it stays there, as the library pairs short ones)."""
         out: list[str] = []
         prev = None
         for x in block.body:
             lines = self.statement(x, ind + "    ")
-            if getattr(x, "same_line", False) and not x.comments and isinstance(prev, (Decl, ExprStmt)) \
+            if getattr(x, "same_line", False) and not x.comments and isinstance(prev, (S.Decl, S.ExprStmt)) \
                     and not prev.trail:
                 out[-1] += " " + lines[0].lstrip()
             else:
@@ -203,9 +154,9 @@ class Glsl:
         return out
 
     def head(self, head: str, body, ind: str) -> list[str]:
-        if isinstance(body, Block) and not body.comments:
+        if isinstance(body, S.Block) and not body.comments:
             return [f"{ind}{head} {{" + _trail(body)] + self.body(body, ind) + [ind + "}"]
-        if isinstance(body, (For, While)) and not body.comments:       # a loop nest: one level
+        if isinstance(body, (S.For, S.While)) and not body.comments:       # a loop nest: one level
             return [ind + head] + self.statement(body, ind)
         return [ind + head] + self.statement(body, ind + "    ")
 
@@ -218,16 +169,16 @@ class Glsl:
     def item(self, it) -> list[str]:
         """Lines of a top-level node."""
         out = self.comments(it.comments, "")
-        if isinstance(it, Struct):
+        if isinstance(it, S.Struct):
             out.append(f"struct {self.name(it.name)} {{")
             for f in it.fields:
                 size = f"[{self.expr(f.size)}]" if f.size is not None else ""
                 out += self.comments(f.comments, "    ")
                 out.append(f"    {self.decl_type(f.type)} {self.name(f.name)}{size};" + (f"  {f.trail}" if f.trail else ""))
             return out + ["};"]
-        if isinstance(it, Global):
+        if isinstance(it, S.Global):
             return out + [" ".join(self.quals(it.quals) + [self.declarators(it.type, it.declarators)]) + ";"]
-        if isinstance(it, Function):
+        if isinstance(it, S.Function):
             sig = f"{self.decl_type(it.ret)} {self.name(it.name)}({', '.join(self.param(p) for p in it.params)})"
             if it.body is None:
                 return out + [sig + ";"]
@@ -235,7 +186,7 @@ class Glsl:
             return out + opening + self.body(it.body, "") + ["}"]
         raise TypeError(f"not a top-level node: {it!r}")
 
-    def unit(self, unit: Unit) -> str:
+    def unit(self, unit: S.Unit) -> str:
         """The text of a tree: its items (one blank line apart if ``blank``), then the comments
         after the last."""
         parts = ["\n".join(lines) for lines in map(self.item, unit.items) if lines]
@@ -246,7 +197,25 @@ class Glsl:
         return "\n".join(pre) + "\n" + text if pre else text
 
 
-def _trail(block: Block) -> str:
+#: how :meth:`Glsl.expr` prints each expression node (the hooks where a dialect differs)
+_EXPR = {
+    S.Num: lambda p, e: e.text,
+    S.Name: lambda p, e: p.name(e.name),
+    S.Paren: lambda p, e: f"({p.expr(e.inner)})",
+    S.Call: lambda p, e: p.call(e),
+    S.Ctor: lambda p, e: p.ctor(e),
+    S.ArrayCtor: lambda p, e: p.array_ctor(e),
+    S.Unary: lambda p, e: e.op + p.expr(e.operand),
+    S.IncDec: lambda p, e: p.expr(e.operand) + e.op if e.postfix else e.op + p.expr(e.operand),
+    S.Binary: lambda p, e: f"{p.expr(e.left)} {e.op} {p.expr(e.right)}",
+    S.Assign: lambda p, e: f"{p.expr(e.target)} {e.op} {p.expr(e.value)}",
+    S.Ternary: lambda p, e: f"{p.expr(e.cond)} ? {p.expr(e.then)} : {p.expr(e.other)}",
+    S.Index: lambda p, e: f"{p.expr(e.base)}[{p.expr(e.index)}]",
+    S.Member: lambda p, e: f"{p.expr(e.base)}.{p.name(e.name)}",
+}
+
+
+def _trail(block: S.Block) -> str:
     return f"  {block.trail}" if block.trail else ""
 
 
@@ -313,7 +282,7 @@ class Hlsl(Glsl):
     def jump(self, kind: str) -> str:
         return self._check(kind) + ";"
 
-    def call(self, e: Call) -> str:
+    def call(self, e: S.Call) -> str:
         f, args = self._check(e.func), e.args
         if f in RELATIONAL:
             if len(args) != 2:
@@ -328,14 +297,14 @@ class Hlsl(Glsl):
             f = self.FUNCS.get(f, self.name(f))
         return f"{f}({self.args(args)})"
 
-    def ctor(self, e: Ctor) -> str:
+    def ctor(self, e: S.Ctor) -> str:
         if e.type not in GLSL_TYPES:                    # a struct: an initialiser list
             return "{" + self.args(e.args) + "}"
         if e.type in self.TYPES and len(e.args) == 1:   # a splat or a conversion: a cast
             return f"(({self.type(e.type)})({self.expr(e.args[0])}))"
         return super().ctor(e)
 
-    def array_ctor(self, e: ArrayCtor) -> str:
+    def array_ctor(self, e: S.ArrayCtor) -> str:
         return "{" + self.args(e.args) + "}"
 
     def prelude(self) -> list[str]:
@@ -353,43 +322,30 @@ DIALECTS = {"glsl": lambda: Glsl(kr=True, blank=False), "godot": lambda: Glsl(kr
             "gles": lambda: Gles(kr=True, blank=False), "hlsl": Hlsl}
 
 
-def print_target(unit: Unit, dialect: str) -> str:
+def print_target(unit: S.Unit, dialect: str) -> str:
     """The snippet text of ``unit`` in ``dialect`` (``glsl``, ``gles``, ``godot``, ``hlsl``):
     items one after the other, a function's brace on its signature line."""
     return DIALECTS[dialect]().unit(unit)
 
 
-def print_glsl(unit: Unit) -> str:
+def print_glsl(unit: S.Unit) -> str:
     """GLSL text of a tree: its items one blank line apart, a function's brace on its own line."""
     return Glsl().unit(unit)
 
 
 _GLSL = Glsl()
+#: GLSL of an expression node; the lines of a statement node (at an indentation); of a top-level node
+expr_glsl, statement_glsl, item_glsl = _GLSL.expr, _GLSL.statement, _GLSL.item
 
 
-def expr_glsl(e) -> str:
-    """GLSL of an expression node."""
-    return _GLSL.expr(e)
-
-
-def statement_glsl(s, ind: str = "") -> list[str]:
-    """Lines of a statement node at indentation ``ind``."""
-    return _GLSL.statement(s, ind)
-
-
-def item_glsl(it) -> list[str]:
-    """Lines of a top-level node."""
-    return _GLSL.item(it)
-
-
-def print_lines(unit: Unit, width: int = 120) -> str:
+def print_lines(unit: S.Unit, width: int = 120) -> str:
     """GLSL text of a compiled tree: :func:`item_glsl` of its items, one after another (no blank
     line); a statement or signature longer than ``width`` broken (:func:`_wrap`; a global's
     initialiser, a table of values, stays on its line)."""
     out = []
     for it in unit.items:
         for line in item_glsl(it):
-            out += [line] if isinstance(it, Global) else _wrap(line, width)
+            out += [line] if isinstance(it, S.Global) else _wrap(line, width)
     return "".join(ln + "\n" for ln in out)
 
 

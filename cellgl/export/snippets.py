@@ -23,10 +23,9 @@ from dataclasses import dataclass, field
 from cellgl._version import __version__
 from cellgl.gl import glsl
 from cellgl.export import compiler, translate
-from cellgl.export.printer import print_lines
 from cellgl.export.command import command_for
 from cellgl.export.names import comment_text, identifier
-from cellgl.export.printer import print_target
+from cellgl.export.printer import print_lines, print_target
 from cellgl.export.syntax import Global, parse, parsed_library
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
@@ -81,13 +80,11 @@ TARGETS: dict[str, Target] = {t.name: t for t in (
 )}
 
 #: target names that are refused, with the reason
-REFUSED: dict[str, str] = {
-    "gles100": "GLSL ES 1.00 (WebGL1) has no 32-bit unsigned integers or bit operations, which "
-               "cellgl's integer hashes need; it is refused rather than emitted in a form that "
-               "cannot compile. Use --target gles (WebGL2 / GLSL ES 3.00).",
-}
-REFUSED["webgl1"] = REFUSED["gles100"]
-REFUSED["webgl"] = REFUSED["gles100"]
+REFUSED: dict[str, str] = dict.fromkeys(
+    ("gles100", "webgl1", "webgl"),
+    "GLSL ES 1.00 (WebGL1) has no 32-bit unsigned integers or bit operations, which cellgl's integer "
+    "hashes need; it is refused rather than emitted in a form that cannot compile. Use --target gles "
+    "(WebGL2 / GLSL ES 3.00).")
 
 
 @dataclass
@@ -147,7 +144,7 @@ def library_code(prog: Program, fold: bool = True) -> str:
     if key not in _CODE_CACHE:
         if len(_CODE_CACHE) > 64:
             _CODE_CACHE.clear()
-        _CODE_CACHE[key] = _library_code(prog, fold)
+        _CODE_CACHE[key] = code_text(compiled_unit(prog, fold))
     return _CODE_CACHE[key]
 
 
@@ -171,10 +168,6 @@ def entry_points(prog: Program) -> list[str]:
     :data:`ENTRY_POINTS` that the program's entry code defines."""
     return list(prog.entries) or [n for n in ENTRY_POINTS
                                   if re.search(rf"\b{n}\s*\(", prog.entry.replace("cell_", "cellgl_"))]
-
-
-def _library_code(prog: Program, fold: bool) -> str:
-    return code_text(compiled_unit(prog, fold))
 
 
 def compiled_unit(prog: Program, fold: bool = True, entries=None):
@@ -412,24 +405,19 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool =
     return export_program(prog, target, uniforms=uniforms, fold=fold)
 
 
-def _refuse_pups(r) -> None:
+def _refuse(r) -> None:
+    """Refuse a recipe no snippet can express: PUPs, and images the engines would bind as buffers."""
     if getattr(r, "kind", None) == "pups":
         raise ExportError(f"{r.name}: PUPs recipes cannot be exported as shader snippets (a "
                           "snippet would need the control points, their Delaunay axes and the "
                           "candidate grid as buffers); bake it to an image instead: cellgl bake "
                           f"{r.name} -o {r.name}.png")
-
-
-def _refuse_density_image(r) -> None:
     if r.values["density_map"] == "image":
         raise ExportError(f"{r.name}: basis.density_map 'image' cannot be exported as a shader snippet "
                           "(the snippet would need the density image's levels as a storage buffer or "
                           "texture, which the engines bind differently); use density_map ramp_x, ramp_y "
                           f"or radial (exported as constants), or bake it: cellgl bake {r.name} -o "
                           f"{r.name}.png")
-
-
-def _refuse_cell_image(r) -> None:
     if r.values["cell_color"] == "image":
         raise ExportError(f"{r.name}: color.cell_color 'image' cannot be exported as a shader snippet (the "
                           "snippet would need the cell image as a storage buffer or texture, which the "
@@ -451,9 +439,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     from cellgl.texture import shader as texture
 
     r = load_recipe(recipe)
-    _refuse_pups(r)
-    _refuse_density_image(r)
-    _refuse_cell_image(r)
+    _refuse(r)
     defines = texture.defines(r)
     solid = int(r.values["dimension"]) >= 3
     vals = texture.uniform_values(r)

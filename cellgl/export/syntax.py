@@ -366,11 +366,13 @@ class _Parser:
         return Function(ret, name, params, self.block(), com)
 
     def array_size(self):
-        if self.peek() != "[":
-            return None
-        self.take("[")
+        return self.inside("[", "]") if self.peek() == "[" else None
+
+    def inside(self, opening: str, closing: str):
+        """The expression between the brackets ``opening`` and ``closing``."""
+        self.take(opening)
         e = self.expr()
-        self.take("]")
+        self.take(closing)
         return e
 
     def declarators(self, first: str) -> list:
@@ -405,9 +407,7 @@ class _Parser:
             return self.block(com)
         if t == "if":
             self.take()
-            self.take("(")
-            c = self.expr()
-            self.take(")")
+            c = self.inside("(", ")")
             a = self.statement()
             b = None
             if self.peek() == "else":
@@ -426,10 +426,7 @@ class _Parser:
             return For(init, cond, step, self.statement(), com)
         if t == "while":
             self.take()
-            self.take("(")
-            c = self.expr()
-            self.take(")")
-            return While(c, self.statement(), com)
+            return While(self.inside("(", ")"), self.statement(), com)
         if t == "return":
             self.take()
             e = None if self.peek() == ";" else self.expr()
@@ -474,7 +471,7 @@ class _Parser:
         return lhs
 
     def ternary(self):
-        c = self.binary(0)
+        c = self.climb(self.unary(), 0)
         if self.peek() == "?":
             self.take()
             a = self.assign_expr()
@@ -482,12 +479,10 @@ class _Parser:
             return Ternary(c, a, self.assign_expr())
         return c
 
-    def binary(self, level: int):
-        """The binary expression whose operators bind at ``level`` or tighter
-        (:data:`BINARY_PRECEDENCE`; precedence climbing, left-associative)."""
-        return self.climb(self.unary(), level)
-
     def climb(self, left, level: int):
+        """The binary expression that starts with the operand ``left`` and whose operators bind
+        at ``level`` or tighter (:data:`BINARY_PRECEDENCE`; precedence climbing,
+        left-associative)."""
         lv = PRECEDENCE.get(self.peek())
         while lv is not None and lv >= level:
             op = self.take()
@@ -515,10 +510,7 @@ class _Parser:
         while True:
             t = self.peek()
             if t == "[":
-                self.take()
-                idx = self.expr()
-                self.take("]")
-                e = Index(e, idx)
+                e = Index(e, self.inside("[", "]"))
             elif t == ".":
                 self.take()
                 e = Member(e, self.take())
@@ -544,17 +536,11 @@ class _Parser:
             self.take()
             return Num(t)
         if t == "(":
-            self.take()
-            e = self.expr()
-            self.take(")")
-            return Paren(e)
+            return Paren(self.inside("(", ")"))
         if k == "id":
             self.take()
             if self.peek() == "[" and self.is_type(-1):
-                self.take("[")
-                size = self.expr()
-                self.take("]")
-                return ArrayCtor(t, size, self.args())
+                return ArrayCtor(t, self.inside("[", "]"), self.args())
             if self.peek() == "(":
                 if t in GLSL_TYPES or t in self.structs:
                     return Ctor(t, self.args())
