@@ -20,6 +20,7 @@ import pytest
 from cellgl.export import snippets as export
 from cellgl.basis import core
 from cellgl.export import translate
+from cellgl.export.basis import _glsl_float
 from tiers import quick_few
 
 REQUIRE = os.environ.get("CELLGL_REQUIRE_GPU", "").strip().lower() in ("1", "true", "yes")
@@ -110,8 +111,37 @@ BASES = {
 }
 
 
+def basis_program(p, n: int = 4, frequency: float = 8.0) -> export.Program:
+    """The machinery's own test program (the bare cellular basis, F1..F4 as RGBA): a program whose ``cellgl_texture(uv)`` returns ``(F1, F2, F3, F4)`` of the basis ``p``
+    (a :class:`cellgl.basis.reference.Params`, 2D) at ``uv * frequency``."""
+    from cellgl.basis.gpu import defines_for
+
+    d = defines_for(p, n)
+    thresholds = ", ".join(f"{int(t)}u" for t in p.thresholds)
+    params = (
+        "// The basis parameters of the recipe.\n"
+        f"const CellParams cell_params = CellParams({int(p.seed)}u, {_glsl_float(p.jitter)}, "
+        f"{int(p.min_points)}, {int(p.max_points)},\n"
+        f"    uint[CELL_MAX_POINTS]({thresholds}),\n"
+        f"    ivec4({', '.join(str(int(v)) for v in p.period)}), {_glsl_float(p.minkowski_p)});\n"
+        f"const float cell_frequency = {_glsl_float(frequency)};\n"
+    )
+    entry = (
+        "// F1..F4 of the basis at uv * cell_frequency.\n"
+        "vec4 cellgl_texture(vec2 uv)\n"
+        "{\n"
+        "    vec2 pos = uv * cell_frequency;\n"
+        "    vec2 fl = floor(pos);\n"
+        "    CellResult r = cell_search(ivec4(ivec2(fl), 0, 0), vec4(pos - fl, 0.0, 0.0), cell_params);\n"
+        "    return vec4(r.F[0], r.F[1], r.F[2], r.F[3]);\n"
+        "}\n"
+    )
+    return export.Program(files=["lib/cellular.glsl"], defines=d, params=params, entry=entry,
+                          title="basis", recipe={"basis": "F1..F4", "frequency": frequency})
+
+
 def basis_snippet(name: str, target: str) -> str:
-    return export.export_program(export.basis_program(BASES[name]), target)
+    return export.export_program(basis_program(BASES[name]), target)
 
 
 @pytest.mark.parametrize("target", ["gles100", "webgl1", "WebGL"])

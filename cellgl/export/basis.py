@@ -21,7 +21,7 @@ cellid     ``uint cellgl_cellid(vec3 p)``  ID of the nearest feature point (``id
 from __future__ import annotations
 
 from cellgl.basis.enums import Distribution
-from cellgl.export.snippets import ExportError, Program, _glsl_float, check_target, export_program
+from cellgl.export.snippets import ExportError, Program, check_target, export_program
 
 __all__ = ["BASES", "basis_export", "basis_program"]
 
@@ -35,6 +35,9 @@ BASES: dict[str, tuple[int, str, str]] = {
     "cellid": (1, "uint", "the ID of the nearest feature point (cellgl.cellular's id[..., 0])"),
 }
 
+#: the parameters of a basis snippet and their defaults (cellgl.cellular's; the command line's)
+DEFAULTS = dict(metric="euclidean", distribution="poisson", density=3.0, jitter=1.0, seed=0,
+                min_points=1, max_points=9, minkowski_p=3.0)
 #: distributions a basis snippet cannot express (see basis_program's refusal)
 BASIS_REFUSED = (Distribution.WORLEY1996,)
 _VEC = {2: "vec2", 3: "vec3", 4: "vec4"}
@@ -45,13 +48,9 @@ _RET = {"f1": "r.F[0]", "f1f2": "vec2(r.F[0], r.F[1])", "f1f2f3": "vec3(r.F[0], 
         "edge": "cell_edge_alone(cell, f, P)"}
 
 
-def _check(basis: str, dim) -> tuple[str, int]:
-    key = str(basis).strip().lower()
-    if key not in BASES:
-        raise ExportError(f"unknown basis {basis!r}; expected one of: {', '.join(BASES)}")
-    if dim not in (2, 3, 4) or isinstance(dim, bool):
-        raise ExportError(f"dim must be 2, 3 or 4, got {dim!r}")
-    return key, int(dim)
+def _glsl_float(v: float) -> str:
+    r = repr(float(v))
+    return r if ("." in r or "e" in r or "n" in r) else r + ".0"
 
 
 def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution="poisson", density=3.0,
@@ -62,7 +61,12 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
     from cellgl.basis.features import defines as feature_defines
     from cellgl.basis.gpu import defines_for
 
-    key, dim = _check(basis, dim)
+    key = str(basis).strip().lower()
+    if key not in BASES:
+        raise ExportError(f"unknown basis {basis!r}; expected one of: {', '.join(BASES)}")
+    if dim not in (2, 3, 4) or isinstance(dim, bool):
+        raise ExportError(f"dim must be 2, 3 or 4, got {dim!r}")
+    dim = int(dim)
     p = make_params(dim, metric=metric, distribution=distribution, density=density, jitter=jitter,
                     min_points=min_points, max_points=max_points, minkowski_p=minkowski_p, seed=seed)
     if p.distribution in BASIS_REFUSED:
@@ -105,16 +109,12 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
                    density=p.density, jitter=p.jitter, seed=p.seed, min_points=p.min_points,
                    max_points=p.max_points, minkowski_p=p.minkowski_p)
     command = f"cellgl export --basis {key} --dim {dim}" + "".join(
-        f" --{k.replace('_', '-')} {v}" for k, v in options.items() if v != _DEFAULTS[k])
+        f" --{k.replace('_', '-')} {v}" for k, v in options.items() if v != DEFAULTS[k])
     files = ["lib/features.glsl"] if key == "edge" else ["lib/cellular.glsl"]
     return Program(files=files, defines=defines, params=params, entry=entry, title=key,
                    recipe=dict(basis=key, dim=dim, **options), kind="cellular basis",
                    command=command, signatures=(f"{ret} cellgl_{key}({vec} p): {what}; p in cells",),
                    entries=(f"cellgl_{key}",), tails=_tails(key, dim, ret))
-
-
-_DEFAULTS = dict(metric="euclidean", distribution="poisson", density=3.0, jitter=1.0, seed=0,
-                 min_points=1, max_points=9, minkowski_p=3.0)
 
 
 def _tails(key: str, dim: int, ret: str) -> dict:

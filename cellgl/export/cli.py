@@ -2,7 +2,7 @@
 :mod:`cellgl.export.basis` (``--basis``)."""
 from __future__ import annotations
 
-from cellgl.export.basis import BASES, BASIS_REFUSED, basis_export
+from cellgl.export.basis import BASES, BASIS_REFUSED, DEFAULTS, basis_export
 from cellgl.export.command import recipe_command
 from cellgl.export.snippets import TARGETS, ExportError, check_target, export
 
@@ -32,21 +32,16 @@ def add_parser(sub):
                    "vec2 cellgl_f1f2(vec3 p), the values of cellgl.cellular")
     b.add_argument("--dim", type=int, default=2,
                    help="2, 3 or 4: the point type (default %(default)s)")
-    metrics = [m.name.lower() for m in Metric]
-    b.add_argument("--metric", default="euclidean", metavar="METRIC",
-                   help=", ".join(metrics) + " (default %(default)s)")
     dists = [d.name.lower() for d in Distribution if d not in BASIS_REFUSED]
-    b.add_argument("--distribution", default="poisson", metavar="NAME",
-                   help=", ".join(dists) + " (default %(default)s)")
-    b.add_argument("--density", type=float, default=3.0,
-                   help="mean points per cell, poisson (default %(default)s)")
-    b.add_argument("--jitter", type=float, default=1.0,
-                   help="spread of the points in [0, 1], jitter and blender (default %(default)s)")
-    b.add_argument("--seed", type=int, default=0, help="(default %(default)s)")
-    b.add_argument("--min-points", type=int, default=1, help="poisson (default %(default)s)")
-    b.add_argument("--max-points", type=int, default=9, help="poisson (default %(default)s)")
-    b.add_argument("--minkowski-p", type=float, default=3.0,
-                   help="exponent of the minkowski metric (default %(default)s)")
+    for name, typ, what in (
+            ("metric", str, ", ".join(m.name.lower() for m in Metric)), ("distribution", str, ", ".join(dists)),
+            ("density", float, "mean points per cell, poisson"),
+            ("jitter", float, "spread of the points in [0, 1], jitter and blender"), ("seed", int, ""),
+            ("min_points", int, "poisson"), ("max_points", int, "poisson"),
+            ("minkowski_p", float, "exponent of the minkowski metric")):
+        b.add_argument("--" + name.replace("_", "-"), type=typ, default=DEFAULTS[name],
+                       metavar={"metric": "METRIC", "distribution": "NAME"}.get(name),
+                       help=f"{what} (default %(default)s)".lstrip())
     p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
                    help="one of: " + names + " (default glsl)")
     p.add_argument("-o", "--output", metavar="FILE", default=None,
@@ -80,10 +75,7 @@ def run_cli(args) -> int:
     if args.output is not None:  # before the work: a missing or read-only directory, a long name
         check_output(os.path.abspath(args.output))
     if args.basis is not None:
-        text = basis_export(args.basis, args.dim, args.target, metric=args.metric,
-                            distribution=args.distribution, density=args.density, jitter=args.jitter,
-                            seed=args.seed, min_points=args.min_points, max_points=args.max_points,
-                            minkowski_p=args.minkowski_p)
+        text = basis_export(args.basis, args.dim, args.target, **{k: getattr(args, k) for k in DEFAULTS})
     else:
         text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold,
                       command=recipe_command(args.recipe, args.sets, fold=args.fold))
