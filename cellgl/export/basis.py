@@ -7,16 +7,8 @@ distribution, density, jitter, seed, ...) and cut down to what the function reac
 (:mod:`cellgl.export.fold`). The values equal ``cellgl.cellular(points, ...)`` with the same
 parameters.
 
-========== =============================== ==================================================
-basis      GLSL signature (dim 3)          value
-========== =============================== ==================================================
-f1         ``float cellgl_f1(vec3 p)``     F1, the distance to the nearest feature point
-f1f2       ``vec2 cellgl_f1f2(vec3 p)``    (F1, F2)
-f1f2f3     ``vec3 cellgl_f1f2f3(vec3 p)``  (F1, F2, F3)
-f1f2f3f4   ``vec4 cellgl_f1f2f3f4(vec3 p)`` (F1, F2, F3, F4)
-edge       ``float cellgl_edge(vec3 p)``   distance to the edge of the Voronoi cell (Euclidean)
-cellid     ``uint cellgl_cellid(vec3 p)``  ID of the nearest feature point (``id[..., 0]``)
-========== =============================== ==================================================
+The functions, their GLSL result types and what they return: :data:`BASES` (``--basis f1f2
+--dim 3``: ``vec2 cellgl_f1f2(vec3 p)``, (F1, F2)).
 """
 from __future__ import annotations
 

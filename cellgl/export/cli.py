@@ -77,7 +77,11 @@ def run_cli(args) -> int:
     if args.basis is not None:
         text = basis_export(args.basis, args.dim, args.target, **{k: getattr(args, k) for k in DEFAULTS})
     else:
-        text = export(_load(args.recipe, args.sets), args.target, uniforms=args.uniforms, fold=args.fold,
+        from cellgl.recipes import load_recipe
+
+        recipe = load_recipe(args.recipe)
+        recipe = recipe.set_from_strings(list(args.sets)) if args.sets else recipe
+        text = export(recipe, args.target, uniforms=args.uniforms, fold=args.fold,
                       command=recipe_command(args.recipe, args.sets, fold=args.fold))
     if args.output is None:
         sys.stdout.write(text)
@@ -88,12 +92,3 @@ def run_cli(args) -> int:
         with open(tmp, "w", encoding="utf-8", newline="\n") as f:
             f.write(text)
     return 0
-
-
-def _load(recipe, sets=()):
-    from cellgl.recipes import load_recipe
-
-    r = load_recipe(recipe)
-    if sets:
-        r = r.set_from_strings(list(sets))
-    return r

@@ -19,10 +19,8 @@ __all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "print_lines", 
            "RELATIONAL", "operand"]
 
 #: GLSL's component-wise relational functions and the infix operator each is (HLSL, WGSL, OSL)
-RELATIONAL = {
-    "lessThan": "<", "lessThanEqual": "<=", "greaterThan": ">", "greaterThanEqual": ">=",
-    "equal": "==", "notEqual": "!=",
-}
+RELATIONAL = {"lessThan": "<", "lessThanEqual": "<=", "greaterThan": ">", "greaterThanEqual": ">=",
+              "equal": "==", "notEqual": "!="}
 
 
 def operand(e, text: str, op: str) -> str:
@@ -108,11 +106,10 @@ class Glsl:
     def statement(self, s, ind: str = "") -> list[str]:
         """Lines of a statement node at indentation ``ind``."""
         out = self.comments(s.comments, ind)
-        trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
         if isinstance(s, S.Block):
             return out + [ind + "{" + _trail(s)] + self.body(s, ind) + [ind + "}"]
         if isinstance(s, (S.Decl, S.ExprStmt)):
-            return out + [ind + self.simple(s) + ";" + trail]
+            return out + [ind + self.simple(s) + ";" + _trail(s)]
         if isinstance(s, S.Return):
             return out + [ind + ("return;" if s.value is None else f"return {self.expr(s.value)};")]
         if isinstance(s, S.Jump):
@@ -122,12 +119,9 @@ class Glsl:
             other = s.other
             if other is None:
                 return out
-            closed = out[-1] == ind + "}"
-            if closed and isinstance(other, S.If) and not other.comments:
-                first, *rest = self.statement(other, ind)
+            if out[-1] == ind + "}" and isinstance(other, (S.If, S.Block)) and not other.comments:
+                first, *rest = self.statement(other, ind)          # } else if (...) {, } else {
                 return out[:-1] + [f"{ind}}} else {first.lstrip()}"] + rest
-            if closed and isinstance(other, S.Block) and not other.comments:
-                return out[:-1] + [f"{ind}}} else {{" + _trail(other)] + self.body(other, ind) + [ind + "}"]
             return out + [ind + "else"] + self.statement(other, ind + "    ")
         if isinstance(s, S.For):
             init = "" if s.init is None else self.simple(s.init)
@@ -174,7 +168,7 @@ class Glsl:
             for f in it.fields:
                 size = f"[{self.expr(f.size)}]" if f.size is not None else ""
                 out += self.comments(f.comments, "    ")
-                out.append(f"    {self.decl_type(f.type)} {self.name(f.name)}{size};" + (f"  {f.trail}" if f.trail else ""))
+                out.append(f"    {self.decl_type(f.type)} {self.name(f.name)}{size};" + _trail(f))
             return out + ["};"]
         if isinstance(it, S.Global):
             return out + [" ".join(self.quals(it.quals) + [self.declarators(it.type, it.declarators)]) + ";"]
@@ -215,8 +209,9 @@ _EXPR = {
 }
 
 
-def _trail(block: S.Block) -> str:
-    return f"  {block.trail}" if block.trail else ""
+def _trail(node) -> str:
+    """The ``//`` comment on the rest of a node's line (a statement's, a member's, after a block's brace)."""
+    return f"  {node.trail}" if getattr(node, "trail", "") else ""
 
 
 #: the GLSL types a GLSL ES declaration pins to highp

@@ -22,7 +22,7 @@ import re
 import textwrap
 
 from cellgl.export import syntax as S
-from cellgl.export.tree import clone, transform, walk
+from cellgl.export.tree import calls, clone, paren, transform, walk
 
 __all__ = ["reach", "reached", "uses", "scalarise", "scalarise_struct", "strip_body_comments", "tidy_comments",
            "first_sentence"]
@@ -88,33 +88,22 @@ def reach(unit: S.Unit, ctx) -> bool:
 # --------------------------------------------------------------------------------------------
 
 
-def _atomic(e) -> bool:
-    return isinstance(e, (S.Name, S.Num, S.Member, S.Call, S.Ctor, S.ArrayCtor, S.Index, S.Paren))
-
-
 def _loader_fields(load: S.Function, constants: set[str]) -> dict[str, tuple[object, object]]:
     """``{field: (value, loader statement)}`` of the fields the loader sets from globals and
     literals only: ``p.f = cellgl_f;``, ``p.f = ivec4(0);``, and the copy of a global array
     ``for (int k = 0; ...) { p.f[k] = cellgl_f[k]; }``."""
     out = {}
     for st in load.body.body:
-        if isinstance(st, S.For) and isinstance(st.init, S.Decl) and len(st.init.declarators) == 1:
-            body = st.body.body if isinstance(st.body, S.Block) else [st.body]
-            k = st.init.declarators[0].name
-            e = body[0].expr if len(body) == 1 and isinstance(body[0], S.ExprStmt) else None
-            if isinstance(e, S.Assign) and e.op == "=" and isinstance(e.target, S.Index) \
-                    and isinstance(e.target.base, S.Member) and isinstance(e.target.base.base, S.Name) \
-                    and e.target.index == S.Name(k) and isinstance(e.value, S.Index) \
-                    and isinstance(e.value.base, S.Name) and e.value.base.name in constants \
-                    and e.value.index == S.Name(k):
-                out[e.target.base.name] = (S.Name(e.value.base.name), st)
-            continue
-        e = st.expr if isinstance(st, S.ExprStmt) else None
-        if isinstance(e, S.Assign) and e.op == "=" and isinstance(e.target, S.Member) \
-                and isinstance(e.target.base, S.Name):
-            if all(n.name in constants for n in walk(e.value) if isinstance(n, S.Name)) \
-                    and not any(isinstance(n, S.Call) for n in walk(e.value)):
-                out[e.target.name] = (e.value if _atomic(e.value) else S.Paren(e.value), st)
+        match st:
+            case S.For(init=S.Decl(declarators=[S.Declarator(name=k)]),
+                       body=S.Block(body=[S.ExprStmt(expr=e)]) | S.ExprStmt(expr=e)):
+                match e:
+                    case S.Assign("=", S.Index(S.Member(S.Name(), f), S.Name(i)), S.Index(S.Name(c), S.Name(j))) \
+                            if i == j == k and c in constants:
+                        out[f] = (S.Name(c), st)
+            case S.ExprStmt(expr=S.Assign("=", S.Member(S.Name(), f), value)):
+                if all(n.name in constants for n in walk(value) if isinstance(n, S.Name)) and not calls(value):
+                    out[f] = (paren(value), st)
     return out
 
 

@@ -193,12 +193,11 @@ _CONSTANT_STRUCTS = (("CellglTextureParams", "cellgl_texture_params_load"), ("Ce
 
 
 def _tidy(text: str) -> str:
-    lines = [ln.rstrip() for ln in text.split("\n")]
+    """``text`` without trailing spaces, blank lines at either end or two blank lines in a row."""
     out: list[str] = []
-    for ln in lines:
-        if not ln and (not out or not out[-1]):
-            continue
-        out.append(ln)
+    for ln in text.split("\n"):
+        if ln.rstrip() or out and out[-1]:
+            out.append(ln.rstrip())
     return "\n".join(out).strip("\n") + "\n"
 
 

@@ -295,6 +295,15 @@ class _Parser:
         t = self.peek(k)
         return t in GLSL_TYPES or t in self.structs
 
+    def qualifiers(self, *allowed: str) -> list[str]:
+        """The qualifiers among ``allowed`` at the cursor, taken (precision qualifiers too, dropped)."""
+        out = []
+        while self.peek() in allowed or self.peek() in _PRECISION:
+            q = self.take()
+            if q not in _PRECISION:
+                out.append(q)
+        return out
+
     # top level
     def unit(self) -> Unit:
         out = []
@@ -303,11 +312,7 @@ class _Parser:
             if self.peek() == "struct":
                 out.append(self.struct(com))
                 continue
-            quals = []
-            while self.peek() in ("const", "uniform", "in", "out", "flat") + _PRECISION:
-                q = self.take()
-                if q not in _PRECISION:
-                    quals.append(q)
+            quals = self.qualifiers("const", "uniform", "in", "out", "flat")
             typ = self.take()
             if self.peek() == "[":
                 raise TranslateError(f"GLSL syntax: array types in 'T[N] name' form are not supported ({typ}[...])")
@@ -328,8 +333,7 @@ class _Parser:
         fields = []
         while self.peek() != "}":
             fcom = self.comments()
-            while self.peek() in _PRECISION:
-                self.take()
+            self.qualifiers()
             typ = self.take()
             while True:
                 fields.append(Field(typ, self.take(), self.array_size(), fcom))
@@ -347,16 +351,12 @@ class _Parser:
         self.take("(")
         params = []
         while self.peek() != ")":
-            mode, const = "in", False
-            while self.peek() in ("in", "out", "inout", "const") + _PRECISION:
-                q = self.take()
-                if q in ("out", "inout"):
-                    mode = q
-                const = const or q == "const"
+            quals = self.qualifiers("in", "out", "inout", "const")
+            mode = ([q for q in quals if q in ("out", "inout")] or ["in"])[-1]
             ptyp = self.take()
             if ptyp == "void" and self.peek() == ")":
                 break
-            params.append(Param(mode, ptyp, self.take(), self.array_size(), const))
+            params.append(Param(mode, ptyp, self.take(), self.array_size(), "const" in quals))
             if self.peek() == ",":
                 self.take()
         self.take(")")
@@ -448,9 +448,7 @@ class _Parser:
         return s
 
     def simple_statement(self):
-        const = False
-        while self.peek() in ("const",) + _PRECISION:
-            const = const or self.take() == "const"
+        const = "const" in self.qualifiers("const")
         if self.is_type() and self.kind(1) == "id":
             typ = self.take()
             return Decl(typ, self.declarators(self.take()), const)
