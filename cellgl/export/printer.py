@@ -323,14 +323,10 @@ def print_target(unit: S.Unit, dialect: str) -> str:
     return DIALECTS[dialect]().unit(unit)
 
 
-def print_glsl(unit: S.Unit) -> str:
-    """GLSL text of a tree: its items one blank line apart, a function's brace on its own line."""
-    return Glsl().unit(unit)
-
-
 _GLSL = Glsl()
-#: GLSL of an expression node; the lines of a statement node (at an indentation); of a top-level node
-expr_glsl, statement_glsl, item_glsl = _GLSL.expr, _GLSL.statement, _GLSL.item
+#: GLSL of an expression node; the lines of a statement node (at an indentation); of a top-level node; the
+#: text of a tree (its items one blank line apart, a function's brace on its own line)
+expr_glsl, statement_glsl, item_glsl, print_glsl = _GLSL.expr, _GLSL.statement, _GLSL.item, _GLSL.unit
 
 
 def print_lines(unit: S.Unit, width: int = 120) -> str:

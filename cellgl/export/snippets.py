@@ -369,8 +369,7 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool =
     recipe : cellgl.texture.recipe.Recipe, str or path
         A recipe, a preset name or a recipe JSON file.
     target : str
-        One of :data:`TARGETS` (``glsl``, ``gles``, ``shadertoy``, ``godot``, ``godotinc``,
-        ``hlsl``, ``unreal``, ``wgsl``). ``gles100``/``webgl1`` are refused with the reason.
+        One of :data:`TARGETS`; ``gles100``/``webgl1`` are refused with the reason.
     uniforms : bool
         Declare the recipe's run-time values as ``cellgl_<name>`` uniforms instead of baking
         them in as constants.
