@@ -4,37 +4,22 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 
-from cellgl.export.translate.tokens import TranslateError, _join, tokenize
-
-# --------------------------------------------------------------------------------------------
-# 2. top-level names and the prefix
-# --------------------------------------------------------------------------------------------
-
+from cellgl.export.translate.tokens import TranslateError, split_tokens
 
 
 def top_level_names(text: str) -> dict[str, str]:
     """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``."""
-    toks = [t for t in tokenize(text) if t.kind not in ("ws", "comment")]
     names: dict[str, str] = {}
-    depth = 0
-    stmt: list[str] = []
-    for t in toks:
-        if t.text == "{":
-            if depth == 0:
-                _decl(stmt, names, brace=True)
-                stmt = []
-            depth += 1
+    depth, stmt = 0, []
+    for kind, t in split_tokens(text):
+        if kind in ("ws", "comment"):
             continue
-        if t.text == "}":
-            depth -= 1
-            continue
-        if depth:
-            continue
-        if t.text == ";":
-            _decl(stmt, names, brace=False)
+        if depth == 0 and t in ("{", ";"):
+            _decl(stmt, names)
             stmt = []
-            continue
-        stmt.append(t.text)
+        elif depth == 0 and t != "}":
+            stmt.append(t)
+        depth += (t == "{") - (t == "}")
     return names
 
 
@@ -42,22 +27,16 @@ _QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "in", "out", "ino
                "precise", "invariant"}
 
 
-def _decl(stmt: list[str], names: dict[str, str], brace: bool) -> None:
+def _decl(stmt: list[str], names: dict[str, str]) -> None:
     s = [t for t in stmt if t not in _QUALIFIERS]
-    if not s:
+    if len(s) < 2:
         return
     if s[0] == "struct":
-        if len(s) >= 2:
-            names[s[1]] = "struct"
-        return
-    if len(s) >= 3 and s[2] == "(" and brace:
-        names[s[1]] = "function"
-        return
-    if len(s) >= 3 and s[2] == "(":
-        names[s[1]] = "function"    # prototype
-        return
-    # variable(s): TYPE NAME [= ...] [, NAME ...]; TYPE NAME[N] = ...
-    if len(s) >= 2 and re.fullmatch(r"[A-Za-z_]\w*", s[1]):
+        names[s[1]] = "struct"
+    elif len(s) >= 3 and s[2] == "(":
+        names[s[1]] = "function"        # a definition or a prototype
+    elif re.fullmatch(r"[A-Za-z_]\w*", s[1]):
+        # variable(s): TYPE NAME [= ...] [, NAME ...]; TYPE NAME[N] = ...
         names[s[1]] = "variable"
         depth = 0
         for i, t in enumerate(s[2:], start=2):
@@ -113,11 +92,12 @@ def prefix_names(text: str, *, keep: set[str] = frozenset(),
         if new in seen or (new in decls and new not in mapping):
             raise TranslateError(f"prefixing {old!r} gives {new!r}, which is taken")
         seen[new] = old
-    toks = tokenize(text)
     word = re.compile(r"\b(" + "|".join(map(re.escape, mapping)) + r")\b") if mapping else None
-    for t in toks:
-        if t.kind == "id" and t.text in mapping:
-            t.text = mapping[t.text]
-        elif t.kind == "comment" and word is not None:
-            t.text = word.sub(lambda m: mapping[m.group(1)], t.text)
-    return _join(toks), mapping
+    out = []
+    for kind, t in split_tokens(text):
+        if kind == "id":
+            t = mapping.get(t, t)
+        elif kind == "comment" and word is not None:
+            t = word.sub(lambda m: mapping[m.group(1)], t)
+        out.append(t)
+    return "".join(out), mapping

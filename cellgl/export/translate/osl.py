@@ -142,7 +142,7 @@ class _Osl(_OslLib):
         if isinstance(x, S.ArrayCtor):
             raise TranslateError("OSL translation: an array constructor outside a declaration")
         if isinstance(x, S.Call):
-            return self.call(x.func, x.args)
+            return (self.user_call if x.func in self.funcs else self.call_builtin)(x.func, x.args)
         raise AssertionError(x)
 
     def binary(self, op, lhs, rhs):
@@ -161,11 +161,9 @@ class _Osl(_OslLib):
             name, rt = self.vec_binary(op, ta, tb)
             return f"{name}({a}, {b})", rt
         t = ta
-        if op in ("<<", ">>"):
-            t = ta
-        elif "uint" in (ta, tb):
+        if op not in ("<<", ">>") and "uint" in (ta, tb):
             t = "uint"
-        elif ta != tb and "float" in (ta, tb):
+        elif op not in ("<<", ">>") and ta != tb and "float" in (ta, tb):
             a, b, t = self.conv(a, ta, "float"), self.conv(b, tb, "float"), "float"
         s = self.scalar_op(op, a, b, t)
         return s, ("bool" if op in _CMP or op == "^^" else t)
@@ -188,15 +186,10 @@ class _Osl(_OslLib):
             idx, _ = self.ex(lhs.index)
             val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
             v, tv = self.ex(val)
-            v = self.conv(v, tv, _vec(bt)[0]) if isinstance(tv, str) and not _vec(tv) else v
-            return f"{self.vec_set(bt)}({base}, {idx}, {v})"
+            return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
         a, ta = self.ex(lhs)
         if op == "=":
-            b, tb = self.ex(rhs)
-            if isinstance(ta, str) and isinstance(tb, str) and not _vec(ta) and not _vec(tb) and ta != tb \
-                    and {ta, tb} != {"int", "uint"}:
-                b = self.conv(b, tb, ta)
-            return f"{a} = {b}"
+            return f"{a} = {self.conv_to(rhs, ta)}"
         base_op = op[:-1]
         _, tb = self.ex(rhs)
         if _vec(ta) or _vec(tb) or (ta == "uint" and base_op in (">>", "/", "%", "<", ">")):
@@ -243,11 +236,6 @@ class _Osl(_OslLib):
         self.helper(name, code)
         return f"{name}({', '.join(s for s, _ in ev)})", t
 
-    def call(self, fn: str, args: list):
-        if fn in self.funcs:
-            return self.user_call(fn, args)
-        return self.call_builtin(fn, args)
-
     def user_call(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
         types = [t for _, t in ev]
@@ -259,13 +247,7 @@ class _Osl(_OslLib):
             if len(cands) != 1:
                 raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
             ptypes, modes, ret, oname, extra = cands[0]
-        ss = []
-        for (s, t), p, m in zip(ev, ptypes, modes):
-            if m == "in" and isinstance(p, str) and isinstance(t, str) and not _vec(p) and not _vec(t) \
-                    and p != t and {p, t} != {"int", "uint"} and p not in self.structs:
-                s = self.conv(s, t, p)
-            ss.append(s)
-        ss += extra
+        ss = [self.coerce(s, t, p) if m == "in" else s for (s, t), p, m in zip(ev, ptypes, modes)] + extra
         return f"{oname}({', '.join(ss)})", ret
 
     def name(self, n: str) -> str:
@@ -273,7 +255,7 @@ class _Osl(_OslLib):
 
     # ------------------------------------------------------------------ statements
     def stmt(self, s, ind: str) -> list[str]:
-        out = [ind + ln.strip() for c in s.comments if c for ln in c.split("\n")]
+        out = [ind + ln for ln in self.comment_lines(s.comments)]
         if isinstance(s, S.Block):
             self.scopes.append({})
             out.append(ind + "{")
@@ -290,12 +272,7 @@ class _Osl(_OslLib):
             if s.value is None:
                 out.append(ind + "return;")
             else:
-                e, t = self.ex(s.value)
-                rt = self.ret
-                if isinstance(t, str) and not _vec(t) and not _vec(rt) and rt not in self.structs \
-                        and t != rt and {t, rt} != {"int", "uint"}:
-                    e = self.conv(e, t, rt)
-                out.append(ind + f"return {e};")
+                out.append(ind + f"return {self.conv_to(s.value, self.ret)};")
         elif isinstance(s, S.Jump) and s.kind in ("break", "continue"):
             out.append(ind + s.kind + ";")
         elif isinstance(s, S.If):
@@ -370,11 +347,7 @@ class _Osl(_OslLib):
         return out
 
     def conv_to(self, node, typ: str) -> str:
-        s, t = self.ex(node)
-        if isinstance(t, str) and not _vec(t) and not _vec(typ) and typ not in self.structs and t != typ \
-                and {t, typ} != {"int", "uint"}:
-            s = self.conv(s, t, typ)
-        return s
+        return self.coerce(*self.ex(node), typ)
 
     # ------------------------------------------------------------------ top level
     def globals_used(self, node, out: set) -> None:
@@ -394,26 +367,16 @@ class _Osl(_OslLib):
             new = [c for n, c in self.helpers.items() if n not in known and not n.startswith("struct ")]
             funcs_out[before:before] = new
         head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
-        body = funcs_out[:1]
-        for prev, c in zip(funcs_out, funcs_out[1:]):      # no blank line between functions (as GLSL)
-            body.append("\n" + c)
-        return _braces(head + "\n" + "".join(body) + "\n")
-
+        # no blank line between functions (as GLSL)
+        return _braces(head + "\n" + "\n".join(funcs_out) + "\n")
 
     def emit_item(self, item, funcs_out: list, overloads: dict) -> None:
         if isinstance(item, S.Struct):
             members = {}
             lines = [f"struct {item.name}", "{"]
             for f in item.fields:
-                ot = self.osl_type(f.type)
-                trail = f"  {f.trail}" if f.trail else ""
-                if f.size is not None:
-                    sz = self.size(f.size)
-                    members[f.name] = (f.type, sz)
-                    lines.append(f"    {ot} {self.name(f.name)}[{sz}];" + trail)
-                else:
-                    members[f.name] = f.type
-                    lines.append(f"    {ot} {self.name(f.name)};" + trail)
+                members[f.name], arr = self.sized(f.type, f.size)
+                lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};" + (f"  {f.trail}" if f.trail else ""))
             lines.append("};")
             self.structs[item.name] = members
             funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
@@ -436,7 +399,7 @@ class _Osl(_OslLib):
             n = overloads.get(name, 0)
             overloads[name] = n + 1
             oname = self.name(name) if n == 0 else f"{name}_{n}"
-            ptypes = [(p.type, self.size(p.size)) if p.size is not None else p.type for p in item.params]
+            ptypes = [self.sized(p.type, p.size)[0] for p in item.params]
             self.funcs.setdefault(name, []).append(
                 (ptypes, [p.mode for p in item.params], item.ret, oname, [self.name(g) for g in passed]))
             funcs_out.append("\n".join(self.comment_lines(item.comments) + self.func(item, oname, passed, used)))
@@ -455,14 +418,8 @@ class _Osl(_OslLib):
         scope: dict = {}
         plist, prologue = [], []
         for p in item.params:
-            ot = self.osl_type(p.type)
-            arr = ""
-            if p.size is not None:
-                arr = f"[{self.size(p.size)}]"
-                scope[p.name] = (p.type, self.size(p.size))
-            else:
-                scope[p.name] = p.type
-            n = self.name(p.name)
+            ot, n = self.osl_type(p.type), self.name(p.name)
+            scope[p.name], arr = self.sized(p.type, p.size)
             if p.mode in ("out", "inout"):
                 plist.append(f"output {ot} {n}{arr}")
             elif p.name in mutated:

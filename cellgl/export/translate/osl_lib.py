@@ -113,6 +113,13 @@ class _OslLib:
             return f"{self.f2u()}({expr})"
         raise TranslateError(f"OSL translation: no conversion from {src} to {dst}")
 
+    def coerce(self, expr: str, src, dst) -> str:
+        """:meth:`conv` where ``src`` and ``dst`` are both scalar types, else ``expr`` as it is
+        (vectors, arrays and structs are never converted implicitly)."""
+        if all(isinstance(t, str) and not _vec(t) and t not in self.structs for t in (src, dst)):
+            return self.conv(expr, src, dst)
+        return expr
+
     def u2f(self) -> str:
         return self.helper("cellgl_u2f", (
             "// float(uint): the top 24 bits exactly, then one rounding with the low 8.\n"
@@ -219,6 +226,14 @@ class _OslLib:
                 return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x.op]
             raise TranslateError("OSL translation: an array size that is not an integer constant")
         return str(ev(node))
+
+    def sized(self, t: str, size) -> tuple:
+        """The type of a name of GLSL type ``t`` and array size ``size`` (None: not an array) as
+        the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with."""
+        if size is None:
+            return t, ""
+        sz = self.size(size)
+        return (t, sz), f"[{sz}]"
 
     def vec_get(self, t: str) -> str:
         comp, n = _vec(t)

@@ -2,10 +2,11 @@
 uses; inactive branches are dropped and every macro replaced by its value."""
 from __future__ import annotations
 
+import operator
 import re
 from collections.abc import Mapping
 
-from cellgl.export.translate.tokens import TranslateError, _join, tokenize
+from cellgl.export.translate.tokens import TranslateError, split_tokens
 
 # --------------------------------------------------------------------------------------------
 # 1. preprocessor subset
@@ -71,28 +72,13 @@ class _Expr:
             w = self.binary(level + 1)
             if op in ("/", "%") and w == 0:
                 raise self.error("division by zero")
-            v = {
-                "||": lambda: int(bool(v) or bool(w)), "&&": lambda: int(bool(v) and bool(w)),
-                "|": lambda: v | w, "^": lambda: v ^ w, "&": lambda: v & w,
-                "==": lambda: int(v == w), "!=": lambda: int(v != w), "<": lambda: int(v < w),
-                ">": lambda: int(v > w), "<=": lambda: int(v <= w), ">=": lambda: int(v >= w),
-                "<<": lambda: v << w, ">>": lambda: v >> w, "+": lambda: v + w, "-": lambda: v - w,
-                "*": lambda: v * w,
-                "/": lambda: int(v / w) if (v < 0) != (w < 0) else v // w,
-                "%": lambda: v - w * (int(v / w) if (v < 0) != (w < 0) else v // w),
-            }[op]()
+            v = int(_BINARY[op](v, w))
         return v
 
     def unary(self) -> int:
         t = self.take()
-        if t == "!":
-            return int(not self.unary())
-        if t == "-":
-            return -self.unary()
-        if t == "+":
-            return self.unary()
-        if t == "~":
-            return ~self.unary()
+        if t in _UNARY:
+            return int(_UNARY[t](self.unary()))
         if t == "(":
             v = self.ternary()
             if self.take() != ")":
@@ -104,6 +90,21 @@ class _Expr:
         if re.fullmatch(r"[A-Za-z_]\w*", t):
             raise self.error(f"undefined macro {t!r}")
         raise self.error(f"unexpected {t!r}")
+
+
+def _cdiv(v: int, w: int) -> int:
+    """C's integer division: truncated toward zero."""
+    return int(v / w) if (v < 0) != (w < 0) else v // w
+
+
+_BINARY = {
+    "||": lambda v, w: bool(v) or bool(w), "&&": lambda v, w: bool(v) and bool(w),
+    "|": operator.or_, "^": operator.xor, "&": operator.and_, "==": operator.eq, "!=": operator.ne,
+    "<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge, "<<": operator.lshift,
+    ">>": operator.rshift, "+": operator.add, "-": operator.sub, "*": operator.mul, "/": _cdiv,
+    "%": lambda v, w: v - w * _cdiv(v, w),
+}
+_UNARY = {"!": operator.not_, "-": operator.neg, "+": operator.pos, "~": operator.invert}
 
 
 def _expand(tokens: list[str], macros: Mapping[str, str], where: str, depth: int = 0) -> list[str]:
@@ -119,7 +120,7 @@ def _expand(tokens: list[str], macros: Mapping[str, str], where: str, depth: int
 
 
 def _ptoks(s: str) -> list[str]:
-    return [t.text for t in tokenize(s) if t.kind not in ("ws", "comment")]
+    return [t for k, t in split_tokens(s) if k not in ("ws", "comment")]
 
 
 def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
@@ -249,11 +250,8 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
     for env, lines in chunks:
         if not lines:
             continue
-        toks = tokenize("\n".join(lines))
-        for t in toks:
-            if t.kind == "id" and t.text in env:
-                t.text = _macro_value(t.text, env, name)
-        out.append(_join(toks))
+        out.append("".join(_macro_value(t, env, name) if k == "id" and t in env else t
+                           for k, t in split_tokens("\n".join(lines))))
     return "\n".join(out)
 
 
