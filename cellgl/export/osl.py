@@ -258,17 +258,16 @@ def _basis_shader(prog, code: str) -> str:
     ]) + "\n"
 
 
-#: a basis function's outputs: its GLSL return type -> [(OSL output, component)]
-_BASIS_OUTPUTS = {"float": None, "vec2": ["F1", "F2"], "vec3": ["F1", "F2", "F3"],
-                  "vec4": ["F1", "F2", "F3", "F4"]}
-
-
 def _basis_outputs(prog) -> list[str]:
-    key = prog.recipe["basis"]
-    ret = re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    """A basis function's outputs, from its key and GLSL return type (``vecN``: F1 .. FN)."""
+    key, ret = prog.recipe["basis"], _basis_return(prog)
     if key == "cellid":
         return ["IDLow", "IDHigh"]
-    return _BASIS_OUTPUTS[ret] or ["Distance" if key == "edge" else "F1"]
+    return ["Distance" if key == "edge" else "F1"] if ret == "float" else ["F1", "F2", "F3", "F4"][:int(ret[-1])]
+
+
+def _basis_return(prog) -> str:
+    return re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
 
 
 def basis_signature(prog) -> str:
@@ -288,8 +287,7 @@ def _basis_function_shader(prog, code: str) -> str:
     nearest feature point's 32-bit ID as ``IDLow`` / ``IDHigh``, 16 bits each, exact)."""
     key = prog.recipe["basis"]
     dim = int(prog.recipe["dim"])
-    fn = prog.entries[0]
-    ret = re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    fn, ret = prog.entries[0], _basis_return(prog)
     lib = to_osl(code)
     arg = {2: "cellgl_vec2(q[0], q[1])", 3: "cellgl_vec3(q[0], q[1], q[2])",
            4: "cellgl_vec4(q[0], q[1], q[2], W)"}[dim]
@@ -301,7 +299,7 @@ def _basis_function_shader(prog, code: str) -> str:
     if key == "cellid":
         body = ["    int id = " + fn + "(" + arg + ");", "    IDLow = float(id & 65535);",
                 "    IDHigh = float((id >> 16) & 65535);"]
-    elif _BASIS_OUTPUTS[ret] is None:
+    elif ret == "float":
         body = [f"    {outs[0]} = {fn}({arg});"]
     else:
         body = [f"    cellgl_{ret} f = {fn}({arg});"] + [f"    {o} = f.{'xyzw'[k]};" for k, o in enumerate(outs)]

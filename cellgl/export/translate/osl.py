@@ -25,7 +25,8 @@ from __future__ import annotations
 from cellgl.export import syntax as S
 from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
 from cellgl.export.translate.tokens import TranslateError
-from cellgl.export.tree import root_name, walk
+from cellgl.export.translate.wgsl import assigned
+from cellgl.export.tree import walk
 
 __all__ = ["to_osl", "OSL_RESERVED"]
 
@@ -56,18 +57,12 @@ class _Osl(_OslLib):
     # ------------------------------------------------------------------ helpers
     def ex(self, x) -> tuple[str, object]:
         if isinstance(x, S.Num):
-            t = x.text
-            if t.lower().startswith("0x"):
-                return _int_lit(int(t.rstrip("uU"), 16)), ("uint" if t[-1] in "uU" else "int")
-            if t[-1] in "uU":
-                return _int_lit(int(t[:-1])), "uint"
+            t, hexa = x.text, x.text.lower().startswith("0x")
+            if hexa or t[-1] in "uU":
+                return _int_lit(int(t.rstrip("uU"), 16 if hexa else 10)), ("uint" if t[-1] in "uU" else "int")
             if "." in t or "e" in t.lower() or t[-1] in "fF":
-                t = t.rstrip("fF")
-                if t.endswith("."):
-                    t += "0"
-                if t.startswith("."):
-                    t = "0" + t
-                return t, "float"
+                t = t.rstrip("fF")                 # .5 -> 0.5, 1. -> 1.0
+                return ("0" if t.startswith(".") else "") + t + ("0" if t.endswith(".") else ""), "float"
             return t, "int"
         if isinstance(x, S.Name):
             if x.name in ("true", "false"):
@@ -316,21 +311,13 @@ class _Osl(_OslLib):
         out = []
         ot = self.osl_type(typ)
         for d in decls:
-            name, size, init = d.name, d.size, d.init
-            n = self.name(name)
-            if size is not None:
-                sz = self.size(size)
-                self.scopes[-1][name] = (typ, sz)
-                if init is None:
-                    out.append(f"{ot} {n}[{sz}];")
-                elif isinstance(init, S.ArrayCtor):
-                    vals = [self.conv_to(a, typ) for a in init.args]
-                    out.append(f"{ot} {n}[{sz}] = {{ {', '.join(vals)} }};")
-                else:
-                    raise TranslateError(f"OSL translation: array {name!r} initialised from an expression")
-                continue
-            self.scopes[-1][name] = typ
-            if isinstance(init, S.Ctor) and init.type in self.structs and any(isinstance(a, S.ArrayCtor) for a in init.args):
+            n, init = self.name(d.name), d.init
+            self.scopes[-1][d.name], arr = self.sized(typ, d.size)
+            if arr and init is not None and not isinstance(init, S.ArrayCtor):
+                raise TranslateError(f"OSL translation: array {d.name!r} initialised from an expression")
+            if arr and init is not None:
+                out.append(f"{ot} {n}{arr} = {{ {', '.join(self.conv_to(a, typ) for a in init.args)} }};")
+            elif isinstance(init, S.Ctor) and init.type in self.structs and any(isinstance(a, S.ArrayCtor) for a in init.args):
                 # a struct with array members: member by member (OSL has no array expressions)
                 out.append(f"{ot} {n};")
                 for (m, mt), a in zip(self.structs[typ].items(), init.args):
@@ -339,9 +326,8 @@ class _Osl(_OslLib):
                             out.append(f"{n}.{self.name(m)}[{j}] = {self.conv_to(e, mt[0])};")
                     else:
                         out.append(f"{n}.{self.name(m)} = {self.conv_to(a, mt)};")
-                continue
-            if init is None:
-                out.append(f"{ot} {n};")
+            elif init is None:
+                out.append(f"{ot} {n}{arr};")
             else:
                 out.append(f"{ot} {n} = {self.conv_to(init, typ)};")
         return out
@@ -376,7 +362,8 @@ class _Osl(_OslLib):
             lines = [f"struct {item.name}", "{"]
             for f in item.fields:
                 members[f.name], arr = self.sized(f.type, f.size)
-                lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};" + (f"  {f.trail}" if f.trail else ""))
+                trail = f"  {f.trail}" if f.trail else ""
+                lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};{trail}")
             lines.append("};")
             self.structs[item.name] = members
             funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
@@ -410,11 +397,7 @@ class _Osl(_OslLib):
 
     def func(self, item, oname: str, passed: list, used: set) -> list[str]:
         self.ret = item.ret
-        modes = {n: c[0][1] for n, c in self.funcs.items()}
-        mutated = {root_name(n.target if isinstance(n, S.Assign) else n.operand)
-                   for n in walk(item.body) if isinstance(n, (S.Assign, S.IncDec))}
-        mutated |= {root_name(a) for n in walk(item.body) if isinstance(n, S.Call) and n.func in modes
-                    for a, m in zip(n.args, modes[n.func]) if m in ("out", "inout")}
+        mutated = assigned(item.body, {n: c[0][1] for n, c in self.funcs.items()})
         scope: dict = {}
         plist, prologue = [], []
         for p in item.params:

@@ -13,25 +13,20 @@ _COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
 _XYZW = "xyzw"
 _CMP = {"<", ">", "<=", ">=", "==", "!="}
-#: component-wise built-ins: name -> OSL scalar function (arguments of the first's type)
-_ELEMENTWISE = {"abs": "abs", "floor": "floor", "ceil": "ceil", "sqrt": "sqrt", "exp": "exp",
-                "log": "log", "sign": "sign", "min": "min", "max": "max", "clamp": "clamp",
-                "pow": "pow", "round": "round", "trunc": "trunc", "sin": "sin", "cos": "cos",
-                "fract": "cellgl_fract", "mod": "mod", "mix": "mix", "step": "step",
-                "smoothstep": "smoothstep", "inversesqrt": "inversesqrt", "exp2": "exp2",
-                "log2": "log2", "tan": "tan", "atan": "atan"}
+#: component-wise built-ins (arguments of the first's type): OSL has each for scalars, by the same
+#: name (``fract``: cellgl_fract)
+_ELEMENTWISE = frozenset("""
+    abs floor ceil sqrt exp log sign min max clamp pow round trunc sin cos fract mod mix step smoothstep
+    inversesqrt exp2 log2 tan atan atan2""".split())
 #: OSL keywords and global names that are legal GLSL identifiers
-OSL_RESERVED = {
-    "P", "I", "N", "Ng", "u", "v", "dPdu", "dPdv", "Ps", "time", "dtime", "dPdtime", "Ci",
-    "color", "point", "vector", "normal", "matrix", "string", "closure", "output", "shader",
-    "surface", "displacement", "volume", "illuminate", "illuminance", "emit", "public", "private",
-    "class", "const", "export", "import", "extern", "friend", "inline", "template", "typedef",
-    "union", "virtual", "cellgl_fract", "mod", "and", "or", "not", "lambda", "auto", "char",
-    "double", "enum", "long", "short", "signed", "unsigned", "sizeof", "static", "switch", "case",
-    "default", "goto", "mutable", "namespace", "new", "operator", "protected", "this", "throw",
-    "try", "catch", "using", "volatile", "bool", "uint", "world", "object", "camera", "raster",
-    "screen", "ndc", "common", "shader_type",
-}
+OSL_RESERVED = frozenset("""
+    P I N Ng u v dPdu dPdv Ps time dtime dPdtime Ci color point vector normal matrix string closure
+    output shader surface displacement volume illuminate illuminance emit public private class const
+    export import extern friend inline template typedef union virtual cellgl_fract mod and or not lambda
+    auto char double enum long short signed unsigned sizeof static switch case default goto mutable
+    namespace new operator protected this throw try catch using volatile bool uint world object camera
+    raster screen ndc common shader_type
+""".split())
 
 
 def _vec(t: str):
@@ -307,8 +302,8 @@ class _OslLib:
             self.helper("cellgl_fract", "float cellgl_fract(float x) { return x - floor(x); }")
         if fn == "atan" and len(ss) == 2:
             fn = "atan2"
-        if fn in _ELEMENTWISE or fn == "atan2":
-            osl = _ELEMENTWISE.get(fn, fn)
+        if fn in _ELEMENTWISE:
+            osl = "cellgl_fract" if fn == "fract" else fn
             vt = next((t for t in types if _vec(t)), None)
             if vt is None:
                 rt = types[-1] if fn in ("step", "smoothstep") else types[0]
