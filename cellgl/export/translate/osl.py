@@ -36,7 +36,6 @@ class _Osl(_OslLib):
         self.unit = [it for it in S.parse(text).items if not (isinstance(it, S.Function) and it.body is None)]
         self.params = list(params)
         self.helpers: dict[str, str] = {}         # generated name -> code (in order)
-        self.vec_structs: set[str] = set()
         self.structs: dict[str, dict] = {}       # name -> {member: type}
         self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name)]
         self.globals: dict[str, tuple] = {}      # name -> (type, size, init node)
@@ -163,12 +162,6 @@ class _Osl(_OslLib):
         s = self.scalar_op(op, a, b, t)
         return s, ("bool" if op in _CMP or op == "^^" else t)
 
-    def lvalue_is_vec_index(self, node):
-        if isinstance(node, S.Index):
-            _, t = self.ex(node.base)
-            return _vec(t) is not None and not isinstance(t, tuple)
-        return False
-
     def assign(self, op, lhs, rhs) -> str:
         if isinstance(lhs, S.Paren):
             lhs = lhs.inner
@@ -176,7 +169,7 @@ class _Osl(_OslLib):
             _, bt = self.ex(lhs.base)
             if _vec(bt) and len(lhs.name) > 1:
                 raise TranslateError("OSL translation: assignment to a multi-component swizzle")
-        if self.lvalue_is_vec_index(lhs):
+        if isinstance(lhs, S.Index) and _vec(self.ex(lhs.base)[1]):        # a component of a vector
             base, bt = self.ex(lhs.base)
             idx, _ = self.ex(lhs.index)
             val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))

@@ -18,6 +18,8 @@ _CMP = {"<", ">", "<=", ">=", "==", "!="}
 _ELEMENTWISE = frozenset("""
     abs floor ceil sqrt exp log sign min max clamp pow round trunc sin cos fract mod mix step smoothstep
     inversesqrt exp2 log2 tan atan atan2""".split())
+#: the geometric built-ins on scalars
+_SCALAR_GEOMETRY = {"dot": "({} * {})", "normalize": "sign({})", "length": "abs({})", "distance": "abs({} - {})"}
 #: OSL keywords and global names that are legal GLSL identifiers
 OSL_RESERVED = frozenset("""
     P I N Ng u v dPdu dPdv Ps time dtime dPdtime Ci color point vector normal matrix string closure
@@ -65,25 +67,14 @@ class _OslLib:
     """The generated-helper half of the translator (mixed into its tree walker)."""
 
     helpers: dict
-    vec_structs: set
     structs: dict
 
     def osl_type(self, t: str) -> str:
         v = _vec(t)
-        if v:
-            self.vec_struct(t)
-            return "cellgl_" + t
-        if t in self.structs:
-            return t
-        return _osl_scalar(t)
-
-    def vec_struct(self, t: str) -> None:
-        if t in self.vec_structs:
-            return
-        self.vec_structs.add(t)
-        comp, n = _vec(t)
-        fields = " ".join(f"{_osl_scalar(comp)} {c};" for c in _XYZW[:n])
-        self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
+        if v and "struct cellgl_" + t not in self.helpers:
+            fields = " ".join(f"{_osl_scalar(v[0])} {c};" for c in _XYZW[:v[1]])
+            self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
+        return "cellgl_" + t if v else t if t in self.structs else _osl_scalar(t)
 
     def helper(self, name: str, code) -> str:
         if name not in self.helpers:
@@ -95,9 +86,7 @@ class _OslLib:
         if src == dst or (src in ("int", "uint") and dst in ("int", "uint")):
             return expr
         if dst == "float":
-            if src == "uint":
-                return f"{self.u2f()}({expr})"
-            return f"float({expr})"
+            return f"{self.u2f()}({expr})" if src == "uint" else f"float({expr})"
         if dst == "bool":
             return f"({expr} != 0)"
         if src == "bool":
@@ -264,11 +253,7 @@ class _OslLib:
             t = types[0]
             v = _vec(t)
             if not v:
-                if fn == "dot":
-                    return f"({ss[0]} * {ss[1]})", "float"
-                if fn == "normalize":
-                    return f"sign({ss[0]})", "float"
-                return (f"abs({ss[0]})" if fn == "length" else f"abs({ss[0]} - {ss[1]})"), "float"
+                return _SCALAR_GEOMETRY[fn].format(*ss), "float"
             ot = self.osl_type(t)
             dot = f"cellgl_dot_{t}"
             self.helper(dot, f"float {dot}({ot} a, {ot} b) {{ return "

@@ -152,6 +152,10 @@ class Wgsl(Glsl):
         if isinstance(s, S.Decl):                       # one declaration per variable
             lines = [ind + d for d in self.decls(s)]
             return self.comments(s.comments, ind) + lines[:-1] + [lines[-1] + (f"  {s.trail}" if s.trail else "")]
+        if isinstance(s, S.For):                        # "; ; " where GLSL has ";;"
+            parts = ("" if x is None else f(x)
+                     for x, f in ((s.init, self.simple), (s.cond, self.expr), (s.step, self.expr)))
+            return self.comments(s.comments, ind) + self.head(f"for ({'; '.join(parts)})", s.body, ind)
         other = getattr(s, "other", None)
         if isinstance(s, S.If) and other is not None and (other.comments or not isinstance(other, (S.If, S.Block))):
             # an else GLSL writes without braces (or one with comments): "} else {", as every body
