@@ -38,7 +38,7 @@ class _Osl(_OslLib):
         self.helpers: dict[str, str] = {}         # generated name -> code (in order)
         self.structs: dict[str, dict] = {}       # name -> {member: type}
         self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name)]
-        self.globals: dict[str, tuple] = {}      # name -> (type, size, init node)
+        self.globals: dict[str, tuple] = {}      # name -> (type, its Declarator)
         self.scopes: list[dict] = []
         self.drop = set(drop)
         self.passed: dict[str, list] = {}        # function -> the parameters it takes (see params)
@@ -49,8 +49,8 @@ class _Osl(_OslLib):
             if name in s:
                 return s[name]
         if name in self.globals:
-            t, size, _ = self.globals[name]
-            return (t, size) if size is not None else t
+            t, d = self.globals[name]
+            return self.sized(t, d.size)[0]
         raise TranslateError(f"OSL translation: unknown name {name!r}")
 
     # ------------------------------------------------------------------ helpers
@@ -254,18 +254,13 @@ class _Osl(_OslLib):
         elif isinstance(s, S.Decl):
             out += [ind + d for d in self.decl(s.type, s.declarators)]
         elif isinstance(s, S.ExprStmt):
-            e, _ = self.ex(s.expr)
-            out.append(ind + e + ";")
+            out.append(ind + self.ex(s.expr)[0] + ";")
         elif isinstance(s, S.Return):
-            if s.value is None:
-                out.append(ind + "return;")
-            else:
-                out.append(ind + f"return {self.conv_to(s.value, self.ret)};")
+            out.append(ind + ("return;" if s.value is None else f"return {self.conv_to(s.value, self.ret)};"))
         elif isinstance(s, S.Jump) and s.kind in ("break", "continue"):
             out.append(ind + s.kind + ";")
         elif isinstance(s, S.If):
-            c, _ = self.ex(s.cond)
-            out.append(f"{ind}if ({c})")
+            out.append(f"{ind}if ({self.ex(s.cond)[0]})")
             out += self.body(s.then, ind)
             if s.other is not None:
                 out.append(ind + "else")
@@ -329,27 +324,28 @@ class _Osl(_OslLib):
         return self.coerce(*self.ex(node), typ)
 
     # ------------------------------------------------------------------ top level
-    def globals_used(self, node, out: set) -> None:
+    def globals_used(self, node) -> set:
+        out = set()
         for n in walk(node):
             if isinstance(n, S.Name) and n.name in self.globals:
                 out.add(n.name)
             elif isinstance(n, S.Call) and n.func in self.passed:
                 out.update(self.passed[n.func])        # the callee's parameters pass through
+        return out
 
     def emit(self) -> str:
         funcs_out: list[str] = []
-        overloads: dict[str, int] = {}
         for item in self.unit:
             before = len(funcs_out)
             known = set(self.helpers)
-            self.emit_item(item, funcs_out, overloads)
+            self.emit_item(item, funcs_out)
             new = [c for n, c in self.helpers.items() if n not in known and not n.startswith("struct ")]
             funcs_out[before:before] = new
         head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
         # no blank line between functions (as GLSL)
         return _braces(head + "\n" + "\n".join(funcs_out) + "\n")
 
-    def emit_item(self, item, funcs_out: list, overloads: dict) -> None:
+    def emit_item(self, item, funcs_out: list) -> None:
         if isinstance(item, S.Struct):
             members = {}
             lines = [f"struct {item.name}", "{"]
@@ -367,17 +363,14 @@ class _Osl(_OslLib):
             for d in item.declarators:
                 if d.init is None:
                     raise TranslateError(f"OSL translation: global {d.name!r} needs a value")
-                self.globals[d.name] = (item.type, self.size(d.size) if d.size is not None else None, d.init)
+                self.globals[d.name] = (item.type, d)
         else:
             name = item.name
             if name in self.drop:
                 return
-            used: set = set()
-            self.globals_used(item.body, used)
-            passed = [g for g in self.params if g in used]
-            self.passed[name] = passed
-            n = overloads.get(name, 0)
-            overloads[name] = n + 1
+            used = self.globals_used(item.body)
+            passed = self.passed[name] = [g for g in self.params if g in used]
+            n = len(self.funcs.get(name, ()))                 # overloads before this one
             oname = self.name(name) if n == 0 else f"{name}_{n}"
             ptypes = [self.sized(p.type, p.size)[0] for p in item.params]
             self.funcs.setdefault(name, []).append(
@@ -405,15 +398,12 @@ class _Osl(_OslLib):
                 prologue.append(f"    {ot} {n} = {n}_in;")
             else:
                 plist.append(f"{ot} {n}{arr}")
-        for g in passed:
-            t, size, _ = self.globals[g]
-            plist.append(f"{self.osl_type(t)} {self.name(g)}")
+        plist += [f"{self.osl_type(self.globals[g][0])} {self.name(g)}" for g in passed]
         self.scopes = [scope]
         for g in sorted(used - set(passed), key=list(self.globals).index):
-            t, size, init = self.globals[g]
             self.scopes[0].pop(g, None)
-            d = self.decl(t, [S.Declarator(g, S.Num(size) if size is not None else None, init)])
-            prologue += ["    " + ln for ln in d]
+            t, d = self.globals[g]
+            prologue += ["    " + ln for ln in self.decl(t, [d])]
         out = [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)})", "{"] + prologue
         for s in item.body.body:
             out += self.stmt(s, "    ")

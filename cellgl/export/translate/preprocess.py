@@ -128,19 +128,15 @@ def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
     resolved: list[str] = []
     i = 0
     while i < len(toks):           # defined X / defined(X) before expansion
-        if toks[i] == "defined":
-            if i + 1 < len(toks) and toks[i + 1] == "(":
-                if i + 3 >= len(toks) or toks[i + 3] != ")":
-                    raise TranslateError(f"{where}: malformed defined() in {expr!r}")
-                name, i = toks[i + 2], i + 4
-            elif i + 1 < len(toks):
-                name, i = toks[i + 1], i + 2
-            else:
-                raise TranslateError(f"{where}: malformed defined in {expr!r}")
-            resolved.append("1" if name in macros else "0")
-        else:
+        if toks[i] != "defined":
             resolved.append(toks[i])
             i += 1
+            continue
+        paren = toks[i + 1:i + 2] == ["("]
+        if len(toks) < i + (4 if paren else 2) or paren and toks[i + 3] != ")":
+            raise TranslateError(f"{where}: malformed defined{'()' if paren else ''} in {expr!r}")
+        resolved.append("1" if toks[i + 1 + paren] in macros else "0")
+        i += 4 if paren else 2
     if not resolved:
         raise TranslateError(f"{where}: empty #if expression")
     return bool(_Expr(_expand(resolved, macros, where), where).parse())
