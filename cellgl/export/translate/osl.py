@@ -208,10 +208,7 @@ class _Osl(_OslLib):
             comps = []
             for j, st in enumerate(types):
                 sv = _vec(st)
-                if sv:
-                    comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]]
-                else:
-                    comps.append((f"a{j}", st))
+                comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
             if len(comps) == 1:
                 comps = comps * v[1]
             comps = comps[:v[1]]

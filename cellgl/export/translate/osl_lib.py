@@ -19,7 +19,8 @@ _ELEMENTWISE = frozenset("""
     abs floor ceil sqrt exp log sign min max clamp pow round trunc sin cos fract mod mix step smoothstep
     inversesqrt exp2 log2 tan atan atan2""".split())
 #: the geometric built-ins on scalars
-_SCALAR_GEOMETRY = {"dot": "({} * {})", "normalize": "sign({})", "length": "abs({})", "distance": "abs({} - {})"}
+_SCALAR_GEOMETRY = {"dot": "({} * {})", "normalize": "sign({})", "length": "abs({})",
+                    "distance": "abs({} - {})"}
 #: OSL keywords and global names that are legal GLSL identifiers
 OSL_RESERVED = frozenset("""
     P I N Ng u v dPdu dPdv Ps time dtime dPdtime Ci color point vector normal matrix string closure
@@ -179,19 +180,14 @@ class _OslLib:
     def vec_binary(self, op: str, ta: str, tb: str) -> tuple[str, str]:
         """Name and result type of the generated component-wise ``op`` on ``ta``, ``tb``."""
         va, vb = _vec(ta), _vec(tb)
-        n = (va or vb)[1]
-        comp = (va or vb)[0]
-        cmp = op in _CMP
-        rt = ("b" if cmp else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
+        comp, n = va or vb
+        rt = ("b" if op in _CMP else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
         name = f"cellgl_{_OPNAME[op]}_{ta}_{tb}"
 
         def code():
             oa, ob, ort = self.osl_type(ta), self.osl_type(tb), self.osl_type(rt)
-            parts = []
-            for c in _XYZW[:n]:
-                x = f"a.{c}" if va else "a"
-                y = f"b.{c}" if vb else "b"
-                parts.append(self.scalar_op(op, x, y, comp))
+            parts = [self.scalar_op(op, f"a.{c}" if va else "a", f"b.{c}" if vb else "b", comp)
+                     for c in _XYZW[:n]]
             return f"{ort} {name}({oa} a, {ob} b) {{ return {ort}({', '.join(parts)}); }}"
         self.helper(name, code)
         return name, rt
@@ -304,10 +300,8 @@ class _OslLib:
             def code():
                 ot = self.osl_type(vt)
                 plist = ", ".join(f"{self.osl_type(t)} a{j}" for j, t in enumerate(types))
-                parts = []
-                for c in _XYZW[:v[1]]:
-                    parts.append(f"{osl}(" + ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}"
-                                                       for j, t in enumerate(types)) + ")")
+                parts = [f"{osl}({', '.join(f'a{j}.{c}' if _vec(t) else f'a{j}' for j, t in enumerate(types))})"
+                         for c in _XYZW[:v[1]]]
                 return f"{ot} {name}({plist}) {{ return {ot}({', '.join(parts)}); }}"
             self.helper(name, code)
             return f"{name}({', '.join(ss)})", vt
