@@ -31,7 +31,7 @@ from cellgl.export.tree import walk
 __all__ = ["to_osl", "OSL_RESERVED"]
 
 class _Osl(_OslLib):
-    def __init__(self, text: str, params=(), drop=()):
+    def __init__(self, text: str, params=()):
         # prototypes left out: OSL needs none
         self.unit = [it for it in S.parse(text).items if not (isinstance(it, S.Function) and it.body is None)]
         self.params = list(params)
@@ -40,7 +40,6 @@ class _Osl(_OslLib):
         self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name)]
         self.globals: dict[str, tuple] = {}      # name -> (type, its Declarator)
         self.scopes: list[dict] = []
-        self.drop = set(drop)
         self.passed: dict[str, list] = {}        # function -> the parameters it takes (see params)
 
     # ------------------------------------------------------------------ types
@@ -363,8 +362,6 @@ class _Osl(_OslLib):
                 self.globals[d.name] = (item.type, d)
         else:
             name = item.name
-            if name in self.drop:
-                return
             used = self.globals_used(item.body)
             passed = self.passed[name] = [g for g in self.params if g in used]
             n = len(self.funcs.get(name, ()))                 # overloads before this one
@@ -409,7 +406,7 @@ class _Osl(_OslLib):
         return out
 
 
-def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
+def to_osl(text: str, *, params=(), passed: dict | None = None) -> str:
     """Translate specialised, prefixed GLSL (library subset) into OSL functions and structs.
 
     Parameters
@@ -419,8 +416,6 @@ def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
     params : sequence of str
         Global constants that the caller supplies instead (the shader's parameters): each
         function that reads one gets it as an extra trailing parameter, in this order.
-    drop : sequence of str
-        Functions to leave out (e.g. fragment-only entry points that use ``fwidth``).
     passed : dict, optional
         Filled with ``{function: [the names of params it takes, in order]}`` (a function takes
         those it reads and those its callees take).
@@ -430,7 +425,7 @@ def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
     str
         OSL text (helpers first, then the library in its order); no ``shader`` block.
     """
-    osl = _Osl(text, params, drop)
+    osl = _Osl(text, params)
     out = osl.emit()
     if passed is not None:
         passed.update(osl.passed)
