@@ -285,12 +285,10 @@ def _basis_function_shader(prog, code: str) -> str:
     ``Vector`` in cells (unconnected: the object's generated coordinates; a 4D basis adds ``W``),
     outputs F1.. (``f1``..``f1f2f3f4``), ``Distance`` (``edge``) or ``CellID`` (``cellid``: the
     nearest feature point's 32-bit ID as ``IDLow`` / ``IDHigh``, 16 bits each, exact)."""
-    key = prog.recipe["basis"]
-    dim = int(prog.recipe["dim"])
+    key, dim = prog.recipe["basis"], int(prog.recipe["dim"])
     fn, ret = prog.entries[0], _basis_return(prog)
     lib = to_osl(code)
-    arg = {2: "cellgl_vec2(q[0], q[1])", 3: "cellgl_vec3(q[0], q[1], q[2])",
-           4: "cellgl_vec4(q[0], q[1], q[2], W)"}[dim]
+    arg = f"cellgl_vec{dim}({', '.join(['q[0]', 'q[1]', 'q[2]', 'W'][:dim])})"
     ins = ['    point Vector = point(0, 0, 0) [[ string label = "Vector", string help = "The sample '
            'point in cells (unconnected: generated coordinates)" ]],']
     if dim == 4:

@@ -119,9 +119,7 @@ class _Osl(_OslLib):
         if isinstance(x, S.Binary):
             return self.binary(x.op, x.left, x.right)
         if isinstance(x, S.Ternary):
-            c, _ = self.ex(x.cond)
-            a, ta = self.ex(x.then)
-            b, tb = self.ex(x.other)
+            c, (a, ta), (b, _) = self.ex(x.cond)[0], self.ex(x.then), self.ex(x.other)
             if ta in ("float", "int", "uint", "bool"):
                 return f"({c} ? {a} : {b})", ta
             ot = self.osl_type(ta)
@@ -180,10 +178,8 @@ class _Osl(_OslLib):
         base_op = op[:-1]
         _, tb = self.ex(rhs)
         if _vec(ta) or _vec(tb) or (ta == "uint" and base_op in (">>", "/", "%", "<", ">")):
-            b, _ = self.binary(base_op, lhs, S.Paren(rhs))
-            return f"{a} = {b}"
-        b, _ = self.ex(rhs)
-        return f"{a} {op} {b}"
+            return f"{a} = {self.binary(base_op, lhs, S.Paren(rhs))[0]}"
+        return f"{a} {op} {self.ex(rhs)[0]}"
 
     def ctor(self, t: str, args: list):
         ev = [self.ex(a) for a in args]

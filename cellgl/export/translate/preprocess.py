@@ -111,13 +111,8 @@ _UNARY = {"!": operator.not_, "-": operator.neg, "+": operator.pos, "~": operato
 def _expand(tokens: list[str], macros: Mapping[str, str], where: str, depth: int = 0) -> list[str]:
     if depth > 32:
         raise TranslateError(f"{where}: macro expansion too deep (recursive #define?)")
-    out: list[str] = []
-    for t in tokens:
-        if t in macros:
-            out.extend(_expand(_ptoks(macros[t]), macros, where, depth + 1))
-        else:
-            out.append(t)
-    return out
+    return [x for t in tokens
+            for x in (_expand(_ptoks(macros[t]), macros, where, depth + 1) if t in macros else [t])]
 
 
 def _ptoks(s: str) -> list[str]:
@@ -228,12 +223,10 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
                 raise TranslateError(
                     f"{where}: function-like macro {m2.group(1)!r} is not supported in exported "
                     "snippets; write a function instead")
-            macros = dict(macros)
-            macros[m2.group(1)] = m2.group(3)
+            macros = {**macros, m2.group(1): m2.group(3)}
             chunks.append((macros, []))
         elif kw == "undef":
-            macros = dict(macros)
-            macros.pop(rest, None)
+            macros = {k: v for k, v in macros.items() if k != rest}
             chunks.append((macros, []))
         elif kw == "":
             continue                    # the null directive
@@ -243,13 +236,8 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
         raise TranslateError(f"{name}: {len(stack)} #if block(s) not closed by #endif")
 
     # substitute macros in code (comments are prose and stay as written)
-    out: list[str] = []
-    for env, lines in chunks:
-        if not lines:
-            continue
-        out.append("".join(_macro_value(t, env, name) if k == "id" and t in env else t
-                           for k, t in split_tokens("\n".join(lines))))
-    return "\n".join(out)
+    return "\n".join("".join(_macro_value(t, env, name) if k == "id" and t in env else t
+                             for k, t in split_tokens("\n".join(lines))) for env, lines in chunks if lines)
 
 
 def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
