@@ -238,10 +238,7 @@ class _Osl(_OslLib):
         out = [ind + ln for ln in self.comment_lines(s.comments)]
         if isinstance(s, S.Block):
             self.scopes.append({})
-            out.append(ind + "{")
-            for t in s.body:
-                out += self.stmt(t, ind + "    ")
-            out.append(ind + "}")
+            out += [ind + "{"] + [ln for t in s.body for ln in self.stmt(t, ind + "    ")] + [ind + "}"]
             self.scopes.pop()
         elif isinstance(s, S.Decl):
             out += [ind + d for d in self.decl(s.type, s.declarators)]
@@ -280,12 +277,8 @@ class _Osl(_OslLib):
         return out
 
     def body(self, s, ind: str) -> list[str]:
-        if isinstance(s, S.Block):
-            return self.stmt(s, ind)
-        self.scopes.append({})
-        out = [ind + "{"] + self.stmt(s, ind + "    ") + [ind + "}"]
-        self.scopes.pop()
-        return out
+        """A loop's or branch's body, braced."""
+        return self.stmt(s if isinstance(s, S.Block) else S.Block([s]), ind)
 
     def decl(self, typ: str, decls) -> list[str]:
         out = []
@@ -395,9 +388,7 @@ class _Osl(_OslLib):
             t, d = self.globals[g]
             prologue += ["    " + ln for ln in self.decl(t, [d])]
         out = [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)})", "{"] + prologue
-        for s in item.body.body:
-            out += self.stmt(s, "    ")
-        out.append("}")
+        out += [ln for s in item.body.body for ln in self.stmt(s, "    ")] + ["}"]
         self.scopes = []
         return out
 
