@@ -47,8 +47,5 @@ def split_tokens(text: str) -> list[tuple[str, str]]:
 _SPLITS: dict[str, list[tuple[str, str]]] = {}
 
 
-GLSL_TYPES = {
-    "void", "bool", "int", "uint", "float",
-    "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec2", "uvec3", "uvec4",
-    "bvec2", "bvec3", "bvec4", "mat2", "mat3", "mat4",
-}
+GLSL_TYPES = ({"void", "bool", "int", "uint", "float", "mat2", "mat3", "mat4"}
+              | {f"{k}vec{n}" for k in ("", "i", "u", "b") for n in (2, 3, 4)})
