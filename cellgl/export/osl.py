@@ -237,25 +237,26 @@ def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
 def _basis_shader(prog, code: str) -> str:
     """The shader of a program whose ``cellgl_texture(vec2 uv)`` returns four values (the bare
     basis: F1..F4), with no parameters: outputs F1..F4 at uv = (x, 1 - y) of ``Vector``."""
-    lib = to_osl(code)
-    return lib + "\n" + "\n".join([
-        "shader cellgl_basis(",
-        "    point Vector = point(0, 0, 0),",
-        "    output float F1 = 0,",
-        "    output float F2 = 0,",
-        "    output float F3 = 0,",
-        "    output float F4 = 0)",
-        "{",
-        "    point q0 = Vector;",
-        "    if (!isconnected(Vector))",
-        '        getattribute("geom:generated", q0);',
-        "    cellgl_vec4 f = cellgl_texture(cellgl_vec2(q0[0], 1.0 - q0[1]));",
-        "    F1 = f.x;",
-        "    F2 = f.y;",
-        "    F3 = f.z;",
-        "    F4 = f.w;",
-        "}",
-    ]) + "\n"
+    return to_osl(code) + "\n" + _BASIS_SHADER
+
+
+_BASIS_SHADER = """shader cellgl_basis(
+    point Vector = point(0, 0, 0),
+    output float F1 = 0,
+    output float F2 = 0,
+    output float F3 = 0,
+    output float F4 = 0)
+{
+    point q0 = Vector;
+    if (!isconnected(Vector))
+        getattribute("geom:generated", q0);
+    cellgl_vec4 f = cellgl_texture(cellgl_vec2(q0[0], 1.0 - q0[1]));
+    F1 = f.x;
+    F2 = f.y;
+    F3 = f.z;
+    F4 = f.w;
+}
+"""
 
 
 def _basis_outputs(prog) -> list[str]:
