@@ -264,7 +264,9 @@ def _basis_outputs(prog) -> list[str]:
     key, ret = prog.recipe["basis"], _basis_return(prog)
     if key == "cellid":
         return ["IDLow", "IDHigh"]
-    return ["Distance" if key == "edge" else "F1"] if ret == "float" else ["F1", "F2", "F3", "F4"][:int(ret[-1])]
+    if ret == "float":
+        return ["Distance" if key == "edge" else "F1"]
+    return ["F1", "F2", "F3", "F4"][:int(ret[-1])]
 
 
 def _basis_return(prog) -> str:

@@ -290,7 +290,8 @@ class _Osl(_OslLib):
                 raise TranslateError(f"OSL translation: array {d.name!r} initialised from an expression")
             if arr and init is not None:
                 out.append(f"{ot} {n}{arr} = {{ {', '.join(self.conv_to(a, typ) for a in init.args)} }};")
-            elif isinstance(init, S.Ctor) and init.type in self.structs and any(isinstance(a, S.ArrayCtor) for a in init.args):
+            elif isinstance(init, S.Ctor) and init.type in self.structs \
+                    and any(isinstance(a, S.ArrayCtor) for a in init.args):
                 # a struct with array members: member by member (OSL has no array expressions)
                 out.append(f"{ot} {n};")
                 for (m, mt), a in zip(self.structs[typ].items(), init.args):

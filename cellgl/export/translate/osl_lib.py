@@ -300,8 +300,9 @@ class _OslLib:
             def code():
                 ot = self.osl_type(vt)
                 plist = ", ".join(f"{self.osl_type(t)} a{j}" for j, t in enumerate(types))
-                parts = [f"{osl}({', '.join(f'a{j}.{c}' if _vec(t) else f'a{j}' for j, t in enumerate(types))})"
-                         for c in _XYZW[:v[1]]]
+                def args(c):
+                    return ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}" for j, t in enumerate(types))
+                parts = [f"{osl}({args(c)})" for c in _XYZW[:v[1]]]
                 return f"{ot} {name}({plist}) {{ return {ot}({', '.join(parts)}); }}"
             self.helper(name, code)
             return f"{name}({', '.join(ss)})", vt

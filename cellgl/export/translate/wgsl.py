@@ -70,7 +70,8 @@ class Wgsl(Glsl):
     def operand(self, e, op: str, right: bool = False) -> str:
         e = _bare(e)
         s = self.expr(e)
-        if isinstance(e, S.Assign) or isinstance(e, S.Binary) and not (e.op == op and op in "+*" and not right):
+        chain = isinstance(e, S.Binary) and e.op == op and op in "+*" and not right     # a + b + c
+        if isinstance(e, (S.Binary, S.Assign)) and not chain:
             return f"({s})"
         return f"({s})" if isinstance(e, S.Unary) and op in ("<<", ">>", "&", "|", "^") else s
 
@@ -151,13 +152,14 @@ class Wgsl(Glsl):
     def statement(self, s, ind: str = "") -> list[str]:
         if isinstance(s, S.Decl):                       # one declaration per variable
             lines = [ind + d for d in self.decls(s)]
-            return self.comments(s.comments, ind) + lines[:-1] + [lines[-1] + (f"  {s.trail}" if s.trail else "")]
+            trail = f"  {s.trail}" if s.trail else ""
+            return self.comments(s.comments, ind) + lines[:-1] + [lines[-1] + trail]
         if isinstance(s, S.For):                        # "; ; " where GLSL has ";;"
             parts = ("" if x is None else f(x)
                      for x, f in ((s.init, self.simple), (s.cond, self.expr), (s.step, self.expr)))
             return self.comments(s.comments, ind) + self.head(f"for ({'; '.join(parts)})", s.body, ind)
         other = getattr(s, "other", None)
-        if isinstance(s, S.If) and other is not None and (other.comments or not isinstance(other, (S.If, S.Block))):
+        if other is not None and (other.comments or not isinstance(other, (S.If, S.Block))):
             # an else GLSL writes without braces (or one with comments): "} else {", as every body
             first = super().statement(S.If(s.cond, s.then, None, s.comments), ind)
             return first[:-1] + self.head("} else", other, ind)
