@@ -30,6 +30,7 @@ from cellgl.export.tree import walk
 
 __all__ = ["to_osl", "OSL_RESERVED"]
 
+
 class _Osl(_OslLib):
     def __init__(self, text: str, params=()):
         # prototypes left out: OSL needs none
@@ -37,7 +38,7 @@ class _Osl(_OslLib):
         self.params = list(params)
         self.helpers: dict[str, str] = {}         # generated name -> code (in order)
         self.structs: dict[str, dict] = {}       # name -> {member: type}
-        self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name)]
+        self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name, params passed)]
         self.globals: dict[str, tuple] = {}      # name -> (type, its Declarator)
         self.scopes: list[dict] = []
         self.passed: dict[str, list] = {}        # function -> the parameters it takes (see params)
