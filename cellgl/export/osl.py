@@ -101,10 +101,6 @@ def _lit(v, typ: str) -> str:
     return str(int(v))
 
 
-def _label(name: str) -> str:
-    return name.replace("_", " ").capitalize()
-
-
 def _quote(s: str) -> str:
     return s.replace("\\", "\\\\").replace('"', "'")
 
@@ -188,7 +184,7 @@ def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
     for p, value in params:
         typ = "float" if p.type == "float" else "int"
         lo, hi = (0, 1) if p.type == "bool" else (p.lo, p.hi)
-        meta = [f'string label = "{_label(p.name)}"', f"{typ} min = {_lit(lo, typ)}",
+        meta = [f'string label = "{p.name.replace("_", " ").capitalize()}"', f"{typ} min = {_lit(lo, typ)}",
                 f"{typ} max = {_lit(hi, typ)}", f'string help = "{_quote(p.doc)}"']
         if p.type == "bool":
             meta.append('string widget = "checkBox"')
