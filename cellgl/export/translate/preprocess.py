@@ -322,8 +322,7 @@ def prefixed(name: str, kind: str) -> str:
     return "cellgl_" + name
 
 
-def prefix_names(text: str, *, keep: set[str] = frozenset(),
-                 overrides: Mapping[str, str] | None = None) -> tuple[str, dict[str, str]]:
+def prefix_names(text: str, *, overrides: Mapping[str, str] | None = None) -> tuple[str, dict[str, str]]:
     """Rename every top-level name with :func:`prefixed` (code and comments alike).
 
     ``overrides`` gives explicit new names (e.g. to keep a library function clear of an entry
@@ -333,10 +332,8 @@ def prefix_names(text: str, *, keep: set[str] = frozenset(),
     names would collide.
     """
     decls = top_level_names(text)
-    mapping = {n: prefixed(n, k) for n, k in decls.items() if n not in keep}
-    for old, new in (overrides or {}).items():
-        if old in mapping:
-            mapping[old] = new
+    overrides = overrides or {}
+    mapping = {n: overrides[n] if n in overrides else prefixed(n, k) for n, k in decls.items()}
     mapping = {a: b for a, b in mapping.items() if a != b}
     seen: dict[str, str] = {}
     for old, new in mapping.items():
