@@ -39,10 +39,6 @@ def _vec(t: str):
     return _COMP[t[:-4]], int(t[-1])
 
 
-def _osl_scalar(t: str) -> str:
-    return {"float": "float", "int": "int", "uint": "int", "bool": "int", "void": "void"}.get(t, t)
-
-
 def _int_lit(v: int) -> str:
     """A 32-bit pattern as an OSL int literal (OSL's lexer has no unsigned or > 2^31 - 1)."""
     v &= 0xFFFFFFFF
@@ -73,9 +69,10 @@ class _OslLib:
     def osl_type(self, t: str) -> str:
         v = _vec(t)
         if v and "struct cellgl_" + t not in self.helpers:
-            fields = " ".join(f"{_osl_scalar(v[0])} {c};" for c in _XYZW[:v[1]])
+            fields = " ".join(f"{self.osl_type(v[0])} {c};" for c in _XYZW[:v[1]])
             self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
-        return "cellgl_" + t if v else t if t in self.structs else _osl_scalar(t)
+        # uint keeps its 32 bits in an int, bool is an int
+        return "cellgl_" + t if v else t if t in self.structs else {"uint": "int", "bool": "int"}.get(t, t)
 
     def helper(self, name: str, code) -> str:
         if name not in self.helpers:
@@ -217,14 +214,14 @@ class _OslLib:
 
     def vec_get(self, t: str) -> str:
         comp, n = _vec(t)
-        ot, oc = self.osl_type(t), _osl_scalar(comp)
+        ot, oc = self.osl_type(t), self.osl_type(comp)
         name = f"cellgl_get_{t}"
         body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(_XYZW[:n - 1]))
         return self.helper(name, f"{oc} {name}({ot} a, int i) {{ {body} return a.{_XYZW[n - 1]}; }}")
 
     def vec_set(self, t: str) -> str:
         comp, n = _vec(t)
-        ot, oc = self.osl_type(t), _osl_scalar(comp)
+        ot, oc = self.osl_type(t), self.osl_type(comp)
         name = f"cellgl_set_{t}"
         body = " else ".join(f"if (i == {j}) a.{c} = x;" for j, c in enumerate(_XYZW[:n - 1]))
         return self.helper(name, f"void {name}(output {ot} a, int i, {oc} x) {{ {body} else a.{_XYZW[n - 1]} = x; }}")
