@@ -96,9 +96,9 @@ class _OslLib:
         raise TranslateError(f"OSL translation: no conversion from {src} to {dst}")
 
     def coerce(self, expr: str, src, dst) -> str:
-        """:meth:`conv` where ``src`` and ``dst`` are both scalar types, else ``expr`` as it is
-        (vectors, arrays and structs are never converted implicitly)."""
-        if all(isinstance(t, str) and not _vec(t) and t not in self.structs for t in (src, dst)):
+        """:meth:`conv` to a scalar type ``dst`` from a non-vector ``src``, else ``expr`` as it is
+        (vectors, arrays and structs are never converted implicitly; a struct to a scalar raises)."""
+        if all(isinstance(t, str) and not _vec(t) for t in (src, dst)) and dst not in self.structs:
             return self.conv(expr, src, dst)
         return expr
 
