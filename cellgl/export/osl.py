@@ -101,10 +101,6 @@ def _lit(v, typ: str) -> str:
     return str(int(v))
 
 
-def _label(name: str) -> str:
-    return name.replace("_", " ").capitalize()
-
-
 def _quote(s: str) -> str:
     return s.replace("\\", "\\\\").replace('"', "'")
 
@@ -188,7 +184,7 @@ def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
     for p, value in params:
         typ = "float" if p.type == "float" else "int"
         lo, hi = (0, 1) if p.type == "bool" else (p.lo, p.hi)
-        meta = [f'string label = "{_label(p.name)}"', f"{typ} min = {_lit(lo, typ)}",
+        meta = [f'string label = "{p.name.replace("_", " ").capitalize()}"', f"{typ} min = {_lit(lo, typ)}",
                 f"{typ} max = {_lit(hi, typ)}", f'string help = "{_quote(p.doc)}"']
         if p.type == "bool":
             meta.append('string widget = "checkBox"')
@@ -237,38 +233,40 @@ def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
 def _basis_shader(prog, code: str) -> str:
     """The shader of a program whose ``cellgl_texture(vec2 uv)`` returns four values (the bare
     basis: F1..F4), with no parameters: outputs F1..F4 at uv = (x, 1 - y) of ``Vector``."""
-    lib = to_osl(code)
-    return lib + "\n" + "\n".join([
-        "shader cellgl_basis(",
-        "    point Vector = point(0, 0, 0),",
-        "    output float F1 = 0,",
-        "    output float F2 = 0,",
-        "    output float F3 = 0,",
-        "    output float F4 = 0)",
-        "{",
-        "    point q0 = Vector;",
-        "    if (!isconnected(Vector))",
-        '        getattribute("geom:generated", q0);',
-        "    cellgl_vec4 f = cellgl_texture(cellgl_vec2(q0[0], 1.0 - q0[1]));",
-        "    F1 = f.x;",
-        "    F2 = f.y;",
-        "    F3 = f.z;",
-        "    F4 = f.w;",
-        "}",
-    ]) + "\n"
+    return to_osl(code) + "\n" + _BASIS_SHADER
 
 
-#: a basis function's outputs: its GLSL return type -> [(OSL output, component)]
-_BASIS_OUTPUTS = {"float": None, "vec2": ["F1", "F2"], "vec3": ["F1", "F2", "F3"],
-                  "vec4": ["F1", "F2", "F3", "F4"]}
+_BASIS_SHADER = """shader cellgl_basis(
+    point Vector = point(0, 0, 0),
+    output float F1 = 0,
+    output float F2 = 0,
+    output float F3 = 0,
+    output float F4 = 0)
+{
+    point q0 = Vector;
+    if (!isconnected(Vector))
+        getattribute("geom:generated", q0);
+    cellgl_vec4 f = cellgl_texture(cellgl_vec2(q0[0], 1.0 - q0[1]));
+    F1 = f.x;
+    F2 = f.y;
+    F3 = f.z;
+    F4 = f.w;
+}
+"""
 
 
 def _basis_outputs(prog) -> list[str]:
-    key = prog.recipe["basis"]
-    ret = re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    """A basis function's outputs, from its key and GLSL return type (``vecN``: F1 .. FN)."""
+    key, ret = prog.recipe["basis"], _basis_return(prog)
     if key == "cellid":
         return ["IDLow", "IDHigh"]
-    return _BASIS_OUTPUTS[ret] or ["Distance" if key == "edge" else "F1"]
+    if ret == "float":
+        return ["Distance" if key == "edge" else "F1"]
+    return ["F1", "F2", "F3", "F4"][:int(ret[-1])]
+
+
+def _basis_return(prog) -> str:
+    return re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
 
 
 def basis_signature(prog) -> str:
@@ -286,13 +284,10 @@ def _basis_function_shader(prog, code: str) -> str:
     ``Vector`` in cells (unconnected: the object's generated coordinates; a 4D basis adds ``W``),
     outputs F1.. (``f1``..``f1f2f3f4``), ``Distance`` (``edge``) or ``CellID`` (``cellid``: the
     nearest feature point's 32-bit ID as ``IDLow`` / ``IDHigh``, 16 bits each, exact)."""
-    key = prog.recipe["basis"]
-    dim = int(prog.recipe["dim"])
-    fn = prog.entries[0]
-    ret = re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    key, dim = prog.recipe["basis"], int(prog.recipe["dim"])
+    fn, ret = prog.entries[0], _basis_return(prog)
     lib = to_osl(code)
-    arg = {2: "cellgl_vec2(q[0], q[1])", 3: "cellgl_vec3(q[0], q[1], q[2])",
-           4: "cellgl_vec4(q[0], q[1], q[2], W)"}[dim]
+    arg = f"cellgl_vec{dim}({', '.join(['q[0]', 'q[1]', 'q[2]', 'W'][:dim])})"
     ins = ['    point Vector = point(0, 0, 0) [[ string label = "Vector", string help = "The sample '
            'point in cells (unconnected: generated coordinates)" ]],']
     if dim == 4:
@@ -301,7 +296,7 @@ def _basis_function_shader(prog, code: str) -> str:
     if key == "cellid":
         body = ["    int id = " + fn + "(" + arg + ");", "    IDLow = float(id & 65535);",
                 "    IDHigh = float((id >> 16) & 65535);"]
-    elif _BASIS_OUTPUTS[ret] is None:
+    elif ret == "float":
         body = [f"    {outs[0]} = {fn}({arg});"]
     else:
         body = [f"    cellgl_{ret} f = {fn}({arg});"] + [f"    {o} = f.{'xyzw'[k]};" for k, o in enumerate(outs)]

@@ -20,14 +20,9 @@ emitting text that would not compile.
 from __future__ import annotations
 
 from cellgl.export.translate.osl import to_osl
-from cellgl.export.translate.names import (
-           prefix_names,
-           prefixed,
-           top_level_names,
-)
-from cellgl.export.translate.preprocess import specialise
-from cellgl.export.translate.tokens import TranslateError, tokenize
+from cellgl.export.translate.preprocess import prefix_names, prefixed, specialise, top_level_names
+from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.translate.wgsl import to_wgsl
 
-__all__ = ["TranslateError", "tokenize", "specialise", "top_level_names", "prefix_names", "prefixed",
+__all__ = ["TranslateError", "specialise", "top_level_names", "prefix_names", "prefixed",
            "to_wgsl", "to_osl"]

@@ -25,22 +25,22 @@ from __future__ import annotations
 from cellgl.export import syntax as S
 from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
 from cellgl.export.translate.tokens import TranslateError
-from cellgl.export.tree import root_name, walk
+from cellgl.export.translate.wgsl import assigned
+from cellgl.export.tree import walk
 
 __all__ = ["to_osl", "OSL_RESERVED"]
 
+
 class _Osl(_OslLib):
-    def __init__(self, text: str, params=(), drop=()):
+    def __init__(self, text: str, params=()):
         # prototypes left out: OSL needs none
         self.unit = [it for it in S.parse(text).items if not (isinstance(it, S.Function) and it.body is None)]
         self.params = list(params)
         self.helpers: dict[str, str] = {}         # generated name -> code (in order)
-        self.vec_structs: set[str] = set()
         self.structs: dict[str, dict] = {}       # name -> {member: type}
-        self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name)]
-        self.globals: dict[str, tuple] = {}      # name -> (type, size, init node)
+        self.funcs: dict[str, list] = {}         # name -> [(param types, modes, return, osl name, params passed)]
+        self.globals: dict[str, tuple] = {}      # name -> (type, its Declarator)
         self.scopes: list[dict] = []
-        self.drop = set(drop)
         self.passed: dict[str, list] = {}        # function -> the parameters it takes (see params)
 
     # ------------------------------------------------------------------ types
@@ -49,25 +49,19 @@ class _Osl(_OslLib):
             if name in s:
                 return s[name]
         if name in self.globals:
-            t, size, _ = self.globals[name]
-            return (t, size) if size is not None else t
+            t, d = self.globals[name]
+            return self.sized(t, d.size)[0]
         raise TranslateError(f"OSL translation: unknown name {name!r}")
 
     # ------------------------------------------------------------------ helpers
     def ex(self, x) -> tuple[str, object]:
         if isinstance(x, S.Num):
-            t = x.text
-            if t.lower().startswith("0x"):
-                return _int_lit(int(t.rstrip("uU"), 16)), ("uint" if t[-1] in "uU" else "int")
-            if t[-1] in "uU":
-                return _int_lit(int(t[:-1])), "uint"
+            t, hexa = x.text, x.text.lower().startswith("0x")
+            if hexa or t[-1] in "uU":
+                return _int_lit(int(t.rstrip("uU"), 16 if hexa else 10)), ("uint" if t[-1] in "uU" else "int")
             if "." in t or "e" in t.lower() or t[-1] in "fF":
-                t = t.rstrip("fF")
-                if t.endswith("."):
-                    t += "0"
-                if t.startswith("."):
-                    t = "0" + t
-                return t, "float"
+                t = t.rstrip("fF")                 # .5 -> 0.5, 1. -> 1.0
+                return ("0" if t.startswith(".") else "") + t + ("0" if t.endswith(".") else ""), "float"
             return t, "int"
         if isinstance(x, S.Name):
             if x.name in ("true", "false"):
@@ -126,9 +120,7 @@ class _Osl(_OslLib):
         if isinstance(x, S.Binary):
             return self.binary(x.op, x.left, x.right)
         if isinstance(x, S.Ternary):
-            c, _ = self.ex(x.cond)
-            a, ta = self.ex(x.then)
-            b, tb = self.ex(x.other)
+            c, (a, ta), (b, _) = self.ex(x.cond)[0], self.ex(x.then), self.ex(x.other)
             if ta in ("float", "int", "uint", "bool"):
                 return f"({c} ? {a} : {b})", ta
             ot = self.osl_type(ta)
@@ -142,7 +134,7 @@ class _Osl(_OslLib):
         if isinstance(x, S.ArrayCtor):
             raise TranslateError("OSL translation: an array constructor outside a declaration")
         if isinstance(x, S.Call):
-            return self.call(x.func, x.args)
+            return (self.user_call if x.func in self.funcs else self.call_builtin)(x.func, x.args)
         raise AssertionError(x)
 
     def binary(self, op, lhs, rhs):
@@ -161,20 +153,12 @@ class _Osl(_OslLib):
             name, rt = self.vec_binary(op, ta, tb)
             return f"{name}({a}, {b})", rt
         t = ta
-        if op in ("<<", ">>"):
-            t = ta
-        elif "uint" in (ta, tb):
+        if op not in ("<<", ">>") and "uint" in (ta, tb):
             t = "uint"
-        elif ta != tb and "float" in (ta, tb):
+        elif op not in ("<<", ">>") and ta != tb and "float" in (ta, tb):
             a, b, t = self.conv(a, ta, "float"), self.conv(b, tb, "float"), "float"
         s = self.scalar_op(op, a, b, t)
         return s, ("bool" if op in _CMP or op == "^^" else t)
-
-    def lvalue_is_vec_index(self, node):
-        if isinstance(node, S.Index):
-            _, t = self.ex(node.base)
-            return _vec(t) is not None and not isinstance(t, tuple)
-        return False
 
     def assign(self, op, lhs, rhs) -> str:
         if isinstance(lhs, S.Paren):
@@ -183,27 +167,20 @@ class _Osl(_OslLib):
             _, bt = self.ex(lhs.base)
             if _vec(bt) and len(lhs.name) > 1:
                 raise TranslateError("OSL translation: assignment to a multi-component swizzle")
-        if self.lvalue_is_vec_index(lhs):
+        if isinstance(lhs, S.Index) and _vec(self.ex(lhs.base)[1]):        # a component of a vector
             base, bt = self.ex(lhs.base)
             idx, _ = self.ex(lhs.index)
             val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
             v, tv = self.ex(val)
-            v = self.conv(v, tv, _vec(bt)[0]) if isinstance(tv, str) and not _vec(tv) else v
-            return f"{self.vec_set(bt)}({base}, {idx}, {v})"
+            return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
         a, ta = self.ex(lhs)
         if op == "=":
-            b, tb = self.ex(rhs)
-            if isinstance(ta, str) and isinstance(tb, str) and not _vec(ta) and not _vec(tb) and ta != tb \
-                    and {ta, tb} != {"int", "uint"}:
-                b = self.conv(b, tb, ta)
-            return f"{a} = {b}"
+            return f"{a} = {self.conv_to(rhs, ta)}"
         base_op = op[:-1]
         _, tb = self.ex(rhs)
         if _vec(ta) or _vec(tb) or (ta == "uint" and base_op in (">>", "/", "%", "<", ">")):
-            b, _ = self.binary(base_op, lhs, S.Paren(rhs))
-            return f"{a} = {b}"
-        b, _ = self.ex(rhs)
-        return f"{a} {op} {b}"
+            return f"{a} = {self.binary(base_op, lhs, S.Paren(rhs))[0]}"
+        return f"{a} {op} {self.ex(rhs)[0]}"
 
     def ctor(self, t: str, args: list):
         ev = [self.ex(a) for a in args]
@@ -227,10 +204,7 @@ class _Osl(_OslLib):
             comps = []
             for j, st in enumerate(types):
                 sv = _vec(st)
-                if sv:
-                    comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]]
-                else:
-                    comps.append((f"a{j}", st))
+                comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
             if len(comps) == 1:
                 comps = comps * v[1]
             comps = comps[:v[1]]
@@ -243,11 +217,6 @@ class _Osl(_OslLib):
         self.helper(name, code)
         return f"{name}({', '.join(s for s, _ in ev)})", t
 
-    def call(self, fn: str, args: list):
-        if fn in self.funcs:
-            return self.user_call(fn, args)
-        return self.call_builtin(fn, args)
-
     def user_call(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
         types = [t for _, t in ev]
@@ -259,13 +228,7 @@ class _Osl(_OslLib):
             if len(cands) != 1:
                 raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
             ptypes, modes, ret, oname, extra = cands[0]
-        ss = []
-        for (s, t), p, m in zip(ev, ptypes, modes):
-            if m == "in" and isinstance(p, str) and isinstance(t, str) and not _vec(p) and not _vec(t) \
-                    and p != t and {p, t} != {"int", "uint"} and p not in self.structs:
-                s = self.conv(s, t, p)
-            ss.append(s)
-        ss += extra
+        ss = [self.coerce(s, t, p) if m == "in" else s for (s, t), p, m in zip(ev, ptypes, modes)] + extra
         return f"{oname}({', '.join(ss)})", ret
 
     def name(self, n: str) -> str:
@@ -273,34 +236,21 @@ class _Osl(_OslLib):
 
     # ------------------------------------------------------------------ statements
     def stmt(self, s, ind: str) -> list[str]:
-        out = [ind + ln.strip() for c in s.comments if c for ln in c.split("\n")]
+        out = [ind + ln for ln in self.comment_lines(s.comments)]
         if isinstance(s, S.Block):
             self.scopes.append({})
-            out.append(ind + "{")
-            for t in s.body:
-                out += self.stmt(t, ind + "    ")
-            out.append(ind + "}")
+            out += [ind + "{"] + [ln for t in s.body for ln in self.stmt(t, ind + "    ")] + [ind + "}"]
             self.scopes.pop()
         elif isinstance(s, S.Decl):
             out += [ind + d for d in self.decl(s.type, s.declarators)]
         elif isinstance(s, S.ExprStmt):
-            e, _ = self.ex(s.expr)
-            out.append(ind + e + ";")
+            out.append(ind + self.ex(s.expr)[0] + ";")
         elif isinstance(s, S.Return):
-            if s.value is None:
-                out.append(ind + "return;")
-            else:
-                e, t = self.ex(s.value)
-                rt = self.ret
-                if isinstance(t, str) and not _vec(t) and not _vec(rt) and rt not in self.structs \
-                        and t != rt and {t, rt} != {"int", "uint"}:
-                    e = self.conv(e, t, rt)
-                out.append(ind + f"return {e};")
+            out.append(ind + ("return;" if s.value is None else f"return {self.conv_to(s.value, self.ret)};"))
         elif isinstance(s, S.Jump) and s.kind in ("break", "continue"):
             out.append(ind + s.kind + ";")
         elif isinstance(s, S.If):
-            c, _ = self.ex(s.cond)
-            out.append(f"{ind}if ({c})")
+            out.append(f"{ind}if ({self.ex(s.cond)[0]})")
             out += self.body(s.then, ind)
             if s.other is not None:
                 out.append(ind + "else")
@@ -328,32 +278,21 @@ class _Osl(_OslLib):
         return out
 
     def body(self, s, ind: str) -> list[str]:
-        if isinstance(s, S.Block):
-            return self.stmt(s, ind)
-        self.scopes.append({})
-        out = [ind + "{"] + self.stmt(s, ind + "    ") + [ind + "}"]
-        self.scopes.pop()
-        return out
+        """A loop's or branch's body, braced."""
+        return self.stmt(s if isinstance(s, S.Block) else S.Block([s]), ind)
 
     def decl(self, typ: str, decls) -> list[str]:
         out = []
         ot = self.osl_type(typ)
         for d in decls:
-            name, size, init = d.name, d.size, d.init
-            n = self.name(name)
-            if size is not None:
-                sz = self.size(size)
-                self.scopes[-1][name] = (typ, sz)
-                if init is None:
-                    out.append(f"{ot} {n}[{sz}];")
-                elif isinstance(init, S.ArrayCtor):
-                    vals = [self.conv_to(a, typ) for a in init.args]
-                    out.append(f"{ot} {n}[{sz}] = {{ {', '.join(vals)} }};")
-                else:
-                    raise TranslateError(f"OSL translation: array {name!r} initialised from an expression")
-                continue
-            self.scopes[-1][name] = typ
-            if isinstance(init, S.Ctor) and init.type in self.structs and any(isinstance(a, S.ArrayCtor) for a in init.args):
+            n, init = self.name(d.name), d.init
+            self.scopes[-1][d.name], arr = self.sized(typ, d.size)
+            if arr and init is not None and not isinstance(init, S.ArrayCtor):
+                raise TranslateError(f"OSL translation: array {d.name!r} initialised from an expression")
+            if arr and init is not None:
+                out.append(f"{ot} {n}{arr} = {{ {', '.join(self.conv_to(a, typ) for a in init.args)} }};")
+            elif isinstance(init, S.Ctor) and init.type in self.structs \
+                    and any(isinstance(a, S.ArrayCtor) for a in init.args):
                 # a struct with array members: member by member (OSL has no array expressions)
                 out.append(f"{ot} {n};")
                 for (m, mt), a in zip(self.structs[typ].items(), init.args):
@@ -362,58 +301,45 @@ class _Osl(_OslLib):
                             out.append(f"{n}.{self.name(m)}[{j}] = {self.conv_to(e, mt[0])};")
                     else:
                         out.append(f"{n}.{self.name(m)} = {self.conv_to(a, mt)};")
-                continue
-            if init is None:
-                out.append(f"{ot} {n};")
+            elif init is None:
+                out.append(f"{ot} {n}{arr};")
             else:
                 out.append(f"{ot} {n} = {self.conv_to(init, typ)};")
         return out
 
     def conv_to(self, node, typ: str) -> str:
-        s, t = self.ex(node)
-        if isinstance(t, str) and not _vec(t) and not _vec(typ) and typ not in self.structs and t != typ \
-                and {t, typ} != {"int", "uint"}:
-            s = self.conv(s, t, typ)
-        return s
+        return self.coerce(*self.ex(node), typ)
 
     # ------------------------------------------------------------------ top level
-    def globals_used(self, node, out: set) -> None:
+    def globals_used(self, node) -> set:
+        out = set()
         for n in walk(node):
             if isinstance(n, S.Name) and n.name in self.globals:
                 out.add(n.name)
             elif isinstance(n, S.Call) and n.func in self.passed:
                 out.update(self.passed[n.func])        # the callee's parameters pass through
+        return out
 
     def emit(self) -> str:
         funcs_out: list[str] = []
-        overloads: dict[str, int] = {}
         for item in self.unit:
             before = len(funcs_out)
             known = set(self.helpers)
-            self.emit_item(item, funcs_out, overloads)
+            self.emit_item(item, funcs_out)
             new = [c for n, c in self.helpers.items() if n not in known and not n.startswith("struct ")]
             funcs_out[before:before] = new
         head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
-        body = funcs_out[:1]
-        for prev, c in zip(funcs_out, funcs_out[1:]):      # no blank line between functions (as GLSL)
-            body.append("\n" + c)
-        return _braces(head + "\n" + "".join(body) + "\n")
+        # no blank line between functions (as GLSL)
+        return _braces(head + "\n" + "\n".join(funcs_out) + "\n")
 
-
-    def emit_item(self, item, funcs_out: list, overloads: dict) -> None:
+    def emit_item(self, item, funcs_out: list) -> None:
         if isinstance(item, S.Struct):
             members = {}
             lines = [f"struct {item.name}", "{"]
             for f in item.fields:
-                ot = self.osl_type(f.type)
+                members[f.name], arr = self.sized(f.type, f.size)
                 trail = f"  {f.trail}" if f.trail else ""
-                if f.size is not None:
-                    sz = self.size(f.size)
-                    members[f.name] = (f.type, sz)
-                    lines.append(f"    {ot} {self.name(f.name)}[{sz}];" + trail)
-                else:
-                    members[f.name] = f.type
-                    lines.append(f"    {ot} {self.name(f.name)};" + trail)
+                lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};{trail}")
             lines.append("};")
             self.structs[item.name] = members
             funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
@@ -424,19 +350,14 @@ class _Osl(_OslLib):
             for d in item.declarators:
                 if d.init is None:
                     raise TranslateError(f"OSL translation: global {d.name!r} needs a value")
-                self.globals[d.name] = (item.type, self.size(d.size) if d.size is not None else None, d.init)
+                self.globals[d.name] = (item.type, d)
         else:
             name = item.name
-            if name in self.drop:
-                return
-            used: set = set()
-            self.globals_used(item.body, used)
-            passed = [g for g in self.params if g in used]
-            self.passed[name] = passed
-            n = overloads.get(name, 0)
-            overloads[name] = n + 1
+            used = self.globals_used(item.body)
+            passed = self.passed[name] = [g for g in self.params if g in used]
+            n = len(self.funcs.get(name, ()))                 # overloads before this one
             oname = self.name(name) if n == 0 else f"{name}_{n}"
-            ptypes = [(p.type, self.size(p.size)) if p.size is not None else p.type for p in item.params]
+            ptypes = [self.sized(p.type, p.size)[0] for p in item.params]
             self.funcs.setdefault(name, []).append(
                 (ptypes, [p.mode for p in item.params], item.ret, oname, [self.name(g) for g in passed]))
             funcs_out.append("\n".join(self.comment_lines(item.comments) + self.func(item, oname, passed, used)))
@@ -447,22 +368,12 @@ class _Osl(_OslLib):
 
     def func(self, item, oname: str, passed: list, used: set) -> list[str]:
         self.ret = item.ret
-        modes = {n: c[0][1] for n, c in self.funcs.items()}
-        mutated = {root_name(n.target if isinstance(n, S.Assign) else n.operand)
-                   for n in walk(item.body) if isinstance(n, (S.Assign, S.IncDec))}
-        mutated |= {root_name(a) for n in walk(item.body) if isinstance(n, S.Call) and n.func in modes
-                    for a, m in zip(n.args, modes[n.func]) if m in ("out", "inout")}
+        mutated = assigned(item.body, {n: c[0][1] for n, c in self.funcs.items()})
         scope: dict = {}
         plist, prologue = [], []
         for p in item.params:
-            ot = self.osl_type(p.type)
-            arr = ""
-            if p.size is not None:
-                arr = f"[{self.size(p.size)}]"
-                scope[p.name] = (p.type, self.size(p.size))
-            else:
-                scope[p.name] = p.type
-            n = self.name(p.name)
+            ot, n = self.osl_type(p.type), self.name(p.name)
+            scope[p.name], arr = self.sized(p.type, p.size)
             if p.mode in ("out", "inout"):
                 plist.append(f"output {ot} {n}{arr}")
             elif p.name in mutated:
@@ -472,24 +383,19 @@ class _Osl(_OslLib):
                 prologue.append(f"    {ot} {n} = {n}_in;")
             else:
                 plist.append(f"{ot} {n}{arr}")
-        for g in passed:
-            t, size, _ = self.globals[g]
-            plist.append(f"{self.osl_type(t)} {self.name(g)}")
+        plist += [f"{self.osl_type(self.globals[g][0])} {self.name(g)}" for g in passed]
         self.scopes = [scope]
         for g in sorted(used - set(passed), key=list(self.globals).index):
-            t, size, init = self.globals[g]
             self.scopes[0].pop(g, None)
-            d = self.decl(t, [S.Declarator(g, S.Num(size) if size is not None else None, init)])
-            prologue += ["    " + ln for ln in d]
+            t, d = self.globals[g]
+            prologue += ["    " + ln for ln in self.decl(t, [d])]
         out = [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)})", "{"] + prologue
-        for s in item.body.body:
-            out += self.stmt(s, "    ")
-        out.append("}")
+        out += [ln for s in item.body.body for ln in self.stmt(s, "    ")] + ["}"]
         self.scopes = []
         return out
 
 
-def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
+def to_osl(text: str, *, params=(), passed: dict | None = None) -> str:
     """Translate specialised, prefixed GLSL (library subset) into OSL functions and structs.
 
     Parameters
@@ -499,8 +405,6 @@ def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
     params : sequence of str
         Global constants that the caller supplies instead (the shader's parameters): each
         function that reads one gets it as an extra trailing parameter, in this order.
-    drop : sequence of str
-        Functions to leave out (e.g. fragment-only entry points that use ``fwidth``).
     passed : dict, optional
         Filled with ``{function: [the names of params it takes, in order]}`` (a function takes
         those it reads and those its callees take).
@@ -510,7 +414,7 @@ def to_osl(text: str, *, params=(), drop=(), passed: dict | None = None) -> str:
     str
         OSL text (helpers first, then the library in its order); no ``shader`` block.
     """
-    osl = _Osl(text, params, drop)
+    osl = _Osl(text, params)
     out = osl.emit()
     if passed is not None:
         passed.update(osl.passed)

@@ -13,25 +13,23 @@ _COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
 _XYZW = "xyzw"
 _CMP = {"<", ">", "<=", ">=", "==", "!="}
-#: component-wise built-ins: name -> OSL scalar function (arguments of the first's type)
-_ELEMENTWISE = {"abs": "abs", "floor": "floor", "ceil": "ceil", "sqrt": "sqrt", "exp": "exp",
-                "log": "log", "sign": "sign", "min": "min", "max": "max", "clamp": "clamp",
-                "pow": "pow", "round": "round", "trunc": "trunc", "sin": "sin", "cos": "cos",
-                "fract": "cellgl_fract", "mod": "mod", "mix": "mix", "step": "step",
-                "smoothstep": "smoothstep", "inversesqrt": "inversesqrt", "exp2": "exp2",
-                "log2": "log2", "tan": "tan", "atan": "atan"}
+#: component-wise built-ins (arguments of the first's type): OSL has each for scalars, by the same
+#: name (``fract``: cellgl_fract)
+_ELEMENTWISE = frozenset("""
+    abs floor ceil sqrt exp log sign min max clamp pow round trunc sin cos fract mod mix step smoothstep
+    inversesqrt exp2 log2 tan atan atan2""".split())
+#: the geometric built-ins on scalars
+_SCALAR_GEOMETRY = {"dot": "({} * {})", "normalize": "sign({})", "length": "abs({})",
+                    "distance": "abs({} - {})"}
 #: OSL keywords and global names that are legal GLSL identifiers
-OSL_RESERVED = {
-    "P", "I", "N", "Ng", "u", "v", "dPdu", "dPdv", "Ps", "time", "dtime", "dPdtime", "Ci",
-    "color", "point", "vector", "normal", "matrix", "string", "closure", "output", "shader",
-    "surface", "displacement", "volume", "illuminate", "illuminance", "emit", "public", "private",
-    "class", "const", "export", "import", "extern", "friend", "inline", "template", "typedef",
-    "union", "virtual", "cellgl_fract", "mod", "and", "or", "not", "lambda", "auto", "char",
-    "double", "enum", "long", "short", "signed", "unsigned", "sizeof", "static", "switch", "case",
-    "default", "goto", "mutable", "namespace", "new", "operator", "protected", "this", "throw",
-    "try", "catch", "using", "volatile", "bool", "uint", "world", "object", "camera", "raster",
-    "screen", "ndc", "common", "shader_type",
-}
+OSL_RESERVED = frozenset("""
+    P I N Ng u v dPdu dPdv Ps time dtime dPdtime Ci color point vector normal matrix string closure
+    output shader surface displacement volume illuminate illuminance emit public private class const
+    export import extern friend inline template typedef union virtual cellgl_fract mod and or not lambda
+    auto char double enum long short signed unsigned sizeof static switch case default goto mutable
+    namespace new operator protected this throw try catch using volatile bool uint world object camera
+    raster screen ndc common shader_type
+""".split())
 
 
 def _vec(t: str):
@@ -39,10 +37,6 @@ def _vec(t: str):
     if not isinstance(t, str) or t[-1:] not in ("2", "3", "4") or t[:-1] not in ("vec", "ivec", "uvec", "bvec"):
         return None
     return _COMP[t[:-4]], int(t[-1])
-
-
-def _osl_scalar(t: str) -> str:
-    return {"float": "float", "int": "int", "uint": "int", "bool": "int", "void": "void"}.get(t, t)
 
 
 def _int_lit(v: int) -> str:
@@ -70,25 +64,15 @@ class _OslLib:
     """The generated-helper half of the translator (mixed into its tree walker)."""
 
     helpers: dict
-    vec_structs: set
     structs: dict
 
     def osl_type(self, t: str) -> str:
         v = _vec(t)
-        if v:
-            self.vec_struct(t)
-            return "cellgl_" + t
-        if t in self.structs:
-            return t
-        return _osl_scalar(t)
-
-    def vec_struct(self, t: str) -> None:
-        if t in self.vec_structs:
-            return
-        self.vec_structs.add(t)
-        comp, n = _vec(t)
-        fields = " ".join(f"{_osl_scalar(comp)} {c};" for c in _XYZW[:n])
-        self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
+        if v and "struct cellgl_" + t not in self.helpers:
+            fields = " ".join(f"{self.osl_type(v[0])} {c};" for c in _XYZW[:v[1]])
+            self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
+        # uint keeps its 32 bits in an int, bool is an int
+        return "cellgl_" + t if v else t if t in self.structs else {"uint": "int", "bool": "int"}.get(t, t)
 
     def helper(self, name: str, code) -> str:
         if name not in self.helpers:
@@ -100,9 +84,7 @@ class _OslLib:
         if src == dst or (src in ("int", "uint") and dst in ("int", "uint")):
             return expr
         if dst == "float":
-            if src == "uint":
-                return f"{self.u2f()}({expr})"
-            return f"float({expr})"
+            return f"{self.u2f()}({expr})" if src == "uint" else f"float({expr})"
         if dst == "bool":
             return f"({expr} != 0)"
         if src == "bool":
@@ -112,6 +94,13 @@ class _OslLib:
         if dst == "uint":
             return f"{self.f2u()}({expr})"
         raise TranslateError(f"OSL translation: no conversion from {src} to {dst}")
+
+    def coerce(self, expr: str, src, dst) -> str:
+        """:meth:`conv` to a scalar type ``dst`` from a non-vector ``src``, else ``expr`` as it is
+        (vectors, arrays and structs are never converted implicitly; a struct to a scalar raises)."""
+        if all(isinstance(t, str) and not _vec(t) for t in (src, dst)) and dst not in self.structs:
+            return self.conv(expr, src, dst)
+        return expr
 
     def u2f(self) -> str:
         return self.helper("cellgl_u2f", (
@@ -188,19 +177,14 @@ class _OslLib:
     def vec_binary(self, op: str, ta: str, tb: str) -> tuple[str, str]:
         """Name and result type of the generated component-wise ``op`` on ``ta``, ``tb``."""
         va, vb = _vec(ta), _vec(tb)
-        n = (va or vb)[1]
-        comp = (va or vb)[0]
-        cmp = op in _CMP
-        rt = ("b" if cmp else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
+        comp, n = va or vb
+        rt = ("b" if op in _CMP else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
         name = f"cellgl_{_OPNAME[op]}_{ta}_{tb}"
 
         def code():
             oa, ob, ort = self.osl_type(ta), self.osl_type(tb), self.osl_type(rt)
-            parts = []
-            for c in _XYZW[:n]:
-                x = f"a.{c}" if va else "a"
-                y = f"b.{c}" if vb else "b"
-                parts.append(self.scalar_op(op, x, y, comp))
+            parts = [self.scalar_op(op, f"a.{c}" if va else "a", f"b.{c}" if vb else "b", comp)
+                     for c in _XYZW[:n]]
             return f"{ort} {name}({oa} a, {ob} b) {{ return {ort}({', '.join(parts)}); }}"
         self.helper(name, code)
         return name, rt
@@ -220,16 +204,24 @@ class _OslLib:
             raise TranslateError("OSL translation: an array size that is not an integer constant")
         return str(ev(node))
 
+    def sized(self, t: str, size) -> tuple:
+        """The type of a name of GLSL type ``t`` and array size ``size`` (None: not an array) as
+        the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with."""
+        if size is None:
+            return t, ""
+        sz = self.size(size)
+        return (t, sz), f"[{sz}]"
+
     def vec_get(self, t: str) -> str:
         comp, n = _vec(t)
-        ot, oc = self.osl_type(t), _osl_scalar(comp)
+        ot, oc = self.osl_type(t), self.osl_type(comp)
         name = f"cellgl_get_{t}"
         body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(_XYZW[:n - 1]))
         return self.helper(name, f"{oc} {name}({ot} a, int i) {{ {body} return a.{_XYZW[n - 1]}; }}")
 
     def vec_set(self, t: str) -> str:
         comp, n = _vec(t)
-        ot, oc = self.osl_type(t), _osl_scalar(comp)
+        ot, oc = self.osl_type(t), self.osl_type(comp)
         name = f"cellgl_set_{t}"
         body = " else ".join(f"if (i == {j}) a.{c} = x;" for j, c in enumerate(_XYZW[:n - 1]))
         return self.helper(name, f"void {name}(output {ot} a, int i, {oc} x) {{ {body} else a.{_XYZW[n - 1]} = x; }}")
@@ -254,11 +246,7 @@ class _OslLib:
             t = types[0]
             v = _vec(t)
             if not v:
-                if fn == "dot":
-                    return f"({ss[0]} * {ss[1]})", "float"
-                if fn == "normalize":
-                    return f"sign({ss[0]})", "float"
-                return (f"abs({ss[0]})" if fn == "length" else f"abs({ss[0]} - {ss[1]})"), "float"
+                return _SCALAR_GEOMETRY[fn].format(*ss), "float"
             ot = self.osl_type(t)
             dot = f"cellgl_dot_{t}"
             self.helper(dot, f"float {dot}({ot} a, {ot} b) {{ return "
@@ -292,8 +280,8 @@ class _OslLib:
             self.helper("cellgl_fract", "float cellgl_fract(float x) { return x - floor(x); }")
         if fn == "atan" and len(ss) == 2:
             fn = "atan2"
-        if fn in _ELEMENTWISE or fn == "atan2":
-            osl = _ELEMENTWISE.get(fn, fn)
+        if fn in _ELEMENTWISE:
+            osl = "cellgl_fract" if fn == "fract" else fn
             vt = next((t for t in types if _vec(t)), None)
             if vt is None:
                 rt = types[-1] if fn in ("step", "smoothstep") else types[0]
@@ -309,10 +297,9 @@ class _OslLib:
             def code():
                 ot = self.osl_type(vt)
                 plist = ", ".join(f"{self.osl_type(t)} a{j}" for j, t in enumerate(types))
-                parts = []
-                for c in _XYZW[:v[1]]:
-                    parts.append(f"{osl}(" + ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}"
-                                                       for j, t in enumerate(types)) + ")")
+                def args(c):
+                    return ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}" for j, t in enumerate(types))
+                parts = [f"{osl}({args(c)})" for c in _XYZW[:v[1]]]
                 return f"{ot} {name}({plist}) {{ return {ot}({', '.join(parts)}); }}"
             self.helper(name, code)
             return f"{name}({', '.join(ss)})", vt

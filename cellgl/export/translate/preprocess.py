@@ -1,11 +1,13 @@
-"""Step 1 of a snippet: :func:`specialise`, a small C preprocessor for the subset the library
-uses; inactive branches are dropped and every macro replaced by its value."""
+"""Steps 1 and 2 of a snippet, on its text: :func:`specialise`, a small C preprocessor for the
+subset the library uses (inactive branches are dropped and every macro replaced by its value),
+and :func:`prefix_names`, which gives every top-level name the ``cellgl_`` prefix."""
 from __future__ import annotations
 
+import operator
 import re
 from collections.abc import Mapping
 
-from cellgl.export.translate.tokens import TranslateError, _join, tokenize
+from cellgl.export.translate.tokens import TranslateError, split_tokens
 
 # --------------------------------------------------------------------------------------------
 # 1. preprocessor subset
@@ -71,28 +73,13 @@ class _Expr:
             w = self.binary(level + 1)
             if op in ("/", "%") and w == 0:
                 raise self.error("division by zero")
-            v = {
-                "||": lambda: int(bool(v) or bool(w)), "&&": lambda: int(bool(v) and bool(w)),
-                "|": lambda: v | w, "^": lambda: v ^ w, "&": lambda: v & w,
-                "==": lambda: int(v == w), "!=": lambda: int(v != w), "<": lambda: int(v < w),
-                ">": lambda: int(v > w), "<=": lambda: int(v <= w), ">=": lambda: int(v >= w),
-                "<<": lambda: v << w, ">>": lambda: v >> w, "+": lambda: v + w, "-": lambda: v - w,
-                "*": lambda: v * w,
-                "/": lambda: int(v / w) if (v < 0) != (w < 0) else v // w,
-                "%": lambda: v - w * (int(v / w) if (v < 0) != (w < 0) else v // w),
-            }[op]()
+            v = int(_BINARY[op](v, w))
         return v
 
     def unary(self) -> int:
         t = self.take()
-        if t == "!":
-            return int(not self.unary())
-        if t == "-":
-            return -self.unary()
-        if t == "+":
-            return self.unary()
-        if t == "~":
-            return ~self.unary()
+        if t in _UNARY:
+            return int(_UNARY[t](self.unary()))
         if t == "(":
             v = self.ternary()
             if self.take() != ")":
@@ -106,20 +93,30 @@ class _Expr:
         raise self.error(f"unexpected {t!r}")
 
 
+def _cdiv(v: int, w: int) -> int:
+    """C's integer division: truncated toward zero."""
+    return int(v / w) if (v < 0) != (w < 0) else v // w
+
+
+_BINARY = {
+    "||": lambda v, w: bool(v) or bool(w), "&&": lambda v, w: bool(v) and bool(w),
+    "|": operator.or_, "^": operator.xor, "&": operator.and_, "==": operator.eq, "!=": operator.ne,
+    "<": operator.lt, ">": operator.gt, "<=": operator.le, ">=": operator.ge, "<<": operator.lshift,
+    ">>": operator.rshift, "+": operator.add, "-": operator.sub, "*": operator.mul, "/": _cdiv,
+    "%": lambda v, w: v - w * _cdiv(v, w),
+}
+_UNARY = {"!": operator.not_, "-": operator.neg, "+": operator.pos, "~": operator.invert}
+
+
 def _expand(tokens: list[str], macros: Mapping[str, str], where: str, depth: int = 0) -> list[str]:
     if depth > 32:
         raise TranslateError(f"{where}: macro expansion too deep (recursive #define?)")
-    out: list[str] = []
-    for t in tokens:
-        if t in macros:
-            out.extend(_expand(_ptoks(macros[t]), macros, where, depth + 1))
-        else:
-            out.append(t)
-    return out
+    return [x for t in tokens
+            for x in (_expand(_ptoks(macros[t]), macros, where, depth + 1) if t in macros else [t])]
 
 
 def _ptoks(s: str) -> list[str]:
-    return [t.text for t in tokenize(s) if t.kind not in ("ws", "comment")]
+    return [t for k, t in split_tokens(s) if k not in ("ws", "comment")]
 
 
 def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
@@ -127,19 +124,15 @@ def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
     resolved: list[str] = []
     i = 0
     while i < len(toks):           # defined X / defined(X) before expansion
-        if toks[i] == "defined":
-            if i + 1 < len(toks) and toks[i + 1] == "(":
-                if i + 3 >= len(toks) or toks[i + 3] != ")":
-                    raise TranslateError(f"{where}: malformed defined() in {expr!r}")
-                name, i = toks[i + 2], i + 4
-            elif i + 1 < len(toks):
-                name, i = toks[i + 1], i + 2
-            else:
-                raise TranslateError(f"{where}: malformed defined in {expr!r}")
-            resolved.append("1" if name in macros else "0")
-        else:
+        if toks[i] != "defined":
             resolved.append(toks[i])
             i += 1
+            continue
+        paren = toks[i + 1:i + 2] == ["("]
+        if len(toks) < i + (4 if paren else 2) or paren and toks[i + 3] != ")":
+            raise TranslateError(f"{where}: malformed defined{'()' if paren else ''} in {expr!r}")
+        resolved.append("1" if toks[i + 1 + paren] in macros else "0")
+        i += 4 if paren else 2
     if not resolved:
         raise TranslateError(f"{where}: empty #if expression")
     return bool(_Expr(_expand(resolved, macros, where), where).parse())
@@ -230,12 +223,10 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
                 raise TranslateError(
                     f"{where}: function-like macro {m2.group(1)!r} is not supported in exported "
                     "snippets; write a function instead")
-            macros = dict(macros)
-            macros[m2.group(1)] = m2.group(3)
+            macros = {**macros, m2.group(1): m2.group(3)}
             chunks.append((macros, []))
         elif kw == "undef":
-            macros = dict(macros)
-            macros.pop(rest, None)
+            macros = {k: v for k, v in macros.items() if k != rest}
             chunks.append((macros, []))
         elif kw == "":
             continue                    # the null directive
@@ -245,16 +236,8 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
         raise TranslateError(f"{name}: {len(stack)} #if block(s) not closed by #endif")
 
     # substitute macros in code (comments are prose and stay as written)
-    out: list[str] = []
-    for env, lines in chunks:
-        if not lines:
-            continue
-        toks = tokenize("\n".join(lines))
-        for t in toks:
-            if t.kind == "id" and t.text in env:
-                t.text = _macro_value(t.text, env, name)
-        out.append(_join(toks))
-    return "\n".join(out)
+    return "\n".join("".join(_macro_value(t, env, name) if k == "id" and t in env else t
+                             for k, t in split_tokens("\n".join(lines))) for env, lines in chunks if lines)
 
 
 def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
@@ -268,3 +251,101 @@ def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
     if value and re.fullmatch(r"[\w.]+", value) is None:
         value = f"({value})"
     return value
+
+
+# --------------------------------------------------------------------------------------------
+# 2. top-level names and the prefix
+# --------------------------------------------------------------------------------------------
+
+
+def top_level_names(text: str) -> dict[str, str]:
+    """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``."""
+    names: dict[str, str] = {}
+    depth, stmt = 0, []
+    for kind, t in split_tokens(text):
+        if kind in ("ws", "comment"):
+            continue
+        if depth == 0 and t in ("{", ";"):
+            _decl(stmt, names)
+            stmt = []
+        elif depth == 0 and t != "}":
+            stmt.append(t)
+        depth += (t == "{") - (t == "}")
+    return names
+
+
+_QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "in", "out", "inout", "flat",
+               "precise", "invariant"}
+
+
+def _decl(stmt: list[str], names: dict[str, str]) -> None:
+    s = [t for t in stmt if t not in _QUALIFIERS]
+    if len(s) < 2:
+        return
+    if s[0] == "struct":
+        names[s[1]] = "struct"
+    elif len(s) >= 3 and s[2] == "(":
+        names[s[1]] = "function"        # a definition or a prototype
+    elif re.fullmatch(r"[A-Za-z_]\w*", s[1]):
+        # variable(s): TYPE NAME [= ...] [, NAME ...]; TYPE NAME[N] = ...
+        names[s[1]] = "variable"
+        depth = 0
+        for i, t in enumerate(s[2:], start=2):
+            if t in "([":
+                depth += 1
+            elif t in ")]":
+                depth -= 1
+            elif t == "," and depth == 0 and i + 1 < len(s):
+                names[s[i + 1]] = "variable"
+
+
+def prefixed(name: str, kind: str) -> str:
+    """The exported spelling of a library name.
+
+    ``cell_x`` -> ``cellgl_x``; private ``_cell_x`` -> ``cellgl_x_``; struct ``CellX`` ->
+    ``CellglX``; anything else gets ``cellgl_`` (``Cellgl`` for structs) in front.
+    """
+    if kind == "struct":
+        if name.startswith("Cellgl"):
+            return name
+        if name.startswith("Cell"):
+            return "Cellgl" + name[4:]
+        return "Cellgl" + name[:1].upper() + name[1:]
+    if name.startswith("cellgl_"):
+        return name
+    if name.startswith("_cell_"):
+        return "cellgl_" + name[6:] + "_"
+    if name.startswith("cell_"):
+        return "cellgl_" + name[5:]
+    if name.startswith("_"):
+        return "cellgl_" + name.lstrip("_") + "_"
+    return "cellgl_" + name
+
+
+def prefix_names(text: str, *, overrides: Mapping[str, str] | None = None) -> tuple[str, dict[str, str]]:
+    """Rename every top-level name with :func:`prefixed` (code and comments alike).
+
+    ``overrides`` gives explicit new names (e.g. to keep a library function clear of an entry
+    point's name: WGSL has no overloading).
+
+    Returns the new text and the ``{old: new}`` map. Raises :class:`TranslateError` when two
+    names would collide.
+    """
+    decls = top_level_names(text)
+    overrides = overrides or {}
+    mapping = {n: overrides[n] if n in overrides else prefixed(n, k) for n, k in decls.items()}
+    mapping = {a: b for a, b in mapping.items() if a != b}
+    seen: dict[str, str] = {}
+    for old, new in mapping.items():
+        if new in seen or (new in decls and new not in mapping):
+            raise TranslateError(f"prefixing {old!r} gives {new!r}, which is taken")
+        seen[new] = old
+    word = re.compile(r"\b(" + "|".join(map(re.escape, mapping)) + r")\b") if mapping else None
+    out = []
+    for kind, t in split_tokens(text):
+        if kind == "id":
+            t = mapping.get(t, t)
+        elif kind == "comment" and word is not None:
+            t = word.sub(lambda m: mapping[m.group(1)], t)
+        out.append(t)
+    return "".join(out), mapping

@@ -23,26 +23,10 @@ _TOKEN_RE = re.compile(
 )
 
 
-class Tok:
-    __slots__ = ("kind", "text")
-
-    def __init__(self, kind: str, text: str):
-        self.kind = kind
-        self.text = text
-
-    def __repr__(self) -> str:
-        return f"Tok({self.kind}, {self.text!r})"
-
-
-def tokenize(text: str) -> list[Tok]:
-    """Split GLSL text (no directives) into tokens: comment, ws, num, id, op (new :class:`Tok`
-    objects each call, which callers may change; the split itself is remembered per text: the
-    compiler's passes re-read the functions they did not change)."""
-    return [Tok(k, t) for k, t in split_tokens(text)]
-
-
 def split_tokens(text: str) -> list[tuple[str, str]]:
-    """``[(kind, text)]`` of :func:`tokenize` (shared: do not change it), remembered per text."""
+    """Split GLSL text (no directives) into ``[(kind, text)]`` tokens, kind one of comment, ws,
+    num, id, op; the split is remembered per text (shared: do not change it): the library's
+    declarations are split again by every program that holds them."""
     split = _SPLITS.get(text)
     if split is None:
         split = [(m.lastgroup, m.group()) for m in _TOKEN_RE.finditer(text)]
@@ -63,12 +47,5 @@ def split_tokens(text: str) -> list[tuple[str, str]]:
 _SPLITS: dict[str, list[tuple[str, str]]] = {}
 
 
-def _join(toks: list[Tok]) -> str:
-    return "".join(t.text for t in toks)
-
-
-GLSL_TYPES = {
-    "void", "bool", "int", "uint", "float",
-    "vec2", "vec3", "vec4", "ivec2", "ivec3", "ivec4", "uvec2", "uvec3", "uvec4",
-    "bvec2", "bvec3", "bvec4", "mat2", "mat3", "mat4",
-}
+GLSL_TYPES = ({"void", "bool", "int", "uint", "float", "mat2", "mat3", "mat4"}
+              | {f"{k}vec{n}" for k in ("", "i", "u", "b") for n in (2, 3, 4)})

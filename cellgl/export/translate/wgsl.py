@@ -3,32 +3,7 @@
 from __future__ import annotations
 
 from cellgl.export.printer import RELATIONAL, Glsl
-from cellgl.export.syntax import (
-    ArrayCtor,
-    Assign,
-    Binary,
-    Block,
-    Call,
-    Ctor,
-    Decl,
-    ExprStmt,
-    For,
-    Function,
-    Global,
-    If,
-    IncDec,
-    Index,
-    Member,
-    Name,
-    Num,
-    Paren,
-    Struct,
-    Ternary,
-    Unary,
-    Unit,
-    While,
-    parse,
-)
+from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.tree import root_name, walk
 
@@ -37,31 +12,25 @@ WGSL_FUNCS = {"inversesqrt": "inverseSqrt", "dFdx": "dpdx", "dFdy": "dpdy",
               "floatBitsToUint": "bitcast<u32>", "floatBitsToInt": "bitcast<i32>",
               "uintBitsToFloat": "bitcast<f32>", "intBitsToFloat": "bitcast<f32>"}
 #: WGSL keywords and reserved words that are legal GLSL identifiers
-WGSL_RESERVED = {
-    "alias", "const_assert", "continuing", "diagnostic", "enable", "fn", "let", "loop", "override",
-    "requires", "var", "ptr", "array", "atomic", "sampler", "texture_2d", "f32", "i32", "u32", "f16",
-    "vec2", "vec3", "vec4", "mat2x2", "mat3x3", "mat4x4", "bitcast", "select", "target", "type",
-    "self", "super", "unless", "where", "with", "yield", "as", "async", "await", "become", "cast",
-    "catch", "class", "co_await", "co_return", "co_yield", "coherent", "column_major", "common",
-    "compile", "compile_fragment", "concept", "const_cast", "consteval", "constexpr", "constinit",
-    "crate", "debugger", "decltype", "delete", "demote", "demote_to_helper", "do", "dynamic_cast",
-    "enum", "explicit", "export", "extends", "extern", "external", "fallthrough", "filter", "final",
-    "finally", "friend", "from", "fxgroup", "get", "goto", "groupshared", "highp", "impl",
-    "implements", "import", "inline", "instanceof", "interface", "layout", "lowp", "macro",
-    "macro_rules", "match", "mediump", "meta", "mod", "module", "move", "mut", "mutable",
-    "namespace", "new", "nil", "noexcept", "noinline", "nointerpolation", "noperspective", "null",
-    "nullptr", "of", "operator", "package", "packoffset", "partition", "pass", "patch",
-    "pixelfragment", "precise", "precision", "premerge", "priv", "protected", "pub", "public",
-    "readonly", "ref", "regardless", "register", "reinterpret_cast", "require", "resource",
-    "restrict", "self", "set", "shared", "sizeof", "smooth", "snorm", "static", "static_assert",
-    "static_cast", "std", "subroutine", "template", "this", "thread_local", "throw", "trait", "try",
-    "typedef", "typeid", "typename", "typeof", "union", "unorm", "unsafe", "unsized", "use",
-    "using", "varying", "virtual", "volatile", "wgsl", "writeonly", "sample", "line", "point",
-}
+WGSL_RESERVED = frozenset("""
+    alias const_assert continuing diagnostic enable fn let loop override requires var ptr array atomic
+    sampler texture_2d f32 i32 u32 f16 vec2 vec3 vec4 mat2x2 mat3x3 mat4x4 bitcast select target type
+    self super unless where with yield as async await become cast catch class co_await co_return
+    co_yield coherent column_major common compile compile_fragment concept const_cast consteval
+    constexpr constinit crate debugger decltype delete demote demote_to_helper do dynamic_cast enum
+    explicit export extends extern external fallthrough filter final finally friend from fxgroup get
+    goto groupshared highp impl implements import inline instanceof interface layout lowp macro
+    macro_rules match mediump meta mod module move mut mutable namespace new nil noexcept noinline
+    nointerpolation noperspective null nullptr of operator package packoffset partition pass patch
+    pixelfragment precise precision premerge priv protected pub public readonly ref regardless register
+    reinterpret_cast require resource restrict set shared sizeof smooth snorm static static_assert
+    static_cast std subroutine template this thread_local throw trait try typedef typeid typename typeof
+    union unorm unsafe unsized use using varying virtual volatile wgsl writeonly sample line point
+""".split())
 
 
 def _bare(e):
-    while isinstance(e, Paren):
+    while isinstance(e, S.Paren):
         e = e.inner
     return e
 
@@ -73,9 +42,9 @@ class Wgsl(Glsl):
     loop and branch body braced, and a binary operation inside another parenthesised (WGSL does
     not allow mixing e.g. ``&&`` and ``||`` without them)."""
 
-    def __init__(self, unit: Unit):
+    def __init__(self, unit: S.Unit):
         super().__init__(kr=True, blank=False)
-        self.modes = {f.name: [p.mode for p in f.params] for f in unit.items if isinstance(f, Function)}
+        self.modes = {f.name: [p.mode for p in f.params] for f in unit.items if isinstance(f, S.Function)}
         self.ptrs: set[str] = set()                 # the pointer parameters of the function printed
         self.uses_mod = False
 
@@ -95,47 +64,49 @@ class Wgsl(Glsl):
         """``e`` as the base of ``.``, ``[]`` or a unary operator."""
         b = _bare(e)
         s = self.expr(b)
-        return f"({s})" if isinstance(b, (Binary, Ternary, Assign)) or (isinstance(b, Name) and b.name in self.ptrs) else s
+        wrap = isinstance(b, (S.Binary, S.Ternary, S.Assign)) or isinstance(b, S.Name) and b.name in self.ptrs
+        return f"({s})" if wrap else s
 
     def operand(self, e, op: str, right: bool = False) -> str:
         e = _bare(e)
         s = self.expr(e)
-        if isinstance(e, (Binary, Assign)) and not (isinstance(e, Binary) and e.op == op and op in "+*" and not right):
+        chain = isinstance(e, S.Binary) and e.op == op and op in "+*" and not right     # a + b + c
+        if isinstance(e, (S.Binary, S.Assign)) and not chain:
             return f"({s})"
-        return f"({s})" if isinstance(e, Unary) and op in ("<<", ">>", "&", "|", "^") else s
+        return f"({s})" if isinstance(e, S.Unary) and op in ("<<", ">>", "&", "|", "^") else s
 
     def expr(self, e) -> str:
-        if isinstance(e, Num):
+        if isinstance(e, S.Num):
             return e.text[:-1] if e.text[-1] in "fF" and not e.text.lower().startswith("0x") else e.text
-        if isinstance(e, Name):
+        if isinstance(e, S.Name):
             return ("*" if e.name in self.ptrs else "") + self.name(e.name)
-        if isinstance(e, Paren):
+        if isinstance(e, S.Paren):
             return self.expr(e.inner)                  # operands are parenthesised as needed
-        if isinstance(e, Member):
+        if isinstance(e, S.Member):
             return f"{self.tight(e.base)}.{self.name(e.name)}"
-        if isinstance(e, Index):
+        if isinstance(e, S.Index):
             return f"{self.tight(e.base)}[{self.expr(e.index)}]"
-        if isinstance(e, Unary):
+        if isinstance(e, S.Unary):
             return e.op + self.tight(e.operand)
-        if isinstance(e, IncDec):
+        if isinstance(e, S.IncDec):
             return self.expr(e.operand) + e.op       # statements only in WGSL
-        if isinstance(e, Binary):
+        if isinstance(e, S.Binary):
             op = "!=" if e.op == "^^" else e.op
             b = self.operand(e.right, op, True)
-            if op in ("<<", ">>") and not isinstance(_bare(e.right), Num):
+            if op in ("<<", ">>") and not isinstance(_bare(e.right), S.Num):
                 b = f"u32({self.expr(e.right)})"
             return f"{self.operand(e.left, op)} {op} {b}"
-        if isinstance(e, Ternary):
+        if isinstance(e, S.Ternary):
             return f"select({self.expr(e.other)}, {self.expr(e.then)}, {self.expr(e.cond)})"
         return super().expr(e)
 
-    def ctor(self, e: Ctor) -> str:
+    def ctor(self, e: S.Ctor) -> str:
         return f"{self.type(e.type)}({self.args(e.args)})"
 
-    def array_ctor(self, e: ArrayCtor) -> str:
+    def array_ctor(self, e: S.ArrayCtor) -> str:
         return f"array<{self.type(e.type)}, {self.expr(e.size)}>({self.args(e.args)})"
 
-    def call(self, e: Call) -> str:
+    def call(self, e: S.Call) -> str:
         f, args = e.func, e.args
         if f in RELATIONAL:
             return f"({self.operand(args[0], '<')} {RELATIONAL[f]} {self.operand(args[1], '<', True)})"
@@ -151,65 +122,59 @@ class Wgsl(Glsl):
         for n, (a, mode) in enumerate(zip(args, self.modes.get(e.func, ["in"] * len(args)))):
             if mode == "in":
                 out.append(self.expr(a))
-            elif not isinstance(_bare(a), Name):
+            elif not isinstance(_bare(a), S.Name):
                 raise TranslateError(f"WGSL translation: argument {n + 1} of {e.func}() must be a variable")
             else:
                 out.append(self.name(_bare(a).name) if _bare(a).name in self.ptrs else "&" + self.name(_bare(a).name))
         return f"{f}({', '.join(out)})"
 
     # statements
-    def decls(self, s: Decl) -> list[str]:
+    def decls(self, s: S.Decl) -> list[str]:
         return [f"var {self.name(d.name)}: {self.type(s.type, d.size)};" if d.init is None else
                 f"{'let' if s.const else 'var'} {self.name(d.name)}: {self.type(s.type, d.size)} = {self.expr(d.init)};"
                 for d in s.declarators]
 
-    def braced(self, s, ind: str) -> list[str]:
-        if isinstance(s, Block):
-            return self.comments(s.comments, ind + "    ") + self.body(s, ind)
-        return self.statement(s, ind + "    ")
+    def simple(self, s) -> str:
+        if isinstance(s, S.Decl):                       # a for-loop's initialiser
+            if len(s.declarators) != 1:
+                raise TranslateError("WGSL translation: one variable per for-loop initialiser")
+            return self.decls(s)[0][:-1]
+        return self.expr(s.expr)
+
+    def head(self, head: str, body, ind: str) -> list[str]:
+        """Every loop and branch body braced, a statement or a block (its comments inside)."""
+        if isinstance(body, S.Block):
+            inner = self.comments(body.comments, ind + "    ") + self.body(body, ind)
+        else:
+            inner = self.statement(body, ind + "    ")
+        return [f"{ind}{head} {{" + _trail(body)] + inner + [ind + "}"]
 
     def statement(self, s, ind: str = "") -> list[str]:
-        out = self.comments(s.comments, ind)
-        trail = f"  {s.trail}" if getattr(s, "trail", "") else ""
-        if isinstance(s, Decl):
+        if isinstance(s, S.Decl):                       # one declaration per variable
             lines = [ind + d for d in self.decls(s)]
-            return out + lines[:-1] + [lines[-1] + trail]
-        if isinstance(s, If):
-            out.append(f"{ind}if ({self.expr(s.cond)}) {{" + _trail(s.then))
-            out += self.braced(s.then, ind)
-            other = s.other
-            while isinstance(other, If) and not other.comments:
-                out.append(f"{ind}}} else if ({self.expr(other.cond)}) {{" + _trail(other.then))
-                out += self.braced(other.then, ind)
-                other = other.other
-            if other is not None:
-                out += [f"{ind}}} else {{" + _trail(other)] + self.braced(other, ind)
-            return out + [ind + "}"]
-        if isinstance(s, For):
-            init = ""
-            if isinstance(s.init, Decl):
-                if len(s.init.declarators) != 1:
-                    raise TranslateError("WGSL translation: one variable per for-loop initialiser")
-                init = self.decls(s.init)[0][:-1]
-            elif isinstance(s.init, ExprStmt):
-                init = self.expr(s.init.expr)
-            cond = "" if s.cond is None else self.expr(s.cond)
-            step = "" if s.step is None else self.expr(s.step)
-            return out + [f"{ind}for ({init}; {cond}; {step}) {{" + _trail(s.body)] + self.braced(s.body, ind) + [ind + "}"]
-        if isinstance(s, While):
-            return out + [f"{ind}while ({self.expr(s.cond)}) {{" + _trail(s.body)] + self.braced(s.body, ind) + [ind + "}"]
+            trail = f"  {s.trail}" if s.trail else ""
+            return self.comments(s.comments, ind) + lines[:-1] + [lines[-1] + trail]
+        if isinstance(s, S.For):                        # "; ; " where GLSL has ";;"
+            parts = ("" if x is None else f(x)
+                     for x, f in ((s.init, self.simple), (s.cond, self.expr), (s.step, self.expr)))
+            return self.comments(s.comments, ind) + self.head(f"for ({'; '.join(parts)})", s.body, ind)
+        other = getattr(s, "other", None)
+        if other is not None and (other.comments or not isinstance(other, (S.If, S.Block))):
+            # an else GLSL writes without braces (or one with comments): "} else {", as every body
+            first = super().statement(S.If(s.cond, s.then, None, s.comments), ind)
+            return first[:-1] + self.head("} else", other, ind)
         return super().statement(s, ind)
 
     # top level
     def item(self, it) -> list[str]:
         out = self.comments(it.comments, "")
-        if isinstance(it, Struct):
+        if isinstance(it, S.Struct):
             out.append(f"struct {it.name} {{")
             for f in it.fields:
                 out += self.comments(f.comments, "    ")
                 out.append(f"    {self.name(f.name)}: {self.type(f.type, f.size)}," + (f"  {f.trail}" if f.trail else ""))
             return out + ["};"]
-        if isinstance(it, Global):
+        if isinstance(it, S.Global):
             for d in it.declarators:
                 if "uniform" in it.quals:
                     raise TranslateError("WGSL translation: uniforms need bindings; "
@@ -222,10 +187,7 @@ class Wgsl(Glsl):
         if it.body is None:
             return []                                   # a prototype: WGSL needs none
         self.ptrs = {p.name for p in it.params if p.mode != "in"}
-        mutated = {root_name(n.target if isinstance(n, Assign) else n.operand)
-                   for n in walk(it.body) if isinstance(n, (Assign, IncDec))}
-        mutated |= {root_name(a) for n in walk(it.body) if isinstance(n, Call)
-                    for a, m in zip(n.args, self.modes.get(n.func, ())) if m != "in"}
+        mutated = assigned(it.body, self.modes)
         plist, prologue = [], []
         for p in it.params:
             t = self.type(p.type, p.size)
@@ -246,11 +208,20 @@ class Wgsl(Glsl):
                 "fn cellgl_mod(x: f32, y: f32) -> f32 { return x - y * floor(x / y); }"] if self.uses_mod else []
 
 
+def assigned(body, modes: dict) -> set:
+    """The variables ``body`` assigns, increments or passes as an ``out``/``inout`` argument
+    (``modes``: the parameter modes of each function it may call)."""
+    return ({root_name(n.target if isinstance(n, S.Assign) else n.operand)
+             for n in walk(body) if isinstance(n, (S.Assign, S.IncDec))}
+            | {root_name(a) for n in walk(body) if isinstance(n, S.Call)
+               for a, m in zip(n.args, modes.get(n.func, ())) if m != "in"})
+
+
 def _trail(block) -> str:
-    return f"  {block.trail}" if isinstance(block, Block) and block.trail else ""
+    return f"  {block.trail}" if isinstance(block, S.Block) and block.trail else ""
 
 
 def to_wgsl(code) -> str:
     """WGSL of specialised, prefixed GLSL (library subset): its tree, or its text."""
-    unit = code if isinstance(code, Unit) else parse(code)
+    unit = code if isinstance(code, S.Unit) else S.parse(code)
     return Wgsl(unit).unit(unit)
