@@ -279,6 +279,15 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
     ``if`` condition, up to anything that writes it."""
     ctx, changed = facts.ctx, False
     pos, last = facts.order
+
+    def forward(e, target, lit):
+        # (only where the facts place an occurrence of the variable inside ``e``: the nodes this
+        # pass put in are literals, and a node without a position is looked at)
+        lo, hi = pos.get(id(e)), last.get(id(e))
+        if lo is not None and not any(lo <= pos[id(n)] <= hi for n, _ in facts.occ[target[0]]):
+            return e, False
+        return _forward(e, target, lit)
+
     for b in facts.blocks:
         for k, s in enumerate(b.body):
             target, lit = _literal_store(s)
@@ -287,7 +296,7 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
                 continue
             for t in b.body[k + 1:]:
                 if isinstance(t, S.If):
-                    t.cond, hit = _forward(t.cond, target, lit)
+                    t.cond, hit = forward(t.cond, target, lit)
                     changed |= hit
                     break
                 if isinstance(t, S.Decl) and all(d.size is None for d in t.declarators):
@@ -295,7 +304,7 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
                         break
                     for d in t.declarators:
                         if d.init is not None:
-                            d.init, hit = _forward(d.init, target, lit)
+                            d.init, hit = forward(d.init, target, lit)
                             changed |= hit
                     if any(d.name == target[0] for d in t.declarators):
                         break
@@ -304,7 +313,7 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
                 if into is None or not _pure_store(e, ctx) or _path(into) is None or _overlap(_path(into), target):
                     break
                 if isinstance(e, S.Assign):
-                    e.value, hit = _forward(e.value, target, lit)
+                    e.value, hit = forward(e.value, target, lit)
                     changed |= hit
     return changed
 

@@ -27,54 +27,52 @@ ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=")
 
 _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Field, S.Function,
                                           S.Param, S.Global)
-_SKIP = {"comments", "trail", "trailing"}
 _NODE_SET = frozenset(_NODE_TYPES)
-#: the fields of each node class that may hold nodes (not its names, operators and flags)
-_CHILD_FIELDS: dict[type, tuple[str, ...]] = {
-    t: tuple(f.name for f in fields(t) if f.name not in _SKIP and f.type not in ("str", "bool")) for t in _NODE_TYPES}
+#: ``(field, holds a list)`` of each node class's fields that may hold nodes, in source order (not
+#: its names, operators, flags, qualifiers and comments)
+_KIDS: dict[type, tuple] = {t: tuple((f.name, f.type == "list") for f in fields(t) if f.type not in ("str", "bool")
+                                     and f.name not in ("comments", "trail", "trailing", "quals")) for t in _NODE_TYPES}
 
 
-def children(node):
+def children(node) -> list:
     """The direct child nodes of ``node``, in source order."""
-    for name in _CHILD_FIELDS.get(type(node), ()):
+    out = []
+    for name, many in _KIDS[type(node)]:
         v = getattr(node, name)
-        if type(v) is list:
-            for x in v:
-                if type(x) in _NODE_SET:
-                    yield x
-        elif type(v) in _NODE_SET:
-            yield v
+        if many:
+            out += v
+        elif v is not None:
+            out.append(v)
+    return out
 
 
-def walk(node):
+def walk(node) -> list:
     """``node`` and every node below it, pre-order (parents before children)."""
-    stack = [node]
-    while stack:
-        n = stack.pop()
-        yield n
-        kids = []
-        for name in _CHILD_FIELDS.get(type(n), ()):
+    out = []
+    add = out.append
+
+    def visit(n):
+        add(n)
+        for name, many in _KIDS[type(n)]:
             v = getattr(n, name)
-            if type(v) is list:
-                kids += [x for x in v if type(x) in _NODE_SET]
-            elif type(v) in _NODE_SET:
-                kids.append(v)
-        kids.reverse()
-        stack += kids
+            if many:
+                for x in v:
+                    visit(x)
+            elif v is not None:
+                visit(v)
+    visit(node)
+    return out
 
 
 def transform(node, fn):
     """Rewrite the tree below ``node`` bottom-up: each child ``c`` is replaced by ``fn(c)``
     (``fn`` returns ``c`` itself to keep it; in a list, ``None`` deletes it and a Python list
     splices several nodes in). Returns ``fn(node)``."""
-    for name in _CHILD_FIELDS.get(type(node), ()):
+    for name, many in _KIDS[type(node)]:
         v = getattr(node, name)
-        if type(v) is list:
+        if many:
             out, same = [], True
             for x in v:
-                if type(x) not in _NODE_SET:
-                    out.append(x)
-                    continue
                 y = transform(x, fn)
                 if y is x:
                     out.append(x)
@@ -82,13 +80,13 @@ def transform(node, fn):
                 same = False
                 if y is None:
                     continue
-                if isinstance(y, list):
+                if type(y) is list:
                     out.extend(y)
                 else:
                     out.append(y)
             if not same:
                 v[:] = out
-        elif type(v) in _NODE_SET:
+        elif v is not None:
             y = transform(v, fn)
             if y is not v:
                 setattr(node, name, y)
@@ -98,8 +96,6 @@ def transform(node, fn):
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
     t = type(node)
-    if t not in _NODE_SET:
-        return copy.deepcopy(node)
     new = t.__new__(t)
     d = new.__dict__
     for k, v in node.__dict__.items():
@@ -144,8 +140,9 @@ class Context:
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}
         direct, called = set(), {}
         for f in self.functions.values():
-            called[f.name] = calls(f.body)
-            if any(p.mode != "in" for p in f.params) or writes(f.body, self) & self.globals_:
+            nodes = walk(f.body)
+            called[f.name] = {n.func for n in nodes if type(n) is S.Call}
+            if any(p.mode != "in" for p in f.params) or _writes(nodes, self) & self.globals_:
                 direct.add(f.name)
         impure, grew = set(direct), True
         while grew:
@@ -167,8 +164,12 @@ def writes(node, ctx: Context | None = None) -> set[str]:
     """The variables stored into anywhere below ``node``: assignment targets, ``++``/``--``
     operands, declared names, and (with ``ctx``) the arguments passed to ``out``/``inout``
     parameters of the module's functions."""
+    return _writes(walk(node), ctx)
+
+
+def _writes(nodes, ctx):
     out = set()
-    for n in walk(node):
+    for n in nodes:
         if isinstance(n, S.Assign):
             out.add(root_name(n.target))
         elif isinstance(n, S.IncDec):
