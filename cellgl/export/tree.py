@@ -13,31 +13,30 @@ from dataclasses import dataclass, field, fields
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
-__all__ = ["children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
-           "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS", "OUT_BUILTINS", "ATOMS", "is_pure",
-           "occurrences", "paren", "rewrite"]
+__all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point",
+           "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "occurrences",
+           "paren", "rewrite", "CHILD_FIELDS"]
 
 #: expression node classes
 EXPRESSIONS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Unary, S.IncDec, S.Binary, S.Assign,
                S.Ternary, S.Index, S.Member, S.Paren)
 #: statement node classes
 STATEMENTS = (S.Block, S.Decl, S.ExprStmt, S.If, S.For, S.While, S.Return, S.Jump)
-#: the assignment operators
-ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=")
 
 _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Field, S.Function,
                                           S.Param, S.Global)
 _NODE_SET = frozenset(_NODE_TYPES)
 #: ``(field, holds a list)`` of each node class's fields that may hold nodes, in source order (not
 #: its names, operators, flags, qualifiers and comments)
-_KIDS: dict[type, tuple] = {t: tuple((f.name, f.type == "list") for f in fields(t) if f.type not in ("str", "bool")
-                                     and f.name not in ("comments", "trail", "trailing", "quals")) for t in _NODE_TYPES}
+CHILD_FIELDS: dict[type, tuple] = {
+    t: tuple((f.name, f.type == "list") for f in fields(t) if f.type not in ("str", "bool")
+             and f.name not in ("comments", "trail", "trailing", "quals")) for t in _NODE_TYPES}
 
 
 def children(node) -> list:
     """The direct child nodes of ``node``, in source order."""
     out = []
-    for name, many in _KIDS[type(node)]:
+    for name, many in CHILD_FIELDS[type(node)]:
         v = getattr(node, name)
         if many:
             out += v
@@ -53,7 +52,7 @@ def walk(node) -> list:
 
     def visit(n):
         add(n)
-        for name, many in _KIDS[type(n)]:
+        for name, many in CHILD_FIELDS[type(n)]:
             v = getattr(n, name)
             if many:
                 for x in v:
@@ -68,7 +67,7 @@ def transform(node, fn):
     """Rewrite the tree below ``node`` bottom-up: each child ``c`` is replaced by ``fn(c)``
     (``fn`` returns ``c`` itself to keep it; in a list, ``None`` deletes it and a Python list
     splices several nodes in). Returns ``fn(node)``."""
-    for name, many in _KIDS[type(node)]:
+    for name, many in CHILD_FIELDS[type(node)]:
         v = getattr(node, name)
         if many:
             out, same = [], True
@@ -93,6 +92,19 @@ def transform(node, fn):
     return fn(node)
 
 
+def replaced(root, fn, apply=transform) -> bool:
+    """``apply(root, fn)`` (:func:`transform`, or :func:`rewrite`); whether ``fn`` replaced a node."""
+    changed = False
+
+    def g(n):
+        nonlocal changed
+        out = fn(n)
+        changed = changed or out is not n
+        return out
+    apply(root, g)
+    return changed
+
+
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
     t = type(node)
@@ -108,11 +120,18 @@ def clone(node):
     return new
 
 
-def root_name(e) -> str | None:
-    """The variable an lvalue stores into: ``a`` of ``a``, ``a.x``, ``a[i].y``, ``(a)``."""
+def root(e):
+    """The Name node of the variable an lvalue stores into: ``a`` of ``a``, ``a.x``, ``a[i].y``,
+    ``(a)`` (None: not a variable)."""
     while isinstance(e, (S.Index, S.Member, S.Paren)):
         e = e.inner if isinstance(e, S.Paren) else e.base
-    return e.name if isinstance(e, S.Name) else None
+    return e if isinstance(e, S.Name) else None
+
+
+def root_name(e) -> str | None:
+    """The name of :func:`root`'s variable."""
+    r = root(e)
+    return None if r is None else r.name
 
 
 def calls(node) -> set[str]:
@@ -142,7 +161,7 @@ class Context:
         for f in self.functions.values():
             nodes = walk(f.body)
             called[f.name] = {n.func for n in nodes if type(n) is S.Call}
-            if any(p.mode != "in" for p in f.params) or _writes(nodes, self) & self.globals_:
+            if any(p.mode != "in" for p in f.params) or writes(nodes, self) & self.globals_:
                 direct.add(f.name)
         impure, grew = set(direct), True
         while grew:
@@ -161,15 +180,11 @@ class Context:
 
 
 def writes(node, ctx: Context | None = None) -> set[str]:
-    """The variables stored into anywhere below ``node``: assignment targets, ``++``/``--``
-    operands, declared names, and (with ``ctx``) the arguments passed to ``out``/``inout``
-    parameters of the module's functions."""
-    return _writes(walk(node), ctx)
-
-
-def _writes(nodes, ctx):
+    """The variables stored into anywhere below ``node`` (or in the list of nodes :func:`walk`
+    gave): assignment targets, ``++``/``--`` operands, declared names, and (with ``ctx``) the
+    arguments passed to ``out``/``inout`` parameters of the module's functions."""
     out = set()
-    for n in nodes:
+    for n in node if type(node) is list else walk(node):
         if isinstance(n, S.Assign):
             out.add(root_name(n.target))
         elif isinstance(n, S.IncDec):
@@ -182,23 +197,6 @@ def _writes(nodes, ctx):
                     out.add(root_name(n.args[k]))
     out.discard(None)
     return out
-
-
-def reads(node, ctx: Context | None = None) -> set[str]:
-    """The variables read anywhere below ``node``: every name, except the target of a plain
-    ``=`` whose target is the bare name (``a = ...`` does not read ``a``; ``a.x = ...`` and
-    ``a += ...`` do) and, with ``ctx``, a bare name passed to an ``out`` parameter."""
-    skip = set()
-    for n in walk(node):
-        if isinstance(n, S.Assign) and n.op == "=" and isinstance(n.target, S.Name):
-            skip.add(id(n.target))
-        elif ctx is not None and isinstance(n, S.Call):
-            f = ctx.functions.get(n.func)
-            if f is not None:
-                for p, a in zip(f.params, n.args):
-                    if p.mode == "out" and isinstance(a, S.Name):
-                        skip.add(id(a))
-    return {n.name for n in walk(node) if isinstance(n, S.Name) and id(n) not in skip}
 
 
 def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> int:
