@@ -427,7 +427,19 @@ def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
         if key not in _FOLDED:
             if len(_FOLDED) > 4096:
                 _FOLDED.clear()
-            body = _fold_function(fn, Facts(fn, genv, garrays, ctx), passes)
+            body, facts = None, Facts(fn, genv, garrays, ctx)
+            for rounds in range(MAX_ROUNDS):            # the passes on this function to their fixed point
+                done = []
+                for p in passes:
+                    if p(fn, facts):
+                        done.append(p.__name__)
+                        facts = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
+                if not done:
+                    body = clone(fn.body) if rounds else None
+                    break
+            else:
+                raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still "
+                                     f"changing: {', '.join(done)}): a pass undoes another")
             _FOLDED[key] = None if body is None or "\n".join(item_glsl(fn)) == text else body
             changed = changed or _FOLDED[key] is not None
         elif _FOLDED[key] is not None:
@@ -442,17 +454,3 @@ _FOLDED: dict = {}
 
 #: rounds of the passes on one function after which :func:`fold` gives up
 MAX_ROUNDS = 64
-
-
-def _fold_function(fn: S.Function, facts: Facts, passes) -> S.Block | None:
-    """``fn``'s body folded (a copy), or None where nothing changed."""
-    for rounds in range(MAX_ROUNDS):
-        changed = []
-        for p in passes:
-            if p(fn, facts):
-                changed.append(p.__name__)
-                facts = Facts(fn, facts.genv, facts.garrays, facts.ctx)
-        if not changed:
-            return clone(fn.body) if rounds else None
-    raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still changing: "
-                         f"{', '.join(changed)}): a pass undoes another")

@@ -20,6 +20,7 @@ The values do not change: the statements run in the same order on the same value
 from __future__ import annotations
 
 import textwrap
+from collections import Counter
 
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, statement_glsl
@@ -147,18 +148,12 @@ def literal(e, vectors: bool = True) -> bool:
 def statement_lists(node):
     """``(list, statement)`` of every statement below ``node`` held in a block's list, outermost
     first."""
-    for n in walk(node):
-        if isinstance(n, S.Block):
-            for s in n.body:
-                yield n.body, s
+    return [(n.body, s) for n in walk(node) if isinstance(n, S.Block) for s in n.body]
 
 
 def defined_once(unit: S.Unit) -> dict:
     """``{name: function}`` of the functions with a body and no other definition or prototype."""
-    count: dict[str, int] = {}
-    for it in unit.items:
-        if isinstance(it, S.Function):
-            count[it.name] = count.get(it.name, 0) + 1
+    count = Counter(it.name for it in unit.items if isinstance(it, S.Function))
     return {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None
             and count[it.name] == 1}
 
@@ -247,7 +242,7 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
     for f in unit.items:
         if not isinstance(f, S.Function) or f.body is None:
             continue
-        hidden, hit = _declared(f), True
+        hidden, hit = {n.name for n in walk(f) if type(n) in (S.Param, S.Declarator)}, True   # its own names
         while hit:                            # (an expression may call another short function)
             hit = False
             transform(f.body, at)
@@ -323,11 +318,6 @@ def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
             return None
         return lst, s, "hoist", None, f.ret
     return None
-
-
-def _declared(fn: S.Function) -> set[str]:
-    """The parameters and locals of ``fn``."""
-    return {p.name for p in fn.params} | {n.name for n in walk(fn.body) if isinstance(n, S.Declarator)}
 
 
 def _lvalue(e) -> bool:
