@@ -254,6 +254,13 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
     ctx, changed = facts.ctx, False
     pos, last = facts.order
     at: dict = {}                   # {name: the sorted positions of its occurrences}
+    pure: dict = {}                 # {id(statement): it has no effect but its store} (literals keep it)
+
+    def effectless(t, e):
+        if id(t) not in pure:
+            pure[id(t)] = _pure_store(e, ctx) if e is not None else \
+                all(d.init is None or is_pure(d.init, ctx) for d in t.declarators)
+        return pure[id(t)]
 
     def forward(e, target, lit):
         # (only where the facts place an occurrence of the variable inside ``e``: the nodes this
@@ -280,7 +287,7 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
                     changed |= hit
                     break
                 if isinstance(t, S.Decl) and all(d.size is None for d in t.declarators):
-                    if not all(d.init is None or is_pure(d.init, ctx) for d in t.declarators):
+                    if not effectless(t, None):
                         break
                     for d in t.declarators:
                         if d.init is not None:
@@ -291,7 +298,7 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
                     continue
                 into, e = _store(t)
                 path = _path(into) if into is not None else None
-                if path is None or _overlap(path, target) or not _pure_store(e, ctx):
+                if path is None or _overlap(path, target) or not effectless(t, e):
                     break
                 if isinstance(e, S.Assign):
                     e.value, hit = forward(e.value, target, lit)
