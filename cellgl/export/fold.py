@@ -427,19 +427,22 @@ def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
         if key not in _FOLDED:
             if len(_FOLDED) > 4096:
                 _FOLDED.clear()
-            body, facts = None, Facts(fn, genv, garrays, ctx)
-            for rounds in range(MAX_ROUNDS):            # the passes on this function to their fixed point
-                done = []
-                for p in passes:
-                    if p(fn, facts):
-                        done.append(p.__name__)
-                        facts = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
-                if not done:
-                    body = clone(fn.body) if rounds else None
-                    break
+            # each pass in turn, until every pass has run once since the last change (a round
+            # from there on would change nothing: the passes see the same tree and facts again)
+            facts, quiet, recent, folded = Facts(fn, genv, garrays, ctx), 0, [], False
+            for run in range(MAX_ROUNDS * len(passes)):
+                p = passes[run % len(passes)]
+                if p(fn, facts):
+                    folded, quiet, recent = True, 0, (recent + [p.__name__])[-len(passes):]
+                    facts = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
+                else:
+                    quiet += 1
+                    if quiet == len(passes):
+                        break
             else:
                 raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still "
-                                     f"changing: {', '.join(done)}): a pass undoes another")
+                                     f"changing: {', '.join(recent)}): a pass undoes another")
+            body = clone(fn.body) if folded else None
             _FOLDED[key] = None if body is None or "\n".join(item_glsl(fn)) == text else body
             changed = changed or _FOLDED[key] is not None
         elif _FOLDED[key] is not None:
