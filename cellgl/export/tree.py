@@ -163,14 +163,9 @@ class Context:
             called[f.name] = {n.func for n in nodes if type(n) is S.Call}
             if any(p.mode != "in" for p in f.params) or writes(nodes, self) & self.globals_:
                 direct.add(f.name)
-        impure, grew = set(direct), True
-        while grew:
-            grew = False
-            for name, c in called.items():
-                if name not in impure and c & impure:
-                    impure.add(name)
-                    grew = True
-        self.impure = impure
+        self.impure = direct                       # and, to a fixed point, what calls one of them
+        while grown := {name for name, c in called.items() if name not in self.impure and c & self.impure}:
+            self.impure |= grown
         return self
 
     def out_positions(self, func: str) -> list[int]:
