@@ -1047,3 +1047,41 @@ def test_a_statement_longer_than_the_width_is_broken_where_it_reads_well():
     assert wrap("    x = f(aaaa, bbbb, cccc);", 24) == ["    x = f(aaaa, bbbb,", "          cccc);"]
     assert wrap("    if (aaaa && bbbbbb && cccc) {", 26) == ["    if (aaaa && bbbbbb", "        && cccc) {"]
     assert wrap("    x = 1.0;  // a long comment past the width", 20) == ["    x = 1.0;  // a long comment past the width"]
+
+
+# --------------------------------------------------------------------------------------------
+# what the passes share (cellgl/export/tree.py): walking, rewriting, the fold cache's key
+# --------------------------------------------------------------------------------------------
+
+def test_walk_is_pre_order_and_replaced_says_whether_a_node_changed():
+    from cellgl.export import syntax as S
+    from cellgl.export.tree import children, replaced, rewrite, root_name, walk
+
+    unit = parse_tree("float f(float x)\n{\n    float a[2];\n    a[0] = x * (1.0 + x);\n"
+                      "    return a[0];\n}\n")
+    body = unit.items[0].body
+    kinds = [type(n).__name__ for n in walk(body.body[1])]
+    assert kinds == ["ExprStmt", "Assign", "Index", "Name", "Num", "Binary", "Name", "Paren", "Binary", "Num",
+                     "Name"]
+    assert [type(n).__name__ for n in children(body.body[1].expr)] == ["Index", "Binary"]
+    assert root_name(body.body[1].expr.target) == "a"
+    assert not replaced(body, lambda n: n)
+    assert replaced(body, lambda n: S.Name("y") if isinstance(n, S.Name) and n.name == "x" else n)
+    # rewrite: a statement turned into a list of statements in a branch's place becomes a block
+    unit = parse_tree("void g(float x)\n{\n    if (x > 0.0)\n        x = 1.0;\n}\n")
+    assert replaced(unit.items[0].body, lambda n: [n, n] if isinstance(n, S.ExprStmt) else n, rewrite)
+    assert print_glsl(unit) == "void g(float x)\n{\n    if (x > 0.0) {\n        x = 1.0;\n        x = 1.0;\n    }\n}\n"
+
+
+def test_a_function_is_folded_again_only_when_what_it_reads_changed():
+    """fold's cache (fold._FOLDED) keys a function on its text and on the values of the globals
+    it names: a constant it does not name changes nothing; one it names gives its own fold."""
+    src = ("const int k_mode = {0};\nconst int k_other = {1};\n"
+           "int f(int x)\n{{\n    if (k_mode == 0)\n        x += 2;\n    return x;\n}}\n")
+    outs = []
+    for mode, other in ((0, 1), (0, 7), (1, 7)):
+        unit = parse_tree(src.format(mode, other))
+        compiler._fold(unit, Context(("f",)).refresh(unit))
+        outs.append(print_glsl(unit).split("int f", 1)[1])
+    assert outs[0] == outs[1] == "(int x)\n{\n    x += 2;\n    return x;\n}\n"
+    assert outs[2] == "(int x)\n{\n    return x;\n}\n"

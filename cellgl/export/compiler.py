@@ -7,17 +7,11 @@ until a round changes nothing (the fixed point, :func:`cellgl.export.tree.fixed_
 :data:`MAX_ROUNDS` rounds without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
 
 1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
-2. :func:`cellgl.export.fold.fold` (to its own fixed point) -- constants that decide the shape of
-   the code (0, 1, integers, switches) written into it, elements of constant arrays, constant
-   conditions, loops, locals (:mod:`cellgl.export.fold`); dead locals and stores, copies,
-   identities (:mod:`cellgl.export.simplify`);
-3. short functions inlined (a ``return`` of one expression, or straight-line stores substituted
-   into one), and every function called once, also from inside an expression
-   (:mod:`cellgl.export.inline`); parameters a function never reads dropped, and those every
-   call passes the same literal written into the body; ``out`` parameters whose results every
-   caller ignores turned into locals, and return values (:func:`cellgl.export.fields.void_results`);
-   struct fields never read (or only copied into themselves) removed, those holding one literal
-   everywhere folded (:mod:`cellgl.export.fields`);
+2. :func:`cellgl.export.fold.fold` (each function to its own fixed point) -- the constant folding of
+   :mod:`cellgl.export.fold`, then the simplification of :mod:`cellgl.export.simplify`;
+3. short functions and functions called once inlined, unused and constant parameters and unused
+   ``out`` parameters dropped (:mod:`cellgl.export.inline`); void results, dead and constant
+   struct fields (:mod:`cellgl.export.fields`);
 4. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
 
 Then every declaration comes after what it uses, the comments are tidied

@@ -1,21 +1,10 @@
 """The snippet compiler's constant folding, on the syntax tree (:mod:`cellgl.export.compiler` runs
-the passes in its round).
+the passes of :data:`FOLD` in its round).
 
 After :func:`cellgl.export.reach.scalarise` the recipe's values are global constants. These
-passes evaluate what they make constant:
-
-* :func:`inline_constants` -- the constants that decide the shape of the code (booleans,
-  integers, the floats 0.0 and 1.0) are written into it;
-* :func:`array_elements` -- elements of constant arrays read at a literal index (or at any
-  index, when all are equal);
-* :func:`constant_conditions` -- ``if`` statements, ternaries, ``&&``/``||`` and comparisons whose
-  value is known (the branches not taken go), integer indices;
-* :func:`local_constants` -- locals holding a boolean, an integer, 0.0 or 1.0 for good, and
-  elements of local arrays of literals, written into the code;
-* :func:`constant_loops` -- ``for`` loops with constant bounds: no iteration (removed), one
-  iteration (its body, the counter replaced by its value), an early ``if (i >= M) break;``
-  bounding the loop;
-* :func:`loop_ranges` -- a loop whose body is guarded by ``k >= A && k < B`` runs over [A, B).
+passes evaluate what they make constant: the constants that decide the shape of the code
+(booleans, integers, the floats 0.0 and 1.0) and the elements of constant arrays are written into
+it, constant conditions choose their branch, loops with constant bounds are unrolled or bounded.
 
 Values are evaluated as GLSL computes them (:mod:`cellgl.export.values`). Float arithmetic is
 evaluated only to decide conditions; no float result is written into the code but the literals
@@ -23,44 +12,38 @@ evaluated only to decide conditions; no float result is written into the code bu
 """
 from __future__ import annotations
 
+from collections import Counter
 from functools import cached_property
 
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, rewrite, transform, walk
+from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, replaced, rewrite, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
 __all__ = ["fold", "FOLD", "Facts", "function_pass", "inline_constants", "array_elements", "constant_conditions",
            "local_constants", "constant_loops", "loop_ranges", "global_constants"]
 
-def global_constants(unit: S.Unit) -> dict:
-    """``{name: value}`` of the global scalar constants initialised with a constant."""
+def global_constants(unit: S.Unit) -> tuple[dict, dict]:
+    """``(env, arrays)``: ``env`` ``{name: value}`` of the global scalar constants initialised with
+    a constant; ``arrays`` ``{name: (element nodes, their GLSL)}`` of the global constant arrays,
+    and ``{name: type}`` of the global scalars and vectors no function writes (constants,
+    uniforms) under the key None."""
     env: dict = {}
-    for it in unit.items:
-        if isinstance(it, S.Global) and "const" in it.quals:
-            for d in it.declarators:
-                if d.size is None and d.init is not None:
-                    v = convert(it.type, value(d.init, env))
-                    if v is not None and v[0] == it.type:
-                        env[d.name] = v
-    return env
-
-
-def _global_arrays(unit: S.Unit) -> dict:
-    """``{name: (element nodes, their GLSL)}`` of the global constant arrays, and ``{name: type}``
-    of the global scalars and vectors no function writes (constants, uniforms) under the key
-    None."""
-    out: dict = {None: {}}
+    arrays: dict = {None: {}}
     for it in unit.items:
         if isinstance(it, S.Global) and ("const" in it.quals or "uniform" in it.quals):
             for d in it.declarators:
                 if d.size is not None and isinstance(d.init, S.ArrayCtor) and "const" in it.quals:
-                    out[d.name] = (d.init.args, [expr_glsl(a) for a in d.init.args])
+                    arrays[d.name] = (d.init.args, [expr_glsl(a) for a in d.init.args])
                 elif d.size is None:
-                    out[None][d.name] = it.type
-    return out
+                    arrays[None][d.name] = it.type
+                if "const" in it.quals and d.size is None and d.init is not None:
+                    v = convert(it.type, value(d.init, env))
+                    if v is not None and v[0] == it.type:
+                        env[d.name] = v
+    return env, arrays
 
 
 class Facts:
@@ -74,7 +57,7 @@ class Facts:
 
     @cached_property
     def nodes(self) -> list:
-        return list(walk(self.fn.body))
+        return walk(self.fn.body)
 
     @cached_property
     def order(self) -> tuple[dict, dict]:
@@ -97,13 +80,8 @@ class Facts:
     @cached_property
     def declared(self) -> dict:
         """``{name: times declared}`` (parameters included)."""
-        out: dict = {}
-        for p in self.fn.params:
-            out[p.name] = out.get(p.name, 0) + 1
-        for n in self.nodes:
-            if isinstance(n, S.Declarator):
-                out[n.name] = out.get(n.name, 0) + 1
-        return out
+        return Counter([p.name for p in self.fn.params]
+                       + [n.name for n in self.nodes if isinstance(n, S.Declarator)])
 
     @cached_property
     def once(self) -> set:
@@ -128,9 +106,7 @@ class Facts:
     @cached_property
     def types(self) -> dict:
         """``{name: type}`` of the scalars and vectors declared once (arrays: None)."""
-        out = {}
-        for p in self.fn.params:
-            out[p.name] = None if p.size is not None else p.type
+        out = {p.name: None if p.size is not None else p.type for p in self.fn.params}
         for n in self.nodes:
             if isinstance(n, S.Decl):
                 for d in n.declarators:
@@ -169,7 +145,7 @@ def function_pass(fpass):
     def run(unit: S.Unit, ctx: Context) -> bool:
         if not ctx.fold_constants:
             return False
-        genv, garrays = global_constants(unit), _global_arrays(unit)
+        genv, garrays = global_constants(unit)
         changed = False
         for fn in list(ctx.functions.values()):
             changed = bool(fpass(fn, Facts(fn, genv, garrays, ctx))) or changed
@@ -183,19 +159,6 @@ def function_pass(fpass):
 # passes
 # --------------------------------------------------------------------------------------------
 
-def _substitute(fn, sub) -> bool:
-    """``transform`` of ``fn``'s body by ``sub``; whether it replaced a node."""
-    changed = False
-
-    def g(n):
-        nonlocal changed
-        out = sub(n)
-        changed = changed or out is not n
-        return out
-    transform(fn.body, g)
-    return changed
-
-
 @function_pass
 def inline_constants(fn: S.Function, facts: Facts) -> bool:
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
@@ -203,7 +166,7 @@ def inline_constants(fn: S.Function, facts: Facts) -> bool:
     pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
     if not pick:
         return False
-    return _substitute(fn, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
+    return replaced(fn.body, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
 
 
 @function_pass
@@ -224,7 +187,7 @@ def array_elements(fn: S.Function, facts: Facts) -> bool:
             if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(args) and len(texts[k[1]]) <= 40:
                 return paren(clone(args[k[1]]))
         return n
-    return _substitute(fn, sub)
+    return replaced(fn.body, sub)
 
 
 def _fold_expr(n, env, ctx):
@@ -262,22 +225,16 @@ def constant_conditions(fn: S.Function, facts: Facts) -> bool:
     conditions of literals (``3.0e38 >= 3.0e38`` -> ``true``), ``true && x`` -> ``x``, and
     integer indices and array sizes (``rest[8 + 1]`` -> ``rest[9]``)."""
     env, ctx = facts.env, facts.ctx
-    changed = False
 
     def fold(n):
-        nonlocal changed
         if isinstance(n, S.If):
             c = value(n.cond, env, ctx)
-            out = _chosen(n, n.then if c[1] else n.other) if c is not None and c[0] == "bool" \
+            return _chosen(n, n.then if c[1] else n.other) if c is not None and c[0] == "bool" \
                 and is_pure(n.cond, ctx) else n
-        elif isinstance(n, S.While) and value(n.cond, env, ctx) == ("bool", False):
-            out = []
-        else:
-            out = _fold_expr(n, env, ctx)
-        changed = changed or out is not n
-        return out
-    rewrite(fn.body, fold)
-    return changed
+        if isinstance(n, S.While) and value(n.cond, env, ctx) == ("bool", False):
+            return []
+        return _fold_expr(n, env, ctx)
+    return replaced(fn.body, fold, rewrite)
 
 
 def _chosen(stmt, kept):
@@ -314,7 +271,7 @@ def local_constants(fn: S.Function, facts: Facts) -> bool:
             if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(arrays[n.base.name]):
                 return clone(arrays[n.base.name][k[1]])
         return n
-    return _substitute(fn, sub)
+    return replaced(fn.body, sub)
 
 
 def _counter(loop: S.For, env, ctx):
@@ -369,28 +326,23 @@ def constant_loops(fn: S.Function, facts: Facts) -> bool:
     """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
     the counter replaced by its first value."""
     env, ctx = facts.env, facts.ctx
-    changed = False
     if not any(isinstance(n, S.For) for n in facts.nodes):
         return False
 
     def unroll(n):
-        nonlocal changed
         bounds = _loop_bounds(n, env, ctx) if isinstance(n, S.For) else None
         if bounds is None:
             return n
         var, first, count, early = bounds
         if count <= 0:
-            changed = True
             return _chosen(n, None)
         body = n.body if isinstance(n.body, S.Block) else S.Block([n.body])
         body = S.Block([s for s in body.body if s is not early], n.comments + body.comments)
         if count != 1 or var in writes(body, ctx) or _jumps(body):
             return n
-        changed = True
         lit = literal(("int", first))
         return [transform(body, lambda x: clone(lit) if isinstance(x, S.Name) and x.name == var else x)]
-    rewrite(fn.body, unroll)
-    return changed
+    return replaced(fn.body, unroll, rewrite)
 
 
 def _conjuncts(e) -> list:
@@ -452,48 +404,56 @@ def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
     :data:`cellgl.export.simplify.SIMPLIFY`), function by function, in order, round after round
     until a round changes nothing (they change no signature, so ``ctx`` stays true);
     :class:`TranslateError` after :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
-    false (the recipe's values stay as they are). A function folded before under the same
-    constants and signatures is not folded again."""
+    false (the recipe's values stay as they are). A function folded before with the same text,
+    the same values of the globals it names and the same facts of the functions it calls is not
+    folded again (:data:`_FOLDED`)."""
     if not ctx.fold_constants:
         return False
     passes = [p.function for p in (FOLD if passes is None else passes)]
-    genv, garrays = global_constants(unit), _global_arrays(unit)
-    key = (tuple(p.__name__ for p in passes), tuple(sorted(genv.items())),
-           tuple(sorted((k, tuple(v[1])) for k, v in garrays.items() if k is not None)),
-           tuple(sorted(garrays[None].items())), tuple(sorted(ctx.impure)),
-           tuple(sorted((f.name, tuple(p.mode for p in f.params)) for f in ctx.functions.values())))
+    genv, garrays = global_constants(unit)
     changed = False
     for fn in list(ctx.functions.values()):
+        # what the passes read besides the function: the globals it names (their values, elements,
+        # types), and whether the functions it calls have effects and which parameters they write
+        nodes = walk(fn.body)
+        used = sorted({n.name for n in nodes if type(n) is S.Name})
+        callees = sorted({n.func for n in nodes if type(n) is S.Call})
+        key = (tuple(p.__name__ for p in passes), tuple((k, genv.get(k), garrays[None].get(k)) for k in used),
+               tuple((k, tuple(garrays[k][1])) for k in used if k in garrays),
+               tuple((c, c in ctx.impure, c in ctx.functions and tuple(p.mode for p in ctx.functions[c].params))
+                     for c in callees))
         text = "\n".join(item_glsl(fn))
-        if (text, key) not in _FOLDED:
+        key = (text,) + key
+        if key not in _FOLDED:
             if len(_FOLDED) > 4096:
                 _FOLDED.clear()
-            body = _fold_function(fn, Facts(fn, genv, garrays, ctx), passes)
-            _FOLDED[(text, key)] = None if body is None or "\n".join(item_glsl(fn)) == text else body
-            changed = changed or _FOLDED[(text, key)] is not None
-        elif _FOLDED[(text, key)] is not None:
-            fn.body = clone(_FOLDED[(text, key)])
+            # each pass in turn, until every pass has run once since the last change (a round
+            # from there on would change nothing: the passes see the same tree and facts again)
+            facts, quiet, recent, folded = Facts(fn, genv, garrays, ctx), 0, [], False
+            for run in range(MAX_ROUNDS * len(passes)):
+                p = passes[run % len(passes)]
+                if p(fn, facts):
+                    folded, quiet, recent = True, 0, (recent + [p.__name__])[-len(passes):]
+                    facts = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
+                else:
+                    quiet += 1
+                    if quiet == len(passes):
+                        break
+            else:
+                raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still "
+                                     f"changing: {', '.join(recent)}): a pass undoes another")
+            body = clone(fn.body) if folded else None
+            _FOLDED[key] = None if body is None or "\n".join(item_glsl(fn)) == text else body
+            changed = changed or _FOLDED[key] is not None
+        elif _FOLDED[key] is not None:
+            fn.body = clone(_FOLDED[key])
             changed = True
     return changed
 
 
-#: ``{(function text, (constants, impure functions, signatures)): folded body (None: unchanged)}``: the
-#: driver's rounds (and a process's exports) fold most functions again unchanged
+#: ``{(function text, passes, what it reads of the globals and callees): folded body (None:
+#: unchanged)}``: the driver's rounds, and a process's exports, fold most functions again unchanged
 _FOLDED: dict = {}
 
 #: rounds of the passes on one function after which :func:`fold` gives up
 MAX_ROUNDS = 64
-
-
-def _fold_function(fn: S.Function, facts: Facts, passes) -> S.Block | None:
-    """``fn``'s body folded (a copy), or None where nothing changed."""
-    for rounds in range(MAX_ROUNDS):
-        changed = []
-        for p in passes:
-            if p(fn, facts):
-                changed.append(p.__name__)
-                facts = Facts(fn, facts.genv, facts.garrays, facts.ctx)
-        if not changed:
-            return clone(fn.body) if rounds else None
-    raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still changing: "
-                         f"{', '.join(changed)}): a pass undoes another")

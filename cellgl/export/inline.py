@@ -20,16 +20,17 @@ The values do not change: the statements run in the same order on the same value
 from __future__ import annotations
 
 import textwrap
-from dataclasses import fields
+from collections import Counter
 
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, statement_glsl
 from cellgl.export.reach import first_sentence
 from cellgl.export.syntax import PRECEDENCE
-from cellgl.export.tree import EXPRESSIONS, Context, calls, clone, root_name, transform, walk, writes
+from cellgl.export.tree import CHILD_FIELDS, EXPRESSIONS, Context, calls, clone, is_pure, root_name, transform, walk
+from cellgl.export.tree import writes
 
 __all__ = ["KEEP", "defined_once", "literal", "inline_short", "inline_once", "drop_unused_params", "constant_args", "drop_unused_outs",
-           "substitute", "statement_lists", "call_sites", "names", "side_effects"]
+           "substitute", "statement_lists", "call_sites", "names"]
 
 #: a body of this many lines keeps its function's comment where it is inlined
 _COMMENTED = 20
@@ -63,16 +64,15 @@ def _need(parent, slot: str) -> int:
 def parenthesise(node):
     """Wrap in parentheses every expression below ``node`` that its place needs grouped (after a
     substitution: the tree is the meaning, the parentheses only its printing)."""
-    for f in fields(node):
-        v = getattr(node, f.name)
-        if isinstance(v, list):
+    for name, many in CHILD_FIELDS[type(node)]:
+        v = getattr(node, name)
+        if many:
             for x in v:
-                if hasattr(x, "__dataclass_fields__"):
-                    parenthesise(x)
-        elif hasattr(v, "__dataclass_fields__"):
+                parenthesise(x)
+        elif v is not None:
             parenthesise(v)
-            if isinstance(v, EXPRESSIONS) and _prec(v) < _need(node, f.name):
-                setattr(node, f.name, S.Paren(v))
+            if isinstance(v, EXPRESSIONS) and _prec(v) < _need(node, name):
+                setattr(node, name, S.Paren(v))
     return node
 
 
@@ -107,13 +107,6 @@ def names(node) -> set[str]:
 
 def _count(node, name: str) -> int:
     return sum(isinstance(n, S.Name) and n.name == name for n in walk(node))
-
-
-def side_effects(e, ctx: Context) -> bool:
-    """Whether evaluating ``e`` stores anything (an assignment, ``++``, a call to a function
-    with effects)."""
-    return any(isinstance(n, (S.Assign, S.IncDec)) or (isinstance(n, S.Call) and n.func in ctx.impure)
-               for n in walk(e))
 
 
 def _flat(e) -> bool:
@@ -155,18 +148,12 @@ def literal(e, vectors: bool = True) -> bool:
 def statement_lists(node):
     """``(list, statement)`` of every statement below ``node`` held in a block's list, outermost
     first."""
-    for n in walk(node):
-        if isinstance(n, S.Block):
-            for s in n.body:
-                yield n.body, s
+    return [(n.body, s) for n in walk(node) if isinstance(n, S.Block) for s in n.body]
 
 
 def defined_once(unit: S.Unit) -> dict:
     """``{name: function}`` of the functions with a body and no other definition or prototype."""
-    count: dict[str, int] = {}
-    for it in unit.items:
-        if isinstance(it, S.Function):
-            count[it.name] = count.get(it.name, 0) + 1
+    count = Counter(it.name for it in unit.items if isinstance(it, S.Function))
     return {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None
             and count[it.name] == 1}
 
@@ -239,7 +226,7 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
         if not isinstance(n, S.Call) or n.func not in small:
             return n
         params, expr = small[n.func]
-        if len(n.args) != len(params) or any(side_effects(a, ctx) for a in n.args) \
+        if len(n.args) != len(params) or not all(is_pure(a, ctx) for a in n.args) \
                 or (names(expr) - set(params)) & hidden:
             return n
         for p, a in zip(params, n.args):
@@ -255,7 +242,7 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
     for f in unit.items:
         if not isinstance(f, S.Function) or f.body is None:
             continue
-        hidden, hit = _declared(f), True
+        hidden, hit = {n.name for n in walk(f) if type(n) in (S.Param, S.Declarator)}, True   # its own names
         while hit:                            # (an expression may call another short function)
             hit = False
             transform(f.body, at)
@@ -333,11 +320,6 @@ def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
     return None
 
 
-def _declared(fn: S.Function) -> set[str]:
-    """The parameters and locals of ``fn``."""
-    return {p.name for p in fn.params} | {n.name for n in walk(fn.body) if isinstance(n, S.Declarator)}
-
-
 def _lvalue(e) -> bool:
     """A variable, or a field or element (at a name or literal) of one."""
     while isinstance(e, (S.Member, S.Index)):
@@ -347,10 +329,10 @@ def _lvalue(e) -> bool:
     return isinstance(e, S.Name)
 
 
-def _loop_vars(node) -> set[str]:
-    """The names declared below ``node`` only as ``for`` loops' variables."""
-    inits = {id(n.init) for n in walk(node) if isinstance(n, S.For)}
-    decls = [(id(s) in inits, d.name) for s in walk(node) if isinstance(s, S.Decl) for d in s.declarators]
+def _loop_vars(nodes: list) -> set[str]:
+    """The names declared in ``nodes`` (a :func:`walk`) only as ``for`` loops' variables."""
+    inits = {id(n.init) for n in nodes if isinstance(n, S.For)}
+    decls = [(id(s) in inits, d.name) for s in nodes if isinstance(s, S.Decl) for d in s.declarators]
     return {n for loop, n in decls if loop} - {n for loop, n in decls if not loop}
 
 
@@ -390,9 +372,12 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     declared = {n.name for n in walk(block) if isinstance(n, S.Declarator)}
     if declared & set(params):
         return False                          # a local shadowing a parameter
-    caller_names = names(caller) | calls(caller.body)
+    everything = walk(caller)                 # (the caller, its parameters and its body)
+    caller_declared = {n.name for n in everything if type(n) in (S.Param, S.Declarator)}
+    caller_names = {n.name for n in everything if type(n) is S.Name} - {"true", "false"} | caller_declared \
+        | {n.func for n in everything if type(n) is S.Call}
     body_ids = names(block) | (names(ret) if ret is not None else set()) | calls(block)
-    if (body_ids - declared - set(params)) & _declared(caller):
+    if (body_ids - declared - set(params)) & caller_declared:
         return False                          # the body reads a global the caller hides with a local
     if hoist:
         k, stem = 2, target
@@ -436,7 +421,7 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     if hoist and own and not (ret.name in declared and _decl_type(body, ret.name, prelude) == typ):
         return False
     if form == "decl" and isinstance(ret, S.Name) and ret.name in declared and _decl_type(body, ret.name, prelude) == typ \
-            and sum(isinstance(n, S.Declarator) and n.name == target for n in walk(caller.body)) == (not hoist) \
+            and sum(type(n) is S.Declarator and n.name == target for n in everything) == (not hoist) \
             and not any(target in names(a) for a in args):
         rename[ret.name] = target
         ret = None
@@ -445,8 +430,8 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     # caller's around the call
     arg_names = {n for a in subst.values() for n in names(a)}
     taken = caller_names | body_ids | arg_names
-    loop_vars = _loop_vars(block) - {p.name for p, _ in prelude} - (_declared(caller) - _loop_vars(caller.body))
-    outer_loops = {d.name for n in walk(caller.body) if isinstance(n, S.For) and isinstance(n.init, S.Decl)
+    loop_vars = _loop_vars(walk(block)) - {p.name for p, _ in prelude} - (caller_declared - _loop_vars(everything))
+    outer_loops = {d.name for n in everything if isinstance(n, S.For) and isinstance(n.init, S.Decl)
                    and any(x is stmt for x in walk(n.body)) for d in n.init.declarators}
     for d in sorted(declared):
         if d in rename:
@@ -471,9 +456,9 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         elif form == "return":
             new.append(S.Return(r))
     if new:
-        lines = sum(not ln.lstrip().startswith("//") for s in body for ln in statement_glsl(s))
         head = [] if hoist else list(stmt.comments)
-        if f.comments and lines >= _COMMENTED:
+        if f.comments and sum(not ln.lstrip().startswith("//") for s in body
+                              for ln in statement_glsl(s)) >= _COMMENTED:
             # a long body keeps the first sentence of its function's comment
             text = first_sentence("\n".join(c for c in f.comments if c), 116)
             head.append("\n".join("// " + ln for ln in textwrap.wrap(text, 113)))
@@ -529,7 +514,7 @@ def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
 def drop_unused_params(unit: S.Unit, ctx: Context) -> bool:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
     return _each_param(unit, ctx, lambda f, k, sites: f.params[k].mode == "in" and f.params[k].name not in
-                       names(f.body) and not any(side_effects(c.args[k], ctx) for _, c in sites))
+                       names(f.body) and all(is_pure(c.args[k], ctx) for _, c in sites))
 
 
 def constant_args(unit: S.Unit, ctx: Context) -> bool:

@@ -1,47 +1,24 @@
 """The snippet compiler's simplification, on the syntax tree (:mod:`cellgl.export.compiler` runs
-the passes, after :mod:`cellgl.export.fold`'s, in its round).
-
-Inside each function, with the def-use facts of :mod:`cellgl.export.tree`:
-
-* :func:`split_declarations` -- ``vec4 a = x, b;`` becomes one declaration per name;
-* :func:`dead_locals` -- a local never read goes, with every store to it (a store whose
-  right-hand side has effects stays);
-* :func:`last_stores` -- a store to a local that nothing reads afterwards (outside loops) goes;
-* :func:`copies` -- ``float y = x;`` with neither ``x`` nor ``y`` written afterwards: ``y`` is
-  ``x``;
-* :func:`bare_blocks` -- a block standing alone (what an unrolled loop leaves) is spliced into
-  its parent where the names it declares are used nowhere else;
-* :func:`merge_declarations` -- ``T x; ... x = e;`` -> ``... T x = e;``;
-* :func:`forward_literals` -- a literal just stored is read in its place by the next
-  straight-line statements (``x = 0; bool b = x > 9;`` -> ``bool b = 0 > 9;``);
-* :func:`loop_variables` -- ``int i = 2; for (; i < 9; i++)`` -> ``for (int i = 2; i < 9; i++)``;
-* :func:`store_into_next` -- ``T y = a; y = f(y);`` -> ``T y = f(a);``, ``T y = a; return y;`` ->
-  ``return a;``;
-* :func:`identities` -- rewrites that give the same value for every IEEE-754 input (``x * 1.0``,
-  ``x / 1.0``, ``x - 0.0``, ``x -= 0.0``, ``mix(a, b, 0.0)``, ``mix(2.0, b, 1.0)`` with a finite
-  literal, ``|x| * |x|``, members of literal vectors, integer literal arithmetic, integer zero
-  vectors added, empty branches). ``x + 0.0`` (``-0.0 + 0.0`` is ``+0.0``) and ``x + 0.0 * y``
-  (NaN for an infinite ``y``) are not rewritten;
-* :func:`parentheses` -- parentheses around an atom, in a statement's or an argument's place,
-  or around a product in a sum.
+the passes of :data:`SIMPLIFY`, after :mod:`cellgl.export.fold`'s, in its round): inside each
+function, with the def-use facts of :mod:`cellgl.export.tree`, declarations split, dead locals and
+stores removed, copies propagated, bare blocks spliced, declarations merged with their first
+store, literals forwarded, loop variables moved into their loop, a store folded into the next
+statement, and the identities that give the same value for every IEEE-754 input (``x * 1.0``,
+``x - 0.0``, ``mix(a, b, 0.0)``; not ``x + 0.0``: ``-0.0 + 0.0`` is ``+0.0``, nor ``x + 0.0 * y``:
+NaN for an infinite ``y``); parentheses that change nothing dropped. Each pass says what it does.
 """
 from __future__ import annotations
+
+from bisect import bisect_left
 
 from cellgl.export import syntax as S
 from cellgl.export.fold import Facts, function_pass
 from cellgl.export.printer import expr_glsl
-from cellgl.export.tree import ATOMS, clone, is_pure, paren, rewrite, transform, walk
+from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, rewrite, root, transform, walk
 from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
            "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY"]
-
-
-def _root(t):
-    """The Name node an assignment target stores into."""
-    while isinstance(t, (S.Index, S.Member, S.Paren)):
-        t = t.inner if isinstance(t, S.Paren) else t.base
-    return t if isinstance(t, S.Name) else None
 
 
 def _store(s):
@@ -56,9 +33,7 @@ def _store(s):
 
 def _pure_store(expr, ctx) -> bool:
     """Whether a store has no effect but the store: its value and indices have none."""
-    if isinstance(expr, S.IncDec):
-        return is_pure(expr.operand, ctx)
-    return is_pure(expr.value, ctx) and is_pure(expr.target, ctx)
+    return all(is_pure(x, ctx) for x in children(expr))
 
 
 def _drop(body: list, s) -> None:
@@ -71,9 +46,8 @@ def _drop(body: list, s) -> None:
 
 def _single(s):
     """The declarator of a declaration of one name (no array), else None."""
-    if isinstance(s, S.Decl) and len(s.declarators) == 1 and s.declarators[0].size is None:
-        return s.declarators[0]
-    return None
+    ok = isinstance(s, S.Decl) and len(s.declarators) == 1 and s.declarators[0].size is None
+    return s.declarators[0] if ok else None
 
 
 @function_pass
@@ -103,8 +77,8 @@ def dead_locals(fn: S.Function, facts: Facts) -> bool:
     for b in facts.blocks:
         for s in b.body:
             t, e = _store(s)
-            if t is not None and _root(t) is not None:
-                stores[id(_root(t))] = (b, s, e)
+            if root(t) is not None:
+                stores[id(root(t))] = (b, s, e)
     for b in facts.blocks:
         for s in b.body:
             if not (isinstance(s, S.Decl) and len(s.declarators) == 1):
@@ -131,7 +105,7 @@ def last_stores(fn: S.Function, facts: Facts) -> bool:
     for b in facts.blocks:
         for s in b.body:
             t, e = _store(s)
-            r = _root(t) if t is not None else None
+            r = root(t)
             if r is None or r.name not in facts.types or id(s) in facts.in_loops \
                     or r.name in facts.params and facts.params[r.name].mode != "in":
                 continue
@@ -279,6 +253,28 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
     ``if`` condition, up to anything that writes it."""
     ctx, changed = facts.ctx, False
     pos, last = facts.order
+    at: dict = {}                   # {name: the sorted positions of its occurrences}
+    pure: dict = {}                 # {id(statement): it has no effect but its store} (literals keep it)
+
+    def effectless(t, e):
+        if id(t) not in pure:
+            pure[id(t)] = _pure_store(e, ctx) if e is not None else \
+                all(d.init is None or is_pure(d.init, ctx) for d in t.declarators)
+        return pure[id(t)]
+
+    def forward(e, target, lit):
+        # (only where the facts place an occurrence of the variable inside ``e``: the nodes this
+        # pass put in are literals, and a node without a position is looked at)
+        lo = pos.get(id(e))
+        if lo is not None:
+            if target[0] not in at:
+                at[target[0]] = sorted(pos[id(n)] for n, _ in facts.occ[target[0]])
+            where = at[target[0]]
+            k = bisect_left(where, lo)
+            if k == len(where) or where[k] > last[id(e)]:
+                return e, False
+        return _forward(e, target, lit)
+
     for b in facts.blocks:
         for k, s in enumerate(b.body):
             target, lit = _literal_store(s)
@@ -287,24 +283,25 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
                 continue
             for t in b.body[k + 1:]:
                 if isinstance(t, S.If):
-                    t.cond, hit = _forward(t.cond, target, lit)
+                    t.cond, hit = forward(t.cond, target, lit)
                     changed |= hit
                     break
                 if isinstance(t, S.Decl) and all(d.size is None for d in t.declarators):
-                    if not all(d.init is None or is_pure(d.init, ctx) for d in t.declarators):
+                    if not effectless(t, None):
                         break
                     for d in t.declarators:
                         if d.init is not None:
-                            d.init, hit = _forward(d.init, target, lit)
+                            d.init, hit = forward(d.init, target, lit)
                             changed |= hit
                     if any(d.name == target[0] for d in t.declarators):
                         break
                     continue
                 into, e = _store(t)
-                if into is None or not _pure_store(e, ctx) or _path(into) is None or _overlap(_path(into), target):
+                path = _path(into) if into is not None else None
+                if path is None or _overlap(path, target) or not effectless(t, e):
                     break
                 if isinstance(e, S.Assign):
-                    e.value, hit = _forward(e.value, target, lit)
+                    e.value, hit = forward(e.value, target, lit)
                     changed |= hit
     return changed
 
@@ -448,18 +445,18 @@ def identities(fn: S.Function, facts: Facts) -> bool:
     abs(x)`` -> ``x * x``, ``vec4(0.0, 0.0, 0.0, 1.0).w`` -> ``1.0``, ``uint(3)`` -> ``3u``,
     products and sums of unsigned literals, ``0u + x`` and ``ivec4(0, 0, 0, 0) + x`` -> ``x``,
     empty blocks and branches (with conditions without effects)."""
-    changed = False
-
-    def fix(n):
-        nonlocal changed
-        out = _identity(n, facts.ctx)
-        changed = changed or out is not n
-        return out
-    rewrite(fn.body, fix)
-    return changed
+    return replaced(fn.body, lambda n: _identity(n, facts.ctx), rewrite)
 
 
 _ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}
+#: ``{node class: ((field, whole: any expression stands there bare but a ternary or an assignment),
+#: ...)}``: the places whose parentheses :func:`parentheses` looks at (besides arguments)
+_PLACES = {S.Index: (("index", True), ("base", False)), S.Member: (("base", False),),
+           S.Declarator: (("init", True),), S.Assign: (("value", True),), S.Return: (("value", True),),
+           S.If: (("cond", True),), S.While: (("cond", True),), S.ExprStmt: (("expr", True),),
+           S.Paren: (("inner", False),), S.Unary: (("operand", False),), S.IncDec: (("operand", False),),
+           S.Ternary: (("cond", False), ("then", False), ("other", False)),
+           S.Binary: (("left", False), ("right", False))}
 _COMPARISONS = ("<", ">", "<=", ">=", "==", "!=")
 
 
@@ -484,38 +481,17 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
     def fix(n):
         if isinstance(n, (S.Call, S.Ctor, S.ArrayCtor)):
             n.args = [bare(a, True) for a in n.args]
-        elif isinstance(n, S.Index):
-            n.index = bare(n.index, True)
-            n.base = bare(n.base)
-        elif isinstance(n, S.Member):
-            n.base = bare(n.base)
-        elif isinstance(n, S.Declarator) and n.init is not None:
-            n.init = bare(n.init, True)
-        elif isinstance(n, S.Assign):
-            n.value = bare(n.value, True)
-        elif isinstance(n, (S.Return,)) and n.value is not None:
-            n.value = bare(n.value, True)
-        elif isinstance(n, (S.If, S.While)):
-            n.cond = bare(n.cond, True)
-        elif isinstance(n, S.ExprStmt):
-            n.expr = bare(n.expr, True)
-        elif isinstance(n, S.Paren):
-            n.inner = bare(n.inner)
-        elif isinstance(n, (S.Unary, S.IncDec)):
-            n.operand = bare(n.operand)
-        elif isinstance(n, S.Ternary):
-            n.cond, n.then, n.other = bare(n.cond), bare(n.then), bare(n.other)
-        elif isinstance(n, S.Binary):
-            n.left, n.right = bare(n.left), bare(n.right)
-            if n.op in _ARITH or n.op in _COMPARISONS:
-                level = _ARITH.get(n.op, 0)
-                for side in ("left", "right"):
-                    p = getattr(n, side)
-                    if isinstance(p, S.Paren) and isinstance(p.inner, S.Binary) and p.inner.op in _ARITH:
-                        inner = _ARITH[p.inner.op]
-                        if inner > level or (inner == level and side == "left"):
-                            setattr(n, side, p.inner)
-                            changed = True
+        for name, top in _PLACES.get(type(n), ()):
+            setattr(n, name, bare(getattr(n, name), top))
+        if isinstance(n, S.Binary) and (n.op in _ARITH or n.op in _COMPARISONS):
+            level = _ARITH.get(n.op, 0)
+            for side in ("left", "right"):
+                p = getattr(n, side)
+                if isinstance(p, S.Paren) and isinstance(p.inner, S.Binary) and p.inner.op in _ARITH:
+                    inner = _ARITH[p.inner.op]
+                    if inner > level or (inner == level and side == "left"):
+                        setattr(n, side, p.inner)
+                        changed = True     # noqa: F841 (fix's own: a regrouping is not reported)
         return n
     transform(fn.body, fix)
     return changed

@@ -13,68 +13,65 @@ from dataclasses import dataclass, field, fields
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
-__all__ = ["children", "walk", "transform", "root_name", "reads", "writes", "calls", "Context",
-           "fixed_point", "clone", "EXPRESSIONS", "STATEMENTS", "ASSIGN_OPS", "OUT_BUILTINS", "ATOMS", "is_pure",
-           "occurrences", "paren", "rewrite"]
+__all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point",
+           "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "occurrences",
+           "paren", "rewrite", "CHILD_FIELDS"]
 
 #: expression node classes
 EXPRESSIONS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Unary, S.IncDec, S.Binary, S.Assign,
                S.Ternary, S.Index, S.Member, S.Paren)
 #: statement node classes
 STATEMENTS = (S.Block, S.Decl, S.ExprStmt, S.If, S.For, S.While, S.Return, S.Jump)
-#: the assignment operators
-ASSIGN_OPS = ("=", "+=", "-=", "*=", "/=", "%=", "&=", "|=", "^=", "<<=", ">>=")
 
 _NODE_TYPES = EXPRESSIONS + STATEMENTS + (S.Declarator, S.Unit, S.Struct, S.Field, S.Function,
                                           S.Param, S.Global)
-_SKIP = {"comments", "trail", "trailing"}
 _NODE_SET = frozenset(_NODE_TYPES)
-#: the fields of each node class that may hold nodes (not its names, operators and flags)
-_CHILD_FIELDS: dict[type, tuple[str, ...]] = {
-    t: tuple(f.name for f in fields(t) if f.name not in _SKIP and f.type not in ("str", "bool")) for t in _NODE_TYPES}
+#: ``(field, holds a list)`` of each node class's fields that may hold nodes, in source order (not
+#: its names, operators, flags, qualifiers and comments)
+CHILD_FIELDS: dict[type, tuple] = {
+    t: tuple((f.name, f.type == "list") for f in fields(t) if f.type not in ("str", "bool")
+             and f.name not in ("comments", "trail", "trailing", "quals")) for t in _NODE_TYPES}
 
 
-def children(node):
+def children(node) -> list:
     """The direct child nodes of ``node``, in source order."""
-    for name in _CHILD_FIELDS.get(type(node), ()):
+    out = []
+    for name, many in CHILD_FIELDS[type(node)]:
         v = getattr(node, name)
-        if type(v) is list:
-            for x in v:
-                if type(x) in _NODE_SET:
-                    yield x
-        elif type(v) in _NODE_SET:
-            yield v
+        if many:
+            out += v
+        elif v is not None:
+            out.append(v)
+    return out
 
 
-def walk(node):
+def walk(node) -> list:
     """``node`` and every node below it, pre-order (parents before children)."""
-    stack = [node]
-    while stack:
-        n = stack.pop()
-        yield n
-        kids = []
-        for name in _CHILD_FIELDS.get(type(n), ()):
+    out = []
+    add = out.append
+
+    def visit(n):
+        add(n)
+        for name, many in CHILD_FIELDS[type(n)]:
             v = getattr(n, name)
-            if type(v) is list:
-                kids += [x for x in v if type(x) in _NODE_SET]
-            elif type(v) in _NODE_SET:
-                kids.append(v)
-        kids.reverse()
-        stack += kids
+            if many:
+                for x in v:
+                    visit(x)
+            elif v is not None:
+                visit(v)
+    visit(node)
+    return out
 
 
 def transform(node, fn):
     """Rewrite the tree below ``node`` bottom-up: each child ``c`` is replaced by ``fn(c)``
     (``fn`` returns ``c`` itself to keep it; in a list, ``None`` deletes it and a Python list
     splices several nodes in). Returns ``fn(node)``."""
-    for name in _CHILD_FIELDS.get(type(node), ()):
+    for name, many in CHILD_FIELDS[type(node)]:
         v = getattr(node, name)
-        if type(v) is list:
+        if many:
             out, same = [], True
             for x in v:
-                if type(x) not in _NODE_SET:
-                    out.append(x)
-                    continue
                 y = transform(x, fn)
                 if y is x:
                     out.append(x)
@@ -82,24 +79,35 @@ def transform(node, fn):
                 same = False
                 if y is None:
                     continue
-                if isinstance(y, list):
+                if type(y) is list:
                     out.extend(y)
                 else:
                     out.append(y)
             if not same:
                 v[:] = out
-        elif type(v) in _NODE_SET:
+        elif v is not None:
             y = transform(v, fn)
             if y is not v:
                 setattr(node, name, y)
     return fn(node)
 
 
+def replaced(root, fn, apply=transform) -> bool:
+    """``apply(root, fn)`` (:func:`transform`, or :func:`rewrite`); whether ``fn`` replaced a node."""
+    changed = False
+
+    def g(n):
+        nonlocal changed
+        out = fn(n)
+        changed = changed or out is not n
+        return out
+    apply(root, g)
+    return changed
+
+
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
     t = type(node)
-    if t not in _NODE_SET:
-        return copy.deepcopy(node)
     new = t.__new__(t)
     d = new.__dict__
     for k, v in node.__dict__.items():
@@ -112,11 +120,18 @@ def clone(node):
     return new
 
 
-def root_name(e) -> str | None:
-    """The variable an lvalue stores into: ``a`` of ``a``, ``a.x``, ``a[i].y``, ``(a)``."""
+def root(e):
+    """The Name node of the variable an lvalue stores into: ``a`` of ``a``, ``a.x``, ``a[i].y``,
+    ``(a)`` (None: not a variable)."""
     while isinstance(e, (S.Index, S.Member, S.Paren)):
         e = e.inner if isinstance(e, S.Paren) else e.base
-    return e.name if isinstance(e, S.Name) else None
+    return e if isinstance(e, S.Name) else None
+
+
+def root_name(e) -> str | None:
+    """The name of :func:`root`'s variable."""
+    r = root(e)
+    return None if r is None else r.name
 
 
 def calls(node) -> set[str]:
@@ -144,17 +159,13 @@ class Context:
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}
         direct, called = set(), {}
         for f in self.functions.values():
-            called[f.name] = calls(f.body)
-            if any(p.mode != "in" for p in f.params) or writes(f.body, self) & self.globals_:
+            nodes = walk(f.body)
+            called[f.name] = {n.func for n in nodes if type(n) is S.Call}
+            if any(p.mode != "in" for p in f.params) or writes(nodes, self) & self.globals_:
                 direct.add(f.name)
-        impure, grew = set(direct), True
-        while grew:
-            grew = False
-            for name, c in called.items():
-                if name not in impure and c & impure:
-                    impure.add(name)
-                    grew = True
-        self.impure = impure
+        self.impure = direct                       # and, to a fixed point, what calls one of them
+        while grown := {name for name, c in called.items() if name not in self.impure and c & self.impure}:
+            self.impure |= grown
         return self
 
     def out_positions(self, func: str) -> list[int]:
@@ -164,11 +175,11 @@ class Context:
 
 
 def writes(node, ctx: Context | None = None) -> set[str]:
-    """The variables stored into anywhere below ``node``: assignment targets, ``++``/``--``
-    operands, declared names, and (with ``ctx``) the arguments passed to ``out``/``inout``
-    parameters of the module's functions."""
+    """The variables stored into anywhere below ``node`` (or in the list of nodes :func:`walk`
+    gave): assignment targets, ``++``/``--`` operands, declared names, and (with ``ctx``) the
+    arguments passed to ``out``/``inout`` parameters of the module's functions."""
     out = set()
-    for n in walk(node):
+    for n in node if type(node) is list else walk(node):
         if isinstance(n, S.Assign):
             out.add(root_name(n.target))
         elif isinstance(n, S.IncDec):
@@ -181,23 +192,6 @@ def writes(node, ctx: Context | None = None) -> set[str]:
                     out.add(root_name(n.args[k]))
     out.discard(None)
     return out
-
-
-def reads(node, ctx: Context | None = None) -> set[str]:
-    """The variables read anywhere below ``node``: every name, except the target of a plain
-    ``=`` whose target is the bare name (``a = ...`` does not read ``a``; ``a.x = ...`` and
-    ``a += ...`` do) and, with ``ctx``, a bare name passed to an ``out`` parameter."""
-    skip = set()
-    for n in walk(node):
-        if isinstance(n, S.Assign) and n.op == "=" and isinstance(n.target, S.Name):
-            skip.add(id(n.target))
-        elif ctx is not None and isinstance(n, S.Call):
-            f = ctx.functions.get(n.func)
-            if f is not None:
-                for p, a in zip(f.params, n.args):
-                    if p.mode == "out" and isinstance(a, S.Name):
-                        skip.add(id(a))
-    return {n.name for n in walk(node) if isinstance(n, S.Name) and id(n) not in skip}
 
 
 def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> int:

@@ -123,19 +123,17 @@ def _binary(e, env, ctx):
     if ta == "bool":
         return None
     if ta == "float":
-        if op in ("/",) and y == 0.0:
-            return None
-        r = {"+": lambda: x + y, "-": lambda: x - y, "*": lambda: x * y, "/": lambda: x / y}.get(op)
-        f = None if r is None else _f32(r())
+        f = _f32(_FLOAT_OPS[op](x, y)) if op in _FLOAT_OPS and not (op == "/" and y == 0.0) else None
         return None if f is None else ("float", f)
-    if op in ("/", "%") and (y <= 0 or x < 0):
-        return None                              # negative or zero divisors: left to the compiler
-    r = {"+": x + y, "-": x - y, "*": x * y, "&": x & y, "|": x | y, "^": x ^ y}
-    if op in ("/", "%"):
-        r[op] = x // y if op == "/" else x % y
-    if op not in r:
-        return None
-    return ta, (_int(r[op]) if ta == "int" else r[op] % _M32)
+    if op in ("/", "%") and (y <= 0 or x < 0) or op not in _INT_OPS:
+        return None                              # (negative or zero divisors: left to the compiler)
+    r = _INT_OPS[op](x, y)
+    return ta, (_int(r) if ta == "int" else r % _M32)
+
+
+_FLOAT_OPS = {"+": operator.add, "-": operator.sub, "*": operator.mul, "/": operator.truediv}
+_INT_OPS = {"+": operator.add, "-": operator.sub, "*": operator.mul, "&": operator.and_, "|": operator.or_,
+            "^": operator.xor, "/": operator.floordiv, "%": operator.mod}
 
 
 def literal(v):
