@@ -452,26 +452,38 @@ def test_preset_arguments(tmp_path, monkeypatch, capsys):
 
 def test_worker_processes_write_the_same_site(tmp_path):
     """The variants exported in worker processes (``--jobs``) are the files one process writes."""
+    import gc
+
     from cellgl.playground import build_site
 
     sites = {}
-    for jobs in (1, 2):
-        out = tmp_path / f"j{jobs}"
-        res = build_site(out, ["f1", "hull"], thumbs=False, neighbours=False, jobs=jobs)
-        assert res["variants"] == 2
-        sites[jobs] = {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
-    assert sites[1] == sites[2]
+    try:
+        for jobs in (1, 2):
+            for collector in (True, False):     # off while the exports run, then as it was
+                (gc.enable if collector else gc.disable)()
+                out = tmp_path / f"j{jobs}{collector}"
+                res = build_site(out, ["f1", "hull"], thumbs=False, neighbours=False, jobs=jobs)
+                assert gc.isenabled() is collector
+                assert res["variants"] == 2
+                sites[jobs, collector] = {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*"))
+                                          if p.is_file()}
+    finally:
+        gc.enable()
+    assert all(files == sites[1, True] for files in sites.values())
 
 
 def test_one_compile_gives_the_live_and_the_copied_texts(tmp_path):
     """A variant's live GLSL ES (with the mean probe) and its copied GLSL ES, Godot and HLSL come
     from one compile: the copied code is the live code without what only the probe reaches, and
     it compiles."""
-    from cellgl.playground.variants import variant_texts
+    from cellgl.export import export
+    from cellgl.playground.variants import _body, variant_texts
 
     helpers = _export_helpers()
     v = variant_texts("f1")
     assert "cellgl_playground_probe" in v["live"] and "cellgl_playground_probe" not in v["gles"]
+    # printed from the compiled tree: what the exporter prints from its text
+    assert v["wgsl"] == _body(export("f1", "wgsl", fold=False))
     live_lines = set(v["live"].split("\n"))
     assert all(ln in live_lines for ln in v["gles"].split("\n") if ln.strip())
     helpers.compile_snippet(tmp_path, "gles", v["gles"])

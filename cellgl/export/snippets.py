@@ -301,20 +301,24 @@ def _fmt_value(v) -> str:
 
 
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
-                   code: str | None = None) -> str:
+                   code=None) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
     recipe's values stay named constants (see :func:`export`); ``code``: the compiled code to
-    print (default: :func:`library_code`'s)."""
+    print (default: :func:`library_code`'s), as text or as :func:`compiled_unit`'s tree (printed
+    as it is, without the parse of its text; the printers only read it)."""
     tgt = check_target(target)
     d = tgt.dialect
+    tree = None if code is None or isinstance(code, str) else code
     if d == "osl":
         # OSL keeps a texture's run-time values as shader parameters (unfolded code); a basis
         # snippet has none, so it takes the folded code like every other target
         from cellgl.export.osl import osl_shader
 
-        code = code if code is not None else library_code(prog, fold) if prog.entries else specialised_code(prog)
+        code = code_text(tree) if tree is not None else code if code is not None \
+            else library_code(prog, fold) if prog.entries else specialised_code(prog)
         return _header(prog, tgt, uniforms) + "\n" + osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
-    unit = parsed_library(library_code(prog, fold) if code is None else code)   # the one parse; the printers only read it
+    # the one parse (none for a tree); the printers only read it
+    unit = tree if tree is not None else parsed_library(library_code(prog, fold) if code is None else code)
     head = _header(prog, tgt, uniforms, {d.name for it in unit.items if isinstance(it, Global) for d in it.declarators})
     if d == "wgsl":
         return head + "\n" + translate.to_wgsl(unit)

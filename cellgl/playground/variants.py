@@ -16,15 +16,7 @@ import hashlib
 from dataclasses import replace
 
 from cellgl.export.reach import reached
-from cellgl.export.snippets import (
-    ExportError,
-    code_text,
-    compiled_unit,
-    entry_points,
-    export,
-    export_program,
-    texture_program,
-)
+from cellgl.export.snippets import ExportError, compiled_unit, entry_points, export_program, texture_program
 from cellgl.recipes import load_recipe
 from cellgl.texture.params import PARAMS_BY_NAME
 
@@ -108,20 +100,21 @@ def variant_texts(recipe) -> dict:
 
     One compile gives the first four: the probe is one more entry point of the live variant, and
     the others are that code reached from the texture's entry points only (what the probe alone
-    needs goes); the WGSL keeps the recipe's values named (``fold=False``), a second compile."""
+    needs goes); the WGSL keeps the recipe's values named (``fold=False``), a second compile.
+    Each target is printed from the compiled tree itself (the text ``cellgl export`` would
+    print and parse again gives the same snippets)."""
     r = load_recipe(recipe)
     prog = texture_program(r, uniforms=True)
     entries = entry_points(prog)
     live = replace(prog, entry=prog.entry + PROBE_ENTRY)
     unit = compiled_unit(live, entries=(*entries, "cellgl_playground_probe"))
-    out = {"key": variant_key(prog.defines),
-           "live": _body(export_program(live, "gles", uniforms=True, code=code_text(unit)))}
+    out = {"key": variant_key(prog.defines), "live": _body(export_program(live, "gles", uniforms=True, code=unit))}
     unit.items[:] = reached(unit.items, entries)
-    code = code_text(unit)
     for t in ("gles", "godot", "hlsl"):
-        out[t] = _body(export_program(prog, t, uniforms=True, code=code))
+        out[t] = _body(export_program(prog, t, uniforms=True, code=unit))
     # named constants (fold=False): the page writes the current values into them
-    out["wgsl"] = _body(export(r, "wgsl", fold=False))
+    consts = texture_program(r)
+    out["wgsl"] = _body(export_program(consts, "wgsl", fold=False, code=compiled_unit(consts, fold=False)))
     out["uniforms"] = [[t, n] for t, n, _ in prog.uniforms]
     return out
 
