@@ -15,8 +15,8 @@
 // Requires: cellular.glsl (included; with it walk.glsl).
 // Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
 // which walks), CELL_FEATURE_MAX_RING, CELL_EDGE_ALONE, CELL_SMOOTH_EXTRA,
-// CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined: a pass of
-// cellular.comp).
+// CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined, a pass of
+// cellular.comp, and CELL_WALK_TUNED is 1).
 
 #include "cellular.glsl"
 
@@ -34,10 +34,11 @@
 #endif
 
 #ifndef CELL_WALK_FAST
-// 1: the smooth walk's specialised loops below (a pass of cellular.comp; the
-// textures and the exported snippets keep the shorter general code).
+// 1: the smooth walk's specialised loops below (a pass of cellular.comp with
+// the tuned shapes, CELL_WALK_TUNED of walk.glsl; the textures and the
+// exported snippets keep the shorter general code).
 #ifdef CELL_FEATURE_PASS
-#define CELL_WALK_FAST 1
+#define CELL_WALK_FAST CELL_WALK_TUNED
 #else
 #define CELL_WALK_FAST 0
 #endif
@@ -254,13 +255,13 @@ void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec
 }
 
 // Visit, ring by ring, every cell that can hold a point within the reach.
-// From ring `first` on, each ring's window within the reach (which shrinks as the walk
+// Rings `first` .. `last`, each ring's window within the reach (which shrinks as the walk
 // goes), until a whole ring is beyond it; returns as _cell_walk.
-bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first)
+bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first, int last)
 {
     float m = cell_face_distance(f);
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = first; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    for (int ring = first; ring <= last; ring++) {
         w.loops += 1;
         float reach = _cell_walk_reach(w);
         if (float(ring - 1) + m >= reach) {
@@ -270,7 +271,7 @@ bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int f
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
         _cell_walk_window(w, cell, f, p, lo, hi, ring, true);      // (once spent, each next window stops at once)
     }
-    return !w.spent && float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
+    return !w.spent && float(last) + m >= _cell_walk_reach(w);
 }
 
 #if CELL_SMOOTH == 1 && !CELL_EDGE
@@ -352,10 +353,17 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 {
     float m = cell_face_distance(f);
-#if CELL_EDGE_ALONE
-    // The snippet's shorter code: rings 0 and 1 are windows of the ring loop
-    // too (the same points within the reach, so the same answer).
-    return _cell_walk_rings(w, cell, f, p, 0);
+#if CELL_EDGE_ALONE || !CELL_WALK_TUNED
+    // The plain version (CELL_WALK_TUNED 0) and the snippet's shorter code:
+    // rings 0 and 1 are windows of the ring loop too (the same points within
+    // the reach in the same order, so the same answer).
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+    if (!w.around) {
+        _cell_walk_rings(w, cell, f, p, 0, 1);
+        return _cell_walk_smooth(w, cell, f, p, m);
+    }
+#endif
+    return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
 #else
 #if _CELL_FAR_SUM
     w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
@@ -402,7 +410,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
         return _cell_walk_smooth(w, cell, f, p, m);
     }
 #endif
-    return _cell_walk_rings(w, cell, f, p, 2);
+    return _cell_walk_rings(w, cell, f, p, 2, CELL_FEATURE_MAX_RING);
 #endif
 }
 // A walk around the sample whose F1 point is at offset d1 (ID id1, distance
