@@ -16,8 +16,7 @@
 // CellResult.loops and stops, flagged inexact, before CELL_LOOP_BUDGET;
 // cell_features() (features.glsl) continues the same count.
 //
-// The sample is given as an integer cell plus a float fraction in [0, 1), so
-// precision does not depend on the distance from the origin.
+// The sample is an integer cell plus a float fraction in [0, 1): precision does not depend on where.
 //
 // Anisotropic distance (CELL_ANISO, stretched cells): a vector v has length
 // |p.axis_scale * v| (each axis weighted), so the Voronoi cells of the
@@ -34,7 +33,8 @@
 //         wanted; default 0: here only whether the search tracks the F1
 //         point's cell for the n-sphere radius alone), CELL_TRACK_F1_CELL
 //         (derived from those unless defined: 1 for the n-sphere radius alone),
-//         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache).
+//         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache),
+//         CELL_WALK_TUNED (walk.glsl: the shapes of the loops, tuned or plain).
 
 #include "walk.glsl"
 

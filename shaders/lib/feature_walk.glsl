@@ -1,10 +1,12 @@
 // cellgl: the walks of the cell features (features.glsl) around a sample.
 //
 // After cell_search() has found the F1 point, the features walk the cells
-// again (walk.glsl: the ring geometry, the cell source): ring 0 and ring 1 as
-// one unrolled block, then ring by ring within a reach that shrinks as the
-// walk goes (_cell_walk_rings), or, for smooth F1 alone, whose reach does not
-// change, one window loop (_cell_walk_smooth) or the rows of a Euclidean ball
+// again (walk.glsl: the ring geometry, the cell source): ring by ring from
+// ring 0, each ring's window within a reach that shrinks as the walk goes
+// (_cell_walk_rings: edge, n-sphere, edge alone, every walk around the F1
+// point), or, for smooth F1 alone, whose reach does not change, rings 0 and 1
+// (tuned, CELL_WALK_TUNED: one unrolled block, _cell_walk_block) and then one
+// window loop (_cell_walk_smooth) or the rows of a Euclidean ball
 // (_cell_walk_ball, a wide reach). The ring walk and the smooth window share
 // one window loop (_cell_walk_window) and one cell visit (_cell_walk_cell);
 // what a walk does per feature point is _cell_walk_point (edge, smooth,
@@ -347,42 +349,24 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 }
 #endif
 
-// Visit every cell around (cell, f) that can hold a point within the reach.
-// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
-// inside the loop budget (w.spent: it stopped at the budget).
-bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_TUNED
+// Smooth F1 (tuned): rings 0 and 1 as one block of constant bounds, unrolled
+// into straight-line SIMD code, every cell of it, in window order (the order
+// of the ring loop). Its reach F1 + 16 k seldom prunes a cell of ring 1, and
+// llvmpipe runs the body of an `if` even when no lane takes it: the ring
+// loop's pruned windows cost 1.08-1.18x here (2D; docs/performance.md). A
+// point beyond the reach changes nothing (its weight is cut). Constant loops
+// spend no loop passes: only the visits are counted. Returns whether the walk
+// goes on past ring 1 (not when the reach ends in ring 0 or the budget is spent).
+bool _cell_walk_block(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float m)
 {
-    float m = cell_face_distance(f);
-#if CELL_EDGE_ALONE || !CELL_WALK_TUNED
-    // The plain version (CELL_WALK_TUNED 0) and the snippet's shorter code:
-    // rings 0 and 1 are windows of the ring loop too (the same points within
-    // the reach in the same order, so the same answer).
-#if CELL_SMOOTH == 1 && !CELL_EDGE
-    if (!w.around) {
-        _cell_walk_rings(w, cell, f, p, 0, 1);
-        return _cell_walk_smooth(w, cell, f, p, m);
-    }
-#endif
-    return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
-#else
-#if _CELL_FAR_SUM
-    w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
-#endif
     if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
     }
     _cell_walk_cell(w, cell, f, ivec4(0), p);
-    // Ring 1 as a block of constant bounds, unrolled into straight-line SIMD
-    // code as in cell_search (most walks end in it); the same cells in the same
-    // order as the window loop below would visit, every one of them: llvmpipe
-    // runs the body of an `if` even when no lane takes it, so testing a cell
-    // against the reach costs more than it saves (a point beyond the reach
-    // changes nothing: its plane is further than the nearest, its smooth
-    // weight is cut, it is further than the nearest neighbour). Constant
-    // loops spend no loop passes: only the visits are counted.
     if (m >= _cell_walk_reach(w)) {
-        return true;
+        return false;
     }
     for (int x = -1; x <= 1; x++)
     for (int y = -1; y <= 1; y++)
@@ -405,13 +389,36 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             }
         }
     }
+    return true;
+}
+#endif
+
+// Visit every cell around (cell, f) that can hold a point within the reach.
+// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
+// inside the loop budget (w.spent: it stopped at the budget). Every walk is
+// the ring loop from ring 0 (rings 0 and 1 windows pruned against the reach,
+// as every later ring: measured faster than visiting the whole 3^d block),
+// but smooth F1 alone around the sample: rings 0 and 1, then the rest of its
+// fixed reach as one window or the ball's rows (_cell_walk_smooth).
+bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
+{
+#if _CELL_FAR_SUM
+    w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
+#endif
 #if CELL_SMOOTH == 1 && !CELL_EDGE
     if (!w.around) {
+        float m = cell_face_distance(f);
+#if CELL_WALK_TUNED
+        if (!_cell_walk_block(w, cell, f, p, m)) {
+            return !w.spent;
+        }
+#else
+        _cell_walk_rings(w, cell, f, p, 0, 1);
+#endif
         return _cell_walk_smooth(w, cell, f, p, m);
     }
 #endif
-    return _cell_walk_rings(w, cell, f, p, 2, CELL_FEATURE_MAX_RING);
-#endif
+    return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
 }
 // A walk around the sample whose F1 point is at offset d1 (ID id1, distance
 // F1), after `loops` loop passes.

@@ -27,18 +27,18 @@
 // searches several times in one invocation passes the count on
 // (cell_search_budget) so the bound holds for the invocation as a whole.
 //
-// The loops' shapes: one switch, CELL_WALK_TUNED (below). 1 (the default):
-// the shapes measured fastest on llvmpipe, chosen per case
-// (docs/performance.md): tested at the bottom where they run at least once, no
-// loop of their own for a stage almost no sample reaches, the search's rings
-// after 1 as nested or as one flat loop, ring 1 unrolled or pruned by its own
-// loop (cellular.glsl), the smooth walk's window and ball rows in a pass of
-// cellular.comp (feature_walk.glsl, CELL_WALK_FAST). 0: the plain version, one
-// shape for every case: the search's rings in nested loops, one outer pass a
-// ring, one inner pass a cell, ring 1 the first pass (2D, 3D: in the order of
-// its table), and the general walks. The same cells in the same order either
-// way: the same answers, bit for bit (the loop passes counted differ, so a
-// search cut by the loop budget may stop at another place).
+// The loops' shapes: one switch, CELL_WALK_TUNED (below). 0: the plain
+// version, one ring loop per walker: the search's rings in nested loops, one
+// outer pass a ring, one inner pass a cell of the ring's window, ring 1 the
+// first pass (2D, 3D: in the order of its table; cellular.glsl), and every
+// feature walk the ring loop from ring 0 (feature_walk.glsl). 1 (the
+// default): the shapes measured fastest on llvmpipe, chosen per case
+// (docs/performance.md): the search's ring 1 unrolled (jitter) or pruned by a
+// loop of its own (3D), its later rings one flat loop (2D jitter, 3D pruned);
+// smooth F1's rings 0 and 1 unrolled, its window or ball rows in a pass of
+// cellular.comp (CELL_WALK_FAST). The same cells in the same order either way:
+// the same answers, bit for bit (the loop passes counted differ, so a search
+// cut by the loop budget may stop at another place).
 //
 // Requires: hash.glsl, metric.glsl, points.glsl (included).
 // Macros: CELL_DIM (2..4), CELL_METRIC, CELL_ANISO, CELL_MAX_POINTS,
