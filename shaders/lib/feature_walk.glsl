@@ -258,22 +258,48 @@ void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec
 
 // Visit, ring by ring, every cell that can hold a point within the reach.
 // Rings `first` .. `last`, each ring's window within the reach (which shrinks as the walk
-// goes), until a whole ring is beyond it; returns as _cell_walk.
+// goes), until a whole ring is beyond it; returns as _cell_walk. The search's shape
+// (_cell_search_nested): one outer pass a ring, one inner pass a cell, both loops
+// tested at the bottom (every window holds a cell, the first ring is always
+// entered), measured 0.85-0.93x the time of top-tested loops; the passes are
+// counted as those spent them (the same budget).
 bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first, int last)
 {
     float m = cell_face_distance(f);
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = first; ring <= last; ring++) {
-        w.loops += 1;
+    int ring = first;
+    for (;;) {
+        w.loops += 2;             // this pass, and the one that leaves the window loop
         float reach = _cell_walk_reach(w);
-        if (float(ring - 1) + m >= reach) {
-            return !w.spent;
-        }
         ivec4 lo, hi;
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
-        _cell_walk_window(w, cell, f, p, lo, hi, ring, true);      // (once spent, each next window stops at once)
+        ivec4 n = hi - lo + 1;
+        int cells = n.x * n.y * n.z * n.w;
+        ivec4 o = cell_window_first(lo);
+        for (int t = 0; ; ) {
+            w.spent = w.spent || cell_budget_spent(w.loops);
+            w.loops += w.spent ? 0 : 1;
+            o = cell_window_next(o, lo, hi);
+            ivec4 ao = abs(o);
+            if (!w.spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
+                _cell_walk_cell(w, cell, f, o, p);
+            }
+            t++;
+            if (t >= cells || w.spent) {
+                break;
+            }
+        }
+        ring++;
+        if (ring > last || w.spent) {
+            break;
+        }
+        if (float(ring - 1) + m >= _cell_walk_reach(w)) {
+            w.loops += 1;         // the pass that found the reach passed
+            break;
+        }
     }
-    return !w.spent && float(last) + m >= _cell_walk_reach(w);
+    return !w.spent && (ring <= last || float(last) + m >= _cell_walk_reach(w));
 }
 
 #if CELL_SMOOTH == 1 && !CELL_EDGE
