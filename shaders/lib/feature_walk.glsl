@@ -233,25 +233,27 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
 // The window loop of every walk: the cells of the window lo .. hi on ring
 // `ring` that can hold a point within the reach (pruned), or, unpruned, every
 // cell of it on ring `ring` or beyond (the reach fixed: each point's own test
-// decides). Stops at the loop budget (w.spent).
+// decides). Tested at the bottom (a window holds a cell); the passes counted as
+// a loop tested at the top spends them. Stops at the loop budget (w.spent).
 void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec4 lo, ivec4 hi, int ring, bool pruned)
 {
     ivec4 n = hi - lo + 1;
     int cells = n.x * n.y * n.z * n.w;
     ivec4 o = cell_window_first(lo);
     w.loops += 1;             // the pass that leaves the window loop
-    for (int i = 0; i < cells; i++) {
-        if (cell_budget_spent(w.loops)) {
-            w.spent = true;
-            break;
-        }
-        w.loops += 1;
+    for (int t = 0; ; ) {
+        w.spent = w.spent || cell_budget_spent(w.loops);
+        w.loops += w.spent ? 0 : 1;
         o = cell_window_next(o, lo, hi);
         ivec4 ao = abs(o);
-        if (pruned ? max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                     && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
-                   : max(max(ao.x, ao.y), max(ao.z, ao.w)) >= ring) {
+        if (!w.spent && (pruned ? max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+                                  && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
+                                : max(max(ao.x, ao.y), max(ao.z, ao.w)) >= ring)) {
             _cell_walk_cell(w, cell, f, o, p);
+        }
+        t++;
+        if (t >= cells || w.spent) {
+            break;
         }
     }
 }
@@ -269,27 +271,11 @@ bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int f
     w.loops += 1;                 // the pass that leaves the ring loop
     int ring = first;
     for (;;) {
-        w.loops += 2;             // this pass, and the one that leaves the window loop
+        w.loops += 1;
         float reach = _cell_walk_reach(w);
         ivec4 lo, hi;
         cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
-        ivec4 n = hi - lo + 1;
-        int cells = n.x * n.y * n.z * n.w;
-        ivec4 o = cell_window_first(lo);
-        for (int t = 0; ; ) {
-            w.spent = w.spent || cell_budget_spent(w.loops);
-            w.loops += w.spent ? 0 : 1;
-            o = cell_window_next(o, lo, hi);
-            ivec4 ao = abs(o);
-            if (!w.spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)) {
-                _cell_walk_cell(w, cell, f, o, p);
-            }
-            t++;
-            if (t >= cells || w.spent) {
-                break;
-            }
-        }
+        _cell_walk_window(w, cell, f, p, lo, hi, ring, true);
         ring++;
         if (ring > last || w.spent) {
             break;
