@@ -233,26 +233,23 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
 // The window loop of every walk: the cells of the window lo .. hi on ring
 // `ring` that can hold a point within the reach (pruned), or, unpruned, every
 // cell of it on ring `ring` or beyond (the reach fixed: each point's own test
-// decides). Tested at the bottom (a window holds a cell); the passes counted as
-// a loop tested at the top spends them. Stops at the loop budget (w.spent).
+// decides). Tested at the bottom (a window holds a cell, hi its last); the
+// passes counted as a loop tested at the top spends them (after the budget is
+// spent the count no longer matters). Stops at the loop budget (w.spent).
 void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec4 lo, ivec4 hi, int ring, bool pruned)
 {
-    ivec4 n = hi - lo + 1;
-    int cells = n.x * n.y * n.z * n.w;
     ivec4 o = cell_window_first(lo);
     w.loops += 1;             // the pass that leaves the window loop
-    for (int t = 0; ; ) {
+    for (;;) {
         w.spent = w.spent || cell_budget_spent(w.loops);
-        w.loops += w.spent ? 0 : 1;
+        w.loops += 1;
         o = cell_window_next(o, lo, hi);
-        ivec4 ao = abs(o);
-        if (!w.spent && (pruned ? max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
+        if (!w.spent && (pruned ? cell_ring_of(o) == ring
                                   && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
-                                : max(max(ao.x, ao.y), max(ao.z, ao.w)) >= ring)) {
+                                : cell_ring_of(o) >= ring)) {
             _cell_walk_cell(w, cell, f, o, p);
         }
-        t++;
-        if (t >= cells || w.spent) {
+        if (all(equal(o, hi)) || w.spent) {
             break;
         }
     }
@@ -272,9 +269,8 @@ bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int f
     int ring = first;
     for (;;) {
         w.loops += 1;
-        float reach = _cell_walk_reach(w);
         ivec4 lo, hi;
-        cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
+        cell_ring_window(ring, min(_cell_walk_reach(w), float(ring + 2)), f, lo, hi);
         _cell_walk_window(w, cell, f, p, lo, hi, ring, true);
         ring++;
         if (ring > last || w.spent || float(ring - 1) + m >= _cell_walk_reach(w)) {

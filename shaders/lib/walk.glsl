@@ -118,6 +118,12 @@ const ivec4 _cell_axes = ivec4(1, 1, 1, 0);
 const ivec4 _cell_axes = ivec4(1, 1, 0, 0);
 #endif
 
+// The ring of the cell at offset o (its Chebyshev distance from the sample's).
+int cell_ring_of(ivec4 o)
+{
+    return max(max(abs(o.x), abs(o.y)), max(abs(o.z), abs(o.w)));
+}
+
 // The window of ring `ring` that a point within true distance `reach` of the
 // sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
 void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
