@@ -208,6 +208,30 @@ def test_grid_cell_cache_gives_the_same_bits(ctx, monkeypatch, dim):
             assert np.array_equal(getattr(on, k), getattr(off, k)), (dist, spacing, period, k)
 
 
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_plain_walker_gives_the_same_bits(ctx, monkeypatch, dim):
+    """CELL_WALK_TUNED 0 (walk.glsl: the plain shapes, one ring loop per walker) answers with the
+    same bits as the tuned shapes of the default: the search with every distribution, periodic
+    too, and each feature walk alone (the edge and the n-sphere radius: the ring loop from ring 0;
+    smooth F1 alone: its block of rings 0 and 1, window and ball rows against the ring loop).
+    At k = 0.1: at 0.25 the plain smooth window (3D, 4D) spends enough loop passes to hit the
+    budget where the ball does not, and a flagged sample is the NumPy fallback's (float64)."""
+    x, _ = _samples(dim, 1000.0, 2000, seed=11)
+    orig = gpu.defines_for
+    cases = [(dist, outputs, period) for dist in ("poisson", "jitter", "blender")
+             for outputs in (("F", "delta", "id"), ("edge",), ("nsphere",), ("smooth_F1",))
+             for period in (None, (5, 7, 6, 4)[:dim]) if not (dist == "blender" and period)]
+    for dist, outputs, period in cases:
+        kw = dict(DISTS[dist], outputs=outputs, smoothness=0.1, period=period)
+        got = {}
+        for tuned in (1, 0):
+            monkeypatch.setattr(gpu, "defines_for",
+                                lambda *a, t=tuned, **k: {**orig(*a, **k), "CELL_WALK_TUNED": t})
+            got[tuned] = cellgl.cellular(x, 3, **kw)
+        for k in outputs + ("exact",):
+            assert np.array_equal(getattr(got[1], k), getattr(got[0], k)), (dist, period, k)
+
+
 # ------------------------------------------------------------------ the loop budget
 
 

@@ -16,8 +16,7 @@
 // CellResult.loops and stops, flagged inexact, before CELL_LOOP_BUDGET;
 // cell_features() (features.glsl) continues the same count.
 //
-// The sample is given as an integer cell plus a float fraction in [0, 1), so
-// precision does not depend on the distance from the origin.
+// The sample is an integer cell plus a float fraction in [0, 1): precision does not depend on where.
 //
 // Anisotropic distance (CELL_ANISO, stretched cells): a vector v has length
 // |p.axis_scale * v| (each axis weighted), so the Voronoi cells of the
@@ -34,7 +33,8 @@
 //         wanted; default 0: here only whether the search tracks the F1
 //         point's cell for the n-sphere radius alone), CELL_TRACK_F1_CELL
 //         (derived from those unless defined: 1 for the n-sphere radius alone),
-//         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache).
+//         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache),
+//         CELL_WALK_TUNED (walk.glsl: the shapes of the loops, tuned or plain).
 
 #include "walk.glsl"
 
@@ -63,14 +63,19 @@
 #endif
 #endif
 
-// How cell_search_budget walks the rings after ring 0 (measured, docs/performance.md):
-// nested loops, one pass per ring and per cell (2D and 4D pruned, 3D and 4D
-// jitter), or one flat loop over the cells of rings 2, 3, ... (2D jitter, 3D
-// pruned); and the first ring walked as a window (4D pruned: ring 1).
-#if (CELL_RING1_PRUNE && CELL_DIM != 3) || (!CELL_RING1_PRUNE && CELL_DIM >= 3)
-#define _CELL_NESTED 1
-#else
+// How cell_search_budget walks the rings after ring 0 (CELL_WALK_TUNED, walk.glsl):
+// nested loops, a pass per ring and per cell (plain: every case), or one flat loop
+// over the cells of rings 2, 3, ... (2D jitter, 3D pruned); ring 1 from its table in
+// the nested loops' first pass (2D pruned; plain: 2D, 3D), or a window (4D pruned).
+#if CELL_WALK_TUNED && ((CELL_RING1_PRUNE && CELL_DIM == 3) || (!CELL_RING1_PRUNE && CELL_DIM == 2))
 #define _CELL_NESTED 0
+#else
+#define _CELL_NESTED 1
+#endif
+#if CELL_DIM <= 3 && (!CELL_WALK_TUNED || (CELL_RING1_PRUNE && CELL_DIM == 2))
+#define _CELL_RING1_TABLE 1
+#else
+#define _CELL_RING1_TABLE 0
 #endif
 #if CELL_DIM == 4 && CELL_RING1_PRUNE
 #define _CELL_FIRST_WINDOW 1
@@ -275,18 +280,16 @@ CellResult _cell_result_start(int loops)
     return r;
 }
 
-// Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1),
-// then rings 2, 3, ... while a point there could still be closer than F_n,
-// each ring's window of cells that can reach. A cell is skipped when its
-// nearest possible point is no closer than the current F_n (skipping never
-// changes the result: such a point could not be inserted). On llvmpipe an
-// `if` does not branch and every loop runs at least one pass, under an
-// empty mask if need be: a loop of their own for rings 2, 3, ..., which
-// almost no sample needs, cost every SIMD vector a masked pass. So they
-// are walked by a loop whose first pass is ring 1's own work (3D pruned:
-// a flat loop entered from an empty pass, the cheapest to enter).
+// Ring 1, the rest of the 3^d block (2D, 3D: nearest first, _cell_ring1), then
+// rings 2, 3, ... while a point there could still be closer than F_n, each ring's
+// window of cells that can reach. A cell is skipped when its nearest possible point
+// is no closer than F_n (such a point could not be inserted). On llvmpipe every
+// loop runs at least one pass, masked if need be: a loop of their own for rings 2,
+// 3, ..., which almost no sample needs, cost every SIMD vector a masked pass. So
+// they are walked by a loop whose first pass is ring 1's own work (3D pruned,
+// tuned: a flat loop entered from an empty pass, the cheapest to enter).
 
-#if !CELL_RING1_PRUNE
+#if !CELL_RING1_PRUNE && !_CELL_RING1_TABLE
 // Unpruned (a test costs more than jitter's one point per cell) and
 // unrolled, but for its last cell (_cell_axes, all +1), the loop's first pass.
 void _cell_search_ring1_all(inout CellResult r, ivec4 cell, vec4 f, CellParams p, inout bool spent)
@@ -322,8 +325,8 @@ void _cell_search_ring1_all(inout CellResult r, ivec4 cell, vec4 f, CellParams p
 #if _CELL_NESTED
 // Rings `ring`, ring + 1, ... of cell_search_budget as nested loops: one pass of the
 // outer loop per ring, of the inner one per cell (the first pass: what is left of
-// ring 1, `cells` passes over the window lo .. hi or, 2D, the table in the order sh).
-#if CELL_DIM == 2 && CELL_RING1_PRUNE
+// ring 1, `cells` passes over the window lo .. hi or the table in the order sh).
+#if _CELL_RING1_TABLE
 void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
                          inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells, ivec4 sh, vec4 qn)
 #else
@@ -331,7 +334,7 @@ void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, f
                          inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells)
 #endif
 {
-#if CELL_DIM == 2 && CELL_RING1_PRUNE
+#if _CELL_RING1_TABLE && CELL_RING1_PRUNE
     // The table's least box distance of each tail (as cell_search_budget's 3D ring 1).
     float rest[CELL_RING1_CELLS + 1];
     rest[CELL_RING1_CELLS] = CELL_FAR;
@@ -351,7 +354,7 @@ void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, f
         for (int t = 0; ; ) {
             spent = cell_budget_spent(r.loops);      // the count only grows
             r.loops += 1;
-#if CELL_DIM == 2 && CELL_RING1_PRUNE
+#if _CELL_RING1_TABLE
             o = ring == 1 ? _cell_ring1_offset(min(t, CELL_RING1_CELLS - 1), sh) : cell_window_next(o, lo, hi);
 #else
             o = cell_window_next(o, lo, hi);
@@ -362,7 +365,7 @@ void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, f
                 _cell_visit(r, cell, f, o, p);
             }
             t++;
-#if CELL_DIM == 2 && CELL_RING1_PRUNE
+#if _CELL_RING1_TABLE && CELL_RING1_PRUNE
             if (t >= cells || spent || (ring == 1 && rest[min(t, CELL_RING1_CELLS)] >= r.F[CELL_N - 1])) {
 #else
             if (t >= cells || spent) {
@@ -429,10 +432,16 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     ivec4 sh;
     vec4 qn;
     _cell_ring1_order(f, sh, qn);
+#elif _CELL_RING1_TABLE
+    ivec4 sh = ivec4(0, 4, 8, 0);     // unpruned: the table as listed (_cell_search_ring1_all)
+    vec4 qn = f;
 #endif
     // The part of ring 1 before the loop below, and what is left of it, as
     // `cells` passes over the window lo .. hi (or the table).
-#if CELL_RING1_PRUNE && CELL_DIM == 3
+#if _CELL_RING1_TABLE
+    int cells = CELL_RING1_CELLS;     // the table
+    ivec4 lo = ivec4(0), hi = lo;
+#elif CELL_RING1_PRUNE && CELL_DIM == 3
     // The cells' nearest possible distances in visiting order, and the least of
     // each tail: the walk leaves its loop once no cell left can beat F_n. A
     // run-time loop on purpose: in straight-line SIMD code a pruned cell still
@@ -457,9 +466,6 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         }
     }
     ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
-#elif CELL_RING1_PRUNE && CELL_DIM == 2
-    int cells = CELL_RING1_CELLS;     // the table
-    ivec4 lo = ivec4(0), hi = lo;
 #elif CELL_RING1_PRUNE
     int cells = 0;                    // 4D: ring 1 a window too, in the loop
     ivec4 lo = ivec4(0), hi = lo;
@@ -469,7 +475,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     ivec4 lo = _cell_axes, hi = lo;
 #endif
 #if _CELL_NESTED
-#if CELL_DIM == 2 && CELL_RING1_PRUNE
+#if _CELL_RING1_TABLE
     _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells, sh, qn);
 #else
     _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells);

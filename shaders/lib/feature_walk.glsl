@@ -1,10 +1,12 @@
 // cellgl: the walks of the cell features (features.glsl) around a sample.
 //
 // After cell_search() has found the F1 point, the features walk the cells
-// again (walk.glsl: the ring geometry, the cell source): ring 0 and ring 1 as
-// one unrolled block, then ring by ring within a reach that shrinks as the
-// walk goes (_cell_walk_rings), or, for smooth F1 alone, whose reach does not
-// change, one window loop (_cell_walk_smooth) or the rows of a Euclidean ball
+// again (walk.glsl: the ring geometry, the cell source): ring by ring from
+// ring 0, each ring's window within a reach that shrinks as the walk goes
+// (_cell_walk_rings: edge, n-sphere, edge alone, every walk around the F1
+// point), or, for smooth F1 alone, whose reach does not change, rings 0 and 1
+// (tuned, CELL_WALK_TUNED: one unrolled block, _cell_walk_block) and then one
+// window loop (_cell_walk_smooth) or the rows of a Euclidean ball
 // (_cell_walk_ball, a wide reach). The ring walk and the smooth window share
 // one window loop (_cell_walk_window) and one cell visit (_cell_walk_cell);
 // what a walk does per feature point is _cell_walk_point (edge, smooth,
@@ -15,8 +17,8 @@
 // Requires: cellular.glsl (included; with it walk.glsl).
 // Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
 // which walks), CELL_FEATURE_MAX_RING, CELL_EDGE_ALONE, CELL_SMOOTH_EXTRA,
-// CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined: a pass of
-// cellular.comp).
+// CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined, a pass of
+// cellular.comp, and CELL_WALK_TUNED is 1).
 
 #include "cellular.glsl"
 
@@ -34,10 +36,11 @@
 #endif
 
 #ifndef CELL_WALK_FAST
-// 1: the smooth walk's specialised loops below (a pass of cellular.comp; the
-// textures and the exported snippets keep the shorter general code).
+// 1: the smooth walk's specialised loops below (a pass of cellular.comp with
+// the tuned shapes, CELL_WALK_TUNED of walk.glsl; the textures and the
+// exported snippets keep the shorter general code).
 #ifdef CELL_FEATURE_PASS
-#define CELL_WALK_FAST 1
+#define CELL_WALK_FAST CELL_WALK_TUNED
 #else
 #define CELL_WALK_FAST 0
 #endif
@@ -230,47 +233,52 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
 // The window loop of every walk: the cells of the window lo .. hi on ring
 // `ring` that can hold a point within the reach (pruned), or, unpruned, every
 // cell of it on ring `ring` or beyond (the reach fixed: each point's own test
-// decides). Stops at the loop budget (w.spent).
+// decides). Tested at the bottom (a window holds a cell, hi its last); the
+// passes counted as a loop tested at the top spends them (after the budget is
+// spent the count no longer matters). Stops at the loop budget (w.spent).
 void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec4 lo, ivec4 hi, int ring, bool pruned)
 {
-    ivec4 n = hi - lo + 1;
-    int cells = n.x * n.y * n.z * n.w;
     ivec4 o = cell_window_first(lo);
     w.loops += 1;             // the pass that leaves the window loop
-    for (int i = 0; i < cells; i++) {
-        if (cell_budget_spent(w.loops)) {
-            w.spent = true;
-            break;
-        }
+    for (;;) {
+        w.spent = w.spent || cell_budget_spent(w.loops);
         w.loops += 1;
         o = cell_window_next(o, lo, hi);
-        ivec4 ao = abs(o);
-        if (pruned ? max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                     && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
-                   : max(max(ao.x, ao.y), max(ao.z, ao.w)) >= ring) {
+        if (!w.spent && (pruned ? cell_ring_of(o) == ring
+                                  && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
+                                : cell_ring_of(o) >= ring)) {
             _cell_walk_cell(w, cell, f, o, p);
+        }
+        if (all(equal(o, hi)) || w.spent) {
+            break;
         }
     }
 }
 
 // Visit, ring by ring, every cell that can hold a point within the reach.
-// From ring `first` on, each ring's window within the reach (which shrinks as the walk
-// goes), until a whole ring is beyond it; returns as _cell_walk.
-bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first)
+// Rings `first` .. `last`, each ring's window within the reach (which shrinks as the walk
+// goes), until a whole ring is beyond it; returns as _cell_walk. The search's shape
+// (_cell_search_nested): one outer pass a ring, one inner pass a cell, both loops
+// tested at the bottom (every window holds a cell, the first ring is always
+// entered), measured 0.87-0.94x the time of top-tested loops; the passes are
+// counted as those spent them (the same budget).
+bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first, int last)
 {
     float m = cell_face_distance(f);
     w.loops += 1;                 // the pass that leaves the ring loop
-    for (int ring = first; ring <= CELL_FEATURE_MAX_RING; ring++) {
+    int ring = first;
+    for (;;) {
         w.loops += 1;
-        float reach = _cell_walk_reach(w);
-        if (float(ring - 1) + m >= reach) {
-            return !w.spent;
-        }
         ivec4 lo, hi;
-        cell_ring_window(ring, min(reach, float(ring + 2)), f, lo, hi);
-        _cell_walk_window(w, cell, f, p, lo, hi, ring, true);      // (once spent, each next window stops at once)
+        cell_ring_window(ring, min(_cell_walk_reach(w), float(ring + 2)), f, lo, hi);
+        _cell_walk_window(w, cell, f, p, lo, hi, ring, true);
+        ring++;
+        if (ring > last || w.spent || float(ring - 1) + m >= _cell_walk_reach(w)) {
+            break;
+        }
     }
-    return !w.spent && float(CELL_FEATURE_MAX_RING) + m >= _cell_walk_reach(w);
+    w.loops += ring <= last ? 1 : 0;     // the pass that found the reach passed
+    return !w.spent && (ring <= last || float(last) + m >= _cell_walk_reach(w));
 }
 
 #if CELL_SMOOTH == 1 && !CELL_EDGE
@@ -346,35 +354,24 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 }
 #endif
 
-// Visit every cell around (cell, f) that can hold a point within the reach.
-// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
-// inside the loop budget (w.spent: it stopped at the budget).
-bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
+#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_TUNED
+// Smooth F1 (tuned): rings 0 and 1 as one block of constant bounds, unrolled
+// into straight-line SIMD code, every cell of it, in window order (the order
+// of the ring loop). Its reach F1 + 16 k seldom prunes a cell of ring 1, and
+// llvmpipe runs the body of an `if` even when no lane takes it: the ring
+// loop's pruned windows cost 1.08-1.18x here (2D; docs/performance.md). A
+// point beyond the reach changes nothing (its weight is cut). Constant loops
+// spend no loop passes: only the visits are counted. Returns whether the walk
+// goes on past ring 1 (not when the reach ends in ring 0 or the budget is spent).
+bool _cell_walk_block(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float m)
 {
-    float m = cell_face_distance(f);
-#if CELL_EDGE_ALONE
-    // The snippet's shorter code: rings 0 and 1 are windows of the ring loop
-    // too (the same points within the reach, so the same answer).
-    return _cell_walk_rings(w, cell, f, p, 0);
-#else
-#if _CELL_FAR_SUM
-    w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
-#endif
     if (cell_budget_spent(w.loops)) {
         w.spent = true;
         return false;
     }
     _cell_walk_cell(w, cell, f, ivec4(0), p);
-    // Ring 1 as a block of constant bounds, unrolled into straight-line SIMD
-    // code as in cell_search (most walks end in it); the same cells in the same
-    // order as the window loop below would visit, every one of them: llvmpipe
-    // runs the body of an `if` even when no lane takes it, so testing a cell
-    // against the reach costs more than it saves (a point beyond the reach
-    // changes nothing: its plane is further than the nearest, its smooth
-    // weight is cut, it is further than the nearest neighbour). Constant
-    // loops spend no loop passes: only the visits are counted.
     if (m >= _cell_walk_reach(w)) {
-        return true;
+        return false;
     }
     for (int x = -1; x <= 1; x++)
     for (int y = -1; y <= 1; y++)
@@ -397,13 +394,36 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
             }
         }
     }
+    return true;
+}
+#endif
+
+// Visit every cell around (cell, f) that can hold a point within the reach.
+// Returns whether the walk finished before CELL_FEATURE_MAX_RING rings and
+// inside the loop budget (w.spent: it stopped at the budget). Every walk is
+// the ring loop from ring 0 (rings 0 and 1 windows pruned against the reach,
+// as every later ring: measured faster than visiting the whole 3^d block),
+// but smooth F1 alone around the sample: rings 0 and 1, then the rest of its
+// fixed reach as one window or the ball's rows (_cell_walk_smooth).
+bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
+{
+#if _CELL_FAR_SUM
+    w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
+#endif
 #if CELL_SMOOTH == 1 && !CELL_EDGE
     if (!w.around) {
+        float m = cell_face_distance(f);
+#if CELL_WALK_TUNED
+        if (!_cell_walk_block(w, cell, f, p, m)) {
+            return !w.spent;
+        }
+#else
+        _cell_walk_rings(w, cell, f, p, 0, 1);
+#endif
         return _cell_walk_smooth(w, cell, f, p, m);
     }
 #endif
-    return _cell_walk_rings(w, cell, f, p, 2);
-#endif
+    return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
 }
 // A walk around the sample whose F1 point is at offset d1 (ID id1, distance
 // F1), after `loops` loop passes.

@@ -168,11 +168,11 @@ CellFeatures cell_poly_features(ivec4 cell, vec4 f, CellParams p, float smoothne
 float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
 {
     _CellWalk w = _cell_walk_start(vec4(0.0), 0u, CELL_FAR, 0, 0.0);
-    _cell_walk_rings(w, cell, f, p, 0);
+    _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
     w.nearest = false;
     w.F1 = cell_metric_finish(w.F1, p.minkowski_p);
     w.edge = CELL_FAR;
-    _cell_walk_rings(w, cell, f, p, 0);
+    _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
     return max(w.edge, 0.0);
 }
 #endif

@@ -27,15 +27,25 @@
 // searches several times in one invocation passes the count on
 // (cell_search_budget) so the bound holds for the invocation as a whole.
 //
-// The loops themselves keep the shapes measured on llvmpipe
-// (docs/performance.md): tested at the bottom where they run at least once,
-// no loop of their own for a stage almost no sample reaches.
+// The loops' shapes: one switch, CELL_WALK_TUNED (below). 0: the plain
+// version, one ring loop per walker: the search's rings in nested loops, one
+// outer pass a ring, one inner pass a cell of the ring's window, ring 1 the
+// first pass (2D, 3D: in the order of its table; cellular.glsl), and every
+// feature walk the ring loop from ring 0 (feature_walk.glsl). 1 (the
+// default): the shapes measured fastest on llvmpipe, chosen per case
+// (docs/performance.md): the search's ring 1 unrolled (jitter) or pruned by a
+// loop of its own (3D), its later rings one flat loop (2D jitter, 3D pruned);
+// smooth F1's rings 0 and 1 unrolled, its window or ball rows in a pass of
+// cellular.comp (CELL_WALK_FAST). The same cells in the same order either way:
+// the same answers, bit for bit (the loop passes counted differ, so a search
+// cut by the loop budget may stop at another place).
 //
 // Requires: hash.glsl, metric.glsl, points.glsl (included).
 // Macros: CELL_DIM (2..4), CELL_METRIC, CELL_ANISO, CELL_MAX_POINTS,
 //         CELL_LOOP_BUDGET (loop iterations one invocation may spend),
 //         CELL_SHARED_CELLS (1: a cache of cells computed ahead, below; only
-//         a compute entry that provides it defines it).
+//         a compute entry that provides it defines it), CELL_WALK_TUNED (the
+//         loops' shapes, above; default 1).
 
 #include "hash.glsl"
 #include "metric.glsl"
@@ -44,6 +54,10 @@
 // Greater than any distance: "no point found yet" (below the float maximum,
 // so a sum or a square root of it stays finite where the walks take one).
 #define CELL_FAR 3.0e38
+
+#ifndef CELL_WALK_TUNED
+#define CELL_WALK_TUNED 1
+#endif
 
 #ifndef CELL_LOOP_BUDGET
 // 6144 per invocation: the 8 invocations of one llvmpipe SIMD vector (AVX2)
@@ -103,6 +117,12 @@ const ivec4 _cell_axes = ivec4(1, 1, 1, 0);
 #else
 const ivec4 _cell_axes = ivec4(1, 1, 0, 0);
 #endif
+
+// The ring of the cell at offset o (its Chebyshev distance from the sample's).
+int cell_ring_of(ivec4 o)
+{
+    return max(max(abs(o.x), abs(o.y)), max(abs(o.z), abs(o.w)));
+}
 
 // The window of ring `ring` that a point within true distance `reach` of the
 // sample (fraction f of its cell) can lie in: offsets lo..hi per axis.
