@@ -106,4 +106,5 @@ def _ordered(items: list) -> list:
 
     for it in items:
         visit(it)
+    del visit   # its cell refers to itself: break the cycle for reference counting
     return out

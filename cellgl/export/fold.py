@@ -46,6 +46,14 @@ def global_constants(unit: S.Unit) -> tuple[dict, dict]:
     return env, arrays
 
 
+def _order(n, k, pos, last) -> int:
+    pos[id(n)] = k
+    for c in children(n):
+        k = _order(c, k + 1, pos, last)
+    last[id(n)] = k
+    return k
+
+
 class Facts:
     """What the passes know of one function: its nodes in source order, blocks, declarations,
     the occurrences of each name (:func:`cellgl.export.tree.occurrences`), the nodes inside
@@ -63,14 +71,7 @@ class Facts:
     def order(self) -> tuple[dict, dict]:
         """``({id(node): position}, {id(node): the last position below it})``."""
         pos, last = {}, {}
-
-        def visit(n, k):
-            pos[id(n)] = k
-            for c in children(n):
-                k = visit(c, k + 1)
-            last[id(n)] = k
-            return k
-        visit(self.fn.body, 0)
+        _order(self.fn.body, 0, pos, last)
         return pos, last
 
     @cached_property

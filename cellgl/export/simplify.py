@@ -470,12 +470,9 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
 
     def bare(p, top=False):
         nonlocal changed
-        if not isinstance(p, S.Paren):
-            return p
-        e = p.inner
-        if isinstance(e, ATOMS) or top and not isinstance(e, (S.Ternary, S.Assign)):
-            changed = True
-            return bare(e, top)
+        while isinstance(p, S.Paren) and (isinstance(p.inner, ATOMS) or top and not isinstance(
+                p.inner, (S.Ternary, S.Assign))):
+            changed, p = True, p.inner
         return p
 
     def fix(n):

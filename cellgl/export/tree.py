@@ -45,21 +45,21 @@ def children(node) -> list:
     return out
 
 
+def _walk(n, add):
+    add(n)
+    for name, many in CHILD_FIELDS[type(n)]:
+        v = getattr(n, name)
+        if many:
+            for x in v:
+                _walk(x, add)
+        elif v is not None:
+            _walk(v, add)
+
+
 def walk(node) -> list:
     """``node`` and every node below it, pre-order (parents before children)."""
     out = []
-    add = out.append
-
-    def visit(n):
-        add(n)
-        for name, many in CHILD_FIELDS[type(n)]:
-            v = getattr(n, name)
-            if many:
-                for x in v:
-                    visit(x)
-            elif v is not None:
-                visit(v)
-    visit(node)
+    _walk(node, out.append)
     return out
 
 
@@ -243,45 +243,46 @@ def is_pure(node, ctx: Context | None) -> bool:
     return True
 
 
+def _target(t, role, out, ctx):
+    if isinstance(t, S.Name):
+        out.setdefault(t.name, []).append((t, role))
+    elif isinstance(t, S.Paren):
+        _target(t.inner, role, out, ctx)
+    elif isinstance(t, (S.Member, S.Index)):
+        _target(t.base, "part" if role == "store" else role, out, ctx)
+        if isinstance(t, S.Index):
+            _occurrences(t.index, out, ctx)
+    else:
+        _occurrences(t, out, ctx)
+
+
+def _occurrences(n, out, ctx):
+    if isinstance(n, S.Name):
+        out.setdefault(n.name, []).append((n, "read"))
+    elif isinstance(n, S.Assign):
+        _target(n.target, "store" if n.op == "=" else "update", out, ctx)
+        _occurrences(n.value, out, ctx)
+    elif isinstance(n, S.IncDec):
+        _target(n.operand, "update", out, ctx)
+    elif isinstance(n, S.Call):
+        modes = _out_modes(n, ctx)
+        for k, a in enumerate(n.args):
+            if k in modes:
+                _target(a, "store" if modes[k] == "out" else "update", out, ctx)
+            else:
+                _occurrences(a, out, ctx)
+    else:
+        for c in children(n):
+            _occurrences(c, out, ctx)
+
+
 def occurrences(root, ctx: Context | None = None) -> dict:
     """``{name: [(Name node, role), ...]}`` of every variable named below ``root``, in source
     order. ``role``: ``"read"``; ``"store"`` (``x = ...``, or an ``out`` argument); ``"part"``
     (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"`` (read and written:
     ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
     out: dict = {}
-
-    def target(t, role):
-        if isinstance(t, S.Name):
-            out.setdefault(t.name, []).append((t, role))
-        elif isinstance(t, S.Paren):
-            target(t.inner, role)
-        elif isinstance(t, (S.Member, S.Index)):
-            target(t.base, "part" if role == "store" else role)
-            if isinstance(t, S.Index):
-                visit(t.index)
-        else:
-            visit(t)
-
-    def visit(n):
-        if isinstance(n, S.Name):
-            out.setdefault(n.name, []).append((n, "read"))
-        elif isinstance(n, S.Assign):
-            target(n.target, "store" if n.op == "=" else "update")
-            visit(n.value)
-        elif isinstance(n, S.IncDec):
-            target(n.operand, "update")
-        elif isinstance(n, S.Call):
-            modes = _out_modes(n, ctx)
-            for k, a in enumerate(n.args):
-                if k in modes:
-                    target(a, "store" if modes[k] == "out" else "update")
-                else:
-                    visit(a)
-        else:
-            for c in children(n):
-                visit(c)
-
-    visit(root)
+    _occurrences(root, out, ctx)
     return out
 
 
