@@ -300,6 +300,7 @@ def _fmt_value(v) -> str:
     return str(v)
 
 
+@compiler.collector_paused()
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
                    code=None) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
