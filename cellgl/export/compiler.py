@@ -42,9 +42,8 @@ MAX_ROUNDS = 64
 
 @contextmanager
 def collector_paused():
-    """The cyclic garbage collector off within, then (if it was on) on again after one pass over
-    the youngest generation: a compile keeps tens of thousands of nodes alive at once, and the
-    collector's passes, set off by them, walked the caches (the parsed library, ...) again and again."""
+    """The cyclic garbage collector off within, then (if it was on) on again after a pass over the
+    youngest generation: the many nodes a compile holds set off full passes over the caches."""
     was = gc.isenabled()
     gc.disable()
     try:

@@ -46,14 +46,6 @@ def global_constants(unit: S.Unit) -> tuple[dict, dict]:
     return env, arrays
 
 
-def _order(n, k, pos, last) -> int:
-    pos[id(n)] = k
-    for c in children(n):
-        k = _order(c, k + 1, pos, last)
-    last[id(n)] = k
-    return k
-
-
 class Facts:
     """What the passes know of one function: its nodes in source order, blocks, declarations,
     the occurrences of each name (:func:`cellgl.export.tree.occurrences`), the nodes inside
@@ -70,8 +62,10 @@ class Facts:
     @cached_property
     def order(self) -> tuple[dict, dict]:
         """``({id(node): position}, {id(node): the last position below it})``."""
-        pos, last = {}, {}
-        _order(self.fn.body, 0, pos, last)
+        pos, last = {id(n): k for k, n in enumerate(self.nodes)}, {}
+        for n in reversed(self.nodes):            # (pre-order: a node's last is its last child's)
+            kids = children(n)
+            last[id(n)] = last[id(kids[-1])] if kids else pos[id(n)]
         return pos, last
 
     @cached_property

@@ -487,8 +487,7 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
                 if isinstance(p, S.Paren) and isinstance(p.inner, S.Binary) and p.inner.op in _ARITH:
                     inner = _ARITH[p.inner.op]
                     if inner > level or (inner == level and side == "left"):
-                        setattr(n, side, p.inner)
-                        changed = True     # noqa: F841 (fix's own: a regrouping is not reported)
+                        setattr(n, side, p.inner)     # (a regrouping is not reported as a change)
         return n
     transform(fn.body, fix)
     return changed

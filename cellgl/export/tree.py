@@ -73,15 +73,10 @@ def transform(node, fn):
             out, same = [], True
             for x in v:
                 y = transform(x, fn)
-                if y is x:
-                    out.append(x)
-                    continue
-                same = False
-                if y is None:
-                    continue
+                same = same and y is x
                 if type(y) is list:
                     out.extend(y)
-                else:
+                elif y is not None:
                     out.append(y)
             if not same:
                 v[:] = out
@@ -243,34 +238,25 @@ def is_pure(node, ctx: Context | None) -> bool:
     return True
 
 
-def _target(t, role, out, ctx):
-    if isinstance(t, S.Name):
-        out.setdefault(t.name, []).append((t, role))
-    elif isinstance(t, S.Paren):
-        _target(t.inner, role, out, ctx)
-    elif isinstance(t, (S.Member, S.Index)):
-        _target(t.base, "part" if role == "store" else role, out, ctx)
-        if isinstance(t, S.Index):
-            _occurrences(t.index, out, ctx)
-    else:
-        _occurrences(t, out, ctx)
-
-
-def _occurrences(n, out, ctx):
+def _occurrences(n, out, ctx, role=None):
+    """:func:`occurrences` below ``n``, read (``role`` None) or stored into (``role``)."""
     if isinstance(n, S.Name):
-        out.setdefault(n.name, []).append((n, "read"))
+        out.setdefault(n.name, []).append((n, role or "read"))
+    elif role and isinstance(n, S.Paren):
+        _occurrences(n.inner, out, ctx, role)
+    elif role and isinstance(n, (S.Member, S.Index)):
+        _occurrences(n.base, out, ctx, "part" if role == "store" else role)
+        if isinstance(n, S.Index):
+            _occurrences(n.index, out, ctx)
     elif isinstance(n, S.Assign):
-        _target(n.target, "store" if n.op == "=" else "update", out, ctx)
+        _occurrences(n.target, out, ctx, "store" if n.op == "=" else "update")
         _occurrences(n.value, out, ctx)
     elif isinstance(n, S.IncDec):
-        _target(n.operand, "update", out, ctx)
+        _occurrences(n.operand, out, ctx, "update")
     elif isinstance(n, S.Call):
         modes = _out_modes(n, ctx)
         for k, a in enumerate(n.args):
-            if k in modes:
-                _target(a, "store" if modes[k] == "out" else "update", out, ctx)
-            else:
-                _occurrences(a, out, ctx)
+            _occurrences(a, out, ctx, {"out": "store", "inout": "update"}.get(modes.get(k)))
     else:
         for c in children(n):
             _occurrences(c, out, ctx)
