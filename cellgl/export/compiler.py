@@ -21,6 +21,9 @@ where it fits. The output is GLSL of the same subset, for the same translators
 """
 from __future__ import annotations
 
+import gc
+from contextlib import contextmanager
+
 from cellgl.export import syntax as S
 from cellgl.export.fields import constant_fields, dead_fields, void_results
 from cellgl.export.fold import FOLD, fold
@@ -37,6 +40,21 @@ __all__ = ["compile_glsl", "compile_unit", "ROUND", "MAX_ROUNDS"]
 MAX_ROUNDS = 64
 
 
+@contextmanager
+def collector_paused():
+    """The cyclic garbage collector off within, then (if it was on) on again after a pass over the
+    youngest generation: the many nodes a compile holds set off full passes over the caches."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
+            gc.collect(0)
+
+
+@collector_paused()
 def compile_unit(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> S.Unit:
     """The middle end on the tree: the declarations ``entries`` reach in ``text`` (its parse is
     cached per process, :func:`cellgl.export.syntax.parsed_library`; this copies only what is
@@ -106,4 +124,5 @@ def _ordered(items: list) -> list:
 
     for it in items:
         visit(it)
+    del visit   # its cell refers to itself: break the cycle for reference counting
     return out

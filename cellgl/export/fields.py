@@ -216,10 +216,11 @@ def constant_fields(unit: S.Unit, ctx: Context) -> bool:
         | {it.type for it in unit.items if isinstance(it, S.Global)}
     types: dict[int, dict] = {}
     changed, gone = False, set()
+    # (the statement lists and declarations stay: the loop drops stores and fields, rewrites reads)
+    decls = [(f, lst, s) for f in funcs for lst, s in statement_lists(f.body) if isinstance(s, S.Decl)
+             and len(s.declarators) == 1 and s.declarators[0].init is None and s.declarators[0].size is None]
     for st in structs:
-        made = [(f, lst, s) for f in funcs for lst, s in statement_lists(f.body)
-                if isinstance(s, S.Decl) and s.type == st.name and len(s.declarators) == 1
-                and s.declarators[0].init is None and s.declarators[0].size is None]
+        made = [(f, lst, s) for f, lst, s in decls if s.type == st.name]
         if len(made) != 1 or st.name in ctors or st.name in outside:
             continue
         home, lst, decl = made[0]

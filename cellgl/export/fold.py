@@ -62,15 +62,10 @@ class Facts:
     @cached_property
     def order(self) -> tuple[dict, dict]:
         """``({id(node): position}, {id(node): the last position below it})``."""
-        pos, last = {}, {}
-
-        def visit(n, k):
-            pos[id(n)] = k
-            for c in children(n):
-                k = visit(c, k + 1)
-            last[id(n)] = k
-            return k
-        visit(self.fn.body, 0)
+        pos, last = {id(n): k for k, n in enumerate(self.nodes)}, {}
+        for n in reversed(self.nodes):            # (pre-order: a node's last is its last child's)
+            kids = children(n)
+            last[id(n)] = last[id(kids[-1])] if kids else pos[id(n)]
         return pos, last
 
     @cached_property

@@ -470,12 +470,9 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
 
     def bare(p, top=False):
         nonlocal changed
-        if not isinstance(p, S.Paren):
-            return p
-        e = p.inner
-        if isinstance(e, ATOMS) or top and not isinstance(e, (S.Ternary, S.Assign)):
-            changed = True
-            return bare(e, top)
+        while isinstance(p, S.Paren) and (isinstance(p.inner, ATOMS) or top and not isinstance(
+                p.inner, (S.Ternary, S.Assign))):
+            changed, p = True, p.inner
         return p
 
     def fix(n):
@@ -490,8 +487,7 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
                 if isinstance(p, S.Paren) and isinstance(p.inner, S.Binary) and p.inner.op in _ARITH:
                     inner = _ARITH[p.inner.op]
                     if inner > level or (inner == level and side == "left"):
-                        setattr(n, side, p.inner)
-                        changed = True     # noqa: F841 (fix's own: a regrouping is not reported)
+                        setattr(n, side, p.inner)     # (a regrouping is not reported as a change)
         return n
     transform(fn.body, fix)
     return changed

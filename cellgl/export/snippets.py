@@ -134,18 +134,18 @@ def check_target(target: str) -> Target:
 # --------------------------------------------------------------------------------------------
 
 
-def library_code(prog: Program, fold: bool = True) -> str:
+def library_code(prog: Program, fold: bool = True, tree: bool = False):
     """Specialised, prefixed GLSL of ``prog`` (library + params + entry); no directive left,
     only what the entry points reach (:mod:`cellgl.export.fold`); ``fold=False`` keeps the
-    recipe's values as the named constants they are declared as. Cached per program: the
-    targets of one recipe share it."""
+    recipe's values as the named constants they are declared as; ``tree``: the compiled tree
+    itself (to print, not to change). Cached per program: the targets of one recipe share it."""
     key = (tuple(prog.files), tuple(sorted((k, str(v)) for k, v in prog.defines.items())), prog.params,
            prog.entry, tuple(prog.entries), fold)
     if key not in _CODE_CACHE:
         if len(_CODE_CACHE) > 64:
             _CODE_CACHE.clear()
-        _CODE_CACHE[key] = code_text(compiled_unit(prog, fold))
-    return _CODE_CACHE[key]
+        _CODE_CACHE[key] = compiled_unit(prog, fold)
+    return _CODE_CACHE[key] if tree else code_text(_CODE_CACHE[key])
 
 
 _CODE_CACHE: dict = {}
@@ -300,6 +300,7 @@ def _fmt_value(v) -> str:
     return str(v)
 
 
+@compiler.collector_paused()
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
                    code=None) -> str:
     """The snippet of ``prog`` for ``target`` (see :data:`TARGETS`); ``fold=False``: the
@@ -318,7 +319,7 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
             else library_code(prog, fold) if prog.entries else specialised_code(prog)
         return _header(prog, tgt, uniforms) + "\n" + osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
     # the one parse (none for a tree); the printers only read it
-    unit = tree if tree is not None else parsed_library(library_code(prog, fold) if code is None else code)
+    unit = tree if tree is not None else library_code(prog, fold, True) if code is None else parsed_library(code)
     head = _header(prog, tgt, uniforms, {d.name for it in unit.items if isinstance(it, Global) for d in it.declarators})
     if d == "wgsl":
         return head + "\n" + translate.to_wgsl(unit)

@@ -45,21 +45,21 @@ def children(node) -> list:
     return out
 
 
+def _walk(n, add):
+    add(n)
+    for name, many in CHILD_FIELDS[type(n)]:
+        v = getattr(n, name)
+        if many:
+            for x in v:
+                _walk(x, add)
+        elif v is not None:
+            _walk(v, add)
+
+
 def walk(node) -> list:
     """``node`` and every node below it, pre-order (parents before children)."""
     out = []
-    add = out.append
-
-    def visit(n):
-        add(n)
-        for name, many in CHILD_FIELDS[type(n)]:
-            v = getattr(n, name)
-            if many:
-                for x in v:
-                    visit(x)
-            elif v is not None:
-                visit(v)
-    visit(node)
+    _walk(node, out.append)
     return out
 
 
@@ -73,15 +73,10 @@ def transform(node, fn):
             out, same = [], True
             for x in v:
                 y = transform(x, fn)
-                if y is x:
-                    out.append(x)
-                    continue
-                same = False
-                if y is None:
-                    continue
+                same = same and y is x
                 if type(y) is list:
                     out.extend(y)
-                else:
+                elif y is not None:
                     out.append(y)
             if not same:
                 v[:] = out
@@ -243,45 +238,37 @@ def is_pure(node, ctx: Context | None) -> bool:
     return True
 
 
+def _occurrences(n, out, ctx, role=None):
+    """:func:`occurrences` below ``n``, read (``role`` None) or stored into (``role``)."""
+    if isinstance(n, S.Name):
+        out.setdefault(n.name, []).append((n, role or "read"))
+    elif role and isinstance(n, S.Paren):
+        _occurrences(n.inner, out, ctx, role)
+    elif role and isinstance(n, (S.Member, S.Index)):
+        _occurrences(n.base, out, ctx, "part" if role == "store" else role)
+        if isinstance(n, S.Index):
+            _occurrences(n.index, out, ctx)
+    elif isinstance(n, S.Assign):
+        _occurrences(n.target, out, ctx, "store" if n.op == "=" else "update")
+        _occurrences(n.value, out, ctx)
+    elif isinstance(n, S.IncDec):
+        _occurrences(n.operand, out, ctx, "update")
+    elif isinstance(n, S.Call):
+        modes = _out_modes(n, ctx)
+        for k, a in enumerate(n.args):
+            _occurrences(a, out, ctx, {"out": "store", "inout": "update"}.get(modes.get(k)))
+    else:
+        for c in children(n):
+            _occurrences(c, out, ctx)
+
+
 def occurrences(root, ctx: Context | None = None) -> dict:
     """``{name: [(Name node, role), ...]}`` of every variable named below ``root``, in source
     order. ``role``: ``"read"``; ``"store"`` (``x = ...``, or an ``out`` argument); ``"part"``
     (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"`` (read and written:
     ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
     out: dict = {}
-
-    def target(t, role):
-        if isinstance(t, S.Name):
-            out.setdefault(t.name, []).append((t, role))
-        elif isinstance(t, S.Paren):
-            target(t.inner, role)
-        elif isinstance(t, (S.Member, S.Index)):
-            target(t.base, "part" if role == "store" else role)
-            if isinstance(t, S.Index):
-                visit(t.index)
-        else:
-            visit(t)
-
-    def visit(n):
-        if isinstance(n, S.Name):
-            out.setdefault(n.name, []).append((n, "read"))
-        elif isinstance(n, S.Assign):
-            target(n.target, "store" if n.op == "=" else "update")
-            visit(n.value)
-        elif isinstance(n, S.IncDec):
-            target(n.operand, "update")
-        elif isinstance(n, S.Call):
-            modes = _out_modes(n, ctx)
-            for k, a in enumerate(n.args):
-                if k in modes:
-                    target(a, "store" if modes[k] == "out" else "update")
-                else:
-                    visit(a)
-        else:
-            for c in children(n):
-                visit(c)
-
-    visit(root)
+    _occurrences(root, out, ctx)
     return out
 
 

@@ -18,7 +18,6 @@ browser tests (``tests/test_playground.py``) hold the canvas to ``cellgl bake``.
 from __future__ import annotations
 
 import base64
-import gc
 import io
 import json
 import math
@@ -32,6 +31,7 @@ import numpy as np
 from cellgl._version import __version__
 from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
 from cellgl.basis.reference import max_ring_default
+from cellgl.export.compiler import collector_paused
 from cellgl.playground import variants as V
 from cellgl.recipes import is_pups, list_presets, load_recipe, render
 from cellgl.texture.schema import RecipeError
@@ -225,48 +225,37 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
 
 def _variant(item):
     """``(key, variant texts)`` of one ``(key, recipe)``; texts None if the exporter refuses it
-    (a worker process's job). The cyclic garbage collector is off meanwhile (:class:`_Exports`):
-    one pass over what this export made, after it."""
+    (a worker process's job). The cyclic garbage collector is off meanwhile
+    (:func:`cellgl.export.compiler.collector_paused`): one pass over what this export made, after it."""
     key, r = item
     try:
-        return key, V.variant_texts(r)
+        with collector_paused():
+            return key, V.variant_texts(r)
     except ValueError:
         return key, None
-    finally:
-        gc.collect(0)
 
 
 class _Exports:
     """The variants' exports, in ``todo``'s order: in ``jobs`` worker processes (started with
-    ``spawn``, so no GL context crosses a fork; the exporter needs none), or here for one.
-
-    The cyclic garbage collector is off while they run (in this process for one job) and
-    :func:`_variant` collects the youngest generation after each export: an export leaves some
-    24,000 objects in reference cycles (the compiler's closures and the trees they hold), and the
-    collector's own full passes, set off by the many objects the caches keep (parsed
-    declarations, ...), walked those caches again and again: a fifth of the CPU time."""
+    ``spawn``, so no GL context crosses a fork; the exporter needs none), or here for one."""
 
     def __init__(self, todo, jobs):
         self.items = list(todo)
         self.jobs = max(1, min(int(jobs or default_jobs()), len(self.items)))
         self.pool = None
-        self.gc = gc.isenabled()
 
     def __enter__(self):
         if self.jobs == 1:
-            gc.disable()
             return map(_variant, self.items)
         import multiprocessing
 
-        self.pool = multiprocessing.get_context("spawn").Pool(self.jobs, initializer=gc.disable)
+        self.pool = multiprocessing.get_context("spawn").Pool(self.jobs)
         return self.pool.imap(_variant, self.items, chunksize=1)
 
     def __exit__(self, *exc):
         if self.pool is not None:
             (self.pool.close if exc[0] is None else self.pool.terminate)()
             self.pool.join()
-        elif self.gc:
-            gc.enable()
         return False
 
 

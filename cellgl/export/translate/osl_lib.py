@@ -191,25 +191,23 @@ class _OslLib:
 
     # ------------------------------------------------------------------ expressions
 
-    def size(self, node) -> str:
+    def size(self, x) -> int:
         """An array size: an integer constant expression, folded (OSL wants a literal)."""
-        def ev(x):
-            if isinstance(x, S.Num) and x.text.rstrip("uU").isdigit():
-                return int(x.text.rstrip("uU"))
-            if isinstance(x, S.Paren):
-                return ev(x.inner)
-            if isinstance(x, S.Binary) and x.op in ("+", "-", "*", "<<"):
-                a, b = ev(x.left), ev(x.right)
-                return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x.op]
-            raise TranslateError("OSL translation: an array size that is not an integer constant")
-        return str(ev(node))
+        if isinstance(x, S.Num) and x.text.rstrip("uU").isdigit():
+            return int(x.text.rstrip("uU"))
+        if isinstance(x, S.Paren):
+            return self.size(x.inner)
+        if isinstance(x, S.Binary) and x.op in ("+", "-", "*", "<<"):
+            a, b = self.size(x.left), self.size(x.right)
+            return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x.op]
+        raise TranslateError("OSL translation: an array size that is not an integer constant")
 
     def sized(self, t: str, size) -> tuple:
         """The type of a name of GLSL type ``t`` and array size ``size`` (None: not an array) as
         the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with."""
         if size is None:
             return t, ""
-        sz = self.size(size)
+        sz = str(self.size(size))
         return (t, sz), f"[{sz}]"
 
     def vec_get(self, t: str) -> str:
