@@ -60,6 +60,16 @@ def test_the_tree_is_typed_and_keeps_comments():
                                        st.Num("1"))
 
 
+def test_the_node_classes_come_from_one_table():
+    # each dataclass is the module's name for it, with its fields in source order and fresh lists
+    assert len(st.NODE_CLASSES) == 28 and all(getattr(st, c.__name__) is c for c in st.NODE_CLASSES)
+    assert st.Num.__module__ == "cellgl.export.syntax" and st.Param.__match_args__ == (
+        "mode", "type", "name", "size", "const")
+    a, b = st.Decl("float", []), st.Decl("float", [])
+    assert a == b and a.comments is not b.comments and (a.const, a.trail, a.same_line) == (False, "", False)
+    assert st.Function("void", "f", [], None) == st.Function("void", "f", [], None, [])
+
+
 def test_the_printer_writes_glsl_back():
     assert print_glsl(st.parse(_SRC)) == """// A pair.
 struct P {
