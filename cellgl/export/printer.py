@@ -242,16 +242,14 @@ class Hlsl(Glsl):
              "floatBitsToUint": "asuint", "floatBitsToInt": "asint", "uintBitsToFloat": "asfloat",
              "intBitsToFloat": "asfloat"}
     #: identifiers HLSL (or its effect syntax) reserves that are legal GLSL names
-    RESERVED = {
-        "point", "line", "lineadj", "triangle", "triangleadj", "sample", "linear", "centroid",
-        "nointerpolation", "noperspective", "precise", "groupshared", "shared", "static", "unorm",
-        "snorm", "packoffset", "register", "vector", "matrix", "half", "double", "dword", "string",
-        "sampler", "compile", "pass", "technique", "row_major", "column_major", "export", "extern",
-        "globallycoherent", "interface", "namespace", "class", "typedef", "volatile", "inline",
-        "min16float", "min10float", "min16int", "min12int", "min16uint", "cbuffer", "tbuffer", "Buffer",
-        "asm", "template", "this", "unsigned", "auto", "catch", "char", "signed", "sizeof", "throw",
-        "try", "union", "using", "virtual",
-    }
+    RESERVED = frozenset("""
+        point line lineadj triangle triangleadj sample linear centroid nointerpolation noperspective
+        precise groupshared shared static unorm snorm packoffset register vector matrix half double
+        dword string sampler compile pass technique row_major column_major export extern
+        globallycoherent interface namespace class typedef volatile inline min16float min10float
+        min16int min12int min16uint cbuffer tbuffer Buffer asm template this unsigned auto catch char
+        signed sizeof throw try union using virtual
+    """.split())
     #: GLSL constructs with no mechanical translation here
     UNSUPPORTED = {"mat2", "mat3", "mat4", "sampler2D", "sampler3D", "texture", "texelFetch", "discard",
                    "gl_FragCoord", "gl_FragColor"}

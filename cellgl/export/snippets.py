@@ -89,27 +89,18 @@ REFUSED: dict[str, str] = dict.fromkeys(
 
 @dataclass
 class Program:
-    """What a snippet is made of, before specialisation (GLSL text using library names).
+    """What a snippet is made of, before specialisation (GLSL text using library names)."""
 
-    files : library files (relative to the shader root) to resolve, dependencies first
-    defines : the compile-time macros of the recipe
-    params : GLSL declarations of the recipe's run-time values (constants or uniforms)
-    entry : GLSL of the entry functions (``cell_texture`` ...), calling the library
-    title : the recipe's name; recipe: its JSON-able dict (for the header)
-    solid : whether ``cell_texture3`` exists
-    uniforms : ``[(glsl type, name, value)]`` of the uniforms when ``params`` declares them
-    filtered : whether ``cellgl_texture_filtered`` (and ``cellgl_texture3_filtered``) exist
-    """
-
-    files: list[str]
-    defines: dict
-    params: str
-    entry: str
-    title: str = "recipe"
-    recipe: dict | None = None
-    solid: bool = False
+    files: list[str]            # library files (relative to the shader root) to resolve, dependencies first
+    defines: dict               # the compile-time macros of the recipe
+    params: str                 # GLSL declarations of the recipe's run-time values (constants or uniforms)
+    entry: str                  # GLSL of the entry functions (``cell_texture`` ...), calling the library
+    title: str = "recipe"       # the recipe's name
+    recipe: dict | None = None  # its JSON-able dict (for the header)
+    solid: bool = False         # whether ``cell_texture3`` exists
+    #: ``[(glsl type, name, value)]`` of the uniforms when ``params`` declares them
     uniforms: list[tuple[str, str, object]] = field(default_factory=list)
-    filtered: bool = False
+    filtered: bool = False      # whether ``cellgl_texture_filtered`` (and ``cellgl_texture3_filtered``) exist
     kind: str = "cellular texture"
     command: str = ""
     signatures: tuple = ()
@@ -454,41 +445,8 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
                   + texture.glsl_constant_block(r, prefix="cell_"))
     params += "\n// All of them in the library's parameter struct.\n"
     params += texture.glsl_params_from_uniforms(prefix="cell_", function="cell_texture_params_load")
-    entry = (
-        "// The RGBA `cellgl bake` writes for the pixel whose centre is uv (v = 0: top row) and\n"
-        "// whose size in uv is duv (a W x H bake: (1/W, 1/H)): fractal octaves finer than the\n"
-        "// pixel fade out (band limit); duv = (0, 0): point samples. Any shader stage.\n"
-        "vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)\n"
-        "{\n"
-        "    return cell_texture_uv(uv, duv, cell_texture_params_load());\n"
-        "}\n"
-    )
-    if solid:
-        entry += (
-            "\n// Solid texturing: the texture at p = (u, v, z) in texture space (object space\n"
-            "// scaled so that 1 unit = the image width; z = 0 is the image plane), band-limited\n"
-            "// to a pixel spanning dp in texture space (0: point samples). Any shader stage.\n"
-            "vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)\n"
-            "{\n"
-            "    return cell_texture_at_filtered(p, dp, cell_texture_params_load()).color;\n"
-            "}\n"
-        )
-    # Last, so that a compute or vertex shader (no derivatives there) can drop them.
-    entry += (
-        "\n// Fragment (pixel) shaders only, the pixel's size from derivatives: delete from here\n"
-        "// to the end in other stages, which have no fwidth.\n"
-        "vec4 cellgl_texture(vec2 uv)\n"
-        "{\n"
-        "    return cellgl_texture_filtered(uv, fwidth(uv));\n"
-        "}\n"
-    )
-    if solid:
-        entry += (
-            "\nvec4 cellgl_texture3(vec3 p)\n"
-            "{\n"
-            "    return cellgl_texture3_filtered(p, fwidth(p));\n"
-            "}\n"
-        )
+    # the fragment-only entries last, so that a compute or vertex shader (no derivatives there) can drop them
+    entry = _ENTRY + _ENTRY3 * solid + _FRAGMENT_ENTRY + _FRAGMENT_ENTRY3 * solid
     # every uniform the values fill, the density map's included: a header line without its type
     # would leave a client that reads `type name = value` with that uniform at 0
     # (the declared type: a vec4 value is a tuple too, but only a declared array is an array)
@@ -496,3 +454,39 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     ulist = [(decl[k[2:]][0] + (f"[{len(v)}]" if decl[k[2:]][1] else ""), k[2:], v) for k, v in vals.items()]
     return Program(files=["lib/texture.glsl"], defines=defines, params=params, entry=entry,
                    title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist, filtered=True)
+
+
+_ENTRY = """// The RGBA `cellgl bake` writes for the pixel whose centre is uv (v = 0: top row) and
+// whose size in uv is duv (a W x H bake: (1/W, 1/H)): fractal octaves finer than the
+// pixel fade out (band limit); duv = (0, 0): point samples. Any shader stage.
+vec4 cellgl_texture_filtered(vec2 uv, vec2 duv)
+{
+    return cell_texture_uv(uv, duv, cell_texture_params_load());
+}
+"""
+
+_ENTRY3 = """
+// Solid texturing: the texture at p = (u, v, z) in texture space (object space
+// scaled so that 1 unit = the image width; z = 0 is the image plane), band-limited
+// to a pixel spanning dp in texture space (0: point samples). Any shader stage.
+vec4 cellgl_texture3_filtered(vec3 p, vec3 dp)
+{
+    return cell_texture_at_filtered(p, dp, cell_texture_params_load()).color;
+}
+"""
+
+_FRAGMENT_ENTRY = """
+// Fragment (pixel) shaders only, the pixel's size from derivatives: delete from here
+// to the end in other stages, which have no fwidth.
+vec4 cellgl_texture(vec2 uv)
+{
+    return cellgl_texture_filtered(uv, fwidth(uv));
+}
+"""
+
+_FRAGMENT_ENTRY3 = """
+vec4 cellgl_texture3(vec3 p)
+{
+    return cellgl_texture3_filtered(p, fwidth(p));
+}
+"""

@@ -151,6 +151,18 @@ class _Parser:
         self.i += 1
         return t
 
+    def accept(self, t: str) -> bool:
+        """Whether the next token is ``t`` (then taken)."""
+        ok = self.peek() == t
+        self.i += ok
+        return ok
+
+    def upto(self, parse, closing: str):
+        """``parse()`` (None where the next token is ``closing``), then ``closing`` taken."""
+        e = None if self.peek() == closing else parse()
+        self.take(closing)
+        return e
+
     def is_type(self, k: int = 0) -> bool:
         t = self.peek(k)
         return t in GLSL_TYPES or t in self.structs
@@ -198,9 +210,8 @@ class _Parser:
             while True:
                 fields.append(Field(typ, self.take(), self.array_size(), fcom))
                 fcom = []
-                if self.peek() != ",":
+                if not self.accept(","):
                     break
-                self.take(",")
             self.take(";")
             fields[-1].trail = self.trail.get(self.i - 1, "")
         self.take("}")
@@ -217,13 +228,9 @@ class _Parser:
             if ptyp == "void" and self.peek() == ")":
                 break
             params.append(Param(mode, ptyp, self.take(), self.array_size(), "const" in quals))
-            if self.peek() == ",":
-                self.take()
+            self.accept(",")
         self.take(")")
-        if self.peek() == ";":
-            self.take()
-            return Function(ret, name, params, None, com)
-        return Function(ret, name, params, self.block(), com)
+        return Function(ret, name, params, None if self.accept(";") else self.block(), com)
 
     def array_size(self):
         return self.inside("[", "]") if self.peek() == "[" else None
@@ -240,14 +247,9 @@ class _Parser:
         name = first
         while True:
             size = self.array_size()
-            init = None
-            if self.peek() == "=":
-                self.take()
-                init = self.assign_expr()
-            decls.append(Declarator(name, size, init))
-            if self.peek() != ",":
+            decls.append(Declarator(name, size, self.assign_expr() if self.accept("=") else None))
+            if not self.accept(","):
                 return decls
-            self.take(",")
             name = self.take()
 
     # statements
@@ -269,35 +271,23 @@ class _Parser:
             self.take()
             c = self.inside("(", ")")
             a = self.statement()
-            b = None
-            if self.peek() == "else":
-                self.take()
-                b = self.statement()
-            return If(c, a, b, com)
+            return If(c, a, self.statement() if self.accept("else") else None, com)
         if t == "for":
             self.take()
             self.take("(")
-            init = None if self.peek() == ";" else self.simple_statement()
-            self.take(";")
-            cond = None if self.peek() == ";" else self.expr()
-            self.take(";")
-            step = None if self.peek() == ")" else self.expr()
-            self.take(")")
-            return For(init, cond, step, self.statement(), com)
+            init, cond = self.upto(self.simple_statement, ";"), self.upto(self.expr, ";")
+            return For(init, cond, self.upto(self.expr, ")"), self.statement(), com)
         if t == "while":
             self.take()
             return While(self.inside("(", ")"), self.statement(), com)
         if t == "return":
             self.take()
-            e = None if self.peek() == ";" else self.expr()
-            self.take(";")
-            return Return(e, com)
+            return Return(self.upto(self.expr, ";"), com)
         if t in ("break", "continue", "discard"):
             self.take()
             self.take(";")
             return Jump(t, com)
-        if t == ";":
-            self.take()
+        if self.accept(";"):
             return Block([], com)
         same_line = self.i in self.inline and self.peek(-1) == ";"
         s = self.simple_statement()
@@ -330,8 +320,7 @@ class _Parser:
 
     def ternary(self):
         c = self.climb(self.unary(), 0)
-        if self.peek() == "?":
-            self.take()
+        if self.accept("?"):
             a = self.assign_expr()
             self.take(":")
             return Ternary(c, a, self.assign_expr())
@@ -369,8 +358,7 @@ class _Parser:
             t = self.peek()
             if t == "[":
                 e = Index(e, self.inside("[", "]"))
-            elif t == ".":
-                self.take()
+            elif self.accept("."):
                 e = Member(e, self.take())
             elif t in ("++", "--"):
                 self.take()
@@ -383,8 +371,7 @@ class _Parser:
         out = []
         while self.peek() != ")":
             out.append(self.assign_expr())
-            if self.peek() == ",":
-                self.take()
+            self.accept(",")
         self.take(")")
         return out
 
@@ -400,9 +387,7 @@ class _Parser:
             if self.peek() == "[" and self.is_type(-1):
                 return ArrayCtor(t, self.inside("[", "]"), self.args())
             if self.peek() == "(":
-                if t in GLSL_TYPES or t in self.structs:
-                    return Ctor(t, self.args())
-                return Call(t, self.args())
+                return (Ctor if self.is_type(-1) else Call)(t, self.args())
             return Name(t)
         raise TranslateError(f"GLSL syntax: unexpected {t!r}")
 
