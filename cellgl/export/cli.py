@@ -3,8 +3,7 @@
 from __future__ import annotations
 
 from cellgl.export.basis import BASES, BASIS_REFUSED, DEFAULTS, basis_export
-from cellgl.export.command import recipe_command
-from cellgl.export.snippets import TARGETS, ExportError, check_target, export
+from cellgl.export.snippets import TARGETS, ExportError, check_target, export, recipe_command
 
 __all__ = ["add_parser", "run_cli"]
 
@@ -89,6 +88,5 @@ def run_cli(args) -> int:
     from cellgl.io.formats import atomic_path
 
     with atomic_path(os.path.abspath(args.output)) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
+        tmp.write_text(text, encoding="utf-8", newline="\n")
     return 0

@@ -27,19 +27,15 @@ def _functions(unit: S.Unit):
 
 def _types(unit: S.Unit, fn: S.Function) -> dict[str, set]:
     """name -> the types it is declared with in ``fn`` (parameters, locals) and at the top level."""
+    top = [(d.name, it.type) for it in unit.items if isinstance(it, S.Global) for d in it.declarators]
+    local = [(p.name, p.type) for p in fn.params] + [
+        (d.name, n.type) for n in walk(fn.body) if isinstance(n, S.Decl) for d in n.declarators]
     out: dict[str, set] = {}
-    for it in unit.items:
-        if isinstance(it, S.Global):
-            for d in it.declarators:
-                out.setdefault(d.name, set()).add(it.type)
-    local: dict[str, set] = {}
-    for p in fn.params:
-        local.setdefault(p.name, set()).add(p.type)
-    for n in walk(fn.body):
-        if isinstance(n, S.Decl):
-            for d in n.declarators:
-                local.setdefault(d.name, set()).add(n.type)
-    out.update(local)
+    for scope in (top, local):                  # a local name hides a global one
+        types: dict[str, set] = {}
+        for name, t in scope:
+            types.setdefault(name, set()).add(t)
+        out.update(types)
     return out
 
 

@@ -91,11 +91,12 @@ class Glsl:
             out += [ind + ln.strip() if ln.strip() else "" for ln in c.split("\n")] if c else [""]
         return out
 
+    def array_name(self, x) -> str:
+        """The name of a declarator, parameter or member, and its array size."""
+        return self.name(x.name) + (f"[{self.expr(x.size)}]" if x.size is not None else "")
+
     def declarators(self, typ: str, decls: list) -> str:
-        parts = []
-        for d in decls:
-            s = self.name(d.name) + (f"[{self.expr(d.size)}]" if d.size is not None else "")
-            parts.append(s + (f" = {self.expr(d.init)}" if d.init is not None else ""))
+        parts = [self.array_name(d) + (f" = {self.expr(d.init)}" if d.init is not None else "") for d in decls]
         return f"{self.decl_type(typ)} {', '.join(parts)}"
 
     def simple(self, s) -> str:
@@ -157,8 +158,7 @@ class Glsl:
     # ---------------------------------------------------------------- top level
     def param(self, p) -> str:
         return (("const " if p.const else "") + (p.mode + " " if p.mode != "in" else "")
-                + f"{self.decl_type(p.type)} {self.name(p.name)}"
-                + (f"[{self.expr(p.size)}]" if p.size is not None else ""))
+                + f"{self.decl_type(p.type)} {self.array_name(p)}")
 
     def item(self, it) -> list[str]:
         """Lines of a top-level node."""
@@ -166,9 +166,8 @@ class Glsl:
         if isinstance(it, S.Struct):
             out.append(f"struct {self.name(it.name)} {{")
             for f in it.fields:
-                size = f"[{self.expr(f.size)}]" if f.size is not None else ""
                 out += self.comments(f.comments, "    ")
-                out.append(f"    {self.decl_type(f.type)} {self.name(f.name)}{size};" + _trail(f))
+                out.append(f"    {self.decl_type(f.type)} {self.array_name(f)};" + _trail(f))
             return out + ["};"]
         if isinstance(it, S.Global):
             return out + [" ".join(self.quals(it.quals) + [self.declarators(it.type, it.declarators)]) + ";"]

@@ -195,9 +195,9 @@ def _droppable(funcs, load, takes: dict, holders: dict) -> bool:
                     return False
                 gone |= {id(x) for x in walk(n.args[k])}
             elif isinstance(n, S.Member) and isinstance(n.base, S.Name) and n.base.name in names:
-                gone.add(id(n.base))
-        if any(isinstance(n, S.Name) and n.name in names and id(n) not in gone for n in walk(f.body)):
-            return False                               # still used whole: cannot drop it
+                gone.add(id(n.base))                   # (a walk visits a node before its children)
+            elif isinstance(n, S.Name) and n.name in names and id(n) not in gone:
+                return False                           # still used whole: cannot drop it
     return True
 
 

@@ -16,19 +16,21 @@ GLSL, GLSL ES, Godot and HLSL by :mod:`cellgl.export.printer`, WGSL and OSL by
 from __future__ import annotations
 
 import json
+import os
 import re
+import shlex
 import textwrap
 from dataclasses import dataclass, field
 
 from cellgl._version import __version__
 from cellgl.gl import glsl
 from cellgl.export import compiler, translate
-from cellgl.export.command import command_for
 from cellgl.export.names import comment_text, identifier
 from cellgl.export.printer import print_lines, print_target
 from cellgl.export.syntax import Global, parse, parsed_library
 
-__all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError"]
+__all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError", "recipe_command",
+           "command_for"]
 
 
 class ExportError(ValueError):
@@ -291,6 +293,53 @@ def _fmt_value(v) -> str:
     return str(v)
 
 
+def recipe_command(recipe: str, sets=(), *, fold: bool = True) -> str:
+    """``cellgl export RECIPE [--set NAME=VALUE ...] [--no-fold]`` (the target and
+    ``--uniforms`` are added by the header), each word quoted for a POSIX shell."""
+    words = ["cellgl", "export", str(recipe)]
+    for s in sets:
+        words += ["--set", str(s)]
+    if not fold:
+        words.append("--no-fold")
+    return shlex.join(words)
+
+
+def _set_text(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (list, tuple)):
+        return json.dumps(value, separators=(",", ":"))
+    return repr(value) if isinstance(value, float) else str(value)
+
+
+def command_for(recipe, *, fold: bool = True) -> str:
+    """The ``Regenerate (do not edit)`` command of the header of :func:`export`'s snippet of
+    ``recipe``: a ``cellgl export`` command line that writes the same snippet, byte for byte (in
+    the directory it was run from, for a recipe file given by a relative path). The command line
+    passes what it was given (:func:`recipe_command`); from Python, a preset or file name as
+    given, and a :class:`~cellgl.texture.recipe.Recipe` object as its preset plus one ``--set``
+    per parameter that differs. A recipe object that no preset and ``--set`` list reproduces
+    (another name, another ramp) gets ``cellgl export RECIPE.json``: the header's ``Recipe:``
+    line saved as ``RECIPE.json`` makes that command write the same snippet."""
+    from cellgl.recipes import load_recipe
+
+    if isinstance(recipe, (str, os.PathLike)):
+        return recipe_command(os.fspath(recipe), fold=fold)
+    try:
+        base = load_recipe(recipe.name)
+    except (ValueError, OSError):
+        base = None
+    if base is not None and type(base) is type(recipe):
+        sets = [f"{k}={_set_text(v)}" for k, v in recipe.values.items() if base.values[k] != v]
+        try:
+            same = base.set_from_strings(sets) == recipe if sets else base == recipe
+        except ValueError:
+            same = False
+        if same:
+            return recipe_command(recipe.name, sets, fold=fold)
+    return recipe_command("RECIPE.json", fold=fold)     # the header's Recipe line, saved
+
+
 @compiler.collector_paused()
 def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = False, fold: bool = True,
                    code=None) -> str:
@@ -375,7 +424,7 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool =
         code (still only what the entry points reach), to edit by hand; the same pixels.
     command : str, optional
         The header's "Regenerate" command up to ``--target`` (the CLI passes what it was given;
-        default: derived from ``recipe`` by :func:`cellgl.export.command.command_for`).
+        default: derived from ``recipe`` by :func:`command_for`).
 
     Returns
     -------

@@ -23,11 +23,6 @@ from functools import lru_cache
 
 from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError, split_tokens
 
-__all__ = ["parse", "parsed_library", "Unit", "Struct", "Field", "Function", "Param",
-           "Global", "Declarator", "Block", "Decl", "ExprStmt", "If", "For", "While", "Return", "Jump",
-           "Num", "Name", "Call", "Ctor", "ArrayCtor", "Unary", "IncDec", "Binary", "Assign", "Ternary",
-           "Index", "Member", "Paren", "NODE_CLASSES"]
-
 
 # --------------------------------------------------------------------------------------------
 # nodes
@@ -86,6 +81,8 @@ def _node_class(line: str) -> type:
 (Num, Name, Call, Ctor, ArrayCtor, Unary, IncDec, Binary, Assign, Ternary, Index, Member, Paren, Declarator,
  Block, Decl, ExprStmt, If, For, While, Return, Jump, Field, Struct, Param, Function, Global,
  Unit) = NODE_CLASSES = tuple(map(_node_class, _NODES.strip().split("\n")))
+
+__all__ = ["parse", "parsed_library", "NODE_CLASSES", *(c.__name__ for c in NODE_CLASSES)]
 
 
 # --------------------------------------------------------------------------------------------
