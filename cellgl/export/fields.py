@@ -109,7 +109,7 @@ def _effects_unused(fn: S.Function, s, ctx: Context) -> bool:
 
 def _facts(funcs):
     """``(members, stores, ctors)``: field name -> ``[(function, Member)]`` of every field access,
-    field name -> ``[(function, list, statement)]`` of the statements ``v.f = ...;`` and
+    field name -> ``[(function, list, statement, v)]`` of the statements ``v.f = ...;`` and
     ``v.f[i] = ...;``, and the types constructed."""
     members: dict[str, list] = {}
     stores: dict[str, list] = {}
@@ -121,11 +121,10 @@ def _facts(funcs):
             elif isinstance(n, S.Ctor):
                 ctors.add(n.type)
         for lst, s in statement_lists(f.body):
-            if isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "=":
-                t = s.expr.target
-                t = t.base if isinstance(t, S.Index) else t
-                if isinstance(t, S.Member) and isinstance(t.base, S.Name):
-                    stores.setdefault(t.name, []).append((f, lst, s))
+            match s:
+                case S.ExprStmt(expr=S.Assign("=", S.Member(S.Name(v), name)
+                                              | S.Index(S.Member(S.Name(v), name)))):
+                    stores.setdefault(name, []).append((f, lst, s, v))
     return members, stores, ctors
 
 
@@ -153,9 +152,7 @@ def dead_fields(unit: S.Unit, ctx: Context) -> bool:
         for fd in st.fields:
             if fd.name in gone:
                 continue
-            mine = [(f, lst, s) for f, lst, s in stores.get(fd.name, ())
-                    if (s.expr.target.base if isinstance(s.expr.target, S.Index) else s.expr.target).base.name
-                    in holders[id(f)]]
+            mine = [(f, lst, s) for f, lst, s, v in stores.get(fd.name, ()) if v in holders[id(f)]]
             ok = all(not any(isinstance(n, S.Call) and n.func in ctx.impure for n in walk(s))
                      or _effects_unused(f, s, ctx) for f, _, s in mine)
             own = {id(n) for _, _, s in mine for n in walk(s)}

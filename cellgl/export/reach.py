@@ -158,22 +158,19 @@ def scalarise_struct(unit: S.Unit, struct: str, loader: str) -> bool:
     if complete and not _droppable(funcs, load, takes, holders):
         return False
     for f in funcs:
-        if f is not load and f.body is not None:
-            names = holders[id(f)]
-            transform(f.body, lambda e: clone(fields[e.name][0]) if _is_field(e, names, fields) else e)
-    if complete:
-        for f in funcs:
-            if f.name in takes:
-                del f.params[takes[f.name]]
-            if f is load or f.body is None:
-                continue
+        if complete and f.name in takes:
+            del f.params[takes[f.name]]
+        if f is load or f.body is None:
+            continue
+        names = holders[id(f)]
+        transform(f.body, lambda e: clone(fields[e.name][0]) if _is_field(e, names, fields) else e)
+        if complete:
             for n in walk(f.body):
                 if isinstance(n, S.Call) and n.func in takes:
                     del n.args[takes[n.func]]
-            names = holders[id(f)]
             transform(f.body, lambda s: None if isinstance(s, S.Decl) and s.type == struct
                       and all(d.name in names for d in s.declarators) else s)
-    else:
+    if not complete:
         sdef.fields[:] = [x for x in sdef.fields if x.name not in fields]
         gone = {id(st) for _, st in fields.values()}
         load.body.body[:] = [st for st in load.body.body if id(st) not in gone]
