@@ -12,7 +12,7 @@ The functions, their GLSL result types and what they return: :data:`BASES` (``--
 """
 from __future__ import annotations
 
-from cellgl.basis.enums import Distribution
+from cellgl.basis.enums import Distribution, Metric
 from cellgl.export.snippets import ExportError, Program, check_target, export_program
 
 __all__ = ["BASES", "basis_export", "basis_program"]
@@ -49,7 +49,6 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
                   jitter=1.0, min_points=1, max_points=9, minkowski_p=3.0, seed=0) -> Program:
     """The :class:`~cellgl.export.snippets.Program` of one basis function (see :data:`BASES`)."""
     from cellgl.basis.core import make_params
-    from cellgl.basis.enums import Distribution, Metric
     from cellgl.basis.features import defines as feature_defines
     from cellgl.basis.gpu import defines_for
 

@@ -26,8 +26,9 @@ from cellgl._version import __version__
 from cellgl.gl import glsl
 from cellgl.export import compiler, translate
 from cellgl.export.names import comment_text, identifier
-from cellgl.export.printer import print_lines, print_target
-from cellgl.export.syntax import Global, parse, parsed_library
+from cellgl.export.printer import Hlsl, print_lines, print_target
+from cellgl.export.syntax import Global, Unit, parse, parsed_library
+from cellgl.export.translate.wgsl import Wgsl
 
 __all__ = ["TARGETS", "REFUSED", "Program", "export", "export_program", "ExportError", "recipe_command",
            "command_for"]
@@ -267,21 +268,17 @@ def _how(target: Target, prog: Program) -> str:
     return how.replace("cellgl_texture", entry).replace("input UV", "input p").replace("(UV, out Out)", "(p, out Out)")
 
 
-_SIG_WGSL = {"vec2": "vec2<f32>", "vec3": "vec3<f32>", "vec4": "vec4<f32>", "float": "f32", "uint": "u32",
-             "int": "i32"}
-
-
 def _signature(e: str, dialect: str) -> str:
-    """An entry line ``TYPE name(TYPE a, ...): what`` in the target's spelling."""
+    """An entry line ``TYPE name(TYPE a, ...): what`` in the target's spelling (its printer's types)."""
     if dialect == "hlsl":
-        return re.sub(r"\b(vec|ivec|uvec)([234])\b",
-                      lambda m: {"vec": "float", "ivec": "int", "uvec": "uint"}[m.group(1)] + m.group(2), e)
+        return re.sub(r"\b[iu]?vec[234]\b", lambda m: Hlsl.TYPES[m.group()], e)
     if dialect == "wgsl":
         m = re.match(r"(\w+) (\w+)\(([^)]*)\)(.*)$", e, re.S)
         if m:
             ret, name, args, rest = m.groups()
-            params = ", ".join(f"{a.split()[1]}: {_SIG_WGSL[a.split()[0]]}" for a in args.split(",") if a.strip())
-            return f"fn {name}({params}) -> {_SIG_WGSL[ret]}{rest}"
+            typ = Wgsl(Unit([])).type
+            params = ", ".join(f"{a.split()[1]}: {typ(a.split()[0])}" for a in args.split(",") if a.strip())
+            return f"fn {name}({params}) -> {typ(ret)}{rest}"
     return e
 
 
@@ -367,11 +364,7 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
     if tgt.name in _TAILS:
         key, default, dialect = _TAILS[tgt.name]
         body += print_target(parse(prog.tails.get(key, default)), dialect)
-    if tgt.name == "godot":
-        body = "shader_type canvas_item;\n" + body
-    elif tgt.name == "unreal":
-        body = "#pragma once\n" + body
-    return head + "\n" + body
+    return head + "\n" + _FIRST_LINE.get(tgt.name, "") + body
 
 
 _SHADERTOY_MAIN = """
@@ -395,6 +388,8 @@ void cellgl_texture_float(vec2 UV, out vec4 Out)
 # Godot compiles its shaders with highp defaults (precision highp float/int): no qualifiers
 _GODOT_FRAGMENT = "\nvoid fragment()\n{\n    COLOR = cellgl_texture(UV);\n}\n"
 
+#: the line a target's code starts with
+_FIRST_LINE = {"godot": "shader_type canvas_item;\n", "unreal": "#pragma once\n"}
 #: target -> (its key in Program.tails, the default tail, the dialect it is printed in)
 _TAILS = {"shadertoy": ("shadertoy", _SHADERTOY_MAIN, "glsl"), "godot": ("godot", _GODOT_FRAGMENT, "glsl"),
           "hlsl": ("unity", _UNITY_WRAPPER, "hlsl")}

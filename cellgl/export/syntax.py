@@ -188,10 +188,9 @@ class _Parser:
             name = self.take()
             if self.peek() == "(":
                 out.append(self.function(com, typ, name))
-                continue
-            decls = self.declarators(name)
-            self.take(";")
-            out.append(Global(quals, typ, decls, com))
+            else:
+                out.append(Global(quals, typ, self.declarators(name), com))
+                self.take(";")
         return Unit(out, self.trailing)
 
     def struct(self, com) -> Struct:
