@@ -96,7 +96,8 @@ class Glsl:
         return self.name(x.name) + (f"[{self.expr(x.size)}]" if x.size is not None else "")
 
     def declarators(self, typ: str, decls: list) -> str:
-        parts = [self.array_name(d) + (f" = {self.expr(d.init)}" if d.init is not None else "") for d in decls]
+        parts = [self.array_name(d) + (f" = {self.expr(d.init)}" if d.init is not None else "")
+                 for d in decls]
         return f"{self.decl_type(typ)} {', '.join(parts)}"
 
     def simple(self, s) -> str:
@@ -302,11 +303,9 @@ class Hlsl(Glsl):
     def prelude(self) -> list[str]:
         if not self.uses_mod:
             return []
-        lines = ["// GLSL mod(): x - y * floor(x / y) (HLSL's fmod truncates instead)."]
-        for t in ("float", "float2", "float3", "float4"):
-            for y in (t, "float") if t != "float" else (t,):
-                lines.append(f"{t} cellgl_mod({t} x, {y} y) {{ return x - y * floor(x / y); }}")
-        return lines
+        return ["// GLSL mod(): x - y * floor(x / y) (HLSL's fmod truncates instead)."] + [
+            f"{t} cellgl_mod({t} x, {y} y) {{ return x - y * floor(x / y); }}"       # y: a vector, or a float
+            for t in ("float", "float2", "float3", "float4") for y in dict.fromkeys((t, "float"))]
 
 
 #: the printer of each snippet dialect (Godot: GLSL's; see the module's text)
