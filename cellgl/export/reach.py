@@ -199,11 +199,8 @@ def _droppable(funcs, load, takes: dict, holders: dict) -> bool:
 
 
 def scalarise(unit: S.Unit, ctx) -> bool:
-    """:func:`scalarise_struct` of every ``(struct, loader)`` of ``ctx.structs``."""
-    changed = False
-    for struct, loader in ctx.structs:
-        changed = scalarise_struct(unit, struct, loader) or changed
-    return changed
+    """:func:`scalarise_struct` of every ``(struct, loader)`` of ``ctx.structs`` (each one: a list)."""
+    return any([scalarise_struct(unit, struct, loader) for struct, loader in ctx.structs])
 
 
 # --------------------------------------------------------------------------------------------

@@ -149,8 +149,7 @@ def specialised_code(prog: Program) -> str:
     """The library of ``prog`` with its compile-time choices resolved and names prefixed, its
     run-time values still the loader's named constants (the OSL target turns those into shader
     parameters, so it takes this code, not a constant-folded one)."""
-    src = glsl.resolve_library(prog.files)
-    text = src.text + "\n" + prog.params + "\n" + prog.entry
+    text = glsl.resolve_library(prog.files).text + "\n" + prog.params + "\n" + prog.entry
     text = text.replace("// begin lib/", "// ---- shaders/lib/").replace("// end lib/", "// ---- end of shaders/lib/")
     text = translate.specialise(text, prog.defines, name="snippet")
     text, _ = translate.prefix_names(text, overrides=_OVERRIDES)

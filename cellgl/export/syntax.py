@@ -203,11 +203,9 @@ class _Parser:
             fcom = self.comments()
             self.qualifiers()
             typ = self.take()
-            while True:
-                fields.append(Field(typ, self.take(), self.array_size(), fcom))
-                fcom = []
-                if not self.accept(","):
-                    break
+            fields.append(Field(typ, self.take(), self.array_size(), fcom))
+            while self.accept(","):
+                fields.append(Field(typ, self.take(), self.array_size()))
             self.take(";")
             fields[-1].trail = self.trail.get(self.i - 1, "")
         self.take("}")
@@ -238,9 +236,9 @@ class _Parser:
         self.take(closing)
         return e
 
-    def declarators(self, first: str) -> list:
+    def declarators(self, name: str) -> list:
+        """The declarators from the one named ``name`` (taken) on: ``a[2], b = 1.0``."""
         decls = []
-        name = first
         while True:
             size = self.array_size()
             decls.append(Declarator(name, size, self.assign_expr() if self.accept("=") else None))
