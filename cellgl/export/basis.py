@@ -96,9 +96,8 @@ def basis_program(basis: str, dim: int = 2, *, metric="euclidean", distribution=
         + ("" if key == "edge" else "    CellResult r = cell_search(cell, f, cell_params_load());\n")
         + f"    return {_RET[key].replace('P', 'cell_params_load()')};\n}}\n"
     )
-    options = dict(metric=p.metric.name.lower(), distribution=p.distribution.name.lower(),
-                   density=p.density, jitter=p.jitter, seed=p.seed, min_points=p.min_points,
-                   max_points=p.max_points, minkowski_p=p.minkowski_p)
+    options = {k: getattr(p, k) for k in DEFAULTS} | dict(metric=p.metric.name.lower(),
+                                                         distribution=p.distribution.name.lower())
     command = f"cellgl export --basis {key} --dim {dim}" + "".join(
         f" --{k.replace('_', '-')} {v}" for k, v in options.items() if v != DEFAULTS[k])
     files = ["lib/features.glsl"] if key == "edge" else ["lib/cellular.glsl"]

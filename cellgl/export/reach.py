@@ -33,21 +33,15 @@ __all__ = ["reach", "reached", "uses", "scalarise", "scalarise_struct", "strip_b
 # --------------------------------------------------------------------------------------------
 
 
+#: the field of each node class that names what it refers to: a variable, a function, a type
+_USED = {S.Name: "name", S.Call: "func", S.Function: "ret", **dict.fromkeys(
+    (S.Ctor, S.ArrayCtor, S.Decl, S.Global, S.Field, S.Param), "type")}
+
+
 def uses(node) -> set[str]:
     """The top-level names ``node`` refers to: variables, called functions, types (its own name
     included, for a function)."""
-    out = set()
-    for n in walk(node):
-        t = type(n)
-        if t is S.Name:
-            out.add(n.name)
-        elif t is S.Call:
-            out.add(n.func)
-        elif t in (S.Ctor, S.ArrayCtor, S.Decl, S.Global, S.Field, S.Param):
-            out.add(n.type)
-        elif t is S.Function:
-            out.add(n.ret)
-    return out
+    return {getattr(n, _USED[type(n)]) for n in walk(node) if type(n) in _USED}
 
 
 def _names(item) -> list[str]:
