@@ -284,9 +284,7 @@ def _signature(e: str, dialect: str) -> str:
 def _fmt_value(v) -> str:
     if isinstance(v, (list, tuple)):
         return "(" + ", ".join(_fmt_value(x) for x in v) + ")"
-    if isinstance(v, float):
-        return repr(v)
-    return str(v)
+    return str(v)       # a float's shortest round-trip digits (also a NumPy 2 float's, which repr would tag)
 
 
 def recipe_command(recipe: str, sets=(), *, fold: bool = True) -> str:
@@ -305,7 +303,7 @@ def _set_text(value) -> str:
         return "true" if value else "false"
     if isinstance(value, (list, tuple)):
         return json.dumps(value, separators=(",", ":"))
-    return repr(value) if isinstance(value, float) else str(value)
+    return str(value)
 
 
 def command_for(recipe, *, fold: bool = True) -> str:
