@@ -6,7 +6,10 @@ from __future__ import annotations
 import operator
 import re
 from collections.abc import Mapping
+from functools import lru_cache
 
+from cellgl.export import syntax as S
+from cellgl.export.printer import expr_glsl
 from cellgl.export.translate.tokens import TranslateError, split_tokens
 
 # --------------------------------------------------------------------------------------------
@@ -21,76 +24,45 @@ def _strip_comment(s: str) -> str:
     return s.split("//", 1)[0].strip()
 
 
-class _Expr:
-    """Integer constant expression of ``#if`` (C semantics, truncating division)."""
+def _value(text: str, where: str) -> int:
+    """The value of the integer constant expression ``text`` of ``#if`` (C semantics, truncating
+    division), read by :mod:`cellgl.export.syntax`'s parser."""
+    def error(msg: str) -> TranslateError:
+        return TranslateError(f"{where}: {msg} in #if expression {text!r}")
 
-    _BIN = [
-        ("||",), ("&&",), ("|",), ("^",), ("&",), ("==", "!="), ("<", ">", "<=", ">="),
-        ("<<", ">>"), ("+", "-"), ("*", "/", "%"),
-    ]
+    def value(e) -> int:
+        if isinstance(e, S.Paren):
+            return value(e.inner)
+        if isinstance(e, S.Num) and re.fullmatch(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?", e.text):
+            t = e.text.rstrip("uU")
+            return int(t, 8) if re.fullmatch(r"0\d+", t) else int(t, 0)
+        if isinstance(e, S.Unary) and e.op in _UNARY:
+            return int(_UNARY[e.op](value(e.operand)))
+        if isinstance(e, S.Ternary):
+            return value(e.then) if value(e.cond) else value(e.other)
+        if isinstance(e, S.Binary) and e.op in _BINARY:
+            v, w = value(e.left), value(e.right)
+            if e.op in ("/", "%") and w == 0:
+                raise error("division by zero")
+            return int(_BINARY[e.op](v, w))
+        raise error(f"undefined macro {e.name!r}" if isinstance(e, S.Name) else f"unexpected {expr_glsl(e)!r}")
+    tree = _parsed(text)
+    if isinstance(tree, str):
+        raise error(tree)
+    return value(tree)
 
-    def __init__(self, toks: list[str], where: str):
-        self.toks = toks
-        self.i = 0
-        self.where = where
 
-    def error(self, msg: str) -> TranslateError:
-        return TranslateError(f"{self.where}: {msg} in #if expression {' '.join(self.toks)!r}")
-
-    def peek(self) -> str | None:
-        return self.toks[self.i] if self.i < len(self.toks) else None
-
-    def take(self) -> str:
-        t = self.peek()
-        if t is None:
-            raise self.error("unexpected end")
-        self.i += 1
-        return t
-
-    def parse(self) -> int:
-        v = self.ternary()
-        if self.peek() is not None:
-            raise self.error(f"unexpected {self.peek()!r}")
-        return v
-
-    def ternary(self) -> int:
-        c = self.binary(0)
-        if self.peek() == "?":
-            self.take()
-            a = self.ternary()
-            if self.take() != ":":
-                raise self.error("expected ':'")
-            b = self.ternary()
-            return a if c else b
-        return c
-
-    def binary(self, level: int) -> int:
-        if level == len(self._BIN):
-            return self.unary()
-        v = self.binary(level + 1)
-        while self.peek() in self._BIN[level]:
-            op = self.take()
-            w = self.binary(level + 1)
-            if op in ("/", "%") and w == 0:
-                raise self.error("division by zero")
-            v = int(_BINARY[op](v, w))
-        return v
-
-    def unary(self) -> int:
-        t = self.take()
-        if t in _UNARY:
-            return int(_UNARY[t](self.unary()))
-        if t == "(":
-            v = self.ternary()
-            if self.take() != ")":
-                raise self.error("expected ')'")
-            return v
-        m = re.fullmatch(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?", t)
-        if m:
-            return int(m.group(1), 0) if not re.fullmatch(r"0\d+", m.group(1)) else int(m.group(1), 8)
-        if re.fullmatch(r"[A-Za-z_]\w*", t):
-            raise self.error(f"undefined macro {t!r}")
-        raise self.error(f"unexpected {t!r}")
+@lru_cache(maxsize=4096)
+def _parsed(text: str):
+    """The tree of the expression ``text``, or why it is none (cached: the same macros recur)."""
+    try:
+        (item,) = S.parse(f"const int v = {text};").items
+        (d,) = item.declarators
+        return d.init
+    except TranslateError as e:
+        return str(e)
+    except ValueError:                                  # a declaration, more than one
+        return "not one expression"
 
 
 def _cdiv(v: int, w: int) -> int:
@@ -135,7 +107,7 @@ def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
         i += 4 if paren else 2
     if not resolved:
         raise TranslateError(f"{where}: empty #if expression")
-    return bool(_Expr(_expand(resolved, macros, where), where).parse())
+    return bool(_value(" ".join(_expand(resolved, macros, where)), where))
 
 
 def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader>") -> str:
@@ -244,7 +216,7 @@ def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
     value = " ".join(_expand([key], env, name))
     if not re.search(r"[0-9a-fA-F][uU]\b", value):
         try:                            # an integer constant expression becomes its value
-            value = str(_Expr(_ptoks(value), name).parse())
+            value = str(_value(value, name))
         except TranslateError:
             pass
     # a negative or compound value keeps its meaning next to any operator
