@@ -77,11 +77,9 @@ class _Osl(_OslLib):
                 # OSL has no member access on a call's result: a getter
                 mt = self.structs[t][x.name] if t in self.structs else _vec(t)[0]
                 m = self.name(x.name) if t in self.structs else _XYZW[_SWZ[x.name]]
-                ot = self.osl_type(t)
                 if isinstance(mt, tuple):
                     raise TranslateError(f"OSL translation: array member {x.name!r} of a call's result")
-                name = f"cellgl_member_{ot}_{m}"
-                self.helper(name, f"{self.osl_type(mt)} {name}({ot} a) {{ return a.{m}; }}")
+                name = self.gen(f"cellgl_member_{self.osl_type(t)}_{m}", mt, [(t, "a")], f"return a.{m};")
                 return f"{name}({s})", mt
             if isinstance(t, str) and t in self.structs:
                 return f"{s}.{self.name(x.name)}", self.structs[t][x.name]
@@ -92,10 +90,8 @@ class _Osl(_OslLib):
             if len(idx) == 1:
                 return f"{s}.{_XYZW[idx[0]]}", v[0]
             rt = t[:-1] + str(len(idx))
-            ort, ot = self.osl_type(rt), self.osl_type(t)
-            name = f"cellgl_swizzle_{t}_{''.join(_XYZW[i] for i in idx)}"
-            self.helper(name, lambda: f"{ort} {name}({ot} a) {{ return {ort}("
-                        + ", ".join(f"a.{_XYZW[i]}" for i in idx) + "); }")
+            name = self.gen(f"cellgl_swizzle_{t}_{''.join(_XYZW[i] for i in idx)}", rt, [(t, "a")],
+                            lambda: self.returns(rt, [f"a.{_XYZW[i]}" for i in idx]))
             return f"{name}({s})", rt
         if isinstance(x, S.Index):
             s, t = self.ex(x.base)
@@ -123,9 +119,8 @@ class _Osl(_OslLib):
             c, (a, ta), (b, _) = self.ex(x.cond)[0], self.ex(x.then), self.ex(x.other)
             if ta in ("float", "int", "uint", "bool"):
                 return f"({c} ? {a} : {b})", ta
-            ot = self.osl_type(ta)
-            name = f"cellgl_select_{ot}"
-            self.helper(name, f"{ot} {name}(int c, {ot} a, {ot} b) {{ if (c) return a; return b; }}")
+            name = self.gen(f"cellgl_select_{self.osl_type(ta)}", ta, [("int", "c"), (ta, "a"), (ta, "b")],
+                            "if (c) return a; return b;")
             return f"{name}({c}, {a}, {b})", ta
         if isinstance(x, S.Assign):
             return self.assign(x.op, x.target, x.value), None
@@ -198,23 +193,17 @@ class _Osl(_OslLib):
         if not v:
             raise TranslateError(f"OSL translation: constructor {t}()")
         types = [st for _, st in ev]
-        name = f"cellgl_make_{t}_" + "_".join(types)
 
         def code():
             comps = []
             for j, st in enumerate(types):
                 sv = _vec(st)
                 comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
-            if len(comps) == 1:
-                comps = comps * v[1]
-            comps = comps[:v[1]]
+            comps = (comps * v[1] if len(comps) == 1 else comps)[:v[1]]
             if len(comps) != v[1]:
                 raise TranslateError(f"OSL translation: {t}({', '.join(types)})")
-            ot = self.osl_type(t)
-            plist = ", ".join(f"{self.osl_type(st)} a{j}" for j, st in enumerate(types))
-            return (f"{ot} {name}({plist}) {{ return {ot}("
-                    + ", ".join(self.conv(c, ct, v[0]) for c, ct in comps) + "); }")
-        self.helper(name, code)
+            return self.returns(t, [self.conv(c, ct, v[0]) for c, ct in comps])
+        name = self.gen(f"cellgl_make_{t}_" + "_".join(types), t, [(st, f"a{j}") for j, st in enumerate(types)], code)
         return f"{name}({', '.join(s for s, _ in ev)})", t
 
     def user_call(self, fn: str, args: list):
