@@ -135,8 +135,8 @@ void cell_osl_texture(vec3 p, vec3 dp, out vec3 color, out float height, out flo
 
 def folded_code(prog, params, specialise, structs) -> tuple[str, list]:
     """The GLSL of ``prog`` for OSL, folded like every other target's but for the recipe values
-    in ``params`` (``[(Param, value)]``, :func:`exposed_params`), which stay named constants the
-    shader passes in as its parameters; and those of ``params`` the folded code still reads.
+    in ``params`` (``[(Param, value)]``, :func:`exposed_params`), which stay uniforms (the
+    shader passes them in as its parameters); and those of ``params`` the folded code still reads.
     ``specialise``: the program's specialised GLSL (:func:`cellgl.export.snippets.specialised_code`),
     ``structs``: the parameter structs to scalarise."""
     from dataclasses import replace
@@ -144,24 +144,17 @@ def folded_code(prog, params, specialise, structs) -> tuple[str, list]:
     from cellgl.export import compiler
 
     sliders = {"cell_" + p.name for p, _ in params}
-    lines, consts = [], {}
+    lines = []
     for ln in prog.params.split("\n"):
         w = ln.split()
         if len(w) >= 4 and w[0] == "const" and w[2] in sliders and w[3] == "=":
-            consts["cellgl_" + w[2][len("cell_"):]] = ln.replace(" cell_", " cellgl_", 1)
             ln = f"uniform {w[1]} {w[2]};"            # not a constant for the compiler: not folded
         lines.append(ln)
     text = specialise(replace(prog, params="\n".join(lines), entry=prog.entry + _ENTRY))
     code = compiler.compile_glsl(text, ["cellgl_osl_texture"], structs=structs,
                                  keep=("cellgl_search_budget",))
-    out, kept = [], set()
-    for ln in code.split("\n"):
-        w = ln.split()
-        if len(w) == 3 and w[0] == "uniform" and w[2].rstrip(";") in consts:
-            kept.add(w[2].rstrip(";"))
-            ln = consts[w[2].rstrip(";")]                 # a value to_osl turns into a parameter
-        out.append(ln)
-    return "\n".join(out), [(p, v) for p, v in params if "cellgl_" + p.name in kept]
+    kept = {w[2].rstrip(";") for w in map(str.split, code.split("\n")) if len(w) == 3 and w[0] == "uniform"}
+    return code, [(p, v) for p, v in params if "cellgl_" + p.name in kept]
 
 
 def osl_shader(prog, code: str, specialise=None, structs=()) -> str:

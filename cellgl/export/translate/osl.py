@@ -72,23 +72,19 @@ class _Osl(_OslLib):
             return f"({s})", t
         if isinstance(x, S.Member):
             s, t = self.ex(x.base)
-            called = isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor))
-            if called and (len(x.name) == 1 or (isinstance(t, str) and t in self.structs)):
+            struct, v = isinstance(t, str) and t in self.structs, _vec(t)
+            if not struct and not v:
+                raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
+            if struct or len(x.name) == 1:
+                m, mt = (self.name(x.name), self.structs[t][x.name]) if struct else (_XYZW[_SWZ[x.name]], v[0])
+                if not isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor)):
+                    return f"{s}.{m}", mt
                 # OSL has no member access on a call's result: a getter
-                mt = self.structs[t][x.name] if t in self.structs else _vec(t)[0]
-                m = self.name(x.name) if t in self.structs else _XYZW[_SWZ[x.name]]
                 if isinstance(mt, tuple):
                     raise TranslateError(f"OSL translation: array member {x.name!r} of a call's result")
                 name = self.gen(f"cellgl_member_{self.osl_type(t)}_{m}", mt, [(t, "a")], f"return a.{m};")
                 return f"{name}({s})", mt
-            if isinstance(t, str) and t in self.structs:
-                return f"{s}.{self.name(x.name)}", self.structs[t][x.name]
-            v = _vec(t)
-            if not v:
-                raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
             idx = [_SWZ[c] for c in x.name]
-            if len(idx) == 1:
-                return f"{s}.{_XYZW[idx[0]]}", v[0]
             rt = t[:-1] + str(len(idx))
             name = self.gen(f"cellgl_swizzle_{t}_{''.join(_XYZW[i] for i in idx)}", rt, [(t, "a")],
                             lambda: self.returns(rt, [f"a.{_XYZW[i]}" for i in idx]))
@@ -333,11 +329,11 @@ class _Osl(_OslLib):
             self.structs[item.name] = members
             funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
         elif isinstance(item, S.Global):
-            if "uniform" in item.quals:
+            if "uniform" in item.quals and any(d.name not in self.params for d in item.declarators):
                 raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
                                      "shader's parameters are OSL's uniforms)")
             for d in item.declarators:
-                if d.init is None:
+                if d.init is None and d.name not in self.params:
                     raise TranslateError(f"OSL translation: global {d.name!r} needs a value")
                 self.globals[d.name] = (item.type, d)
         else:
@@ -392,8 +388,8 @@ def to_osl(text: str, *, params=(), passed: dict | None = None) -> str:
     text : str
         GLSL from :func:`cellgl.export.snippets.library_code`.
     params : sequence of str
-        Global constants that the caller supplies instead (the shader's parameters): each
-        function that reads one gets it as an extra trailing parameter, in this order.
+        Global constants or uniforms that the caller supplies instead (the shader's parameters):
+        each function that reads one gets it as an extra trailing parameter, in this order.
     passed : dict, optional
         Filled with ``{function: [the names of params it takes, in order]}`` (a function takes
         those it reads and those its callees take).

@@ -4,10 +4,9 @@ access, built-ins) and for unsigned 32-bit arithmetic on OSL's signed ``int``; e
 generated once, when the translation first needs it."""
 from __future__ import annotations
 
-
-from cellgl.export import syntax as S
 from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
+from cellgl.export.values import value
 
 _COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
@@ -199,24 +198,16 @@ class _OslLib:
 
     # ------------------------------------------------------------------ expressions
 
-    def size(self, x) -> int:
-        """An array size: an integer constant expression, folded (OSL wants a literal)."""
-        if isinstance(x, S.Num) and x.text.rstrip("uU").isdigit():
-            return int(x.text.rstrip("uU"))
-        if isinstance(x, S.Paren):
-            return self.size(x.inner)
-        if isinstance(x, S.Binary) and x.op in ("+", "-", "*", "<<"):
-            a, b = self.size(x.left), self.size(x.right)
-            return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x.op]
-        raise TranslateError("OSL translation: an array size that is not an integer constant")
-
     def sized(self, t: str, size) -> tuple:
         """The type of a name of GLSL type ``t`` and array size ``size`` (None: not an array) as
-        the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with."""
+        the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with
+        (an integer constant expression, folded: OSL wants a literal)."""
         if size is None:
             return t, ""
-        sz = str(self.size(size))
-        return (t, sz), f"[{sz}]"
+        v = value(size, {})
+        if v is None or v[0] not in ("int", "uint"):
+            raise TranslateError("OSL translation: an array size that is not an integer constant")
+        return (t, str(v[1])), f"[{v[1]}]"
 
     def vec_get(self, t: str) -> str:
         comp, n = _vec(t)
