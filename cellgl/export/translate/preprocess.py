@@ -231,44 +231,15 @@ def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
 
 
 def top_level_names(text: str) -> dict[str, str]:
-    """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``."""
+    """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``, read from
+    :func:`cellgl.export.syntax.parsed_library`'s tree (each declaration parsed once per process)."""
     names: dict[str, str] = {}
-    depth, stmt = 0, []
-    for kind, t in split_tokens(text):
-        if kind in ("ws", "comment"):
-            continue
-        if depth == 0 and t in ("{", ";"):
-            _decl(stmt, names)
-            stmt = []
-        elif depth == 0 and t != "}":
-            stmt.append(t)
-        depth += (t == "{") - (t == "}")
+    for it in S.parsed_library(text).items:
+        if isinstance(it, S.Global):
+            names.update(dict.fromkeys((d.name for d in it.declarators), "variable"))
+        else:
+            names[it.name] = "struct" if isinstance(it, S.Struct) else "function"
     return names
-
-
-_QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "in", "out", "inout", "flat",
-               "precise", "invariant"}
-
-
-def _decl(stmt: list[str], names: dict[str, str]) -> None:
-    s = [t for t in stmt if t not in _QUALIFIERS]
-    if len(s) < 2:
-        return
-    if s[0] == "struct":
-        names[s[1]] = "struct"
-    elif len(s) >= 3 and s[2] == "(":
-        names[s[1]] = "function"        # a definition or a prototype
-    elif re.fullmatch(r"[A-Za-z_]\w*", s[1]):
-        # variable(s): TYPE NAME [= ...] [, NAME ...]; TYPE NAME[N] = ...
-        names[s[1]] = "variable"
-        depth = 0
-        for i, t in enumerate(s[2:], start=2):
-            if t in "([":
-                depth += 1
-            elif t in ")]":
-                depth -= 1
-            elif t == "," and depth == 0 and i + 1 < len(s):
-                names[s[i + 1]] = "variable"
 
 
 def prefixed(name: str, kind: str) -> str:
