@@ -74,11 +74,10 @@ def exposed_params(prog, code: str):
     for typ, name, value in prog.uniforms:
         p = PARAMS_BY_NAME.get(name)
         m = re.fullmatch(r"c(\d)(\d)?", name)              # a weight of F_i or of F_i F_j
-        if m and any(int(d) > n for d in m.groups() if d):
-            continue
         if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \
                 or isinstance(value, (list, tuple)) or name not in used \
-                or ((name in TERM_SWITCHES or m) and value == 0):
+                or ((name in TERM_SWITCHES or m) and value == 0) \
+                or (m and any(int(d) > n for d in m.groups() if d)):
             continue
         out.append((p, value))
     return out

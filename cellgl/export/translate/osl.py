@@ -242,17 +242,12 @@ class _Osl(_OslLib):
                 out += self.body(s.other, ind)
         elif isinstance(s, S.For):
             self.scopes.append({})
-            init = ""
-            if isinstance(s.init, S.Decl):
-                d = self.decl(s.init.type, s.init.declarators)
-                if len(d) != 1:
-                    raise TranslateError("OSL translation: one variable per for-loop initialiser")
-                init = d[0][:-1]
-            elif s.init is not None:
-                init, _ = self.ex(s.init.expr)
-            cond = "" if s.cond is None else self.ex(s.cond)[0]
-            step = "" if s.step is None else self.ex(s.step)[0]
-            out.append(f"{ind}for ({init}; {cond}; {step})")
+            init = self.decl(s.init.type, s.init.declarators) if isinstance(s.init, S.Decl) \
+                else [("" if s.init is None else self.ex(s.init.expr)[0]) + ";"]
+            if len(init) != 1:
+                raise TranslateError("OSL translation: one variable per for-loop initialiser")
+            cond, step = ("" if x is None else self.ex(x)[0] for x in (s.cond, s.step))
+            out.append(f"{ind}for ({init[0]} {cond}; {step})")
             out += self.body(s.body, ind)
             self.scopes.pop()
         elif isinstance(s, S.While):

@@ -9,10 +9,6 @@ class TranslateError(ValueError):
     """The shader text uses a construct the exporter cannot specialise or translate."""
 
 
-# --------------------------------------------------------------------------------------------
-# tokens
-# --------------------------------------------------------------------------------------------
-
 _TOKEN_RE = re.compile(
     r"(?P<comment>//[^\n]*|/\*.*?\*/)"
     r"|(?P<ws>\s+)"
