@@ -148,22 +148,20 @@ class _Osl(_OslLib):
             t = "uint"
         elif op not in ("<<", ">>") and ta != tb and "float" in (ta, tb):
             a, b, t = self.conv(a, ta, "float"), self.conv(b, tb, "float"), "float"
-        s = self.scalar_op(op, a, b, t)
-        return s, ("bool" if op in _CMP or op == "^^" else t)
+        return self.scalar_op(op, a, b, t), ("bool" if op in _CMP or op == "^^" else t)
 
     def assign(self, op, lhs, rhs) -> str:
         if isinstance(lhs, S.Paren):
             lhs = lhs.inner
-        if isinstance(lhs, S.Member):
-            _, bt = self.ex(lhs.base)
-            if _vec(bt) and len(lhs.name) > 1:
-                raise TranslateError("OSL translation: assignment to a multi-component swizzle")
-        if isinstance(lhs, S.Index) and _vec(self.ex(lhs.base)[1]):        # a component of a vector
+        if isinstance(lhs, (S.Member, S.Index)):
             base, bt = self.ex(lhs.base)
-            idx, _ = self.ex(lhs.index)
-            val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
-            v, tv = self.ex(val)
-            return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
+            if isinstance(lhs, S.Member) and _vec(bt) and len(lhs.name) > 1:
+                raise TranslateError("OSL translation: assignment to a multi-component swizzle")
+            if isinstance(lhs, S.Index) and _vec(bt):        # a component of a vector
+                idx, _ = self.ex(lhs.index)
+                val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
+                v, tv = self.ex(val)
+                return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
         a, ta = self.ex(lhs)
         if op == "=":
             return f"{a} = {self.conv_to(rhs, ta)}"

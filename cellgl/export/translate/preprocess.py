@@ -156,28 +156,20 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
             continue
         kw, rest = m.group(1), _strip_comment(m.group(2))
         if kw in ("if", "ifdef", "ifndef"):
-            if not active:
-                stack.append([False, True, False, False])
-            else:
-                if kw == "if":
-                    cond = _eval_if(rest, macros, where)
-                else:
-                    if not re.fullmatch(r"[A-Za-z_]\w*", rest):
-                        raise TranslateError(f"{where}: #{kw} needs one macro name, got {rest!r}")
-                    cond = (rest in macros) == (kw == "ifdef")
-                stack.append([cond, cond, True, False])
-            active = stack[-1][0]
+            if active and kw != "if" and not re.fullmatch(r"[A-Za-z_]\w*", rest):
+                raise TranslateError(f"{where}: #{kw} needs one macro name, got {rest!r}")
+            cond = active and (_eval_if(rest, macros, where) if kw == "if"
+                               else (rest in macros) == (kw == "ifdef"))
+            stack.append([cond, cond or not active, active, False])   # (inactive parent: none will be taken)
+            active = cond
         elif kw in ("elif", "else"):
             if not stack:
                 raise TranslateError(f"{where}: #{kw} without #if")
             top = stack[-1]
             if top[3]:
                 raise TranslateError(f"{where}: #{kw} after #else")
-            if kw == "else":
-                top[3] = True
-                top[0] = top[2] and not top[1]
-            else:
-                top[0] = top[2] and not top[1] and _eval_if(rest, macros, where)
+            top[3] = kw == "else"
+            top[0] = top[2] and not top[1] and (kw == "else" or _eval_if(rest, macros, where))
             top[1] = top[1] or top[0]
             active = top[0]
         elif kw == "endif":
