@@ -301,16 +301,15 @@ class _Osl(_OslLib):
     def emit(self) -> str:
         funcs_out: list[str] = []
         for item in self.unit:
-            before = len(funcs_out)
-            known = set(self.helpers)
-            self.emit_item(item, funcs_out)
-            new = [c for n, c in self.helpers.items() if n not in known and not n.startswith("struct ")]
-            funcs_out[before:before] = new
+            known = len(self.helpers)
+            lines = self.item(item)                           # the helpers it needs go before it
+            funcs_out += [c for n, c in list(self.helpers.items())[known:] if not n.startswith("struct ")]
+            funcs_out += ["\n".join(self.comment_lines(item.comments) + lines)] if lines else []
         head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
         # no blank line between functions (as GLSL)
         return _braces(head + "\n" + "\n".join(funcs_out) + "\n")
 
-    def emit_item(self, item, funcs_out: list) -> None:
+    def item(self, item) -> list[str]:
         if isinstance(item, S.Struct):
             members = {}
             lines = [f"struct {item.name}", "{"]
@@ -318,10 +317,9 @@ class _Osl(_OslLib):
                 members[f.name], arr = self.sized(f.type, f.size)
                 trail = f"  {f.trail}" if f.trail else ""
                 lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};{trail}")
-            lines.append("};")
             self.structs[item.name] = members
-            funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
-        elif isinstance(item, S.Global):
+            return lines + ["};"]
+        if isinstance(item, S.Global):
             if "uniform" in item.quals and any(d.name not in self.params for d in item.declarators):
                 raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
                                      "shader's parameters are OSL's uniforms)")
@@ -329,26 +327,21 @@ class _Osl(_OslLib):
                 if d.init is None and d.name not in self.params:
                     raise TranslateError(f"OSL translation: global {d.name!r} needs a value")
                 self.globals[d.name] = (item.type, d)
-        else:
-            name = item.name
-            used = self.globals_used(item.body)
-            passed = self.passed[name] = [g for g in self.params if g in used]
-            n = len(self.funcs.get(name, ()))                 # overloads before this one
-            oname = self.name(name) if n == 0 else f"{name}_{n}"
-            ptypes = [self.sized(p.type, p.size)[0] for p in item.params]
-            self.funcs.setdefault(name, []).append(
-                (ptypes, [p.mode for p in item.params], item.ret, oname, [self.name(g) for g in passed]))
-            funcs_out.append("\n".join(self.comment_lines(item.comments) + self.func(item, oname, passed, used)))
+            return []
+        return self.function(item)
 
     @staticmethod
     def comment_lines(com) -> list[str]:
         return [ln.strip() for c in com if c for ln in c.split("\n")]
 
-    def func(self, item, oname: str, passed: list, used: set) -> list[str]:
-        self.ret = item.ret
+    def function(self, item) -> list[str]:
+        """The lines of a function; its overloads are numbered, and it takes the ``params`` it reads."""
+        used = self.globals_used(item.body)
+        passed = self.passed[item.name] = [g for g in self.params if g in used]
         mutated = assigned(item.body, {n: c[0][1] for n, c in self.funcs.items()})
-        scope: dict = {}
-        plist, prologue = [], []
+        overloads = self.funcs.setdefault(item.name, [])
+        oname = self.name(item.name) if not overloads else f"{item.name}_{len(overloads)}"
+        self.ret, scope, plist, prologue = item.ret, {}, [], []
         for p in item.params:
             ot, n = self.osl_type(p.type), self.name(p.name)
             scope[p.name], arr = self.sized(p.type, p.size)
@@ -362,6 +355,8 @@ class _Osl(_OslLib):
             else:
                 plist.append(f"{ot} {n}{arr}")
         plist += [f"{self.osl_type(self.globals[g][0])} {self.name(g)}" for g in passed]
+        overloads.append(([scope[p.name] for p in item.params], [p.mode for p in item.params], item.ret, oname,
+                          [self.name(g) for g in passed]))
         self.scopes = [scope]
         for g in sorted(used - set(passed), key=list(self.globals).index):
             self.scopes[0].pop(g, None)
