@@ -197,7 +197,8 @@ class _Osl(_OslLib):
             if len(comps) != v[1]:
                 raise TranslateError(f"OSL translation: {t}({', '.join(types)})")
             return self.returns(t, [self.conv(c, ct, v[0]) for c, ct in comps])
-        name = self.gen(f"cellgl_make_{t}_" + "_".join(types), t, [(st, f"a{j}") for j, st in enumerate(types)], code)
+        name = self.gen(f"cellgl_make_{t}_" + "_".join(types), t, [(st, f"a{j}") for j, st in enumerate(types)],
+                        code)
         return f"{name}({', '.join(s for s, _ in ev)})", t
 
     def user_call(self, fn: str, args: list):

@@ -223,7 +223,8 @@ class _OslLib:
 
     def any_all(self, fn: str, bt: str) -> str:
         j = " || " if fn == "any" else " && "
-        return self.gen(f"cellgl_{fn}_{bt}", "int", [(bt, "a")], f"return {j.join(f'a.{c}' for c in _XYZW[:_vec(bt)[1]])};")
+        return self.gen(f"cellgl_{fn}_{bt}", "int", [(bt, "a")],
+                        f"return {j.join(f'a.{c}' for c in _XYZW[:_vec(bt)[1]])};")
 
     def call_builtin(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
