@@ -205,13 +205,10 @@ class _Osl(_OslLib):
         ev = [self.ex(a) for a in args]
         types = [t for _, t in ev]
         cands = self.funcs[fn]
-        for ptypes, modes, ret, oname, extra in cands:
-            if len(ptypes) == len(types) and all(_same(p, t) for p, t in zip(ptypes, types)):
-                break
-        else:
-            if len(cands) != 1:
-                raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
-            ptypes, modes, ret, oname, extra = cands[0]
+        match = [c for c in cands if len(c[0]) == len(types) and all(_same(p, t) for p, t in zip(c[0], types))]
+        if not match and len(cands) != 1:
+            raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
+        ptypes, modes, ret, oname, extra = (match or cands)[0]
         ss = [self.coerce(s, t, p) if m == "in" else s for (s, t), p, m in zip(ev, ptypes, modes)] + extra
         return f"{oname}({', '.join(ss)})", ret
 

@@ -92,22 +92,13 @@ def _ptoks(s: str) -> list[str]:
 
 
 def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
-    toks = _ptoks(_strip_comment(expr))
-    resolved: list[str] = []
-    i = 0
-    while i < len(toks):           # defined X / defined(X) before expansion
-        if toks[i] != "defined":
-            resolved.append(toks[i])
-            i += 1
-            continue
-        paren = toks[i + 1:i + 2] == ["("]
-        if len(toks) < i + (4 if paren else 2) or paren and toks[i + 3] != ")":
-            raise TranslateError(f"{where}: malformed defined{'()' if paren else ''} in {expr!r}")
-        resolved.append("1" if toks[i + 1 + paren] in macros else "0")
-        i += 4 if paren else 2
-    if not resolved:
+    text = " ".join(_ptoks(_strip_comment(expr)))       # defined X / defined(X) before expansion
+    text = re.sub(r"\bdefined (?:\( (\w+) \)|(\w+))", lambda m: str(int((m[1] or m[2]) in macros)), text)
+    if bad := re.search(r"\bdefined\b( \()?", text):
+        raise TranslateError(f"{where}: malformed defined{'()' if bad[1] else ''} in {expr!r}")
+    if not text:
         raise TranslateError(f"{where}: empty #if expression")
-    return bool(_value(" ".join(_expand(resolved, macros, where)), where))
+    return bool(_value(" ".join(_expand(text.split(), macros, where)), where))
 
 
 def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader>") -> str:
@@ -267,8 +258,7 @@ def prefix_names(text: str, *, overrides: Mapping[str, str] | None = None) -> tu
     names would collide.
     """
     decls = top_level_names(text)
-    overrides = overrides or {}
-    mapping = {n: overrides[n] if n in overrides else prefixed(n, k) for n, k in decls.items()}
+    mapping = {n: (overrides or {}).get(n) or prefixed(n, k) for n, k in decls.items()}
     mapping = {a: b for a, b in mapping.items() if a != b}
     seen: dict[str, str] = {}
     for old, new in mapping.items():
