@@ -8,7 +8,6 @@ from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.values import value
 
-_COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
 _XYZW = "xyzw"
 _CMP = {"<", ">", "<=", ">=", "==", "!="}
@@ -31,11 +30,10 @@ OSL_RESERVED = frozenset("""
 """.split())
 
 
-def _vec(t: str):
-    """``(component type, n)`` of a GLSL vector type, or None."""
-    if not isinstance(t, str) or t[-1:] not in ("2", "3", "4") or t[:-1] not in ("vec", "ivec", "uvec", "bvec"):
-        return None
-    return _COMP[t[:-4]], int(t[-1])
+#: ``(component type, n)`` of each GLSL vector type; :func:`_vec`: that of a type, or None
+_VECS = {f"{k}vec{n}": (c, n) for k, c in (("", "float"), ("i", "int"), ("u", "uint"), ("b", "bool"))
+         for n in (2, 3, 4)}
+_vec = _VECS.get
 
 
 def _int_lit(v: int) -> str:
