@@ -74,11 +74,10 @@ def exposed_params(prog, code: str):
     for typ, name, value in prog.uniforms:
         p = PARAMS_BY_NAME.get(name)
         m = re.fullmatch(r"c(\d)(\d)?", name)              # a weight of F_i or of F_i F_j
-        if m and any(int(d) > n for d in m.groups() if d):
-            continue
         if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \
                 or isinstance(value, (list, tuple)) or name not in used \
-                or ((name in TERM_SWITCHES or m) and value == 0):
+                or ((name in TERM_SWITCHES or m) and value == 0) \
+                or (m and any(int(d) > n for d in m.groups() if d)):
             continue
         out.append((p, value))
     return out
@@ -135,8 +134,8 @@ void cell_osl_texture(vec3 p, vec3 dp, out vec3 color, out float height, out flo
 
 def folded_code(prog, params, specialise, structs) -> tuple[str, list]:
     """The GLSL of ``prog`` for OSL, folded like every other target's but for the recipe values
-    in ``params`` (``[(Param, value)]``, :func:`exposed_params`), which stay named constants the
-    shader passes in as its parameters; and those of ``params`` the folded code still reads.
+    in ``params`` (``[(Param, value)]``, :func:`exposed_params`), which stay uniforms (the
+    shader passes them in as its parameters); and those of ``params`` the folded code still reads.
     ``specialise``: the program's specialised GLSL (:func:`cellgl.export.snippets.specialised_code`),
     ``structs``: the parameter structs to scalarise."""
     from dataclasses import replace
@@ -144,24 +143,17 @@ def folded_code(prog, params, specialise, structs) -> tuple[str, list]:
     from cellgl.export import compiler
 
     sliders = {"cell_" + p.name for p, _ in params}
-    lines, consts = [], {}
+    lines = []
     for ln in prog.params.split("\n"):
         w = ln.split()
         if len(w) >= 4 and w[0] == "const" and w[2] in sliders and w[3] == "=":
-            consts["cellgl_" + w[2][len("cell_"):]] = ln.replace(" cell_", " cellgl_", 1)
             ln = f"uniform {w[1]} {w[2]};"            # not a constant for the compiler: not folded
         lines.append(ln)
     text = specialise(replace(prog, params="\n".join(lines), entry=prog.entry + _ENTRY))
     code = compiler.compile_glsl(text, ["cellgl_osl_texture"], structs=structs,
                                  keep=("cellgl_search_budget",))
-    out, kept = [], set()
-    for ln in code.split("\n"):
-        w = ln.split()
-        if len(w) == 3 and w[0] == "uniform" and w[2].rstrip(";") in consts:
-            kept.add(w[2].rstrip(";"))
-            ln = consts[w[2].rstrip(";")]                 # a value to_osl turns into a parameter
-        out.append(ln)
-    return "\n".join(out), [(p, v) for p, v in params if "cellgl_" + p.name in kept]
+    kept = {w[2].rstrip(";") for w in map(str.split, code.split("\n")) if len(w) == 3 and w[0] == "uniform"}
+    return code, [(p, v) for p, v in params if "cellgl_" + p.name in kept]
 
 
 def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
@@ -171,16 +163,12 @@ def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
     if prog.entries:
         return _basis_function_shader(prog, code)
     if not prog.filtered:
-        return _basis_shader(prog, code)
+        return to_osl(code) + "\n" + _shader("cellgl_basis", _BASIS_PARAMS, _BASIS_BODY)
     glsl, params = folded_code(prog, exposed_params(prog, code), specialise, structs)
-    names = ["cellgl_" + p.name for p, _ in params]
     passed: dict = {}
-    lib = to_osl(glsl, params=names, passed=passed)
-    args = ", ".join(_pname(g[len("cellgl_"):]) for g in passed["cellgl_osl_texture"])
-    shader_name = identifier(prog.title)
-    lines = [f"shader {shader_name}(", '    point Vector = point(0, 0, 0) [[ string label = "Vector", '
-             'string help = "Texture coordinate: (x, y) in [0, 1]^2 spans the bake, z the solid depth '
-             '(unconnected: generated coordinates)" ]],']
+    lib = to_osl(glsl, params=["cellgl_" + p.name for p, _ in params], passed=passed)
+    ins = [_VECTOR.format("Texture coordinate: (x, y) in [0, 1]^2 spans the bake, z the solid depth "
+                          "(unconnected: generated coordinates)")]
     for p, value in params:
         typ = "float" if p.type == "float" else "int"
         lo, hi = (0, 1) if p.type == "bool" else (p.lo, p.hi)
@@ -188,61 +176,59 @@ def osl_shader(prog, code: str, specialise=None, structs=()) -> str:
                 f"{typ} max = {_lit(hi, typ)}", f'string help = "{_quote(p.doc)}"']
         if p.type == "bool":
             meta.append('string widget = "checkBox"')
-        lines.append(f"    {typ} {_pname(p.name)} = {_lit(value, typ)} [[ {', '.join(meta)} ]],")
-    for typ, name, default, doc in OUTPUTS:
-        lines.append(f'    output {typ} {name} = {default} [[ string help = "{_quote(doc)}" ]],')
-    lines[-1] = lines[-1].rstrip(",")
-    z = "q[2]" if prog.solid else "0.0"
-    lines += [
-        ")",
-        "{",
-        "    point q0 = Vector;",
-        "    // unconnected: generated coordinates (Cycles), else the surface's (u, v)",
-        "    if (!isconnected(Vector) && !getattribute(\"geom:generated\", q0))",
-        "        q0 = point(u, v, 0);",
-        "    // cellgl's texture space: v = 0 at the top row of a bake",
-        "    vector q = vector(q0[0], 1.0 - q0[1], q0[2]);",
-        "    // the pixel's extent along each axis (Cycles' two differentials: the pixel's diagonals)",
-        "    vector ddx = Dx(q);",
-        "    vector ddy = Dy(q);",
-        "    vector dq = vector(hypot(ddx[0], ddy[0]), hypot(ddx[1], ddy[1]), hypot(ddx[2], ddy[2]));",
-        "    cellgl_vec3 c;",
-        "    cellgl_vec3 cc;",
-        "    cellgl_vec3 g;",
-        f"    cellgl_osl_texture(cellgl_vec3(q[0], q[1], {z}), cellgl_vec3(dq[0], dq[1], "
-        f"{'dq[2]' if prog.solid else '0.0'}), c, Fac, F1, F2, F3, F4, Value, cc, CellValue, IDLow, IDHigh, g"
-        f"{', ' + args if args else ''});",
-        "    Color = color(c.x, c.y, c.z);",
-        "    CellColor = color(cc.x, cc.y, cc.z);",
-        "    // bump: the height's gradient g (texture units) on the pixel, and the surface gradient",
-        "    vector guv = vector(g.x, g.y, g.z);",
-        "    float hx = dot(guv, ddx);",
-        "    float hy = dot(guv, ddy);",
-        "    vector dpdx = Dx(P);",
-        "    vector dpdy = Dy(P);",
-        "    vector r1 = cross(dpdy, N);",
-        "    vector r2 = cross(N, dpdx);",
-        "    float det = dot(dpdx, r1);",
-        "    vector sg = (det < 0.0 ? -1.0 : 1.0) * (hx * r1 + hy * r2);",
-        "    Normal = det == 0.0 ? N : normalize(abs(det) * N - sg);",
-        "}",
-    ]
-    return lib + "\n" + "\n".join(lines) + "\n"
+        ins.append(f"{typ} {_pname(p.name)} = {_lit(value, typ)} [[ {', '.join(meta)} ]]")
+    outs = [f'output {typ} {name} = {default} [[ string help = "{_quote(doc)}" ]]'
+            for typ, name, default, doc in OUTPUTS]
+    args = [_LOCALS.get(name, name) for _, name, _, _ in OUTPUTS]
+    args += [_pname(g[len("cellgl_"):]) for g in passed["cellgl_osl_texture"]]
+    body = _TEXTURE_BODY.format(z="q[2]" if prog.solid else "0.0", dz="dq[2]" if prog.solid else "0.0",
+                                args=", ".join(args))
+    return lib + "\n" + _shader(identifier(prog.title), ins + outs, body)
 
 
-def _basis_shader(prog, code: str) -> str:
-    """The shader of a program whose ``cellgl_texture(vec2 uv)`` returns four values (the bare
-    basis: F1..F4), with no parameters: outputs F1..F4 at uv = (x, 1 - y) of ``Vector``."""
-    return to_osl(code) + "\n" + _BASIS_SHADER
+def _shader(name: str, params: list, body: str) -> str:
+    """The ``shader`` block ``name`` of ``params`` (one a line) and ``body`` (its lines indented)."""
+    return f"shader {name}(\n    " + ",\n    ".join(params) + "\n)\n{\n" + body + "\n}\n"
 
 
-_BASIS_SHADER = """shader cellgl_basis(
-    point Vector = point(0, 0, 0),
-    output float F1 = 0,
-    output float F2 = 0,
-    output float F3 = 0,
-    output float F4 = 0)
-{
+#: the ``Vector`` input of a shader (its help text: ``{}``)
+_VECTOR = 'point Vector = point(0, 0, 0) [[ string label = "Vector", string help = "{}" ]]'
+#: the shader's locals that its outputs are passed as (the rest: the outputs themselves)
+_LOCALS = {"Color": "c", "CellColor": "cc", "Normal": "g"}
+#: the body of a texture's shader
+_TEXTURE_BODY = """\
+    point q0 = Vector;
+    // unconnected: generated coordinates (Cycles), else the surface's (u, v)
+    if (!isconnected(Vector) && !getattribute("geom:generated", q0))
+        q0 = point(u, v, 0);
+    // cellgl's texture space: v = 0 at the top row of a bake
+    vector q = vector(q0[0], 1.0 - q0[1], q0[2]);
+    // the pixel's extent along each axis (Cycles' two differentials: the pixel's diagonals)
+    vector ddx = Dx(q);
+    vector ddy = Dy(q);
+    vector dq = vector(hypot(ddx[0], ddy[0]), hypot(ddx[1], ddy[1]), hypot(ddx[2], ddy[2]));
+    cellgl_vec3 c;
+    cellgl_vec3 cc;
+    cellgl_vec3 g;
+    cellgl_osl_texture(cellgl_vec3(q[0], q[1], {z}), cellgl_vec3(dq[0], dq[1], {dz}), {args});
+    Color = color(c.x, c.y, c.z);
+    CellColor = color(cc.x, cc.y, cc.z);
+    // bump: the height's gradient g (texture units) on the pixel, and the surface gradient
+    vector guv = vector(g.x, g.y, g.z);
+    float hx = dot(guv, ddx);
+    float hy = dot(guv, ddy);
+    vector dpdx = Dx(P);
+    vector dpdy = Dy(P);
+    vector r1 = cross(dpdy, N);
+    vector r2 = cross(N, dpdx);
+    float det = dot(dpdx, r1);
+    vector sg = (det < 0.0 ? -1.0 : 1.0) * (hx * r1 + hy * r2);
+    Normal = det == 0.0 ? N : normalize(abs(det) * N - sg);"""
+
+#: the shader of a program whose ``cellgl_texture(vec2 uv)`` returns four values (the bare
+#: basis: F1..F4), with no parameters: outputs F1..F4 at uv = (x, 1 - y) of ``Vector``
+_BASIS_PARAMS = ["point Vector = point(0, 0, 0)"] + [f"output float F{k} = 0" for k in range(1, 5)]
+_BASIS_BODY = """\
     point q0 = Vector;
     if (!isconnected(Vector))
         getattribute("geom:generated", q0);
@@ -250,9 +236,7 @@ _BASIS_SHADER = """shader cellgl_basis(
     F1 = f.x;
     F2 = f.y;
     F3 = f.z;
-    F4 = f.w;
-}
-"""
+    F4 = f.w;"""
 
 
 def _basis_outputs(prog) -> list[str]:
@@ -285,24 +269,18 @@ def _basis_function_shader(prog, code: str) -> str:
     outputs F1.. (``f1``..``f1f2f3f4``), ``Distance`` (``edge``) or ``CellID`` (``cellid``: the
     nearest feature point's 32-bit ID as ``IDLow`` / ``IDHigh``, 16 bits each, exact)."""
     key, dim = prog.recipe["basis"], int(prog.recipe["dim"])
-    fn, ret = prog.entries[0], _basis_return(prog)
-    lib = to_osl(code)
-    arg = f"cellgl_vec{dim}({', '.join(['q[0]', 'q[1]', 'q[2]', 'W'][:dim])})"
-    ins = ['    point Vector = point(0, 0, 0) [[ string label = "Vector", string help = "The sample '
-           'point in cells (unconnected: generated coordinates)" ]],']
+    fn, ret, outs = prog.entries[0], _basis_return(prog), _basis_outputs(prog)
+    call = f"{fn}(cellgl_vec{dim}({', '.join(['q[0]', 'q[1]', 'q[2]', 'W'][:dim])}))"
+    ins = [_VECTOR.format("The sample point in cells (unconnected: generated coordinates)")]
     if dim == 4:
-        ins.append('    float W = 0 [[ string label = "W", string help = "The fourth coordinate, in cells" ]],')
-    outs = _basis_outputs(prog)
+        ins.append('float W = 0 [[ string label = "W", string help = "The fourth coordinate, in cells" ]]')
     if key == "cellid":
-        body = ["    int id = " + fn + "(" + arg + ");", "    IDLow = float(id & 65535);",
-                "    IDHigh = float((id >> 16) & 65535);"]
+        body = [f"int id = {call};", "IDLow = float(id & 65535);", "IDHigh = float((id >> 16) & 65535);"]
     elif ret == "float":
-        body = [f"    {outs[0]} = {fn}({arg});"]
+        body = [f"{outs[0]} = {call};"]
     else:
-        body = [f"    cellgl_{ret} f = {fn}({arg});"] + [f"    {o} = f.{'xyzw'[k]};" for k, o in enumerate(outs)]
-    lines = [f"shader cellgl_basis_{key}("] + ins + [f"    output float {o} = 0," for o in outs]
-    lines[-1] = lines[-1].rstrip(",")
-    lines += [")", "{", "    point q = Vector;",
-              "    if (!isconnected(Vector) && !getattribute(\"geom:generated\", q))",
-              "        q = P;"] + body + ["}"]
-    return lib + "\n" + "\n".join(lines) + "\n"
+        body = [f"cellgl_{ret} f = {call};"] + [f"{o} = f.{'xyzw'[k]};" for k, o in enumerate(outs)]
+    body = ["point q = Vector;", 'if (!isconnected(Vector) && !getattribute("geom:generated", q))',
+            "    q = P;"] + body
+    outs = [f"output float {o} = 0" for o in outs]
+    return to_osl(code) + "\n" + _shader(f"cellgl_basis_{key}", ins + outs, "    " + "\n    ".join(body))

@@ -72,30 +72,22 @@ class _Osl(_OslLib):
             return f"({s})", t
         if isinstance(x, S.Member):
             s, t = self.ex(x.base)
-            called = isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor))
-            if called and (len(x.name) == 1 or (isinstance(t, str) and t in self.structs)):
+            struct, v = isinstance(t, str) and t in self.structs, _vec(t)
+            if not struct and not v:
+                raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
+            if struct or len(x.name) == 1:
+                m, mt = (self.name(x.name), self.structs[t][x.name]) if struct else (_XYZW[_SWZ[x.name]], v[0])
+                if not isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor)):
+                    return f"{s}.{m}", mt
                 # OSL has no member access on a call's result: a getter
-                mt = self.structs[t][x.name] if t in self.structs else _vec(t)[0]
-                m = self.name(x.name) if t in self.structs else _XYZW[_SWZ[x.name]]
-                ot = self.osl_type(t)
                 if isinstance(mt, tuple):
                     raise TranslateError(f"OSL translation: array member {x.name!r} of a call's result")
-                name = f"cellgl_member_{ot}_{m}"
-                self.helper(name, f"{self.osl_type(mt)} {name}({ot} a) {{ return a.{m}; }}")
+                name = self.gen(f"cellgl_member_{self.osl_type(t)}_{m}", mt, [(t, "a")], f"return a.{m};")
                 return f"{name}({s})", mt
-            if isinstance(t, str) and t in self.structs:
-                return f"{s}.{self.name(x.name)}", self.structs[t][x.name]
-            v = _vec(t)
-            if not v:
-                raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
             idx = [_SWZ[c] for c in x.name]
-            if len(idx) == 1:
-                return f"{s}.{_XYZW[idx[0]]}", v[0]
             rt = t[:-1] + str(len(idx))
-            ort, ot = self.osl_type(rt), self.osl_type(t)
-            name = f"cellgl_swizzle_{t}_{''.join(_XYZW[i] for i in idx)}"
-            self.helper(name, lambda: f"{ort} {name}({ot} a) {{ return {ort}("
-                        + ", ".join(f"a.{_XYZW[i]}" for i in idx) + "); }")
+            name = self.gen(f"cellgl_swizzle_{t}_{''.join(_XYZW[i] for i in idx)}", rt, [(t, "a")],
+                            lambda: self.returns(rt, [f"a.{_XYZW[i]}" for i in idx]))
             return f"{name}({s})", rt
         if isinstance(x, S.Index):
             s, t = self.ex(x.base)
@@ -123,9 +115,8 @@ class _Osl(_OslLib):
             c, (a, ta), (b, _) = self.ex(x.cond)[0], self.ex(x.then), self.ex(x.other)
             if ta in ("float", "int", "uint", "bool"):
                 return f"({c} ? {a} : {b})", ta
-            ot = self.osl_type(ta)
-            name = f"cellgl_select_{ot}"
-            self.helper(name, f"{ot} {name}(int c, {ot} a, {ot} b) {{ if (c) return a; return b; }}")
+            name = self.gen(f"cellgl_select_{self.osl_type(ta)}", ta, [("int", "c"), (ta, "a"), (ta, "b")],
+                            "if (c) return a; return b;")
             return f"{name}({c}, {a}, {b})", ta
         if isinstance(x, S.Assign):
             return self.assign(x.op, x.target, x.value), None
@@ -157,22 +148,20 @@ class _Osl(_OslLib):
             t = "uint"
         elif op not in ("<<", ">>") and ta != tb and "float" in (ta, tb):
             a, b, t = self.conv(a, ta, "float"), self.conv(b, tb, "float"), "float"
-        s = self.scalar_op(op, a, b, t)
-        return s, ("bool" if op in _CMP or op == "^^" else t)
+        return self.scalar_op(op, a, b, t), ("bool" if op in _CMP or op == "^^" else t)
 
     def assign(self, op, lhs, rhs) -> str:
         if isinstance(lhs, S.Paren):
             lhs = lhs.inner
-        if isinstance(lhs, S.Member):
-            _, bt = self.ex(lhs.base)
-            if _vec(bt) and len(lhs.name) > 1:
-                raise TranslateError("OSL translation: assignment to a multi-component swizzle")
-        if isinstance(lhs, S.Index) and _vec(self.ex(lhs.base)[1]):        # a component of a vector
+        if isinstance(lhs, (S.Member, S.Index)):
             base, bt = self.ex(lhs.base)
-            idx, _ = self.ex(lhs.index)
-            val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
-            v, tv = self.ex(val)
-            return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
+            if isinstance(lhs, S.Member) and _vec(bt) and len(lhs.name) > 1:
+                raise TranslateError("OSL translation: assignment to a multi-component swizzle")
+            if isinstance(lhs, S.Index) and _vec(bt):        # a component of a vector
+                idx, _ = self.ex(lhs.index)
+                val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
+                v, tv = self.ex(val)
+                return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
         a, ta = self.ex(lhs)
         if op == "=":
             return f"{a} = {self.conv_to(rhs, ta)}"
@@ -198,36 +187,28 @@ class _Osl(_OslLib):
         if not v:
             raise TranslateError(f"OSL translation: constructor {t}()")
         types = [st for _, st in ev]
-        name = f"cellgl_make_{t}_" + "_".join(types)
 
         def code():
             comps = []
             for j, st in enumerate(types):
                 sv = _vec(st)
                 comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
-            if len(comps) == 1:
-                comps = comps * v[1]
-            comps = comps[:v[1]]
+            comps = (comps * v[1] if len(comps) == 1 else comps)[:v[1]]
             if len(comps) != v[1]:
                 raise TranslateError(f"OSL translation: {t}({', '.join(types)})")
-            ot = self.osl_type(t)
-            plist = ", ".join(f"{self.osl_type(st)} a{j}" for j, st in enumerate(types))
-            return (f"{ot} {name}({plist}) {{ return {ot}("
-                    + ", ".join(self.conv(c, ct, v[0]) for c, ct in comps) + "); }")
-        self.helper(name, code)
+            return self.returns(t, [self.conv(c, ct, v[0]) for c, ct in comps])
+        name = self.gen(f"cellgl_make_{t}_" + "_".join(types), t, [(st, f"a{j}") for j, st in enumerate(types)],
+                        code)
         return f"{name}({', '.join(s for s, _ in ev)})", t
 
     def user_call(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
         types = [t for _, t in ev]
         cands = self.funcs[fn]
-        for ptypes, modes, ret, oname, extra in cands:
-            if len(ptypes) == len(types) and all(_same(p, t) for p, t in zip(ptypes, types)):
-                break
-        else:
-            if len(cands) != 1:
-                raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
-            ptypes, modes, ret, oname, extra = cands[0]
+        match = [c for c in cands if len(c[0]) == len(types) and all(_same(p, t) for p, t in zip(c[0], types))]
+        if not match and len(cands) != 1:
+            raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
+        ptypes, modes, ret, oname, extra = (match or cands)[0]
         ss = [self.coerce(s, t, p) if m == "in" else s for (s, t), p, m in zip(ev, ptypes, modes)] + extra
         return f"{oname}({', '.join(ss)})", ret
 
@@ -257,17 +238,12 @@ class _Osl(_OslLib):
                 out += self.body(s.other, ind)
         elif isinstance(s, S.For):
             self.scopes.append({})
-            init = ""
-            if isinstance(s.init, S.Decl):
-                d = self.decl(s.init.type, s.init.declarators)
-                if len(d) != 1:
-                    raise TranslateError("OSL translation: one variable per for-loop initialiser")
-                init = d[0][:-1]
-            elif s.init is not None:
-                init, _ = self.ex(s.init.expr)
-            cond = "" if s.cond is None else self.ex(s.cond)[0]
-            step = "" if s.step is None else self.ex(s.step)[0]
-            out.append(f"{ind}for ({init}; {cond}; {step})")
+            init = self.decl(s.init.type, s.init.declarators) if isinstance(s.init, S.Decl) \
+                else [("" if s.init is None else self.ex(s.init.expr)[0]) + ";"]
+            if len(init) != 1:
+                raise TranslateError("OSL translation: one variable per for-loop initialiser")
+            cond, step = ("" if x is None else self.ex(x)[0] for x in (s.cond, s.step))
+            out.append(f"{ind}for ({init[0]} {cond}; {step})")
             out += self.body(s.body, ind)
             self.scopes.pop()
         elif isinstance(s, S.While):
@@ -323,16 +299,15 @@ class _Osl(_OslLib):
     def emit(self) -> str:
         funcs_out: list[str] = []
         for item in self.unit:
-            before = len(funcs_out)
-            known = set(self.helpers)
-            self.emit_item(item, funcs_out)
-            new = [c for n, c in self.helpers.items() if n not in known and not n.startswith("struct ")]
-            funcs_out[before:before] = new
+            known = len(self.helpers)
+            lines = self.item(item)                           # the helpers it needs go before it
+            funcs_out += [c for n, c in list(self.helpers.items())[known:] if not n.startswith("struct ")]
+            funcs_out += ["\n".join(self.comment_lines(item.comments) + lines)] if lines else []
         head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
         # no blank line between functions (as GLSL)
         return _braces(head + "\n" + "\n".join(funcs_out) + "\n")
 
-    def emit_item(self, item, funcs_out: list) -> None:
+    def item(self, item) -> list[str]:
         if isinstance(item, S.Struct):
             members = {}
             lines = [f"struct {item.name}", "{"]
@@ -340,37 +315,31 @@ class _Osl(_OslLib):
                 members[f.name], arr = self.sized(f.type, f.size)
                 trail = f"  {f.trail}" if f.trail else ""
                 lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};{trail}")
-            lines.append("};")
             self.structs[item.name] = members
-            funcs_out.append("\n".join(self.comment_lines(item.comments) + lines))
-        elif isinstance(item, S.Global):
-            if "uniform" in item.quals:
+            return lines + ["};"]
+        if isinstance(item, S.Global):
+            if "uniform" in item.quals and any(d.name not in self.params for d in item.declarators):
                 raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
                                      "shader's parameters are OSL's uniforms)")
             for d in item.declarators:
-                if d.init is None:
+                if d.init is None and d.name not in self.params:
                     raise TranslateError(f"OSL translation: global {d.name!r} needs a value")
                 self.globals[d.name] = (item.type, d)
-        else:
-            name = item.name
-            used = self.globals_used(item.body)
-            passed = self.passed[name] = [g for g in self.params if g in used]
-            n = len(self.funcs.get(name, ()))                 # overloads before this one
-            oname = self.name(name) if n == 0 else f"{name}_{n}"
-            ptypes = [self.sized(p.type, p.size)[0] for p in item.params]
-            self.funcs.setdefault(name, []).append(
-                (ptypes, [p.mode for p in item.params], item.ret, oname, [self.name(g) for g in passed]))
-            funcs_out.append("\n".join(self.comment_lines(item.comments) + self.func(item, oname, passed, used)))
+            return []
+        return self.function(item)
 
     @staticmethod
     def comment_lines(com) -> list[str]:
         return [ln.strip() for c in com if c for ln in c.split("\n")]
 
-    def func(self, item, oname: str, passed: list, used: set) -> list[str]:
-        self.ret = item.ret
+    def function(self, item) -> list[str]:
+        """The lines of a function; its overloads are numbered, and it takes the ``params`` it reads."""
+        used = self.globals_used(item.body)
+        passed = self.passed[item.name] = [g for g in self.params if g in used]
         mutated = assigned(item.body, {n: c[0][1] for n, c in self.funcs.items()})
-        scope: dict = {}
-        plist, prologue = [], []
+        overloads = self.funcs.setdefault(item.name, [])
+        oname = self.name(item.name) if not overloads else f"{item.name}_{len(overloads)}"
+        self.ret, scope, plist, prologue = item.ret, {}, [], []
         for p in item.params:
             ot, n = self.osl_type(p.type), self.name(p.name)
             scope[p.name], arr = self.sized(p.type, p.size)
@@ -384,6 +353,8 @@ class _Osl(_OslLib):
             else:
                 plist.append(f"{ot} {n}{arr}")
         plist += [f"{self.osl_type(self.globals[g][0])} {self.name(g)}" for g in passed]
+        overloads.append(([scope[p.name] for p in item.params], [p.mode for p in item.params], item.ret, oname,
+                          [self.name(g) for g in passed]))
         self.scopes = [scope]
         for g in sorted(used - set(passed), key=list(self.globals).index):
             self.scopes[0].pop(g, None)
@@ -403,8 +374,8 @@ def to_osl(text: str, *, params=(), passed: dict | None = None) -> str:
     text : str
         GLSL from :func:`cellgl.export.snippets.library_code`.
     params : sequence of str
-        Global constants that the caller supplies instead (the shader's parameters): each
-        function that reads one gets it as an extra trailing parameter, in this order.
+        Global constants or uniforms that the caller supplies instead (the shader's parameters):
+        each function that reads one gets it as an extra trailing parameter, in this order.
     passed : dict, optional
         Filled with ``{function: [the names of params it takes, in order]}`` (a function takes
         those it reads and those its callees take).

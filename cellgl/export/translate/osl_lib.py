@@ -4,12 +4,10 @@ access, built-ins) and for unsigned 32-bit arithmetic on OSL's signed ``int``; e
 generated once, when the translation first needs it."""
 from __future__ import annotations
 
-
-from cellgl.export import syntax as S
 from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
+from cellgl.export.values import value
 
-_COMP = {"": "float", "i": "int", "u": "uint", "b": "bool"}
 _SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
 _XYZW = "xyzw"
 _CMP = {"<", ">", "<=", ">=", "==", "!="}
@@ -32,11 +30,10 @@ OSL_RESERVED = frozenset("""
 """.split())
 
 
-def _vec(t: str):
-    """``(component type, n)`` of a GLSL vector type, or None."""
-    if not isinstance(t, str) or t[-1:] not in ("2", "3", "4") or t[:-1] not in ("vec", "ivec", "uvec", "bvec"):
-        return None
-    return _COMP[t[:-4]], int(t[-1])
+#: ``(component type, n)`` of each GLSL vector type; :func:`_vec`: that of a type, or None
+_VECS = {f"{k}vec{n}": (c, n) for k, c in (("", "float"), ("i", "int"), ("u", "uint"), ("b", "bool"))
+         for n in (2, 3, 4)}
+_vec = _VECS.get
 
 
 def _int_lit(v: int) -> str:
@@ -78,6 +75,19 @@ class _OslLib:
         if name not in self.helpers:
             self.helpers[name] = code() if callable(code) else code
         return name
+
+    def gen(self, name: str, ret: str, params, body) -> str:
+        """:meth:`helper` ``name``: a one-line function returning GLSL type ``ret``, of ``params``
+        (``[(GLSL type, name)]``), whose body is ``body`` (or ``body()``, made when first needed)."""
+        def code():
+            text = body() if callable(body) else body
+            plist = ", ".join(f"{self.osl_type(t)} {n}" for t, n in params)
+            return f"{self.osl_type(ret)} {name}({plist}) {{ {text} }}"
+        return self.helper(name, code)
+
+    def returns(self, t: str, parts) -> str:
+        """The statement returning the vector of GLSL type ``t`` made of ``parts``."""
+        return f"return {self.osl_type(t)}({', '.join(parts)});"
 
     def conv(self, expr: str, src: str, dst: str) -> str:
         """Scalar conversion of ``expr`` (OSL text of GLSL type ``src``) to GLSL type ``dst``."""
@@ -180,42 +190,27 @@ class _OslLib:
         comp, n = va or vb
         rt = ("b" if op in _CMP else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
         name = f"cellgl_{_OPNAME[op]}_{ta}_{tb}"
-
-        def code():
-            oa, ob, ort = self.osl_type(ta), self.osl_type(tb), self.osl_type(rt)
-            parts = [self.scalar_op(op, f"a.{c}" if va else "a", f"b.{c}" if vb else "b", comp)
-                     for c in _XYZW[:n]]
-            return f"{ort} {name}({oa} a, {ob} b) {{ return {ort}({', '.join(parts)}); }}"
-        self.helper(name, code)
+        self.gen(name, rt, [(ta, "a"), (tb, "b")], lambda: self.returns(rt, [
+            self.scalar_op(op, f"a.{c}" if va else "a", f"b.{c}" if vb else "b", comp) for c in _XYZW[:n]]))
         return name, rt
 
     # ------------------------------------------------------------------ expressions
 
-    def size(self, x) -> int:
-        """An array size: an integer constant expression, folded (OSL wants a literal)."""
-        if isinstance(x, S.Num) and x.text.rstrip("uU").isdigit():
-            return int(x.text.rstrip("uU"))
-        if isinstance(x, S.Paren):
-            return self.size(x.inner)
-        if isinstance(x, S.Binary) and x.op in ("+", "-", "*", "<<"):
-            a, b = self.size(x.left), self.size(x.right)
-            return {"+": a + b, "-": a - b, "*": a * b, "<<": a << b}[x.op]
-        raise TranslateError("OSL translation: an array size that is not an integer constant")
-
     def sized(self, t: str, size) -> tuple:
         """The type of a name of GLSL type ``t`` and array size ``size`` (None: not an array) as
-        the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with."""
+        the scopes hold it (an array: ``(t, size)``), and the ``[size]`` its declaration ends with
+        (an integer constant expression, folded: OSL wants a literal)."""
         if size is None:
             return t, ""
-        sz = str(self.size(size))
-        return (t, sz), f"[{sz}]"
+        v = value(size, {})
+        if v is None or v[0] not in ("int", "uint"):
+            raise TranslateError("OSL translation: an array size that is not an integer constant")
+        return (t, str(v[1])), f"[{v[1]}]"
 
     def vec_get(self, t: str) -> str:
         comp, n = _vec(t)
-        ot, oc = self.osl_type(t), self.osl_type(comp)
-        name = f"cellgl_get_{t}"
         body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(_XYZW[:n - 1]))
-        return self.helper(name, f"{oc} {name}({ot} a, int i) {{ {body} return a.{_XYZW[n - 1]}; }}")
+        return self.gen(f"cellgl_get_{t}", comp, [(t, "a"), ("int", "i")], f"{body} return a.{_XYZW[n - 1]};")
 
     def vec_set(self, t: str) -> str:
         comp, n = _vec(t)
@@ -225,11 +220,9 @@ class _OslLib:
         return self.helper(name, f"void {name}(output {ot} a, int i, {oc} x) {{ {body} else a.{_XYZW[n - 1]} = x; }}")
 
     def any_all(self, fn: str, bt: str) -> str:
-        _, n = _vec(bt)
-        ot = self.osl_type(bt)
-        name = f"cellgl_{fn}_{bt}"
         j = " || " if fn == "any" else " && "
-        return self.helper(name, f"int {name}({ot} a) {{ return {j.join(f'a.{c}' for c in _XYZW[:n])}; }}")
+        return self.gen(f"cellgl_{fn}_{bt}", "int", [(bt, "a")],
+                        f"return {j.join(f'a.{c}' for c in _XYZW[:_vec(bt)[1]])};")
 
     def call_builtin(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
@@ -245,22 +238,19 @@ class _OslLib:
             v = _vec(t)
             if not v:
                 return _SCALAR_GEOMETRY[fn].format(*ss), "float"
-            ot = self.osl_type(t)
-            dot = f"cellgl_dot_{t}"
-            self.helper(dot, f"float {dot}({ot} a, {ot} b) {{ return "
-                        + " + ".join(f"a.{c} * b.{c}" for c in _XYZW[:v[1]]) + "; }")
+            dot = self.gen(f"cellgl_dot_{t}", "float", [(t, "a"), (t, "b")],
+                           "return " + " + ".join(f"a.{c} * b.{c}" for c in _XYZW[:v[1]]) + ";")
             if fn == "dot":
                 return f"{dot}({ss[0]}, {ss[1]})", "float"
             if fn == "length":
                 return f"sqrt({dot}({ss[0]}, {ss[0]}))", "float"
             if fn == "distance":
                 sub, _ = self.vec_binary("-", t, t)
-                name = self.helper(f"cellgl_distance_{t}", f"float cellgl_distance_{t}({ot} a, {ot} b) "
-                                   f"{{ {ot} d = {sub}(a, b); return sqrt({dot}(d, d)); }}")
+                name = self.gen(f"cellgl_distance_{t}", "float", [(t, "a"), (t, "b")],
+                                f"{self.osl_type(t)} d = {sub}(a, b); return sqrt({dot}(d, d));")
                 return f"{name}({ss[0]}, {ss[1]})", "float"
             mul, _ = self.vec_binary("*", t, "float")
-            name = self.helper(f"cellgl_normalize_{t}", f"{ot} cellgl_normalize_{t}({ot} a) "
-                               f"{{ return {mul}(a, 1.0 / sqrt({dot}(a, a))); }}")
+            name = self.gen(f"cellgl_normalize_{t}", t, [(t, "a")], f"return {mul}(a, 1.0 / sqrt({dot}(a, a)));")
             return f"{name}({ss[0]})", t
         if fn in ("floatBitsToUint", "floatBitsToInt"):
             self.float_bits()
@@ -269,10 +259,8 @@ class _OslLib:
             if not v:
                 return f"cellgl_float_bits({ss[0]})", "uint" if fn.endswith("Uint") else "int"
             rt = ("u" if fn.endswith("Uint") else "i") + f"vec{v[1]}"
-            ot, ort = self.osl_type(t), self.osl_type(rt)
-            name = f"cellgl_{fn}_{t}"
-            self.helper(name, f"{ort} {name}({ot} a) {{ return {ort}("
-                        + ", ".join(f"cellgl_float_bits(a.{c})" for c in _XYZW[:v[1]]) + "); }")
+            name = self.gen(f"cellgl_{fn}_{t}", rt, [(t, "a")],
+                            self.returns(rt, [f"cellgl_float_bits(a.{c})" for c in _XYZW[:v[1]]]))
             return f"{name}({ss[0]})", rt
         if fn == "fract":
             self.helper("cellgl_fract", "float cellgl_fract(float x) { return x - floor(x); }")
@@ -289,16 +277,9 @@ class _OslLib:
                     ss = [self.conv(s, t, "float") for s, t in zip(ss, types)]
                     rt = "float"
                 return f"{osl}({', '.join(ss)})", rt
-            v = _vec(vt)
-            name = f"cellgl_{fn}_" + "_".join(types)
-
-            def code():
-                ot = self.osl_type(vt)
-                plist = ", ".join(f"{self.osl_type(t)} a{j}" for j, t in enumerate(types))
-                def args(c):
-                    return ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}" for j, t in enumerate(types))
-                parts = [f"{osl}({args(c)})" for c in _XYZW[:v[1]]]
-                return f"{ot} {name}({plist}) {{ return {ot}({', '.join(parts)}); }}"
-            self.helper(name, code)
+            name = self.gen(f"cellgl_{fn}_" + "_".join(types), vt, [(t, f"a{j}") for j, t in enumerate(types)],
+                            lambda: self.returns(vt, [f"{osl}(" + ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}"
+                                                                           for j, t in enumerate(types)) + ")"
+                                                      for c in _XYZW[:_vec(vt)[1]]]))
             return f"{name}({', '.join(ss)})", vt
         raise TranslateError(f"OSL translation: function {fn!r} has no OSL translation")

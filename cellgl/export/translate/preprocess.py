@@ -6,7 +6,10 @@ from __future__ import annotations
 import operator
 import re
 from collections.abc import Mapping
+from functools import lru_cache
 
+from cellgl.export import syntax as S
+from cellgl.export.printer import expr_glsl
 from cellgl.export.translate.tokens import TranslateError, split_tokens
 
 # --------------------------------------------------------------------------------------------
@@ -21,76 +24,45 @@ def _strip_comment(s: str) -> str:
     return s.split("//", 1)[0].strip()
 
 
-class _Expr:
-    """Integer constant expression of ``#if`` (C semantics, truncating division)."""
+def _value(text: str, where: str) -> int:
+    """The value of the integer constant expression ``text`` of ``#if`` (C semantics, truncating
+    division), read by :mod:`cellgl.export.syntax`'s parser."""
+    def error(msg: str) -> TranslateError:
+        return TranslateError(f"{where}: {msg} in #if expression {text!r}")
 
-    _BIN = [
-        ("||",), ("&&",), ("|",), ("^",), ("&",), ("==", "!="), ("<", ">", "<=", ">="),
-        ("<<", ">>"), ("+", "-"), ("*", "/", "%"),
-    ]
+    def value(e) -> int:
+        if isinstance(e, S.Paren):
+            return value(e.inner)
+        if isinstance(e, S.Num) and re.fullmatch(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?", e.text):
+            t = e.text.rstrip("uU")
+            return int(t, 8) if re.fullmatch(r"0\d+", t) else int(t, 0)
+        if isinstance(e, S.Unary) and e.op in _UNARY:
+            return int(_UNARY[e.op](value(e.operand)))
+        if isinstance(e, S.Ternary):
+            return value(e.then) if value(e.cond) else value(e.other)
+        if isinstance(e, S.Binary) and e.op in _BINARY:
+            v, w = value(e.left), value(e.right)
+            if e.op in ("/", "%") and w == 0:
+                raise error("division by zero")
+            return int(_BINARY[e.op](v, w))
+        raise error(f"undefined macro {e.name!r}" if isinstance(e, S.Name) else f"unexpected {expr_glsl(e)!r}")
+    tree = _parsed(text)
+    if isinstance(tree, str):
+        raise error(tree)
+    return value(tree)
 
-    def __init__(self, toks: list[str], where: str):
-        self.toks = toks
-        self.i = 0
-        self.where = where
 
-    def error(self, msg: str) -> TranslateError:
-        return TranslateError(f"{self.where}: {msg} in #if expression {' '.join(self.toks)!r}")
-
-    def peek(self) -> str | None:
-        return self.toks[self.i] if self.i < len(self.toks) else None
-
-    def take(self) -> str:
-        t = self.peek()
-        if t is None:
-            raise self.error("unexpected end")
-        self.i += 1
-        return t
-
-    def parse(self) -> int:
-        v = self.ternary()
-        if self.peek() is not None:
-            raise self.error(f"unexpected {self.peek()!r}")
-        return v
-
-    def ternary(self) -> int:
-        c = self.binary(0)
-        if self.peek() == "?":
-            self.take()
-            a = self.ternary()
-            if self.take() != ":":
-                raise self.error("expected ':'")
-            b = self.ternary()
-            return a if c else b
-        return c
-
-    def binary(self, level: int) -> int:
-        if level == len(self._BIN):
-            return self.unary()
-        v = self.binary(level + 1)
-        while self.peek() in self._BIN[level]:
-            op = self.take()
-            w = self.binary(level + 1)
-            if op in ("/", "%") and w == 0:
-                raise self.error("division by zero")
-            v = int(_BINARY[op](v, w))
-        return v
-
-    def unary(self) -> int:
-        t = self.take()
-        if t in _UNARY:
-            return int(_UNARY[t](self.unary()))
-        if t == "(":
-            v = self.ternary()
-            if self.take() != ")":
-                raise self.error("expected ')'")
-            return v
-        m = re.fullmatch(r"(0[xX][0-9a-fA-F]+|\d+)[uU]?", t)
-        if m:
-            return int(m.group(1), 0) if not re.fullmatch(r"0\d+", m.group(1)) else int(m.group(1), 8)
-        if re.fullmatch(r"[A-Za-z_]\w*", t):
-            raise self.error(f"undefined macro {t!r}")
-        raise self.error(f"unexpected {t!r}")
+@lru_cache(maxsize=4096)
+def _parsed(text: str):
+    """The tree of the expression ``text``, or why it is none (cached: the same macros recur)."""
+    try:
+        (item,) = S.parse(f"const int v = {text};").items
+        (d,) = item.declarators
+        return d.init
+    except TranslateError as e:
+        return str(e)
+    except ValueError:                                  # a declaration, more than one
+        return "not one expression"
 
 
 def _cdiv(v: int, w: int) -> int:
@@ -120,22 +92,13 @@ def _ptoks(s: str) -> list[str]:
 
 
 def _eval_if(expr: str, macros: Mapping[str, str], where: str) -> bool:
-    toks = _ptoks(_strip_comment(expr))
-    resolved: list[str] = []
-    i = 0
-    while i < len(toks):           # defined X / defined(X) before expansion
-        if toks[i] != "defined":
-            resolved.append(toks[i])
-            i += 1
-            continue
-        paren = toks[i + 1:i + 2] == ["("]
-        if len(toks) < i + (4 if paren else 2) or paren and toks[i + 3] != ")":
-            raise TranslateError(f"{where}: malformed defined{'()' if paren else ''} in {expr!r}")
-        resolved.append("1" if toks[i + 1 + paren] in macros else "0")
-        i += 4 if paren else 2
-    if not resolved:
+    text = " ".join(_ptoks(_strip_comment(expr)))       # defined X / defined(X) before expansion
+    text = re.sub(r"\bdefined (?:\( (\w+) \)|(\w+))", lambda m: str(int((m[1] or m[2]) in macros)), text)
+    if bad := re.search(r"\bdefined\b( \()?", text):
+        raise TranslateError(f"{where}: malformed defined{'()' if bad[1] else ''} in {expr!r}")
+    if not text:
         raise TranslateError(f"{where}: empty #if expression")
-    return bool(_Expr(_expand(resolved, macros, where), where).parse())
+    return bool(_value(" ".join(_expand(text.split(), macros, where)), where))
 
 
 def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader>") -> str:
@@ -184,28 +147,20 @@ def specialise(text: str, defines: Mapping[str, object], *, name: str = "<shader
             continue
         kw, rest = m.group(1), _strip_comment(m.group(2))
         if kw in ("if", "ifdef", "ifndef"):
-            if not active:
-                stack.append([False, True, False, False])
-            else:
-                if kw == "if":
-                    cond = _eval_if(rest, macros, where)
-                else:
-                    if not re.fullmatch(r"[A-Za-z_]\w*", rest):
-                        raise TranslateError(f"{where}: #{kw} needs one macro name, got {rest!r}")
-                    cond = (rest in macros) == (kw == "ifdef")
-                stack.append([cond, cond, True, False])
-            active = stack[-1][0]
+            if active and kw != "if" and not re.fullmatch(r"[A-Za-z_]\w*", rest):
+                raise TranslateError(f"{where}: #{kw} needs one macro name, got {rest!r}")
+            cond = active and (_eval_if(rest, macros, where) if kw == "if"
+                               else (rest in macros) == (kw == "ifdef"))
+            stack.append([cond, cond or not active, active, False])   # (inactive parent: none will be taken)
+            active = cond
         elif kw in ("elif", "else"):
             if not stack:
                 raise TranslateError(f"{where}: #{kw} without #if")
             top = stack[-1]
             if top[3]:
                 raise TranslateError(f"{where}: #{kw} after #else")
-            if kw == "else":
-                top[3] = True
-                top[0] = top[2] and not top[1]
-            else:
-                top[0] = top[2] and not top[1] and _eval_if(rest, macros, where)
+            top[3] = kw == "else"
+            top[0] = top[2] and not top[1] and (kw == "else" or _eval_if(rest, macros, where))
             top[1] = top[1] or top[0]
             active = top[0]
         elif kw == "endif":
@@ -244,7 +199,7 @@ def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
     value = " ".join(_expand([key], env, name))
     if not re.search(r"[0-9a-fA-F][uU]\b", value):
         try:                            # an integer constant expression becomes its value
-            value = str(_Expr(_ptoks(value), name).parse())
+            value = str(_value(value, name))
         except TranslateError:
             pass
     # a negative or compound value keeps its meaning next to any operator
@@ -259,44 +214,15 @@ def _macro_value(key: str, env: Mapping[str, str], name: str) -> str:
 
 
 def top_level_names(text: str) -> dict[str, str]:
-    """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``."""
+    """Names declared at file scope: ``{name: 'function' | 'struct' | 'variable'}``, read from
+    :func:`cellgl.export.syntax.parsed_library`'s tree (each declaration parsed once per process)."""
     names: dict[str, str] = {}
-    depth, stmt = 0, []
-    for kind, t in split_tokens(text):
-        if kind in ("ws", "comment"):
-            continue
-        if depth == 0 and t in ("{", ";"):
-            _decl(stmt, names)
-            stmt = []
-        elif depth == 0 and t != "}":
-            stmt.append(t)
-        depth += (t == "{") - (t == "}")
+    for it in S.parsed_library(text).items:
+        if isinstance(it, S.Global):
+            names.update(dict.fromkeys((d.name for d in it.declarators), "variable"))
+        else:
+            names[it.name] = "struct" if isinstance(it, S.Struct) else "function"
     return names
-
-
-_QUALIFIERS = {"const", "uniform", "highp", "mediump", "lowp", "in", "out", "inout", "flat",
-               "precise", "invariant"}
-
-
-def _decl(stmt: list[str], names: dict[str, str]) -> None:
-    s = [t for t in stmt if t not in _QUALIFIERS]
-    if len(s) < 2:
-        return
-    if s[0] == "struct":
-        names[s[1]] = "struct"
-    elif len(s) >= 3 and s[2] == "(":
-        names[s[1]] = "function"        # a definition or a prototype
-    elif re.fullmatch(r"[A-Za-z_]\w*", s[1]):
-        # variable(s): TYPE NAME [= ...] [, NAME ...]; TYPE NAME[N] = ...
-        names[s[1]] = "variable"
-        depth = 0
-        for i, t in enumerate(s[2:], start=2):
-            if t in "([":
-                depth += 1
-            elif t in ")]":
-                depth -= 1
-            elif t == "," and depth == 0 and i + 1 < len(s):
-                names[s[i + 1]] = "variable"
 
 
 def prefixed(name: str, kind: str) -> str:
@@ -332,8 +258,7 @@ def prefix_names(text: str, *, overrides: Mapping[str, str] | None = None) -> tu
     names would collide.
     """
     decls = top_level_names(text)
-    overrides = overrides or {}
-    mapping = {n: overrides[n] if n in overrides else prefixed(n, k) for n, k in decls.items()}
+    mapping = {n: (overrides or {}).get(n) or prefixed(n, k) for n, k in decls.items()}
     mapping = {a: b for a, b in mapping.items() if a != b}
     seen: dict[str, str] = {}
     for old, new in mapping.items():

@@ -1,16 +1,13 @@
 """Tokens of GLSL text (the lexer every translation step shares) and the error they raise."""
 from __future__ import annotations
 
+import os
 import re
 
 
 class TranslateError(ValueError):
     """The shader text uses a construct the exporter cannot specialise or translate."""
 
-
-# --------------------------------------------------------------------------------------------
-# tokens
-# --------------------------------------------------------------------------------------------
 
 _TOKEN_RE = re.compile(
     r"(?P<comment>//[^\n]*|/\*.*?\*/)"
@@ -31,13 +28,8 @@ def split_tokens(text: str) -> list[tuple[str, str]]:
     if split is None:
         split = [(m.lastgroup, m.group()) for m in _TOKEN_RE.finditer(text)]
         if sum(len(t) for _, t in split) != len(text):      # a character no token matches
-            pos = 0
-            for _, t in split:
-                if not text.startswith(t, pos):
-                    break
-                pos += len(t)
-            line = text.count("\n", 0, pos) + 1
-            raise TranslateError(f"line {line}: unexpected character {text[pos]!r}")
+            pos = len(os.path.commonprefix([text, "".join(t for _, t in split)]))
+            raise TranslateError(f"line {text.count(chr(10), 0, pos) + 1}: unexpected character {text[pos]!r}")
         if len(_SPLITS) >= 20000:
             _SPLITS.clear()
         _SPLITS[text] = split

@@ -100,9 +100,6 @@ class Wgsl(Glsl):
             return f"select({self.expr(e.other)}, {self.expr(e.then)}, {self.expr(e.cond)})"
         return super().expr(e)
 
-    def ctor(self, e: S.Ctor) -> str:
-        return f"{self.type(e.type)}({self.args(e.args)})"
-
     def array_ctor(self, e: S.ArrayCtor) -> str:
         return f"array<{self.type(e.type)}, {self.expr(e.size)}>({self.args(e.args)})"
 
