@@ -143,7 +143,7 @@ class Glsl:
             lines = self.statement(x, ind + "    ")
             if getattr(x, "same_line", False) and not x.comments and isinstance(prev, (S.Decl, S.ExprStmt)) \
                     and not prev.trail:
-                out[-1] += " " + lines[0].lstrip()
+                out[-1:] = [out[-1] + " " + lines[0].lstrip()] + lines[1:]
             else:
                 out += lines
             prev = x

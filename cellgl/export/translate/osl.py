@@ -23,6 +23,7 @@ Anything outside the subset raises :class:`TranslateError` naming the construct.
 from __future__ import annotations
 
 from cellgl.export import syntax as S
+from cellgl.export.printer import Glsl, _trail
 from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.translate.wgsl import assigned
@@ -31,10 +32,14 @@ from cellgl.export.tree import walk
 __all__ = ["to_osl", "OSL_RESERVED"]
 
 
-class _Osl(_OslLib):
+class _Osl(_OslLib, Glsl):
+    """The translator: :class:`printer.Glsl`'s statements, with expressions, declarations and
+    functions (and the scopes that type them) of its own."""
+
     def __init__(self, text: str, params=()):
+        super().__init__(kr=True, blank=False)
         # prototypes left out: OSL needs none
-        self.unit = [it for it in S.parse(text).items if not (isinstance(it, S.Function) and it.body is None)]
+        self.items = [it for it in S.parse(text).items if not (isinstance(it, S.Function) and it.body is None)]
         self.params = list(params)
         self.helpers: dict[str, str] = {}         # generated name -> code (in order)
         self.structs: dict[str, dict] = {}       # name -> {member: type}
@@ -215,47 +220,47 @@ class _Osl(_OslLib):
     def name(self, n: str) -> str:
         return n + "_" if n in OSL_RESERVED else n
 
-    # ------------------------------------------------------------------ statements
-    def stmt(self, s, ind: str) -> list[str]:
-        out = [ind + ln for ln in self.comment_lines(s.comments)]
-        if isinstance(s, S.Block):
-            self.scopes.append({})
-            out += [ind + "{"] + [ln for t in s.body for ln in self.stmt(t, ind + "    ")] + [ind + "}"]
-            self.scopes.pop()
-        elif isinstance(s, S.Decl):
-            out += [ind + d for d in self.decl(s.type, s.declarators)]
-        elif isinstance(s, S.ExprStmt):
-            out.append(ind + self.ex(s.expr)[0] + ";")
-        elif isinstance(s, S.Return):
-            out.append(ind + ("return;" if s.value is None else f"return {self.conv_to(s.value, self.ret)};"))
-        elif isinstance(s, S.Jump) and s.kind in ("break", "continue"):
-            out.append(ind + s.kind + ";")
-        elif isinstance(s, S.If):
-            out.append(f"{ind}if ({self.ex(s.cond)[0]})")
-            out += self.body(s.then, ind)
-            if s.other is not None:
-                out.append(ind + "else")
-                out += self.body(s.other, ind)
-        elif isinstance(s, S.For):
-            self.scopes.append({})
-            init = self.decl(s.init.type, s.init.declarators) if isinstance(s.init, S.Decl) \
-                else [("" if s.init is None else self.ex(s.init.expr)[0]) + ";"]
-            if len(init) != 1:
-                raise TranslateError("OSL translation: one variable per for-loop initialiser")
-            cond, step = ("" if x is None else self.ex(x)[0] for x in (s.cond, s.step))
-            out.append(f"{ind}for ({init[0]} {cond}; {step})")
-            out += self.body(s.body, ind)
-            self.scopes.pop()
-        elif isinstance(s, S.While):
-            out.append(f"{ind}while ({self.ex(s.cond)[0]})")
-            out += self.body(s.body, ind)
-        else:
-            raise TranslateError(f"OSL translation: statement {getattr(s, 'kind', type(s).__name__)!r}")
+    # ------------------------------------------------------------------ statements: printer.Glsl's, but for these
+    def expr(self, e) -> str:
+        return self.ex(e)[0]
+
+    def statement(self, s, ind: str = "") -> list[str]:
+        if isinstance(s, S.Decl):                # a struct with array members: several lines
+            *first, last = self.decl(s.type, s.declarators)
+            return self.comments(s.comments, ind) + [ind + ln for ln in first] + [ind + last + _trail(s)]
+        if isinstance(s, S.Return) and s.value is not None:
+            return self.comments(s.comments, ind) + [f"{ind}return {self.conv_to(s.value, self.ret)};"]
+        self.scopes.append({})                   # a for-loop's variable
+        out = super().statement(s, ind)
+        self.scopes.pop()
         return out
 
-    def body(self, s, ind: str) -> list[str]:
-        """A loop's or branch's body, braced."""
-        return self.stmt(s if isinstance(s, S.Block) else S.Block([s]), ind)
+    def simple(self, s) -> str:
+        if isinstance(s, S.Decl):                # a for-loop's initialiser
+            init = self.decl(s.type, s.declarators)
+            if len(init) != 1:
+                raise TranslateError("OSL translation: one variable per for-loop initialiser")
+            return init[0][:-1]
+        return super().simple(s)
+
+    def body(self, block, ind: str) -> list[str]:
+        """A block's statements but those after one that always leaves it (unreachable)."""
+        end = next((k + 1 for k, x in enumerate(block.body) if _leaves(x)), None)
+        self.scopes.append({})
+        out = super().body(S.Block(block.body[:end]), ind)
+        self.scopes.pop()
+        return out
+
+    def jump(self, kind: str) -> str:
+        if kind not in ("break", "continue"):
+            raise TranslateError(f"OSL translation: statement {kind!r}")
+        return kind + ";"
+
+    def decl_type(self, t: str) -> str:
+        return self.osl_type(t)
+
+    def array_name(self, x) -> str:
+        return self.name(x.name) + self.sized("", x.size)[1]
 
     def decl(self, typ: str, decls) -> list[str]:
         out = []
@@ -298,25 +303,19 @@ class _Osl(_OslLib):
 
     def emit(self) -> str:
         funcs_out: list[str] = []
-        for item in self.unit:
+        for item in self.items:
             known = len(self.helpers)
             lines = self.item(item)                           # the helpers it needs go before it
             funcs_out += [c for n, c in list(self.helpers.items())[known:] if not n.startswith("struct ")]
-            funcs_out += ["\n".join(self.comment_lines(item.comments) + lines)] if lines else []
+            funcs_out += ["\n".join(lines)] if lines else []
         head = "\n".join(c for n, c in self.helpers.items() if n.startswith("struct "))
         # no blank line between functions (as GLSL)
-        return _braces(head + "\n" + "\n".join(funcs_out) + "\n")
+        return head + "\n" + "\n".join(funcs_out) + "\n"
 
     def item(self, item) -> list[str]:
         if isinstance(item, S.Struct):
-            members = {}
-            lines = [f"struct {item.name}", "{"]
-            for f in item.fields:
-                members[f.name], arr = self.sized(f.type, f.size)
-                trail = f"  {f.trail}" if f.trail else ""
-                lines.append(f"    {self.osl_type(f.type)} {self.name(f.name)}{arr};{trail}")
-            self.structs[item.name] = members
-            return lines + ["};"]
+            self.structs[item.name] = {f.name: self.sized(f.type, f.size)[0] for f in item.fields}
+            return super().item(item)
         if isinstance(item, S.Global):
             if "uniform" in item.quals and any(d.name not in self.params for d in item.declarators):
                 raise TranslateError("OSL translation: uniforms (export OSL with constants; the "
@@ -327,10 +326,6 @@ class _Osl(_OslLib):
                 self.globals[d.name] = (item.type, d)
             return []
         return self.function(item)
-
-    @staticmethod
-    def comment_lines(com) -> list[str]:
-        return [ln.strip() for c in com if c for ln in c.split("\n")]
 
     def function(self, item) -> list[str]:
         """The lines of a function; its overloads are numbered, and it takes the ``params`` it reads."""
@@ -356,14 +351,19 @@ class _Osl(_OslLib):
         overloads.append(([scope[p.name] for p in item.params], [p.mode for p in item.params], item.ret, oname,
                           [self.name(g) for g in passed]))
         self.scopes = [scope]
-        for g in sorted(used - set(passed), key=list(self.globals).index):
-            self.scopes[0].pop(g, None)
-            t, d = self.globals[g]
-            prologue += ["    " + ln for ln in self.decl(t, [d])]
-        out = [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)})", "{"] + prologue
-        out += [ln for s in item.body.body for ln in self.stmt(s, "    ")] + ["}"]
+        consts = [S.Decl(self.globals[g][0], [self.globals[g][1]])           # the constants it reads: locals
+                  for g in sorted(used - set(passed), key=list(self.globals).index)]
+        out = self.comments(item.comments, "") + [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)}) {{"
+                                                   + _trail(item.body)] + prologue
+        out += self.body(S.Block(consts + item.body.body), "") + ["}"]
         self.scopes = []
         return out
+
+
+def _leaves(s) -> bool:
+    """Whether statement ``s`` always leaves its block (a return, break or continue; a block ending so)."""
+    return isinstance(s, (S.Return, S.Jump)) or (isinstance(s, S.Block) and bool(s.body)
+                                                 and _leaves(s.body[-1]))
 
 
 def to_osl(text: str, *, params=(), passed: dict | None = None) -> str:
@@ -391,16 +391,3 @@ def to_osl(text: str, *, params=(), passed: dict | None = None) -> str:
         passed.update(osl.passed)
     return out
 
-
-def _braces(text: str) -> str:
-    """A line holding only ``{`` joined to the statement or signature above it (as the other
-    targets print their blocks)."""
-    out: list[str] = []
-    for ln in text.split("\n"):
-        prev = out[-1] if out else ""
-        if ln.strip() == "{" and prev.strip() and "//" not in prev \
-                and len(prev) - len(prev.lstrip()) == len(ln) - len(ln.lstrip()):
-            out[-1] = prev + " {"
-        else:
-            out.append(ln)
-    return "\n".join(out)

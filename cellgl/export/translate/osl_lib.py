@@ -128,7 +128,7 @@ class _OslLib:
         exponent, which is then corrected). -0.0 gives the bits of +0.0."""
         return self.helper("cellgl_float_bits", (
             "// 2^e, exactly (binary powering of 2 or 1/2), |e| < 256.\n"
-            "float cellgl_pow2(int e)\n{\n"
+            "float cellgl_pow2(int e) {\n"
             "    float b = e < 0 ? 0.5 : 2.0;\n"
             "    int n = abs(e);\n"
             "    float p = 1.0;\n"
@@ -139,7 +139,7 @@ class _OslLib:
             "    }\n"
             "    return p;\n}\n\n"
             "// floatBitsToUint(x) for finite x: sign, biased exponent, mantissa.\n"
-            "int cellgl_float_bits(float x)\n{\n"
+            "int cellgl_float_bits(float x) {\n"
             "    if (x == 0.0)\n"
             "        return 0;\n"
             "    int s = x < 0.0 ? (1 << 31) : 0;\n"
@@ -170,7 +170,7 @@ class _OslLib:
             if op in ("/", "%"):
                 self.helper("cellgl_udiv", (
                     "// uint / and %, by long division on the int's bits.\n"
-                    "int cellgl_udiv(int a, int b)\n{\n"
+                    "int cellgl_udiv(int a, int b) {\n"
                     "    if (b < 0)          // b >= 2^31: the quotient is 0 or 1\n"
                     "        return (a ^ (1 << 31)) >= (b ^ (1 << 31)) ? 1 : 0;\n"
                     "    int q = 0; int r = 0;\n"
