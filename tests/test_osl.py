@@ -63,6 +63,18 @@ def test_unsupported_constructs_are_named():
         translate.to_osl("void f(inout vec4 a) { a.xy = vec2(1.0); }\n")
 
 
+def test_statements_printed_as_glsl_and_unreachable_ones_left_out():
+    """OSL's statements are printer.Glsl's (``} else {``, a trailing comment kept); statements
+    after one that always leaves the block (here a block ending in a return) are left out."""
+    glsl = ("float f(float x)\n{\n    float y = x * 2.0;  // twice\n"
+            "    if (x > 0.0) {\n        y += 1.0;\n    } else {\n        y -= 1.0;\n    }\n"
+            "    {\n        return y;\n    }\n    y = 3.0;\n    return y;\n}\n")
+    assert translate.to_osl(glsl) == (
+        "\nfloat f(float x) {\n    float y = (x * 2.0);  // twice\n"
+        "    if ((x > 0.0)) {\n        y += 1.0;\n    } else {\n        y -= 1.0;\n    }\n"
+        "    {\n        return y;\n    }\n}\n")
+
+
 def test_osl_export_declares_parameters_outputs_and_coordinates():
     text = export("flagstone", "osl")
     r = load_recipe("flagstone")
