@@ -18,7 +18,7 @@ from functools import cached_property
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, replaced, rewrite, transform, walk
+from cellgl.export.tree import Context, children, clone, is_pure, paren, scan, replaced, rewrite, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
@@ -48,7 +48,7 @@ def global_constants(unit: S.Unit) -> tuple[dict, dict]:
 
 class Facts:
     """What the passes know of one function: its nodes in source order, blocks, declarations,
-    the occurrences of each name (:func:`cellgl.export.tree.occurrences`), the nodes inside
+    the occurrences of each name (:func:`cellgl.export.tree.scan`), the nodes inside
     loops, and its constants (the globals' ``genv`` and its own). Computed when first asked;
     a pass that changes the function makes a new one."""
 
@@ -56,17 +56,17 @@ class Facts:
         self.fn, self.genv, self.garrays, self.ctx = fn, genv, garrays, ctx
 
     @cached_property
+    def scan(self) -> tuple[list, dict, dict]:
+        return scan(self.fn.body, self.ctx)
+
+    @property
     def nodes(self) -> list:
-        return walk(self.fn.body)
+        return self.scan[0]
 
     @cached_property
     def order(self) -> tuple[dict, dict]:
         """``({id(node): position}, {id(node): the last position below it})``."""
-        pos, last = {id(n): k for k, n in enumerate(self.nodes)}, {}
-        for n in reversed(self.nodes):            # (pre-order: a node's last is its last child's)
-            kids = children(n)
-            last[id(n)] = last[id(kids[-1])] if kids else pos[id(n)]
-        return pos, last
+        return {id(n): k for k, n in enumerate(self.nodes)}, self.scan[1]
 
     @cached_property
     def blocks(self) -> list:
@@ -86,9 +86,9 @@ class Facts:
     def params(self) -> dict:
         return {p.name: p for p in self.fn.params}
 
-    @cached_property
+    @property
     def occ(self) -> dict:
-        return occurrences(self.fn.body, self.ctx)
+        return self.scan[2]
 
     @cached_property
     def in_loops(self) -> set:

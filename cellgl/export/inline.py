@@ -173,12 +173,12 @@ def call_sites(unit: S.Unit) -> dict[str, list]:
 # short functions: their expression at every call
 # --------------------------------------------------------------------------------------------
 
-def _short(unit: S.Unit, keep) -> dict:
+def _short(unit: S.Unit, ctx: Context) -> dict:
     """``{name: (parameter names, expression)}`` of the functions short enough to inline."""
-    sites = {k: len(v) for k, v in call_sites(unit).items()}
+    sites = {k: len(v) for k, v in ctx.sites.items()}
     out = {}
     for it in unit.items:
-        if not isinstance(it, S.Function) or it.body is None or it.name in keep:
+        if not isinstance(it, S.Function) or it.body is None or it.name in ctx.entries:
             continue
         if any(p.mode != "in" or p.size is not None for p in it.params):
             continue
@@ -215,7 +215,7 @@ def _forward(body: list, params: set) -> object | None:
 
 def inline_short(unit: S.Unit, ctx: Context) -> bool:
     """Short functions (not the entry points) become their expression at their calls."""
-    small = _short(unit, set(ctx.entries))
+    small = _short(unit, ctx)
     if not small:
         return False
     changed = hit = False
@@ -259,20 +259,26 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
     """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
-    once, index, changed = defined_once(unit), call_sites(unit), False
+    once, index, changed = defined_once(unit), ctx.sites, False
+    failed: set = set()         # (callee, caller) that would not inline (until the caller changes)
     while True:
         for f in unit.items:
             sites = index.get(getattr(f, "name", None), [])
-            if sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1 and sites[0][0] is not f \
-                    and _inline_call(f, *sites[0], ctx):
-                # (the context's facts stay a superset until the next pass refreshes them)
-                caller, changed = sites[0][0], True
-                unit.items[:] = [it for it in unit.items if it is not f]
-                index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
-                for n in walk(caller.body):
-                    if isinstance(n, S.Call):
-                        index.setdefault(n.func, []).append((caller, n))
-                break
+            if not (sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1
+                    and sites[0][0] is not f and (id(f), id(sites[0][0])) not in failed):
+                continue
+            if not _inline_call(f, *sites[0], ctx):
+                failed.add((id(f), id(sites[0][0])))    # (it reads only the two and the context)
+                continue
+            # (the context's facts stay a superset until the next pass refreshes them)
+            caller, changed = sites[0][0], True
+            unit.items[:] = [it for it in unit.items if it is not f]
+            failed = {pair for pair in failed if id(caller) not in pair}
+            index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
+            for n in walk(caller.body):
+                if isinstance(n, S.Call):
+                    index.setdefault(n.func, []).append((caller, n))
+            break
         else:
             return changed
 
@@ -384,6 +390,12 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         while target in caller_names or target in ctx.functions or (target in body_ids and not own):
             target, k = f"{stem}{k}", k + 1
     written = writes(block, ctx)
+    # what the body (and the returned value) does with each name: reads, reads as a field's or
+    # element's base, reads inside a loop
+    inner = walk(block) + (walk(ret) if ret is not None else [])
+    reads = Counter(n.name for n in inner if type(n) is S.Name)
+    based = {x.base.name for x in inner if isinstance(x, (S.Member, S.Index)) and isinstance(x.base, S.Name)}
+    looped = {n.name for x in walk(block) if isinstance(x, (S.For, S.While)) for n in walk(x) if type(n) is S.Name}
     args = call.args
     out_bases = {root_name(a) for p, a in zip(f.params, args) if p.mode != "in"}
     subst: dict = {}
@@ -406,11 +418,8 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         b = _bare(a)
         simple = _lvalue(b) and all(isinstance(x, (S.Name, S.Member)) for x in walk(b)) or isinstance(b, S.Num) \
             or (isinstance(b, S.Unary) and b.op == "-" and isinstance(b.operand, S.Num))
-        uses = _count(block, p.name) + (_count(ret, p.name) if ret is not None else 0)
-        based = any(isinstance(x, (S.Member, S.Index)) and isinstance(x.base, S.Name) and x.base.name == p.name
-                    for x in walk(S.Block(block.body + ([S.Return(ret)] if ret is not None else []))))
-        looped = any(isinstance(x, (S.For, S.While)) and _count(x, p.name) for x in walk(block))
-        if (simple or (uses <= 1 and not based and not looped and not calls(a) & set(ctx.functions))) \
+        if (simple or (reads[p.name] <= 1 and p.name not in based and p.name not in looped
+                       and not calls(a) & set(ctx.functions))) \
                 and not (arg_ids & out_bases) \
                 and not (arg_ids & written & ctx.globals_):
             subst[p.name] = a
@@ -492,7 +501,7 @@ def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
     """Call ``drop(f, k, sites)`` for each parameter ``k`` of each function ``f`` whose signature
     may change (defined once, not an entry point; ``sites``: its calls elsewhere, each with an
     argument per parameter); where it returns True, the parameter and its arguments go."""
-    index, changed = call_sites(unit), False
+    index, changed = ctx.sites, False
     for f in defined_once(unit).values():
         if f.name in ctx.entries:
             continue

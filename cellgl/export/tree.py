@@ -14,7 +14,7 @@ from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
 __all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point",
-           "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "occurrences",
+           "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
            "paren", "rewrite", "CHILD_FIELDS"]
 
 #: expression node classes
@@ -138,8 +138,8 @@ def calls(node) -> set[str]:
 class Context:
     """What the passes know of the module: its entry points, the functions they must keep, the
     functions by name, and which functions have effects beyond their return value (they write
-    an ``out``/``inout`` parameter or a global, or call one that does). Rebuilt with
-    :meth:`refresh` after a pass changes the set of functions or their signatures."""
+    an ``out``/``inout`` parameter or a global, or call one that does), and where each function is
+    called. Rebuilt with :meth:`refresh` after a pass changes the tree (the driver does)."""
 
     entries: tuple = ()
     keep: frozenset = frozenset()
@@ -148,13 +148,20 @@ class Context:
     functions: dict = field(default_factory=dict)      # name -> Function with a body
     globals_: set = field(default_factory=set)
     impure: set = field(default_factory=set)
+    sites: dict = field(default_factory=dict)          # name -> [(Function, Call), ...]: every call
 
     def refresh(self, unit: S.Unit) -> "Context":
-        self.functions = {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None}
+        bodies = [it for it in unit.items if isinstance(it, S.Function) and it.body is not None]
+        self.functions = {f.name: f for f in bodies}
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}
-        direct, called = set(), {}
-        for f in self.functions.values():
+        direct, called, self.sites = set(), {}, {}
+        for f in bodies:
             nodes = walk(f.body)
+            for n in nodes:
+                if type(n) is S.Call:
+                    self.sites.setdefault(n.func, []).append((f, n))
+            if self.functions[f.name] is not f:
+                continue                               # (an overload: the table holds the last)
             called[f.name] = {n.func for n in nodes if type(n) is S.Call}
             if any(p.mode != "in" for p in f.params) or writes(nodes, self) & self.globals_:
                 direct.add(f.name)
@@ -238,38 +245,45 @@ def is_pure(node, ctx: Context | None) -> bool:
     return True
 
 
-def _occurrences(n, out, ctx, role=None):
-    """:func:`occurrences` below ``n``, read (``role`` None) or stored into (``role``)."""
-    if isinstance(n, S.Name):
-        out.setdefault(n.name, []).append((n, role or "read"))
-    elif role and isinstance(n, S.Paren):
-        _occurrences(n.inner, out, ctx, role)
-    elif role and isinstance(n, (S.Member, S.Index)):
-        _occurrences(n.base, out, ctx, "part" if role == "store" else role)
-        if isinstance(n, S.Index):
-            _occurrences(n.index, out, ctx)
-    elif isinstance(n, S.Assign):
-        _occurrences(n.target, out, ctx, "store" if n.op == "=" else "update")
-        _occurrences(n.value, out, ctx)
-    elif isinstance(n, S.IncDec):
-        _occurrences(n.operand, out, ctx, "update")
-    elif isinstance(n, S.Call):
+def _scan(n, role, nodes, last, occ, ctx):
+    """:func:`scan` below ``n``, read (``role`` None) or stored into (``role``)."""
+    nodes.append(n)
+    t = type(n)
+    if t is S.Name:
+        occ.setdefault(n.name, []).append((n, role or "read"))
+    elif role and t is S.Paren:
+        _scan(n.inner, role, nodes, last, occ, ctx)
+    elif role and (t is S.Member or t is S.Index):
+        _scan(n.base, "part" if role == "store" else role, nodes, last, occ, ctx)
+        if t is S.Index:
+            _scan(n.index, None, nodes, last, occ, ctx)
+    elif t is S.Assign:
+        _scan(n.target, "store" if n.op == "=" else "update", nodes, last, occ, ctx)
+        _scan(n.value, None, nodes, last, occ, ctx)
+    elif t is S.IncDec:
+        _scan(n.operand, "update", nodes, last, occ, ctx)
+    elif t is S.Call:
         modes = _out_modes(n, ctx)
         for k, a in enumerate(n.args):
-            _occurrences(a, out, ctx, {"out": "store", "inout": "update"}.get(modes.get(k)))
+            _scan(a, {"out": "store", "inout": "update"}.get(modes.get(k)), nodes, last, occ, ctx)
     else:
         for c in children(n):
-            _occurrences(c, out, ctx)
+            _scan(c, None, nodes, last, occ, ctx)
+    last[id(n)] = len(nodes) - 1
 
 
-def occurrences(root, ctx: Context | None = None) -> dict:
-    """``{name: [(Name node, role), ...]}`` of every variable named below ``root``, in source
-    order. ``role``: ``"read"``; ``"store"`` (``x = ...``, or an ``out`` argument); ``"part"``
-    (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"`` (read and written:
-    ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
-    out: dict = {}
-    _occurrences(root, out, ctx)
-    return out
+def scan(root, ctx: Context | None = None) -> tuple[list, dict, dict]:
+    """The def-use facts of the tree below ``root``, from one walk: ``(nodes, last, occ)``:
+    ``nodes`` as :func:`walk` lists them; ``last`` ``{id(node): the position in nodes of the last
+    node below it}``; ``occ`` ``{name: [(Name node, role), ...]}`` of every variable named, in
+    source order, ``role`` one of ``"read"``; ``"store"`` (``x = ...``, or an ``out``
+    argument); ``"part"`` (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"``
+    (read and written: ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
+    nodes: list = []
+    last: dict = {}
+    occ: dict = {}
+    _scan(root, None, nodes, last, occ, ctx)
+    return nodes, last, occ
 
 
 def paren(e):
