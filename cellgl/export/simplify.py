@@ -79,8 +79,9 @@ def dead_locals(fn: S.Function, facts: Facts) -> bool:
             t, e = _store(s)
             if root(t) is not None:
                 stores[id(root(t))] = (b, s, e)
+    changed = False                 # (the facts stay a superset: a read in a dropped store keeps a local)
     for b in facts.blocks:
-        for s in b.body:
+        for s in list(b.body):
             if not (isinstance(s, S.Decl) and len(s.declarators) == 1):
                 continue
             d = s.declarators[0]
@@ -93,8 +94,8 @@ def dead_locals(fn: S.Function, facts: Facts) -> bool:
                     if any(x is st for x in sb.body):
                         _drop(sb.body, st)
                 _drop(b.body, s)
-                return True
-    return False
+                changed = True
+    return changed
 
 
 @function_pass
@@ -102,8 +103,9 @@ def last_stores(fn: S.Function, facts: Facts) -> bool:
     """Remove a store ``x op= ...;`` to a local (or an ``in`` parameter) that nothing reads
     afterwards, outside loops."""
     pos, last = facts.order
+    changed = False                 # (the facts stay a superset: a read in a dropped store keeps a store)
     for b in facts.blocks:
-        for s in b.body:
+        for s in list(b.body):
             t, e = _store(s)
             r = root(t)
             if r is None or r.name not in facts.types or id(s) in facts.in_loops \
@@ -114,8 +116,8 @@ def last_stores(fn: S.Function, facts: Facts) -> bool:
                     or not _pure_store(e, facts.ctx):
                 continue
             _drop(b.body, s)
-            return True
-    return False
+            changed = True
+    return changed
 
 
 @function_pass
@@ -180,12 +182,14 @@ def _mentions(node, name: str) -> bool:
 @function_pass
 def merge_declarations(fn: S.Function, facts: Facts) -> bool:
     """``T x; ... x = e;`` (x unused between, in the same block) -> ``... T x = e;``."""
+    changed = False
     for b in facts.blocks:
-        for k, s in enumerate(b.body):
+        k = 0
+        while k < len(b.body):
+            s = b.body[k]
             d = _single(s)
-            if d is None or d.init is not None or s.const:
-                continue
-            j = next((i for i in range(k + 1, len(b.body)) if _mentions(b.body[i], d.name)), None)
+            j = None if d is None or d.init is not None or s.const else \
+                next((i for i in range(k + 1, len(b.body)) if _mentions(b.body[i], d.name)), None)
             t = b.body[j] if j is not None else None
             if isinstance(t, S.ExprStmt) and isinstance(t.expr, S.Assign) and t.expr.op == "=" \
                     and isinstance(t.expr.target, S.Name) and t.expr.target.name == d.name \
@@ -193,8 +197,10 @@ def merge_declarations(fn: S.Function, facts: Facts) -> bool:
                 b.body[j] = S.Decl(s.type, [S.Declarator(d.name, None, t.expr.value)], False,
                                    s.comments + t.comments, t.trail)
                 del b.body[k]
-                return True
-    return False
+                changed = True
+            else:
+                k += 1
+    return changed
 
 
 def _path(e):
