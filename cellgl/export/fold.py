@@ -13,12 +13,11 @@ evaluated only to decide conditions; no float result is written into the code bu
 from __future__ import annotations
 
 from collections import Counter
-from functools import cached_property
 
 from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, children, clone, is_pure, paren, scan, replaced, rewrite, transform, walk
+from cellgl.export.tree import Context, clone, is_pure, paren, replaced, rewrite, scan, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
@@ -47,91 +46,48 @@ def global_constants(unit: S.Unit) -> tuple[dict, dict]:
 
 
 class Facts:
-    """What the passes know of one function: its nodes in source order, blocks, declarations,
-    the occurrences of each name (:func:`cellgl.export.tree.scan`), the nodes inside
-    loops, and its constants (the globals' ``genv`` and its own). Computed when first asked;
-    a pass that changes the function makes a new one."""
+    """What the passes know of one function, from one walk (:func:`cellgl.export.tree.scan`): its
+    nodes in source order, ``order`` (``({id(node): position}, {id(node): the last position below
+    it})``), blocks, ``declared`` (``{name: times declared}``, parameters included) and the names
+    declared ``once``, ``types`` (``{name: type}``; arrays: None), the occurrences of each name
+    (``occ``), the nodes inside loops, and ``constants``: ``({name: value}, {array: [element
+    nodes]})``, the globals' ``genv`` not shadowed and the locals declared once with a constant
+    (or an array of literals) never written after. A pass that changes the function makes a new
+    one (a pass may go on after a change where the facts stay a superset of the truth)."""
 
     def __init__(self, fn: S.Function, genv: dict, garrays: dict, ctx: Context):
         self.fn, self.genv, self.garrays, self.ctx = fn, genv, garrays, ctx
-
-    @cached_property
-    def scan(self) -> tuple[list, dict, dict]:
-        return scan(self.fn.body, self.ctx)
-
-    @property
-    def nodes(self) -> list:
-        return self.scan[0]
-
-    @cached_property
-    def order(self) -> tuple[dict, dict]:
-        """``({id(node): position}, {id(node): the last position below it})``."""
-        return {id(n): k for k, n in enumerate(self.nodes)}, self.scan[1]
-
-    @cached_property
-    def blocks(self) -> list:
-        return [n for n in self.nodes if isinstance(n, S.Block)]
-
-    @cached_property
-    def declared(self) -> dict:
-        """``{name: times declared}`` (parameters included)."""
-        return Counter([p.name for p in self.fn.params]
-                       + [n.name for n in self.nodes if isinstance(n, S.Declarator)])
-
-    @cached_property
-    def once(self) -> set:
-        return {k for k, v in self.declared.items() if v == 1}
-
-    @cached_property
-    def params(self) -> dict:
-        return {p.name: p for p in self.fn.params}
-
-    @property
-    def occ(self) -> dict:
-        return self.scan[2]
-
-    @cached_property
-    def in_loops(self) -> set:
-        out = set()
+        self.nodes, last, self.occ = scan(fn.body, ctx)
+        pos = {id(n): k for k, n in enumerate(self.nodes)}
+        self.order = pos, last
+        self.params = {p.name: p for p in fn.params}
+        self.types = {p.name: None if p.size is not None else p.type for p in fn.params}
+        self.blocks, self.in_loops, decls, names = [], set(), [], [p.name for p in fn.params]
         for n in self.nodes:
-            if isinstance(n, (S.For, S.While)) and id(n) not in out:
-                out.update(id(x) for x in walk(n))
-        return out
-
-    @cached_property
-    def types(self) -> dict:
-        """``{name: type}`` of the scalars and vectors declared once (arrays: None)."""
-        out = {p.name: None if p.size is not None else p.type for p in self.fn.params}
-        for n in self.nodes:
-            if isinstance(n, S.Decl):
+            if type(n) is S.Block:
+                self.blocks.append(n)
+            elif type(n) is S.Decl:
+                decls.append(n)
                 for d in n.declarators:
-                    out[d.name] = None if d.size is not None else n.type
-        return out
-
-    @cached_property
-    def constants(self) -> tuple[dict, dict]:
-        """``({name: value}, {array: [element nodes]})``: the globals' constants not shadowed, and
-        the locals declared once with a constant (or an array of literals) never written after."""
-        local = {k: v for k, v in self.genv.items() if k not in self.declared}
-        arrays: dict = {}
+                    names.append(d.name)
+                    self.types[d.name] = None if d.size is not None else n.type
+            elif type(n) in (S.For, S.While) and id(n) not in self.in_loops:
+                self.in_loops.update(id(x) for x in self.nodes[pos[id(n)]:last[id(n)] + 1])
+        self.declared = Counter(names)
+        self.once = {k for k, v in self.declared.items() if v == 1}
+        self.env = {k: v for k, v in genv.items() if k not in self.declared}
+        self.constants = self.env, {}
         stored = {n for n, uses in self.occ.items() if any(role != "read" for _, role in uses)}
-        for node in self.nodes:
-            if not isinstance(node, S.Decl):
-                continue
+        for node in decls:
             for d in node.declarators:
                 if d.name not in self.once or d.name in stored or d.init is None or d.name in self.params:
                     continue
                 if d.size is None and node.type in ("int", "uint", "float", "bool"):
-                    v = convert(node.type, value(d.init, local, self.ctx))
+                    v = convert(node.type, value(d.init, self.env, ctx))
                     if v is not None and v[0] == node.type:
-                        local[d.name] = v
+                        self.env[d.name] = v
                 elif isinstance(d.init, S.ArrayCtor) and all(isinstance(a, S.Num) for a in d.init.args):
-                    arrays[d.name] = d.init.args
-        return local, arrays
-
-    @property
-    def env(self) -> dict:
-        return self.constants[0]
+                    self.constants[1][d.name] = d.init.args
 
 
 def function_pass(fpass):
