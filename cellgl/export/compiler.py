@@ -26,11 +26,11 @@ from contextlib import contextmanager
 
 from cellgl.export import syntax as S
 from cellgl.export.fields import constant_fields, dead_fields, void_results
-from cellgl.export.fold import FOLD, fold
+from cellgl.export.fold import constant_loops, fold, loop_ranges
 from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_params, inline_once, inline_short
 from cellgl.export.printer import print_lines
 from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
-from cellgl.export.simplify import SIMPLIFY
+from cellgl.export.simplify import EXPRESSIONS, SIMPLIFY
 from cellgl.export.tree import Context, clone, fixed_point
 
 __all__ = ["compile_glsl", "compile_unit", "ROUND", "MAX_ROUNDS"]
@@ -81,7 +81,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
 
 def _fold(unit, ctx):
     """The folding and simplification passes (:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`)."""
-    return fold(unit, ctx, FOLD + SIMPLIFY)
+    return fold(unit, ctx, [EXPRESSIONS, constant_loops, loop_ranges] + SIMPLIFY)
 
 
 # one round of the passes, in order: each is ``(unit, ctx) -> changed`` (:mod:`cellgl.export.tree`)

@@ -110,27 +110,38 @@ def function_pass(fpass):
 # passes
 # --------------------------------------------------------------------------------------------
 
-@function_pass
-def inline_constants(fn: S.Function, facts: Facts) -> bool:
+def rewriting(*makers):
+    """The function pass of the node rules ``makers`` make of a function's facts (``maker(facts)``:
+    a rule ``node -> node`` for :func:`cellgl.export.tree.rewrite`, or None where it has nothing
+    to do): one walk, bottom-up, each node through every rule in turn."""
+    def fpass(fn: S.Function, facts: Facts) -> bool:
+        rules = [r for r in (make(facts) for make in makers) if r is not None]
+
+        def each(n):
+            for rule in rules:
+                n = rule(n) if type(n) is not list else n
+            return n
+        return bool(rules) and replaced(fn.body, each, rewrite)
+    fpass.__name__ = "_".join(m.__name__.lstrip("_") for m in makers)
+    fpass.__doc__ = "\n\n".join(m.__doc__ for m in makers)
+    return function_pass(fpass)
+
+
+def _inline_constants(facts: Facts):
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
     pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
-    if not pick:
-        return False
-    return replaced(fn.body, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
+    return (lambda n: clone(pick[n.name]) if type(n) is S.Name and n.name in pick else n) if pick else None
 
 
-@function_pass
-def array_elements(fn: S.Function, facts: Facts) -> bool:
+def _array_elements(facts: Facts):
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
     effects or calls) where all elements are the same."""
     arrays = {k: v for k, v in facts.garrays.items() if k is not None and k not in facts.declared and k in facts.occ}
-    if not arrays:
-        return False
 
     def sub(n):
-        if isinstance(n, S.Index) and isinstance(n.base, S.Name) and n.base.name in arrays:
+        if type(n) is S.Index and type(n.base) is S.Name and n.base.name in arrays:
             args, texts = arrays[n.base.name]
             if len(set(texts)) == 1 and not any(isinstance(x, (S.Call, S.Assign, S.IncDec)) for x in walk(n.index)):
                 return paren(clone(args[0]))
@@ -138,7 +149,7 @@ def array_elements(fn: S.Function, facts: Facts) -> bool:
             if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(args) and len(texts[k[1]]) <= 40:
                 return paren(clone(args[k[1]]))
         return n
-    return replaced(fn.body, sub)
+    return sub if arrays else None
 
 
 def _fold_expr(n, env, ctx):
@@ -170,8 +181,7 @@ def _fold_expr(n, env, ctx):
     return n
 
 
-@function_pass
-def constant_conditions(fn: S.Function, facts: Facts) -> bool:
+def _constant_conditions(facts: Facts):
     """Remove the branches of ``if`` statements and ternaries whose condition is constant, fold
     conditions of literals (``3.0e38 >= 3.0e38`` -> ``true``), ``true && x`` -> ``x``, and
     integer indices and array sizes (``rest[8 + 1]`` -> ``rest[9]``)."""
@@ -185,7 +195,7 @@ def constant_conditions(fn: S.Function, facts: Facts) -> bool:
         if isinstance(n, S.While) and value(n.cond, env, ctx) == ("bool", False):
             return []
         return _fold_expr(n, env, ctx)
-    return replaced(fn.body, fold, rewrite)
+    return fold
 
 
 def _chosen(stmt, kept):
@@ -202,8 +212,7 @@ def _chosen(stmt, kept):
     return out
 
 
-@function_pass
-def local_constants(fn: S.Function, facts: Facts) -> bool:
+def _local_constants(facts: Facts):
     """Write locals that hold a boolean, an integer, 0.0 or 1.0 for good into the code, and the
     elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
     env, arrays = facts.constants
@@ -211,18 +220,20 @@ def local_constants(fn: S.Function, facts: Facts) -> bool:
             and (v[0] != "uint" or v[1] in (0, 1))       # (other unsigned values: hash constants, named)
             and any(role == "read" for _, role in facts.occ.get(k, ()))}
     arrays = {k: v for k, v in arrays.items() if any(role == "read" for _, role in facts.occ.get(k, ()))}
-    if not pick and not arrays:
-        return False
 
     def sub(n):
-        if isinstance(n, S.Name) and n.name in pick:
+        if type(n) is S.Name and n.name in pick:
             return clone(pick[n.name])
-        if isinstance(n, S.Index) and isinstance(n.base, S.Name) and n.base.name in arrays:
+        if type(n) is S.Index and type(n.base) is S.Name and n.base.name in arrays:
             k = value(n.index, env, facts.ctx)
             if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(arrays[n.base.name]):
                 return clone(arrays[n.base.name][k[1]])
         return n
-    return replaced(fn.body, sub)
+    return sub if pick or arrays else None
+
+
+inline_constants, array_elements = rewriting(_inline_constants), rewriting(_array_elements)
+constant_conditions, local_constants = rewriting(_constant_conditions), rewriting(_local_constants)
 
 
 def _counter(loop: S.For, env, ctx):

@@ -12,13 +12,14 @@ from __future__ import annotations
 from bisect import bisect_left
 
 from cellgl.export import syntax as S
-from cellgl.export.fold import Facts, function_pass
+from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _inline_constants, _local_constants,
+                                 function_pass, rewriting)
 from cellgl.export.printer import expr_glsl
 from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, rewrite, root, transform, walk
 from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
-           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY"]
+           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY", "EXPRESSIONS"]
 
 
 def _store(s):
@@ -443,15 +444,20 @@ def _empty(s) -> bool:
     return isinstance(s, S.Block) and not s.body
 
 
-@function_pass
-def identities(fn: S.Function, facts: Facts) -> bool:
+def _identities(facts: Facts):
     """Rewrite what gives the same value for every IEEE-754 input: ``x * 1.0``, ``1.0 * x``,
     ``x / 1.0``, ``x - 0.0``, statements ``x -= 0.0;``, ``x *= 1.0;``, ``x = x;``,
     ``mix(a, b, 0.0)`` -> ``a``, ``mix(2.0, b, 1.0)`` -> ``b`` (a finite literal), ``abs(x) *
     abs(x)`` -> ``x * x``, ``vec4(0.0, 0.0, 0.0, 1.0).w`` -> ``1.0``, ``uint(3)`` -> ``3u``,
     products and sums of unsigned literals, ``0u + x`` and ``ivec4(0, 0, 0, 0) + x`` -> ``x``,
     empty blocks and branches (with conditions without effects)."""
-    return replaced(fn.body, lambda n: _identity(n, facts.ctx), rewrite)
+    return lambda n: _identity(n, facts.ctx)
+
+
+identities = rewriting(_identities)
+#: one walk for the rules on single nodes: the constants written in, constant conditions and the
+#: identities (:mod:`cellgl.export.fold`'s rules and :func:`identities`)
+EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions, _identities)
 
 
 _ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}
@@ -499,6 +505,6 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-#: the simplification passes, in the order of the driver's round
+#: the simplification passes, in the order of the driver's round (after :data:`EXPRESSIONS`)
 SIMPLIFY = [split_declarations, dead_locals, last_stores, copies, bare_blocks, merge_declarations,
-            forward_literals, loop_variables, store_into_next, identities, parentheses]
+            forward_literals, loop_variables, store_into_next, parentheses]
