@@ -113,13 +113,15 @@ def function_pass(fpass):
 def rewriting(*makers):
     """The function pass of the node rules ``makers`` make of a function's facts (``maker(facts)``:
     a rule ``node -> node`` for :func:`cellgl.export.tree.rewrite`, or None where it has nothing
-    to do): one walk, bottom-up, each node through every rule in turn."""
+    to do; ``maker.types``: the node classes it rewrites): one walk, bottom-up, each node through
+    every rule for its class in turn."""
     def fpass(fn: S.Function, facts: Facts) -> bool:
-        rules = [r for r in (make(facts) for make in makers) if r is not None]
+        rules = [(make.types, r) for make in makers if (r := make(facts)) is not None]
 
         def each(n):
-            for rule in rules:
-                n = rule(n) if type(n) is not list else n
+            for types, rule in rules:
+                if type(n) in types:
+                    n = rule(n)
             return n
         return bool(rules) and replaced(fn.body, each, rewrite)
     fpass.__name__ = "_".join(m.__name__.lstrip("_") for m in makers)
@@ -131,7 +133,7 @@ def _inline_constants(facts: Facts):
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
     pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
-    return (lambda n: clone(pick[n.name]) if type(n) is S.Name and n.name in pick else n) if pick else None
+    return (lambda n: clone(pick[n.name]) if n.name in pick else n) if pick else None
 
 
 def _array_elements(facts: Facts):
@@ -141,7 +143,7 @@ def _array_elements(facts: Facts):
     arrays = {k: v for k, v in facts.garrays.items() if k is not None and k not in facts.declared and k in facts.occ}
 
     def sub(n):
-        if type(n) is S.Index and type(n.base) is S.Name and n.base.name in arrays:
+        if type(n.base) is S.Name and n.base.name in arrays:
             args, texts = arrays[n.base.name]
             if len(set(texts)) == 1 and not any(isinstance(x, (S.Call, S.Assign, S.IncDec)) for x in walk(n.index)):
                 return paren(clone(args[0]))
@@ -150,6 +152,9 @@ def _array_elements(facts: Facts):
                 return paren(clone(args[k[1]]))
         return n
     return sub if arrays else None
+
+
+_inline_constants.types, _array_elements.types = {S.Name}, {S.Index}
 
 
 def _fold_expr(n, env, ctx):
@@ -198,6 +203,9 @@ def _constant_conditions(facts: Facts):
     return fold
 
 
+_constant_conditions.types = {S.If, S.While, S.Ternary, S.Binary, S.Unary, S.Index, S.Declarator, S.ArrayCtor}
+
+
 def _chosen(stmt, kept):
     """What replaces the statement ``stmt`` by its part ``kept`` (a block's statements, spliced
     unless it declares names; nothing for None), keeping ``stmt``'s comments."""
@@ -230,6 +238,9 @@ def _local_constants(facts: Facts):
                 return clone(arrays[n.base.name][k[1]])
         return n
     return sub if pick or arrays else None
+
+
+_local_constants.types = {S.Name, S.Index}
 
 
 inline_constants, array_elements = rewriting(_inline_constants), rewriting(_array_elements)

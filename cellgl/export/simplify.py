@@ -454,6 +454,9 @@ def _identities(facts: Facts):
     return lambda n: _identity(n, facts.ctx)
 
 
+_identities.types = {S.Binary, S.Call, S.Member, S.Ctor, S.ExprStmt, S.If}
+
+
 identities = rewriting(_identities)
 #: one walk for the rules on single nodes: the constants written in, constant conditions and the
 #: identities (:mod:`cellgl.export.fold`'s rules and :func:`identities`)
