@@ -1,5 +1,5 @@
-"""The snippet compiler's constant folding, on the syntax tree (:mod:`cellgl.export.compiler` runs
-the passes of :data:`FOLD` in its round).
+"""The snippet compiler's constant folding, on the syntax tree: function passes ``(fn, facts) ->
+changed`` that :func:`fold` runs (in :mod:`cellgl.export.compiler`'s round).
 
 After :func:`cellgl.export.reach.scalarise` the recipe's values are global constants. These
 passes evaluate what they make constant: the constants that decide the shape of the code
@@ -14,14 +14,14 @@ from __future__ import annotations
 
 from collections import Counter
 
-from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
+from cellgl.export.translate.tokens import TranslateError  # noqa: F401  (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, clone, is_pure, paren, replaced, rewrite, scan, transform, walk
+from cellgl.export.tree import Context, clone, is_pure, paren, replaced, scan, settle, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
-__all__ = ["fold", "FOLD", "Facts", "function_pass", "inline_constants", "array_elements", "constant_conditions",
+__all__ = ["fold", "Facts", "rewriting", "inline_constants", "array_elements", "constant_conditions",
            "local_constants", "constant_loops", "loop_ranges", "global_constants"]
 
 def global_constants(unit: S.Unit) -> tuple[dict, dict]:
@@ -90,29 +90,13 @@ class Facts:
                     self.constants[1][d.name] = d.init.args
 
 
-def function_pass(fpass):
-    """A tree pass (``(unit, ctx) -> changed``) running ``fpass(fn, facts) -> changed`` on every
-    function (``fpass`` stays its attribute ``function``: :func:`fold` runs it)."""
-    def run(unit: S.Unit, ctx: Context) -> bool:
-        if not ctx.fold_constants:
-            return False
-        genv, garrays = global_constants(unit)
-        changed = False
-        for fn in list(ctx.functions.values()):
-            changed = bool(fpass(fn, Facts(fn, genv, garrays, ctx))) or changed
-        return changed
-    run.__name__, run.__qualname__, run.__doc__ = fpass.__name__, fpass.__qualname__, fpass.__doc__
-    run.function = fpass
-    return run
-
-
 # --------------------------------------------------------------------------------------------
 # passes
 # --------------------------------------------------------------------------------------------
 
 def rewriting(*makers):
     """The function pass of the node rules ``makers`` make of a function's facts (``maker(facts)``:
-    a rule ``node -> node`` for :func:`cellgl.export.tree.rewrite`, or None where it has nothing
+    a rule ``node -> node`` for :func:`cellgl.export.tree.transform`, or None where it has nothing
     to do; ``maker.types``: the node classes it rewrites): one walk, bottom-up, each node through
     every rule for its class in turn."""
     def fpass(fn: S.Function, facts: Facts) -> bool:
@@ -123,10 +107,10 @@ def rewriting(*makers):
                 if type(n) in types:
                     n = rule(n)
             return n
-        return bool(rules) and replaced(fn.body, each, rewrite)
+        return bool(rules) and replaced(fn.body, each)
     fpass.__name__ = "_".join(m.__name__.lstrip("_") for m in makers)
     fpass.__doc__ = "\n\n".join(m.__doc__ for m in makers)
-    return function_pass(fpass)
+    return fpass
 
 
 def _inline_constants(facts: Facts):
@@ -294,7 +278,6 @@ def _jumps(node) -> bool:
     return False
 
 
-@function_pass
 def constant_loops(fn: S.Function, facts: Facts) -> bool:
     """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
     the counter replaced by its first value."""
@@ -315,14 +298,13 @@ def constant_loops(fn: S.Function, facts: Facts) -> bool:
             return n
         lit = literal(("int", first))
         return [transform(body, lambda x: clone(lit) if isinstance(x, S.Name) and x.name == var else x)]
-    return replaced(fn.body, unroll, rewrite)
+    return replaced(fn.body, unroll)
 
 
 def _conjuncts(e) -> list:
     return _conjuncts(e.left) + _conjuncts(e.right) if isinstance(e, S.Binary) and e.op == "&&" else [e]
 
 
-@function_pass
 def loop_ranges(fn: S.Function, facts: Facts) -> bool:
     """``for (int k = 0; k < 16; k++) { x += (k >= 1 && k < 9 && c) ? 1 : 0; }`` -> the loop over
     1 <= k < 9 with ``c`` alone: a body that is one statement guarded by bounds on k (an ``if``
@@ -368,21 +350,16 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-#: the folding passes, in the order of :func:`fold`'s round
-FOLD = [inline_constants, array_elements, local_constants, constant_conditions, constant_loops, loop_ranges]
-
-
-def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
-    """The function passes ``passes`` (:data:`FOLD` by default; the compiler adds
-    :data:`cellgl.export.simplify.SIMPLIFY`), function by function, in order, round after round
-    until a round changes nothing (they change no signature, so ``ctx`` stays true);
-    :class:`TranslateError` after :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
+def fold(unit: S.Unit, ctx: Context, passes) -> bool:
+    """The function passes ``passes`` (``(fn, facts) -> changed``; the compiler's: the rules of
+    :data:`cellgl.export.simplify.EXPRESSIONS`, the loops', :data:`cellgl.export.simplify.SIMPLIFY`),
+    function by function, until they settle (:func:`cellgl.export.tree.settle`; they change no
+    signature, so ``ctx`` stays true) or :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
     false (the recipe's values stay as they are). A function folded before with the same text,
     the same values of the globals it names and the same facts of the functions it calls is not
     folded again (:data:`_FOLDED`)."""
     if not ctx.fold_constants:
         return False
-    passes = [p.function for p in (FOLD if passes is None else passes)]
     genv, garrays = global_constants(unit)
     changed = False
     for fn in list(ctx.functions.values()):
@@ -400,21 +377,15 @@ def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
         if key not in _FOLDED:
             if len(_FOLDED) > 4096:
                 _FOLDED.clear()
-            # each pass in turn, until every pass has run once since the last change (a round
-            # from there on would change nothing: the passes see the same tree and facts again)
-            facts, quiet, recent, folded = Facts(fn, genv, garrays, ctx), 0, [], False
-            for run in range(MAX_ROUNDS * len(passes)):
-                p = passes[run % len(passes)]
-                if p(fn, facts):
-                    folded, quiet, recent = True, 0, (recent + [p.__name__])[-len(passes):]
-                    facts = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
-                else:
-                    quiet += 1
-                    if quiet == len(passes):
-                        break
-            else:
-                raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still "
-                                     f"changing: {', '.join(recent)}): a pass undoes another")
+            facts = [Facts(fn, genv, garrays, ctx)]
+
+            def apply(p):
+                if p(fn, facts[0]):
+                    facts[0] = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
+                    return True
+                return False
+            folded = settle(passes, apply, MAX_ROUNDS, f"the folding passes did not settle on {fn.name} in "
+                            f"{MAX_ROUNDS} rounds")
             body = clone(fn.body) if folded else None
             _FOLDED[key] = None if body is None or "\n".join(item_glsl(fn)) == text else body
             changed = changed or _FOLDED[key] is not None

@@ -1,19 +1,8 @@
 """Inlining and the parameter passes of the snippet compiler (:mod:`cellgl.export.compiler`'s
-pass 4), transforms of the syntax tree (:mod:`cellgl.export.tree`):
-
-- :func:`inline_short`: a function whose body is one short ``return`` (or straight-line stores
-  ending in one, substituted forward: ``x = abs(x); return x * x;``) becomes that expression;
-- :func:`inline_once`: a function called once, from a statement (``f(a);``, ``T v = f(a);``,
-  ``v = f(a);``, ``return f(a);``, or any statement that may compute the call first into a local),
-  whose body returns only at its end, becomes that body in place of the call: an ``out`` /
-  ``inout`` parameter becomes its argument (a variable, or a field or element of one, that no
-  other argument names); an ``in`` parameter becomes its argument where that is a name, field or
-  literal, or read once outside loops, and a local copy otherwise (always where the body writes
-  it: GLSL's ``in`` is a copy); the body's locals are renamed where the caller uses the name;
-- :func:`drop_unused_params`, :func:`constant_args`: parameters a function never reads go, and
-  those every call passes the same literal become that literal;
-- :func:`drop_unused_outs`: an ``out`` parameter whose argument is, at every call, a local used
-  nowhere else becomes a local of the function (whose stores the dead-store pass removes).
+round), transforms of the syntax tree (:mod:`cellgl.export.tree`): short functions become their
+expression (:func:`inline_short`), functions called once their body (:func:`inline_once`),
+parameters never read, always given the same literal, or written for no caller go
+(:func:`drop_unused_params`, :func:`constant_args`, :func:`drop_unused_outs`).
 
 The values do not change: the statements run in the same order on the same values.
 """
@@ -103,10 +92,6 @@ def substitute(node, env: dict, rename: dict | None = None):
 def names(node) -> set[str]:
     """The variables named below ``node`` (read, written or declared)."""
     return {n.name for n in walk(node) if isinstance(n, (S.Name, S.Declarator, S.Param))} - {"true", "false"}
-
-
-def _count(node, name: str) -> int:
-    return sum(isinstance(n, S.Name) and n.name == name for n in walk(node))
 
 
 def _flat(e) -> bool:
@@ -234,7 +219,7 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
                         and _bare(x.base).name == p for x in walk(expr))
             if based and not _simple(_bare(a)):
                 return n                      # (a + b).xy: keep the call
-            if _count(expr, p) > 1 and not _cheap(_bare(a)):
+            if sum(type(n) is S.Name and n.name == p for n in walk(expr)) > 1 and not _cheap(_bare(a)):
                 return n                      # an argument the expression reads twice: compute it once
         hit = True
         return substitute(clone(expr), dict(zip(params, n.args)))
@@ -257,7 +242,14 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 # --------------------------------------------------------------------------------------------
 
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
-    """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
+    """Inline every function (not an entry, not kept) called exactly once, where that is safe: from
+    a statement (``f(a);``, ``T v = f(a);``, ``v = f(a);``, ``return f(a);``, or any statement
+    that may compute the call first into a local), with a body that returns only at its end. An
+    ``out`` / ``inout`` parameter becomes its argument (a variable, or a field or element of one,
+    that no other argument names); an ``in`` parameter becomes its argument where that is a name,
+    field or literal, or read once outside loops, and a local copy otherwise (always where the
+    body writes it: GLSL's ``in`` is a copy); the body's locals are renamed where the caller uses
+    the name."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
     once, index, changed = defined_once(unit), ctx.sites, False
     failed: set = set()         # (callee, caller) that would not inline (until the caller changes)

@@ -13,9 +13,9 @@ from bisect import bisect_left
 
 from cellgl.export import syntax as S
 from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _inline_constants, _local_constants,
-                                 function_pass, rewriting)
+                                 rewriting)
 from cellgl.export.printer import expr_glsl
-from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, rewrite, root, transform, walk
+from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, root, transform, walk
 from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
@@ -51,7 +51,6 @@ def _single(s):
     return s.declarators[0] if ok else None
 
 
-@function_pass
 def split_declarations(fn: S.Function, facts: Facts) -> bool:
     """``vec4 a = x, b;`` -> ``vec4 a = x;`` and ``vec4 b;``."""
     changed = False
@@ -69,7 +68,6 @@ def split_declarations(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-@function_pass
 def dead_locals(fn: S.Function, facts: Facts) -> bool:
     """Remove a local that is never read (``T x = e;``, ``x = ...;``, ``x.y += ...;``,
     ``x[0] = ...;``): its declaration and the statements that store into it."""
@@ -99,7 +97,6 @@ def dead_locals(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-@function_pass
 def last_stores(fn: S.Function, facts: Facts) -> bool:
     """Remove a store ``x op= ...;`` to a local (or an ``in`` parameter) that nothing reads
     afterwards, outside loops."""
@@ -121,7 +118,6 @@ def last_stores(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-@function_pass
 def copies(fn: S.Function, facts: Facts) -> bool:
     """``float y = x;`` (``x`` a variable of the same type), with ``y`` never written again and
     ``x`` not after it: every ``y`` becomes ``x``."""
@@ -153,7 +149,6 @@ def copies(fn: S.Function, facts: Facts) -> bool:
     return False
 
 
-@function_pass
 def bare_blocks(fn: S.Function, facts: Facts) -> bool:
     """``{ stmts }`` standing alone in a block -> ``stmts``, where no name it declares is used
     outside it (an empty one goes)."""
@@ -180,7 +175,6 @@ def _mentions(node, name: str) -> bool:
     return any(isinstance(n, S.Name) and n.name == name for n in walk(node))
 
 
-@function_pass
 def merge_declarations(fn: S.Function, facts: Facts) -> bool:
     """``T x; ... x = e;`` (x unused between, in the same block) -> ``... T x = e;``."""
     changed = False
@@ -253,7 +247,6 @@ def _forward(e, target, lit) -> tuple[object, bool]:
     return transform(e, sub), bool(hits)
 
 
-@function_pass
 def forward_literals(fn: S.Function, facts: Facts) -> bool:
     """``x = 0; bool b = x > 9; if (!b) {`` -> ``bool b = 0 > 9; if (!b) {``: a literal just stored
     (``x`` a local or a field) read in its place by the next straight-line statements and
@@ -313,7 +306,6 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-@function_pass
 def loop_variables(fn: S.Function, facts: Facts) -> bool:
     """``int i = 2; ... for (; i <= 9; i++) {...}`` with ``i`` unused after the loop (nor between)
     -> ``... for (int i = 2; i <= 9; i++) {...}``."""
@@ -341,7 +333,6 @@ def loop_variables(fn: S.Function, facts: Facts) -> bool:
     return False
 
 
-@function_pass
 def store_into_next(fn: S.Function, facts: Facts) -> bool:
     """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);``; ``T y = a; return y;`` ->
     ``return a;``."""
@@ -475,7 +466,6 @@ _PLACES = {S.Index: (("index", True), ("base", False)), S.Member: (("base", Fals
 _COMPARISONS = ("<", ">", "<=", ">=", "==", "!=")
 
 
-@function_pass
 def parentheses(fn: S.Function, facts: Facts) -> bool:
     """Drop parentheses that change nothing: around an atom, around a whole argument, index,
     initialiser, stored value, returned value or condition (not a ternary), and around

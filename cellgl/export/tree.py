@@ -3,8 +3,8 @@ def-use facts (what a statement reads, writes and calls), the module's function 
 driver that runs passes to a fixed point.
 
 A pass is a function ``pass_(unit: Unit, ctx: Context) -> bool``: it changes the tree in place
-and returns whether it changed anything. :func:`fixed_point` runs a list of passes round after
-round until a round changes nothing, or raises after ``max_rounds``.
+and returns whether it changed anything. :func:`fixed_point` runs a list of passes until they
+settle (:func:`settle`), or raises after ``max_rounds`` rounds.
 """
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ from dataclasses import dataclass, field, fields
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
-__all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point",
+__all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point", "settle",
            "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
-           "paren", "rewrite", "CHILD_FIELDS"]
+           "paren", "CHILD_FIELDS"]
 
 #: expression node classes
 EXPRESSIONS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Unary, S.IncDec, S.Binary, S.Assign,
@@ -66,7 +66,8 @@ def walk(node) -> list:
 def transform(node, fn):
     """Rewrite the tree below ``node`` bottom-up: each child ``c`` is replaced by ``fn(c)``
     (``fn`` returns ``c`` itself to keep it; in a list, ``None`` deletes it and a Python list
-    splices several nodes in). Returns ``fn(node)``."""
+    splices several nodes in; a list of statements (or ``[]``) for an ``if``'s branch or a loop's
+    body becomes a block there, an empty ``else`` goes). Returns ``fn(node)``."""
     for name, many in CHILD_FIELDS[type(node)]:
         v = getattr(node, name)
         if many:
@@ -82,13 +83,16 @@ def transform(node, fn):
                 v[:] = out
         elif v is not None:
             y = transform(v, fn)
+            if type(y) is list:
+                y = None if not y and name == "other" else y[0] if len(y) == 1 and isinstance(y[0], S.Block) \
+                    else S.Block(y)
             if y is not v:
                 setattr(node, name, y)
     return fn(node)
 
 
-def replaced(root, fn, apply=transform) -> bool:
-    """``apply(root, fn)`` (:func:`transform`, or :func:`rewrite`); whether ``fn`` replaced a node."""
+def replaced(root, fn) -> bool:
+    """``transform(root, fn)``; whether ``fn`` replaced a node."""
     changed = False
 
     def g(n):
@@ -96,7 +100,7 @@ def replaced(root, fn, apply=transform) -> bool:
         out = fn(n)
         changed = changed or out is not n
         return out
-    apply(root, g)
+    transform(root, g)
     return changed
 
 
@@ -196,24 +200,36 @@ def writes(node, ctx: Context | None = None) -> set[str]:
     return out
 
 
-def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> int:
-    """Run ``passes`` over ``unit`` round after round until a whole round changes nothing;
-    return the number of rounds. Raises :class:`TranslateError` naming the passes still
-    changing the tree after ``max_rounds`` rounds (a pass undoes another)."""
+def settle(passes, apply, max_rounds: int, failure: str) -> bool:
+    """``apply(p) -> changed`` for each pass of ``passes`` in turn, round after round, until every
+    pass has run once since the last change (from there on they would see the same tree and facts
+    again); whether any changed. Raises :class:`TranslateError` with ``failure`` and the passes
+    still changing after ``max_rounds`` rounds (a pass undoes another)."""
+    quiet, recent, changed = 0, [], False
+    for run in range(max_rounds * len(passes)):
+        p = passes[run % len(passes)]
+        if apply(p):
+            changed, quiet, recent = True, 0, (recent + [getattr(p, "__name__", repr(p))])[-len(passes):]
+        else:
+            quiet += 1
+            if quiet == len(passes):
+                return changed
+    raise TranslateError(f"{failure} (still changing: {', '.join(recent)}): a pass undoes another")
+
+
+def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> bool:
+    """Run the tree passes ``passes`` over ``unit`` (:func:`settle`), ``ctx`` refreshed after a
+    pass that changed the tree."""
     stale = True
-    for rounds in range(1, max_rounds + 1):
-        changed = []
-        for p in passes:
-            if stale:                     # (a pass that changed nothing left the facts true)
-                ctx.refresh(unit)
-            stale = bool(p(unit, ctx))
-            if stale:
-                changed.append(getattr(p, "__name__", repr(p)))
-        if not changed:
-            return rounds
-    raise TranslateError(f"the snippet compiler did not settle in {max_rounds} rounds of its passes "
-                         f"(entry points {', '.join(ctx.entries)}; still changing: {', '.join(changed)}): "
-                         "a pass undoes another")
+
+    def apply(p):
+        nonlocal stale
+        if stale:
+            ctx.refresh(unit)
+        stale = bool(p(unit, ctx))
+        return stale
+    return settle(passes, apply, max_rounds, f"the snippet compiler did not settle in {max_rounds} rounds of "
+                  f"its passes (entry points {', '.join(ctx.entries)})")
 
 
 # --------------------------------------------------------------------------------------------
@@ -289,20 +305,3 @@ def scan(root, ctx: Context | None = None) -> tuple[list, dict, dict]:
 def paren(e):
     """``e``, in parentheses unless it is an atom (a name, literal, call, member or index)."""
     return e if isinstance(e, ATOMS) else S.Paren(e)
-
-
-_SLOTS = {S.If: ("then", "other"), S.For: ("body",), S.While: ("body",)}
-
-
-def rewrite(root, fn):
-    """:func:`transform` where ``fn`` may also return a list of statements (or ``[]``) for a
-    statement that is an ``if``'s branch or a loop's body: they become a block there (an empty
-    ``else`` goes)."""
-    def g(n):
-        for a in _SLOTS.get(type(n), ()):
-            v = getattr(n, a)
-            if isinstance(v, list):
-                setattr(n, a, None if not v and a == "other" else v[0] if len(v) == 1 and isinstance(v[0], S.Block)
-                        else S.Block(v))
-        return fn(n)
-    return transform(root, g)
