@@ -22,7 +22,7 @@ from contextlib import contextmanager
 
 from cellgl.export import syntax as S
 from cellgl.export.fields import constant_fields, dead_fields, void_results
-from cellgl.export.fold import constant_loops, fold, loop_ranges
+from cellgl.export.fold import fold, loop_ranges
 from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_params, inline_once, inline_short
 from cellgl.export.printer import print_lines
 from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
@@ -76,7 +76,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
 
 def _fold(unit, ctx):
     """The folding and simplification passes (:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`)."""
-    return fold(unit, ctx, [EXPRESSIONS, constant_loops, loop_ranges] + SIMPLIFY)
+    return fold(unit, ctx, [EXPRESSIONS, loop_ranges] + SIMPLIFY)
 
 
 # one round of the passes, in order: each is ``(unit, ctx) -> changed`` (:mod:`cellgl.export.tree`)

@@ -278,15 +278,13 @@ def _jumps(node) -> bool:
     return False
 
 
-def constant_loops(fn: S.Function, facts: Facts) -> bool:
+def _constant_loops(facts: Facts):
     """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
     the counter replaced by its first value."""
     env, ctx = facts.env, facts.ctx
-    if not any(isinstance(n, S.For) for n in facts.nodes):
-        return False
 
     def unroll(n):
-        bounds = _loop_bounds(n, env, ctx) if isinstance(n, S.For) else None
+        bounds = _loop_bounds(n, env, ctx)
         if bounds is None:
             return n
         var, first, count, early = bounds
@@ -298,7 +296,11 @@ def constant_loops(fn: S.Function, facts: Facts) -> bool:
             return n
         lit = literal(("int", first))
         return [transform(body, lambda x: clone(lit) if isinstance(x, S.Name) and x.name == var else x)]
-    return replaced(fn.body, unroll)
+    return unroll if any(type(n) is S.For for n in facts.nodes) else None
+
+
+_constant_loops.types = {S.For}
+constant_loops = rewriting(_constant_loops)
 
 
 def _conjuncts(e) -> list:

@@ -1,19 +1,16 @@
-"""The snippet compiler's simplification, on the syntax tree (:mod:`cellgl.export.compiler` runs
-the passes of :data:`SIMPLIFY`, after :mod:`cellgl.export.fold`'s, in its round): inside each
-function, with the def-use facts of :mod:`cellgl.export.tree`, declarations split, dead locals and
-stores removed, copies propagated, bare blocks spliced, declarations merged with their first
-store, literals forwarded, loop variables moved into their loop, a store folded into the next
-statement, and the identities that give the same value for every IEEE-754 input (``x * 1.0``,
-``x - 0.0``, ``mix(a, b, 0.0)``; not ``x + 0.0``: ``-0.0 + 0.0`` is ``+0.0``, nor ``x + 0.0 * y``:
-NaN for an infinite ``y``); parentheses that change nothing dropped. Each pass says what it does.
+"""The snippet compiler's simplification, on the syntax tree: function passes (:func:`cellgl.export.fold.fold`
+runs them after the folding rules, in :mod:`cellgl.export.compiler`'s round) that use the def-use
+facts of :class:`cellgl.export.fold.Facts`, and the identities that give the same value for every
+IEEE-754 input (``x * 1.0``, ``x - 0.0``, ``mix(a, b, 0.0)``; not ``x + 0.0``: ``-0.0 + 0.0`` is
+``+0.0``, nor ``x + 0.0 * y``: NaN for an infinite ``y``). Each pass says what it does.
 """
 from __future__ import annotations
 
 from bisect import bisect_left
 
 from cellgl.export import syntax as S
-from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _inline_constants, _local_constants,
-                                 rewriting)
+from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops, _inline_constants,
+                                 _local_constants, rewriting)
 from cellgl.export.printer import expr_glsl
 from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, root, transform, walk
 from cellgl.export.values import value
@@ -449,9 +446,10 @@ _identities.types = {S.Binary, S.Call, S.Member, S.Ctor, S.ExprStmt, S.If}
 
 
 identities = rewriting(_identities)
-#: one walk for the rules on single nodes: the constants written in, constant conditions and the
-#: identities (:mod:`cellgl.export.fold`'s rules and :func:`identities`)
-EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions, _identities)
+#: one walk for the rules on single nodes: the constants written in, constant conditions and loops,
+#: the identities (:mod:`cellgl.export.fold`'s rules and :func:`identities`)
+EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions, _constant_loops,
+                        _identities)
 
 
 _ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}
