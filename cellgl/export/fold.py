@@ -94,10 +94,18 @@ class Facts:
 # passes
 # --------------------------------------------------------------------------------------------
 
+def rule(*types):
+    """Marks a maker of a node rule (:func:`rewriting`) for the node classes ``types``."""
+    def mark(make):
+        make.types = frozenset(types)
+        return make
+    return mark
+
+
 def rewriting(*makers):
     """The function pass of the node rules ``makers`` make of a function's facts (``maker(facts)``:
     a rule ``node -> node`` for :func:`cellgl.export.tree.transform`, or None where it has nothing
-    to do; ``maker.types``: the node classes it rewrites): one walk, bottom-up, each node through
+    to do; ``maker.types``: the node classes it rewrites, :func:`rule`): one walk, bottom-up, each node through
     every rule for its class in turn."""
     def fpass(fn: S.Function, facts: Facts) -> bool:
         rules = [(make.types, r) for make in makers if (r := make(facts)) is not None]
@@ -113,6 +121,7 @@ def rewriting(*makers):
     return fpass
 
 
+@rule(S.Name)
 def _inline_constants(facts: Facts):
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
@@ -120,6 +129,7 @@ def _inline_constants(facts: Facts):
     return (lambda n: clone(pick[n.name]) if n.name in pick else n) if pick else None
 
 
+@rule(S.Index)
 def _array_elements(facts: Facts):
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
@@ -136,9 +146,6 @@ def _array_elements(facts: Facts):
                 return paren(clone(args[k[1]]))
         return n
     return sub if arrays else None
-
-
-_inline_constants.types, _array_elements.types = {S.Name}, {S.Index}
 
 
 def _fold_expr(n, env, ctx):
@@ -170,6 +177,7 @@ def _fold_expr(n, env, ctx):
     return n
 
 
+@rule(S.If, S.While, S.Ternary, S.Binary, S.Unary, S.Index, S.Declarator, S.ArrayCtor)
 def _constant_conditions(facts: Facts):
     """Remove the branches of ``if`` statements and ternaries whose condition is constant, fold
     conditions of literals (``3.0e38 >= 3.0e38`` -> ``true``), ``true && x`` -> ``x``, and
@@ -187,9 +195,6 @@ def _constant_conditions(facts: Facts):
     return fold
 
 
-_constant_conditions.types = {S.If, S.While, S.Ternary, S.Binary, S.Unary, S.Index, S.Declarator, S.ArrayCtor}
-
-
 def _chosen(stmt, kept):
     """What replaces the statement ``stmt`` by its part ``kept`` (a block's statements, spliced
     unless it declares names; nothing for None), keeping ``stmt``'s comments."""
@@ -204,6 +209,7 @@ def _chosen(stmt, kept):
     return out
 
 
+@rule(S.Name, S.Index)
 def _local_constants(facts: Facts):
     """Write locals that hold a boolean, an integer, 0.0 or 1.0 for good into the code, and the
     elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
@@ -222,9 +228,6 @@ def _local_constants(facts: Facts):
                 return clone(arrays[n.base.name][k[1]])
         return n
     return sub if pick or arrays else None
-
-
-_local_constants.types = {S.Name, S.Index}
 
 
 inline_constants, array_elements = rewriting(_inline_constants), rewriting(_array_elements)
@@ -278,6 +281,7 @@ def _jumps(node) -> bool:
     return False
 
 
+@rule(S.For)
 def _constant_loops(facts: Facts):
     """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
     the counter replaced by its first value."""
@@ -299,7 +303,6 @@ def _constant_loops(facts: Facts):
     return unroll if any(type(n) is S.For for n in facts.nodes) else None
 
 
-_constant_loops.types = {S.For}
 constant_loops = rewriting(_constant_loops)
 
 

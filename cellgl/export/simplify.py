@@ -10,7 +10,7 @@ from bisect import bisect_left
 
 from cellgl.export import syntax as S
 from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops, _inline_constants,
-                                 _local_constants, rewriting)
+                                 _local_constants, rewriting, rule)
 from cellgl.export.printer import expr_glsl
 from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, root, transform, walk
 from cellgl.export.values import value
@@ -432,6 +432,7 @@ def _empty(s) -> bool:
     return isinstance(s, S.Block) and not s.body
 
 
+@rule(S.Binary, S.Call, S.Member, S.Ctor, S.ExprStmt, S.If)
 def _identities(facts: Facts):
     """Rewrite what gives the same value for every IEEE-754 input: ``x * 1.0``, ``1.0 * x``,
     ``x / 1.0``, ``x - 0.0``, statements ``x -= 0.0;``, ``x *= 1.0;``, ``x = x;``,
@@ -440,9 +441,6 @@ def _identities(facts: Facts):
     products and sums of unsigned literals, ``0u + x`` and ``ivec4(0, 0, 0, 0) + x`` -> ``x``,
     empty blocks and branches (with conditions without effects)."""
     return lambda n: _identity(n, facts.ctx)
-
-
-_identities.types = {S.Binary, S.Call, S.Member, S.Ctor, S.ExprStmt, S.If}
 
 
 identities = rewriting(_identities)
