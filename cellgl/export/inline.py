@@ -224,8 +224,9 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
         hit = True
         return substitute(clone(expr), dict(zip(params, n.args)))
 
+    callers = {id(g) for name in small for g, _ in ctx.sites.get(name, ())}
     for f in unit.items:
-        if not isinstance(f, S.Function) or f.body is None:
+        if not isinstance(f, S.Function) or f.body is None or id(f) not in callers:
             continue
         hidden, hit = {n.name for n in walk(f) if type(n) in (S.Param, S.Declarator)}, True   # its own names
         while hit:                            # (an expression may call another short function)
@@ -514,8 +515,14 @@ def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
 
 def drop_unused_params(unit: S.Unit, ctx: Context) -> bool:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
-    return _each_param(unit, ctx, lambda f, k, sites: f.params[k].mode == "in" and f.params[k].name not in
-                       names(f.body) and all(is_pure(c.args[k], ctx) for _, c in sites))
+    read: dict = {}                  # (a function's names: its body stays while its parameters go)
+
+    def unread(f, k, sites):
+        if id(f) not in read:
+            read[id(f)] = names(f.body)
+        return f.params[k].mode == "in" and f.params[k].name not in read[id(f)] \
+            and all(is_pure(c.args[k], ctx) for _, c in sites)
+    return _each_param(unit, ctx, unread)
 
 
 def constant_args(unit: S.Unit, ctx: Context) -> bool:
@@ -524,8 +531,8 @@ def constant_args(unit: S.Unit, ctx: Context) -> bool:
 
     def drop(f, k, sites):
         p = f.params[k]
-        if p.mode != "in" or not sites or p.name in writes(f.body, ctx) or not literal(sites[0][1].args[k]) \
-                or len({expr_glsl(_bare(c.args[k])) for _, c in sites}) != 1:
+        if p.mode != "in" or not sites or not literal(sites[0][1].args[k]) \
+                or len({expr_glsl(_bare(c.args[k])) for _, c in sites}) != 1 or p.name in writes(f.body, ctx):
             return False
         f.body = substitute(f.body, {p.name: _bare(sites[0][1].args[k])})
         return True

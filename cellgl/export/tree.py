@@ -160,13 +160,14 @@ class Context:
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}
         direct, called, self.sites = set(), {}, {}
         for f in bodies:
-            nodes = walk(f.body)
+            nodes, calls_ = walk(f.body), []
             for n in nodes:
                 if type(n) is S.Call:
                     self.sites.setdefault(n.func, []).append((f, n))
+                    calls_.append(n.func)
             if self.functions[f.name] is not f:
                 continue                               # (an overload: the table holds the last)
-            called[f.name] = {n.func for n in nodes if type(n) is S.Call}
+            called[f.name] = set(calls_)
             if any(p.mode != "in" for p in f.params) or writes(nodes, self) & self.globals_:
                 direct.add(f.name)
         self.impure = direct                       # and, to a fixed point, what calls one of them
@@ -186,13 +187,14 @@ def writes(node, ctx: Context | None = None) -> set[str]:
     arguments passed to ``out``/``inout`` parameters of the module's functions."""
     out = set()
     for n in node if type(node) is list else walk(node):
-        if isinstance(n, S.Assign):
+        t = type(n)
+        if t is S.Assign:
             out.add(root_name(n.target))
-        elif isinstance(n, S.IncDec):
+        elif t is S.IncDec:
             out.add(root_name(n.operand))
-        elif isinstance(n, S.Declarator):
+        elif t is S.Declarator:
             out.add(n.name)
-        elif ctx is not None and isinstance(n, S.Call):
+        elif t is S.Call and ctx is not None:
             for k in ctx.out_positions(n.func):
                 if k < len(n.args):
                     out.add(root_name(n.args[k]))
