@@ -276,10 +276,10 @@ def inline_once(unit: S.Unit, ctx: Context) -> bool:
             return changed
 
 
-def _call_statement(caller: S.Function, call: S.Call):
+def _call_statement(lists: list, call: S.Call):
     """``(list, statement, form, target, type)`` of the statement the call makes up: ``f(...);``
     (form "stmt"), ``return f(...);``, ``T v = f(...);`` ("decl"), ``v = f(...);`` ("assign")."""
-    for lst, s in statement_lists(caller.body):
+    for lst, s in lists:
         if isinstance(s, S.ExprStmt) and s.expr is call:
             return lst, s, "stmt", None, None
         if isinstance(s, S.Return) and s.value is call:
@@ -293,12 +293,12 @@ def _call_statement(caller: S.Function, call: S.Call):
     return None
 
 
-def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
+def _hoist_site(lists: list, call: S.Call, f: S.Function, ctx: Context):
     """``(list, statement, "hoist", None, type)`` where ``call`` sits inside the expression of a
     statement that may compute it first, into a local: evaluated every time the statement is
     (not under ``&&``, ``||`` or ``?:``), and nothing else in the statement stores anything or
     reads what the call writes."""
-    for lst, s in statement_lists(caller.body):
+    for lst, s in lists:
         if not isinstance(s, (S.ExprStmt, S.Return)) and not (isinstance(s, S.Decl) and len(s.declarators) == 1):
             continue
         if not any(n is call for n in walk(s)):
@@ -352,7 +352,9 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         if len(rets) != 1 or not body or body[-1] is not rets[0] or rets[0].value is None:
             return False
         ret, body = clone(rets[0].value), body[:-1]
-    site = _call_statement(caller, call) or _hoist_site(caller, call, f, ctx)
+    everything = walk(caller)                 # (the caller, its parameters and its body)
+    lists = [(n.body, s) for n in everything if type(n) is S.Block for s in n.body]   # (statement_lists)
+    site = _call_statement(lists, call) or _hoist_site(lists, call, f, ctx)
     if site is None:
         return False
     lst, stmt, form, target, typ = site
@@ -371,7 +373,6 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     declared = {n.name for n in walk(block) if isinstance(n, S.Declarator)}
     if declared & set(params):
         return False                          # a local shadowing a parameter
-    everything = walk(caller)                 # (the caller, its parameters and its body)
     caller_declared = {n.name for n in everything if type(n) in (S.Param, S.Declarator)}
     caller_names = {n.name for n in everything if type(n) is S.Name} - {"true", "false"} | caller_declared \
         | {n.func for n in everything if type(n) is S.Call}
