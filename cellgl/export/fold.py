@@ -17,7 +17,7 @@ from collections import Counter
 from cellgl.export.translate.tokens import TranslateError  # noqa: F401  (first: the translators import the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, clone, is_pure, paren, replaced, scan, settle, transform, walk
+from cellgl.export.tree import Context, clone, is_pure, paren, scan, settle, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
@@ -109,13 +109,21 @@ def rewriting(*makers):
     every rule for its class in turn."""
     def fpass(fn: S.Function, facts: Facts) -> bool:
         rules = [(make.types, r) for make in makers if (r := make(facts)) is not None]
+        some = frozenset().union(*(types for types, _ in rules))
+        changed = False
 
         def each(n):
+            nonlocal changed
+            if type(n) not in some:
+                return n
+            m = n
             for types, rule in rules:
-                if type(n) in types:
-                    n = rule(n)
-            return n
-        return bool(rules) and replaced(fn.body, each)
+                if type(m) in types:
+                    m = rule(m)
+            changed = changed or m is not n
+            return m
+        transform(fn.body, each)
+        return changed
     fpass.__name__ = "_".join(m.__name__.lstrip("_") for m in makers)
     fpass.__doc__ = "\n\n".join(m.__doc__ for m in makers)
     return fpass

@@ -12,7 +12,7 @@ from cellgl.export import syntax as S
 from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops, _inline_constants,
                                  _local_constants, rewriting, rule)
 from cellgl.export.printer import expr_glsl
-from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, root, transform, walk
+from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, root, transform, walk
 from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
