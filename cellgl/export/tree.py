@@ -14,7 +14,7 @@ from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
 __all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point", "settle",
-           "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
+           "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
            "paren", "CHILD_FIELDS"]
 
 #: expression node classes
@@ -89,19 +89,6 @@ def transform(node, fn):
             if y is not v:
                 setattr(node, name, y)
     return fn(node)
-
-
-def replaced(root, fn) -> bool:
-    """``transform(root, fn)``; whether ``fn`` replaced a node."""
-    changed = False
-
-    def g(n):
-        nonlocal changed
-        out = fn(n)
-        changed = changed or out is not n
-        return out
-    transform(root, g)
-    return changed
 
 
 def clone(node):
