@@ -434,11 +434,13 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     arg_names = {n for a in subst.values() for n in names(a)}
     taken = caller_names | body_ids | arg_names
     loop_vars = _loop_vars(walk(block)) - {p.name for p, _ in prelude} - (caller_declared - _loop_vars(everything))
-    outer_loops = {d.name for n in everything if isinstance(n, S.For) and isinstance(n.init, S.Decl)
-                   and any(x is stmt for x in walk(n.body)) for d in n.init.declarators}
+    outer_loops = None
     for d in sorted(declared):
         if d in rename:
             continue
+        if d in loop_vars and d not in arg_names and outer_loops is None:
+            outer_loops = {v.name for n in everything if isinstance(n, S.For) and isinstance(n.init, S.Decl)
+                           and any(x is stmt for x in walk(n.body)) for v in n.init.declarators}
         if d in caller_names and not (d in loop_vars and d not in arg_names and d not in outer_loops):
             k = 2
             while f"{d}{k}" in taken:
