@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from collections import Counter
 
-from cellgl.export.translate.tokens import TranslateError  # noqa: F401  (first: the translators import the parser)
+from cellgl.export.translate.tokens import TranslateError  # noqa: F401  (first: the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
 from cellgl.export.tree import Context, clone, is_pure, paren, scan, settle, transform, walk
@@ -105,8 +105,8 @@ def rule(*types):
 def rewriting(*makers):
     """The function pass of the node rules ``makers`` make of a function's facts (``maker(facts)``:
     a rule ``node -> node`` for :func:`cellgl.export.tree.transform`, or None where it has nothing
-    to do; ``maker.types``: the node classes it rewrites, :func:`rule`): one walk, bottom-up, each node through
-    every rule for its class in turn."""
+    to do; ``maker.types``: the node classes it rewrites, :func:`rule`): one walk, bottom-up, each
+    node through every rule for its class in turn."""
     def fpass(fn: S.Function, facts: Facts) -> bool:
         rules = [(make.types, r) for make in makers if (r := make(facts)) is not None]
         some = frozenset().union(*(types for types, _ in rules))

@@ -389,7 +389,8 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     inner = walk(block) + (walk(ret) if ret is not None else [])
     reads = Counter(n.name for n in inner if type(n) is S.Name)
     based = {x.base.name for x in inner if isinstance(x, (S.Member, S.Index)) and isinstance(x.base, S.Name)}
-    looped = {n.name for x in walk(block) if isinstance(x, (S.For, S.While)) for n in walk(x) if type(n) is S.Name}
+    looped = {n.name for x in walk(block) if isinstance(x, (S.For, S.While))
+              for n in walk(x) if type(n) is S.Name}
     args = call.args
     out_bases = {root_name(a) for p, a in zip(f.params, args) if p.mode != "in"}
     subst: dict = {}

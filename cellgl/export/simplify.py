@@ -9,14 +9,15 @@ from __future__ import annotations
 from bisect import bisect_left
 
 from cellgl.export import syntax as S
-from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops, _inline_constants,
-                                 _local_constants, rewriting, rule)
+from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops,
+                                 _inline_constants, _local_constants, rewriting, rule)
 from cellgl.export.printer import expr_glsl
 from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, root, transform, walk
 from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
-           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY", "EXPRESSIONS"]
+           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY",
+           "EXPRESSIONS"]
 
 
 def _store(s):
@@ -446,8 +447,8 @@ def _identities(facts: Facts):
 identities = rewriting(_identities)
 #: one walk for the rules on single nodes: the constants written in, constant conditions and loops,
 #: the identities (:mod:`cellgl.export.fold`'s rules and :func:`identities`)
-EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions, _constant_loops,
-                        _identities)
+EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions,
+                        _constant_loops, _identities)
 
 
 _ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}

@@ -13,8 +13,8 @@ from dataclasses import dataclass, field, fields
 from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
-__all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point", "settle",
-           "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
+__all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point",
+           "settle", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
            "paren", "CHILD_FIELDS"]
 
 #: expression node classes
