@@ -7,6 +7,7 @@ IEEE-754 input (``x * 1.0``, ``x - 0.0``, ``mix(a, b, 0.0)``; not ``x + 0.0``: `
 from __future__ import annotations
 
 from bisect import bisect_left
+from copy import copy
 
 from cellgl.export import syntax as S
 from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops,
@@ -445,12 +446,6 @@ def _identities(facts: Facts):
 
 
 identities = rewriting(_identities)
-#: one walk for the rules on single nodes: the constants written in, constant conditions and loops,
-#: the identities (:mod:`cellgl.export.fold`'s rules and :func:`identities`)
-EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions,
-                        _constant_loops, _identities)
-
-
 _ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}
 #: ``{node class: ((field, whole: any expression stands there bare but a ternary or an assignment),
 #: ...)}``: the places whose parentheses :func:`parentheses` looks at (besides arguments)
@@ -463,21 +458,21 @@ _PLACES = {S.Index: (("index", True), ("base", False)), S.Member: (("base", Fals
 _COMPARISONS = ("<", ">", "<=", ">=", "==", "!=")
 
 
-def parentheses(fn: S.Function, facts: Facts) -> bool:
+@rule(*_PLACES, S.Call, S.Ctor, S.ArrayCtor)
+def _parentheses(facts: Facts):
     """Drop parentheses that change nothing: around an atom, around a whole argument, index,
     initialiser, stored value, returned value or condition (not a ternary), and around
     arithmetic inside arithmetic or a comparison where precedence keeps the order
     (``(a * b) + c``, ``(a + b) - c``, ``(a + b) < c``)."""
-    changed = False
-
     def bare(p, top=False):
-        nonlocal changed
         while isinstance(p, S.Paren) and (isinstance(p.inner, ATOMS) or top and not isinstance(
                 p.inner, (S.Ternary, S.Assign))):
-            changed, p = True, p.inner
+            dropped.append(p)
+            p = p.inner
         return p
 
     def fix(n):
+        dropped.clear()
         if isinstance(n, (S.Call, S.Ctor, S.ArrayCtor)):
             n.args = [bare(a, True) for a in n.args]
         for name, top in _PLACES.get(type(n), ()):
@@ -490,11 +485,18 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
                     inner = _ARITH[p.inner.op]
                     if inner > level or (inner == level and side == "left"):
                         setattr(n, side, p.inner)     # (a regrouping is not reported as a change)
-        return n
-    transform(fn.body, fix)
-    return changed
+        return copy(n) if dropped else n              # (a new node: the walk reports the change)
+    dropped: list = []
+    return fix
+
+
+parentheses = rewriting(_parentheses)
+#: one walk for the rules on single nodes: the constants written in, constant conditions and loops,
+#: the identities, the parentheses (:mod:`cellgl.export.fold`'s rules and this module's)
+EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions,
+                        _constant_loops, _identities, _parentheses)
 
 
 #: the simplification passes, in the order of the driver's round (after :data:`EXPRESSIONS`)
 SIMPLIFY = [split_declarations, dead_locals, last_stores, copies, bare_blocks, merge_declarations,
-            forward_literals, loop_variables, store_into_next, parentheses]
+            forward_literals, loop_variables, store_into_next]
