@@ -15,10 +15,21 @@ from cellgl.export.tree import Context
 from cellgl.export.values import value
 
 
-def _run(tree_pass, src: str, entries=("f",)) -> str:
-    """The GLSL ``tree_pass`` makes of ``src`` (the pass must change it)."""
+def _once(function_pass, unit, entries=("f",)) -> bool:
+    """One run of ``function_pass`` (``(fn, facts) -> changed``) on each function of ``unit``."""
+    ctx = Context(tuple(entries)).refresh(unit)
+    genv, garrays = F.global_constants(unit)
+    return any([function_pass(fn, F.Facts(fn, genv, garrays, ctx)) for fn in list(ctx.functions.values())])
+
+
+def _run(function_pass, src: str, entries=("f",)) -> str:
+    """The GLSL one run of ``function_pass`` makes of ``src`` (it must change it; ``compiler._fold``:
+    the compiler's passes to their fixed point)."""
     unit = parse_tree(src)
-    assert tree_pass(unit, Context(tuple(entries)).refresh(unit))
+    if function_pass is compiler._fold:
+        assert function_pass(unit, Context(tuple(entries)).refresh(unit))
+    else:
+        assert _once(function_pass, unit, entries)
     return print_glsl(unit)
 
 
@@ -322,7 +333,7 @@ def test_a_copy_of_a_parameter_read_in_a_loop_stays():
     return t;
 }
 """)
-    assert not SP.copies(unit, Context(("f",)).refresh(unit))
+    assert not _once(SP.copies, unit)
 
 
 def test_a_bare_block_is_spliced_where_its_names_are_free():
@@ -1053,9 +1064,9 @@ def test_a_statement_longer_than_the_width_is_broken_where_it_reads_well():
 # what the passes share (cellgl/export/tree.py): walking, rewriting, the fold cache's key
 # --------------------------------------------------------------------------------------------
 
-def test_walk_is_pre_order_and_replaced_says_whether_a_node_changed():
+def test_walk_is_pre_order_and_transform_replaces_bottom_up():
     from cellgl.export import syntax as S
-    from cellgl.export.tree import children, replaced, rewrite, root_name, walk
+    from cellgl.export.tree import children, root_name, transform, walk
 
     unit = parse_tree("float f(float x)\n{\n    float a[2];\n    a[0] = x * (1.0 + x);\n"
                       "    return a[0];\n}\n")
@@ -1065,11 +1076,13 @@ def test_walk_is_pre_order_and_replaced_says_whether_a_node_changed():
                      "Name"]
     assert [type(n).__name__ for n in children(body.body[1].expr)] == ["Index", "Binary"]
     assert root_name(body.body[1].expr.target) == "a"
-    assert not replaced(body, lambda n: n)
-    assert replaced(body, lambda n: S.Name("y") if isinstance(n, S.Name) and n.name == "x" else n)
-    # rewrite: a statement turned into a list of statements in a branch's place becomes a block
+    text = print_glsl(unit)
+    assert transform(body, lambda n: n) is body and print_glsl(unit) == text
+    transform(body, lambda n: S.Name("y") if isinstance(n, S.Name) and n.name == "x" else n)
+    assert print_glsl(unit) == text.replace("a[0] = x * (1.0 + x);", "a[0] = y * (1.0 + y);") != text
+    # a statement turned into a list of statements in a branch's place becomes a block
     unit = parse_tree("void g(float x)\n{\n    if (x > 0.0)\n        x = 1.0;\n}\n")
-    assert replaced(unit.items[0].body, lambda n: [n, n] if isinstance(n, S.ExprStmt) else n, rewrite)
+    transform(unit.items[0].body, lambda n: [n, n] if isinstance(n, S.ExprStmt) else n)
     assert print_glsl(unit) == "void g(float x)\n{\n    if (x > 0.0) {\n        x = 1.0;\n        x = 1.0;\n    }\n}\n"
 
 

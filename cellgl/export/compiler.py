@@ -2,17 +2,13 @@
 into the code its entry points need, and nothing else.
 
 One tree (:mod:`cellgl.export.syntax`) through the whole compile: the parse of the text (cached
-per process), the declarations the entry points reach, then :data:`ROUND`'s passes, repeated
-until a round changes nothing (the fixed point, :func:`cellgl.export.tree.fixed_point`;
-:data:`MAX_ROUNDS` rounds without one raise :class:`~cellgl.export.translate.tokens.TranslateError`):
-
-1. :func:`cellgl.export.reach.scalarise` -- the recipe's parameter struct becomes its constants;
-2. :func:`cellgl.export.fold.fold` (each function to its own fixed point) -- the constant folding of
-   :mod:`cellgl.export.fold`, then the simplification of :mod:`cellgl.export.simplify`;
-3. short functions and functions called once inlined, unused and constant parameters and unused
-   ``out`` parameters dropped (:mod:`cellgl.export.inline`); void results, dead and constant
-   struct fields (:mod:`cellgl.export.fields`);
-4. :func:`cellgl.export.reach.reach` -- only what the entry points reach.
+per process), the declarations the entry points reach, then :data:`ROUND`'s passes until they
+settle (:func:`cellgl.export.tree.fixed_point`; :data:`MAX_ROUNDS` rounds without raise
+:class:`~cellgl.export.translate.tokens.TranslateError`): the recipe's parameter structs become
+constants (:mod:`cellgl.export.reach`), constants are folded and the code simplified
+(:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`), functions inlined and parameters
+dropped (:mod:`cellgl.export.inline`), void results, dead and constant struct fields go
+(:mod:`cellgl.export.fields`), and what the entry points do not reach.
 
 Then every declaration comes after what it uses, the comments are tidied
 (:func:`cellgl.export.reach.tidy_comments`) and the tree is printed, a statement on one line
@@ -26,11 +22,11 @@ from contextlib import contextmanager
 
 from cellgl.export import syntax as S
 from cellgl.export.fields import constant_fields, dead_fields, void_results
-from cellgl.export.fold import FOLD, fold
+from cellgl.export.fold import fold, loop_ranges
 from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_params, inline_once, inline_short
 from cellgl.export.printer import print_lines
 from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
-from cellgl.export.simplify import SIMPLIFY
+from cellgl.export.simplify import EXPRESSIONS, SIMPLIFY
 from cellgl.export.tree import Context, clone, fixed_point
 
 __all__ = ["compile_glsl", "compile_unit", "ROUND", "MAX_ROUNDS"]
@@ -58,10 +54,9 @@ def collector_paused():
 def compile_unit(text: str, entries, structs=(), fold_constants: bool = True, keep=()) -> S.Unit:
     """The middle end on the tree: the declarations ``entries`` reach in ``text`` (its parse is
     cached per process, :func:`cellgl.export.syntax.parsed_library`; this copies only what is
-    reached), then :data:`ROUND` of passes to their fixed point (:func:`cellgl.export.tree.fixed_point`):
-    scalarise ``structs`` (``[(struct, loader)]``, :func:`cellgl.export.reach.scalarise`), fold
-    constants, inline one-liners and functions called once (but those named in ``keep``) ...
-    Returns the tree, every declaration after what it uses, its comments tidied."""
+    reached), then :data:`ROUND` to its fixed point, ``structs`` (``[(struct, loader)]``)
+    scalarised, the functions named in ``keep`` not inlined. Returns the tree, every declaration
+    after what it uses, its comments tidied."""
     unit = S.Unit([clone(it) for it in reached(S.parsed_library(text).items, entries)])
     strip_body_comments(unit)
     ctx = Context(tuple(entries), frozenset(set(keep) | {loader for _, loader in structs}),
@@ -81,7 +76,7 @@ def compile_glsl(text: str, entries, structs=(), fold_constants: bool = True, ke
 
 def _fold(unit, ctx):
     """The folding and simplification passes (:mod:`cellgl.export.fold`, :mod:`cellgl.export.simplify`)."""
-    return fold(unit, ctx, FOLD + SIMPLIFY)
+    return fold(unit, ctx, [EXPRESSIONS, loop_ranges] + SIMPLIFY)
 
 
 # one round of the passes, in order: each is ``(unit, ctx) -> changed`` (:mod:`cellgl.export.tree`)

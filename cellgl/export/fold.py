@@ -1,5 +1,5 @@
-"""The snippet compiler's constant folding, on the syntax tree (:mod:`cellgl.export.compiler` runs
-the passes of :data:`FOLD` in its round).
+"""The snippet compiler's constant folding, on the syntax tree: function passes ``(fn, facts) ->
+changed`` that :func:`fold` runs (in :mod:`cellgl.export.compiler`'s round).
 
 After :func:`cellgl.export.reach.scalarise` the recipe's values are global constants. These
 passes evaluate what they make constant: the constants that decide the shape of the code
@@ -13,16 +13,15 @@ evaluated only to decide conditions; no float result is written into the code bu
 from __future__ import annotations
 
 from collections import Counter
-from functools import cached_property
 
-from cellgl.export.translate.tokens import TranslateError  # (first: the translators import the parser)
+from cellgl.export.translate.tokens import TranslateError  # noqa: F401  (first: the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
-from cellgl.export.tree import Context, children, clone, is_pure, occurrences, paren, replaced, rewrite, transform, walk
+from cellgl.export.tree import Context, clone, is_pure, paren, scan, settle, transform, walk
 from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
-__all__ = ["fold", "FOLD", "Facts", "function_pass", "inline_constants", "array_elements", "constant_conditions",
+__all__ = ["fold", "Facts", "rewriting", "inline_constants", "array_elements", "constant_conditions",
            "local_constants", "constant_loops", "loop_ranges", "global_constants"]
 
 def global_constants(unit: S.Unit) -> tuple[dict, dict]:
@@ -47,134 +46,106 @@ def global_constants(unit: S.Unit) -> tuple[dict, dict]:
 
 
 class Facts:
-    """What the passes know of one function: its nodes in source order, blocks, declarations,
-    the occurrences of each name (:func:`cellgl.export.tree.occurrences`), the nodes inside
-    loops, and its constants (the globals' ``genv`` and its own). Computed when first asked;
-    a pass that changes the function makes a new one."""
+    """What the passes know of one function, from one walk (:func:`cellgl.export.tree.scan`): its
+    nodes in source order, ``order`` (``({id(node): position}, {id(node): the last position below
+    it})``), blocks, ``declared`` (``{name: times declared}``, parameters included) and the names
+    declared ``once``, ``types`` (``{name: type}``; arrays: None), the occurrences of each name
+    (``occ``), the nodes inside loops, and ``constants``: ``({name: value}, {array: [element
+    nodes]})``, the globals' ``genv`` not shadowed and the locals declared once with a constant
+    (or an array of literals) never written after. A pass that changes the function makes a new
+    one (a pass may go on after a change where the facts stay a superset of the truth)."""
 
     def __init__(self, fn: S.Function, genv: dict, garrays: dict, ctx: Context):
         self.fn, self.genv, self.garrays, self.ctx = fn, genv, garrays, ctx
-
-    @cached_property
-    def nodes(self) -> list:
-        return walk(self.fn.body)
-
-    @cached_property
-    def order(self) -> tuple[dict, dict]:
-        """``({id(node): position}, {id(node): the last position below it})``."""
-        pos, last = {id(n): k for k, n in enumerate(self.nodes)}, {}
-        for n in reversed(self.nodes):            # (pre-order: a node's last is its last child's)
-            kids = children(n)
-            last[id(n)] = last[id(kids[-1])] if kids else pos[id(n)]
-        return pos, last
-
-    @cached_property
-    def blocks(self) -> list:
-        return [n for n in self.nodes if isinstance(n, S.Block)]
-
-    @cached_property
-    def declared(self) -> dict:
-        """``{name: times declared}`` (parameters included)."""
-        return Counter([p.name for p in self.fn.params]
-                       + [n.name for n in self.nodes if isinstance(n, S.Declarator)])
-
-    @cached_property
-    def once(self) -> set:
-        return {k for k, v in self.declared.items() if v == 1}
-
-    @cached_property
-    def params(self) -> dict:
-        return {p.name: p for p in self.fn.params}
-
-    @cached_property
-    def occ(self) -> dict:
-        return occurrences(self.fn.body, self.ctx)
-
-    @cached_property
-    def in_loops(self) -> set:
-        out = set()
+        self.nodes, last, self.occ = scan(fn.body, ctx)
+        pos = {id(n): k for k, n in enumerate(self.nodes)}
+        self.order = pos, last
+        self.params = {p.name: p for p in fn.params}
+        self.types = {p.name: None if p.size is not None else p.type for p in fn.params}
+        self.blocks, self.in_loops, decls, names = [], set(), [], [p.name for p in fn.params]
         for n in self.nodes:
-            if isinstance(n, (S.For, S.While)) and id(n) not in out:
-                out.update(id(x) for x in walk(n))
-        return out
-
-    @cached_property
-    def types(self) -> dict:
-        """``{name: type}`` of the scalars and vectors declared once (arrays: None)."""
-        out = {p.name: None if p.size is not None else p.type for p in self.fn.params}
-        for n in self.nodes:
-            if isinstance(n, S.Decl):
+            if type(n) is S.Block:
+                self.blocks.append(n)
+            elif type(n) is S.Decl:
+                decls.append(n)
                 for d in n.declarators:
-                    out[d.name] = None if d.size is not None else n.type
-        return out
-
-    @cached_property
-    def constants(self) -> tuple[dict, dict]:
-        """``({name: value}, {array: [element nodes]})``: the globals' constants not shadowed, and
-        the locals declared once with a constant (or an array of literals) never written after."""
-        local = {k: v for k, v in self.genv.items() if k not in self.declared}
-        arrays: dict = {}
+                    names.append(d.name)
+                    self.types[d.name] = None if d.size is not None else n.type
+            elif type(n) in (S.For, S.While) and id(n) not in self.in_loops:
+                self.in_loops.update(id(x) for x in self.nodes[pos[id(n)]:last[id(n)] + 1])
+        self.declared = Counter(names)
+        self.once = {k for k, v in self.declared.items() if v == 1}
+        self.env = {k: v for k, v in genv.items() if k not in self.declared}
+        self.constants = self.env, {}
         stored = {n for n, uses in self.occ.items() if any(role != "read" for _, role in uses)}
-        for node in self.nodes:
-            if not isinstance(node, S.Decl):
-                continue
+        for node in decls:
             for d in node.declarators:
                 if d.name not in self.once or d.name in stored or d.init is None or d.name in self.params:
                     continue
                 if d.size is None and node.type in ("int", "uint", "float", "bool"):
-                    v = convert(node.type, value(d.init, local, self.ctx))
+                    v = convert(node.type, value(d.init, self.env, ctx))
                     if v is not None and v[0] == node.type:
-                        local[d.name] = v
+                        self.env[d.name] = v
                 elif isinstance(d.init, S.ArrayCtor) and all(isinstance(a, S.Num) for a in d.init.args):
-                    arrays[d.name] = d.init.args
-        return local, arrays
-
-    @property
-    def env(self) -> dict:
-        return self.constants[0]
-
-
-def function_pass(fpass):
-    """A tree pass (``(unit, ctx) -> changed``) running ``fpass(fn, facts) -> changed`` on every
-    function (``fpass`` stays its attribute ``function``: :func:`fold` runs it)."""
-    def run(unit: S.Unit, ctx: Context) -> bool:
-        if not ctx.fold_constants:
-            return False
-        genv, garrays = global_constants(unit)
-        changed = False
-        for fn in list(ctx.functions.values()):
-            changed = bool(fpass(fn, Facts(fn, genv, garrays, ctx))) or changed
-        return changed
-    run.__name__, run.__qualname__, run.__doc__ = fpass.__name__, fpass.__qualname__, fpass.__doc__
-    run.function = fpass
-    return run
+                    self.constants[1][d.name] = d.init.args
 
 
 # --------------------------------------------------------------------------------------------
 # passes
 # --------------------------------------------------------------------------------------------
 
-@function_pass
-def inline_constants(fn: S.Function, facts: Facts) -> bool:
+def rule(*types):
+    """Marks a maker of a node rule (:func:`rewriting`) for the node classes ``types``."""
+    def mark(make):
+        make.types = frozenset(types)
+        return make
+    return mark
+
+
+def rewriting(*makers):
+    """The function pass of the node rules ``makers`` make of a function's facts (``maker(facts)``:
+    a rule ``node -> node`` for :func:`cellgl.export.tree.transform`, or None where it has nothing
+    to do; ``maker.types``: the node classes it rewrites, :func:`rule`): one walk, bottom-up, each
+    node through every rule for its class in turn."""
+    def fpass(fn: S.Function, facts: Facts) -> bool:
+        rules = [(make.types, r) for make in makers if (r := make(facts)) is not None]
+        some = frozenset().union(*(types for types, _ in rules))
+        changed = False
+
+        def each(n):
+            nonlocal changed
+            if type(n) not in some:
+                return n
+            m = n
+            for types, rule in rules:
+                if type(m) in types:
+                    m = rule(m)
+            changed = changed or m is not n
+            return m
+        transform(fn.body, each)
+        return changed
+    fpass.__name__ = "_".join(m.__name__.lstrip("_") for m in makers)
+    fpass.__doc__ = "\n\n".join(m.__doc__ for m in makers)
+    return fpass
+
+
+@rule(S.Name)
+def _inline_constants(facts: Facts):
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
     pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
-    if not pick:
-        return False
-    return replaced(fn.body, lambda n: clone(pick[n.name]) if isinstance(n, S.Name) and n.name in pick else n)
+    return (lambda n: clone(pick[n.name]) if n.name in pick else n) if pick else None
 
 
-@function_pass
-def array_elements(fn: S.Function, facts: Facts) -> bool:
+@rule(S.Index)
+def _array_elements(facts: Facts):
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
     effects or calls) where all elements are the same."""
     arrays = {k: v for k, v in facts.garrays.items() if k is not None and k not in facts.declared and k in facts.occ}
-    if not arrays:
-        return False
 
     def sub(n):
-        if isinstance(n, S.Index) and isinstance(n.base, S.Name) and n.base.name in arrays:
+        if type(n.base) is S.Name and n.base.name in arrays:
             args, texts = arrays[n.base.name]
             if len(set(texts)) == 1 and not any(isinstance(x, (S.Call, S.Assign, S.IncDec)) for x in walk(n.index)):
                 return paren(clone(args[0]))
@@ -182,7 +153,7 @@ def array_elements(fn: S.Function, facts: Facts) -> bool:
             if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(args) and len(texts[k[1]]) <= 40:
                 return paren(clone(args[k[1]]))
         return n
-    return replaced(fn.body, sub)
+    return sub if arrays else None
 
 
 def _fold_expr(n, env, ctx):
@@ -214,8 +185,8 @@ def _fold_expr(n, env, ctx):
     return n
 
 
-@function_pass
-def constant_conditions(fn: S.Function, facts: Facts) -> bool:
+@rule(S.If, S.While, S.Ternary, S.Binary, S.Unary, S.Index, S.Declarator, S.ArrayCtor)
+def _constant_conditions(facts: Facts):
     """Remove the branches of ``if`` statements and ternaries whose condition is constant, fold
     conditions of literals (``3.0e38 >= 3.0e38`` -> ``true``), ``true && x`` -> ``x``, and
     integer indices and array sizes (``rest[8 + 1]`` -> ``rest[9]``)."""
@@ -229,7 +200,7 @@ def constant_conditions(fn: S.Function, facts: Facts) -> bool:
         if isinstance(n, S.While) and value(n.cond, env, ctx) == ("bool", False):
             return []
         return _fold_expr(n, env, ctx)
-    return replaced(fn.body, fold, rewrite)
+    return fold
 
 
 def _chosen(stmt, kept):
@@ -246,8 +217,8 @@ def _chosen(stmt, kept):
     return out
 
 
-@function_pass
-def local_constants(fn: S.Function, facts: Facts) -> bool:
+@rule(S.Name, S.Index)
+def _local_constants(facts: Facts):
     """Write locals that hold a boolean, an integer, 0.0 or 1.0 for good into the code, and the
     elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
     env, arrays = facts.constants
@@ -255,18 +226,20 @@ def local_constants(fn: S.Function, facts: Facts) -> bool:
             and (v[0] != "uint" or v[1] in (0, 1))       # (other unsigned values: hash constants, named)
             and any(role == "read" for _, role in facts.occ.get(k, ()))}
     arrays = {k: v for k, v in arrays.items() if any(role == "read" for _, role in facts.occ.get(k, ()))}
-    if not pick and not arrays:
-        return False
 
     def sub(n):
-        if isinstance(n, S.Name) and n.name in pick:
+        if type(n) is S.Name and n.name in pick:
             return clone(pick[n.name])
-        if isinstance(n, S.Index) and isinstance(n.base, S.Name) and n.base.name in arrays:
+        if type(n) is S.Index and type(n.base) is S.Name and n.base.name in arrays:
             k = value(n.index, env, facts.ctx)
             if k is not None and k[0] in ("int", "uint") and 0 <= k[1] < len(arrays[n.base.name]):
                 return clone(arrays[n.base.name][k[1]])
         return n
-    return replaced(fn.body, sub)
+    return sub if pick or arrays else None
+
+
+inline_constants, array_elements = rewriting(_inline_constants), rewriting(_array_elements)
+constant_conditions, local_constants = rewriting(_constant_conditions), rewriting(_local_constants)
 
 
 def _counter(loop: S.For, env, ctx):
@@ -316,16 +289,14 @@ def _jumps(node) -> bool:
     return False
 
 
-@function_pass
-def constant_loops(fn: S.Function, facts: Facts) -> bool:
+@rule(S.For)
+def _constant_loops(facts: Facts):
     """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
     the counter replaced by its first value."""
     env, ctx = facts.env, facts.ctx
-    if not any(isinstance(n, S.For) for n in facts.nodes):
-        return False
 
     def unroll(n):
-        bounds = _loop_bounds(n, env, ctx) if isinstance(n, S.For) else None
+        bounds = _loop_bounds(n, env, ctx)
         if bounds is None:
             return n
         var, first, count, early = bounds
@@ -337,14 +308,16 @@ def constant_loops(fn: S.Function, facts: Facts) -> bool:
             return n
         lit = literal(("int", first))
         return [transform(body, lambda x: clone(lit) if isinstance(x, S.Name) and x.name == var else x)]
-    return replaced(fn.body, unroll, rewrite)
+    return unroll if any(type(n) is S.For for n in facts.nodes) else None
+
+
+constant_loops = rewriting(_constant_loops)
 
 
 def _conjuncts(e) -> list:
     return _conjuncts(e.left) + _conjuncts(e.right) if isinstance(e, S.Binary) and e.op == "&&" else [e]
 
 
-@function_pass
 def loop_ranges(fn: S.Function, facts: Facts) -> bool:
     """``for (int k = 0; k < 16; k++) { x += (k >= 1 && k < 9 && c) ? 1 : 0; }`` -> the loop over
     1 <= k < 9 with ``c`` alone: a body that is one statement guarded by bounds on k (an ``if``
@@ -390,21 +363,16 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-#: the folding passes, in the order of :func:`fold`'s round
-FOLD = [inline_constants, array_elements, local_constants, constant_conditions, constant_loops, loop_ranges]
-
-
-def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
-    """The function passes ``passes`` (:data:`FOLD` by default; the compiler adds
-    :data:`cellgl.export.simplify.SIMPLIFY`), function by function, in order, round after round
-    until a round changes nothing (they change no signature, so ``ctx`` stays true);
-    :class:`TranslateError` after :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
+def fold(unit: S.Unit, ctx: Context, passes) -> bool:
+    """The function passes ``passes`` (``(fn, facts) -> changed``; the compiler's: the rules of
+    :data:`cellgl.export.simplify.EXPRESSIONS`, the loops', :data:`cellgl.export.simplify.SIMPLIFY`),
+    function by function, until they settle (:func:`cellgl.export.tree.settle`; they change no
+    signature, so ``ctx`` stays true) or :data:`MAX_ROUNDS` rounds. Nothing with ``ctx.fold_constants``
     false (the recipe's values stay as they are). A function folded before with the same text,
     the same values of the globals it names and the same facts of the functions it calls is not
     folded again (:data:`_FOLDED`)."""
     if not ctx.fold_constants:
         return False
-    passes = [p.function for p in (FOLD if passes is None else passes)]
     genv, garrays = global_constants(unit)
     changed = False
     for fn in list(ctx.functions.values()):
@@ -422,21 +390,15 @@ def fold(unit: S.Unit, ctx: Context, passes=None) -> bool:
         if key not in _FOLDED:
             if len(_FOLDED) > 4096:
                 _FOLDED.clear()
-            # each pass in turn, until every pass has run once since the last change (a round
-            # from there on would change nothing: the passes see the same tree and facts again)
-            facts, quiet, recent, folded = Facts(fn, genv, garrays, ctx), 0, [], False
-            for run in range(MAX_ROUNDS * len(passes)):
-                p = passes[run % len(passes)]
-                if p(fn, facts):
-                    folded, quiet, recent = True, 0, (recent + [p.__name__])[-len(passes):]
-                    facts = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
-                else:
-                    quiet += 1
-                    if quiet == len(passes):
-                        break
-            else:
-                raise TranslateError(f"the folding passes did not settle on {fn.name} in {MAX_ROUNDS} rounds (still "
-                                     f"changing: {', '.join(recent)}): a pass undoes another")
+            facts = [Facts(fn, genv, garrays, ctx)]
+
+            def apply(p):
+                if p(fn, facts[0]):
+                    facts[0] = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
+                    return True
+                return False
+            folded = settle(passes, apply, MAX_ROUNDS, f"the folding passes did not settle on {fn.name} in "
+                            f"{MAX_ROUNDS} rounds")
             body = clone(fn.body) if folded else None
             _FOLDED[key] = None if body is None or "\n".join(item_glsl(fn)) == text else body
             changed = changed or _FOLDED[key] is not None

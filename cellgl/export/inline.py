@@ -1,19 +1,8 @@
 """Inlining and the parameter passes of the snippet compiler (:mod:`cellgl.export.compiler`'s
-pass 4), transforms of the syntax tree (:mod:`cellgl.export.tree`):
-
-- :func:`inline_short`: a function whose body is one short ``return`` (or straight-line stores
-  ending in one, substituted forward: ``x = abs(x); return x * x;``) becomes that expression;
-- :func:`inline_once`: a function called once, from a statement (``f(a);``, ``T v = f(a);``,
-  ``v = f(a);``, ``return f(a);``, or any statement that may compute the call first into a local),
-  whose body returns only at its end, becomes that body in place of the call: an ``out`` /
-  ``inout`` parameter becomes its argument (a variable, or a field or element of one, that no
-  other argument names); an ``in`` parameter becomes its argument where that is a name, field or
-  literal, or read once outside loops, and a local copy otherwise (always where the body writes
-  it: GLSL's ``in`` is a copy); the body's locals are renamed where the caller uses the name;
-- :func:`drop_unused_params`, :func:`constant_args`: parameters a function never reads go, and
-  those every call passes the same literal become that literal;
-- :func:`drop_unused_outs`: an ``out`` parameter whose argument is, at every call, a local used
-  nowhere else becomes a local of the function (whose stores the dead-store pass removes).
+round), transforms of the syntax tree (:mod:`cellgl.export.tree`): short functions become their
+expression (:func:`inline_short`), functions called once their body (:func:`inline_once`),
+parameters never read, always given the same literal, or written for no caller go
+(:func:`drop_unused_params`, :func:`constant_args`, :func:`drop_unused_outs`).
 
 The values do not change: the statements run in the same order on the same values.
 """
@@ -105,10 +94,6 @@ def names(node) -> set[str]:
     return {n.name for n in walk(node) if isinstance(n, (S.Name, S.Declarator, S.Param))} - {"true", "false"}
 
 
-def _count(node, name: str) -> int:
-    return sum(isinstance(n, S.Name) and n.name == name for n in walk(node))
-
-
 def _flat(e) -> bool:
     return not any(isinstance(n, (S.Call, S.Ctor, S.Paren)) for n in walk(e))
 
@@ -173,12 +158,12 @@ def call_sites(unit: S.Unit) -> dict[str, list]:
 # short functions: their expression at every call
 # --------------------------------------------------------------------------------------------
 
-def _short(unit: S.Unit, keep) -> dict:
+def _short(unit: S.Unit, ctx: Context) -> dict:
     """``{name: (parameter names, expression)}`` of the functions short enough to inline."""
-    sites = {k: len(v) for k, v in call_sites(unit).items()}
+    sites = {k: len(v) for k, v in ctx.sites.items()}
     out = {}
     for it in unit.items:
-        if not isinstance(it, S.Function) or it.body is None or it.name in keep:
+        if not isinstance(it, S.Function) or it.body is None or it.name in ctx.entries:
             continue
         if any(p.mode != "in" or p.size is not None for p in it.params):
             continue
@@ -215,7 +200,7 @@ def _forward(body: list, params: set) -> object | None:
 
 def inline_short(unit: S.Unit, ctx: Context) -> bool:
     """Short functions (not the entry points) become their expression at their calls."""
-    small = _short(unit, set(ctx.entries))
+    small = _short(unit, ctx)
     if not small:
         return False
     changed = hit = False
@@ -234,13 +219,14 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
                         and _bare(x.base).name == p for x in walk(expr))
             if based and not _simple(_bare(a)):
                 return n                      # (a + b).xy: keep the call
-            if _count(expr, p) > 1 and not _cheap(_bare(a)):
+            if sum(type(n) is S.Name and n.name == p for n in walk(expr)) > 1 and not _cheap(_bare(a)):
                 return n                      # an argument the expression reads twice: compute it once
         hit = True
         return substitute(clone(expr), dict(zip(params, n.args)))
 
+    callers = {id(g) for name in small for g, _ in ctx.sites.get(name, ())}
     for f in unit.items:
-        if not isinstance(f, S.Function) or f.body is None:
+        if not isinstance(f, S.Function) or f.body is None or id(f) not in callers:
             continue
         hidden, hit = {n.name for n in walk(f) if type(n) in (S.Param, S.Declarator)}, True   # its own names
         while hit:                            # (an expression may call another short function)
@@ -257,30 +243,43 @@ def inline_short(unit: S.Unit, ctx: Context) -> bool:
 # --------------------------------------------------------------------------------------------
 
 def inline_once(unit: S.Unit, ctx: Context) -> bool:
-    """Inline every function (not an entry, not kept) called exactly once, where that is safe."""
+    """Inline every function (not an entry, not kept) called exactly once, where that is safe: from
+    a statement (``f(a);``, ``T v = f(a);``, ``v = f(a);``, ``return f(a);``, or any statement
+    that may compute the call first into a local), with a body that returns only at its end. An
+    ``out`` / ``inout`` parameter becomes its argument (a variable, or a field or element of one,
+    that no other argument names); an ``in`` parameter becomes its argument where that is a name,
+    field or literal, or read once outside loops, and a local copy otherwise (always where the
+    body writes it: GLSL's ``in`` is a copy); the body's locals are renamed where the caller uses
+    the name."""
     keep = set(ctx.entries) | set(ctx.keep) | set(KEEP)
-    once, index, changed = defined_once(unit), call_sites(unit), False
+    once, index, changed = defined_once(unit), ctx.sites, False
+    failed: set = set()         # (callee, caller) that would not inline (until the caller changes)
     while True:
         for f in unit.items:
             sites = index.get(getattr(f, "name", None), [])
-            if sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1 and sites[0][0] is not f \
-                    and _inline_call(f, *sites[0], ctx):
-                # (the context's facts stay a superset until the next pass refreshes them)
-                caller, changed = sites[0][0], True
-                unit.items[:] = [it for it in unit.items if it is not f]
-                index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
-                for n in walk(caller.body):
-                    if isinstance(n, S.Call):
-                        index.setdefault(n.func, []).append((caller, n))
-                break
+            if not (sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1
+                    and sites[0][0] is not f and (id(f), id(sites[0][0])) not in failed):
+                continue
+            if not _inline_call(f, *sites[0], ctx):
+                failed.add((id(f), id(sites[0][0])))    # (it reads only the two and the context)
+                continue
+            # (the context's facts stay a superset until the next pass refreshes them)
+            caller, changed = sites[0][0], True
+            unit.items[:] = [it for it in unit.items if it is not f]
+            failed = {pair for pair in failed if id(caller) not in pair}
+            index = {k: [(g, c) for g, c in v if g is not caller and g is not f] for k, v in index.items()}
+            for n in walk(caller.body):
+                if isinstance(n, S.Call):
+                    index.setdefault(n.func, []).append((caller, n))
+            break
         else:
             return changed
 
 
-def _call_statement(caller: S.Function, call: S.Call):
+def _call_statement(lists: list, call: S.Call):
     """``(list, statement, form, target, type)`` of the statement the call makes up: ``f(...);``
     (form "stmt"), ``return f(...);``, ``T v = f(...);`` ("decl"), ``v = f(...);`` ("assign")."""
-    for lst, s in statement_lists(caller.body):
+    for lst, s in lists:
         if isinstance(s, S.ExprStmt) and s.expr is call:
             return lst, s, "stmt", None, None
         if isinstance(s, S.Return) and s.value is call:
@@ -294,12 +293,12 @@ def _call_statement(caller: S.Function, call: S.Call):
     return None
 
 
-def _hoist_site(caller: S.Function, call: S.Call, f: S.Function, ctx: Context):
+def _hoist_site(lists: list, call: S.Call, f: S.Function, ctx: Context):
     """``(list, statement, "hoist", None, type)`` where ``call`` sits inside the expression of a
     statement that may compute it first, into a local: evaluated every time the statement is
     (not under ``&&``, ``||`` or ``?:``), and nothing else in the statement stores anything or
     reads what the call writes."""
-    for lst, s in statement_lists(caller.body):
+    for lst, s in lists:
         if not isinstance(s, (S.ExprStmt, S.Return)) and not (isinstance(s, S.Decl) and len(s.declarators) == 1):
             continue
         if not any(n is call for n in walk(s)):
@@ -353,7 +352,9 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         if len(rets) != 1 or not body or body[-1] is not rets[0] or rets[0].value is None:
             return False
         ret, body = clone(rets[0].value), body[:-1]
-    site = _call_statement(caller, call) or _hoist_site(caller, call, f, ctx)
+    everything = walk(caller)                 # (the caller, its parameters and its body)
+    lists = [(n.body, s) for n in everything if type(n) is S.Block for s in n.body]   # (statement_lists)
+    site = _call_statement(lists, call) or _hoist_site(lists, call, f, ctx)
     if site is None:
         return False
     lst, stmt, form, target, typ = site
@@ -372,7 +373,6 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     declared = {n.name for n in walk(block) if isinstance(n, S.Declarator)}
     if declared & set(params):
         return False                          # a local shadowing a parameter
-    everything = walk(caller)                 # (the caller, its parameters and its body)
     caller_declared = {n.name for n in everything if type(n) in (S.Param, S.Declarator)}
     caller_names = {n.name for n in everything if type(n) is S.Name} - {"true", "false"} | caller_declared \
         | {n.func for n in everything if type(n) is S.Call}
@@ -384,6 +384,13 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         while target in caller_names or target in ctx.functions or (target in body_ids and not own):
             target, k = f"{stem}{k}", k + 1
     written = writes(block, ctx)
+    # what the body (and the returned value) does with each name: reads, reads as a field's or
+    # element's base, reads inside a loop
+    inner = walk(block) + (walk(ret) if ret is not None else [])
+    reads = Counter(n.name for n in inner if type(n) is S.Name)
+    based = {x.base.name for x in inner if isinstance(x, (S.Member, S.Index)) and isinstance(x.base, S.Name)}
+    looped = {n.name for x in walk(block) if isinstance(x, (S.For, S.While))
+              for n in walk(x) if type(n) is S.Name}
     args = call.args
     out_bases = {root_name(a) for p, a in zip(f.params, args) if p.mode != "in"}
     subst: dict = {}
@@ -406,11 +413,8 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
         b = _bare(a)
         simple = _lvalue(b) and all(isinstance(x, (S.Name, S.Member)) for x in walk(b)) or isinstance(b, S.Num) \
             or (isinstance(b, S.Unary) and b.op == "-" and isinstance(b.operand, S.Num))
-        uses = _count(block, p.name) + (_count(ret, p.name) if ret is not None else 0)
-        based = any(isinstance(x, (S.Member, S.Index)) and isinstance(x.base, S.Name) and x.base.name == p.name
-                    for x in walk(S.Block(block.body + ([S.Return(ret)] if ret is not None else []))))
-        looped = any(isinstance(x, (S.For, S.While)) and _count(x, p.name) for x in walk(block))
-        if (simple or (uses <= 1 and not based and not looped and not calls(a) & set(ctx.functions))) \
+        if (simple or (reads[p.name] <= 1 and p.name not in based and p.name not in looped
+                       and not calls(a) & set(ctx.functions))) \
                 and not (arg_ids & out_bases) \
                 and not (arg_ids & written & ctx.globals_):
             subst[p.name] = a
@@ -431,11 +435,13 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     arg_names = {n for a in subst.values() for n in names(a)}
     taken = caller_names | body_ids | arg_names
     loop_vars = _loop_vars(walk(block)) - {p.name for p, _ in prelude} - (caller_declared - _loop_vars(everything))
-    outer_loops = {d.name for n in everything if isinstance(n, S.For) and isinstance(n.init, S.Decl)
-                   and any(x is stmt for x in walk(n.body)) for d in n.init.declarators}
+    outer_loops = None
     for d in sorted(declared):
         if d in rename:
             continue
+        if d in loop_vars and d not in arg_names and outer_loops is None:
+            outer_loops = {v.name for n in everything if isinstance(n, S.For) and isinstance(n.init, S.Decl)
+                           and any(x is stmt for x in walk(n.body)) for v in n.init.declarators}
         if d in caller_names and not (d in loop_vars and d not in arg_names and d not in outer_loops):
             k = 2
             while f"{d}{k}" in taken:
@@ -492,7 +498,7 @@ def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
     """Call ``drop(f, k, sites)`` for each parameter ``k`` of each function ``f`` whose signature
     may change (defined once, not an entry point; ``sites``: its calls elsewhere, each with an
     argument per parameter); where it returns True, the parameter and its arguments go."""
-    index, changed = call_sites(unit), False
+    index, changed = ctx.sites, False
     for f in defined_once(unit).values():
         if f.name in ctx.entries:
             continue
@@ -513,8 +519,14 @@ def _each_param(unit: S.Unit, ctx: Context, drop) -> bool:
 
 def drop_unused_params(unit: S.Unit, ctx: Context) -> bool:
     """Drop the parameters a function never reads (its callers' arguments with them)."""
-    return _each_param(unit, ctx, lambda f, k, sites: f.params[k].mode == "in" and f.params[k].name not in
-                       names(f.body) and all(is_pure(c.args[k], ctx) for _, c in sites))
+    read: dict = {}                  # (a function's names: its body stays while its parameters go)
+
+    def unread(f, k, sites):
+        if id(f) not in read:
+            read[id(f)] = names(f.body)
+        return f.params[k].mode == "in" and f.params[k].name not in read[id(f)] \
+            and all(is_pure(c.args[k], ctx) for _, c in sites)
+    return _each_param(unit, ctx, unread)
 
 
 def constant_args(unit: S.Unit, ctx: Context) -> bool:
@@ -523,8 +535,8 @@ def constant_args(unit: S.Unit, ctx: Context) -> bool:
 
     def drop(f, k, sites):
         p = f.params[k]
-        if p.mode != "in" or not sites or p.name in writes(f.body, ctx) or not literal(sites[0][1].args[k]) \
-                or len({expr_glsl(_bare(c.args[k])) for _, c in sites}) != 1:
+        if p.mode != "in" or not sites or not literal(sites[0][1].args[k]) \
+                or len({expr_glsl(_bare(c.args[k])) for _, c in sites}) != 1 or p.name in writes(f.body, ctx):
             return False
         f.body = substitute(f.body, {p.name: _bare(sites[0][1].args[k])})
         return True

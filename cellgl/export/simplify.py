@@ -1,24 +1,24 @@
-"""The snippet compiler's simplification, on the syntax tree (:mod:`cellgl.export.compiler` runs
-the passes of :data:`SIMPLIFY`, after :mod:`cellgl.export.fold`'s, in its round): inside each
-function, with the def-use facts of :mod:`cellgl.export.tree`, declarations split, dead locals and
-stores removed, copies propagated, bare blocks spliced, declarations merged with their first
-store, literals forwarded, loop variables moved into their loop, a store folded into the next
-statement, and the identities that give the same value for every IEEE-754 input (``x * 1.0``,
-``x - 0.0``, ``mix(a, b, 0.0)``; not ``x + 0.0``: ``-0.0 + 0.0`` is ``+0.0``, nor ``x + 0.0 * y``:
-NaN for an infinite ``y``); parentheses that change nothing dropped. Each pass says what it does.
+"""The snippet compiler's simplification, on the syntax tree: function passes (:func:`cellgl.export.fold.fold`
+runs them after the folding rules, in :mod:`cellgl.export.compiler`'s round) that use the def-use
+facts of :class:`cellgl.export.fold.Facts`, and the identities that give the same value for every
+IEEE-754 input (``x * 1.0``, ``x - 0.0``, ``mix(a, b, 0.0)``; not ``x + 0.0``: ``-0.0 + 0.0`` is
+``+0.0``, nor ``x + 0.0 * y``: NaN for an infinite ``y``). Each pass says what it does.
 """
 from __future__ import annotations
 
 from bisect import bisect_left
+from copy import copy
 
 from cellgl.export import syntax as S
-from cellgl.export.fold import Facts, function_pass
+from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops,
+                                 _inline_constants, _local_constants, rewriting, rule)
 from cellgl.export.printer import expr_glsl
-from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, replaced, rewrite, root, transform, walk
+from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, root, transform, walk
 from cellgl.export.values import value
 
 __all__ = ["split_declarations", "dead_locals", "last_stores", "copies", "bare_blocks", "merge_declarations",
-           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY"]
+           "forward_literals", "loop_variables", "store_into_next", "identities", "parentheses", "SIMPLIFY",
+           "EXPRESSIONS"]
 
 
 def _store(s):
@@ -50,7 +50,6 @@ def _single(s):
     return s.declarators[0] if ok else None
 
 
-@function_pass
 def split_declarations(fn: S.Function, facts: Facts) -> bool:
     """``vec4 a = x, b;`` -> ``vec4 a = x;`` and ``vec4 b;``."""
     changed = False
@@ -68,7 +67,6 @@ def split_declarations(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-@function_pass
 def dead_locals(fn: S.Function, facts: Facts) -> bool:
     """Remove a local that is never read (``T x = e;``, ``x = ...;``, ``x.y += ...;``,
     ``x[0] = ...;``): its declaration and the statements that store into it."""
@@ -79,8 +77,9 @@ def dead_locals(fn: S.Function, facts: Facts) -> bool:
             t, e = _store(s)
             if root(t) is not None:
                 stores[id(root(t))] = (b, s, e)
+    changed = False                 # (the facts stay a superset: a read in a dropped store keeps a local)
     for b in facts.blocks:
-        for s in b.body:
+        for s in list(b.body):
             if not (isinstance(s, S.Decl) and len(s.declarators) == 1):
                 continue
             d = s.declarators[0]
@@ -93,17 +92,17 @@ def dead_locals(fn: S.Function, facts: Facts) -> bool:
                     if any(x is st for x in sb.body):
                         _drop(sb.body, st)
                 _drop(b.body, s)
-                return True
-    return False
+                changed = True
+    return changed
 
 
-@function_pass
 def last_stores(fn: S.Function, facts: Facts) -> bool:
     """Remove a store ``x op= ...;`` to a local (or an ``in`` parameter) that nothing reads
     afterwards, outside loops."""
     pos, last = facts.order
+    changed = False                 # (the facts stay a superset: a read in a dropped store keeps a store)
     for b in facts.blocks:
-        for s in b.body:
+        for s in list(b.body):
             t, e = _store(s)
             r = root(t)
             if r is None or r.name not in facts.types or id(s) in facts.in_loops \
@@ -114,11 +113,10 @@ def last_stores(fn: S.Function, facts: Facts) -> bool:
                     or not _pure_store(e, facts.ctx):
                 continue
             _drop(b.body, s)
-            return True
-    return False
+            changed = True
+    return changed
 
 
-@function_pass
 def copies(fn: S.Function, facts: Facts) -> bool:
     """``float y = x;`` (``x`` a variable of the same type), with ``y`` never written again and
     ``x`` not after it: every ``y`` becomes ``x``."""
@@ -150,7 +148,6 @@ def copies(fn: S.Function, facts: Facts) -> bool:
     return False
 
 
-@function_pass
 def bare_blocks(fn: S.Function, facts: Facts) -> bool:
     """``{ stmts }`` standing alone in a block -> ``stmts``, where no name it declares is used
     outside it (an empty one goes)."""
@@ -177,15 +174,16 @@ def _mentions(node, name: str) -> bool:
     return any(isinstance(n, S.Name) and n.name == name for n in walk(node))
 
 
-@function_pass
 def merge_declarations(fn: S.Function, facts: Facts) -> bool:
     """``T x; ... x = e;`` (x unused between, in the same block) -> ``... T x = e;``."""
+    changed = False
     for b in facts.blocks:
-        for k, s in enumerate(b.body):
+        k = 0
+        while k < len(b.body):
+            s = b.body[k]
             d = _single(s)
-            if d is None or d.init is not None or s.const:
-                continue
-            j = next((i for i in range(k + 1, len(b.body)) if _mentions(b.body[i], d.name)), None)
+            j = None if d is None or d.init is not None or s.const else \
+                next((i for i in range(k + 1, len(b.body)) if _mentions(b.body[i], d.name)), None)
             t = b.body[j] if j is not None else None
             if isinstance(t, S.ExprStmt) and isinstance(t.expr, S.Assign) and t.expr.op == "=" \
                     and isinstance(t.expr.target, S.Name) and t.expr.target.name == d.name \
@@ -193,8 +191,10 @@ def merge_declarations(fn: S.Function, facts: Facts) -> bool:
                 b.body[j] = S.Decl(s.type, [S.Declarator(d.name, None, t.expr.value)], False,
                                    s.comments + t.comments, t.trail)
                 del b.body[k]
-                return True
-    return False
+                changed = True
+            else:
+                k += 1
+    return changed
 
 
 def _path(e):
@@ -246,7 +246,6 @@ def _forward(e, target, lit) -> tuple[object, bool]:
     return transform(e, sub), bool(hits)
 
 
-@function_pass
 def forward_literals(fn: S.Function, facts: Facts) -> bool:
     """``x = 0; bool b = x > 9; if (!b) {`` -> ``bool b = 0 > 9; if (!b) {``: a literal just stored
     (``x`` a local or a field) read in its place by the next straight-line statements and
@@ -306,7 +305,6 @@ def forward_literals(fn: S.Function, facts: Facts) -> bool:
     return changed
 
 
-@function_pass
 def loop_variables(fn: S.Function, facts: Facts) -> bool:
     """``int i = 2; ... for (; i <= 9; i++) {...}`` with ``i`` unused after the loop (nor between)
     -> ``... for (int i = 2; i <= 9; i++) {...}``."""
@@ -334,7 +332,6 @@ def loop_variables(fn: S.Function, facts: Facts) -> bool:
     return False
 
 
-@function_pass
 def store_into_next(fn: S.Function, facts: Facts) -> bool:
     """``T y = a; y = f(y);`` (y read once there) -> ``T y = f(a);``; ``T y = a; return y;`` ->
     ``return a;``."""
@@ -437,17 +434,18 @@ def _empty(s) -> bool:
     return isinstance(s, S.Block) and not s.body
 
 
-@function_pass
-def identities(fn: S.Function, facts: Facts) -> bool:
+@rule(S.Binary, S.Call, S.Member, S.Ctor, S.ExprStmt, S.If)
+def _identities(facts: Facts):
     """Rewrite what gives the same value for every IEEE-754 input: ``x * 1.0``, ``1.0 * x``,
     ``x / 1.0``, ``x - 0.0``, statements ``x -= 0.0;``, ``x *= 1.0;``, ``x = x;``,
     ``mix(a, b, 0.0)`` -> ``a``, ``mix(2.0, b, 1.0)`` -> ``b`` (a finite literal), ``abs(x) *
     abs(x)`` -> ``x * x``, ``vec4(0.0, 0.0, 0.0, 1.0).w`` -> ``1.0``, ``uint(3)`` -> ``3u``,
     products and sums of unsigned literals, ``0u + x`` and ``ivec4(0, 0, 0, 0) + x`` -> ``x``,
     empty blocks and branches (with conditions without effects)."""
-    return replaced(fn.body, lambda n: _identity(n, facts.ctx), rewrite)
+    return lambda n: _identity(n, facts.ctx)
 
 
+identities = rewriting(_identities)
 _ARITH = {"+": 9, "-": 9, "*": 10, "/": 10}
 #: ``{node class: ((field, whole: any expression stands there bare but a ternary or an assignment),
 #: ...)}``: the places whose parentheses :func:`parentheses` looks at (besides arguments)
@@ -460,22 +458,21 @@ _PLACES = {S.Index: (("index", True), ("base", False)), S.Member: (("base", Fals
 _COMPARISONS = ("<", ">", "<=", ">=", "==", "!=")
 
 
-@function_pass
-def parentheses(fn: S.Function, facts: Facts) -> bool:
+@rule(*_PLACES, S.Call, S.Ctor, S.ArrayCtor)
+def _parentheses(facts: Facts):
     """Drop parentheses that change nothing: around an atom, around a whole argument, index,
     initialiser, stored value, returned value or condition (not a ternary), and around
     arithmetic inside arithmetic or a comparison where precedence keeps the order
     (``(a * b) + c``, ``(a + b) - c``, ``(a + b) < c``)."""
-    changed = False
-
     def bare(p, top=False):
-        nonlocal changed
         while isinstance(p, S.Paren) and (isinstance(p.inner, ATOMS) or top and not isinstance(
                 p.inner, (S.Ternary, S.Assign))):
-            changed, p = True, p.inner
+            dropped.append(p)
+            p = p.inner
         return p
 
     def fix(n):
+        dropped.clear()
         if isinstance(n, (S.Call, S.Ctor, S.ArrayCtor)):
             n.args = [bare(a, True) for a in n.args]
         for name, top in _PLACES.get(type(n), ()):
@@ -488,11 +485,18 @@ def parentheses(fn: S.Function, facts: Facts) -> bool:
                     inner = _ARITH[p.inner.op]
                     if inner > level or (inner == level and side == "left"):
                         setattr(n, side, p.inner)     # (a regrouping is not reported as a change)
-        return n
-    transform(fn.body, fix)
-    return changed
+        return copy(n) if dropped else n              # (a new node: the walk reports the change)
+    dropped: list = []
+    return fix
 
 
-#: the simplification passes, in the order of the driver's round
+parentheses = rewriting(_parentheses)
+#: one walk for the rules on single nodes: the constants written in, constant conditions and loops,
+#: the identities, the parentheses (:mod:`cellgl.export.fold`'s rules and this module's)
+EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions,
+                        _constant_loops, _identities, _parentheses)
+
+
+#: the simplification passes, in the order of the driver's round (after :data:`EXPRESSIONS`)
 SIMPLIFY = [split_declarations, dead_locals, last_stores, copies, bare_blocks, merge_declarations,
-            forward_literals, loop_variables, store_into_next, identities, parentheses]
+            forward_literals, loop_variables, store_into_next]

@@ -3,8 +3,8 @@ def-use facts (what a statement reads, writes and calls), the module's function 
 driver that runs passes to a fixed point.
 
 A pass is a function ``pass_(unit: Unit, ctx: Context) -> bool``: it changes the tree in place
-and returns whether it changed anything. :func:`fixed_point` runs a list of passes round after
-round until a round changes nothing, or raises after ``max_rounds``.
+and returns whether it changed anything. :func:`fixed_point` runs a list of passes until they
+settle (:func:`settle`), or raises after ``max_rounds`` rounds.
 """
 from __future__ import annotations
 
@@ -14,8 +14,8 @@ from cellgl.export import syntax as S
 from cellgl.export.translate.tokens import TranslateError
 
 __all__ = ["children", "walk", "transform", "root", "root_name", "writes", "calls", "Context", "fixed_point",
-           "replaced", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "occurrences",
-           "paren", "rewrite", "CHILD_FIELDS"]
+           "settle", "clone", "EXPRESSIONS", "STATEMENTS", "OUT_BUILTINS", "ATOMS", "is_pure", "scan",
+           "paren", "CHILD_FIELDS"]
 
 #: expression node classes
 EXPRESSIONS = (S.Num, S.Name, S.Call, S.Ctor, S.ArrayCtor, S.Unary, S.IncDec, S.Binary, S.Assign,
@@ -66,7 +66,8 @@ def walk(node) -> list:
 def transform(node, fn):
     """Rewrite the tree below ``node`` bottom-up: each child ``c`` is replaced by ``fn(c)``
     (``fn`` returns ``c`` itself to keep it; in a list, ``None`` deletes it and a Python list
-    splices several nodes in). Returns ``fn(node)``."""
+    splices several nodes in; a list of statements (or ``[]``) for an ``if``'s branch or a loop's
+    body becomes a block there, an empty ``else`` goes). Returns ``fn(node)``."""
     for name, many in CHILD_FIELDS[type(node)]:
         v = getattr(node, name)
         if many:
@@ -82,22 +83,12 @@ def transform(node, fn):
                 v[:] = out
         elif v is not None:
             y = transform(v, fn)
+            if type(y) is list:
+                y = None if not y and name == "other" else y[0] if len(y) == 1 and isinstance(y[0], S.Block) \
+                    else S.Block(y)
             if y is not v:
                 setattr(node, name, y)
     return fn(node)
-
-
-def replaced(root, fn, apply=transform) -> bool:
-    """``apply(root, fn)`` (:func:`transform`, or :func:`rewrite`); whether ``fn`` replaced a node."""
-    changed = False
-
-    def g(n):
-        nonlocal changed
-        out = fn(n)
-        changed = changed or out is not n
-        return out
-    apply(root, g)
-    return changed
 
 
 def clone(node):
@@ -138,8 +129,8 @@ def calls(node) -> set[str]:
 class Context:
     """What the passes know of the module: its entry points, the functions they must keep, the
     functions by name, and which functions have effects beyond their return value (they write
-    an ``out``/``inout`` parameter or a global, or call one that does). Rebuilt with
-    :meth:`refresh` after a pass changes the set of functions or their signatures."""
+    an ``out``/``inout`` parameter or a global, or call one that does), and where each function is
+    called. Rebuilt with :meth:`refresh` after a pass changes the tree (the driver does)."""
 
     entries: tuple = ()
     keep: frozenset = frozenset()
@@ -148,14 +139,22 @@ class Context:
     functions: dict = field(default_factory=dict)      # name -> Function with a body
     globals_: set = field(default_factory=set)
     impure: set = field(default_factory=set)
+    sites: dict = field(default_factory=dict)          # name -> [(Function, Call), ...]: every call
 
     def refresh(self, unit: S.Unit) -> "Context":
-        self.functions = {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None}
+        bodies = [it for it in unit.items if isinstance(it, S.Function) and it.body is not None]
+        self.functions = {f.name: f for f in bodies}
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}
-        direct, called = set(), {}
-        for f in self.functions.values():
-            nodes = walk(f.body)
-            called[f.name] = {n.func for n in nodes if type(n) is S.Call}
+        direct, called, self.sites = set(), {}, {}
+        for f in bodies:
+            nodes, calls_ = walk(f.body), []
+            for n in nodes:
+                if type(n) is S.Call:
+                    self.sites.setdefault(n.func, []).append((f, n))
+                    calls_.append(n.func)
+            if self.functions[f.name] is not f:
+                continue                               # (an overload: the table holds the last)
+            called[f.name] = set(calls_)
             if any(p.mode != "in" for p in f.params) or writes(nodes, self) & self.globals_:
                 direct.add(f.name)
         self.impure = direct                       # and, to a fixed point, what calls one of them
@@ -175,13 +174,14 @@ def writes(node, ctx: Context | None = None) -> set[str]:
     arguments passed to ``out``/``inout`` parameters of the module's functions."""
     out = set()
     for n in node if type(node) is list else walk(node):
-        if isinstance(n, S.Assign):
+        t = type(n)
+        if t is S.Assign:
             out.add(root_name(n.target))
-        elif isinstance(n, S.IncDec):
+        elif t is S.IncDec:
             out.add(root_name(n.operand))
-        elif isinstance(n, S.Declarator):
+        elif t is S.Declarator:
             out.add(n.name)
-        elif ctx is not None and isinstance(n, S.Call):
+        elif t is S.Call and ctx is not None:
             for k in ctx.out_positions(n.func):
                 if k < len(n.args):
                     out.add(root_name(n.args[k]))
@@ -189,24 +189,36 @@ def writes(node, ctx: Context | None = None) -> set[str]:
     return out
 
 
-def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> int:
-    """Run ``passes`` over ``unit`` round after round until a whole round changes nothing;
-    return the number of rounds. Raises :class:`TranslateError` naming the passes still
-    changing the tree after ``max_rounds`` rounds (a pass undoes another)."""
+def settle(passes, apply, max_rounds: int, failure: str) -> bool:
+    """``apply(p) -> changed`` for each pass of ``passes`` in turn, round after round, until every
+    pass has run once since the last change (from there on they would see the same tree and facts
+    again); whether any changed. Raises :class:`TranslateError` with ``failure`` and the passes
+    still changing after ``max_rounds`` rounds (a pass undoes another)."""
+    quiet, recent, changed = 0, [], False
+    for run in range(max_rounds * len(passes)):
+        p = passes[run % len(passes)]
+        if apply(p):
+            changed, quiet, recent = True, 0, (recent + [getattr(p, "__name__", repr(p))])[-len(passes):]
+        else:
+            quiet += 1
+            if quiet == len(passes):
+                return changed
+    raise TranslateError(f"{failure} (still changing: {', '.join(recent)}): a pass undoes another")
+
+
+def fixed_point(unit: S.Unit, passes, ctx: Context, max_rounds: int = 64) -> bool:
+    """Run the tree passes ``passes`` over ``unit`` (:func:`settle`), ``ctx`` refreshed after a
+    pass that changed the tree."""
     stale = True
-    for rounds in range(1, max_rounds + 1):
-        changed = []
-        for p in passes:
-            if stale:                     # (a pass that changed nothing left the facts true)
-                ctx.refresh(unit)
-            stale = bool(p(unit, ctx))
-            if stale:
-                changed.append(getattr(p, "__name__", repr(p)))
-        if not changed:
-            return rounds
-    raise TranslateError(f"the snippet compiler did not settle in {max_rounds} rounds of its passes "
-                         f"(entry points {', '.join(ctx.entries)}; still changing: {', '.join(changed)}): "
-                         "a pass undoes another")
+
+    def apply(p):
+        nonlocal stale
+        if stale:
+            ctx.refresh(unit)
+        stale = bool(p(unit, ctx))
+        return stale
+    return settle(passes, apply, max_rounds, f"the snippet compiler did not settle in {max_rounds} rounds of "
+                  f"its passes (entry points {', '.join(ctx.entries)})")
 
 
 # --------------------------------------------------------------------------------------------
@@ -238,57 +250,47 @@ def is_pure(node, ctx: Context | None) -> bool:
     return True
 
 
-def _occurrences(n, out, ctx, role=None):
-    """:func:`occurrences` below ``n``, read (``role`` None) or stored into (``role``)."""
-    if isinstance(n, S.Name):
-        out.setdefault(n.name, []).append((n, role or "read"))
-    elif role and isinstance(n, S.Paren):
-        _occurrences(n.inner, out, ctx, role)
-    elif role and isinstance(n, (S.Member, S.Index)):
-        _occurrences(n.base, out, ctx, "part" if role == "store" else role)
-        if isinstance(n, S.Index):
-            _occurrences(n.index, out, ctx)
-    elif isinstance(n, S.Assign):
-        _occurrences(n.target, out, ctx, "store" if n.op == "=" else "update")
-        _occurrences(n.value, out, ctx)
-    elif isinstance(n, S.IncDec):
-        _occurrences(n.operand, out, ctx, "update")
-    elif isinstance(n, S.Call):
+def _scan(n, role, nodes, last, occ, ctx):
+    """:func:`scan` below ``n``, read (``role`` None) or stored into (``role``)."""
+    nodes.append(n)
+    t = type(n)
+    if t is S.Name:
+        occ.setdefault(n.name, []).append((n, role or "read"))
+    elif role and t is S.Paren:
+        _scan(n.inner, role, nodes, last, occ, ctx)
+    elif role and (t is S.Member or t is S.Index):
+        _scan(n.base, "part" if role == "store" else role, nodes, last, occ, ctx)
+        if t is S.Index:
+            _scan(n.index, None, nodes, last, occ, ctx)
+    elif t is S.Assign:
+        _scan(n.target, "store" if n.op == "=" else "update", nodes, last, occ, ctx)
+        _scan(n.value, None, nodes, last, occ, ctx)
+    elif t is S.IncDec:
+        _scan(n.operand, "update", nodes, last, occ, ctx)
+    elif t is S.Call:
         modes = _out_modes(n, ctx)
         for k, a in enumerate(n.args):
-            _occurrences(a, out, ctx, {"out": "store", "inout": "update"}.get(modes.get(k)))
+            _scan(a, {"out": "store", "inout": "update"}.get(modes.get(k)), nodes, last, occ, ctx)
     else:
         for c in children(n):
-            _occurrences(c, out, ctx)
+            _scan(c, None, nodes, last, occ, ctx)
+    last[id(n)] = len(nodes) - 1
 
 
-def occurrences(root, ctx: Context | None = None) -> dict:
-    """``{name: [(Name node, role), ...]}`` of every variable named below ``root``, in source
-    order. ``role``: ``"read"``; ``"store"`` (``x = ...``, or an ``out`` argument); ``"part"``
-    (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"`` (read and written:
-    ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
-    out: dict = {}
-    _occurrences(root, out, ctx)
-    return out
+def scan(root, ctx: Context | None = None) -> tuple[list, dict, dict]:
+    """The def-use facts of the tree below ``root``, from one walk: ``(nodes, last, occ)``:
+    ``nodes`` as :func:`walk` lists them; ``last`` ``{id(node): the position in nodes of the last
+    node below it}``; ``occ`` ``{name: [(Name node, role), ...]}`` of every variable named, in
+    source order, ``role`` one of ``"read"``; ``"store"`` (``x = ...``, or an ``out``
+    argument); ``"part"`` (a store to part of it: ``x.y = ...``, ``x[i] = ...``); ``"update"``
+    (read and written: ``x += ...``, ``x++``, an ``inout`` argument, ``x.y += ...``)."""
+    nodes: list = []
+    last: dict = {}
+    occ: dict = {}
+    _scan(root, None, nodes, last, occ, ctx)
+    return nodes, last, occ
 
 
 def paren(e):
     """``e``, in parentheses unless it is an atom (a name, literal, call, member or index)."""
     return e if isinstance(e, ATOMS) else S.Paren(e)
-
-
-_SLOTS = {S.If: ("then", "other"), S.For: ("body",), S.While: ("body",)}
-
-
-def rewrite(root, fn):
-    """:func:`transform` where ``fn`` may also return a list of statements (or ``[]``) for a
-    statement that is an ``if``'s branch or a loop's body: they become a block there (an empty
-    ``else`` goes)."""
-    def g(n):
-        for a in _SLOTS.get(type(n), ()):
-            v = getattr(n, a)
-            if isinstance(v, list):
-                setattr(n, a, None if not v and a == "other" else v[0] if len(v) == 1 and isinstance(v[0], S.Block)
-                        else S.Block(v))
-        return fn(n)
-    return transform(root, g)
