@@ -185,6 +185,44 @@ def test_resolve_library_rejects_version(tmp_path):
         glsl.resolve_library(["lib/v.glsl"], root=tmp_path)
 
 
+def test_a_template_is_included_each_time(tmp_path):
+    """A file marked `#pragma cellgl include_each_time` (lib/ring_loop.glsl) comes in at every
+    #include, its names set by the includer's #defines; the marker line is dropped, the line map
+    still points at the template's lines, and ordinary files still come in once."""
+    write(tmp_path, {
+        "m.comp": ("#version 430\n"
+                   '#include "lib/a.glsl"\n'
+                   "#define NAME first\n"
+                   '#include "lib/t.glsl"\n'
+                   "#define NAME second\n"
+                   '#include "lib/t.glsl"\n'),
+        "lib/a.glsl": "float a() { return 1.0; }\n",
+        "lib/t.glsl": ("// a template\n"
+                       "#pragma cellgl include_each_time  // the marker\n"
+                       '#include "a.glsl"\n'
+                       "float NAME() { return a(); }\n"
+                       "#undef NAME\n"),
+    })
+    src = glsl.load("m.comp", root=tmp_path)
+    lines = lines_of(src)
+    assert lines.count("float NAME() { return a(); }") == 2
+    assert lines.count("float a() { return 1.0; }") == 1
+    assert not any("pragma" in ln for ln in lines)
+    assert src.files == ["m.comp", "lib/a.glsl", "lib/t.glsl"]
+    at = [src.origin(k + 1) for k, ln in enumerate(lines) if ln.startswith("float NAME")]
+    assert at == [("lib/t.glsl", 4), ("lib/t.glsl", 4)]
+    lib = glsl.resolve_library(["lib/t.glsl", "lib/t.glsl"], root=tmp_path)
+    assert lines_of(lib).count("float NAME() { return a(); }") == 2
+
+
+def test_a_template_including_itself_is_an_error(tmp_path):
+    write(tmp_path, {"m.comp": '#include "lib/t.glsl"\n',
+                     "lib/t.glsl": '#pragma cellgl include_each_time\n#include "u.glsl"\n',
+                     "lib/u.glsl": '#include "t.glsl"\n'})
+    with pytest.raises(glsl.ShaderError, match=r"lib/u\.glsl:1: 'lib/t\.glsl' .* includes itself"):
+        glsl.load("m.comp", root=tmp_path)
+
+
 def test_shader_dir_monkeypatch_is_used(tree, monkeypatch):
     monkeypatch.setattr(glsl, "shader_dir", lambda: tree)
     assert glsl.load("main.comp").files[0] == "main.comp"
