@@ -263,3 +263,16 @@ def test_map_error_leaves_unknown_lines(src):
 def test_map_error_inside_moderngl_message(src):
     msg = "GLSL Compiler failed\n\ncompute_shader\n==============\n0:6(14): error: `foo' undeclared\n"
     assert "lib/b.glsl:3(14): error: `foo' undeclared" in glsl.map_error(msg, src)
+
+
+def test_the_search_and_the_walks_share_one_ring_loop():
+    """shaders/lib: the ring loop is written once (ring_loop.glsl), the search's and the walks'
+    instances of it come from that file's lines, each under its walker's name."""
+    walks = glsl.resolve_library(["lib/features.glsl"])
+    search = glsl.resolve_library(["lib/cellular.glsl"])
+    assert lines_of(walks).count("// begin lib/ring_loop.glsl") == 2
+    assert lines_of(search).count("// begin lib/ring_loop.glsl") == 1
+    heads = [k for k, ln in enumerate(lines_of(walks)) if ln.startswith("void _CELL_RINGS(")]
+    assert [walks.origin(k + 1)[0] for k in heads] == ["lib/ring_loop.glsl"] * 2
+    names = [ln.split()[2] for ln in lines_of(walks) if ln.startswith("#define _CELL_RINGS ")]
+    assert names == ["_cell_search_rings", "_cell_walk_ring_loop"]
