@@ -43,8 +43,9 @@
 #include "walk.glsl"
 
 // The ring loop of every walker: rings `ring`, ring + 1, ... up to `last`.
-// Then `ring` is the first ring not walked (the rings past it cannot matter, or
-// it is past `last`), and `spent` whether the loop budget stopped the walker.
+// Then `ring` is the first ring not walked (the rings from it on cannot matter,
+// it is past `last`, or the budget stopped the walk), and `spent` whether the
+// loop budget stopped the walker.
 // sh, qn: the order of the table and the sample in its frame
 // (_CELL_RINGS_TABLE; _cell_ring1_order).
 void _CELL_RINGS(inout _CELL_RINGS_STATE s, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
