@@ -185,6 +185,44 @@ def test_resolve_library_rejects_version(tmp_path):
         glsl.resolve_library(["lib/v.glsl"], root=tmp_path)
 
 
+def test_a_template_is_included_each_time(tmp_path):
+    """A file marked `#pragma cellgl include_each_time` (lib/ring_loop.glsl) comes in at every
+    #include, its names set by the includer's #defines; the marker line is dropped, the line map
+    still points at the template's lines, and ordinary files still come in once."""
+    write(tmp_path, {
+        "m.comp": ("#version 430\n"
+                   '#include "lib/a.glsl"\n'
+                   "#define NAME first\n"
+                   '#include "lib/t.glsl"\n'
+                   "#define NAME second\n"
+                   '#include "lib/t.glsl"\n'),
+        "lib/a.glsl": "float a() { return 1.0; }\n",
+        "lib/t.glsl": ("// a template\n"
+                       "#pragma cellgl include_each_time  // the marker\n"
+                       '#include "a.glsl"\n'
+                       "float NAME() { return a(); }\n"
+                       "#undef NAME\n"),
+    })
+    src = glsl.load("m.comp", root=tmp_path)
+    lines = lines_of(src)
+    assert lines.count("float NAME() { return a(); }") == 2
+    assert lines.count("float a() { return 1.0; }") == 1
+    assert not any("pragma" in ln for ln in lines)
+    assert src.files == ["m.comp", "lib/a.glsl", "lib/t.glsl"]
+    at = [src.origin(k + 1) for k, ln in enumerate(lines) if ln.startswith("float NAME")]
+    assert at == [("lib/t.glsl", 4), ("lib/t.glsl", 4)]
+    lib = glsl.resolve_library(["lib/t.glsl", "lib/t.glsl"], root=tmp_path)
+    assert lines_of(lib).count("float NAME() { return a(); }") == 2
+
+
+def test_a_template_including_itself_is_an_error(tmp_path):
+    write(tmp_path, {"m.comp": '#include "lib/t.glsl"\n',
+                     "lib/t.glsl": '#pragma cellgl include_each_time\n#include "u.glsl"\n',
+                     "lib/u.glsl": '#include "t.glsl"\n'})
+    with pytest.raises(glsl.ShaderError, match=r"lib/u\.glsl:1: 'lib/t\.glsl' .* includes itself"):
+        glsl.load("m.comp", root=tmp_path)
+
+
 def test_shader_dir_monkeypatch_is_used(tree, monkeypatch):
     monkeypatch.setattr(glsl, "shader_dir", lambda: tree)
     assert glsl.load("main.comp").files[0] == "main.comp"
@@ -225,3 +263,16 @@ def test_map_error_leaves_unknown_lines(src):
 def test_map_error_inside_moderngl_message(src):
     msg = "GLSL Compiler failed\n\ncompute_shader\n==============\n0:6(14): error: `foo' undeclared\n"
     assert "lib/b.glsl:3(14): error: `foo' undeclared" in glsl.map_error(msg, src)
+
+
+def test_the_search_and_the_walks_share_one_ring_loop():
+    """shaders/lib: the ring loop is written once (ring_loop.glsl), the search's and the walks'
+    instances of it come from that file's lines, each under its walker's name."""
+    walks = glsl.resolve_library(["lib/features.glsl"])
+    search = glsl.resolve_library(["lib/cellular.glsl"])
+    assert lines_of(walks).count("// begin lib/ring_loop.glsl") == 2
+    assert lines_of(search).count("// begin lib/ring_loop.glsl") == 1
+    heads = [k for k, ln in enumerate(lines_of(walks)) if ln.startswith("void _CELL_RINGS(")]
+    assert [walks.origin(k + 1)[0] for k in heads] == ["lib/ring_loop.glsl"] * 2
+    names = [ln.split()[2] for ln in lines_of(walks) if ln.startswith("#define _CELL_RINGS ")]
+    assert names == ["_cell_search_rings", "_cell_walk_ring_loop"]

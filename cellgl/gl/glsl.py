@@ -8,7 +8,11 @@ Rules
 -----
 - ``#include "path"`` is relative to the directory of the including file.
 - Each file is included at most once per :class:`Source`; later includes emit nothing, so an
-  include cycle is harmless.
+  include cycle is harmless. A file holding the line ``#pragma cellgl include_each_time`` is the
+  exception: a template (e.g. ``lib/ring_loop.glsl``, the ring loop of every walker, whose names
+  its includer sets with ``#define`` before each ``#include``), its text emitted at every
+  ``#include``. The marker line itself is not emitted (neither a driver nor the snippet
+  exporter sees it); such a file including itself, directly or not, is an error.
 - Each included file is wrapped in ``// begin <relpath>`` / ``// end <relpath>`` lines.
 - Included (library) files must not contain ``#version``.
 - ``#define KEY VALUE`` lines go immediately after the ``#version`` line of the entry file, or
@@ -41,6 +45,7 @@ DEFINES_FILE = "<defines>"
 _INCLUDE_RE = re.compile(r'^\s*#\s*include\s+(?:"([^"]*)"|<([^>]*)>)\s*(?://.*)?$')
 _INCLUDE_LOOSE_RE = re.compile(r"^\s*#\s*include\b")
 _VERSION_RE = re.compile(r"^\s*#\s*version\b")
+_EACH_TIME_RE = re.compile(r"^\s*#\s*pragma\s+cellgl\s+include_each_time\s*(?://.*)?$", re.M)
 _IDENT_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 
 
@@ -130,6 +135,7 @@ class _Resolver:
         self.root = root
         self.virtual = dict(files or {})
         self.seen: set[str] = set()
+        self.open: list[str] = []          # the files being included, outermost first
         self.files: list[str] = []
         self.lines: list[str] = []
         self.line_map: list[tuple[str, int]] = []
@@ -154,9 +160,15 @@ class _Resolver:
         rel = posixpath.normpath(rel)
         if rel in self.seen:
             return
-        self.seen.add(rel)
         text = self._read(rel, where)
-        self.files.append(rel)
+        each_time = _EACH_TIME_RE.search(text) is not None
+        if each_time and rel in self.open:
+            raise ShaderError(f"{where}: {rel!r} (#pragma cellgl include_each_time) includes itself")
+        if not each_time:
+            self.seen.add(rel)
+        if rel not in self.files:
+            self.files.append(rel)
+        self.open.append(rel)
         mark_at = at if at is not None else (rel, 0)
         if markers:
             self.lines.append(f"// begin {rel}")
@@ -176,6 +188,8 @@ class _Resolver:
                 continue
             if _INCLUDE_LOOSE_RE.match(line):
                 raise ShaderError(f'{rel}:{num}: malformed #include, expected #include "path"')
+            if each_time and _EACH_TIME_RE.match(line):
+                continue
             if is_library and _VERSION_RE.match(line):
                 raise ShaderError(
                     f"{rel}:{num}: library files must not contain #version "
@@ -186,6 +200,7 @@ class _Resolver:
         if markers:
             self.lines.append(f"// end {rel}")
             self.line_map.append(mark_at)
+        self.open.pop()
 
     def source(self) -> Source:
         return Source("\n".join(self.lines) + "\n", self.line_map, self.files)

@@ -323,62 +323,48 @@ void _cell_search_ring1_all(inout CellResult r, ivec4 cell, vec4 f, CellParams p
 #endif
 
 #if _CELL_NESTED
-// Rings `ring`, ring + 1, ... of cell_search_budget as nested loops: one pass of the
-// outer loop per ring, of the inner one per cell (the first pass: what is left of
-// ring 1, `cells` passes over the window lo .. hi or the table in the order sh).
-#if _CELL_RING1_TABLE
-void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
-                         inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells, ivec4 sh, vec4 qn)
-#else
-void _cell_search_nested(inout CellResult r, ivec4 cell, vec4 f, CellParams p, float m, vec4 ma, inout int ring,
-                         inout bool spent, inout ivec4 lo, inout ivec4 hi, inout int cells)
-#endif
+// Rings 1, 2, ... of cell_search_budget as the ring loop of every walker
+// (ring_loop.glsl), with the search's hooks: ring 1 the loop's first pass (what
+// is left of it: its table in the order sh, its last cell, or, 4D pruned, its
+// window), each later ring its window of cells that can reach; a cell visited
+// when it can hold a point nearer than F_n; on while a point past the rings
+// done can be (_cell_ring_bound).
+int _cell_search_ring_window(int ring, CellResult r, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
 {
-#if _CELL_RING1_TABLE && CELL_RING1_PRUNE
-    // The table's least box distance of each tail (as cell_search_budget's 3D ring 1).
-    float rest[CELL_RING1_CELLS + 1];
-    rest[CELL_RING1_CELLS] = CELL_FAR;
-    for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
-        rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));
-    }
-#endif
-    ivec4 o = cell_window_first(lo);
-    for (;;) {
-        r.loops += 1;
-        if (ring >= _CELL_FIRST_WINDOW) {    // its window (4D pruned: ring 1 too)
-            _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
-            ivec4 n = hi - lo + 1;
-            cells = n.x * n.y * n.z * n.w;
-            o = cell_window_first(lo);
-        }
-        for (int t = 0; ; ) {
-            spent = cell_budget_spent(r.loops);      // the count only grows
-            r.loops += 1;
 #if _CELL_RING1_TABLE
-            o = ring == 1 ? _cell_ring1_offset(min(t, CELL_RING1_CELLS - 1), sh) : cell_window_next(o, lo, hi);
+    lo = ivec4(0);
+    int cells = CELL_RING1_CELLS;     // the table
 #else
-            o = cell_window_next(o, lo, hi);
+    lo = _cell_axes;                  // its last cell (the rest: _cell_search_ring1_all)
+    int cells = 1;
 #endif
-            ivec4 ao = abs(o);
-            if (!spent && max(max(ao.x, ao.y), max(ao.z, ao.w)) == ring
-                && _cell_box_distance(o, f, p) < r.F[CELL_N - 1]) {
-                _cell_visit(r, cell, f, o, p);
-            }
-            t++;
-#if _CELL_RING1_TABLE && CELL_RING1_PRUNE
-            if (t >= cells || spent || (ring == 1 && rest[min(t, CELL_RING1_CELLS)] >= r.F[CELL_N - 1])) {
-#else
-            if (t >= cells || spent) {
-#endif
-                break;
-            }
-        }
-        ring++;
-        if (ring > CELL_MAX_RING || spent || _cell_ring_bound(float(ring - 1), m, ma, p) >= r.F[CELL_N - 1]) {
-            break;
-        }
+    hi = lo;
+    if (ring >= _CELL_FIRST_WINDOW) {    // its window (4D pruned: ring 1 too)
+        _cell_search_window(ring, r.F[CELL_N - 1], f, p, lo, hi);
+        ivec4 n = hi - lo + 1;
+        cells = n.x * n.y * n.z * n.w;
     }
+    return cells;
 }
+
+float _cell_search_bound(CellResult r, CellParams p)
+{
+    return r.F[CELL_N - 1];
+}
+
+bool _cell_search_past(CellResult r, int rings, float m, vec4 ma, CellParams p)
+{
+    return _cell_ring_bound(float(rings), m, ma, p) >= r.F[CELL_N - 1];
+}
+
+#define _CELL_RINGS _cell_search_rings
+#define _CELL_RINGS_STATE CellResult
+#define _CELL_RINGS_WINDOW _cell_search_ring_window
+#define _CELL_RINGS_BOUND _cell_search_bound
+#define _CELL_RINGS_PAST _cell_search_past
+#define _CELL_RINGS_VISIT _cell_visit
+#define _CELL_RINGS_TABLE _CELL_RING1_TABLE
+#include "ring_loop.glsl"
 #else
 // Rings `ring`, ring + 1, ... of cell_search_budget as one flat loop over the
 // cells of the rings (the cells of each ring's window that are on the ring), on
@@ -426,22 +412,18 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     float m = cell_face_distance(f);
     vec4 ma = _cell_axis_scale(min(f, 1.0 - f), p);
 
-    // Ring 1, then rings 2, 3, ... (_cell_search_nested, _cell_search_flat).
+    // Ring 1, then rings 2, 3, ... (_cell_search_rings, _cell_search_flat).
     int ring = 1;
 #if CELL_DIM <= 3 && CELL_RING1_PRUNE
     ivec4 sh;
     vec4 qn;
     _cell_ring1_order(f, sh, qn);
-#elif _CELL_RING1_TABLE
+#else
     ivec4 sh = ivec4(0, 4, 8, 0);     // unpruned: the table as listed (_cell_search_ring1_all)
     vec4 qn = f;
 #endif
-    // The part of ring 1 before the loop below, and what is left of it, as
-    // `cells` passes over the window lo .. hi (or the table).
-#if _CELL_RING1_TABLE
-    int cells = CELL_RING1_CELLS;     // the table
-    ivec4 lo = ivec4(0), hi = lo;
-#elif CELL_RING1_PRUNE && CELL_DIM == 3
+    // The part of ring 1 before the loop below (the loop's first pass: what is left).
+#if CELL_RING1_PRUNE && CELL_DIM == 3 && !_CELL_RING1_TABLE
     // The cells' nearest possible distances in visiting order, and the least of
     // each tail: the walk leaves its loop once no cell left can beat F_n. A
     // run-time loop on purpose: in straight-line SIMD code a pruned cell still
@@ -466,20 +448,14 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
         }
     }
     ivec4 lo = ivec4(0), hi = lo;     // nothing left (ring 0)
-#elif CELL_RING1_PRUNE
-    int cells = 0;                    // 4D: ring 1 a window too, in the loop
-    ivec4 lo = ivec4(0), hi = lo;
-#else
+#elif !CELL_RING1_PRUNE && !_CELL_RING1_TABLE
     _cell_search_ring1_all(r, cell, f, p, spent);
-    int cells = 1;
-    ivec4 lo = _cell_axes, hi = lo;
+#if !_CELL_NESTED
+    ivec4 lo = _cell_axes, hi = lo;   // its last cell left
+#endif
 #endif
 #if _CELL_NESTED
-#if _CELL_RING1_TABLE
-    _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells, sh, qn);
-#else
-    _cell_search_nested(r, cell, f, p, m, ma, ring, spent, lo, hi, cells);
-#endif
+    _cell_search_rings(r, cell, f, p, m, ma, ring, CELL_MAX_RING, spent, sh, qn);
 #else
     _cell_search_flat(r, cell, f, p, m, ma, ring, spent, lo, hi);
 #endif

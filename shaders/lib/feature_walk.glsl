@@ -4,17 +4,19 @@
 // again (walk.glsl: the ring geometry, the cell source): ring by ring from
 // ring 0, each ring's window within a reach that shrinks as the walk goes
 // (_cell_walk_rings: edge, n-sphere, edge alone, every walk around the F1
-// point), or, for smooth F1 alone, whose reach does not change, rings 0 and 1
-// (tuned, CELL_WALK_TUNED: one unrolled block, _cell_walk_block) and then one
-// window loop (_cell_walk_smooth) or the rows of a Euclidean ball
-// (_cell_walk_ball, a wide reach). The ring walk and the smooth window share
-// one window loop (_cell_walk_window) and one cell visit (_cell_walk_cell);
-// what a walk does per feature point is _cell_walk_point (edge, smooth,
-// n-sphere, edge alone; smooth F1 alone in rings 2 and on, _CellWalk.far: the
-// sum alone, _cell_walk_far_point); features.glsl explains the maths and the
-// bounds that keep every walk exact.
+// point), by the search's own ring loop (ring_loop.glsl, included here with
+// the walks' state and hooks), or, for smooth F1 alone, whose reach does not
+// change, rings 0 and 1 (tuned, CELL_WALK_TUNED: one unrolled block,
+// _cell_walk_block) and then one window, every cell of it on ring 2 or beyond
+// (_cell_walk_smooth, _cell_walk_window), or the rows of a Euclidean ball
+// (_cell_walk_ball, a wide reach). Every walk visits a cell the same way
+// (_cell_walk_cell); what a walk does per feature point is _cell_walk_point
+// (edge, smooth, n-sphere, edge alone; smooth F1 alone in rings 2 and on,
+// _CellWalk.far: the sum alone, _cell_walk_far_point); features.glsl explains
+// the maths and the bounds that keep every walk exact.
 //
-// Requires: cellular.glsl (included; with it walk.glsl).
+// Requires: cellular.glsl (included; with it walk.glsl), ring_loop.glsl
+// (included, with the walks' hooks).
 // Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
 // which walks), CELL_FEATURE_MAX_RING, CELL_EDGE_ALONE, CELL_SMOOTH_EXTRA,
 // CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined, a pass of
@@ -230,13 +232,57 @@ void _cell_walk_cell(inout _CellWalk w, ivec4 cell, vec4 f, ivec4 o, CellParams 
     }
 }
 
-// The window loop of every walk: the cells of the window lo .. hi on ring
-// `ring` that can hold a point within the reach (pruned), or, unpruned, every
-// cell of it on ring `ring` or beyond (the reach fixed: each point's own test
-// decides). Tested at the bottom (a window holds a cell, hi its last); the
-// passes counted as a loop tested at the top spends them (after the budget is
-// spent the count no longer matters). Stops at the loop budget (w.spent).
-void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec4 lo, ivec4 hi, int ring, bool pruned)
+// The ring loop's hooks for the walks (ring_loop.glsl): each ring's window
+// within the reach (which shrinks as the walk goes), a cell visited when its
+// nearest possible point is within the reach, on while a point past the rings
+// done can be.
+int _cell_walk_ring_window(int ring, _CellWalk w, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
+{
+    cell_ring_window(ring, min(_cell_walk_reach(w), float(ring + 2)), f, lo, hi);
+    ivec4 n = hi - lo + 1;
+    return n.x * n.y * n.z * n.w;
+}
+
+float _cell_walk_bound(_CellWalk w, CellParams p)
+{
+    return cell_metric_term(_cell_walk_reach(w), p.minkowski_p);
+}
+
+bool _cell_walk_past(_CellWalk w, int rings, float m, vec4 ma, CellParams p)
+{
+    return float(rings) + m >= _cell_walk_reach(w);
+}
+
+#define _CELL_RINGS _cell_walk_ring_loop
+#define _CELL_RINGS_STATE _CellWalk
+#define _CELL_RINGS_WINDOW _cell_walk_ring_window
+#define _CELL_RINGS_BOUND _cell_walk_bound
+#define _CELL_RINGS_PAST _cell_walk_past
+#define _CELL_RINGS_VISIT _cell_walk_cell
+#define _CELL_RINGS_TABLE 0
+#include "ring_loop.glsl"
+
+// Visit, ring by ring, every cell that can hold a point within the reach.
+// Rings `first` .. `last` by the ring loop of every walker (the search's,
+// ring_loop.glsl), until a whole ring is beyond the reach; returns as _cell_walk.
+bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first, int last)
+{
+    float m = cell_face_distance(f);
+    int ring = first;
+    bool spent;
+    _cell_walk_ring_loop(w, cell, f, p, m, vec4(0.0), ring, last, spent, ivec4(0), vec4(0.0));
+    w.spent = spent;
+    return !spent && (ring <= last || float(last) + m >= _cell_walk_reach(w));
+}
+
+#if CELL_SMOOTH == 1 && !CELL_EDGE
+// The smooth window of smooth F1 alone (_cell_walk_smooth): every cell of the
+// window lo .. hi on ring `ring` or beyond (the reach fixed: each point's own
+// cut-off decides). Tested at the bottom (a window holds a cell, hi its last);
+// the passes counted as a loop tested at the top spends them (after the
+// budget is spent the count no longer matters). Stops at the loop budget
+// (w.spent).
+void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec4 lo, ivec4 hi, int ring)
 {
     ivec4 o = cell_window_first(lo);
     w.loops += 1;             // the pass that leaves the window loop
@@ -244,9 +290,7 @@ void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec
         w.spent = w.spent || cell_budget_spent(w.loops);
         w.loops += 1;
         o = cell_window_next(o, lo, hi);
-        if (!w.spent && (pruned ? cell_ring_of(o) == ring
-                                  && _cell_box_distance(o, f, p) < cell_metric_term(_cell_walk_reach(w), p.minkowski_p)
-                                : cell_ring_of(o) >= ring)) {
+        if (!w.spent && cell_ring_of(o) >= ring) {
             _cell_walk_cell(w, cell, f, o, p);
         }
         if (all(equal(o, hi)) || w.spent) {
@@ -255,33 +299,6 @@ void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec
     }
 }
 
-// Visit, ring by ring, every cell that can hold a point within the reach.
-// Rings `first` .. `last`, each ring's window within the reach (which shrinks as the walk
-// goes), until a whole ring is beyond it; returns as _cell_walk. The search's shape
-// (_cell_search_nested): one outer pass a ring, one inner pass a cell, both loops
-// tested at the bottom (every window holds a cell, the first ring is always
-// entered), measured 0.87-0.94x the time of top-tested loops; the passes are
-// counted as those spent them (the same budget).
-bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int first, int last)
-{
-    float m = cell_face_distance(f);
-    w.loops += 1;                 // the pass that leaves the ring loop
-    int ring = first;
-    for (;;) {
-        w.loops += 1;
-        ivec4 lo, hi;
-        cell_ring_window(ring, min(_cell_walk_reach(w), float(ring + 2)), f, lo, hi);
-        _cell_walk_window(w, cell, f, p, lo, hi, ring, true);
-        ring++;
-        if (ring > last || w.spent || float(ring - 1) + m >= _cell_walk_reach(w)) {
-            break;
-        }
-    }
-    w.loops += ring <= last ? 1 : 0;     // the pass that found the reach passed
-    return !w.spent && (ring <= last || float(last) + m >= _cell_walk_reach(w));
-}
-
-#if CELL_SMOOTH == 1 && !CELL_EDGE
 #if CELL_WALK_FAST && CELL_METRIC == CELL_METRIC_EUCLIDEAN && !CELL_ANISO
 // Smooth F1 alone with a wide reach (last >= 4 rings): only the cells of its
 // ball, row by row, not the whole (2 last + 1)^d window (the ball is 0.79 of
@@ -349,7 +366,7 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 #if _CELL_FAR_SUM
     w.far = true;
 #endif
-    _cell_walk_window(w, cell, f, p, lo, hi, 2, false);
+    _cell_walk_window(w, cell, f, p, lo, hi, 2);
     return !w.spent && float(last) + m >= reach;
 }
 #endif

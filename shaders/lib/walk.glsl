@@ -28,10 +28,10 @@
 // (cell_search_budget) so the bound holds for the invocation as a whole.
 //
 // The loops' shapes: one switch, CELL_WALK_TUNED (below). 0: the plain
-// version, one ring loop per walker: the search's rings in nested loops, one
-// outer pass a ring, one inner pass a cell of the ring's window, ring 1 the
-// first pass (2D, 3D: in the order of its table; cellular.glsl), and every
-// feature walk the ring loop from ring 0 (feature_walk.glsl). 1 (the
+// version, one ring loop for every walker (ring_loop.glsl: one outer pass a
+// ring, one inner pass a cell of the ring's window): the search's rings from
+// ring 1, its first pass (2D, 3D: in the order of its table; cellular.glsl),
+// every feature walk's from ring 0 (feature_walk.glsl). 1 (the
 // default): the shapes measured fastest on llvmpipe, chosen per case
 // (docs/performance.md): the search's ring 1 unrolled (jitter) or pruned by a
 // loop of its own (3D), its later rings one flat loop (2D jitter, 3D pruned);
