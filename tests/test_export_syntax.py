@@ -133,7 +133,8 @@ def test_libraries_with_other_structs_share_the_declarations_that_name_none():
     assert a.items[1] is b.items[2]                    # twice: parsed once
     assert a.items[2] is b.items[3] and isinstance(b.items[3].body.body[0].value, st.Ctor)
     c = st.parsed_library("struct C\n{\n    float v;\n};\n" + twice + uses)
-    assert c.items[1] is a.items[1] and isinstance(c.items[2].body.body[0].value, st.Call)   # A: no struct here
+    # A is no struct in c's library: its call parsed as one
+    assert c.items[1] is a.items[1] and isinstance(c.items[2].body.body[0].value, st.Call)
 
 
 # --------------------------------------------------------------------------------------------
