@@ -125,6 +125,18 @@ def test_the_parse_of_a_library_text_is_cached():
     assert st.parsed_library(text) == st.parse(text)
 
 
+def test_libraries_with_other_structs_share_the_declarations_that_name_none():
+    twice = "float twice(float x)\n{\n    return 2.0 * x;\n}\n"
+    uses = "A make(float x)\n{\n    return A(x);\n}\n"
+    a = st.parsed_library("struct A\n{\n    float v;\n};\n" + twice + uses)
+    b = st.parsed_library("struct A\n{\n    float v;\n};\nstruct B\n{\n    float v;\n};\n" + twice + uses)
+    assert a.items[1] is b.items[2]                    # twice: parsed once
+    assert a.items[2] is b.items[3] and isinstance(b.items[3].body.body[0].value, st.Ctor)
+    c = st.parsed_library("struct C\n{\n    float v;\n};\n" + twice + uses)
+    # A is no struct in c's library: its call parsed as one
+    assert c.items[1] is a.items[1] and isinstance(c.items[2].body.body[0].value, st.Call)
+
+
 # --------------------------------------------------------------------------------------------
 # the target printers (cellgl/export/printer.py): one test per dialect hook, exact text
 # --------------------------------------------------------------------------------------------

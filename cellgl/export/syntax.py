@@ -420,6 +420,12 @@ def parsed_library(text: str) -> Unit:
     return Unit(items, _declaration("".join(chunk), structs).trailing)
 
 
-@lru_cache(maxsize=4096)
 def _declaration(text: str, structs: frozenset) -> Unit:
+    # keyed by the struct names ``text`` may mention: the libraries of two presets declare
+    # different structs, their shared declarations hit the cache all the same
+    return _parsed_declaration(text, frozenset(s for s in structs if s in text))
+
+
+@lru_cache(maxsize=4096)
+def _parsed_declaration(text: str, structs: frozenset) -> Unit:
     return parse(text, structs)
