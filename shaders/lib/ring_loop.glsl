@@ -20,7 +20,7 @@
 // walker that had spent it before the loop finds it spent at its first pass).
 //
 // Requires: walk.glsl (included).
-// Macros (the walker's, defined before each #include):
+// Macros (the walker's, defined before each inclusion of this file):
 //   _CELL_RINGS          the function's name;
 //   _CELL_RINGS_STATE    the walker's state, a struct with `int loops`;
 //   _CELL_RINGS_WINDOW   int (int ring, STATE s, vec4 f, CellParams p, out ivec4
