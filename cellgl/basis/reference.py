@@ -288,8 +288,16 @@ def _ring_offsets(ring: int, dim: int):
 
 def _insert(F, D, I, d, delta, ids):
     """``_cell_insert`` for a batch: merge one candidate per row, keeping the
-    existing entry first on equal distances (stable sort)."""
+    existing entry first on equal distances (stable sort). Only the rows whose candidate is
+    nearer than their n-th are sorted: the others would keep their entries as they are."""
     n = F.shape[1]
+    rows = np.nonzero(d < F[:, -1])[0]
+    if len(rows) < len(d):
+        if len(rows):
+            sF, sD, sI = F[rows], D[rows], I[rows]
+            _insert(sF, sD, sI, d[rows], delta[rows], ids[rows])
+            F[rows], D[rows], I[rows] = sF, sD, sI
+        return
     allF = np.concatenate([F, d[:, None]], axis=1)
     order = np.argsort(allF, axis=1, kind="stable")[:, :n]
     F[:] = np.take_along_axis(allF, order, axis=1)
