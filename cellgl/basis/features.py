@@ -127,10 +127,22 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     state = ref.cell_seed(wc, p)
     state, count = ref.point_count(state, p, wc)
     base = o.astype(np.float64) - f[rows]
+    # point k of the cells that have one (a cell's stream steps by itself: the cells past their
+    # last point are dropped), all handed to _point at once, point-major as the shader's loop
+    at = np.arange(len(rows))
+    parts = []
     for k in range(int(count.max(initial=0))):
+        more = count[at] > k           # (worley1996 has empty cells)
+        if not more.all():
+            at, state, wc = at[more], state[more], wc[more]
         state, q, ids = ref.next_point(state, p, wc)
-        has = k < count
-        _point(w, rows[has], base[has] + q[has], ids[has], o[has], q[has], p)
+        parts.append((at, q, ids))
+    if not parts:
+        return
+    at = np.concatenate([a for a, _, _ in parts])
+    q = np.concatenate([b for _, b, _ in parts])
+    ids = np.concatenate([c for _, _, c in parts])
+    _point(w, rows[at], base[at] + q, ids, o[at], q, p)
 
 
 def _reach(w: dict, rows, on: dict) -> np.ndarray:
