@@ -161,7 +161,7 @@ def _reach(w: dict, rows, on: dict) -> np.ndarray:
 
 def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
     """``_cell_walk_point`` for candidates of the given rows (several candidates of one row
-    allowed: minima and sums are taken with ``np.minimum.at`` / ``np.add.at``)."""
+    allowed: minima are taken with ``np.minimum.at``, the smooth terms kept for :func:`_sums`)."""
     on = w["on"]
     delta = delta.copy()
     delta[:, p.dim:] = 0.0
@@ -194,18 +194,33 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
         F1 = w["F1"][rows]
         d = np.where(mine, F1, ref.metric_finish(ref.metric_length(delta, p), p))
         k = w["k"]
-        take = mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k))
-        if not take.any():
+        take = np.nonzero(mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k)))[0]
+        if not len(take):
             return
+        r, dl, dd, mt = rows[take], delta[take], d[take], mine[take]
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-            wt = np.where(mine, 1.0, np.exp((F1 - d) / k) if k > 0 else 0.0)
-        r, wt, dl, dd = rows[take], wt[take], delta[take], d[take]
-        np.add.at(w["wsum"], r, wt)
-        np.add.at(w["wdelta"], r, wt[:, None] * dl)
+            wt = np.where(mt, 1.0, np.exp((F1[take] - dd) / k) if k > 0 else 0.0)
         g = np.zeros_like(dl)
         g[:, : p.dim] = ref.metric_gradient(dl[:, : p.dim], dd, p)
-        np.add.at(w["wgrad"], r, wt[:, None] * g)
-        np.add.at(w["wattr"], r, wt[:, None] * id_attribute(ids[take]))
+        # the weighted terms, summed per row by _sums in this order (the walk reads no sum)
+        w["terms"].append((r, wt, wt[:, None] * dl, wt[:, None] * g, wt[:, None] * id_attribute(ids[take])))
+
+
+def _sums(w: dict) -> None:
+    """Sum the smooth walk's terms into ``wsum``, ``wdelta``, ``wgrad``, ``wattr``, each row's
+    in the order of the walk (as ``np.add.at`` one candidate after another: same bits)."""
+    terms = w.pop("terms", [])
+    if not terms:
+        return
+    N = len(w["wsum"])
+    r = np.concatenate([t[0] for t in terms])
+    for i, name in enumerate(("wsum", "wdelta", "wgrad", "wattr"), 1):
+        a = np.concatenate([t[i] for t in terms])
+        if a.ndim == 1:
+            w[name] = w[name] + np.bincount(r, weights=a, minlength=N)
+        else:
+            w[name] = w[name] + np.stack([np.bincount(r, weights=a[:, c], minlength=N)
+                                          for c in range(a.shape[1])], axis=1)
 
 
 @functools.lru_cache(maxsize=64)
@@ -334,8 +349,9 @@ def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float
              F1=np.asarray(F[:, 0], dtype=np.float64), k=float(smoothness),
              edge=np.full(N, BIG), edge_n=np.zeros((N, 4)), wsum=np.zeros(N), wdelta=np.zeros((N, 4)),
              wgrad=np.zeros((N, 4)), wattr=np.zeros((N, 4)), found=np.zeros(N, dtype=bool),
-             o1=np.zeros((N, 4), dtype=np.int64), q1=np.zeros((N, 4)), nn=np.full(N, BIG))
+             o1=np.zeros((N, 4), dtype=np.int64), q1=np.zeros((N, 4)), nn=np.full(N, BIG), terms=[])
     ok = np.asarray(exact, dtype=bool) & _walk(w, cells, f, p, max_ring)
+    _sums(w)
     g1 = np.zeros((N, 4))
     g1[:, : p.dim] = ref.metric_gradient(d1[:, : p.dim], w["F1"], p)
     out = dict(edge=np.maximum(w["edge"], 0.0), edge_grad=-w["edge_n"], smooth_F=w["F1"].copy(),
