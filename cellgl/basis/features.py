@@ -163,11 +163,16 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
     """``_cell_walk_point`` for candidates of the given rows (several candidates of one row
     allowed: minima are taken with ``np.minimum.at``, the smooth terms kept for :func:`_sums`)."""
     on = w["on"]
-    delta = delta.copy()
-    delta[:, p.dim:] = 0.0
-    e = delta - w["d1"][rows]
-    e2 = (e * e).sum(axis=1)
-    mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
+    delta[:, p.dim:] = 0.0          # (the caller's own array)
+    if w["around"] or on["edge"]:
+        e = delta - w["d1"][rows]
+        e2 = (e * e).sum(axis=1)
+        mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
+    else:                           # the distance to the F1 point only where the ID is F1's
+        mine = ids == w["id1"][rows]
+        at = np.nonzero(mine)[0]
+        e = delta[at] - w["d1"][rows[at]]
+        mine[at] = (e * e).sum(axis=1) < 1e-10
     if w["around"]:
         np.minimum.at(w["nn"], rows, np.where(mine, np.inf, np.sqrt(e2)))
         return
