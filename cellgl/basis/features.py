@@ -23,7 +23,7 @@ import itertools
 import numpy as np
 
 from cellgl.basis import reference as ref
-from cellgl.basis.enums import Metric
+from cellgl.basis.enums import Distribution, Metric
 
 #: outputs of :func:`cellgl.cellular` beyond F, delta, id, grad
 OUTPUTS = ("edge", "edge_grad", "nsphere", "position", "color",
@@ -127,6 +127,7 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     state = ref.cell_seed(wc, p)
     state, count = ref.point_count(state, p, wc)
     base = o.astype(np.float64) - f[rows]
+    blender = p.distribution == Distribution.BLENDER
     # point k of the cells that have one (a cell's stream steps by itself: the cells past their
     # last point are dropped), all handed to _point at once, point-major as the shader's loop
     at = np.arange(len(rows))
@@ -134,7 +135,9 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     for k in range(int(count.max(initial=0))):
         more = count[at] > k           # (worley1996 has empty cells)
         if not more.all():
-            at, state, wc = at[more], state[more], wc[more]
+            at, state = at[more], state[more]
+            if blender:                 # (next_point reads the cells of Blender's points only)
+                wc = wc[more]
         state, q, ids = ref.next_point(state, p, wc)
         parts.append((at, q, ids))
     if not parts:
@@ -142,7 +145,12 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     at = np.concatenate([a for a, _, _ in parts])
     q = np.concatenate([b for _, b, _ in parts])
     ids = np.concatenate([c for _, _, c in parts])
-    _point(w, rows[at], base[at] + q, ids, o[at], q, p)
+    mine = _point(w, rows[at], base[at] + q, ids, p)
+    if mine is not None:            # the F1 point's cell and place (the n-sphere walk's start)
+        hit = at[mine]
+        w["found"][rows[hit]] = True
+        w["o1"][rows[hit]] = o[hit]
+        w["q1"][rows[hit]] = q[mine]
 
 
 def _reach(w: dict, rows, on: dict) -> np.ndarray:
@@ -159,9 +167,10 @@ def _reach(w: dict, rows, on: dict) -> np.ndarray:
     return r * 1.000001 + 1e-6
 
 
-def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
+def _point(w: dict, rows, delta, ids, p: ref.Params):
     """``_cell_walk_point`` for candidates of the given rows (several candidates of one row
-    allowed: minima are taken with ``np.minimum.at``, the smooth terms kept for :func:`_sums`)."""
+    allowed: minima are taken with ``np.minimum.at``, the smooth terms kept for :func:`_sums`).
+    Returns which candidates are the row's F1 point (None for the n-sphere walk)."""
     on = w["on"]
     delta[:, p.dim:] = 0.0          # (the caller's own array)
     if w["around"] or on["edge"]:
@@ -175,11 +184,7 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
         mine[at] = (e * e).sum(axis=1) < 1e-10
     if w["around"]:
         np.minimum.at(w["nn"], rows, np.where(mine, np.inf, np.sqrt(e2)))
-        return
-    hit = rows[mine]
-    w["found"][hit] = True
-    w["o1"][hit] = o[mine]
-    w["q1"][hit] = q[mine]
+        return None
     if on["edge"]:
         ok = ~mine & (e2 > 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -201,7 +206,7 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
         k = w["k"]
         take = np.nonzero(mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k)))[0]
         if not len(take):
-            return
+            return mine
         r, dl, dd, mt = rows[take], delta[take], d[take], mine[take]
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             wt = np.where(mt, 1.0, np.exp((F1[take] - dd) / k) if k > 0 else 0.0)
@@ -209,6 +214,7 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
         g[:, : p.dim] = ref.metric_gradient(dl[:, : p.dim], dd, p)
         # the weighted terms, summed per row by _sums in this order (the walk reads no sum)
         w["terms"].append((r, wt, wt[:, None] * dl, wt[:, None] * g, wt[:, None] * id_attribute(ids[take])))
+    return mine
 
 
 def _sums(w: dict) -> None:
