@@ -167,6 +167,16 @@ def _reach(w: dict, rows, on: dict) -> np.ndarray:
     return r * 1.000001 + 1e-6
 
 
+def _length(delta, p: ref.Params) -> np.ndarray:
+    """:func:`cellgl.basis.reference.metric_length` of rows (M, 4), summed axis by axis (the
+    same bits: at most four terms, left to right)."""
+    t = ref.metric_term(delta[:, 0], p)
+    for a in range(1, p.dim):
+        u = ref.metric_term(delta[:, a], p)
+        t = np.maximum(t, u) if p.metric == Metric.CHEBYSHEV else t + u
+    return t
+
+
 def _point(w: dict, rows, delta, ids, p: ref.Params):
     """``_cell_walk_point`` for candidates of the given rows (several candidates of one row
     allowed: minima are taken with ``np.minimum.at``, the smooth terms kept for :func:`_sums`).
@@ -202,16 +212,16 @@ def _point(w: dict, rows, delta, ids, p: ref.Params):
         w["edge_n"][r] = e[better] * inv[better, None]
     if on["smooth"]:
         F1 = w["F1"][rows]
-        d = np.where(mine, F1, ref.metric_finish(ref.metric_length(delta, p), p))
+        d = np.where(mine, F1, ref.metric_finish(_length(delta, p), p))
         k = w["k"]
         take = np.nonzero(mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k)))[0]
         if not len(take):
             return mine
-        r, dl, dd, mt = rows[take], delta[take], d[take], mine[take]
+        # the offsets and gradients over the basis' axes only (the others' terms are 0)
+        r, dl, dd, mt = rows[take], delta[take, : p.dim], d[take], mine[take]
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             wt = np.where(mt, 1.0, np.exp((F1[take] - dd) / k) if k > 0 else 0.0)
-        g = np.zeros_like(dl)
-        g[:, : p.dim] = ref.metric_gradient(dl[:, : p.dim], dd, p)
+        g = ref.metric_gradient(dl, dd, p)
         # the weighted terms, summed per row by _sums in this order (the walk reads no sum)
         w["terms"].append((r, wt, wt[:, None] * dl, wt[:, None] * g, wt[:, None] * id_attribute(ids[take])))
     return mine
@@ -229,9 +239,11 @@ def _sums(w: dict) -> None:
         a = np.concatenate([t[i] for t in terms])
         if a.ndim == 1:
             w[name] = w[name] + np.bincount(r, weights=a, minlength=N)
-        else:
-            w[name] = w[name] + np.stack([np.bincount(r, weights=a[:, c], minlength=N)
-                                          for c in range(a.shape[1])], axis=1)
+        else:                       # (the columns past the basis' axes: sums of 0)
+            s = np.zeros_like(w[name])
+            for c in range(a.shape[1]):
+                s[:, c] = np.bincount(r, weights=a[:, c], minlength=N)
+            w[name] = w[name] + s
 
 
 @functools.lru_cache(maxsize=64)
