@@ -255,6 +255,14 @@ def _offsets(ring: int, dim: int) -> np.ndarray:
     return out
 
 
+def _box_distance(o, f, p: ref.Params) -> np.ndarray:
+    """:func:`cellgl.basis.reference._box_distance` over the basis' own axes (the others' terms
+    are 0), summed axis by axis as :func:`_length`."""
+    o, f = o[:, : p.dim], f[:, : p.dim]
+    g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0)) * np.asarray(p.axis_scale[: p.dim])
+    return _length(g, p)
+
+
 _PAIRS = 1 << 22    #: (sample, offset) pairs tested at once by the vectorised walk
 
 
@@ -272,7 +280,9 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
         rows = np.nonzero(~done)[0]
         if len(rows) == 0:
             return np.ones(N, dtype=bool)
-        lo, hi = ref.ring_window(ring, np.minimum(_reach(w, rows, on), ring + 2.0), f[rows], p.dim)
+        reach = _reach(w, rows, on)
+        lo, hi = ref.ring_window(ring, np.minimum(reach, ring + 2.0), f[rows], p.dim)
+        term = ref.metric_term(reach, p)
         # All (sample, cell) pairs of the ring at once, with the reach at the start of the ring
         # (the shader's shrinks as it goes: visiting more is always safe, and every sum and
         # minimum is over points, each taken or not by its own distance).
@@ -280,10 +290,12 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
         step = max(1, _PAIRS // len(offs))
         for c in range(0, len(rows), step):
             rs = rows[c:c + step]
-            inside = np.all((offs[None] >= lo[c:c + step, None]) & (offs[None] <= hi[c:c + step, None]), axis=2)
+            inside = np.ones((len(rs), len(offs)), dtype=bool)
+            for a in range(p.dim):          # (the other axes' offsets and window are 0)
+                inside &= (offs[:, a] >= lo[c:c + step, a, None]) & (offs[:, a] <= hi[c:c + step, a, None])
             ri, ki = np.nonzero(inside)
             sel, o = rs[ri], offs[ki]
-            near = ref._box_distance(o, f[sel], p) < ref.metric_term(_reach(w, sel, on), p)
+            near = _box_distance(o, f[sel], p) < term[c + ri]
             if near.any():
                 _visit(w, sel[near], cells, f, o[near], p)
     return max_ring + m >= _reach(w, every, on)
