@@ -32,14 +32,16 @@ def _add(a, b):
 # --------------------------------------------------------------------------- hash.glsl
 
 def hash_u32(x):
-    """``cell_hash_u32``: lowbias32 avalanche of uint32 values."""
-    x = _u(x)
-    x ^= x >> np.uint64(16)
-    x = _mul(x, 0x7FEB352D)
-    x ^= x >> np.uint64(15)
-    x = _mul(x, 0x846CA68B)
-    x ^= x >> np.uint64(16)
-    return x
+    """``cell_hash_u32``: lowbias32 avalanche of uint32 values (as uint64). Computed in uint32,
+    which wraps as GLSL's does."""
+    x = _u(x).astype(np.uint32)
+    with np.errstate(over="ignore"):        # (a 0-d input's scalar product says it wraps)
+        x ^= x >> np.uint32(16)
+        x *= np.uint32(0x7FEB352D)
+        x ^= x >> np.uint32(15)
+        x *= np.uint32(0x846CA68B)
+        x ^= x >> np.uint32(16)
+    return x.astype(np.uint64)
 
 
 def u16(v):
