@@ -255,12 +255,17 @@ def _offsets(ring: int, dim: int) -> np.ndarray:
     return out
 
 
-def _box_distance(o, f, p: ref.Params) -> np.ndarray:
-    """:func:`cellgl.basis.reference._box_distance` over the basis' own axes (the others' terms
-    are 0), summed axis by axis as :func:`_length`."""
-    o, f = o[:, : p.dim], f[:, : p.dim]
-    g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0)) * np.asarray(p.axis_scale[: p.dim])
-    return _length(g, p)
+def _box_terms(ring: int, f, p: ref.Params) -> list:
+    """Per axis, the metric term (R, 2 ring + 1) of the gap from samples at fractions f (R, 4)
+    to the cells at offsets -ring..ring along it: the terms
+    :func:`cellgl.basis.reference._box_distance` sums (the same bits)."""
+    v = np.arange(-ring, ring + 1)
+    out = []
+    for a in range(p.dim):
+        fa = f[:, a, None]
+        g = np.where(v > 0, v - fa, np.where(v < 0, -v - 1 + fa, 0.0))
+        out.append(ref.metric_term(g * p.axis_scale[a], p))
+    return out
 
 
 _PAIRS = 1 << 22    #: (sample, offset) pairs tested at once by the vectorised walk
@@ -294,10 +299,14 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
             for a in range(p.dim):          # (the other axes' offsets and window are 0)
                 inside &= (offs[:, a] >= lo[c:c + step, a, None]) & (offs[:, a] <= hi[c:c + step, a, None])
             ri, ki = np.nonzero(inside)
-            sel, o = rs[ri], offs[ki]
-            near = _box_distance(o, f[sel], p) < term[c + ri]
-            if near.any():
-                _visit(w, sel[near], cells, f, o[near], p)
+            # the distance to each pair's cell, its axes' terms summed left to right (_length)
+            box = None
+            for a, t in enumerate(_box_terms(ring, f[rs], p)):
+                u = t[ri, offs[ki, a] + ring]
+                box = u if box is None else (np.maximum(box, u) if p.metric == Metric.CHEBYSHEV else box + u)
+            near = np.nonzero(box < term[c + ri])[0]
+            if len(near):
+                _visit(w, rs[ri[near]], cells, f, offs[ki[near]], p)
     return max_ring + m >= _reach(w, every, on)
 
 
