@@ -23,7 +23,7 @@ import itertools
 import numpy as np
 
 from cellgl.basis import reference as ref
-from cellgl.basis.enums import Metric
+from cellgl.basis.enums import Distribution, Metric
 
 #: outputs of :func:`cellgl.cellular` beyond F, delta, id, grad
 OUTPUTS = ("edge", "edge_grad", "nsphere", "position", "color",
@@ -127,10 +127,30 @@ def _visit(w: dict, rows, cells, f, o, p: ref.Params):
     state = ref.cell_seed(wc, p)
     state, count = ref.point_count(state, p, wc)
     base = o.astype(np.float64) - f[rows]
+    blender = p.distribution == Distribution.BLENDER
+    # point k of the cells that have one (a cell's stream steps by itself: the cells past their
+    # last point are dropped), all handed to _point at once, point-major as the shader's loop
+    at = np.arange(len(rows))
+    parts = []
     for k in range(int(count.max(initial=0))):
+        more = count[at] > k           # (worley1996 has empty cells)
+        if not more.all():
+            at, state = at[more], state[more]
+            if blender:                 # (next_point reads the cells of Blender's points only)
+                wc = wc[more]
         state, q, ids = ref.next_point(state, p, wc)
-        has = k < count
-        _point(w, rows[has], base[has] + q[has], ids[has], o[has], q[has], p)
+        parts.append((at, q, ids))
+    if not parts:
+        return
+    at = np.concatenate([a for a, _, _ in parts])
+    q = np.concatenate([b for _, b, _ in parts])
+    ids = np.concatenate([c for _, _, c in parts])
+    mine = _point(w, rows[at], base[at] + q, ids, p)
+    if mine is not None:            # the F1 point's cell and place (the n-sphere walk's start)
+        hit = at[mine]
+        w["found"][rows[hit]] = True
+        w["o1"][rows[hit]] = o[hit]
+        w["q1"][rows[hit]] = q[mine]
 
 
 def _reach(w: dict, rows, on: dict) -> np.ndarray:
@@ -147,22 +167,34 @@ def _reach(w: dict, rows, on: dict) -> np.ndarray:
     return r * 1.000001 + 1e-6
 
 
-def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
+def _length(delta, p: ref.Params) -> np.ndarray:
+    """:func:`cellgl.basis.reference.metric_length` of rows (M, 4), summed axis by axis (the
+    same bits: at most four terms, left to right)."""
+    t = ref.metric_term(delta[:, 0], p)
+    for a in range(1, p.dim):
+        u = ref.metric_term(delta[:, a], p)
+        t = np.maximum(t, u) if p.metric == Metric.CHEBYSHEV else t + u
+    return t
+
+
+def _point(w: dict, rows, delta, ids, p: ref.Params):
     """``_cell_walk_point`` for candidates of the given rows (several candidates of one row
-    allowed: minima and sums are taken with ``np.minimum.at`` / ``np.add.at``)."""
+    allowed: minima are taken with ``np.minimum.at``, the smooth terms kept for :func:`_sums`).
+    Returns which candidates are the row's F1 point (None for the n-sphere walk)."""
     on = w["on"]
-    delta = delta.copy()
-    delta[:, p.dim:] = 0.0
-    e = delta - w["d1"][rows]
-    e2 = (e * e).sum(axis=1)
-    mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
+    delta[:, p.dim:] = 0.0          # (the caller's own array)
+    if w["around"] or on["edge"]:
+        e = delta - w["d1"][rows]
+        e2 = (e * e).sum(axis=1)
+        mine = (ids == w["id1"][rows]) & (e2 < 1e-10)
+    else:                           # the distance to the F1 point only where the ID is F1's
+        mine = ids == w["id1"][rows]
+        at = np.nonzero(mine)[0]
+        e = delta[at] - w["d1"][rows[at]]
+        mine[at] = (e * e).sum(axis=1) < 1e-10
     if w["around"]:
         np.minimum.at(w["nn"], rows, np.where(mine, np.inf, np.sqrt(e2)))
-        return
-    hit = rows[mine]
-    w["found"][hit] = True
-    w["o1"][hit] = o[mine]
-    w["q1"][hit] = q[mine]
+        return None
     if on["edge"]:
         ok = ~mine & (e2 > 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -180,20 +212,38 @@ def _point(w: dict, rows, delta, ids, o, q, p: ref.Params):
         w["edge_n"][r] = e[better] * inv[better, None]
     if on["smooth"]:
         F1 = w["F1"][rows]
-        d = np.where(mine, F1, ref.metric_finish(ref.metric_length(delta, p), p))
+        d = np.where(mine, F1, ref.metric_finish(_length(delta, p), p))
         k = w["k"]
-        take = mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k))
-        if not take.any():
-            return
+        take = np.nonzero(mine | ((k > 0.0) & (d < F1 + SMOOTH_CUTOFF * k)))[0]
+        if not len(take):
+            return mine
+        # the offsets and gradients over the basis' axes only (the others' terms are 0)
+        r, dl, dd, mt = rows[take], delta[take, : p.dim], d[take], mine[take]
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
-            wt = np.where(mine, 1.0, np.exp((F1 - d) / k) if k > 0 else 0.0)
-        r, wt, dl, dd = rows[take], wt[take], delta[take], d[take]
-        np.add.at(w["wsum"], r, wt)
-        np.add.at(w["wdelta"], r, wt[:, None] * dl)
-        g = np.zeros_like(dl)
-        g[:, : p.dim] = ref.metric_gradient(dl[:, : p.dim], dd, p)
-        np.add.at(w["wgrad"], r, wt[:, None] * g)
-        np.add.at(w["wattr"], r, wt[:, None] * id_attribute(ids[take]))
+            wt = np.where(mt, 1.0, np.exp((F1[take] - dd) / k) if k > 0 else 0.0)
+        g = ref.metric_gradient(dl, dd, p)
+        # the weighted terms, summed per row by _sums in this order (the walk reads no sum)
+        w["terms"].append((r, wt, wt[:, None] * dl, wt[:, None] * g, wt[:, None] * id_attribute(ids[take])))
+    return mine
+
+
+def _sums(w: dict) -> None:
+    """Sum the smooth walk's terms into ``wsum``, ``wdelta``, ``wgrad``, ``wattr``, each row's
+    in the order of the walk (as ``np.add.at`` one candidate after another: same bits)."""
+    terms = w.pop("terms", [])
+    if not terms:
+        return
+    N = len(w["wsum"])
+    r = np.concatenate([t[0] for t in terms])
+    for i, name in enumerate(("wsum", "wdelta", "wgrad", "wattr"), 1):
+        a = np.concatenate([t[i] for t in terms])
+        if a.ndim == 1:
+            w[name] = w[name] + np.bincount(r, weights=a, minlength=N)
+        else:                       # (the columns past the basis' axes: sums of 0)
+            s = np.zeros_like(w[name])
+            for c in range(a.shape[1]):
+                s[:, c] = np.bincount(r, weights=a[:, c], minlength=N)
+            w[name] = w[name] + s
 
 
 @functools.lru_cache(maxsize=64)
@@ -202,6 +252,19 @@ def _offsets(ring: int, dim: int) -> np.ndarray:
     rng = [range(-ring, ring + 1)] * dim + [range(0, 1)] * (4 - dim)
     out = np.array([o for o in itertools.product(*rng) if max(abs(v) for v in o) == ring], dtype=np.int64)
     out.flags.writeable = False
+    return out
+
+
+def _box_terms(ring: int, f, p: ref.Params) -> list:
+    """Per axis, the metric term (R, 2 ring + 1) of the gap from samples at fractions f (R, 4)
+    to the cells at offsets -ring..ring along it: the terms
+    :func:`cellgl.basis.reference._box_distance` sums (the same bits)."""
+    v = np.arange(-ring, ring + 1)
+    out = []
+    for a in range(p.dim):
+        fa = f[:, a, None]
+        g = np.where(v > 0, v - fa, np.where(v < 0, -v - 1 + fa, 0.0))
+        out.append(ref.metric_term(g * p.axis_scale[a], p))
     return out
 
 
@@ -222,7 +285,9 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
         rows = np.nonzero(~done)[0]
         if len(rows) == 0:
             return np.ones(N, dtype=bool)
-        lo, hi = ref.ring_window(ring, np.minimum(_reach(w, rows, on), ring + 2.0), f[rows], p.dim)
+        reach = _reach(w, rows, on)
+        lo, hi = ref.ring_window(ring, np.minimum(reach, ring + 2.0), f[rows], p.dim)
+        term = ref.metric_term(reach, p)
         # All (sample, cell) pairs of the ring at once, with the reach at the start of the ring
         # (the shader's shrinks as it goes: visiting more is always safe, and every sum and
         # minimum is over points, each taken or not by its own distance).
@@ -230,12 +295,18 @@ def _walk(w: dict, cells, f, p: ref.Params, max_ring: int) -> np.ndarray:
         step = max(1, _PAIRS // len(offs))
         for c in range(0, len(rows), step):
             rs = rows[c:c + step]
-            inside = np.all((offs[None] >= lo[c:c + step, None]) & (offs[None] <= hi[c:c + step, None]), axis=2)
+            inside = np.ones((len(rs), len(offs)), dtype=bool)
+            for a in range(p.dim):          # (the other axes' offsets and window are 0)
+                inside &= (offs[:, a] >= lo[c:c + step, a, None]) & (offs[:, a] <= hi[c:c + step, a, None])
             ri, ki = np.nonzero(inside)
-            sel, o = rs[ri], offs[ki]
-            near = ref._box_distance(o, f[sel], p) < ref.metric_term(_reach(w, sel, on), p)
-            if near.any():
-                _visit(w, sel[near], cells, f, o[near], p)
+            # the distance to each pair's cell, its axes' terms summed left to right (_length)
+            box = None
+            for a, t in enumerate(_box_terms(ring, f[rs], p)):
+                u = t[ri, offs[ki, a] + ring]
+                box = u if box is None else (np.maximum(box, u) if p.metric == Metric.CHEBYSHEV else box + u)
+            near = np.nonzero(box < term[c + ri])[0]
+            if len(near):
+                _visit(w, rs[ri[near]], cells, f, offs[ki[near]], p)
     return max_ring + m >= _reach(w, every, on)
 
 
@@ -322,8 +393,9 @@ def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float
              F1=np.asarray(F[:, 0], dtype=np.float64), k=float(smoothness),
              edge=np.full(N, BIG), edge_n=np.zeros((N, 4)), wsum=np.zeros(N), wdelta=np.zeros((N, 4)),
              wgrad=np.zeros((N, 4)), wattr=np.zeros((N, 4)), found=np.zeros(N, dtype=bool),
-             o1=np.zeros((N, 4), dtype=np.int64), q1=np.zeros((N, 4)), nn=np.full(N, BIG))
+             o1=np.zeros((N, 4), dtype=np.int64), q1=np.zeros((N, 4)), nn=np.full(N, BIG), terms=[])
     ok = np.asarray(exact, dtype=bool) & _walk(w, cells, f, p, max_ring)
+    _sums(w)
     g1 = np.zeros((N, 4))
     g1[:, : p.dim] = ref.metric_gradient(d1[:, : p.dim], w["F1"], p)
     out = dict(edge=np.maximum(w["edge"], 0.0), edge_grad=-w["edge_n"], smooth_F=w["F1"].copy(),

@@ -32,14 +32,16 @@ def _add(a, b):
 # --------------------------------------------------------------------------- hash.glsl
 
 def hash_u32(x):
-    """``cell_hash_u32``: lowbias32 avalanche of uint32 values."""
-    x = _u(x)
-    x ^= x >> np.uint64(16)
-    x = _mul(x, 0x7FEB352D)
-    x ^= x >> np.uint64(15)
-    x = _mul(x, 0x846CA68B)
-    x ^= x >> np.uint64(16)
-    return x
+    """``cell_hash_u32``: lowbias32 avalanche of uint32 values (as uint64). Computed in uint32,
+    which wraps as GLSL's does."""
+    x = _u(x).astype(np.uint32)
+    with np.errstate(over="ignore"):        # (a 0-d input's scalar product says it wraps)
+        x ^= x >> np.uint32(16)
+        x *= np.uint32(0x7FEB352D)
+        x ^= x >> np.uint32(15)
+        x *= np.uint32(0x846CA68B)
+        x ^= x >> np.uint32(16)
+    return x.astype(np.uint64)
 
 
 def u16(v):
@@ -85,21 +87,16 @@ def poisson_thresholds(density: float) -> np.ndarray:
 # --------------------------------------------------------------------------- Blender's points
 
 def _rot(x, k: int):
-    """Rotate uint32 values left by k bits."""
-    x = _u(x)
-    return ((x << np.uint64(k)) | (x >> np.uint64(32 - k))) & M32
-
-
-def _sub(a, b):
-    return (_u(a) + np.uint64(1 << 32) - _u(b)) & M32
+    """Rotate uint32 values (uint32 arrays) left by k bits."""
+    return (x << np.uint32(k)) | (x >> np.uint32(32 - k))
 
 
 def _jenkins_final(a, b, c):
-    """Bob Jenkins' lookup3 final mix of three uint32 words; returns c."""
+    """Bob Jenkins' lookup3 final mix of three uint32 words (uint32 arrays); returns c."""
     w = {"a": a, "b": b, "c": c}
     for x, y, k in (("c", "b", 14), ("a", "c", 11), ("b", "a", 25), ("c", "b", 16),
                     ("a", "c", 4), ("b", "a", 14), ("c", "b", 24)):
-        w[x] = _sub(w[x] ^ w[y], _rot(w[y], k))      # x ^= y; x -= rot(y, k)
+        w[x] = (w[x] ^ w[y]) - _rot(w[y], k)       # x ^= y; x -= rot(y, k)
     return w["c"]
 
 
@@ -109,27 +106,31 @@ def _jenkins_mix(a, b, c):
     for x, y, z, k in (("a", "c", "b", 4), ("b", "a", "c", 6), ("c", "b", "a", 8),
                        ("a", "c", "b", 16), ("b", "a", "c", 19), ("c", "b", "a", 4)):
         # x -= y; x ^= rot(y, k); y += z
-        w[x] = _sub(w[x], w[y]) ^ _rot(w[y], k)
-        w[y] = _add(w[y], w[z])
+        w[x] = (w[x] - w[y]) ^ _rot(w[y], k)
+        w[y] = w[y] + w[z]
     return w["a"], w["b"], w["c"]
 
 
 def jenkins_hash(*words):
-    """lookup3 hash of 1..4 uint32 words (arrays broadcast), as Blender hashes a cell's float bits."""
+    """lookup3 hash of 1..4 uint32 words (arrays broadcast), as Blender hashes a cell's float bits;
+    uint64 values < 2^32 (computed in uint32 arithmetic, which wraps as lookup3's does)."""
     n = len(words)
-    init = _u(0xDEADBEEF + (n << 2) + 13)
+    words = [np.asarray(_u(x)).astype(np.uint32) for x in words]
+    init = np.asarray(0xDEADBEEF + (n << 2) + 13, dtype=np.uint32)
     a = b = c = init
-    if n == 4:
-        a, b, c = _add(a, words[0]), _add(b, words[1]), _add(c, words[2])
-        a, b, c = _jenkins_mix(a, b, c)
-        a = _add(a, words[3])
-    else:
-        a = _add(a, words[0])
-        if n >= 2:
-            b = _add(b, words[1])
-        if n >= 3:
-            c = _add(c, words[2])
-    return _jenkins_final(a, b, c)
+    with np.errstate(over="ignore"):
+        if n == 4:
+            a, b, c = a + words[0], b + words[1], c + words[2]
+            a, b, c = _jenkins_mix(a, b, c)
+            a = a + words[3]
+        else:
+            a = a + words[0]
+            if n >= 2:
+                b = b + words[1]
+            if n >= 3:
+                c = c + words[2]
+        c = _jenkins_final(a, b, c)
+    return np.asarray(c).astype(np.uint64)
 
 
 def float_bits(x) -> np.ndarray:

@@ -286,17 +286,24 @@ def _ring_offsets(ring: int, dim: int):
     return [o for o in itertools.product(*rng) if max(abs(v) for v in o) == ring]
 
 
-def _insert(F, D, I, d, delta, ids):
-    """``_cell_insert`` for a batch: merge one candidate per row, keeping the
-    existing entry first on equal distances (stable sort)."""
+def _insert(F, D, I, d, delta, ids, at=None):
+    """``_cell_insert`` for a batch: merge one candidate per row (``at``: the rows, distinct;
+    default all, in order), keeping the existing entry first on equal distances (stable sort).
+    Only the rows whose candidate is nearer than their n-th are sorted: the others would keep
+    their entries as they are."""
     n = F.shape[1]
-    allF = np.concatenate([F, d[:, None]], axis=1)
+    keep = d < F[:, -1] if at is None else d < F[at, -1]
+    rows = np.nonzero(keep)[0] if at is None else at[keep]
+    if len(rows) == 0:
+        return
+    d, delta, ids = d[keep], delta[keep], ids[keep]
+    allF = np.concatenate([F[rows], d[:, None]], axis=1)
     order = np.argsort(allF, axis=1, kind="stable")[:, :n]
-    F[:] = np.take_along_axis(allF, order, axis=1)
-    allD = np.concatenate([D, delta[:, None, :]], axis=1)
-    D[:] = np.take_along_axis(allD, order[:, :, None], axis=1)
-    allI = np.concatenate([I, ids[:, None]], axis=1)
-    I[:] = np.take_along_axis(allI, order, axis=1)
+    F[rows] = np.take_along_axis(allF, order, axis=1)
+    allD = np.concatenate([D[rows], delta[:, None, :]], axis=1)
+    D[rows] = np.take_along_axis(allD, order[:, :, None], axis=1)
+    allI = np.concatenate([I[rows], ids[:, None]], axis=1)
+    I[rows] = np.take_along_axis(allI, order, axis=1)
 
 
 def _visit(F, D, I, cells, f, o, p: Params):
@@ -305,12 +312,16 @@ def _visit(F, D, I, cells, f, o, p: Params):
     state = cell_seed(wc, p)
     state, count = point_count(state, p, wc)
     base = o.astype(np.float64) - f
+    at = np.arange(len(count))
     for k in range(int(count.max(initial=0))):
+        more = count[at] > k        # the cells past their last point are dropped (their streams
+        if not more.all():          # step by themselves; only Blender's points read the cell)
+            at, state = at[more], state[more]
+            if p.distribution == Distribution.BLENDER:
+                wc = wc[more]
         state, q, ids = next_point(state, p, wc)
-        has = k < count
-        delta = (base + q) * np.asarray(p.axis_scale)
-        d = np.where(has, metric_length(delta, p), np.inf)
-        _insert(F, D, I, d, delta, ids)
+        delta = (base[at] + q) * np.asarray(p.axis_scale)
+        _insert(F, D, I, metric_length(delta, p), delta, ids, at)
 
 
 def max_ring_default(dim: int, axis_scale=(1.0,)) -> int:
