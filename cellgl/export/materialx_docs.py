@@ -1,0 +1,204 @@
+"""The files of ``cellgl export --target materialx -o DIR``, written as text (exporting needs
+neither MaterialX nor USD; tests/test_materialx.py checks the files with both):
+
+* ``cellgl_nodes.mtlx``: the node library, every nodedef (the basis, each texture preset) and
+  its implementations (``genglsl``, ``genosl``), whose sources lie in ``genglsl/`` and
+  ``genosl/`` next to it;
+* ``cellgl_materials.mtlx``: one example material per preset (``surfacematerial`` of an
+  ``open_pbr_surface`` whose base colour is the node's colour, converted from sRGB, and whose
+  normal is the node's normal through ``normalmap``), which includes the library;
+* ``cellgl_materials.usda``: the same materials as UsdShade networks, each shader's
+  ``info:id`` a nodedef name (as Houdini and Omniverse write MaterialX into USD).
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+from cellgl.export.materialx import MxNode
+from cellgl.export.snippets import ExportError
+
+__all__ = ["LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage", "write_files"]
+
+LIBRARY = "cellgl_nodes.mtlx"
+MATERIALS = "cellgl_materials.mtlx"
+USD = "cellgl_materials.usda"
+_HEAD = '<?xml version="1.0"?>\n<materialx version="1.39">\n'
+
+
+def _val(v, mxtype: str) -> str:
+    if isinstance(v, (tuple, list)):
+        return ", ".join(_val(x, "float") for x in v)
+    if mxtype == "boolean":
+        return "true" if v else "false"
+    if mxtype == "integer":
+        return str(int(v))
+    r = repr(float(v))
+    return r if any(c in r for c in ".en") else r + ".0"
+
+
+def _attrs(**kw) -> str:
+    return "".join(f" {k}={quoteattr(str(v))}" for k, v in kw.items() if v is not None)
+
+
+def _nodedef(node: MxNode) -> list[str]:
+    out = [f"  <nodedef{_attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, doc=node.doc)}>"]
+    for i in node.inputs:
+        a = dict(name=i.name, type=i.mxtype)
+        if i.value is not None:
+            a["value"] = _val(i.value, i.mxtype)
+        if i.geomprop:
+            a["defaultgeomprop"] = i.geomprop
+        if i.uiname:
+            a["uiname"] = i.uiname
+        if i.uimin is not None:
+            a["uimin"] = _val(i.uimin, i.mxtype)
+        if i.uimax is not None:
+            a["uimax"] = _val(i.uimax, i.mxtype)
+        if i.uifolder:
+            a["uifolder"] = i.uifolder
+        if i.inactive:
+            a["uiadvanced"] = "true"
+        a["doc"] = i.doc
+        out.append(f"    <input{_attrs(**a)} />")
+    for name, mxtype, _, _, doc in node.outputs:
+        out.append(f"    <output{_attrs(name=name, type=mxtype, doc=doc)} />")
+    out.append("  </nodedef>")
+    for target, ext in (("genglsl", "glsl"), ("genosl", "osl")):
+        out.append(f"  <implementation{_attrs(name=f'IM_{node.name}_{target}', nodedef=node.nodedef, file=f'{target}/{node.name}.{ext}', function=node.function, target=target)} />")
+    return out
+
+
+def library_document(nodes: list[MxNode]) -> str:
+    """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``."""
+    from cellgl._version import __version__
+
+    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library (cellgl export --target materialx): "
+             "nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
+    for n in nodes:
+        lines += _nodedef(n)
+    return "\n".join(lines) + "\n</materialx>\n"
+
+
+def _ex(node: MxNode) -> str:
+    return node.name[len("cellgl_"):]
+
+
+def materials_document(nodes: list[MxNode]) -> str:
+    """``cellgl_materials.mtlx``: one example material per texture node of ``nodes``."""
+    lines = [_HEAD.rstrip("\n"), f'  <xi:include href="{LIBRARY}" />']
+    for n in nodes:
+        if not n.example:
+            continue
+        e = _ex(n)
+        lines.append(f'  <{n.name} name="{e}_texture" type="multioutput" />')
+        lines += [f'  <srgb_texture_to_lin_rec709 name="{e}_linear" type="color3">',
+                  f'    <input name="in" type="color3" nodename="{e}_texture" output="color" />',
+                  "  </srgb_texture_to_lin_rec709>"]
+        normal = "normal" in n.example["outputs"]
+        if normal:
+            lines += [f'  <normalmap name="{e}_normalmap" type="vector3">',
+                      f'    <input name="in" type="vector3" nodename="{e}_texture" output="normal" />',
+                      "  </normalmap>"]
+        lines += [f'  <open_pbr_surface name="{e}_surface" type="surfaceshader">',
+                  f'    <input name="base_color" type="color3" nodename="{e}_linear" />',
+                  '    <input name="specular_roughness" type="float" value="0.5" />']
+        if normal:
+            lines.append(f'    <input name="geometry_normal" type="vector3" nodename="{e}_normalmap" />')
+        lines += ["  </open_pbr_surface>",
+                  f'  <surfacematerial name="M_{e}" type="material">',
+                  f'    <input name="surfaceshader" type="surfaceshader" nodename="{e}_surface" />',
+                  "  </surfacematerial>"]
+    return "\n".join(lines).replace('<materialx version="1.39">',
+                                    '<materialx version="1.39" xmlns:xi="http://www.w3.org/2001/XInclude">') \
+        + "\n</materialx>\n"
+
+
+#: MaterialX type -> USD Sdf value type name (UsdMtlx's mapping)
+_USD_TYPES = {"float": "float", "integer": "int", "boolean": "bool", "vector2": "float2", "vector3": "float3",
+              "color3": "color3f", "surfaceshader": "token", "material": "token"}
+
+
+def _usd_val(v, mxtype: str) -> str:
+    if isinstance(v, (tuple, list)):
+        return "(" + ", ".join(_val(x, "float") for x in v) + ")"
+    if mxtype == "boolean":
+        return "true" if v else "false"
+    return _val(v, mxtype)
+
+
+def usd_stage(nodes: list[MxNode]) -> str:
+    """``cellgl_materials.usda``: the example materials as UsdShade networks under
+    ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections)."""
+    from cellgl._version import __version__
+
+    out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
+           'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
+           '    defaultPrim = "cellgl"', ")", "", 'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
+    for n in nodes:
+        if not n.example:
+            continue
+        e = _ex(n)
+        path = f"/cellgl/Materials/M_{e}"
+        normal = "normal" in n.example["outputs"]
+        out += [f'        def Material "M_{e}"', "        {",
+                f"            token outputs:mtlx:surface.connect = <{path}/{e}_surface.outputs:out>", "",
+                f'            def Shader "{e}_texture"', "            {",
+                f'                uniform token info:id = "{n.nodedef}"']
+        for i in n.inputs:
+            if i.value is None:
+                continue
+            out.append(f"                {_USD_TYPES[i.mxtype]} inputs:{i.name} = {_usd_val(i.value, i.mxtype)}")
+        for name, mxtype, _, _, _ in n.outputs:
+            out.append(f"                {_USD_TYPES[mxtype]} outputs:{name}")
+        out += ["            }", "", f'            def Shader "{e}_linear"', "            {",
+                '                uniform token info:id = "ND_srgb_texture_to_lin_rec709_color3"',
+                f"                color3f inputs:in.connect = <{path}/{e}_texture.outputs:color>",
+                "                color3f outputs:out", "            }", ""]
+        if normal:
+            out += [f'            def Shader "{e}_normalmap"', "            {",
+                    '                uniform token info:id = "ND_normalmap_float"',
+                    f"                float3 inputs:in.connect = <{path}/{e}_texture.outputs:normal>",
+                    "                float3 outputs:out", "            }", ""]
+        out += [f'            def Shader "{e}_surface"', "            {",
+                '                uniform token info:id = "ND_open_pbr_surface_surfaceshader"',
+                f"                color3f inputs:base_color.connect = <{path}/{e}_linear.outputs:out>",
+                "                float inputs:specular_roughness = 0.5"]
+        if normal:
+            out.append(f"                float3 inputs:geometry_normal.connect = <{path}/{e}_normalmap.outputs:out>")
+        out += ["                token outputs:out", "            }", "        }"]
+    out += ["    }", "}", ""]
+    return "\n".join(out)
+
+
+def check_dir(path) -> Path:
+    """``path`` as the output directory: an existing directory, or a new one in an existing,
+    writable parent; one clear error otherwise (a file, a missing parent)."""
+    p = Path(os.fspath(path))
+    if p.exists() and not p.is_dir():
+        raise ExportError(f"output {str(p)!r} is a file; --target materialx writes a directory of files "
+                          "(the node library, the implementations, the materials): give a directory")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not p.exists() and not parent.is_dir():
+        raise ExportError(f"output directory {str(p)!r}: its parent {str(parent)!r} does not exist")
+    if not os.access(p if p.exists() else parent, os.W_OK):
+        raise ExportError(f"output directory {str(p)!r} is not writable")
+    return p
+
+
+def write_files(files: dict[str, str], outdir) -> list[Path]:
+    """Write ``{relative path: text}`` under ``outdir`` (created), each file atomically (a
+    temporary name, then renamed): a failure leaves no half-written file."""
+    from cellgl.io.formats import atomic_path
+
+    root = check_dir(outdir)
+    root.mkdir(exist_ok=True)
+    written = []
+    for rel, text in files.items():
+        dest = root / rel
+        dest.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_path(str(dest)) as tmp:
+            Path(tmp).write_text(text, encoding="utf-8", newline="\n")
+        written.append(dest)
+    return written
