@@ -42,9 +42,11 @@ def add_parser(sub):
                        metavar={"metric": "METRIC", "distribution": "NAME"}.get(name),
                        help=f"{what} (default %(default)s)".lstrip())
     p.add_argument("--target", "-t", default="glsl", metavar="TARGET",
-                   help="one of: " + names + " (default glsl)")
+                   help="one of: " + names + " (default glsl); or materialx: a MaterialX node library, "
+                   "example materials and a USD stage, written to the directory -o DIR (every "
+                   "exportable preset, or the one given; docs/materialx.md)")
     p.add_argument("-o", "--output", metavar="FILE", default=None,
-                   help="write to FILE (atomically) instead of standard output")
+                   help="write to FILE (atomically) instead of standard output (materialx: a directory)")
     p.add_argument("--uniforms", action="store_true",
                    help="declare the recipe's run-time values as cellgl_<name> uniforms instead of "
                    "constants")
@@ -63,6 +65,8 @@ def run_cli(args) -> int:
 
     from cellgl.io.tempfiles import check_output
 
+    if str(args.target).strip().lower() == "materialx":
+        return _run_materialx(args)
     check_target(args.target)
     if args.basis is None and args.recipe is None:
         raise ExportError("nothing to export: give a preset name (`cellgl presets` lists them), a "
@@ -89,4 +93,30 @@ def run_cli(args) -> int:
 
     with atomic_path(os.path.abspath(args.output)) as tmp:
         tmp.write_text(text, encoding="utf-8", newline="\n")
+    return 0
+
+
+def _run_materialx(args) -> int:
+    """``cellgl export [PRESET_OR_RECIPE] --target materialx -o DIR``."""
+    from cellgl.export.materialx import export_materialx
+
+    if args.output is None:
+        raise ExportError("--target materialx writes a directory of files: give it with -o DIR")
+    if args.basis is not None or args.uniforms or not args.fold:
+        raise ExportError("--target materialx takes a preset or recipe (or none: every exportable preset), "
+                          "not --basis, --uniforms or --no-fold (the basis nodes are always in the library)")
+    recipes = None
+    if args.recipe is not None:
+        from cellgl.recipes import load_recipe
+        from cellgl.texture.recipe import RecipeError
+
+        try:
+            recipe = load_recipe(args.recipe)
+            recipes = [recipe.set_from_strings(list(args.sets)) if args.sets else recipe]
+        except (RecipeError, OSError) as exc:
+            raise ExportError(str(exc)) from None
+    elif args.sets:
+        raise ExportError("--set needs a preset or recipe to set it on")
+    for path in export_materialx(args.output, recipes):
+        print(path)
     return 0

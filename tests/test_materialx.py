@@ -1,0 +1,435 @@
+"""``cellgl export --target materialx``, checked with the tools themselves: MaterialX's own
+``validate()``, its GLSL and OSL shader generators (GenGlsl, GenOsl), its GLSL renderer
+(RenderGlsl, under Xvfb: the node's colour against ``cellgl bake``), Blender's OSL compiler and
+Cycles (GenOsl's shader against the bake), usd-core (the stage's materials, shader ids and typed
+inputs), and the bad inputs' errors.
+
+The default tier exports one preset (and one basis node); the slow tier every preset and every
+basis node. Without MaterialX (or usd-core, or bpy) the tests that need it skip.
+"""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cellgl.export.materialx import MxInput, exportable_presets, export_materialx, node_name, preset_node
+from cellgl.export.snippets import ExportError
+
+ROOT = Path(__file__).resolve().parents[1]
+SIZE = 64
+#: the presets the Cycles test renders (one per family: cell colours, a fractal, Qin's noise, a bump)
+CYCLES_SET = ("flagstone", "f1", "qin-marble", "hammered")
+
+
+def _mx():
+    return pytest.importorskip("MaterialX")
+
+
+def _stdlib():
+    mx = _mx()
+    lib = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+    return lib
+
+
+def _read(path):
+    """The document at ``path`` (its xi:includes resolved) with the standard libraries imported."""
+    mx = _mx()
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, str(path))
+    doc.importLibrary(_stdlib())
+    return doc
+
+
+def _context(gen, out):
+    from MaterialX import PyMaterialXGenShader as mxg
+    import MaterialX as mx
+
+    ctx = mxg.GenContext(gen)
+    ctx.registerSourceCodeSearchPath(mx.getDefaultDataSearchPath())
+    ctx.registerSourceCodeSearchPath(mx.FilePath(str(out)))
+    return ctx
+
+
+def _output_graph(doc, nodedef, output, mxtype, values=()):
+    """A node graph with one instance of ``nodedef`` and an output of its ``output`` (GenGlsl
+    renders a graph's output)."""
+    name = f"NG_{nodedef}_{output}"
+    ng = doc.getNodeGraph(name) or doc.addNodeGraph(name)
+    node = ng.getNode("n") or ng.addNodeInstance(doc.getNodeDef(nodedef), "n")
+    for k, v in values:
+        node.setInputValue(k, v)
+    o = ng.getOutput("out") or ng.addOutput("out", mxtype)
+    o.setNodeName("n")
+    o.setOutputString(output)
+    return o
+
+
+@pytest.fixture(scope="module")
+def one(tmp_path_factory):
+    """The library of one preset (flagstone: colour, height, normal) and no basis nodes."""
+    _mx()
+    out = tmp_path_factory.mktemp("mx-one")
+    export_materialx(out, ["flagstone"], basis=False)
+    return out
+
+
+@pytest.fixture(scope="module")
+def full(tmp_path_factory):
+    """``cellgl export --target materialx -o DIR``: every exportable preset and the basis."""
+    _mx()
+    out = tmp_path_factory.mktemp("mx-full") / "lib"
+    from cellgl.cli import main
+
+    assert main(["export", "--target", "materialx", "-o", str(out)]) == 0
+    return out
+
+
+def _check_documents(out):
+    for name in ("cellgl_nodes.mtlx", "cellgl_materials.mtlx"):
+        doc = _read(out / name)
+        ok, msg = doc.validate()
+        assert ok, (name, msg)
+    return _read(out / "cellgl_materials.mtlx")
+
+
+def _check_library_matches_nodes(doc, nodes):
+    for n in nodes:
+        nd = doc.getNodeDef(n.nodedef)
+        assert nd is not None, n.nodedef
+        assert [i.getName() for i in nd.getInputs()] == [i.name for i in n.inputs]
+        assert [o.getName() for o in nd.getOutputs()] == [o[0] for o in n.outputs]
+        for target in ("genglsl", "genosl"):
+            assert doc.getImplementation(f"IM_{n.name}_{target}") is not None
+
+
+def _generate_all(doc, out, lang):
+    from MaterialX import PyMaterialXGenShader as mxg
+
+    if lang == "glsl":
+        from MaterialX import PyMaterialXGenGlsl as g
+        gen = g.GlslShaderGenerator.create()
+    else:
+        from MaterialX import PyMaterialXGenOsl as g
+        gen = g.OslShaderGenerator.create()
+    ctx = _context(gen, out)
+    mats = [m for m in doc.getMaterialNodes()]
+    assert mats
+    for m in mats:
+        shader = gen.generate(m.getName(), m, ctx)
+        src = shader.getSourceCode(mxg.PIXEL_STAGE)
+        node = m.getName()[2:]
+        assert f"cellglmx_{node}(" in src, m.getName()     # the node's function is called
+    return len(mats)
+
+
+def test_one_preset_validates_and_generates_glsl_and_osl(one):
+    doc = _check_documents(one)
+    n = preset_node("flagstone")
+    _check_library_matches_nodes(doc, [n])
+    assert _generate_all(doc, one, "glsl") == 1
+    assert _generate_all(doc, one, "osl") == 1
+    nd = doc.getNodeDef("ND_cellgl_flagstone")
+    # inputs from the parameter table: default, range, folder, doc; inactive ones marked
+    shade = nd.getInput("shade")
+    assert shade.getValueString() == "0.85" and shade.getAttribute("uimin") == "0.0"
+    assert shade.getAttribute("uimax") == "1.0" and shade.getAttribute("uifolder") == "color"
+    assert "colour *=" in shade.getAttribute("doc")
+    jitter = nd.getInput("jitter")
+    assert jitter.getAttribute("uiadvanced") == "true"
+    assert "needs distribution jitter or blender" in jitter.getAttribute("doc")
+    assert nd.getInput("invert").getType() == "boolean" and nd.getInput("noise_octaves").getType() == "integer"
+    assert [o.getType() for o in nd.getOutputs()] == ["color3", "float", "vector3"]
+    assert "density=3.0" in nd.getAttribute("doc")           # fixed at export, listed
+    # the implementations are files next to the library
+    assert (one / "genglsl" / "cellgl_flagstone.glsl").read_text().count("void cellglmx_flagstone(") == 1
+    assert (one / "genosl" / "cellgl_flagstone.osl").read_text().count("void cellglmx_flagstone(") == 1
+
+
+def test_basis_node_validates_and_generates(tmp_path):
+    from cellgl.export import materialx_docs as docs
+    from cellgl.export.materialx_basis import basis_node
+
+    nodes = [basis_node(2, "euclidean", "poisson")]
+    docs.write_files({docs.LIBRARY: docs.library_document(nodes),
+                      **{f"genglsl/{n.name}.glsl": n.glsl for n in nodes},
+                      **{f"genosl/{n.name}.osl": n.osl for n in nodes}}, tmp_path)
+    doc = _read(tmp_path / docs.LIBRARY)
+    assert doc.validate()[0]
+    _check_library_matches_nodes(doc, nodes)
+    for lang in ("glsl", "osl"):
+        from MaterialX import PyMaterialXGenShader as mxg
+        if lang == "glsl":
+            from MaterialX import PyMaterialXGenGlsl as g
+            gen = g.GlslShaderGenerator.create()
+        else:
+            from MaterialX import PyMaterialXGenOsl as g
+            gen = g.OslShaderGenerator.create()
+        o = _output_graph(doc, "ND_cellgl_cellular2d_euclidean_poisson", "edge", "float")
+        src = gen.generate("edge", o, _context(gen, tmp_path)).getSourceCode(mxg.PIXEL_STAGE)
+        assert "cellglmx_cellular2d_euclidean_poisson(" in src
+
+
+def test_usd_stage_has_every_material_shader_and_typed_input(one):
+    Usd = pytest.importorskip("pxr.Usd")
+    from pxr import Sdf, UsdShade
+
+    stage = Usd.Stage.Open(str(one / "cellgl_materials.usda"))
+    assert stage is not None
+    _check_stage(stage, [preset_node("flagstone")])
+
+
+def _check_stage(stage, nodes):
+    from pxr import Sdf, UsdShade
+
+    lib = _stdlib()
+    want = {"float": Sdf.ValueTypeNames.Float, "integer": Sdf.ValueTypeNames.Int,
+            "boolean": Sdf.ValueTypeNames.Bool, "vector2": Sdf.ValueTypeNames.Float2}
+    for n in nodes:
+        e = n.name[len("cellgl_"):]
+        mat = UsdShade.Material(stage.GetPrimAtPath(f"/cellgl/Materials/M_{e}"))
+        assert mat, e
+        surf = mat.GetSurfaceOutput("mtlx")
+        src = surf.GetConnectedSources()[0][0]
+        shader = UsdShade.Shader(src.source.GetPrim())
+        assert shader.GetIdAttr().Get() == "ND_open_pbr_surface_surfaceshader"
+        tex = UsdShade.Shader(stage.GetPrimAtPath(f"/cellgl/Materials/M_{e}/{e}_texture"))
+        assert tex.GetIdAttr().Get() == n.nodedef
+        for i in n.inputs:
+            if i.value is None:
+                continue
+            inp = tex.GetInput(i.name)
+            assert inp, (e, i.name)
+            assert inp.GetTypeName() == want[i.mxtype], (e, i.name)
+            got = inp.Get()
+            assert np.allclose(np.asarray(got, float), np.asarray(i.value, float)), (e, i.name, got, i.value)
+        # every other shader's id is a nodedef of MaterialX's libraries
+        for prim in mat.GetPrim().GetChildren():
+            sid = UsdShade.Shader(prim).GetIdAttr().Get()
+            assert sid == n.nodedef or lib.getNodeDef(sid) is not None, sid
+        base = UsdShade.Shader(stage.GetPrimAtPath(f"/cellgl/Materials/M_{e}/{e}_surface")).GetInput("base_color")
+        assert base.GetConnectedSources()[0][0].source.GetPath().name == f"{e}_linear"
+
+
+# ------------------------------------------------------------------------------ bad input
+
+
+def _cli(args, capsys):
+    from cellgl.cli import main
+
+    rc = main(["export", "--target", "materialx", *args])
+    return rc, capsys.readouterr().err
+
+
+def test_bad_input_gets_one_clear_error(tmp_path, capsys):
+    rc, err = _cli(["no-such-preset", "-o", str(tmp_path / "a")], capsys)
+    assert rc == 2 and "unknown preset 'no-such-preset'" in err and "flagstone" in err
+    assert not (tmp_path / "a").exists()
+    f = tmp_path / "file.txt"
+    f.write_text("keep")
+    rc, err = _cli(["flagstone", "-o", str(f)], capsys)
+    assert rc == 2 and "is a file" in err and "give a directory" in err
+    assert f.read_text() == "keep"
+    rc, err = _cli(["flagstone"], capsys)
+    assert rc == 2 and "-o DIR" in err
+    rc, err = _cli(["flagstone", "-o", str(tmp_path / "missing" / "dir")], capsys)
+    assert rc == 2 and "does not exist" in err
+    rc, err = _cli(["pups-cow", "-o", str(tmp_path / "b")], capsys)
+    assert rc == 2 and "PUPs recipes cannot be exported" in err and not (tmp_path / "b").exists()
+    rc, err = _cli(["stained-glass", "-o", str(tmp_path / "b")], capsys)
+    assert rc == 2 and "cell_color 'image'" in err and not (tmp_path / "b").exists()
+    # a recipe whose name is not a valid MaterialX name
+    from cellgl.recipes import load_recipe
+
+    d = load_recipe("f1").to_dict()
+    for bad in ("my stone!", "1st", "a__b", "été"):
+        d["name"] = bad
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(d))
+        rc, err = _cli([str(path), "-o", str(tmp_path / "c")], capsys)
+        assert rc == 2 and f"recipe name {bad!r} is not a valid MaterialX name" in err, err
+        assert "accepted" in err and not (tmp_path / "c").exists()
+    d["name"] = "my-stone_2"
+    path.write_text(json.dumps(d))
+    assert node_name("my-stone_2") == "cellgl_my_stone_2"
+
+
+def test_exportable_presets_leave_out_pups_and_images_only():
+    from cellgl.recipes import load_recipe
+
+    ok, refused = exportable_presets()
+    assert len(ok) >= 25 and "flagstone" in ok
+    for name, why in refused.items():
+        r = load_recipe(name)
+        assert getattr(r, "kind", None) == "pups" or "image" in why, (name, why)
+
+
+def test_float32_poisson_table_is_close_to_the_float64_one():
+    """The basis nodes compute the Poisson table of their density input in float32: a cell's
+    count differs from cellgl's only if its 32-bit hash falls between the two tables' entries."""
+    from cellgl.basis.population import poisson_thresholds
+    from cellgl.export.materialx_basis import float32_thresholds
+
+    worst = 0
+    for d in np.linspace(0.05, 16.0, 320):
+        a = poisson_thresholds(float(d)).astype(np.int64)
+        b = float32_thresholds(float(d)).astype(np.int64)
+        worst = max(worst, int(np.abs(a - b).sum()))
+    # the chance that one cell's count differs: worst / 2^32
+    assert worst / 2.0 ** 32 < 1e-5, worst
+
+
+# ------------------------------------------------------------------------------ the slow tier
+
+
+@pytest.mark.slow
+def test_every_preset_and_basis_node_validates_and_generates(full):
+    from cellgl.export.materialx_basis import basis_nodes
+
+    doc = _check_documents(full)
+    names, _ = exportable_presets()
+    nodes = [preset_node(n) for n in names]
+    _check_library_matches_nodes(doc, nodes + basis_nodes())
+    assert _generate_all(doc, full, "glsl") == len(names)
+    assert _generate_all(doc, full, "osl") == len(names)
+
+
+@pytest.mark.slow
+def test_usd_stage_of_every_preset(full):
+    Usd = pytest.importorskip("pxr.Usd")
+    stage = Usd.Stage.Open(str(full / "cellgl_materials.usda"))
+    names, _ = exportable_presets()
+    _check_stage(stage, [preset_node(n) for n in names])
+
+
+def _render_script(out, names, size, kind="preset"):
+    """Python code that renders the colour output of each node with RenderGlsl (texture space:
+    a flat quad over [0, 1]^2) and saves it as .npy."""
+    return f"""
+import numpy as np, MaterialX as mx
+from MaterialX import PyMaterialXGenGlsl as g, PyMaterialXGenShader as mxg
+from MaterialX import PyMaterialXRender as mxr, PyMaterialXRenderGlsl as rg
+sys_out = {str(out)!r}
+lib = mx.createDocument()
+mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+doc = mx.createDocument()
+mx.readFromXmlFile(doc, sys_out + "/cellgl_nodes.mtlx")
+doc.importLibrary(lib)
+gen = g.GlslShaderGenerator.create()
+ctx = mxg.GenContext(gen)
+ctx.registerSourceCodeSearchPath(mx.getDefaultDataSearchPath())
+ctx.registerSourceCodeSearchPath(mx.FilePath(sys_out))
+r = rg.GlslRenderer.create({size}, {size}, mxr.BaseType.FLOAT)
+r.initialize()
+r.setImageHandler(rg.GLTextureHandler.create(mxr.StbImageLoader.create()))
+for nd, output, typ, vals in {names!r}:
+    ng = doc.addNodeGraph(mx.createValidName("NG_" + nd + "_" + output))
+    n = ng.addNodeInstance(doc.getNodeDef(nd), "n")
+    for k, v in vals:
+        if k == "position_scale":           # position = texcoord * v (cells across the quad)
+            tc = ng.addNode("texcoord", "tc", "vector2")
+            mul = ng.addNode("multiply", "mul", "vector2")
+            mul.setConnectedNode("in1", tc)
+            mul.setInputValue("in2", float(v))
+            n.setConnectedNode("position", mul)
+        else:
+            n.setInputValue(k, mx.Vector2(*v) if isinstance(v, tuple) else v)
+    o = ng.addOutput("out", typ)
+    o.setNodeName("n")
+    o.setOutputString(output)
+    shader = gen.generate(ng.getName(), o, ctx)
+    r.createProgram(shader)
+    r.validateInputs()
+    r.renderTextureSpace(mx.Vector2(0, 0), mx.Vector2(1, 1))
+    img = r.captureImage(None)
+    a = np.array([[list(img.getTexelColor(x, y)) for x in range(img.getWidth())] for y in range(img.getHeight())])
+    np.save(sys_out + "/" + ng.getName() + ".npy", a[::-1])     # row 0 at the top, as the bake
+print("rendered")
+"""
+
+
+def _run_under_xvfb(code):
+    from tests.xvfb import some_display
+
+    with some_display() as disp:
+        env = dict(__import__("os").environ, DISPLAY=disp)
+        return subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True,
+                              timeout=1800, env=env)
+
+
+def _render_glsl(out, jobs, size=SIZE):
+    proc = _run_under_xvfb(_render_script(out, jobs, size))
+    assert proc.returncode == 0 and "rendered" in proc.stdout, proc.stderr[-4000:]
+    import MaterialX as mx
+
+    return {(nd, o): np.load(out / (mx.createValidName(f"NG_{nd}_{o}") + ".npy")) for nd, o, _, _ in jobs}
+
+
+def _bake(name, tmp_path, size=SIZE):
+    from PIL import Image
+
+    from cellgl.io.bake import bake
+
+    png = tmp_path / f"{name}.png"
+    bake(name, str(png), size=size)
+    return np.asarray(Image.open(png).convert("RGB"), np.int16)
+
+
+def _diff255(got, want):
+    return int(np.abs(np.round(np.clip(got[..., :3], 0, 1) * 255).astype(np.int16) - want).max())
+
+
+def test_renderglsl_renders_the_bake(one, tmp_path):
+    """RenderGlsl renders the node's colour (a flat quad, the texture space) as `cellgl bake`
+    writes it: within 2/255 per channel (footprint 1/64: the bake's band limit at 64 x 64)."""
+    got = _render_glsl(one, [("ND_cellgl_flagstone", "color", "color3", [("footprint", (1 / SIZE, 1 / SIZE))])])
+    assert _diff255(got["ND_cellgl_flagstone", "color"], _bake("flagstone", tmp_path)) <= 2
+
+
+@pytest.mark.slow
+def test_renderglsl_renders_every_preset_as_the_bake(full, tmp_path):
+    names, _ = exportable_presets()
+    jobs = [(f"ND_{node_name(n)}", "color", "color3", [("footprint", (1 / SIZE, 1 / SIZE))]) for n in names]
+    got = _render_glsl(full, jobs)
+    bad = {n: d for n in names if (d := _diff255(got[f"ND_{node_name(n)}", "color"], _bake(n, tmp_path))) > 2}
+    assert not bad, bad
+
+
+@pytest.mark.slow
+def test_renderglsl_basis_nodes_equal_cellular(full):
+    """The 2D basis nodes rendered by RenderGlsl against cellgl.cellular at the pixel centres
+    (8 cells across): F1..F4, the edge and the cell colour."""
+    import cellgl
+    from cellgl.export.materialx_basis import BASIS_DISTRIBUTIONS, BASIS_METRICS
+
+    jobs, cases = [], []
+    for m in BASIS_METRICS:
+        for dist in BASIS_DISTRIBUTIONS:
+            nd = f"ND_cellgl_cellular2d_{m}_{dist}"
+            # position = 8 uv: the graph's input is a texcoord times 8
+            vals = [("position_scale", 8.0), ("seed", 7)] + ([("jitter", 0.75)] if dist == "jitter" else [("density", 2.5)])
+            outs = ["f1", "f2", "f3", "f4", "cellcolor"] + (["edge"] if m == "euclidean" else [])
+            for o in outs:
+                jobs.append((nd, o, "color3" if o == "cellcolor" else "float", vals))
+            cases.append((nd, m, dist, dict(vals), outs))
+    got = _render_glsl(full, [(nd, o, t, v) for nd, o, t, v in jobs], size=32)
+    u = (np.arange(32) + 0.5) / 32
+    uu, vv = np.meshgrid(u, u)
+    pts = 8.0 * np.stack([uu, 1.0 - vv], -1).reshape(-1, 2)     # row 0 at the top: v = 1 - y
+    for nd, m, dist, vals, outs in cases:
+        kw = dict(metric=m, distribution=dist, seed=vals["seed"])
+        kw.update(jitter=vals["jitter"]) if dist == "jitter" else kw.update(density=vals["density"])
+        res = cellgl.cellular(pts, n=4, **kw)
+        F = np.asarray(res.F).reshape(32, 32, -1)
+        for k in range(4):
+            assert np.allclose(got[nd, f"f{k + 1}"][..., 0], F[..., k], atol=2e-5), (nd, k)
+        from cellgl.io.spec import id_colors
+
+        ids = np.asarray(res.id)[..., 0].reshape(32, 32).astype(np.uint32)
+        assert np.array_equal(np.round(got[nd, "cellcolor"][..., :3] * 255).astype(int),
+                              id_colors(ids).astype(int)), nd
