@@ -7,9 +7,9 @@ shaders they write (``genglsl``: ``void NAME(inputs..., out outputs...)`` in a `
 
 * every exportable texture preset (:func:`preset_node`): the node ``cellgl_<name>`` (``-`` in a
   preset's name becomes ``_``) with a ``texcoord`` (UV0) and a ``footprint`` input, the
-  recipe's run-time values as inputs, and the outputs the preset gives (``color`` color3,
-  ``height`` float, ``normal`` vector3: the tangent-space normal encoded as the bake's normal
-  map, ``0.5 n + 0.5``, OpenGL green);
+  recipe's run-time values as inputs, and the outputs ``color`` (color3), ``height`` (float)
+  and, where the preset gives a normal map, ``normal`` (vector3: the tangent-space normal
+  encoded as the bake's normal map, ``0.5 n + 0.5``, OpenGL green);
 * the cellular basis (:mod:`cellgl.export.materialx_basis`).
 
 The code is the exporter's (:mod:`cellgl.export.compiler`), folded for the recipe as every
@@ -291,7 +291,9 @@ def preset_node(recipe) -> MxNode:
                                   inactive=why, glsl=gl, osl=osl, var="cellgl_" + p.name if p.name in live else None))
         elif p.name not in off and not (re.fullmatch(r"c\d+", p.name) and v == 0):
             fixed.append(f"{p.name}={v}")
-    outs = [o for o in TEXTURE_OUTPUTS if o[0] == "color" or o[0] in r.outputs]
+    # colour and height always (every texture has a height; two outputs keep every node a
+    # multi-output node, connected by output name), the normal where the preset gives one
+    outs = [o for o in TEXTURE_OUTPUTS if o[0] != "normal" or o[0] in r.outputs]
     node = MxNode(name, "texture2d", _node_doc(r, fixed), inputs, outs,
                   example={"recipe": r.name, "outputs": [o[0] for o in outs]})
     entry = "cellgl_mx_texture"
