@@ -433,3 +433,106 @@ def test_renderglsl_basis_nodes_equal_cellular(full):
         ids = np.asarray(res.id)[..., 0].reshape(32, 32).astype(np.uint32)
         assert np.array_equal(np.round(got[nd, "cellcolor"][..., :3] * 255).astype(int),
                               id_colors(ids).astype(int)), nd
+
+
+# ------------------------------------------------------------------------------ GenOsl in Cycles
+
+
+def _inline_includes(src: str, root: Path, seen=None) -> str:
+    """``src`` with its ``#include "x"`` lines replaced by the files (MaterialX's genosl include
+    folder): Cycles' compiler (``_cycles.osl_compile``) takes one file and no include path.
+    Their ``#pragma once`` lines go (each file is inlined once): the compiler in bpy 4.5
+    crashes (SIGSEGV) on that directive, even in a shader that has nothing else."""
+    import re
+
+    seen = set() if seen is None else seen
+
+    def one(m):
+        name = m.group(1)
+        if name in seen:
+            return ""
+        seen.add(name)
+        text = re.sub(r"^#pragma once[^\n]*$", "", (root / name).read_text(), flags=re.M)
+        return _inline_includes(text, root, seen)
+
+    return re.sub(r'^#include "([^"]+)"[^\n]*$', one, src, flags=re.M)
+
+
+def _genosl_for_cycles(out, nodedef, footprint):
+    """GenOsl's shader of ``nodedef``'s colour output, made a Script node for the project's Cycles
+    scene (cellgl.blender.scene.set_script): includes inlined, its UV0 read from a ``point Vector``
+    input (Cycles' ``u``, ``v`` globals are the triangle's, not a UV map), the output named
+    ``Color``. The node's code is GenOsl's, untouched."""
+    import re
+
+    import MaterialX as mx
+    from MaterialX import PyMaterialXGenOsl as g
+    from MaterialX import PyMaterialXGenShader as mxg
+
+    doc = _read(out / "cellgl_nodes.mtlx")
+    gen = g.OslShaderGenerator.create()
+    o = _output_graph(doc, nodedef, "color", "color3", [("footprint", mx.Vector2(*footprint))])
+    src = gen.generate("cellgl_mx", o, _context(gen, out)).getSourceCode(mxg.PIXEL_STAGE)
+    inc = Path(mx.getDefaultDataSearchPath().find("libraries/stdlib/genosl/include/mx_funcs.h").asString()).parent
+    src = _inline_includes(src, inc)
+    head, sep, body = src.partition("\nshader ")
+    assert sep, "no shader block"
+    assert "vector2(u,v)" in body, "GenOsl's UV0 is no longer vector2(u,v): adapt the test"
+    body = body.replace("vector2(u,v)", "vector2(Vector[0], Vector[1])")
+    body = re.sub(r"\]\]\n\(\n", "]]\n(\n    point Vector = point(0, 0, 0),\n", body, count=1)
+    body = body.replace("output color out = ", "output color Color = ")
+    body = re.sub(r"^    out = ", "    Color = ", body, flags=re.M)
+    return head + sep + body
+
+
+def _need_bpy():
+    import importlib.util
+    import os
+
+    if importlib.util.find_spec("bpy") is None:
+        if os.environ.get("CELLGL_REQUIRE_BLENDER", "").strip().lower() in ("1", "true", "yes"):
+            pytest.fail("CELLGL_REQUIRE_BLENDER=1 but bpy (the [blender] extra) is not installed", pytrace=False)
+        pytest.skip("bpy (the [blender] extra) is not installed")
+
+
+def _cycles(texts: dict, outdir: Path, size: int = SIZE):
+    """Compile each OSL text with Cycles' compiler and render it in the project's scene (a flat
+    quad under an orthographic camera, one sample at each pixel centre) to ``outdir/NAME.png``."""
+    (outdir / "texts.json").write_text(json.dumps(texts))
+    code = ("import json, sys\nfrom cellgl.blender import osl_compile\n"
+            "from cellgl.blender.scene import build_scene, set_script, render_scene\n"
+            f"texts = json.load(open({str(outdir / 'texts.json')!r}))\n"
+            "for t in texts.values():\n    osl_compile(t)\n"
+            f"scene = build_scene('f1', {size})\n"
+            "for name, t in texts.items():\n"
+            "    set_script(scene, t, name)\n"
+            f"    render_scene(scene, {str(outdir)!r} + '/' + name + '.png')\n"
+            "print('rendered')\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=1800)
+    assert proc.returncode == 0 and "rendered" in proc.stdout, (proc.stdout[-2000:], proc.stderr[-4000:])
+
+
+def test_genosl_compiles_and_renders_in_cycles_as_the_bake(one, tmp_path):
+    _need_bpy()
+    from PIL import Image
+
+    texts = {"flagstone": _genosl_for_cycles(one, "ND_cellgl_flagstone", (1 / SIZE, 1 / SIZE))}
+    _cycles(texts, tmp_path)
+    got = np.asarray(Image.open(tmp_path / "flagstone.png").convert("RGB"), np.int16)
+    assert int(np.abs(got - _bake("flagstone", tmp_path)).max()) <= 2
+
+
+@pytest.mark.slow
+def test_genosl_renders_a_representative_set_in_cycles(full, tmp_path):
+    _need_bpy()
+    from PIL import Image
+
+    texts = {n: _genosl_for_cycles(full, f"ND_{node_name(n)}", (1 / SIZE, 1 / SIZE)) for n in CYCLES_SET}
+    _cycles(texts, tmp_path)
+    bad = {}
+    for n in CYCLES_SET:
+        got = np.asarray(Image.open(tmp_path / f"{n}.png").convert("RGB"), np.int16)
+        d = int(np.abs(got - _bake(n, tmp_path)).max())
+        if d > 2:
+            bad[n] = d
+    assert not bad, bad
