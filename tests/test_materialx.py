@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cellgl.export.materialx import MxInput, exportable_presets, export_materialx, node_name, preset_node
+from cellgl.export.materialx import exportable_presets, node_name, preset_node
+from cellgl.export.materialx_docs import export_materialx
 from cellgl.export.snippets import ExportError
 
 ROOT = Path(__file__).resolve().parents[1]

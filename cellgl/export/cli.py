@@ -98,7 +98,7 @@ def run_cli(args) -> int:
 
 def _run_materialx(args) -> int:
     """``cellgl export [PRESET_OR_RECIPE] --target materialx -o DIR``."""
-    from cellgl.export.materialx import export_materialx
+    from cellgl.export.materialx_docs import export_materialx
 
     if args.output is None:
         raise ExportError("--target materialx writes a directory of files: give it with -o DIR")

@@ -24,7 +24,7 @@ v = 0 at the top row. The node evaluates cellgl at ``(u, 1 - v)``, so the node a
 equals a ``cellgl bake`` image read by MaterialX's ``image`` node at the same ``texcoord``.
 
 The documents themselves (the node library, the example materials, the USD stage) are written
-by :mod:`cellgl.export.materialx_docs`.
+by :mod:`cellgl.export.materialx_docs` (:func:`~cellgl.export.materialx_docs.export_materialx`).
 """
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 
 from cellgl.export.snippets import ExportError
 
-__all__ = ["MxInput", "MxNode", "export_materialx", "preset_node", "node_name", "valid_name", "exportable_presets",
+__all__ = ["MxInput", "MxNode", "preset_node", "node_name", "valid_name", "exportable_presets",
            "TEXTURE_OUTPUTS", "MX_TYPES"]
 
 #: a valid MaterialX element name (MaterialX's own createValidName keeps [A-Za-z0-9_])
@@ -326,55 +326,3 @@ def _node_doc(r, fixed: list[str]) -> str:
             "`cellgl export RECIPE --set NAME=VALUE --target materialx` to change): "
             + ", ".join(fixed) + ", the colour ramp; every other weight c_i, c_ij is 0.")
 
-
-# ------------------------------------------------------------------------------ the export
-
-
-def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
-    """Write the MaterialX node library, the example materials and their USD stage to
-    ``outdir`` (:mod:`cellgl.export.materialx_docs`).
-
-    Parameters
-    ----------
-    outdir : str or path
-        A directory (created in an existing parent; an existing file is refused).
-    recipes : list, optional
-        Presets, recipe files or recipes (default: every exportable preset, see
-        :func:`exportable_presets`). A PUPs or image-driven recipe, an unknown preset or a name
-        that is not a valid MaterialX name is refused with :class:`ExportError`.
-    basis : bool
-        Include the cellular basis nodes (:mod:`cellgl.export.materialx_basis`).
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files written. Every node is compiled before the first file is written.
-    """
-    from cellgl.export import materialx_docs as docs
-    from cellgl.recipes import load_recipe
-    from cellgl.texture.recipe import RecipeError
-
-    docs.check_dir(outdir)
-    names = exportable_presets()[0] if recipes is None else list(recipes)
-    nodes, seen = [], {}
-    for rec in names:
-        try:
-            r = load_recipe(rec)
-        except (RecipeError, OSError) as exc:
-            raise ExportError(str(exc)) from None
-        node = preset_node(r)
-        if node.name in seen:
-            raise ExportError(f"recipes {seen[node.name]!r} and {r.name!r} give the same MaterialX node name "
-                              f"{node.name!r}; rename one")
-        seen[node.name] = r.name
-        nodes.append(node)
-    if basis:
-        from cellgl.export.materialx_basis import basis_nodes
-
-        nodes = basis_nodes() + nodes
-    files = {docs.LIBRARY: docs.library_document(nodes), docs.MATERIALS: docs.materials_document(nodes),
-             docs.USD: docs.usd_stage(nodes)}
-    for n in nodes:
-        files[f"genglsl/{n.name}.glsl"] = n.glsl
-        files[f"genosl/{n.name}.osl"] = n.osl
-    return docs.write_files(files, outdir)

@@ -19,7 +19,8 @@ from xml.sax.saxutils import quoteattr
 from cellgl.export.materialx import MxNode
 from cellgl.export.snippets import ExportError
 
-__all__ = ["LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage", "write_files"]
+__all__ = ["export_materialx", "LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage",
+           "write_files", "check_dir"]
 
 LIBRARY = "cellgl_nodes.mtlx"
 MATERIALS = "cellgl_materials.mtlx"
@@ -202,3 +203,56 @@ def write_files(files: dict[str, str], outdir) -> list[Path]:
             Path(tmp).write_text(text, encoding="utf-8", newline="\n")
         written.append(dest)
     return written
+
+
+# ------------------------------------------------------------------------------ the export
+
+
+def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
+    """Write the MaterialX node library, the example materials and their USD stage to
+    ``outdir`` (this module's files).
+
+    Parameters
+    ----------
+    outdir : str or path
+        A directory (created in an existing parent; an existing file is refused).
+    recipes : list, optional
+        Presets, recipe files or recipes (default: every exportable preset, see
+        :func:`exportable_presets`). A PUPs or image-driven recipe, an unknown preset or a name
+        that is not a valid MaterialX name is refused with :class:`ExportError`.
+    basis : bool
+        Include the cellular basis nodes (:mod:`cellgl.export.materialx_basis`).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written. Every node is compiled before the first file is written.
+    """
+    from cellgl.export.materialx import exportable_presets, preset_node
+    from cellgl.recipes import load_recipe
+    from cellgl.texture.recipe import RecipeError
+
+    check_dir(outdir)
+    names = exportable_presets()[0] if recipes is None else list(recipes)
+    nodes, seen = [], {}
+    for rec in names:
+        try:
+            r = load_recipe(rec)
+        except (RecipeError, OSError) as exc:
+            raise ExportError(str(exc)) from None
+        node = preset_node(r)
+        if node.name in seen:
+            raise ExportError(f"recipes {seen[node.name]!r} and {r.name!r} give the same MaterialX node name "
+                              f"{node.name!r}; rename one")
+        seen[node.name] = r.name
+        nodes.append(node)
+    if basis:
+        from cellgl.export.materialx_basis import basis_nodes
+
+        nodes = basis_nodes() + nodes
+    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes),
+             USD: usd_stage(nodes)}
+    for n in nodes:
+        files[f"genglsl/{n.name}.glsl"] = n.glsl
+        files[f"genosl/{n.name}.osl"] = n.osl
+    return write_files(files, outdir)
