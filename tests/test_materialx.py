@@ -338,6 +338,19 @@ for nd, output, typ, vals in {names!r}:
             mul.setConnectedNode("in1", tc)
             mul.setInputValue("in2", float(v))
             n.setConnectedNode("position", mul)
+        elif k == "position_scale3":        # position = (texcoord * v[0], v[1])
+            tc = ng.addNode("texcoord", "tc", "vector2")
+            mul = ng.addNode("multiply", "mul", "vector2")
+            mul.setConnectedNode("in1", tc)
+            mul.setInputValue("in2", float(v[0]))
+            sep = ng.addNode("separate2", "sep", "multioutput")
+            sep.setConnectedNode("in", mul)
+            pos = ng.addNode("combine3", "pos", "vector3")
+            for i, o in (("in1", "outx"), ("in2", "outy")):
+                pos.addInput(i, "float").setConnectedNode(sep)
+                pos.getInput(i).setOutputString(o)
+            pos.setInputValue("in3", float(v[1]))
+            n.setConnectedNode("position", pos)
         else:
             n.setInputValue(k, mx.Vector2(*v) if isinstance(v, tuple) else v)
     o = ng.addOutput("out", typ)
@@ -403,34 +416,44 @@ def test_renderglsl_renders_every_preset_as_the_bake(full, tmp_path):
 
 @pytest.mark.slow
 def test_renderglsl_basis_nodes_equal_cellular(full):
-    """The 2D basis nodes rendered by RenderGlsl against cellgl.cellular at the pixel centres
-    (8 cells across): F1..F4, the edge and the cell colour."""
+    """The 2D basis nodes (and two 3D ones, on the plane z = 0.3) rendered by RenderGlsl against
+    cellgl.cellular at the pixel centres (8 cells across): F1..F4, the cell colour and (Euclidean)
+    the edge and the n-sphere radius."""
     import cellgl
     from cellgl.export.materialx_basis import BASIS_DISTRIBUTIONS, BASIS_METRICS
 
     jobs, cases = [], []
-    for m in BASIS_METRICS:
-        for dist in BASIS_DISTRIBUTIONS:
-            nd = f"ND_cellgl_cellular2d_{m}_{dist}"
-            # position = 8 uv: the graph's input is a texcoord times 8
-            vals = [("position_scale", 8.0), ("seed", 7)] + ([("jitter", 0.75)] if dist == "jitter" else [("density", 2.5)])
-            outs = ["f1", "f2", "f3", "f4", "cellcolor"] + (["edge"] if m == "euclidean" else [])
+    combos = [(2, m, dist) for m in BASIS_METRICS for dist in BASIS_DISTRIBUTIONS]
+    combos += [(3, "euclidean", "poisson"), (3, "minkowski", "jitter")]
+    for dim, m, dist in combos:
+        if True:
+            nd = f"ND_cellgl_cellular{dim}d_{m}_{dist}"
+            # position = 8 uv (3D: z = 0.3): the graph's input is a texcoord times 8
+            vals = [("position_scale", 8.0) if dim == 2 else ("position_scale3", (8.0, 0.3)), ("seed", 7)]
+            vals += [("jitter", 0.75)] if dist == "jitter" else [("density", 2.5)]
+            outs = ["f1", "f2", "f3", "f4", "cellcolor"] + (["edge", "nsphere"] if m == "euclidean" else [])
             for o in outs:
                 jobs.append((nd, o, "color3" if o == "cellcolor" else "float", vals))
-            cases.append((nd, m, dist, dict(vals), outs))
+            cases.append((nd, dim, m, dist, dict(vals), outs))
     got = _render_glsl(full, [(nd, o, t, v) for nd, o, t, v in jobs], size=32)
     u = (np.arange(32) + 0.5) / 32
     uu, vv = np.meshgrid(u, u)
-    pts = 8.0 * np.stack([uu, 1.0 - vv], -1).reshape(-1, 2)     # row 0 at the top: v = 1 - y
-    for nd, m, dist, vals, outs in cases:
+    pts2 = 8.0 * np.stack([uu, 1.0 - vv], -1).reshape(-1, 2)     # row 0 at the top: v = 1 - y
+    for nd, dim, m, dist, vals, outs in cases:
+        pts = pts2 if dim == 2 else np.concatenate([pts2, np.full((len(pts2), 1), 0.3)], 1)
         kw = dict(metric=m, distribution=dist, seed=vals["seed"])
         kw.update(jitter=vals["jitter"]) if dist == "jitter" else kw.update(density=vals["density"])
-        res = cellgl.cellular(pts, n=4, **kw)
+        euclid = m == "euclidean"
+        res = cellgl.cellular(pts, n=4, outputs=("F", "id") + (("edge", "nsphere") if euclid else ()), **kw)
         F = np.asarray(res.F).reshape(32, 32, -1)
         for k in range(4):
             assert np.allclose(got[nd, f"f{k + 1}"][..., 0], F[..., k], atol=2e-5), (nd, k)
         from cellgl.io.spec import id_colors
 
+        if euclid:
+            for o in ("edge", "nsphere"):
+                want = np.asarray(getattr(res, o)).reshape(32, 32)
+                assert np.allclose(got[nd, o][..., 0], want, atol=2e-5), (nd, o)
         ids = np.asarray(res.id)[..., 0].reshape(32, 32).astype(np.uint32)
         assert np.array_equal(np.round(got[nd, "cellcolor"][..., :3] * 255).astype(int),
                               id_colors(ids).astype(int)), nd
