@@ -106,9 +106,17 @@ def render_worley(size: int, z: float) -> np.ndarray:
     r.createProgram(shader)
     r.validateInputs()
     r.renderTextureSpace(mx.Vector2(0, 0), mx.Vector2(1, 1))
-    img = r.captureImage(None)
-    buf = np.array([[list(img.getTexelColor(x, y))[:2] for x in range(size)] for y in range(size)])
-    return buf
+    return image_array(r.captureImage(None))[..., :2]
+
+
+def image_array(img) -> np.ndarray:
+    """A float MaterialX image as a NumPy copy (height, width, channels); row 0 is the image's
+    y = 0 (RenderGlsl: the bottom row, v ~ 0)."""
+    import ctypes
+
+    h, w, c = img.getHeight(), img.getWidth(), img.getChannelCount()
+    buf = (ctypes.c_float * (h * w * c)).from_address(img.getResourceBuffer())
+    return np.ctypeslib.as_array(buf).reshape(h, w, c).copy()
 
 
 def compare(size: int = 256, slices: int = 8) -> dict:

@@ -312,7 +312,7 @@ def _render_script(out, names, size, kind="preset"):
     """Python code that renders the colour output of each node with RenderGlsl (texture space:
     a flat quad over [0, 1]^2) and saves it as .npy."""
     return f"""
-import numpy as np, MaterialX as mx
+import ctypes, numpy as np, MaterialX as mx
 from MaterialX import PyMaterialXGenGlsl as g, PyMaterialXGenShader as mxg
 from MaterialX import PyMaterialXRender as mxr, PyMaterialXRenderGlsl as rg
 sys_out = {str(out)!r}
@@ -361,7 +361,9 @@ for nd, output, typ, vals in {names!r}:
     r.validateInputs()
     r.renderTextureSpace(mx.Vector2(0, 0), mx.Vector2(1, 1))
     img = r.captureImage(None)
-    a = np.array([[list(img.getTexelColor(x, y)) for x in range(img.getWidth())] for y in range(img.getHeight())])
+    buf = (ctypes.c_float * (img.getHeight() * img.getWidth() * img.getChannelCount())).from_address(
+        img.getResourceBuffer())
+    a = np.ctypeslib.as_array(buf).reshape(img.getHeight(), img.getWidth(), img.getChannelCount()).copy()
     np.save(sys_out + "/" + ng.getName() + ".npy", a[::-1])     # row 0 at the top, as the bake
 print("rendered")
 """
