@@ -190,15 +190,6 @@ def renamed(code: str, name: str) -> str:
     return re.sub(r"\bCellgl(?=\w)", "Cellgl" + camel, code)
 
 
-def _lit(v, mxtype: str) -> str:
-    if mxtype == "boolean":
-        return "true" if v else "false"
-    if mxtype == "integer":
-        return str(int(v))
-    r = repr(float(v))
-    return r if any(c in r for c in ".en") else r + ".0"
-
-
 def _wrapper_glsl(node: MxNode, entry: str, vars_: list[str]) -> str:
     """The node's GLSL function: set the code's variables from the inputs, then call ``entry``."""
     args = [f"{i.glsl} in_{i.name}" for i in node.inputs] + [f"out {o[2]} out_{o[0]}" for o in node.outputs]
