@@ -562,3 +562,15 @@ def test_genosl_renders_a_representative_set_in_cycles(full, tmp_path):
         if d > 2:
             bad[n] = d
     assert not bad, bad
+
+
+def test_set_values_are_the_inputs_defaults_and_the_fixed_values():
+    """A recipe changed with --set exports its values: an input's default, or (a value fixed at
+    export) the nodedef's doc."""
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe("flagstone").set_from_strings(["shade=0.5", "density=5"])
+    n = preset_node(r)
+    assert {i.name: i.value for i in n.inputs}["shade"] == 0.5
+    assert "density=5.0" in n.doc and "density" not in {i.name for i in n.inputs}
+    assert "cellgl_flagstone_density" not in n.glsl       # folded: no variable for it
