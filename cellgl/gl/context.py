@@ -1,10 +1,13 @@
 """Headless OpenGL context (3.3 core and up) and shader program cache.
 
-One context per backend per process. The backends of each platform, in the order tried when
+One context per backend per process. Every backend asks for the newest OpenGL core version
+first and walks down :data:`cellgl.gl.versions.LADDER` (4.6, 4.5, 4.3, 4.1, 3.3): some drivers
+(NVIDIA's) give exactly the version asked. The backends of each platform, in the order tried when
 none is named (:mod:`cellgl.gl.platforms`):
 
 ``egl`` (Linux)
-    glcontext's EGL backend (headless; Mesa llvmpipe or a GPU driver).
+    glcontext's EGL backend (headless; Mesa llvmpipe or a GPU driver) on EGL device 0, or
+    device ``N`` with ``CELLGL_DEVICE=N`` (:func:`cellgl.gl.platforms.egl_devices`).
 ``glx`` (Linux)
     glcontext's X11 backend, only when ``DISPLAY`` is set.
 ``wgl`` (Windows)
@@ -47,7 +50,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa, path, platforms
+from cellgl.gl import glsl, osmesa, path, platforms, versions
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -66,8 +69,8 @@ __all__ = [
 BACKENDS = platforms.ALL_BACKENDS
 
 #: Minimum OpenGL version, as moderngl's version code: 3.3 core runs the fragment path;
-#: 4.3 adds compute shaders (cellgl.gl.path).
-REQUIRED_GL = 330
+#: 4.3 adds compute shaders (cellgl.gl.path). The versions asked: cellgl.gl.versions.LADDER.
+REQUIRED_GL = versions.MINIMUM
 
 
 class ContextError(RuntimeError):
@@ -98,23 +101,11 @@ deferred: list = []
 
 def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
     """Wrap a loader object (None: glcontext's default backend) in a moderngl.Context
-    (moderngl 5.10+ internals)."""
-    ctx = moderngl.Context.__new__(moderngl.Context)
-    settings = {"context": loader} if loader is not None else {}
-    ctx.mglo, ctx.version_code = moderngl.mgl.create_context(glversion=require, mode=mode, **settings)
-    ctx._info = None
-    ctx._extensions = None
-    ctx.extra = None
-    ctx._gc_mode = None
-    ctx._objects = deque()
-    ctx._screen = None
-    ctx.fbo = None
-    if ctx.version_code < require:
-        raise ContextError(
-            f"OpenGL {require // 100}.{require % 100 // 10} required, "
-            f"got {ctx.version_code // 100}.{ctx.version_code % 100 // 10}"
-        )
-    return ctx
+    (:func:`cellgl.gl.versions.wrap_loader`; too old a context is a ContextError)."""
+    try:
+        return versions.wrap_loader(loader, require, mode)
+    except ValueError as exc:
+        raise ContextError(str(exc)) from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -124,14 +115,17 @@ def _context_from_loader(loader, require: int, mode: str = "standalone") -> mode
 
 def _create(backend: str) -> moderngl.Context:
     """A new context of ``backend``, current on this thread, on a display whose driver threads
-    exist in this process (see :mod:`cellgl.gl.surfaceless`)."""
+    exist in this process (see :mod:`cellgl.gl.surfaceless`): the first rung of
+    :data:`cellgl.gl.versions.LADDER` the driver gives."""
     why = platforms.check_backend(backend)
     if why:
         raise ContextError(why)
     if backend == "egl":
         if "egl" not in _tainted:
+            device = platforms.device_setting()
+            settings = {} if device is None else {"device_index": device}
             _opened.add("egl")
-            return moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_GL)
+            return versions.climb(lambda code: versions.glcontext_context("egl", code, **settings))
         if "egl-surfaceless" not in _tainted:
             from cellgl.gl.surfaceless import SurfacelessEGLLoader
 
@@ -145,14 +139,14 @@ def _create(backend: str) -> moderngl.Context:
             raise ContextError("DISPLAY is not set")
         _opened.add("glx")
         # glcontext's default backend on Linux is X11/GLX.
-        return moderngl.create_context(standalone=True, require=REQUIRED_GL)
+        return platforms.create_native("glx")
     if backend == "osmesa":
-        path = osmesa.probe()
+        library = osmesa.probe()
         _opened.add("osmesa")
-        return _from_loader(osmesa.OSMesaLoader(library=path))
+        return _from_loader(osmesa.OSMesaLoader(library=library))
     if backend in ("wgl", "cgl"):
         _opened.add(backend)
-        return platforms.create_native(backend, REQUIRED_GL)
+        return platforms.create_native(backend)
     raise _unknown_backend(backend)
 
 
@@ -162,11 +156,11 @@ _FORKED = ("this process was forked from one that had already used every display
 
 
 def _from_loader(loader) -> moderngl.Context:
-    try:
-        return _context_from_loader(loader, REQUIRED_GL)
-    except Exception:
-        loader.release()
-        raise
+    """A context over one of cellgl's loaders (OSMesa, surfaceless EGL), which climbed the
+    ladder itself (``loader.ladder``)."""
+    ctx = _context_from_loader(loader, REQUIRED_GL)
+    ctx._cellgl_ladder = getattr(loader, "ladder", None)
+    return ctx
 
 
 def _unknown_backend(name: object) -> ValueError:
@@ -296,6 +290,9 @@ def _section():
                     deferred.pop()()
 
 
+path.set_guard(_section)   # the known-answer checks (cellgl.gl.path) run holding the GL lock
+
+
 @contextlib.contextmanager
 def current(backend: str | None = None):
     """``with current() as ctx:``: the context (as :func:`get_context`) current on this thread,
@@ -390,6 +387,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 raise _unknown_backend(backend)
             candidates = [_check_name(backend, "backend argument")]
 
+        candidates = _device_candidates(candidates, backend)
         errors = []
         for name in candidates:
             if name in _contexts:
@@ -421,6 +419,24 @@ def get_context(backend: str | None = None) -> moderngl.Context:
             f"could not create an OpenGL context on {platforms.platform_name()}. Backends tried:\n"
             + "\n".join(errors) + note + "\n" + platforms.install_hint()
         )
+
+
+def _device_candidates(candidates: list[str], backend: str | None) -> list[str]:
+    """With ``CELLGL_DEVICE`` set: only ``egl`` (the API that picks a device), after checking
+    the index against this machine's EGL devices (ValueError naming them). A backend named
+    explicitly that is not ``egl`` is a ContextError (one line)."""
+    device = platforms.device_setting()
+    if device is None:
+        return candidates
+    named = backend is not None or bool(os.environ.get("CELLGL_BACKEND", "").strip())
+    if named and candidates != ["egl"] or "egl" not in platforms.platform_backends():
+        raise ContextError(
+            f"CELLGL_DEVICE={device} picks an EGL device, but the backend is "
+            f"{candidates[0] if named else platforms.platform_backends()[0]} on "
+            f"{platforms.platform_name()}: unset CELLGL_DEVICE"
+            + (" or set CELLGL_BACKEND=egl" if "egl" in platforms.platform_backends() else ""))
+    platforms.check_device(device)
+    return ["egl"]
 
 
 def _available(backend: str) -> bool:
@@ -466,6 +482,9 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
     dict
         Keys ``backend``, ``path`` (the GPU path that runs: ``compute`` or ``fragment``,
         :func:`cellgl.gl.path.gpu_path`), ``GL_VENDOR``, ``GL_RENDERER``, ``GL_VERSION``, ``gl_version_code``,
+        ``gl_ladder`` (the versions asked and refused, :func:`cellgl.gl.versions.describe`),
+        ``egl_device`` (the EGL device in use, ``CELLGL_DEVICE``; None off EGL), ``selfcheck``
+        (the known-answer check of the path, :func:`cellgl.gl.path.check_summary`),
         ``GL_MAX_COMPUTE_WORK_GROUP_COUNT`` (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_SIZE``
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
         (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
@@ -483,12 +502,26 @@ def _info(ctx: moderngl.Context) -> dict:
         "GL_RENDERER": info.get("GL_RENDERER"),
         "GL_VERSION": info.get("GL_VERSION"),
         "gl_version_code": ctx.version_code,
+        "gl_ladder": versions.describe(ctx),
+        "egl_device": _device_info(ctx),
+        "selfcheck": path.check_summary(ctx),
         "GL_MAX_COMPUTE_WORK_GROUP_COUNT": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_COUNT", ())),
         "GL_MAX_COMPUTE_WORK_GROUP_SIZE": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_SIZE", ())),
         "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS": info.get("GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS"),
         "GL_MAX_SHADER_STORAGE_BLOCK_SIZE": info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"),
         "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE": _get_integer(ctx, _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE),
     }
+
+
+def _device_info(ctx: moderngl.Context) -> str | None:
+    """``"0 of 2: NVIDIA ..."`` for an EGL context made on glcontext's device display, else None."""
+    if _backend_of.get(id(ctx)) != "egl" or "egl-surfaceless" in _opened:
+        return None
+    devices = platforms.egl_devices()
+    index = platforms.device_setting() or 0
+    if not devices or index >= len(devices):
+        return str(index)
+    return f"{index} of {len(devices)}: {devices[index]}"
 
 
 def check_gl_error(ctx: moderngl.Context | None = None) -> None:
