@@ -66,8 +66,11 @@ def test_context_info_keys(ctx):
     for key in ("backend", "GL_VENDOR", "GL_RENDERER", "GL_VERSION", "gl_version_code",
                 "GL_MAX_COMPUTE_WORK_GROUP_COUNT", "GL_MAX_COMPUTE_WORK_GROUP_SIZE",
                 "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS", "GL_MAX_SHADER_STORAGE_BLOCK_SIZE",
-                "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE"):
+                "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE", "gl_ladder", "egl_device", "selfcheck"):
         assert key in info, key
+    # the ladder's newest rung first: a driver that gives exactly the version asked (NVIDIA's)
+    # gives its highest (tests/test_versions.py)
+    assert info["gl_ladder"].endswith(f"asked, got {ctx.version_code // 100}.{ctx.version_code % 100 // 10}")
     assert info["backend"] in context.BACKENDS
     assert len(info["GL_MAX_COMPUTE_WORK_GROUP_COUNT"]) == 3
     assert min(info["GL_MAX_COMPUTE_WORK_GROUP_SIZE"]) >= 64  # GL 4.3 minimum
@@ -179,6 +182,7 @@ def test_osmesa_backend_runs_compute():
     info = json.loads(r.stdout)
     assert info["backend"] == "osmesa"
     assert info["gl_version_code"] >= 430
+    assert info["gl_ladder"].startswith("4.6 ")   # OSMesa climbs the same ladder
     assert info["ok"] and info["error"] == "GL_NO_ERROR"
 
 

@@ -483,7 +483,7 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
         Keys ``backend``, ``path`` (the GPU path that runs: ``compute`` or ``fragment``,
         :func:`cellgl.gl.path.gpu_path`), ``GL_VENDOR``, ``GL_RENDERER``, ``GL_VERSION``, ``gl_version_code``,
         ``gl_ladder`` (the versions asked and refused, :func:`cellgl.gl.versions.describe`),
-        ``egl_device`` (the EGL device in use, ``CELLGL_DEVICE``; None off EGL), ``selfcheck``
+        ``egl_device`` (the EGL device in use, ``CELLGL_DEVICE``), ``selfcheck``
         (the known-answer check of the path, :func:`cellgl.gl.path.check_summary`),
         ``GL_MAX_COMPUTE_WORK_GROUP_COUNT`` (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_SIZE``
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
@@ -520,10 +520,13 @@ def _path_or_why(ctx: moderngl.Context) -> str:
         return "none (no path passes the known-answer check)"
 
 
-def _device_info(ctx: moderngl.Context) -> str | None:
-    """``"0 of 2: NVIDIA ..."`` for an EGL context made on glcontext's device display, else None."""
-    if _backend_of.get(id(ctx)) != "egl" or "egl-surfaceless" in _opened:
-        return None
+def _device_info(ctx: moderngl.Context) -> str:
+    """``"0 of 2: NVIDIA ..."`` for an EGL context made on glcontext's device display."""
+    backend = _backend_of.get(id(ctx))
+    if backend != "egl":
+        return f"n/a (the {backend or 'attached'} context has no device choice)"
+    if "egl-surfaceless" in _opened:
+        return "n/a (a forked child's surfaceless display)"
     devices = platforms.egl_devices()
     index = platforms.device_setting() or 0
     if not devices or index >= len(devices):
