@@ -17,6 +17,11 @@ from cellgl.gl import glsl, platforms
 
 REPO = Path(__file__).resolve().parent.parent
 
+
+def _pythonpath() -> str:
+    """The checkout first, then what the test process had (a stand-in driver: tests/standin)."""
+    return os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
+
 TINY = """#version 430
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) buffer Out { uint values[]; };
@@ -150,7 +155,7 @@ def test_unknown_backend_from_env(monkeypatch):
 
 
 def _python(code: str, **env) -> subprocess.CompletedProcess:
-    full_env = dict(os.environ, PYTHONPATH=str(REPO), **env)
+    full_env = dict(os.environ, PYTHONPATH=_pythonpath(), **env)
     return subprocess.run([sys.executable, "-c", code], cwd=REPO, env=full_env,
                           capture_output=True, text=True, timeout=120)
 
@@ -188,7 +193,7 @@ def test_osmesa_backend_runs_compute():
 
 def test_cli_info_prints_renderer(ctx):
     expected = context.context_info(ctx)
-    env = dict(os.environ, PYTHONPATH=str(REPO), CELLGL_BACKEND=expected["backend"])
+    env = dict(os.environ, PYTHONPATH=_pythonpath(), CELLGL_BACKEND=expected["backend"])
     r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=REPO, env=env,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
@@ -208,7 +213,7 @@ def test_cli_info_prints_renderer(ctx):
 
 
 def test_cli_error_is_one_line_exit_2():
-    env = dict(os.environ, PYTHONPATH=str(REPO), CELLGL_BACKEND="nonsense")
+    env = dict(os.environ, PYTHONPATH=_pythonpath(), CELLGL_BACKEND="nonsense")
     r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=REPO, env=env,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
