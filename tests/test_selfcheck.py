@@ -4,10 +4,12 @@ every call raises; a right path passes silently, once per context."""
 
 from __future__ import annotations
 
+import os
 import warnings
 
 import numpy as np
 import pytest
+from conftest import _check_paths
 
 import cellgl
 from cellgl.basis import selfcheck
@@ -31,7 +33,15 @@ def fresh(ctx, monkeypatch):
 
     monkeypatch.setattr(selfcheck, "gpu_cellular", counted)
     yield calls
+    # the session's context checked again with the real GPU code, as conftest's ctx leaves it
     path.forget(ctx)
+    broken, selfcheck.gpu_cellular = selfcheck.gpu_cellular, real
+    env = {k: os.environ.pop(k) for k in ("CELLGL_SELFCHECK", "CELLGL_PATH") if k in os.environ}
+    try:
+        _check_paths(ctx)
+    finally:
+        selfcheck.gpu_cellular = broken
+        os.environ.update(env)
 
 
 def _break(monkeypatch, ctx, broken: set, how: str = "F"):
@@ -178,3 +188,12 @@ def test_importing_any_gpu_layer_registers_the_check():
         r = subprocess.run([sys.executable, "-c", code], cwd=repo, capture_output=True, text=True,
                            timeout=120, env={**__import__("os").environ, "PYTHONPATH": str(repo)})
         assert r.returncode == 0 and r.stdout.strip() == "1", (module, r.stderr)
+
+
+def test_every_path_of_this_driver_passes(ctx):
+    """On the machine the suite runs on (llvmpipe in CI, a GPU under .ci/gpu-check) both paths
+    give the reference's answers: conftest's ctx ran the check on each."""
+    summary = path.check_summary(ctx)
+    assert "FAILED" not in summary, summary
+    for p in ("compute", "fragment") if path.has_compute(ctx) else ("fragment",):
+        assert f"{p}: passed" in summary, summary
