@@ -42,15 +42,14 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import ctypes.util
 import os
 import threading
-from collections import deque
 from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa, path, platforms, versions
+from cellgl.gl import backends, glsl, osmesa, path, platforms, versions
+from cellgl.gl.backends import ContextError
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -71,10 +70,6 @@ BACKENDS = platforms.ALL_BACKENDS
 #: Minimum OpenGL version, as moderngl's version code: 3.3 core runs the fragment path;
 #: 4.3 adds compute shaders (cellgl.gl.path). The versions asked: cellgl.gl.versions.LADDER.
 REQUIRED_GL = versions.MINIMUM
-
-
-class ContextError(RuntimeError):
-    """No usable OpenGL context (3.3 core or later) could be created."""
 
 
 _lock = threading.RLock()
@@ -99,68 +94,18 @@ _orphans: list = []
 deferred: list = []
 
 
-def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
-    """Wrap a loader object (None: glcontext's default backend) in a moderngl.Context
-    (:func:`cellgl.gl.versions.wrap_loader`; too old a context is a ContextError)."""
-    try:
-        return versions.wrap_loader(loader, require, mode)
-    except ValueError as exc:
-        raise ContextError(str(exc)) from None
-
-
 # --------------------------------------------------------------------------------------------
 # Backends
 # --------------------------------------------------------------------------------------------
 
 
 def _create(backend: str) -> moderngl.Context:
-    """A new context of ``backend``, current on this thread, on a display whose driver threads
-    exist in this process (see :mod:`cellgl.gl.surfaceless`): the first rung of
-    :data:`cellgl.gl.versions.LADDER` the driver gives."""
-    why = platforms.check_backend(backend)
-    if why:
-        raise ContextError(why)
-    if backend == "egl":
-        if "egl" not in _tainted:
-            device = platforms.device_setting()
-            settings = {} if device is None else {"device_index": device}
-            _opened.add("egl")
-            return versions.climb(lambda code: versions.glcontext_context("egl", code, **settings))
-        if "egl-surfaceless" not in _tainted:
-            from cellgl.gl.surfaceless import SurfacelessEGLLoader
-
-            _opened.add("egl-surfaceless")
-            return _from_loader(SurfacelessEGLLoader())
-        raise ContextError(_FORKED)
-    if backend in _tainted:
-        raise ContextError(_FORKED)
-    if backend == "glx":
-        if not os.environ.get("DISPLAY"):
-            raise ContextError("DISPLAY is not set")
-        _opened.add("glx")
-        # glcontext's default backend on Linux is X11/GLX.
-        return platforms.create_native("glx")
-    if backend == "osmesa":
-        library = osmesa.probe()
-        _opened.add("osmesa")
-        return _from_loader(osmesa.OSMesaLoader(library=library))
-    if backend in ("wgl", "cgl"):
-        _opened.add(backend)
-        return platforms.create_native(backend)
-    raise _unknown_backend(backend)
+    """A new context of ``backend`` (:func:`cellgl.gl.backends.create`), current on this thread."""
+    return backends.create(backend, _tainted, _opened)
 
 
-_FORKED = ("this process was forked from one that had already used every display this backend "
-           "can open (Mesa's driver threads do not survive fork, so those displays would hang); "
-           "start it with multiprocessing's 'spawn' or 'forkserver' method instead")
-
-
-def _from_loader(loader) -> moderngl.Context:
-    """A context over one of cellgl's loaders (OSMesa, surfaceless EGL), which climbed the
-    ladder itself (``loader.ladder``)."""
-    ctx = _context_from_loader(loader, REQUIRED_GL)
-    ctx._cellgl_ladder = getattr(loader, "ladder", None)
-    return ctx
+def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
+    return backends.context_from_loader(loader, require, mode)
 
 
 def _unknown_backend(name: object) -> ValueError:
@@ -387,7 +332,8 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 raise _unknown_backend(backend)
             candidates = [_check_name(backend, "backend argument")]
 
-        candidates = _device_candidates(candidates, backend)
+        candidates = platforms.device_backends(
+            candidates, backend is not None or bool(os.environ.get("CELLGL_BACKEND", "").strip()))
         errors = []
         for name in candidates:
             if name in _contexts:
@@ -419,24 +365,6 @@ def get_context(backend: str | None = None) -> moderngl.Context:
             f"could not create an OpenGL context on {platforms.platform_name()}. Backends tried:\n"
             + "\n".join(errors) + note + "\n" + platforms.install_hint()
         )
-
-
-def _device_candidates(candidates: list[str], backend: str | None) -> list[str]:
-    """With ``CELLGL_DEVICE`` set: only ``egl`` (the API that picks a device), after checking
-    the index against this machine's EGL devices (ValueError naming them). A backend named
-    explicitly that is not ``egl`` is a ContextError (one line)."""
-    device = platforms.device_setting()
-    if device is None:
-        return candidates
-    named = backend is not None or bool(os.environ.get("CELLGL_BACKEND", "").strip())
-    if named and candidates != ["egl"] or "egl" not in platforms.platform_backends():
-        raise ContextError(
-            f"CELLGL_DEVICE={device} picks an EGL device, but the backend is "
-            f"{candidates[0] if named else platforms.platform_backends()[0]} on "
-            f"{platforms.platform_name()}: unset CELLGL_DEVICE"
-            + (" or set CELLGL_BACKEND=egl" if "egl" in platforms.platform_backends() else ""))
-    platforms.check_device(device)
-    return ["egl"]
 
 
 def _available(backend: str) -> bool:
@@ -521,17 +449,10 @@ def _path_or_why(ctx: moderngl.Context) -> str:
 
 
 def _device_info(ctx: moderngl.Context) -> str:
-    """``"0 of 2: NVIDIA ..."`` for an EGL context made on glcontext's device display."""
     backend = _backend_of.get(id(ctx))
-    if backend != "egl":
+    if backend != "egl" or "egl-surfaceless" in _opened:
         return f"n/a (the {backend or 'attached'} context has no device choice)"
-    if "egl-surfaceless" in _opened:
-        return "n/a (a forked child's surfaceless display)"
-    devices = platforms.egl_devices()
-    index = platforms.device_setting() or 0
-    if not devices or index >= len(devices):
-        return str(index)
-    return f"{index} of {len(devices)}: {devices[index]}"
+    return platforms.device_line(platforms.device_setting() or 0)
 
 
 def check_gl_error(ctx: moderngl.Context | None = None) -> None:

@@ -38,7 +38,7 @@ from cellgl.gl import versions
 
 __all__ = ["ALL_BACKENDS", "PLATFORM_BACKENDS", "platform", "platform_backends", "check_backend",
            "create_native", "install_hint", "get_proc", "CurrentEGLLoader", "egl_devices",
-           "device_setting", "check_device"]
+           "device_setting", "check_device", "device_backends", "device_line"]
 
 #: Backends of each platform, in the order tried (those with a condition are tried only when it
 #: holds; see :func:`platform_backends`).
@@ -193,6 +193,36 @@ def device_setting() -> int | None:
         raise ValueError(f"CELLGL_DEVICE={index} and GLCONTEXT_DEVICE_INDEX={other} name "
                          "different EGL devices; unset one of them")
     return index
+
+
+def device_backends(candidates: list[str], named: bool) -> list[str]:
+    """``candidates`` (the backends to try; ``named``: chosen by the user), or with
+    ``CELLGL_DEVICE`` set only ``egl`` (the API that picks a device), the index checked.
+
+    Raises
+    ------
+    ValueError
+        A bad ``CELLGL_DEVICE`` (naming the devices), or one set beside another backend.
+    """
+    device = device_setting()
+    if device is None:
+        return candidates
+    own = platform_backends()
+    if named and candidates != ["egl"] or "egl" not in own:
+        raise ValueError(
+            f"CELLGL_DEVICE={device} picks an EGL device, but the backend is "
+            f"{candidates[0] if named else own[0]} on {platform_name()}: unset CELLGL_DEVICE"
+            + (" or set CELLGL_BACKEND=egl" if "egl" in own else ""))
+    check_device(device)
+    return ["egl"]
+
+
+def device_line(index: int) -> str:
+    """``"0 of 2: NVIDIA ..."``: device ``index`` among this machine's EGL devices."""
+    devices = egl_devices()
+    if not devices or index >= len(devices):
+        return str(index)
+    return f"{index} of {len(devices)}: {devices[index]}"
 
 
 def check_device(index: int) -> None:
