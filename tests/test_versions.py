@@ -112,3 +112,26 @@ def test_info_names_the_device_and_refuses_a_bad_one():
     assert r.stderr.startswith("cellgl: error: CELLGL_DEVICE=99 is not an EGL device of this "
                                "machine; accepted values: 0..")
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+
+
+def test_the_viewer_window_climbs_the_same_ladder():
+    app = pytest.importorskip("viewer.app", reason="the viewer extra (glfw, imgui-bundle)")
+    assert app.WINDOW_VERSIONS == ((4, 6), (4, 5), (4, 3), (4, 1), (3, 3))
+
+
+def test_the_osmesa_probe_climbs_the_same_ladder(monkeypatch):
+    from cellgl.gl import osmesa
+
+    seen = []
+
+    def run(argv, **kw):
+        seen.append(argv)
+        return subprocess.CompletedProcess(argv, 0, b"", b"")
+
+    monkeypatch.setattr(osmesa.ctypes.util, "find_library", lambda name: "/opt/libOSMesa.so")
+    monkeypatch.setattr(osmesa.subprocess, "run", run)
+    monkeypatch.setattr(osmesa, "probed", {})
+    assert osmesa.probe() == "/opt/libOSMesa.so"
+    assert seen[0][-2:] == ["/opt/libOSMesa.so", "460,450,430,410,330"]
+    # and the probe's script reads the ladder from there
+    assert "sys.argv[2].split" in osmesa._PROBE
