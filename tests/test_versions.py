@@ -97,6 +97,7 @@ def test_exact_version_driver_gets_the_highest_it_has(limit, code, path):
     assert ladder.startswith("4.6 refused (eglCreateContext failed (0x3009))")
     assert ladder.endswith(f"{versions.label(code)} asked, got {versions.label(code)}")
     assert ladder.count("refused") == versions.LADDER.index(code)
+    assert info["selfcheck"].startswith(f"{path}: passed (")     # the known-answer check ran
 
 
 @linux_only
