@@ -110,7 +110,7 @@ def check(ctx, path: str) -> str | None:
     that is not this thread's cellgl context is not checked (the basis runs on the latter)."""
     from cellgl.gl import context
 
-    if context.backend_name(ctx) is None or context.get_context() is not ctx:
+    if not context.computes_on(ctx) or context.get_context() is not ctx:
         _path.note(ctx, path, "not checked (not the context cellgl computes on)")
         return None
     started = time.perf_counter()

@@ -376,6 +376,14 @@ def _available(backend: str) -> bool:
     return True
 
 
+def computes_on(ctx: moderngl.Context) -> bool:
+    """Whether cellgl's own calls on this thread (those that take no context: the basis, the
+    textures) run on ``ctx``, as :func:`get_context` would answer, without making a context."""
+    name = os.environ.get("CELLGL_BACKEND", "").strip().lower() or _default_backend
+    private = getattr(_tls, "private", None) or {}
+    return name is not None and (ctx is private.get(name) or ctx is _contexts.get(name))
+
+
 def backend_name(ctx: moderngl.Context | None = None) -> str | None:
     """Return the backend name a context made by :func:`get_context` came from."""
     ctx = ctx if ctx is not None else get_context()
