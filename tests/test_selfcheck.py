@@ -197,3 +197,13 @@ def test_every_path_of_this_driver_passes(ctx):
     assert "FAILED" not in summary, summary
     for p in ("compute", "fragment") if path.has_compute(ctx) else ("fragment",):
         assert f"{p}: passed" in summary, summary
+
+
+def test_a_context_cellgl_does_not_compute_on_is_not_checked(ctx, fresh):
+    class Window:   # a context cellgl attached to (the viewer's window), or one asked for by name
+        version_code = 450
+
+    other = Window()
+    assert selfcheck.check(other, "compute") is None
+    assert fresh == []                                   # no GPU work for it
+    assert other._cellgl_path["notes"]["compute"].startswith("not checked")
