@@ -136,3 +136,34 @@ def test_the_osmesa_probe_climbs_the_same_ladder(monkeypatch):
     assert seen[0][-2:] == ["/opt/libOSMesa.so", "460,450,430,410,330"]
     # and the probe's script reads the ladder from there
     assert "sys.argv[2].split" in osmesa._PROBE
+
+
+@linux_only
+def test_a_context_below_the_minimum_is_refused_and_released(ctx):
+    import glcontext
+
+    from cellgl.gl import context
+
+    inner = glcontext.get_backend_by_name("egl")(mode="standalone", glversion=330)
+    released = []
+
+    class Spy:
+        def load_opengl_function(self, name):
+            return inner.load_opengl_function(name)
+
+        def __enter__(self):
+            return inner.__enter__()
+
+        def __exit__(self, *args):
+            return inner.__exit__(*args)
+
+        def release(self):
+            released.append(True)
+            inner.release()
+
+    try:
+        with pytest.raises(ValueError, match=r"^OpenGL 9\.9 required, got \d\.\d$"):
+            versions.wrap_loader(Spy(), minimum=990)
+        assert released == [True]
+    finally:
+        context.get_context()        # the session's context current again

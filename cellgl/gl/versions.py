@@ -95,7 +95,7 @@ def wrap_loader(loader, minimum: int = MINIMUM, mode: str = "standalone"):
     ``__enter__``/``__exit__``: glcontext's or cellgl's own; None: glcontext's default backend
     detecting the current context), refused below ``minimum`` (moderngl 5.10+ internals).
 
-    The loader is released when the context cannot be made or is too old.
+    A standalone context's loader is released when the context cannot be made or is too old.
     """
     import moderngl
 
@@ -117,7 +117,8 @@ def wrap_loader(loader, minimum: int = MINIMUM, mode: str = "standalone"):
     ctx.fbo = None
     if ctx.version_code < minimum:
         got = ctx.version_code
-        ctx.release()
+        if mode == "standalone":   # ours; a detected one (a window's) belongs to its owner
+            ctx.release()
         raise ValueError(f"OpenGL {label(minimum)} required, got {label(got)}")
     return ctx
 
