@@ -48,6 +48,7 @@ def _fmt(value: object) -> str:
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
+    import cellgl.basis  # noqa: F401 - registers the known-answer check of the path (selfcheck)
     from cellgl.gl import context
 
     ctx = context.get_context(args.backend)
@@ -57,7 +58,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
     else:
         for key, value in info.items():
             print(f"{key}: {_fmt(value)}")
-    return 0
+    return 1 if info["path"].startswith("none") else 0
 
 
 # --------------------------------------------------------------------------------------------

@@ -24,11 +24,37 @@ def ctx():
     from cellgl.gl import context
 
     try:
-        return context.get_context()
+        gl = context.get_context()
     except (context.ContextError, ValueError) as exc:
         if require_gpu():
             pytest.fail(f"CELLGL_REQUIRE_GPU=1 but no OpenGL 3.3 core context: {exc}", pytrace=False)
         pytest.skip(f"no OpenGL 3.3 core context: {exc}")
+    _check_paths(gl)
+    return gl
+
+
+def _check_paths(gl) -> None:
+    """The known-answer check of each path of the context (cellgl.basis.selfcheck) runs now, not
+    on the first use inside some test that patches the GPU code. A path that fails it raises its
+    PathError in the tests that use it."""
+    import os
+
+    import cellgl.basis  # noqa: F401 - registers the check
+    from cellgl.gl import path
+
+    saved = os.environ.get("CELLGL_PATH")
+    try:
+        for forced in ("", "fragment") if path.has_compute(gl) else ("",):
+            os.environ["CELLGL_PATH"] = forced
+            try:
+                path.gpu_path(gl)
+            except path.PathError:
+                pass
+    finally:
+        if saved is None:
+            os.environ.pop("CELLGL_PATH", None)
+        else:
+            os.environ["CELLGL_PATH"] = saved
 
 
 @pytest.fixture(autouse=True)

@@ -17,6 +17,11 @@ from cellgl.gl import glsl, platforms
 
 REPO = Path(__file__).resolve().parent.parent
 
+
+def _pythonpath() -> str:
+    """The checkout first, then what the test process had (a stand-in driver: tests/standin)."""
+    return os.pathsep.join(p for p in (str(REPO), os.environ.get("PYTHONPATH", "")) if p)
+
 TINY = """#version 430
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) buffer Out { uint values[]; };
@@ -66,8 +71,11 @@ def test_context_info_keys(ctx):
     for key in ("backend", "GL_VENDOR", "GL_RENDERER", "GL_VERSION", "gl_version_code",
                 "GL_MAX_COMPUTE_WORK_GROUP_COUNT", "GL_MAX_COMPUTE_WORK_GROUP_SIZE",
                 "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS", "GL_MAX_SHADER_STORAGE_BLOCK_SIZE",
-                "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE"):
+                "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE", "gl_ladder", "egl_device", "selfcheck"):
         assert key in info, key
+    # the ladder's newest rung first: a driver that gives exactly the version asked (NVIDIA's)
+    # gives its highest (tests/test_versions.py)
+    assert info["gl_ladder"].endswith(f"asked, got {ctx.version_code // 100}.{ctx.version_code % 100 // 10}")
     assert info["backend"] in context.BACKENDS
     assert len(info["GL_MAX_COMPUTE_WORK_GROUP_COUNT"]) == 3
     assert min(info["GL_MAX_COMPUTE_WORK_GROUP_SIZE"]) >= 64  # GL 4.3 minimum
@@ -147,7 +155,7 @@ def test_unknown_backend_from_env(monkeypatch):
 
 
 def _python(code: str, **env) -> subprocess.CompletedProcess:
-    full_env = dict(os.environ, PYTHONPATH=str(REPO), **env)
+    full_env = dict(os.environ, PYTHONPATH=_pythonpath(), **env)
     return subprocess.run([sys.executable, "-c", code], cwd=REPO, env=full_env,
                           capture_output=True, text=True, timeout=120)
 
@@ -179,12 +187,13 @@ def test_osmesa_backend_runs_compute():
     info = json.loads(r.stdout)
     assert info["backend"] == "osmesa"
     assert info["gl_version_code"] >= 430
+    assert info["gl_ladder"].startswith("4.6 ")   # OSMesa climbs the same ladder
     assert info["ok"] and info["error"] == "GL_NO_ERROR"
 
 
 def test_cli_info_prints_renderer(ctx):
     expected = context.context_info(ctx)
-    env = dict(os.environ, PYTHONPATH=str(REPO), CELLGL_BACKEND=expected["backend"])
+    env = dict(os.environ, PYTHONPATH=_pythonpath(), CELLGL_BACKEND=expected["backend"])
     r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=REPO, env=env,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
@@ -204,7 +213,7 @@ def test_cli_info_prints_renderer(ctx):
 
 
 def test_cli_error_is_one_line_exit_2():
-    env = dict(os.environ, PYTHONPATH=str(REPO), CELLGL_BACKEND="nonsense")
+    env = dict(os.environ, PYTHONPATH=_pythonpath(), CELLGL_BACKEND="nonsense")
     r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=REPO, env=env,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2

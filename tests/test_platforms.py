@@ -1,6 +1,7 @@
 """Context selection on each desktop platform (cellgl.gl.platforms), tested here on Linux by
-patching ``sys.platform`` and glcontext's entry (``moderngl.create_context``, which calls
-glcontext's default backend: WGL on Windows, CGL on macOS)."""
+patching ``sys.platform`` and glcontext's entry (``cellgl.gl.versions.glcontext_context``, which
+calls glcontext's default backend: WGL on Windows, CGL on macOS), and the EGL device setting
+(``CELLGL_DEVICE``)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import sys
 
 import pytest
 
-from cellgl.gl import context, osmesa, platforms
+from cellgl.gl import context, osmesa, platforms, versions
 
 
 class _FakeMglo:
@@ -36,24 +37,26 @@ def clean_state(monkeypatch):
         monkeypatch.setattr(context, name, value)
     monkeypatch.delenv("CELLGL_BACKEND", raising=False)
     monkeypatch.delenv("CELLGL_PATH", raising=False)
+    monkeypatch.delenv("CELLGL_DEVICE", raising=False)
+    monkeypatch.delenv("GLCONTEXT_DEVICE_INDEX", raising=False)
+    monkeypatch.setenv("CELLGL_SELFCHECK", "0")   # no known-answer check on stand-in contexts
     yield
 
 
 def _native(monkeypatch, outcomes: dict):
-    """Patch glcontext's entry: ``outcomes[require]`` is a version code to return, or an error
-    text to raise. Returns the list of calls (their keyword arguments)."""
+    """Patch glcontext's entry: ``outcomes[version asked]`` is a version code to return, or an
+    error text to raise (a version not listed raises "not this version"). Returns the list of
+    calls (api, version asked, settings)."""
     calls = []
 
-    def create_context(**kwargs):
-        calls.append(kwargs)
-        out = outcomes[kwargs.get("require")]
+    def glcontext_context(api, code, **settings):
+        calls.append((api, code, settings))
+        out = outcomes.get(code, "not this version")
         if isinstance(out, str):
             raise Exception(out)  # glcontext raises bare Exception
         return _FakeContext(out)
 
-    import moderngl
-
-    monkeypatch.setattr(moderngl, "create_context", create_context)
+    monkeypatch.setattr(versions, "glcontext_context", glcontext_context)
     return calls
 
 
@@ -78,49 +81,56 @@ def test_platform_key(monkeypatch, plat, key):
 def test_windows_tries_wgl_first_and_lists_every_backend(monkeypatch, clean_state):
     monkeypatch.setattr(sys, "platform", "win32")
     _no_osmesa(monkeypatch)
-    calls = _native(monkeypatch, {430: "wglCreateContextAttribsARB failed",
-                                  330: "wglCreateContextAttribsARB failed"})
+    calls = _native(monkeypatch, {code: "wglCreateContextAttribsARB failed" for code in versions.LADDER})
     with pytest.raises(context.ContextError) as info:
         context.get_context()
     msg = str(info.value)
     lines = msg.splitlines()
     assert "on Windows" in lines[0]
-    assert lines[1].startswith("  wgl: 4.3 core: wglCreateContextAttribsARB failed; 3.3 core:")
+    assert lines[1].startswith("  wgl: 4.6 core: wglCreateContextAttribsARB failed; 4.5 core:")
+    assert lines[1].endswith("; 3.3 core: wglCreateContextAttribsARB failed")
     assert "  osmesa: skipped (libOSMesa not found)" in lines
     assert "GLCONTEXT_WIN_LIBGL" in msg and "opengl32.dll" in msg
     assert "apt-get" not in msg and "egl" not in msg.replace("GLCONTEXT", "")
-    # glcontext's default backend (WGL on Windows): no backend= argument, 4.3 core asked first
-    assert [c["require"] for c in calls] == [430, 330]
-    assert all(c.get("standalone") is True and "backend" not in c for c in calls)
+    # glcontext's default backend (WGL on Windows), every rung of the ladder, newest first
+    assert [c[1] for c in calls] == [460, 450, 430, 410, 330]
+    assert all(c[0] == "native" and c[2] == {} for c in calls)
 
 
 def test_windows_wgl_falls_back_to_33_core(monkeypatch, clean_state):
     monkeypatch.setattr(sys, "platform", "win32")
     _no_osmesa(monkeypatch)
-    calls = _native(monkeypatch, {430: "wglCreateContextAttribsARB failed", 330: 330})
+    calls = _native(monkeypatch, {330: 330})
     ctx = context.get_context()
     assert ctx.version_code == 330
     assert context.backend_name(ctx) == "wgl"
-    assert [c["require"] for c in calls] == [430, 330]
+    assert [c[1] for c in calls] == [460, 450, 430, 410, 330]
     assert context.get_context() is ctx  # cached
+    assert versions.describe(ctx).startswith("4.6 refused (not this version), 4.5 refused")
+    assert versions.describe(ctx).endswith("3.3 asked, got 3.3")
 
 
-def test_windows_wgl_with_compute_is_asked_once(monkeypatch, clean_state):
+@pytest.mark.parametrize("gives, asked", [({460: 460}, [460]), ({430: 430}, [460, 450, 430])])
+def test_windows_wgl_takes_the_first_rung_that_works(monkeypatch, clean_state, gives, asked):
     monkeypatch.setattr(sys, "platform", "win32")
-    calls = _native(monkeypatch, {430: 460})
+    calls = _native(monkeypatch, gives)
     ctx = context.get_context()
-    assert context.backend_name(ctx) == "wgl" and ctx.version_code == 460
-    assert [c["require"] for c in calls] == [430]
+    assert context.backend_name(ctx) == "wgl" and ctx.version_code == asked[-1]
+    assert [c[1] for c in calls] == asked
+
+    from cellgl.gl import path
+
+    assert path.gpu_path(ctx) == "compute"
 
 
 def test_macos_tries_cgl_first(monkeypatch, clean_state):
     monkeypatch.setattr(sys, "platform", "darwin")
-    calls = _native(monkeypatch, {330: 410})
+    calls = _native(monkeypatch, {460: 410})
     ctx = context.get_context()
     assert context.backend_name(ctx) == "cgl" and ctx.version_code == 410
-    # glcontext's darwin backend ignores the version and asks for GL4 core (4.1): one call,
-    # no backend= (glcontext's default on macOS is CGL)
-    assert len(calls) == 1 and "backend" not in calls[0] and calls[0]["standalone"] is True
+    # glcontext's darwin backend ignores the version and asks for GL4 core (4.1): the first rung
+    # gives 4.1, accepted (every context from 3.3 up is); glcontext's default backend on macOS
+    assert calls == [("native", 460, {})]
 
     from cellgl.gl import path
 
@@ -136,14 +146,66 @@ def test_macos_error_lists_cgl_and_osmesa(monkeypatch, clean_state):
                                  "profile 4.3 context in a probe process")
 
     monkeypatch.setattr(osmesa, "probe", probe)
-    _native(monkeypatch, {330: "cannot choose pixel format"})
+    _native(monkeypatch, {code: "cannot choose pixel format" for code in versions.LADDER})
     with pytest.raises(context.ContextError) as info:
         context.get_context()
     lines = str(info.value).splitlines()
     assert "on macOS" in lines[0]
-    assert lines[1] == "  cgl: cannot choose pixel format"
+    assert lines[1].startswith("  cgl: 4.6 core: cannot choose pixel format; 4.5 core: ")
     assert lines[2].startswith("  osmesa: OSMesa (/opt/mesa/libOSMesa.dylib)")
     assert "4.1 core" in str(info.value)
+
+
+def test_linux_egl_climbs_the_ladder_on_the_chosen_device(monkeypatch, clean_state):
+    calls = _native(monkeypatch, {450: 450})
+    monkeypatch.setattr(platforms, "egl_devices", lambda: ["NVIDIA A", "NVIDIA B"])
+    monkeypatch.setenv("CELLGL_DEVICE", "1")
+    ctx = context.get_context()
+    assert context.backend_name(ctx) == "egl" and ctx.version_code == 450
+    assert calls == [("egl", 460, {"device_index": 1}), ("egl", 450, {"device_index": 1})]
+
+
+@pytest.mark.parametrize("value, message", [
+    ("2", r"CELLGL_DEVICE=2 is not an EGL device of this machine; accepted values: 0\.\.1 "
+          r"\(0: NVIDIA A; 1: NVIDIA B\)"),
+    ("-1", r"CELLGL_DEVICE='-1' is not an EGL device index; accepted values: 0\.\.1 \(0: NVIDIA A"),
+    ("gpu1", r"CELLGL_DEVICE='gpu1' is not an EGL device index; accepted values: 0\.\.1"),
+])
+def test_bad_device_is_refused_naming_the_devices(monkeypatch, clean_state, value, message):
+    calls = _native(monkeypatch, {450: 450})
+    monkeypatch.setattr(platforms, "egl_devices", lambda: ["NVIDIA A", "NVIDIA B"])
+    monkeypatch.setenv("CELLGL_DEVICE", value)
+    with pytest.raises(ValueError, match=message):
+        context.get_context()
+    assert calls == []  # nothing was created
+
+
+def test_device_needs_the_egl_backend(monkeypatch, clean_state):
+    calls = _native(monkeypatch, {450: 450})
+    monkeypatch.setenv("CELLGL_DEVICE", "0")
+    monkeypatch.setenv("CELLGL_BACKEND", "osmesa")
+    with pytest.raises(ValueError, match=r"^CELLGL_DEVICE=0 picks an EGL device, but "
+                       r"the backend is osmesa on Linux: unset CELLGL_DEVICE or set CELLGL_BACKEND=egl$"):
+        context.get_context()
+    monkeypatch.setattr(sys, "platform", "win32")
+    monkeypatch.delenv("CELLGL_BACKEND")
+    with pytest.raises(ValueError, match=r"backend is wgl on Windows: unset CELLGL_DEVICE$"):
+        context.get_context()
+    assert calls == []
+
+
+def test_device_and_glcontexts_own_setting_must_agree(monkeypatch, clean_state):
+    monkeypatch.setenv("CELLGL_DEVICE", "1")
+    monkeypatch.setenv("GLCONTEXT_DEVICE_INDEX", "0")
+    with pytest.raises(ValueError, match="name different EGL devices; unset one of them"):
+        platforms.device_setting()
+
+
+def test_egl_devices_lists_this_machine():
+    devices = platforms.egl_devices()
+    if devices is None:
+        pytest.skip("libEGL cannot list devices here")
+    assert all(isinstance(d, str) and d for d in devices)
 
 
 @pytest.mark.parametrize("plat, name, own", [("darwin", "wgl", "cgl"), ("darwin", "egl", "cgl"),

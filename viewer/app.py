@@ -31,7 +31,7 @@ from imgui_bundle import imgui
 
 import glfw  # noqa: E402
 
-from cellgl.gl import context
+from cellgl.gl import context, versions
 
 from . import camera, render
 from .model import Model
@@ -39,10 +39,9 @@ from .modes import MODE_LABELS, MODES, PANEL_WIDTH, PUPS_REFUSED_MODES
 
 __all__ = ["Viewer", "ViewerOptions", "MODES"]
 
-#: Core profile versions asked of GLFW, newest first: 4.3 (what the viewer asked for before,
-#: the same pixels), 4.1 (macOS), 3.3 (the least cellgl runs on). Most drivers give their
-#: newest core version for any of them.
-WINDOW_VERSIONS = ((4, 3), (4, 1), (3, 3))
+#: Core profile versions asked of GLFW, newest first: cellgl's one ladder (cellgl.gl.versions:
+#: 4.6 ... 3.3; some drivers give exactly the version asked, macOS 4.1).
+WINDOW_VERSIONS = tuple(versions.major_minor(code) for code in versions.LADDER)
 
 
 @dataclass

@@ -7,3 +7,6 @@ Bottom to top: :mod:`~cellgl.basis.enums` (metric, distribution; the GLSL ``#def
 :mod:`~cellgl.basis.gpu` (compute dispatch) and :mod:`~cellgl.basis.core` (the public API:
 ``cellular``, ``cellular_grid``, ``feature_points``).
 """
+
+# the known-answer check of each context's GPU path, registered on import (issue 39)
+from cellgl.basis import selfcheck as _selfcheck  # noqa: E402,F401

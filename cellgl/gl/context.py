@@ -1,10 +1,13 @@
 """Headless OpenGL context (3.3 core and up) and shader program cache.
 
-One context per backend per process. The backends of each platform, in the order tried when
+One context per backend per process. Every backend asks for the newest OpenGL core version
+first and walks down :data:`cellgl.gl.versions.LADDER` (4.6, 4.5, 4.3, 4.1, 3.3): some drivers
+(NVIDIA's) give exactly the version asked. The backends of each platform, in the order tried when
 none is named (:mod:`cellgl.gl.platforms`):
 
 ``egl`` (Linux)
-    glcontext's EGL backend (headless; Mesa llvmpipe or a GPU driver).
+    glcontext's EGL backend (headless; Mesa llvmpipe or a GPU driver) on EGL device 0, or
+    device ``N`` with ``CELLGL_DEVICE=N`` (:func:`cellgl.gl.platforms.egl_devices`).
 ``glx`` (Linux)
     glcontext's X11 backend, only when ``DISPLAY`` is set.
 ``wgl`` (Windows)
@@ -39,15 +42,14 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import ctypes.util
 import os
 import threading
-from collections import deque
 from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa, path, platforms
+from cellgl.gl import backends, glsl, osmesa, path, platforms, versions
+from cellgl.gl.backends import ContextError
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -66,12 +68,8 @@ __all__ = [
 BACKENDS = platforms.ALL_BACKENDS
 
 #: Minimum OpenGL version, as moderngl's version code: 3.3 core runs the fragment path;
-#: 4.3 adds compute shaders (cellgl.gl.path).
-REQUIRED_GL = 330
-
-
-class ContextError(RuntimeError):
-    """No usable OpenGL context (3.3 core or later) could be created."""
+#: 4.3 adds compute shaders (cellgl.gl.path). The versions asked: cellgl.gl.versions.LADDER.
+REQUIRED_GL = versions.MINIMUM
 
 
 _lock = threading.RLock()
@@ -96,77 +94,18 @@ _orphans: list = []
 deferred: list = []
 
 
-def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
-    """Wrap a loader object (None: glcontext's default backend) in a moderngl.Context
-    (moderngl 5.10+ internals)."""
-    ctx = moderngl.Context.__new__(moderngl.Context)
-    settings = {"context": loader} if loader is not None else {}
-    ctx.mglo, ctx.version_code = moderngl.mgl.create_context(glversion=require, mode=mode, **settings)
-    ctx._info = None
-    ctx._extensions = None
-    ctx.extra = None
-    ctx._gc_mode = None
-    ctx._objects = deque()
-    ctx._screen = None
-    ctx.fbo = None
-    if ctx.version_code < require:
-        raise ContextError(
-            f"OpenGL {require // 100}.{require % 100 // 10} required, "
-            f"got {ctx.version_code // 100}.{ctx.version_code % 100 // 10}"
-        )
-    return ctx
-
-
 # --------------------------------------------------------------------------------------------
 # Backends
 # --------------------------------------------------------------------------------------------
 
 
 def _create(backend: str) -> moderngl.Context:
-    """A new context of ``backend``, current on this thread, on a display whose driver threads
-    exist in this process (see :mod:`cellgl.gl.surfaceless`)."""
-    why = platforms.check_backend(backend)
-    if why:
-        raise ContextError(why)
-    if backend == "egl":
-        if "egl" not in _tainted:
-            _opened.add("egl")
-            return moderngl.create_context(standalone=True, backend="egl", require=REQUIRED_GL)
-        if "egl-surfaceless" not in _tainted:
-            from cellgl.gl.surfaceless import SurfacelessEGLLoader
-
-            _opened.add("egl-surfaceless")
-            return _from_loader(SurfacelessEGLLoader())
-        raise ContextError(_FORKED)
-    if backend in _tainted:
-        raise ContextError(_FORKED)
-    if backend == "glx":
-        if not os.environ.get("DISPLAY"):
-            raise ContextError("DISPLAY is not set")
-        _opened.add("glx")
-        # glcontext's default backend on Linux is X11/GLX.
-        return moderngl.create_context(standalone=True, require=REQUIRED_GL)
-    if backend == "osmesa":
-        path = osmesa.probe()
-        _opened.add("osmesa")
-        return _from_loader(osmesa.OSMesaLoader(library=path))
-    if backend in ("wgl", "cgl"):
-        _opened.add(backend)
-        return platforms.create_native(backend, REQUIRED_GL)
-    raise _unknown_backend(backend)
+    """A new context of ``backend`` (:func:`cellgl.gl.backends.create`), current on this thread."""
+    return backends.create(backend, _tainted, _opened)
 
 
-_FORKED = ("this process was forked from one that had already used every display this backend "
-           "can open (Mesa's driver threads do not survive fork, so those displays would hang); "
-           "start it with multiprocessing's 'spawn' or 'forkserver' method instead")
-
-
-def _from_loader(loader) -> moderngl.Context:
-    try:
-        return _context_from_loader(loader, REQUIRED_GL)
-    except Exception:
-        loader.release()
-        raise
+def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
+    return backends.context_from_loader(loader, require, mode)
 
 
 def _unknown_backend(name: object) -> ValueError:
@@ -296,6 +235,9 @@ def _section():
                     deferred.pop()()
 
 
+path.set_guard(_section)   # the known-answer checks (cellgl.gl.path) run holding the GL lock
+
+
 @contextlib.contextmanager
 def current(backend: str | None = None):
     """``with current() as ctx:``: the context (as :func:`get_context`) current on this thread,
@@ -390,6 +332,8 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 raise _unknown_backend(backend)
             candidates = [_check_name(backend, "backend argument")]
 
+        candidates = platforms.device_backends(
+            candidates, backend is not None or bool(os.environ.get("CELLGL_BACKEND", "").strip()))
         errors = []
         for name in candidates:
             if name in _contexts:
@@ -432,6 +376,14 @@ def _available(backend: str) -> bool:
     return True
 
 
+def computes_on(ctx: moderngl.Context) -> bool:
+    """Whether cellgl's own calls on this thread (those that take no context: the basis, the
+    textures) run on ``ctx``, as :func:`get_context` would answer, without making a context."""
+    name = os.environ.get("CELLGL_BACKEND", "").strip().lower() or _default_backend
+    private = getattr(_tls, "private", None) or {}
+    return name is not None and (ctx is private.get(name) or ctx is _contexts.get(name))
+
+
 def backend_name(ctx: moderngl.Context | None = None) -> str | None:
     """Return the backend name a context made by :func:`get_context` came from."""
     ctx = ctx if ctx is not None else get_context()
@@ -466,6 +418,9 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
     dict
         Keys ``backend``, ``path`` (the GPU path that runs: ``compute`` or ``fragment``,
         :func:`cellgl.gl.path.gpu_path`), ``GL_VENDOR``, ``GL_RENDERER``, ``GL_VERSION``, ``gl_version_code``,
+        ``gl_ladder`` (the versions asked and refused, :func:`cellgl.gl.versions.describe`),
+        ``egl_device`` (the EGL device in use, ``CELLGL_DEVICE``), ``selfcheck``
+        (the known-answer check of the path, :func:`cellgl.gl.path.check_summary`),
         ``GL_MAX_COMPUTE_WORK_GROUP_COUNT`` (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_SIZE``
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
         (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
@@ -478,17 +433,34 @@ def _info(ctx: moderngl.Context) -> dict:
     info = ctx.info
     return {
         "backend": _backend_of.get(id(ctx)),
-        "path": path.gpu_path(ctx),
+        "path": _path_or_why(ctx),
         "GL_VENDOR": info.get("GL_VENDOR"),
         "GL_RENDERER": info.get("GL_RENDERER"),
         "GL_VERSION": info.get("GL_VERSION"),
         "gl_version_code": ctx.version_code,
+        "gl_ladder": versions.describe(ctx),
+        "egl_device": _device_info(ctx),
+        "selfcheck": path.check_summary(ctx),
         "GL_MAX_COMPUTE_WORK_GROUP_COUNT": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_COUNT", ())),
         "GL_MAX_COMPUTE_WORK_GROUP_SIZE": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_SIZE", ())),
         "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS": info.get("GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS"),
         "GL_MAX_SHADER_STORAGE_BLOCK_SIZE": info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"),
         "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE": _get_integer(ctx, _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE),
     }
+
+
+def _path_or_why(ctx: moderngl.Context) -> str:
+    try:
+        return path.gpu_path(ctx)
+    except path.PathError:   # the selfcheck entry says why
+        return "none (no path passes the known-answer check)"
+
+
+def _device_info(ctx: moderngl.Context) -> str:
+    backend = _backend_of.get(id(ctx))
+    if backend != "egl" or "egl-surfaceless" in _opened:
+        return f"n/a (the {backend or 'attached'} context has no device choice)"
+    return platforms.device_line(platforms.device_setting() or 0)
 
 
 def check_gl_error(ctx: moderngl.Context | None = None) -> None:

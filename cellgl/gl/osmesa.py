@@ -12,6 +12,8 @@ import os
 import subprocess
 import sys
 
+from cellgl.gl import versions
+
 __all__ = ["OSMesaError", "OSMesaLoader", "probe", "DRIVER_ENV"]
 
 
@@ -31,19 +33,16 @@ _OSMESA_CONTEXT_MAJOR_VERSION = 0x36
 _OSMESA_CONTEXT_MINOR_VERSION = 0x37
 
 
-#: core profile versions asked of OSMesa, in order: 4.5 and 4.3 have compute shaders (llvmpipe
-#: gives 4.5), 4.1 and 3.3 run the fragment path (cellgl.gl.path)
-VERSIONS = ((4, 5), (4, 3), (4, 1), (3, 3))
-
-
 class OSMesaLoader:
     """A moderngl loader (``load_opengl_function``, ``release``) backed by libOSMesa.
 
-    Creates a core-profile context (4.5, else 4.3, 4.1 or 3.3: :data:`VERSIONS`) and makes it
-    current on a small RGBA pbuffer.
+    Creates a core-profile context of version ``version`` (a moderngl version code), or with
+    ``version=None`` the first of :data:`cellgl.gl.versions.LADDER` OSMesa gives (llvmpipe: 4.5),
+    and makes it current on a small RGBA pbuffer.
     """
 
-    def __init__(self, width: int = 16, height: int = 16, library: str | None = None):
+    def __init__(self, width: int = 16, height: int = 16, library: str | None = None,
+                 version: int | None = None):
         path = library or ctypes.util.find_library("OSMesa")
         if not path:
             raise OSMesaError("libOSMesa not found (Debian/Ubuntu: apt-get install libosmesa6)")
@@ -60,33 +59,38 @@ class OSMesaLoader:
         lib.OSMesaDestroyContext.argtypes = [ctypes.c_void_p]
 
         self._ctx = None
-        tried = []
-        for major, minor in VERSIONS:
-            attribs = [
-                _OSMESA_FORMAT, _OSMESA_RGBA,
-                _OSMESA_DEPTH_BITS, 24,
-                _OSMESA_STENCIL_BITS, 8,
-                _OSMESA_ACCUM_BITS, 0,
-                _OSMESA_PROFILE, _OSMESA_CORE_PROFILE,
-                _OSMESA_CONTEXT_MAJOR_VERSION, major,
-                _OSMESA_CONTEXT_MINOR_VERSION, minor,
-                0,
-            ]
-            arr = (ctypes.c_int * len(attribs))(*attribs)
-            handle = lib.OSMesaCreateContextAttribs(arr, None)
-            if handle:
-                self._ctx = handle
-                break
-            tried.append(f"{major}.{minor}")
-        if not self._ctx:
+        ladder = versions.LADDER if version is None else (version,)
+        try:
+            handle = versions.climb(self._create, ladder=ladder)
+        except versions.LadderError as exc:
             raise OSMesaError(
-                f"OSMesa ({path}) could not create a core profile context of version "
-                f"{' or '.join(tried)}; cellgl needs OpenGL 3.3 core (4.3 for the compute path; a "
-                "gallium/llvmpipe OSMesa, e.g. Mesa >= 20)"
-            )
+                f"OSMesa ({path}) could not create a core profile context ({exc}); cellgl needs "
+                "OpenGL 3.3 core (4.3 for the compute path; a gallium/llvmpipe OSMesa, e.g. "
+                "Mesa >= 20)"
+            ) from None
+        self._ctx = handle.value
+        #: the rungs tried: (version code, error or None) (cellgl.gl.versions.describe)
+        self.ladder = handle._cellgl_ladder
         self._width, self._height = width, height
         self._buffer = ctypes.create_string_buffer(width * height * 4)
         self.make_current()
+
+    def _create(self, code: int) -> ctypes.c_void_p:
+        major, minor = versions.major_minor(code)
+        attribs = [
+            _OSMESA_FORMAT, _OSMESA_RGBA,
+            _OSMESA_DEPTH_BITS, 24,
+            _OSMESA_STENCIL_BITS, 8,
+            _OSMESA_ACCUM_BITS, 0,
+            _OSMESA_PROFILE, _OSMESA_CORE_PROFILE,
+            _OSMESA_CONTEXT_MAJOR_VERSION, major,
+            _OSMESA_CONTEXT_MINOR_VERSION, minor,
+            0,
+        ]
+        handle = self._lib.OSMesaCreateContextAttribs((ctypes.c_int * len(attribs))(*attribs), None)
+        if not handle:
+            raise OSMesaError("OSMesaCreateContextAttribs returned no context")
+        return ctypes.c_void_p(handle)
 
     def make_current(self) -> None:
         ok = self._lib.OSMesaMakeCurrent(self._ctx, self._buffer, _GL_UNSIGNED_BYTE,
@@ -122,8 +126,8 @@ lib.OSMesaCreateContextAttribs.restype = ctypes.c_void_p
 lib.OSMesaCreateContextAttribs.argtypes = [ctypes.POINTER(ctypes.c_int), ctypes.c_void_p]
 lib.OSMesaMakeCurrent.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_int,
                                   ctypes.c_int]
-for major, minor in ((4, 3), (3, 3)):
-    a = [0x22, 0x1908, 0x33, 0x34, 0x36, major, 0x37, minor, 0]
+for code in map(int, sys.argv[2].split(",")):   # the ladder (cellgl.gl.versions.LADDER)
+    a = [0x22, 0x1908, 0x33, 0x34, 0x36, code // 100, 0x37, code % 100 // 10, 0]
     ctx = lib.OSMesaCreateContextAttribs((ctypes.c_int * len(a))(*a), None)
     if ctx:
         break
@@ -148,7 +152,8 @@ def probe() -> str:
     if (path, env) in probed:
         return path
     try:
-        res = subprocess.run([sys.executable, "-I", "-S", "-c", _PROBE, path],
+        ladder = ",".join(map(str, versions.LADDER))
+        res = subprocess.run([sys.executable, "-I", "-S", "-c", _PROBE, path, ladder],
                              capture_output=True, timeout=120)
     except (OSError, subprocess.TimeoutExpired) as exc:
         raise OSMesaError(f"could not probe OSMesa ({path}) in a child process: {exc}") from None

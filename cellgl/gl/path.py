@@ -7,14 +7,34 @@ targets, and gives the same bits.
 
 ``CELLGL_PATH=compute|fragment`` forces one (for tests and comparisons); unset or empty, the
 context decides.
+
+A driver nobody has tried may still give wrong answers on one path. So the first time a path is
+used on a context, the checks registered with :func:`on_first_use` run on it (the basis layer
+registers a known-answer check, :mod:`cellgl.basis.selfcheck`: a few hundred samples against
+the NumPy reference). When the path fails and the context has the other one, the context
+switches to it (:func:`set_path`) with one :class:`GPUPathWarning` naming the driver and what
+differed; when both fail (or the failing path was forced with ``CELLGL_PATH``),
+:class:`PathError`. ``CELLGL_SELFCHECK=0`` turns the checks off.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import threading
+import time
+import warnings
 
 #: Accepted values of ``CELLGL_PATH``.
 PATHS = ("compute", "fragment")
+
+
+class GPUPathWarning(RuntimeWarning):
+    """A path failed its known-answer check on this driver; the context runs the other one."""
+
+
+class PathError(RuntimeError):
+    """No path of this context passes its known-answer check (or the forced one fails)."""
 
 #: moderngl's version code of the first OpenGL with compute shaders.
 COMPUTE_GL = 430
@@ -50,22 +70,243 @@ def forced_path() -> str | None:
     return value
 
 
+def selfcheck_enabled() -> bool:
+    """False when ``CELLGL_SELFCHECK=0``.
+
+    Raises
+    ------
+    ValueError
+        ``CELLGL_SELFCHECK`` is neither 0 nor 1 (nor unset or empty).
+    """
+    value = os.environ.get("CELLGL_SELFCHECK", "").strip()
+    if value not in ("", "0", "1"):
+        raise ValueError(f"CELLGL_SELFCHECK={os.environ['CELLGL_SELFCHECK']!r}; accepted values: "
+                         "0 (skip the known-answer check of the GPU path) or 1 (the default)")
+    return value != "0"
+
+
+# --------------------------------------------------------------------------------------------
+# Per-context state: the override, the first-use checks
+# --------------------------------------------------------------------------------------------
+
+#: fn(ctx, path) -> None when ``path`` gives right answers on ``ctx``, else what differed
+_hooks: list = []
+#: fn(ctx, old, new): a context's path changed (set_path) or was forgotten (new None)
+_listeners: list = []
+#: the GL lock's section (cellgl.gl.context sets it): the checks run inside it
+_guard = contextlib.nullcontext
+#: driver strings already warned about (one warning per driver and process)
+_warned: set = set()
+
+
+def on_first_use(fn) -> None:
+    """Register a check ``fn(ctx, path)`` run the first time ``path`` is used on a context,
+    inside :func:`gpu_path` (once per context and path; ``fn`` may itself do GPU work: inside
+    it, :func:`gpu_path` returns the path under check). It returns None when the path is right
+    on that context, else a short text of what differed. Registering the same function twice
+    keeps one."""
+    if fn not in _hooks:
+        _hooks.append(fn)
+
+
+def on_change(fn) -> None:
+    """Register ``fn(ctx, old, new)``, called when :func:`set_path` or :func:`forget` changes
+    the path of a context (for those who keep GPU objects made for one path)."""
+    if fn not in _listeners:
+        _listeners.append(fn)
+
+
+def set_guard(section) -> None:
+    """The context manager that holds the GL lock (cellgl.gl.context's): the checks run in it."""
+    global _guard
+    _guard = section
+
+
+def _state(ctx) -> dict:
+    st = getattr(ctx, "_cellgl_path", None)
+    if st is None:
+        # override: the path set_path chose; results: path -> None (passed) or what differed;
+        # notes: path -> text for `cellgl info`; running: the thread running the checks
+        st = {"override": None, "why": None, "results": {}, "notes": {}, "running": None}
+        ctx._cellgl_path = st
+    return st
+
+
+def set_path(ctx, path: str, why: str) -> None:
+    """Make ``ctx`` run ``path`` from now on (``why``: one line for `cellgl info`), unless
+    ``CELLGL_PATH`` forces one.
+
+    Raises
+    ------
+    ValueError
+        ``path`` is not a path, or ``compute`` on a context without compute shaders.
+    """
+    if path not in PATHS:
+        raise ValueError(f"unknown GPU path {path!r}; accepted values: {', '.join(PATHS)}")
+    if path == "compute" and not has_compute(ctx):
+        raise ValueError(f"this OpenGL {_version(ctx)} context has no compute shaders (OpenGL 4.3)")
+    st = _state(ctx)
+    old = st["override"] or _natural(ctx)
+    st["override"], st["why"] = path, why
+    if old != path:
+        for fn in list(_listeners):
+            fn(ctx, old, path)
+
+
+def forget(ctx) -> None:
+    """Drop the override and the check results of ``ctx`` (tests; a driver update in place)."""
+    st = getattr(ctx, "_cellgl_path", None)
+    if st is None:
+        return
+    old = st["override"]
+    del ctx._cellgl_path
+    if old is not None:
+        for fn in list(_listeners):
+            fn(ctx, old, None)
+
+
+def note(ctx, path: str, text: str) -> None:
+    """Keep ``text`` (what a check found) for :func:`check_summary`."""
+    _state(ctx)["notes"][path] = text
+
+
+def _version(ctx) -> str:
+    return f"{ctx.version_code // 100}.{ctx.version_code % 100 // 10}"
+
+
+def _natural(ctx) -> str:
+    return "compute" if has_compute(ctx) else "fragment"
+
+
+def driver(ctx) -> str:
+    """``GL_VENDOR / GL_RENDERER / GL_VERSION`` of ``ctx`` (for messages)."""
+    try:
+        info = ctx.info
+        return " / ".join(str(info.get(k)) for k in ("GL_VENDOR", "GL_RENDERER", "GL_VERSION"))
+    except Exception:  # noqa: BLE001 - a context without info (a stand-in)
+        return f"OpenGL {_version(ctx)}"
+
+
 def gpu_path(ctx) -> str:
     """``"compute"`` or ``"fragment"``: the path cellgl runs on ``ctx``.
+
+    ``CELLGL_PATH`` when set, else the path :func:`set_path` chose, else compute from OpenGL
+    4.3. The first use of a path on a context runs the :func:`on_first_use` checks on it.
 
     Raises
     ------
     ValueError
         ``CELLGL_PATH`` names no path, or forces ``compute`` on a context without compute
-        shaders.
+        shaders; ``CELLGL_SELFCHECK`` is neither 0 nor 1.
+    PathError
+        The path failed its check and the other one failed too (or cannot run here, or the
+        failing path is forced by ``CELLGL_PATH``): every call on this context raises it.
     """
     forced = forced_path()
     if forced == "compute" and not has_compute(ctx):
         raise ValueError(
-            f"CELLGL_PATH=compute, but this OpenGL {ctx.version_code // 100}."
-            f"{ctx.version_code % 100 // 10} context has no compute shaders (OpenGL 4.3); "
-            "unset CELLGL_PATH or set CELLGL_PATH=fragment"
+            f"CELLGL_PATH=compute, but this OpenGL {_version(ctx)} context has no compute shaders "
+            "(OpenGL 4.3); unset CELLGL_PATH or set CELLGL_PATH=fragment"
         )
+    st = _state(ctx)
+    chosen = forced or st["override"] or _natural(ctx)
+    if chosen in st["results"] and st["results"][chosen] is None:
+        return chosen
+    if st["running"] == threading.get_ident():   # a check's own GPU work
+        return chosen
+    if not _hooks or not selfcheck_enabled():
+        return chosen
+    with _guard():
+        if chosen not in st["results"]:
+            st["running"] = threading.get_ident()
+            try:
+                chosen = _first_use(ctx, st, chosen, forced)
+            finally:
+                st["running"] = None
+    return _verdict(ctx, st, forced or st["override"] or _natural(ctx), forced)
+
+
+def _check(ctx, st: dict, path: str) -> str | None:
+    """Run the checks on ``path`` (as the context's path meanwhile); keep the result."""
+    saved = st["override"]
+    st["override"] = path
+    try:
+        what = None
+        for fn in list(_hooks):
+            try:
+                what = fn(ctx, path)
+            except Exception as exc:  # noqa: BLE001 - a path that raises is a failing path
+                what = f"raised {type(exc).__name__}: {str(exc).strip().splitlines()[0] if str(exc).strip() else ''}"
+            if what:
+                break
+    finally:
+        st["override"] = saved
+    st["results"][path] = what or None
+    return what or None
+
+
+def _first_use(ctx, st: dict, chosen: str, forced: str | None) -> str:
+    started = time.perf_counter()
+    what = _check(ctx, st, chosen)
+    if what is None or forced:
+        return chosen
+    other = "fragment" if chosen == "compute" else "compute"
+    if other == "compute" and not has_compute(ctx):
+        return chosen
+    if other not in st["results"]:
+        _check(ctx, st, other)
+    if st["results"][other] is None:
+        set_path(ctx, other, f"the {chosen} path failed its known-answer check: {what}")
+        name = driver(ctx)
+        if name not in _warned:
+            _warned.add(name)
+            warnings.warn(
+                f"cellgl: the {chosen} path gave wrong answers on this driver ({name}) in its "
+                f"known-answer check: {what}. This context runs the {other} path instead "
+                f"(right, maybe slower; checked in {time.perf_counter() - started:.2f} s). Please "
+                "report it with the output of `cellgl info`; CELLGL_SELFCHECK=0 skips the check.",
+                GPUPathWarning, stacklevel=4)
+        return other
+    return chosen
+
+
+def _verdict(ctx, st: dict, chosen: str, forced: str | None) -> str:
+    what = st["results"].get(chosen)
+    if what is None:
+        return chosen
+    name = driver(ctx)
     if forced:
-        return forced
-    return "compute" if has_compute(ctx) else "fragment"
+        raise PathError(
+            f"CELLGL_PATH={forced}: the {forced} path gives wrong answers on this driver ({name}) "
+            f"in cellgl's known-answer check: {what}. Unset CELLGL_PATH (cellgl then runs a path "
+            "that passes), or set CELLGL_SELFCHECK=0 to skip the check")
+    other = "fragment" if chosen == "compute" else "compute"
+    tail = (f"the {other} path failed too: {st['results'][other]}" if st["results"].get(other)
+            else f"this OpenGL {_version(ctx)} context has no other path")
+    raise PathError(
+        f"cellgl's known-answer check failed on this driver ({name}): the {chosen} path: {what}; "
+        f"{tail}. cellgl will not return wrong answers: update the GPU driver, try another "
+        "(CELLGL_BACKEND, CELLGL_DEVICE), or set CELLGL_SELFCHECK=0 to skip the check at your "
+        "own risk")
+
+
+def check_summary(ctx) -> str:
+    """What the known-answer checks found on ``ctx``, one line (for `cellgl info`)."""
+    try:
+        enabled = selfcheck_enabled()
+    except ValueError as exc:
+        return str(exc)
+    if not enabled:
+        return "off (CELLGL_SELFCHECK=0)"
+    if not _hooks:
+        return "not registered (import cellgl.basis to register the known-answer check)"
+    st = getattr(ctx, "_cellgl_path", None)
+    if not st or not st["results"]:
+        return "not run yet (it runs on the first GPU call)"
+    parts = []
+    for path, what in st["results"].items():
+        text = st["notes"].get(path, "passed") if what is None else f"FAILED ({what})"
+        parts.append(f"{path}: {text}")
+    if st["override"]:
+        parts.append(f"running {st['override']}: {st['why']}")
+    return "; ".join(parts)

@@ -4,19 +4,25 @@ when none can be made.
 ========  ===========================================  ==========================================
 platform  backends, in the order tried                 what the platform's own backend gives
 ========  ===========================================  ==========================================
-Linux     ``egl``, ``glx`` (``DISPLAY`` set),          Mesa or the GPU driver: the highest core
-          ``osmesa`` (libOSMesa found)                 version it has (Mesa llvmpipe: 4.5)
+Linux     ``egl``, ``glx`` (``DISPLAY`` set),          Mesa (llvmpipe: 4.5) or the GPU driver
+          ``osmesa`` (libOSMesa found)                 (NVIDIA: 4.6)
 Windows   ``wgl``, ``osmesa`` (OSMesa DLL found)       the driver's ``opengl32.dll`` (or Mesa's,
-                                                       ``GLCONTEXT_WIN_LIBGL``): 4.3 core is asked
-                                                       for first, then 3.3 core
+                                                       ``GLCONTEXT_WIN_LIBGL``)
 macOS     ``cgl``, ``osmesa`` (libOSMesa found)        Apple's OpenGL: 4.1 core, no compute
 ========  ===========================================  ==========================================
 
-The platform backends are glcontext's: on Windows and macOS it is glcontext's default backend,
-so ``moderngl.create_context(standalone=True)`` with no ``backend=``. glcontext's WGL backend
-asks ``wglCreateContextAttribsARB`` for a core profile of the requested version; its CGL backend
+Every backend climbs the one version ladder of :mod:`cellgl.gl.versions` (4.6, 4.5, 4.3, 4.1,
+3.3 core; the first the driver gives wins): a driver may give exactly the version asked
+(NVIDIA's EGL and GLX do), so asking 3.3 would leave the compute path unused.
+
+The platform backends are glcontext's: on Windows and macOS it is glcontext's default backend
+(:func:`cellgl.gl.versions.glcontext_context` with ``"native"``). glcontext's WGL backend asks
+``wglCreateContextAttribsARB`` for a core profile of the requested version; its CGL backend
 ignores the version and asks for ``kCGLOGLPVersion_GL4_Core`` (then ``GL3_Core``), which is
 4.1 core on every Mac that has it (a legacy context would stop at 2.1).
+
+On a machine with several GPUs ``CELLGL_DEVICE=N`` picks EGL device ``N`` (glcontext's
+``device_index``; :func:`egl_devices` lists them, ``cellgl info`` shows the one in use).
 
 Everything here is plain data and small functions; :mod:`cellgl.gl.context` owns the contexts.
 """
@@ -28,8 +34,11 @@ import ctypes.util
 import os
 import sys
 
+from cellgl.gl import versions
+
 __all__ = ["ALL_BACKENDS", "PLATFORM_BACKENDS", "platform", "platform_backends", "check_backend",
-           "create_native", "install_hint", "get_proc", "CurrentEGLLoader"]
+           "create_native", "install_hint", "get_proc", "CurrentEGLLoader", "egl_devices",
+           "device_setting", "check_device", "device_backends", "device_line"]
 
 #: Backends of each platform, in the order tried (those with a condition are tried only when it
 #: holds; see :func:`platform_backends`).
@@ -43,9 +52,6 @@ ALL_BACKENDS = ("egl", "glx", "osmesa", "wgl", "cgl")
 
 _PLATFORM_NAMES = {"linux": "Linux", "win32": "Windows", "darwin": "macOS"}
 _HOME = {"egl": "linux", "glx": "linux", "wgl": "win32", "cgl": "darwin"}
-
-#: GL versions asked of WGL, in order: compute shaders first, else what the fragment path needs.
-WGL_VERSIONS = (430, 330)
 
 
 def platform() -> str:
@@ -82,30 +88,149 @@ def osmesa_library() -> str | None:
     return ctypes.util.find_library("OSMesa") or ctypes.util.find_library("osmesa")
 
 
-def create_native(backend: str, require: int):
-    """A new standalone context of the platform's own backend ``wgl`` or ``cgl`` (glcontext's
-    default backend there), current on this thread.
+def create_native(backend: str):
+    """A new standalone context of the platform's own backend ``glx``, ``wgl`` or ``cgl``
+    (glcontext's default backend there), current on this thread: the first rung of
+    :data:`cellgl.gl.versions.LADDER` the driver gives (CGL ignores the version asked: 4.1 core,
+    or 3.2 core on old Macs, refused below 3.3).
 
-    ``wgl`` asks for each of :data:`WGL_VERSIONS` in turn (a driver may give exactly the core
-    version asked for), keeping the first that works; ``cgl`` gets 4.1 core (or 3.2 core on
-    old Macs, refused below ``require``).
+    Raises
+    ------
+    cellgl.gl.versions.LadderError
+        No rung worked; the message lists each version asked with the driver's answer.
     """
-    import moderngl
-
-    if backend == "cgl":
-        return moderngl.create_context(standalone=True, require=require)
-    if backend != "wgl":
+    if backend not in ("glx", "wgl", "cgl"):
         raise ValueError(f"not a native backend: {backend!r}")
-    errors = []
-    for version in WGL_VERSIONS:
-        if version < require:
-            continue
-        try:
-            return moderngl.create_context(standalone=True, require=version)
-        except Exception as exc:  # noqa: BLE001 - glcontext raises bare Exception
-            text = (str(exc).strip() or type(exc).__name__).splitlines()[0]
-            errors.append(f"{version // 100}.{version % 100 // 10} core: {text}")
-    raise RuntimeError("; ".join(errors))
+    return versions.climb(lambda code: versions.glcontext_context("native", code))
+
+
+# --------------------------------------------------------------------------------------------
+# EGL devices (CELLGL_DEVICE)
+# --------------------------------------------------------------------------------------------
+
+_EGL_VENDOR = 0x3053
+_EGL_EXTENSIONS = 0x3055
+_EGL_DRM_DEVICE_FILE_EXT = 0x3233
+_EGL_RENDERER_EXT = 0x335F
+
+
+def egl_devices() -> list[str] | None:
+    """One line per EGL device (``eglQueryDevicesEXT``, in the order of glcontext's
+    ``device_index``): its name where the driver tells it, else its DRM node or kind. None when
+    libEGL cannot list devices (no ``EGL_EXT_device_enumeration``)."""
+    name = ctypes.util.find_library("EGL")
+    if not name:
+        return None
+    try:
+        egl = ctypes.CDLL(name)
+        egl.eglGetProcAddress.restype = ctypes.c_void_p
+        egl.eglGetProcAddress.argtypes = [ctypes.c_char_p]
+        query = egl.eglGetProcAddress(b"eglQueryDevicesEXT")
+        string = egl.eglGetProcAddress(b"eglQueryDeviceStringEXT")
+    except (OSError, AttributeError):
+        return None
+    if not query:
+        return None
+    vp = ctypes.c_void_p
+    query = ctypes.CFUNCTYPE(ctypes.c_uint, ctypes.c_int, ctypes.POINTER(vp),
+                             ctypes.POINTER(ctypes.c_int))(query)
+    devices, count = (vp * 64)(), ctypes.c_int(0)
+    if not query(64, devices, ctypes.byref(count)):
+        return None
+    text = ctypes.CFUNCTYPE(ctypes.c_char_p, vp, ctypes.c_int)(string) if string else None
+
+    def get(dev, key) -> str | None:
+        value = text(dev, key) if text else None
+        return value.decode(errors="replace").strip() if value else None
+
+    out = []
+    for i in range(count.value):
+        ext = (get(devices[i], _EGL_EXTENSIONS) or "").split()
+        parts = []
+        if "EGL_EXT_device_query_name" in ext:
+            parts += [v for v in (get(devices[i], _EGL_VENDOR), get(devices[i], _EGL_RENDERER_EXT))
+                      if v]
+        if "EGL_EXT_device_drm" in ext:
+            parts += [v for v in (get(devices[i], _EGL_DRM_DEVICE_FILE_EXT),) if v]
+        if "EGL_MESA_device_software" in ext:
+            parts.append("Mesa software renderer (llvmpipe)")
+        if "EGL_NV_device_cuda" in ext:
+            parts.append("NVIDIA CUDA device")
+        out.append(", ".join(dict.fromkeys(parts)) or "EGL device")
+    return out
+
+
+def _range(devices: list[str] | None) -> str:
+    if devices is None:
+        return "a device index from 0 (this machine's libEGL cannot list its devices)"
+    if not devices:
+        return "none (EGL lists no device on this machine)"
+    listing = "; ".join(f"{i}: {d}" for i, d in enumerate(devices))
+    return f"0..{len(devices) - 1} ({listing})"
+
+
+def device_setting() -> int | None:
+    """The EGL device index named by ``CELLGL_DEVICE`` (None when unset or empty).
+
+    Raises
+    ------
+    ValueError
+        Not a whole number from 0, or ``GLCONTEXT_DEVICE_INDEX`` (glcontext's own setting,
+        which would win) names another device; the message names the accepted values.
+    """
+    raw = os.environ.get("CELLGL_DEVICE", "").strip()
+    if not raw:
+        return None
+    try:
+        index = int(raw, 10)
+    except ValueError:
+        index = -1
+    if index < 0:
+        raise ValueError(f"CELLGL_DEVICE={os.environ['CELLGL_DEVICE']!r} is not an EGL device "
+                         f"index; accepted values: {_range(egl_devices())}")
+    other = os.environ.get("GLCONTEXT_DEVICE_INDEX", "").strip()
+    if other and other != str(index):
+        raise ValueError(f"CELLGL_DEVICE={index} and GLCONTEXT_DEVICE_INDEX={other} name "
+                         "different EGL devices; unset one of them")
+    return index
+
+
+def device_backends(candidates: list[str], named: bool) -> list[str]:
+    """``candidates`` (the backends to try; ``named``: chosen by the user), or with
+    ``CELLGL_DEVICE`` set only ``egl`` (the API that picks a device), the index checked.
+
+    Raises
+    ------
+    ValueError
+        A bad ``CELLGL_DEVICE`` (naming the devices), or one set beside another backend.
+    """
+    device = device_setting()
+    if device is None:
+        return candidates
+    own = platform_backends()
+    if named and candidates != ["egl"] or "egl" not in own:
+        raise ValueError(
+            f"CELLGL_DEVICE={device} picks an EGL device, but the backend is "
+            f"{candidates[0] if named else own[0]} on {platform_name()}: unset CELLGL_DEVICE"
+            + (" or set CELLGL_BACKEND=egl" if "egl" in own else ""))
+    check_device(device)
+    return ["egl"]
+
+
+def device_line(index: int) -> str:
+    """``"0 of 2: NVIDIA ..."``: device ``index`` among this machine's EGL devices."""
+    devices = egl_devices()
+    if not devices or index >= len(devices):
+        return str(index)
+    return f"{index} of {len(devices)}: {devices[index]}"
+
+
+def check_device(index: int) -> None:
+    """Raise ValueError when ``index`` is not one of this machine's EGL devices (naming them)."""
+    devices = egl_devices()
+    if devices is not None and index >= len(devices):
+        raise ValueError(f"CELLGL_DEVICE={index} is not an EGL device of this machine; "
+                         f"accepted values: {_range(devices)}")
 
 
 def install_hint() -> str:

@@ -15,6 +15,8 @@ from __future__ import annotations
 import ctypes
 import ctypes.util
 
+from cellgl.gl import versions
+
 __all__ = ["SurfacelessEGLLoader"]
 
 _EGL_PLATFORM_SURFACELESS_MESA = 0x31DD
@@ -31,7 +33,9 @@ _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT = 0x1
 
 class SurfacelessEGLLoader:
     """A moderngl loader (``load_opengl_function``, ``__enter__``/``__exit__``, ``release``)
-    owning a core-profile context (4.5, else 4.3, 4.1 or 3.3) on the surfaceless EGL display.
+    owning a core-profile context on the surfaceless EGL display: of version ``version`` (a
+    moderngl version code), or with ``version=None`` the first of
+    :data:`cellgl.gl.versions.LADDER` the driver gives.
 
     Raises
     ------
@@ -40,7 +44,7 @@ class SurfacelessEGLLoader:
         the EGL call and its error code.
     """
 
-    def __init__(self):
+    def __init__(self, version: int | None = None):
         name = ctypes.util.find_library("EGL")
         if not name:
             raise RuntimeError("libEGL not found")
@@ -76,16 +80,27 @@ class SurfacelessEGLLoader:
                 or n.value < 1:
             self._fail("eglChooseConfig(OpenGL, no surface)")
         self._ctx = None
-        for want in ((4, 5), (4, 3), (4, 1), (3, 3)):
-            cattrs = (i * 7)(_EGL_CONTEXT_MAJOR_VERSION, want[0], _EGL_CONTEXT_MINOR_VERSION,
-                             want[1], _EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                             _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, _EGL_NONE)
-            self._ctx = egl.eglCreateContext(self._dpy, cfg, None, cattrs)
-            if self._ctx:
-                break
-        if not self._ctx:
-            self._fail("eglCreateContext(OpenGL 3.3 core or later)")
+        self._cfg = cfg
+        ladder = versions.LADDER if version is None else (version,)
+        try:
+            handle = versions.climb(self._create, ladder=ladder)
+        except versions.LadderError as exc:
+            raise RuntimeError(f"eglCreateContext(surfaceless): {exc}") from None
+        self._ctx = handle.value
+        #: the rungs tried: (version code, error or None) (cellgl.gl.versions.describe)
+        self.ladder = handle._cellgl_ladder
         self.__enter__()
+
+    def _create(self, code: int) -> ctypes.c_void_p:
+        i = ctypes.c_int
+        major, minor = versions.major_minor(code)
+        cattrs = (i * 7)(_EGL_CONTEXT_MAJOR_VERSION, major, _EGL_CONTEXT_MINOR_VERSION, minor,
+                         _EGL_CONTEXT_OPENGL_PROFILE_MASK, _EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                         _EGL_NONE)
+        handle = self._egl.eglCreateContext(self._dpy, self._cfg, None, cattrs)
+        if not handle:
+            self._fail("eglCreateContext")
+        return ctypes.c_void_p(handle)
 
     def _fail(self, what: str):
         raise RuntimeError(f"{what} failed (0x{self._egl.eglGetError():x})")

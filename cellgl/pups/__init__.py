@@ -15,6 +15,7 @@ This package re-exports the public functions of those modules.
 """
 from __future__ import annotations
 
+from cellgl.basis import selfcheck as _selfcheck  # noqa: F401 - the GPU path's known-answer check
 from cellgl.pups.generators import (cluster_labels, labels_by_ramp, labels_from_image, poisson_disk,
                                     poisson_disk_variable, random_orientations, space_giraffe)
 from cellgl.pups.graph import PupsGraph, pups_graph

@@ -1,0 +1,124 @@
+"""The known-answer check of a GPU path, run on the first use of each context (issue 39).
+
+cellgl has been verified on the drivers named in docs/platforms.md; a user on another one must
+never get silently wrong answers. So the first time a path (compute or fragment) is used on a
+context, :func:`check` evaluates a few hundred samples on it (:data:`CASES`: 3D Poisson Euclidean
+F1..F4 and 2D jitter Manhattan F1..F2, with their IDs, near the origin and around 1e5 cells), and compares them with the NumPy reference
+(:mod:`cellgl.basis.reference`) within the promise of docs/exactness.md: every ID equal except
+at a near tie, every F within :data:`F_RTOL` relative (plus :data:`F_ATOL`). A path that fails
+is replaced by the other one with one warning naming the driver (:mod:`cellgl.gl.path`); when
+both fail, every GPU call raises :class:`cellgl.gl.path.PathError`.
+
+Cost: two shader variants, the first of which (3D, Poisson, Euclidean, n = 4, F, delta, id) is
+the one ``cellgl.cellular`` compiles by default, and 288 samples: the GPU takes milliseconds,
+the NumPy reference about 0.2 s (llvmpipe machine, 2 cores), compiling what it has to. ``CELLGL_SELFCHECK=0`` turns it off. `cellgl info` shows what it found.
+
+Importing :mod:`cellgl.basis` (and so :mod:`cellgl.texture`, :mod:`cellgl.pups`) registers it.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+from cellgl.gl import path as _path
+
+__all__ = ["CASES", "F_RTOL", "F_ATOL", "TIE", "check", "compare"]
+
+#: F may differ from the reference by F_RTOL * |F| + F_ATOL (docs/exactness.md: float32 rounding
+#: of the distance computation; the same bound as tests/test_core.py's comparisons)
+F_RTOL = 2e-5
+F_ATOL = 2e-6
+#: two distances closer than this (cells) are a near tie: the IDs there may be swapped
+TIE = 1e-4
+
+#: (name, dimension, keyword arguments of cellgl.cellular, n, outputs, samples near the origin,
+#: samples far from it (around 1e5 cells, where the float64 split of the position matters))
+CASES = (
+    ("3D poisson euclidean", 3, dict(distribution="poisson", metric="euclidean"), 4,
+     ("F", "delta", "id"), 128, 32),
+    ("2D jitter manhattan", 2, dict(distribution="jitter", metric="manhattan", jitter=0.8, seed=39),
+     2, ("F", "id"), 96, 32),
+)
+
+
+def _samples(dim: int, near: int, far: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    out = rng.uniform(-8.0, 8.0, (near + far, dim))
+    out[near:] += rng.choice([-1.0, 1.0], (far, dim)) * 1.0e5
+    return out
+
+
+def gpu_cellular(points, n, **kw):
+    """The answer of the path under check (``cellgl.cellular`` on the GPU; tests replace it)."""
+    from cellgl.basis.core import cellular
+
+    return cellular(points, n, backend="gpu", **kw)
+
+
+def reference_cellular(points, n, **kw):
+    """The NumPy reference's answer."""
+    from cellgl.basis.core import cellular
+
+    return cellular(points, n, backend="numpy", **kw)
+
+
+def compare(name: str, got, ref, n: int) -> str | None:
+    """None when ``got`` (F, id of n neighbours) keeps the promise against ``ref`` (n + 1
+    neighbours, so that a tie with the first one left out counts), else what differed."""
+    F, G = ref.F[:, :n].astype(np.float64), np.asarray(got.F, dtype=np.float64)
+    bad_F = ~(np.abs(G - F) <= F_RTOL * np.abs(F) + F_ATOL)      # NaN counts as bad
+    gaps = np.minimum(np.abs(np.diff(ref.F.astype(np.float64), axis=1, prepend=-1.0))[:, :n],
+                      np.abs(np.diff(ref.F.astype(np.float64), axis=1))[:, :n])
+    bad_id = (np.asarray(got.id) != ref.id[:, :n]) & (gaps >= TIE)
+    problems = []
+    if bad_id.any():
+        row = int(np.argmax(bad_id.any(axis=1)))
+        problems.append(f"{int(bad_id.any(axis=1).sum())} of {len(F)} samples with other feature "
+                        f"point IDs away from ties (first: sample {row}, IDs "
+                        f"{np.asarray(got.id)[row].tolist()} vs {ref.id[row, :n].tolist()})")
+    if bad_F.any():
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rel = np.abs(G - F) / np.maximum(np.abs(F), F_ATOL)
+        worst = "NaN" if np.isnan(G[bad_F]).any() else f"{np.nanmax(rel[bad_F]):.2g}"
+        problems.append(f"F off the reference at {int(bad_F.any(axis=1).sum())} of {len(F)} "
+                        f"samples (up to {worst} relative; bound {F_RTOL:g})")
+    return f"{name}: {'; '.join(problems)}" if problems else None
+
+
+def run_cases() -> tuple[str | None, int]:
+    """Every case on the current path: (what differed or None, samples checked)."""
+    count = 0
+    for i, (name, dim, kw, n, outputs, near, far) in enumerate(CASES):
+        pts = _samples(dim, near, far, seed=1000 + i)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")     # inexact-sample warnings: the answer is what counts
+            got = gpu_cellular(pts, n, outputs=outputs, **kw)
+            ref = reference_cellular(pts, n + 1, outputs=("F", "id"), **kw)
+        what = compare(name, got, ref, n)
+        count += len(pts)
+        if what:
+            return what, count
+    return None, count
+
+
+def check(ctx, path: str) -> str | None:
+    """The hook of :func:`cellgl.gl.path.on_first_use`: None when ``path`` gives the reference's
+    answers on ``ctx``, else what differed. A context cellgl did not make (a window's) or one
+    that is not this thread's cellgl context is not checked (the basis runs on the latter)."""
+    from cellgl.gl import context
+
+    if not context.computes_on(ctx) or context.get_context() is not ctx:
+        _path.note(ctx, path, "not checked (not the context cellgl computes on)")
+        return None
+    started = time.perf_counter()
+    what, count = run_cases()
+    if what is None:
+        _path.note(ctx, path, f"passed ({len(CASES)} cases, {count} samples against the NumPy "
+                              f"reference, {time.perf_counter() - started:.2f} s)")
+    return what
+
+
+_path.on_first_use(check)

@@ -1,0 +1,139 @@
+"""The one OpenGL version ladder: the core versions cellgl asks of every context API, in order.
+
+Drivers answer a request for "OpenGL X.Y core" differently. Mesa gives its highest core version
+whatever is asked (llvmpipe: 4.5); NVIDIA's EGL and GLX give exactly the version asked (3.3 asked,
+3.3 given: no compute shaders). So cellgl asks for the newest first and walks down,
+:data:`LADDER`: 4.6, 4.5, 4.3 (compute shaders: the compute path), 4.1 (macOS), 3.3 core (the
+least the fragment path runs on). The first rung a driver accepts wins; what each refused rung
+said is kept for the one error message when none works.
+
+Every way cellgl makes a context climbs this ladder: EGL, GLX, WGL and CGL through glcontext
+(:func:`glcontext_context`; glcontext's CGL backend ignores the version and gives 4.1 core),
+OSMesa and the surfaceless EGL display of a forked child through cellgl's own loaders, and the
+viewer's GLFW window (``viewer/app.py``).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+__all__ = ["LADDER", "MINIMUM", "LadderError", "label", "major_minor", "climb", "wrap_loader",
+           "glcontext_context", "describe"]
+
+#: moderngl version codes asked for, newest first (core profile).
+LADDER = (460, 450, 430, 410, 330)
+#: the least cellgl runs on (the fragment path); 4.3 adds the compute path (cellgl.gl.path).
+MINIMUM = 330
+
+
+def label(code: int) -> str:
+    """``460`` -> ``"4.6"``."""
+    return f"{code // 100}.{code % 100 // 10}"
+
+
+def major_minor(code: int) -> tuple[int, int]:
+    """``460`` -> ``(4, 6)``."""
+    return code // 100, code % 100 // 10
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.splitlines()[0]
+
+
+class LadderError(RuntimeError):
+    """No rung of the ladder gave a context. ``attempts``: (version code, why it failed)."""
+
+    def __init__(self, what: str, attempts: list[tuple[int, str]]):
+        self.attempts = attempts
+        tried = "; ".join(f"{label(code)} core: {why}" for code, why in attempts)
+        super().__init__(f"{what}: {tried}" if what else tried)
+
+
+def climb(make, what: str = "", ladder=LADDER):
+    """Ask ``make(code)`` for each version code of ``ladder`` in turn; the first context it
+    returns wins. ``make`` raises when the driver refuses that version (any exception: each API
+    fails in its own way). The context gets ``_cellgl_ladder``: the list of (code, error or None)
+    of the rungs tried (:func:`describe`).
+
+    Raises
+    ------
+    LadderError
+        Every rung failed; its message lists each version with the driver's answer.
+    """
+    attempts: list[tuple[int, str | None]] = []
+    for code in ladder:
+        try:
+            ctx = make(code)
+        except Exception as exc:  # noqa: BLE001 - glcontext raises bare Exception
+            attempts.append((code, _first_line(exc)))
+            continue
+        attempts.append((code, None))
+        try:
+            ctx._cellgl_ladder = attempts
+        except AttributeError:  # a stand-in object without attributes (tests)
+            pass
+        return ctx
+    raise LadderError(what, attempts)
+
+
+def describe(ctx) -> str:
+    """What the ladder did for ``ctx``: ``"4.6 refused (eglCreateContext failed (0x3009)), 4.5
+    asked, got 4.5"``; ``"not climbed"`` for a context cellgl did not make (a window's)."""
+    attempts = getattr(ctx, "_cellgl_ladder", None)
+    if not attempts:
+        return "not climbed (a context cellgl attached to, not one it made)"
+    parts = [f"{label(code)} refused ({why})" for code, why in attempts if why is not None]
+    asked = attempts[-1][0]
+    got = getattr(ctx, "version_code", None)
+    parts.append(f"{label(asked)} asked, got {label(got) if got else 'unknown'}")
+    return ", ".join(parts)
+
+
+def wrap_loader(loader, minimum: int = MINIMUM, mode: str = "standalone"):
+    """A moderngl.Context over a loader object (``load_opengl_function``, ``release``,
+    ``__enter__``/``__exit__``: glcontext's or cellgl's own; None: glcontext's default backend
+    detecting the current context), refused below ``minimum`` (moderngl 5.10+ internals).
+
+    A standalone context's loader is released when the context cannot be made or is too old.
+    """
+    import moderngl
+
+    ctx = moderngl.Context.__new__(moderngl.Context)
+    settings = {"context": loader} if loader is not None else {}
+    try:
+        ctx.mglo, ctx.version_code = moderngl.mgl.create_context(glversion=minimum, mode=mode,
+                                                                 **settings)
+    except Exception:
+        if loader is not None:
+            loader.release()
+        raise
+    ctx._info = None
+    ctx._extensions = None
+    ctx.extra = None
+    ctx._gc_mode = None
+    ctx._objects = deque()
+    ctx._screen = None
+    ctx.fbo = None
+    if ctx.version_code < minimum:
+        got = ctx.version_code
+        if mode == "standalone":   # ours; a detected one (a window's) belongs to its owner
+            ctx.release()
+        raise ValueError(f"OpenGL {label(minimum)} required, got {label(got)}")
+    return ctx
+
+
+def glcontext_context(api: str, code: int, **settings):
+    """A standalone context from glcontext's backend for ``api`` asking for version ``code``
+    core: ``"egl"`` (its EGL backend; ``device_index`` picks the EGL device), or ``"native"``
+    (its default backend: GLX on Linux, WGL on Windows, CGL on macOS). Whatever version the
+    driver gives from 3.3 up is accepted (a driver may give more than asked; CGL gives 4.1).
+
+    Note: glcontext lets ``GLCONTEXT_GLVERSION`` replace the version asked (every rung then asks
+    the same) and ``GLCONTEXT_DEVICE_INDEX`` the device.
+    """
+    import glcontext
+
+    create = glcontext.get_backend_by_name("egl") if api == "egl" else glcontext.default_backend()
+    loader = create(mode="standalone", glversion=code, **settings)
+    return wrap_loader(loader)
