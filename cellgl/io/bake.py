@@ -25,7 +25,7 @@ import numpy as np
 
 from cellgl.io import formats as cio
 from cellgl import _interrupt
-from cellgl.io.tempfiles import NAME_MAX, atomic_paths, human_size
+from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
 
 __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
@@ -221,16 +221,14 @@ def _check_path(path) -> tuple[Path, str]:
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     if ext not in FORMATS:
+        animated = " (an animated .webp/.gif needs --frames N)" if ext in (".webp", ".gif") else ""
         raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
-                        f"accepted {_accepted(FORMATS)}")
+                        f"accepted {_accepted(FORMATS)}{animated}")
     _check_name(path)
-    if path.is_dir():
-        raise BakeError(f"output {str(path)!r} is a directory; give a file name")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise BakeError(f"output directory {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise BakeError(f"output directory {str(parent)!r} is not writable")
+    try:
+        check_output(path)      # the one rule of every command's output (cellgl.io.tempfiles)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
     return path, ext
 
 

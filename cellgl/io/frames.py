@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io.spec import BakeError, _check_size, parse_channels, parse_size
-from cellgl.io.tempfiles import scratch_dir
+from cellgl.io.tempfiles import check_output, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
@@ -89,8 +89,11 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
     parent = path.parent if str(path.parent) else Path(".")
     if ext not in ANIMATED:
         _check_path(path)                     # names the accepted extensions
-    elif not parent.is_dir():
-        raise BakeError(f"output directory {str(parent)!r} does not exist")
+    else:
+        try:
+            check_output(path)                # the one rule of every command's output
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
     recipe = _load(recipe_or_name, sets, tileable)
     _check(frames, fps, recipe, ext, channels)
     bar = _Progress(frames, f"baking {path.name}", progress, unit="frames")

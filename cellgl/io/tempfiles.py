@@ -24,7 +24,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 __all__ = ["atomic_paths", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
-           "check_output", "NAME_MAX"]
+           "check_output", "check_output_dir", "NAME_MAX"]
 
 NAME_MAX = 255  #: bytes in one file name on every common filesystem
 _EXT_MAX = 32   #: longest extension kept on a temporary name
@@ -212,9 +212,26 @@ def reserve(path: str | os.PathLike, nbytes: int) -> None:
         os.close(fd)
 
 
+def _folder_problem(folder: Path) -> str | None:
+    """Why ``folder`` cannot receive a new file (None: it can): it or one of its parents is a
+    file, it does not exist, or it is not writable."""
+    for above in (folder, *folder.parents):
+        if above.exists() or above.is_symlink():
+            if not above.is_dir():
+                return f"{str(above)!r} is a file, not a directory"
+            break
+    if not folder.is_dir():
+        return f"output directory {str(folder)!r} does not exist (it is not created; make it first)"
+    if not os.access(folder, os.W_OK):
+        return f"output directory {str(folder)!r} is not writable"
+    return None
+
+
 def check_output(path: str | os.PathLike) -> Path:
     """``path`` as a destination a writer can create, else ValueError saying why (directory
-    missing or not writable, a directory given, a name longer than 255 bytes)."""
+    missing, a file where a directory should be, not writable, a directory given, a name
+    longer than 255 bytes). Every command checks its output with this (or
+    :func:`check_output_dir`) before its work starts: a missing folder is never created."""
     path = Path(os.fspath(path))
     parent = path.parent if str(path.parent) else Path(".")
     if len(os.fsencode(path.name)) > NAME_MAX:
@@ -222,8 +239,25 @@ def check_output(path: str | os.PathLike) -> Path:
                          f"bytes long; accepted at most {NAME_MAX}")
     if path.is_dir():
         raise ValueError(f"output {str(path)!r} is a directory; give a file name")
-    if not parent.is_dir():
-        raise ValueError(f"output directory {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"output directory {str(parent)!r} is not writable")
+    why = _folder_problem(parent)
+    if why:
+        raise ValueError(f"output {str(path)!r}: {why}")
+    return path
+
+
+def check_output_dir(path: str | os.PathLike) -> Path:
+    """``path`` as an output directory a command may fill: an existing directory, or a new one
+    (created by the command) in an existing, writable directory; ValueError otherwise."""
+    path = Path(os.fspath(path))
+    if path.is_dir():
+        why = None if os.access(path, os.W_OK) else f"output directory {str(path)!r} is not writable"
+    elif path.exists() or path.is_symlink():
+        why = f"{str(path)!r} exists and is not a directory"
+    else:
+        if len(os.fsencode(path.name)) > NAME_MAX:
+            raise ValueError(f"output directory name {path.name[:40]!r}... is "
+                             f"{len(os.fsencode(path.name))} bytes long; accepted at most {NAME_MAX}")
+        why = _folder_problem(path.parent if str(path.parent) else Path("."))
+    if why:
+        raise ValueError(f"output {str(path)!r}: {why}")
     return path
