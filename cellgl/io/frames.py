@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io.spec import BakeError, _check_size, parse_channels, parse_size
-from cellgl.io.tempfiles import check_output, scratch_dir
+from cellgl.io.tempfiles import check_output, commit_lock, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
@@ -114,10 +114,11 @@ def _move_all(files: list[Path], parent: Path) -> list[Path]:
     """Move the finished frames into ``parent``; if one move fails, move back those done."""
     done = []
     try:
-        for f in files:
-            dest = parent / f.name
-            os.replace(f, dest)
-            done.append((f, dest))
+        with commit_lock([parent]):     # a concurrent bake of the same names: one set after the other
+            for f in files:
+                dest = parent / f.name
+                os.replace(f, dest)
+                done.append((f, dest))
     except BaseException:
         for f, dest in reversed(done):
             try:

@@ -23,7 +23,7 @@ import socket
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-__all__ = ["atomic_paths", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
+__all__ = ["atomic_paths", "commit_lock", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
            "check_output", "check_output_dir", "NAME_MAX"]
 
 NAME_MAX = 255  #: bytes in one file name on every common filesystem
@@ -113,6 +113,35 @@ def _default_mode() -> int:
 
 
 @contextlib.contextmanager
+def commit_lock(directories) -> Iterator[None]:
+    """Hold an exclusive lock on each of ``directories`` (``flock`` on the directory itself: no
+    lock file is left behind) while the block runs: two writers that commit sets of files into
+    the same folder (``<stem>_color.png``, ``<stem>_F1.png``, ...) rename one whole set after the
+    other, never interleaved, so the last writer's set is the one that stays, complete. Held
+    only for the renames (milliseconds); waits while another writer holds it. Where the
+    platform or the filesystem has no ``flock`` (Windows) the block runs unlocked."""
+    try:
+        import fcntl
+    except ImportError:         # pragma: no cover - Windows
+        yield
+        return
+    fds = []
+    try:
+        for d in sorted({os.path.abspath(str(d) or ".") for d in directories}):
+            try:
+                fd = os.open(d, os.O_RDONLY)
+            except OSError:
+                continue
+            fds.append(fd)
+            with contextlib.suppress(OSError):      # a filesystem without locks
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        for fd in fds:
+            os.close(fd)        # releases the lock
+
+
+@contextlib.contextmanager
 def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> Iterator[list[Path]]:
     """Yield one temporary path beside each destination; on success move them all onto their
     destinations, on any exception (``KeyboardInterrupt`` and the CLI's SIGTERM/SIGHUP
@@ -136,8 +165,9 @@ def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> 
             with open(t, "rb+") as f:
                 os.fsync(f.fileno())
             os.chmod(t, _default_mode())
-        for t, d in zip(tmps, dests):
-            os.replace(t, d)
+        with commit_lock(d.parent for d in dests):
+            for t, d in zip(tmps, dests):
+                os.replace(t, d)
     except BaseException:
         for t in tmps:
             with contextlib.suppress(OSError):
