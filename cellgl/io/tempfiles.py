@@ -168,11 +168,31 @@ def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> 
         with commit_lock(d.parent for d in dests):
             for t, d in zip(tmps, dests):
                 os.replace(t, d)
-    except BaseException:
+    except BaseException as exc:
         for t in tmps:
             with contextlib.suppress(OSError):
                 t.unlink()
+        named = _naming_destination(exc, tmps, dests) if isinstance(exc, OSError) else None
+        if named is not None:
+            raise named from None
         raise
+
+
+def _naming_destination(exc: OSError, tmps: Sequence[Path], dests: Sequence[Path]) -> OSError | None:
+    """``exc`` (a write that failed: a full disk, a file size limit) naming the output the user
+    gave instead of its hidden temporary file, and naming it at all where the library said no
+    file (a bare ``write``); None where there is nothing to change."""
+    text, name = exc.strerror or str(exc), exc.filename
+    for t, d in zip(tmps, dests):
+        if name is not None and os.fspath(name) in (str(t), t.name):
+            name = str(d)
+        for form in (str(t), t.name):
+            text = text.replace(form, str(d))
+    if name is None and len(dests) == 1:
+        name = str(dests[0])
+    if name == exc.filename and text == (exc.strerror or str(exc)):
+        return None
+    return OSError(exc.errno, text, name)
 
 
 @contextlib.contextmanager
