@@ -213,7 +213,11 @@ class _Progress:
         self.drawn = 0
 
     def __enter__(self) -> _Progress:
-        self.start()
+        try:
+            self.start()
+        except BaseException as exc:    # a Ctrl-C right after the first line: still said
+            self.close(exc)
+            raise
         return self
 
     def __exit__(self, kind, exc, tb) -> None:
