@@ -5,7 +5,13 @@ A recipe whose feature points orbit (``orbit_radius > 0``, :mod:`cellgl.texture.
 bit for bit (the phase reaches the shaders as an integer turn modulo 2^32). The frames are
 written as a numbered sequence ``<stem>_0000<ext> .. <stem>_<N-1><ext>`` (any format
 :func:`cellgl.io.bake.bake` writes, every channel it writes) or, for ``.webp`` and ``.gif``, as
-one animated file that loops forever (Pillow; colour only; WebP lossless).
+one animated file that loops forever (colour only; WebP lossless).
+
+An animated file is written as its frames are rendered, one at a time (this module writes the
+GIF89a blocks and the WebP RIFF chunks, each frame encoded by Pillow alone: Pillow's own
+multi-frame writers hold every frame until the end), so memory does not grow with the number
+of frames; sizes beyond the format (WebP sides <= 16383, GIF <= 65535) or one frame's encoding
+beyond half the memory budget are refused before anything is rendered.
 
 All or nothing: every frame is rendered into a temporary folder next to the output first; only
 when all are done are they moved into place (a move that fails undoes the ones before it), and
@@ -221,8 +227,6 @@ def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bake
         if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
             raise BakeError(f"cannot write {path}: {exc.strerror}") from None
         raise
-    except (KeyError, ValueError) as exc:
-        raise BakeError(f"cannot write {path.suffix} animation with Pillow: {exc}") from None
     os.replace(part, path)
     return path
 
@@ -246,7 +250,7 @@ def _write_gif(f, frames, w: int, h: int, duration: int) -> None:
 def _riff_chunks(data: bytes) -> dict[bytes, bytes]:
     """The chunks of a RIFF WEBP file, ``{fourcc: chunk with its header and padding}``."""
     if data[:4] != b"RIFF" or data[8:12] != b"WEBP":
-        raise ValueError("Pillow did not write a RIFF WEBP file")
+        raise RuntimeError("Pillow did not write a RIFF WEBP file")
     chunks, i = {}, 12
     while i + 8 <= len(data):
         n = struct.unpack("<I", data[i + 4:i + 8])[0]
@@ -278,14 +282,14 @@ def _write_webp(f, frames, w: int, h: int, duration: int) -> None:
         Image.fromarray(rgb, "RGB").save(buf, "WEBP", lossless=True, exact=True)
         bits = _riff_chunks(buf.getvalue()).get(b"VP8L")
         if bits is None:
-            raise ValueError("Pillow's lossless WebP frame holds no VP8L bitstream")
+            raise RuntimeError("Pillow's lossless WebP frame holds no VP8L bitstream")
         # offset 0, 0; the frame's size; no blending (bit 1), no disposal
         head = u24(0) + u24(0) + u24(w - 1) + u24(h - 1) + u24(min(duration, (1 << 24) - 1)) + b"\x02"
         payload = len(head) + len(bits)
         size += 8 + payload
         if size > _RIFF_MAX:
-            raise ValueError(f"the animation passes the 4 GiB a WebP file can hold; accepted: "
-                             "fewer --frames, a smaller --size, or a .gif")
+            raise BakeError("the animation passes the 4 GiB a WebP file can hold; accepted: "
+                            "fewer --frames, a smaller --size, or a .gif")
         f.write(b"ANMF" + struct.pack("<I", payload) + head + bits)
     f.seek(4)
     f.write(struct.pack("<I", size))
