@@ -173,8 +173,8 @@ def _on_signal(signum, frame):
     _received[:] = [signum]
     exc = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
     _interrupt.pending[:] = [exc]    # raised again at the next tile or frame if this is swallowed
-    gl = sys.modules.get("cellgl.gl.context")
-    if gl is not None and getattr(gl._tls, "depth", 0) > 0:
+    gl = sys.modules.get("cellgl.gl.context")   # (maybe half imported: the signal came during it)
+    if gl is not None and getattr(getattr(gl, "_tls", None), "depth", 0) > 0:
         # inside a GL call: raised as it returns (an exception in the middle of GL work has
         # been seen to crash the driver at exit)
         gl.deferred[:] = [lambda: _raise(exc)]

@@ -150,13 +150,13 @@ class _Progress:
     def _log(self, text: str) -> None:
         """One plain line (stderr not a terminal); never raises (a closed log ends the lines)."""
         with self._lock:
+            self.drawn = 2      # first: a signal that lands in the write still ends the lines
+            self._logged = time.perf_counter()
             try:
                 self.stream.write(f"{self.label}: {text}\n")
                 self.stream.flush()
             except (OSError, ValueError):
                 return
-            self.drawn = 2
-            self._logged = time.perf_counter()
 
     def start(self) -> None:
         """Say what started (stderr not a terminal) and keep a line coming every
@@ -201,7 +201,9 @@ class _Progress:
             self._stop = None
         if not self.enabled or not self.drawn:
             return
-        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated"
+        # (a signal during an import can reach here as another exception; it is still pending)
+        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated" \
+            or bool(_interrupt.pending)
         try:
             if self.drawn == 1:
                 self.stream.write(" interrupted\n" if stopped else "\n")
