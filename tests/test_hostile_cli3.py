@@ -101,6 +101,8 @@ _WRITERS = {
     "playground": (["playground", "--preset", "f1", "--no-thumbnails", "-j", "1", "-o"], "site", []),
     "view": (["view", "flagstone", "--screenshot"], "a.png", []),
     "blender-extension": (["blender-extension", "-o"], "a.zip", []),
+    "zarr": (["bake", "f1", "-o"], "t.zarr", ["--size", "16"]),
+    "sweep": (["sweep", "f1", "--set", "seed=0..1", "--size", "16", "-o"], "sw", []),
 }
 
 
@@ -111,6 +113,8 @@ def test_every_command_refuses_a_missing_or_file_parent(tmp_path, command, case)
     if command == "view":
         for module in cli.VIEWER_EXTRA:     # without them: the message says how to install them
             pytest.importorskip(module)
+    if command in ("zarr", "sweep"):
+        pytest.importorskip("distributed")
     (tmp_path / "afile").write_text("x")
     parent = tmp_path / "nothere" / "deeper" if case == "missing" else tmp_path / "afile"
     env = {k: v for k, v in ENV.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}

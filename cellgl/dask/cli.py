@@ -8,6 +8,7 @@ from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
 from cellgl.dask.zarr_bake import bake_zarr
 from cellgl.io.spec import DEFAULT_SIZE, _int_arg
+from cellgl.io.tempfiles import check_output_dir
 
 __all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
 
@@ -66,6 +67,7 @@ def run_zarr_bake(args: argparse.Namespace) -> int:
         _int_arg("--workers", args.workers, 1, 1024)
     threads = _int_arg("--threads", args.threads, 1, 256)
     check_scheduler(args.scheduler)
+    check_output_dir(args.output)       # the one rule of every command's output (a .zarr is a folder)
     bake_zarr(args.recipe, args.output, size=args.size,
               channels=tuple(args.channels or ("color",)), chunk=chunk, sets=args.sets,
               tileable=args.tileable, scheduler=args.scheduler, workers=workers,
@@ -119,6 +121,7 @@ def add_sweep_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
 def run_sweep(args: argparse.Namespace) -> int:
     """``cellgl sweep ...``."""
     check_scheduler(args.scheduler)
+    check_output_dir(args.output)       # the one rule of every command's output
     workers = None if args.workers is None else \
         _int_arg("--workers", args.workers, 1, 1024)
     sweep(args.recipe, args.output, args.sets, size=args.size,
