@@ -124,6 +124,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog=PROG, description="Cellular texture basis functions on the GPU."
     )
+    from cellgl._version import __version__
+
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name, (add, run) in _COMMANDS.items():
@@ -171,8 +174,8 @@ def _on_signal(signum, frame):
     _received[:] = [signum]
     exc = KeyboardInterrupt() if signum == signal.SIGINT else Terminated(signum)
     _interrupt.pending[:] = [exc]    # raised again at the next tile or frame if this is swallowed
-    gl = sys.modules.get("cellgl.gl.context")
-    if gl is not None and getattr(gl._tls, "depth", 0) > 0:
+    gl = sys.modules.get("cellgl.gl.context")   # (maybe half imported: the signal came during it)
+    if gl is not None and getattr(getattr(gl, "_tls", None), "depth", 0) > 0:
         # inside a GL call: raised as it returns (an exception in the middle of GL work has
         # been seen to crash the driver at exit)
         gl.deferred[:] = [lambda: _raise(exc)]

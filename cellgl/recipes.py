@@ -112,6 +112,9 @@ def add_presets_parser(sub):
 
 def run_presets_cli(args) -> int:
     """Run ``cellgl presets``."""
+    if args.set and (args.params or not args.name):
+        raise RecipeError(f"--set {args.set[0]}: changes the recipe printed for a preset; accepted "
+                          "only with NAME (cellgl presets NAME --set ...), not with a listing")
     if args.params:
         for prm in PARAMS:
             print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")

@@ -204,7 +204,8 @@ def test_progress_off_a_terminal_is_plain_lines():
             bar.step()
     assert "\r" not in s.text
     lines = s.text.splitlines()
-    assert len(lines) == 10 and lines[-1].startswith("baking x.png: 40/40 tiles"), lines
+    assert lines[0] == "baking x.png: started, 40 tiles", lines      # at once (issue 42)
+    assert len(lines) == 11 and lines[-1].startswith("baking x.png: 40/40 tiles"), lines
 
 
 @pytest.mark.parametrize("tty", [True, False])

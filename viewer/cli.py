@@ -53,6 +53,10 @@ def run(args: argparse.Namespace) -> int:
     """Open the viewer (or capture a screenshot) as ``args`` says; return the exit status."""
     from .app import Viewer, ViewerOptions
 
+    if args.screenshot:     # before the window opens: the one rule of every command's output
+        from cellgl.io.tempfiles import check_output
+
+        check_output(args.screenshot)
     opts = ViewerOptions(
         recipe=args.recipe, mode=args.mode, shape=args.shape, size=args.size,
         sets=list(args.sets), panel=not args.no_panel, time=args.time,

@@ -166,8 +166,9 @@ def build_extension(output, *, platforms=tuple(PLATFORMS), fetch=pip_fetch, cach
     output = Path(os.path.abspath(os.fspath(output)))
     if output.suffix != ".zip":
         raise ValueError(f"output {str(output)!r} must end in .zip")
-    if not output.parent.is_dir():
-        raise ValueError(f"output folder {str(output.parent)!r} does not exist")
+    from cellgl.io.tempfiles import check_output
+
+    check_output(output)        # before the build: a missing or read-only folder, a long name
     platforms = list(platforms)
     bad = [p for p in platforms if p not in PLATFORMS]
     if bad or not platforms:

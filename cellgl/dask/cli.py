@@ -8,8 +8,50 @@ from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
 from cellgl.dask.zarr_bake import bake_zarr
 from cellgl.io.spec import DEFAULT_SIZE, _int_arg
+from cellgl.io.tempfiles import check_output_dir
 
-__all__ = ["add_sweep_parser", "run_sweep", "run_zarr_bake"]
+__all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
+
+
+#: largest scheduler file read (Dask writes a few hundred bytes)
+MAX_SCHEDULER_FILE = 1 << 20
+
+
+def check_scheduler(scheduler: str | None) -> None:
+    """A ``--scheduler`` that names a scheduler file (``*.json``, as
+    :func:`cellgl.dask.cluster.cluster_client` reads it) must be there, now, and hold the JSON
+    object Dask writes (``{"address": "tcp://..."}``): Dask itself waits for a missing file for
+    ever. DaskError naming the file and what is wrong otherwise."""
+    import json
+    import os
+    import stat
+
+    if scheduler is None or not str(scheduler).endswith(".json"):
+        return
+    what = f"--scheduler {scheduler}"
+    try:
+        st = os.stat(scheduler)
+    except OSError as exc:
+        raise DaskError(f"{what}: {exc.strerror.lower() if exc.strerror else exc}; a scheduler "
+                        "file is written by a running scheduler (dask scheduler --scheduler-file "
+                        "FILE): start it first, or give its address (tcp://host:8786)") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise DaskError(f"{what}: not a regular file; accepted: the JSON file a Dask scheduler "
+                        "writes (--scheduler-file)")
+    if st.st_size > MAX_SCHEDULER_FILE:
+        raise DaskError(f"{what}: {st.st_size} bytes; a scheduler file holds a few hundred "
+                        f"(accepted at most {MAX_SCHEDULER_FILE})")
+    try:
+        with open(scheduler, "rb") as f:
+            info = json.loads(f.read(MAX_SCHEDULER_FILE + 1).decode("utf-8"))
+    except OSError as exc:
+        raise DaskError(f"{what}: cannot read it: {exc.strerror or exc}") from None
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise DaskError(f"{what}: not a Dask scheduler file (not valid JSON: {exc})") from None
+    address = info.get("address") if isinstance(info, dict) else None
+    if not isinstance(address, str) or not address:
+        raise DaskError(f"{what}: not a Dask scheduler file (no \"address\" string in it); "
+                        "accepted: the JSON file a Dask scheduler writes (--scheduler-file)")
 
 
 def run_zarr_bake(args: argparse.Namespace) -> int:
@@ -24,6 +66,8 @@ def run_zarr_bake(args: argparse.Namespace) -> int:
     workers = None if args.workers is None else \
         _int_arg("--workers", args.workers, 1, 1024)
     threads = _int_arg("--threads", args.threads, 1, 256)
+    check_scheduler(args.scheduler)
+    check_output_dir(args.output)       # the one rule of every command's output (a .zarr is a folder)
     bake_zarr(args.recipe, args.output, size=args.size,
               channels=tuple(args.channels or ("color",)), chunk=chunk, sets=args.sets,
               tileable=args.tileable, scheduler=args.scheduler, workers=workers,
@@ -76,6 +120,8 @@ def add_sweep_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser
 
 def run_sweep(args: argparse.Namespace) -> int:
     """``cellgl sweep ...``."""
+    check_scheduler(args.scheduler)
+    check_output_dir(args.output)       # the one rule of every command's output
     workers = None if args.workers is None else \
         _int_arg("--workers", args.workers, 1, 1024)
     sweep(args.recipe, args.output, args.sets, size=args.size,

@@ -16,6 +16,7 @@ import os
 import shutil
 import sys
 import dataclasses
+import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -25,7 +26,7 @@ import numpy as np
 
 from cellgl.io import formats as cio
 from cellgl import _interrupt
-from cellgl.io.tempfiles import NAME_MAX, atomic_paths, human_size
+from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
 
 __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
@@ -114,9 +115,15 @@ def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tup
 
 class _Progress:
     """A progress bar on stderr. On a terminal one line redrawn in place (``\\r``, at most four
-    times a second); elsewhere (a log, a pipe) a plain line at every tenth of the work; nothing
-    when not ``enabled`` (``--quiet``) or for a single step. Used as ``with bar:`` the line is
-    ended on leaving, with "interrupted" after Ctrl-C or a terminating signal."""
+    times a second); elsewhere (a log, a pipe) plain lines: one saying what started as soon as
+    the work begins, one at every tenth of the work, and one at least every
+    :data:`LOG_INTERVAL` seconds between them (from a timer thread, so a slow tile still shows
+    the bake is alive); nothing when not ``enabled`` (``--quiet``) or for a single step. Used
+    as ``with bar:`` the line is ended on leaving, with "interrupted" after Ctrl-C or a
+    terminating signal."""
+
+    #: most seconds between two lines in a log (stderr not a terminal)
+    LOG_INTERVAL = 5.0
 
     def __init__(self, total: int, label: str, enabled: bool, stream=None, unit: str = "tiles"):
         self.total, self.label, self.done, self.unit = total, label, 0, unit
@@ -129,11 +136,42 @@ class _Progress:
         self.t0 = time.perf_counter()
         self.last = -1.0
         self.drawn = 0    # 0 nothing written, 1 a line in progress (terminal), 2 lines ended
+        self._lock = threading.Lock()
+        self._stop: threading.Event | None = None
+        self._logged = self.t0      # when the last log line was written
 
     def _text(self) -> str:
         secs = time.perf_counter() - self.t0
+        if not self.done:
+            return f"0/{self.total} {self.unit}, {secs:.0f} s"
         eta = secs / self.done * (self.total - self.done)
         return f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s"
+
+    def _log(self, text: str) -> None:
+        """One plain line (stderr not a terminal); never raises (a closed log ends the lines)."""
+        with self._lock:
+            self.drawn = 2      # first: a signal that lands in the write still ends the lines
+            self._logged = time.perf_counter()
+            try:
+                self.stream.write(f"{self.label}: {text}\n")
+                self.stream.flush()
+            except (OSError, ValueError):
+                return
+
+    def start(self) -> None:
+        """Say what started (stderr not a terminal) and keep a line coming every
+        :data:`LOG_INTERVAL` seconds until :meth:`close`."""
+        if not self.enabled or self.tty or self._stop is not None:
+            return
+        self._log(f"started, {self.total} {self.unit}")
+        self._stop = threading.Event()
+        threading.Thread(target=self._heartbeat, args=(self._stop,), daemon=True,
+                         name="cellgl-progress").start()
+
+    def _heartbeat(self, stop: threading.Event) -> None:
+        while not stop.wait(self.LOG_INTERVAL / 4):
+            if time.perf_counter() - self._logged >= self.LOG_INTERVAL and not stop.is_set():
+                self._log(self._text())
 
     def step(self) -> None:
         _interrupt.check()      # a Ctrl-C the first raise of which was swallowed
@@ -151,27 +189,37 @@ class _Progress:
             self.drawn = 1
         else:
             if 10 * self.done // self.total == 10 * (self.done - 1) // self.total:
-                return  # a line at every tenth, and at the end
-            self.stream.write(f"{self.label}: {self._text()}\n")
-            self.drawn = 2
+                return  # a line at every tenth, and at the end (the timer thread in between)
+            self._log(self._text())
+            return
         self.stream.flush()
 
     def close(self, exc: BaseException | None = None) -> None:
         """End the line; say "interrupted" if ``exc`` is a Ctrl-C or a terminating signal."""
+        if self._stop is not None:
+            self._stop.set()
+            self._stop = None
         if not self.enabled or not self.drawn:
             return
-        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated"
+        # (a signal during an import can reach here as another exception; it is still pending)
+        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated" \
+            or bool(_interrupt.pending)
         try:
             if self.drawn == 1:
                 self.stream.write(" interrupted\n" if stopped else "\n")
             elif stopped:
-                self.stream.write(f"{self.label}: interrupted at {self.done}/{self.total} {self.unit}\n")
+                self._log(f"interrupted at {self.done}/{self.total} {self.unit}")
             self.stream.flush()
         except (OSError, ValueError):
             pass
         self.drawn = 0
 
     def __enter__(self) -> _Progress:
+        try:
+            self.start()
+        except BaseException as exc:    # a Ctrl-C right after the first line: still said
+            self.close(exc)
+            raise
         return self
 
     def __exit__(self, kind, exc, tb) -> None:
@@ -221,16 +269,14 @@ def _check_path(path) -> tuple[Path, str]:
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     if ext not in FORMATS:
+        animated = " (an animated .webp/.gif needs --frames N)" if ext in (".webp", ".gif") else ""
         raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
-                        f"accepted {_accepted(FORMATS)}")
+                        f"accepted {_accepted(FORMATS)}{animated}")
     _check_name(path)
-    if path.is_dir():
-        raise BakeError(f"output {str(path)!r} is a directory; give a file name")
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.is_dir():
-        raise BakeError(f"output directory {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise BakeError(f"output directory {str(parent)!r} is not writable")
+    try:
+        check_output(path)      # the one rule of every command's output (cellgl.io.tempfiles)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
     return path, ext
 
 

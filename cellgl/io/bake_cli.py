@@ -62,8 +62,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--frames", default=None, metavar="N",
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
                         ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
-    p.add_argument("--fps", default="24", metavar="FPS",
-                   help="frames per second of an animated .webp/.gif (default %(default)s)")
+    p.add_argument("--fps", default=None, metavar="FPS",
+                   help="frames per second of an animated .webp/.gif (with --frames; default 24)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -79,7 +79,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
-    if Path(args.output).suffix.lower() == ".zarr":
+    ext = Path(args.output).suffix.lower()
+    if args.frames is not None and ext == ".zarr":
+        raise BakeError(f"--frames {args.frames}: a .zarr bake writes one image; accepted for "
+                        f"--frames: an animated .webp/.gif or a numbered {', '.join(FORMATS)} sequence")
+    if args.fps is not None and (args.frames is None or ext not in (".webp", ".gif")):
+        raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
+                        f"or NAME.gif); a numbered sequence or a single image has no frame rate")
+    if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
         return run_zarr_bake(args)
@@ -116,7 +123,7 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     from cellgl.io.frames import MAX_FPS, MAX_FRAMES, bake_frames
 
     try:
-        fps = float(args.fps)
+        fps = 24.0 if args.fps is None else float(args.fps)
     except ValueError:
         raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
     paths = bake_frames(args.recipe, args.output, _int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,

@@ -5,7 +5,13 @@ A recipe whose feature points orbit (``orbit_radius > 0``, :mod:`cellgl.texture.
 bit for bit (the phase reaches the shaders as an integer turn modulo 2^32). The frames are
 written as a numbered sequence ``<stem>_0000<ext> .. <stem>_<N-1><ext>`` (any format
 :func:`cellgl.io.bake.bake` writes, every channel it writes) or, for ``.webp`` and ``.gif``, as
-one animated file that loops forever (Pillow; colour only; WebP lossless).
+one animated file that loops forever (colour only; WebP lossless).
+
+An animated file is written as its frames are rendered, one at a time (this module writes the
+GIF89a blocks and the WebP RIFF chunks, each frame encoded by Pillow alone: Pillow's own
+multi-frame writers hold every frame until the end), so memory does not grow with the number
+of frames; sizes beyond the format (WebP sides <= 16383, GIF <= 65535) or one frame's encoding
+beyond half the memory budget are refused before anything is rendered.
 
 All or nothing: every frame is rendered into a temporary folder next to the output first; only
 when all are done are they moved into place (a move that fails undoes the ones before it), and
@@ -13,13 +19,16 @@ an animated file is written to a temporary name and renamed.
 """
 from __future__ import annotations
 
+import errno
+import io
 import os
+import struct
 from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import BakeError, _check_size, parse_channels, parse_size
-from cellgl.io.tempfiles import scratch_dir
+from cellgl.io.spec import DEFAULT_BUDGET, BakeError, _check_size, parse_channels, parse_size
+from cellgl.io.tempfiles import check_output, commit_lock, human_size, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
@@ -89,32 +98,55 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
     parent = path.parent if str(path.parent) else Path(".")
     if ext not in ANIMATED:
         _check_path(path)                     # names the accepted extensions
-    elif not parent.is_dir():
-        raise BakeError(f"output directory {str(parent)!r} does not exist")
+    else:
+        try:
+            check_output(path)                # the one rule of every command's output
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
     recipe = _load(recipe_or_name, sets, tileable)
     _check(frames, fps, recipe, ext, channels)
+    if ext in ANIMATED:
+        w, h = _animated_size(path, size, bake_kw.get("memory_budget", DEFAULT_BUDGET))
     bar = _Progress(frames, f"baking {path.name}", progress, unit="frames")
     # the folder is swept by a later bake if this one is killed
     with scratch_dir(path) as tmp, bar:
         if ext in ANIMATED:
-            return [_animated(recipe, path, tmp, frames, fps, size, bar)]
+            return [_animated(recipe, path, tmp, frames, fps, (w, h), bake_kw, bar)]
         names = []
         for k in range(frames):
             target = tmp / f"{path.stem}_{k:04d}{path.suffix}"
-            names += bake(frame_recipe(recipe, k, frames), target, size=size, channels=channels,
-                          bit_depth=bit_depth, progress=progress and frames == 1, **bake_kw)
+            try:
+                names += bake(frame_recipe(recipe, k, frames), target, size=size, channels=channels,
+                              bit_depth=bit_depth, progress=progress and frames == 1, **bake_kw)
+            except (BakeError, OSError) as exc:     # name the frame's file, not the hidden folder
+                raise _naming_output(exc, tmp, parent) from None
             bar.step()
         return _move_all(names, parent)
+
+
+def _naming_output(exc: BaseException, tmp: Path, parent: Path) -> BaseException:
+    """``exc`` with the hidden folder ``tmp`` of the frames replaced by the output's ``parent``."""
+    def fix(text):
+        if text is None:
+            return None
+        text = str(text)
+        text = text.replace(str(tmp) + os.sep, "" if str(parent) == "." else str(parent) + os.sep)
+        return text.replace(str(tmp), str(parent))
+
+    if isinstance(exc, OSError):
+        return OSError(exc.errno, fix(exc.strerror or str(exc)), fix(exc.filename))
+    return type(exc)(fix(str(exc)))
 
 
 def _move_all(files: list[Path], parent: Path) -> list[Path]:
     """Move the finished frames into ``parent``; if one move fails, move back those done."""
     done = []
     try:
-        for f in files:
-            dest = parent / f.name
-            os.replace(f, dest)
-            done.append((f, dest))
+        with commit_lock([parent]):     # a concurrent bake of the same names: one set after the other
+            for f in files:
+                dest = parent / f.name
+                os.replace(f, dest)
+                done.append((f, dest))
     except BaseException:
         for f, dest in reversed(done):
             try:
@@ -125,35 +157,139 @@ def _move_all(files: list[Path], parent: Path) -> list[Path]:
     return [d for _, d in done]
 
 
-def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bar) -> Path:
-    from PIL import Image
+#: largest side of an animated file (WebP stores width - 1 in 14 bits; GIF in 16 bits)
+ANIMATED_MAX_SIDE = {".webp": 16383, ".gif": 65535}
+#: memory per pixel of the frame being encoded, beyond its render (measured with Pillow 13: the
+#: RGB frame, its copy as an image, and the encoder: WebP lossless 12-18 bytes, GIF 5-8 bytes)
+ANIMATED_BYTES_PER_PIXEL = {".webp": 24, ".gif": 16}
 
-    from cellgl import recipes
 
+def _animated_size(path: Path, size, budget: int) -> tuple[int, int]:
+    """The frame size of an animated file, checked against the format's largest side and
+    against ``budget`` (one whole frame is encoded at a time; half the budget is for it, the
+    other half for the render of its tiles), before anything is rendered."""
+    ext = path.suffix.lower()
     if isinstance(size, str):
         w, h, d = parse_size(size)
         if d is not None:
-            raise BakeError(f"--frames to {path.suffix}: a volume size ({size}) cannot be animated; "
+            raise BakeError(f"--frames to {ext}: a volume size ({size}) cannot be animated; "
                             "accepted: WxH")
     else:
         w, h = (size, size) if isinstance(size, (int, np.integer)) else tuple(size)
         _check_size(w, h, None, f"size {w}x{h}")
-    images = []
-    for k in range(frames):
-        rgb = recipes.render(frame_recipe(recipe, k, frames), w, h, channels=("color",))["color"][..., :3]
-        images.append(Image.fromarray(np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8), "RGB"))
-        bar.step()
+    most = ANIMATED_MAX_SIDE[ext]
+    if max(w, h) > most:
+        raise BakeError(f"--size {w}x{h}: an animated {ext} has sides of at most {most} pixels; "
+                        f"accepted: 1..{most}, or a numbered sequence (-o NAME.png)")
+    need = w * h * ANIMATED_BYTES_PER_PIXEL[ext]
+    if need > budget // 2:
+        raise BakeError(f"--size {w}x{h}: encoding one {ext} frame of that size takes about "
+                        f"{human_size(need)}, more than half of --memory {budget >> 20} (MB); "
+                        f"accepted: --memory {-(-2 * need // (1 << 20))} or more, a smaller --size, "
+                        "or a numbered sequence (-o NAME.png), which is rendered tile by tile")
+    return int(w), int(h)
+
+
+def _frame_rgb(recipe, w: int, h: int, plan) -> np.ndarray:
+    """The colour of ``recipe`` at ``w x h`` as uint8 (h, w, 3), rendered tile by tile as
+    ``plan`` says (the same bits as a one-pass render)."""
+    from cellgl import recipes
+
+    out = np.empty((h, w, 3), np.uint8)
+    for x0, y0, tw, th in plan.tiles():
+        rgb = recipes.render(recipe, w, h, channels=("color",), x0=x0, y0=y0, tile_w=tw,
+                             tile_h=th)["color"][..., :3]
+        out[y0:y0 + th, x0:x0 + tw] = np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
+    return out
+
+
+def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bake_kw, bar) -> Path:
+    """Render and encode one frame at a time, appending each to the file as it comes: memory
+    holds one frame, whatever the number of frames."""
+    from cellgl.io.bake import _plan
+
+    w, h = size
+    budget = bake_kw.get("memory_budget", DEFAULT_BUDGET)
+    plan = _plan(w, h, None, ".png", ("color",), bake_kw.get("tile"), budget // 2, 3)
     duration = int(round(1000.0 / fps))
+    ext = path.suffix.lower()
     part = tmp / f"{path.stem}{path.suffix}"
-    kw = dict(save_all=True, append_images=images[1:], duration=duration, loop=0)
-    if path.suffix.lower() == ".webp":
-        kw.update(lossless=True)
-    else:
-        kw.update(disposal=1)
+
+    def images():
+        for k in range(frames):
+            yield _frame_rgb(frame_recipe(recipe, k, frames), w, h, plan)
+            bar.step()
+
     try:
-        images[0].save(part, **kw)
-    except (OSError, KeyError, ValueError) as exc:
-        raise BakeError(f"cannot write {path.suffix} animation with Pillow: {exc}") from None
+        with open(part, "wb") as f:
+            (_write_webp if ext == ".webp" else _write_gif)(f, images(), w, h, duration)
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise BakeError(f"cannot write {path}: {exc.strerror}") from None
+        raise
     os.replace(part, path)
     return path
 
+
+def _write_gif(f, frames, w: int, h: int, duration: int) -> None:
+    """An endlessly looping GIF89a of the uint8 RGB ``frames``, each with its own palette
+    (Pillow's adaptive one, as its GIF writer makes) and shown ``duration`` ms, written frame
+    by frame."""
+    from PIL import GifImagePlugin, Image
+
+    f.write(b"GIF89a" + struct.pack("<HHBBB", w, h, 0, 0, 0))   # no global colour table
+    f.write(b"!\xff\x0bNETSCAPE2.0\x03\x01" + struct.pack("<H", 0) + b"\x00")  # loop for ever
+    for rgb in frames:
+        im = Image.fromarray(rgb, "RGB").convert("P", palette=Image.Palette.ADAPTIVE)
+        for chunk in GifImagePlugin.getdata(im, (0, 0), duration=duration, disposal=1,
+                                            include_color_table=True):
+            f.write(chunk)
+    f.write(b";")
+
+
+def _riff_chunks(data: bytes) -> dict[bytes, bytes]:
+    """The chunks of a RIFF WEBP file, ``{fourcc: chunk with its header and padding}``."""
+    if data[:4] != b"RIFF" or data[8:12] != b"WEBP":
+        raise RuntimeError("Pillow did not write a RIFF WEBP file")
+    chunks, i = {}, 12
+    while i + 8 <= len(data):
+        n = struct.unpack("<I", data[i + 4:i + 8])[0]
+        end = i + 8 + n + (n & 1)
+        chunks[data[i:i + 4]] = data[i:end]
+        i = end
+    return chunks
+
+
+#: largest RIFF file (its size field has 32 bits)
+_RIFF_MAX = (1 << 32) - 2
+
+
+def _write_webp(f, frames, w: int, h: int, duration: int) -> None:
+    """An endlessly looping animated lossless WebP of the uint8 RGB ``frames``, shown
+    ``duration`` ms each, written frame by frame: each frame is encoded alone (Pillow,
+    lossless) and its bitstream wrapped in an ANMF chunk (the WebP container spec)."""
+    from PIL import Image
+
+    def u24(n: int) -> bytes:
+        return struct.pack("<I", n)[:3]
+
+    f.write(b"RIFF\0\0\0\0WEBP")                    # size patched at the end
+    f.write(b"VP8X" + struct.pack("<I", 10) + bytes([0x02, 0, 0, 0]) + u24(w - 1) + u24(h - 1))
+    f.write(b"ANIM" + struct.pack("<I", 6) + struct.pack("<IH", 0xFFFFFFFF, 0))  # white, forever
+    size = 4 + 18 + 14
+    for rgb in frames:
+        buf = io.BytesIO()
+        Image.fromarray(rgb, "RGB").save(buf, "WEBP", lossless=True, exact=True)
+        bits = _riff_chunks(buf.getvalue()).get(b"VP8L")
+        if bits is None:
+            raise RuntimeError("Pillow's lossless WebP frame holds no VP8L bitstream")
+        # offset 0, 0; the frame's size; no blending (bit 1), no disposal
+        head = u24(0) + u24(0) + u24(w - 1) + u24(h - 1) + u24(min(duration, (1 << 24) - 1)) + b"\x02"
+        payload = len(head) + len(bits)
+        size += 8 + payload
+        if size > _RIFF_MAX:
+            raise BakeError("the animation passes the 4 GiB a WebP file can hold; accepted: "
+                            "fewer --frames, a smaller --size, or a .gif")
+        f.write(b"ANMF" + struct.pack("<I", payload) + head + bits)
+    f.seek(4)
+    f.write(struct.pack("<I", size))

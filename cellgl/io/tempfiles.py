@@ -23,8 +23,8 @@ import socket
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-__all__ = ["atomic_paths", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
-           "check_output", "NAME_MAX"]
+__all__ = ["atomic_paths", "commit_lock", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
+           "check_output", "check_output_dir", "NAME_MAX"]
 
 NAME_MAX = 255  #: bytes in one file name on every common filesystem
 _EXT_MAX = 32   #: longest extension kept on a temporary name
@@ -113,6 +113,35 @@ def _default_mode() -> int:
 
 
 @contextlib.contextmanager
+def commit_lock(directories) -> Iterator[None]:
+    """Hold an exclusive lock on each of ``directories`` (``flock`` on the directory itself: no
+    lock file is left behind) while the block runs: two writers that commit sets of files into
+    the same folder (``<stem>_color.png``, ``<stem>_F1.png``, ...) rename one whole set after the
+    other, never interleaved, so the last writer's set is the one that stays, complete. Held
+    only for the renames (milliseconds); waits while another writer holds it. Where the
+    platform or the filesystem has no ``flock`` (Windows) the block runs unlocked."""
+    try:
+        import fcntl
+    except ImportError:         # pragma: no cover - Windows
+        yield
+        return
+    fds = []
+    try:
+        for d in sorted({os.path.abspath(str(d) or ".") for d in directories}):
+            try:
+                fd = os.open(d, os.O_RDONLY)
+            except OSError:
+                continue
+            fds.append(fd)
+            with contextlib.suppress(OSError):      # a filesystem without locks
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        for fd in fds:
+            os.close(fd)        # releases the lock
+
+
+@contextlib.contextmanager
 def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> Iterator[list[Path]]:
     """Yield one temporary path beside each destination; on success move them all onto their
     destinations, on any exception (``KeyboardInterrupt`` and the CLI's SIGTERM/SIGHUP
@@ -136,13 +165,34 @@ def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> 
             with open(t, "rb+") as f:
                 os.fsync(f.fileno())
             os.chmod(t, _default_mode())
-        for t, d in zip(tmps, dests):
-            os.replace(t, d)
-    except BaseException:
+        with commit_lock(d.parent for d in dests):
+            for t, d in zip(tmps, dests):
+                os.replace(t, d)
+    except BaseException as exc:
         for t in tmps:
             with contextlib.suppress(OSError):
                 t.unlink()
+        named = _naming_destination(exc, tmps, dests) if isinstance(exc, OSError) else None
+        if named is not None:
+            raise named from None
         raise
+
+
+def _naming_destination(exc: OSError, tmps: Sequence[Path], dests: Sequence[Path]) -> OSError | None:
+    """``exc`` (a write that failed: a full disk, a file size limit) naming the output the user
+    gave instead of its hidden temporary file, and naming it at all where the library said no
+    file (a bare ``write``); None where there is nothing to change."""
+    text, name = exc.strerror or str(exc), exc.filename
+    for t, d in zip(tmps, dests):
+        if name is not None and os.fspath(name) in (str(t), t.name):
+            name = str(d)
+        for form in (str(t), t.name):
+            text = text.replace(form, str(d))
+    if name is None and len(dests) == 1:
+        name = str(dests[0])
+    if name == exc.filename and text == (exc.strerror or str(exc)):
+        return None
+    return OSError(exc.errno, text, name)
 
 
 @contextlib.contextmanager
@@ -212,9 +262,26 @@ def reserve(path: str | os.PathLike, nbytes: int) -> None:
         os.close(fd)
 
 
+def _folder_problem(folder: Path) -> str | None:
+    """Why ``folder`` cannot receive a new file (None: it can): it or one of its parents is a
+    file, it does not exist, or it is not writable."""
+    for above in (folder, *folder.parents):
+        if above.exists() or above.is_symlink():
+            if not above.is_dir():
+                return f"{str(above)!r} is a file, not a directory"
+            break
+    if not folder.is_dir():
+        return f"output directory {str(folder)!r} does not exist (it is not created; make it first)"
+    if not os.access(folder, os.W_OK):
+        return f"output directory {str(folder)!r} is not writable"
+    return None
+
+
 def check_output(path: str | os.PathLike) -> Path:
     """``path`` as a destination a writer can create, else ValueError saying why (directory
-    missing or not writable, a directory given, a name longer than 255 bytes)."""
+    missing, a file where a directory should be, not writable, a directory given, a name
+    longer than 255 bytes). Every command checks its output with this (or
+    :func:`check_output_dir`) before its work starts: a missing folder is never created."""
     path = Path(os.fspath(path))
     parent = path.parent if str(path.parent) else Path(".")
     if len(os.fsencode(path.name)) > NAME_MAX:
@@ -222,8 +289,25 @@ def check_output(path: str | os.PathLike) -> Path:
                          f"bytes long; accepted at most {NAME_MAX}")
     if path.is_dir():
         raise ValueError(f"output {str(path)!r} is a directory; give a file name")
-    if not parent.is_dir():
-        raise ValueError(f"output directory {str(parent)!r} does not exist")
-    if not os.access(parent, os.W_OK):
-        raise ValueError(f"output directory {str(parent)!r} is not writable")
+    why = _folder_problem(parent)
+    if why:
+        raise ValueError(f"output {str(path)!r}: {why}")
+    return path
+
+
+def check_output_dir(path: str | os.PathLike) -> Path:
+    """``path`` as an output directory a command may fill: an existing directory, or a new one
+    (created by the command) in an existing, writable directory; ValueError otherwise."""
+    path = Path(os.fspath(path))
+    if path.is_dir():
+        why = None if os.access(path, os.W_OK) else f"output directory {str(path)!r} is not writable"
+    elif path.exists() or path.is_symlink():
+        why = f"{str(path)!r} exists and is not a directory"
+    else:
+        if len(os.fsencode(path.name)) > NAME_MAX:
+            raise ValueError(f"output directory name {path.name[:40]!r}... is "
+                             f"{len(os.fsencode(path.name))} bytes long; accepted at most {NAME_MAX}")
+        why = _folder_problem(path.parent if str(path.parent) else Path("."))
+    if why:
+        raise ValueError(f"output {str(path)!r}: {why}")
     return path

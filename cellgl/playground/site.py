@@ -139,7 +139,8 @@ def _js(name: str, obj) -> str:
 
 def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool = True, log=None,
                jobs: int | None = None) -> dict:
-    """Write the playground site into ``out_dir`` (created; files replaced atomically).
+    """Write the playground site into ``out_dir`` (created in an existing folder; files replaced
+    atomically).
 
     Parameters
     ----------
@@ -160,8 +161,9 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     dict: ``{"presets": [names], "refused": {name: reason}, "variants": count}``.
     """
     from cellgl.io.formats import atomic_path
+    from cellgl.io.tempfiles import check_output_dir
 
-    out = Path(out_dir)
+    out = check_output_dir(out_dir)     # a missing parent folder is refused, never created
     if presets is None:
         names = [n for n, _ in list_presets()]
     else:
@@ -284,7 +286,7 @@ def add_parser(sub):
         description="Write a static site (HTML + JavaScript, no server: open DIR/index.html, also "
         "from file://) with every texture preset, its parameters as sliders, 2D / tiled / animated "
         "views and buttons that copy the snippet or the `cellgl bake` command. See docs/playground.md.")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory to write (created)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="directory to write (created; its parent must exist)")
     p.add_argument("--preset", dest="presets", action="append", default=None, metavar="NAME",
                    help="only these presets or recipe .json files (repeatable; default: every preset)")
     p.add_argument("--no-thumbnails", action="store_true", help="skip rendering the preset thumbnails")
@@ -297,9 +299,9 @@ def add_parser(sub):
 def run_cli(args) -> int:
     """Run ``cellgl playground``; returns the exit status."""
     t0 = time.perf_counter()
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--output {str(out)!r} exists and is not a directory")
+    from cellgl.io.tempfiles import check_output_dir
+
+    out = check_output_dir(args.output)     # before the work: the one rule of every command
     log = None if args.quiet else (lambda s: print(s, file=sys.stderr))
     if args.jobs is not None and args.jobs < 1:
         raise ValueError(f"--jobs {args.jobs}: accepted: 1 or more processes")

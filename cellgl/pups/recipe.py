@@ -354,9 +354,15 @@ class PupsRecipe:
 
     @classmethod
     def load(cls, path) -> "PupsRecipe":
-        """Read a PUPs recipe JSON file."""
+        """Read a PUPs recipe JSON file; a relative ``pups.image`` is relative to the file's
+        folder (as ``color.cell_image`` of a cellular recipe), stored absolute."""
         path = Path(path)
         d = read_json(path)
+        g = d.get("pups") if isinstance(d, dict) else None
+        image = g.get("image") if isinstance(g, dict) else None
+        if isinstance(image, str) and image.strip() and not image.startswith("builtin:") \
+                and not Path(image).expanduser().is_absolute():
+            d = {**d, "pups": {**g, "image": str(path.resolve().parent / Path(image).expanduser())}}
         try:
             return cls.from_dict(d)
         except RecipeError as exc:

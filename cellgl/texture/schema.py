@@ -13,7 +13,7 @@ import numbers
 from cellgl.texture.params import Param
 
 __all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "check_name_doc", "parse_value", "read_json",
-           "MAX_NAME", "MAX_DOC"]
+           "MAX_NAME", "MAX_DOC", "MAX_RECIPE_BYTES"]
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
@@ -36,6 +36,28 @@ def _parse_int(text: str) -> int:
     return int(text)
 
 
+#: largest recipe file read, in bytes (a recipe is a few KiB: the largest preset is 8 KiB)
+MAX_RECIPE_BYTES = 1 << 20
+
+
+def _read_capped(path) -> bytes:
+    """The bytes of recipe file ``path``: a regular file of at most :data:`MAX_RECIPE_BYTES`
+    (opened without blocking, so a FIFO or a device is refused, not waited on or read for ever)."""
+    import os
+    import stat
+
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+    with os.fdopen(fd, "rb") as f:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise RecipeError(f"recipe {str(path)!r} is not a regular file; accepted: a recipe "
+                              ".json file or a preset name")
+        raw = f.read(MAX_RECIPE_BYTES + 1)
+    if len(raw) > MAX_RECIPE_BYTES:
+        raise RecipeError(f"recipe {str(path)!r} is larger than {MAX_RECIPE_BYTES >> 10} KiB; "
+                          f"accepted: at most {MAX_RECIPE_BYTES} bytes (a recipe is a few KiB)")
+    return raw
+
+
 def read_json(path) -> object:
     """The JSON value in recipe file ``path``; RecipeError naming the file otherwise.
 
@@ -48,7 +70,7 @@ def read_json(path) -> object:
 
     path = Path(path)
     try:
-        raw = path.read_bytes()
+        raw = _read_capped(path)
     except OSError as exc:
         raise RecipeError(f"cannot read recipe {str(path)!r}: {exc.strerror or exc}") from None
     try:
@@ -82,13 +104,20 @@ def check_name_doc(name, doc) -> tuple[str, str]:
     if len(name) > MAX_NAME:
         raise RecipeError(f"name: {len(name)} characters ({_shown(name[:24])}...); accepted: at most "
                           f"{MAX_NAME} characters")
-    bad = next((c for c in name if ord(c) < 32 or 127 <= ord(c) < 160), None)
-    if bad is not None:
-        raise RecipeError(f"name: {_shown(name)} holds the control character {bad!r}; accepted: one line "
-                          f"of at most {MAX_NAME} printable characters")
     if len(doc) > MAX_DOC:
         raise RecipeError(f"doc: {len(doc)} characters ({_shown(doc[:24])}...); accepted: at most "
                           f"{MAX_DOC} characters")
+    # Both are copied into exported shaders' comments and the playground's page: no control or
+    # invisible format character (U+202E reorders the text a reader sees: "Trojan Source").
+    for key, value, most in (("name", name, MAX_NAME), ("doc", doc, MAX_DOC)):
+        bad = next((c for c in value if not c.isprintable()), None)
+        if bad is not None:
+            import unicodedata
+
+            what = {"Cc": "control character", "Cf": "invisible format character"}.get(
+                unicodedata.category(bad), "unprintable character")
+            raise RecipeError(f"{key}: {_shown(value[:80])} holds the {what} U+{ord(bad):04X}; "
+                              f"accepted: one line of at most {most} printable characters")
     return name, doc
 
 
