@@ -26,16 +26,20 @@ LAYERS = (
     ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.formats",
                     "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
-    ("viewer", ("viewer",)),
+    ("viewer", ("cellgl.viewer",)),
     ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli", "cellgl.voronoi_cli")),
 )
 
 
+#: source folder -> the package it installs as (pyproject.toml's package-dir)
+PACKAGE_DIRS = {"cellgl": "cellgl", "viewer": "cellgl.viewer"}
+
+
 def _modules() -> dict[str, Path]:
     out = {}
-    for top in ("cellgl", "viewer"):
+    for top, package in PACKAGE_DIRS.items():
         for path in sorted((ROOT / top).rglob("*.py")):
-            parts = path.relative_to(ROOT).with_suffix("").parts
+            parts = (package,) + path.relative_to(ROOT / top).with_suffix("").parts
             if parts[-1] == "__init__":
                 parts = parts[:-1]
             out[".".join(parts)] = path
