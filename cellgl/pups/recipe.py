@@ -34,7 +34,7 @@ from cellgl.texture.schema import (VERSION, RecipeError, _coerce, _err, _suggest
                                    read_json)
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
-           "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for",
+           "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for", "MAX_SIDE",
            "markdown_table"]
 
 #: what a PUPs recipe renders (``cellgl.render(channels=...)``)
@@ -505,6 +505,10 @@ def period_px(width: int, height: int) -> int:
     return min(int(width), int(height))
 
 
+#: the largest image side :func:`render` takes
+MAX_SIDE = 1 << 16
+
+
 def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), x0: int = 0,
            y0: int = 0, tile_w: int | None = None, tile_h: int | None = None, depth=None,
            backend: str = "gpu") -> dict:
@@ -540,8 +544,8 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     if backend not in ("gpu", "numpy"):
         raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
     for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
-            raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1 or v > MAX_SIDE:
+            raise ValueError(f"{name} must be an integer in [1, {MAX_SIDE}], got {v!r}")
     tw = width - x0 if tile_w is None else tile_w
     th = height - y0 if tile_h is None else tile_h
     if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):
