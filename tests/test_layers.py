@@ -225,6 +225,136 @@ def test_the_kind_rule_can_fail(tmp_path, monkeypatch):
                     "cellgl.io.fake:4 uses cellgl.texture.render"], hits
 
 
+def _underscore_imports(module: str) -> list[str]:
+    """``"importer: module._name"`` for each underscore name ``module`` takes from another cellgl
+    module: ``from cellgl.x import _name`` or ``x._name`` on a name bound to a cellgl module."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+    def owner(name: str) -> str:
+        while name and name not in MODULES:
+            name = name.rpartition(".")[0]
+        return name
+
+    def private(name: str) -> bool:
+        return name.startswith("_") and not name.startswith("__")
+
+    bound, out = {}, set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if owner(a.name):
+                    bound[a.asname or a.name.partition(".")[0]] = a.name if a.asname else a.name.partition(".")[0]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            for a in node.names:
+                if f"{base}.{a.name}" in MODULES:
+                    bound[a.asname or a.name] = f"{base}.{a.name}"
+                elif private(a.name) and owner(base) and owner(base) != module:
+                    out.add(f"{module}: {owner(base)}.{a.name}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and private(node.attr):
+            chain, v = [], node.value
+            while isinstance(v, ast.Attribute):
+                chain.append(v.attr)
+                v = v.value
+            if isinstance(v, ast.Name) and v.id in bound:
+                name = ".".join([bound[v.id]] + chain[::-1])
+                if name in MODULES and name != module:
+                    out.add(f"{module}: {name}.{node.attr}")
+    return sorted(out)
+
+
+#: underscore names still taken across modules: those of the modules being rewritten beside
+#: this change (renamed after the runner/speed merges); the list only shrinks
+UNDERSCORE_IMPORTS_LEFT: set[str] = {
+    "cellgl.basis.reference: cellgl.basis.population._add",
+    "cellgl.basis.reference: cellgl.basis.population._mul",
+    "cellgl.basis.reference: cellgl.basis.population._u",
+    "cellgl.dask.blocks: cellgl.io.bake._load",
+    "cellgl.dask.cli: cellgl.io.spec._int_arg",
+    "cellgl.dask.variations: cellgl.io.bake._Progress",
+    "cellgl.dask.variations: cellgl.io.bake._check_bits",
+    "cellgl.dask.variations: cellgl.io.bake._check_size",
+    "cellgl.dask.variations: cellgl.io.bake._output_paths",
+    "cellgl.dask.zarr_bake: cellgl.io.bake._Progress",
+    "cellgl.export.compiler: cellgl.export.reach._names",
+    "cellgl.export.simplify: cellgl.export.fold._array_elements",
+    "cellgl.export.simplify: cellgl.export.fold._constant_conditions",
+    "cellgl.export.simplify: cellgl.export.fold._constant_loops",
+    "cellgl.export.simplify: cellgl.export.fold._inline_constants",
+    "cellgl.export.simplify: cellgl.export.fold._local_constants",
+    "cellgl.export.snippets: cellgl.texture.shader._uniform_decls",
+    "cellgl.export.translate.osl: cellgl.export.printer._trail",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._CMP",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._OslLib",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._SWZ",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._XYZW",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._int_lit",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._same",
+    "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._vec",
+    "cellgl.gl.threads: cellgl.gl.context._section",
+    "cellgl.io.bake: cellgl.io.spec._Encoding",
+    "cellgl.io.bake: cellgl.io.spec._accepted",
+    "cellgl.io.bake: cellgl.io.spec._check_size",
+    "cellgl.io.bake: cellgl.io.spec._encoding",
+    "cellgl.io.bake: cellgl.io.spec._exr_names",
+    "cellgl.io.bake: cellgl.io.spec._parse_sets",
+    "cellgl.io.bake_cli: cellgl.io.spec._int_arg",
+    "cellgl.io.frames: cellgl.io.bake._Progress",
+    "cellgl.io.frames: cellgl.io.bake._check_path",
+    "cellgl.io.frames: cellgl.io.bake._load",
+    "cellgl.io.frames: cellgl.io.spec._check_size",
+    "cellgl.playground.site: cellgl.texture.schema._suggest",
+    "cellgl.pups.generators: cellgl.pups.points._check_domain",
+    "cellgl.pups.generators: cellgl.pups.points._check_positive",
+    "cellgl.pups.generators: cellgl.pups.points._rng",
+    "cellgl.pups.gpu: cellgl.pups.pack._stream",
+    "cellgl.pups.graph: cellgl.pups.points._check_positive",
+    "cellgl.pups.pack: cellgl.pups.points._check_size",
+    "cellgl.pups.presets: cellgl.pups.generators._sample_map",
+    "cellgl.pups.presets: cellgl.pups.points._check_size",
+    "cellgl.pups.recipe: cellgl.pups.presets._draw_graph",
+    "cellgl.pups.recipe: cellgl.texture.recipe._parse",
+    "cellgl.pups.recipe: cellgl.texture.schema._coerce",
+    "cellgl.pups.recipe: cellgl.texture.schema._err",
+    "cellgl.pups.recipe: cellgl.texture.schema._suggest",
+    "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_gpu",
+    "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_raster",
+    "cellgl.pups.synthesis: cellgl.pups.gpu._raster_applies",
+    "cellgl.pups.synthesis: cellgl.pups.points._check_epsilon",
+    "cellgl.texture.recipe: cellgl.texture.schema._coerce",
+    "cellgl.texture.recipe: cellgl.texture.schema._err",
+    "cellgl.texture.recipe: cellgl.texture.schema._suggest",
+    "cellgl.texture.reference: cellgl.basis.reference._add",
+    "cellgl.texture.reference: cellgl.basis.reference._mul",
+    "cellgl.viewer.model: cellgl.texture.reference._tex",
+}
+
+
+def test_no_underscore_name_crosses_modules():
+    """A name another cellgl module uses is public to the package: it has no leading underscore."""
+    got = {hit for m in sorted(MODULES) for hit in _underscore_imports(m)}
+    assert not got - UNDERSCORE_IMPORTS_LEFT, "underscore names imported from another cellgl module " \
+        "(drop the underscore: the name is the package's):\n" + "\n".join(sorted(got - UNDERSCORE_IMPORTS_LEFT))
+    assert not UNDERSCORE_IMPORTS_LEFT - got, f"renamed since, drop from the list: {UNDERSCORE_IMPORTS_LEFT - got}"
+
+
+def test_the_underscore_check_sees_both_spellings(tmp_path, monkeypatch):
+    src = tmp_path / "m.py"
+    src.write_text("from cellgl.texture.schema import _coerce, RecipeError\n"
+                   "from cellgl.io import bake as B\n"
+                   "import cellgl.io.spec as S\n"
+                   "def f():\n    return B._load, S.check, B.__name__, B.bake\n")
+    monkeypatch.setitem(MODULES, "cellgl.io.fake", src)
+    assert _underscore_imports("cellgl.io.fake") == ["cellgl.io.fake: cellgl.io.bake._load",
+                                                      "cellgl.io.fake: cellgl.texture.schema._coerce"]
+
+
 def test_no_import_cycle():
     # a package's __init__ re-exports its modules; the implicit import of a parent package by its
     # submodules is not an edge
