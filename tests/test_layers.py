@@ -272,9 +272,6 @@ def _underscore_imports(module: str) -> list[str]:
 #: underscore names still taken across modules: those of the modules being rewritten beside
 #: this change (renamed after the runner/speed merges); the list only shrinks
 UNDERSCORE_IMPORTS_LEFT: set[str] = {
-    "cellgl.basis.reference: cellgl.basis.population._add",
-    "cellgl.basis.reference: cellgl.basis.population._mul",
-    "cellgl.basis.reference: cellgl.basis.population._u",
     "cellgl.dask.blocks: cellgl.io.bake._load",
     "cellgl.dask.cli: cellgl.io.spec._int_arg",
     "cellgl.dask.variations: cellgl.io.bake._Progress",
@@ -330,8 +327,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.texture.recipe: cellgl.texture.schema._coerce",
     "cellgl.texture.recipe: cellgl.texture.schema._err",
     "cellgl.texture.recipe: cellgl.texture.schema._suggest",
-    "cellgl.texture.reference: cellgl.basis.reference._add",
-    "cellgl.texture.reference: cellgl.basis.reference._mul",
     "cellgl.viewer.model: cellgl.texture.reference._tex",
 }
 

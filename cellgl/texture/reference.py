@@ -20,7 +20,7 @@ from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.texture.antialias import feature_frequency, smoothscale
 from cellgl.texture.params import LINEAR, PARAMS
-from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
+from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, add_u32, mul_u32, hash_u32, u16
 
 M32 = 0xFFFFFFFF
 
@@ -30,10 +30,10 @@ M32 = 0xFFFFFFFF
 def noise_gradient(c: np.ndarray, seed: int) -> np.ndarray:
     """``_cell_noise_gradient``: corner gradients (N, 4) in [-1, 1] for corners c (N, 4) int64."""
     c = c.astype(np.int64) & M32
-    h = _add(_add(_mul(seed, 0x165667B1), 0x9E3779B9), _mul(c[:, 0], 0x8DA6B343))
-    h = _add(h, _mul(c[:, 1], 0xD8163841))
-    h = _add(h, _mul(c[:, 2], 0xCB1AB31F))
-    h = _add(h, _mul(c[:, 3], 0x27D4EB2F))
+    h = add_u32(add_u32(mul_u32(seed, 0x165667B1), 0x9E3779B9), mul_u32(c[:, 0], 0x8DA6B343))
+    h = add_u32(h, mul_u32(c[:, 1], 0xD8163841))
+    h = add_u32(h, mul_u32(c[:, 2], 0xCB1AB31F))
+    h = add_u32(h, mul_u32(c[:, 3], 0x27D4EB2F))
     h = hash_u32(h)
     h2 = hash_u32(h ^ np.uint64(0x68E31DA4))
     g = np.stack([u16(h >> np.uint64(16)), u16(h & np.uint64(0xFFFF)),
