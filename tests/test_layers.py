@@ -281,7 +281,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.dask.zarr_bake: cellgl.io.bake._Progress",
     "cellgl.export.compiler: cellgl.export.reach._names",
     "cellgl.export.snippets: cellgl.texture.shader._uniform_decls",
-    "cellgl.export.translate.osl: cellgl.export.printer._trail",
     "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._CMP",
     "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._OslLib",
     "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._SWZ",

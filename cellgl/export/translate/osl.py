@@ -23,7 +23,7 @@ Anything outside the subset raises :class:`TranslateError` naming the construct.
 from __future__ import annotations
 
 from cellgl.export import syntax as S
-from cellgl.export.printer import Glsl, _trail
+from cellgl.export.printer import Glsl, trail_comment
 from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.translate.wgsl import assigned
@@ -227,7 +227,7 @@ class _Osl(_OslLib, Glsl):
     def statement(self, s, ind: str = "") -> list[str]:
         if isinstance(s, S.Decl):                # a struct with array members: several lines
             *first, last = self.decl(s.type, s.declarators)
-            return self.comments(s.comments, ind) + [ind + ln for ln in first] + [ind + last + _trail(s)]
+            return self.comments(s.comments, ind) + [ind + ln for ln in first] + [ind + last + trail_comment(s)]
         if isinstance(s, S.Return) and s.value is not None:
             return self.comments(s.comments, ind) + [f"{ind}return {self.conv_to(s.value, self.ret)};"]
         self.scopes.append({})                   # a for-loop's variable
@@ -354,7 +354,7 @@ class _Osl(_OslLib, Glsl):
         consts = [S.Decl(self.globals[g][0], [self.globals[g][1]])           # the constants it reads: locals
                   for g in sorted(used - set(passed), key=list(self.globals).index)]
         out = self.comments(item.comments, "") + [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)}) {{"
-                                                   + _trail(item.body)] + prologue
+                                                   + trail_comment(item.body)] + prologue
         out += self.body(S.Block(consts + item.body.body), "") + ["}"]
         self.scopes = []
         return out
