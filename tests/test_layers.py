@@ -279,7 +279,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.dask.variations: cellgl.io.bake._check_size",
     "cellgl.dask.variations: cellgl.io.bake._output_paths",
     "cellgl.dask.zarr_bake: cellgl.io.bake._Progress",
-    "cellgl.export.compiler: cellgl.export.reach._names",
     "cellgl.export.snippets: cellgl.texture.shader._uniform_decls",
     "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._CMP",
     "cellgl.export.translate.osl: cellgl.export.translate.osl_lib._OslLib",
