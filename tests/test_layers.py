@@ -273,7 +273,6 @@ def _underscore_imports(module: str) -> list[str]:
 #: this change (renamed after the runner/speed merges); the list only shrinks
 UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.dask.blocks: cellgl.io.bake._load",
-    "cellgl.dask.cli: cellgl.io.spec._int_arg",
     "cellgl.dask.variations: cellgl.io.bake._Progress",
     "cellgl.dask.variations: cellgl.io.bake._check_bits",
     "cellgl.dask.variations: cellgl.io.bake._check_size",
@@ -287,11 +286,9 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.io.bake: cellgl.io.spec._encoding",
     "cellgl.io.bake: cellgl.io.spec._exr_names",
     "cellgl.io.bake: cellgl.io.spec._parse_sets",
-    "cellgl.io.bake_cli: cellgl.io.spec._int_arg",
     "cellgl.io.frames: cellgl.io.bake._Progress",
     "cellgl.io.frames: cellgl.io.bake._check_path",
     "cellgl.io.frames: cellgl.io.bake._load",
-    "cellgl.io.frames: cellgl.io.spec._check_size",
     "cellgl.playground.site: cellgl.texture.schema._suggest",
     "cellgl.pups.generators: cellgl.pups.points._check_domain",
     "cellgl.pups.generators: cellgl.pups.points._check_positive",

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import BakeError, _check_size, parse_channels, parse_size
+from cellgl.io.spec import BakeError, check_size, parse_channels, parse_size
 from cellgl.io.tempfiles import scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
@@ -137,7 +137,7 @@ def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bar)
                             "accepted: WxH")
     else:
         w, h = (size, size) if isinstance(size, (int, np.integer)) else tuple(size)
-        _check_size(w, h, None, f"size {w}x{h}")
+        check_size(w, h, None, f"size {w}x{h}")
     images = []
     for k in range(frames):
         rgb = recipes.render(frame_recipe(recipe, k, frames), w, h, channels=("color",))["color"][..., :3]
