@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cellgl.pups.graph import PupsGraph
-from cellgl.pups.points import _check_size
+from cellgl.pups.points import check_size
 
 # --------------------------------------------------------------------------------------------
 # packing: instances, pixel boxes and the candidate grid
@@ -99,7 +99,7 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None, grid=True) -> PupsP
     -------
     PupsPacked
     """
-    width, height = _check_size(width, height)
+    width, height = check_size(width, height)
     pts = graph.points
     x0, y0, x1, y1 = pts.domain
     px, py = (x1 - x0) / width, (y1 - y0) / height

@@ -40,7 +40,7 @@ import numpy as np
 
 from cellgl.pups.generators import _sample_map, cluster_labels, labels_by_ramp, labels_from_image, poisson_disk, poisson_disk_variable, random_orientations, space_giraffe
 from cellgl.pups.graph import pups_graph
-from cellgl.pups.points import DEFAULT_DOMAIN, _check_size, pups_points
+from cellgl.pups.points import DEFAULT_DOMAIN, check_size, pups_points
 from cellgl.pups.synthesis import pups_evaluate
 
 __all__ = ["PUPS_PRESETS", "KIND_DEFAULTS", "build_pups", "build_scene", "evaluate_scene",
@@ -472,7 +472,7 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
     numpy.ndarray of float32, shape (height, width) or (height, width, 3)
     """
     p = _params(preset_or_params)
-    w, h = _check_size(width, height)
+    w, h = check_size(width, height)
     scene = build_scene(p, seed=seed, backend=backend)
 
     def layer(lay):
