@@ -13,7 +13,7 @@ from cellgl.pups.points import DEFAULT_DOMAIN, check_domain, check_positive, as_
 # --------------------------------------------------------------------------------------------
 
 
-def _sample_map(density, xy, domain):
+def sample_map(density, xy, domain):
     """Nearest sample of a (H, W) map over the domain (row 0 at y0) at positions (N, 2)."""
     x0, y0, x1, y1 = domain
     h, w = density.shape
@@ -258,7 +258,7 @@ def poisson_disk_variable(radius_min, radius_max, density, *, domain=DEFAULT_DOM
             raise ValueError("density map values must be in [0, 1]")
 
         def dens(xy):
-            return _sample_map(arr, xy, domain)
+            return sample_map(arr, xy, domain)
 
     def radius_at(xy):
         d = np.clip(np.asarray(dens(xy), dtype=np.float64), 0.0, 1.0)
@@ -425,7 +425,7 @@ def labels_from_image(positions, image, *, domain=DEFAULT_DOMAIN, seed=0) -> np.
     if not np.isfinite(img).all() or img.min() < 0 or img.max() > 1:
         raise ValueError("reference image intensities must be in [0, 1]")
     pos = np.asarray(positions, dtype=np.float64)
-    inten = _sample_map(img, pos, domain)
+    inten = sample_map(img, pos, domain)
     return (as_rng(seed).random(pos.shape[0]) < inten).astype(np.int32)
 
 

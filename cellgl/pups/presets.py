@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cellgl.pups.generators import _sample_map, cluster_labels, labels_by_ramp, labels_from_image, poisson_disk, poisson_disk_variable, random_orientations, space_giraffe
+from cellgl.pups.generators import sample_map, cluster_labels, labels_by_ramp, labels_from_image, poisson_disk, poisson_disk_variable, random_orientations, space_giraffe
 from cellgl.pups.graph import pups_graph
 from cellgl.pups.points import DEFAULT_DOMAIN, check_size, pups_points
 from cellgl.pups.synthesis import pups_evaluate
@@ -316,7 +316,7 @@ def _cells_graph(p, radius, seed, k):
 
 
 def _sample_image(img, pos):
-    return _sample_map(img, pos, DEFAULT_DOMAIN)
+    return sample_map(img, pos, DEFAULT_DOMAIN)
 
 
 def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
