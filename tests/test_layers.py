@@ -291,7 +291,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.io.frames: cellgl.io.bake._load",
     "cellgl.playground.site: cellgl.texture.schema._suggest",
     "cellgl.pups.gpu: cellgl.pups.pack._stream",
-    "cellgl.pups.recipe: cellgl.pups.presets._draw_graph",
     "cellgl.pups.recipe: cellgl.texture.recipe._parse",
     "cellgl.pups.recipe: cellgl.texture.schema._coerce",
     "cellgl.pups.recipe: cellgl.texture.schema._err",

@@ -479,10 +479,10 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
         return pups_evaluate(lay.graph, w, h, mode=lay.mode, epsilon=lay.epsilon,
                                backend=backend)
 
-    return evaluate_scene(scene, layer, lambda pos, g, prm: _draw_graph(prm, w, h, pos=pos, graph=g))
+    return evaluate_scene(scene, layer, lambda pos, g, prm: draw_graph(prm, w, h, pos=pos, graph=g))
 
 
-def _draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
+def draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
     """Rasterise the Delaunay edges (anti-aliased lines) and the points, white on black.
 
     ``scale``: pixels per domain unit ``(sx, sy)``, default ``(w / 2, h / 2)`` (the domain

@@ -534,7 +534,7 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     dict channel -> ndarray (row 0 at the top)
     """
     from cellgl.pups.synthesis import pups_evaluate
-    from cellgl.pups.presets import _draw_graph, evaluate_scene
+    from cellgl.pups.presets import draw_graph, evaluate_scene
 
     from cellgl.texture.schema import check_channels
 
@@ -566,7 +566,7 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
         return pups_evaluate(g, tw, th, mode=lay.mode, epsilon=lay.epsilon, backend=backend)
 
     def lines(pos, graph, prm):
-        return _draw_graph(prm, width, height, pos=pos, graph=graph, scale=(S / 2.0, S / 2.0),
+        return draw_graph(prm, width, height, pos=pos, graph=graph, scale=(S / 2.0, S / 2.0),
                            region=(x0, y0, tw, th))
 
     img = evaluate_scene(scene, layer, lines)
