@@ -205,7 +205,7 @@ def encoding_of(channel: str, ext: str, bits: int) -> Encoding:
     if fmt.stream == "band" and ext == ".exr":
         return Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
     return Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
-                                                 32: np.float32}[bits]))
+                                                32: np.float32}[bits]))
 
 
 #: EXR channel names per cellgl channel.
