@@ -38,8 +38,9 @@ def _source_viewer() -> None:
     here = os.path.dirname(os.path.abspath(__file__))
     root = os.path.dirname(here)
     folder = os.path.join(root, "viewer")
-    if not os.path.isdir(os.path.join(here, "viewer")) and os.path.isfile(os.path.join(root, "pyproject.toml")) \
-            and os.path.isfile(os.path.join(folder, "__init__.py")) and not any(isinstance(f, _SourceViewer) for f in sys.meta_path):
+    source = not os.path.isdir(os.path.join(here, "viewer")) and os.path.isfile(os.path.join(root, "pyproject.toml")) \
+        and os.path.isfile(os.path.join(folder, "__init__.py"))
+    if source and not any(isinstance(f, _SourceViewer) for f in sys.meta_path):
         sys.meta_path.insert(0, _SourceViewer(folder))
 
 
