@@ -289,18 +289,11 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.io.frames: cellgl.io.bake._Progress",
     "cellgl.io.frames: cellgl.io.bake._check_path",
     "cellgl.io.frames: cellgl.io.bake._load",
-    "cellgl.playground.site: cellgl.texture.schema._suggest",
     "cellgl.pups.gpu: cellgl.pups.pack._stream",
     "cellgl.pups.recipe: cellgl.texture.recipe._parse",
-    "cellgl.pups.recipe: cellgl.texture.schema._coerce",
-    "cellgl.pups.recipe: cellgl.texture.schema._err",
-    "cellgl.pups.recipe: cellgl.texture.schema._suggest",
     "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_gpu",
     "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_raster",
     "cellgl.pups.synthesis: cellgl.pups.gpu._raster_applies",
-    "cellgl.texture.recipe: cellgl.texture.schema._coerce",
-    "cellgl.texture.recipe: cellgl.texture.schema._err",
-    "cellgl.texture.recipe: cellgl.texture.schema._suggest",
     "cellgl.viewer.model: cellgl.texture.reference._tex",
 }
 

@@ -119,14 +119,14 @@ def playground_presets() -> list[str]:
 def _check_names(names) -> None:
     """RecipeError for a ``--preset`` that is neither a recipe file nor a preset, naming the
     presets the page accepts (not the PUPs ones it refuses)."""
-    from cellgl.texture.schema import _suggest
+    from cellgl.texture.schema import suggest
 
     known = {n for n, _ in list_presets()}
     for name in names:
         if not is_path(name) and name.partition(":")[0] not in known:
             shown = repr(name) if len(name) <= 80 else f"{name[:60]!r}... ({len(name)} characters)"
             accepted = playground_presets()
-            raise RecipeError(f"--preset {shown}: unknown preset{_suggest(name, accepted)}; accepted: a recipe "
+            raise RecipeError(f"--preset {shown}: unknown preset{suggest(name, accepted)}; accepted: a recipe "
                               ".json file or one of: " + ", ".join(accepted))
 
 

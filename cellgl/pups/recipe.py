@@ -30,7 +30,7 @@ from types import MappingProxyType
 import numpy as np
 
 from cellgl.texture.params import Param
-from cellgl.texture.schema import (VERSION, RecipeError, _coerce, _err, _suggest, check_name_doc, parse_value,
+from cellgl.texture.schema import (VERSION, RecipeError, coerce, value_error, suggest, check_name_doc, parse_value,
                                    read_json)
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
@@ -169,8 +169,8 @@ class PupsRecipe:
     def __init__(self, values: dict | None = None, name: str = "custom", doc: str = "",
                  outputs=("color",), image: str | None = None):
         values = dict(values or {})
-        pattern = _coerce(PUPS_PARAMS_BY_NAME["pattern"], values.get("pattern", "noise"),
-                          "pups.pattern")
+        pattern = coerce(PUPS_PARAMS_BY_NAME["pattern"], values.get("pattern", "noise"),
+                         "pups.pattern")
         from cellgl.pups.presets import KIND_DEFAULTS
 
         vals = _from_preset_dict({"kind": _kind(pattern)})
@@ -181,20 +181,20 @@ class PupsRecipe:
                 image = v
                 continue
             if k not in PUPS_PARAMS_BY_NAME:
-                raise RecipeError(f"pups.{k}: unknown parameter{_suggest(k, PUPS_PARAMS_BY_NAME)}; "
+                raise RecipeError(f"pups.{k}: unknown parameter{suggest(k, PUPS_PARAMS_BY_NAME)}; "
                                   f"accepted for pattern {pattern!r}: {', '.join(used)}")
             if k not in used:
                 raise RecipeError(f"pups.{k}: not a parameter of pattern {pattern!r}; accepted: "
                                   f"{', '.join(used)}")
-            vals[k] = _coerce(PUPS_PARAMS_BY_NAME[k], v, f"pups.{k}")
+            vals[k] = coerce(PUPS_PARAMS_BY_NAME[k], v, f"pups.{k}")
         vals["pattern"] = pattern
         for k in used:
             if k != "image":
-                vals[k] = _coerce(PUPS_PARAMS_BY_NAME[k], vals[k], f"pups.{k}")
+                vals[k] = coerce(PUPS_PARAMS_BY_NAME[k], vals[k], f"pups.{k}")
         if "image" in used:
             image = KIND_DEFAULTS[_kind(pattern)]["image"] if image is None else image
             if not isinstance(image, str) or not image:
-                raise _err("pups.image", image, IMAGE_DOC, "expected a string, got")
+                raise value_error("pups.image", image, IMAGE_DOC, "expected a string, got")
         else:
             if image is not None:
                 raise RecipeError(f"pups.image: not a parameter of pattern {pattern!r}; accepted: "
@@ -205,12 +205,12 @@ class PupsRecipe:
         if isinstance(outputs, str):
             outputs = [outputs]
         if not isinstance(outputs, (list, tuple)) or not outputs:
-            raise _err("outputs", outputs, "a list of: " + ", ".join(PUPS_CHANNELS),
-                       "expected a list of channels, got")
+            raise value_error("outputs", outputs, "a list of: " + ", ".join(PUPS_CHANNELS),
+                              "expected a list of channels, got")
         for c in outputs:
             if c not in PUPS_CHANNELS:
-                raise _err("outputs", c, "a list of: " + ", ".join(PUPS_CHANNELS),
-                           "unknown channel (PUPs recipes render color and height)")
+                raise value_error("outputs", c, "a list of: " + ", ".join(PUPS_CHANNELS),
+                                  "unknown channel (PUPs recipes render color and height)")
         self.outputs = tuple(outputs)
         self._check()
 
@@ -251,7 +251,7 @@ class PupsRecipe:
             return self.image
         if name not in self._values:
             raise RecipeError(f"pups.{name}: not a parameter of pattern {self._values['pattern']!r}"
-                              f"{_suggest(name, self._values)}; accepted: "
+                              f"{suggest(name, self._values)}; accepted: "
                               f"{', '.join(params_for(self._values['pattern']))}")
         return self._values[name]
 
@@ -272,7 +272,7 @@ class PupsRecipe:
         if self.image is not None:
             vals["image"] = self.image
         if "pattern" in values:
-            pattern = _coerce(PUPS_PARAMS_BY_NAME["pattern"], values["pattern"], "pups.pattern")
+            pattern = coerce(PUPS_PARAMS_BY_NAME["pattern"], values["pattern"], "pups.pattern")
             used = params_for(pattern)
             vals = {k: v for k, v in vals.items() if k in used}
         vals.update(values)
@@ -296,7 +296,7 @@ class PupsRecipe:
             p = PUPS_PARAMS_BY_NAME.get(name)
             if p is None:
                 raise RecipeError(f"--set {name}={text}: unknown PUPs parameter"
-                                  f"{_suggest(name, PUPS_PARAMS_BY_NAME)}; accepted for pattern "
+                                  f"{suggest(name, PUPS_PARAMS_BY_NAME)}; accepted for pattern "
                                   f"{self._values['pattern']!r}: "
                                   f"{', '.join(params_for(self._values['pattern']))}")
             changes[name] = parse_value(p, name, text)
@@ -329,19 +329,19 @@ class PupsRecipe:
         keys = ("cellgl_recipe", "kind", "name", "doc", "pups", "outputs")
         for k in d:
             if k not in keys:
-                raise RecipeError(f"{where}: unknown key {k!r}{_suggest(str(k), keys)}; "
+                raise RecipeError(f"{where}: unknown key {k!r}{suggest(str(k), keys)}; "
                                   f"accepted in a PUPs recipe: {', '.join(keys)}")
         if d.get("kind") != "pups":
-            raise _err("kind", d.get("kind"), "'pups'", "not a PUPs recipe:")
+            raise value_error("kind", d.get("kind"), "'pups'", "not a PUPs recipe:")
         version = d.get("cellgl_recipe", VERSION)
         if version != VERSION:
-            raise _err("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+            raise value_error("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
-                raise _err(k, d[k], "a string", "expected a string, got")
+                raise value_error(k, d[k], "a string", "expected a string, got")
         g = d.get("pups", {})
         if not isinstance(g, dict):
-            raise _err("pups", g, "a JSON object", "expected an object, got")
+            raise value_error("pups", g, "a JSON object", "expected an object, got")
         if not g:
             held = ", ".join(repr(k) for k in d)
             raise RecipeError(f"{where}: no PUPs parameter set (it holds only {held}); accepted: a "
