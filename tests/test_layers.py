@@ -290,7 +290,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.io.frames: cellgl.io.bake._check_path",
     "cellgl.io.frames: cellgl.io.bake._load",
     "cellgl.pups.gpu: cellgl.pups.pack._stream",
-    "cellgl.pups.recipe: cellgl.texture.recipe._parse",
     "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_gpu",
     "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_raster",
     "cellgl.pups.synthesis: cellgl.pups.gpu._raster_applies",

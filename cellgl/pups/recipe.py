@@ -280,7 +280,7 @@ class PupsRecipe:
 
     def set_from_strings(self, items) -> "PupsRecipe":
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe."""
-        from cellgl.texture.recipe import _parse
+        from cellgl.texture.recipe import parse_set_value
 
         changes = {}
         for item in items:
@@ -291,7 +291,7 @@ class PupsRecipe:
                 changes[name] = text
                 continue
             if name == "outputs":
-                changes[name] = _parse(name, text)
+                changes[name] = parse_set_value(name, text)
                 continue
             p = PUPS_PARAMS_BY_NAME.get(name)
             if p is None:

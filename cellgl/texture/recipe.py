@@ -41,7 +41,7 @@ from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, 
                      PRODUCTS, unqualified)
 
 __all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS", "check_channels",
-           "needed_n"]
+           "needed_n", "parse_set_value"]
 
 _TOP_KEYS = ("cellgl_recipe", "name", "doc", "outputs", "variants") + GROUPS
 _EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "color": ("ramp", "cell_image")}
@@ -248,7 +248,7 @@ class Recipe:
                 name = unqualified(name, item)
             except ValueError as exc:
                 raise RecipeError(str(exc)) from None
-            changes[name] = _parse(name, text)
+            changes[name] = parse_set_value(name, text)
         try:
             return self.replace(**changes)
         except RecipeError as exc:
@@ -453,7 +453,7 @@ def _read_groups(d: dict, base=None):
     return values, ramp, image, cimage
 
 
-def _parse(name: str, text: str):
+def parse_set_value(name: str, text: str):
     """Parse a ``--set`` value for parameter ``name``."""
     if name in ("density_image", "cell_image"):
         return text
