@@ -293,7 +293,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_gpu",
     "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_raster",
     "cellgl.pups.synthesis: cellgl.pups.gpu._raster_applies",
-    "cellgl.viewer.model: cellgl.texture.reference._tex",
 }
 
 

@@ -174,7 +174,7 @@ class Model:
             return x
         from cellgl.texture import reference as texture_reference
 
-        t = texture_reference._tex(self.recipe)
+        t = texture_reference.texture_values(self.recipe)
         s = texture_reference.texture_local(np.asarray([p], dtype=np.float64), t)
         sw, _ = texture_reference.texture_warp(s, t)
         return x + (sw - s)[0, : len(x)]

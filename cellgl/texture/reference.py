@@ -106,7 +106,7 @@ def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
 MAX_OCTAVES = 8
 
 
-def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
+def texture_values(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     """The run-time values the GLSL reads (enums as names), plus derived ones (the split
     origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`,
     the band limit's ``feature_frequency`` (:mod:`cellgl.texture.antialias`) and :func:`octave_mean`;
@@ -392,14 +392,14 @@ def texture_footprint(duvz, t: dict) -> np.ndarray:
 def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, r=0.0) -> dict:
     """``cell_texture_filtered``: the texture at basis positions O + s, s (N, 4) small
     (:func:`texture_local`) and the origin O = (offset_x, offset_y, offset_z, time) split in ``t``
-    (default ``_tex(recipe)``), band-limited to the footprint ``r`` (scalar or (N,), basis units).
+    (default ``texture_values(recipe)``), band-limited to the footprint ``r`` (scalar or (N,), basis units).
 
     Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
     F (N, 4), value (N,), as the GLSL ``CellTexel``.
     """
     from cellgl.texture.recipe import needed_n
 
-    t = t if t is not None else _tex(recipe)
+    t = t if t is not None else texture_values(recipe)
     n = n or needed_n(recipe)
     N = len(s)
     j = None
@@ -510,7 +510,7 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
 def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0), duvz=(0.0, 0.0, 0.0)) -> dict:
     """``cell_texture_at_filtered``: the texture at texture-space points p (N, 3) (plus ``pan``
     in uv), band-limited to pixels spanning ``duvz`` ((3,) or (N, 3); 0: point samples)."""
-    t = _tex(recipe, pan)
+    t = texture_values(recipe, pan)
     return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t, texture_footprint(duvz, t))
 
 
@@ -524,7 +524,7 @@ def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
         if c in ("F1", "F2", "F3", "F4"):
             n = max(n, int(c[1]))
     o = texture_at(pts, recipe, n, duvz=duvz)
-    t = _tex(recipe)
+    t = texture_values(recipe)
     res = {}
     for c in outputs:
         if c == "color":
@@ -600,7 +600,7 @@ def _measure_mean(recipe) -> float:
                                offset_x=0.0, offset_y=0.0, offset_z=0.0, time=0.0)
         side = 1000.0 if dim == 2 else 100.0
         pts[:, : min(dim, 3)] = rng.uniform(0.0, side, size=(_MEAN_SAMPLES, min(dim, 3)))
-    t = _tex(probe, mean=False)
+    t = texture_values(probe, mean=False)
     s = texture_local(pts, t)
     val = texture_combination(s, t, 0, needed_n(probe))[0]
     b = np.clip((val - v["range_lo"]) / (v["range_hi"] - v["range_lo"]), 0.0, 1.0)
