@@ -278,7 +278,6 @@ UNDERSCORE_IMPORTS_LEFT: set[str] = {
     "cellgl.dask.variations: cellgl.io.bake._check_size",
     "cellgl.dask.variations: cellgl.io.bake._output_paths",
     "cellgl.dask.zarr_bake: cellgl.io.bake._Progress",
-    "cellgl.export.snippets: cellgl.texture.shader._uniform_decls",
     "cellgl.gl.threads: cellgl.gl.context._section",
     "cellgl.io.bake: cellgl.io.spec._Encoding",
     "cellgl.io.bake: cellgl.io.spec._accepted",
