@@ -12,6 +12,40 @@ import importlib.util
 TYPE_CHECKING = False   # (not typing's: importing typing would slow the command's start)
 from cellgl._version import __version__
 
+
+class _SourceViewer:
+    """Finds ``cellgl.viewer`` in a source checkout (a meta path finder).
+
+    The viewer's code is the repository's top-level ``viewer/`` folder; the wheel installs it as
+    ``cellgl/viewer`` (pyproject.toml's package-dir), an editable install maps it there. Run from
+    the source itself (``PYTHONPATH=.``, pytest) ``cellgl/`` has no ``viewer``: this finder gives
+    ``cellgl.viewer`` the sibling folder, so the one name works everywhere."""
+
+    def __init__(self, folder: str):
+        self.folder = folder
+
+    def find_spec(self, fullname, path=None, target=None):
+        if fullname != "cellgl.viewer":
+            return None
+        return importlib.util.spec_from_file_location(
+            fullname, self.folder + "/__init__.py", submodule_search_locations=[self.folder])
+
+
+def _source_viewer() -> None:
+    import os
+    import sys
+
+    here = os.path.dirname(os.path.abspath(__file__))
+    root = os.path.dirname(here)
+    folder = os.path.join(root, "viewer")
+    source = not os.path.isdir(os.path.join(here, "viewer")) and os.path.isfile(os.path.join(root, "pyproject.toml")) \
+        and os.path.isfile(os.path.join(folder, "__init__.py"))
+    if source and not any(isinstance(f, _SourceViewer) for f in sys.meta_path):
+        sys.meta_path.insert(0, _SourceViewer(folder))
+
+
+_source_viewer()
+
 #: public name -> the module that defines it
 _EXPORTS = {
     "CellularResult": "cellgl.basis.core",

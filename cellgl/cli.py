@@ -67,7 +67,7 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 
 def _add_view(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    from viewer.cli import add_arguments
+    from cellgl.viewer.cli import add_arguments
 
     return add_arguments(sub.add_parser(
         "view", help="interactive viewer (GLFW + Dear ImGui); --screenshot FILE for a headless capture"))
@@ -80,13 +80,13 @@ VIEWER_EXTRA = ("imgui_bundle", "glfw")
 def _run_view(args: argparse.Namespace) -> int:
     """``cellgl view``; without the [viewer] extra, one line saying how to install it."""
     try:
-        importlib.import_module("viewer.app")
+        importlib.import_module("cellgl.viewer.app")
     except ModuleNotFoundError as exc:
         if (exc.name or "").partition(".")[0] not in VIEWER_EXTRA:
             raise
         raise ValueError(f"cellgl view needs the viewer extra (no module {exc.name!r}): "
                          "pip install 'cellgl[viewer]'") from None
-    return importlib.import_module("viewer.cli").run(args)
+    return importlib.import_module("cellgl.viewer.cli").run(args)
 
 
 def _lazy(module: str, name: str) -> Callable:

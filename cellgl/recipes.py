@@ -18,15 +18,44 @@ from cellgl.texture.params import PARAMS
 from cellgl.texture.recipe import Recipe
 from cellgl.texture.schema import RecipeError, read_json
 
-__all__ = ["load_recipe", "list_presets", "render", "evaluate", "is_pups"]
+__all__ = ["load_recipe", "list_presets", "render", "evaluate", "is_pups", "is_path", "parameters",
+           "max_side", "MAX_SIDE", "KINDS"]
+
+#: the recipe kinds: cellular textures and PUPs syntheses
+KINDS = ("cellular", "pups")
 
 is_pups = pups_recipe.is_pups
+#: whether a recipe argument names a file rather than a preset (any kind)
+is_path = cellular.is_path
+#: the largest image side :func:`render` takes, any kind (a cellular recipe's: 2^20; PUPs: 2^16)
+MAX_SIDE = max(cellular_render.MAX_SIDE, pups_recipe.MAX_SIDE)
 
 
-def list_presets() -> list[tuple[str, str]]:
+def list_presets(kind: str | None = None) -> list[tuple[str, str]]:
     """``[(name, one-line doc), ...]`` of every preset, sorted by name: the cellular recipes
-    (``cellgl/presets/*.json``) and the PUPs presets (``pups-*``, :mod:`cellgl.pups.recipe`)."""
-    return sorted(cellular.list_presets() + pups_recipe.pups_preset_names())
+    (``cellgl/presets/*.json``) and the PUPs presets (``pups-*``, :mod:`cellgl.pups.recipe`);
+    ``kind="cellular"`` or ``"pups"``: those of one kind only."""
+    if kind is not None and kind not in KINDS:
+        raise ValueError(f"kind {kind!r}: unknown recipe kind; accepted: None (every kind), "
+                         + ", ".join(KINDS))
+    out = [] if kind == "pups" else cellular.list_presets()
+    return sorted(out + ([] if kind == "cellular" else pups_recipe.pups_preset_names()))
+
+
+def parameters(recipe) -> tuple:
+    """The parameter table entries a recipe has (what a panel shows): every entry of
+    :data:`cellgl.texture.params.PARAMS` for a cellular recipe, the entries of
+    :data:`cellgl.pups.recipe.PUPS_PARAMS` its pattern uses for a PUPs one."""
+    recipe = load_recipe(recipe)
+    if is_pups(recipe):
+        used = set(recipe.names())
+        return tuple(p for p in pups_recipe.PUPS_PARAMS if p.name in used)
+    return PARAMS
+
+
+def max_side(recipe) -> int:
+    """The largest image side :func:`render` takes for this recipe (its kind's limit)."""
+    return pups_recipe.MAX_SIDE if is_pups(load_recipe(recipe)) else cellular_render.MAX_SIDE
 
 
 def load_recipe(preset_or_path):

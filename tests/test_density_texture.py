@@ -66,7 +66,7 @@ def test_octaves_use_the_map_scaled_to_their_lattice(image_path):
     from cellgl.texture import reference as texture_reference
 
     r = _recipes(image_path)["ramp_y_fractal"]
-    t = texture_reference._tex(r)
+    t = texture_reference.texture_values(r)
     v = r.values
     fa = v["frequency"] * v["aspect"]
     for i in range(4):

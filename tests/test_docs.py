@@ -73,7 +73,7 @@ def test_documents_parse_and_their_markers_are_valid():
 
 
 def _needs_display(block: Block) -> bool:
-    return block.interactive or "cellgl view" in block.text() or "python -m viewer" in block.text()
+    return block.interactive or "cellgl view" in block.text() or "python -m cellgl.viewer" in block.text()
 
 
 @pytest.mark.slow

@@ -16,26 +16,32 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: the layers, bottom first: a module may import modules of its own layer or below, never above.
 #: Each entry is a module or a package prefix (every module under it).
+#: docs/architecture.md's table is the same map: row ``# = index + 1`` names every module of the layer.
 LAYERS = (
-    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl.io.formats", "cellgl.io.tempfiles")),
+    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl.io", "cellgl.io.formats", "cellgl.io.tempfiles",
+               "cellgl.presets")),
     ("gl", ("cellgl.gl",)),
     ("basis", ("cellgl.basis",)),
     ("texture", ("cellgl.texture",)),
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
-    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.formats",
+    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.frames",
                     "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
-    ("viewer", ("viewer",)),
+    ("viewer", ("cellgl.viewer",)),
     ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli", "cellgl.voronoi_cli")),
 )
 
 
+#: source folder -> the package it installs as (pyproject.toml's package-dir)
+PACKAGE_DIRS = {"cellgl": "cellgl", "viewer": "cellgl.viewer"}
+
+
 def _modules() -> dict[str, Path]:
     out = {}
-    for top in ("cellgl", "viewer"):
+    for top, package in PACKAGE_DIRS.items():
         for path in sorted((ROOT / top).rglob("*.py")):
-            parts = path.relative_to(ROOT).with_suffix("").parts
+            parts = (package,) + path.relative_to(ROOT / top).with_suffix("").parts
             if parts[-1] == "__init__":
                 parts = parts[:-1]
             out[".".join(parts)] = path
@@ -97,6 +103,215 @@ def test_imports_go_down_the_layers():
             if _layer(d) > _layer(m):
                 bad.append(f"{m} ({LAYERS[_layer(m)][0]}) imports {d} ({LAYERS[_layer(d)][0]})")
     assert not bad, "imports against the layer order:\n" + "\n".join(sorted(bad))
+
+
+def _doc_rows() -> dict[int, str]:
+    """docs/architecture.md's layer table: ``#`` -> the "modules" cell."""
+    rows = {}
+    for line in (ROOT / "docs" / "architecture.md").read_text().splitlines():
+        m = re.match(r"^\| (\d+) \| [^|]+ \| (.*) \| [^|]* \|$", line)
+        if m:
+            rows[int(m.group(1))] = m.group(2)
+    return rows
+
+
+def _on_map(module: str, row: str) -> bool:
+    """Whether a row of the map names ``module``: its file (``cellgl/io/bake.py``), a package its
+    folder (``cellgl/blender/addon/`` or ``addon/``), a module of a folder its name (```bake```)."""
+    path = MODULES[module].relative_to(ROOT).as_posix()
+    last = module.rpartition(".")[2]
+    if MODULES[module].name == "__init__.py":
+        folder = path.rpartition("/")[0]
+        return f"`{path}`" in row or f"`{folder}/`" in row or f"`{folder.rpartition('/')[2]}/`" in row
+    return f"`{path}`" in row or f"`{last}`" in row or f"`{last}.py`" in row
+
+
+def test_every_module_is_on_the_map():
+    """docs/architecture.md names every module in the row of the layer LAYERS puts it in (the map
+    and this test are one table)."""
+    rows = _doc_rows()
+    assert sorted(rows) == list(range(len(LAYERS) + 1)), sorted(rows)   # + row 0, the shaders
+    off = [f"{m} ({LAYERS[_layer(m)][0]}, row {_layer(m) + 1})" for m in sorted(MODULES)
+           if not _on_map(m, rows[_layer(m) + 1])]
+    assert not off, "modules docs/architecture.md does not name in their layer's row:\n" + "\n".join(off)
+
+
+def test_folders_list_their_modules_bottom_first():
+    """Inside the folders of the GL, basis, texture and PUPs layers, a module imports only modules
+    the map's row lists before it (docs/architecture.md: "in the order listed, bottom first")."""
+    rows = _doc_rows()
+    bad = []
+    for i, (name, (folder, *_)) in enumerate(LAYERS):
+        if name not in ("gl", "basis", "texture", "pups"):
+            continue
+        order = {n: k for k, n in enumerate(dict.fromkeys(re.findall(r"`(\w+)`", rows[i + 1])))}
+        for m in sorted(MODULES):
+            if m.startswith(folder + "."):
+                for d in sorted(GRAPH[m]):
+                    a, b = m[len(folder) + 1:].partition(".")[0], d[len(folder) + 1:].partition(".")[0]
+                    if d.startswith(folder + ".") and order[b] > order[a]:
+                        bad.append(f"{m} imports {d}, listed after it")
+    assert not bad, "\n".join(bad)
+
+
+#: what depends on a recipe's kind (cellular texture or PUPs): loading a recipe or a preset,
+#: listing presets, telling kinds and files apart, rendering, evaluating, a recipe's parameter
+#: table, the largest side. Above the recipes layer these come from cellgl.recipes, which picks
+#: the kind, never from cellgl.texture or cellgl.pups (docs/architecture.md, "Why the cut is here").
+KIND_ENTRY_POINTS = {"load_recipe", "list_presets", "render", "evaluate", "is_pups", "is_path",
+                     "load_pups_preset", "pups_preset_names", "PUPS_PARAMS", "MAX_SIDE"}
+KIND_LAYERS = {"texture", "pups"}
+
+
+def _kind_entry_imports(module: str, graph_layer=None) -> list[str]:
+    """The kind entry points ``module`` takes from a kind's layer: ``from cellgl.texture.x import
+    render``, or ``texture.render`` on a name bound to a kind's module."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    layer = graph_layer or _layer
+
+    def kind(name: str) -> bool:
+        while name and name not in MODULES:
+            name = name.rpartition(".")[0]
+        return bool(name) and LAYERS[layer(name)][0] in KIND_LAYERS
+
+    bound, out = {}, []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.asname and kind(a.name):
+                    bound[a.asname] = a.name
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            for a in node.names:
+                sub = f"{base}.{a.name}"
+                if sub in MODULES and kind(sub):
+                    bound[a.asname or a.name] = sub
+                elif kind(base) and a.name in KIND_ENTRY_POINTS:
+                    out.append(f"{module}:{node.lineno} imports {a.name} from {base}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in KIND_ENTRY_POINTS:
+            chain, v = [], node.value
+            while isinstance(v, ast.Attribute):
+                chain.append(v.attr)
+                v = v.value
+            if isinstance(v, ast.Name):
+                name = ".".join([bound.get(v.id, v.id)] + chain[::-1])
+                if (v.id in bound or name.startswith("cellgl.")) and kind(name):
+                    out.append(f"{module}:{node.lineno} uses {name}.{node.attr}")
+    return out
+
+
+def test_front_ends_reach_the_kinds_through_recipes():
+    """The rule the map states: above the recipes layer, nothing imports a kind's entry points."""
+    recipes = [i for i, (name, _) in enumerate(LAYERS) if name == "recipes"][0]
+    bad = [hit for m in sorted(MODULES) if _layer(m) > recipes for hit in _kind_entry_imports(m)]
+    assert not bad, "kind entry points taken past cellgl.recipes:\n" + "\n".join(bad)
+
+
+def test_the_kind_rule_can_fail(tmp_path, monkeypatch):
+    """The check above sees both spellings of a kind's entry point."""
+    src = tmp_path / "m.py"
+    src.write_text("from cellgl.texture.recipe import list_presets\n"
+                   "from cellgl import texture\n"
+                   "def f(r):\n    return texture.render(r, 8, 8)\n")
+    monkeypatch.setitem(MODULES, "cellgl.io.fake", src)
+    hits = _kind_entry_imports("cellgl.io.fake", lambda m: 6 if m == "cellgl.io.fake" else _layer(m))
+    assert hits == ["cellgl.io.fake:1 imports list_presets from cellgl.texture.recipe",
+                    "cellgl.io.fake:4 uses cellgl.texture.render"], hits
+
+
+def _underscore_imports(module: str) -> list[str]:
+    """``"importer: module._name"`` for each underscore name ``module`` takes from another cellgl
+    module: ``from cellgl.x import _name`` or ``x._name`` on a name bound to a cellgl module."""
+    path = MODULES[module]
+    tree = ast.parse(path.read_text(), str(path))
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+
+    def owner(name: str) -> str:
+        while name and name not in MODULES:
+            name = name.rpartition(".")[0]
+        return name
+
+    def private(name: str) -> bool:
+        return name.startswith("_") and not name.startswith("__")
+
+    bound, out = {}, set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if owner(a.name):
+                    bound[a.asname or a.name.partition(".")[0]] = a.name if a.asname else a.name.partition(".")[0]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
+                base = ".".join(anchor + ([base] if base else []))
+            for a in node.names:
+                if f"{base}.{a.name}" in MODULES:
+                    bound[a.asname or a.name] = f"{base}.{a.name}"
+                elif private(a.name) and owner(base) and owner(base) != module:
+                    out.add(f"{module}: {owner(base)}.{a.name}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and private(node.attr):
+            chain, v = [], node.value
+            while isinstance(v, ast.Attribute):
+                chain.append(v.attr)
+                v = v.value
+            if isinstance(v, ast.Name) and v.id in bound:
+                name = ".".join([bound[v.id]] + chain[::-1])
+                if name in MODULES and name != module:
+                    out.add(f"{module}: {name}.{node.attr}")
+    return sorted(out)
+
+
+#: underscore names still taken across modules: those of the modules being rewritten beside
+#: this change (renamed after the runner/speed merges); the list only shrinks
+UNDERSCORE_IMPORTS_LEFT: set[str] = {
+    "cellgl.dask.blocks: cellgl.io.bake._load",
+    "cellgl.dask.variations: cellgl.io.bake._Progress",
+    "cellgl.dask.variations: cellgl.io.bake._check_bits",
+    "cellgl.dask.variations: cellgl.io.bake._check_size",
+    "cellgl.dask.variations: cellgl.io.bake._output_paths",
+    "cellgl.dask.zarr_bake: cellgl.io.bake._Progress",
+    "cellgl.gl.threads: cellgl.gl.context._section",
+    "cellgl.io.bake: cellgl.io.spec._Encoding",
+    "cellgl.io.bake: cellgl.io.spec._accepted",
+    "cellgl.io.bake: cellgl.io.spec._check_size",
+    "cellgl.io.bake: cellgl.io.spec._encoding",
+    "cellgl.io.bake: cellgl.io.spec._exr_names",
+    "cellgl.io.bake: cellgl.io.spec._parse_sets",
+    "cellgl.io.frames: cellgl.io.bake._Progress",
+    "cellgl.io.frames: cellgl.io.bake._check_path",
+    "cellgl.io.frames: cellgl.io.bake._load",
+    "cellgl.pups.gpu: cellgl.pups.pack._stream",
+    "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_gpu",
+    "cellgl.pups.synthesis: cellgl.pups.gpu._evaluate_raster",
+    "cellgl.pups.synthesis: cellgl.pups.gpu._raster_applies",
+}
+
+
+def test_no_underscore_name_crosses_modules():
+    """A name another cellgl module uses is public to the package: it has no leading underscore."""
+    got = {hit for m in sorted(MODULES) for hit in _underscore_imports(m)}
+    assert not got - UNDERSCORE_IMPORTS_LEFT, "underscore names imported from another cellgl module " \
+        "(drop the underscore: the name is the package's):\n" + "\n".join(sorted(got - UNDERSCORE_IMPORTS_LEFT))
+    assert not UNDERSCORE_IMPORTS_LEFT - got, f"renamed since, drop from the list: {UNDERSCORE_IMPORTS_LEFT - got}"
+
+
+def test_the_underscore_check_sees_both_spellings(tmp_path, monkeypatch):
+    src = tmp_path / "m.py"
+    src.write_text("from cellgl.texture.schema import _coerce, RecipeError\n"
+                   "from cellgl.io import bake as B\n"
+                   "import cellgl.io.spec as S\n"
+                   "def f():\n    return B._load, S.check, B.__name__, B.bake\n")
+    monkeypatch.setitem(MODULES, "cellgl.io.fake", src)
+    assert _underscore_imports("cellgl.io.fake") == ["cellgl.io.fake: cellgl.io.bake._load",
+                                                      "cellgl.io.fake: cellgl.texture.schema._coerce"]
 
 
 def test_no_import_cycle():

@@ -187,3 +187,24 @@ def test_name_and_doc_have_a_sane_size(tmp_path, capsys, kind):
     path.write_text(json.dumps(d))
     assert main(["export", str(path), "--target", "gles"]) == 2
     assert "name: 100 characters" in capsys.readouterr().err
+
+
+def test_recipes_answers_what_depends_on_the_kind():
+    """What front ends used to take from one kind's module comes from cellgl.recipes (issue 42)."""
+    from cellgl import recipes
+    from cellgl.pups.recipe import PUPS_PARAMS
+    from cellgl.texture.evaluation import MAX_SIDE
+
+    every = list_presets()
+    cellular, pups = list_presets("cellular"), list_presets("pups")
+    assert sorted(cellular + pups) == every and cellular and pups
+    assert all(n.startswith("pups-") for n, _ in pups) and not any(n.startswith("pups-") for n, _ in cellular)
+    with pytest.raises(ValueError, match=r"kind 'texture'.*accepted: None \(every kind\), cellular, pups"):
+        list_presets("texture")
+    assert recipes.parameters("flagstone") is params.PARAMS
+    cow = load_recipe("pups-cow")
+    table = recipes.parameters(cow)
+    assert table and set(p.name for p in table) == set(cow.names()) and set(table) <= set(PUPS_PARAMS)
+    assert recipes.max_side("flagstone") == MAX_SIDE == recipes.MAX_SIDE == 1 << 20
+    assert recipes.max_side(cow) == 1 << 16
+    assert recipes.is_path("a/b.json") and not recipes.is_path("flagstone")

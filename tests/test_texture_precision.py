@@ -13,7 +13,7 @@ import pytest
 from cellgl import texture
 from cellgl.texture.recipe import Recipe
 from cellgl.recipes import load_recipe
-from cellgl.texture.reference import _tex, texture_period
+from cellgl.texture.reference import texture_values, texture_period
 from test_texture import RECIPES as TEXTURE_RECIPES     # tests/ is on sys.path under pytest
 
 FAR = 1e6 + 0.3
@@ -124,7 +124,7 @@ def test_tileable_far_away_is_the_same_tile(ctx):
     assert np.array_equal(near["id"], far["id"])
     np.testing.assert_allclose(near["color"], far["color"], atol=1e-5)
     o = texture.lattice_origins(r.replace(offset_x=FAR, offset_y=FAR))
-    per = texture_period(_tex(r), 7)
+    per = texture_period(texture_values(r), 7)
     assert np.all(np.abs(o["origin_cell"][:, :2]) <= per[:2])
 
 

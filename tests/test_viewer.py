@@ -43,7 +43,7 @@ def display():
 
 @pytest.fixture(scope="module")
 def viewer(display):
-    from viewer.app import Viewer, ViewerOptions
+    from cellgl.viewer.app import Viewer, ViewerOptions
 
     try:
         v = Viewer(ViewerOptions(recipe=PRESET, size=SIZE, hidden=True))
@@ -250,7 +250,7 @@ def test_saved_recipe_bakes_identically(viewer, tmp_path):
     """Edit, save from the viewer, bake with `cellgl bake`: the bake equals the view."""
     from PIL import Image
 
-    from viewer import actions
+    from cellgl.viewer import actions
 
     _reset(viewer)
     viewer.model.set("seed", 4242)

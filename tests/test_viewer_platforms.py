@@ -55,7 +55,7 @@ CONFIGS = {
 
 _CHILD = r"""
 import json, sys
-from viewer.app import Viewer, ViewerOptions
+from cellgl.viewer.app import Viewer, ViewerOptions
 out, cases = sys.argv[1], json.loads(sys.argv[2])
 report = {}
 for name, (preset, mode, sets) in cases.items():
@@ -133,8 +133,8 @@ def test_same_pixels_as_on_gl43(shots, config, case):
 
 _ACTIONS_CHILD = r"""
 import json, sys
-from viewer import actions
-from viewer.app import Viewer, ViewerOptions
+from cellgl.viewer import actions
+from cellgl.viewer.app import Viewer, ViewerOptions
 out = sys.argv[1]
 v = Viewer(ViewerOptions(recipe="flagstone", size=(96, 96), panel=False, hidden=True))
 try:

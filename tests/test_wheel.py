@@ -66,6 +66,17 @@ def test_wheel_ships_the_preset_images(wheel):
     assert images and all(f"cellgl/presets/images/{n}" in names for n in images)
 
 
+def test_wheel_installs_the_viewer_inside_cellgl(wheel):
+    """The source folder viewer/ is the package cellgl.viewer: no top-level `viewer` in
+    site-packages, where another package of that name would collide (issue 42)."""
+    names = set(zipfile.ZipFile(wheel).namelist())
+    expected = sorted(p.name for p in (REPO / "viewer").glob("*.py"))
+    assert expected and all(f"cellgl/viewer/{n}" in names for n in expected), \
+        sorted(n for n in names if "viewer" in n)
+    tops = {n.split("/")[0] for n in names}
+    assert tops == {"cellgl", next(t for t in tops if t.endswith(".dist-info"))}, tops
+
+
 @pytest.fixture(scope="module")
 def installed(wheel, tmp_path_factory) -> Path:
     """A clean venv with the wheel installed (shared by the tests below); returns the venv."""
@@ -105,6 +116,18 @@ def test_installed_wheel_resolves_shaders(installed, tmp_path):
     assert found == expected
     assert len([x for x in lines if x.startswith("resolved ")]) == \
         len([x for x in expected if "/" not in x and x.endswith(".comp")])
+
+    # The viewer is cellgl.viewer (its arguments import without the [viewer] extra's GUI
+    # libraries), and there is no top-level `viewer`.
+    code = ("import importlib.util, cellgl.viewer.cli as c\n"
+            "print(c.__file__)\n"
+            "print(importlib.util.find_spec('viewer'))\n")
+    r = _run([py, "-c", code], cwd=outside, env=env)
+    viewer_cli, top_viewer = r.stdout.splitlines()
+    assert Path(viewer_cli).parent == shader_dir.parent / "viewer", viewer_cli
+    assert top_viewer == "None"
+    r = _run([venv / "bin" / "cellgl", "view", "--help"], cwd=outside, env=env)
+    assert "--screenshot" in r.stdout
 
     # The console script works from the installed wheel too (needs a GL 4.3 context).
     r = _run([venv / "bin" / "cellgl", "info"], cwd=outside, env=env, check=False)

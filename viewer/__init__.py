@@ -1,7 +1,7 @@
 """cellgl's interactive viewer: a GLFW window, Dear ImGui panel, live texture preview.
 
-``cellgl view [PRESET_OR_RECIPE]`` or ``python -m viewer``. See docs/viewer.md.
-GUI libraries (imgui-bundle, glfw) are imported lazily, by :mod:`viewer.app`.
+``cellgl view [PRESET_OR_RECIPE]`` or ``python -m cellgl.viewer``. See docs/viewer.md.
+GUI libraries (imgui-bundle, glfw) are imported lazily, by :mod:`cellgl.viewer.app`.
 """
 
 __all__ = ["main"]

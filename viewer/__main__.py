@@ -1,5 +1,5 @@
 import sys
 
-from viewer import main
+from cellgl.viewer import main
 
 sys.exit(main())

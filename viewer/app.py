@@ -1,11 +1,11 @@
 """The viewer window: GLFW + moderngl + Dear ImGui (imgui-bundle).
 
 One :class:`Viewer` owns a GLFW window, a moderngl context made current on it, the ImGui
-context and its GLFW/OpenGL3 backends, and the renderers of :mod:`viewer.render`. A frame:
+context and its GLFW/OpenGL3 backends, and the renderers of :mod:`cellgl.viewer.render`. A frame:
 
 1. poll GLFW, start an ImGui frame (scripted mouse events, if any, are fed to ImGui's IO here:
    the tests drag sliders through exactly the path real mouse input takes);
-2. the panel (:mod:`viewer.panel`) edits the :class:`viewer.model.Model`;
+2. the panel (:mod:`cellgl.viewer.panel`) edits the :class:`cellgl.viewer.model.Model`;
 3. view input (pan / zoom / orbit) from ImGui's IO when the mouse is not over the panel;
 4. the view is rendered into an offscreen framebuffer only when something it depends on
    changed, at reduced resolution while a slider or the view is being dragged (refined once

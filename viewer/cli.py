@@ -1,4 +1,4 @@
-"""``cellgl view`` / ``python -m viewer``: argument parsing only (no GL or GUI imports here)."""
+"""``cellgl view`` / ``python -m cellgl.viewer``: argument parsing only (no GL or GUI imports here)."""
 
 from __future__ import annotations
 
@@ -28,7 +28,7 @@ def _assignment(text: str) -> tuple[str, str]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """Declare the viewer's arguments on ``p`` (shared by ``cellgl view`` and ``python -m viewer``)."""
+    """Declare the viewer's arguments on ``p`` (shared by ``cellgl view`` and ``python -m cellgl.viewer``)."""
     p.add_argument("recipe", nargs="?", default=None, metavar="PRESET_OR_RECIPE",
                    help="preset name or recipe JSON file (default: the first preset)")
     p.add_argument("--mode", choices=MODES, default="2d",
@@ -81,7 +81,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m viewer",
+    p = argparse.ArgumentParser(prog="python -m cellgl.viewer",
                                 description="Interactive cellgl texture viewer.")
     add_arguments(p)
     args = p.parse_args(argv)

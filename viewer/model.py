@@ -15,8 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from cellgl.gl import context
-from cellgl.texture.params import PARAMS, inactive
-from cellgl.recipes import list_presets, load_recipe
+from cellgl.texture.params import inactive
+from cellgl.recipes import is_pups as pups_recipe, list_presets, load_recipe, parameters
 from cellgl.texture.recipe import Recipe
 
 __all__ = ["Model", "DEFAULT_PRESET"]
@@ -70,18 +70,13 @@ class Model:
     @property
     def is_pups(self) -> bool:
         """A PUPs recipe (:mod:`cellgl.pups.recipe`): 2D only, rendered by its own engine."""
-        return getattr(self.recipe, "kind", None) == "pups"
+        return pups_recipe(self.recipe)
 
     @property
     def params(self):
-        """The parameter table the panel shows: :data:`cellgl.texture.params.PARAMS`, or for a PUPs
-        recipe the entries of :data:`cellgl.pups.recipe.PUPS_PARAMS` its pattern uses."""
-        if self.is_pups:
-            from cellgl.pups.recipe import PUPS_PARAMS
-
-            used = set(self.recipe.names())
-            return tuple(p for p in PUPS_PARAMS if p.name in used)
-        return PARAMS
+        """The parameter table the panel shows (:func:`cellgl.recipes.parameters`: every entry for
+        a cellular recipe, the entries its pattern uses for a PUPs one)."""
+        return parameters(self.recipe)
 
     def inactive(self) -> dict[str, str]:
         """``{name: what turns it on}`` of the parameters that change nothing now
@@ -179,7 +174,7 @@ class Model:
             return x
         from cellgl.texture import reference as texture_reference
 
-        t = texture_reference._tex(self.recipe)
+        t = texture_reference.texture_values(self.recipe)
         s = texture_reference.texture_local(np.asarray([p], dtype=np.float64), t)
         sw, _ = texture_reference.texture_warp(s, t)
         return x + (sw - s)[0, : len(x)]

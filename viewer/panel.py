@@ -278,9 +278,7 @@ def draw_panel(viewer) -> None:
     imgui.separator()
     groups = GROUPS
     if viewer.model.is_pups:
-        from cellgl.pups.recipe import PUPS_PARAMS
-
-        groups = tuple(dict.fromkeys(p.group for p in PUPS_PARAMS))
+        groups = tuple(dict.fromkeys(p.group for p in viewer.model.params))
         imgui.text_wrapped("PUPs recipe: 2D texture (3D object and 4D animation views are not "
                            "available); channels color, height")
     for g in groups:

@@ -17,16 +17,19 @@ BIG = 3.0e38           #: "no point yet" distance, as in the GLSL
 W96_DENSITY_ADJUSTMENT = 0.398150
 
 
-def _u(x) -> np.ndarray:
+def as_u32(x) -> np.ndarray:
+    """``x`` as GLSL's uint32 holds it (uint64 values below 2^32: the low 32 bits)."""
     return np.asarray(x, dtype=np.uint64) & M32
 
 
-def _mul(a, b):
-    return (_u(a) * _u(b)) & M32
+def mul_u32(a, b):
+    """``a * b`` in uint32, wrapping as GLSL does."""
+    return (as_u32(a) * as_u32(b)) & M32
 
 
-def _add(a, b):
-    return (_u(a) + _u(b)) & M32
+def add_u32(a, b):
+    """``a + b`` in uint32, wrapping as GLSL does."""
+    return (as_u32(a) + as_u32(b)) & M32
 
 
 # --------------------------------------------------------------------------- hash.glsl
@@ -34,7 +37,7 @@ def _add(a, b):
 def hash_u32(x):
     """``cell_hash_u32``: lowbias32 avalanche of uint32 values (as uint64). Computed in uint32,
     which wraps as GLSL's does."""
-    x = _u(x).astype(np.uint32)
+    x = as_u32(x).astype(np.uint32)
     with np.errstate(over="ignore"):        # (a 0-d input's scalar product says it wraps)
         x ^= x >> np.uint32(16)
         x *= np.uint32(0x7FEB352D)
@@ -46,7 +49,7 @@ def hash_u32(x):
 
 def u16(v):
     """``cell_u16``: a 16-bit value as a float in (0, 1), centred in its step."""
-    return (_u(v).astype(np.float64) + 0.5) * (1.0 / 65536.0)
+    return (as_u32(v).astype(np.float64) + 0.5) * (1.0 / 65536.0)
 
 
 # --------------------------------------------------------------------------- points.glsl
@@ -115,7 +118,7 @@ def jenkins_hash(*words):
     """lookup3 hash of 1..4 uint32 words (arrays broadcast), as Blender hashes a cell's float bits;
     uint64 values < 2^32 (computed in uint32 arithmetic, which wraps as lookup3's does)."""
     n = len(words)
-    words = [np.asarray(_u(x)).astype(np.uint32) for x in words]
+    words = [np.asarray(as_u32(x)).astype(np.uint32) for x in words]
     init = np.asarray(0xDEADBEEF + (n << 2) + 13, dtype=np.uint32)
     a = b = c = init
     with np.errstate(over="ignore"):
@@ -140,7 +143,7 @@ def float_bits(x) -> np.ndarray:
 
 def unit_float(h) -> np.ndarray:
     """A uint32 hash as Blender's float in [0, 1]: float32(h) / 2^32 (float32, rounded to nearest)."""
-    return (_u(h).astype(np.float32) * np.float32(1.0 / 4294967296.0)).astype(np.float32)
+    return (as_u32(h).astype(np.float32) * np.float32(1.0 / 4294967296.0)).astype(np.float32)
 
 
 _ONE, _TWO = 0x3F800000, 0x40000000      # float bits of 1.0 and 2.0
@@ -177,7 +180,7 @@ def blender_point(cells, dim: int) -> np.ndarray:
     [0, 1], the hash of the cell's coordinates as floats (x from one hash, y, z, w from the same
     coordinates with a constant or a rotation appended)."""
     k = blender_cell_words(cells, dim)
-    one, two = _u(_ONE), _u(_TWO)
+    one, two = as_u32(_ONE), as_u32(_TWO)
     if dim == 1:
         hs = [jenkins_hash(k[0])]
     elif dim == 2:
@@ -201,7 +204,7 @@ def blender_color(cells, dim: int) -> np.ndarray:
     """Blender's colour of each integer cell: float32 (N, 3) in [0, 1], three hashes of the
     cell's coordinates as floats."""
     k = blender_cell_words(cells, dim)
-    one, two = _u(_ONE), _u(_TWO)
+    one, two = as_u32(_ONE), as_u32(_TWO)
     if dim == 1:
         hs = [jenkins_hash(k[0]), jenkins_hash(k[0], one), jenkins_hash(k[0], two)]
     elif dim == 2:
@@ -222,7 +225,7 @@ def blender_owner_cells(lattice_pos, ids, dim: int) -> np.ndarray:
     import itertools
 
     cells = np.floor(np.asarray(lattice_pos, dtype=np.float64)[:, :dim]).astype(np.int64)
-    ids = _u(ids)
+    ids = as_u32(ids)
     rows = np.nonzero(blender_id(cells, dim) != ids)[0]
     for o in itertools.product((-1, 0, 1), repeat=dim):
         if not len(rows):

@@ -18,7 +18,7 @@ import numpy as np
 
 from cellgl.basis.density import levels_reference
 from cellgl.basis.enums import Distribution, Metric
-from cellgl.basis.population import (BIG, M32, MAX_POINTS, W96_DENSITY_ADJUSTMENT, _add, _mul, _u,  # noqa: F401
+from cellgl.basis.population import (BIG, M32, MAX_POINTS, W96_DENSITY_ADJUSTMENT, add_u32, mul_u32, as_u32,  # noqa: F401
                                      blender_id, blender_point, hash_u32, poisson_thresholds, u16,
                                      worley1996_table)
 
@@ -90,10 +90,10 @@ def orbit_turn(phase: float) -> int:
 
 def orbit(f: np.ndarray, ids: np.ndarray, p: Params) -> np.ndarray:
     """``cell_orbit``: the points at f (N, 4) in their cells moved along their circles."""
-    h = hash_u32(_u(ids) ^ np.uint64(0x3C6EF372))
+    h = hash_u32(as_u32(ids) ^ np.uint64(0x3C6EF372))
     turn = np.where((h & np.uint64(1)) != 0, np.uint64(p.orbit_turn),
                     np.uint64((-p.orbit_turn) & 0xFFFFFFFF))
-    a = (_add(h, turn) >> np.uint64(8)).astype(np.float64) * (2.0 * math.pi / 16777216.0)
+    a = (add_u32(h, turn) >> np.uint64(8)).astype(np.float64) * (2.0 * math.pi / 16777216.0)
     r = p.orbit_radius
     f = f.copy()
     f[:, 0] = 0.5 + (1.0 - 2.0 * r) * (f[:, 0] - 0.5) + r * np.cos(a)
@@ -116,16 +116,16 @@ def cell_seed(cells: np.ndarray, p: Params) -> np.ndarray:
         return blender_id(cells, p.dim)
     c = cells.astype(np.int64) & 0xFFFFFFFF
     if p.distribution == Distribution.WORLEY1996:
-        h = _add(_add(_mul(c[:, 0], 702395077), _mul(c[:, 1], 915488749)), _mul(c[:, 2], 2120969693))
-        return _add(h, _mul(p.seed, 2654435769))
-    h = _add(_mul(p.seed, 0x27D4EB2F), _add(_mul(c[:, 0], 0x8DA6B343), _mul(c[:, 1], 0xD8163841)))
+        h = add_u32(add_u32(mul_u32(c[:, 0], 702395077), mul_u32(c[:, 1], 915488749)), mul_u32(c[:, 2], 2120969693))
+        return add_u32(h, mul_u32(p.seed, 2654435769))
+    h = add_u32(mul_u32(p.seed, 0x27D4EB2F), add_u32(mul_u32(c[:, 0], 0x8DA6B343), mul_u32(c[:, 1], 0xD8163841)))
     for a, k in ((2, 0xCB1AB31F), (3, 0x165667B1))[: p.dim - 2]:
-        h = _add(h, _mul(c[:, a], k))
+        h = add_u32(h, mul_u32(c[:, a], k))
     return hash_u32(h)
 
 
 def _w96_step(state):
-    return _add(_mul(state, 1402024253), 586950981)
+    return add_u32(mul_u32(state, 1402024253), 586950981)
 
 
 def density_level(cells: np.ndarray, p: Params) -> np.ndarray:
@@ -170,13 +170,13 @@ def next_point(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
     if p.distribution == Distribution.JITTER:
         u = state                                   # one point: the cell's hash itself
     else:
-        state = _add(state, 0x9E3779B9)             # point k: avalanche of h + k 0x9e3779b9
+        state = add_u32(state, 0x9E3779B9)             # point k: avalanche of h + k 0x9e3779b9
         u = hash_u32(state)
     ids = hash_u32(u ^ np.uint64(0x5BD1E995))
     f[:, 0] = u16(u >> np.uint64(16))
     f[:, 1] = u16(u & np.uint64(0xFFFF))
     if p.dim >= 3:
-        v = _mul(u ^ (u >> np.uint64(15)), 0x2C1B3C6D)
+        v = mul_u32(u ^ (u >> np.uint64(15)), 0x2C1B3C6D)
         v ^= v >> np.uint64(12)
         f[:, 2] = u16(v >> np.uint64(16))
         f[:, 3] = u16(v & np.uint64(0xFFFF))

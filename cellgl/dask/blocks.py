@@ -25,7 +25,7 @@ import numpy as np
 
 from cellgl import recipes
 from cellgl.io import bake as _bake
-from cellgl.texture.evaluation import MAX_SIDE  # 2**20: float32 uv keeps pixels apart there
+from cellgl.recipes import MAX_SIDE  # 2**20: float32 uv keeps pixels apart there
 
 __all__ = ["DaskError", "Layout", "to_dask", "on_gl_thread", "render_block", "require",
            "MAX_SIDE", "MAX_CHUNK", "DEFAULT_CHUNK"]
@@ -136,8 +136,8 @@ class Layout:
         ch = _whole("chunk rows", ch, 1, MAX_CHUNK)
         cw = _whole("chunk columns", cw, 1, MAX_CHUNK)
         chans = _bake.parse_channels(channels)
-        if getattr(recipe, "kind", None) == "pups" and max(w, h) > 65536:
-            raise DaskError(f"a PUPs recipe renders at most 65536 pixels a side, got {w}x{h}")
+        if max(w, h) > (side := recipes.max_side(recipe)):
+            raise DaskError(f"a PUPs recipe renders at most {side} pixels a side, got {w}x{h}")
         return cls(recipe, w, h, chans, min(cw, w), min(ch, h))
 
     @property

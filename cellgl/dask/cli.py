@@ -7,7 +7,7 @@ import argparse
 from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
 from cellgl.dask.zarr_bake import bake_zarr
-from cellgl.io.spec import DEFAULT_SIZE, _int_arg
+from cellgl.io.spec import DEFAULT_SIZE, int_arg
 from cellgl.io.tempfiles import check_output_dir
 
 __all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
@@ -62,10 +62,10 @@ def run_zarr_bake(args: argparse.Namespace) -> int:
     if args.memory is not None:
         raise DaskError("--memory: not used by a .zarr bake; --tile N sets its chunk size")
     chunk = DEFAULT_CHUNK if args.tile is None else \
-        _int_arg("--tile", args.tile, 16, MAX_CHUNK)
+        int_arg("--tile", args.tile, 16, MAX_CHUNK)
     workers = None if args.workers is None else \
-        _int_arg("--workers", args.workers, 1, 1024)
-    threads = _int_arg("--threads", args.threads, 1, 256)
+        int_arg("--workers", args.workers, 1, 1024)
+    threads = int_arg("--threads", args.threads, 1, 256)
     check_scheduler(args.scheduler)
     check_output_dir(args.output)       # the one rule of every command's output (a .zarr is a folder)
     bake_zarr(args.recipe, args.output, size=args.size,
@@ -123,9 +123,9 @@ def run_sweep(args: argparse.Namespace) -> int:
     check_scheduler(args.scheduler)
     check_output_dir(args.output)       # the one rule of every command's output
     workers = None if args.workers is None else \
-        _int_arg("--workers", args.workers, 1, 1024)
+        int_arg("--workers", args.workers, 1, 1024)
     sweep(args.recipe, args.output, args.sets, size=args.size,
           channels=tuple(args.channels or ("color",)), fmt=args.format, bit_depth=args.depth,
           tileable=args.tileable, scheduler=args.scheduler, workers=workers,
-          threads=_int_arg("--threads", args.threads, 1, 256), progress=not args.quiet)
+          threads=int_arg("--threads", args.threads, 1, 256), progress=not args.quiet)
     return 0

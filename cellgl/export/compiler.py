@@ -25,7 +25,7 @@ from cellgl.export.fields import constant_fields, dead_fields, void_results
 from cellgl.export.fold import fold, loop_ranges
 from cellgl.export.inline import constant_args, drop_unused_outs, drop_unused_params, inline_once, inline_short
 from cellgl.export.printer import print_lines
-from cellgl.export.reach import _names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
+from cellgl.export.reach import item_names, reach, reached, scalarise, strip_body_comments, tidy_comments, uses
 from cellgl.export.simplify import EXPRESSIONS, SIMPLIFY
 from cellgl.export.tree import Context, clone, fixed_point
 
@@ -100,7 +100,7 @@ def _ordered(items: list) -> list:
     after the library in the source, but the library now reads them)."""
     by_name: dict[str, list] = {}
     for it in items:
-        for n in _names(it):
+        for n in item_names(it):
             by_name.setdefault(n, []).append(it)
     pos = {id(it): k for k, it in enumerate(items)}
     out, done, busy = [], set(), set()

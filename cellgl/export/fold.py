@@ -22,7 +22,8 @@ from cellgl.export.tree import writes
 from cellgl.export.values import COMPARE, convert, literal, shape, value
 
 __all__ = ["fold", "Facts", "rewriting", "inline_constants", "array_elements", "constant_conditions",
-           "local_constants", "constant_loops", "loop_ranges", "global_constants"]
+           "local_constants", "constant_loops", "loop_ranges", "global_constants", "inline_constants_rule",
+           "array_elements_rule", "constant_conditions_rule", "local_constants_rule", "constant_loops_rule"]
 
 def global_constants(unit: S.Unit) -> tuple[dict, dict]:
     """``(env, arrays)``: ``env`` ``{name: value}`` of the global scalar constants initialised with
@@ -130,7 +131,7 @@ def rewriting(*makers):
 
 
 @rule(S.Name)
-def _inline_constants(facts: Facts):
+def inline_constants_rule(facts: Facts):
     """Write the recipe's constants that decide the shape of the code (booleans, integers, 0.0,
     1.0) into it: ``cellgl_fractal == 0`` -> ``0 == 0``."""
     pick = {k: literal(v) for k, v in facts.genv.items() if shape(v) and k not in facts.declared and k in facts.occ}
@@ -138,7 +139,7 @@ def _inline_constants(facts: Facts):
 
 
 @rule(S.Index)
-def _array_elements(facts: Facts):
+def array_elements_rule(facts: Facts):
     """``cellgl_origin_frac[0]`` -> ``vec4(0.0, 0.0, 0.0, 0.0)``: elements of global constant
     arrays read at a literal index where the element is short, or at any index (without
     effects or calls) where all elements are the same."""
@@ -186,7 +187,7 @@ def _fold_expr(n, env, ctx):
 
 
 @rule(S.If, S.While, S.Ternary, S.Binary, S.Unary, S.Index, S.Declarator, S.ArrayCtor)
-def _constant_conditions(facts: Facts):
+def constant_conditions_rule(facts: Facts):
     """Remove the branches of ``if`` statements and ternaries whose condition is constant, fold
     conditions of literals (``3.0e38 >= 3.0e38`` -> ``true``), ``true && x`` -> ``x``, and
     integer indices and array sizes (``rest[8 + 1]`` -> ``rest[9]``)."""
@@ -218,7 +219,7 @@ def _chosen(stmt, kept):
 
 
 @rule(S.Name, S.Index)
-def _local_constants(facts: Facts):
+def local_constants_rule(facts: Facts):
     """Write locals that hold a boolean, an integer, 0.0 or 1.0 for good into the code, and the
     elements of local arrays of literals never written (``lin[0]`` -> ``1.0``)."""
     env, arrays = facts.constants
@@ -238,8 +239,8 @@ def _local_constants(facts: Facts):
     return sub if pick or arrays else None
 
 
-inline_constants, array_elements = rewriting(_inline_constants), rewriting(_array_elements)
-constant_conditions, local_constants = rewriting(_constant_conditions), rewriting(_local_constants)
+inline_constants, array_elements = rewriting(inline_constants_rule), rewriting(array_elements_rule)
+constant_conditions, local_constants = rewriting(constant_conditions_rule), rewriting(local_constants_rule)
 
 
 def _counter(loop: S.For, env, ctx):
@@ -290,7 +291,7 @@ def _jumps(node) -> bool:
 
 
 @rule(S.For)
-def _constant_loops(facts: Facts):
+def constant_loops_rule(facts: Facts):
     """``for`` loops with constant bounds: no iteration -> removed; one -> its body (a block),
     the counter replaced by its first value."""
     env, ctx = facts.env, facts.ctx
@@ -311,7 +312,7 @@ def _constant_loops(facts: Facts):
     return unroll if any(type(n) is S.For for n in facts.nodes) else None
 
 
-constant_loops = rewriting(_constant_loops)
+constant_loops = rewriting(constant_loops_rule)
 
 
 def _conjuncts(e) -> list:

@@ -16,7 +16,7 @@ from cellgl.export.syntax import PRECEDENCE
 from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError
 
 __all__ = ["Glsl", "Gles", "Hlsl", "print_glsl", "print_target", "print_lines", "expr_glsl", "statement_glsl", "item_glsl",
-           "RELATIONAL", "operand"]
+           "RELATIONAL", "operand", "trail_comment"]
 
 #: GLSL's component-wise relational functions and the infix operator each is (HLSL, WGSL, OSL)
 RELATIONAL = {"lessThan": "<", "lessThanEqual": "<=", "greaterThan": ">", "greaterThanEqual": ">=",
@@ -109,9 +109,9 @@ class Glsl:
         """Lines of a statement node at indentation ``ind``."""
         out = self.comments(s.comments, ind)
         if isinstance(s, S.Block):
-            return out + [ind + "{" + _trail(s)] + self.body(s, ind) + [ind + "}"]
+            return out + [ind + "{" + trail_comment(s)] + self.body(s, ind) + [ind + "}"]
         if isinstance(s, (S.Decl, S.ExprStmt)):
-            return out + [ind + self.simple(s) + ";" + _trail(s)]
+            return out + [ind + self.simple(s) + ";" + trail_comment(s)]
         if isinstance(s, S.Return):
             return out + [ind + ("return;" if s.value is None else f"return {self.expr(s.value)};")]
         if isinstance(s, S.Jump):
@@ -151,7 +151,7 @@ class Glsl:
 
     def head(self, head: str, body, ind: str) -> list[str]:
         if isinstance(body, S.Block) and not body.comments:
-            return [f"{ind}{head} {{" + _trail(body)] + self.body(body, ind) + [ind + "}"]
+            return [f"{ind}{head} {{" + trail_comment(body)] + self.body(body, ind) + [ind + "}"]
         if isinstance(body, (S.For, S.While)) and not body.comments:       # a loop nest: one level
             return [ind + head] + self.statement(body, ind)
         return [ind + head] + self.statement(body, ind + "    ")
@@ -168,7 +168,7 @@ class Glsl:
             out.append(f"struct {self.name(it.name)} {{")
             for f in it.fields:
                 out += self.comments(f.comments, "    ")
-                out.append(f"    {self.decl_type(f.type)} {self.array_name(f)};" + _trail(f))
+                out.append(f"    {self.decl_type(f.type)} {self.array_name(f)};" + trail_comment(f))
             return out + ["};"]
         if isinstance(it, S.Global):
             return out + [" ".join(self.quals(it.quals) + [self.declarators(it.type, it.declarators)]) + ";"]
@@ -176,7 +176,7 @@ class Glsl:
             sig = f"{self.decl_type(it.ret)} {self.name(it.name)}({', '.join(self.param(p) for p in it.params)})"
             if it.body is None:
                 return out + [sig + ";"]
-            opening = [sig + " {" + _trail(it.body)] if self.kr else [sig, "{" + _trail(it.body)]
+            opening = [sig + " {" + trail_comment(it.body)] if self.kr else [sig, "{" + trail_comment(it.body)]
             return out + opening + self.body(it.body, "") + ["}"]
         raise TypeError(f"not a top-level node: {it!r}")
 
@@ -209,7 +209,7 @@ _EXPR = {
 }
 
 
-def _trail(node) -> str:
+def trail_comment(node) -> str:
     """The ``//`` comment on the rest of a node's line (a statement's, a member's, after a block's brace)."""
     return f"  {node.trail}" if getattr(node, "trail", "") else ""
 

@@ -25,7 +25,7 @@ from cellgl.export import syntax as S
 from cellgl.export.tree import calls, clone, paren, transform, walk
 
 __all__ = ["reach", "reached", "uses", "scalarise", "scalarise_struct", "strip_body_comments", "tidy_comments",
-           "first_sentence"]
+           "first_sentence", "item_names"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -44,7 +44,8 @@ def uses(node) -> set[str]:
     return {getattr(n, _USED[type(n)]) for n in walk(node) if type(n) in _USED}
 
 
-def _names(item) -> list[str]:
+def item_names(item) -> list[str]:
+    """The top-level names a tree item defines (a global's declarators, a function's or struct's name)."""
     if isinstance(item, S.Global):
         return [d.name for d in item.declarators]
     return [item.name]
@@ -54,7 +55,7 @@ def reached(items: list, entries) -> list:
     """The top-level nodes of ``items`` reached from the names ``entries`` (in their order)."""
     by_name: dict[str, list] = {}
     for it in items:
-        for n in _names(it):
+        for n in item_names(it):
             by_name.setdefault(n, []).append(it)
     seen: set[str] = set()
     todo = [e for e in entries if e in by_name]
@@ -65,7 +66,7 @@ def reached(items: list, entries) -> list:
         seen.add(name)
         for it in by_name[name]:
             todo.extend(u for u in uses(it) if u in by_name and u not in seen)
-    return [it for it in items if any(n in seen for n in _names(it))]
+    return [it for it in items if any(n in seen for n in item_names(it))]
 
 
 def reach(unit: S.Unit, ctx) -> bool:

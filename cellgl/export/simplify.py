@@ -10,8 +10,8 @@ from bisect import bisect_left
 from copy import copy
 
 from cellgl.export import syntax as S
-from cellgl.export.fold import (Facts, _array_elements, _constant_conditions, _constant_loops,
-                                 _inline_constants, _local_constants, rewriting, rule)
+from cellgl.export.fold import (Facts, array_elements_rule, constant_conditions_rule, constant_loops_rule,
+                                 inline_constants_rule, local_constants_rule, rewriting, rule)
 from cellgl.export.printer import expr_glsl
 from cellgl.export.tree import ATOMS, children, clone, is_pure, paren, root, transform, walk
 from cellgl.export.values import value
@@ -493,8 +493,8 @@ def _parentheses(facts: Facts):
 parentheses = rewriting(_parentheses)
 #: one walk for the rules on single nodes: the constants written in, constant conditions and loops,
 #: the identities, the parentheses (:mod:`cellgl.export.fold`'s rules and this module's)
-EXPRESSIONS = rewriting(_inline_constants, _array_elements, _local_constants, _constant_conditions,
-                        _constant_loops, _identities, _parentheses)
+EXPRESSIONS = rewriting(inline_constants_rule, array_elements_rule, local_constants_rule, constant_conditions_rule,
+                        constant_loops_rule, _identities, _parentheses)
 
 
 #: the simplification passes, in the order of the driver's round (after :data:`EXPRESSIONS`)

@@ -491,7 +491,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     # every uniform the values fill, the density map's included: a header line without its type
     # would leave a client that reads `type name = value` with that uniform at 0
     # (the declared type: a vec4 value is a tuple too, but only a declared array is an array)
-    decl = {n: (t, bool(arr)) for t, n, arr in texture._uniform_decls("") + texture._uniform_decls("", True)}
+    decl = {n: (t, bool(arr)) for t, n, arr in texture.uniform_decls("") + texture.uniform_decls("", True)}
     ulist = [(decl[k[2:]][0] + (f"[{len(v)}]" if decl[k[2:]][1] else ""), k[2:], v) for k, v in vals.items()]
     return Program(files=["lib/texture.glsl"], defines=defines, params=params, entry=entry,
                    title=r.name, recipe=r.to_dict(), solid=solid, uniforms=ulist, filtered=True)

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from cellgl.io.bake import bake
-from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, BakeError, _int_arg
+from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, BakeError, int_arg
 from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]
@@ -96,9 +96,9 @@ def run_cli(args: argparse.Namespace) -> int:
             raise BakeError(f"{flag} {value}: only for a distributed .zarr bake "
                             f"(-o NAME.zarr); accepted outputs here: {', '.join(FORMATS)}")
     budget = DEFAULT_BUDGET if args.memory is None else \
-        _int_arg("--memory", args.memory, 1, 1 << 20) << 20
-    tile = None if args.tile is None else _int_arg("--tile", args.tile, 16, 8192)
-    samples = _int_arg("--samples", args.samples, 1, MAX_SAMPLES)
+        int_arg("--memory", args.memory, 1, 1 << 20) << 20
+    tile = None if args.tile is None else int_arg("--tile", args.tile, 16, 8192)
+    samples = int_arg("--samples", args.samples, 1, MAX_SAMPLES)
     t0 = time.perf_counter()
     try:
         if args.frames is not None:
@@ -126,7 +126,7 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
         fps = 24.0 if args.fps is None else float(args.fps)
     except ValueError:
         raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
-    paths = bake_frames(args.recipe, args.output, _int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
+    paths = bake_frames(args.recipe, args.output, int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
                         size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                         tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
                         memory_budget=budget)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import DEFAULT_BUDGET, BakeError, _check_size, parse_channels, parse_size
+from cellgl.io.spec import DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
@@ -176,7 +176,7 @@ def _animated_size(path: Path, size, budget: int) -> tuple[int, int]:
                             "accepted: WxH")
     else:
         w, h = (size, size) if isinstance(size, (int, np.integer)) else tuple(size)
-        _check_size(w, h, None, f"size {w}x{h}")
+        check_size(w, h, None, f"size {w}x{h}")
     most = ANIMATED_MAX_SIDE[ext]
     if max(w, h) > most:
         raise BakeError(f"--size {w}x{h}: an animated {ext} has sides of at most {most} pixels; "

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["BakeError", "CHANNELS", "FORMATS", "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS", "parse_size",
-           "parse_channels", "id_colors"]
+           "parse_channels", "id_colors", "Encoding", "accepted_list", "check_size", "encoding_of", "exr_names",
+           "int_arg", "parse_sets"]
 
 
 class BakeError(ValueError):
@@ -54,7 +55,8 @@ DEFAULT_BUDGET = 256 << 20  #: bytes of working memory a bake aims to stay withi
 RENDER_BYTES_PER_PIXEL = 256
 
 
-def _accepted(values: Iterable) -> str:
+def accepted_list(values: Iterable) -> str:
+    """``values`` as an error message lists what is accepted: ``"a, b, c"``."""
     return ", ".join(str(v) for v in values)
 
 
@@ -76,11 +78,11 @@ def parse_size(text: str) -> tuple[int, int, int | None]:
         raise BakeError(f"--size {text!r}: expected W, WxH or WxHxD with whole numbers, "
                         f"e.g. 512, 1024x512 or 64x64x16")
     w, h, d = nums[0], (nums[1] if len(nums) > 1 else nums[0]), (nums[2] if len(nums) > 2 else None)
-    _check_size(w, h, d, f"--size {text}")
+    check_size(w, h, d, f"--size {text}")
     return w, h, d
 
 
-def _check_size(w: int, h: int, d: int | None, what: str) -> None:
+def check_size(w: int, h: int, d: int | None, what: str) -> None:
     for name, v in (("width", w), ("height", h)):
         if not isinstance(v, (int, np.integer)) or not 1 <= v <= MAX_SIDE:
             raise BakeError(f"{what}: {name} {v} is out of range; accepted 1..{MAX_SIDE}")
@@ -92,7 +94,7 @@ def _check_size(w: int, h: int, d: int | None, what: str) -> None:
         raise BakeError(f"{what}: {n} pixels is too many; at most {MAX_VOXELS} (2**32)")
 
 
-def _int_arg(flag: str, text, lo: int, hi: int) -> int:
+def int_arg(flag: str, text, lo: int, hi: int) -> int:
     """A command line whole number ``text`` for ``flag``, checked to lie in ``lo..hi``."""
     try:
         v = int(str(text).strip())
@@ -117,15 +119,15 @@ def parse_channels(values: str | Iterable[str]) -> tuple[str, ...]:
             name = lookup.get(part.lower())
             if name is None:
                 raise BakeError(f"--channels {part!r}: unknown channel; accepted "
-                                f"{_accepted(CHANNELS)}")
+                                f"{accepted_list(CHANNELS)}")
             if name not in out:
                 out.append(name)
     if not out:
-        raise BakeError(f"--channels: no channel given; accepted {_accepted(CHANNELS)}")
+        raise BakeError(f"--channels: no channel given; accepted {accepted_list(CHANNELS)}")
     return tuple(out)
 
 
-def _parse_sets(sets: Iterable[str]) -> list[str]:
+def parse_sets(sets: Iterable[str]) -> list[str]:
     out = []
     for s in sets:
         name, eq, value = str(s).partition("=")
@@ -164,7 +166,7 @@ def id_colors(ids: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class _Encoding:
+class Encoding:
     """How one channel is stored: sample count and dtype in the file."""
 
     channel: str
@@ -183,7 +185,8 @@ class _Encoding:
         return np.asarray(a).astype(self.dtype, copy=False)
 
 
-def _encoding(channel: str, ext: str, bits: int) -> _Encoding:
+def encoding_of(channel: str, ext: str, bits: int) -> Encoding:
+    """How ``channel`` is stored in a ``ext`` file of ``bits`` bits per sample."""
     fmt = FORMATS[ext]
     samples = CHANNELS[channel]
     if channel == "color":
@@ -194,20 +197,26 @@ def _encoding(channel: str, ext: str, bits: int) -> _Encoding:
                 raise BakeError(f"--channels id with .png: ids are written as an 8-bit false-"
                                 f"colour preview, so --depth must be 8 (got {bits}); for raw "
                                 f"uint32 ids use .tif, .exr or .npy")
-            return _Encoding(channel, 3, np.dtype(np.uint8))
+            return Encoding(channel, 3, np.dtype(np.uint8))
         if ext in (".tif", ".tiff") and bits != 32:
             raise BakeError(f"--channels id with {ext}: ids are uint32, so --depth must be 32 "
                             f"(got {bits})")
-        return _Encoding(channel, 1, np.dtype(np.uint32))
+        return Encoding(channel, 1, np.dtype(np.uint32))
     if fmt.stream == "band" and ext == ".exr":
-        return _Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
-    return _Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
-                                                 32: np.float32}[bits]))
+        return Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
+    return Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
+                                                32: np.float32}[bits]))
 
 
 #: EXR channel names per cellgl channel.
 _EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B")}
 
 
-def _exr_names(channel: str) -> tuple[str, ...]:
+def exr_names(channel: str) -> tuple[str, ...]:
+    """The EXR channel names of a channel's samples."""
     return _EXR_NAMES.get(channel, (channel,))
+
+
+# The old names cellgl/io/bake.py still imports (renamed after the runner/speed merges)
+_Encoding, _accepted, _check_size, _encoding, _exr_names, _parse_sets = (
+    Encoding, accepted_list, check_size, encoding_of, exr_names, parse_sets)

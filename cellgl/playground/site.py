@@ -33,7 +33,7 @@ from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
 from cellgl.basis.reference import max_ring_default
 from cellgl.export.compiler import collector_paused
 from cellgl.playground import variants as V
-from cellgl.recipes import is_pups, list_presets, load_recipe, render
+from cellgl.recipes import is_path, is_pups, list_presets, load_recipe, render
 from cellgl.texture.schema import RecipeError
 from cellgl import texture
 from cellgl.texture import params as P
@@ -113,23 +113,20 @@ def _preset_entry(r, source: str, thumbs: bool) -> dict:
 
 def playground_presets() -> list[str]:
     """The presets the page shows: the cellular ones the snippet exporter takes."""
-    from cellgl.texture.recipe import list_presets as cellular_presets
-
-    return [n for n, _ in cellular_presets() if V.exportable(load_recipe(n)) is None]
+    return [n for n, _ in list_presets("cellular") if V.exportable(load_recipe(n)) is None]
 
 
 def _check_names(names) -> None:
     """RecipeError for a ``--preset`` that is neither a recipe file nor a preset, naming the
     presets the page accepts (not the PUPs ones it refuses)."""
-    from cellgl.texture.recipe import is_path
-    from cellgl.texture.schema import _suggest
+    from cellgl.texture.schema import suggest
 
     known = {n for n, _ in list_presets()}
     for name in names:
         if not is_path(name) and name.partition(":")[0] not in known:
             shown = repr(name) if len(name) <= 80 else f"{name[:60]!r}... ({len(name)} characters)"
             accepted = playground_presets()
-            raise RecipeError(f"--preset {shown}: unknown preset{_suggest(name, accepted)}; accepted: a recipe "
+            raise RecipeError(f"--preset {shown}: unknown preset{suggest(name, accepted)}; accepted: a recipe "
                               ".json file or one of: " + ", ".join(accepted))
 
 

@@ -6,14 +6,14 @@ import math
 
 import numpy as np
 
-from cellgl.pups.points import DEFAULT_DOMAIN, _check_domain, _check_positive, _rng
+from cellgl.pups.points import DEFAULT_DOMAIN, check_domain, check_positive, as_rng
 
 # --------------------------------------------------------------------------------------------
 # generators
 # --------------------------------------------------------------------------------------------
 
 
-def _sample_map(density, xy, domain):
+def sample_map(density, xy, domain):
     """Nearest sample of a (H, W) map over the domain (row 0 at y0) at positions (N, 2)."""
     x0, y0, x1, y1 = domain
     h, w = density.shape
@@ -206,15 +206,15 @@ def poisson_disk(radius, *, domain=DEFAULT_DOMAIN, periodic=True, seed=0, k=8) -
     numpy.ndarray of float64, shape (N, 2)
         In acceptance order.
     """
-    domain = _check_domain(domain)
+    domain = check_domain(domain)
     side = min(domain[2] - domain[0], domain[3] - domain[1])
-    r = _check_positive("radius", radius, upper=side / 2)
+    r = check_positive("radius", radius, upper=side / 2)
     if side / r > 4000:
         raise ValueError(f"radius must be >= domain side / 4000 = {side / 4000:.6g}, got {radius}")
     k = int(k)
     if k < 1:
         raise ValueError(f"k must be >= 1, got {k}")
-    return _dart_throwing(r, domain, periodic, _rng(seed), rounds=max(8 * k, 64), misses=k)
+    return _dart_throwing(r, domain, periodic, as_rng(seed), rounds=max(8 * k, 64), misses=k)
 
 
 def poisson_disk_variable(radius_min, radius_max, density, *, domain=DEFAULT_DOMAIN,
@@ -240,10 +240,10 @@ def poisson_disk_variable(radius_min, radius_max, density, *, domain=DEFAULT_DOM
     -------
     numpy.ndarray of float64, shape (N, 2)
     """
-    domain = _check_domain(domain)
+    domain = check_domain(domain)
     side = min(domain[2] - domain[0], domain[3] - domain[1])
-    rmin = _check_positive("radius_min", radius_min, upper=side / 2)
-    rmax = _check_positive("radius_max", radius_max, upper=side / 2)
+    rmin = check_positive("radius_min", radius_min, upper=side / 2)
+    rmax = check_positive("radius_max", radius_max, upper=side / 2)
     if rmax < rmin:
         raise ValueError(f"radius_max must be >= radius_min = {rmin}, got {radius_max}")
     if side / rmin > 4000:
@@ -258,13 +258,13 @@ def poisson_disk_variable(radius_min, radius_max, density, *, domain=DEFAULT_DOM
             raise ValueError("density map values must be in [0, 1]")
 
         def dens(xy):
-            return _sample_map(arr, xy, domain)
+            return sample_map(arr, xy, domain)
 
     def radius_at(xy):
         d = np.clip(np.asarray(dens(xy), dtype=np.float64), 0.0, 1.0)
         return rmax + (rmin - rmax) * d
 
-    return _bridson(radius_at, rmin, rmax, domain, periodic, _rng(seed), int(k))
+    return _bridson(radius_at, rmin, rmax, domain, periodic, as_rng(seed), int(k))
 
 
 def random_orientations(n, *, seed=0) -> np.ndarray:
@@ -280,7 +280,7 @@ def random_orientations(n, *, seed=0) -> np.ndarray:
     -------
     numpy.ndarray of float64, shape (n, 3)
     """
-    rng = _rng(seed)
+    rng = as_rng(seed)
     z = rng.random(n) * 2 - 1
     phi = rng.random(n) * 2 * math.pi
     s = np.sqrt(1 - z * z)
@@ -311,7 +311,7 @@ def space_giraffe(centres, *, n_range=(10, 20), domain=DEFAULT_DOMAIN, periodic=
     labels : numpy.ndarray of int32, shape (N,)
         1 = spot, 0 = background.
     """
-    domain = _check_domain(domain)
+    domain = check_domain(domain)
     c = np.asarray(centres, dtype=np.float64)
     if c.ndim != 2 or c.shape[1] != 2 or c.shape[0] < 2:
         raise ValueError(f"centres must have shape (M, 2) with M >= 2, got {c.shape}")
@@ -320,7 +320,7 @@ def space_giraffe(centres, *, n_range=(10, 20), domain=DEFAULT_DOMAIN, periodic=
         raise ValueError(f"n_range must satisfy 3 <= lo <= hi, got {n_range!r}")
     from scipy.spatial import cKDTree     # here: `import cellgl` needs no SciPy (Blender's extension)
 
-    rng = _rng(seed)
+    rng = as_rng(seed)
     x0, y0, x1, y1 = domain
     if periodic:
         box = np.array([x1 - x0, y1 - y0])
@@ -373,7 +373,7 @@ def cluster_labels(graph, *, sizes=(3, 4), seed=0) -> np.ndarray:
     lo, hi = (int(v) for v in sizes)
     if not 1 <= lo <= hi:
         raise ValueError(f"sizes must satisfy 1 <= lo <= hi, got {sizes!r}")
-    rng = _rng(seed)
+    rng = as_rng(seed)
     n = len(graph.points)
     labels = np.full(n, -1, dtype=np.int32)
     off, nb = graph.offsets, graph.neighbours
@@ -418,15 +418,15 @@ def labels_from_image(positions, image, *, domain=DEFAULT_DOMAIN, seed=0) -> np.
     -------
     numpy.ndarray of int32, shape (N,)
     """
-    domain = _check_domain(domain)
+    domain = check_domain(domain)
     img = np.asarray(image, dtype=np.float64)
     if img.ndim != 2 or img.size == 0:
         raise ValueError(f"reference image must be grayscale with shape (H, W), got {img.shape}")
     if not np.isfinite(img).all() or img.min() < 0 or img.max() > 1:
         raise ValueError("reference image intensities must be in [0, 1]")
     pos = np.asarray(positions, dtype=np.float64)
-    inten = _sample_map(img, pos, domain)
-    return (_rng(seed).random(pos.shape[0]) < inten).astype(np.int32)
+    inten = sample_map(img, pos, domain)
+    return (as_rng(seed).random(pos.shape[0]) < inten).astype(np.int32)
 
 
 def labels_by_ramp(positions, *, domain=DEFAULT_DOMAIN, axis=0, seed=0) -> np.ndarray:
@@ -444,10 +444,10 @@ def labels_by_ramp(positions, *, domain=DEFAULT_DOMAIN, axis=0, seed=0) -> np.nd
     -------
     numpy.ndarray of int32, shape (N,)
     """
-    domain = _check_domain(domain)
+    domain = check_domain(domain)
     if axis not in (0, 1):
         raise ValueError(f"axis must be 0 or 1, got {axis!r}")
     pos = np.asarray(positions, dtype=np.float64)
     lo, hi = domain[axis], domain[axis + 2]
     prob = np.clip((pos[:, axis] - lo) / (hi - lo), 0, 1)
-    return (_rng(seed).random(pos.shape[0]) < prob).astype(np.int32)
+    return (as_rng(seed).random(pos.shape[0]) < prob).astype(np.int32)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cellgl.pups.points import PupsPoints, _check_positive
+from cellgl.pups.points import PupsPoints, check_positive
 
 # --------------------------------------------------------------------------------------------
 # graph and support
@@ -148,7 +148,7 @@ def pups_graph(points: PupsPoints, axis_factor=1.0) -> PupsGraph:
     """
     if not isinstance(points, PupsPoints):
         raise ValueError(f"points must be a PupsPoints, got {type(points).__name__}")
-    f = _check_positive("axis_factor", axis_factor, upper=16.0)
+    f = check_positive("axis_factor", axis_factor, upper=16.0)
     n = len(points)
     try:
         owner, nb, axes = _delaunay_edges(points)

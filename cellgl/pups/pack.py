@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cellgl.pups.graph import PupsGraph
-from cellgl.pups.points import _check_size
+from cellgl.pups.points import check_size
 
 # --------------------------------------------------------------------------------------------
 # packing: instances, pixel boxes and the candidate grid
@@ -99,7 +99,7 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None, grid=True) -> PupsP
     -------
     PupsPacked
     """
-    width, height = _check_size(width, height)
+    width, height = check_size(width, height)
     pts = graph.points
     x0, y0, x1, y1 = pts.domain
     px, py = (x1 - x0) / width, (y1 - y0) / height
@@ -183,8 +183,8 @@ def pups_pack(graph: PupsGraph, width, height, *, tile=None, grid=True) -> PupsP
     cell_sorted = cell[order]
     slot = np.arange(order.size) - cell_offsets[cell_sorted].astype(np.int64)
     si = inst[order]
-    stream = _stream(cell_offsets, cell_sorted, slot, rank[kpair], kslot, kaxis, inst.size,
-                     positions[si], orient[si], values[si], labels[si], axes_scaled)
+    stream = candidate_stream(cell_offsets, cell_sorted, slot, rank[kpair], kslot, kaxis, inst.size,
+                              positions[si], orient[si], values[si], labels[si], axes_scaled)
     return PupsPacked(
         point_index=point_index, positions=positions,
         orient=orient, values=values,
@@ -266,9 +266,9 @@ def _cull(inst, cell, gw, tile, width, height, positions, axis_begin, axis_count
             np.concatenate(ka) if ka else kp)
 
 
-def _stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axis, npairs_total, pos,
-            orient, values, labels, axes_scaled):
-    """Build the shaders' candidate stream (see :func:`_cell_stream`).
+def candidate_stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axis, npairs_total, pos,
+                     orient, values, labels, axes_scaled):
+    """Build the shaders' candidate stream (see :func:`cellgl.pups.gpu._cell_stream`).
 
     Pairs in list order (by cell, then instance). ``cell_of`` / ``slot``: grid cell and
     index within that cell's list of each pair;
@@ -305,3 +305,7 @@ def _stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axis, npairs
     cells[:ncell, 1] = ncand
     cells[:ncell, 2] = pairs
     return cells, rec
+
+
+# The old name cellgl/pups/gpu.py still imports (renamed after the runner/speed merges)
+_stream = candidate_stream

@@ -24,7 +24,11 @@ class PupsMode(IntEnum):
 # --------------------------------------------------------------------------------------------
 
 
-def _check_domain(domain):
+# The argument checks the generators, graphs, packing and synthesis share: each returns the value
+# normalised or raises ValueError naming it and the accepted range.
+
+def check_domain(domain):
+    """``(x0, y0, x1, y1)`` as floats: finite, non-empty."""
     try:
         x0, y0, x1, y1 = (float(v) for v in domain)
     except (TypeError, ValueError):
@@ -34,7 +38,8 @@ def _check_domain(domain):
     return (x0, y0, x1, y1)
 
 
-def _check_size(width, height):
+def check_size(width, height):
+    """``(width, height)``: integers in [1, 16384]."""
     for name, v in (("width", width), ("height", height)):
         if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
             raise ValueError(f"{name} must be an integer in [1, 16384], got {v!r}")
@@ -43,7 +48,8 @@ def _check_size(width, height):
     return int(width), int(height)
 
 
-def _check_positive(name, v, upper=None):
+def check_positive(name, v, upper=None):
+    """``v`` as a float > 0 (and <= ``upper``)."""
     try:
         f = float(v)
     except (TypeError, ValueError):
@@ -54,7 +60,8 @@ def _check_positive(name, v, upper=None):
     return f
 
 
-def _check_epsilon(epsilon):
+def check_epsilon(epsilon):
+    """``epsilon`` as a float in [0, 1)."""
     try:
         e = float(epsilon)
     except (TypeError, ValueError):
@@ -64,7 +71,8 @@ def _check_epsilon(epsilon):
     return e
 
 
-def _rng(seed):
+def as_rng(seed):
+    """A NumPy generator: ``seed`` itself if it is one, else one seeded with it."""
     if isinstance(seed, np.random.Generator):
         return seed
     return np.random.default_rng(seed)
@@ -148,7 +156,7 @@ def pups_points(positions, values=None, labels=None, orientations=None, *,
         On a wrong shape, non-finite values, negative labels, an orientation longer than 1,
         or (non-periodic) positions outside the domain.
     """
-    domain = _check_domain(domain)
+    domain = check_domain(domain)
     pos = np.array(positions, dtype=np.float64)
     if pos.ndim != 2 or pos.shape[1] != 2:
         raise ValueError(f"positions must have shape (N, 2), got {pos.shape}")

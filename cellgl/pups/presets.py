@@ -38,9 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cellgl.pups.generators import _sample_map, cluster_labels, labels_by_ramp, labels_from_image, poisson_disk, poisson_disk_variable, random_orientations, space_giraffe
+from cellgl.pups.generators import sample_map, cluster_labels, labels_by_ramp, labels_from_image, poisson_disk, poisson_disk_variable, random_orientations, space_giraffe
 from cellgl.pups.graph import pups_graph
-from cellgl.pups.points import DEFAULT_DOMAIN, _check_size, pups_points
+from cellgl.pups.points import DEFAULT_DOMAIN, check_size, pups_points
 from cellgl.pups.synthesis import pups_evaluate
 
 __all__ = ["PUPS_PRESETS", "KIND_DEFAULTS", "build_pups", "build_scene", "evaluate_scene",
@@ -316,7 +316,7 @@ def _cells_graph(p, radius, seed, k):
 
 
 def _sample_image(img, pos):
-    return _sample_map(img, pos, DEFAULT_DOMAIN)
+    return sample_map(img, pos, DEFAULT_DOMAIN)
 
 
 def build_scene(preset_or_params, *, seed=0, backend="gpu") -> PupsScene:
@@ -472,17 +472,17 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
     numpy.ndarray of float32, shape (height, width) or (height, width, 3)
     """
     p = _params(preset_or_params)
-    w, h = _check_size(width, height)
+    w, h = check_size(width, height)
     scene = build_scene(p, seed=seed, backend=backend)
 
     def layer(lay):
         return pups_evaluate(lay.graph, w, h, mode=lay.mode, epsilon=lay.epsilon,
                                backend=backend)
 
-    return evaluate_scene(scene, layer, lambda pos, g, prm: _draw_graph(prm, w, h, pos=pos, graph=g))
+    return evaluate_scene(scene, layer, lambda pos, g, prm: draw_graph(prm, w, h, pos=pos, graph=g))
 
 
-def _draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
+def draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
     """Rasterise the Delaunay edges (anti-aliased lines) and the points, white on black.
 
     ``scale``: pixels per domain unit ``(sx, sy)``, default ``(w / 2, h / 2)`` (the domain

@@ -30,11 +30,11 @@ from types import MappingProxyType
 import numpy as np
 
 from cellgl.texture.params import Param
-from cellgl.texture.schema import (VERSION, RecipeError, _coerce, _err, _suggest, check_name_doc, parse_value,
+from cellgl.texture.schema import (VERSION, RecipeError, coerce, value_error, suggest, check_name_doc, parse_value,
                                    read_json)
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
-           "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for",
+           "is_pups", "pups_preset_names", "load_pups_preset", "render", "params_for", "MAX_SIDE",
            "markdown_table"]
 
 #: what a PUPs recipe renders (``cellgl.render(channels=...)``)
@@ -169,8 +169,8 @@ class PupsRecipe:
     def __init__(self, values: dict | None = None, name: str = "custom", doc: str = "",
                  outputs=("color",), image: str | None = None):
         values = dict(values or {})
-        pattern = _coerce(PUPS_PARAMS_BY_NAME["pattern"], values.get("pattern", "noise"),
-                          "pups.pattern")
+        pattern = coerce(PUPS_PARAMS_BY_NAME["pattern"], values.get("pattern", "noise"),
+                         "pups.pattern")
         from cellgl.pups.presets import KIND_DEFAULTS
 
         vals = _from_preset_dict({"kind": _kind(pattern)})
@@ -181,20 +181,20 @@ class PupsRecipe:
                 image = v
                 continue
             if k not in PUPS_PARAMS_BY_NAME:
-                raise RecipeError(f"pups.{k}: unknown parameter{_suggest(k, PUPS_PARAMS_BY_NAME)}; "
+                raise RecipeError(f"pups.{k}: unknown parameter{suggest(k, PUPS_PARAMS_BY_NAME)}; "
                                   f"accepted for pattern {pattern!r}: {', '.join(used)}")
             if k not in used:
                 raise RecipeError(f"pups.{k}: not a parameter of pattern {pattern!r}; accepted: "
                                   f"{', '.join(used)}")
-            vals[k] = _coerce(PUPS_PARAMS_BY_NAME[k], v, f"pups.{k}")
+            vals[k] = coerce(PUPS_PARAMS_BY_NAME[k], v, f"pups.{k}")
         vals["pattern"] = pattern
         for k in used:
             if k != "image":
-                vals[k] = _coerce(PUPS_PARAMS_BY_NAME[k], vals[k], f"pups.{k}")
+                vals[k] = coerce(PUPS_PARAMS_BY_NAME[k], vals[k], f"pups.{k}")
         if "image" in used:
             image = KIND_DEFAULTS[_kind(pattern)]["image"] if image is None else image
             if not isinstance(image, str) or not image:
-                raise _err("pups.image", image, IMAGE_DOC, "expected a string, got")
+                raise value_error("pups.image", image, IMAGE_DOC, "expected a string, got")
         else:
             if image is not None:
                 raise RecipeError(f"pups.image: not a parameter of pattern {pattern!r}; accepted: "
@@ -205,12 +205,12 @@ class PupsRecipe:
         if isinstance(outputs, str):
             outputs = [outputs]
         if not isinstance(outputs, (list, tuple)) or not outputs:
-            raise _err("outputs", outputs, "a list of: " + ", ".join(PUPS_CHANNELS),
-                       "expected a list of channels, got")
+            raise value_error("outputs", outputs, "a list of: " + ", ".join(PUPS_CHANNELS),
+                              "expected a list of channels, got")
         for c in outputs:
             if c not in PUPS_CHANNELS:
-                raise _err("outputs", c, "a list of: " + ", ".join(PUPS_CHANNELS),
-                           "unknown channel (PUPs recipes render color and height)")
+                raise value_error("outputs", c, "a list of: " + ", ".join(PUPS_CHANNELS),
+                                  "unknown channel (PUPs recipes render color and height)")
         self.outputs = tuple(outputs)
         self._check()
 
@@ -251,7 +251,7 @@ class PupsRecipe:
             return self.image
         if name not in self._values:
             raise RecipeError(f"pups.{name}: not a parameter of pattern {self._values['pattern']!r}"
-                              f"{_suggest(name, self._values)}; accepted: "
+                              f"{suggest(name, self._values)}; accepted: "
                               f"{', '.join(params_for(self._values['pattern']))}")
         return self._values[name]
 
@@ -272,7 +272,7 @@ class PupsRecipe:
         if self.image is not None:
             vals["image"] = self.image
         if "pattern" in values:
-            pattern = _coerce(PUPS_PARAMS_BY_NAME["pattern"], values["pattern"], "pups.pattern")
+            pattern = coerce(PUPS_PARAMS_BY_NAME["pattern"], values["pattern"], "pups.pattern")
             used = params_for(pattern)
             vals = {k: v for k, v in vals.items() if k in used}
         vals.update(values)
@@ -280,7 +280,7 @@ class PupsRecipe:
 
     def set_from_strings(self, items) -> "PupsRecipe":
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe."""
-        from cellgl.texture.recipe import _parse
+        from cellgl.texture.recipe import parse_set_value
 
         changes = {}
         for item in items:
@@ -291,12 +291,12 @@ class PupsRecipe:
                 changes[name] = text
                 continue
             if name == "outputs":
-                changes[name] = _parse(name, text)
+                changes[name] = parse_set_value(name, text)
                 continue
             p = PUPS_PARAMS_BY_NAME.get(name)
             if p is None:
                 raise RecipeError(f"--set {name}={text}: unknown PUPs parameter"
-                                  f"{_suggest(name, PUPS_PARAMS_BY_NAME)}; accepted for pattern "
+                                  f"{suggest(name, PUPS_PARAMS_BY_NAME)}; accepted for pattern "
                                   f"{self._values['pattern']!r}: "
                                   f"{', '.join(params_for(self._values['pattern']))}")
             changes[name] = parse_value(p, name, text)
@@ -329,19 +329,19 @@ class PupsRecipe:
         keys = ("cellgl_recipe", "kind", "name", "doc", "pups", "outputs")
         for k in d:
             if k not in keys:
-                raise RecipeError(f"{where}: unknown key {k!r}{_suggest(str(k), keys)}; "
+                raise RecipeError(f"{where}: unknown key {k!r}{suggest(str(k), keys)}; "
                                   f"accepted in a PUPs recipe: {', '.join(keys)}")
         if d.get("kind") != "pups":
-            raise _err("kind", d.get("kind"), "'pups'", "not a PUPs recipe:")
+            raise value_error("kind", d.get("kind"), "'pups'", "not a PUPs recipe:")
         version = d.get("cellgl_recipe", VERSION)
         if version != VERSION:
-            raise _err("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+            raise value_error("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
-                raise _err(k, d[k], "a string", "expected a string, got")
+                raise value_error(k, d[k], "a string", "expected a string, got")
         g = d.get("pups", {})
         if not isinstance(g, dict):
-            raise _err("pups", g, "a JSON object", "expected an object, got")
+            raise value_error("pups", g, "a JSON object", "expected an object, got")
         if not g:
             held = ", ".join(repr(k) for k in d)
             raise RecipeError(f"{where}: no PUPs parameter set (it holds only {held}); accepted: a "
@@ -511,6 +511,10 @@ def period_px(width: int, height: int) -> int:
     return min(int(width), int(height))
 
 
+#: the largest image side :func:`render` takes
+MAX_SIDE = 1 << 16
+
+
 def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), x0: int = 0,
            y0: int = 0, tile_w: int | None = None, tile_h: int | None = None, depth=None,
            backend: str = "gpu") -> dict:
@@ -536,7 +540,7 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     dict channel -> ndarray (row 0 at the top)
     """
     from cellgl.pups.synthesis import pups_evaluate
-    from cellgl.pups.presets import _draw_graph, evaluate_scene
+    from cellgl.pups.presets import draw_graph, evaluate_scene
 
     from cellgl.texture.schema import check_channels
 
@@ -546,8 +550,8 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     if backend not in ("gpu", "numpy"):
         raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
     for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1 or v > 1 << 16:
-            raise ValueError(f"{name} must be an integer in [1, 65536], got {v!r}")
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1 or v > MAX_SIDE:
+            raise ValueError(f"{name} must be an integer in [1, {MAX_SIDE}], got {v!r}")
     tw = width - x0 if tile_w is None else tile_w
     th = height - y0 if tile_h is None else tile_h
     if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):
@@ -568,7 +572,7 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
         return pups_evaluate(g, tw, th, mode=lay.mode, epsilon=lay.epsilon, backend=backend)
 
     def lines(pos, graph, prm):
-        return _draw_graph(prm, width, height, pos=pos, graph=graph, scale=(S / 2.0, S / 2.0),
+        return draw_graph(prm, width, height, pos=pos, graph=graph, scale=(S / 2.0, S / 2.0),
                            region=(x0, y0, tw, th))
 
     img = evaluate_scene(scene, layer, lines)

@@ -38,7 +38,7 @@ from cellgl.gl.threads import gl_call
 from cellgl.pups import gpu
 from cellgl.pups.graph import PupsGraph
 from cellgl.pups.pack import pups_pack
-from cellgl.pups.points import PupsMode, _check_epsilon
+from cellgl.pups.points import PupsMode, check_epsilon
 from cellgl.pups.reference import evaluate_reference
 
 __all__ = ["pups_evaluate"]
@@ -95,7 +95,7 @@ def pups_evaluate(graph: PupsGraph, width, height, *, mode="interpolate", epsilo
     if not isinstance(graph, PupsGraph):
         raise ValueError(f"graph must be a PupsGraph, got {type(graph).__name__}")
     mode = _parse_mode(mode)
-    epsilon = _check_epsilon(epsilon)
+    epsilon = check_epsilon(epsilon)
     if backend not in ("gpu", "numpy"):
         raise ValueError(f"backend must be 'gpu' or 'numpy', got {backend!r}")
     if return_labels and mode != PupsMode.LABEL:

@@ -35,13 +35,13 @@ from types import MappingProxyType
 
 from cellgl.texture import domain
 from cellgl.texture.schema import check_name_doc
-from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
+from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, coerce, value_error, suggest,  # noqa: F401
                                    check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
                      PRODUCTS, unqualified)
 
 __all__ = ["Recipe", "RecipeError", "load_recipe", "list_presets", "preset_dir", "CHANNELS", "check_channels",
-           "needed_n"]
+           "needed_n", "parse_set_value"]
 
 _TOP_KEYS = ("cellgl_recipe", "name", "doc", "outputs", "variants") + GROUPS
 _EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "color": ("ramp", "cell_image")}
@@ -50,16 +50,16 @@ _EXTRA = {"basis": ("density_image",), "combination": ("linear", "products"), "c
 def _ramp(value, path: str) -> tuple:
     accepted = f"a list of 1..{MAX_RAMP_KEYS} keys [t, r, g, b], t ascending in [0, 1], r, g, b in [0, 1]"
     if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= MAX_RAMP_KEYS:
-        raise _err(path, value, accepted, "expected a colour ramp, got")
+        raise value_error(path, value, accepted, "expected a colour ramp, got")
     keys = []
     for k, key in enumerate(value):
         ok = isinstance(key, (list, tuple)) and len(key) == 4 and all(
             isinstance(c, numbers.Real) and not isinstance(c, bool) and math.isfinite(c) and 0.0 <= c <= 1.0
             for c in key)
         if not ok:
-            raise _err(f"{path}[{k}]", key, accepted, "bad ramp key")
+            raise value_error(f"{path}[{k}]", key, accepted, "bad ramp key")
         if keys and key[0] < keys[-1][0]:
-            raise _err(f"{path}[{k}]", key, accepted, "ramp positions must not decrease; key")
+            raise value_error(f"{path}[{k}]", key, accepted, "ramp positions must not decrease; key")
         keys.append(tuple(float(c) for c in key))
     return tuple(keys)
 
@@ -69,10 +69,10 @@ def _outputs(value, path: str) -> tuple:
     if isinstance(value, str):
         value = [value]
     if not isinstance(value, (list, tuple)) or not value:
-        raise _err(path, value, accepted, "expected a list of channels, got")
+        raise value_error(path, value, accepted, "expected a list of channels, got")
     for v in value:
         if v not in CHANNELS:
-            raise _err(path, v, accepted, "unknown channel")
+            raise value_error(path, v, accepted, "unknown channel")
     return tuple(value)
 
 
@@ -125,8 +125,8 @@ class Recipe:
         vals = _defaults()
         for k, v in (values or {}).items():
             if k not in PARAMS_BY_NAME:
-                raise RecipeError(f"{k}: unknown parameter{_suggest(k, PARAMS_BY_NAME)}")
-            vals[k] = _coerce(PARAMS_BY_NAME[k], v, f"{PARAMS_BY_NAME[k].group}.{k}")
+                raise RecipeError(f"{k}: unknown parameter{suggest(k, PARAMS_BY_NAME)}")
+            vals[k] = coerce(PARAMS_BY_NAME[k], v, f"{PARAMS_BY_NAME[k].group}.{k}")
         self.name, self.doc = check_name_doc(str(name), str(doc))
         self._values = vals
         self.ramp = _ramp(ramp, "color.ramp")
@@ -158,7 +158,7 @@ class Recipe:
         if name == "products":
             return [[self._values[f"c{i}{j}"] for j in range(1, 5)] for i in range(1, 5)]
         if name not in self._values:
-            raise RecipeError(f"{name}: unknown parameter{_suggest(name, PARAMS_BY_NAME)}")
+            raise RecipeError(f"{name}: unknown parameter{suggest(name, PARAMS_BY_NAME)}")
         return self._values[name]
 
     def __getitem__(self, name):
@@ -248,7 +248,7 @@ class Recipe:
                 name = unqualified(name, item)
             except ValueError as exc:
                 raise RecipeError(str(exc)) from None
-            changes[name] = _parse(name, text)
+            changes[name] = parse_set_value(name, text)
         try:
             return self.replace(**changes)
         except RecipeError as exc:
@@ -287,16 +287,16 @@ class Recipe:
             raise RecipeError(f"{where}: expected a JSON object, got {type(d).__name__}")
         for k in d:
             if k not in _TOP_KEYS:
-                raise RecipeError(f"{where}: unknown key {k!r}{_suggest(str(k), _TOP_KEYS)}; "
+                raise RecipeError(f"{where}: unknown key {k!r}{suggest(str(k), _TOP_KEYS)}; "
                                   f"accepted: {', '.join(_TOP_KEYS)}")
         version = d.get("cellgl_recipe", VERSION)
         if version != VERSION:
-            raise _err("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+            raise value_error("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
         folder = base
         values, ramp, image, cimage = _read_groups(d, folder)
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
-                raise _err(k, d[k], "a string", "expected a string, got")
+                raise value_error(k, d[k], "a string", "expected a string, got")
         outputs = _outputs(d.get("outputs", ["color"]), "outputs")
         variants = d.get("variants", [])
         if not values and ramp is None and image is None and cimage is None and not variants:
@@ -304,11 +304,11 @@ class Recipe:
         base = cls(values, ramp if ramp is not None else DEFAULT_RAMP, d.get("name", "custom"),
                    d.get("doc", ""), outputs, density_image=image, cell_image=cimage)
         if not isinstance(variants, list):
-            raise _err("variants", variants, "a list of partial recipes", "expected a list, got")
+            raise value_error("variants", variants, "a list of partial recipes", "expected a list, got")
         out = []
         for k, v in enumerate(variants):
             if not isinstance(v, dict):
-                raise _err(f"variants[{k}]", v, "a partial recipe object", "expected an object, got")
+                raise value_error(f"variants[{k}]", v, "a partial recipe object", "expected an object, got")
             bad = [key for key in v if key not in ("name", "doc") + GROUPS]
             if bad:
                 raise RecipeError(f"variants[{k}]: unknown key {bad[0]!r}; accepted: name, doc, "
@@ -389,22 +389,22 @@ def _coefficients(key: str, value, path: str) -> dict:
     out = {}
     if key == "linear":
         if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= N_LINEAR:
-            raise _err(path, value, f"a list of 1..{N_LINEAR} numbers (weights of F1..F{N_LINEAR})",
-                       "expected a list, got")
+            raise value_error(path, value, f"a list of 1..{N_LINEAR} numbers (weights of F1..F{N_LINEAR})",
+                              "expected a list, got")
         for i, c in enumerate(value):
-            out[LINEAR[i]] = _coerce(PARAMS_BY_NAME[LINEAR[i]], c, f"{path}[{i}]")
+            out[LINEAR[i]] = coerce(PARAMS_BY_NAME[LINEAR[i]], c, f"{path}[{i}]")
         for name in LINEAR[len(value):]:
             out[name] = 0.0
         return out
     accepted = "a 4 x 4 list of numbers (weights of F_i F_j)"
     if not isinstance(value, (list, tuple)) or len(value) != 4:
-        raise _err(path, value, accepted, "expected 4 rows, got")
+        raise value_error(path, value, accepted, "expected 4 rows, got")
     for i, row in enumerate(value):
         if not isinstance(row, (list, tuple)) or len(row) != 4:
-            raise _err(f"{path}[{i}]", row, accepted, "expected 4 numbers, got")
+            raise value_error(f"{path}[{i}]", row, accepted, "expected 4 numbers, got")
         for j, c in enumerate(row):
             name = f"c{i + 1}{j + 1}"
-            out[name] = _coerce(PARAMS_BY_NAME[name], c, f"{path}[{i}][{j}]")
+            out[name] = coerce(PARAMS_BY_NAME[name], c, f"{path}[{i}][{j}]")
     return out
 
 
@@ -425,7 +425,7 @@ def _read_groups(d: dict, base=None):
             continue
         g = d[group]
         if not isinstance(g, dict):
-            raise _err(group, g, "a JSON object", "expected an object, got")
+            raise value_error(group, g, "a JSON object", "expected an object, got")
         names = [p.name for p in PARAMS if p.group == group] + list(_EXTRA.get(group, ()))
         for k, v in g.items():
             path = f"{group}.{k}"
@@ -445,15 +445,15 @@ def _read_groups(d: dict, base=None):
                 continue
             p = PARAMS_BY_NAME.get(k)
             if p is None or p.group != group:
-                where = f" (it belongs in '{p.group}')" if p is not None else _suggest(str(k), names)
+                where = f" (it belongs in '{p.group}')" if p is not None else suggest(str(k), names)
                 raise RecipeError(f"{path}: unknown key{where}; accepted in {group}: "
                                   + ", ".join(n for n in names if n not in PRODUCTS[1:] and n not in LINEAR[1:])
                                   .replace("c1,", "c1..c8,").replace("c11,", "c11..c44,"))
-            values[k] = _coerce(p, v, path)
+            values[k] = coerce(p, v, path)
     return values, ramp, image, cimage
 
 
-def _parse(name: str, text: str):
+def parse_set_value(name: str, text: str):
     """Parse a ``--set`` value for parameter ``name``."""
     if name in ("density_image", "cell_image"):
         return text
@@ -466,7 +466,7 @@ def _parse(name: str, text: str):
             raise RecipeError(f"--set {name}={text}: expected a JSON list") from None
     p = PARAMS_BY_NAME.get(name)
     if p is None:
-        raise RecipeError(f"--set {name}={text}: unknown parameter{_suggest(name, PARAMS_BY_NAME)}; "
+        raise RecipeError(f"--set {name}={text}: unknown parameter{suggest(name, PARAMS_BY_NAME)}; "
                           "see docs/textures.md or `cellgl presets --params`")
     return parse_value(p, name, text)
 
@@ -577,7 +577,7 @@ def load_recipe(preset_or_path, known=None):
     if not _is_file(file):
         names = known if known is not None else [n for n, _ in list_presets()]
         shown = repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
-        raise RecipeError(f"unknown preset {shown}{_suggest(name, names)}; accepted: a recipe .json "
+        raise RecipeError(f"unknown preset {shown}{suggest(name, names)}; accepted: a recipe .json "
                           "file or one of: " + ", ".join(names))
     recipe = Recipe.load(file)
     if not variant:

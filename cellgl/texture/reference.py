@@ -20,7 +20,7 @@ from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.texture.antialias import feature_frequency, smoothscale
 from cellgl.texture.params import LINEAR, PARAMS
-from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, _add, _mul, hash_u32, u16
+from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, add_u32, mul_u32, hash_u32, u16
 
 M32 = 0xFFFFFFFF
 
@@ -30,10 +30,10 @@ M32 = 0xFFFFFFFF
 def noise_gradient(c: np.ndarray, seed: int) -> np.ndarray:
     """``_cell_noise_gradient``: corner gradients (N, 4) in [-1, 1] for corners c (N, 4) int64."""
     c = c.astype(np.int64) & M32
-    h = _add(_add(_mul(seed, 0x165667B1), 0x9E3779B9), _mul(c[:, 0], 0x8DA6B343))
-    h = _add(h, _mul(c[:, 1], 0xD8163841))
-    h = _add(h, _mul(c[:, 2], 0xCB1AB31F))
-    h = _add(h, _mul(c[:, 3], 0x27D4EB2F))
+    h = add_u32(add_u32(mul_u32(seed, 0x165667B1), 0x9E3779B9), mul_u32(c[:, 0], 0x8DA6B343))
+    h = add_u32(h, mul_u32(c[:, 1], 0xD8163841))
+    h = add_u32(h, mul_u32(c[:, 2], 0xCB1AB31F))
+    h = add_u32(h, mul_u32(c[:, 3], 0x27D4EB2F))
     h = hash_u32(h)
     h2 = hash_u32(h ^ np.uint64(0x68E31DA4))
     g = np.stack([u16(h >> np.uint64(16)), u16(h & np.uint64(0xFFFF)),
@@ -106,7 +106,7 @@ def noise_fractal(x: np.ndarray, period, seed: int, octaves: int, dim: int):
 MAX_OCTAVES = 8
 
 
-def _tex(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
+def texture_values(recipe, pan=(0.0, 0.0), mean: bool = True) -> dict:
     """The run-time values the GLSL reads (enums as names), plus derived ones (the split
     origins of :func:`lattice_origins`, the density map per octave of :func:`density_encodings`,
     the band limit's ``feature_frequency`` (:mod:`cellgl.texture.antialias`) and :func:`octave_mean`;
@@ -392,14 +392,14 @@ def texture_footprint(duvz, t: dict) -> np.ndarray:
 def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, r=0.0) -> dict:
     """``cell_texture_filtered``: the texture at basis positions O + s, s (N, 4) small
     (:func:`texture_local`) and the origin O = (offset_x, offset_y, offset_z, time) split in ``t``
-    (default ``_tex(recipe)``), band-limited to the footprint ``r`` (scalar or (N,), basis units).
+    (default ``texture_values(recipe)``), band-limited to the footprint ``r`` (scalar or (N,), basis units).
 
     Returns a dict with height (N,), grad (N, 4), normal (N, 3), color (N, 4), id (N,),
     F (N, 4), value (N,), as the GLSL ``CellTexel``.
     """
     from cellgl.texture.recipe import needed_n
 
-    t = t if t is not None else _tex(recipe)
+    t = t if t is not None else texture_values(recipe)
     n = n or needed_n(recipe)
     N = len(s)
     j = None
@@ -510,7 +510,7 @@ def texture(s: np.ndarray, recipe, n: int | None = None, t: dict | None = None, 
 def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0), duvz=(0.0, 0.0, 0.0)) -> dict:
     """``cell_texture_at_filtered``: the texture at texture-space points p (N, 3) (plus ``pan``
     in uv), band-limited to pixels spanning ``duvz`` ((3,) or (N, 3); 0: point samples)."""
-    t = _tex(recipe, pan)
+    t = texture_values(recipe, pan)
     return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t, texture_footprint(duvz, t))
 
 
@@ -524,7 +524,7 @@ def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
         if c in ("F1", "F2", "F3", "F4"):
             n = max(n, int(c[1]))
     o = texture_at(pts, recipe, n, duvz=duvz)
-    t = _tex(recipe)
+    t = texture_values(recipe)
     res = {}
     for c in outputs:
         if c == "color":
@@ -600,7 +600,7 @@ def _measure_mean(recipe) -> float:
                                offset_x=0.0, offset_y=0.0, offset_z=0.0, time=0.0)
         side = 1000.0 if dim == 2 else 100.0
         pts[:, : min(dim, 3)] = rng.uniform(0.0, side, size=(_MEAN_SAMPLES, min(dim, 3)))
-    t = _tex(probe, mean=False)
+    t = texture_values(probe, mean=False)
     s = texture_local(pts, t)
     val = texture_combination(s, t, 0, needed_n(probe))[0]
     b = np.clip((val - v["range_lo"]) / (v["range_hi"] - v["range_lo"]), 0.0, 1.0)

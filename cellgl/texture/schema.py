@@ -13,7 +13,7 @@ import numbers
 from cellgl.texture.params import Param
 
 __all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "check_name_doc", "parse_value", "read_json",
-           "MAX_NAME", "MAX_DOC", "MAX_RECIPE_BYTES"]
+           "MAX_NAME", "MAX_DOC", "MAX_RECIPE_BYTES", "coerce", "value_error", "suggest"]
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
@@ -100,7 +100,7 @@ def check_name_doc(name, doc) -> tuple[str, str]:
     :data:`MAX_NAME` characters, the doc at most :data:`MAX_DOC`; RecipeError otherwise."""
     for key, value in (("name", name), ("doc", doc)):
         if not isinstance(value, str):
-            raise _err(key, value, "a string", "expected a string, got")
+            raise value_error(key, value, "a string", "expected a string, got")
     if len(name) > MAX_NAME:
         raise RecipeError(f"name: {len(name)} characters ({_shown(name[:24])}...); accepted: at most "
                           f"{MAX_NAME} characters")
@@ -129,50 +129,52 @@ def _shown(value) -> str:
     return text if len(text) <= 100 else f"{text[:80]}... ({len(text)} characters)"
 
 
-def _err(path: str, value, accepted: str, problem: str = "") -> RecipeError:
+def value_error(path: str, value, accepted: str, problem: str = "") -> RecipeError:
+    """The error for a bad value at ``path``: the problem, the value (shortened) and what is accepted."""
     problem = problem or "invalid value"
     return RecipeError(f"{path}: {problem} {_shown(value)}; accepted: {accepted}")
 
 
-def _suggest(name: str, names) -> str:
+def suggest(name: str, names) -> str:
+    """``" (did you mean a, b?)"`` for the names close to ``name``, or ``""``."""
     close = difflib.get_close_matches(name, list(names), n=3)
     return f" (did you mean {', '.join(close)}?)" if close else ""
 
 
-def _coerce(p: Param, value, path: str):
+def coerce(p: Param, value, path: str):
     """Validate one parameter value (already parsed from JSON) and return it normalised."""
     if p.type == "float":
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
-            raise _err(path, value, p.range_text(), "expected a number, got")
+            raise value_error(path, value, p.range_text(), "expected a number, got")
         try:
             v = float(value)
         except OverflowError:  # an integer beyond float range
             v = math.inf
         if not math.isfinite(v) or v < p.lo or v > p.hi:
-            raise _err(path, value, p.range_text(), "out of range:")
+            raise value_error(path, value, p.range_text(), "out of range:")
         return v
     if p.type == "int":
         if isinstance(value, float) and value.is_integer():
             value = int(value)
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-            raise _err(path, value, "an integer in " + p.range_text(), "expected an integer, got")
+            raise value_error(path, value, "an integer in " + p.range_text(), "expected an integer, got")
         if value < p.lo or value > p.hi:
-            raise _err(path, value, "an integer in " + p.range_text(), "out of range:")
+            raise value_error(path, value, "an integer in " + p.range_text(), "out of range:")
         return int(value)
     if p.type == "bool":
         if not isinstance(value, bool):
-            raise _err(path, value, p.range_text(), "expected true or false, got")
+            raise value_error(path, value, p.range_text(), "expected true or false, got")
         return value
     if p.type == "enum":
         key = value.strip().lower().replace("-", "_") if isinstance(value, str) else None
         if key not in p.choices:
-            raise _err(path, value, p.range_text(), "unknown choice")
+            raise value_error(path, value, p.range_text(), "unknown choice")
         return key
     if p.type == "color":
         ok = isinstance(value, (list, tuple)) and len(value) == 3 and all(
             isinstance(c, numbers.Real) and not isinstance(c, bool) and 0.0 <= c <= 1.0 for c in value)
         if not ok:
-            raise _err(path, value, p.range_text(), "expected a colour, got")
+            raise value_error(path, value, p.range_text(), "expected a colour, got")
         return tuple(float(c) for c in value)
     raise AssertionError(p.type)
 

@@ -44,7 +44,8 @@ from cellgl.basis.features import feature_max_ring
 from cellgl.basis.reference import MAX_POINTS, W96_DENSITY_ADJUSTMENT, max_ring_default, poisson_thresholds
 
 __all__ = ["defines", "uniform_values", "lattice_origins", "set_uniforms", "set_view", "glsl_struct_block",
-           "glsl_uniform_block", "glsl_params_from_uniforms", "glsl_constant_block", "LOCAL_SIZE"]
+           "glsl_uniform_block", "glsl_params_from_uniforms", "glsl_constant_block", "LOCAL_SIZE",
+           "uniform_decls"]
 
 LOCAL_SIZE = 64
 
@@ -125,7 +126,7 @@ def glsl_struct_block() -> str:
     return "\n".join(lines) + "\n"
 
 
-def _uniform_decls(prefix: str, density=False) -> list[tuple[str, str, str]]:
+def uniform_decls(prefix: str, density=False) -> list[tuple[str, str, str]]:
     """(glsl type, uniform name, array suffix) of every value the loader reads (``density``:
     only those of a conditional group of derived fields, :data:`_CONDITIONAL`: True for the
     density map's, or the group itself)."""
@@ -140,9 +141,9 @@ def _uniform_decls(prefix: str, density=False) -> list[tuple[str, str, str]]:
 def glsl_uniform_block(prefix: str = "u_") -> str:
     """``uniform`` declarations for every run-time parameter (and the derived arrays; those of
     the density map under ``#if CELL_DENSITY_MAP != CELL_DMAP_NONE``)."""
-    return ("".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix))
+    return ("".join(f"uniform {t} {n}{arr};\n" for t, n, arr in uniform_decls(prefix))
             + "".join(cond + "\n"
-                      + "".join(f"uniform {t} {n}{arr};\n" for t, n, arr in _uniform_decls(prefix, fields))
+                      + "".join(f"uniform {t} {n}{arr};\n" for t, n, arr in uniform_decls(prefix, fields))
                       + "#endif\n" for cond, fields in _CONDITIONAL))
 
 
@@ -220,9 +221,9 @@ def glsl_constant_block(recipe, prefix: str = "u_") -> str:
     recipe = load_recipe(recipe)
     vals = uniform_values(recipe)
     lines = []
-    decls = _uniform_decls("u_")
+    decls = uniform_decls("u_")
     for _, fields in _CONDITIONAL:
-        extra = _uniform_decls("u_", fields)
+        extra = uniform_decls("u_", fields)
         if all(n in vals for _, n, _ in extra):
             decls += extra
     for t, n, arr in decls:

@@ -23,8 +23,9 @@ Anything outside the subset raises :class:`TranslateError` naming the construct.
 from __future__ import annotations
 
 from cellgl.export import syntax as S
-from cellgl.export.printer import Glsl, _trail
-from cellgl.export.translate.osl_lib import _CMP, _SWZ, _XYZW, OSL_RESERVED, _int_lit, _OslLib, _same, _vec
+from cellgl.export.printer import Glsl, trail_comment
+from cellgl.export.translate.osl_lib import (COMPARISONS, OSL_RESERVED, SWIZZLE, XYZW, OslLib, int_literal,
+                                             same_type, vec_type)
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.translate.wgsl import assigned
 from cellgl.export.tree import walk
@@ -32,7 +33,7 @@ from cellgl.export.tree import walk
 __all__ = ["to_osl", "OSL_RESERVED"]
 
 
-class _Osl(_OslLib, Glsl):
+class _Osl(OslLib, Glsl):
     """The translator: :class:`printer.Glsl`'s statements, with expressions, declarations and
     functions (and the scopes that type them) of its own."""
 
@@ -63,7 +64,7 @@ class _Osl(_OslLib, Glsl):
         if isinstance(x, S.Num):
             t, hexa = x.text, x.text.lower().startswith("0x")
             if hexa or t[-1] in "uU":
-                return _int_lit(int(t.rstrip("uU"), 16 if hexa else 10)), ("uint" if t[-1] in "uU" else "int")
+                return int_literal(int(t.rstrip("uU"), 16 if hexa else 10)), ("uint" if t[-1] in "uU" else "int")
             if "." in t or "e" in t.lower() or t[-1] in "fF":
                 t = t.rstrip("fF")                 # .5 -> 0.5, 1. -> 1.0
                 return ("0" if t.startswith(".") else "") + t + ("0" if t.endswith(".") else ""), "float"
@@ -77,11 +78,11 @@ class _Osl(_OslLib, Glsl):
             return f"({s})", t
         if isinstance(x, S.Member):
             s, t = self.ex(x.base)
-            struct, v = isinstance(t, str) and t in self.structs, _vec(t)
+            struct, v = isinstance(t, str) and t in self.structs, vec_type(t)
             if not struct and not v:
                 raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
             if struct or len(x.name) == 1:
-                m, mt = (self.name(x.name), self.structs[t][x.name]) if struct else (_XYZW[_SWZ[x.name]], v[0])
+                m, mt = (self.name(x.name), self.structs[t][x.name]) if struct else (XYZW[SWIZZLE[x.name]], v[0])
                 if not isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor)):
                     return f"{s}.{m}", mt
                 # OSL has no member access on a call's result: a getter
@@ -89,27 +90,27 @@ class _Osl(_OslLib, Glsl):
                     raise TranslateError(f"OSL translation: array member {x.name!r} of a call's result")
                 name = self.gen(f"cellgl_member_{self.osl_type(t)}_{m}", mt, [(t, "a")], f"return a.{m};")
                 return f"{name}({s})", mt
-            idx = [_SWZ[c] for c in x.name]
+            idx = [SWIZZLE[c] for c in x.name]
             rt = t[:-1] + str(len(idx))
-            name = self.gen(f"cellgl_swizzle_{t}_{''.join(_XYZW[i] for i in idx)}", rt, [(t, "a")],
-                            lambda: self.returns(rt, [f"a.{_XYZW[i]}" for i in idx]))
+            name = self.gen(f"cellgl_swizzle_{t}_{''.join(XYZW[i] for i in idx)}", rt, [(t, "a")],
+                            lambda: self.returns(rt, [f"a.{XYZW[i]}" for i in idx]))
             return f"{name}({s})", rt
         if isinstance(x, S.Index):
             s, t = self.ex(x.base)
             i, ti = self.ex(x.index)
             if isinstance(t, tuple):
                 return f"{s}[{i}]", t[0]
-            v = _vec(t)
+            v = vec_type(t)
             if not v:
                 raise TranslateError(f"OSL translation: indexing a {t}")
             return f"{self.vec_get(t)}({s}, {i})", v[0]
         if isinstance(x, S.Unary):
             s, t = self.ex(x.operand)
-            if _vec(t):
+            if vec_type(t):
                 if x.op != "-":
                     raise TranslateError(f"OSL translation: unary {x.op!r} on a {t}")
-                name, rt = self.vec_binary("-", _vec(t)[0], t)
-                return f"{name}({'0' if _vec(t)[0] != 'float' else '0.0'}, {s})", t
+                name, rt = self.vec_binary("-", vec_type(t)[0], t)
+                return f"{name}({'0' if vec_type(t)[0] != 'float' else '0.0'}, {s})", t
             return f"{x.op}{s}", t
         if isinstance(x, S.IncDec):
             s, t = self.ex(x.operand)
@@ -138,13 +139,13 @@ class _Osl(_OslLib, Glsl):
         b, tb = self.ex(rhs)
         if op in ("&&", "||"):
             return f"({a} {op} {b})", "bool"
-        if _vec(ta) or _vec(tb):
+        if vec_type(ta) or vec_type(tb):
             # GLSL == / != on whole vectors: all components equal
-            if op in ("==", "!=") and _vec(ta) and _vec(tb):
+            if op in ("==", "!=") and vec_type(ta) and vec_type(tb):
                 name, rt = self.vec_binary("==", ta, tb)
                 s = f"{self.any_all('all', rt)}({name}({a}, {b}))"
                 return (s if op == "==" else f"!{s}"), "bool"
-            if _vec(ta) and _vec(tb) and ta != tb:
+            if vec_type(ta) and vec_type(tb) and ta != tb:
                 raise TranslateError(f"OSL translation: {ta} {op} {tb}")
             name, rt = self.vec_binary(op, ta, tb)
             return f"{name}({a}, {b})", rt
@@ -153,26 +154,26 @@ class _Osl(_OslLib, Glsl):
             t = "uint"
         elif op not in ("<<", ">>") and ta != tb and "float" in (ta, tb):
             a, b, t = self.conv(a, ta, "float"), self.conv(b, tb, "float"), "float"
-        return self.scalar_op(op, a, b, t), ("bool" if op in _CMP or op == "^^" else t)
+        return self.scalar_op(op, a, b, t), ("bool" if op in COMPARISONS or op == "^^" else t)
 
     def assign(self, op, lhs, rhs) -> str:
         if isinstance(lhs, S.Paren):
             lhs = lhs.inner
         if isinstance(lhs, (S.Member, S.Index)):
             base, bt = self.ex(lhs.base)
-            if isinstance(lhs, S.Member) and _vec(bt) and len(lhs.name) > 1:
+            if isinstance(lhs, S.Member) and vec_type(bt) and len(lhs.name) > 1:
                 raise TranslateError("OSL translation: assignment to a multi-component swizzle")
-            if isinstance(lhs, S.Index) and _vec(bt):        # a component of a vector
+            if isinstance(lhs, S.Index) and vec_type(bt):        # a component of a vector
                 idx, _ = self.ex(lhs.index)
                 val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
                 v, tv = self.ex(val)
-                return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, _vec(bt)[0])})"
+                return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, vec_type(bt)[0])})"
         a, ta = self.ex(lhs)
         if op == "=":
             return f"{a} = {self.conv_to(rhs, ta)}"
         base_op = op[:-1]
         _, tb = self.ex(rhs)
-        if _vec(ta) or _vec(tb) or (ta == "uint" and base_op in (">>", "/", "%", "<", ">")):
+        if vec_type(ta) or vec_type(tb) or (ta == "uint" and base_op in (">>", "/", "%", "<", ">")):
             return f"{a} = {self.binary(base_op, lhs, S.Paren(rhs))[0]}"
         return f"{a} {op} {self.ex(rhs)[0]}"
 
@@ -182,13 +183,13 @@ class _Osl(_OslLib, Glsl):
             if len(ev) != 1:
                 raise TranslateError(f"OSL translation: {t}() with {len(ev)} arguments")
             s, st = ev[0]
-            v = _vec(st)
+            v = vec_type(st)
             if v:       # float(vec) takes the first component
                 s, st = f"{s}.x", v[0]
             return self.conv(s, st, t), t
         if t in self.structs:
             return f"{t}({', '.join(s for s, _ in ev)})", t
-        v = _vec(t)
+        v = vec_type(t)
         if not v:
             raise TranslateError(f"OSL translation: constructor {t}()")
         types = [st for _, st in ev]
@@ -196,8 +197,8 @@ class _Osl(_OslLib, Glsl):
         def code():
             comps = []
             for j, st in enumerate(types):
-                sv = _vec(st)
-                comps += [(f"a{j}.{c}", sv[0]) for c in _XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
+                sv = vec_type(st)
+                comps += [(f"a{j}.{c}", sv[0]) for c in XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
             comps = (comps * v[1] if len(comps) == 1 else comps)[:v[1]]
             if len(comps) != v[1]:
                 raise TranslateError(f"OSL translation: {t}({', '.join(types)})")
@@ -210,7 +211,7 @@ class _Osl(_OslLib, Glsl):
         ev = [self.ex(a) for a in args]
         types = [t for _, t in ev]
         cands = self.funcs[fn]
-        match = [c for c in cands if len(c[0]) == len(types) and all(_same(p, t) for p, t in zip(c[0], types))]
+        match = [c for c in cands if len(c[0]) == len(types) and all(same_type(p, t) for p, t in zip(c[0], types))]
         if not match and len(cands) != 1:
             raise TranslateError(f"OSL translation: no overload of {fn} for ({', '.join(map(str, types))})")
         ptypes, modes, ret, oname, extra = (match or cands)[0]
@@ -227,7 +228,7 @@ class _Osl(_OslLib, Glsl):
     def statement(self, s, ind: str = "") -> list[str]:
         if isinstance(s, S.Decl):                # a struct with array members: several lines
             *first, last = self.decl(s.type, s.declarators)
-            return self.comments(s.comments, ind) + [ind + ln for ln in first] + [ind + last + _trail(s)]
+            return self.comments(s.comments, ind) + [ind + ln for ln in first] + [ind + last + trail_comment(s)]
         if isinstance(s, S.Return) and s.value is not None:
             return self.comments(s.comments, ind) + [f"{ind}return {self.conv_to(s.value, self.ret)};"]
         self.scopes.append({})                   # a for-loop's variable
@@ -354,7 +355,7 @@ class _Osl(_OslLib, Glsl):
         consts = [S.Decl(self.globals[g][0], [self.globals[g][1]])           # the constants it reads: locals
                   for g in sorted(used - set(passed), key=list(self.globals).index)]
         out = self.comments(item.comments, "") + [f"{self.osl_type(item.ret)} {oname}({', '.join(plist)}) {{"
-                                                   + _trail(item.body)] + prologue
+                                                   + trail_comment(item.body)] + prologue
         out += self.body(S.Block(consts + item.body.body), "") + ["}"]
         self.scopes = []
         return out

@@ -8,9 +8,10 @@ from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.values import value
 
-_SWZ = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
-_XYZW = "xyzw"
-_CMP = {"<", ">", "<=", ">=", "==", "!="}
+#: the component index of each swizzle letter; the components by index; the comparison operators
+SWIZZLE = {"x": 0, "y": 1, "z": 2, "w": 3, "r": 0, "g": 1, "b": 2, "a": 3, "s": 0, "t": 1, "p": 2, "q": 3}
+XYZW = "xyzw"
+COMPARISONS = {"<", ">", "<=", ">=", "==", "!="}
 #: component-wise built-ins (arguments of the first's type): OSL has each for scalars, by the same
 #: name (``fract``: cellgl_fract)
 _ELEMENTWISE = frozenset("""
@@ -30,13 +31,13 @@ OSL_RESERVED = frozenset("""
 """.split())
 
 
-#: ``(component type, n)`` of each GLSL vector type; :func:`_vec`: that of a type, or None
+#: ``(component type, n)`` of each GLSL vector type; :func:`vec_type`: that of a type, or None
 _VECS = {f"{k}vec{n}": (c, n) for k, c in (("", "float"), ("i", "int"), ("u", "uint"), ("b", "bool"))
          for n in (2, 3, 4)}
-_vec = _VECS.get
+vec_type = _VECS.get
 
 
-def _int_lit(v: int) -> str:
+def int_literal(v: int) -> str:
     """A 32-bit pattern as an OSL int literal (OSL's lexer has no unsigned or > 2^31 - 1)."""
     v &= 0xFFFFFFFF
     if v >= 0x80000000:
@@ -44,11 +45,11 @@ def _int_lit(v: int) -> str:
     return f"({v})" if v < 0 else str(v)
 
 
-def _same(p, t) -> bool:
+def same_type(p, t) -> bool:
     """Whether an argument of GLSL type ``t`` matches a parameter of type ``p`` exactly (arrays:
     by element type), for overload resolution."""
     if isinstance(p, tuple) or isinstance(t, tuple):
-        return isinstance(p, tuple) and isinstance(t, tuple) and _same(p[0], t[0])
+        return isinstance(p, tuple) and isinstance(t, tuple) and same_type(p[0], t[0])
     return p == t
 
 
@@ -57,16 +58,16 @@ _OPNAME = {"+": "add", "-": "sub", "*": "mul", "/": "div", "%": "mod", "&": "and
            "==": "eq", "!=": "ne"}
 
 
-class _OslLib:
+class OslLib:
     """The generated-helper half of the translator (mixed into its tree walker)."""
 
     helpers: dict
     structs: dict
 
     def osl_type(self, t: str) -> str:
-        v = _vec(t)
+        v = vec_type(t)
         if v and "struct cellgl_" + t not in self.helpers:
-            fields = " ".join(f"{self.osl_type(v[0])} {c};" for c in _XYZW[:v[1]])
+            fields = " ".join(f"{self.osl_type(v[0])} {c};" for c in XYZW[:v[1]])
             self.helpers["struct cellgl_" + t] = f"struct cellgl_{t} {{ {fields} }};"
         # uint keeps its 32 bits in an int, bool is an int
         return "cellgl_" + t if v else t if t in self.structs else {"uint": "int", "bool": "int"}.get(t, t)
@@ -108,7 +109,7 @@ class _OslLib:
     def coerce(self, expr: str, src, dst) -> str:
         """:meth:`conv` to a scalar type ``dst`` from a non-vector ``src``, else ``expr`` as it is
         (vectors, arrays and structs are never converted implicitly; a struct to a scalar raises)."""
-        if all(isinstance(t, str) and not _vec(t) for t in (src, dst)) and dst not in self.structs:
+        if all(isinstance(t, str) and not vec_type(t) for t in (src, dst)) and dst not in self.structs:
             return self.conv(expr, src, dst)
         return expr
 
@@ -186,12 +187,12 @@ class _OslLib:
 
     def vec_binary(self, op: str, ta: str, tb: str) -> tuple[str, str]:
         """Name and result type of the generated component-wise ``op`` on ``ta``, ``tb``."""
-        va, vb = _vec(ta), _vec(tb)
+        va, vb = vec_type(ta), vec_type(tb)
         comp, n = va or vb
-        rt = ("b" if op in _CMP else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
+        rt = ("b" if op in COMPARISONS else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
         name = f"cellgl_{_OPNAME[op]}_{ta}_{tb}"
         self.gen(name, rt, [(ta, "a"), (tb, "b")], lambda: self.returns(rt, [
-            self.scalar_op(op, f"a.{c}" if va else "a", f"b.{c}" if vb else "b", comp) for c in _XYZW[:n]]))
+            self.scalar_op(op, f"a.{c}" if va else "a", f"b.{c}" if vb else "b", comp) for c in XYZW[:n]]))
         return name, rt
 
     # ------------------------------------------------------------------ expressions
@@ -208,21 +209,21 @@ class _OslLib:
         return (t, str(v[1])), f"[{v[1]}]"
 
     def vec_get(self, t: str) -> str:
-        comp, n = _vec(t)
-        body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(_XYZW[:n - 1]))
-        return self.gen(f"cellgl_get_{t}", comp, [(t, "a"), ("int", "i")], f"{body} return a.{_XYZW[n - 1]};")
+        comp, n = vec_type(t)
+        body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(XYZW[:n - 1]))
+        return self.gen(f"cellgl_get_{t}", comp, [(t, "a"), ("int", "i")], f"{body} return a.{XYZW[n - 1]};")
 
     def vec_set(self, t: str) -> str:
-        comp, n = _vec(t)
+        comp, n = vec_type(t)
         ot, oc = self.osl_type(t), self.osl_type(comp)
         name = f"cellgl_set_{t}"
-        body = " else ".join(f"if (i == {j}) a.{c} = x;" for j, c in enumerate(_XYZW[:n - 1]))
-        return self.helper(name, f"void {name}(output {ot} a, int i, {oc} x) {{ {body} else a.{_XYZW[n - 1]} = x; }}")
+        body = " else ".join(f"if (i == {j}) a.{c} = x;" for j, c in enumerate(XYZW[:n - 1]))
+        return self.helper(name, f"void {name}(output {ot} a, int i, {oc} x) {{ {body} else a.{XYZW[n - 1]} = x; }}")
 
     def any_all(self, fn: str, bt: str) -> str:
         j = " || " if fn == "any" else " && "
         return self.gen(f"cellgl_{fn}_{bt}", "int", [(bt, "a")],
-                        f"return {j.join(f'a.{c}' for c in _XYZW[:_vec(bt)[1]])};")
+                        f"return {j.join(f'a.{c}' for c in XYZW[:vec_type(bt)[1]])};")
 
     def call_builtin(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
@@ -235,11 +236,11 @@ class _OslLib:
             return f"{self.any_all(fn, types[0])}({ss[0]})", "bool"
         if fn in ("dot", "length", "distance", "normalize"):
             t = types[0]
-            v = _vec(t)
+            v = vec_type(t)
             if not v:
                 return _SCALAR_GEOMETRY[fn].format(*ss), "float"
             dot = self.gen(f"cellgl_dot_{t}", "float", [(t, "a"), (t, "b")],
-                           "return " + " + ".join(f"a.{c} * b.{c}" for c in _XYZW[:v[1]]) + ";")
+                           "return " + " + ".join(f"a.{c} * b.{c}" for c in XYZW[:v[1]]) + ";")
             if fn == "dot":
                 return f"{dot}({ss[0]}, {ss[1]})", "float"
             if fn == "length":
@@ -255,12 +256,12 @@ class _OslLib:
         if fn in ("floatBitsToUint", "floatBitsToInt"):
             self.float_bits()
             t = types[0]
-            v = _vec(t)
+            v = vec_type(t)
             if not v:
                 return f"cellgl_float_bits({ss[0]})", "uint" if fn.endswith("Uint") else "int"
             rt = ("u" if fn.endswith("Uint") else "i") + f"vec{v[1]}"
             name = self.gen(f"cellgl_{fn}_{t}", rt, [(t, "a")],
-                            self.returns(rt, [f"cellgl_float_bits(a.{c})" for c in _XYZW[:v[1]]]))
+                            self.returns(rt, [f"cellgl_float_bits(a.{c})" for c in XYZW[:v[1]]]))
             return f"{name}({ss[0]})", rt
         if fn == "fract":
             self.helper("cellgl_fract", "float cellgl_fract(float x) { return x - floor(x); }")
@@ -268,7 +269,7 @@ class _OslLib:
             fn = "atan2"
         if fn in _ELEMENTWISE:
             osl = "cellgl_fract" if fn == "fract" else fn
-            vt = next((t for t in types if _vec(t)), None)
+            vt = next((t for t in types if vec_type(t)), None)
             if vt is None:
                 rt = types[-1] if fn in ("step", "smoothstep") else types[0]
                 if rt == "uint" and fn in ("min", "max", "clamp"):
@@ -278,8 +279,8 @@ class _OslLib:
                     rt = "float"
                 return f"{osl}({', '.join(ss)})", rt
             name = self.gen(f"cellgl_{fn}_" + "_".join(types), vt, [(t, f"a{j}") for j, t in enumerate(types)],
-                            lambda: self.returns(vt, [f"{osl}(" + ", ".join(f"a{j}.{c}" if _vec(t) else f"a{j}"
+                            lambda: self.returns(vt, [f"{osl}(" + ", ".join(f"a{j}.{c}" if vec_type(t) else f"a{j}"
                                                                            for j, t in enumerate(types)) + ")"
-                                                      for c in _XYZW[:_vec(vt)[1]]]))
+                                                      for c in XYZW[:vec_type(vt)[1]]]))
             return f"{name}({', '.join(ss)})", vt
         raise TranslateError(f"OSL translation: function {fn!r} has no OSL translation")
