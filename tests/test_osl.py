@@ -121,7 +121,7 @@ def test_osl_is_folded_but_for_exactly_its_sliders():
         sliders = re.findall(r"^    (?:float|int) (\w+) = [^\[\n]*\[\[", head, re.M)
         prog = snippets.texture_program(name)
         exposed = osl.exposed_params(prog, snippets.specialised_code(prog))
-        _, kept = osl.folded_code(prog, exposed, snippets.specialised_code, snippets._CONSTANT_STRUCTS)
+        _, kept = osl.folded_code(prog, exposed, snippets.specialised_code, snippets.CONSTANT_STRUCTS)
         assert [osl._pname(p.name) for p, _ in kept] == sliders
         for s in sliders:
             assert re.search(rf"\bcellgl_{s.rstrip('_')}\b", body), (name, s)       # each one is read

@@ -123,12 +123,12 @@ def exportable_presets() -> tuple[list[str], dict[str, str]]:
     """``(names, {name: why not})`` of the presets: a PUPs preset, or one driven by an image
     (``density_map`` or ``cell_color`` image), is refused with the reason the snippets give."""
     from cellgl.recipes import list_presets, load_recipe
-    from cellgl.export.snippets import _refuse
+    from cellgl.export.snippets import refuse
 
     ok, refused = [], {}
     for name, _ in list_presets():
         try:
-            _refuse(load_recipe(name))
+            refuse(load_recipe(name))
             ok.append(name)
         except ExportError as exc:
             refused[name] = str(exc)
@@ -175,7 +175,7 @@ def compiled(prog, entry_glsl: str, entry: str, live: set) -> tuple[str, list[st
 
     text = snippets.specialised_code(replace(prog, params=_params_with_vars(prog, live),
                                              entry=prog.entry + entry_glsl))
-    code = compiler.compile_glsl(text, [entry.replace("cell_", "cellgl_", 1)], structs=snippets._CONSTANT_STRUCTS,
+    code = compiler.compile_glsl(text, [entry.replace("cell_", "cellgl_", 1)], structs=snippets.CONSTANT_STRUCTS,
                                  keep=("cellgl_search_budget",))
     kept = [w[2].rstrip(";") for w in map(str.split, code.split("\n")) if len(w) == 3 and w[0] == "uniform"]
     return code, kept
@@ -288,7 +288,7 @@ def preset_node(recipe) -> MxNode:
     node = MxNode(name, "texture2d", _node_doc(r, fixed), inputs, outs,
                   example={"recipe": r.name, "outputs": [o[0] for o in outs]})
     entry = "cellgl_mx_texture"
-    node.glsl = (_library_head(r, "GLSL") + _private_globals(renamed(code, name)) + "\n"
+    node.glsl = (_library_head(r, "GLSL") + private_globals(renamed(code, name)) + "\n"
                  + _wrapper_glsl(node, renamed(entry, name), kept))
     passed: dict = {}
     osl = to_osl(code, params=kept, passed=passed)
@@ -297,7 +297,7 @@ def preset_node(recipe) -> MxNode:
     return node
 
 
-def _private_globals(code: str) -> str:
+def private_globals(code: str) -> str:
     """The code's ``uniform`` variables (the node's inputs) as private globals, which the node's
     function sets before it calls the code: a MaterialX source file declares no uniforms."""
     return re.sub(r"^uniform (\w+) (\w+);$", r"\1 \2;     // set by the node's function from its input",

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from cellgl.export.materialx import MxInput, MxNode, compiled, renamed, _private_globals
+from cellgl.export.materialx import MxInput, MxNode, compiled, renamed, private_globals
 
 __all__ = ["basis_nodes", "basis_node", "BASIS_METRICS", "BASIS_DISTRIBUTIONS", "float32_thresholds"]
 
@@ -158,7 +158,7 @@ def basis_node(dim: int, metric: str, distribution: str) -> MxNode:
             sets.append(f"    {renamed(i.var, name)} = {val};")
     call = ", ".join(["in_position"] + [f"out_{o[0]}" for o in outs])
     node.glsl = (f"// cellgl: MaterialX node {name} (GLSL), compiled by `cellgl export --target materialx`.\n"
-                 + _private_globals(renamed(code, name)) + f"\n// MaterialX implementation of {node.nodedef} "
+                 + private_globals(renamed(code, name)) + f"\n// MaterialX implementation of {node.nodedef} "
                  f"(genglsl).\nvoid {node.function}({', '.join(args)})\n{{\n" + "\n".join(sets)
                  + f"\n    {entry}({call});\n}}\n")
     # OSL: vectors are the translation's structs; the variables are passed as parameters

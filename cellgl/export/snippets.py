@@ -169,7 +169,7 @@ def compiled_unit(prog: Program, fold: bool = True, entries=None):
     :func:`library_code` does."""
     # a texture keeps its search one function (benchmarks/bench_snippets.py --stub-search swaps
     # its body); a basis snippet is little more than the search, written into its entry point
-    return compiler.compile_unit(specialised_code(prog), entries or entry_points(prog), structs=_CONSTANT_STRUCTS,
+    return compiler.compile_unit(specialised_code(prog), entries or entry_points(prog), structs=CONSTANT_STRUCTS,
                                  fold_constants=fold, keep=() if prog.entries else ("cellgl_search_budget",))
 
 
@@ -181,7 +181,7 @@ def code_text(unit) -> str:
 #: the functions a snippet may export (the reachability pass starts from those it defines)
 ENTRY_POINTS = ("cellgl_texture", "cellgl_texture_filtered", "cellgl_texture3", "cellgl_texture3_filtered")
 #: parameter structs that only ever hold their loader's values: scalarised away (reach.scalarise)
-_CONSTANT_STRUCTS = (("CellglTextureParams", "cellgl_texture_params_load"), ("CellglParams", "cellgl_params_load"),
+CONSTANT_STRUCTS = (("CellglTextureParams", "cellgl_texture_params_load"), ("CellglParams", "cellgl_params_load"),
                      ("CellglParams", "cellgl_tex_basis_"))
 
 
@@ -351,7 +351,7 @@ def export_program(prog: Program, target: str = "glsl", *, uniforms: bool = Fals
 
         code = code_text(tree) if tree is not None else code if code is not None \
             else library_code(prog, fold) if prog.entries else specialised_code(prog)
-        return _header(prog, tgt, uniforms) + "\n" + osl_shader(prog, code, specialised_code, _CONSTANT_STRUCTS)
+        return _header(prog, tgt, uniforms) + "\n" + osl_shader(prog, code, specialised_code, CONSTANT_STRUCTS)
     # the one parse (none for a tree); the printers only read it
     unit = tree if tree is not None else library_code(prog, fold, True) if code is None else parsed_library(code)
     head = _header(prog, tgt, uniforms, {d.name for it in unit.items if isinstance(it, Global) for d in it.declarators})
@@ -440,7 +440,7 @@ def export(recipe, target: str = "glsl", *, uniforms: bool = False, fold: bool =
     return export_program(prog, target, uniforms=uniforms, fold=fold)
 
 
-def _refuse(r) -> None:
+def refuse(r) -> None:
     """Refuse a recipe no snippet can express: PUPs, and images the engines would bind as buffers."""
     if getattr(r, "kind", None) == "pups":
         raise ExportError(f"{r.name}: PUPs recipes cannot be exported as shader snippets (a "
@@ -474,7 +474,7 @@ def texture_program(recipe, *, uniforms: bool = False) -> Program:
     from cellgl.texture import shader as texture
 
     r = load_recipe(recipe)
-    _refuse(r)
+    refuse(r)
     defines = texture.defines(r)
     solid = int(r.values["dimension"]) >= 3
     vals = texture.uniform_values(r)
