@@ -216,6 +216,15 @@ void _cell_ball_reset(inout ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, flo
         CELL_PRECISE float g = o[a] > 0 ? float(o[a]) - f[a] : (o[a] < 0 ? float(-o[a] - 1) + f[a] : 0.0);
         s += g * g;
     }
+    // the axes past CELL_DIM: 0, as cell_ring_window's (a caller's lo, hi may arrive undefined)
+#if CELL_DIM < 4
+    lo.w = 0;
+    hi.w = 0;
+#endif
+#if CELL_DIM < 3
+    lo.z = 0;
+    hi.z = 0;
+#endif
 }
 
 // The first cell of the row after o's in the ball (o.x > hi.x once all rows
