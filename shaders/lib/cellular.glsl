@@ -281,7 +281,8 @@ CellResult _cell_result_start(int loops)
     r.o1 = ivec4(0);
     r.q1 = vec4(0.0);
 #endif
-    r.exact = false;          // set at the end of the search: never copied undefined before that
+    // set at the end of the search; never copied undefined before that
+    r.exact = false;
     r.loops = loops;
     return r;
 }

@@ -113,8 +113,7 @@ void cell_texture_lattice(ivec4 origin_cell, vec4 origin_frac, vec4 s, out ivec4
     CELL_PRECISE vec4 q = origin_frac + s;
     vec4 fl = floor(q);
     cell = origin_cell + ivec4(fl);
-    CELL_PRECISE vec4 r = q - fl;
-    f = r;
+    f = q - fl;
 }
 
 // Lattice period of octave `octave` (cells per texture repeat), 0 where not tileable.
@@ -175,7 +174,8 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     CellParams p = _cell_tex_basis(t, octave);
     ivec4 cell;
     vec4 f;
-    CELL_PRECISE vec4 sd = s * t.dist_scale;       // a product, then the lattice's sum: no fused multiply-add
+    // a product, then the lattice's sum: no fused multiply-add
+    CELL_PRECISE vec4 sd = s * t.dist_scale;
     cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], sd, cell, f);
     cell = cell_dims_i(cell);
     f = cell_dims(f);
@@ -184,10 +184,11 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     float lin[8] = float[8](t.c1, t.c2, t.c3, t.c4, t.c5, t.c6, t.c7, t.c8);
     float prod[16] = float[16](t.c11, t.c12, t.c13, t.c14, t.c21, t.c22, t.c23, t.c24,
                                t.c31, t.c32, t.c33, t.c34, t.c41, t.c42, t.c43, t.c44);
-    CELL_PRECISE float F[CELL_N];
-    CELL_PRECISE vec4 dF[CELL_N];
+    float F[CELL_N];
+    vec4 dF[CELL_N];
+    // grad, an out parameter, is precise through the entry's outputs (CELL_PRECISE there)
     CELL_PRECISE float v = 0.0;
-    CELL_PRECISE vec4 gsum = vec4(0.0);
+    grad = vec4(0.0);
     F4 = vec4(0.0);
     for (int k = 0; k < CELL_N; k++) {
         F[k] = r.F[k] / t.dist_scale;
@@ -196,7 +197,7 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
         dF[k] *= t.axis_scale;      // r.delta is weighted: the chain rule
 #endif
         v += lin[k] * F[k];
-        gsum += lin[k] * dF[k];
+        grad += lin[k] * dF[k];
         if (k < 4) {
             F4[k] = F[k];
         }
@@ -206,17 +207,17 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     for (int j = 0; j < CELL_TEX_NP; j++) {
         float c = prod[i * 4 + j];
         v += c * F[i] * F[j];
-        gsum += c * (F[i] * dF[j] + F[j] * dF[i]);
+        grad += c * (F[i] * dF[j] + F[j] * dF[i]);
     }
 #undef CELL_TEX_NP
 #if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
     CellFeatures x = cell_features(cell, f, p, r, t.smoothness * t.dist_scale);
     v += (t.c_edge * x.edge + t.c_smooth * x.smooth_F + t.c_nsphere * x.nsphere) / t.dist_scale;
-    gsum += t.c_edge * x.edge_grad + t.c_smooth * x.smooth_grad;
+    grad += t.c_edge * x.edge_grad + t.c_smooth * x.smooth_grad;
     cell_out = vec4(x.smooth_delta.xyz / t.dist_scale, x.smooth_attr.w);
 #else
     v += t.c_smooth * F[0];          // smoothness 0: smooth F1 is F1
-    gsum += t.c_smooth * dF[0];
+    grad += t.c_smooth * dF[0];
     cell_out = vec4(r.delta[0].xyz / t.dist_scale, cell_id_value(r.id[0]));
 #endif
     if (t.c_noise != 0.0) {
@@ -224,9 +225,8 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
         ivec4 per = cell_texture_period(t, octave) * int(round(t.noise_frequency));
         v += t.c_noise * cell_noise_split(t.noise_cell[octave], t.noise_frac[octave] + s * t.noise_frequency,
                                           per, t.seed + 7919u + uint(octave), gn);
-        gsum += t.c_noise * t.noise_frequency * gn;
+        grad += t.c_noise * t.noise_frequency * gn;
     }
-    grad = gsum;
     id = r.id[0];
     return v;
 }
@@ -237,7 +237,7 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
 vec3 cell_texture_ramp(float x, CellTextureParams t)
 {
     // n and k clamped: every index in range whatever the uniform (or a NaN x) holds
-    int n = clamp(t.ramp_count, 1, CELL_TEX_RAMP_KEYS);
+    int n = t.ramp_count < 1 ? 1 : (t.ramp_count > CELL_TEX_RAMP_KEYS ? CELL_TEX_RAMP_KEYS : t.ramp_count);
     if (t.ramp_mode == CELL_TEX_RAMP_SPLINE && n >= 4) {
         int spans = n - 3;
         float s = clamp(x, 0.0, 1.0) * float(spans);
@@ -323,7 +323,7 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
     bool qin = t.fractal == CELL_TEX_FRACTAL_QIN || t.fractal == CELL_TEX_FRACTAL_QIN_CUBE;
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
     CELL_PRECISE float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
-    CELL_PRECISE vec4 dGs = vec4(0.0);
+    dG = vec4(0.0);
     // Feature spacings per pixel at octave 0 (times L^i at octave i).
     float spacings = t.antialias * t.feature_frequency * r;
     for (int i = 0; i < CELL_TEX_OCTAVES; i++) {
@@ -353,7 +353,7 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
                 if (i == 0 || vm < G) {
                     float fade = i == 0 ? 1.0 : min(t.octaves - float(i), 1.0) * a;
                     G = mix(G, vm, fade);
-                    dGs = mix(dGs, g, fade);
+                    dG = mix(dG, g, fade);
                 }
                 scale *= t.lacunarity;
                 continue;
@@ -371,7 +371,7 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
                 db = -sign(dev) * db;
             }
             G += w * (a * term + (1.0 - a) * t.octave_mean);
-            dGs += (w * a) * db;
+            dG += (w * a) * db;
         } else if (t.fractal != CELL_TEX_FRACTAL_MIN) {
             G += w * t.octave_mean;
         }
@@ -381,16 +381,15 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
     }
     if (t.fractal == CELL_TEX_FRACTAL_MIN) {
         G = (G - t.range_lo) * inv_range;
-        dGs *= inv_range;
+        dG *= inv_range;
         if (G < 0.0 || G > 1.0) {
             G = clamp(G, 0.0, 1.0);
-            dGs = vec4(0.0);
+            dG = vec4(0.0);
         }
     } else {
         G /= total;
-        dGs /= total;
+        dG /= total;
     }
-    dG = dGs;
     return G;
 }
 
