@@ -151,7 +151,10 @@ def test_cell_counts_dispatches_stay_within_the_group_limit(ctx, monkeypatch):
     import moderngl
 
     from cellgl.basis import core, reference
+    from cellgl.gl.path import gpu_path
 
+    if gpu_path(ctx) != "compute":
+        pytest.skip("counts compute dispatches; the fragment path draws (tests/test_fragment_path.py)")
     p = core.make_params(2, density=2.0)
     cells = np.zeros((300, 4), np.int64)
     cells[:, 0] = np.arange(300) - 150
