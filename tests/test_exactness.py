@@ -426,3 +426,18 @@ def test_snippets_carry_and_document_the_bound(target):
     text = export("f1", target)
     assert "6144" in text
     assert "LOOP_BUDGET" in text and "llvmpipe" in text
+
+
+@pytest.mark.parametrize("p", [0.5, 1.0])
+def test_minkowski_gradient_is_finite_where_an_offset_is_zero(ctx, p):
+    """grad of a Minkowski F with p <= 1 where a component of the offset is exactly 0: pow(0, p - 1)
+    is undefined in GLSL (an infinity on llvmpipe, then 0 * inf = NaN); that axis gets 0, the
+    others their value (lib/metric.glsl)."""
+    x = np.array([[3.5, 0.25], [-7.5, 0.9], [0.1, 2.5]])       # jitter 0: points at the cell centres
+    r = cellgl.cellular(x, 1, metric="minkowski", minkowski_p=p, distribution="jitter", jitter=0.0,
+                        outputs=("F", "delta", "grad"))
+    assert np.isfinite(r.grad).all()
+    zero = r.delta[:, 0, :] == 0.0
+    assert zero.any(axis=1).all()
+    assert np.all(r.grad[:, 0, :][zero] == 0.0)
+    assert np.all(r.grad[:, 0, :][~zero] != 0.0)
