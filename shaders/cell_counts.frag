@@ -37,6 +37,14 @@ void main()
     }
     p.period = u_period;
     p.minkowski_p = 2.0;
+    // every field set (a struct passed on with a field never written copies an undefined value)
+#if CELL_ORBIT
+    p.orbit_radius = 0.0;
+    p.orbit_turn = 0u;
+#endif
+#if CELL_ANISO
+    p.axis_scale = vec4(1.0);
+#endif
     int level = 0;
 #if CELL_DENSITY_MAP != CELL_DMAP_NONE
     for (int k = 0; k < CELL_DENSITY_LEVELS * CELL_MAX_POINTS; k++) {

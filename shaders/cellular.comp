@@ -75,13 +75,17 @@ uniform dvec4 u_spacing;
 uniform ivec4 u_slab;          // first sample of this slab
 uniform ivec2 u_slab_size;     // samples along x, rows (y) per slab
 
-// Grid sample idx: its integer cell and float32 fraction.
+// Grid sample idx: its integer cell and float32 fraction. CELL_PRECISE: a multiply, then an add,
+// each rounded once (no fused multiply-add, which a GPU's float64 unit does whenever it may), as
+// the fragment path's NumPy computes them (cellgl/basis/gpu_fragment.py): the same bits.
+// cellgl.basis.core checks that the grid lies within +-2^30 cells, so int(fl) is in range.
 void cell_grid_sample(ivec4 idx, out ivec4 cell, out vec4 frac)
 {
-    dvec4 pos = u_origin_frac + u_spacing * dvec4(idx);
+    CELL_PRECISE dvec4 pos = u_origin_frac + u_spacing * dvec4(idx);
     dvec4 fl = floor(pos);
     cell = u_origin_cell + ivec4(fl);
-    frac = vec4(pos - fl);
+    CELL_PRECISE dvec4 rest = pos - fl;
+    frac = vec4(rest);
     // A fraction just below 1 can round up to 1.0 in float32.
     for (int a = 0; a < 4; a++) {
         if (frac[a] >= 1.0) {
@@ -185,11 +189,23 @@ layout(std430, binding = 8) writeonly buffer LoopProbe { int loop_probe[]; };
 #if CELL_OUT_GRAD
 vec4 cell_out_grad(vec4 delta, float F)
 {
-    vec4 g = cell_metric_gradient(delta, F, u_minkowski_p);
+    CELL_PRECISE vec4 g = cell_metric_gradient(delta, F, u_minkowski_p);
 #if CELL_ANISO
     g *= u_axis_scale;     // d|w (q - x)|/dx = w * (the gradient in weighted units)
 #endif
     return g;
+}
+#endif
+#if CELL_OUT_DELTA
+// A delta as stored: in sample units (stretched cells: divided by the axis weights), scaled.
+vec4 cell_out_delta(vec4 delta)
+{
+#if CELL_ANISO
+    CELL_PRECISE vec4 d = delta / u_axis_scale * u_out_scale;
+#else
+    CELL_PRECISE vec4 d = delta * u_out_scale;
+#endif
+    return d;
 }
 #endif
 
@@ -359,19 +375,21 @@ void main()
     uvec4 t1 = cell_sample_texel(2u * i + 1u);
     pos = dvec4(packDouble2x32(t0.xy), packDouble2x32(t0.zw), packDouble2x32(t1.xy), packDouble2x32(t1.zw));
 #endif
-    // Coordinates must lie within +-2^30 cells (cellgl.basis.core.COORD_LIMIT). One that does not
-    // (or NaN) is searched at 0 and its sample flagged: the library then finds it and raises
-    // (core._check_coords), as it would have before the dispatch.
+    // Coordinates must lie within +-2^30 cells (cellgl.basis.core.COORD_LIMIT): the library checks
+    // them on the CPU before the upload, with its error message (core.cellular). This guard only
+    // keeps int(fl) defined whatever arrives (a float-to-int conversion out of range is undefined):
+    // a coordinate outside is searched at 0 and its sample flagged. It is not the check: a driver
+    // compiling with fast-math semantics need not make a comparison with NaN false.
     bool in_range = true;
     cell = ivec4(0);
     frac = vec4(0.0);
     for (int a = 0; a < CELL_DIM; a++) {
-        double x = pos[a] * u_scale;
+        CELL_PRECISE double x = pos[a] * u_scale;
         bool ok = abs(x) < 1073741824.0LF;
         in_range = in_range && ok;
         x = ok ? x : 0.0LF;
         double fl = floor(x);
-        float fr = float(x - fl);
+        CELL_PRECISE float fr = float(x - fl);     // exact in float64, then rounded once
         // A fraction just below 1 can round up to 1.0 in float32.
         cell[a] = int(fl) + (fr >= 1.0 ? 1 : 0);
         frac[a] = fr >= 1.0 ? 0.0 : fr;
@@ -399,11 +417,7 @@ void main()
     }
 #endif
 #if CELL_OUT_DELTA
-#if CELL_ANISO
-#define CELL_DELTA_OUT(k) (r.delta[k] / u_axis_scale * u_out_scale)
-#else
-#define CELL_DELTA_OUT(k) (r.delta[k] * u_out_scale)
-#endif
+#define CELL_DELTA_OUT(k) cell_out_delta(r.delta[k])
     CELL_STORE_VECS(out_delta, CELL_DELTA_OUT)
 #endif
 #if CELL_OUT_GRAD

@@ -88,14 +88,26 @@ layout(location = CELL_FRAG_PROBE_LOC) out ivec4 o_probe;
 
 CELL_FRAG_DECL
 
+// As cellular.comp's (CELL_PRECISE: the same rounding in both entries).
 #if CELL_OUT_GRAD
 vec4 cell_out_grad(vec4 delta, float F)
 {
-    vec4 g = cell_metric_gradient(delta, F, u_minkowski_p);
+    CELL_PRECISE vec4 g = cell_metric_gradient(delta, F, u_minkowski_p);
 #if CELL_ANISO
     g *= u_axis_scale;
 #endif
     return g;
+}
+#endif
+#if CELL_OUT_DELTA
+vec4 cell_out_delta(vec4 delta)
+{
+#if CELL_ANISO
+    CELL_PRECISE vec4 d = delta / u_axis_scale * u_out_scale;
+#else
+    CELL_PRECISE vec4 d = delta * u_out_scale;
+#endif
+    return d;
 }
 #endif
 
@@ -169,19 +181,28 @@ void main()
     int loops = x.loops;
 #else
     CellResult r = cell_search(cell, frac, p);
+    // Only the rows this pass writes exist (CELL_FRAG_WRITE reads no other), each written whole.
+#if CELL_OUT_F
     float row_F[CELL_N];
-    uint row_id[CELL_N];
-    float row_delta[CELL_N * CELL_DIM];
-    float row_grad[CELL_N * CELL_DIM];
-    for (int k = 0; k < CELL_N; k++) {
-        row_F[k] = r.F[k] * u_out_scale;
-        row_id[k] = r.id[k];
-#if CELL_OUT_DELTA
-#if CELL_ANISO
-        vec4 d = r.delta[k] / u_axis_scale * u_out_scale;
-#else
-        vec4 d = r.delta[k] * u_out_scale;
 #endif
+#if CELL_OUT_ID
+    uint row_id[CELL_N];
+#endif
+#if CELL_OUT_DELTA
+    float row_delta[CELL_N * CELL_DIM];
+#endif
+#if CELL_OUT_GRAD
+    float row_grad[CELL_N * CELL_DIM];
+#endif
+    for (int k = 0; k < CELL_N; k++) {
+#if CELL_OUT_F
+        row_F[k] = r.F[k] * u_out_scale;
+#endif
+#if CELL_OUT_ID
+        row_id[k] = r.id[k];
+#endif
+#if CELL_OUT_DELTA
+        vec4 d = cell_out_delta(r.delta[k]);
         for (int c = 0; c < CELL_DIM; c++) {
             row_delta[k * CELL_DIM + c] = d[c];
         }

@@ -63,7 +63,9 @@ void main()
     uint rest = s / uint(u_tile.x);
     int y = int(rest % uint(u_tile.y));
     int k = int(rest / uint(u_tile.y));
-    vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
+    // CELL_PRECISE here and below: the same rounding in texture.comp and texture_samples.frag
+    // (docs/exactness.md), so that a bake's bytes do not depend on the path.
+    CELL_PRECISE vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
                   (float(u_origin.y + y) + 0.5) / float(u_size.y),
                   u_depth > 0 ? (float(k) + 0.5) / float(u_depth) : 0.0);
     // The pixel in texture space (a volume's slices too are band-limited in the image plane
@@ -73,20 +75,21 @@ void main()
     vec3 p = points[i].xyz;
     vec3 duvz = u_filter_width;
 #endif
-    vec4 local = cell_texture_local(p, t);
+    CELL_PRECISE vec4 local = cell_texture_local(p, t);
 #if CELL_TEX_GRID && CELL_TEX_SUPERSAMPLE > 1
     // Supersampling: the centres of an n x n grid of sub-pixels (x fastest), each band-limited
     // to its own footprint; colour, height and gradient averaged, normals summed and
     // renormalised. ID, F1..F4 and the value stay those of the pixel centre (below).
     const int n = CELL_TEX_SUPERSAMPLE;
     float r = cell_texture_footprint(vec3(duvz.xy / float(n), duvz.z), t);
-    vec4 color = vec4(0.0), grad = vec4(0.0);
-    float height = 0.0;
-    vec3 normal = vec3(0.0);
+    CELL_PRECISE vec4 color = vec4(0.0), grad = vec4(0.0);
+    CELL_PRECISE float height = 0.0;
+    CELL_PRECISE vec3 normal = vec3(0.0);
     for (int sy = 0; sy < n; sy++)
     for (int sx = 0; sx < n; sx++) {
-        vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
-        CellTexel c = cell_texture_filtered(cell_texture_local(p + vec3(off * duvz.xy, 0.0), t), r, t);
+        CELL_PRECISE vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
+        CELL_PRECISE vec3 ps = p + vec3(off * duvz.xy, 0.0);
+        CellTexel c = cell_texture_filtered(cell_texture_local(ps, t), r, t);
         color += c.color;
         height += c.height;
         normal += c.normal;
@@ -102,15 +105,16 @@ void main()
 #endif
 #else
     CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
-    vec4 color = c.color, grad = c.grad;
-    float height = c.height;
-    vec3 normal = c.normal;
+    CELL_PRECISE vec4 color = c.color, grad = c.grad;
+    CELL_PRECISE float height = c.height;
+    CELL_PRECISE vec3 normal = c.normal;
 #endif
 #if CELL_TEX_WANT(1)
     out_color[i] = color;
 #endif
 #if CELL_TEX_WANT(2)
-    out_aux[i] = vec4(height, normal * 0.5 + 0.5);
+    CELL_PRECISE vec4 aux = vec4(height, normal * 0.5 + 0.5);     // a product, then a sum
+    out_aux[i] = aux;
 #endif
 #if CELL_TEX_WANT(4)
     out_F[i] = c.F;

@@ -53,7 +53,9 @@ void main()
     uint rest = s / uint(u_tile.x);
     int y = int(rest % uint(u_tile.y));
     int k = int(rest / uint(u_tile.y));
-    vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
+    // CELL_PRECISE here and below: the same rounding in texture.comp and texture_samples.frag
+    // (docs/exactness.md), so that a bake's bytes do not depend on the path.
+    CELL_PRECISE vec3 p = vec3((float(u_origin.x + x) + 0.5) / float(u_size.x),
                   (float(u_origin.y + y) + 0.5) / float(u_size.y),
                   u_depth > 0 ? (float(k) + 0.5) / float(u_depth) : 0.0);
     vec3 duvz = vec3(1.0 / float(u_size.x), 1.0 / float(u_size.y), 0.0);
@@ -61,19 +63,20 @@ void main()
     vec3 p = texelFetch(u_in0, xy, 0).xyz;
     vec3 duvz = u_filter_width;
 #endif
-    vec4 local = cell_texture_local(p, t);
+    CELL_PRECISE vec4 local = cell_texture_local(p, t);
 #if CELL_TEX_GRID && CELL_TEX_SUPERSAMPLE > 1
     // Supersampling as texture.comp: sub-pixel centres x fastest; colour, height and gradient
     // averaged, normals summed and renormalised; ID, F1..F4 and the value of the pixel centre.
     const int n = CELL_TEX_SUPERSAMPLE;
     float r = cell_texture_footprint(vec3(duvz.xy / float(n), duvz.z), t);
-    vec4 color = vec4(0.0), grad = vec4(0.0);
-    float height = 0.0;
-    vec3 normal = vec3(0.0);
+    CELL_PRECISE vec4 color = vec4(0.0), grad = vec4(0.0);
+    CELL_PRECISE float height = 0.0;
+    CELL_PRECISE vec3 normal = vec3(0.0);
     for (int sy = 0; sy < n; sy++)
     for (int sx = 0; sx < n; sx++) {
-        vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
-        CellTexel c = cell_texture_filtered(cell_texture_local(p + vec3(off * duvz.xy, 0.0), t), r, t);
+        CELL_PRECISE vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
+        CELL_PRECISE vec3 ps = p + vec3(off * duvz.xy, 0.0);
+        CellTexel c = cell_texture_filtered(cell_texture_local(ps, t), r, t);
         color += c.color;
         height += c.height;
         normal += c.normal;
@@ -89,15 +92,16 @@ void main()
 #endif
 #else
     CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
-    vec4 color = c.color, grad = c.grad;
-    float height = c.height;
-    vec3 normal = c.normal;
+    CELL_PRECISE vec4 color = c.color, grad = c.grad;
+    CELL_PRECISE float height = c.height;
+    CELL_PRECISE vec3 normal = c.normal;
 #endif
 #if CELL_TEX_WANT_COLOR
     o_color = color;
 #endif
 #if CELL_TEX_WANT_AUX
-    o_aux = vec4(height, normal * 0.5 + 0.5);
+    CELL_PRECISE vec4 aux = vec4(height, normal * 0.5 + 0.5);     // a product, then a sum
+    o_aux = aux;
 #endif
 #if CELL_TEX_WANT_F
     o_F = c.F;

@@ -72,3 +72,56 @@ def _gl_error_check(request):
     yield
     after = gl.error
     assert after == "GL_NO_ERROR", f"test left a GL error behind: {after}"
+
+
+def _renderer(gl) -> str:
+    return str(gl.info.get("GL_RENDERER", ""))
+
+
+@pytest.fixture
+def llvmpipe(ctx):
+    """For the tests of Mesa llvmpipe's own loop limiter (65535 loop passes per SIMD vector, then
+    every loop runs once: docs/exactness.md) and of the probe that measures it: elsewhere they
+    skip, saying why. No other driver has that limiter: nothing is cut there (so nothing to
+    catch), and the probe's loop of 2^30 passes would run in full."""
+    renderer = _renderer(ctx)
+    if "llvmpipe" not in renderer.lower():
+        pytest.skip(f"tests llvmpipe's loop limiter, which the driver here ({renderer!r}) does not have: "
+                    "its loops are never cut, and the probe loop would run all its 2^30 passes")
+    return ctx
+
+
+def precise_in_fragment_entries(gl) -> bool:
+    """Whether the fragment entries (``#version 330 core``) get ``precise`` on this context: GLSL
+    4.00 or GL_ARB_gpu_shader5 (cellgl.gl.glsl.PRELUDE). The compute entries (``#version 430``)
+    always have it."""
+    from cellgl.gl import glsl
+
+    key = ("cellgl_precise", id(gl))
+    if key not in _PRECISE:
+        vs = "#version 330 core\nin vec2 p;\nvoid main() { gl_Position = vec4(p, 0.0, 1.0); }\n"
+        fs = "\n".join(["#version 330 core", *glsl.PRELUDE,
+                        "#if !(__VERSION__ >= 400 || defined(GL_ARB_gpu_shader5))",
+                        "#error no precise qualifier",
+                        "#endif",
+                        "out vec4 o;", "void main() { CELL_PRECISE float x = 1.0; o = vec4(x); }", ""])
+        try:
+            gl.program(vertex_shader=vs, fragment_shader=fs).release()
+            _PRECISE[key] = True
+        except Exception:          # moderngl.Error: the #error line
+            _PRECISE[key] = False
+    return _PRECISE[key]
+
+
+_PRECISE: dict = {}
+
+
+@pytest.fixture
+def same_bits(ctx):
+    """For a test that compares the two paths (or two walkers) bit for bit: docs/exactness.md
+    promises that only where ``precise`` holds in every entry compiled (GLSL 4.00+, or
+    GL_ARB_gpu_shader5 for the ``#version 330 core`` fragment entries). Skips elsewhere."""
+    if not precise_in_fragment_entries(ctx):
+        pytest.skip(f"no `precise` in the fragment entries on {_renderer(ctx)!r} (GLSL 3.30 without "
+                    "GL_ARB_gpu_shader5): bit-identity between entries is not promised there")
+    return ctx

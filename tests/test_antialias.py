@@ -18,8 +18,21 @@ from cellgl.texture import antialias
 from cellgl.texture import dispatch as texture_dispatch
 from cellgl.texture import reference as texture_reference
 from cellgl.texture.recipe import load_recipe
+from test_exactness import f_bound, near_ties      # tests/ is on sys.path under pytest
 
 CHANNELS = ("color", "height", "normal")
+
+
+def _close_but_ties(gpu, ref, c, atol, tie=None, share=0.01):
+    """Channel c within atol at every pixel but those of a near-tie (docs/exactness.md): at
+    octave 0 (``tie``, from the reference's F1 and F2: excluded) and in a finer octave or a
+    sub-sample, which the outputs do not show (at most ``share`` of the pixels)."""
+    d = np.abs(gpu[c].astype(np.float64) - ref[c])
+    d = d.reshape(d.shape[0], d.shape[1], -1).max(axis=-1)
+    bad = d > atol
+    if tie is not None:
+        bad &= ~tie
+    assert bad.mean() <= share, (c, float(bad.mean()), float(d.max()))
 
 
 def test_glsl_thresholds_are_the_python_ones():
@@ -34,11 +47,15 @@ def test_glsl_thresholds_are_the_python_ones():
 def test_band_limited_render_matches_reference(ctx, name):
     # 24 x 20 pixels: the finer octaves are partly and fully faded.
     r = load_recipe(name)
-    gpu = texture.render(r, 24, 20, channels=CHANNELS + ("id", "F1"))
-    ref = texture.render(r, 24, 20, channels=CHANNELS + ("id", "F1"), backend="numpy")
-    for c in CHANNELS + ("F1",):
-        np.testing.assert_allclose(gpu[c], ref[c], atol=2e-5, err_msg=c)
-    np.testing.assert_array_equal(gpu["id"], ref["id"])
+    gpu = texture.render(r, 24, 20, channels=CHANNELS + ("id", "F1", "F2"))
+    ref = texture.render(r, 24, 20, channels=CHANNELS + ("id", "F1", "F2"), backend="numpy")
+    S = 1.0 + r.get("frequency") * max(1.0, r.get("aspect"))
+    tie = near_ties(np.stack([ref["F1"].ravel(), ref["F2"].ravel()], axis=1), S).reshape(20, 24)
+    assert tie.mean() < 0.02
+    assert np.all(np.abs(gpu["F1"].astype(np.float64) - ref["F1"]) <= f_bound(ref["F1"], S))
+    for c in CHANNELS:
+        _close_but_ties(gpu, ref, c, 2e-5, tie)
+    np.testing.assert_array_equal(gpu["id"][~tie], ref["id"][~tie])
     # ... and the band limit did something here.
     off = texture.render(r.replace(antialias=0.0), 24, 20)["color"]
     assert np.abs(off - gpu["color"]).max() > 0.05
@@ -50,7 +67,7 @@ def test_supersampled_render_matches_reference(ctx, name):
     gpu = texture.render(r, 20, 16, channels=CHANNELS, samples=4)
     ref = texture.render(r, 20, 16, channels=CHANNELS, samples=4, backend="numpy")
     for c in CHANNELS:
-        np.testing.assert_allclose(gpu[c], ref[c], atol=2e-5, err_msg=c)
+        _close_but_ties(gpu, ref, c, 2e-5)
 
 
 def test_supersampling_is_a_box_filter_of_a_finer_render(ctx):

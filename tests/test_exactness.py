@@ -30,7 +30,29 @@ DISTS = {
 #: cells of margin around the sample box holding every point that can matter
 REACH = {2: 9, 3: 8, 4: 7}
 SPAN = 1.5          #: the samples fill [base, base + SPAN)^d
-TOL = 2e-4
+TOL = 2e-4          #: "wrong while flagged exact": far above any rounding (f_bound), far below a wrong point
+
+#: the float32 unit roundoff
+U32 = 2.0 ** -24
+
+
+def f_bound(F, S=1.0):
+    """docs/exactness.md, "What is promised": the largest |F_gpu - F_reference| a conformant driver
+    may give for a Euclidean (or Manhattan, Chebyshev) distance F in cells, when the float32
+    fraction the search starts from came from a float32 sum of magnitude S (1: a position split
+    in float64, as cellular does; a texture's lattice sum at octave 0 otherwise)."""
+    return U32 * (18.0 * np.asarray(F, np.float64) + 2.0 * S + 4.0)
+
+
+def near_ties(F_ref, S=1.0):
+    """Samples (rows of the reference's F1..Fn) where two consecutive distances lie within twice
+    f_bound of each other: there a conformant driver may order the two points either way, so
+    their IDs may swap (docs/exactness.md)."""
+    F_ref = np.asarray(F_ref, np.float64).reshape(len(F_ref), -1)
+    if F_ref.shape[1] < 2:
+        return np.zeros(len(F_ref), bool)
+    gap = np.diff(F_ref, axis=1)
+    return np.any(gap <= 2.0 * f_bound(F_ref[:, 1:], S), axis=1)
 
 
 def _distances(diff: np.ndarray, metric: str, p: float = 3.0) -> np.ndarray:
@@ -121,6 +143,25 @@ def test_basis_matrix(ctx, dim, dist, periodic, base):
                reach=reach)
 
 
+@pytest.mark.parametrize("metric", ["euclidean", "manhattan", "chebyshev"])
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_reference_within_the_promised_bound(ctx, dim, metric):
+    """The promise every conformant driver keeps (docs/exactness.md, "What is promised"): against
+    the NumPy reference (float64), F within f_bound and IDs equal but at near-ties, at the origin
+    and 10^6 cells away, periodic too (Poisson, jitter; n = 4)."""
+    rng = np.random.default_rng(40 + dim)
+    for base, kw in [(0.0, {}), (1e6 + 0.5, dict(distribution="jitter", jitter=0.9)),
+                     (-3e4, dict(period=(5, 7, 3, 4)[:dim]))]:
+        x = base + rng.uniform(-4.0, 4.0, (3000, dim))
+        r = cellgl.cellular(x, 4, metric=metric, outputs=("F", "id"), **kw)
+        ref = cellgl.cellular(x, 4, metric=metric, outputs=("F", "id"), backend="numpy", **kw)
+        assert r.exact.all()
+        err = np.abs(r.F.astype(np.float64) - ref.F)
+        assert np.all(err <= f_bound(ref.F)), (base, kw, float((err / f_bound(ref.F)).max()))
+        tie = near_ties(ref.F)
+        assert np.array_equal(r.id[~tie], ref.id[~tie]), (base, kw, int((r.id != ref.id).any(1).sum()))
+
+
 @pytest.mark.parametrize("smoothness", [0.05, 0.25])
 @pytest.mark.parametrize("dist", ["poisson", "sparse", "jitter"])
 @pytest.mark.parametrize("dim", [2, 3, 4])
@@ -183,7 +224,7 @@ def test_grid_matrix_far_and_periodic(ctx):
 
 
 @pytest.mark.parametrize("dim", [2, 3, 4])
-def test_grid_cell_cache_gives_the_same_bits(ctx, monkeypatch, dim):
+def test_grid_cell_cache_gives_the_same_bits(same_bits, monkeypatch, dim):
     """The workgroup-shared cell cache (CELLGL_CELL_CACHE=1, grids) answers with the same bits as
     hashing every cell: every distribution, periodic and far from the origin, fine and coarse
     spacings (a workgroup over a few cells and over many), a grid narrower than a workgroup."""
@@ -209,7 +250,7 @@ def test_grid_cell_cache_gives_the_same_bits(ctx, monkeypatch, dim):
 
 
 @pytest.mark.parametrize("dim", [2, 3, 4])
-def test_plain_walker_gives_the_same_bits(ctx, monkeypatch, dim):
+def test_plain_walker_gives_the_same_bits(same_bits, monkeypatch, dim):
     """CELL_WALK_TUNED 0 (walk.glsl: the plain shapes, one ring loop per walker) answers with the
     same bits as the tuned shapes of the default: the search with every distribution, periodic
     too, and each feature walk alone (the edge and the n-sphere radius: the ring loop from ring 0;
@@ -280,7 +321,7 @@ def test_tiny_budget_on_a_grid(ctx, monkeypatch):
     _check("tiny budget grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
 
 
-def test_driver_cut_is_caught_by_the_canary(ctx, monkeypatch):
+def test_driver_cut_is_caught_by_the_canary(llvmpipe, monkeypatch):
     """With the budget lifted (10^6), 4D smooth F1 at k = 0.25 spends more than llvmpipe's 65535
     loop passes per SIMD vector: the driver cuts loops silently, and the canary flags exactly those
     samples (then recomputed). Where the driver is not llvmpipe nothing is cut: all exact."""
@@ -300,7 +341,7 @@ def test_driver_cut_is_caught_by_the_canary(ctx, monkeypatch):
     assert np.all(np.abs(got[exact] - want["smooth_F1"][exact]) < TOL)
 
 
-def test_default_budget_stays_inside_the_driver_limit(ctx):
+def test_default_budget_stays_inside_the_driver_limit(llvmpipe):
     """The heaviest paths at the default budget: no SIMD vector reaches llvmpipe's limit."""
     rng = np.random.default_rng(9)
     for dim, kw, outs, k, n in [(4, {}, ("smooth_F1",), 0.25, 1),
@@ -349,7 +390,7 @@ def test_sparse_poisson_is_served_exactly(ctx, dim):
 # ------------------------------------------------------------------ textures and PUPs
 
 
-def test_texture_cut_by_the_driver_raises(ctx):
+def test_texture_cut_by_the_driver_raises(llvmpipe):
     """A texture whose loops llvmpipe would cut (smooth F1 at k = 0.25, 8 octaves, 16 samples per
     pixel: far past 65535 loop passes per SIMD vector) is refused with LoopLimitError, never
     returned with wrong pixels; a shipped smooth preset is served."""
@@ -385,3 +426,18 @@ def test_snippets_carry_and_document_the_bound(target):
     text = export("f1", target)
     assert "6144" in text
     assert "LOOP_BUDGET" in text and "llvmpipe" in text
+
+
+@pytest.mark.parametrize("p", [0.5, 1.0])
+def test_minkowski_gradient_is_finite_where_an_offset_is_zero(ctx, p):
+    """grad of a Minkowski F with p <= 1 where a component of the offset is exactly 0: pow(0, p - 1)
+    is undefined in GLSL (an infinity on llvmpipe, then 0 * inf = NaN); that axis gets 0, the
+    others their value (lib/metric.glsl)."""
+    x = np.array([[3.5, 0.25], [-7.5, 0.9], [0.1, 2.5]])       # jitter 0: points at the cell centres
+    r = cellgl.cellular(x, 1, metric="minkowski", minkowski_p=p, distribution="jitter", jitter=0.0,
+                        outputs=("F", "delta", "grad"))
+    assert np.isfinite(r.grad).all()
+    zero = r.delta[:, 0, :] == 0.0
+    assert zero.any(axis=1).all()
+    assert np.all(r.grad[:, 0, :][zero] == 0.0)
+    assert np.all(r.grad[:, 0, :][~zero] != 0.0)

@@ -35,6 +35,10 @@ EMULATED = {
     "gl33": {"MESA_GL_VERSION_OVERRIDE": "3.3FC", "MESA_GLSL_VERSION_OVERRIDE": "330",
              "MESA_EXTENSION_OVERRIDE": "-GL_ARB_compute_shader"},
 }
+#: 3.3 core without GL_ARB_gpu_shader5: no `precise` (CELL_PRECISE empty), the weakest promise
+#: (docs/exactness.md): the reference's bounds hold, bit-identity with the compute path is not promised
+PLAIN = {"gl33-plain": {"MESA_GL_VERSION_OVERRIDE": "3.3FC", "MESA_GLSL_VERSION_OVERRIDE": "330",
+                        "MESA_EXTENSION_OVERRIDE": "-GL_ARB_compute_shader -GL_ARB_gpu_shader5"}}
 
 FIELDS = ("F", "delta", "id", "exact", "grad", "edge", "edge_grad", "nsphere", "position", "color",
           "smooth_F1", "smooth_position", "smooth_grad", "smooth_color")
@@ -50,6 +54,23 @@ def compute(ctx):
 
     if not has_compute(ctx):
         pytest.skip("the session context has no compute shaders to compare the fragment path with")
+    return ctx
+
+
+@pytest.fixture
+def both_paths(compute, same_bits):
+    """The session context, with compute shaders and `precise` in the fragment entries too: the
+    two paths must then give the same bits (docs/exactness.md; conftest.same_bits skips elsewhere)."""
+    return compute
+
+
+@pytest.fixture
+def mesa(ctx):
+    """The emulated contexts are Mesa's (MESA_GL_VERSION_OVERRIDE and friends): another driver
+    ignores those variables and gives its own context, so the tests that need them skip there."""
+    version = str(ctx.info.get("GL_VERSION", ""))
+    if "Mesa" not in version:
+        pytest.skip(f"Mesa's context emulation (MESA_GL_VERSION_OVERRIDE) is not available on {version!r}")
     return ctx
 
 
@@ -103,7 +124,7 @@ CASES = [
 
 
 @pytest.mark.parametrize("case", range(len(CASES)))
-def test_cellular_same_bits(compute, monkeypatch, case):
+def test_cellular_same_bits(both_paths, monkeypatch, case):
     dim, kw, outputs, n = CASES[case]
     x = np.random.default_rng(case).uniform(-20.0, 20.0, (300, dim))
     x[:8] += 5e8 if dim == 2 else 3e4                # far from the origin too
@@ -111,7 +132,7 @@ def test_cellular_same_bits(compute, monkeypatch, case):
     _same_result(a, b, f"case {case}")
 
 
-def test_polynomial_smooth_and_grids_same_bits(compute, monkeypatch):
+def test_polynomial_smooth_and_grids_same_bits(both_paths, monkeypatch):
     x = np.random.default_rng(5).uniform(-9.0, 9.0, (200, 3))
     a, b = _both(monkeypatch, lambda: cellgl.cellular(x, 1, outputs=("smooth_F1",), smooth="polynomial"))
     _same_result(a, b, "polynomial smooth")
@@ -123,7 +144,9 @@ def test_polynomial_smooth_and_grids_same_bits(compute, monkeypatch):
     _same_result(a, b, "2D grid, wide rows, far, periodic")
 
 
-def test_voronoi_and_loop_probe_same_bits(compute, monkeypatch):
+def test_loop_probe_same_counts(compute, llvmpipe, monkeypatch):
+    """The measurement build (gpu.loop_probe) on both paths: the search's own count and the flags
+    are the same code's; llvmpipe's count is what its limiter left (nothing elsewhere: skipped)."""
     x = np.random.default_rng(6).uniform(-9.0, 9.0, (256, 4))
     p = core.make_params(4)
     a, b = _both(monkeypatch, lambda: gpu.loop_probe(x, p, 1, ("smooth_F1",), 0.25))
@@ -133,6 +156,9 @@ def test_voronoi_and_loop_probe_same_bits(compute, monkeypatch):
         assert not np.any(driver >= gpu.DRIVER_LOOP_LIMIT - 3), "the default budget keeps inside the driver's"
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[2], b[2])
+
+
+def test_voronoi_same_bits(both_paths, monkeypatch):
     v = np.random.default_rng(6).uniform(-9.0, 9.0, (300, 3))
     for feature in ("F2", "smooth_F1", "distance_to_edge", "n_sphere_radius"):
         a, b = _both(monkeypatch, lambda: cellgl.voronoi(v, 3, feature, detail=1.5))
@@ -141,7 +167,7 @@ def test_voronoi_and_loop_probe_same_bits(compute, monkeypatch):
             assert (x is None and y is None) or np.asarray(x).tobytes() == np.asarray(y).tobytes(), (feature, name)
 
 
-def test_driver_cut_is_caught_on_the_fragment_path(compute, monkeypatch):
+def test_driver_cut_is_caught_on_the_fragment_path(compute, llvmpipe, monkeypatch):
     """The budget lifted: llvmpipe's limiter cuts the loops of the heaviest vectors, the fragment
     entry's canary flags exactly those, and what reaches the user is exact (the NumPy recompute)."""
     x = np.random.default_rng(7).uniform(-9.0, 9.0, (64, 3))
@@ -184,18 +210,18 @@ def _texture_case(monkeypatch, name):
 
 
 @pytest.mark.parametrize("name", QUICK_PRESETS)
-def test_texture_presets_same_bits(compute, monkeypatch, name):
+def test_texture_presets_same_bits(both_paths, monkeypatch, name):
     _texture_case(monkeypatch, name)
 
 
 @pytest.mark.slow
-def test_every_texture_preset_same_bits(compute, monkeypatch):
+def test_every_texture_preset_same_bits(both_paths, monkeypatch):
     for name, _ in cellgl.list_presets():
         if not name.startswith("pups-"):
             _texture_case(monkeypatch, name)
 
 
-def test_pups_same_bits(compute, monkeypatch):
+def test_pups_same_bits(both_paths, monkeypatch):
     from cellgl import pups as P
 
     a, b = _both(monkeypatch, lambda: cellgl.render("pups-cow", 96, 80, channels=("color", "height")))
@@ -213,7 +239,7 @@ def test_pups_same_bits(compute, monkeypatch):
             assert x.tobytes() == y.tobytes(), (mode, method)
 
 
-def test_bake_bytes_equal(compute, monkeypatch, tmp_path):
+def test_bake_bytes_equal(both_paths, monkeypatch, tmp_path):
     from cellgl.io.bake import bake
 
     def run(path):
@@ -227,7 +253,7 @@ def test_bake_bytes_equal(compute, monkeypatch, tmp_path):
     _same_dict(a, b, "bake files")
 
 
-def test_to_dask_blocks_same_bits(compute, monkeypatch):
+def test_to_dask_blocks_same_bits(both_paths, monkeypatch):
     pytest.importorskip("dask")
     from cellgl.dask import to_dask
 
@@ -235,7 +261,7 @@ def test_to_dask_blocks_same_bits(compute, monkeypatch):
     assert a.tobytes() == b.tobytes()
 
 
-def test_forced_fragment_draws_in_tiles(compute, monkeypatch):
+def test_forced_fragment_draws_in_tiles(both_paths, monkeypatch):
     """More samples than one draw's tile: every tile is drawn (none left at the clear value)."""
     from cellgl.gl import dispatch
 
@@ -249,32 +275,39 @@ def test_forced_fragment_draws_in_tiles(compute, monkeypatch):
 
 def _child(env_name: str, args: list[str], timeout: int = 900) -> subprocess.CompletedProcess:
     env = {k: v for k, v in os.environ.items() if k != "CELLGL_PATH"}
-    env.update(EMULATED[env_name], CELLGL_REQUIRE_GPU="1")
+    env.update({**EMULATED, **PLAIN}[env_name], CELLGL_REQUIRE_GPU="1")
     return subprocess.run([sys.executable] + args, cwd=ROOT, env=env, capture_output=True, text=True,
                           timeout=timeout)
 
 
 _PROBE = """
-import json, cellgl
+import json, sys, cellgl
+sys.path.insert(0, "tests")
+from conftest import precise_in_fragment_entries
 from cellgl.gl import context, dispatch
 ctx = context.get_context()
-print(json.dumps({"version": ctx.version_code, "path": dispatch.path(ctx)}))
+print(json.dumps({"version": ctx.version_code, "path": dispatch.path(ctx),
+                  "precise": precise_in_fragment_entries(ctx)}))
 """
 
 
-@pytest.mark.parametrize("env_name", list(EMULATED))
-def test_emulated_context_runs_the_fragment_path(ctx, env_name):
+@pytest.mark.parametrize("env_name", list(EMULATED) + list(PLAIN))
+def test_emulated_context_runs_the_fragment_path(mesa, env_name):
+    """Each emulated context runs the fragment path; `precise` is there but where
+    GL_ARB_gpu_shader5 was taken away (the prelude then leaves CELL_PRECISE empty, and the
+    fragment entries still compile)."""
     r = _child(env_name, ["-c", _PROBE])
     assert r.returncode == 0, r.stderr[-3000:]
     info = json.loads(r.stdout.strip().splitlines()[-1])
-    assert info == {"version": 410 if env_name == "gl41" else 330, "path": "fragment"}
+    assert info == {"version": 410 if env_name == "gl41" else 330, "path": "fragment",
+                    "precise": env_name != "gl33-plain"}
 
 
 #: the exactness matrix's subset for the default run (every dimension, metric, the distributions,
 #: features, period, far samples, the loop budget); the slow test runs a larger one
 QUICK_MATRIX = ("(basis_matrix and (2-poisson-period-5e8 or 3-worley1996-free-0 or 4-jitter-period-0 "
                 "or 2-blender-free-0 or 3-sparse-period-5e8)) or (features_matrix and 3-poisson-0.25) "
-                "or tiny_budget_on_a_grid or reproducer_nsphere")
+                "or tiny_budget_on_a_grid or reproducer_nsphere or (promised_bound and 3-euclidean)")
 FULL_MATRIX = ("(basis_matrix and (free-0 or period-5e8)) or (features_matrix and 0.25) or stretch_and_density "
                "or grid_matrix or tiny_budget or reproducer_nsphere or sparse_poisson")
 
@@ -287,14 +320,16 @@ def _matrix(env_name: str, selection: str) -> None:
     assert " passed" in tail and "failed" not in tail, tail
 
 
-@pytest.mark.parametrize("env_name", ["gl41", pytest.param("gl33", marks=pytest.mark.slow)])
-def test_exactness_matrix_without_compute(ctx, env_name):
+@pytest.mark.parametrize("env_name", ["gl41", "gl33-plain", pytest.param("gl33", marks=pytest.mark.slow)])
+def test_exactness_matrix_without_compute(mesa, env_name):
+    """The brute-force matrix (and the reference's bound) on contexts without compute shaders,
+    one of them without `precise`: the promise against the reference holds on every driver."""
     _matrix(env_name, QUICK_MATRIX)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("env_name", list(EMULATED))
-def test_full_exactness_matrix_without_compute(ctx, env_name):
+def test_full_exactness_matrix_without_compute(mesa, env_name):
     _matrix(env_name, FULL_MATRIX)
 
 
@@ -319,7 +354,7 @@ np.savez(sys.argv[1] + "/out.npz", **out)
 
 
 @pytest.mark.parametrize("env_name", list(EMULATED))
-def test_renders_without_compute_equal_the_compute_path(compute, monkeypatch, tmp_path, env_name):
+def test_renders_without_compute_equal_the_compute_path(both_paths, mesa, monkeypatch, tmp_path, env_name):
     """Presets (a cellular and a PUPs one), a bake's file bytes and cellular's outputs made in a
     context without compute shaders equal this process's compute path."""
     names = ["flagstone", "pups-cells"]

@@ -151,7 +151,10 @@ def test_cell_counts_dispatches_stay_within_the_group_limit(ctx, monkeypatch):
     import moderngl
 
     from cellgl.basis import core, reference
+    from cellgl.gl.path import gpu_path
 
+    if gpu_path(ctx) != "compute":
+        pytest.skip("counts compute dispatches; the fragment path draws (tests/test_fragment_path.py)")
     p = core.make_params(2, density=2.0)
     cells = np.zeros((300, 4), np.int64)
     cells[:, 0] = np.arange(300) - 150
@@ -237,3 +240,25 @@ def test_bad_coordinate_anywhere_is_named(ctx, dim, bad, match):
     edge[-1, -1] = np.nextafter(2.0 ** 30, 0.0)
     r = cellgl.cellular(edge, 2, distribution="jitter", outputs=("F",))
     assert r.exact.all()
+
+
+@pytest.mark.parametrize("bad,match", [(np.nan, r"finite.*nan"), (np.inf, r"finite.*inf"),
+                                       (2.0 ** 30, r"within \+-2\^30 cells; got 1073741824\.0"),
+                                       (-1e300, r"within \+-2\^30 cells; got -1e\+300")])
+def test_bad_coordinate_is_caught_before_the_upload(monkeypatch, bad, match):
+    """The check runs on the CPU before anything reaches the GPU (issue 39): a driver compiling with
+    fast-math semantics need not honour the shader's comparisons with NaN or its range guard. A
+    stand-in GPU search that flags nothing (such a driver) must never be reached."""
+    def never(*a, **k):
+        raise AssertionError("bad coordinates reached the GPU search")
+
+    monkeypatch.setattr(gpu, "search_points", never)
+    pts = np.random.default_rng(2).uniform(-5.0, 5.0, (300, 3))
+    pts[123, 1] = bad
+    with pytest.raises(ValueError, match=match) as err:
+        cellgl.cellular(pts, 2, distribution="jitter", outputs=("F",))
+    assert "[123, 1]" in str(err.value)
+    far = np.random.default_rng(3).uniform(-5.0, 5.0, (300, 3))     # worley1996 scales by 0.398150: 2^30 cells lie further out
+    far[7, 2] = np.nextafter(2.0 ** 30 / 0.398150, np.inf) * 1.000001
+    with pytest.raises(ValueError, match=r"within \+-2\^30 cells; got .* at \[7, 2\]"):
+        cellgl.cellular(far, 2, distribution="worley1996", outputs=("F",))

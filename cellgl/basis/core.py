@@ -337,14 +337,17 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
     else:
         from cellgl.basis import gpu
 
-        # The shader checks the coordinates (it flags a sample whose coordinate is NaN, infinite
-        # or beyond COORD_LIMIT): only when a sample comes back flagged are they checked here,
-        # for the same error as a check before the dispatch (no pass over the points otherwise).
+        # The coordinates are checked here, before the upload: a GPU comparison cannot catch NaN
+        # or infinity where the driver compiles with fast-math semantics (GLSL does not promise
+        # that a comparison with NaN is false), so the shader's own range guard (cellular.comp)
+        # only keeps its float-to-int conversions defined. Two reductions; scale > 0, so the
+        # scaled extremes are the extremes scaled (and NaN stays NaN).
+        lo, hi = float(pts.min()) * p.scale, float(pts.max()) * p.scale
+        if not (lo > -COORD_LIMIT and hi < COORD_LIMIT):
+            _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
         out, passes = _passes.gpu_passes(
             lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p)
         exact = passes[0][1] if len(passes) == 1 else np.logical_and.reduce([ok for _, ok in passes])
-        if not exact.all():
-            _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
         _gpu_finish(out, outs, pts, p)
         if not exact.all():
             def where(rows):

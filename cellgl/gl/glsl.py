@@ -17,6 +17,11 @@ Rules
 - Included (library) files must not contain ``#version``.
 - ``#define KEY VALUE`` lines go immediately after the ``#version`` line of the entry file, or
   at the top when it has none.
+- An entry file with a ``#version`` line whose resolved text uses ``CELL_PRECISE`` gets
+  :data:`PRELUDE` right after that line (before the defines): it defines ``CELL_PRECISE`` as ``precise`` where the compiler has that qualifier
+  (GLSL 4.00 and up, or ``GL_ARB_gpu_shader5``, which it then enables) and as nothing elsewhere.
+  The shaders put ``CELL_PRECISE`` on the arithmetic whose rounding decides an answer
+  (docs/exactness.md, "What the driver may round").
 """
 
 from __future__ import annotations
@@ -41,12 +46,33 @@ __all__ = [
 
 #: Pseudo file name used in the line map for generated ``#define`` lines.
 DEFINES_FILE = "<defines>"
+#: Pseudo file name used in the line map for the lines of :data:`PRELUDE`.
+PRELUDE_FILE = "<prelude>"
+
+#: Placed after the ``#version`` line of every entry shader. ``precise`` (GLSL 4.00, or
+#: GL_ARB_gpu_shader5 in a 3.30 compiler that has it) makes the operations that compute a
+#: variable happen in the order written, each rounded once, with the same precision everywhere
+#: it appears: no fused multiply-add the source does not ask for, no reassociation. Without it
+#: two compilations of the same code (a compute and a fragment entry, two walker variants) may
+#: round differently. The macro is empty where no such qualifier exists (and in exported
+#: snippets: cellgl/export/snippets.py), so the code is valid in every GLSL from 3.30.
+PRELUDE = (
+    "#if __VERSION__ < 400 && defined(GL_ARB_gpu_shader5)",
+    "#extension GL_ARB_gpu_shader5 : enable",
+    "#endif",
+    "#if __VERSION__ >= 400 || defined(GL_ARB_gpu_shader5)",
+    "#define CELL_PRECISE precise",
+    "#else",
+    "#define CELL_PRECISE",
+    "#endif",
+)
 
 _INCLUDE_RE = re.compile(r'^\s*#\s*include\s+(?:"([^"]*)"|<([^>]*)>)\s*(?://.*)?$')
 _INCLUDE_LOOSE_RE = re.compile(r"^\s*#\s*include\b")
 _VERSION_RE = re.compile(r"^\s*#\s*version\b")
 _EACH_TIME_RE = re.compile(r"^\s*#\s*pragma\s+cellgl\s+include_each_time\s*(?://.*)?$", re.M)
 _IDENT_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_PRECISE_RE = re.compile(r"\bCELL_PRECISE\b")
 
 
 class ShaderError(RuntimeError):
@@ -219,7 +245,8 @@ def load(name: str, defines: Mapping[str, object] | None = None, *,
     name : str
         Path relative to the shader root, e.g. ``"cellular.comp"``.
     defines : mapping of str to bool, int, float, str or None, optional
-        Emitted as ``#define`` lines right after ``#version`` (see :func:`format_define`).
+        Emitted as ``#define`` lines right after ``#version`` and :data:`PRELUDE` (see
+        :func:`format_define`).
     root : path, optional
         Shader root directory; defaults to :func:`shader_dir`.
     files : mapping of str to str, optional
@@ -238,17 +265,16 @@ def load(name: str, defines: Mapping[str, object] | None = None, *,
     resolver = _Resolver(_root(root), files)
     resolver.add(name, is_library=False, where=None, at=None, markers=False)
     src = resolver.source()
-    if defines:
-        define_lines = [format_define(k, v) for k, v in defines.items()]
-        lines = src.text.splitlines()
-        insert_at = 0
-        for i, line in enumerate(lines):
-            if _VERSION_RE.match(line):
-                insert_at = i + 1
-                break
-        lines[insert_at:insert_at] = define_lines
+    lines = src.text.splitlines()
+    version_at = next((i for i, line in enumerate(lines) if _VERSION_RE.match(line)), None)
+    insert_at = 0 if version_at is None else version_at + 1
+    uses = version_at is not None and _PRECISE_RE.search(src.text) is not None
+    added = [(line, (PRELUDE_FILE, i + 1)) for i, line in enumerate(PRELUDE)] if uses else []
+    added += [(format_define(k, v), (DEFINES_FILE, i + 1)) for i, (k, v) in enumerate((defines or {}).items())]
+    if added:
+        lines[insert_at:insert_at] = [text for text, _ in added]
         line_map = list(src.line_map)
-        line_map[insert_at:insert_at] = [(DEFINES_FILE, i + 1) for i in range(len(define_lines))]
+        line_map[insert_at:insert_at] = [where for _, where in added]
         src = Source("\n".join(lines) + "\n", line_map, src.files)
     return src
 

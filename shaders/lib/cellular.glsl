@@ -36,6 +36,11 @@
 //         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache),
 //         CELL_WALK_TUNED (walk.glsl: the shapes of the loops, tuned or plain).
 
+// CELL_PRECISE: `precise` where the compiler has it (the entry's prelude, cellgl/gl/glsl.py), on
+// the arithmetic whose rounding decides an answer (lib/metric.glsl, docs/exactness.md).
+#ifndef CELL_PRECISE
+#define CELL_PRECISE
+#endif
 #include "walk.glsl"
 
 #ifndef CELL_EDGE
@@ -152,8 +157,8 @@ void _cell_insert(inout CellResult r, float d, vec4 delta, uint id)
 // offset o, base = o - f, becomes a candidate.
 void _cell_visit_point(inout CellResult r, vec4 base, ivec4 o, vec4 q, uint id, CellParams p)
 {
-    vec4 delta = _cell_axis_scale(base + q, p);
-    float d = cell_metric_length(delta, p.minkowski_p);
+    CELL_PRECISE vec4 delta = _cell_axis_scale(base + q, p);
+    CELL_PRECISE float d = cell_metric_length(delta, p.minkowski_p);
 #if CELL_TRACK_F1_CELL
     if (d < r.F[0]) {          // the test that makes it the new F1 in _cell_insert
         r.o1 = o;
@@ -169,7 +174,7 @@ void _cell_visit(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParams p)
     ivec4 c;
     uint state;
     int count = _cell_open(cell, o, p, c, state);
-    vec4 base = vec4(o) - f;
+    CELL_PRECISE vec4 base = vec4(o) - f;
     r.loops += count + 1;
     // Tested at the end of each pass: on SIMD CPUs (llvmpipe) an `if` does not
     // branch, it masks, so a loop whose lanes all leave at its top still runs
@@ -198,7 +203,7 @@ void _cell_visit_near(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParam
     if (cell_shared_on()) {
         int count;
         int slot = cell_shared_open(cell, o, count);
-        vec4 base = vec4(o) - f;
+        CELL_PRECISE vec4 base = vec4(o) - f;
         r.loops += count + 1;
         if (cell_min_count(p) > 0 || count > 0) {
             for (int k = 0; ; ) {
@@ -223,13 +228,13 @@ void _cell_visit_near(inout CellResult r, ivec4 cell, vec4 f, ivec4 o, CellParam
 // point nearer than Fn (internal units; CELL_FAR: none found yet, the whole ring).
 void _cell_search_window(int ring, float Fn, vec4 f, CellParams p, out ivec4 lo, out ivec4 hi)
 {
-    float reach = Fn < CELL_FAR ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
+    CELL_PRECISE float reach = Fn < CELL_FAR ? cell_metric_finish(Fn, p.minkowski_p) * 1.000001 + 1e-6 : float(ring + 2);
 #if CELL_ANISO
     lo = ivec4(0);
     hi = ivec4(0);
     for (int a = 0; a < CELL_DIM; a++) {
         // In lattice units on this axis (no point found yet: the whole ring).
-        float ra = Fn < CELL_FAR ? reach / p.axis_scale[a] : reach;
+        CELL_PRECISE float ra = Fn < CELL_FAR ? reach / p.axis_scale[a] : reach;
         hi[a] = min(ring, int(ceil(ra + f[a])) - 1);
         lo[a] = -min(ring, int(ceil(ra + 1.0 - f[a])) - 1);
     }
@@ -276,6 +281,8 @@ CellResult _cell_result_start(int loops)
     r.o1 = ivec4(0);
     r.q1 = vec4(0.0);
 #endif
+    // set at the end of the search; never copied undefined before that
+    r.exact = false;
     r.loops = loops;
     return r;
 }
@@ -429,7 +436,7 @@ CellResult cell_search_budget(ivec4 cell, vec4 f, CellParams p, int loops)
     // run-time loop on purpose: in straight-line SIMD code a pruned cell still
     // runs while any lane of the vector needs it, a lane that left a loop costs
     // nothing. Tested at the end of each pass, as the point loop (_cell_visit).
-    float rest[CELL_RING1_CELLS + 1];
+    CELL_PRECISE float rest[CELL_RING1_CELLS + 1];
     rest[CELL_RING1_CELLS] = CELL_FAR;
     for (int t = CELL_RING1_CELLS - 1; t >= 0; t--) {
         rest[t] = min(rest[t + 1], _cell_box_distance(_cell_ring1_offset(t, ivec4(0, 4, 8, 0)), qn, p));

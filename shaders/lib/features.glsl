@@ -75,11 +75,12 @@ float _cell_smoothstep_slope(float t)
 
 void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, float smoothness)
 {
+    // CELL_PRECISE (metric.glsl): the fold rounded as written, the same in every entry
     float k = 0.5 * smoothness;
-    float s = 8.0;
-    vec4 gs = vec4(0.0);            // d s / d sample
-    vec4 pos = vec4(0.0);           // folded point position, relative to the sample's cell
-    vec4 col = vec4(0.0);           // folded cell colour and cell value (cell_id_value)
+    CELL_PRECISE float s = 8.0;
+    CELL_PRECISE vec4 gs = vec4(0.0);            // d s / d sample
+    CELL_PRECISE vec4 pos = vec4(0.0);           // folded point position, relative to the sample's cell
+    CELL_PRECISE vec4 col = vec4(0.0);           // folded cell colour and cell value (cell_id_value)
 #if CELL_DIM >= 4
     for (int v = -2; v <= 2; v++)
 #else
@@ -98,12 +99,12 @@ void _cell_poly_smooth(inout CellFeatures o, ivec4 cell, vec4 f, CellParams p, f
         int count = _cell_open(cell, o4, p, c, state);
         for (int j = 0; j < count; j++) {
             uint id;
-            vec4 q = cell_dims(vec4(o4) + cell_next_point(state, c, p, id));
-            vec4 delta = q - f;
-            float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-            float h, dh_ds;
+            CELL_PRECISE vec4 q = cell_dims(vec4(o4) + cell_next_point(state, c, p, id));
+            CELL_PRECISE vec4 delta = q - f;
+            CELL_PRECISE float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+            CELL_PRECISE float h, dh_ds;
             if (k > 0.0) {
-                float t = 0.5 + 0.5 * (s - d) / k;
+                CELL_PRECISE float t = 0.5 + 0.5 * (s - d) / k;
                 h = smoothstep(0.0, 1.0, t);
                 dh_ds = _cell_smoothstep_slope(t) * 0.5 / k;     // d h / d (s - d)
             } else {

@@ -7,7 +7,16 @@
 // CELL_METRIC selects the metric at compile time (values from
 // cellgl.basis.enums.Metric: CELL_METRIC_EUCLIDEAN, _MANHATTAN, _CHEBYSHEV, _MINKOWSKI).
 //
-// Macros: CELL_DIM (2..4), CELL_METRIC.
+// Macros: CELL_DIM (2..4), CELL_METRIC; CELL_PRECISE (the entry's prelude, cellgl/gl/glsl.py:
+// `precise` where the compiler has it, else empty).
+//
+// Rounding (docs/exactness.md, "What the driver may round"): every value here decides an
+// answer (the order of F1..Fn, the search's bounds, the outputs), so each is CELL_PRECISE: the
+// operations happen as written, each rounded once (no fused multiply-add the source does not
+// ask for, no reassociation), the same in every entry and walker compiled on one driver.
+#ifndef CELL_PRECISE
+#define CELL_PRECISE
+#endif
 
 // A CELL_DIM-dimensional value in a 4-vector: the components past CELL_DIM set
 // to zero.
@@ -38,12 +47,14 @@ float cell_metric_term(float x, float p)
 {
     x = abs(x);
 #if CELL_METRIC == CELL_METRIC_EUCLIDEAN
-    return x * x;
+    CELL_PRECISE float t = x * x;
 #elif CELL_METRIC == CELL_METRIC_MINKOWSKI
-    return pow(x, p);
+    // pow(0, p) is defined (p >= 0.25 > 0: cellgl.basis.core checks it)
+    CELL_PRECISE float t = pow(x, p);
 #else
-    return x;
+    float t = x;
 #endif
+    return t;
 }
 
 // Fold one axis term into an accumulated internal length.
@@ -52,7 +63,8 @@ float cell_metric_add(float acc, float term)
 #if CELL_METRIC == CELL_METRIC_CHEBYSHEV
     return max(acc, term);
 #else
-    return acc + term;
+    CELL_PRECISE float sum = acc + term;
+    return sum;
 #endif
 }
 
@@ -60,19 +72,20 @@ float cell_metric_add(float acc, float term)
 float cell_metric_finish(float acc, float p)
 {
 #if CELL_METRIC == CELL_METRIC_EUCLIDEAN
-    return sqrt(acc);
+    CELL_PRECISE float F = sqrt(acc);
 #elif CELL_METRIC == CELL_METRIC_MINKOWSKI
-    return pow(acc, 1.0 / p);
+    CELL_PRECISE float F = pow(acc, 1.0 / p);      // acc >= 0, 1 / p > 0: defined
 #else
-    return acc;
+    float F = acc;
 #endif
+    return F;
 }
 
 // Internal length of a CELL_DIM-dimensional vector (components past
 // CELL_DIM are ignored).
 float cell_metric_length(vec4 d, float p)
 {
-    float acc = cell_metric_term(d.x, p);
+    CELL_PRECISE float acc = cell_metric_term(d.x, p);
     acc = cell_metric_add(acc, cell_metric_term(d.y, p));
 #if CELL_DIM >= 3
     acc = cell_metric_add(acc, cell_metric_term(d.z, p));
@@ -90,6 +103,9 @@ float cell_metric_length(vec4 d, float p)
 //   Manhattan:  -sign(delta)
 //   Chebyshev:  -sign(delta) on the axis of the largest |delta| only
 //   Minkowski:  -sign(delta) |delta|^(p-1) / F^(p-1)
+//               (0 on an axis where delta is 0: pow(0, y) is undefined for y <= 0, i.e. p <= 1;
+//               0 is the limit for p > 1 and the subgradient's middle for p = 1, and for p < 1,
+//               where the derivative is unbounded there, the one finite choice)
 vec4 cell_metric_gradient(vec4 delta, float F, float p)
 {
     delta = cell_dims(delta);
@@ -97,7 +113,8 @@ vec4 cell_metric_gradient(vec4 delta, float F, float p)
         return vec4(0.0);
     }
 #if CELL_METRIC == CELL_METRIC_EUCLIDEAN
-    return -delta / F;
+    CELL_PRECISE vec4 g = -delta / F;
+    return g;
 #elif CELL_METRIC == CELL_METRIC_MANHATTAN
     return -sign(delta);
 #elif CELL_METRIC == CELL_METRIC_CHEBYSHEV
@@ -111,6 +128,11 @@ vec4 cell_metric_gradient(vec4 delta, float F, float p)
     g[k] = -sign(delta[k]);
     return g;
 #else
-    return -sign(delta) * pow(abs(delta), vec4(p - 1.0)) / pow(F, p - 1.0);
+    // |delta_a| raised to p - 1 only where it is > 0 (the smallest normal float elsewhere, whose
+    // power is finite for p - 1 >= -0.75, and then multiplied by 0): never 0 * inf.
+    vec4 a = abs(delta);
+    vec4 on = vec4(greaterThan(a, vec4(0.0)));
+    CELL_PRECISE vec4 g = -sign(delta) * on * pow(max(a, vec4(1.17549435e-38)), vec4(p - 1.0)) / pow(F, p - 1.0);
+    return g;
 #endif
 }

@@ -19,6 +19,12 @@
 
 #include "hash.glsl"
 
+// CELL_PRECISE: `precise` where the compiler has it (cellgl/gl/glsl.py); a point's position is
+// rounded as written, the same in every entry (lib/metric.glsl, docs/exactness.md).
+#ifndef CELL_PRECISE
+#define CELL_PRECISE
+#endif
+
 #ifndef CELL_DENSITY_MAP
 #define CELL_DENSITY_MAP 0
 #endif
@@ -374,11 +380,12 @@ vec4 cell_orbit(vec4 f, uint id, CellParams p)
 {
     uint h = cell_hash_u32(id ^ 0x3c6ef372u);
     uint turn = (h & 1u) != 0u ? p.orbit_turn : 0u - p.orbit_turn;
-    float a = float((h + turn) >> 8) * (6.283185307179586 / 16777216.0);
+    CELL_PRECISE float a = float((h + turn) >> 8) * (6.283185307179586 / 16777216.0);
     float r = p.orbit_radius;
-    f.x = 0.5 + (1.0 - 2.0 * r) * (f.x - 0.5) + r * cos(a);
-    f.y = 0.5 + (1.0 - 2.0 * r) * (f.y - 0.5) + r * sin(a);
-    return f;
+    CELL_PRECISE vec4 g = f;
+    g.x = 0.5 + (1.0 - 2.0 * r) * (f.x - 0.5) + r * cos(a);
+    g.y = 0.5 + (1.0 - 2.0 * r) * (f.y - 0.5) + r * sin(a);
+    return g;
 }
 #endif
 
@@ -386,7 +393,7 @@ vec4 cell_orbit(vec4 f, uint id, CellParams p)
 // position relative to the cell's lower corner, each coordinate in [0, 1].
 vec4 cell_next_point(inout uint state, ivec4 c, CellParams p, out uint id)
 {
-    vec4 f = vec4(0.0);
+    CELL_PRECISE vec4 f = vec4(0.0);
 #if CELL_DIST == CELL_DIST_BLENDER
     // Blender: the hash times Randomness (p.jitter), a float32 product as in the node.
     id = state;

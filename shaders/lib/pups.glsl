@@ -29,6 +29,12 @@
 // cell_pups_eval(), which walks a candidate list. The including shader must
 // then define the three fetch functions declared below (they read its
 // buffers); this file itself declares no buffers, uniforms or bindings.
+//
+// CELL_PRECISE (`precise` where the compiler has it, cellgl/gl/glsl.py; docs/exactness.md) on the
+// weights and sums: rounded as written, the same in the compute and the fragment entries.
+#ifndef CELL_PRECISE
+#define CELL_PRECISE
+#endif
 
 // Axial weight (1): the cubic Hermite falloff from 1 at p = 0 to 0 at p = 1,
 // with zero slope at both ends. p is clamped to [0, 1].
@@ -36,27 +42,30 @@ float cell_pups_axial(float p)
 {
     p = clamp(p, 0.0, 1.0);
     float q = 1.0 - p;
-    return q * q * (1.0 + 2.0 * p);
+    CELL_PRECISE float a = q * q * (1.0 + 2.0 * p);
+    return a;
 }
 
 // Normalised projection of d = u - c on a pre-scaled axis, clamped to [0, 1].
 float cell_pups_project(vec2 d, vec2 axis_scaled)
 {
-    return clamp(dot(d, axis_scaled), 0.0, 1.0);
+    CELL_PRECISE float p = d.x * axis_scaled.x + d.y * axis_scaled.y;
+    return clamp(p, 0.0, 1.0);
 }
 
 // One factor of the product (2). Returns false once the weight is zero
 // (u lies beyond the end of this axis), so the caller can stop early.
 bool cell_pups_axis_step(inout float w, vec2 d, vec2 axis_scaled)
 {
-    float p = dot(d, axis_scaled);
+    CELL_PRECISE float p = d.x * axis_scaled.x + d.y * axis_scaled.y;
     if (p >= 1.0) {
         w = 0.0;
         return false;
     }
     if (p > 0.0) {
         float q = 1.0 - p;
-        w *= q * q * (1.0 + 2.0 * p);
+        CELL_PRECISE float a = q * q * (1.0 + 2.0 * p);
+        w *= a;
     }
     return true;
 }
@@ -65,11 +74,12 @@ bool cell_pups_axis_step(inout float w, vec2 d, vec2 axis_scaled)
 // eta = 0 at u = c (where w = 1 anyway). epsilon in [0, 1).
 float cell_pups_orient(float w, vec2 d, vec2 v, float epsilon)
 {
-    float len = length(d);
-    float eta = len > 0.0 ? dot(d, v) / len : 0.0;
-    float k = epsilon * eta;
-    float e = k >= 0.0 ? 1.0 - k : 1.0 / (1.0 + k);
-    return w > 0.0 ? pow(w, e) : 0.0;
+    CELL_PRECISE float len = sqrt(d.x * d.x + d.y * d.y);
+    CELL_PRECISE float eta = len > 0.0 ? (d.x * v.x + d.y * v.y) / len : 0.0;
+    CELL_PRECISE float k = epsilon * eta;
+    CELL_PRECISE float e = k >= 0.0 ? 1.0 - k : 1.0 / (1.0 + k);      // 1 + k > 0: epsilon < 1
+    CELL_PRECISE float o = w > 0.0 ? pow(w, e) : 0.0;                  // pow(0, e) avoided
+    return o;
 }
 
 // Running sums over the candidate points of one pixel.
@@ -88,8 +98,10 @@ CellPupsAcc cell_pups_acc_init()
 
 void cell_pups_acc_add(inout CellPupsAcc acc, float w, vec4 value, int label)
 {
-    acc.sum += w * value;
-    acc.wsum += w;
+    CELL_PRECISE vec4 sum = acc.sum + w * value;
+    CELL_PRECISE float wsum = acc.wsum + w;
+    acc.sum = sum;
+    acc.wsum = wsum;
     if (w > acc.wmax) {
         acc.wmax = w;
         acc.label = label;
@@ -100,7 +112,8 @@ void cell_pups_acc_add(inout CellPupsAcc acc, float w, vec4 value, int label)
 // Interpolated value (3); 0 where no point has weight (outside every support).
 vec4 cell_pups_acc_value(CellPupsAcc acc)
 {
-    return acc.wsum > 0.0 ? acc.sum / acc.wsum : vec4(0.0);
+    CELL_PRECISE vec4 v = acc.wsum > 0.0 ? acc.sum / acc.wsum : vec4(0.0);
+    return v;
 }
 
 #ifdef CELL_PUPS_FETCH
@@ -129,12 +142,14 @@ CellPupsAcc cell_pups_eval(vec2 u, uvec4 cell, float epsilon)
     for (uint k = cell.x; k < end; k += per) {
         uvec4 head = cell_pups_fetch(k);
         uvec4 attr = cell_pups_fetch(k + 1u);
-        vec2 d = u - uintBitsToFloat(head.xy);
-        float w = 1.0;
+        CELL_PRECISE vec2 d = u - uintBitsToFloat(head.xy);
+        CELL_PRECISE float w = 1.0;
         for (uint j = k + 2u; j < k + per; ++j) {
             vec4 a = uintBitsToFloat(cell_pups_fetch(j));
-            w *= cell_pups_axial(dot(d, a.xy));
-            w *= cell_pups_axial(dot(d, a.zw));
+            CELL_PRECISE float p0 = d.x * a.x + d.y * a.y;
+            CELL_PRECISE float p1 = d.x * a.z + d.y * a.w;
+            w *= cell_pups_axial(p0);
+            w *= cell_pups_axial(p1);
         }
         cell_pups_acc_add(acc, cell_pups_orient(w, d, uintBitsToFloat(head.zw), epsilon),
                           vec4(uintBitsToFloat(attr.xyz), 0.0), int(attr.w));

@@ -83,6 +83,8 @@
 #include "features.glsl"
 #include "noise.glsl"
 #include "texture_params.glsl"
+// CELL_PRECISE (metric.glsl) on the positions and sums that make a texel: the same bytes from
+// the compute and the fragment entry on one driver (docs/exactness.md).
 
 struct CellTexel {
     float height;   // h in [0, 1]
@@ -99,14 +101,16 @@ struct CellTexel {
 // offset_y, offset_z, time), which t carries split per octave: s = x - O.
 vec4 cell_texture_local(vec3 p, CellTextureParams t)
 {
-    return vec4(p.x * t.frequency, p.y * t.frequency * t.aspect, p.z * t.frequency, 0.0);
+    CELL_PRECISE vec4 s = vec4(p.x * t.frequency, p.y * t.frequency * t.aspect, p.z * t.frequency, 0.0);
+    return s;
 }
 
 // The lattice point origin_cell + origin_frac + s as an integer cell and a
 // fraction in [0, 1) (s small).
+// (ivec4(fl) is in range: the CPU keeps |origin_frac + s| far below 2^31, texture/lattice.)
 void cell_texture_lattice(ivec4 origin_cell, vec4 origin_frac, vec4 s, out ivec4 cell, out vec4 f)
 {
-    vec4 q = origin_frac + s;
+    CELL_PRECISE vec4 q = origin_frac + s;
     vec4 fl = floor(q);
     cell = origin_cell + ivec4(fl);
     f = q - fl;
@@ -170,7 +174,9 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
     CellParams p = _cell_tex_basis(t, octave);
     ivec4 cell;
     vec4 f;
-    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], s * t.dist_scale, cell, f);
+    // a product, then the lattice's sum: no fused multiply-add
+    CELL_PRECISE vec4 sd = s * t.dist_scale;
+    cell_texture_lattice(t.origin_cell[octave], t.origin_frac[octave], sd, cell, f);
     cell = cell_dims_i(cell);
     f = cell_dims(f);
     CellResult r = cell_search(cell, f, p);
@@ -180,7 +186,8 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
                                t.c31, t.c32, t.c33, t.c34, t.c41, t.c42, t.c43, t.c44);
     float F[CELL_N];
     vec4 dF[CELL_N];
-    float v = 0.0;
+    // grad, an out parameter, is precise through the entry's outputs (CELL_PRECISE there)
+    CELL_PRECISE float v = 0.0;
     grad = vec4(0.0);
     F4 = vec4(0.0);
     for (int k = 0; k < CELL_N; k++) {
@@ -229,11 +236,12 @@ float cell_texture_combination(vec4 s, CellTextureParams t, int octave, out vec4
 // last keys only steer the ends).
 vec3 cell_texture_ramp(float x, CellTextureParams t)
 {
-    int n = t.ramp_count;
+    // n and k clamped: every index in range whatever the uniform (or a NaN x) holds
+    int n = t.ramp_count < 1 ? 1 : (t.ramp_count > CELL_TEX_RAMP_KEYS ? CELL_TEX_RAMP_KEYS : t.ramp_count);
     if (t.ramp_mode == CELL_TEX_RAMP_SPLINE && n >= 4) {
         int spans = n - 3;
         float s = clamp(x, 0.0, 1.0) * float(spans);
-        int k = min(int(s), spans - 1);
+        int k = clamp(int(s), 0, spans - 1);
         s -= float(k);
         vec3 p0 = t.ramp[k].rgb, p1 = t.ramp[k + 1].rgb, p2 = t.ramp[k + 2].rgb, p3 = t.ramp[k + 3].rgb;
         return 0.5 * ((((-p0 + 3.0 * p1 - 3.0 * p2 + p3) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3)) * s
@@ -314,7 +322,7 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
     int octaves = t.fractal == CELL_TEX_FRACTAL_NONE ? 1 : int(ceil(t.octaves));
     bool qin = t.fractal == CELL_TEX_FRACTAL_QIN || t.fractal == CELL_TEX_FRACTAL_QIN_CUBE;
     float inv_range = 1.0 / (t.range_hi - t.range_lo);
-    float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
+    CELL_PRECISE float G = 0.0, total = 0.0, amp = 1.0, scale = 1.0;
     dG = vec4(0.0);
     // Feature spacings per pixel at octave 0 (times L^i at octave i).
     float spacings = t.antialias * t.feature_frequency * r;
@@ -350,8 +358,8 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
                 scale *= t.lacunarity;
                 continue;
             }
-            float b = (v - t.range_lo) * inv_range;
-            vec4 db = g * (inv_range * scale);
+            CELL_PRECISE float b = (v - t.range_lo) * inv_range;
+            CELL_PRECISE vec4 db = g * (inv_range * scale);
             if (b < 0.0 || b > 1.0) {
                 b = clamp(b, 0.0, 1.0);
                 db = vec4(0.0);
@@ -390,12 +398,12 @@ float _cell_texture_octaves(vec4 s, float r, CellTextureParams t, inout CellTexe
 void _cell_texture_shade(inout CellTexel o, vec4 s, float h, vec4 dh, CellTextureParams t)
 {
     // Normal, y down (image rows) first.
-    vec3 n = normalize(vec3(-t.bump * dh.x, -t.bump * dh.y, 1.0));
+    CELL_PRECISE vec3 n = normalize(vec3(-t.bump * dh.x, -t.bump * dh.y, 1.0));
 
 #if CELL_TEX_CELL_IMAGE
-    float index = h;
+    CELL_PRECISE float index = h;
 #else
-    float index = mix(h, o.cell.w, t.cell_mix);
+    CELL_PRECISE float index = mix(h, o.cell.w, t.cell_mix);
 #endif
     if (t.noise_color != 0.0) {
         vec4 gn;
@@ -403,7 +411,7 @@ void _cell_texture_shade(inout CellTexel o, vec4 s, float h, vec4 dh, CellTextur
         index += t.noise_color * cell_noise_fractal_split(t.noise_cell[0], t.noise_frac[0] + s * t.noise_frequency,
                                                           per, t.seed + 104729u, t.noise_octaves, gn);
     }
-    vec3 rgb = cell_texture_ramp(clamp(index, 0.0, 1.0), t);
+    CELL_PRECISE vec3 rgb = cell_texture_ramp(clamp(index, 0.0, 1.0), t);
 #if CELL_TEX_CELL_IMAGE
     // The feature point's uv: the sample's (s / (f, f aspect), plus the view's pan)
     // plus its offset.
@@ -441,8 +449,8 @@ CellTexel cell_texture_filtered(vec4 s, float r, CellTextureParams t)
         dG = -dG;
     }
     float lw = 1.0 / (t.level_hi - t.level_lo);
-    float h = (G - t.level_lo) * lw;
-    vec4 dh = dG * lw;
+    CELL_PRECISE float h = (G - t.level_lo) * lw;
+    CELL_PRECISE vec4 dh = dG * lw;
     if (h < 0.0 || h > 1.0) {
         h = clamp(h, 0.0, 1.0);
         dh = vec4(0.0);

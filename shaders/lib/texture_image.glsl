@@ -32,10 +32,12 @@ vec3 cell_texture_image(vec2 uv, CellTextureParams t)
         ivec2 d = ivec2(k & 1, k >> 1);
         ivec2 q = ivec2(x0) + d;
 #if CELL_PERIODIC
-        q = q - size * ivec2(floor(vec2(q) / vec2(size)));
-#else
-        q = clamp(q, ivec2(0), size - 1);
+        // uv - floor(uv) lies in [0, 1] (1 where a tiny negative uv rounds up), so q lies in
+        // [-1, size]: one integer step wraps it, exactly (a float division need not be exact);
+        // the clamp after it keeps the index inside the image whatever arrives (NaN uv).
+        q += size * (ivec2(lessThan(q, ivec2(0))) - ivec2(greaterThanEqual(q, size)));
 #endif
+        q = clamp(q, ivec2(0), size - 1);
         uint u = cell_texture_image_texel(q.y * size.x + q.x);
         float w = (d.x == 1 ? fr.x : 1.0 - fr.x) * (d.y == 1 ? fr.y : 1.0 - fr.y);
         c += w * vec3(float(u & 255u), float((u >> 8) & 255u), float((u >> 16) & 255u));

@@ -92,14 +92,15 @@ vec4 _cell_axis_scale(vec4 v, CellParams p)
 float _cell_box_distance(ivec4 o, vec4 f, CellParams p)
 {
     // Per axis o - f above, -o - 1 + f below (the larger), 0 in the sample's own slab.
-    vec4 g = max(max(vec4(o) - f, vec4(-o - 1) + f), vec4(0.0));
-    return cell_metric_length(_cell_axis_scale(g, p), p.minkowski_p);
+    CELL_PRECISE vec4 g = _cell_axis_scale(max(max(vec4(o) - f, vec4(-o - 1) + f), vec4(0.0)), p);
+    CELL_PRECISE float b = cell_metric_length(g, p.minkowski_p);
+    return b;
 }
 
 // The sample's distance to the nearest face of its own cell (f: its fraction).
 float cell_face_distance(vec4 f)
 {
-    vec4 g = min(f, 1.0 - f);
+    CELL_PRECISE vec4 g = min(f, 1.0 - f);
 #if CELL_DIM == 2
     return min(g.x, g.y);
 #elif CELL_DIM == 3
@@ -141,14 +142,14 @@ void cell_ring_window(int ring, float reach, vec4 f, out ivec4 lo, out ivec4 hi)
 float _cell_ring_bound(float rings, float m, vec4 ma, CellParams p)
 {
 #if CELL_ANISO
-    float b = CELL_FAR;
+    CELL_PRECISE float b = CELL_FAR;
     for (int a = 0; a < CELL_DIM; a++) {
         b = min(b, cell_metric_term(p.axis_scale[a] * rings + ma[a], p.minkowski_p));
     }
-    return b;
 #else
-    return cell_metric_term(rings + m, p.minkowski_p);
+    CELL_PRECISE float b = cell_metric_term(rings + m, p.minkowski_p);
 #endif
+    return b;
 }
 
 // The cells of the window lo .. hi in the order of nested x, y, z, w loops
@@ -203,18 +204,27 @@ ivec4 cell_window_next(ivec4 o, ivec4 lo, ivec4 hi)
 // ranges, given o's axes before `from`.
 void _cell_ball_reset(inout ivec4 o, inout ivec4 lo, inout ivec4 hi, vec4 f, float reach, int last, int from)
 {
-    float r2 = reach * reach;
-    float s = 0.0;
+    CELL_PRECISE float r2 = reach * reach;
+    CELL_PRECISE float s = 0.0;
     for (int a = 0; a < CELL_DIM; a++) {
         if (a >= from) {
-            float t = sqrt(max(r2 - s, 0.0)) * 1.000001 + 1e-6;
+            CELL_PRECISE float t = sqrt(max(r2 - s, 0.0)) * 1.000001 + 1e-6;
             hi[a] = clamp(int(ceil(t + f[a])) - 1, 0, last);
             lo[a] = -clamp(int(ceil(t + 1.0 - f[a])) - 1, 0, last);
             o[a] = lo[a];
         }
-        float g = o[a] > 0 ? float(o[a]) - f[a] : (o[a] < 0 ? float(-o[a] - 1) + f[a] : 0.0);
+        CELL_PRECISE float g = o[a] > 0 ? float(o[a]) - f[a] : (o[a] < 0 ? float(-o[a] - 1) + f[a] : 0.0);
         s += g * g;
     }
+    // the axes past CELL_DIM: 0, as cell_ring_window's (a caller's lo, hi may arrive undefined)
+#if CELL_DIM < 4
+    lo.w = 0;
+    hi.w = 0;
+#endif
+#if CELL_DIM < 3
+    lo.z = 0;
+    hi.z = 0;
+#endif
 }
 
 // The first cell of the row after o's in the ball (o.x > hi.x once all rows
