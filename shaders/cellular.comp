@@ -32,6 +32,7 @@ layout(local_size_x = CELL_LOCAL_SIZE) in;
 #define CELL_FO_SMOOTH_DELTA 8
 #define CELL_FO_SMOOTH_GRAD 12
 #define CELL_FO_SMOOTH_ATTR 16
+#define CELL_FO_WALKS -1
 #endif
 uniform float u_smoothness;    // k of smooth F1, lattice units
 layout(std430, binding = 1) writeonly buffer OutFeatures { float out_features[]; };
@@ -428,6 +429,10 @@ void main()
 #endif
 #if CELL_FO_SMOOTH_F >= 0
     out_features[b + uint(CELL_FO_SMOOTH_F)] = x.smooth_F * u_out_scale;
+#endif
+#if CELL_FO_WALKS >= 0
+    // which of the search and the walks were exact (CELL_WALKS_APART; 0..15, exact in a float)
+    out_features[b + uint(CELL_FO_WALKS)] = float(x.walks);
 #endif
     for (int a = 0; a < 4; a++) {
 #if CELL_FO_EDGE_GRAD >= 0

@@ -341,7 +341,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         # or beyond COORD_LIMIT): only when a sample comes back flagged are they checked here,
         # for the same error as a check before the dispatch (no pass over the points otherwise).
         out, passes = _passes.gpu_passes(
-            lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p)
+            lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p, n)
         exact = passes[0][1] if len(passes) == 1 else np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():
             _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
@@ -452,7 +452,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         sp4[:dim] = spc
         out, passes = _passes.gpu_passes(
             lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o, smoothness * p.scale, smooth),
-            outs, total, p)
+            outs, total, p, n)
         _gpu_finish(out, outs, positions, p)
         exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():

@@ -19,8 +19,26 @@
 // (included, with the walks' hooks).
 // Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
 // which walks), CELL_FEATURE_MAX_RING, CELL_EDGE_ALONE, CELL_SMOOTH_EXTRA,
+// CELL_WALKS_APART (1: one search, then each walk on its own, see below),
 // CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined, a pass of
-// cellular.comp, and CELL_WALK_TUNED is 1).
+// cellular.comp, or CELL_WALKS_APART is 1, and CELL_WALK_TUNED is 1).
+
+#ifndef CELL_WALKS_APART
+// 1 (cellular.comp and .frag asked for several of: the basis, the edge, the
+// n-sphere radius, smooth F1; cellgl/basis/passes.py): cell_features
+// (features.glsl) runs each walk the outputs need on its own, one after the
+// other from the same cell_search() result, each with the state and the loop
+// count it has in a pass of its own (so the same bits and the same flag as
+// alone), instead of the one walk with every feature the textures take. A walk
+// knows which feature it serves at run time (_CellWalk.edge_on, .smooth_on);
+// with 0 those are the compile-time switches, and the code is the same as before.
+#define CELL_WALKS_APART 0
+#endif
+#if CELL_WALKS_APART && CELL_NSPHERE
+// The n-sphere walk starts around the F1 point the search found (its cell
+// and place, as in a pass of the n-sphere radius alone).
+#define CELL_TRACK_F1_CELL 1
+#endif
 
 #include "cellular.glsl"
 
@@ -41,13 +59,25 @@
 // 1: the smooth walk's specialised loops below (a pass of cellular.comp with
 // the tuned shapes, CELL_WALK_TUNED of walk.glsl; the textures and the
 // exported snippets keep the shorter general code).
-#ifdef CELL_FEATURE_PASS
+#if defined(CELL_FEATURE_PASS) || CELL_WALKS_APART
 #define CELL_WALK_FAST CELL_WALK_TUNED
 #else
 #define CELL_WALK_FAST 0
 #endif
 #endif
-#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST
+// The walk of smooth F1 without the edge: compiled where smooth F1 has a walk
+// of its own (alone, or apart from the edge's).
+#define _CELL_SMOOTH_OWN (CELL_SMOOTH == 1 && (!CELL_EDGE || CELL_WALKS_APART))
+// Whether walk w serves the edge, smooth F1 (exp): the compile-time switch, and
+// with CELL_WALKS_APART the walk's own flag.
+#if CELL_WALKS_APART
+#define _CELL_DO_EDGE(w) (CELL_EDGE != 0 && (w).edge_on)
+#define _CELL_DO_SMOOTH(w) (CELL_SMOOTH == 1 && (w).smooth_on)
+#else
+#define _CELL_DO_EDGE(w) (CELL_EDGE != 0)
+#define _CELL_DO_SMOOTH(w) (CELL_SMOOTH == 1)
+#endif
+#if _CELL_SMOOTH_OWN && CELL_WALK_FAST
 // Smooth F1 alone, rings 2, 3, ... (_CellWalk.far): a point is summed without
 // the tests of the other walks.
 #define _CELL_FAR_SUM 1
@@ -95,6 +125,10 @@ struct _CellWalk {
     vec4 wdelta;
     vec4 wgrad;
     vec4 wattr;
+#if CELL_WALKS_APART
+    bool edge_on;    // this walk serves the edge
+    bool smooth_on;  // this walk serves smooth F1
+#endif
     bool found;      // the F1 point was seen: its cell offset o1, position q1 in it
     ivec4 o1;
     vec4 q1;
@@ -117,10 +151,14 @@ float _cell_walk_reach(_CellWalk w)
     }
     float reach = w.F1;
 #if CELL_EDGE
-    reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
+    if (_CELL_DO_EDGE(w)) {
+        reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
+    }
 #endif
 #if CELL_SMOOTH == 1
-    reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+    if (_CELL_DO_SMOOTH(w)) {
+        reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+    }
 #endif
 #if CELL_EDGE_ALONE
     reach = w.nearest ? sqrt(w.F1) : reach;     // F1 in internal units, Euclidean (as CELL_EDGE)
@@ -132,10 +170,23 @@ float _cell_walk_reach(_CellWalk w)
 #if CELL_SMOOTH == 1
 // Smooth F1 (exp): add the point at true distance d (delta, id) to the sums when its weight
 // exp(-(d - F1) / k) is inside the cut-off; the F1 point itself (is_p1) weighs 1.
+// _cell_smooth_weight: exp((F1 - d) / k) for k > 0 (the only case it is asked
+// for: k = 0 would give exp(x / 0), inf, and the sum inf, S NaN), at most 1:
+// no point is nearer than F1, but d and F1 come from two computations a
+// compiler may round differently (its own FMA contraction in each), and a d a
+// rounding below F1 with a tiny k would give inf.
+float _cell_smooth_weight(float F1, float d, float k)
+{
+    return exp(min(F1 - d, 0.0) / k);
+}
+
 void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p1, CellParams p)
 {
     if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
-        float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
+        float wt = 1.0;
+        if (!is_p1) {            // (then k > 0)
+            wt = _cell_smooth_weight(w.F1, d, w.k);
+        }
         w.wsum += wt;
 #if CELL_SMOOTH_EXTRA
         w.wdelta += wt * delta;
@@ -148,19 +199,23 @@ void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p
 
 #if _CELL_FAR_SUM
 // What smooth F1 alone does per point in rings 2, 3, ...: the sum of
-// _cell_walk_point. The F1 point (only there when the search needed ring 2)
-// has d == F1 to the bit (the same sum of the same terms), so it is told by
-// its ID and distance.
+// _cell_walk_point. The F1 point (only there when the search needed ring 2) is
+// told as _cell_walk_point tells it, by its ID and offset (not by d == F1: d
+// and the search's F1 are two computations, which a compiler may contract
+// differently), and counts with d = F1 and weight 1.
 void _cell_walk_far_point(inout _CellWalk w, vec4 delta, uint id, CellParams p)
 {
     float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
 #if CELL_SMOOTH_EXTRA
-    _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
+    vec4 e = delta - w.d1;
+    bool is_p1 = id == w.id1 && dot(e, e) < 1e-10;
+    _cell_smooth_add(w, delta, is_p1 ? w.F1 : d, id, is_p1, p);
 #else
-    // Smooth F1 alone needs no ID: the F1 point (d == F1) weighs exp(0) = 1
-    // as is_p1 gives it, and with k = 0 the sum does not change S = F1.
-    if (d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
-        w.wsum += exp((w.F1 - d) / w.k);
+    // Smooth F1 alone needs no ID: the F1 point (d == F1, or a rounding from
+    // it) weighs exp(0) = 1 as is_p1 gives it (_cell_smooth_weight caps it at
+    // 1), and with k = 0 nothing is added: S = F1.
+    if (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
+        w.wsum += _cell_smooth_weight(w.F1, d, w.k);
     }
 #endif
 }
@@ -192,7 +247,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
         w.q1 = q;
     }
 #if CELL_EDGE
-    if (!is_p1 && e2 > 0.0) {
+    if (_CELL_DO_EDGE(w) && !is_p1 && e2 > 0.0) {
         float inv = inversesqrt(e2);
         float b = dot(0.5 * (delta + w.d1), e) * inv;
         if (b < w.edge) {
@@ -202,8 +257,10 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
     }
 #endif
 #if CELL_SMOOTH == 1
-    float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-    _cell_smooth_add(w, delta, d, id, is_p1, p);
+    if (_CELL_DO_SMOOTH(w)) {
+        float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+        _cell_smooth_add(w, delta, d, id, is_p1, p);
+    }
 #endif
 #if CELL_EDGE_ALONE
     // Nearest mode: the F1 point as cell_search finds it, the least internal-unit
@@ -275,7 +332,7 @@ bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int f
     return !spent && (ring <= last || float(last) + m >= _cell_walk_reach(w));
 }
 
-#if CELL_SMOOTH == 1 && !CELL_EDGE
+#if _CELL_SMOOTH_OWN
 // The smooth window of smooth F1 alone (_cell_walk_smooth): every cell of the
 // window lo .. hi on ring `ring` or beyond (the reach fixed: each point's own
 // cut-off decides). Tested at the bottom (a window holds a cell, hi its last);
@@ -310,7 +367,10 @@ void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec
 // k = 0.1 with rows from ring 3 (llvmpipe, 2D and 3D).
 bool _cell_walk_ball(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float m, float reach, int last)
 {
-    ivec4 lo, hi;
+    // (Every component set: _cell_ball_reset sets the axes below CELL_DIM,
+    // the others stay 0 and are copied in and out, never read.)
+    ivec4 lo = ivec4(0);
+    ivec4 hi = ivec4(0);
     ivec4 o = ivec4(0);
     _cell_ball_reset(o, lo, hi, f, reach, last, 0);
     w.far = true;
@@ -371,7 +431,7 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 }
 #endif
 
-#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_TUNED
+#if _CELL_SMOOTH_OWN && CELL_WALK_TUNED
 // Smooth F1 (tuned): rings 0 and 1 as one block of constant bounds, unrolled
 // into straight-line SIMD code, every cell of it, in window order (the order
 // of the ring loop). Its reach F1 + 16 k seldom prunes a cell of ring 1, and
@@ -427,8 +487,8 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 #if _CELL_FAR_SUM
     w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
 #endif
-#if CELL_SMOOTH == 1 && !CELL_EDGE
-    if (!w.around) {
+#if _CELL_SMOOTH_OWN
+    if (!w.around && !_CELL_DO_EDGE(w)) {
         float m = cell_face_distance(f);
 #if CELL_WALK_TUNED
         if (!_cell_walk_block(w, cell, f, p, m)) {
@@ -443,8 +503,9 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
 }
 // A walk around the sample whose F1 point is at offset d1 (ID id1, distance
-// F1), after `loops` loop passes.
-_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness)
+// F1), after `loops` loop passes; with CELL_WALKS_APART serving the edge
+// (edge_on) and/or smooth F1 (smooth_on), else every compiled feature.
+_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness, bool edge_on, bool smooth_on)
 {
     _CellWalk w;
     w.around = false;
@@ -458,6 +519,10 @@ _CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothn
     w.wdelta = vec4(0.0);
     w.wgrad = vec4(0.0);
     w.wattr = vec4(0.0);
+#if CELL_WALKS_APART
+    w.edge_on = edge_on;
+    w.smooth_on = smooth_on;
+#endif
     w.found = false;
     w.o1 = ivec4(0);
     w.q1 = vec4(0.0);
