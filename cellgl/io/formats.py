@@ -25,7 +25,6 @@ import os
 import struct
 import zlib
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -121,6 +120,8 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     (zlib and NumPy release the GIL): a bake's encoding overlaps its rendering. One zlib stream,
     band after band, in order: the same bytes as encoding after rendering.
     """
+    from concurrent.futures import ThreadPoolExecutor      # (on first use: not at `import cellgl`)
+
     if bit_depth not in (8, 16):
         raise ValueError(f"PNG bit depth {bit_depth}: accepted 8, 16")
     if samples not in _PNG_COLOR_TYPE:

@@ -24,20 +24,16 @@
 // cellular.comp, or CELL_WALKS_APART is 1, and CELL_WALK_TUNED is 1).
 
 #ifndef CELL_WALKS_APART
-// 1 (cellular.comp and .frag asked for several of: the basis, the edge, the
-// n-sphere radius, smooth F1; cellgl/basis/passes.py): cell_features
-// (features.glsl) runs each walk the outputs need on its own, one after the
-// other from the same cell_search() result, each with the state and the loop
-// count it has in a pass of its own (so the same bits and the same flag as
-// alone), instead of the one walk with every feature the textures take. A walk
-// knows which feature it serves at run time (_CellWalk.edge_on, .smooth_on);
-// with 0 those are the compile-time switches, and the code is the same as before.
+// 1 (a pass of cellular.comp/.frag serving several of the basis, the edge, the
+// n-sphere radius, smooth F1; cellgl/basis/passes.py): cell_features runs each
+// walk on its own after one cell_search(), as in a pass of its own (the same
+// bits and flag), not the one walk of every feature the textures take. A walk
+// knows what it serves at run time (_CellWalk.edge_on, .smooth_on); with 0 the
+// compile-time switches decide, the code as before.
 #define CELL_WALKS_APART 0
 #endif
 #if CELL_WALKS_APART && CELL_NSPHERE
-// The n-sphere walk starts around the F1 point the search found (its cell
-// and place, as in a pass of the n-sphere radius alone).
-#define CELL_TRACK_F1_CELL 1
+#define CELL_TRACK_F1_CELL 1     // the n-sphere walk starts where the search found F1
 #endif
 
 #include "cellular.glsl"
@@ -170,11 +166,9 @@ float _cell_walk_reach(_CellWalk w)
 #if CELL_SMOOTH == 1
 // Smooth F1 (exp): add the point at true distance d (delta, id) to the sums when its weight
 // exp(-(d - F1) / k) is inside the cut-off; the F1 point itself (is_p1) weighs 1.
-// _cell_smooth_weight: exp((F1 - d) / k) for k > 0 (the only case it is asked
-// for: k = 0 would give exp(x / 0), inf, and the sum inf, S NaN), at most 1:
-// no point is nearer than F1, but d and F1 come from two computations a
-// compiler may round differently (its own FMA contraction in each), and a d a
-// rounding below F1 with a tiny k would give inf.
+// _cell_smooth_weight: exp((F1 - d) / k), asked for k > 0 only (k = 0: inf,
+// then S NaN), at most 1: d and F1 are two computations a compiler may round
+// differently (FMA contraction), and d a rounding below F1 with a tiny k: inf.
 float _cell_smooth_weight(float F1, float d, float k)
 {
     return exp(min(F1 - d, 0.0) / k);
@@ -501,41 +495,6 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     }
 #endif
     return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
-}
-// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
-// F1), after `loops` loop passes; with CELL_WALKS_APART serving the edge
-// (edge_on) and/or smooth F1 (smooth_on), else every compiled feature.
-_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness, bool edge_on, bool smooth_on)
-{
-    _CellWalk w;
-    w.around = false;
-    w.d1 = d1;
-    w.id1 = id1;
-    w.F1 = F1;
-    w.k = smoothness;
-    w.edge = CELL_FAR;
-    w.edge_n = vec4(0.0);
-    w.wsum = 0.0;
-    w.wdelta = vec4(0.0);
-    w.wgrad = vec4(0.0);
-    w.wattr = vec4(0.0);
-#if CELL_WALKS_APART
-    w.edge_on = edge_on;
-    w.smooth_on = smooth_on;
-#endif
-    w.found = false;
-    w.o1 = ivec4(0);
-    w.q1 = vec4(0.0);
-    w.nn = CELL_FAR;
-    w.loops = loops;
-    w.spent = false;
-#if CELL_EDGE_ALONE
-    w.nearest = F1 >= CELL_FAR;    // no F1 point given: the walk finds it first
-#endif
-#if _CELL_FAR_SUM
-    w.far = false;
-#endif
-    return w;
 }
 
 #endif

@@ -38,11 +38,48 @@
 // Blender's Voronoi node folds it, _cell_poly_smooth below; all 0: nothing
 // below is compiled and cell_search is untouched), CELL_FEATURE_MAX_RING,
 // CELL_EDGE_ALONE (1: cell_edge_alone, the walk finding the F1 point too),
-// CELL_SMOOTH_EXTRA (feature_walk.glsl).
+// CELL_SMOOTH_EXTRA, CELL_WALKS_APART (feature_walk.glsl: each walk on its own
+// after one search, cell_features below).
 
 #include "feature_walk.glsl"
 
 #if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
+
+// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
+// F1), after `loops` loop passes; with CELL_WALKS_APART serving the edge
+// (edge_on) and/or smooth F1 (smooth_on), else every compiled feature.
+_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness, bool edge_on, bool smooth_on)
+{
+    _CellWalk w;
+    w.around = false;
+    w.d1 = d1;
+    w.id1 = id1;
+    w.F1 = F1;
+    w.k = smoothness;
+    w.edge = CELL_FAR;
+    w.edge_n = vec4(0.0);
+    w.wsum = 0.0;
+    w.wdelta = vec4(0.0);
+    w.wgrad = vec4(0.0);
+    w.wattr = vec4(0.0);
+#if CELL_WALKS_APART
+    w.edge_on = edge_on;
+    w.smooth_on = smooth_on;
+#endif
+    w.found = false;
+    w.o1 = ivec4(0);
+    w.q1 = vec4(0.0);
+    w.nn = CELL_FAR;
+    w.loops = loops;
+    w.spent = false;
+#if CELL_EDGE_ALONE
+    w.nearest = F1 >= CELL_FAR;    // no F1 point given: the walk finds it first
+#endif
+#if _CELL_FAR_SUM
+    w.far = false;
+#endif
+    return w;
+}
 
 struct CellFeatures {
     float edge;          // distance to the cell's border (CELL_EDGE)
