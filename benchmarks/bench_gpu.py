@@ -354,7 +354,7 @@ def _fmt(row) -> str:
     if row["row"] == "compile":
         return f"| {row['what']} | {row['compile_s'] * 1e3:.0f} ms compile (first call {row['first_s'] * 1e3:.0f} ms) | | | | |"
     n, t, g = row.get("samples"), row["median_s"], row.get("gpu_s")
-    rate = f"{n / t / 1e6:,.1f} M/s ({t * 1e3:.1f} ms)"
+    rate = f"{n / t / 1e6:,.1f} M/s ({t * 1e3:.1f} ms)" if row["row"] != "bake" else f"{t:.2f} s ({n / t / 1e6:,.1f} Mpx/s)"
     grate = f"{n / g / 1e6:,.1f} M/s" if g else "n/a"
     share = f"{g / t:.0%}" if g else ""
     extra = []
