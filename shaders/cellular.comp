@@ -430,10 +430,6 @@ void main()
 #if CELL_FO_SMOOTH_F >= 0
     out_features[b + uint(CELL_FO_SMOOTH_F)] = x.smooth_F * u_out_scale;
 #endif
-#if CELL_FO_WALKS >= 0
-    // which of the search and the walks were exact (CELL_WALKS_APART; 0..15, exact in a float)
-    out_features[b + uint(CELL_FO_WALKS)] = float(x.walks);
-#endif
     for (int a = 0; a < 4; a++) {
 #if CELL_FO_EDGE_GRAD >= 0
         out_features[b + uint(CELL_FO_EDGE_GRAD + a)] = x.edge_grad[a];
@@ -454,6 +450,11 @@ void main()
         canary += 1;
     }
     exact = exact && canary == u_loop_canary;
+#if CELL_FEATURES && CELL_FO_WALKS >= 0
+    // CELL_WALKS_APART: which of the search and the walks were exact, and 16: the
+    // canary ran whole (0..31, exact in a float; cellgl/basis/passes.py)
+    out_features[b + uint(CELL_FO_WALKS)] = float(x.walks | (canary == u_loop_canary ? 16 : 0));
+#endif
 #if !CELL_GRID
     exact = exact && in_range;
 #endif

@@ -49,8 +49,9 @@ FAMILIES = {"edge": ("edge", "edge_grad"), "nsphere": ("nsphere",),
 #: (``walks``: which of the search and the walks were exact, :data:`WALK_BITS`, in a pass apart)
 FIELDS = (("edge", 1), ("edge_grad", 4), ("nsphere", 1), ("smooth_F", 1), ("smooth_delta", 4),
           ("smooth_grad", 4), ("smooth_attr", 4), ("walks", 1))
-#: the bits of the ``walks`` field (``CELL_WALK_OK_*`` of shaders/lib/features.glsl)
-WALK_BITS = {"search": 1, "edge": 2, "nsphere": 4, "smooth": 8}
+#: the bits of the ``walks`` field (``CELL_WALK_OK_*`` of shaders/lib/features.glsl; "canary": the
+#: loop of shaders/cellular.comp that tells that the driver's own loop limit was not reached)
+WALK_BITS = {"search": 1, "edge": 2, "nsphere": 4, "smooth": 8, "canary": 16}
 _BASIS = ("F", "delta", "id", "grad")
 
 

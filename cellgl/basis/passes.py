@@ -85,9 +85,9 @@ def gpu_passes(run, outs, N: int, p, n: int = 1, apart: bool = True) -> tuple[di
     (``CELL_LOOP_BUDGET``) from where the search left it, as in a pass of its own. So a sample
     gets the same bits, and the same exact flag, whatever else was asked with it: the pass's
     record says which of the search and the walks were exact (the ``walks`` field). Where llvmpipe's
-    own loop limit cut such a pass (the canary: flagged, though every part says exact), the call
-    runs again with each walk in a pass of its own (``apart=False``, the way before), where each
-    has the driver's whole limit to itself.
+    own loop limit cut such a pass (its canary, also in the field: then no part's flag holds), the
+    call runs again with each walk in a pass of its own (``apart=False``, the way before), where
+    each has the driver's whole limit to itself.
     ``run(outputs)`` dispatches one pass and returns ``({name: array}, exact)``; the walks' records,
     unpacked (:func:`cellgl.basis.features.unpack`), are merged into ``"features"``.
     Returns the outputs and, per part, (the output names it serves, its exact flags)."""
@@ -108,10 +108,11 @@ def gpu_passes(run, outs, N: int, p, n: int = 1, apart: bool = True) -> tuple[di
             passes.append((_served(parts[0][0]), ok))
             continue
         bad = np.nonzero(~ok)[0]
-        mask = np.full(len(ok), 15, dtype=np.int64)
+        mask = np.full(len(ok), 31, dtype=np.int64)
         if len(bad):
             mask[bad] = rec[bad, _features.layout(wanted)["walks"]].astype(np.int64)
-            if apart and np.any(mask[bad] == 15):       # cut by the driver: every part in a pass of its own
+            if np.any((mask[bad] & _features.WALK_BITS["canary"]) == 0):
+                # llvmpipe's limit cut a loop somewhere in the invocation: no part's flag holds
                 return gpu_passes(run, outs, N, p, n, apart=False)
         search = (mask & _features.WALK_BITS["search"]) != 0
         for part, _ in parts:
