@@ -392,11 +392,16 @@ def main(argv=None) -> int:
                   file=sys.stderr)
             fnl = False
     from cellgl.gl import context
-    from cellgl.gl.path import gpu_path
 
     ctx = context.get_context()
+    try:
+        from cellgl.gl.path import gpu_path
+
+        path = gpu_path(ctx)
+    except Exception as exc:  # noqa: BLE001 - the table without the path's name
+        path = f"? ({type(exc).__name__})"
     head = dict(row="info", renderer=ctx.info.get("GL_RENDERER"), version=ctx.info.get("GL_VERSION"),
-                path=gpu_path(ctx), quick=q, repeats=reps, cores=os.cpu_count(), load=os.getloadavg()[0])
+                path=path, quick=q, repeats=reps, cores=os.cpu_count(), load=os.getloadavg()[0])
     plan = [("grid", lambda: rows_grid(sizes["grid"], reps, fnl)),
             ("points", lambda: rows_points(sizes["points"], reps)),
             ("features", lambda: rows_features(sizes["features"], reps)),
