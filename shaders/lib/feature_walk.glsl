@@ -27,9 +27,8 @@
 // 1 (a pass of cellular.comp/.frag serving several of the basis, the edge, the
 // n-sphere radius, smooth F1; cellgl/basis/passes.py): cell_features runs each
 // walk on its own after one cell_search(), as in a pass of its own (the same
-// bits and flag), not the one walk of every feature the textures take. A walk
-// knows what it serves at run time (_CellWalk.edge_on, .smooth_on); with 0 the
-// compile-time switches decide, the code as before.
+// bits, flag), not the textures' one walk of every feature. A walk knows what
+// it serves at run time (_CellWalk.edge_on, .smooth_on); 0: the switches.
 #define CELL_WALKS_APART 0
 #endif
 #if CELL_WALKS_APART && CELL_NSPHERE
@@ -61,17 +60,11 @@
 #define CELL_WALK_FAST 0
 #endif
 #endif
-// The walk of smooth F1 without the edge: compiled where smooth F1 has a walk
-// of its own (alone, or apart from the edge's).
-#define _CELL_SMOOTH_OWN (CELL_SMOOTH == 1 && (!CELL_EDGE || CELL_WALKS_APART))
-// Whether walk w serves the edge, smooth F1 (exp): the compile-time switch, and
-// with CELL_WALKS_APART the walk's own flag.
-#if CELL_WALKS_APART
-#define _CELL_DO_EDGE(w) (CELL_EDGE != 0 && (w).edge_on)
-#define _CELL_DO_SMOOTH(w) (CELL_SMOOTH == 1 && (w).smooth_on)
+// Smooth F1's own walk, without the edge's (alone, or apart from the edge's).
+#if CELL_SMOOTH == 1 && (!CELL_EDGE || CELL_WALKS_APART)
+#define _CELL_SMOOTH_OWN 1
 #else
-#define _CELL_DO_EDGE(w) (CELL_EDGE != 0)
-#define _CELL_DO_SMOOTH(w) (CELL_SMOOTH == 1)
+#define _CELL_SMOOTH_OWN 0
 #endif
 #if _CELL_SMOOTH_OWN && CELL_WALK_FAST
 // Smooth F1 alone, rings 2, 3, ... (_CellWalk.far): a point is summed without
@@ -121,10 +114,8 @@ struct _CellWalk {
     vec4 wdelta;
     vec4 wgrad;
     vec4 wattr;
-#if CELL_WALKS_APART
-    bool edge_on;    // this walk serves the edge
-    bool smooth_on;  // this walk serves smooth F1
-#endif
+    bool edge_on;    // CELL_WALKS_APART: this walk serves the edge
+    bool smooth_on;  // CELL_WALKS_APART: this walk serves smooth F1
     bool found;      // the F1 point was seen: its cell offset o1, position q1 in it
     ivec4 o1;
     vec4 q1;
@@ -139,6 +130,18 @@ struct _CellWalk {
 #endif
 };
 
+// Whether walk w serves the edge, smooth F1 (exp): the compile-time switch, and
+// with CELL_WALKS_APART the walk's own flag.
+bool _cell_do_edge(_CellWalk w)
+{
+    return CELL_EDGE != 0 && (CELL_WALKS_APART == 0 || w.edge_on);
+}
+
+bool _cell_do_smooth(_CellWalk w)
+{
+    return CELL_SMOOTH == 1 && (CELL_WALKS_APART == 0 || w.smooth_on);
+}
+
 // True distance from the walk's centre beyond which no point matters (now).
 float _cell_walk_reach(_CellWalk w)
 {
@@ -147,12 +150,12 @@ float _cell_walk_reach(_CellWalk w)
     }
     float reach = w.F1;
 #if CELL_EDGE
-    if (_CELL_DO_EDGE(w)) {
+    if (_cell_do_edge(w)) {
         reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
     }
 #endif
 #if CELL_SMOOTH == 1
-    if (_CELL_DO_SMOOTH(w)) {
+    if (_cell_do_smooth(w)) {
         reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
     }
 #endif
@@ -166,9 +169,8 @@ float _cell_walk_reach(_CellWalk w)
 #if CELL_SMOOTH == 1
 // Smooth F1 (exp): add the point at true distance d (delta, id) to the sums when its weight
 // exp(-(d - F1) / k) is inside the cut-off; the F1 point itself (is_p1) weighs 1.
-// _cell_smooth_weight: exp((F1 - d) / k), asked for k > 0 only (k = 0: inf,
-// then S NaN), at most 1: d and F1 are two computations a compiler may round
-// differently (FMA contraction), and d a rounding below F1 with a tiny k: inf.
+// _cell_smooth_weight: exp((F1 - d) / k) for k > 0 only (k = 0: inf, S NaN),
+// at most 1 (d a rounding below F1, FMA contraction, with a tiny k: inf).
 float _cell_smooth_weight(float F1, float d, float k)
 {
     return exp(min(F1 - d, 0.0) / k);
@@ -193,10 +195,9 @@ void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p
 
 #if _CELL_FAR_SUM
 // What smooth F1 alone does per point in rings 2, 3, ...: the sum of
-// _cell_walk_point. The F1 point (only there when the search needed ring 2) is
-// told as _cell_walk_point tells it, by its ID and offset (not by d == F1: d
-// and the search's F1 are two computations, which a compiler may contract
-// differently), and counts with d = F1 and weight 1.
+// _cell_walk_point. The F1 point (there if the search needed ring 2) is told by
+// its ID and offset as there (not by d == F1: two computations a compiler may
+// contract differently), and counts with d = F1, weight 1.
 void _cell_walk_far_point(inout _CellWalk w, vec4 delta, uint id, CellParams p)
 {
     float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
@@ -205,9 +206,8 @@ void _cell_walk_far_point(inout _CellWalk w, vec4 delta, uint id, CellParams p)
     bool is_p1 = id == w.id1 && dot(e, e) < 1e-10;
     _cell_smooth_add(w, delta, is_p1 ? w.F1 : d, id, is_p1, p);
 #else
-    // Smooth F1 alone needs no ID: the F1 point (d == F1, or a rounding from
-    // it) weighs exp(0) = 1 as is_p1 gives it (_cell_smooth_weight caps it at
-    // 1), and with k = 0 nothing is added: S = F1.
+    // Smooth F1 alone needs no ID: the F1 point (d == F1, or a rounding off,
+    // capped) weighs 1 as is_p1 gives it; with k = 0 nothing is added: S = F1.
     if (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
         w.wsum += _cell_smooth_weight(w.F1, d, w.k);
     }
@@ -241,7 +241,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
         w.q1 = q;
     }
 #if CELL_EDGE
-    if (_CELL_DO_EDGE(w) && !is_p1 && e2 > 0.0) {
+    if (_cell_do_edge(w) && !is_p1 && e2 > 0.0) {
         float inv = inversesqrt(e2);
         float b = dot(0.5 * (delta + w.d1), e) * inv;
         if (b < w.edge) {
@@ -251,7 +251,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
     }
 #endif
 #if CELL_SMOOTH == 1
-    if (_CELL_DO_SMOOTH(w)) {
+    if (_cell_do_smooth(w)) {
         float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
         _cell_smooth_add(w, delta, d, id, is_p1, p);
     }
@@ -482,7 +482,7 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
 #endif
 #if _CELL_SMOOTH_OWN
-    if (!w.around && !_CELL_DO_EDGE(w)) {
+    if (!w.around && !_cell_do_edge(w)) {
         float m = cell_face_distance(f);
 #if CELL_WALK_TUNED
         if (!_cell_walk_block(w, cell, f, p, m)) {

@@ -62,10 +62,8 @@ _CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothn
     w.wdelta = vec4(0.0);
     w.wgrad = vec4(0.0);
     w.wattr = vec4(0.0);
-#if CELL_WALKS_APART
     w.edge_on = edge_on;
     w.smooth_on = smooth_on;
-#endif
     w.found = false;
     w.o1 = ivec4(0);
     w.q1 = vec4(0.0);
