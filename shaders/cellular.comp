@@ -32,6 +32,7 @@ layout(local_size_x = CELL_LOCAL_SIZE) in;
 #define CELL_FO_SMOOTH_DELTA 8
 #define CELL_FO_SMOOTH_GRAD 12
 #define CELL_FO_SMOOTH_ATTR 16
+#define CELL_FO_WALKS -1
 #endif
 uniform float u_smoothness;    // k of smooth F1, lattice units
 layout(std430, binding = 1) writeonly buffer OutFeatures { float out_features[]; };
@@ -463,6 +464,11 @@ void main()
         canary += 1;
     }
     exact = exact && canary == u_loop_canary;
+#if CELL_FEATURES && CELL_FO_WALKS >= 0
+    // CELL_WALKS_APART: which of the search and the walks were exact, and 16: the
+    // canary ran whole (0..31, exact in a float; cellgl/basis/passes.py)
+    out_features[b + uint(CELL_FO_WALKS)] = float(x.walks | (canary == u_loop_canary ? 16 : 0));
+#endif
 #if !CELL_GRID
     exact = exact && in_range;
 #endif

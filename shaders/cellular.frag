@@ -29,6 +29,7 @@
 #define CELL_FO_SMOOTH_DELTA 8
 #define CELL_FO_SMOOTH_GRAD 12
 #define CELL_FO_SMOOTH_ATTR 16
+#define CELL_FO_WALKS -1
 #endif
 uniform float u_smoothness;    // k of smooth F1, lattice units
 #endif
@@ -256,6 +257,11 @@ void main()
         canary += 1;
     }
     exact = exact && canary == u_loop_canary;
+#if CELL_FEATURES && CELL_FO_WALKS >= 0
+    // CELL_WALKS_APART: which of the search and the walks were exact, and 16: the
+    // canary ran whole (0..31, exact in a float; cellgl/basis/passes.py)
+    row_features[CELL_FO_WALKS] = float(x.walks | (canary == u_loop_canary ? 16 : 0));
+#endif
     o_exact = exact ? 1u : 0u;
 #if CELL_LOOP_PROBE
     int left = 0;

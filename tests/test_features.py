@@ -196,3 +196,103 @@ def test_fast_path_defines_are_unchanged():
     assert d["CELL_EDGE"] == d["CELL_SMOOTH"] == d["CELL_NSPHERE"] == 0
     d = gpu.defines_for(p, 1, ("F", "edge", "smooth_F1"))
     assert d["CELL_EDGE"] == d["CELL_SMOOTH"] == 1 and d["CELL_NSPHERE"] == 0
+
+
+@pytest.mark.parametrize("dim", [2, 3, 4])
+def test_one_search_for_the_basis_and_every_walk(ctx, monkeypatch, dim):
+    """F + edge + n-sphere + smooth F1 (n = 1) is one GPU pass: one search, each walk after it on its
+    own; every output has the bits, and the flag, it has when asked alone. With n > 1 the basis
+    searches further than the walks need: it keeps its pass, the walks share one."""
+    from cellgl.basis import gpu
+
+    calls = []
+    orig = gpu.search_points
+    monkeypatch.setattr(gpu, "search_points", lambda *a, **k: calls.append(a[3]) or orig(*a, **k))
+    X = _pts(dim, n=500, lo=-6.0, hi=6.0, seed=dim)
+    outs = ("F", "id", "edge", "edge_grad", "nsphere", "smooth_F1", "smooth_grad")
+    for n, passes in ((1, 1), (3, 2)):
+        calls.clear()
+        g = cellgl.cellular(X, n, outputs=outs, smoothness=0.1)
+        assert len(calls) == passes, calls
+        alone = {o: cellgl.cellular(X, n, outputs=(o,), smoothness=0.1) for o in outs}
+        for o in outs:
+            np.testing.assert_array_equal(getattr(g, o), getattr(alone[o], o), err_msg=o)
+        assert g.exact.all()
+
+
+def test_a_pass_cut_by_the_driver_runs_again_walk_by_walk():
+    """Where the canary of the pass apart says llvmpipe's own limit cut a loop (then no part's flag
+    holds), the call runs again with each walk in a pass of its own."""
+    from cellgl.basis import passes
+
+    p = make_params(2)
+    seen = []
+
+    def run(outputs):
+        seen.append(outputs)
+        lay = features.layout(outputs)
+        rec = np.zeros((4, lay["stride"]), np.float32)
+        ok = np.ones(4, bool)
+        if "walks" in lay:
+            rec[:, lay["walks"]] = 31.0
+            rec[2, lay["walks"]] = 15.0   # flagged, the canary cut short: the driver's limit
+            ok[2] = False
+        got = {"F": np.zeros((4, 1), np.float32)} if "F" in outputs else {}
+        if lay["stride"]:
+            got["features"] = rec
+        return got, ok
+
+    out, got = passes.gpu_passes(run, ("F", "edge", "smooth_F1"), 4, p, 1)
+    assert seen[0] == ("F", "edge", "smooth_F1") and seen[1:] == [("F",), ("edge",), ("smooth_F1",)]
+    assert len(got) == 3 and all(ok.all() for _, ok in got)
+
+
+def test_the_walks_field_splits_the_flags_per_part():
+    """A sample the edge walk left open is flagged for the edge only: its F and smooth F1 stay the
+    GPU's (their bits do not depend on what else was asked)."""
+    from cellgl.basis import passes
+
+    p = make_params(2)
+
+    def run(outputs):
+        lay = features.layout(outputs)
+        rec = np.zeros((3, lay["stride"]), np.float32)
+        rec[:, lay["walks"]] = [31, 31 & ~features.WALK_BITS["edge"], features.WALK_BITS["canary"]]
+        return {"F": np.zeros((3, 1), np.float32), "features": rec}, np.array([True, False, False])
+
+    out, got = passes.gpu_passes(run, ("F", "edge", "smooth_F1"), 3, p, 1)
+    flags = {names[0]: ok.tolist() for names, ok in got}
+    assert flags == {"F": [True, True, False], "edge": [True, False, False], "smooth_F1": [True, True, False]}
+
+
+@pytest.mark.parametrize("k", [0.0, 1e-30])
+def test_smooth_f1_at_zero_and_tiny_smoothness_is_f1(ctx, k):
+    """k = 0 (and a k so small that exp((F1 - d) / k) overflows for a d a rounding below F1) is the
+    hard minimum: S = F1, finite, in every ring the walk reaches."""
+    X = _pts(3, n=400, lo=-30.0, hi=30.0, seed=5)
+    r = cellgl.cellular(X, 1, outputs=("F", "smooth_F1"), smoothness=k, density=0.3, min_points=0)
+    assert np.isfinite(r.smooth_F1).all()
+    np.testing.assert_array_equal(r.smooth_F1[r.exact], r.F[r.exact, 0])
+
+
+def test_a_real_driver_cut_of_the_pass_apart_gives_the_bits_of_each_alone(ctx, monkeypatch):
+    """With the loop budget lifted (10^6), 4D smooth F1 at k = 0.25 (Poisson 8, up to 16 points a
+    cell) spends more than llvmpipe's 65535 loop passes per SIMD vector: the pass that runs every walk is cut by the driver, the
+    canary flags it, and the call runs again walk by walk. Every output and flag is what each
+    walk alone gives with the same budget (where the driver cuts nothing: the pass apart's)."""
+    from cellgl.basis import gpu, passes
+
+    orig_defines = gpu.defines_for
+    monkeypatch.setattr(gpu, "defines_for", lambda *a, **k: {**orig_defines(*a, **k), "CELL_LOOP_BUDGET": 10 ** 6})
+    seen = []
+    orig = passes.gpu_passes
+    monkeypatch.setattr(passes, "gpu_passes", lambda *a, **k: seen.append(k.get("apart", True)) or orig(*a, **k))
+    X = np.random.default_rng(4).uniform(-9, 9, (64, 4))
+    outs = ("edge", "nsphere", "smooth_F1")
+    kw = dict(density=8.0, max_points=16, smoothness=0.25)      # 56 of 64 cut on llvmpipe (AVX2)
+    g = cellgl.cellular(X, 1, outputs=outs, **kw)
+    if "llvmpipe" in ctx.info.get("GL_RENDERER", ""):
+        assert False in seen, "the pass apart was not cut by llvmpipe's limit: the redo was not reached"
+    for o in outs:
+        a = cellgl.cellular(X, 1, outputs=(o,), **kw)
+        np.testing.assert_array_equal(getattr(g, o), getattr(a, o), err_msg=o)

@@ -190,3 +190,69 @@ def _umask():
     m = os.umask(0)
     os.umask(m)
     return m
+
+
+def _serial_png(bands, width, height, samples, depth) -> bytes:
+    """The PNG write_png made before it encoded on a thread: one zlib stream (level 6), filter
+    "up", IDAT chunks of about 1 MiB (the bytes a bake must keep)."""
+    def chunk(tag, data):
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
+
+    dtype = np.dtype(">u2") if depth == 16 else np.dtype(np.uint8)
+    row = width * samples * dtype.itemsize
+    comp, prev, out, pending = zlib.compressobj(6), np.zeros(row, np.uint8), [], bytearray()
+    out.append(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, depth,
+                                                                 {1: 0, 2: 4, 3: 2, 4: 6}[samples], 0, 0, 0)))
+    for band in bands:
+        raw = np.ascontiguousarray(band, dtype=dtype).view(np.uint8).reshape(len(band), row)
+        filt = np.concatenate([np.full((len(raw), 1), 2, np.uint8),
+                               np.concatenate([(raw[:1] - prev), raw[1:] - raw[:-1]])], axis=1)
+        prev = raw[-1].copy()
+        pending += comp.compress(filt.tobytes())
+        if len(pending) >= 1 << 20:
+            out.append(chunk(b"IDAT", bytes(pending)))
+            pending.clear()
+    pending += comp.flush()
+    return b"".join(out) + chunk(b"IDAT", bytes(pending)) + chunk(b"IEND", b"")
+
+
+@pytest.mark.parametrize("samples,depth", [(3, 8), (4, 16), (1, 8)])
+def test_png_encodes_on_a_thread_while_the_next_band_is_made(tmp_path, monkeypatch, samples, depth):
+    """Each band is filtered and compressed on a thread of its own while the caller makes the next
+    one (a bake's GPU renders it), and the file has the bytes of the serial encoder."""
+    import threading
+
+    rng = np.random.default_rng(samples + depth)
+    W, H, rows = 700, 2000, 300
+    top = 255 if depth == 8 else 65535
+    img = rng.integers(0, top + 1, (H, W, samples) if samples > 1 else (H, W)).astype(
+        np.uint8 if depth == 8 else np.uint16)
+    img[::7] = img[0]                       # some runs, so that the stream has matches across bands
+    bands = [img[i:i + rows] for i in range(0, H, rows)]
+    where = []
+    real = zlib.compressobj
+
+    class Spy:
+        def __init__(self, level):
+            self.c = real(level)
+
+        def compress(self, data):
+            where.append(threading.get_ident())
+            return self.c.compress(data)
+
+        def flush(self):
+            return self.c.flush()
+
+    monkeypatch.setattr(io.zlib, "compressobj", Spy)
+    path = tmp_path / "t.png"
+    io.write_png(path, iter(bands), W, H, samples, depth)
+    assert where and threading.get_ident() not in where
+    assert path.read_bytes() == _serial_png(bands, W, H, samples, depth)
+    monkeypatch.setattr(io.zlib, "compressobj", real)
+
+    def failing():
+        yield bands[0]
+        raise KeyError("the render failed")
+
+    with pytest.raises(KeyError, match="render failed"):
+        io.write_png(tmp_path / "u.png", failing(), W, H, samples, depth)

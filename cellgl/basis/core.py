@@ -346,7 +346,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
         if not (lo > -COORD_LIMIT and hi < COORD_LIMIT):
             _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
         out, passes = _passes.gpu_passes(
-            lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p)
+            lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p, n)
         exact = passes[0][1] if len(passes) == 1 else np.logical_and.reduce([ok for _, ok in passes])
         _gpu_finish(out, outs, pts, p)
         if not exact.all():
@@ -455,7 +455,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
         sp4[:dim] = spc
         out, passes = _passes.gpu_passes(
             lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o, smoothness * p.scale, smooth),
-            outs, total, p)
+            outs, total, p, n)
         _gpu_finish(out, outs, positions, p)
         exact = np.logical_and.reduce([ok for _, ok in passes])
         if not exact.all():

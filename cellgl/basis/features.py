@@ -41,12 +41,18 @@ def feature_max_ring(dim: int) -> int:
     return {2: 24, 3: 12, 4: 7}[dim]
 
 
-#: the walks, each run in a pass of its own on the GPU, and the outputs each serves
+#: the walks, each run on its own on the GPU (a pass of its own, or apart in one pass after one
+#: search: :func:`apart`), and the outputs each serves
 FAMILIES = {"edge": ("edge", "edge_grad"), "nsphere": ("nsphere",),
             "smooth": ("smooth_F1", "smooth_position", "smooth_grad", "smooth_color")}
 #: the fields of the GPU's per-sample feature record in their order, and their widths in floats
+#: (``walks``: which of the search and the walks were exact, :data:`WALK_BITS`, in a pass apart)
 FIELDS = (("edge", 1), ("edge_grad", 4), ("nsphere", 1), ("smooth_F", 1), ("smooth_delta", 4),
-          ("smooth_grad", 4), ("smooth_attr", 4))
+          ("smooth_grad", 4), ("smooth_attr", 4), ("walks", 1))
+#: the bits of the ``walks`` field (``CELL_WALK_OK_*`` of shaders/lib/features.glsl; "canary": the
+#: loop of shaders/cellular.comp that tells that the driver's own loop limit was not reached)
+WALK_BITS = {"search": 1, "edge": 2, "nsphere": 4, "smooth": 8, "canary": 16}
+_BASIS = ("F", "delta", "id", "grad")
 
 
 def flags(outputs) -> dict:
@@ -55,6 +61,13 @@ def flags(outputs) -> dict:
     return {"edge": bool(outs & {"edge", "edge_grad"}),
             "smooth": any(o.startswith("smooth_") for o in outs),
             "nsphere": "nsphere" in outs}
+
+
+def apart(outputs) -> bool:
+    """Whether one GPU pass for ``outputs`` serves several of the basis (F, delta, id, grad) and
+    the walks (edge, n-sphere, smooth): then one search, and each walk after it on its own
+    (``CELL_WALKS_APART``), with the ``walks`` field in the record."""
+    return sum(flags(outputs).values()) + bool(set(outputs) & set(_BASIS)) > 1
 
 
 SMOOTH_MODES = ("exp", "polynomial")   #: smooth F1: log-sum-exp (exact), or Blender's polynomial fold
@@ -67,7 +80,8 @@ def layout(outputs) -> dict:
     f = flags(outputs)
     extra = bool(set(outputs) & {"smooth_grad", "smooth_position", "smooth_color"})
     on = {"edge": f["edge"], "edge_grad": "edge_grad" in outputs, "nsphere": f["nsphere"],
-          "smooth_F": f["smooth"], "smooth_delta": extra, "smooth_grad": extra, "smooth_attr": extra}
+          "smooth_F": f["smooth"], "smooth_delta": extra, "smooth_grad": extra, "smooth_attr": extra,
+          "walks": apart(outputs)}
     out, col = {}, 0
     for name, width in FIELDS:
         if on[name]:
@@ -84,15 +98,16 @@ def stride(outputs) -> int:
 
 def defines(outputs, dim: int, smooth: str = "exp") -> dict:
     """The macros of ``shaders/lib/features.glsl`` for these outputs (``CELL_SMOOTH`` 1: the
-    exponential smooth minimum, 2: Blender's polynomial fold), and the record's layout
-    (``CELL_FEATURE_STRIDE``, ``CELL_FO_<FIELD>``: a field's first column, -1 if not written)."""
+    exponential smooth minimum, 2: Blender's polynomial fold), ``CELL_WALKS_APART`` (:func:`apart`),
+    and the record's layout (``CELL_FEATURE_STRIDE``, ``CELL_FO_<FIELD>``: a field's first column,
+    -1 if not written)."""
     f = flags(outputs)
     mode = (2 if smooth == "polynomial" else 1) if f["smooth"] else 0
     extra = bool(set(outputs) & {"smooth_grad", "smooth_position", "smooth_color"})
     lay = layout(outputs)
     out = dict(CELL_EDGE=int(f["edge"]), CELL_SMOOTH=mode, CELL_NSPHERE=int(f["nsphere"]),
                CELL_SMOOTH_EXTRA=int(extra), CELL_FEATURE_MAX_RING=feature_max_ring(dim),
-               CELL_FEATURE_STRIDE=lay["stride"])
+               CELL_FEATURE_STRIDE=lay["stride"], CELL_WALKS_APART=int(apart(outputs)))
     out.update({"CELL_FO_" + name.upper(): lay.get(name, -1) for name, _ in FIELDS})
     return out
 

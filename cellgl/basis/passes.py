@@ -1,5 +1,6 @@
 """How :func:`cellgl.cellular` and :func:`cellgl.cellular_grid` keep ``exact`` honest on the GPU
-(docs/exactness.md): the basis and each feature walk in a pass of their own, the samples a pass
+(docs/exactness.md): the basis and each feature walk on their own (one search, each walk after it
+apart, or a pass of their own), the samples a pass
 flagged (loop budget, driver's limit, ring cap) computed again by the NumPy reference, and a
 warning for what is still open after that. Also the NumPy backend's search itself.
 """
@@ -54,28 +55,72 @@ def numpy_search(cells, fr, p, n, outputs, smoothness=0.0, positions=None,
 _BASIS_NAMES = ("F", "delta", "id", "grad", "position", "color")
 
 
-def gpu_passes(run, outs, N: int, p) -> tuple[dict, list]:
-    """The GPU dispatches for ``outs``: one for the basis outputs (F, delta, id, grad, and what
-    position and colour need), then one per feature walk (edge, n-sphere, smooth), each with the
-    whole loop budget (``CELL_LOOP_BUDGET``) to itself. So a sample gets the same bits, and the
-    same exact flag, whatever else was asked with it. ``run(outputs)`` dispatches one pass and
-    returns ``({name: array}, exact)``; the walks' records, unpacked (:func:`cellgl.basis.features.unpack`),
-    are merged into ``"features"``.
-    Returns the outputs and, per pass, (the output names it serves, its exact flags)."""
-    fams = _features.flags(outs)
-    out, passes = {}, []
-    if set(outs) & set(_BASIS_NAMES) or not any(fams.values()):
-        out, exact = run(basis_outputs(outs, p.distribution == Distribution.BLENDER))
-        passes.append((_BASIS_NAMES, exact))
-    if any(fams.values()):
-        feats = {}
-        for fam, on in fams.items():
-            if on:
-                wanted = tuple(o for o in outs if o in _features.FAMILIES[fam])
-                got, ok = run(wanted)
-                # each pass's record holds only its own fields: views into it, no copies
-                feats.update(_features.unpack(got["features"], wanted, p.dim))
-                passes.append((_features.FAMILIES[fam], ok))
+def _plan(outs, p, n: int) -> list:
+    """The GPU passes for ``outs``: a list of passes, each a list of (what it serves, its outputs),
+    ``what`` being "basis" or a walk (edge, nsphere, smooth). The search of the basis and of every
+    walk is one search where it is the same: F1 alone (n = 1, or no basis output asked); the basis
+    with n > 1 searches further (and so spends more of the loop budget) than the walks need, so it
+    keeps a pass of its own."""
+    fams = [f for f, on in _features.flags(outs).items() if on]
+    parts = []
+    if set(outs) & set(_BASIS_NAMES) or not fams:
+        parts.append(("basis", basis_outputs(outs, p.distribution == Distribution.BLENDER)))
+    for fam in fams:
+        parts.append((fam, tuple(o for o in outs if o in _features.FAMILIES[fam])))
+    if parts[0][0] == "basis" and n > 1 and len(parts) > 2:
+        return [parts[:1], parts[1:]]
+    if parts[0][0] == "basis" and n > 1:
+        return [[part] for part in parts]
+    return [parts]
+
+
+def _served(part: str) -> tuple:
+    return _BASIS_NAMES if part == "basis" else _features.FAMILIES[part]
+
+
+def gpu_passes(run, outs, N: int, p, n: int = 1, apart: bool = True) -> tuple[dict, list]:
+    """The GPU dispatches for ``outs``: one search for the basis outputs (F, delta, id, grad, and
+    what position and colour need) and every feature walk (edge, n-sphere, smooth) where the
+    search is the same (:func:`_plan`), each walk after it on its own with the loop budget
+    (``CELL_LOOP_BUDGET``) from where the search left it, as in a pass of its own. So a sample
+    gets the same bits, and the same exact flag, whatever else was asked with it: the pass's
+    record says which of the search and the walks were exact (the ``walks`` field). Where llvmpipe's
+    own loop limit cut such a pass (its canary, also in the field: then no part's flag holds), the
+    call runs again with each walk in a pass of its own (``apart=False``, the way before), where
+    each has the driver's whole limit to itself.
+    ``run(outputs)`` dispatches one pass and returns ``({name: array}, exact)``; the walks' records,
+    unpacked (:func:`cellgl.basis.features.unpack`), are merged into ``"features"``.
+    Returns the outputs and, per part, (the output names it serves, its exact flags)."""
+    plan = _plan(outs, p, n)
+    if not apart:
+        plan = [[part] for parts in plan for part in parts]
+    out, passes, feats = {}, [], {}
+    for parts in plan:
+        wanted = tuple(o for _, names in parts for o in names)
+        got, ok = run(wanted)
+        rec = got.pop("features", None)
+        if parts[0][0] == "basis":
+            out.update(got)
+        if rec is not None:
+            # each pass's record holds only its own fields: views into it, no copies
+            feats.update({k: v for k, v in _features.unpack(rec, wanted, p.dim).items() if k != "walks"})
+        if len(parts) == 1:
+            passes.append((_served(parts[0][0]), ok))
+            continue
+        bad = np.nonzero(~ok)[0]
+        mask = np.full(len(ok), 31, dtype=np.int64)
+        if len(bad):
+            mask[bad] = rec[bad, _features.layout(wanted)["walks"]].astype(np.int64)
+            if np.any((mask[bad] & _features.WALK_BITS["canary"]) == 0):
+                # llvmpipe's limit cut a loop somewhere in the invocation: no part's flag holds
+                return gpu_passes(run, outs, N, p, n, apart=False)
+        search = (mask & _features.WALK_BITS["search"]) != 0
+        for part, _ in parts:
+            if part == "basis":
+                passes.append((_BASIS_NAMES, search))
+            else:       # (a walk's bit is off after an inexact search, as alone; not the polynomial fold's)
+                passes.append((_served(part), (mask & _features.WALK_BITS[part]) != 0))
+    if feats or any(_features.flags(outs).values()):
         out["features"] = feats
     return out, passes
 

@@ -93,7 +93,7 @@ def _chunk(tag: bytes, data: bytes) -> bytes:
 
 def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, height: int,
               samples: int, bit_depth: int, *, text: Mapping[str, str] | None = None) -> None:
-    """Write a PNG from full-width bands of rows, never holding more than one band.
+    """Write a PNG from full-width bands of rows, never holding more than two bands.
 
     Parameters
     ----------
@@ -102,7 +102,8 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     bands : iterable of ndarray
         Row bands from top to bottom, each ``(rows, width)`` for gray or ``(rows, width, samples)``,
         dtype ``uint8`` for ``bit_depth=8``, ``uint16`` for 16. Their rows must add up to
-        ``height``.
+        ``height``. A band is read after the next one is asked for: each must be an array of its
+        own (not one buffer filled again).
     width, height : int
         Image size in pixels (1 .. 2**31 - 1).
     samples : {1, 2, 3, 4}
@@ -114,8 +115,13 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     Notes
     -----
     Every row uses PNG filter 2 ("up"), computed with NumPy per band; the stream is compressed
-    with zlib level 6 and flushed into ``IDAT`` chunks of about 1 MiB.
+    with zlib level 6 and flushed into ``IDAT`` chunks of about 1 MiB. The filter, the compression
+    and the writing of a band run on a thread of their own while ``bands`` makes the next one
+    (zlib and NumPy release the GIL): a bake's encoding overlaps its rendering. One zlib stream,
+    band after band, in order: the same bytes as encoding after rendering.
     """
+    from concurrent.futures import ThreadPoolExecutor      # (on first use: not at `import cellgl`)
+
     if bit_depth not in (8, 16):
         raise ValueError(f"PNG bit depth {bit_depth}: accepted 8, 16")
     if samples not in _PNG_COLOR_TYPE:
@@ -123,34 +129,50 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     dtype = np.dtype(">u2") if bit_depth == 16 else np.dtype(np.uint8)
     row_bytes = width * samples * dtype.itemsize
     comp = zlib.compressobj(6)
-    prev = np.zeros(row_bytes, np.uint8)
+    state = {"prev": np.zeros(row_bytes, np.uint8), "pending": bytearray()}
     rows_done = 0
-    with open(path, "wb") as f:
+
+    def encode(f, band: np.ndarray) -> None:
+        n = band.shape[0]
+        raw = np.ascontiguousarray(band, dtype=dtype).view(np.uint8).reshape(n, row_bytes)
+        filtered = np.empty((n, row_bytes + 1), np.uint8)
+        filtered[:, 0] = 2  # "up": byte minus the byte above, mod 256
+        np.subtract(raw[0], state["prev"], out=filtered[0, 1:])
+        np.subtract(raw[1:], raw[:-1], out=filtered[1:, 1:])
+        state["prev"] = raw[-1].copy()
+        pending = state["pending"]
+        pending += comp.compress(filtered)
+        if len(pending) >= _IDAT_SIZE:
+            f.write(_chunk(b"IDAT", bytes(pending)))
+            pending.clear()
+
+    with open(path, "wb") as f, ThreadPoolExecutor(1, thread_name_prefix="cellgl-png") as pool:
         f.write(b"\x89PNG\r\n\x1a\n")
         f.write(_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth,
                                             _PNG_COLOR_TYPE[samples], 0, 0, 0)))
         for key, value in (text or {}).items():
             f.write(_chunk(b"tEXt", key.encode("latin-1") + b"\0" + value.encode("latin-1")))
-        pending = bytearray()
-        for band in bands:
-            band = np.asarray(band)
-            n = band.shape[0]
-            if band.shape[1] != width or band.size != n * width * samples:
-                raise ValueError(f"PNG band of shape {band.shape}: expected ({n}, {width}"
-                                 f"{'' if samples == 1 else f', {samples}'})")
-            raw = np.ascontiguousarray(band, dtype=dtype).view(np.uint8).reshape(n, row_bytes)
-            filtered = np.empty((n, row_bytes + 1), np.uint8)
-            filtered[:, 0] = 2  # "up": byte minus the byte above, mod 256
-            filtered[0, 1:] = raw[0] - prev
-            filtered[1:, 1:] = raw[1:] - raw[:-1]
-            prev = raw[-1].copy()
-            rows_done += n
-            pending += comp.compress(filtered.tobytes())
-            if len(pending) >= _IDAT_SIZE:
-                f.write(_chunk(b"IDAT", bytes(pending)))
-                pending.clear()
+        busy = None
+        try:
+            for band in bands:          # (the next band is made here while the last one encodes)
+                band = np.asarray(band)
+                n = band.shape[0]
+                if band.ndim < 2 or band.shape[1] != width or band.size != n * width * samples:
+                    raise ValueError(f"PNG band of shape {band.shape}: expected ({n}, {width}"
+                                     f"{'' if samples == 1 else f', {samples}'})")
+                rows_done += n
+                if busy is not None:
+                    busy.result()
+                busy = pool.submit(encode, f, band)
+            if busy is not None:
+                busy.result()
+        except BaseException:
+            if busy is not None:
+                busy.cancel()
+            raise
         if rows_done != height:
             raise ValueError(f"PNG got {rows_done} rows, expected {height}")
+        pending = state["pending"]
         pending += comp.flush()
         f.write(_chunk(b"IDAT", bytes(pending)))
         f.write(_chunk(b"IEND", b""))

@@ -143,9 +143,14 @@ def parse_sets(sets: Iterable[str]) -> list[str]:
 
 
 def _quantize(v: np.ndarray, bits: int) -> np.ndarray:
+    """floor(clip(v, 0, 1) * top + 0.5) in float32 (NaN 0, +inf 1, -inf 0), in place in one copy."""
     top = (1 << bits) - 1
-    v = np.nan_to_num(np.asarray(v, np.float32), nan=0.0, posinf=1.0, neginf=0.0)
-    q = np.floor(np.clip(v, 0.0, 1.0) * np.float32(top) + np.float32(0.5))
+    q = np.array(v, np.float32)               # (a copy: the caller's array is left as it was)
+    np.nan_to_num(q, copy=False, nan=0.0, posinf=1.0, neginf=0.0)
+    np.clip(q, np.float32(0.0), np.float32(1.0), out=q)
+    q *= np.float32(top)
+    q += np.float32(0.5)
+    np.floor(q, out=q)
     return q.astype(np.uint8 if bits == 8 else np.uint16)
 
 

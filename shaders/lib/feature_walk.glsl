@@ -19,8 +19,21 @@
 // (included, with the walks' hooks).
 // Macros: those of cellular.glsl (CELL_EDGE, CELL_SMOOTH, CELL_NSPHERE:
 // which walks), CELL_FEATURE_MAX_RING, CELL_EDGE_ALONE, CELL_SMOOTH_EXTRA,
+// CELL_WALKS_APART (1: one search, then each walk on its own, see below),
 // CELL_WALK_FAST (default 1 where CELL_FEATURE_PASS is defined, a pass of
-// cellular.comp, and CELL_WALK_TUNED is 1).
+// cellular.comp, or CELL_WALKS_APART is 1, and CELL_WALK_TUNED is 1).
+
+#ifndef CELL_WALKS_APART
+// 1 (a pass of cellular.comp/.frag serving several of the basis, the edge, the
+// n-sphere radius, smooth F1; cellgl/basis/passes.py): cell_features runs each
+// walk on its own after one cell_search(), as in a pass of its own (the same
+// bits, flag), not the textures' one walk of every feature. A walk knows what
+// it serves at run time (_CellWalk.edge_on, .smooth_on); 0: the switches.
+#define CELL_WALKS_APART 0
+#endif
+#if CELL_WALKS_APART && CELL_NSPHERE
+#define CELL_TRACK_F1_CELL 1     // the n-sphere walk starts where the search found F1
+#endif
 
 #include "cellular.glsl"
 
@@ -41,13 +54,19 @@
 // 1: the smooth walk's specialised loops below (a pass of cellular.comp with
 // the tuned shapes, CELL_WALK_TUNED of walk.glsl; the textures and the
 // exported snippets keep the shorter general code).
-#ifdef CELL_FEATURE_PASS
+#if defined(CELL_FEATURE_PASS) || CELL_WALKS_APART
 #define CELL_WALK_FAST CELL_WALK_TUNED
 #else
 #define CELL_WALK_FAST 0
 #endif
 #endif
-#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_FAST
+// Smooth F1's own walk, without the edge's (alone, or apart from the edge's).
+#if CELL_SMOOTH == 1 && (!CELL_EDGE || CELL_WALKS_APART)
+#define _CELL_SMOOTH_OWN 1
+#else
+#define _CELL_SMOOTH_OWN 0
+#endif
+#if _CELL_SMOOTH_OWN && CELL_WALK_FAST
 // Smooth F1 alone, rings 2, 3, ... (_CellWalk.far): a point is summed without
 // the tests of the other walks.
 #define _CELL_FAR_SUM 1
@@ -95,6 +114,8 @@ struct _CellWalk {
     vec4 wdelta;
     vec4 wgrad;
     vec4 wattr;
+    bool edge_on;    // CELL_WALKS_APART: this walk serves the edge
+    bool smooth_on;  // CELL_WALKS_APART: this walk serves smooth F1
     bool found;      // the F1 point was seen: its cell offset o1, position q1 in it
     ivec4 o1;
     vec4 q1;
@@ -109,6 +130,18 @@ struct _CellWalk {
 #endif
 };
 
+// Whether walk w serves the edge, smooth F1 (exp): the compile-time switch, and
+// with CELL_WALKS_APART the walk's own flag.
+bool _cell_do_edge(_CellWalk w)
+{
+    return CELL_EDGE != 0 && (CELL_WALKS_APART == 0 || w.edge_on);
+}
+
+bool _cell_do_smooth(_CellWalk w)
+{
+    return CELL_SMOOTH == 1 && (CELL_WALKS_APART == 0 || w.smooth_on);
+}
+
 // True distance from the walk's centre beyond which no point matters (now).
 float _cell_walk_reach(_CellWalk w)
 {
@@ -117,10 +150,14 @@ float _cell_walk_reach(_CellWalk w)
     }
     float reach = w.F1;
 #if CELL_EDGE
-    reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
+    if (_cell_do_edge(w)) {
+        reach = max(reach, w.F1 + 2.0 * min(w.edge, 1.0e30));
+    }
 #endif
 #if CELL_SMOOTH == 1
-    reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+    if (_cell_do_smooth(w)) {
+        reach = max(reach, w.F1 + CELL_SMOOTH_CUTOFF * w.k);
+    }
 #endif
 #if CELL_EDGE_ALONE
     reach = w.nearest ? sqrt(w.F1) : reach;     // F1 in internal units, Euclidean (as CELL_EDGE)
@@ -132,10 +169,20 @@ float _cell_walk_reach(_CellWalk w)
 #if CELL_SMOOTH == 1
 // Smooth F1 (exp): add the point at true distance d (delta, id) to the sums when its weight
 // exp(-(d - F1) / k) is inside the cut-off; the F1 point itself (is_p1) weighs 1.
+// _cell_smooth_weight: exp((F1 - d) / k) for k > 0 only (k = 0: inf, S NaN),
+// at most 1 (d a rounding below F1, FMA contraction, with a tiny k: inf).
+float _cell_smooth_weight(float F1, float d, float k)
+{
+    return exp(min(F1 - d, 0.0) / k);
+}
+
 void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p1, CellParams p)
 {
     if (is_p1 || (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k)) {
-        float wt = is_p1 ? 1.0 : exp((w.F1 - d) / w.k);
+        float wt = 1.0;
+        if (!is_p1) {            // (then k > 0)
+            wt = _cell_smooth_weight(w.F1, d, w.k);
+        }
         w.wsum += wt;
 #if CELL_SMOOTH_EXTRA
         w.wdelta += wt * delta;
@@ -148,19 +195,21 @@ void _cell_smooth_add(inout _CellWalk w, vec4 delta, float d, uint id, bool is_p
 
 #if _CELL_FAR_SUM
 // What smooth F1 alone does per point in rings 2, 3, ...: the sum of
-// _cell_walk_point. The F1 point (only there when the search needed ring 2)
-// has d == F1 to the bit (the same sum of the same terms), so it is told by
-// its ID and distance.
+// _cell_walk_point. The F1 point (there if the search needed ring 2) is told by
+// its ID and offset as there (not by d == F1: two computations a compiler may
+// contract differently), and counts with d = F1, weight 1.
 void _cell_walk_far_point(inout _CellWalk w, vec4 delta, uint id, CellParams p)
 {
     float d = cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
 #if CELL_SMOOTH_EXTRA
-    _cell_smooth_add(w, delta, d, id, id == w.id1 && d == w.F1, p);
+    vec4 e = delta - w.d1;
+    bool is_p1 = id == w.id1 && dot(e, e) < 1e-10;
+    _cell_smooth_add(w, delta, is_p1 ? w.F1 : d, id, is_p1, p);
 #else
-    // Smooth F1 alone needs no ID: the F1 point (d == F1) weighs exp(0) = 1
-    // as is_p1 gives it, and with k = 0 the sum does not change S = F1.
-    if (d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
-        w.wsum += exp((w.F1 - d) / w.k);
+    // Smooth F1 alone needs no ID: the F1 point (d == F1, or a rounding off,
+    // capped) weighs 1 as is_p1 gives it; with k = 0 nothing is added: S = F1.
+    if (w.k > 0.0 && d < w.F1 + CELL_SMOOTH_CUTOFF * w.k) {
+        w.wsum += _cell_smooth_weight(w.F1, d, w.k);
     }
 #endif
 }
@@ -192,7 +241,7 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
         w.q1 = q;
     }
 #if CELL_EDGE
-    if (!is_p1 && e2 > 0.0) {
+    if (_cell_do_edge(w) && !is_p1 && e2 > 0.0) {
         float inv = inversesqrt(e2);
         float b = dot(0.5 * (delta + w.d1), e) * inv;
         if (b < w.edge) {
@@ -202,8 +251,10 @@ void _cell_walk_point(inout _CellWalk w, vec4 delta, uint id, ivec4 o, vec4 q, C
     }
 #endif
 #if CELL_SMOOTH == 1
-    float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
-    _cell_smooth_add(w, delta, d, id, is_p1, p);
+    if (_cell_do_smooth(w)) {
+        float d = is_p1 ? w.F1 : cell_metric_finish(cell_metric_length(delta, p.minkowski_p), p.minkowski_p);
+        _cell_smooth_add(w, delta, d, id, is_p1, p);
+    }
 #endif
 #if CELL_EDGE_ALONE
     // Nearest mode: the F1 point as cell_search finds it, the least internal-unit
@@ -275,7 +326,7 @@ bool _cell_walk_rings(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, int f
     return !spent && (ring <= last || float(last) + m >= _cell_walk_reach(w));
 }
 
-#if CELL_SMOOTH == 1 && !CELL_EDGE
+#if _CELL_SMOOTH_OWN
 // The smooth window of smooth F1 alone (_cell_walk_smooth): every cell of the
 // window lo .. hi on ring `ring` or beyond (the reach fixed: each point's own
 // cut-off decides). Tested at the bottom (a window holds a cell, hi its last);
@@ -310,7 +361,10 @@ void _cell_walk_window(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, ivec
 // k = 0.1 with rows from ring 3 (llvmpipe, 2D and 3D).
 bool _cell_walk_ball(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, float m, float reach, int last)
 {
-    ivec4 lo, hi;
+    // (Every component set: _cell_ball_reset sets the axes below CELL_DIM,
+    // the others stay 0 and are copied in and out, never read.)
+    ivec4 lo = ivec4(0);
+    ivec4 hi = ivec4(0);
     ivec4 o = ivec4(0);
     _cell_ball_reset(o, lo, hi, f, reach, last, 0);
     w.far = true;
@@ -371,7 +425,7 @@ bool _cell_walk_smooth(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p, floa
 }
 #endif
 
-#if CELL_SMOOTH == 1 && !CELL_EDGE && CELL_WALK_TUNED
+#if _CELL_SMOOTH_OWN && CELL_WALK_TUNED
 // Smooth F1 (tuned): rings 0 and 1 as one block of constant bounds, unrolled
 // into straight-line SIMD code, every cell of it, in window order (the order
 // of the ring loop). Its reach F1 + 16 k seldom prunes a cell of ring 1, and
@@ -427,8 +481,8 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
 #if _CELL_FAR_SUM
     w.far = false;            // rings 0 and 1: every test (a walk around the F1 point: all rings)
 #endif
-#if CELL_SMOOTH == 1 && !CELL_EDGE
-    if (!w.around) {
+#if _CELL_SMOOTH_OWN
+    if (!w.around && !_cell_do_edge(w)) {
         float m = cell_face_distance(f);
 #if CELL_WALK_TUNED
         if (!_cell_walk_block(w, cell, f, p, m)) {
@@ -441,36 +495,6 @@ bool _cell_walk(inout _CellWalk w, ivec4 cell, vec4 f, CellParams p)
     }
 #endif
     return _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
-}
-// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
-// F1), after `loops` loop passes.
-_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness)
-{
-    _CellWalk w;
-    w.around = false;
-    w.d1 = d1;
-    w.id1 = id1;
-    w.F1 = F1;
-    w.k = smoothness;
-    w.edge = CELL_FAR;
-    w.edge_n = vec4(0.0);
-    w.wsum = 0.0;
-    w.wdelta = vec4(0.0);
-    w.wgrad = vec4(0.0);
-    w.wattr = vec4(0.0);
-    w.found = false;
-    w.o1 = ivec4(0);
-    w.q1 = vec4(0.0);
-    w.nn = CELL_FAR;
-    w.loops = loops;
-    w.spent = false;
-#if CELL_EDGE_ALONE
-    w.nearest = F1 >= CELL_FAR;    // no F1 point given: the walk finds it first
-#endif
-#if _CELL_FAR_SUM
-    w.far = false;
-#endif
-    return w;
 }
 
 #endif

@@ -38,11 +38,46 @@
 // Blender's Voronoi node folds it, _cell_poly_smooth below; all 0: nothing
 // below is compiled and cell_search is untouched), CELL_FEATURE_MAX_RING,
 // CELL_EDGE_ALONE (1: cell_edge_alone, the walk finding the F1 point too),
-// CELL_SMOOTH_EXTRA (feature_walk.glsl).
+// CELL_SMOOTH_EXTRA, CELL_WALKS_APART (feature_walk.glsl: each walk on its own
+// after one search, cell_features below).
 
 #include "feature_walk.glsl"
 
 #if CELL_EDGE || CELL_SMOOTH || CELL_NSPHERE
+
+// A walk around the sample whose F1 point is at offset d1 (ID id1, distance
+// F1), after `loops` loop passes; with CELL_WALKS_APART serving the edge
+// (edge_on) and/or smooth F1 (smooth_on), else every compiled feature.
+_CellWalk _cell_walk_start(vec4 d1, uint id1, float F1, int loops, float smoothness, bool edge_on, bool smooth_on)
+{
+    _CellWalk w;
+    w.around = false;
+    w.d1 = d1;
+    w.id1 = id1;
+    w.F1 = F1;
+    w.k = smoothness;
+    w.edge = CELL_FAR;
+    w.edge_n = vec4(0.0);
+    w.wsum = 0.0;
+    w.wdelta = vec4(0.0);
+    w.wgrad = vec4(0.0);
+    w.wattr = vec4(0.0);
+    w.edge_on = edge_on;
+    w.smooth_on = smooth_on;
+    w.found = false;
+    w.o1 = ivec4(0);
+    w.q1 = vec4(0.0);
+    w.nn = CELL_FAR;
+    w.loops = loops;
+    w.spent = false;
+#if CELL_EDGE_ALONE
+    w.nearest = F1 >= CELL_FAR;    // no F1 point given: the walk finds it first
+#endif
+#if _CELL_FAR_SUM
+    w.far = false;
+#endif
+    return w;
+}
 
 struct CellFeatures {
     float edge;          // distance to the cell's border (CELL_EDGE)
@@ -54,7 +89,15 @@ struct CellFeatures {
     float nsphere;       // n-sphere radius (CELL_NSPHERE)
     bool exact;          // false if a walk reached CELL_FEATURE_MAX_RING or the loop budget
     int loops;           // loop iterations spent by the search and the walks
+    int walks;           // CELL_WALKS_APART: which were exact, CELL_WALK_OK_* (else all)
 };
+
+// The bits of CellFeatures.walks (cellgl/basis/passes.py reads them from the
+// record, CELL_FO_WALKS): the search, and each walk, exact.
+#define CELL_WALK_OK_SEARCH 1
+#define CELL_WALK_OK_EDGE 2
+#define CELL_WALK_OK_NSPHERE 4
+#define CELL_WALK_OK_SMOOTH 8
 
 #if CELL_SMOOTH == 2
 // Smooth F1 as Blender's Voronoi node folds it (CELL_SMOOTH 2): a running
@@ -155,6 +198,7 @@ CellFeatures cell_poly_features(ivec4 cell, vec4 f, CellParams p, float smoothne
     o.smooth_attr = vec4(0.0);
     o.exact = true;
     o.loops = 0;
+    o.walks = 15;
     _cell_poly_smooth(o, cell, f, p, smoothness);
     return o;
 }
@@ -168,7 +212,7 @@ CellFeatures cell_poly_features(ivec4 cell, vec4 f, CellParams p, float smoothne
 // and cell_features, in one walker's code.
 float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
 {
-    _CellWalk w = _cell_walk_start(vec4(0.0), 0u, CELL_FAR, 0, 0.0);
+    _CellWalk w = _cell_walk_start(vec4(0.0), 0u, CELL_FAR, 0, 0.0, true, false);
     _cell_walk_rings(w, cell, f, p, 0, CELL_FEATURE_MAX_RING);
     w.nearest = false;
     w.F1 = cell_metric_finish(w.F1, p.minkowski_p);
@@ -178,11 +222,80 @@ float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
 }
 #endif
 
+#if CELL_WALKS_APART
+// The features of the sample (cell, f) whose cell_search() result is r, each
+// walk on its own (CELL_WALKS_APART, feature_walk.glsl): what each gives in a
+// pass of its own, one search for all. Each walk starts from the search's loop
+// count (r.loops), as there: together they may spend more than one walk's
+// budget, and where llvmpipe's own limit then cut a loop the canary of
+// cellular.comp flags the sample (cellgl/basis/passes.py then runs the walks
+// in passes of their own). o.walks: which were exact; o.exact: all.
+CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
+{
+    CellFeatures o;
+    o.edge = 0.0;
+    o.edge_grad = vec4(0.0);
+    o.smooth_F = r.F[0];
+    o.smooth_delta = r.delta[0];
+    o.smooth_grad = cell_metric_gradient(r.delta[0], r.F[0], p.minkowski_p);
+    o.smooth_attr = cell_id_attribute(r.id[0]);
+    o.nsphere = 0.0;
+    o.walks = r.exact ? CELL_WALK_OK_SEARCH | CELL_WALK_OK_EDGE | CELL_WALK_OK_NSPHERE | CELL_WALK_OK_SMOOTH : 0;
+    o.loops = r.loops;
+    // A walk runs only after an exact search (as r.exact && _cell_walk(...) alone).
+#if CELL_EDGE
+    if (r.exact) {
+        _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness, true, false);
+        bool ok = _cell_walk(w, cell, f, p);
+        o.edge = max(w.edge, 0.0);
+        o.edge_grad = -w.edge_n;
+        o.walks &= ok ? ~0 : ~CELL_WALK_OK_EDGE;
+        o.loops = max(o.loops, w.loops);
+    }
+#endif
+#if CELL_SMOOTH == 1
+    if (r.exact) {
+        _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness, false, true);
+        bool ok = _cell_walk(w, cell, f, p);
+        if (w.wsum > 0.0) {
+            float inv = 1.0 / w.wsum;
+            o.smooth_F = w.F1 - w.k * log(w.wsum);
+#if CELL_SMOOTH_EXTRA
+            o.smooth_delta = w.wdelta * inv;
+            o.smooth_grad = w.wgrad * inv;
+            o.smooth_attr = w.wattr * inv;
+#endif
+        }
+        o.walks &= ok ? ~0 : ~CELL_WALK_OK_SMOOTH;
+        o.loops = max(o.loops, w.loops);
+    }
+#elif CELL_SMOOTH == 2
+    // (a fixed block, no search: exact whatever the search, as alone)
+    _cell_poly_smooth(o, cell, f, p, smoothness);
+    o.walks |= CELL_WALK_OK_SMOOTH;
+#endif
+#if CELL_NSPHERE
+    // Around the F1 point, from the cell and place the search found it in
+    // (as the pass of the n-sphere radius alone, CELL_TRACK_F1_CELL).
+    if (r.exact) {
+        _CellWalk v = _cell_walk_start(vec4(0.0), r.id[0], r.F[0], r.loops, smoothness, false, false);
+        v.around = true;
+        v.nn = CELL_FAR;
+        bool ok = _cell_walk(v, cell + r.o1, r.q1, p);
+        o.nsphere = 0.5 * v.nn;
+        o.walks &= ok ? ~0 : ~CELL_WALK_OK_NSPHERE;
+        o.loops = max(o.loops, v.loops);
+    }
+#endif
+    o.exact = o.walks == (CELL_WALK_OK_SEARCH | CELL_WALK_OK_EDGE | CELL_WALK_OK_NSPHERE | CELL_WALK_OK_SMOOTH);
+    return o;
+}
+#else
 // The features of the sample (cell, f) whose cell_search() result is r;
 // smoothness: k of smooth F1 in lattice units (>= 0).
 CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float smoothness)
 {
-    _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness);
+    _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness, true, true);
     CellFeatures o;
 #if CELL_TRACK_F1_CELL
     // n-sphere radius alone: the search already knows the F1 point's cell.
@@ -231,7 +344,9 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     w.loops = v.loops;
 #endif
     o.loops = w.loops;
+    o.walks = o.exact ? 15 : 0;
     return o;
 }
+#endif
 
 #endif
