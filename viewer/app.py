@@ -31,7 +31,7 @@ from imgui_bundle import imgui
 
 import glfw  # noqa: E402
 
-from cellgl.gl import context, versions
+from cellgl.gl import context, shadercache, versions
 
 from . import camera, render
 from .model import Model
@@ -146,6 +146,7 @@ class Viewer:
                 glfw.window_hint(glfw.COCOA_RETINA_FRAMEBUFFER, False)
                 glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API if api == "egl"
                                  else glfw.NATIVE_CONTEXT_API)
+                shadercache.prepare_environment()   # the drivers' shader disk caches, before a driver loads
                 self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
                 if self.window:
                     return api

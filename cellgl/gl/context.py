@@ -48,7 +48,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import backends, glsl, osmesa, path, platforms, versions
+from cellgl.gl import backends, glsl, osmesa, path, platforms, shadercache, versions
 from cellgl.gl.backends import ContextError
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
@@ -101,6 +101,7 @@ deferred: list = []
 
 def _create(backend: str) -> moderngl.Context:
     """A new context of ``backend`` (:func:`cellgl.gl.backends.create`), current on this thread."""
+    shadercache.prepare_environment()   # the drivers' shader disk caches, before a driver loads
     return backends.create(backend, _tainted, _opened)
 
 

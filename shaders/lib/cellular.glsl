@@ -34,7 +34,8 @@
 //         point's cell for the n-sphere radius alone), CELL_TRACK_F1_CELL
 //         (derived from those unless defined: 1 for the n-sphere radius alone),
 //         CELL_SHARED_CELLS (walk.glsl: rings 0 and 1 from a workgroup's cache),
-//         CELL_WALK_TUNED (walk.glsl: the shapes of the loops, tuned or plain).
+//         CELL_WALK_TUNED (walk.glsl: the shapes of the loops, tuned or plain),
+//         CELL_PRECISE (below).
 
 // CELL_PRECISE: `precise` where the compiler has it (the entry's prelude, cellgl/gl/glsl.py), on
 // the arithmetic whose rounding decides an answer (lib/metric.glsl, docs/exactness.md).

@@ -15,7 +15,8 @@
 // anisotropic distance, CellParams.axis_scale: stretched cells; cellular.glsl),
 // CELL_JITTER_UNIFORM (1: jitter is a uniform; cell_next_point), CELL_COUNT_CONST
 // (1: CELL_MIN_POINTS, CELL_MAX_COUNT constant; cell_point_count), CELL_PERIODIC
-// (1: a tileable texture; cell_wrap).
+// (1: a tileable texture; cell_wrap), CELL_PRECISE (the entry's prelude, cellgl/gl/glsl.py:
+// `precise` where the compiler has it, else empty).
 
 #include "hash.glsl"
 
