@@ -47,7 +47,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import glsl, osmesa, path, platforms
+from cellgl.gl import glsl, osmesa, path, platforms, registry
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
 __all__ = [
@@ -504,12 +504,18 @@ def check_gl_error(ctx: moderngl.Context | None = None) -> None:
 # --------------------------------------------------------------------------------------------
 
 
+def _compile_error(what: str, exc: Exception, src: glsl.Source) -> glsl.ShaderError:
+    err = glsl.ShaderError(f"{what}: {glsl.map_error(str(exc), src).strip()}")
+    err.sources = [src]
+    return err
+
+
 def compute_program(name: str, defines: Mapping | None = None, *,
                     ctx: moderngl.Context | None = None, files: Mapping[str, str] | None = None,
-                    cache: bool = True) -> moderngl.ComputeShader:
+                    cache: bool = True, lru: tuple | None = None) -> moderngl.ComputeShader:
     """Compile (once, cached) the compute shader ``shaders/<name>``.
 
-    The cache is the context's one program cache (:mod:`cellgl.gl.runner`: dropped with the
+    The cache is the context's one program cache (:mod:`cellgl.gl.registry`: dropped with the
     context and in a forked child).
 
     Parameters
@@ -524,16 +530,27 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         Generated include files (see :func:`cellgl.glsl.load`).
     cache : bool
         False: compile a new program and do not keep it (the caller owns and releases it).
+    lru : (str, int), optional
+        Keep it among the last ``int`` programs of the named group only (older ones released).
 
     Raises
     ------
     cellgl.gl.glsl.ShaderError
         Loading or compiling failed; driver line numbers are mapped to ``file:line``.
     """
-    from cellgl.gl import runner
+    ctx = ctx if ctx is not None else get_context()
 
+    def make():
+        src = glsl.load(name, defines, files=files)
+        try:
+            return ctx.compute_shader(src.text), None
+        except moderngl.Error as exc:
+            raise _compile_error(f"compiling {name}", exc, src) from None
+    if not cache:
+        return make()[0]
     with _lock:
-        return runner.runner(ctx).compute_program(name, defines, files=files, cache=cache)
+        return registry.cached(ctx, registry.program_key("compute", name, defines=defines, files=files),
+                               make, lru)[0]
 
 
 def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
@@ -546,10 +563,24 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
     ``u_storage_<binding>`` are set to their units: such programs read storage words from
     textures (``shaders/storage.glsl``, :meth:`cellgl.gl.runner.Runner.bind_words`).
     """
-    from cellgl.gl import runner
+    ctx = ctx if ctx is not None else get_context()
+    if path.gpu_path(ctx) == "fragment":
+        defines = {**(defines or {}), "CELL_STORAGE_ROW_BITS": path.STORAGE_ROW_BITS}
 
+    def make():
+        version = glsl_version(ctx)
+        vs = glsl.lower_version(glsl.load(vertex, defines), version)
+        fs = glsl.lower_version(glsl.load(fragment, defines), version)
+        try:
+            prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
+        except moderngl.Error as exc:
+            raise _program_error(vertex, fragment, exc, vs, fs) from None
+        for unit in (5, 6, 7):   # the storage bindings read from textures (storage.glsl)
+            if f"u_storage_{unit}" in prog:
+                prog[f"u_storage_{unit}"].value = unit
+        return prog, None
     with _lock:
-        return runner.runner(ctx).program(vertex, fragment, defines)
+        return registry.cached(ctx, registry.program_key("program", vertex, fragment, defines=defines), make)[0]
 
 
 def glsl_version(ctx: moderngl.Context) -> int:
@@ -576,7 +607,5 @@ def _program_error(vertex, fragment, exc, vs, fs) -> glsl.ShaderError:
 
 def clear_program_cache() -> None:
     """Forget compiled programs (e.g. after editing shader files)."""
-    from cellgl.gl import runner
-
     with _lock:
-        runner.clear_programs()
+        registry.clear_programs()

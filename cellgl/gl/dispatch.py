@@ -1,39 +1,195 @@
-"""The fragment path's runner (:class:`FragmentRunner`; the seam: :mod:`cellgl.gl.runner`).
+"""What a pass of cellgl's GPU paths is, and the NumPy side of running one (the seam:
+:mod:`cellgl.gl.runner`, whose runners use these).
 
-OpenGL 3.3 core and up without compute shaders (Apple's 4.1 core included; :mod:`cellgl.gl.path`)
-runs the same ``shaders/lib`` code in fragment programs over tiled quads:
-
-* **Programs.** A ``#version 330 core`` fragment entry of ``shaders/`` with ``tiles.vert`` (a
-  triangle covering the viewport from ``gl_VertexID``), compiled once per context into the
-  runner's one cache together with its vertex array; storage samplers bound to their units
-  (:data:`SAMPLERS`).
-* **Inputs.** Storage words (:meth:`cellgl.gl.runner.Runner.bind_words`) are an R32UI texture
-  2^STORAGE_ROW_BITS words wide on texture unit ``binding`` (``shaders/storage.glsl``); records
-  RGBA32UI (``u_in<binding>``). Sample inputs are textures :data:`WIDTH` texels wide, sample j at
-  texel (j % WIDTH, j // WIDTH). Positions are split into cell and float32 fraction in NumPy with
-  cellular.comp's float64 operations (OpenGL 3.3 has no doubles; :func:`split_points`); a grid is
-  separable (:func:`axis_tables`).
-* **Outputs.** Fragment (x, y) of a :data:`WIDTH`-wide target is sample ``y * WIDTH + x``. Each
-  output's components are spread over render targets of at most 4 channels of its own kind (float,
-  uint or int: integers travel in integer targets), packed tight (R, RG or RGBA), location 0 the
-  flag; where they exceed the draw buffers, several draws each write a part (:func:`slots`). The
-  entry defines ``row_<name>`` arrays; the runner writes ``CELL_FRAG_DECL`` and
-  ``CELL_FRAG_WRITE`` from them. Readback goes straight into the caller's array where one target
-  carries a whole output.
-* **Tiles.** Draws of at most :func:`cellgl.gl.runner.tile_samples` samples (the watchdog).
+* **A pass** (:class:`Pass`): the entry of each path, its ``#define``s, a uniform setter, the
+  samples' input (:class:`Positions`, :class:`Grid`, :class:`Rows`, :class:`Index`,
+  :class:`Image`), its outputs (:class:`Output`: a destination array each) and its flag
+  (:class:`Flag`), with the worst loop passes one sample may spend (its ``cost``).
+* **Tiles** (:func:`tile_samples`): the watchdog's bound on the samples of one dispatch or draw.
+* **The fragment path's layout.** Fragment (x, y) of a :data:`WIDTH`-wide target is sample
+  ``y * WIDTH + x``. Each output's components are spread over render targets of at most 4
+  channels of its own kind (float, uint or int: integers travel in integer targets), packed tight
+  (R, RG or RGBA; :func:`slots`), location 0 the flag; the entry defines ``row_<name>`` arrays and
+  the runner writes ``CELL_FRAG_DECL`` / ``CELL_FRAG_WRITE`` from them (:func:`pass_defines`).
+  Positions are split into cell and float32 fraction in NumPy with cellular.comp's float64
+  operations (OpenGL 3.3 has no doubles; :func:`split_points`); a grid is separable
+  (:func:`axis_tables`).
+* **The compute path's layout.** A grid in slabs of rows or layers (:func:`grid_slabs`).
 """
 from __future__ import annotations
 
-from collections import OrderedDict
+import os
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 from cellgl.gl.path import STORAGE_ROW_BITS
-from cellgl.gl.runner import (SAMPLERS, WIDTH, Grid, Image, Index, Pass, Positions, Result, Rows, Runner,
-                              set_uniform, store, tile_samples)
 
-__all__ = ["WIDTH", "CHUNK", "STORAGE_ROW_BITS", "FragmentRunner", "slots", "draw_buffers",
-           "split_points", "axis_tables", "MAX_TARGETS"]
+__all__ = ["Pass", "Output", "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result",
+           "tile_samples", "forced_tile", "slots", "draw_buffers", "split_points", "axis_tables",
+           "grid_slabs", "pass_defines", "read_rows", "WIDTH", "CHUNK", "LOCAL_SIZE", "SAMPLE_ROW_BITS",
+           "STORAGE_ROW_BITS", "SLOW_PASSES_PER_S", "DISPATCH_SECONDS", "MAX_TILE", "MAX_TARGETS"]
+
+
+#: work-group size of the 1D compute entries (``CELL_LOCAL_SIZE``)
+LOCAL_SIZE = 64
+#: the float64 positions of :class:`Positions` on the compute path: an RGBA32UI texture
+#: 2^SAMPLE_ROW_BITS texels wide (cellular.comp, ``u_samples``)
+SAMPLE_ROW_BITS = 12
+_TEXTURE_ROWS_MAX = 16384     #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
+_MAX_GROUPS = 65535           #: work groups per axis GL guarantees
+#: OpenGL 4.3's guaranteed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (bytes): the output buffers of one
+#: dispatch stay within the context's own limit, and never above this default where it is unknown
+_STORAGE_BLOCK_MIN = 16 << 20
+_STORAGE_BLOCK_MAX = 128 << 20
+
+#: The watchdog (docs/architecture.md, "Tiles and the watchdog"). Windows (TDR) and macOS reset a
+#: GPU whose batch runs past about 2 s; cellgl keeps every dispatch and draw under
+#: DISPATCH_SECONDS on the slowest GPU it supports. SLOW_PASSES_PER_S is that GPU's rate in loop
+#: passes of the search (one pass: a cell or point visit, ~40-80 ALU operations) per second over
+#: all its lanes. Measured: an H200 runs the 3x3 jitter F1 snippet at 3.1e9 samples/s, 9 passes
+#: each: ~2.8e10 passes/s. The slowest GPU cellgl supports (an integrated GPU of ~0.4 TFLOPS
+#: against the H200's ~60) is ~150x slower: ~1.9e8; the bound takes 1.5e8. A tile holds at most
+#: SLOW_PASSES_PER_S * DISPATCH_SECONDS / (worst passes per sample) samples.
+SLOW_PASSES_PER_S = 1.5e8
+DISPATCH_SECONDS = 1.0
+#: the most samples any tile holds (a few MB of outputs per dispatch)
+MAX_TILE = 1 << 20
+_MIN_TILE = 1024
+#: width of the fragment entries' render targets and sample-input textures, in samples
+WIDTH = 1024
+#: sampler uniform -> texture unit: the storage words of each binding and the sample inputs
+SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
+            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3}
+
+
+def tile_samples(cost: int, ctx_limit: int | None = None) -> int:
+    """Samples per dispatch or draw for a pass whose samples spend at most ``cost`` loop passes
+    each: within :data:`DISPATCH_SECONDS` on the slow GPU (:data:`SLOW_PASSES_PER_S`), a multiple
+    of 1024, at least 1024 and at most :data:`MAX_TILE`. ``CELLGL_TILE_SAMPLES`` (a positive
+    integer) forces a smaller tile (tests: tiny tiles give the same bits)."""
+    n = int(SLOW_PASSES_PER_S * DISPATCH_SECONDS // max(1, int(cost)))
+    n = max(_MIN_TILE, min(MAX_TILE, n // _MIN_TILE * _MIN_TILE))
+    forced = forced_tile()
+    if forced:
+        n = min(n, forced)
+    if ctx_limit:
+        n = min(n, ctx_limit)
+    return n
+
+
+def forced_tile() -> int | None:
+    """``CELLGL_TILE_SAMPLES`` as an int (None when unset); a clear error when it is not one."""
+    raw = os.environ.get("CELLGL_TILE_SAMPLES", "").strip()
+    if not raw:
+        return None
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ValueError(f"CELLGL_TILE_SAMPLES={raw!r} must be a positive integer (samples per "
+                         "dispatch or draw), or unset")
+    return value
+
+
+# ---------------------------------------------------------------------------------------------
+# What a pass is
+# ---------------------------------------------------------------------------------------------
+
+@dataclass
+class Output:
+    """One per-sample output of an entry: the storage buffer at ``binding`` (compute) or the
+    entry's ``row_<name>`` array (fragment); ``array`` (count, components) float32, uint32 or int32,
+    C-contiguous: the destination, written in place."""
+    name: str
+    binding: int
+    array: np.ndarray
+
+
+@dataclass
+class Flag:
+    """The entry's per-sample flag: on the compute path ``"list"`` (a counter then the indices of
+    the flagged samples, storage buffer ``binding``) or ``"count"`` (a counter); on the fragment
+    path ``o_<name>`` at location 0 (1: fine)."""
+    name: str
+    binding: int
+    mode: str = "list"
+
+
+@dataclass
+class Positions:
+    """float64 sample positions (count, dim), C-contiguous, times ``scale``: the compute entry
+    splits them into cell and float32 fraction in double precision (``u_samples``, ``u_scale``);
+    the fragment path, which has no doubles, does the same split in NumPy."""
+    pts: np.ndarray
+    scale: float
+    dim: int
+
+
+@dataclass
+class Grid:
+    """A regular 4D grid (x fastest): ``shape`` (4,), origin split into ``cell`` (4,) int and
+    ``frac`` (4,) float64, ``spacing`` (4,), all in lattice units."""
+    shape: tuple
+    cell: tuple
+    frac: tuple
+    spacing: tuple
+
+
+@dataclass
+class Rows:
+    """Per-sample input rows (count, 4) of int32, uint32 or float32: storage buffer ``binding``
+    (compute) or the RGBA texture ``u_in<binding>`` (fragment), row i for sample i."""
+    array: np.ndarray
+    binding: int = 0
+
+
+@dataclass
+class Index:
+    """No input: sample i of the pass is ``u_first + i`` (the entry derives its position)."""
+
+
+@dataclass
+class Image:
+    """A ``width x height`` pixel grid, pixel (x, y) sample ``y * width + x``: 2D work groups of
+    ``local`` (compute: tiles are bands of rows, a multiple of ``align``, ``u_row0`` the first)."""
+    width: int
+    height: int
+    local: tuple = (8, 8)
+    align: int = 8
+
+
+@dataclass
+class Pass:
+    """A pass of an entry over ``count`` samples (see the module's doc)."""
+    compute: str
+    fragment: str
+    defines: dict
+    count: int
+    inputs: object
+    outputs: list
+    setup: Callable | None = None
+    flag: Flag | None = None
+    files: dict | None = None
+    #: the worst loop passes one sample may spend (the watchdog's tile size)
+    cost: int = 1 << 14
+    #: keep the program in a least-recently-used group (name, size) instead of for good
+    lru: tuple | None = None
+
+
+@dataclass
+class Result:
+    """What a run reports besides its outputs: ``flagged`` (count,) bool (a ``"list"`` flag: the
+    flagged samples), ``cut`` (a ``"count"`` flag: how many)."""
+    flagged: np.ndarray | None = None
+    cut: int = 0
+
+
+# ---------------------------------------------------------------------------------------------
+# Layouts
+# ---------------------------------------------------------------------------------------------
 
 #: samples per upload and read-back (one render-target set; a multiple of WIDTH)
 CHUNK = 1 << 19
@@ -112,7 +268,7 @@ def _kind(a: np.ndarray) -> str:
     return {"f": "f", "u": "u", "i": "i"}[a.dtype.kind]
 
 
-def _pass_defines(flag, draw_slots) -> dict:
+def pass_defines(flag, draw_slots) -> dict:
     """CELL_FRAG_DECL and CELL_FRAG_WRITE of one draw: the flag at location 0 (``o_<name>``), then
     each slot a target of its kind, written from the entry's ``row_<name>``."""
     decl, write = [], []
@@ -132,135 +288,33 @@ def _pass_defines(flag, draw_slots) -> dict:
     return {"CELL_FRAG_DECL": " ".join(decl), "CELL_FRAG_WRITE": " ".join(write)}
 
 
-class FragmentRunner(Runner):
-    """OpenGL 3.3 core and up: draws of the fragment entry, outputs in render targets."""
-
-    path = "fragment"
-
-    # -- programs and objects -------------------------------------------------------------------
-
-    def _bind_words(self, data, raw, content, binding, comps):
-        width = 1 << STORAGE_ROW_BITS
-
-        def make():
-            texels = data.size // comps
-            rows = max(1, -(-texels // width))
-            padded = np.zeros(rows * width * comps, np.uint32)
-            padded[:data.size] = data.reshape(-1)
-            tex = self.ctx.texture((width, rows), comps, padded.tobytes(), dtype="u4")
-            tex.filter = (0x2600, 0x2600)          # GL_NEAREST: an integer texture is complete only so
-            return tex
-        self._object(("words", binding), (content, comps), make).use(binding)
-
-    def _target(self, formats, rows: int):
-        """A framebuffer of len(formats) attachments WIDTH x rows (or taller), kept per formats
-        (the last :data:`MAX_TARGETS`)."""
-        held_all = store("fragment.targets", self.ctx).setdefault("sets", OrderedDict())
-        key = tuple(formats)
-        got = held_all.get(key)
-        if got is None or got[0] < rows:
-            height = max(rows, 8)
-            texs = [self.ctx.texture((WIDTH, height), c, dtype=dt) for c, dt in formats]
-            fbo = self.ctx.framebuffer(color_attachments=texs)
-            fbo.use()            # bound before the old ones go (moderngl restores the last binding)
-            if got is not None:
-                for o in got[1]:
-                    o.release()
-            got = held_all[key] = (height, [fbo] + texs)
-            while len(held_all) > MAX_TARGETS:
-                for o in held_all.popitem(last=False)[1][1]:
-                    o.release()
-        held_all.move_to_end(key)
-        return got[1][0]
-
-    # -- running a pass -------------------------------------------------------------------------
-
-    def run(self, p: Pass) -> Result:
-        layout = [(o.name, _kind(o.array), o.array.shape[1]) for o in p.outputs]
-        per = draw_buffers(self.ctx) - (1 if p.flag is not None else 0)
-        all_slots = slots(layout)
-        draws = [all_slots[i:i + per] for i in range(0, len(all_slots), per)] or [[]]
-        base = dict(p.defines)
-        inp = p.inputs
-        if isinstance(inp, Grid):
-            base["CELL_FRAG_GRID_AXES"] = max([1] + [a + 1 for a, e in enumerate(inp.shape) if int(e) > 1])
-        progs = []
-        for draw_slots in draws:
-            d = dict(base)
-            d.update(_pass_defines(p.flag, draw_slots))
-            prog, vao = self.entry(p.fragment, d, files=p.files, lru=p.lru)
-            if p.setup is not None:
-                p.setup(prog)
-            progs.append((prog, vao, draw_slots))
-        if isinstance(inp, Grid):
-            self._grid(inp, [q for q, _, _ in progs])
-        by_name = {o.name: o.array for o in p.outputs}
-        res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
-        tile_rows = max(1, tile_samples(p.cost) // WIDTH)
-        chunk = max(CHUNK, tile_rows * WIDTH)
-        for first in range(0, p.count, chunk):
-            m = min(chunk, p.count - first)
-            ok = self._inputs(inp, first, m)
-            for prog, vao, draw_slots in progs:
-                set_uniform(prog, "u_first", first)
-                formats = ([(1, "u4")] if p.flag is not None else [])
-                formats += [(_target_comps(k), _KIND[kind][0]) for _, kind, _, k in draw_slots]
-                rows = -(-m // WIDTH)
-                fbo = self._target(formats, rows)
-                fbo.use()
-                for r0 in range(0, rows, tile_rows):
-                    fbo.viewport = (0, r0, WIDTH, min(tile_rows, rows - r0))
-                    vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-                att = 0
-                if p.flag is not None:
-                    flags = np.empty((m, 1), np.uint32)
-                    _read(fbo, 0, flags, "u4")
-                    if p.flag.mode == "count":
-                        res.cut += int(np.count_nonzero(flags[:, 0] == 0))
-                    else:
-                        res.flagged[first:first + m] |= flags[:, 0] == 0
-                    att = 1
-                for k_att, (name, kind, c0, k) in enumerate(draw_slots, start=att):
-                    dest = by_name[name][first:first + m]
-                    tc = _target_comps(k)
-                    if c0 == 0 and k == tc == dest.shape[1]:
-                        _read(fbo, k_att, dest, _KIND[kind][0])      # straight into the caller's array
-                    else:
-                        tmp = np.empty((m, tc), dest.dtype)
-                        _read(fbo, k_att, tmp, _KIND[kind][0])
-                        dest[:, c0:c0 + k] = tmp[:, :k]
-            if ok is not None:
-                res.flagged[first:first + m] |= ~ok
-        return res
-
-    def _grid(self, g: Grid, progs) -> None:
-        cells, fracs, offsets = axis_tables(g.shape, g.cell, g.frac, g.spacing)
-        table = np.stack([cells, fracs.view(np.int32)], axis=1)      # RG32I: cell, the fraction's bits
-        self.input_texture(0, table, 1 << STORAGE_ROW_BITS)
-        for prog in progs:
-            set_uniform(prog, "u_grid", tuple(int(v) for v in g.shape))
-            set_uniform(prog, "u_axis_offset", tuple(offsets))
-            set_uniform(prog, "u_axis_cell", tuple(int(cells[o]) for o in offsets))
-            set_uniform(prog, "u_axis_frac", tuple(float(fracs[o]) for o in offsets))
-
-    def _inputs(self, inp, first: int, m: int):
-        """Upload chunk [first, first + m) of the samples' input; the in-range flags of positions."""
-        if isinstance(inp, Positions):
-            cell, frac, ok = split_points(inp.pts[first:first + m], inp.scale, inp.dim)
-            if inp.dim == 2:                    # one texel: the cell and the fraction's bits
-                self.input_texture(0, np.concatenate([cell, frac.view(np.int32)], axis=1))
-            else:
-                self.input_texture(0, cell)
-                self.input_texture(1, frac)
-            return ok
-        if isinstance(inp, Rows):
-            self.input_texture(inp.binding, inp.array[first:first + m])
-        elif not isinstance(inp, (Grid, Index, Image)):
-            raise TypeError(f"unknown input {inp!r}")
-        return None
+def grid_slabs(X: int, Y: int, Z: int, W: int, step: int, local: int = LOCAL_SIZE):
+    """The dispatches of an X x Y x Z x W grid (x fastest), each contiguous in the output and within
+    :data:`_MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first
+    output index, (groups x, y, z))``. Several z-layers of full rows, or some rows of one layer,
+    or (a row wider than ``step``) a run of columns of one row."""
+    if X > step:          # wider than one dispatch: split rows
+        for w in range(W):
+            for z in range(Z):
+                for y in range(Y):
+                    row = ((w * Z + z) * Y + y) * X
+                    for x0 in range(0, X, step):
+                        cx = min(step, X - x0)
+                        yield (x0, y, z, w, cx, 1), row + x0, ((cx + local - 1) // local, 1, 1)
+        return
+    if X * Y <= step and Y <= _MAX_GROUPS:
+        ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
+    else:
+        ny, nz = max(1, min(step // X, _MAX_GROUPS)), 1
+    gx = (X + local - 1) // local
+    for w in range(W):
+        for z0 in range(0, Z, nz):
+            for y0 in range(0, Y, ny):
+                cy, cz = min(ny, Y - y0), min(nz, Z - z0)
+                yield (0, y0, z0, w, X, cy), ((w * Z + z0) * Y + y0) * X, (gx, cy, cz)
 
 
-def _read(fbo, attachment: int, dest: np.ndarray, dtype: str) -> None:
+def read_rows(fbo, attachment: int, dest: np.ndarray, dtype: str) -> None:
     """Read samples [0, len(dest)) of ``attachment`` (fragment (x, y): sample y * WIDTH + x) into
     ``dest`` (m, components), C-contiguous: whole rows, then the last row's part."""
     m, comps = dest.shape
