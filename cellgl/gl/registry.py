@@ -95,13 +95,13 @@ def held(ctx) -> _Held:
     if _pid != os.getpid():
         _after_fork_in_child()
     with _lock:
+        if len(_registry) > 1:
+            for k, other in list(_registry.items()):   # released since: their objects went with them
+                if not _alive(other.ctx):
+                    del _registry[k]
         h = _registry.get(id(ctx))
-        if h is not None and h.ctx is ctx:
-            return h
-        for k, other in list(_registry.items()):     # released since: their objects went with them
-            if not _alive(other.ctx):
-                del _registry[k]
-        h = _registry[id(ctx)] = _Held(ctx)
+        if h is None or h.ctx is not ctx:
+            h = _registry[id(ctx)] = _Held(ctx)
         return h
 
 
