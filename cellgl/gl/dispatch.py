@@ -44,15 +44,16 @@ _MAX_GROUPS = 65535           #: work groups per axis GL guarantees
 _STORAGE_BLOCK_MIN = 16 << 20
 _STORAGE_BLOCK_MAX = 128 << 20
 
-#: The watchdog (docs/architecture.md, "Tiles and the watchdog"). Windows (TDR) and macOS reset a
-#: GPU whose batch runs past about 2 s; cellgl keeps every dispatch and draw under
-#: DISPATCH_SECONDS on the slowest GPU it supports. SLOW_PASSES_PER_S is that GPU's rate in loop
-#: passes of the search (one pass: a cell or point visit, ~40-80 ALU operations) per second over
-#: all its lanes. Measured: an H200 runs the 3x3 jitter F1 snippet at 3.1e9 samples/s, 9 passes
-#: each: ~2.8e10 passes/s. The slowest GPU cellgl supports (an integrated GPU of ~0.4 TFLOPS
-#: against the H200's ~60) is ~150x slower: ~1.9e8; the bound takes 1.5e8. A tile holds at most
-#: SLOW_PASSES_PER_S * DISPATCH_SECONDS / (worst passes per sample) samples.
-SLOW_PASSES_PER_S = 1.5e8
+#: The watchdog (docs/fragment-path.md, "Tiles: no dispatch or draw runs long"). Windows (TDR) and
+#: macOS reset a GPU whose batch runs past about 2 s; cellgl keeps every dispatch and draw under
+#: DISPATCH_SECONDS on the slowest GPU it supports, in the worst case. A pass declares the most loop
+#: passes one sample may spend (its ``cost``: the search's loop budget, counted in loop passes of
+#: the search and the walks); SLOW_PASSES_PER_S is the slow GPU's rate in such passes per second
+#: over all its lanes. Measured: an H200 runs 2D poisson F1+F2 (~30 passes a sample) at 962e6
+#: samples/s, ~3e10 passes/s. The slowest GPU cellgl supports, an OpenGL 3.3-class integrated one
+#: (Intel HD 4000: 0.33 TFLOPS against the H200's 67), is ~200x slower, ~1.5e8; the bound takes 1e8.
+#: A tile holds at most SLOW_PASSES_PER_S * DISPATCH_SECONDS / cost samples (at least 1024).
+SLOW_PASSES_PER_S = 1e8
 DISPATCH_SECONDS = 1.0
 #: the most samples any tile holds (a few MB of outputs per dispatch)
 MAX_TILE = 1 << 20
