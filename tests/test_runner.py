@@ -226,10 +226,11 @@ def test_tiny_tiles_give_the_same_bits(ctx, monkeypatch, path):
     def run():
         r = cellgl.cellular(x, 3, outputs=("F", "id", "delta", "edge"))
         grid = cellgl.cellular_grid((41, 23, 3), spacing=0.29, n=2, outputs=("F", "id"))
+        grid4 = cellgl.cellular_grid((3, 2, 2, 40), spacing=0.7, n=1, outputs=("F",))   # many short slabs
         counts = gpu.cell_counts(cells, core.make_params(2, density=1.5))
         tex = cellgl.render("flagstone", 37, 29, channels=("color", "id", "F1"))
         vals, labs = P.pups_evaluate(g, 83, 51, mode="label", return_labels=True)
-        return [r.F, r.id, r.delta, r.edge, r.exact, grid.F, grid.id, counts[0], counts[1],
+        return [r.F, r.id, r.delta, r.edge, r.exact, grid.F, grid.id, grid4.F, counts[0], counts[1],
                 tex["color"], tex["id"], tex["F1"], vals, labs]
 
     want = run()

@@ -74,8 +74,9 @@ def _buffers(outputs) -> tuple[str, ...]:
 
 
 def _set(prog, name, value):
-    if name in prog:
-        prog[name].value = value
+    u = prog.get(name, None)          # (``name in prog`` walks every member)
+    if u is not None:
+        u.value = value
 
 
 def _set_params(prog, p: Params):

@@ -26,7 +26,7 @@ import numpy as np
 
 from cellgl.gl.path import STORAGE_ROW_BITS
 
-__all__ = ["Pass", "Output", "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result",
+__all__ = ["has_watchdog", "Pass", "Output", "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result",
            "tile_samples", "forced_tile", "slots", "draw_buffers", "split_points", "axis_tables",
            "grid_slabs", "pass_defines", "read_rows", "WIDTH", "CHUNK", "LOCAL_SIZE", "SAMPLE_ROW_BITS",
            "STORAGE_ROW_BITS", "SLOW_PASSES_PER_S", "DISPATCH_SECONDS", "MAX_TILE", "MAX_TARGETS"]
@@ -43,6 +43,9 @@ _MAX_GROUPS = 65535           #: work groups per axis GL guarantees
 #: dispatch stay within the context's own limit, and never above this default where it is unknown
 _STORAGE_BLOCK_MIN = 16 << 20
 _STORAGE_BLOCK_MAX = 128 << 20
+#: bytes of one output the compute path reads back at once (the tiles of a chunk write ranges of
+#: one buffer; docs/performance.md)
+_CHUNK_BYTES = 64 << 20
 
 #: The watchdog (docs/fragment-path.md, "Tiles: no dispatch or draw runs long"). Windows (TDR) and
 #: macOS reset a GPU whose batch runs past about 2 s; cellgl keeps every dispatch and draw under
@@ -65,19 +68,31 @@ SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
             "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3}
 
 
-def tile_samples(cost: int, ctx_limit: int | None = None) -> int:
+def tile_samples(cost: int, watchdog: bool = True) -> int:
     """Samples per dispatch or draw for a pass whose samples spend at most ``cost`` loop passes
     each: within :data:`DISPATCH_SECONDS` on the slow GPU (:data:`SLOW_PASSES_PER_S`), a multiple
-    of 1024, at least 1024 and at most :data:`MAX_TILE`. ``CELLGL_TILE_SAMPLES`` (a positive
+    of 1024, at least 1024 and at most :data:`MAX_TILE`; ``watchdog=False`` (a renderer on the CPU,
+    which no watchdog resets: llvmpipe): :data:`MAX_TILE`. ``CELLGL_TILE_SAMPLES`` (a positive
     integer) forces a smaller tile (tests: tiny tiles give the same bits)."""
-    n = int(SLOW_PASSES_PER_S * DISPATCH_SECONDS // max(1, int(cost)))
-    n = max(_MIN_TILE, min(MAX_TILE, n // _MIN_TILE * _MIN_TILE))
+    n = MAX_TILE
+    if watchdog:
+        n = int(SLOW_PASSES_PER_S * DISPATCH_SECONDS // max(1, int(cost)))
+        n = max(_MIN_TILE, min(MAX_TILE, n // _MIN_TILE * _MIN_TILE))
     forced = forced_tile()
     if forced:
         n = min(n, forced)
-    if ctx_limit:
-        n = min(n, ctx_limit)
     return n
+
+
+#: renderers on the CPU (GL_RENDERER), which no GPU watchdog resets: their tiles are as large as
+#: memory asks, not as the watchdog does
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "lavapipe", "software rasterizer")
+
+
+def has_watchdog(ctx) -> bool:
+    """Whether a GPU watchdog can reset ``ctx``'s device (False for a renderer on the CPU)."""
+    name = str(ctx.info.get("GL_RENDERER", "")).lower()
+    return not any(s in name for s in SOFTWARE_RENDERERS)
 
 
 def forced_tile() -> int | None:

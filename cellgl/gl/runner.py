@@ -31,7 +31,7 @@ from cellgl.gl import context, glsl
 from cellgl.gl import path as _path
 from cellgl.gl import dispatch as _d
 from cellgl.gl import registry
-from cellgl.gl.dispatch import (_KIND, _STORAGE_BLOCK_MAX, _STORAGE_BLOCK_MIN, _TEXTURE_ROWS_MAX, CHUNK,
+from cellgl.gl.dispatch import (_CHUNK_BYTES, _KIND, _STORAGE_BLOCK_MAX, _STORAGE_BLOCK_MIN, _TEXTURE_ROWS_MAX, CHUNK,
                                 LOCAL_SIZE, MAX_TARGETS, SAMPLE_ROW_BITS, SAMPLERS, STORAGE_ROW_BITS, WIDTH,
                                 Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, _kind,
                                 _target_comps, axis_tables, draw_buffers, grid_slabs, pass_defines,
@@ -64,6 +64,8 @@ class Runner:
     def __init__(self, h):
         self.held = h
         self.ctx = h.ctx
+        #: whether a GPU watchdog can reset the device (tiles: :func:`cellgl.gl.dispatch.tile_samples`)
+        self.watchdog = _d.has_watchdog(self.ctx)
 
     # -- programs ------------------------------------------------------------------------------
 
@@ -162,9 +164,10 @@ class Runner:
 
 
 def set_uniform(prog, name: str, value) -> None:
-    """Set ``prog[name]`` where the compiler kept it."""
-    if name in prog:
-        prog[name].value = value
+    """Set ``prog[name]`` where the compiler kept it (``name in prog`` walks every member)."""
+    u = prog.get(name, None)
+    if u is not None:
+        u.value = value
 
 
 class FragmentRunner(Runner):
@@ -231,7 +234,7 @@ class FragmentRunner(Runner):
             self._grid(inp, [q for q, _, _ in progs])
         by_name = {o.name: o.array for o in p.outputs}
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
-        tile_rows = max(1, tile_samples(p.cost) // WIDTH)
+        tile_rows = max(1, tile_samples(p.cost, self.watchdog) // WIDTH)
         chunk = max(CHUNK, tile_rows * WIDTH)
         for first in range(0, p.count, chunk):
             m = min(chunk, p.count - first)
@@ -309,15 +312,17 @@ class ComputeRunner(Runner):
         buf = self._object(("words", binding), content, lambda: self.ctx.buffer(raw if raw else b"\0" * 4))
         buf.bind_to_storage_buffer(binding)
 
-    def storage(self, binding: int, nbytes: int):
-        """A storage buffer of at least ``nbytes`` bound to ``binding``, reused across calls."""
+    def storage(self, binding: int, nbytes: int, bind: bool = True):
+        """A storage buffer of at least ``nbytes`` for ``binding`` (bound to it unless ``bind`` is
+        False), reused across calls (grown, its content lost, when too small)."""
         objs = self.held.objects
         got = objs.get(("storage", binding))
         if got is None or got[1].size < nbytes:
             if got is not None:
                 _release(got[1])
             got = objs[("storage", binding)] = (None, self.ctx.buffer(reserve=max(64, nbytes + nbytes // 4)))
-        got[1].bind_to_storage_buffer(binding)
+        if bind:
+            got[1].bind_to_storage_buffer(binding)
         return got[1]
 
     def block_bytes(self) -> int:
@@ -327,12 +332,23 @@ class ComputeRunner(Runner):
         return int(min(_STORAGE_BLOCK_MAX, max(_STORAGE_BLOCK_MIN, int(v))))
 
     def _step(self, p: Pass, local: int) -> int:
+        """Samples per dispatch: the watchdog's tile, within the context's storage block."""
         per = max([o.array.strides[0] for o in p.outputs] + [4])
         by_bytes = self.block_bytes() // per
-        step = min(tile_samples(p.cost), by_bytes, local * _d._MAX_GROUPS)
+        step = min(tile_samples(p.cost, self.watchdog), by_bytes, local * _d._MAX_GROUPS)
         return max(local, step // local * local)
 
+    def offset_alignment(self) -> int:
+        """GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT (256, the most the spec allows, where unknown)."""
+        got = self.held.objects.get("ssbo-align")
+        if got is None:
+            v = context._get_integer(self.ctx, 0x90DF)
+            got = self.held.objects["ssbo-align"] = (None, int(v) if v and v > 0 else 256)
+        return got[1]
+
     def run(self, p: Pass) -> Result:
+        """Dispatch ``p`` in tiles (the watchdog's); the tiles of a chunk write ranges of one
+        buffer per output, read back once per chunk straight into the destination arrays."""
         d = dict(p.defines)
         d.setdefault("CELL_LOCAL_SIZE", LOCAL_SIZE)
         local = int(d["CELL_LOCAL_SIZE"])
@@ -347,36 +363,79 @@ class ComputeRunner(Runner):
             set_uniform(prog, "u_origin_frac", tuple(float(v) for v in inp.frac))     # dvec4
             set_uniform(prog, "u_spacing", tuple(float(v) for v in inp.spacing))
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
-        for first, m, groups, extra in self._pieces(p, local):
-            if isinstance(inp, Positions):
-                self._upload_positions(prog, inp.pts[first:first + m])
-            elif isinstance(inp, Rows):
-                rows = np.ascontiguousarray(inp.array[first:first + m])
-                buf = self.storage(inp.binding, rows.nbytes)
-                buf.write(rows)
-            for name, value in extra:
-                set_uniform(prog, name, value)
-            set_uniform(prog, "u_count", m)
-            set_uniform(prog, "u_first", first)
-            bufs = [(o, self.storage(o.binding, m * o.array.strides[0])) for o in p.outputs]
-            flag = None
-            if p.flag is not None:
-                flag = self.storage(p.flag.binding, 4 * (m + 1) if p.flag.mode == "list" else 4)
-                flag.write(b"\0\0\0\0")
-            if max(groups) > _d._MAX_GROUPS:  # GL drops such a dispatch: the buffers would stay unwritten
-                raise RuntimeError(f"internal error: dispatch of {groups} work groups exceeds {_d._MAX_GROUPS}")
-            prog.run(*groups)
-            self.ctx.memory_barrier()
-            for o, buf in bufs:
-                buf.read_into(o.array[first:first + m], size=m * o.array.strides[0])
-            if flag is not None:
-                nbad = int(np.frombuffer(flag.read(4), dtype=np.uint32)[0])
-                if p.flag.mode == "count":
-                    res.cut += nbad
-                elif nbad:
-                    idx = np.frombuffer(flag.read(4 * nbad, offset=4), dtype=np.uint32)
-                    res.flagged[first + idx.astype(np.int64)] = True
+        align = self.offset_alignment()
+        sizes = [o.array.strides[0] for o in p.outputs]
+        step = self._step(p, local)
+        cap = max(step, _CHUNK_BYTES // max(sizes + [4]) // step * step)
+        # the flag's region of each piece: a counter (and the list mode's indices), aligned
+        stride = -(-4 * (step + 1) // align) * align if p.flag and p.flag.mode == "list" else align
+        chunk: list = []
+        slots = 0
+        for piece in self._pieces(p, local):
+            first, m = piece[0], piece[1]
+            if chunk and (first + m - chunk[0][0] > cap or len(chunk) == slots
+                          or any((first - chunk[0][0]) * b % align for b in sizes)):
+                self._flush(p, chunk, res, stride)
+                chunk = []
+            if not chunk:                   # the chunk's buffers, whole (a dispatch never grows them)
+                n = min(cap, p.count - first)
+                for o in p.outputs:
+                    self.storage(o.binding, n * o.array.strides[0], bind=False)
+                slots = 2 * -(-n // step) + 1       # flag regions: pieces may be shorter than a tile
+                if p.flag is not None:
+                    self.storage(p.flag.binding, slots * stride, bind=False)
+            chunk.append(piece)
+            self._dispatch(p, prog, chunk, stride)
+        if chunk:
+            self._flush(p, chunk, res, stride)
         return res
+
+    def _dispatch(self, p: Pass, prog, chunk: list, stride: int) -> None:
+        """Dispatch the last piece of ``chunk`` into its ranges of the chunk's buffers."""
+        first, m, groups, extra = chunk[-1]
+        c0 = chunk[0][0]
+        inp = p.inputs
+        if isinstance(inp, Positions):
+            self._upload_positions(prog, inp.pts[first:first + m])
+        elif isinstance(inp, Rows):
+            rows = np.ascontiguousarray(inp.array[first:first + m])
+            self.storage(inp.binding, rows.nbytes).write(rows)
+        for name, value in extra:
+            set_uniform(prog, name, value)
+        set_uniform(prog, "u_count", m)
+        set_uniform(prog, "u_first", first)
+        objs = self.held.objects
+        for o in p.outputs:
+            rb = o.array.strides[0]
+            objs[("storage", o.binding)][1].bind_to_storage_buffer(o.binding, offset=(first - c0) * rb, size=m * rb)
+        if p.flag is not None:
+            at = (len(chunk) - 1) * stride
+            flag = objs[("storage", p.flag.binding)][1]
+            flag.write(b"\0\0\0\0", offset=at)
+            flag.bind_to_storage_buffer(p.flag.binding, offset=at, size=stride)
+        if max(groups) > _d._MAX_GROUPS:  # GL drops such a dispatch: the buffers would stay unwritten
+            raise RuntimeError(f"internal error: dispatch of {groups} work groups exceeds {_d._MAX_GROUPS}")
+        prog.run(*groups)
+
+    def _flush(self, p: Pass, chunk: list, res: Result, stride: int) -> None:
+        """Wait for the chunk's dispatches; read its outputs and flags."""
+        self.ctx.memory_barrier()
+        c0 = chunk[0][0]
+        end = chunk[-1][0] + chunk[-1][1] - c0
+        objs = self.held.objects
+        for o in p.outputs:
+            rb = o.array.strides[0]
+            objs[("storage", o.binding)][1].read_into(o.array[c0:c0 + end], size=end * rb)
+        if p.flag is None:
+            return
+        flag = objs[("storage", p.flag.binding)][1]
+        for k, (first, m, _, _) in enumerate(chunk):
+            nbad = int(np.frombuffer(flag.read(4, offset=k * stride), dtype=np.uint32)[0])
+            if p.flag.mode == "count":
+                res.cut += nbad
+            elif nbad:
+                idx = np.frombuffer(flag.read(4 * nbad, offset=k * stride + 4), dtype=np.uint32)
+                res.flagged[first + idx.astype(np.int64)] = True
 
     def _pieces(self, p: Pass, local: int):
         """The dispatches: (first sample, samples, work groups, extra uniforms)."""
