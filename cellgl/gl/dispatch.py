@@ -118,10 +118,18 @@ def forced_tile() -> int | None:
 class Output:
     """One per-sample output of an entry: the storage buffer at ``binding`` (compute) or the
     entry's ``row_<name>`` array (fragment); ``array`` (count, components) float32, uint32 or int32,
-    C-contiguous: the destination, written in place."""
+    C-contiguous: the destination, written in place. ``row``: the components the compute entry
+    writes per sample when more than the array takes (its first ``components`` are kept; the
+    fragment path writes only those)."""
     name: str
     binding: int
     array: np.ndarray
+    row: int | None = None
+
+    @property
+    def row_bytes(self) -> int:
+        """Bytes per sample in the compute entry's buffer."""
+        return 4 * max(self.row or 0, self.array.shape[1])
 
 
 @dataclass

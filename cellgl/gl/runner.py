@@ -333,7 +333,7 @@ class ComputeRunner(Runner):
 
     def _step(self, p: Pass, local: int) -> int:
         """Samples per dispatch: the watchdog's tile, within the context's storage block."""
-        per = max([o.array.strides[0] for o in p.outputs] + [4])
+        per = max([o.row_bytes for o in p.outputs] + [4])
         by_bytes = self.block_bytes() // per
         step = min(tile_samples(p.cost, self.watchdog), by_bytes, local * _d._MAX_GROUPS)
         return max(local, step // local * local)
@@ -364,7 +364,7 @@ class ComputeRunner(Runner):
             set_uniform(prog, "u_spacing", tuple(float(v) for v in inp.spacing))
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
         align = self.offset_alignment()
-        sizes = [o.array.strides[0] for o in p.outputs]
+        sizes = [o.row_bytes for o in p.outputs]
         step = self._step(p, local)
         cap = max(step, _CHUNK_BYTES // max(sizes + [4]) // step * step)
         # the flag's region of each piece: a counter (and the list mode's indices), aligned
@@ -380,7 +380,7 @@ class ComputeRunner(Runner):
             if not chunk:                   # the chunk's buffers, whole (a dispatch never grows them)
                 n = min(cap, p.count - first)
                 for o in p.outputs:
-                    self.storage(o.binding, n * o.array.strides[0], bind=False)
+                    self.storage(o.binding, n * o.row_bytes, bind=False)
                 slots = 2 * -(-n // step) + 1       # flag regions: pieces may be shorter than a tile
                 if p.flag is not None:
                     self.storage(p.flag.binding, slots * stride, bind=False)
@@ -406,7 +406,7 @@ class ComputeRunner(Runner):
         set_uniform(prog, "u_first", first)
         objs = self.held.objects
         for o in p.outputs:
-            rb = o.array.strides[0]
+            rb = o.row_bytes
             objs[("storage", o.binding)][1].bind_to_storage_buffer(o.binding, offset=(first - c0) * rb, size=m * rb)
         if p.flag is not None:
             at = (len(chunk) - 1) * stride
@@ -424,8 +424,14 @@ class ComputeRunner(Runner):
         end = chunk[-1][0] + chunk[-1][1] - c0
         objs = self.held.objects
         for o in p.outputs:
-            rb = o.array.strides[0]
-            objs[("storage", o.binding)][1].read_into(o.array[c0:c0 + end], size=end * rb)
+            rb = o.row_bytes
+            buf = objs[("storage", o.binding)][1]
+            if rb == o.array.strides[0]:        # straight into the caller's array
+                buf.read_into(o.array[c0:c0 + end], size=end * rb)
+            else:                               # the entry writes more than is wanted
+                rows = np.empty((end, rb // 4), o.array.dtype)
+                buf.read_into(rows, size=end * rb)
+                o.array[c0:c0 + end] = rows[:, :o.array.shape[1]]
         if p.flag is None:
             return
         flag = objs[("storage", p.flag.binding)][1]

@@ -89,10 +89,12 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     d["CELL_LOOP_BUDGET"] = 1 << 30
     out = {}
     outputs = []
-    for name, (binding, comps, bit, _) in _OUTPUTS.items():
+    for name, (binding, comps, bit, chans) in _OUTPUTS.items():
         if mask & bit:
-            out[name] = np.empty((count, comps), np.uint32 if name == "id" else np.float32)
-            outputs.append(_runner.Output(name, binding, out[name]))
+            # F1..F4: only up to the last one asked for (F1 alone: one float a sample)
+            k = max(int(c[1]) for c in channels if c in chans) if name == "F" else comps
+            out[name] = np.empty((count, k), np.uint32 if name == "id" else np.float32)
+            outputs.append(_runner.Output(name, binding, out[name], row=comps))
     loops = None
     if probe:
         d["CELL_LOOP_PROBE"] = 1
