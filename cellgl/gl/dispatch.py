@@ -246,27 +246,42 @@ def _target_comps(k: int) -> int:
     return k if k in (1, 2) else 4
 
 
-def split_points(pts: np.ndarray, scale: float, dim: int):
+#: rows split at once by :func:`split_points` (its float64 temporaries stay in the cache)
+_SPLIT_BLOCK = 1 << 14
+
+
+def split_points(pts: np.ndarray, scale: float, dim: int, cell=None, frac=None):
     """cellular.comp's split of positions ``pts`` (N, dim) float64 times ``scale``: (cell int32
-    (N, dim), fraction float32 (N, dim), in range (N,) bool). Out of range (|x| >= 2^30 cells, or
-    NaN): searched at 0 and flagged, as there."""
-    x = pts[:, :dim] * np.float64(scale)
-    lo, hi = (x.min(), x.max()) if x.size else (0.0, 0.0)
-    if -_COORD_LIMIT < lo and hi < _COORD_LIMIT:        # False for NaN: the careful way below
-        ok = np.ones(len(x), bool)
-    else:
-        with np.errstate(invalid="ignore"):
-            inside = np.abs(x) < _COORD_LIMIT
-        x[~inside] = 0.0
-        ok = inside.all(axis=1)
-    fl = np.floor(x)
-    np.subtract(x, fl, out=x)
-    frac = x.astype(np.float32)                         # float64 -> float32, to nearest
-    cell = fl.astype(np.int32)
-    up = frac >= 1.0                                    # a fraction just below 1 rounds up to 1
-    if up.any():
-        cell += up
-        frac[up] = 0.0
+    (N, dim), fraction float32 (N, dim), in range (N,) bool or None when all are). Out of range
+    (|x| >= 2^30 cells, or NaN): searched at 0 and flagged, as there. ``cell``, ``frac``: arrays
+    (N, dim) to fill (views of one texel array in 2D), else new ones. In blocks of
+    :data:`_SPLIT_BLOCK` rows, each the same operations in the same order: the same bits."""
+    n = len(pts)
+    cell = np.empty((n, dim), np.int32) if cell is None else cell
+    frac = np.empty((n, dim), np.float32) if frac is None else frac
+    ok = None
+    sc = np.float64(scale)
+    for b in range(0, n, _SPLIT_BLOCK):
+        e = min(n, b + _SPLIT_BLOCK)
+        x = pts[b:e, :dim] * sc
+        top = np.abs(x).max() if x.size else 0.0
+        if not top < _COORD_LIMIT:                      # also NaN: the careful way
+            with np.errstate(invalid="ignore"):
+                inside = np.abs(x) < _COORD_LIMIT
+            x[~inside] = 0.0
+            if ok is None:
+                ok = np.ones(n, bool)
+            ok[b:e] = inside.all(axis=1)
+        fl = np.floor(x)
+        np.subtract(x, fl, out=x)
+        fr = frac[b:e]
+        fr[...] = x                                     # float64 -> float32, to nearest
+        cl = cell[b:e]
+        cl[...] = fl
+        up = fr >= 1.0                                  # a fraction just below 1 rounds up to 1
+        if up.any():
+            cl += up
+            fr[up] = 0.0
     return cell, frac, ok
 
 

@@ -284,10 +284,13 @@ class FragmentRunner(Runner):
     def _inputs(self, inp, first: int, m: int):
         """Upload chunk [first, first + m) of the samples' input; the in-range flags of positions."""
         if isinstance(inp, Positions):
-            cell, frac, ok = split_points(inp.pts[first:first + m], inp.scale, inp.dim)
+            pts = inp.pts[first:first + m]
             if inp.dim == 2:                    # one texel: the cell and the fraction's bits
-                self.input_texture(0, np.concatenate([cell, frac.view(np.int32)], axis=1))
+                texels = np.empty((m, 4), np.int32)
+                _, _, ok = split_points(pts, inp.scale, 2, texels[:, :2], texels[:, 2:].view(np.float32))
+                self.input_texture(0, texels)
             else:
+                cell, frac, ok = split_points(pts, inp.scale, inp.dim)
                 self.input_texture(0, cell)
                 self.input_texture(1, frac)
             return ok
