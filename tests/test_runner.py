@@ -251,3 +251,41 @@ def test_loop_probe_is_bounded(ctx):
         gpu.loop_probe(np.zeros((4, 2)), p, 1, ("F",), budget=1 << 30)
     own, driver, flagged = gpu.loop_probe(np.random.default_rng(0).uniform(-5, 5, (64, 2)), p, 1, ("F",))
     assert (own > 0).all() and not flagged.any()
+
+
+class _FakeCtx:
+    def __init__(self, **info):
+        self.info = info
+
+
+def test_only_gpus_get_watchdog_tiles(monkeypatch):
+    """A renderer on the CPU (llvmpipe) has no watchdog to reset it: its tiles are as large as
+    memory asks; a GPU's are the watchdog's."""
+    monkeypatch.delenv("CELLGL_TILE_SAMPLES", raising=False)
+    assert not dispatch.has_watchdog(_FakeCtx(GL_RENDERER="llvmpipe (LLVM 15.0.6, 256 bits)"))
+    assert dispatch.has_watchdog(_FakeCtx(GL_RENDERER="NVIDIA H200/PCIe/SSE2"))
+    assert dispatch.tile_samples(6144, watchdog=False) == dispatch.MAX_TILE
+    assert dispatch.tile_samples(6144) * 6144 <= dispatch.SLOW_PASSES_PER_S * dispatch.DISPATCH_SECONDS
+
+
+def test_a_dispatch_stays_within_the_contexts_storage_block(ctx, monkeypatch):
+    """The outputs of one dispatch fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE (GL 4.3 guarantees 16 MiB);
+    a chunk read back at once may hold several dispatches (ranges of one buffer)."""
+    from cellgl.gl.path import has_compute
+
+    if not has_compute(ctx):
+        pytest.skip("no compute shaders on this context")
+    monkeypatch.setenv("CELLGL_PATH", "compute")
+    r = runner.runner(ctx)
+    monkeypatch.setattr(r, "block_bytes", lambda: 1 << 16)        # 64 KiB: 2048 samples of F1..F8
+    monkeypatch.setattr(r, "watchdog", False)
+    seen = []
+    real = r._dispatch
+    monkeypatch.setattr(r, "_dispatch", lambda p, prog, chunk, stride: (seen.append(chunk[-1][1]),
+                                                                       real(p, prog, chunk, stride)))
+    x = np.random.default_rng(3).uniform(-9.0, 9.0, (10000, 2))
+    got = cellgl.cellular(x, 8, outputs=("F",))
+    assert max(seen) * 8 * 4 <= 1 << 16 and sum(seen) == 10000
+    monkeypatch.undo()
+    want = cellgl.cellular(x, 8, outputs=("F",))
+    assert got.F.tobytes() == want.F.tobytes()
