@@ -234,8 +234,8 @@ class FragmentRunner(Runner):
             self._grid(inp, [q for q, _, _ in progs])
         by_name = {o.name: o.array for o in p.outputs}
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
-        tile_rows = max(1, tile_samples(p.cost, self.watchdog) // WIDTH)
-        chunk = max(CHUNK, tile_rows * WIDTH)
+        tile = tile_samples(p.cost, self.watchdog)
+        chunk = max(CHUNK, tile // WIDTH * WIDTH)
         for first in range(0, p.count, chunk):
             m = min(chunk, p.count - first)
             ok = self._inputs(inp, first, m)
@@ -246,8 +246,8 @@ class FragmentRunner(Runner):
                 rows = -(-m // WIDTH)
                 fbo = self._target(formats, rows)
                 fbo.use()
-                for r0 in range(0, rows, tile_rows):
-                    fbo.viewport = (0, r0, WIDTH, min(tile_rows, rows - r0))
+                for viewport in _tiles(rows, tile):
+                    fbo.viewport = viewport
                     vao.render(mode=self.ctx.TRIANGLES, vertices=3)
                 att = 0
                 if p.flag is not None:
@@ -304,6 +304,19 @@ class FragmentRunner(Runner):
 # ---------------------------------------------------------------------------------------------
 # The compute path
 # ---------------------------------------------------------------------------------------------
+
+def _tiles(rows: int, tile: int):
+    """The viewports of the draws over ``rows`` rows of WIDTH samples, at most ``tile`` samples
+    each: whole rows, or (a tile under a row) runs of one row."""
+    if tile >= WIDTH:
+        step = tile // WIDTH
+        for r0 in range(0, rows, step):
+            yield (0, r0, WIDTH, min(step, rows - r0))
+        return
+    for r in range(rows):
+        for x0 in range(0, WIDTH, tile):
+            yield (x0, r, min(tile, WIDTH - x0), 1)
+
 
 class ComputeRunner(Runner):
     """OpenGL 4.3: dispatches of the ``*.comp`` entry, outputs in storage buffers."""
