@@ -168,9 +168,10 @@ def _alloc(N: int, n: int, dim: int, outputs, stride: int = 0) -> dict:
     return out
 
 
-def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra=None) -> np.ndarray:
-    """Run cellular.* with defines ``d`` over ``N`` samples of ``inputs`` into ``out``; returns
-    exact (N,) bool."""
+def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra=None,
+         group=None) -> np.ndarray:
+    """Run cellular.* with defines ``d`` (and ``group``: those of a work group's cell cache) over
+    ``N`` samples of ``inputs`` into ``out``; returns exact (N,) bool."""
     def setup(prog):
         _set_params(prog, p)
         _set(prog, "u_smoothness", float(smoothness))
@@ -180,7 +181,7 @@ def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra
     if not N:
         return np.ones(0, bool)
     res = _runner.runner().run(Pass("cellular.comp", "cellular.frag", d, N, inputs, outputs,
-                                    setup=setup, flag=_FLAG, cost=_cost(d)))
+                                    setup=setup, flag=_FLAG, cost=_cost(d), group_defines=group))
     return ~res.flagged
 
 
@@ -214,7 +215,6 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     Returns flat arrays in x-fastest order, as :func:`search_points`.
     """
     d = defines_for(p, n, outputs, grid=True, smooth=smooth)
-    d.update(cell_cache_defines(p, float(spacing[0])))
     stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
     X, Y, Z, W = (int(v) for v in shape_xyzw)
     N = X * Y * Z * W
@@ -223,7 +223,7 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     out = _alloc(N, n, p.dim, outputs, stride)
     grid = Grid((X, Y, Z, W), tuple(int(v) for v in origin_cell), tuple(float(v) for v in origin_frac),
                 tuple(float(v) for v in spacing))
-    exact = _run(d, p, smoothness, grid, N, out)
+    exact = _run(d, p, smoothness, grid, N, out, group=cell_cache_defines(p, float(spacing[0])))
     return out, exact
 
 

@@ -201,6 +201,9 @@ class Pass:
     cost: int = 1 << 14
     #: keep the program in a least-recently-used group (name, size) instead of for good
     lru: tuple | None = None
+    #: defines for where invocations run in work groups (the compute path; e.g. a work group's
+    #: shared cell cache), left out elsewhere
+    group_defines: dict | None = None
 
 
 @dataclass

@@ -366,6 +366,7 @@ class ComputeRunner(Runner):
         """Dispatch ``p`` in tiles (the watchdog's); the tiles of a chunk write ranges of one
         buffer per output, read back once per chunk straight into the destination arrays."""
         d = dict(p.defines)
+        d.update(p.group_defines or {})
         d.setdefault("CELL_LOCAL_SIZE", LOCAL_SIZE)
         local = int(d["CELL_LOCAL_SIZE"])
         prog = self.compute_program(p.compute, d, files=p.files, lru=p.lru)
