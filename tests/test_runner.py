@@ -289,3 +289,14 @@ def test_a_dispatch_stays_within_the_contexts_storage_block(ctx, monkeypatch):
     monkeypatch.undo()
     want = cellgl.cellular(x, 8, outputs=("F",))
     assert got.F.tobytes() == want.F.tobytes()
+
+
+def test_work_group_defines_stay_off_the_fragment_path(ctx, monkeypatch):
+    """The compute path's work-group cell cache (CELLGL_CELL_CACHE=1) is a pass's group define:
+    the fragment path, which has no work groups, leaves it out (it would not link there)."""
+    monkeypatch.setenv("CELLGL_PATH", "fragment")
+    kw = dict(spacing=0.05, n=2, distribution="jitter", outputs=("F", "id"))
+    off = cellgl.cellular_grid((150, 3), **kw)
+    monkeypatch.setenv("CELLGL_CELL_CACHE", "1")
+    on = cellgl.cellular_grid((150, 3), **kw)
+    assert on.F.tobytes() == off.F.tobytes() and on.id.tobytes() == off.id.tobytes()
