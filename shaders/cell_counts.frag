@@ -23,7 +23,7 @@ uint cell_density_image_level(int index) { return cell_storage_word(u_storage_7,
 #endif
 
 uniform isampler2D u_in0;      // the cells (RGBA32I)
-layout(location = 0) out ivec4 o_count;   // count, level
+CELL_FRAG_DECL             // row_count: count, level (cellgl/gl/dispatch.py)
 
 void main()
 {
@@ -60,5 +60,6 @@ void main()
     level = cell_density_level(c, p);
 #endif
     uint state = cell_cell_seed(c, p.seed);
-    o_count = ivec4(cell_point_count_at(state, c, p), level, 0, 0);
+    int row_count[2] = int[2](cell_point_count_at(state, c, p), level);
+    CELL_FRAG_WRITE
 }

@@ -340,6 +340,21 @@ void cell_cache_fill(CellParams p)
 
 void main()
 {
+#if defined(CELL_STUB) && CELL_STUB   // benchmarks/bench_host.py: constants (F, id), no search
+#if CELL_GRID
+    uint is = (gl_GlobalInvocationID.z * uint(u_slab_size.y) + gl_GlobalInvocationID.y) * uint(u_slab_size.x)
+        + gl_GlobalInvocationID.x;
+    if (gl_GlobalInvocationID.x >= uint(u_slab_size.x)) return;
+#else
+    uint is = gl_GlobalInvocationID.x;
+    if (is >= u_count) return;
+#endif
+    for (int j = 0; j < CELL_N / CELL_N_VEC; j++) {
+        if (CELL_OUT_F != 0) out_F[is * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_VEC_T(0.5);
+        if (CELL_OUT_ID != 0) out_id[is * uint(CELL_N / CELL_N_VEC) + uint(j)] = CELL_N_UVEC_T(7u);
+    }
+    return;
+#endif
     ivec4 cell;
     vec4 frac;
 #if CELL_GRID

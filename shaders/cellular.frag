@@ -6,7 +6,7 @@
 // Macros: those of cellular.comp (cellgl/basis/gpu.py, defines_for) and
 //   CELL_FRAG_WIDTH       width of the render targets: fragment (x, y) is sample y * width + x
 //   CELL_FRAG_DECL        the output declarations of this draw (location 0: the exact flag)
-//   CELL_FRAG_WRITE       their assignments, from the rows below (cellgl/basis/gpu_fragment.py)
+//   CELL_FRAG_WRITE       their assignments, from the rows below (cellgl/gl/dispatch.py)
 //   CELL_FRAG_GRID_AXES   (grids) the axes up to the last one longer than one sample
 // The split of a position into cell and fraction is cellular.comp's, done in float64 on the CPU
 // (OpenGL 3.3 has no doubles): the same bits.
@@ -60,7 +60,7 @@ uniform float u_out_scale;     // distances and deltas are multiplied by this
 
 #if CELL_GRID
 // Sample i = u_first + fragment index of the grid u_grid (x fastest); axis a's cell and fraction
-// of index v at word u_axis_offset[a] + v of the tables (cellgl/basis/gpu_fragment.py).
+// of index v at word u_axis_offset[a] + v of the tables (cellgl/gl/dispatch.py).
 uniform isampler2D u_in0;      // axis tables: integer cell, float32 fraction (its bits)
 uniform uvec4 u_grid;          // samples along x, y, z, w
 uniform ivec4 u_axis_offset;
@@ -82,9 +82,8 @@ uniform int u_loop_canary;     // 2: the driver's loop limit (cellular.comp)
 #endif
 #if CELL_LOOP_PROBE
 // Measurement build (cellgl.basis.gpu.loop_probe), as cellular.comp's: the search's own count
-// and what the driver's limiter had left, at location CELL_FRAG_PROBE_LOC.
+// and what the driver's limiter had left (row_probe, an int output of the runner's).
 uniform int u_loop_probe;
-layout(location = CELL_FRAG_PROBE_LOC) out ivec4 o_probe;
 #endif
 
 CELL_FRAG_DECL
@@ -114,6 +113,16 @@ vec4 cell_out_delta(vec4 delta)
 
 void main()
 {
+#if defined(CELL_STUB) && CELL_STUB   // benchmarks/bench_host.py: constants (F, id), no search
+    {
+        float row_F[CELL_N];
+        uint row_id[CELL_N];
+        for (int k = 0; k < CELL_N; k++) { row_F[k] = 0.5; row_id[k] = 7u; }
+        o_exact = 1u;
+        CELL_FRAG_WRITE
+        return;
+    }
+#endif
     ivec2 xy = ivec2(gl_FragCoord.xy);
     ivec4 cell;
     vec4 frac;
@@ -268,7 +277,7 @@ void main()
     for (int k = 0; k < u_loop_probe; k++) {
         left += 1;
     }
-    o_probe = ivec4(loops, left, 0, 0);
+    int row_probe[2] = int[2](loops, left);
 #endif
     CELL_FRAG_WRITE
 }

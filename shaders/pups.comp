@@ -31,6 +31,8 @@ uniform int u_tile;        // candidate-grid cell size in pixels
 uniform int u_grid_w;      // candidate-grid cells per row
 uniform float u_epsilon;   // orientation strength, [0, 1)
 uniform int u_tile_groups; // work groups per grid-cell side (CELL_PUPS_GROUP_CELLS)
+uniform int u_row0;        // first image row of this dispatch (a band of rows: the runner's tile;
+                           // a multiple of the grid-cell size with CELL_PUPS_GROUP_CELLS)
 
 uvec4 cell_pups_fetch(uint k) { return records[k]; }
 
@@ -38,9 +40,9 @@ uvec4 cell_pups_fetch(uint k) { return records[k]; }
 
 void main()
 {
-    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy) + ivec2(0, u_row0);
 #ifdef CELL_PUPS_GROUP_CELLS
-    ivec2 wg = ivec2(gl_WorkGroupID.xy);
+    ivec2 wg = ivec2(gl_WorkGroupID.xy) + ivec2(0, u_row0 / int(gl_WorkGroupSize.y));
     int cell = (wg.y / u_tile_groups) * u_grid_w + wg.x / u_tile_groups;
 #else
     ivec2 pc = min(px, u_size - 1);
@@ -51,7 +53,7 @@ void main()
     if (px.x >= u_size.x || px.y >= u_size.y) {
         return;
     }
-    int o = px.y * u_size.x + px.x;
+    int o = (px.y - u_row0) * u_size.x + px.x;   // the band's own rows
 #if CELL_PUPS_MODE == 1
     vec4 v = acc.best;
     out_labels[o] = acc.label;

@@ -1,7 +1,7 @@
 #version 330 core
 // cellgl fragment entry (the fragment path, cellgl/gl/dispatch.py): PUPs over a pixel grid, as
 // shaders/pups.comp computes it, for OpenGL 3.3 core and up without compute shaders.
-// Thin: sample s of the render target (fragment (s mod CELL_FRAG_WIDTH, s / CELL_FRAG_WIDTH)) is
+// Thin: sample s (u_first + fragment (s mod CELL_FRAG_WIDTH, s / CELL_FRAG_WIDTH)) is
 // pixel (s mod width, s / width); read the candidate grid from textures, call
 // shaders/lib/pups.glsl, write the value (and the label).
 // Defines (cellgl/pups/gpu.py): CELL_PUPS_MODE (as pups.comp), CELL_FRAG_WIDTH.
@@ -28,12 +28,16 @@ uvec4 cell_pups_fetch(uint k) { return texelFetch(u_in1, CELL_PUPS_TEXEL(k), 0);
 
 #include "lib/pups.glsl"
 
-layout(location = 0) out vec4 o_value;   // rgb: the value; a: the label (CELL_PUPS_MODE 1)
+uniform uint u_first;      // the first sample of this chunk
+
+// The outputs (cellgl/gl/dispatch.py): row_values in a float target, row_labels in an int one
+// (an integer in a float target could come back as a canonicalised NaN or a flushed denormal).
+CELL_FRAG_DECL
 
 void main()
 {
     ivec2 xy = ivec2(gl_FragCoord.xy);
-    uint s = uint(xy.y) * uint(CELL_FRAG_WIDTH) + uint(xy.x);
+    uint s = u_first + uint(xy.y) * uint(CELL_FRAG_WIDTH) + uint(xy.x);
     ivec2 px = ivec2(int(s % uint(u_size.x)), int(s / uint(u_size.x)));
     ivec2 pc = min(px, u_size - 1);
     int cell = (pc.y / u_tile) * u_grid_w + pc.x / u_tile;
@@ -46,5 +50,7 @@ void main()
 #else
     vec4 v = cell_pups_acc_value(acc);
 #endif
-    o_value = vec4(v.xyz, intBitsToFloat(acc.label));
+    vec4 row_values = v;
+    int row_labels[1] = int[1](acc.label);
+    CELL_FRAG_WRITE
 }

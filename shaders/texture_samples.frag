@@ -4,9 +4,10 @@
 // without compute shaders. Thin: sample i of this chunk is fragment (i mod width, i / width);
 // compute its texture-space point and footprint, call cell_texture_filtered() (once, or over a
 // grid of sub-pixels), write the channels asked for to render targets.
-// Macros (cellgl/texture/dispatch.py): those of texture.comp, CELL_FRAG_WIDTH and
-//   CELL_TEX_LOC_COLOR, _AUX, _F, _GRAD, _ID: the render target of each output written
-//   (location 0: 1 where the driver's loop limit left the sample alone, the canary).
+// Macros (cellgl/texture/dispatch.py): those of texture.comp, CELL_FRAG_WIDTH,
+//   CELL_TEX_WANT_COLOR, _AUX, _F, _GRAD, _ID: the outputs written, and the runner's
+//   CELL_FRAG_DECL / CELL_FRAG_WRITE (location 0: 1 where the driver's loop limit left the sample
+//   alone, the canary).
 
 #include "storage.glsl"
 #include "lib/texture.glsl"
@@ -25,22 +26,16 @@ uniform vec3 u_filter_width;    // footprint of every point in texture space (0:
 #endif
 uniform int u_loop_canary;      // 2 (texture.comp)
 
-layout(location = 0) out uint o_canary;
-#if CELL_TEX_WANT_COLOR
-layout(location = CELL_TEX_LOC_COLOR) out vec4 o_color;
+#ifndef CELL_LOOP_PROBE
+#define CELL_LOOP_PROBE 0
 #endif
-#if CELL_TEX_WANT_AUX
-layout(location = CELL_TEX_LOC_AUX) out vec4 o_aux;
+#if CELL_LOOP_PROBE
+uniform int u_loop_probe;       // texture.comp's probe: runs until llvmpipe's limiter stops it
 #endif
-#if CELL_TEX_WANT_F
-layout(location = CELL_TEX_LOC_F) out vec4 o_F;
-#endif
-#if CELL_TEX_WANT_GRAD
-layout(location = CELL_TEX_LOC_GRAD) out vec4 o_grad;
-#endif
-#if CELL_TEX_WANT_ID
-layout(location = CELL_TEX_LOC_ID) out uint o_id;
-#endif
+
+// The outputs (cellgl/gl/dispatch.py): o_canary at location 0, then a render target per
+// row_<output> written (CELL_TEX_WANT_<OUTPUT>).
+CELL_FRAG_DECL
 
 void main()
 {
@@ -97,25 +92,32 @@ void main()
     CELL_PRECISE vec3 normal = c.normal;
 #endif
 #if CELL_TEX_WANT_COLOR
-    o_color = color;
+    vec4 row_color = color;
 #endif
 #if CELL_TEX_WANT_AUX
-    CELL_PRECISE vec4 aux = vec4(height, normal * 0.5 + 0.5);     // a product, then a sum
-    o_aux = aux;
+    CELL_PRECISE vec4 row_aux = vec4(height, normal * 0.5 + 0.5);     // a product, then a sum
 #endif
 #if CELL_TEX_WANT_F
-    o_F = c.F;
+    vec4 row_F = c.F;
 #endif
 #if CELL_TEX_WANT_GRAD
     c.grad = grad;
-    o_grad = vec4(cell_texture_grad_uvz(c, t), c.value);
+    vec4 row_grad = vec4(cell_texture_grad_uvz(c, t), c.value);
 #endif
 #if CELL_TEX_WANT_ID
-    o_id = c.id;
+    uint row_id[1] = uint[1](c.id);
 #endif
     int canary = 0;
     for (int k = 0; k < u_loop_canary; k++) {
         canary += 1;
     }
     o_canary = canary == u_loop_canary ? 1u : 0u;
+#if CELL_LOOP_PROBE
+    int left = 0;
+    for (int k = 0; k < u_loop_probe; k++) {
+        left += 1;
+    }
+    int row_loops[1] = int[1](left);
+#endif
+    CELL_FRAG_WRITE
 }

@@ -265,7 +265,7 @@ def test_forced_fragment_draws_in_tiles(both_paths, monkeypatch):
     """More samples than one draw's tile: every tile is drawn (none left at the clear value)."""
     from cellgl.gl import dispatch
 
-    monkeypatch.setattr(dispatch, "TILE_SAMPLES", 4 * dispatch.WIDTH)
+    monkeypatch.setenv("CELLGL_TILE_SAMPLES", str(4 * dispatch.WIDTH))
     x = np.random.default_rng(8).uniform(-50.0, 50.0, (10 * dispatch.WIDTH + 77, 2))
     a, b = _both(monkeypatch, lambda: cellgl.cellular(x, 2, outputs=("F", "id")))
     _same_result(a, b, "tiled draws")
@@ -284,9 +284,9 @@ _PROBE = """
 import json, sys, cellgl
 sys.path.insert(0, "tests")
 from conftest import precise_in_fragment_entries
-from cellgl.gl import context, dispatch
+from cellgl.gl import context, runner
 ctx = context.get_context()
-print(json.dumps({"version": ctx.version_code, "path": dispatch.path(ctx),
+print(json.dumps({"version": ctx.version_code, "path": runner.runner(ctx).path,
                   "precise": precise_in_fragment_entries(ctx)}))
 """
 
@@ -399,15 +399,16 @@ def test_outputs_past_the_draw_buffers_take_several_draws(ctx):
     targets: with 8 draw buffers (one for the exact flag) that is 4 draws, each slot in exactly
     one. (``cellular`` runs the feature walks as passes of their own: CASES[8]'s basis pass has 20
     targets, 3 draws, compared bit for bit above.)"""
-    from cellgl.basis import features, gpu_fragment
+    from cellgl.basis import features
     from cellgl.gl import dispatch
 
-    outputs = gpu._buffers(core._gpu_outputs(BASIS + FEATURES, core.make_params(4)))
-    layout = gpu_fragment._layout(outputs, 8, 4, features.stride(core._gpu_outputs(BASIS + FEATURES,
-                                                                                   core.make_params(4))))
-    passes = gpu_fragment._passes(layout, ctx)
+    outs = core._gpu_outputs(BASIS + FEATURES, core.make_params(4))
+    size = {"F": 8, "id": 8, "delta": 32, "grad": 32, "features": features.stride(outs)}
+    layout = [(name, "u" if name == "id" else "f", size[name]) for name in gpu._buffers(outs)]
+    all_slots = dispatch.slots(layout)
     per = dispatch.draw_buffers(ctx) - 1
+    passes = [all_slots[i:i + per] for i in range(0, len(all_slots), per)]
     slots = [s for p in passes for s in p]
     assert len(passes) == -(-len(slots) // per) >= 2
     assert all(len(p) <= per for p in passes)
-    assert slots == dispatch.slots(layout)
+    assert sum(k for *_, k in slots) == sum(n for *_, n in layout)

@@ -11,6 +11,7 @@ import pytest
 
 import cellgl
 from cellgl.basis import gpu
+from cellgl.gl import dispatch
 
 
 def _brute(pts, n=1, **kw):
@@ -21,11 +22,11 @@ def _brute(pts, n=1, **kw):
 
 def test_grid_slabs_stay_within_the_group_limit(monkeypatch):
     """Every dispatch of a grid wider than one dispatch covers its samples once, contiguously."""
-    monkeypatch.setattr(gpu, "_MAX_GROUPS", 3)
-    step = gpu._chunk_size(1, 2, ("F",))
+    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 3)
+    step = 3 * dispatch.LOCAL_SIZE
     X, Y = step * 2 + 17, 3
     seen = np.zeros(X * Y, int)
-    for (x0, y0, z0, w, cols, rows), start, groups in gpu._grid_slabs(X, Y, 1, 1, step):
+    for (x0, y0, z0, w, cols, rows), start, groups in dispatch.grid_slabs(X, Y, 1, 1, step):
         assert max(groups) <= 3 and cols <= step
         assert start == (y0 * X + x0)
         seen[start:start + cols * rows * groups[2]] += 1
@@ -34,7 +35,7 @@ def test_grid_slabs_stay_within_the_group_limit(monkeypatch):
 
 def test_narrow_group_limit_grid_equals_reference(ctx, monkeypatch):
     """With the group limit forced small, a grid split into column runs equals the reference."""
-    monkeypatch.setattr(gpu, "_MAX_GROUPS", 2)       # 128 samples per dispatch
+    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 2)       # 128 samples per dispatch
     r = cellgl.cellular_grid((3, 300), origin=(0.5, 2.0), spacing=(0.05, 0.3), n=2, outputs=("F", "id"))
     ref = cellgl.cellular_grid((3, 300), origin=(0.5, 2.0), spacing=(0.05, 0.3), n=2, outputs=("F", "id"),
                                backend="numpy")
@@ -164,7 +165,7 @@ def test_cell_counts_dispatches_stay_within_the_group_limit(ctx, monkeypatch):
     real_run = moderngl.ComputeShader.run
     monkeypatch.setattr(moderngl.ComputeShader, "run",
                         lambda self, group_x=1, *a, **k: (groups.append(group_x), real_run(self, group_x, *a, **k)))
-    monkeypatch.setattr(gpu, "_MAX_GROUPS", 2)
+    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 2)
     split = gpu.cell_counts(cells, p)
     assert len(groups) == 3 and max(groups) <= 2
     np.testing.assert_array_equal(split[0], whole[0])
@@ -213,7 +214,7 @@ def test_points_in_small_chunks_equal_one_dispatch(ctx, monkeypatch):
     chunks of 128 samples, the bits equal one dispatch's."""
     pts = np.random.default_rng(5).uniform(-9.0, 9.0, (1001, 3))
     whole = cellgl.cellular(pts, 3, outputs=("F", "delta", "id"))
-    monkeypatch.setattr(gpu, "_MAX_GROUPS", 2)             # 128 samples per dispatch
+    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 2)             # 128 samples per dispatch
     parts = cellgl.cellular(pts, 3, outputs=("F", "delta", "id"))
     for name in ("F", "delta", "id"):
         assert getattr(parts, name).tobytes() == getattr(whole, name).tobytes(), name

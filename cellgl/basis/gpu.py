@@ -1,9 +1,10 @@
-"""GPU evaluation of the cellular basis: compute shader over sample lists and grids.
+"""GPU evaluation of the cellular basis: each call describes a pass of ``shaders/cellular.*``
+(entries, defines, uniforms, the samples, the outputs asked for) and hands it to the context's
+runner (:mod:`cellgl.gl.runner`), which runs it on the compute or the fragment path in tiles and
+reads the outputs straight into the arrays made here.
 
-Only :mod:`cellgl.basis.core` calls this; it receives validated parameters. Work is
-split into chunks so that no storage buffer exceeds a few tens of MB, and only
-the outputs that were asked for are computed (compile-time switches) and read
-back.
+Only :mod:`cellgl.basis.core` calls this; it receives validated parameters. Only the outputs that
+were asked for are computed (compile-time switches) and read back.
 """
 from __future__ import annotations
 
@@ -12,20 +13,22 @@ import os
 
 import numpy as np
 
-from cellgl.gl import context
-from cellgl.gl import dispatch
+from cellgl.gl import runner as _runner
+from cellgl.gl.runner import Flag, Grid, Output, Pass, Positions, Rows
 from cellgl.basis import features as _features
-from cellgl.basis import gpu_fragment
 from cellgl.gl.threads import gl_call
 from cellgl.basis.enums import Distribution, glsl_defines
 from cellgl.basis.reference import MAX_POINTS, Params, max_ring_default
 
-LOCAL_SIZE = 64
+LOCAL_SIZE = _runner.LOCAL_SIZE
 #: the sample texture of :func:`search_points` is 2^_SAMPLE_ROW_BITS texels wide (cellular.comp)
-_SAMPLE_ROW_BITS = 12
-_TEXTURE_ROWS_MAX = 16384   #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
-_CHUNK_BYTES = 48 << 20     # largest output buffer per dispatch
-_MAX_GROUPS = 65535
+_SAMPLE_ROW_BITS = _runner.SAMPLE_ROW_BITS
+#: the search's loop budget when none is given (shaders/lib/walk.glsl, CELL_LOOP_BUDGET)
+LOOP_BUDGET = 6144
+#: passes of the loop probe's counting loop (``u_loop_probe``): past llvmpipe's limiter
+#: (:data:`DRIVER_LOOP_LIMIT`), so the count is what the limiter had left, and bounded, so a GPU
+#: without a limiter runs 2^17 empty passes a sample (milliseconds a tile), never hangs
+PROBE_PASSES = 1 << 17
 
 
 #: llvmpipe's loop limiter (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
@@ -71,8 +74,9 @@ def _buffers(outputs) -> tuple[str, ...]:
 
 
 def _set(prog, name, value):
-    if name in prog:
-        prog[name].value = value
+    u = prog.get(name, None)          # (``name in prog`` walks every member)
+    if u is not None:
+        u.value = value
 
 
 def _set_params(prog, p: Params):
@@ -115,145 +119,41 @@ def bind_density_image(levels, ctx=None) -> None:
 
 
 def bind_storage(words, binding: int, ctx=None) -> None:
-    """Upload uint32 ``words`` (cached by content, one buffer per context and binding) and bind
-    them to storage buffer ``binding`` of ``ctx`` (default: cellgl's context), or on the fragment
-    path to texture unit ``binding`` (:func:`cellgl.gl.dispatch.bind_words`)."""
-    dispatch.bind_words(words, binding, ctx)
+    """Upload uint32 ``words`` (cached by content, one per context and binding) and bind them where
+    the entries read them (storage buffer or texture ``binding``: :meth:`cellgl.gl.runner.Runner.bind_words`)
+    on ``ctx`` (default: cellgl's context)."""
+    _runner.runner(ctx).bind_words(words, binding)
+
+
+#: each output's storage binding in cellular.comp (its ``row_<name>`` in cellular.frag)
+_BINDING = {"F": 2, "delta": 3, "id": 4, "grad": 5, "features": 1, "probe": 8}
+#: the flag: cellular.comp's list of the samples whose search was cut (binding 6), cellular.frag's
+#: ``o_exact``
+_FLAG = Flag("exact", 6, "list")
+
+
+def _cost(d: dict) -> int:
+    """The most loop passes one invocation of cellular.* with defines ``d`` spends: the search's
+    budget, and as much again for the feature walks (they carry on the search's count), and the
+    probe's counting loop."""
+    budget = int(d.get("CELL_LOOP_BUDGET", LOOP_BUDGET))
+    walks = 2 if (d.get("CELL_EDGE") or d.get("CELL_SMOOTH") or d.get("CELL_NSPHERE")) else 1
+    return budget * walks + (PROBE_PASSES if d.get("CELL_LOOP_PROBE") else 0) + 2
 
 
 @gl_call
 def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     """Point count and density level of each integer cell (M, 4) int, on the GPU (as the
-    search sees them; ``shaders/cell_counts.comp``). Returns (count int64 (M,), level int64 (M,))."""
-    ctx = context.get_context()
+    search sees them; ``shaders/cell_counts.*``). Returns (count int64 (M,), level int64 (M,))."""
     d = defines_for(p, 1)
     cells = np.ascontiguousarray(cells, dtype=np.int32)
-    if dispatch.path(ctx) == "fragment":
-        prog = dispatch.program("cell_counts.frag", d)
-        _set_params(prog, p)
-        parts = []
-        for first in range(0, len(cells), gpu_fragment.CHUNK):
-            chunk = cells[first:first + gpu_fragment.CHUNK]
-            dispatch.input_texture(ctx, 0, chunk)
-            (res,) = dispatch.draw(prog, len(chunk), [(4, "i4")], ctx)
-            parts.append(res[:, :2].astype(np.int64))
-        out = np.concatenate(parts) if parts else np.zeros((0, 2), np.int64)
-        return out[:, 0], out[:, 1]
-    prog = context.compute_program("cell_counts.comp", d)
-    _set_params(prog, p)
-    parts = []
-    step = LOCAL_SIZE * _MAX_GROUPS      # one dispatch's worth (a larger one would be dropped)
-    for first in range(0, len(cells), step):
-        chunk = cells[first:first + step]
-        M = len(chunk)
-        cb = ctx.buffer(chunk.tobytes())
-        cb.bind_to_storage_buffer(0)
-        ob = ctx.buffer(reserve=8 * M)
-        ob.bind_to_storage_buffer(2)
-        _set(prog, "u_count", M)
-        prog.run(group_x=(M + LOCAL_SIZE - 1) // LOCAL_SIZE)
-        ctx.memory_barrier()
-        parts.append(np.frombuffer(ob.read(), dtype=np.int32).reshape(M, 2).astype(np.int64))
-        cb.release()
-        ob.release()
-    out = np.concatenate(parts)
+    out = np.empty((len(cells), 2), np.int32)
+    if len(cells):
+        _runner.runner().run(Pass("cell_counts.comp", "cell_counts.frag", d, len(cells), Rows(cells, 0),
+                                  [Output("count", 2, out)], setup=lambda prog: _set_params(prog, p),
+                                  cost=64))
+    out = out.astype(np.int64)
     return out[:, 0], out[:, 1]
-
-
-def _fragment_params(p: Params, smoothness: float):
-    """``set_params`` of :func:`cellgl.basis.gpu_fragment.run`: the uniforms of ``p``."""
-    def set_params(prog):
-        _set_params(prog, p)
-        _set(prog, "u_smoothness", float(smoothness))
-    return set_params
-
-
-def _chunk_size(n: int, dim: int, outputs, stride: int = 0) -> int:
-    per = 4 * n * (dim if ("delta" in outputs or "grad" in outputs) else 1)
-    per = max(per, 4 * stride if "features" in outputs else 0)
-    return max(LOCAL_SIZE, min(LOCAL_SIZE * _MAX_GROUPS, (_CHUNK_BYTES // per) // LOCAL_SIZE * LOCAL_SIZE))
-
-
-_pool: dict = {}
-
-
-def _held(key, ctx):
-    """The buffer or texture of ``_pool`` under ``key`` if it belongs to ``ctx`` (not to a context
-    gone since, whose id ``ctx`` now has), else None."""
-    obj = _pool.get(key)
-    return obj if obj is not None and obj.ctx is ctx else None
-
-
-def _storage(ctx, binding: int, nbytes: int):
-    """A storage buffer of at least ``nbytes`` bound to ``binding``, reused across calls
-    (allocating fresh tens-of-MB buffers every call costs as much as a small dispatch)."""
-    key = (id(ctx), binding)
-    buf = _held(key, ctx)
-    if buf is None or buf.size < nbytes:
-        if buf is not None:
-            buf.release()
-        buf = ctx.buffer(reserve=max(64, nbytes + nbytes // 4))
-        _pool[key] = buf
-    buf.bind_to_storage_buffer(binding)
-    return buf
-
-
-def upload_samples(ctx, prog, pts: np.ndarray) -> None:
-    """Hand the float64 positions ``pts`` (count, d), C-contiguous, to ``prog`` (``cellular.comp``,
-    ``u_samples``) as the 32-bit words of an RGBA32UI texture ``2^_SAMPLE_ROW_BITS`` texels wide,
-    d / 2 texels per sample, no padding between samples. The texture is kept and reused across
-    calls (grown when a chunk needs more rows)."""
-    words = pts.reshape(-1).view(np.uint32)
-    width = 1 << _SAMPLE_ROW_BITS
-    rows, tail = divmod(words.size, 4 * width)
-    if rows + 1 > _TEXTURE_ROWS_MAX:      # a chunk holds at most 2 * LOCAL_SIZE * _MAX_GROUPS texels
-        raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
-                           f"{_TEXTURE_ROWS_MAX} rows of {width}")
-    key = (id(ctx), "samples")
-    tex = _held(key, ctx)
-    if tex is None or tex.height < rows + 1:
-        if tex is not None:
-            tex.release()
-        tex = ctx.texture((width, min(_TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
-        tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
-        _pool[key] = tex
-    if rows:
-        tex.write(words[: rows * width * 4], viewport=(0, 0, width, rows))
-    if tail:
-        rest = words[rows * width * 4:]
-        if tail % 4:                         # 3D, an odd count: the last texel is half a sample
-            rest = np.concatenate([rest, np.zeros(4 - tail % 4, np.uint32)])
-        tex.write(rest, viewport=(0, rows, rest.size // 4, 1))
-    tex.use(0)
-    _set(prog, "u_samples", 0)
-
-
-def _run(prog, ctx, count: int, n: int, dim: int, outputs, out: dict, start: int, exact: np.ndarray,
-         groups=None, stride: int = 0):
-    """Dispatch one chunk of ``count`` samples (``groups``: work groups x, y, z; default a
-    1D dispatch) and copy results into ``out[start:start + count]``."""
-    bufs = {}
-    sizes = {"F": 4 * n, "delta": 4 * n * dim, "id": 4 * n, "grad": 4 * n * dim,
-             "features": 4 * stride}
-    binding = {"F": 2, "delta": 3, "id": 4, "grad": 5, "features": 1}
-    for name in outputs:
-        bufs[name] = _storage(ctx, binding[name], count * sizes[name])
-    # Samples whose search hit the cap: a counter and a list of their indices.
-    flags = _storage(ctx, 6, 4 * (count + 1))
-    flags.write(b"\0\0\0\0")
-    _set(prog, "u_count", count)
-    gx, gy, gz = groups or ((count + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
-    if max(gx, gy, gz) > _MAX_GROUPS:   # GL drops such a dispatch: the buffers would stay unwritten
-        raise RuntimeError(f"internal error: dispatch of {gx} x {gy} x {gz} work groups exceeds {_MAX_GROUPS}")
-    prog.run(group_x=gx, group_y=gy, group_z=gz)
-    ctx.memory_barrier()
-    for name, buf in bufs.items():
-        # Straight into the result array (a contiguous run of whole samples).
-        buf.read_into(out[name][start:start + count], size=count * sizes[name])
-    nbad = int(np.frombuffer(flags.read(4), dtype=np.uint32)[0])
-    if nbad:
-        idx = np.frombuffer(flags.read(4 * nbad, offset=4), dtype=np.uint32)
-        exact[start + idx.astype(np.int64)] = False
 
 
 def _alloc(N: int, n: int, dim: int, outputs, stride: int = 0) -> dict:
@@ -268,38 +168,40 @@ def _alloc(N: int, n: int, dim: int, outputs, stride: int = 0) -> dict:
     return out
 
 
+def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra=None,
+         group=None) -> np.ndarray:
+    """Run cellular.* with defines ``d`` (and ``group``: those of a work group's cell cache) over
+    ``N`` samples of ``inputs`` into ``out``; returns exact (N,) bool."""
+    def setup(prog):
+        _set_params(prog, p)
+        _set(prog, "u_smoothness", float(smoothness))
+        _set(prog, "u_loop_probe", PROBE_PASSES)
+    outputs = [Output(name, _BINDING[name], a.reshape(N, -1)) for name, a in out.items()]
+    outputs += [Output(name, _BINDING[name], a) for name, a in (extra or {}).items()]
+    if not N:
+        return np.ones(0, bool)
+    res = _runner.runner().run(Pass("cellular.comp", "cellular.frag", d, N, inputs, outputs,
+                                    setup=setup, flag=_FLAG, cost=_cost(d), group_defines=group))
+    return ~res.flagged
+
+
 @gl_call
 def search_points(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0,
                   smooth: str = "exp") -> tuple[dict, np.ndarray]:
     """Cellular basis at sample positions ``pts`` (N, d) float64, in sample units.
 
-    The shader scales them by ``p.scale`` and splits them into an integer cell
-    and a float32 fraction in double precision. Returns ({output name: array},
-    exact (N,) bool). Feature outputs (:data:`cellgl.basis.features.OUTPUTS`) in ``outputs`` switch
-    on the walks of ``shaders/lib/features.glsl`` (``smoothness`` in lattice units) and add
-    ``"features"``, its per-sample record, to the result.
+    The positions are scaled by ``p.scale`` and split into an integer cell and a float32 fraction
+    in double precision. Returns ({output name: array}, exact (N,) bool). Feature outputs
+    (:data:`cellgl.basis.features.OUTPUTS`) in ``outputs`` switch on the walks of
+    ``shaders/lib/features.glsl`` (``smoothness`` in lattice units) and add ``"features"``, its
+    per-sample record, to the result.
     """
-    ctx = context.get_context()
     d = defines_for(p, n, outputs, grid=False, smooth=smooth)
     stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
+    pts = np.ascontiguousarray(pts, dtype=np.float64)
     N = len(pts)
     out = _alloc(N, n, p.dim, outputs, stride)
-    exact = np.ones(N, dtype=bool)
-    if dispatch.path(ctx) == "fragment":
-        pts = np.ascontiguousarray(pts, dtype=np.float64)
-        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
-                         gpu_fragment.points_inputs(pts, p.scale, p.dim))
-        return out, exact
-    prog = context.compute_program("cellular.comp", d)
-    _set_params(prog, p)
-    _set(prog, "u_smoothness", float(smoothness))
-    _set(prog, "u_scale", float(p.scale))
-    step = _chunk_size(n, p.dim, outputs, stride)
-    pts = np.ascontiguousarray(pts, dtype=np.float64)
-    for start in range(0, N, step):
-        count = min(step, N - start)
-        upload_samples(ctx, prog, pts[start:start + count])
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, stride=stride)
+    exact = _run(d, p, smoothness, Positions(pts, float(p.scale), p.dim), N, out)
     return out, exact
 
 
@@ -312,36 +214,16 @@ def search_grid(shape_xyzw, origin_cell, origin_frac, spacing, p: Params, n: int
     int cell (4,) and float fraction (4,); spacing (4,) (all already scaled).
     Returns flat arrays in x-fastest order, as :func:`search_points`.
     """
-    ctx = context.get_context()
     d = defines_for(p, n, outputs, grid=True, smooth=smooth)
     stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
-    if dispatch.path(ctx) == "fragment":
-        X, Y, Z, W = (int(v) for v in shape_xyzw)
-        N = X * Y * Z * W
-        if N >= 1 << 32:
-            raise ValueError(f"a grid of {N} samples is too large for the fragment path (at most 2^32 - 1)")
-        out = _alloc(N, n, p.dim, outputs, stride)
-        exact = np.ones(N, dtype=bool)
-        d["CELL_FRAG_GRID_AXES"] = max([1] + [a + 1 for a, e in enumerate((X, Y, Z, W)) if e > 1])
-        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
-                         gpu_fragment.grid_inputs(shape_xyzw, origin_cell, origin_frac, spacing))
-        return out, exact
-    d.update(cell_cache_defines(p, float(spacing[0])))
-    prog = context.compute_program("cellular.comp", d)
-    _set_params(prog, p)
-    _set(prog, "u_smoothness", float(smoothness))
-    _set(prog, "u_origin_cell", tuple(int(v) for v in origin_cell))
-    _set(prog, "u_origin_frac", tuple(float(v) for v in origin_frac))      # dvec4: float64
-    _set(prog, "u_spacing", tuple(float(v) for v in spacing))
     X, Y, Z, W = (int(v) for v in shape_xyzw)
     N = X * Y * Z * W
+    if N >= 1 << 32:
+        raise ValueError(f"a grid of {N} samples is too large (at most 2^32 - 1 samples)")
     out = _alloc(N, n, p.dim, outputs, stride)
-    exact = np.ones(N, dtype=bool)
-    for slab, start, groups in _grid_slabs(X, Y, Z, W, _chunk_size(n, p.dim, outputs, stride)):
-        _set(prog, "u_slab", slab[:4])
-        _set(prog, "u_slab_size", slab[4:])
-        count = slab[4] * slab[5] * groups[2]
-        _run(prog, ctx, count, n, p.dim, outputs, out, start, exact, groups=groups, stride=stride)
+    grid = Grid((X, Y, Z, W), tuple(int(v) for v in origin_cell), tuple(float(v) for v in origin_frac),
+                tuple(float(v) for v in spacing))
+    exact = _run(d, p, smoothness, grid, N, out, group=cell_cache_defines(p, float(spacing[0])))
     return out, exact
 
 
@@ -366,70 +248,28 @@ def cell_cache_defines(p: Params, spacing_x: float) -> dict:
     return dict(CELL_SHARED_CELLS=1, CELL_CACHE_NX=nx)
 
 
-def _grid_slabs(X: int, Y: int, Z: int, W: int, step: int):
-    """The dispatches of an X x Y x Z x W grid (x fastest), each contiguous in the output and within
-    :data:`_MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first
-    output index, (groups x, y, z))``. Several z-layers of full rows, or some rows of one layer,
-    or (a row wider than ``step``) a run of columns of one row."""
-    if X > step:          # wider than one dispatch (> LOCAL_SIZE * _MAX_GROUPS samples): split rows
-        for w in range(W):
-            for z in range(Z):
-                for y in range(Y):
-                    row = ((w * Z + z) * Y + y) * X
-                    for x0 in range(0, X, step):
-                        cx = min(step, X - x0)
-                        yield (x0, y, z, w, cx, 1), row + x0, ((cx + LOCAL_SIZE - 1) // LOCAL_SIZE, 1, 1)
-        return
-    if X * Y <= step and Y <= _MAX_GROUPS:
-        ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
-    else:
-        ny, nz = max(1, min(step // X, _MAX_GROUPS)), 1
-    gx = (X + LOCAL_SIZE - 1) // LOCAL_SIZE
-    for w in range(W):
-        for z0 in range(0, Z, nz):
-            for y0 in range(0, Y, ny):
-                cy, cz = min(ny, Y - y0), min(nz, Z - z0)
-                yield (0, y0, z0, w, X, cy), ((w * Z + z0) * Y + y0) * X, (gx, cy, cz)
-
-
 @gl_call
 def loop_probe(pts: np.ndarray, p: Params, n: int, outputs, smoothness: float = 0.0,
                budget: int | None = None, smooth: str = "exp") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Measure the loop budget of :func:`search_points` (the measurement build of
-    ``shaders/cellular.comp``, ``CELL_LOOP_PROBE``): per sample the search's own count of loop
+    ``shaders/cellular.*``, ``CELL_LOOP_PROBE``): per sample the search's own count of loop
     iterations (``CellResult.loops``), the iterations the driver's limiter counted for the sample's
     SIMD vector of invocations (llvmpipe; :data:`DRIVER_LOOP_LIMIT` minus what it had left at the
-    end), and whether the sample was flagged inexact. ``budget`` overrides ``CELL_LOOP_BUDGET``."""
-    ctx = context.get_context()
+    end), and whether the sample was flagged inexact. ``budget`` overrides ``CELL_LOOP_BUDGET``
+    (at most 2^20). The probe's own counting loop is :data:`PROBE_PASSES` long: on a GPU without
+    llvmpipe's limiter the driver's count is meaningless, never a hang."""
     d = defines_for(p, n, outputs, grid=False, smooth=smooth)
     if budget is not None:
+        if not 1 <= int(budget) <= 1 << 20:
+            raise ValueError(f"loop_probe budget must be in [1, 2^20], got {budget}")
         d["CELL_LOOP_BUDGET"] = int(budget)
-    if dispatch.path(ctx) == "fragment":
-        stride, outputs = _features.stride(outputs), _buffers(outputs)
-        pts = np.ascontiguousarray(pts, dtype=np.float64)
-        N = len(pts)
-        out = _alloc(N, n, p.dim, outputs, stride)
-        exact = np.ones(N, dtype=bool)
-        raw = np.zeros((N, 2), np.int64)
-        gpu_fragment.run(d, _fragment_params(p, smoothness), N, outputs, n, p.dim, stride, out, exact,
-                         gpu_fragment.points_inputs(pts, p.scale, p.dim), probe=raw)
-        return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], ~exact
     d["CELL_LOOP_PROBE"] = 1
-    prog = context.compute_program("cellular.comp", d)
-    _set_params(prog, p)
-    _set(prog, "u_smoothness", float(smoothness))
-    _set(prog, "u_scale", float(p.scale))
-    _set(prog, "u_loop_probe", 1 << 30)
     stride, outputs = _features.stride(outputs), _buffers(outputs)     # floats per sample of the record
     pts = np.ascontiguousarray(pts, dtype=np.float64)
     N = len(pts)
-    if N > _chunk_size(n, p.dim, outputs, stride):
-        raise ValueError(f"loop_probe takes at most {_chunk_size(n, p.dim, outputs, stride)} samples, got {N}")
     out = _alloc(N, n, p.dim, outputs, stride)
-    exact = np.ones(N, dtype=bool)
-    upload_samples(ctx, prog, pts)
-    probe = _storage(ctx, 8, 8 * N)
-    _run(prog, ctx, N, n, p.dim, outputs, out, 0, exact, stride=stride)
-    raw = np.frombuffer(probe.read(8 * N), dtype=np.int32).reshape(N, 2).astype(np.int64)
+    raw = np.zeros((N, 2), np.int32)
+    exact = _run(d, p, smoothness, Positions(pts, float(p.scale), p.dim), N, out, {"probe": raw})
+    raw = raw.astype(np.int64)
     # the canary loop (2 passes) ran before the probe
     return raw[:, 0], DRIVER_LOOP_LIMIT - 2 - raw[:, 1], ~exact

@@ -48,7 +48,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import backends, glsl, osmesa, path, platforms, shadercache, versions
+from cellgl.gl import backends, glsl, osmesa, path, platforms, registry, shadercache, versions
 from cellgl.gl.backends import ContextError
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
@@ -477,12 +477,6 @@ def check_gl_error(ctx: moderngl.Context | None = None) -> None:
 # --------------------------------------------------------------------------------------------
 
 
-def _defines_key(defines: Mapping | None) -> tuple:
-    if not defines:
-        return ()
-    return tuple(sorted((str(k), repr(v)) for k, v in defines.items()))
-
-
 def _compile_error(what: str, exc: Exception, src: glsl.Source) -> glsl.ShaderError:
     err = glsl.ShaderError(f"{what}: {glsl.map_error(str(exc), src).strip()}")
     err.sources = [src]
@@ -491,8 +485,11 @@ def _compile_error(what: str, exc: Exception, src: glsl.Source) -> glsl.ShaderEr
 
 def compute_program(name: str, defines: Mapping | None = None, *,
                     ctx: moderngl.Context | None = None, files: Mapping[str, str] | None = None,
-                    cache: bool = True) -> moderngl.ComputeShader:
+                    cache: bool = True, lru: tuple | None = None) -> moderngl.ComputeShader:
     """Compile (once, cached) the compute shader ``shaders/<name>``.
+
+    The cache is the context's one program cache (:mod:`cellgl.gl.registry`: dropped with the
+    context and in a forked child).
 
     Parameters
     ----------
@@ -506,6 +503,8 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         Generated include files (see :func:`cellgl.glsl.load`).
     cache : bool
         False: compile a new program and do not keep it (the caller owns and releases it).
+    lru : (str, int), optional
+        Keep it among the last ``int`` programs of the named group only (older ones released).
 
     Raises
     ------
@@ -513,18 +512,18 @@ def compute_program(name: str, defines: Mapping | None = None, *,
         Loading or compiling failed; driver line numbers are mapped to ``file:line``.
     """
     ctx = ctx if ctx is not None else get_context()
-    key = ("compute", id(ctx), name, _defines_key(defines), tuple(sorted((files or {}).items())))
+
+    def make():
+        src = glsl.load(name, defines, files=files)
+        try:
+            return ctx.compute_shader(src.text), None
+        except moderngl.Error as exc:
+            raise _compile_error(f"compiling {name}", exc, src) from None
+    if not cache:
+        return make()[0]
     with _lock:
-        prog = _programs.get(key) if cache else None
-        if prog is None:
-            src = glsl.load(name, defines, files=files)
-            try:
-                prog = ctx.compute_shader(src.text)
-            except moderngl.Error as exc:
-                raise _compile_error(f"compiling {name}", exc, src) from None
-            if cache:
-                _programs[key] = prog
-        return prog
+        return registry.cached(ctx, registry.program_key("compute", name, defines=defines, files=files),
+                               make, lru)[0]
 
 
 def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
@@ -535,27 +534,26 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
     is lowered to :func:`glsl_version` of ``ctx``; where the fragment path runs
     (:func:`cellgl.gl.path.gpu_path`) ``CELL_STORAGE_ROW_BITS`` is defined and the samplers
     ``u_storage_<binding>`` are set to their units: such programs read storage words from
-    textures (``shaders/storage.glsl``, :func:`cellgl.gl.dispatch.bind_words`).
+    textures (``shaders/storage.glsl``, :meth:`cellgl.gl.runner.Runner.bind_words`).
     """
     ctx = ctx if ctx is not None else get_context()
     if path.gpu_path(ctx) == "fragment":
         defines = {**(defines or {}), "CELL_STORAGE_ROW_BITS": path.STORAGE_ROW_BITS}
-    key = ("program", id(ctx), vertex, fragment, _defines_key(defines))
+
+    def make():
+        version = glsl_version(ctx)
+        vs = glsl.lower_version(glsl.load(vertex, defines), version)
+        fs = glsl.lower_version(glsl.load(fragment, defines), version)
+        try:
+            prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
+        except moderngl.Error as exc:
+            raise _program_error(vertex, fragment, exc, vs, fs) from None
+        for unit in (5, 6, 7):   # the storage bindings read from textures (storage.glsl)
+            if f"u_storage_{unit}" in prog:
+                prog[f"u_storage_{unit}"].value = unit
+        return prog, None
     with _lock:
-        prog = _programs.get(key)
-        if prog is None:
-            version = glsl_version(ctx)
-            vs = glsl.lower_version(glsl.load(vertex, defines), version)
-            fs = glsl.lower_version(glsl.load(fragment, defines), version)
-            try:
-                prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
-            except moderngl.Error as exc:
-                raise _program_error(vertex, fragment, exc, vs, fs) from None
-            for unit in (5, 6, 7):   # the storage bindings read from textures (storage.glsl)
-                if f"u_storage_{unit}" in prog:
-                    prog[f"u_storage_{unit}"].value = unit
-            _programs[key] = prog
-        return prog
+        return registry.cached(ctx, registry.program_key("program", vertex, fragment, defines=defines), make)[0]
 
 
 def glsl_version(ctx: moderngl.Context) -> int:
@@ -583,9 +581,4 @@ def _program_error(vertex, fragment, exc, vs, fs) -> glsl.ShaderError:
 def clear_program_cache() -> None:
     """Forget compiled programs (e.g. after editing shader files)."""
     with _lock:
-        for prog in _programs.values():
-            try:
-                prog.release()
-            except Exception:
-                pass
-        _programs.clear()
+        registry.clear_programs()

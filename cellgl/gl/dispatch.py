@@ -1,57 +1,229 @@
-"""Run a pass of cellgl's shaders on either GPU path: the one place that knows both.
+"""What a pass of cellgl's GPU paths is, and the NumPy side of running one (the seam:
+:mod:`cellgl.gl.runner`, whose runners use these).
 
-A pass evaluates ``shaders/lib`` code once per sample. On the compute path (OpenGL 4.3) the
-callers dispatch their ``*.comp`` entries themselves; this module gives them what differs on the
-fragment path (OpenGL 3.3 core and up, Apple's 4.1 core included; :mod:`cellgl.gl.path`):
-
-* :func:`program`: a ``#version 330 core`` fragment entry of ``shaders/`` with ``tiles.vert``,
-  compiled once per context, defines and generated files, with its storage samplers bound to
-  their units.
-* :func:`bind_words`: what the lib's entries take from a storage buffer (density-image levels,
-  cell-image texels, PUPs control points: "provided by the entry point") goes to storage buffer
-  ``binding`` on the compute path and to an R32UI texture on texture unit ``binding`` on the
-  fragment path, read with ``texelFetch`` (``shaders/storage.glsl``, ``cell_storage_word``).
-* :func:`draw`: the program over ``count`` samples, fragment ``(x, y)`` of a
-  :data:`WIDTH`-wide target being sample ``y * WIDTH + x``, each output location a render target
-  (MRT) read back into one array per location. The draws are tiles of at most
-  :data:`TILE_SAMPLES` samples each (docs/fragment-path.md: Windows and macOS reset a GPU whose
-  batch runs past about 2 s).
-* :func:`slots`: how a pass's per-sample outputs are spread over render targets of 4 channels
-  and over several draws where they exceed the draw buffers.
+* **A pass** (:class:`Pass`): the entry of each path, its ``#define``s, a uniform setter, the
+  samples' input (:class:`Positions`, :class:`Grid`, :class:`Rows`, :class:`Index`,
+  :class:`Image`), its outputs (:class:`Output`: a destination array each) and its flag
+  (:class:`Flag`), with the worst loop passes one sample may spend (its ``cost``).
+* **Tiles** (:func:`tile_samples`): the watchdog's bound on the samples of one dispatch or draw.
+* **The fragment path's layout.** Fragment (x, y) of a :data:`WIDTH`-wide target is sample
+  ``y * WIDTH + x``. Each output's components are spread over render targets of at most 4
+  channels of its own kind (float, uint or int: integers travel in integer targets), packed tight
+  (R, RG or RGBA; :func:`slots`), location 0 the flag; the entry defines ``row_<name>`` arrays and
+  the runner writes ``CELL_FRAG_DECL`` / ``CELL_FRAG_WRITE`` from them (:func:`pass_defines`).
+  Positions are split into cell and float32 fraction in NumPy with cellular.comp's float64
+  operations (OpenGL 3.3 has no doubles; :func:`split_points`); a grid is separable
+  (:func:`axis_tables`).
+* **The compute path's layout.** A grid in slabs of rows or layers (:func:`grid_slabs`).
 """
 from __future__ import annotations
 
-from collections import OrderedDict
+import os
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
-from cellgl.gl import context, glsl
-from cellgl.gl.path import STORAGE_ROW_BITS, gpu_path
+from cellgl.gl.path import STORAGE_ROW_BITS
 
-__all__ = ["WIDTH", "TILE_SAMPLES", "STORAGE_ROW_BITS", "path", "program", "bind_words", "draw",
-           "slots", "draw_buffers"]
+__all__ = ["has_watchdog", "Pass", "Output", "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result",
+           "tile_samples", "forced_tile", "slots", "draw_buffers", "split_points", "axis_tables",
+           "grid_slabs", "pass_defines", "read_rows", "WIDTH", "CHUNK", "LOCAL_SIZE", "SAMPLE_ROW_BITS",
+           "STORAGE_ROW_BITS", "SLOW_PASSES_PER_S", "DISPATCH_SECONDS", "MAX_TILE", "MAX_TARGETS"]
 
-#: width of the fragment path's render targets, in samples
+
+#: work-group size of the 1D compute entries (``CELL_LOCAL_SIZE``)
+LOCAL_SIZE = 64
+#: the float64 positions of :class:`Positions` on the compute path: an RGBA32UI texture
+#: 2^SAMPLE_ROW_BITS texels wide (cellular.comp, ``u_samples``)
+SAMPLE_ROW_BITS = 12
+_TEXTURE_ROWS_MAX = 16384     #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
+_MAX_GROUPS = 65535           #: work groups per axis GL guarantees
+#: OpenGL 4.3's guaranteed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (bytes): the output buffers of one
+#: dispatch stay within the context's own limit, and never above this default where it is unknown
+_STORAGE_BLOCK_MIN = 16 << 20
+_STORAGE_BLOCK_MAX = 128 << 20
+#: bytes of one output the compute path reads back at once (the tiles of a chunk write ranges of
+#: one buffer; docs/performance.md)
+_CHUNK_BYTES = 64 << 20
+
+#: The watchdog (docs/fragment-path.md, "Tiles: no dispatch or draw runs long"). Windows (TDR) and
+#: macOS reset a GPU whose batch runs past about 2 s; cellgl keeps every dispatch and draw under
+#: DISPATCH_SECONDS on the slowest GPU it supports, in the worst case. A pass declares the most loop
+#: passes one sample may spend (its ``cost``: the search's loop budget, counted in loop passes of
+#: the search and the walks); SLOW_PASSES_PER_S is the slow GPU's rate in such passes per second
+#: over all its lanes. Measured: an H200 runs 2D poisson F1+F2 (~30 passes a sample) at 962e6
+#: samples/s, ~3e10 passes/s. The slowest GPU cellgl supports, an OpenGL 3.3-class integrated one
+#: (Intel HD 4000: 0.33 TFLOPS against the H200's 67), is ~200x slower, ~1.5e8; the bound takes 1e8.
+#: A tile holds at most SLOW_PASSES_PER_S * DISPATCH_SECONDS / cost samples (at least 1024).
+SLOW_PASSES_PER_S = 1e8
+DISPATCH_SECONDS = 1.0
+#: the most samples any tile holds (a few MB of outputs per dispatch)
+MAX_TILE = 1 << 20
+_MIN_TILE = 1024
+#: width of the fragment entries' render targets and sample-input textures, in samples
 WIDTH = 1024
-#: most samples one draw covers (docs/fragment-path.md, "Tiles"): 256 rows of WIDTH. The loop
-#: budget bounds a sample's work (~6144 cell visits): the worst tile is ~20 ms on a discrete GPU,
-#: ~200 ms on a small integrated one, 10x under the ~2 s after which Windows (TDR) and macOS
-#: reset the GPU.
-TILE_SAMPLES = 1 << 18
-#: sampler uniform -> texture unit: the storage words of each binding (bind_words) and the
-#: sample inputs of the entries (units 0..3)
+#: sampler uniform -> texture unit: the storage words of each binding and the sample inputs
 SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
             "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3}
 
-_programs: dict = {}
-_words: dict = {}
-_targets: dict = {}
-_vaos: dict = {}
+
+def tile_samples(cost: int, watchdog: bool = True) -> int:
+    """Samples per dispatch or draw for a pass whose samples spend at most ``cost`` loop passes
+    each: within :data:`DISPATCH_SECONDS` on the slow GPU (:data:`SLOW_PASSES_PER_S`), a multiple
+    of 1024, at least 1024 and at most :data:`MAX_TILE`; ``watchdog=False`` (a renderer on the CPU,
+    which no watchdog resets: llvmpipe): :data:`MAX_TILE`. ``CELLGL_TILE_SAMPLES`` (a positive
+    integer) forces a smaller tile (tests: tiny tiles give the same bits)."""
+    n = MAX_TILE
+    if watchdog:
+        n = int(SLOW_PASSES_PER_S * DISPATCH_SECONDS // max(1, int(cost)))
+        n = max(_MIN_TILE, min(MAX_TILE, n // _MIN_TILE * _MIN_TILE))
+    forced = forced_tile()
+    if forced:
+        n = min(n, forced)
+    return n
 
 
-def path(ctx=None) -> str:
-    """``"compute"`` or ``"fragment"``: the path cellgl runs on ``ctx`` (default its context)."""
-    return gpu_path(ctx if ctx is not None else context.get_context())
+#: renderers on the CPU (GL_RENDERER), which no GPU watchdog resets: their tiles are as large as
+#: memory asks, not as the watchdog does
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swiftshader", "lavapipe", "software rasterizer")
+
+
+def has_watchdog(ctx) -> bool:
+    """Whether a GPU watchdog can reset ``ctx``'s device (False for a renderer on the CPU)."""
+    name = str(ctx.info.get("GL_RENDERER", "")).lower()
+    return not any(s in name for s in SOFTWARE_RENDERERS)
+
+
+def forced_tile() -> int | None:
+    """``CELLGL_TILE_SAMPLES`` as an int (None when unset); a clear error when it is not one."""
+    raw = os.environ.get("CELLGL_TILE_SAMPLES", "").strip()
+    if not raw:
+        return None
+    try:
+        value = int(raw)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ValueError(f"CELLGL_TILE_SAMPLES={raw!r} must be a positive integer (samples per "
+                         "dispatch or draw), or unset")
+    return value
+
+
+# ---------------------------------------------------------------------------------------------
+# What a pass is
+# ---------------------------------------------------------------------------------------------
+
+@dataclass
+class Output:
+    """One per-sample output of an entry: the storage buffer at ``binding`` (compute) or the
+    entry's ``row_<name>`` array (fragment); ``array`` (count, components) float32, uint32 or int32,
+    C-contiguous: the destination, written in place. ``row``: the components the compute entry
+    writes per sample when more than the array takes (its first ``components`` are kept; the
+    fragment path writes only those)."""
+    name: str
+    binding: int
+    array: np.ndarray
+    row: int | None = None
+
+    @property
+    def row_bytes(self) -> int:
+        """Bytes per sample in the compute entry's buffer."""
+        return 4 * max(self.row or 0, self.array.shape[1])
+
+
+@dataclass
+class Flag:
+    """The entry's per-sample flag: on the compute path ``"list"`` (a counter then the indices of
+    the flagged samples, storage buffer ``binding``) or ``"count"`` (a counter); on the fragment
+    path ``o_<name>`` at location 0 (1: fine)."""
+    name: str
+    binding: int
+    mode: str = "list"
+
+
+@dataclass
+class Positions:
+    """float64 sample positions (count, dim), C-contiguous, times ``scale``: the compute entry
+    splits them into cell and float32 fraction in double precision (``u_samples``, ``u_scale``);
+    the fragment path, which has no doubles, does the same split in NumPy."""
+    pts: np.ndarray
+    scale: float
+    dim: int
+
+
+@dataclass
+class Grid:
+    """A regular 4D grid (x fastest): ``shape`` (4,), origin split into ``cell`` (4,) int and
+    ``frac`` (4,) float64, ``spacing`` (4,), all in lattice units."""
+    shape: tuple
+    cell: tuple
+    frac: tuple
+    spacing: tuple
+
+
+@dataclass
+class Rows:
+    """Per-sample input rows (count, 4) of int32, uint32 or float32: storage buffer ``binding``
+    (compute) or the RGBA texture ``u_in<binding>`` (fragment), row i for sample i."""
+    array: np.ndarray
+    binding: int = 0
+
+
+@dataclass
+class Index:
+    """No input: sample i of the pass is ``u_first + i`` (the entry derives its position)."""
+
+
+@dataclass
+class Image:
+    """A ``width x height`` pixel grid, pixel (x, y) sample ``y * width + x``: 2D work groups of
+    ``local`` (compute: tiles are bands of rows, a multiple of ``align``, ``u_row0`` the first)."""
+    width: int
+    height: int
+    local: tuple = (8, 8)
+    align: int = 8
+
+
+@dataclass
+class Pass:
+    """A pass of an entry over ``count`` samples (see the module's doc)."""
+    compute: str
+    fragment: str
+    defines: dict
+    count: int
+    inputs: object
+    outputs: list
+    setup: Callable | None = None
+    flag: Flag | None = None
+    files: dict | None = None
+    #: the worst loop passes one sample may spend (the watchdog's tile size)
+    cost: int = 1 << 14
+    #: keep the program in a least-recently-used group (name, size) instead of for good
+    lru: tuple | None = None
+    #: defines for where invocations run in work groups (the compute path; e.g. a work group's
+    #: shared cell cache), left out elsewhere
+    group_defines: dict | None = None
+
+
+@dataclass
+class Result:
+    """What a run reports besides its outputs: ``flagged`` (count,) bool (a ``"list"`` flag: the
+    flagged samples), ``cut`` (a ``"count"`` flag: how many)."""
+    flagged: np.ndarray | None = None
+    cut: int = 0
+
+
+# ---------------------------------------------------------------------------------------------
+# Layouts
+# ---------------------------------------------------------------------------------------------
+
+#: samples per upload and read-back (one render-target set; a multiple of WIDTH)
+CHUNK = 1 << 19
+#: render-target sets kept per context (least recently used released)
+MAX_TARGETS = 4
+_COORD_LIMIT = 1073741824.0
+_KIND = {"f": ("f4", "float", "vec"), "u": ("u4", "uint", "uvec"), "i": ("i4", "int", "ivec")}
 
 
 def draw_buffers(ctx) -> int:
@@ -60,153 +232,138 @@ def draw_buffers(ctx) -> int:
                       int(ctx.info.get("GL_MAX_COLOR_ATTACHMENTS", 8))))
 
 
-def program(fragment: str, defines=None, *, files=None, ctx=None, cache: bool = True):
-    """The fragment entry ``shaders/<fragment>`` (``#version 330 core``) with ``tiles.vert``,
-    ``defines`` and generated include ``files`` (:func:`cellgl.gl.glsl.load`), compiled once per
-    context (``cache=False``: the caller owns and releases it). Its storage samplers are bound to
-    their units (:data:`SAMPLERS`)."""
-    ctx = ctx if ctx is not None else context.get_context()
-    d = dict(defines or {})
-    d.setdefault("CELL_FRAG_WIDTH", WIDTH)
-    d.setdefault("CELL_STORAGE_ROW_BITS", STORAGE_ROW_BITS)
-    key = (id(ctx), fragment, tuple(sorted((k, str(v)) for k, v in d.items())),
-           tuple(sorted((files or {}).items())))
-    prog = _programs.get(key) if cache else None
-    if prog is not None and prog.ctx is ctx:
-        return prog
-    vs = glsl.load("tiles.vert", d)
-    fs = glsl.load(fragment, d, files=files)
-    try:
-        prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
-    except Exception as exc:                           # moderngl.Error: the compiler's log
-        err = glsl.ShaderError(f"compiling tiles.vert + {fragment}: {glsl.map_error(str(exc), fs).strip()}")
-        err.sources = [vs, fs]
-        raise err from None
-    for name, unit in SAMPLERS.items():
-        if name in prog:
-            prog[name].value = unit
-    if cache:
-        _programs[key] = prog
-    return prog
-
-
-def bind_words(words, binding: int, ctx=None) -> None:
-    """Upload uint32 ``words`` (cached by content, one per context and binding) and bind them
-    where the entries read them: storage buffer ``binding`` (compute path) or an R32UI texture
-    2^:data:`STORAGE_ROW_BITS` words wide on texture unit ``binding`` (fragment path)."""
-    ctx = ctx if ctx is not None else context.get_context()
-    data = np.ascontiguousarray(words, dtype=np.uint32).reshape(-1)
-    fragment = gpu_path(ctx) == "fragment"
-    raw = data.tobytes()
-    key = (hash(raw), len(raw), fragment)
-    held = _words.get((id(ctx), binding))
-    if held is None or held[0] != key or held[2] is not ctx:
-        if held is not None and held[2] is ctx:
-            held[1].release()
-        if fragment:
-            width = 1 << STORAGE_ROW_BITS
-            rows = max(1, -(-data.size // width))
-            padded = np.zeros(rows * width, np.uint32)
-            padded[:data.size] = data
-            obj = ctx.texture((width, rows), 1, padded.tobytes(), dtype="u4")
-            obj.filter = (0x2600, 0x2600)          # GL_NEAREST: an integer texture is complete only so
-        else:
-            obj = ctx.buffer(raw if raw else b"\0\0\0\0")
-        held = _words[(id(ctx), binding)] = (key, obj, ctx)
-    if fragment:
-        held[1].use(binding)
-    else:
-        held[1].bind_to_storage_buffer(binding)
-
-
-def input_texture(ctx, unit: int, array: np.ndarray, width: int = WIDTH):
-    """Upload ``array`` (count, c) of int32 / uint32 / float32 to texture unit ``unit``: sample j
-    at texel (j % width, j // width), c components, reused across calls (grown as needed)."""
-    count, comps = array.shape
-    dtype = {"i": "i4", "u": "u4", "f": "f4"}[array.dtype.kind]
-    rows = max(1, -(-count // width))
-    key = (id(ctx), "input", unit)
-    held = _targets.get(key)
-    tex = held[1] if held is not None and held[0] is ctx else None
-    if tex is None or tex.height < rows or tex.components != comps or tex.dtype != dtype:
-        if tex is not None:
-            tex.release()
-        tex = ctx.texture((width, max(rows, 8)), comps, dtype=dtype)
-        tex.filter = (0x2600, 0x2600)
-        _targets[key] = (ctx, tex)
-    full, tail = divmod(count, width)
-    a = np.ascontiguousarray(array)
-    if full:
-        tex.write(a[: full * width].tobytes(), viewport=(0, 0, width, full))
-    if tail:
-        tex.write(a[full * width:].tobytes(), viewport=(0, full, tail, 1))
-    tex.use(unit)
-    return tex
-
-
-def slots(outputs) -> list[list[tuple[str, str, int]]]:
-    """Spread per-sample outputs over render targets of 4 channels. ``outputs``: (name, kind
-    ``"f"`` or ``"u"``, length) in order. Returns the slots in order, each a list of
-    (name, kind, first component) (one kind per slot: a name never shares a slot)."""
+def slots(outputs) -> list[tuple[str, str, int, int]]:
+    """Spread per-sample outputs over render targets of at most 4 channels. ``outputs``: (name,
+    kind ``"f"``, ``"u"`` or ``"i"``, length) in order. Returns the slots in order, each
+    (name, kind, first component, components) (one kind per slot: a name never shares a slot)."""
     out = []
     for name, kind, length in outputs:
         for first in range(0, length, 4):
-            out.append((name, kind, first))
+            out.append((name, kind, first, min(4, length - first)))
     return out
 
 
-#: render-target sets kept per context (least recently used released): a chunk's set of 8
-#: RGBA32 targets is 8 x 16 MB
-MAX_TARGETS = 4
+def _target_comps(k: int) -> int:
+    """Channels of the target of a slot of ``k`` components: R, RG or RGBA (RGB32F, RGB32UI are
+    not colour-renderable in OpenGL 3.3)."""
+    return k if k in (1, 2) else 4
 
 
-def _target(ctx, formats, rows: int):
-    """A framebuffer of len(formats) attachments WIDTH x rows (or taller), kept per context and
-    formats (the last :data:`MAX_TARGETS`)."""
-    held_all = _targets.setdefault((id(ctx), "fbos"), OrderedDict())
-    key = tuple(formats)
-    held = held_all.get(key)
-    if held is None or held[0] is not ctx or held[1] < rows:
-        height = max(rows, 8)
-        texs = [ctx.texture((WIDTH, height), c, dtype=dt) for c, dt in formats]
-        fbo = ctx.framebuffer(color_attachments=texs)
-        fbo.use()            # bound before the old ones go (moderngl restores the last binding)
-        if held is not None and held[0] is ctx:
-            for o in held[2]:
-                o.release()
-        held = held_all[key] = (ctx, height, [fbo] + texs)
-        while len(held_all) > MAX_TARGETS:
-            old = held_all.popitem(last=False)[1]
-            if old[0] is ctx:
-                for o in old[2]:
-                    o.release()
-    held_all.move_to_end(key)
-    return held[2][0]
+#: rows split at once by :func:`split_points` (its float64 temporaries stay in the cache)
+_SPLIT_BLOCK = 1 << 14
 
 
-def draw(prog, count: int, formats, ctx=None, before_tile=None) -> list[np.ndarray]:
-    """Run fragment program ``prog`` over ``count`` samples (fragment (x, y) = sample
-    ``y * WIDTH + x``) in draws of at most :data:`TILE_SAMPLES`; ``formats``: per output location
-    (components, ``"f4"`` or ``"u4"``). ``before_tile(first_sample)`` is called before each draw.
-    Returns per location an array (count, components)."""
-    ctx = ctx if ctx is not None else context.get_context()
-    rows = max(1, -(-count // WIDTH))
-    fbo = _target(ctx, formats, rows)
-    fbo.use()
-    vkey = (id(ctx), id(prog))
-    held = _vaos.get(vkey)
-    if held is None or held[0] is not prog:
-        held = _vaos[vkey] = (prog, ctx.vertex_array(prog, []))
-    vao = held[1]
-    tile = TILE_SAMPLES // WIDTH
-    for r0 in range(0, rows, tile):
-        if before_tile is not None:
-            before_tile(r0 * WIDTH)
-        fbo.viewport = (0, r0, WIDTH, min(tile, rows - r0))
-        vao.render(mode=ctx.TRIANGLES, vertices=3)
-    out = []
-    for k, (comps, dt) in enumerate(formats):
-        data = np.empty((rows * WIDTH, comps), np.dtype(dt))      # read straight into the array
-        fbo.read_into(data, viewport=(0, 0, WIDTH, rows), components=comps, attachment=k, dtype=dt)
-        out.append(data[:count])
-    return out
+def split_points(pts: np.ndarray, scale: float, dim: int, cell=None, frac=None):
+    """cellular.comp's split of positions ``pts`` (N, dim) float64 times ``scale``: (cell int32
+    (N, dim), fraction float32 (N, dim), in range (N,) bool or None when all are). Out of range
+    (|x| >= 2^30 cells, or NaN): searched at 0 and flagged, as there. ``cell``, ``frac``: arrays
+    (N, dim) to fill (views of one texel array in 2D), else new ones. In blocks of
+    :data:`_SPLIT_BLOCK` rows, each the same operations in the same order: the same bits."""
+    n = len(pts)
+    cell = np.empty((n, dim), np.int32) if cell is None else cell
+    frac = np.empty((n, dim), np.float32) if frac is None else frac
+    ok = None
+    sc = np.float64(scale)
+    for b in range(0, n, _SPLIT_BLOCK):
+        e = min(n, b + _SPLIT_BLOCK)
+        x = pts[b:e, :dim] * sc
+        top = np.abs(x).max() if x.size else 0.0
+        if not top < _COORD_LIMIT:                      # also NaN: the careful way
+            with np.errstate(invalid="ignore"):
+                inside = np.abs(x) < _COORD_LIMIT
+            x[~inside] = 0.0
+            if ok is None:
+                ok = np.ones(n, bool)
+            ok[b:e] = inside.all(axis=1)
+        fl = np.floor(x)
+        np.subtract(x, fl, out=x)
+        fr = frac[b:e]
+        fr[...] = x                                     # float64 -> float32, to nearest
+        cl = cell[b:e]
+        cl[...] = fl
+        up = fr >= 1.0                                  # a fraction just below 1 rounds up to 1
+        if up.any():
+            cl += up
+            fr[up] = 0.0
+    return cell, frac, ok
+
+
+def axis_tables(shape_xyzw, origin_cell, origin_frac, spacing):
+    """Per axis, the integer cell and float32 fraction of every grid index (cellular.comp's
+    ``u_origin_frac + u_spacing * idx`` in float64): (cells int32, fractions float32, offsets (4,))
+    with axis a's entries from offsets[a]."""
+    cells, fracs, offsets, at = [], [], [], 0
+    for a in range(4):
+        idx = np.arange(int(shape_xyzw[a]), dtype=np.float64)
+        pos = np.float64(origin_frac[a]) + np.float64(spacing[a]) * idx
+        fl = np.floor(pos)
+        fr = (pos - fl).astype(np.float32)
+        up = fr >= 1.0
+        cells.append((int(origin_cell[a]) + fl.astype(np.int64) + up).astype(np.int32))
+        fracs.append(np.where(up, np.float32(0.0), fr))
+        offsets.append(at)
+        at += len(idx)
+    return np.concatenate(cells), np.concatenate(fracs), offsets
+
+
+def _kind(a: np.ndarray) -> str:
+    return {"f": "f", "u": "u", "i": "i"}[a.dtype.kind]
+
+
+def pass_defines(flag, draw_slots) -> dict:
+    """CELL_FRAG_DECL and CELL_FRAG_WRITE of one draw: the flag at location 0 (``o_<name>``), then
+    each slot a target of its kind, written from the entry's ``row_<name>``."""
+    decl, write = [], []
+    loc = 0
+    if flag is not None:
+        decl.append(f"layout(location = 0) out uint o_{flag.name};")
+        loc = 1
+    for name, kind, first, k in draw_slots:
+        _, scalar, vec = _KIND[kind]
+        tc = _target_comps(k)
+        t = scalar if tc == 1 else f"{vec}{tc}"
+        zero = {"f": "0.0", "u": "0u", "i": "0"}[kind]
+        comps = [f"row_{name}[{first + c}]" if c < k else zero for c in range(tc)]
+        decl.append(f"layout(location = {loc}) out {t} o_{loc};")
+        write.append(f"o_{loc} = {t}({', '.join(comps)});")
+        loc += 1
+    return {"CELL_FRAG_DECL": " ".join(decl), "CELL_FRAG_WRITE": " ".join(write)}
+
+
+def grid_slabs(X: int, Y: int, Z: int, W: int, step: int, local: int = LOCAL_SIZE):
+    """The dispatches of an X x Y x Z x W grid (x fastest), each contiguous in the output and within
+    :data:`_MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first
+    output index, (groups x, y, z))``. Several z-layers of full rows, or some rows of one layer,
+    or (a row wider than ``step``) a run of columns of one row."""
+    if X > step:          # wider than one dispatch: split rows
+        for w in range(W):
+            for z in range(Z):
+                for y in range(Y):
+                    row = ((w * Z + z) * Y + y) * X
+                    for x0 in range(0, X, step):
+                        cx = min(step, X - x0)
+                        yield (x0, y, z, w, cx, 1), row + x0, ((cx + local - 1) // local, 1, 1)
+        return
+    if X * Y <= step and Y <= _MAX_GROUPS:
+        ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
+    else:
+        ny, nz = max(1, min(step // X, _MAX_GROUPS)), 1
+    gx = (X + local - 1) // local
+    for w in range(W):
+        for z0 in range(0, Z, nz):
+            for y0 in range(0, Y, ny):
+                cy, cz = min(ny, Y - y0), min(nz, Z - z0)
+                yield (0, y0, z0, w, X, cy), ((w * Z + z0) * Y + y0) * X, (gx, cy, cz)
+
+
+def read_rows(fbo, attachment: int, dest: np.ndarray, dtype: str) -> None:
+    """Read samples [0, len(dest)) of ``attachment`` (fragment (x, y): sample y * WIDTH + x) into
+    ``dest`` (m, components), C-contiguous: whole rows, then the last row's part."""
+    m, comps = dest.shape
+    full, tail = divmod(m, WIDTH)
+    if full:
+        fbo.read_into(dest[: full * WIDTH], viewport=(0, 0, WIDTH, full), components=comps,
+                      attachment=attachment, dtype=dtype)
+    if tail:
+        fbo.read_into(dest[full * WIDTH:], viewport=(0, full, tail, 1), components=comps,
+                      attachment=attachment, dtype=dtype)

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from cellgl.gl.path import STORAGE_ROW_BITS
 from cellgl.gl.targets import float_target
 
 from cellgl.pups.graph import PupsGraph
@@ -17,7 +18,6 @@ from cellgl.pups.points import PupsMode
 # --------------------------------------------------------------------------------------------
 
 _LOCAL = (8, 8)
-_fragment_target = {}
 
 
 def _context():
@@ -25,12 +25,6 @@ def _context():
     from cellgl.gl.context import get_context
 
     return get_context()
-
-
-def _compute_program(defines):
-    from cellgl.gl.context import compute_program
-
-    return compute_program("pups.comp", defines)
 
 
 def _cell_stream(packed: PupsPacked):
@@ -96,91 +90,48 @@ def _check_budget(packed: PupsPacked, group_cells: bool) -> None:
                            "point density or the support size (docs/exactness.md)")
 
 
-def _gpu_buffers(packed: PupsPacked):
-    """Pack the candidate grid for the shaders (std430 bytes: cell headers, records)."""
-    cells, rec = _cell_stream(packed)
-    return [cells.tobytes(), rec.tobytes()]
-
-
 def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
-    from cellgl.gl import dispatch
+    """PUPs over the pixel grid (``shaders/pups.comp`` / ``pups_samples.frag``) on the context's
+    runner (:mod:`cellgl.gl.runner`): the candidate grid as records (storage buffers or RGBA32UI
+    textures), the values in a float output, the labels (mode ``label``) in an int one. Where the
+    runner runs work groups and the grid cells are whole groups (``CELL_PUPS_GROUP_CELLS``), a group
+    stays in one grid cell; otherwise the lanes of a SIMD vector may lie in different cells: the
+    loop budget is checked for that."""
+    from cellgl.gl import runner as R
 
     t0 = time.perf_counter()
-    ctx = _context()
-    if dispatch.path(ctx) == "fragment":
-        return _evaluate_samples(packed, mode, epsilon, timings)
+    r = R.runner(_context())
     c = packed.values.shape[1]
+    w, h = packed.width, packed.height
     labels = mode == PupsMode.LABEL
+    group_cells = r.groups and packed.tile % _LOCAL[0] == 0 and packed.tile % _LOCAL[1] == 0
     defines = {"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)}
-    group_cells = packed.tile % _LOCAL[0] == 0 and packed.tile % _LOCAL[1] == 0
-    data = _gpu_buffers(packed)
     if group_cells:
         defines["CELL_PUPS_GROUP_CELLS"] = 1
     _check_budget(packed, group_cells)
-    prog = _compute_program(defines)
+    cells, rec = _cell_stream(packed)
     t1 = time.perf_counter()
-    w, h = packed.width, packed.height
-    bufs = [ctx.buffer(d) for d in data]
-    out = ctx.buffer(reserve=4 * w * h * c)
-    lab = ctx.buffer(reserve=4 * w * h if labels else 4)
-    for b, binding in zip(bufs + [out, lab], range(4)):
-        b.bind_to_storage_buffer(binding)
+    r.bind_records(cells, 0)
+    r.bind_records(rec, 1)
+    vals = np.empty((h, w, c), np.float32)
+    labs = np.empty((h, w), np.int32) if labels else None
+    outputs = [R.Output("values", 2, vals.reshape(w * h, c))]
+    if labels:
+        outputs.append(R.Output("labels", 3, labs.reshape(w * h, 1)))
+
+    def setup(prog):
+        for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
+                        ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
+                        ("u_epsilon", epsilon), ("u_tile_groups", packed.tile // _LOCAL[0])):
+            if name in prog:
+                prog[name] = v
     t2 = time.perf_counter()
-    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
-                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
-                    ("u_epsilon", epsilon), ("u_tile_groups", packed.tile // _LOCAL[0])):
-        if name in prog:
-            prog[name] = v
-    prog.run(-(-w // _LOCAL[0]), -(-h // _LOCAL[1]), 1)
-    ctx.finish()
+    if w * h:
+        r.run(R.Pass("pups.comp", "pups_samples.frag", defines, w * h,
+                     R.Image(w, h, _LOCAL, packed.tile if group_cells else _LOCAL[1]), outputs,
+                     setup=setup, cost=max(1, loop_budget(packed, False) // SIMD_LANES)))
     t3 = time.perf_counter()
-    vals = np.frombuffer(out.read(), dtype=np.float32).reshape(h, w, c)
-    labs = np.frombuffer(lab.read(), dtype=np.int32).reshape(h, w) if labels else None
-    for b in bufs + [out, lab]:
-        b.release()
-    t4 = time.perf_counter()
-    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
-    return vals, labs
-
-
-def _grid_textures(ctx, packed: PupsPacked) -> None:
-    """The candidate grid (:func:`_cell_stream`) as RGBA32UI textures on units 0 (cell headers) and
-    1 (records), 2^STORAGE_ROW_BITS texels wide: what the fragment entries read (OpenGL 3.3 has
-    no storage buffers)."""
-    from cellgl.gl import dispatch
-
-    width = 1 << dispatch.STORAGE_ROW_BITS
-    for unit, words in zip((0, 1), _cell_stream(packed)):
-        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
-        dispatch.input_texture(ctx, unit, words if len(words) else np.zeros((1, 4), np.uint32), width)
-
-
-def _evaluate_samples(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
-    """pups.comp's work on the fragment path (``shaders/pups_samples.frag``, :mod:`cellgl.gl.dispatch`):
-    the candidate grid in RGBA32UI textures, pixel s of the image sample s of the draws. The
-    lanes of a SIMD vector may lie in different grid cells (no work groups): the loop budget is
-    checked for that."""
-    from cellgl.gl import dispatch
-
-    t0 = time.perf_counter()
-    ctx = _context()
-    c = packed.values.shape[1]
-    _check_budget(packed, False)
-    prog = dispatch.program("pups_samples.frag", {"CELL_PUPS_MODE": int(mode)})
-    _cell_stream(packed)
-    t1 = time.perf_counter()
-    _grid_textures(ctx, packed)
-    w, h = packed.width, packed.height
-    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
-                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]), ("u_epsilon", epsilon)):
-        if name in prog:
-            prog[name] = v
-    t2 = time.perf_counter()
-    (out,) = dispatch.draw(prog, w * h, [(4, "f4")], ctx)
-    t3 = time.perf_counter()
-    vals = out[:, :c].reshape(h, w, c).copy()
-    labs = out[:, 3].view(np.int32).reshape(h, w).copy() if mode == PupsMode.LABEL else None
-    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=time.perf_counter() - t3)
+    timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=0.0)
     return vals, labs
 
 
@@ -189,15 +140,16 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
 
     Returns float32 (H, W, 4): rgb value, alpha the label as a float.
     """
-    from cellgl.gl import dispatch
+    from cellgl.gl import runner as R
 
-    ctx = _context()
-    prog = dispatch.program("pups.frag", {"CELL_PUPS_MODE": int(mode)})
+    r = R.runner(_context())
+    prog, vao = r.entry("pups.frag", {"CELL_PUPS_MODE": int(mode)})
     _check_budget(packed, False)
     w, h = packed.width, packed.height
-    _grid_textures(ctx, packed)
-    fbo, tex = float_target(_fragment_target, ctx, w, h)["objects"]
-    vao = ctx.vertex_array(prog, [])
+    for unit, words in zip((0, 1), _cell_stream(packed)):
+        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
+        r.input_texture(unit, words if len(words) else np.zeros((1, 4), np.uint32), 1 << STORAGE_ROW_BITS)
+    fbo, tex = float_target(R.store("pups.fragment", r.ctx), r.ctx, w, h)["objects"]
     for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
                     ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
                     ("u_epsilon", epsilon)):
@@ -205,13 +157,12 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
             prog[name] = v
     fbo.use()
     fbo.viewport = (0, 0, w, h)
-    vao.render(mode=ctx.TRIANGLES, vertices=3)
-    out = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(h, w, 4)
-    vao.release()
-    return out.copy()
+    vao.render(mode=r.ctx.TRIANGLES, vertices=3)
+    out = np.empty((h, w, 4), np.float32)
+    fbo.read_into(out, components=4, dtype="f4")
+    return out
 
 
-_raster_target = {}
 
 
 def _raster_polygons(packed: PupsPacked):
@@ -326,6 +277,7 @@ def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings
     most :func:`_raster_pairs_limit` axis pairs per point (see :func:`_raster_applies`).
     """
     from cellgl.gl.context import program
+    from cellgl.gl.runner import store
     t0 = time.perf_counter()
     ctx = _context()
     import moderngl
@@ -365,7 +317,7 @@ def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings
     t1 = time.perf_counter()
     vbuf = ctx.buffer(vert.tobytes() if vert.size else b"\0" * (4 * nf))
     ibuf = ctx.buffer(idx.tobytes() if idx.size else b"\0" * 4)
-    target = float_target(_raster_target, ctx, w, h)
+    target = float_target(store("pups.raster", ctx), ctx, w, h)
     fbo, tex = target["objects"]
     # the readback array is kept too: reading into pages already mapped saves ~10 ms at 1000^2
     acc = target.setdefault("acc", np.empty((h, w, 4), dtype=np.float32))

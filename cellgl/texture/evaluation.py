@@ -86,14 +86,14 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
 
         return texture_reference.evaluate(recipe, pts, outputs, duvz)
 
-    def setup_for(local):
-        def setup(prog, start, n):
-            p4 = np.zeros((n, 4), np.float32)
-            p4[:, :3] = local[start:start + n]
-            if "u_filter_width" in prog:
-                prog["u_filter_width"].value = tuple(float(c) for c in duvz)
-            return dispatch.bind_points(p4)         # inside dispatch.run's cellgl call
-        return setup
+    def set_filter(prog):
+        if "u_filter_width" in prog:
+            prog["u_filter_width"].value = tuple(float(c) for c in duvz)
+
+    def run_points(local, **kw):
+        p4 = np.zeros((len(local), 4), np.float32)
+        p4[:, :3] = local
+        return dispatch.run(recipe, outputs, len(local), set_filter, grid=False, points=p4, **kw)
 
     # The shader adds the sample's texture position to the split origins in float32, which holds
     # only the first few cells exactly. So points are grouped by their whole part (u, v, z) and each
@@ -101,7 +101,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     # fraction as the position: a point at uv 1e9 is as exact as one at 0.5.
     whole = np.floor(pts)
     if not split_far or not whole.any():
-        return dispatch.run(recipe, outputs, len(pts), setup_for(pts), grid=False)
+        return run_points(pts)
     order = np.lexsort(whole.T[::-1])           # points of one whole part next to each other
     ws = whole[order]
     starts = np.flatnonzero(np.concatenate([[True], np.any(ws[1:] != ws[:-1], axis=1), [True]]))
@@ -109,8 +109,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     for g in range(len(starts) - 1):
         idx = order[starts[g]:starts[g + 1]]
         key = ws[starts[g]]
-        res = dispatch.run(recipe, outputs, len(idx), setup_for(pts[idx] - key), grid=False,
-                           pan=tuple(float(c) for c in key), pan_only=g > 0)
+        res = run_points(pts[idx] - key, pan=tuple(float(c) for c in key), pan_only=g > 0)
         if out is None:
             out = {k: np.empty((len(pts),) + a.shape[1:], a.dtype) for k, a in res.items()}
         for k, a in res.items():
@@ -187,12 +186,11 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
         if n_sub > 1:
             res.update(_supersample_reference(recipe, pts, channels, duvz, samples))
     else:
-        def setup(prog, start, n):
+        def setup(prog):
             for name, value in (("u_size", (width, height)), ("u_origin", (x0, y0)),
                                 ("u_tile", (tw, th)), ("u_depth", int(depth or 0))):
                 if name in prog:
                     prog[name].value = value
-            return []
 
         res = dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub)
     lead = (D, th, tw) if depth else (th, tw)
@@ -222,9 +220,6 @@ def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
     return out
 
 
-_fragment_target: dict = {}
-
-
 @gl_call
 def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
                     view=(0.0, 0.0, 1.0, 1.0)) -> np.ndarray:
@@ -236,7 +231,7 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     besides the recipe's: ``u_view`` (vec4: uv = xy + (v_uv.x, 1 - v_uv.y) * zw) and
     ``u_channel`` (index into :data:`cellgl.texture.recipe.CHANNELS`).
     """
-    from cellgl.gl import context
+    from cellgl.gl import context, runner
     from cellgl.gl.targets import float_target
 
     recipe = load_recipe(recipe)
@@ -245,7 +240,7 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     set_view(prog, recipe, view[:2], view[2:])
     if "u_channel" in prog:
         prog["u_channel"].value = CHANNELS.index(channel)
-    fbo, tex = float_target(_fragment_target, ctx, width, height)["objects"]
+    fbo, tex = float_target(runner.store("texture.render_fragment", ctx), ctx, width, height)["objects"]
     fbo.use()
     fbo.viewport = (0, 0, width, height)
     vao = ctx.vertex_array(prog, [])
