@@ -54,6 +54,10 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
     points : array_like (N, 2) or (N, 3) float
         ``(u, v)`` on the image plane (``v = 0``: top row) or ``(u, v, z)`` for solid recipes
         (basis position ``(u f + offset_x, v f aspect + offset_y, z f + offset_z, time)``).
+        Each basis coordinate must lie within +-2^30 cells, as :func:`cellgl.cellular` accepts
+        (float64 then keeps 2^-22 of a cell): u in ``(-2^30 - offset_x) / f .. (2^30 -
+        offset_x) / f``, and so on; further points raise ValueError naming the range
+        (:func:`cellgl.texture.reference.point_range`).
     outputs : sequence of str
         Any of ``color`` (N, 4) float32, ``height`` (N,) float32, ``normal`` (N, 3) float32
         in [0, 1] encoding, ``id`` (N,) uint32, ``F1``..``F4`` (N,) float32 (octave 0),
@@ -81,9 +85,10 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     _backend(backend)
     pts = _points(points)
     duvz = _filter_width(filter_width)
-    if backend == "numpy":
-        from cellgl.texture import reference as texture_reference
+    from cellgl.texture import reference as texture_reference
 
+    texture_reference.check_points(recipe, pts)       # both backends: +-2^30 cells (the recipe's uv)
+    if backend == "numpy":
         return texture_reference.evaluate(recipe, pts, outputs, duvz)
 
     def setup_for(local):

@@ -1,0 +1,50 @@
+"""Issue 42: far points, ranges and limits that used to give silently wrong answers, raw errors
+or minutes of work (items 1-4, 9, 10, 12 and 13's API parts). Each test failed before its fix."""
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import cellgl
+
+
+# ---------------------------------------------------------------- 1. evaluate far out
+
+@pytest.mark.parametrize("backend", ["numpy", "gpu"])
+@pytest.mark.parametrize("x", [1e15, 1e20, 1e300, -1e300])
+def test_evaluate_refuses_what_it_cannot_resolve(request, backend, x):
+    """Far out both backends returned one F1 and ID for every point (and NumPy warned of an
+    invalid cast); now they refuse, naming the point and the accepted range in uv."""
+    if backend == "gpu":
+        request.getfixturevalue("ctx")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")            # no NumPy cast warning on the way
+        with pytest.raises(ValueError, match=r"points\[0, 0\] \(u\) = .* offset_x \+ u x frequency 8 "
+                                             r"must lie within \+-2\^30 cells.*u in \(-134217728, 134217728\)"):
+            cellgl.evaluate("f1", [[x, 0.5], [x + 0.01, 0.5]], outputs=("F1", "id"), backend=backend)
+
+
+def test_evaluate_range_follows_frequency_aspect_and_offset():
+    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.reference import point_range
+
+    r = load_recipe("f1").replace(frequency=4.0, aspect=2.0, offset_x=1e8, dimension=3)
+    box = point_range(r)
+    assert box[0, 1] == (2 ** 30 - 1e8) / 4 and box[0, 0] == (-2 ** 30 - 1e8) / 4
+    assert box[1, 1] == 2 ** 30 / 8 and box[2, 1] == (2 ** 30 - 0.5) / 4
+    with pytest.raises(ValueError, match=r"points\[1, 1\] \(v\) = .*frequency 4 x aspect 2"):
+        cellgl.evaluate(r, [[0.5, 0.5, 0.5], [0.5, 2 ** 27 + 1.0, 0.5]], backend="numpy")
+    # inside the box (just): evaluated, no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        out = cellgl.evaluate(r, [[box[0, 1] - 1.0, 0.5, 0.5]], ("F1",), backend="numpy")
+    assert np.isfinite(out["F1"]).all()
+
+
+def test_evaluate_2d_ignores_z_far_out():
+    """A 2D recipe ignores z: any finite z is accepted (and changes nothing)."""
+    a = cellgl.evaluate("f1", [[0.3, 0.4, 0.0]], ("F1", "id"), backend="numpy")
+    b = cellgl.evaluate("f1", [[0.3, 0.4, 1e300]], ("F1", "id"), backend="numpy")
+    assert a["id"][0] == b["id"][0] and a["F1"][0] == b["F1"][0]
