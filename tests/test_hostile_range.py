@@ -48,3 +48,31 @@ def test_evaluate_2d_ignores_z_far_out():
     a = cellgl.evaluate("f1", [[0.3, 0.4, 0.0]], ("F1", "id"), backend="numpy")
     b = cellgl.evaluate("f1", [[0.3, 0.4, 1e300]], ("F1", "id"), backend="numpy")
     assert a["id"][0] == b["id"][0] and a["F1"][0] == b["F1"][0]
+
+
+# ---------------------------------------------------------------- 2. voronoi 1D: the 2D-4D range check
+
+@pytest.mark.parametrize("x", [1e20, 1e300, -1e300])
+def test_voronoi_1d_refuses_far_coordinates(x):
+    """1D returned distance 4.9e20 at 1e20 and inf at 1e300, with overflow warnings."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match=r"w\[0, 0\] = .* times scale 5 is .* cells; accepted: within "
+                                             r"\+-2\^30 cells, so \|w\| < 2.14748e\+08 at this scale"):
+            cellgl.voronoi(None, dimensions=1, w=[x, 0.5])
+        with pytest.raises(ValueError, match=r"points\[1, 0\] = .*accepted: within \+-2\^30 cells"):
+            cellgl.voronoi([0.5, x], dimensions=1, backend="numpy")
+
+
+@pytest.mark.filterwarnings("ignore:distribution 'blender' at")     # Blender's float hash far out
+@pytest.mark.parametrize("dimensions", [1, 2, 3, 4])
+def test_voronoi_range_is_the_same_in_every_dimension(dimensions):
+    lim = 2.0 ** 30 / 5.0
+    ok = np.full((1, dimensions), lim * 0.999)
+    r = cellgl.voronoi(ok if dimensions > 1 else ok[:, 0], dimensions=dimensions, backend="numpy")
+    assert np.isfinite(r.distance).all()
+    with pytest.raises(ValueError, match=r"accepted: within \+-2\^30 cells"):
+        cellgl.voronoi(ok * 1.002 if dimensions > 1 else ok[:, 0] * 1.002, dimensions=dimensions, backend="numpy")
+    with pytest.raises(ValueError, match="must be finite"):
+        cellgl.voronoi(np.full((1, dimensions), np.inf) if dimensions > 1 else [np.inf], dimensions=dimensions,
+                       backend="numpy")

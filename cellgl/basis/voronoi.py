@@ -126,6 +126,21 @@ def _check_reach(coord: np.ndarray, octaves: int, lacunarity: float, detail: flo
                          f"the +-2^30 accepted; lower detail, lacunarity or scale")
 
 
+def _check_coords(coord: np.ndarray, scale: float, what: str) -> None:
+    """The node's Vector (W in 1D) times Scale must be finite and within +-2^30 cells, the range
+    :func:`cellgl.basis.core.cellular` takes (checked here for every dimension, 1D too)."""
+    if not len(coord) or (coord.min() > -core.COORD_LIMIT and coord.max() < core.COORD_LIMIT):
+        return
+    bad = ~np.isfinite(coord)
+    if bad.any():
+        i, j = (int(x) for x in np.argwhere(bad)[0])
+        raise ValueError(f"{what} must be finite; {what}[{i}, {j}] times scale {scale:g} is {coord[i, j]}")
+    i, j = (int(x) for x in np.argwhere(np.abs(coord) >= core.COORD_LIMIT)[0])
+    raw = coord[i, j] / scale
+    raise ValueError(f"{what}[{i}, {j}] = {raw!r} times scale {scale:g} is {coord[i, j]:.6g} cells; accepted: "
+                     f"within +-2^30 cells, so |{what}| < {core.COORD_LIMIT / scale:.6g} at this scale")
+
+
 def _max_distance(metric: Metric, exponent: float, dim: int, randomness: float) -> float:
     """The node's distance from the origin to (0.5 + 0.5 randomness) on every axis."""
     a = 0.5 + 0.5 * randomness
@@ -282,6 +297,7 @@ def voronoi(points, dimensions=3, feature="F1", metric="euclidean", exponent=0.5
         raise ValueError(f"unknown backend {backend!r}; expected one of: {', '.join(core.BACKENDS)}")
     _check_basis(basis)
     coord = _coords(points, dimensions, w) * scale
+    _check_coords(coord, scale, "w" if points is None else "points")
     N = len(coord)
     euclid = feature in ("distance_to_edge", "n_sphere_radius")
     kw = dict(distribution=dist, jitter=randomness, metric=Metric.EUCLIDEAN if euclid else metric,
