@@ -15,7 +15,9 @@ _DESCRIPTION = """\
 Blender's Voronoi Texture node, socket for socket, over the unit square.
 
 Pixel (row, column) of a W x H image samples the node's Vector at the pixel centre
-((column + 0.5) / W, 1 - (row + 0.5) / H, z): y up, as a texture; W at --w.
+((column + 0.5) / W, 1 - (row + 0.5) / H, z): y up, as a texture; W at --w. In 1D the
+node's only input is W: column c samples W = --w + (c + 0.5) / W (every row the same), so
+--w moves the strip along the 1D axis.
 
 example:
   cellgl voronoi -o cells.png --size 512 --dimensions 2 --feature F1 --socket color
@@ -30,7 +32,8 @@ _FLOATS = {
     "randomness": (1.0, "Randomness: spread of the points in their cells"),
     "smoothness": (1.0, "Smoothness of smooth_F1"),
     "exponent": (0.5, "Exponent of the minkowski metric"),
-    "w": (0.0, "W: the fourth coordinate (4D) or the coordinate (1D)"),
+    "w": (0.0, "W: the fourth coordinate (4D); in 1D the W of the left edge (column c samples "
+               "W = w + (c + 0.5) / width)"),
     "z": (0.0, "the Vector's z (3D and 4D)"),
 }
 
@@ -84,13 +87,14 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def sample_points(width: int, height: int, dimensions: int, z: float, w: float) -> np.ndarray:
-    """The sample of every pixel, row-major from the top row: (H * W, d) float64 (1D: u only)."""
+    """The sample of every pixel, row-major from the top row: (H * W, d) float64 (1D: the node's
+    W, ``w + u``: the image spans W in [w, w + 1])."""
     u = (np.arange(width) + 0.5) / width
     v = 1.0 - (np.arange(height) + 0.5) / height
     uu, vv = np.meshgrid(u, v)
     cols = [uu.ravel(), vv.ravel(), np.full(uu.size, z), np.full(uu.size, w)]
     if dimensions == 1:
-        return uu.ravel()[:, None]
+        return (uu.ravel() + w)[:, None]
     return np.stack(cols[:dimensions], axis=1)
 
 

@@ -76,3 +76,22 @@ def test_voronoi_range_is_the_same_in_every_dimension(dimensions):
     with pytest.raises(ValueError, match="must be finite"):
         cellgl.voronoi(np.full((1, dimensions), np.inf) if dimensions > 1 else [np.inf], dimensions=dimensions,
                        backend="numpy")
+
+
+# ---------------------------------------------------------------- 3. voronoi --dimensions 1 --w X
+
+def test_cli_voronoi_1d_honours_w(tmp_path):
+    """--w changed nothing in 1D, where the help says W is the coordinate: now column c samples
+    W = w + (c + 0.5) / width, so --w 0.5 shifts a 1D strip by half its width."""
+    from cellgl.cli import main
+
+    outs = {}
+    for w in (0.0, 0.5, 3.0):
+        out = tmp_path / f"w{w}.npy"
+        assert main(["voronoi", "-o", str(out), "--size", "32x2", "--dimensions", "1", "--w", str(w),
+                     "--backend", "numpy"]) == 0
+        outs[w] = np.load(out)
+    assert not np.array_equal(outs[0.0], outs[3.0])
+    np.testing.assert_array_equal(outs[0.0][:, 16:], outs[0.5][:, :16])     # half a strip along
+    direct = cellgl.voronoi(None, dimensions=1, w=3.0 + (np.arange(32) + 0.5) / 32)
+    np.testing.assert_array_equal(outs[3.0][0], direct.distance)
