@@ -72,6 +72,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help=", ".join(dists) + " (default blender: the node's own points and colours)")
     p.add_argument("--backend", choices=BACKENDS, default="gpu",
                    help=", ".join(BACKENDS) + " (default %(default)s)")
+    p.add_argument("--allow-inexact", action="store_true",
+                   help="write the image even where the search could not settle a sample (Minkowski "
+                        "exponents below 0.443 in 3D, 0.713 in 4D; very sparse points): those pixels "
+                        "hold the nearest point within the search cap, not the nearest point. Without "
+                        "it such a run is refused and nothing is written")
     return p
 
 
@@ -112,12 +117,24 @@ def run_cli(args: argparse.Namespace) -> int:
         if not math.isfinite(getattr(args, name)):
             raise ValueError(f"--{name} {getattr(args, name)}: accepted a finite number")
     out = args.socket or ("radius" if args.feature == "n_sphere_radius" else "distance")
+    from cellgl.basis.reference import minkowski_floor, minkowski_message
+
+    if (args.metric == "minkowski" and args.feature in ("F1", "F2", "smooth_F1") and args.dimensions > 1
+            and not args.allow_inexact and args.exponent < minkowski_floor(args.dimensions)):
+        raise ValueError(minkowski_message("--exponent", args.exponent, args.dimensions, "--dimensions")
+                         + "; or pass --allow-inexact to write the nearest point within that cap")
     pts = sample_points(width, height, args.dimensions, args.z, args.w)
     r = cellgl.voronoi(pts, dimensions=args.dimensions, feature=args.feature, metric=args.metric,
                        exponent=args.exponent, scale=args.scale, detail=args.detail,
                        roughness=args.roughness, lacunarity=args.lacunarity, normalize=args.normalize,
                        randomness=args.randomness, smoothness=args.smoothness, w=args.w,
-                       distribution=args.distribution, backend=args.backend)
+                       distribution=args.distribution, backend=args.backend,
+                       allow_inexact=args.allow_inexact)
+    left = int(np.size(r.exact) - np.count_nonzero(r.exact))
+    if left and not args.allow_inexact:
+        raise ValueError(f"{left} of {np.size(r.exact)} samples could not be computed exactly (their "
+                         f"nearest points may lie beyond the rings the search visits); nothing written. "
+                         f"Raise the exponent or the density, or pass --allow-inexact to write them anyway")
     arr = getattr(r, out)
     if arr is None:
         raise ValueError(f"--socket {out}: feature {args.feature!r} in {args.dimensions}D has no such "

@@ -95,3 +95,88 @@ def test_cli_voronoi_1d_honours_w(tmp_path):
     np.testing.assert_array_equal(outs[0.0][:, 16:], outs[0.5][:, :16])     # half a strip along
     direct = cellgl.voronoi(None, dimensions=1, w=3.0 + (np.arange(32) + 0.5) / 32)
     np.testing.assert_array_equal(outs[3.0][0], direct.distance)
+
+
+# ---------------------------------------------------------------- 4. Minkowski p near its floor
+
+def test_minkowski_floor_is_the_search_cap():
+    """ln(d) / ln(R): a point anywhere in the sample's own cell is settled within R rings."""
+    import math
+
+    from cellgl.basis.reference import max_ring_default, minkowski_floor
+
+    for d in (2, 3, 4):
+        lo = minkowski_floor(d)
+        assert d ** (1.0 / lo) <= max_ring_default(d) < d ** (1.0 / (lo - 0.001))
+        assert lo == math.ceil(math.log(d) / math.log(max_ring_default(d)) * 1000) / 1000
+    assert (minkowski_floor(3), minkowski_floor(4)) == (0.443, 0.713)
+
+
+def test_recipe_refuses_minkowski_below_the_floor():
+    """bake ran 32 s, then blamed the driver and advised fewer octaves; now the recipe is refused."""
+    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.schema import RecipeError
+
+    r = load_recipe("f1")
+    with pytest.raises(RecipeError, match=r"--set basis.minkowski_p: 0.25 with basis.dimension 4 cannot be "
+                                          r"exact.*accepted: \[0.713, 64\] in 4D \(\[0.25, 64\] in 2D, "
+                                          r"\[0.443, 64\] in 3D\)"):
+        r.set_from_strings(["metric=minkowski", "minkowski_p=0.25", "dimension=4"])
+    with pytest.raises(RecipeError, match=r"0.44 with basis.dimension 3"):
+        r.replace(metric="minkowski", minkowski_p=0.44, dimension=3)
+    r.replace(metric="minkowski", minkowski_p=0.443, dimension=3)
+    r.replace(metric="minkowski", minkowski_p=0.25, dimension=2)
+    r.replace(metric="euclidean", minkowski_p=0.25, dimension=4)        # inactive: no metric minkowski
+
+
+def test_minkowski_at_the_floor_is_exact():
+    """At the floor every sample is settled: a point in every cell (Blender's, Poisson's minimum 1)."""
+    rng = np.random.default_rng(4)
+    for d, n in ((3, 3000), (4, 400)):
+        pts = rng.uniform(-100, 100, (n, d))
+        pts[: n // 2] = np.floor(pts[: n // 2]) + 1e-3        # near a corner: the worst place
+        r = cellgl.voronoi(pts, dimensions=d, metric="minkowski", exponent=0.713 if d == 4 else 0.443,
+                           feature="F2", backend="numpy")
+        assert r.exact.all()
+
+
+def test_voronoi_refuses_minkowski_below_the_floor(tmp_path, capsys):
+    from cellgl.cli import main
+
+    with pytest.raises(ValueError, match=r"exponent: 0.25 with dimensions 4 cannot be exact.*"
+                                         r"accepted: \[0.713, 64\] in 4D.*allow_inexact=True"):
+        cellgl.voronoi(np.zeros((4, 4)), dimensions=4, metric="minkowski", exponent=0.25)
+    out = tmp_path / "a.png"
+    assert main(["voronoi", "-o", str(out), "--metric", "minkowski", "--exponent", "0.25", "--dimensions", "4",
+                 "--size", "64"]) == 2
+    err = capsys.readouterr().err
+    assert "--exponent: 0.25 with --dimensions 4 cannot be exact" in err and "--allow-inexact" in err
+    assert not out.exists()
+    with pytest.raises(ValueError, match=r"exponent: 0.3 with dimensions 3"):    # smooth F1 searches F1 too
+        cellgl.voronoi(np.zeros((4, 3)), dimensions=3, metric="minkowski", exponent=0.3, feature="smooth_F1")
+    # distance to edge and n-sphere radius are Euclidean whatever the metric (as the node)
+    cellgl.voronoi(np.zeros((4, 3)), dimensions=3, metric="minkowski", exponent=0.25,
+                   feature="distance_to_edge", backend="numpy")
+
+
+def test_voronoi_cli_never_writes_inexact_without_asking(tmp_path, capsys, monkeypatch):
+    """The CLI wrote the PNG with exit 0 and a warning that every sample was inexact."""
+    from cellgl.cli import main
+
+    out = tmp_path / "a.npy"
+    args = ["voronoi", "-o", str(out), "--metric", "minkowski", "--exponent", "0.25", "--dimensions", "3",
+            "--size", "6x4", "--backend", "numpy", "--scale", "50"]
+    assert main(args + ["--allow-inexact"]) == 0           # asked for: written, with the warning
+    assert "cellgl: warning: 14 of 24 samples could not be computed exactly" in capsys.readouterr().err
+    assert out.exists()
+    out.unlink()
+    real = cellgl.voronoi
+
+    def capped(*a, **k):          # a case above the floor the search still cannot settle
+        r = real(*a, **k)
+        r.exact[1] = False
+        return r
+    monkeypatch.setattr(cellgl, "voronoi", capped)
+    assert main(args[:6] + ["0.5"] + args[7:]) == 2
+    assert "1 of 24 samples could not be computed exactly" in capsys.readouterr().err
+    assert not out.exists()

@@ -33,6 +33,7 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
+from cellgl.basis.reference import minkowski_floor, minkowski_message
 from cellgl.texture import domain
 from cellgl.texture.schema import check_name_doc
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, _coerce, _err, _suggest,  # noqa: F401
@@ -484,6 +485,9 @@ def _check(r: Recipe) -> None:
         raise RecipeError(f"basis.seed: {v['seed']!r} with basis.distribution 'blender' (Blender's points "
                           "have no seed; move the texture with domain.offset_x/offset_y instead); "
                           "accepted: seed 0")
+    if v["metric"] == "minkowski" and v["minkowski_p"] < minkowski_floor(v["dimension"]):
+        raise RecipeError(minkowski_message("basis.minkowski_p", v["minkowski_p"], v["dimension"],
+                                            "basis.dimension") + " (a texture has no exact flag to warn with)")
     if v["smooth"] == "exp" and v["smoothness"] > 0.25:
         raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
                           "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "
