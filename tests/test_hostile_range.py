@@ -180,3 +180,37 @@ def test_voronoi_cli_never_writes_inexact_without_asking(tmp_path, capsys, monke
     assert main(args[:6] + ["0.5"] + args[7:]) == 2
     assert "1 of 24 samples could not be computed exactly" in capsys.readouterr().err
     assert not out.exists()
+
+
+# ---------------------------------------------------------------- 9. render() against memory
+
+def test_render_refuses_what_memory_cannot_hold(monkeypatch):
+    """render(r, 100000, 100000) raised a raw MemoryError (149 GiB); now it is refused up front,
+    saying how to tile."""
+    from cellgl import recipes
+
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 16 << 30)
+    with pytest.raises(ValueError, match=r"render 100000x100000 of 'f1' \(color, backend gpu\) needs about "
+                                         r"149 GiB \(16 bytes a pixel\), more than 50% of this machine's "
+                                         r"16 GiB; render it in tiles .*cellgl.to_dask\(recipe, "
+                                         r"\(100000, 100000\)\)") as e:
+        cellgl.render("f1", 100000, 100000)
+    assert "cellgl.io.bake.bake" not in str(e.value)          # past bake's 65536 a side
+    with pytest.raises(ValueError, match=r"needs about 13.4 GiB.*cellgl.io.bake.bake\(recipe, 'big.tif', "
+                                         r"size=\(30000, 30000\)\)"):
+        cellgl.render("f1", 30000, 30000, channels=("F1", "F2", "F3", "F4"))
+    with pytest.raises(ValueError, match=r"render 2048x1024x4 \(a tile of the 30000x30000 image\).*backend numpy"):
+        cellgl.render("flagstone", 30000, 30000, tile_w=2048, tile_h=1024, depth=4, backend="numpy")
+    with pytest.raises(ValueError, match=r"of 'pups-cow' \(color, backend gpu\) needs about"):
+        cellgl.render("pups-cow", 65536, 65536)
+
+
+def test_render_tiles_within_memory_are_rendered(monkeypatch, ctx):
+    from cellgl import recipes
+
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 4096 * 16 * 2)        # 4096 pixels of colour
+    cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=64)
+    with pytest.raises(ValueError, match="needs about"):
+        cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=65)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 0)                      # unknown: not refused
+    cellgl.render("f1", 8, 8)
