@@ -8,6 +8,7 @@ its functions, and the front ends (bake, export, viewer, CLI) use it.
 """
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from cellgl.pups import recipe as pups_recipe
@@ -43,21 +44,31 @@ def load_recipe(preset_or_path):
     text = str(preset_or_path)
     if cellular.is_path(text):
         path = Path(text)
-        return PupsRecipe.load(path) if _json_kind(path) == "pups" else Recipe.load(path)
+        kind = _json_kind(path)
+        if kind is not _NO_KIND and kind != "pups":
+            shown = json.dumps(kind)
+            shown = shown if len(shown) <= 60 else f"{shown[:40]}... ({len(shown)} characters)"
+            raise RecipeError(f"{path}: kind: unknown recipe kind {shown}; accepted: \"pups\" (a PUPs "
+                              "synthesis), or no \"kind\" key for a cellular texture recipe")
+        return PupsRecipe.load(path) if kind == "pups" else Recipe.load(path)
     pups = pups_recipe.load_pups_preset(text)
     if pups is not None:
         return pups
     return cellular.load_recipe(text, known=[n for n, _ in list_presets()])
 
 
+#: what :func:`_json_kind` returns for a file without a ``kind`` key
+_NO_KIND = object()
+
+
 def _json_kind(path: Path):
-    """The ``kind`` key of a recipe file (None: a cellular recipe, or unreadable: let
-    :meth:`Recipe.load` report it)."""
+    """The ``kind`` key of a recipe file (:data:`_NO_KIND`: none, a cellular recipe, or unreadable:
+    let :meth:`Recipe.load` report it)."""
     try:
         d = read_json(path)
     except RecipeError:
-        return None
-    return d.get("kind") if isinstance(d, dict) else None
+        return _NO_KIND
+    return d.get("kind", _NO_KIND) if isinstance(d, dict) else _NO_KIND
 
 
 def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,

@@ -214,3 +214,66 @@ def test_render_tiles_within_memory_are_rendered(monkeypatch, ctx):
         cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=65)
     monkeypatch.setattr(recipes, "memory_bytes", lambda: 0)                      # unknown: not refused
     cellgl.render("f1", 8, 8)
+
+
+# ---------------------------------------------------------------- 12, 13: the API's own messages
+
+@pytest.mark.parametrize("budget", [-1, 0, (1 << 20) - 1, True, 2.5e8, (1 << 40) + 1])
+def test_bake_memory_budget_is_checked_as_memory_is(tmp_path, budget):
+    """bake(..., memory_budget=-1) was accepted and split a 16x16 bake into 16 tiles."""
+    from cellgl.io.bake import bake
+
+    with pytest.raises(ValueError, match=r"memory_budget .*: accepted a whole number of bytes in "
+                                         r"1048576..1099511627776 \(1 MiB..1 TiB; the command line's --memory"):
+        bake("f1", tmp_path / "a.png", size=16, memory_budget=budget)
+    assert not list(tmp_path.iterdir())
+
+
+def test_bake_sets_as_a_string_is_named(tmp_path):
+    """bake(sets="seed=3") said "--set 's'" (the string read letter by letter)."""
+    from cellgl.io.bake import bake
+
+    with pytest.raises(ValueError, match=r"sets='seed=3': expected a list of NAME=VALUE strings, e.g. "
+                                         r"sets=\['seed=3'\]"):
+        bake("f1", tmp_path / "a.png", size=16, sets="seed=3")
+    with pytest.raises(ValueError, match=r"sets=5: expected a list"):
+        bake("f1", tmp_path / "a.png", size=16, sets=5)
+
+
+def test_variant_of_a_preset_without_variants():
+    """'cellgl presets flagstone:bogus' said "accepted: 0..-1"."""
+    with pytest.raises(cellgl.RecipeError, match=r"preset 'flagstone' has no variant 'bogus': it has no variants; "
+                                                 r"accepted: 'flagstone' alone"):
+        cellgl.load_recipe("flagstone:bogus")
+    with pytest.raises(cellgl.RecipeError, match=r"no variant 'bogus'; accepted: 0..19 or worley-gallery:0, "):
+        cellgl.load_recipe("worley-gallery:bogus")
+
+
+def test_pups_volume_bake_names_pups(tmp_path):
+    """'bake pups-cow --size 16x16x4' blamed pups.dimension, which the user never set."""
+    from cellgl.io.bake import bake
+
+    with pytest.raises(ValueError, match=r"volume bake \(16x16x4\): pups-cow is a PUPs recipe, which makes 2D "
+                                         r"images only; accepted: --size WxH") as e:
+        bake("pups-cow", tmp_path / "v.npy", size="16x16x4")
+    assert "dimension" not in str(e.value).split("accepted")[0]
+
+
+@pytest.mark.parametrize("kind", ['"bogus"', "null", "3"])
+def test_unknown_recipe_kind_is_named(tmp_path, kind):
+    """A recipe with "kind": "bogus" said "unknown key 'kind'"."""
+    p = tmp_path / "k.json"
+    p.write_text('{"kind": %s, "basis": {"seed": 3}}' % kind)
+    with pytest.raises(cellgl.RecipeError, match=r"k.json: kind: unknown recipe kind %s; accepted: \"pups\"" % kind):
+        cellgl.load_recipe(str(p))
+
+
+@pytest.mark.parametrize("preset, name", [("f1", "frequency"), ("pups-cow", "radius")])
+def test_set_beyond_float_range_is_not_inf(preset, name):
+    """--set frequency=<5,000 nines> said "out of range: inf"."""
+    text = "9" * 5000
+    with pytest.raises(cellgl.RecipeError, match=r"--set %s=9{60}\.\.\. \(5000 characters\): out of range "
+                                                 r"\(beyond any float, not just the parameter's\); accepted: \[" % name):
+        cellgl.load_recipe(preset).set_from_strings([f"{name}={text}"])
+    with pytest.raises(cellgl.RecipeError, match=r"1e400: out of range"):
+        cellgl.load_recipe(preset).set_from_strings([f"{name}=1e400"])

@@ -590,8 +590,11 @@ def load_recipe(preset_or_path, known=None):
     for k, v in enumerate(vs):
         if variant == str(k) or variant == v.name or f"{name}:{variant}" == v.name:
             return v
-    raise RecipeError(f"preset {name!r} has no variant {variant!r}; accepted: 0..{len(vs) - 1}"
-                      + (" or " + ", ".join(v.name for v in vs) if vs else ""))
+    if not vs:
+        raise RecipeError(f"preset {name!r} has no variant {variant!r}: it has no variants; accepted: "
+                          f"{name!r} alone (`cellgl presets --variants` lists the presets that have some)")
+    raise RecipeError(f"preset {name!r} has no variant {variant!r}; accepted: 0..{len(vs) - 1} or "
+                      + ", ".join(v.name for v in vs))
 
 
 def is_path(text: str) -> bool:
