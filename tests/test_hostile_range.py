@@ -320,8 +320,9 @@ def _draw_graph_per_edge(p, w, h, *, pos, graph, scale=None, region=None):
     return img.astype(np.float32)
 
 
-@pytest.mark.parametrize("sets, size", [(["radius=0.06"], 64), (["radius=0.05", "line_width=4.5"], 80),
-                                        (["radius=0.08", "line_width=0.5"], 48)])
+@pytest.mark.parametrize("sets, size", [(["radius=0.08", "line_width=0.5"], 48),
+                                        pytest.param(["radius=0.06"], 64, marks=pytest.mark.slow),
+                                        pytest.param(["radius=0.05", "line_width=4.5"], 80, marks=pytest.mark.slow)])
 def test_graph_lines_vectorised_are_the_same_bits(monkeypatch, sets, size):
     """pups-graph at radius 0.005 took over 180 s in a per-edge Python loop; the vectorised drawing
     gives the same bits, for the whole image and for tiles (also small chunks)."""

@@ -556,7 +556,7 @@ def _draw_edges(flat, a, d, n, lw, ox, oy, w, h):
 def _draw_points(flat, xy, ox, oy, w, h):
     """Each point lights the pixels ``[int(max(x - 4, ox)), int(min(x + 5, ox + w)))`` (and so in
     y) by ``clip(3.5 - d, 0, 1)``, kept by their maximum in ``flat``."""
-    step = max(1, _DRAW_CHUNK // 100)
+    step = max(256, _DRAW_CHUNK // 100)
     for s in range(0, len(xy), step):
         x, y = xy[s:s + step, 0], xy[s:s + step, 1]
         x0 = np.maximum(x - 4, ox).astype(np.int64)       # int(): towards zero, as astype
