@@ -28,7 +28,7 @@ def test_evaluate_refuses_what_it_cannot_resolve(request, backend, x):
 
 def test_evaluate_range_follows_frequency_aspect_and_offset():
     from cellgl.texture.recipe import load_recipe
-    from cellgl.texture.reference import point_range
+    from cellgl.texture.evaluation import point_range
 
     r = load_recipe("f1").replace(frequency=4.0, aspect=2.0, offset_x=1e8, dimension=3)
     box = point_range(r)
@@ -242,7 +242,7 @@ def test_bake_sets_as_a_string_is_named(tmp_path):
 
 def test_variant_of_a_preset_without_variants():
     """'cellgl presets flagstone:bogus' said "accepted: 0..-1"."""
-    with pytest.raises(cellgl.RecipeError, match=r"preset 'flagstone' has no variant 'bogus': it has no variants; "
+    with pytest.raises(cellgl.RecipeError, match=r"preset 'flagstone' has no variant 'bogus'; it has no variants; "
                                                  r"accepted: 'flagstone' alone"):
         cellgl.load_recipe("flagstone:bogus")
     with pytest.raises(cellgl.RecipeError, match=r"no variant 'bogus'; accepted: 0..19 or worley-gallery:0, "):
@@ -273,7 +273,7 @@ def test_set_beyond_float_range_is_not_inf(preset, name):
     """--set frequency=<5,000 nines> said "out of range: inf"."""
     text = "9" * 5000
     with pytest.raises(cellgl.RecipeError, match=r"--set %s=9{60}\.\.\. \(5000 characters\): out of range "
-                                                 r"\(beyond any float, not just the parameter's\); accepted: \[" % name):
+                                                 r"\(beyond any float, not just the parameter.s\)" % name):
         cellgl.load_recipe(preset).set_from_strings([f"{name}={text}"])
     with pytest.raises(cellgl.RecipeError, match=r"1e400: out of range"):
         cellgl.load_recipe(preset).set_from_strings([f"{name}=1e400"])

@@ -486,8 +486,7 @@ def _check(r: Recipe) -> None:
                           "have no seed; move the texture with domain.offset_x/offset_y instead); "
                           "accepted: seed 0")
     if v["metric"] == "minkowski" and v["minkowski_p"] < minkowski_floor(v["dimension"]):
-        raise RecipeError(minkowski_message("basis.minkowski_p", v["minkowski_p"], v["dimension"],
-                                            "basis.dimension") + " (a texture has no exact flag to warn with)")
+        raise RecipeError(minkowski_message("basis.minkowski_p", v["minkowski_p"], v["dimension"], "basis.dimension"))
     if v["smooth"] == "exp" and v["smoothness"] > 0.25:
         raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
                           "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "
@@ -590,11 +589,8 @@ def load_recipe(preset_or_path, known=None):
     for k, v in enumerate(vs):
         if variant == str(k) or variant == v.name or f"{name}:{variant}" == v.name:
             return v
-    if not vs:
-        raise RecipeError(f"preset {name!r} has no variant {variant!r}: it has no variants; accepted: "
-                          f"{name!r} alone (`cellgl presets --variants` lists the presets that have some)")
-    raise RecipeError(f"preset {name!r} has no variant {variant!r}; accepted: 0..{len(vs) - 1} or "
-                      + ", ".join(v.name for v in vs))
+    raise RecipeError(f"preset {name!r} has no variant {variant!r}; " + (f"accepted: 0..{len(vs) - 1} or " + ", ".join(
+        v.name for v in vs) if vs else f"it has no variants; accepted: {name!r} alone (`cellgl presets --variants`)"))
 
 
 def is_path(text: str) -> bool:

@@ -514,53 +514,12 @@ def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0), duvz
     return texture(texture_local(np.asarray(p, dtype=np.float64), t), recipe, n, t, texture_footprint(duvz, t))
 
 
-#: |basis position| (cells of octave 0's lattice) an evaluated point may reach: what
-#: :func:`cellgl.cellular` accepts (``cellgl.basis.core.COORD_LIMIT``), where float64 still holds
-#: 2^-22 of a cell and the cell index fits the GPU's int32
-POINT_LIMIT = 2.0 ** 30
-
-
-def point_range(recipe) -> np.ndarray:
-    """The texture-space box :func:`evaluate` accepts, (3, 2) float64 (lo, hi) per axis u, v, z:
-    ``offset + uv * frequency`` (v: ``* aspect``) within +-:data:`POINT_LIMIT` cells (z only in
-    3D/4D; in 2D it is ignored and any finite value is accepted)."""
-    v = recipe.values
-    f = float(v["frequency"])
-    out = np.empty((3, 2))
-    for a, (off, k) in enumerate(((v["offset_x"], f), (v["offset_y"], f * float(v["aspect"])),
-                                  (v["offset_z"], f))):
-        out[a] = ((-POINT_LIMIT - off) / k, (POINT_LIMIT - off) / k)
-    if int(v["dimension"]) < 3:
-        out[2] = (-np.inf, np.inf)
-    return out
-
-
-def check_points(recipe, pts: np.ndarray) -> None:
-    """ValueError for the first point outside :func:`point_range`, naming it, the accepted range
-    in uv and where that comes from (the recipe's frequency and offset)."""
-    box = point_range(recipe)
-    p = np.asarray(pts, dtype=np.float64)[:, :3]
-    bad = (p <= box[: p.shape[1], 0]) | (p >= box[: p.shape[1], 1])
-    if not bad.any():
-        return
-    i, a = (int(x) for x in np.argwhere(bad)[0])
-    v = recipe.values
-    axis = "uvz"[a]
-    off = ("offset_x", "offset_y", "offset_z")[a]
-    scale = f"frequency {v['frequency']:g}" + (f" x aspect {v['aspect']:g}" if a == 1 else "")
-    raise ValueError(f"points[{i}, {a}] ({axis}) = {p[i, a]!r} is beyond what the recipe can resolve: "
-                     f"{off} + {axis} x {scale} must lie within +-2^30 cells (as cellgl.cellular "
-                     f"accepts; float64 keeps 2^-22 of a cell there), so {axis} in "
-                     f"({box[a, 0]:.10g}, {box[a, 1]:.10g}) for this recipe")
-
-
 def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
     """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space; ``duvz``:
-    the footprint of each point in texture space, as its ``filter_width``). Points outside
-    :func:`point_range` raise ValueError."""
+    the footprint of each point in texture space, as its ``filter_width``; the caller checks
+    them: :func:`cellgl.texture.evaluation.check_points`)."""
     from cellgl.texture.recipe import needed_n
 
-    check_points(recipe, pts)
     n = needed_n(recipe)
     for c in outputs:
         if c in ("F1", "F2", "F3", "F4"):
