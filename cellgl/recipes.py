@@ -8,6 +8,7 @@ its functions, and the front ends (bake, export, viewer, CLI) use it.
 """
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from cellgl.pups import recipe as pups_recipe
@@ -19,7 +20,7 @@ from cellgl.texture.recipe import Recipe
 from cellgl.texture.schema import RecipeError, read_json
 
 __all__ = ["load_recipe", "list_presets", "render", "evaluate", "is_pups", "is_path", "parameters",
-           "max_side", "MAX_SIDE", "KINDS"]
+           "max_side", "MAX_SIDE", "KINDS", "check_memory", "memory_bytes"]
 
 #: the recipe kinds: cellular textures and PUPs syntheses
 KINDS = ("cellular", "pups")
@@ -72,21 +73,31 @@ def load_recipe(preset_or_path):
     text = str(preset_or_path)
     if cellular.is_path(text):
         path = Path(text)
-        return PupsRecipe.load(path) if _json_kind(path) == "pups" else Recipe.load(path)
+        kind = _json_kind(path)
+        if kind is not _NO_KIND and kind != "pups":
+            shown = json.dumps(kind)
+            shown = shown if len(shown) <= 60 else f"{shown[:40]}... ({len(shown)} characters)"
+            raise RecipeError(f"{path}: kind: unknown recipe kind {shown}; accepted: \"pups\" (a PUPs "
+                              "synthesis), or no \"kind\" key for a cellular texture recipe")
+        return PupsRecipe.load(path) if kind == "pups" else Recipe.load(path)
     pups = pups_recipe.load_pups_preset(text)
     if pups is not None:
         return pups
     return cellular.load_recipe(text, known=[n for n, _ in list_presets()])
 
 
+#: what :func:`_json_kind` returns for a file without a ``kind`` key
+_NO_KIND = object()
+
+
 def _json_kind(path: Path):
-    """The ``kind`` key of a recipe file (None: a cellular recipe, or unreadable: let
-    :meth:`Recipe.load` report it)."""
+    """The ``kind`` key of a recipe file (:data:`_NO_KIND`: none, a cellular recipe, or unreadable:
+    let :meth:`Recipe.load` report it)."""
     try:
         d = read_json(path)
     except RecipeError:
-        return None
-    return d.get("kind") if isinstance(d, dict) else None
+        return _NO_KIND
+    return d.get("kind", _NO_KIND) if isinstance(d, dict) else _NO_KIND
 
 
 def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0, y0: int = 0,
@@ -104,8 +115,13 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z. PUPs
     recipes give ``color`` and ``height``.
+
+    A tile that would need more than half the machine's memory (:func:`check_memory`) raises
+    ValueError up front, saying how to tile it (tiles, ``cellgl.io.bake.bake``, ``cellgl.to_dask``).
     """
     recipe = load_recipe(recipe)
+    check_memory(recipe, width, height, channels, x0=x0, y0=y0, tile_w=tile_w, tile_h=tile_h, depth=depth,
+                 backend=backend)
     kw = dict(channels=channels, x0=x0, y0=y0, tile_w=tile_w, tile_h=tile_h, depth=depth, backend=backend)
     if is_pups(recipe):
         if samples != 1:
@@ -113,6 +129,65 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
                              f"{recipe.name} is a PUPs recipe (accepted: 1)")
         return pups_recipe.render(recipe, width, height, **kw)
     return cellular_render.render(recipe, width, height, samples=samples, **kw)
+
+
+#: bytes of each channel's result, per pixel (float32; id uint32)
+_RESULT_BYTES = {"color": 16, "height": 4, "normal": 12, "id": 4, "F1": 4, "F2": 4, "F3": 4, "F4": 4}
+#: working bytes per pixel beyond the result (tracemalloc peaks at 128^2, llvmpipe, 2026-11-28):
+#: the GPU path reads back in chunks (16.5 bytes a pixel in all for colour), the NumPy path holds
+#: float64 intermediates for every pixel (f1 860, flagstone 2520), PUPs about 1000
+_WORK_BYTES = {"gpu": 0, "numpy": 2600, "pups": 1000}
+#: share of the machine's memory one render() may ask for
+MEMORY_SHARE = 0.5
+
+
+def memory_bytes() -> int:
+    """Physical memory of this machine in bytes (0 when it cannot be read: then nothing is refused)."""
+    import os
+
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return 0
+
+
+def check_memory(recipe, width, height, channels=("color",), *, x0=0, y0=0, tile_w=None, tile_h=None,
+                 depth=None, backend="gpu") -> None:
+    """ValueError if :func:`render` of this tile would need more than :data:`MEMORY_SHARE` of the
+    machine's memory (an estimate: the result plus the path's working memory), naming the size and
+    how to tile it instead (as ``cellgl bake`` tiles to ``--memory``). Arguments of the wrong type
+    are left to :func:`render`'s own checks."""
+    import numbers
+
+    ints = (width, height, x0, y0) + tuple(v for v in (tile_w, tile_h, depth) if v is not None)
+    if not all(isinstance(v, numbers.Integral) and not isinstance(v, bool) for v in ints):
+        return
+    chans = (channels,) if isinstance(channels, str) else channels
+    try:
+        per_px = sum(_RESULT_BYTES[c] for c in chans)
+    except (KeyError, TypeError):
+        return
+    tw = width - x0 if tile_w is None else tile_w
+    th = height - y0 if tile_h is None else tile_h
+    pixels = max(0, tw) * max(0, th) * (depth or 1)
+    work = _WORK_BYTES["pups" if is_pups(recipe) else ("numpy" if backend == "numpy" else "gpu")]
+    need = pixels * (per_px + work)
+    mem = memory_bytes()
+    if not mem or need <= mem * MEMORY_SHARE:
+        return
+    gib = 1 << 30
+    tile = f"{tw}x{th}" + (f"x{depth}" if depth else "")
+    whole = "" if (tw, th) == (width, height) else f" (a tile of the {width}x{height} image)"
+    ways = ["render it in tiles (x0, y0, tile_w, tile_h: each tile equals those pixels of the whole render)"]
+    if width <= 65536 and height <= 65536 and width * height <= 1 << 32 and not depth:   # cellgl.io.spec's limits
+        ways.append(f"bake it to a file tile by tile within a memory budget (cellgl.io.bake.bake(recipe, "
+                    f"'big.tif', size=({width}, {height})), or `cellgl bake NAME -o big.tif --size "
+                    f"{width}x{height}`)")
+    ways.append(f"take it as a lazy array rendered block by block: cellgl.to_dask(recipe, ({height}, {width}))")
+    raise ValueError(
+        f"render {tile}{whole} of {recipe.name!r} ({', '.join(chans)}, backend {backend}) needs about "
+        f"{need / gib:.3g} GiB ({per_px + work} bytes a pixel), more than {MEMORY_SHARE:.0%} of this "
+        f"machine's {mem / gib:.3g} GiB; " + "; or ".join(ways))
 
 
 def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter_width=0.0) -> dict:

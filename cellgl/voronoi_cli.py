@@ -15,7 +15,9 @@ _DESCRIPTION = """\
 Blender's Voronoi Texture node, socket for socket, over the unit square.
 
 Pixel (row, column) of a W x H image samples the node's Vector at the pixel centre
-((column + 0.5) / W, 1 - (row + 0.5) / H, z): y up, as a texture; W at --w.
+((column + 0.5) / W, 1 - (row + 0.5) / H, z): y up, as a texture; W at --w. In 1D the
+node's only input is W: column c samples W = --w + (c + 0.5) / W (every row the same), so
+--w moves the strip along the 1D axis.
 
 example:
   cellgl voronoi -o cells.png --size 512 --dimensions 2 --feature F1 --socket color
@@ -30,7 +32,8 @@ _FLOATS = {
     "randomness": (1.0, "Randomness: spread of the points in their cells"),
     "smoothness": (1.0, "Smoothness of smooth_F1"),
     "exponent": (0.5, "Exponent of the minkowski metric"),
-    "w": (0.0, "W: the fourth coordinate (4D) or the coordinate (1D)"),
+    "w": (0.0, "W: the fourth coordinate (4D); in 1D the W of the left edge (column c samples "
+               "W = w + (c + 0.5) / width)"),
     "z": (0.0, "the Vector's z (3D and 4D)"),
 }
 
@@ -69,6 +72,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help=", ".join(dists) + " (default blender: the node's own points and colours)")
     p.add_argument("--backend", choices=BACKENDS, default="gpu",
                    help=", ".join(BACKENDS) + " (default %(default)s)")
+    p.add_argument("--allow-inexact", action="store_true",
+                   help="write the image even where the search could not settle a sample (Minkowski "
+                        "exponents below 0.443 in 3D, 0.713 in 4D; very sparse points): those pixels "
+                        "hold the nearest point within the search cap, not the nearest point. Without "
+                        "it such a run is refused and nothing is written")
     return p
 
 
@@ -84,13 +92,14 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def sample_points(width: int, height: int, dimensions: int, z: float, w: float) -> np.ndarray:
-    """The sample of every pixel, row-major from the top row: (H * W, d) float64 (1D: u only)."""
+    """The sample of every pixel, row-major from the top row: (H * W, d) float64 (1D: the node's
+    W, ``w + u``: the image spans W in [w, w + 1])."""
     u = (np.arange(width) + 0.5) / width
     v = 1.0 - (np.arange(height) + 0.5) / height
     uu, vv = np.meshgrid(u, v)
     cols = [uu.ravel(), vv.ravel(), np.full(uu.size, z), np.full(uu.size, w)]
     if dimensions == 1:
-        return uu.ravel()[:, None]
+        return (uu.ravel() + w)[:, None]
     return np.stack(cols[:dimensions], axis=1)
 
 
@@ -108,12 +117,24 @@ def run_cli(args: argparse.Namespace) -> int:
         if not math.isfinite(getattr(args, name)):
             raise ValueError(f"--{name} {getattr(args, name)}: accepted a finite number")
     out = args.socket or ("radius" if args.feature == "n_sphere_radius" else "distance")
+    from cellgl.basis.reference import minkowski_floor, minkowski_message
+
+    if (args.metric == "minkowski" and args.feature in ("F1", "F2", "smooth_F1") and args.dimensions > 1
+            and not args.allow_inexact and args.exponent < minkowski_floor(args.dimensions)):
+        raise ValueError(minkowski_message("--exponent", args.exponent, args.dimensions, "--dimensions")
+                         + "; or pass --allow-inexact to write the nearest point within that cap")
     pts = sample_points(width, height, args.dimensions, args.z, args.w)
     r = cellgl.voronoi(pts, dimensions=args.dimensions, feature=args.feature, metric=args.metric,
                        exponent=args.exponent, scale=args.scale, detail=args.detail,
                        roughness=args.roughness, lacunarity=args.lacunarity, normalize=args.normalize,
                        randomness=args.randomness, smoothness=args.smoothness, w=args.w,
-                       distribution=args.distribution, backend=args.backend)
+                       distribution=args.distribution, backend=args.backend,
+                       allow_inexact=args.allow_inexact)
+    left = int(np.size(r.exact) - np.count_nonzero(r.exact))
+    if left and not args.allow_inexact:
+        raise ValueError(f"{left} of {np.size(r.exact)} samples could not be computed exactly (their "
+                         f"nearest points may lie beyond the rings the search visits); nothing written. "
+                         f"Raise the exponent or the density, or pass --allow-inexact to write them anyway")
     arr = getattr(r, out)
     if arr is None:
         raise ValueError(f"--socket {out}: feature {args.feature!r} in {args.dimensions}D has no such "

@@ -68,9 +68,9 @@ def _tiled_stained_glass():
     return load_recipe("stained-glass").tileable()[0]
 
 
-#: where test_evaluate_far_away samples: (preset, points); uv 1e4..1e9 spread over several whole
-#: uv cells, and z 3e5 for a solid recipe
-FAR_POINTS = [(preset, base) for base in (1e4, 1e6, 1e9)
+#: where test_evaluate_far_away samples: (preset, points); uv 1e4..5e7 (up to 6e8 cells, inside the
+#: +-2^30 cells evaluate accepts) spread over several whole uv cells, and z 3e5 for a solid recipe
+FAR_POINTS = [(preset, base) for base in (1e4, 1e6, 5e7)
               for preset in ("f1", "qin-cloud", "density", "stained-glass", "stained-glass:tileable")]
 FAR_POINTS += [("qin-marble", "z 3e5")]
 
@@ -80,8 +80,9 @@ FAR_POINTS += [("qin-marble", "z 3e5")]
 def test_evaluate_far_away(ctx, preset, where):
     """``cellgl.evaluate`` at points far from the unit square: IDs equal the NumPy path's but at
     near-ties and F1 within the promised bound (docs/exactness.md; 1% of the IDs were wrong at uv
-    1e4, all at 1e9). Points are evaluated in groups of one whole uv (cellgl.texture.evaluation), so
-    the float32 lattice sum stays below S = 1 + frequency cells."""
+    1e4, all at 1e9; uv 1e9 is now refused: tests/test_hostile_range.py). Points are evaluated in
+    groups of one whole uv (cellgl.texture.evaluation), so the float32 lattice sum stays below
+    S = 1 + frequency cells."""
     import cellgl
 
     if where == "z 3e5":
@@ -89,10 +90,10 @@ def test_evaluate_far_away(ctx, preset, where):
     else:
         pts = where + np.random.default_rng(int(where) % 97).uniform(-1.5, 1.5, (600, 2))
     r = _tiled_stained_glass() if preset == "stained-glass:tileable" else preset
-    if preset == "density" and where > 2 ** 30 / 8:
-        # the GPU encodes the map relative to the panned origin in 32-bit integers: past 2^30
-        # cells it says so (the NumPy path has no such limit)
-        with pytest.raises(ValueError, match=r"basis.density_map: density map of octave 0"):
+    if preset == "density" and where > 2 ** 30 / 24:
+        # the GPU encodes the map of each octave relative to the panned origin in 32-bit integers:
+        # where octave 2 (frequency 6 x lacunarity^2) passes 2^30 cells it says so
+        with pytest.raises(ValueError, match=r"basis.density_map: density map of octave 2"):
             cellgl.evaluate(r, pts, ("id",))
         return
     chs = ("id", "F1", "F2") if where == "z 3e5" else ("id", "F1", "F2", "color")

@@ -333,6 +333,34 @@ def max_ring_default(dim: int, axis_scale=(1.0,)) -> int:
     return min(64, {2: 24, 3: 12, 4: 7}[dim] * math.ceil(ratio - 1e-9))
 
 
+def minkowski_floor(dim: int) -> float:
+    """The least ``minkowski_p`` at which every sample's F1 can be settled within the search cap
+    (:func:`max_ring_default`, R rings) with a point in every cell: that point lies at most
+    ``dim^(1/p)`` away (a whole cell along every axis), and the search proves a distance once
+    ``R + m >= F`` (m >= 0 the sample's distance to its cell's nearest face), so every sample is
+    settled iff ``dim^(1/p) <= R``: ``p >= ln(dim) / ln(R)``, rounded up to 3 decimals (2D 0.219,
+    3D 0.443, 4D 0.713; 1D has no exponent). Below it how many samples the cap leaves open depends
+    on where the points fell (at 0.25 in 4D nearly all; see docs/exactness.md): recipes refuse
+    it, ``cellgl.voronoi`` unless ``allow_inexact``, ``cellgl.cellular`` flags them."""
+    if dim <= 1:
+        return 0.0
+    return math.ceil(math.log(dim) / math.log(max_ring_default(dim)) * 1000.0) / 1000.0
+
+
+def minkowski_message(name: str, p: float, dim: int, dim_name: str) -> str:
+    """The error for a Minkowski exponent below :func:`minkowski_floor`: names the value, the
+    dimension, the accepted range and why."""
+    def lo(d):                  # the parameter's own floor is 0.25 (Blender's Exponent)
+        return max(minkowski_floor(d), 0.25)
+
+    rings = max_ring_default(dim)
+    return (f"{name}: {p:g} with {dim_name} {dim} cannot be exact: at that exponent a point in the "
+            f"sample's own cell can lie {dim}^(1/{p:g}) = {dim ** (1.0 / p):.4g} cells away, beyond the "
+            f"{rings} rings of cells the search visits in {dim}D; accepted: [{lo(dim):g}, 64] in {dim}D "
+            f"(" + ", ".join(f"[{lo(d):g}, 64] in {d}D" for d in (2, 3, 4) if d != dim)
+            + ")")
+
+
 def _box_distance(o: np.ndarray, f: np.ndarray, p: Params) -> np.ndarray:
     g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0))
     return metric_length(g * np.asarray(p.axis_scale), p)

@@ -35,7 +35,7 @@ __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHAN
 
 from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
                             MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, _accepted, _check_size, _Encoding,
-                            _encoding, _exr_names, _parse_sets, id_colors, parse_channels, parse_size)
+                            _encoding, _exr_names, _parse_sets, check_budget, id_colors, parse_channels, parse_size)
 
 
 # --------------------------------------------------------------------------------------------
@@ -377,10 +377,14 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     if ext in (".tif", ".tiff") and not cio.have_tiff():
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
+    memory_budget = check_budget(memory_budget)          # as --memory (issue 42 item 12)
     recipe = _load(recipe_or_name, sets, tileable)
     if samples != 1 and getattr(recipe, "kind", None) == "pups":
         raise BakeError(f"--samples {samples}: supersampling is for texture recipes; "
                         f"{recipe.name} is a PUPs recipe (accepted: 1)")
+    if depth_slices is not None and getattr(recipe, "kind", None) == "pups":
+        raise BakeError(f"volume bake ({w}x{h}x{depth_slices}): {recipe.name} is a PUPs recipe, which makes "
+                        f"2D images only; accepted: --size WxH, or a cellular recipe with basis.dimension 3 or 4")
     if depth_slices is not None and recipe.get("dimension") < 3:
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "

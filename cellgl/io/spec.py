@@ -127,7 +127,29 @@ def parse_channels(values: str | Iterable[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
+#: the working memory a bake may be given, in bytes: ``--memory`` 1..2^20 MB
+MIN_BUDGET, MAX_BUDGET = 1 << 20, 1 << 40
+
+
+def check_budget(budget) -> int:
+    """``bake(..., memory_budget=)`` checked as ``--memory`` is: whole bytes in 1 MiB..1 TiB."""
+    import numbers
+
+    if isinstance(budget, bool) or not isinstance(budget, numbers.Integral) \
+            or not MIN_BUDGET <= budget <= MAX_BUDGET:
+        raise BakeError(f"memory_budget {budget!r}: accepted a whole number of bytes in {MIN_BUDGET}.."
+                        f"{MAX_BUDGET} (1 MiB..1 TiB; the command line's --memory 1..{MAX_BUDGET >> 20} MB)")
+    return int(budget)
+
+
 def parse_sets(sets: Iterable[str]) -> list[str]:
+    if isinstance(sets, (str, bytes)):
+        raise BakeError(f"sets={sets!r}: expected a list of NAME=VALUE strings, e.g. sets=[{sets!r}] "
+                        f"(a string alone would be read letter by letter)")
+    try:
+        sets = list(sets)
+    except TypeError:
+        raise BakeError(f"sets={sets!r}: expected a list of NAME=VALUE strings, e.g. sets=['seed=7']") from None
     out = []
     for s in sets:
         name, eq, value = str(s).partition("=")

@@ -482,12 +482,23 @@ def build_pups(preset_or_params, width, height, *, seed=0, backend="gpu"):
     return evaluate_scene(scene, layer, lambda pos, g, prm: draw_graph(prm, w, h, pos=pos, graph=g))
 
 
+#: samples of line (and point) footprints scattered per pass of :func:`draw_graph` (bounds its
+#: working memory to a few hundred MB whatever the number of edges)
+_DRAW_CHUNK = 1 << 21
+
+
 def draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
     """Rasterise the Delaunay edges (anti-aliased lines) and the points, white on black.
 
     ``scale``: pixels per domain unit ``(sx, sy)``, default ``(w / 2, h / 2)`` (the domain
     stretched over the image). ``region``: ``(x0, y0, tw, th)``, the pixels to return; every
     pixel gets the same value as in the whole image.
+
+    Each edge is sampled every half pixel (``n = int(2 * max(|dx|, |dy|)) + 2`` samples at
+    ``linspace(0, 1, n)``), each sample lights the 5 x 5 pixels around it by its distance to them
+    (``clip(line_width / 2 + 0.5 - d, 0, 1) * 0.8``), each point the pixels within 4 of it
+    (``clip(3.5 - d, 0, 1)``); a pixel keeps the largest. All edges at once, in chunks of
+    :data:`_DRAW_CHUNK` samples (a maximum does not depend on the order the values come in).
     """
     g = graph
     owner = np.repeat(np.arange(len(pos)), np.diff(g.offsets))
@@ -497,33 +508,70 @@ def draw_graph(p, w, h, *, pos, graph, scale=None, region=None):
     a = (a + 1) * [sx, sy] - 0.5
     b = (b + 1) * [sx, sy] - 0.5
     ox, oy, w, h = (0, 0, w, h) if region is None else region
-    img = np.zeros((h, w))
+    flat = np.zeros(h * w)
     lw = float(p["line_width"])
     # positions in whole-image pixels; only integer pixel indices are shifted to the region
-    for (ax, ay), (bx, by) in zip(a, b):
-        n = int(max(abs(bx - ax), abs(by - ay)) * 2) + 2
-        t = np.linspace(0, 1, n)
-        xs, ys = ax + (bx - ax) * t, ay + (by - ay) * t
-        if xs.max() < ox - 3 or xs.min() > ox + w + 2 or ys.max() < oy - 3 or ys.min() > oy + h + 2:
-            continue
-        for dx in range(-2, 3):
-            for dy in range(-2, 3):
-                ix = np.round(xs).astype(int) + dx
-                iy = np.round(ys).astype(int) + dy
-                d = np.hypot(ix - xs, iy - ys)
-                v = np.clip(lw / 2 + 0.5 - d, 0, 1)
-                ok = (ix >= ox) & (ix < ox + w) & (iy >= oy) & (iy < oy + h)
-                np.maximum.at(img, (iy[ok] - oy, ix[ok] - ox), v[ok] * 0.8)
-    yy, xx = np.mgrid[oy:oy + h, ox:ox + w]
-    for x, y in (pos + 1) * [sx, sy] - 0.5:
-        x0, x1 = int(max(x - 4, ox)), int(min(x + 5, ox + w))
-        y0, y1 = int(max(y - 4, oy)), int(min(y + 5, oy + h))
-        if x1 <= x0 or y1 <= y0:
-            continue
-        sl = (slice(y0 - oy, y1 - oy), slice(x0 - ox, x1 - ox))
-        d = np.hypot(xx[sl] - x, yy[sl] - y)
-        img[sl] = np.maximum(img[sl], np.clip(3.5 - d, 0, 1))
-    return img.astype(np.float32)
+    d = b - a
+    # an edge none of whose samples comes within 3 pixels of the region is left out; a sample is
+    # a + d t rounded, monotone in t, so the extremes are the ends a (t = 0) and a + d (t = 1)
+    e = a + d
+    lo, hi = np.minimum(a, e), np.maximum(a, e)
+    near = ~((hi[:, 0] < ox - 3) | (lo[:, 0] > ox + w + 2) | (hi[:, 1] < oy - 3) | (lo[:, 1] > oy + h + 2))
+    a, d = a[near], d[near]
+    n = (np.maximum(np.abs(d[:, 0]), np.abs(d[:, 1])) * 2).astype(np.int64) + 2
+    ends = np.cumsum(n)
+    e0 = 0
+    while e0 < len(n):          # whole edges per chunk, about _DRAW_CHUNK samples
+        e1 = max(e0 + 1, int(np.searchsorted(ends, ends[e0] - n[e0] + _DRAW_CHUNK, side="right")))
+        _draw_edges(flat, a[e0:e1], d[e0:e1], n[e0:e1], lw, ox, oy, w, h)
+        e0 = e1
+    _draw_points(flat, (pos + 1) * [sx, sy] - 0.5, ox, oy, w, h)
+    return flat.reshape(h, w).astype(np.float32)
+
+
+def _draw_edges(flat, a, d, n, lw, ox, oy, w, h):
+    """The line samples of edges from ``a`` (E, 2) along ``d`` (E, 2), ``n`` (E,) samples each,
+    scattered into ``flat`` (the region, row-major) by their maximum."""
+    edge = np.repeat(np.arange(len(n)), n)
+    first = np.cumsum(n) - n
+    k = np.arange(int(n.sum())) - first[edge]
+    t = k * (1.0 / (n - 1))[edge]               # np.linspace(0, 1, n): k * (1 / (n - 1)), the last 1
+    t[first + n - 1] = 1.0
+    xs = a[edge, 0] + d[edge, 0] * t
+    ys = a[edge, 1] + d[edge, 1] * t
+    rx = np.round(xs).astype(np.int64)
+    ry = np.round(ys).astype(np.int64)
+    reach = lw / 2 + 0.5          # a pixel |dx| - 0.5 or more from every sample gets clip(<= 0) = 0
+    for dx in range(-2, 3):
+        for dy in range(-2, 3):
+            if max(abs(dx), abs(dy)) - 0.5 >= reach:
+                continue
+            ix = rx + dx
+            iy = ry + dy
+            v = np.clip(lw / 2 + 0.5 - np.hypot(ix - xs, iy - ys), 0, 1)
+            ok = (ix >= ox) & (ix < ox + w) & (iy >= oy) & (iy < oy + h) & (v > 0)
+            np.maximum.at(flat, (iy[ok] - oy) * w + (ix[ok] - ox), v[ok] * 0.8)
+
+
+def _draw_points(flat, xy, ox, oy, w, h):
+    """Each point lights the pixels ``[int(max(x - 4, ox)), int(min(x + 5, ox + w)))`` (and so in
+    y) by ``clip(3.5 - d, 0, 1)``, kept by their maximum in ``flat``."""
+    step = max(256, _DRAW_CHUNK // 100)
+    for s in range(0, len(xy), step):
+        x, y = xy[s:s + step, 0], xy[s:s + step, 1]
+        x0 = np.maximum(x - 4, ox).astype(np.int64)       # int(): towards zero, as astype
+        x1 = np.minimum(x + 5, ox + w).astype(np.int64)
+        y0 = np.maximum(y - 4, oy).astype(np.int64)
+        y1 = np.minimum(y + 5, oy + h).astype(np.int64)
+        use = (x1 > x0) & (y1 > y0)
+        x, y, x0, x1, y0, y1 = x[use], y[use], x0[use], x1[use], y0[use], y1[use]
+        for j in range(10):                    # a window is at most 9 pixels a side
+            px = x0 + j
+            for i in range(10):
+                py = y0 + i
+                ok = (px < x1) & (py < y1)
+                v = np.clip(3.5 - np.hypot(px[ok] - x[ok], py[ok] - y[ok]), 0, 1)
+                np.maximum.at(flat, (py[ok] - oy) * w + (px[ok] - ox), v)
 
 
 def pups_presets():

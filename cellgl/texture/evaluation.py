@@ -17,7 +17,8 @@ from cellgl.texture import antialias, dispatch
 from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
 from cellgl.texture.shader import defines, set_view
 
-__all__ = ["evaluate", "render", "render_fragment", "measure_range", "OUTPUTS", "MAX_SIDE"]
+__all__ = ["evaluate", "render", "render_fragment", "measure_range", "point_range", "check_points", "OUTPUTS",
+           "MAX_SIDE", "POINT_LIMIT"]
 
 #: largest image side :func:`render` takes. The shader puts a pixel at uv ``(x + 0.5) / W`` in
 #: float32: pixel centres are exact below 2**23, and at 2**20 neighbouring pixels are still 16
@@ -54,6 +55,10 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
     points : array_like (N, 2) or (N, 3) float
         ``(u, v)`` on the image plane (``v = 0``: top row) or ``(u, v, z)`` for solid recipes
         (basis position ``(u f + offset_x, v f aspect + offset_y, z f + offset_z, time)``).
+        Each basis coordinate must lie within +-2^30 cells, as :func:`cellgl.cellular` accepts
+        (float64 then keeps 2^-22 of a cell): u in ``(-2^30 - offset_x) / f .. (2^30 -
+        offset_x) / f``, and so on; further points raise ValueError naming the range
+        (:func:`point_range`).
     outputs : sequence of str
         Any of ``color`` (N, 4) float32, ``height`` (N,) float32, ``normal`` (N, 3) float32
         in [0, 1] encoding, ``id`` (N,) uint32, ``F1``..``F4`` (N,) float32 (octave 0),
@@ -81,6 +86,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     _backend(backend)
     pts = _points(points)
     duvz = _filter_width(filter_width)
+    check_points(recipe, pts)       # both backends: +-2^30 cells (the range in the recipe's uv)
     if backend == "numpy":
         from cellgl.texture import reference as texture_reference
 
@@ -115,6 +121,46 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
         for k, a in res.items():
             out[k][idx] = a
     return out
+
+
+#: |basis position| (cells of octave 0's lattice) an evaluated point may reach: what
+#: :func:`cellgl.cellular` accepts (``cellgl.basis.core.COORD_LIMIT``), where float64 still holds
+#: 2^-22 of a cell and the cell index fits the GPU's int32
+POINT_LIMIT = 2.0 ** 30
+
+
+def point_range(recipe) -> np.ndarray:
+    """The texture-space box :func:`evaluate` accepts, (3, 2) float64 (lo, hi) per axis u, v, z:
+    ``offset + uv * frequency`` (v: ``* aspect``) within +-:data:`POINT_LIMIT` cells (z only in
+    3D/4D; in 2D it is ignored and any finite value is accepted)."""
+    v = recipe.values
+    f = float(v["frequency"])
+    out = np.empty((3, 2))
+    for a, (off, k) in enumerate(((v["offset_x"], f), (v["offset_y"], f * float(v["aspect"])),
+                                  (v["offset_z"], f))):
+        out[a] = ((-POINT_LIMIT - off) / k, (POINT_LIMIT - off) / k)
+    if int(v["dimension"]) < 3:
+        out[2] = (-np.inf, np.inf)
+    return out
+
+
+def check_points(recipe, pts: np.ndarray) -> None:
+    """ValueError for the first point outside :func:`point_range`, naming it, the accepted range
+    in uv and where that comes from (the recipe's frequency and offset)."""
+    box = point_range(recipe)
+    p = np.asarray(pts, dtype=np.float64)[:, :3]
+    bad = (p <= box[: p.shape[1], 0]) | (p >= box[: p.shape[1], 1])
+    if not bad.any():
+        return
+    i, a = (int(x) for x in np.argwhere(bad)[0])
+    v = recipe.values
+    axis = "uvz"[a]
+    off = ("offset_x", "offset_y", "offset_z")[a]
+    scale = f"frequency {v['frequency']:g}" + (f" x aspect {v['aspect']:g}" if a == 1 else "")
+    raise ValueError(f"points[{i}, {a}] ({axis}) = {p[i, a]!r} is beyond what the recipe can resolve: "
+                     f"{off} + {axis} x {scale} must lie within +-2^30 cells (as cellgl.cellular "
+                     f"accepts; float64 keeps 2^-22 of a cell there), so {axis} in "
+                     f"({box[a, 0]:.10g}, {box[a, 1]:.10g}) for this recipe")
 
 
 def _filter_width(fw) -> np.ndarray:

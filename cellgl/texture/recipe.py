@@ -33,6 +33,7 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
+from cellgl.basis.reference import minkowski_floor, minkowski_message
 from cellgl.texture import domain
 from cellgl.texture.schema import check_name_doc
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, coerce, value_error, suggest,  # noqa: F401
@@ -484,6 +485,8 @@ def _check(r: Recipe) -> None:
         raise RecipeError(f"basis.seed: {v['seed']!r} with basis.distribution 'blender' (Blender's points "
                           "have no seed; move the texture with domain.offset_x/offset_y instead); "
                           "accepted: seed 0")
+    if v["metric"] == "minkowski" and v["minkowski_p"] < minkowski_floor(v["dimension"]):
+        raise RecipeError(minkowski_message("basis.minkowski_p", v["minkowski_p"], v["dimension"], "basis.dimension"))
     if v["smooth"] == "exp" and v["smoothness"] > 0.25:
         raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
                           "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "
@@ -586,8 +589,8 @@ def load_recipe(preset_or_path, known=None):
     for k, v in enumerate(vs):
         if variant == str(k) or variant == v.name or f"{name}:{variant}" == v.name:
             return v
-    raise RecipeError(f"preset {name!r} has no variant {variant!r}; accepted: 0..{len(vs) - 1}"
-                      + (" or " + ", ".join(v.name for v in vs) if vs else ""))
+    raise RecipeError(f"preset {name!r} has no variant {variant!r}; " + (f"accepted: 0..{len(vs) - 1} or " + ", ".join(
+        v.name for v in vs) if vs else f"it has no variants; accepted: {name!r} alone (`cellgl presets --variants`)"))
 
 
 def is_path(text: str) -> bool:

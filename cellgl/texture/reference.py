@@ -516,7 +516,8 @@ def texture_at(p: np.ndarray, recipe, n: int | None = None, pan=(0.0, 0.0), duvz
 
 def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
     """The NumPy backend of :func:`cellgl.texture.evaluate` (pts (N, 3) texture space; ``duvz``:
-    the footprint of each point in texture space, as its ``filter_width``)."""
+    the footprint of each point in texture space, as its ``filter_width``; the caller checks
+    them: :func:`cellgl.texture.evaluation.check_points`)."""
     from cellgl.texture.recipe import needed_n
 
     n = needed_n(recipe)

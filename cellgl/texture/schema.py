@@ -181,9 +181,14 @@ def coerce(p: Param, value, path: str):
 
 def parse_value(p: Param, name: str, text: str):
     """Parse the text of ``--set name=text`` for table parameter ``p`` (any recipe kind's table)."""
+    shown = text if len(text) <= 80 else f"{text[:60]}... ({len(text)} characters)"
     try:
         if p.type == "float":
-            return float(text)
+            v = float(text)
+            if math.isinf(v) and "inf" not in text.lower():     # digits past float range, not "inf"
+                raise RecipeError(f"--set {name}={shown}: out of range (beyond any float, not just "
+                                  f"the parameter's); accepted: {p.range_text()}")
+            return v
         if p.type == "int":
             return int(text, 0)
         if p.type == "bool":
@@ -196,8 +201,9 @@ def parse_value(p: Param, name: str, text: str):
         if p.type == "color":
             return [float(c) for c in text.strip("[]() ").split(",")]
         return text
+    except RecipeError:
+        raise
     except ValueError:
-        shown = text if len(text) <= 80 else f"{text[:60]}... ({len(text)} characters)"
         raise RecipeError(f"--set {name}={shown}: cannot parse {shown!r}; accepted: "
                           + ("an integer in " if p.type == "int" else "") + p.range_text()) from None
 
