@@ -22,7 +22,7 @@ def _brute(pts, n=1, **kw):
 
 def test_grid_slabs_stay_within_the_group_limit(monkeypatch):
     """Every dispatch of a grid wider than one dispatch covers its samples once, contiguously."""
-    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 3)
+    monkeypatch.setattr(dispatch, "MAX_GROUPS", 3)
     step = 3 * dispatch.LOCAL_SIZE
     X, Y = step * 2 + 17, 3
     seen = np.zeros(X * Y, int)
@@ -35,7 +35,7 @@ def test_grid_slabs_stay_within_the_group_limit(monkeypatch):
 
 def test_narrow_group_limit_grid_equals_reference(ctx, monkeypatch):
     """With the group limit forced small, a grid split into column runs equals the reference."""
-    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 2)       # 128 samples per dispatch
+    monkeypatch.setattr(dispatch, "MAX_GROUPS", 2)       # 128 samples per dispatch
     r = cellgl.cellular_grid((3, 300), origin=(0.5, 2.0), spacing=(0.05, 0.3), n=2, outputs=("F", "id"))
     ref = cellgl.cellular_grid((3, 300), origin=(0.5, 2.0), spacing=(0.05, 0.3), n=2, outputs=("F", "id"),
                                backend="numpy")
@@ -165,7 +165,7 @@ def test_cell_counts_dispatches_stay_within_the_group_limit(ctx, monkeypatch):
     real_run = moderngl.ComputeShader.run
     monkeypatch.setattr(moderngl.ComputeShader, "run",
                         lambda self, group_x=1, *a, **k: (groups.append(group_x), real_run(self, group_x, *a, **k)))
-    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 2)
+    monkeypatch.setattr(dispatch, "MAX_GROUPS", 2)
     split = gpu.cell_counts(cells, p)
     assert len(groups) == 3 and max(groups) <= 2
     np.testing.assert_array_equal(split[0], whole[0])
@@ -214,7 +214,7 @@ def test_points_in_small_chunks_equal_one_dispatch(ctx, monkeypatch):
     chunks of 128 samples, the bits equal one dispatch's."""
     pts = np.random.default_rng(5).uniform(-9.0, 9.0, (1001, 3))
     whole = cellgl.cellular(pts, 3, outputs=("F", "delta", "id"))
-    monkeypatch.setattr(dispatch, "_MAX_GROUPS", 2)             # 128 samples per dispatch
+    monkeypatch.setattr(dispatch, "MAX_GROUPS", 2)             # 128 samples per dispatch
     parts = cellgl.cellular(pts, 3, outputs=("F", "delta", "id"))
     for name in ("F", "delta", "id"):
         assert getattr(parts, name).tobytes() == getattr(whole, name).tobytes(), name

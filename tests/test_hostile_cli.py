@@ -122,7 +122,7 @@ def test_in_process_main_returns_130_on_ctrl_c(monkeypatch, tmp_path):
 def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
     """A Ctrl-C that hit a C extension's import was printed by it and swallowed: the bake went
     on to the end (exit 130 then, the outputs complete). The next tile or frame raises it again."""
-    from cellgl.io.bake import _Progress
+    from cellgl.io.bake import Progress
 
     steps = []
 
@@ -132,7 +132,7 @@ def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
             time.sleep(0.01)
         except KeyboardInterrupt:
             pass                                     # ... which something swallows
-        bar = _Progress(10, "baking x.png", False)
+        bar = Progress(10, "baking x.png", False)
         for _ in range(10):
             bar.step()
             steps.append(1)
@@ -196,10 +196,10 @@ class _Stream:
 
 
 def test_progress_off_a_terminal_is_plain_lines():
-    from cellgl.io.bake import _Progress
+    from cellgl.io.bake import Progress
 
     s = _Stream(tty=False)
-    with _Progress(40, "baking x.png", True, stream=s) as bar:
+    with Progress(40, "baking x.png", True, stream=s) as bar:
         for _ in range(40):
             bar.step()
     assert "\r" not in s.text
@@ -210,11 +210,11 @@ def test_progress_off_a_terminal_is_plain_lines():
 
 @pytest.mark.parametrize("tty", [True, False])
 def test_progress_says_interrupted(tty):
-    from cellgl.io.bake import _Progress
+    from cellgl.io.bake import Progress
 
     s = _Stream(tty=tty)
     with pytest.raises(KeyboardInterrupt):
-        with _Progress(40, "baking x.png", True, stream=s) as bar:
+        with Progress(40, "baking x.png", True, stream=s) as bar:
             for _ in range(20):
                 bar.step()
             raise KeyboardInterrupt
@@ -226,11 +226,11 @@ def test_progress_says_interrupted(tty):
 
 
 def test_quiet_progress_writes_nothing():
-    from cellgl.io.bake import _Progress
+    from cellgl.io.bake import Progress
 
     s = _Stream(tty=False)
     with pytest.raises(KeyboardInterrupt):
-        with _Progress(40, "baking x.png", False, stream=s) as bar:
+        with Progress(40, "baking x.png", False, stream=s) as bar:
             bar.step()
             raise KeyboardInterrupt
     assert s.text == ""

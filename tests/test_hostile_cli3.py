@@ -216,7 +216,7 @@ def test_pups_image_resolves_against_the_recipe_folder(ctx, tmp_path):
 # --------------------------------------------------------------------------------------------
 
 def test_progress_in_a_log_starts_at_once_and_keeps_coming():
-    from cellgl.io.bake import _Progress
+    from cellgl.io.bake import Progress
 
     class Log:
         def __init__(self):
@@ -232,7 +232,7 @@ def test_progress_in_a_log_starts_at_once_and_keeps_coming():
             return False
 
     log = Log()
-    bar = _Progress(100, "baking x.png", True, stream=log)
+    bar = Progress(100, "baking x.png", True, stream=log)
     bar.LOG_INTERVAL = 0.2
     with bar:
         assert [t for _, t in log.lines] == ["baking x.png: started, 100 tiles\n"]

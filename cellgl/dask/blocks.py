@@ -196,7 +196,7 @@ def _render_one(layout: Layout, i: int, j: int) -> np.ndarray:
 
 def load(recipe_or_name, sets=(), tileable=None):
     """A recipe object from a Recipe, preset name or JSON path, with ``--set`` overrides."""
-    return _bake._load(recipe_or_name, sets, tileable)
+    return _bake.load_recipe_sets(recipe_or_name, sets, tileable)
 
 
 def to_dask(recipe, shape, chunks=DEFAULT_CHUNK, channels="color", *, sets=(), tileable=None):

@@ -113,7 +113,7 @@ def _sweep_task(item, job: _Job) -> int:
     """Bake one variation unless its files are all there: 1 baked, 0 skipped."""
     name, sets = item
     path = Path(job.outdir) / name
-    if all(p.exists() for p, _ in _bake._output_paths(path, job.channels)):
+    if all(p.exists() for p, _ in _bake.output_paths(path, job.channels)):
         return 0
     on_gl_thread(_bake.bake, job.base, path, size=job.size, channels=job.channels,
                  bit_depth=job.bit_depth, tileable=job.tileable, sets=sets, progress=False)
@@ -176,7 +176,7 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
         w, h, d = _bake.parse_size(size)
     else:
         (w, h), d = pair("size", size, "W, (W, H) or 'WxH'"), None
-    _bake._check_size(w, h, d, f"size {size}")
+    _bake.check_size(w, h, d, f"size {size}")
     if d is not None:
         raise DaskError(f"--size {size}: a sweep bakes images, not volumes")
     channels = _bake.parse_channels(channels)
@@ -186,14 +186,14 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
     stem = re.sub(r"[^A-Za-z0-9.+-]+", "-", str(getattr(base, "name", "") or "recipe"))
     items = list(_variations(stem, axes, ext))
     job = _Job(base, str(outdir.resolve()), (w, h), channels, bit_depth, tileable)
-    _bake._check_bits(ext, bit_depth)
+    _bake.check_bits(ext, bit_depth)
     request = {"generator": "cellgl", "version": __version__, "recipe": base.to_dict(),
                "sets": list(sets), "size": [w, h], "channels": list(channels),
                "format": ext[1:], "depth": bit_depth, "tileable": tileable,
                "variations": len(items)}
     have = _check_manifest(outdir, request)
     t0 = time.perf_counter()
-    bar = _bake._Progress(len(items), f"sweep {outdir.name}", progress, unit="files")
+    bar = _bake.Progress(len(items), f"sweep {outdir.name}", progress, unit="files")
     with bar:   # the line ends; "interrupted" after Ctrl-C
         with cluster_client(scheduler, workers, threads) as client:
             if not have:   # only once there is a cluster to fill it

@@ -203,7 +203,7 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
         _RENDER_BYTES * (1 + len(layout.channels)) // 2
         + 8 * sum(samples(c) for c in layout.channels))
     blocks = layout.blocks()
-    bar = _bake._Progress(len(blocks), f"baking {path.name}", progress, unit="chunks")
+    bar = _bake.Progress(len(blocks), f"baking {path.name}", progress, unit="chunks")
     with bar:   # the line ends; "interrupted" after Ctrl-C
         with cluster_client(scheduler, workers, threads, per_task) as client:
             if resume:

@@ -216,7 +216,7 @@ if hasattr(os, "register_at_fork"):
 
 
 @contextlib.contextmanager
-def _section():
+def section():
     """Hold the lock; on leaving the outermost one, release from this thread the contexts made
     current during it (those current here before stay so)."""
     with _lock:
@@ -236,7 +236,7 @@ def _section():
                     deferred.pop()()
 
 
-path.set_guard(_section)   # the known-answer checks (cellgl.gl.path) run holding the GL lock
+path.set_guard(section)   # the known-answer checks (cellgl.gl.path) run holding the GL lock
 
 
 @contextlib.contextmanager
@@ -244,7 +244,7 @@ def current(backend: str | None = None):
     """``with current() as ctx:``: the context (as :func:`get_context`) current on this thread,
     with the process's GL lock held, for GL work of your own while other threads use cellgl.
     On leaving, it is released from the thread again (unless it was current here before)."""
-    with _section():
+    with section():
         yield get_context(backend)
 
 
@@ -398,7 +398,7 @@ def backend_name(ctx: moderngl.Context | None = None) -> str | None:
 _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE = 0x8262
 
 
-def _get_integer(ctx: moderngl.Context, pname: int) -> int | None:
+def get_integer(ctx: moderngl.Context, pname: int) -> int | None:
     addr = platforms.get_proc(_backend_of.get(id(ctx)), "glGetIntegerv")
     if not addr:
         return None
@@ -426,7 +426,7 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
         (3-tuple), ``GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS``, ``GL_MAX_SHADER_STORAGE_BLOCK_SIZE``
         (bytes), ``GL_MAX_COMPUTE_SHARED_MEMORY_SIZE`` (bytes, None if it cannot be queried).
     """
-    with _section():  # a cellgl call: from any thread, leaving no context held there
+    with section():  # a cellgl call: from any thread, leaving no context held there
         return _info(ctx if ctx is not None else get_context())
 
 
@@ -446,7 +446,7 @@ def _info(ctx: moderngl.Context) -> dict:
         "GL_MAX_COMPUTE_WORK_GROUP_SIZE": tuple(info.get("GL_MAX_COMPUTE_WORK_GROUP_SIZE", ())),
         "GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS": info.get("GL_MAX_COMPUTE_WORK_GROUP_INVOCATIONS"),
         "GL_MAX_SHADER_STORAGE_BLOCK_SIZE": info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"),
-        "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE": _get_integer(ctx, _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE),
+        "GL_MAX_COMPUTE_SHARED_MEMORY_SIZE": get_integer(ctx, _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE),
     }
 
 

@@ -37,15 +37,15 @@ LOCAL_SIZE = 64
 #: the float64 positions of :class:`Positions` on the compute path: an RGBA32UI texture
 #: 2^SAMPLE_ROW_BITS texels wide (cellular.comp, ``u_samples``)
 SAMPLE_ROW_BITS = 12
-_TEXTURE_ROWS_MAX = 16384     #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
-_MAX_GROUPS = 65535           #: work groups per axis GL guarantees
+TEXTURE_ROWS_MAX = 16384     #: GL_MAX_TEXTURE_SIZE is at least this in every OpenGL 4.3 driver
+MAX_GROUPS = 65535           #: work groups per axis GL guarantees
 #: OpenGL 4.3's guaranteed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (bytes): the output buffers of one
 #: dispatch stay within the context's own limit, and never above this default where it is unknown
-_STORAGE_BLOCK_MIN = 16 << 20
-_STORAGE_BLOCK_MAX = 128 << 20
+STORAGE_BLOCK_MIN = 16 << 20
+STORAGE_BLOCK_MAX = 128 << 20
 #: bytes of one output the compute path reads back at once (the tiles of a chunk write ranges of
 #: one buffer; docs/performance.md)
-_CHUNK_BYTES = 64 << 20
+CHUNK_BYTES = 64 << 20
 
 #: The watchdog (docs/fragment-path.md, "Tiles: no dispatch or draw runs long"). Windows (TDR) and
 #: macOS reset a GPU whose batch runs past about 2 s; cellgl keeps every dispatch and draw under
@@ -223,7 +223,7 @@ CHUNK = 1 << 19
 #: render-target sets kept per context (least recently used released)
 MAX_TARGETS = 4
 _COORD_LIMIT = 1073741824.0
-_KIND = {"f": ("f4", "float", "vec"), "u": ("u4", "uint", "uvec"), "i": ("i4", "int", "ivec")}
+KIND = {"f": ("f4", "float", "vec"), "u": ("u4", "uint", "uvec"), "i": ("i4", "int", "ivec")}
 
 
 def draw_buffers(ctx) -> int:
@@ -243,7 +243,7 @@ def slots(outputs) -> list[tuple[str, str, int, int]]:
     return out
 
 
-def _target_comps(k: int) -> int:
+def target_comps(k: int) -> int:
     """Channels of the target of a slot of ``k`` components: R, RG or RGBA (RGB32F, RGB32UI are
     not colour-renderable in OpenGL 3.3)."""
     return k if k in (1, 2) else 4
@@ -306,7 +306,7 @@ def axis_tables(shape_xyzw, origin_cell, origin_frac, spacing):
     return np.concatenate(cells), np.concatenate(fracs), offsets
 
 
-def _kind(a: np.ndarray) -> str:
+def kind_of(a: np.ndarray) -> str:
     return {"f": "f", "u": "u", "i": "i"}[a.dtype.kind]
 
 
@@ -319,8 +319,8 @@ def pass_defines(flag, draw_slots) -> dict:
         decl.append(f"layout(location = 0) out uint o_{flag.name};")
         loc = 1
     for name, kind, first, k in draw_slots:
-        _, scalar, vec = _KIND[kind]
-        tc = _target_comps(k)
+        _, scalar, vec = KIND[kind]
+        tc = target_comps(k)
         t = scalar if tc == 1 else f"{vec}{tc}"
         zero = {"f": "0.0", "u": "0u", "i": "0"}[kind]
         comps = [f"row_{name}[{first + c}]" if c < k else zero for c in range(tc)]
@@ -332,7 +332,7 @@ def pass_defines(flag, draw_slots) -> dict:
 
 def grid_slabs(X: int, Y: int, Z: int, W: int, step: int, local: int = LOCAL_SIZE):
     """The dispatches of an X x Y x Z x W grid (x fastest), each contiguous in the output and within
-    :data:`_MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first
+    :data:`MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first
     output index, (groups x, y, z))``. Several z-layers of full rows, or some rows of one layer,
     or (a row wider than ``step``) a run of columns of one row."""
     if X > step:          # wider than one dispatch: split rows
@@ -344,10 +344,10 @@ def grid_slabs(X: int, Y: int, Z: int, W: int, step: int, local: int = LOCAL_SIZ
                         cx = min(step, X - x0)
                         yield (x0, y, z, w, cx, 1), row + x0, ((cx + local - 1) // local, 1, 1)
         return
-    if X * Y <= step and Y <= _MAX_GROUPS:
-        ny, nz = Y, max(1, min(step // (X * Y), _MAX_GROUPS))
+    if X * Y <= step and Y <= MAX_GROUPS:
+        ny, nz = Y, max(1, min(step // (X * Y), MAX_GROUPS))
     else:
-        ny, nz = max(1, min(step // X, _MAX_GROUPS)), 1
+        ny, nz = max(1, min(step // X, MAX_GROUPS)), 1
     gx = (X + local - 1) // local
     for w in range(W):
         for z0 in range(0, Z, nz):

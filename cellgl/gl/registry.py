@@ -31,10 +31,10 @@ class _Held:
     def release(self) -> None:
         """Release every GL object held (the context must be current and alive)."""
         for prog, vao in self.programs.values():
-            _release(vao)
-            _release(prog)
+            release_object(vao)
+            release_object(prog)
         for _, obj in self.objects.values():
-            _release(obj)
+            release_object(obj)
         for s in self.stores.values():
             _release_all(s)
         self.programs.clear()
@@ -43,7 +43,7 @@ class _Held:
         self.stores.clear()
 
 
-def _release(obj) -> None:
+def release_object(obj) -> None:
     if obj is None:
         return
     try:
@@ -60,7 +60,7 @@ def _release_all(value) -> None:
         for v in value:
             _release_all(v)
     elif hasattr(value, "mglo") and hasattr(value, "release"):
-        _release(value)
+        release_object(value)
 
 
 _lock = threading.RLock()
@@ -125,8 +125,8 @@ def clear_programs() -> None:
         for h in list(_registry.values()):
             if _alive(h.ctx):
                 for prog, vao in h.programs.values():
-                    _release(vao)
-                    _release(prog)
+                    release_object(vao)
+                    release_object(prog)
             h.programs.clear()
             h.groups.clear()
 
@@ -148,8 +148,8 @@ def cached(ctx, key, make, lru: tuple | None = None):
             while len(group) > size:
                 old = h.programs.pop(group.popitem(last=False)[0], None)
                 if old is not None:
-                    _release(old[1])
-                    _release(old[0])
+                    release_object(old[1])
+                    release_object(old[0])
         return got
 
 

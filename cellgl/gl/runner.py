@@ -31,12 +31,12 @@ from cellgl.gl import context, glsl
 from cellgl.gl import path as _path
 from cellgl.gl import dispatch as _d
 from cellgl.gl import registry
-from cellgl.gl.dispatch import (_CHUNK_BYTES, _KIND, _STORAGE_BLOCK_MAX, _STORAGE_BLOCK_MIN, _TEXTURE_ROWS_MAX, CHUNK,
+from cellgl.gl.dispatch import (CHUNK_BYTES, KIND, STORAGE_BLOCK_MAX, STORAGE_BLOCK_MIN, TEXTURE_ROWS_MAX, CHUNK,
                                 LOCAL_SIZE, MAX_TARGETS, SAMPLE_ROW_BITS, SAMPLERS, STORAGE_ROW_BITS, WIDTH,
-                                Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, _kind,
-                                _target_comps, axis_tables, draw_buffers, grid_slabs, pass_defines,
+                                Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, kind_of,
+                                target_comps, axis_tables, draw_buffers, grid_slabs, pass_defines,
                                 read_rows, slots, split_points, tile_samples)
-from cellgl.gl.registry import _release, drop, held, store
+from cellgl.gl.registry import release_object, drop, held, store
 
 __all__ = ["Runner", "ComputeRunner", "FragmentRunner", "runner", "held", "drop", "store", "Pass", "Output",
            "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result", "tile_samples", "set_uniform"]
@@ -112,7 +112,7 @@ class Runner:
         if got is None or got[0] != content:
             obj = make()
             if got is not None:
-                _release(got[1])
+                release_object(got[1])
             objs[key] = got = (content, obj)
         return got[1]
 
@@ -126,7 +126,7 @@ class Runner:
         got = objs.get(("input", unit))
         tex = got[1] if got is not None else None
         if tex is None or tex.height < rows or tex.width != width or tex.components != comps or tex.dtype != dtype:
-            _release(tex)
+            release_object(tex)
             tex = self.ctx.texture((width, max(rows, 8)), comps, dtype=dtype)
             tex.filter = (0x2600, 0x2600)
             objs[("input", unit)] = (None, tex)
@@ -214,7 +214,7 @@ class FragmentRunner(Runner):
     # -- running a pass -------------------------------------------------------------------------
 
     def run(self, p: Pass) -> Result:
-        layout = [(o.name, _kind(o.array), o.array.shape[1]) for o in p.outputs]
+        layout = [(o.name, kind_of(o.array), o.array.shape[1]) for o in p.outputs]
         per = draw_buffers(self.ctx) - (1 if p.flag is not None else 0)
         all_slots = slots(layout)
         draws = [all_slots[i:i + per] for i in range(0, len(all_slots), per)] or [[]]
@@ -242,7 +242,7 @@ class FragmentRunner(Runner):
             for prog, vao, draw_slots in progs:
                 set_uniform(prog, "u_first", first)
                 formats = ([(1, "u4")] if p.flag is not None else [])
-                formats += [(_target_comps(k), _KIND[kind][0]) for _, kind, _, k in draw_slots]
+                formats += [(target_comps(k), KIND[kind][0]) for _, kind, _, k in draw_slots]
                 rows = -(-m // WIDTH)
                 fbo = self._target(formats, rows)
                 fbo.use()
@@ -260,12 +260,12 @@ class FragmentRunner(Runner):
                     att = 1
                 for k_att, (name, kind, c0, k) in enumerate(draw_slots, start=att):
                     dest = by_name[name][first:first + m]
-                    tc = _target_comps(k)
+                    tc = target_comps(k)
                     if c0 == 0 and k == tc == dest.shape[1]:
-                        read_rows(fbo, k_att, dest, _KIND[kind][0])      # straight into the caller's array
+                        read_rows(fbo, k_att, dest, KIND[kind][0])      # straight into the caller's array
                     else:
                         tmp = np.empty((m, tc), dest.dtype)
-                        read_rows(fbo, k_att, tmp, _KIND[kind][0])
+                        read_rows(fbo, k_att, tmp, KIND[kind][0])
                         dest[:, c0:c0 + k] = tmp[:, :k]
             if ok is not None:
                 res.flagged[first:first + m] |= ~ok
@@ -335,7 +335,7 @@ class ComputeRunner(Runner):
         got = objs.get(("storage", binding))
         if got is None or got[1].size < nbytes:
             if got is not None:
-                _release(got[1])
+                release_object(got[1])
             got = objs[("storage", binding)] = (None, self.ctx.buffer(reserve=max(64, nbytes + nbytes // 4)))
         if bind:
             got[1].bind_to_storage_buffer(binding)
@@ -344,21 +344,21 @@ class ComputeRunner(Runner):
     def block_bytes(self) -> int:
         """The bytes one storage block may hold on this context (GL_MAX_SHADER_STORAGE_BLOCK_SIZE),
         within [16 MiB (GL 4.3's guarantee), 128 MiB]."""
-        v = self.ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE") or _STORAGE_BLOCK_MIN
-        return int(min(_STORAGE_BLOCK_MAX, max(_STORAGE_BLOCK_MIN, int(v))))
+        v = self.ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE") or STORAGE_BLOCK_MIN
+        return int(min(STORAGE_BLOCK_MAX, max(STORAGE_BLOCK_MIN, int(v))))
 
     def _step(self, p: Pass, local: int) -> int:
         """Samples per dispatch: the watchdog's tile, within the context's storage block."""
         per = max([o.row_bytes for o in p.outputs] + [4])
         by_bytes = self.block_bytes() // per
-        step = min(tile_samples(p.cost, self.watchdog), by_bytes, local * _d._MAX_GROUPS)
+        step = min(tile_samples(p.cost, self.watchdog), by_bytes, local * _d.MAX_GROUPS)
         return max(local, step // local * local)
 
     def offset_alignment(self) -> int:
         """GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT (256, the most the spec allows, where unknown)."""
         got = self.held.objects.get("ssbo-align")
         if got is None:
-            v = context._get_integer(self.ctx, 0x90DF)
+            v = context.get_integer(self.ctx, 0x90DF)
             got = self.held.objects["ssbo-align"] = (None, int(v) if v and v > 0 else 256)
         return got[1]
 
@@ -383,7 +383,7 @@ class ComputeRunner(Runner):
         align = self.offset_alignment()
         sizes = [o.row_bytes for o in p.outputs]
         step = self._step(p, local)
-        cap = max(step, _CHUNK_BYTES // max(sizes + [4]) // step * step)
+        cap = max(step, CHUNK_BYTES // max(sizes + [4]) // step * step)
         # the flag's region of each piece: a counter (and the list mode's indices), aligned
         stride = -(-4 * (step + 1) // align) * align if p.flag and p.flag.mode == "list" else align
         chunk: list = []
@@ -430,8 +430,8 @@ class ComputeRunner(Runner):
             flag = objs[("storage", p.flag.binding)][1]
             flag.write(b"\0\0\0\0", offset=at)
             flag.bind_to_storage_buffer(p.flag.binding, offset=at, size=stride)
-        if max(groups) > _d._MAX_GROUPS:  # GL drops such a dispatch: the buffers would stay unwritten
-            raise RuntimeError(f"internal error: dispatch of {groups} work groups exceeds {_d._MAX_GROUPS}")
+        if max(groups) > _d.MAX_GROUPS:  # GL drops such a dispatch: the buffers would stay unwritten
+            raise RuntimeError(f"internal error: dispatch of {groups} work groups exceeds {_d.MAX_GROUPS}")
         prog.run(*groups)
 
     def _flush(self, p: Pass, chunk: list, res: Result, stride: int) -> None:
@@ -488,15 +488,15 @@ class ComputeRunner(Runner):
         words = np.ascontiguousarray(pts, dtype=np.float64).reshape(-1).view(np.uint32)
         width = 1 << SAMPLE_ROW_BITS
         rows, tail = divmod(words.size, 4 * width)
-        if rows + 1 > _TEXTURE_ROWS_MAX:
+        if rows + 1 > TEXTURE_ROWS_MAX:
             raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
-                               f"{_TEXTURE_ROWS_MAX} rows of {width}")
+                               f"{TEXTURE_ROWS_MAX} rows of {width}")
         objs = self.held.objects
         got = objs.get("samples")
         tex = got[1] if got is not None else None
         if tex is None or tex.height < rows + 1:
-            _release(tex)
-            tex = self.ctx.texture((width, min(_TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
+            release_object(tex)
+            tex = self.ctx.texture((width, min(TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
             tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
             objs["samples"] = (None, tex)
         if rows:

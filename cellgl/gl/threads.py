@@ -14,9 +14,9 @@ def gl_call(fn):
     threads can use them. No context is made unless ``fn`` asks for one."""
     @functools.wraps(fn)
     def call(*args, **kwargs):
-        from cellgl.gl.context import _section
+        from cellgl.gl.context import section
 
-        with _section():
+        with section():
             return fn(*args, **kwargs)
 
     return call

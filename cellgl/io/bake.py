@@ -34,8 +34,8 @@ __all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHAN
 
 
 from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
-                            MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, _accepted, _check_size, _Encoding,
-                            _encoding, _exr_names, _parse_sets, check_budget, id_colors, parse_channels, parse_size)
+                            MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, accepted_list, check_size, Encoding,
+                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size)
 
 
 # --------------------------------------------------------------------------------------------
@@ -47,7 +47,7 @@ from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX
 class _Output:
     path: Path
     channels: tuple[str, ...]
-    encodings: tuple[_Encoding, ...]
+    encodings: tuple[Encoding, ...]
 
 
 @dataclass(frozen=True)
@@ -74,7 +74,7 @@ def _round16_up(n: int) -> int:
     return max(16, -(-n // 16) * 16)
 
 
-def _plan(width, height, slices, ext, channels, tile, budget, file_bytes) -> _Plan:
+def plan_tiles(width, height, slices, ext, channels, tile, budget, file_bytes) -> _Plan:
     """Tile size so that rendering one tile, and (PNG/EXR) holding one band, fit ``budget``.
 
     Half the budget is for the render of one tile (``RENDER_BYTES_PER_PIXEL`` of working memory
@@ -101,7 +101,7 @@ def _plan(width, height, slices, ext, channels, tile, budget, file_bytes) -> _Pl
     return _Plan(width, height, slices, tw, th)
 
 
-def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tuple[str, ...]]]:
+def output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tuple[str, ...]]]:
     ext = path.suffix.lower()
     if ext == ".exr" or len(channels) == 1:
         return [(path, channels)]
@@ -113,7 +113,7 @@ def _output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tup
 # --------------------------------------------------------------------------------------------
 
 
-class _Progress:
+class Progress:
     """A progress bar on stderr. On a terminal one line redrawn in place (``\\r``, at most four
     times a second); elsewhere (a log, a pipe) plain lines: one saying what started as soon as
     the work begins, one at every tenth of the work, and one at least every
@@ -214,7 +214,7 @@ class _Progress:
             pass
         self.drawn = 0
 
-    def __enter__(self) -> _Progress:
+    def __enter__(self) -> Progress:
         try:
             self.start()
         except BaseException as exc:    # a Ctrl-C right after the first line: still said
@@ -231,14 +231,14 @@ class _Progress:
 # --------------------------------------------------------------------------------------------
 
 
-def _load(recipe_or_name, sets, tileable):
+def load_recipe_sets(recipe_or_name, sets, tileable):
     from cellgl import recipes
 
     if isinstance(recipe_or_name, (str, os.PathLike)):
         recipe = recipes.load_recipe(str(recipe_or_name))
     else:
         recipe = recipe_or_name
-    sets = _parse_sets(sets)
+    sets = parse_sets(sets)
     if sets:
         recipe = recipe.set_from_strings(sets)
     if tileable:
@@ -251,7 +251,7 @@ def _load(recipe_or_name, sets, tileable):
     return recipe
 
 
-def _check_bits(ext: str, bit_depth) -> int:
+def check_bits(ext: str, bit_depth) -> int:
     fmt = FORMATS[ext]
     if bit_depth is None:
         return fmt.default_depth
@@ -260,18 +260,18 @@ def _check_bits(ext: str, bit_depth) -> int:
     except (TypeError, ValueError):
         bits = None
     if bits not in fmt.depths or str(bit_depth).strip() != str(bits):
-        raise BakeError(f"--depth {bit_depth}: {ext} accepts {_accepted(fmt.depths)} bits "
+        raise BakeError(f"--depth {bit_depth}: {ext} accepts {accepted_list(fmt.depths)} bits "
                         f"(8|16|32 overall: .png 8/16, .tif 8/16/32, .exr 16/32, .npy 32)")
     return bits
 
 
-def _check_path(path) -> tuple[Path, str]:
+def check_path(path) -> tuple[Path, str]:
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     if ext not in FORMATS:
         animated = " (an animated .webp/.gif needs --frames N)" if ext in (".webp", ".gif") else ""
         raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
-                        f"accepted {_accepted(FORMATS)}{animated}")
+                        f"accepted {accepted_list(FORMATS)}{animated}")
     _check_name(path)
     try:
         check_output(path)      # the one rule of every command's output (cellgl.io.tempfiles)
@@ -348,29 +348,29 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     cellgl.texture.recipe.RecipeError
         Unknown preset or bad recipe value.
     """
-    path, ext = _check_path(path)
+    path, ext = check_path(path)
     fmt = FORMATS[ext]
     if isinstance(size, str):
         w, h, d = parse_size(size)
         depth_slices = depth_slices if depth_slices is not None else d
     else:
         w, h = (size, size) if isinstance(size, (int, np.integer)) else tuple(size)
-        _check_size(w, h, None, f"size {w}x{h}")
+        check_size(w, h, None, f"size {w}x{h}")
     if depth_slices is not None:
-        _check_size(w, h, depth_slices, f"size {w}x{h}x{depth_slices}")
+        check_size(w, h, depth_slices, f"size {w}x{h}x{depth_slices}")
         if not fmt.volume:
             raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
-    bits = _check_bits(ext, bit_depth)
+    bits = check_bits(ext, bit_depth)
     tile = _check_tile(tile)
     try:
         samples = antialias.check_samples(samples)
     except ValueError as exc:
         raise BakeError(f"--samples: {exc}") from None
     outputs = []
-    for p, chs in _output_paths(path, channels):
-        outputs.append(_Output(p, chs, tuple(_encoding(c, ext, bits) for c in chs)))
+    for p, chs in output_paths(path, channels):
+        outputs.append(_Output(p, chs, tuple(encoding_of(c, ext, bits) for c in chs)))
     if ext == ".exr" and not cio.have_exr():
         raise BakeError("writing .exr files needs the 'OpenEXR' package: "
                         "pip install 'cellgl[exr]'")
@@ -378,7 +378,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
     memory_budget = check_budget(memory_budget)          # as --memory (issue 42 item 12)
-    recipe = _load(recipe_or_name, sets, tileable)
+    recipe = load_recipe_sets(recipe_or_name, sets, tileable)
     if samples != 1 and getattr(recipe, "kind", None) == "pups":
         raise BakeError(f"--samples {samples}: supersampling is for texture recipes; "
                         f"{recipe.name} is a PUPs recipe (accepted: 1)")
@@ -398,7 +398,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     with atomic_paths([out.path for out in outputs]) as tmps:
         for out, tmp in zip(outputs, tmps):
             file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-            plan = dataclasses.replace(_plan(w, h, depth_slices, ext, out.channels, tile, memory_budget,
+            plan = dataclasses.replace(plan_tiles(w, h, depth_slices, ext, out.channels, tile, memory_budget,
                                              file_bytes), samples=samples)
             _bake_one(recipe, out, ext, plan, progress, tmp)
     return [out.path for out in outputs]
@@ -422,7 +422,7 @@ def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
                         f"{human_size(need)}, {human_size(free)} free")
 
 
-def _render_tiles(recipe, out: _Output, plan: _Plan, bar: _Progress) -> Iterator[tuple]:
+def _render_tiles(recipe, out: _Output, plan: _Plan, bar: Progress) -> Iterator[tuple]:
     """Yield (x0, y0, {channel: encoded array}) row-major; arrays (h, w[, S]) or (D, h, w[, S])."""
     from cellgl import recipes
 
@@ -467,7 +467,7 @@ def _meta(recipe, out: _Output, plan: _Plan) -> str:
 
 def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: Path) -> None:
     """Render ``out`` into ``tmp``, its temporary file (see :func:`bake`)."""
-    bar = _Progress(plan.count, f"baking {out.path.name}", progress)
+    bar = Progress(plan.count, f"baking {out.path.name}", progress)
     meta = _meta(recipe, out, plan)
     tiles = _render_tiles(recipe, out, plan, bar)
     with bar:
@@ -494,12 +494,12 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
         raise
 
 
-def _shape(e: _Encoding, plan: _Plan) -> tuple[int, ...]:
+def _shape(e: Encoding, plan: _Plan) -> tuple[int, ...]:
     lead = (plan.slices,) if plan.slices else ()
     return lead + (plan.height, plan.width) + ((e.samples,) if e.samples > 1 else ())
 
 
-def _npy_pieces(tiles, e: _Encoding, plan: _Plan):
+def _npy_pieces(tiles, e: Encoding, plan: _Plan):
     for x0, y0, enc in tiles:
         a = enc[e.channel]
         lead = (slice(None),) if plan.slices else ()
@@ -510,14 +510,14 @@ def _npy_pieces(tiles, e: _Encoding, plan: _Plan):
 def _write_exr(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
     dtypes = {}
     for e in out.encodings:
-        for name in _exr_names(e.channel):
+        for name in exr_names(e.channel):
             dtypes[name] = e.dtype
 
     def split(band):
         res = {}
         for e in out.encodings:
             a = band[e.channel]
-            names = _exr_names(e.channel)
+            names = exr_names(e.channel)
             if len(names) == 1:
                 res[names[0]] = a
             else:

@@ -90,24 +90,24 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
         Bad frame count, fps, extension or channels, or a recipe that does not move. Nothing
         is written.
     """
-    from cellgl.io.bake import _check_path, _load, _Progress, bake
+    from cellgl.io.bake import check_path, load_recipe_sets, Progress, bake
 
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     channels = parse_channels(channels)
     parent = path.parent if str(path.parent) else Path(".")
     if ext not in ANIMATED:
-        _check_path(path)                     # names the accepted extensions
+        check_path(path)                     # names the accepted extensions
     else:
         try:
             check_output(path)                # the one rule of every command's output
         except ValueError as exc:
             raise BakeError(str(exc)) from None
-    recipe = _load(recipe_or_name, sets, tileable)
+    recipe = load_recipe_sets(recipe_or_name, sets, tileable)
     _check(frames, fps, recipe, ext, channels)
     if ext in ANIMATED:
         w, h = _animated_size(path, size, bake_kw.get("memory_budget", DEFAULT_BUDGET))
-    bar = _Progress(frames, f"baking {path.name}", progress, unit="frames")
+    bar = Progress(frames, f"baking {path.name}", progress, unit="frames")
     # the folder is swept by a later bake if this one is killed
     with scratch_dir(path) as tmp, bar:
         if ext in ANIMATED:
@@ -206,11 +206,11 @@ def _frame_rgb(recipe, w: int, h: int, plan) -> np.ndarray:
 def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bake_kw, bar) -> Path:
     """Render and encode one frame at a time, appending each to the file as it comes: memory
     holds one frame, whatever the number of frames."""
-    from cellgl.io.bake import _plan
+    from cellgl.io.bake import plan_tiles
 
     w, h = size
     budget = bake_kw.get("memory_budget", DEFAULT_BUDGET)
-    plan = _plan(w, h, None, ".png", ("color",), bake_kw.get("tile"), budget // 2, 3)
+    plan = plan_tiles(w, h, None, ".png", ("color",), bake_kw.get("tile"), budget // 2, 3)
     duration = int(round(1000.0 / fps))
     ext = path.suffix.lower()
     part = tmp / f"{path.stem}{path.suffix}"

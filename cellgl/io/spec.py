@@ -243,7 +243,3 @@ def exr_names(channel: str) -> tuple[str, ...]:
     """The EXR channel names of a channel's samples."""
     return _EXR_NAMES.get(channel, (channel,))
 
-
-# The old names cellgl/io/bake.py still imports (renamed after the runner/speed merges)
-_Encoding, _accepted, _check_size, _encoding, _exr_names, _parse_sets = (
-    Encoding, accepted_list, check_size, encoding_of, exr_names, parse_sets)

@@ -10,7 +10,7 @@ from cellgl.gl.path import STORAGE_ROW_BITS
 from cellgl.gl.targets import float_target
 
 from cellgl.pups.graph import PupsGraph
-from cellgl.pups.pack import PupsPacked, _stream
+from cellgl.pups.pack import PupsPacked, candidate_stream
 from cellgl.pups.points import PupsMode
 
 # --------------------------------------------------------------------------------------------
@@ -56,7 +56,7 @@ def _cell_stream(packed: PupsPacked):
     kept_pair = rep[keep]
     naxes = np.bincount(kept_pair, minlength=n)
     kept_slot = np.arange(kept_pair.size) - (np.cumsum(naxes) - naxes)[kept_pair]
-    return _stream(offsets, cell_of, np.arange(n) - offsets[cell_of], kept_pair, kept_slot,
+    return candidate_stream(offsets, cell_of, np.arange(n) - offsets[cell_of], kept_pair, kept_slot,
                    (packed.axis_begin[items][rep] + r)[keep], n, packed.positions[items],
                    packed.orient[items], packed.values[items], packed.labels[items],
                    packed.axes_scaled)
@@ -90,7 +90,7 @@ def _check_budget(packed: PupsPacked, group_cells: bool) -> None:
                            "point density or the support size (docs/exactness.md)")
 
 
-def _evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+def evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
     """PUPs over the pixel grid (``shaders/pups.comp`` / ``pups_samples.frag``) on the context's
     runner (:mod:`cellgl.gl.runner`): the candidate grid as records (storage buffers or RGBA32UI
     textures), the values in a float output, the labels (mode ``label``) in an int one. Where the
@@ -166,7 +166,7 @@ def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
 
 
 def _raster_polygons(packed: PupsPacked):
-    """Convex polygons to rasterise for :func:`_evaluate_raster`, in pixel units.
+    """Convex polygons to rasterise for :func:`evaluate_raster`, in pixel units.
 
     Per instance with a non-empty pixel box: the intersection of its axes' half-planes
     ``d.a <= 1`` (``a`` pre-scaled), each pushed out by one pixel, with its pixel box (pixel
@@ -256,8 +256,8 @@ def _raster_pairs_limit(ctx):
     return max(0, min((comps - 8) // 4, attribs - 3))
 
 
-def _raster_applies(graph: PupsGraph, mode: PupsMode) -> bool:
-    """Whether :func:`_evaluate_raster` can evaluate ``graph``: modes ``interpolate`` and
+def raster_applies(graph: PupsGraph, mode: PupsMode) -> bool:
+    """Whether :func:`evaluate_raster` can evaluate ``graph``: modes ``interpolate`` and
     ``weighted_sum``, every axis list within the varying budget (else: compute)."""
     if mode == PupsMode.LABEL:
         return False
@@ -266,7 +266,7 @@ def _raster_applies(graph: PupsGraph, mode: PupsMode) -> bool:
     return (d + 1) // 2 <= _raster_pairs_limit(_context())
 
 
-def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
+def evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: dict):
     """Rasterised evaluation (``method="raster"``): per instance the triangles of a convex
     polygon around its support (:func:`_raster_polygons`), one indexed draw in instance order;
     each vertex carries its instance's position, orientation, value, label and pre-scaled
@@ -274,7 +274,7 @@ def _evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings
     ``shaders/pups_raster.frag`` reads no buffer. It writes ``(w * value, w)`` and additive
     blending sums them into an RGBA32F target in instance order (the compute path's order);
     the division (interpolate) is done here. Modes ``interpolate`` and ``weighted_sum``, at
-    most :func:`_raster_pairs_limit` axis pairs per point (see :func:`_raster_applies`).
+    most :func:`_raster_pairs_limit` axis pairs per point (see :func:`raster_applies`).
     """
     from cellgl.gl.context import program
     from cellgl.gl.runner import store

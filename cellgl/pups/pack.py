@@ -308,4 +308,3 @@ def candidate_stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axi
 
 
 # The old name cellgl/pups/gpu.py still imports (renamed after the runner/speed merges)
-_stream = candidate_stream

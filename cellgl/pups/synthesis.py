@@ -106,13 +106,13 @@ def pups_evaluate(graph: PupsGraph, width, height, *, mode="interpolate", epsilo
         raise ValueError("method='raster' supports modes 'interpolate' and 'weighted_sum'")
     timings = {} if timings is None else timings
     t0 = time.perf_counter()
-    raster = backend == "gpu" and method != "compute" and gpu._raster_applies(graph, mode)
+    raster = backend == "gpu" and method != "compute" and gpu.raster_applies(graph, mode)
     packed = pups_pack(graph, width, height, tile=tile, grid=not raster)
     timings["grid"] = time.perf_counter() - t0
     if raster:
-        vals, labs = gpu._evaluate_raster(packed, mode, epsilon, timings)
+        vals, labs = gpu.evaluate_raster(packed, mode, epsilon, timings)
     elif backend == "gpu":
-        vals, labs = gpu._evaluate_gpu(packed, mode, epsilon, timings)
+        vals, labs = gpu.evaluate_gpu(packed, mode, epsilon, timings)
     else:
         t1 = time.perf_counter()
         value, best, label, wsum = evaluate_reference(packed, packed.width, packed.height,
