@@ -231,61 +231,23 @@ def rows_bake(S, repeats):
                  median_s=statistics.median(ts), best_s=min(ts), first_s=None, gpu_s=None)]
 
 
-_VERT = """#version 330 core
-void main()
-{
-    vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
-    gl_Position = vec4(p * 2.0 - 1.0, 0.0, 1.0);
-}
-"""
-
-#: approximate F1: the 3x3 cells around p, one hashed point in each, no pruning, no exactness
-_COMPACT = """
-uint compact_hash(uvec2 c)
-{
-    uint v = c.x * 0x8da6b343u ^ c.y * 0xd8163841u;
-    v ^= v >> 15;
-    v *= 0x2c1b3c6du;
-    v ^= v >> 12;
-    return v;
-}
-
-float compact_f1(vec2 p)
-{
-    vec2 i = floor(p);
-    vec2 f = p - i;
-    float d = 8.0;
-    for (int y = -1; y <= 1; y++) {
-        for (int x = -1; x <= 1; x++) {
-            uint h = compact_hash(uvec2(ivec2(i) + ivec2(x, y)));
-            vec2 q = vec2(float(x), float(y)) + vec2(float(h & 0xffffu), float(h >> 16)) * (1.0 / 65536.0);
-            vec2 r = q - f;
-            d = min(d, dot(r, r));
-        }
-    }
-    return sqrt(d);
-}
-"""
-
-
-def _frag(body, call):
-    return ("#version 330 core\n" + body + "\nuniform vec2 size;\nout vec4 bench_out;\nvoid main()\n{\n"
-            "    vec2 uv = gl_FragCoord.xy / size;\n" f"    bench_out = vec4(vec3({call}), 1.0);\n}}\n")
-
-
 def rows_snippet(S, repeats):
     from cellgl.export.basis import basis_export
     from cellgl.gl import context
 
     ctx = context.get_context()
     snippet = basis_export("f1", 2, "glsl", distribution="jitter").split("\n\n", 1)[1]
-    shaders = [("compact approximate 3x3 jitter F1 (written here)", _frag(_COMPACT, "compact_f1(uv * 8.0)")),
-               ("exported --basis f1 jitter snippet", _frag(snippet, "cellgl_f1(uv * 8.0)"))]
+    # the comparison and the full-screen pass are bench_snippets.py's (one compact 3x3 F1 for both)
+    from bench_snippets import COMPACT, VERT, frag_shader
+
+    shaders = [("compact approximate 3x3 jitter F1 (bench_snippets.py)",
+                frag_shader(COMPACT, "vec4(vec3(bench_f1(uv * 8.0)), 1.0)")),
+               ("exported --basis f1 jitter snippet", frag_shader(snippet, "vec4(vec3(cellgl_f1(uv * 8.0)), 1.0)"))]
     tex = ctx.texture((S, S), 4)
     fbo = ctx.framebuffer(color_attachments=[tex])
     out = []
     for label, frag in shaders:
-        prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
+        prog = ctx.program(vertex_shader=VERT, fragment_shader=frag)
         prog["size"].value = (float(S), float(S))
         vao = ctx.vertex_array(prog, [])
 

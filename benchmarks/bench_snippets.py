@@ -45,7 +45,7 @@ _REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if _REPO not in sys.path:
     sys.path.insert(0, _REPO)
 
-_VERT = """#version 330 core
+VERT = """#version 330 core
 void main()
 {
     vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2));
@@ -82,7 +82,7 @@ float bench_f1(vec2 p)
 """
 
 
-def _frag(body: str, call: str) -> str:
+def frag_shader(body: str, call: str) -> str:
     return ("#version 330 core\n" + body + "\nuniform vec2 size;\nout vec4 bench_out;\n"
             "void main()\n{\n    vec2 uv = gl_FragCoord.xy / size;\n"
             f"    bench_out = {call};\n}}\n")
@@ -121,7 +121,7 @@ def rows(names: list[str], compare: str | None = None, stub: bool = False):
     def code(text):
         return text.split("\n\n", 1)[1]
 
-    out = [("compact 3x3 jitter F1 (approximate)", _frag(COMPACT, "vec4(vec3(bench_f1(uv * 8.0)), 1.0)"), False)]
+    out = [("compact 3x3 jitter F1 (approximate)", frag_shader(COMPACT, "vec4(vec3(bench_f1(uv * 8.0)), 1.0)"), False)]
     basis = [("basis f1, jitter", "f1", dict(distribution="jitter")),
              ("basis f1, poisson", "f1", {}),
              ("basis f1f2, poisson", "f1f2", {}),
@@ -131,11 +131,11 @@ def rows(names: list[str], compare: str | None = None, stub: bool = False):
             call = {"f1": "vec4(vec3(cellgl_f1(uv * 8.0)), 1.0)",
                     "f1f2": "vec4(cellgl_f1f2(uv * 8.0), 0.0, 1.0)",
                     "edge": "vec4(vec3(cellgl_edge(uv * 8.0)), 1.0)"}[b]
-            out.append((label, _frag(code(basis_export(b, 2, "glsl", **kw)), call), False))
+            out.append((label, frag_shader(code(basis_export(b, 2, "glsl", **kw)), call), False))
             old = os.path.join(compare, f"basis-{b}" + ("-jitter" if kw else "") + ".glsl") if compare else None
             if old and os.path.exists(old):
                 with open(old, encoding="utf-8") as f:
-                    out.append((f"{label} ({old})", _frag(code(f.read()), call), True))
+                    out.append((f"{label} ({old})", frag_shader(code(f.read()), call), True))
     presets = [n for n, _ in list_presets() if not n.startswith("pups-")
                and load_recipe(n).values["cell_color"] != "image"
                and load_recipe(n).values["density_map"] != "image"]
@@ -145,14 +145,14 @@ def rows(names: list[str], compare: str | None = None, stub: bool = False):
         if names and label.split(",")[0] not in names:
             continue
         text = code(snippets.export(r, "glsl"))
-        out.append((label, _frag(text, "cellgl_texture(uv)"), False))
+        out.append((label, frag_shader(text, "cellgl_texture(uv)"), False))
         old = os.path.join(compare, label.replace(", distribution=", "-") + ".glsl") if compare else None
         if old and os.path.exists(old):
             with open(old, encoding="utf-8") as f:
-                out.append((f"{label} ({old})", _frag(code(f.read()), "cellgl_texture(uv)"), True))
+                out.append((f"{label} ({old})", frag_shader(code(f.read()), "cellgl_texture(uv)"), True))
         stubbed = stub_search(text) if stub else None
         if stubbed:
-            out.append((f"{label}, search stubbed", _frag(stubbed, "cellgl_texture(uv)"), False))
+            out.append((f"{label}, search stubbed", frag_shader(stubbed, "cellgl_texture(uv)"), False))
     return out
 
 
@@ -192,7 +192,7 @@ def main(argv=None) -> int:
     progs = []
     table = rows(args.names, args.compare, args.stub_search)
     for label, frag, _ in table:
-        prog = ctx.program(vertex_shader=_VERT, fragment_shader=frag)
+        prog = ctx.program(vertex_shader=VERT, fragment_shader=frag)
         prog["size"].value = (float(S), float(S))
         progs.append((label, prog, ctx.vertex_array(prog, [])))
 
