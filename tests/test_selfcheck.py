@@ -207,3 +207,38 @@ def test_a_context_cellgl_does_not_compute_on_is_not_checked(ctx, fresh):
     assert selfcheck.check(other, "compute") is None
     assert fresh == []                                   # no GPU work for it
     assert other._cellgl_path["notes"]["compute"].startswith("not checked")
+
+
+def test_a_pass_is_recorded_per_driver_and_code(tmp_path):
+    """A process records its pass (the shader cache's folder); the next process on the same
+    driver and code reads it instead of checking again; a corrupt or foreign record is no record;
+    CELLGL_SHADER_CACHE=0 keeps none."""
+    import json
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parent.parent
+    env = {**os.environ, "PYTHONPATH": str(repo), "CELLGL_SHADER_CACHE_DIR": str(tmp_path)}
+    env.pop("CELLGL_SELFCHECK", None)
+
+    def selfcheck_line(**extra):
+        r = subprocess.run([sys.executable, "-m", "cellgl", "info"], cwd=repo, capture_output=True,
+                           text=True, timeout=300, env={**env, **extra})
+        assert r.returncode == 0, r.stderr
+        return next(line for line in r.stdout.splitlines() if line.startswith("selfcheck:"))
+
+    first = selfcheck_line()
+    assert "samples against the NumPy reference" in first, first
+    records = list((tmp_path / "selfcheck").glob("*.json"))
+    assert len(records) == 1
+    rec = json.loads(records[0].read_text())
+    assert rec["key"]["path"] in first and rec["key"]["renderer"]
+    assert "recorded" in selfcheck_line()
+    records[0].write_text("{not json")                    # corrupt: checked again, then recorded
+    assert "samples against the NumPy reference" in selfcheck_line()
+    rec["key"]["version"] = "9.9 another driver"           # a record of another driver: no record
+    records[0].write_text(json.dumps(rec))
+    assert "samples against the NumPy reference" in selfcheck_line()
+    assert "recorded" in selfcheck_line()
+    assert "samples against" in selfcheck_line(CELLGL_SHADER_CACHE="0")

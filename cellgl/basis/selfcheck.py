@@ -9,6 +9,13 @@ at a near tie, every F within :data:`F_RTOL` relative (plus :data:`F_ATOL`). A p
 is replaced by the other one with one warning naming the driver (:mod:`cellgl.gl.path`); when
 both fail, every GPU call raises :class:`cellgl.gl.path.PathError`.
 
+A pass is recorded on disk (:func:`record_path`: in the shader cache's folder,
+:mod:`cellgl.gl.shadercache`), keyed by the driver (GL_VENDOR, GL_RENDERER, GL_VERSION), the path,
+cellgl's version and the bytes of every shader and every module of ``cellgl/gl`` and
+``cellgl/basis``; a later process on the same driver and code skips the check. A failure is never
+recorded; an unreadable or foreign record counts as none. ``CELLGL_SHADER_CACHE=0`` keeps no
+records (every process checks).
+
 Cost: two shader variants, the first of which (3D, Poisson, Euclidean, n = 4, F, delta, id) is
 the one ``cellgl.cellular`` compiles by default, and 288 samples: the GPU takes milliseconds,
 the NumPy reference about 0.2 s (llvmpipe machine, 2 cores), compiling what it has to. ``CELLGL_SELFCHECK=0`` turns it off. `cellgl info` shows what it found.
@@ -18,14 +25,18 @@ Importing :mod:`cellgl.basis` (and so :mod:`cellgl.texture`, :mod:`cellgl.pups`)
 
 from __future__ import annotations
 
+import hashlib
+import json
+import os
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 
 from cellgl.gl import path as _path
 
-__all__ = ["CASES", "F_RTOL", "F_ATOL", "TIE", "check", "compare"]
+__all__ = ["CASES", "F_RTOL", "F_ATOL", "TIE", "check", "compare", "record_key", "record_path"]
 
 #: F may differ from the reference by F_RTOL * |F| + F_ATOL (docs/exactness.md: float32 rounding
 #: of the distance computation; the same bound as tests/test_core.py's comparisons)
@@ -104,6 +115,79 @@ def run_cases() -> tuple[str | None, int]:
     return None, count
 
 
+_code_digest: list = []
+
+
+def _code() -> str:
+    """A digest of what decides the GPU's answers: every shader file and every module of
+    ``cellgl/gl`` and ``cellgl/basis`` (read once per process)."""
+    if not _code_digest:
+        from cellgl.gl import glsl
+
+        h = hashlib.sha256()
+        here = Path(__file__).resolve().parent
+        files = [f for f in sorted(glsl.shader_dir().rglob("*")) if f.is_file()]
+        files += sorted(here.glob("*.py")) + sorted((here.parent / "gl").glob("*.py"))
+        for f in files:
+            h.update(f.name.encode() + b"\0" + f.read_bytes() + b"\0")
+        _code_digest.append(h.hexdigest())
+    return _code_digest[0]
+
+
+def record_key(ctx, path: str) -> dict:
+    """What a recorded pass holds and must match: the driver's strings, the path, cellgl's
+    version, the digest of its GPU code and of the check itself."""
+    from cellgl._version import __version__
+
+    info = ctx.info
+    return {"vendor": info.get("GL_VENDOR"), "renderer": info.get("GL_RENDERER"),
+            "version": info.get("GL_VERSION"), "path": path, "cellgl": __version__,
+            "code": _code(), "check": repr((CASES, F_RTOL, F_ATOL, TIE))}
+
+
+def record_path(key: dict) -> Path | None:
+    """The file a pass of ``key`` is recorded in, or None where records are off (no writable
+    cache folder, or ``CELLGL_SHADER_CACHE=0``)."""
+    from cellgl.gl import shadercache
+
+    folder = shadercache.cache_dir()
+    if folder is None:
+        return None
+    name = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:32]
+    return folder / "selfcheck" / f"{name}.json"
+
+
+def _recorded(key: dict) -> str | None:
+    """When ``key``'s pass was recorded (its record read back and equal), else None."""
+    where = record_path(key)
+    try:
+        rec = json.loads(where.read_text(encoding="utf-8")) if where is not None else None
+    except (OSError, ValueError):            # none yet, unreadable, or not JSON: check again
+        return None
+    if isinstance(rec, dict) and rec.get("key") == key and isinstance(rec.get("passed"), str):
+        return rec["passed"]
+    return None
+
+
+def _record(key: dict) -> None:
+    """Record a pass of ``key`` (written whole or not at all; a folder that refuses it is no
+    error: the next process checks again)."""
+    where = record_path(key)
+    if where is None:
+        return
+    tmp = where.with_name(f".{where.name}.{os.getpid()}.tmp")
+    try:
+        where.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(json.dumps({"key": key, "passed": time.strftime("%Y-%m-%d %H:%M:%S")}),
+                       encoding="utf-8")
+        os.replace(tmp, where)
+    except OSError:
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+
+
 def check(ctx, path: str) -> str | None:
     """The hook of :func:`cellgl.gl.path.on_first_use`: None when ``path`` gives the reference's
     answers on ``ctx``, else what differed. A context cellgl did not make (a window's) or one
@@ -113,12 +197,23 @@ def check(ctx, path: str) -> str | None:
     if not context.computes_on(ctx) or context.get_context() is not ctx:
         _path.note(ctx, path, "not checked (not the context cellgl computes on)")
         return None
+    key = record_key(ctx, path)
+    when = _recorded(key) if gpu_cellular is _GPU_CELLULAR else None    # tests replace it
+    if when is not None:
+        _path.note(ctx, path, f"passed (recorded {when} for this driver and cellgl's GPU code)")
+        return None
     started = time.perf_counter()
     what, count = run_cases()
     if what is None:
         _path.note(ctx, path, f"passed ({len(CASES)} cases, {count} samples against the NumPy "
                               f"reference, {time.perf_counter() - started:.2f} s)")
+        if gpu_cellular is _GPU_CELLULAR:
+            _record(key)
     return what
 
+
+#: the real GPU answer: a record is read or written only for it (a test that replaces
+#: gpu_cellular checks its stand-in every time)
+_GPU_CELLULAR = gpu_cellular
 
 _path.on_first_use(check)
