@@ -157,9 +157,36 @@ def test_a_bad_scheduler_file_is_refused_at_once(tmp_path, case):
              "fifo": "not a regular file"}[case]
     for argv in (["bake", "mountains", "-o", tmp_path / "t.zarr", "--size", "64"],
                  ["sweep", "f1", "--set", "seed=0..1", "-o", tmp_path / "sw", "--size", "16"]):
-        r = _cli(*argv, "--scheduler", f, timeout=60)     # it waited for ever
+        r = _cli(*argv, "--scheduler", f, timeout=60,     # it waited for ever
+                 env={**ENV, "CELLGL_SCHEDULER_WAIT": "1"})
         _refused(r, f"--scheduler {f}", words)
     assert sorted(os.listdir(tmp_path)) == ([] if case == "missing" else ["sched.json"])
+
+
+def test_a_scheduler_file_written_while_waiting_is_taken(tmp_path, monkeypatch):
+    """`dask scheduler --scheduler-file F &` then `cellgl bake ... --scheduler F` at once
+    (docs/scale.md): the file comes a few seconds later, and is waited for, within a bound."""
+    import threading
+
+    pytest.importorskip("distributed")
+    from cellgl.dask import cli as dcli
+    from cellgl.dask.blocks import DaskError
+
+    f = tmp_path / "sched.json"
+    later = threading.Timer(0.5, lambda: f.write_text(json.dumps({"address": "tcp://127.0.0.1:1"})))
+    later.start()
+    try:
+        monkeypatch.setenv("CELLGL_SCHEDULER_WAIT", "30")
+        dcli.check_scheduler(str(f))
+    finally:
+        later.cancel()
+    monkeypatch.setenv("CELLGL_SCHEDULER_WAIT", "0.3")
+    with pytest.raises(DaskError, match=r"no such file.*waited 0.3 s"):
+        dcli.check_scheduler(str(tmp_path / "never.json"))
+    for bad in ("-1", "nan", "4000", "soon"):
+        monkeypatch.setenv("CELLGL_SCHEDULER_WAIT", bad)
+        with pytest.raises(DaskError, match=r"CELLGL_SCHEDULER_WAIT=.*accepted seconds in 0..3600"):
+            dcli.check_scheduler(str(f))
 
 
 # --------------------------------------------------------------------------------------------

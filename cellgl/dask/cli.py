@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import errno
 
 from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
@@ -15,6 +16,26 @@ __all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
 
 #: largest scheduler file read (Dask writes a few hundred bytes)
 MAX_SCHEDULER_FILE = 1 << 20
+#: how long a missing scheduler file is waited for (a scheduler started just before writes it a
+#: few seconds later), in seconds: ``$CELLGL_SCHEDULER_WAIT``, 0..3600, default 20
+SCHEDULER_WAIT_ENV, SCHEDULER_WAIT = "CELLGL_SCHEDULER_WAIT", 20.0
+
+
+def _scheduler_wait() -> float:
+    import math
+    import os
+
+    text = os.environ.get(SCHEDULER_WAIT_ENV, "").strip()
+    if not text:
+        return SCHEDULER_WAIT
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value <= 3600.0:                      # NaN fails too
+        raise DaskError(f"{SCHEDULER_WAIT_ENV}={text!r}: accepted seconds in 0..3600 "
+                        f"(default {SCHEDULER_WAIT:g})")
+    return value
 
 
 def check_scheduler(scheduler: str | None) -> None:
@@ -28,13 +49,24 @@ def check_scheduler(scheduler: str | None) -> None:
 
     if scheduler is None or not str(scheduler).endswith(".json"):
         return
+    import time
+
     what = f"--scheduler {scheduler}"
-    try:
-        st = os.stat(scheduler)
-    except OSError as exc:
-        raise DaskError(f"{what}: {exc.strerror.lower() if exc.strerror else exc}; a scheduler "
-                        "file is written by a running scheduler (dask scheduler --scheduler-file "
-                        "FILE): start it first, or give its address (tcp://host:8786)") from None
+    wait = _scheduler_wait()
+    deadline = time.monotonic() + wait
+    while True:                  # a scheduler started just before (`dask scheduler ... &`) writes
+        try:                     # its file a few seconds later: wait for it, not for ever
+            st = os.stat(scheduler)
+            break
+        except OSError as exc:
+            if exc.errno != errno.ENOENT or time.monotonic() >= deadline:
+                raise DaskError(
+                    f"{what}: {exc.strerror.lower() if exc.strerror else exc}"
+                    f"{f' (waited {wait:g} s for it)' if exc.errno == errno.ENOENT and wait else ''}; "
+                    "a scheduler file is written by a running scheduler (dask scheduler "
+                    "--scheduler-file FILE): start it first, or give its address "
+                    f"(tcp://host:8786); {SCHEDULER_WAIT_ENV} sets the wait") from None
+            time.sleep(0.2)
     if not stat.S_ISREG(st.st_mode):
         raise DaskError(f"{what}: not a regular file; accepted: the JSON file a Dask scheduler "
                         "writes (--scheduler-file)")
