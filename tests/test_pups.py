@@ -239,7 +239,7 @@ def test_raster_matches_compute_and_reference(ctx, periodic, channels, mode):
     # method="raster" (support polygons, flat per-point inputs, additive blending) sums the
     # same float32 weights in the same order as the compute path: the same image, bit for bit
     g = _graph(0.08, seed=5, channels=channels, periodic=periodic)
-    assert G._raster_applies(g, P.PupsMode[mode.upper()])
+    assert G.raster_applies(g, P.PupsMode[mode.upper()])
     r = P.pups_evaluate(g, 170, 130, mode=mode, method="raster")
     c = P.pups_evaluate(g, 170, 130, mode=mode, method="compute")
     n = P.pups_evaluate(g, 170, 130, mode=mode, backend="numpy")
@@ -255,12 +255,12 @@ def test_raster_falls_back_to_compute(ctx, monkeypatch):
     assert P.pups_evaluate(g, 90, 70, method="raster").tobytes() == c.tobytes()
     # more axes than the flat varyings hold: compute, silently
     monkeypatch.setattr(G, "_raster_pairs_limit", lambda ctx: 1)
-    assert not G._raster_applies(g, P.PupsMode.INTERPOLATE)
-    monkeypatch.setattr(G, "_evaluate_raster", None)  # would fail if called
+    assert not G.raster_applies(g, P.PupsMode.INTERPOLATE)
+    monkeypatch.setattr(G, "evaluate_raster", None)  # would fail if called
     assert P.pups_evaluate(g, 90, 70, method="raster").tobytes() == c.tobytes()
     assert P.pups_evaluate(g, 90, 70).tobytes() == c.tobytes()
     # label mode: compute by default, raster refused
-    assert not G._raster_applies(g, P.PupsMode.LABEL)
+    assert not G.raster_applies(g, P.PupsMode.LABEL)
     P.pups_evaluate(g, 90, 70, mode="label")
     with pytest.raises(ValueError, match="method='raster'"):
         P.pups_evaluate(g, 90, 70, mode="label", method="raster")
