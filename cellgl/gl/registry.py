@@ -27,12 +27,14 @@ class _Held:
     objects: dict = field(default_factory=dict)        # key -> (content key, GL object)
     stores: dict = field(default_factory=dict)         # name -> dict a module keeps (float targets)
     runners: dict = field(default_factory=dict)        # path -> Runner
+    #: programs forgotten while the context was current on another thread: released on its next
+    #: :func:`cached` (a program name means nothing, or another program, in another context)
+    retired: list = field(default_factory=list)
 
     def release(self) -> None:
         """Release every GL object held (the context must be current and alive)."""
-        for prog, vao in self.programs.values():
-            release_object(vao)
-            release_object(prog)
+        _release_programs(list(self.programs.values()) + self.retired)
+        self.retired.clear()
         for _, obj in self.objects.values():
             release_object(obj)
         for s in self.stores.values():
@@ -50,6 +52,12 @@ def release_object(obj) -> None:
         obj.release()
     except Exception:  # noqa: BLE001 - already gone with its context
         pass
+
+
+def _release_programs(programs) -> None:
+    for prog, vao in programs:
+        release_object(vao)
+        release_object(prog)
 
 
 def _release_all(value) -> None:
@@ -106,11 +114,13 @@ def held(ctx) -> _Held:
 
 
 def drop(ctx) -> None:
-    """Forget ``ctx``: release what cellgl holds on it (while it is alive) and its entry."""
+    """Forget ``ctx``: release what cellgl holds on it (while it is alive, made current here: it
+    must not be current on another thread) and its entry."""
     with _lock:
         h = _registry.pop(id(ctx), None)
     if h is not None and h.ctx is ctx and _alive(ctx):
-        h.release()
+        with ctx:                                      # its names mean nothing in another context
+            h.release()
 
 
 def store(name: str, ctx) -> dict:
@@ -119,16 +129,20 @@ def store(name: str, ctx) -> dict:
     return held(ctx).stores.setdefault(name, {})
 
 
-def clear_programs() -> None:
-    """Release every context's programs (after editing shader files)."""
+def clear_programs(run_current, last=lambda ctx: False) -> None:
+    """Forget every context's programs (after editing shader files). ``run_current(ctx, fn)``
+    calls ``fn()`` with ``ctx`` current on this thread and returns True, or returns False when it
+    cannot (``ctx`` is current on another thread: its programs are then released on its next
+    :func:`cached`, on its own thread). A program name means nothing, or another program, in any
+    other context. Contexts for which ``last(ctx)`` holds go last (they stay current after)."""
     with _lock:
-        for h in list(_registry.values()):
-            if _alive(h.ctx):
-                for prog, vao in h.programs.values():
-                    release_object(vao)
-                    release_object(prog)
+        for h in sorted(_registry.values(), key=lambda h: bool(last(h.ctx))):
+            programs = list(h.programs.values()) + h.retired
             h.programs.clear()
             h.groups.clear()
+            h.retired = []
+            if _alive(h.ctx) and not run_current(h.ctx, lambda: _release_programs(programs)):
+                h.retired = programs
 
 
 def cached(ctx, key, make, lru: tuple | None = None):
@@ -137,6 +151,9 @@ def cached(ctx, key, make, lru: tuple | None = None):
     released with their vertex arrays)."""
     h = held(ctx)
     with _lock:
+        if h.retired:                                  # the caller made ``ctx`` current
+            _release_programs(h.retired)
+            h.retired.clear()
         got = h.programs.get(key)
         if got is None:
             got = h.programs[key] = make()
