@@ -250,6 +250,17 @@ def _finish(out: dict, exact, shape, p: reference.Params, n: int, outputs) -> Ce
                           **{k: get(k, t) for k, t in tails.items()})
 
 
+def _all_exact(passes) -> np.ndarray:
+    """Where every pass was exact: the one pass's own flags, or the passes' AND folded into a copy
+    of the first (``np.logical_and.reduce`` of a list first stacks it: an (k, N) copy)."""
+    exact = passes[0][1]
+    if len(passes) > 1:
+        exact = exact.copy()
+        for _, ok in passes[1:]:
+            np.logical_and(exact, ok, out=exact)
+    return exact
+
+
 def _gpu_finish(out: dict, outs, positions, p) -> None:
     """Turn the GPU's feature record into the requested feature outputs."""
     if set(outs) & set(_features.OUTPUTS):
@@ -347,7 +358,7 @@ def cellular(points, n=4, *, metric="euclidean", distribution="poisson", density
             _check_coords(pts, pts * p.scale if p.scale != 1.0 else pts)
         out, passes = _passes.gpu_passes(
             lambda o: gpu.search_points(pts, p, n, o, smoothness * p.scale, smooth), outs, len(pts), p, n)
-        exact = passes[0][1] if len(passes) == 1 else np.logical_and.reduce([ok for _, ok in passes])
+        exact = _all_exact(passes)
         _gpu_finish(out, outs, pts, p)
         if not exact.all():
             def where(rows):
@@ -457,7 +468,7 @@ def cellular_grid(shape, origin=None, spacing=1.0, n=4, *, metric="euclidean", d
             lambda o: gpu.search_grid(shape_xyzw, ocell, ofrac, sp4, p, n, o, smoothness * p.scale, smooth),
             outs, total, p, n)
         _gpu_finish(out, outs, positions, p)
-        exact = np.logical_and.reduce([ok for _, ok in passes])
+        exact = _all_exact(passes)
         if not exact.all():
             def where(rows):
                 # sample index -> position, as the shader computes it (cellular.comp, CELL_GRID)

@@ -182,7 +182,7 @@ def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra
         return np.ones(0, bool)
     res = _runner.runner().run(Pass("cellular.comp", "cellular.frag", d, N, inputs, outputs,
                                     setup=setup, flag=_FLAG, cost=_cost(d), group_defines=group))
-    return ~res.flagged
+    return np.logical_not(res.flagged, out=res.flagged)     # in place: no second (N,) array
 
 
 @gl_call
