@@ -241,7 +241,8 @@ class FragmentRunner(Runner):
             ok = self._inputs(inp, first, m)
             for prog, vao, draw_slots in progs:
                 set_uniform(prog, "u_first", first)
-                formats = ([(1, "u4")] if p.flag is not None else [])
+                # the flag (0 or 1) in an R8UI target: a quarter of the bytes of R32UI to read back
+                formats = ([(1, "u1")] if p.flag is not None else [])
                 formats += [(target_comps(k), KIND[kind][0]) for _, kind, _, k in draw_slots]
                 rows = -(-m // WIDTH)
                 fbo = self._target(formats, rows)
@@ -251,12 +252,13 @@ class FragmentRunner(Runner):
                     vao.render(mode=self.ctx.TRIANGLES, vertices=3)
                 att = 0
                 if p.flag is not None:
-                    flags = np.empty((m, 1), np.uint32)
-                    read_rows(fbo, 0, flags, "u4")
+                    flags = np.empty((m, 1), np.uint8)
+                    read_rows(fbo, 0, flags, "u1")
                     if p.flag.mode == "count":
-                        res.cut += int(np.count_nonzero(flags[:, 0] == 0))
+                        res.cut += m - int(np.count_nonzero(flags))
                     else:
-                        res.flagged[first:first + m] |= flags[:, 0] == 0
+                        np.logical_or(res.flagged[first:first + m], flags[:, 0] == 0,
+                                      out=res.flagged[first:first + m])
                     att = 1
                 for k_att, (name, kind, c0, k) in enumerate(draw_slots, start=att):
                     dest = by_name[name][first:first + m]
