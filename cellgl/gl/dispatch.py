@@ -264,25 +264,27 @@ def split_points(pts: np.ndarray, scale: float, dim: int, cell=None, frac=None):
     frac = np.empty((n, dim), np.float32) if frac is None else frac
     ok = None
     sc = np.float64(scale)
+    rows = min(n, _SPLIT_BLOCK)
+    xs, fls = np.empty((rows, dim)), np.empty((rows, dim))     # one pair of temporaries, reused
     for b in range(0, n, _SPLIT_BLOCK):
         e = min(n, b + _SPLIT_BLOCK)
-        x = pts[b:e, :dim] * sc
-        top = np.abs(x).max() if x.size else 0.0
-        if not top < _COORD_LIMIT:                      # also NaN: the careful way
+        x, fl = xs[:e - b], fls[:e - b]
+        np.multiply(pts[b:e, :dim], sc, out=x)
+        if not (x.min() > -_COORD_LIMIT and x.max() < _COORD_LIMIT):   # also NaN: the careful way
             with np.errstate(invalid="ignore"):
                 inside = np.abs(x) < _COORD_LIMIT
             x[~inside] = 0.0
             if ok is None:
                 ok = np.ones(n, bool)
             ok[b:e] = inside.all(axis=1)
-        fl = np.floor(x)
+        np.floor(x, out=fl)
         np.subtract(x, fl, out=x)
         fr = frac[b:e]
         fr[...] = x                                     # float64 -> float32, to nearest
         cl = cell[b:e]
         cl[...] = fl
-        up = fr >= 1.0                                  # a fraction just below 1 rounds up to 1
-        if up.any():
+        if fr.max() >= 1.0:                             # a fraction just below 1 rounds up to 1
+            up = fr >= 1.0
             cl += up
             fr[up] = 0.0
     return cell, frac, ok
