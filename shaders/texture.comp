@@ -29,7 +29,11 @@ uniform vec3 u_filter_width;    // footprint of every point in texture space (0:
 #endif
 layout(std430, binding = 1) writeonly buffer OutColor { vec4 out_color[]; };
 layout(std430, binding = 2) writeonly buffer OutAux { vec4 out_aux[]; };    // height, normal (0..1)
-layout(std430, binding = 3) writeonly buffer OutF { vec4 out_F[]; };        // F1..F4, octave 0
+// F1..F_k of octave 0, k = CELL_TEX_F_COMPS (the last one asked for: F1 alone is one float)
+#ifndef CELL_TEX_F_COMPS
+#define CELL_TEX_F_COMPS 4
+#endif
+layout(std430, binding = 3) writeonly buffer OutF { float out_F[]; };
 layout(std430, binding = 4) writeonly buffer OutGrad { vec4 out_grad[]; };  // dh/du, dh/dv, dh/dz, value
 layout(std430, binding = 5) writeonly buffer OutId { uint out_id[]; };
 
@@ -117,7 +121,17 @@ void main()
     out_aux[i] = aux;
 #endif
 #if CELL_TEX_WANT(4)
-    out_F[i] = c.F;
+    uint f0 = i * uint(CELL_TEX_F_COMPS);
+    out_F[f0] = c.F.x;
+#if CELL_TEX_F_COMPS > 1
+    out_F[f0 + 1u] = c.F.y;
+#endif
+#if CELL_TEX_F_COMPS > 2
+    out_F[f0 + 2u] = c.F.z;
+#endif
+#if CELL_TEX_F_COMPS > 3
+    out_F[f0 + 3u] = c.F.w;
+#endif
 #endif
 #if CELL_TEX_WANT(8)
     c.grad = grad;

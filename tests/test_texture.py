@@ -176,3 +176,16 @@ def test_bad_arguments():
         texture.render(Recipe(), 8, 8, x0=4, tile_w=5)
     with pytest.raises(ValueError, match="backend"):
         texture.render(Recipe(), 8, 8, backend="cuda")
+
+
+@pytest.mark.parametrize("asked", [("F1",), ("F2",), ("F3",), ("F1", "F4"), ("id", "F2")])
+def test_f_channels_asked_alone_are_those_asked_with_all(ctx, asked):
+    """Only F1..F_k up to the last one asked is written and read back (one float a sample for F1
+    alone, on both paths): the values are those of a render asking for all four, bit for bit."""
+    r = RECIPES["everything"]
+    every = texture.render(r, 24, 20, channels=("F1", "F2", "F3", "F4", "id"))
+    got = texture.render(r, 24, 20, channels=asked)
+    assert set(got) == set(asked)
+    for k in asked:
+        assert got[k].shape == (20, 24) and got[k].flags.c_contiguous
+        assert np.array_equal(got[k], every[k]), k

@@ -91,10 +91,13 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     outputs = []
     for name, (binding, comps, bit, chans) in _OUTPUTS.items():
         if mask & bit:
-            # F1..F4: only up to the last one asked for (F1 alone: one float a sample)
+            # F1..F4: only up to the last one asked for (F1 alone: one float a sample), written
+            # so on both paths (texture.comp's CELL_TEX_F_COMPS) and read back without a copy
             k = max(int(c[1]) for c in channels if c in chans) if name == "F" else comps
+            if name == "F":
+                d["CELL_TEX_F_COMPS"] = k
             out[name] = np.empty((count, k), np.uint32 if name == "id" else np.float32)
-            outputs.append(_runner.Output(name, binding, out[name], row=comps))
+            outputs.append(_runner.Output(name, binding, out[name], row=k))
     loops = None
     if probe:
         d["CELL_LOOP_PROBE"] = 1
@@ -156,7 +159,8 @@ def _unpack(channels, out: dict, loops) -> dict:
         elif c == "id":
             res[c] = out["id"][:, 0]
         elif c in ("F1", "F2", "F3", "F4"):
-            res[c] = out["F"][:, int(c[1]) - 1].copy()
+            f = out["F"][:, int(c[1]) - 1]
+            res[c] = f if out["F"].shape[1] == 1 else f.copy()     # F1 alone: the array itself
         elif c == "grad":
             res[c] = out["grad"][:, :3].copy()
         elif c == "value":
