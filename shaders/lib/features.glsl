@@ -222,6 +222,23 @@ float cell_edge_alone(ivec4 cell, vec4 f, CellParams p)
 }
 #endif
 
+#if CELL_SMOOTH == 1
+// Smooth F1 (and its delta, gradient, attribute) from the walk's weights, where it has any
+// (else the search's F1 stays).
+void _cell_smooth_finish(inout CellFeatures o, _CellWalk w)
+{
+    if (w.wsum > 0.0) {
+        float inv = 1.0 / w.wsum;
+        o.smooth_F = w.F1 - w.k * log(w.wsum);
+#if CELL_SMOOTH_EXTRA
+        o.smooth_delta = w.wdelta * inv;
+        o.smooth_grad = w.wgrad * inv;
+        o.smooth_attr = w.wattr * inv;
+#endif
+    }
+}
+#endif
+
 #if CELL_WALKS_APART
 // The features of the sample (cell, f) whose cell_search() result is r, each
 // walk on its own (CELL_WALKS_APART, feature_walk.glsl): what each gives in a
@@ -257,15 +274,7 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
     if (r.exact) {
         _CellWalk w = _cell_walk_start(cell_dims(r.delta[0]), r.id[0], r.F[0], r.loops, smoothness, false, true);
         bool ok = _cell_walk(w, cell, f, p);
-        if (w.wsum > 0.0) {
-            float inv = 1.0 / w.wsum;
-            o.smooth_F = w.F1 - w.k * log(w.wsum);
-#if CELL_SMOOTH_EXTRA
-            o.smooth_delta = w.wdelta * inv;
-            o.smooth_grad = w.wgrad * inv;
-            o.smooth_attr = w.wattr * inv;
-#endif
-        }
+        _cell_smooth_finish(o, w);
         o.walks &= ok ? ~0 : ~CELL_WALK_OK_SMOOTH;
         o.loops = max(o.loops, w.loops);
     }
@@ -318,15 +327,7 @@ CellFeatures cell_features(ivec4 cell, vec4 f, CellParams p, CellResult r, float
 #if CELL_SMOOTH == 2
     _cell_poly_smooth(o, cell, f, p, smoothness);
 #elif CELL_SMOOTH
-    if (w.wsum > 0.0) {
-        float inv = 1.0 / w.wsum;
-        o.smooth_F = w.F1 - w.k * log(w.wsum);
-#if CELL_SMOOTH_EXTRA
-        o.smooth_delta = w.wdelta * inv;
-        o.smooth_grad = w.wgrad * inv;
-        o.smooth_attr = w.wattr * inv;
-#endif
-    }
+    _cell_smooth_finish(o, w);
 #endif
 #if CELL_NSPHERE
     // Around the F1 point: the cell it lies in (unwrapped, as the walk wraps
