@@ -37,6 +37,15 @@ LAYERS = (
 PACKAGE_DIRS = {"cellgl": "cellgl", "viewer": "cellgl.viewer"}
 
 
+
+def import_base(node: ast.ImportFrom, package: str) -> str:
+    """The absolute module a ``from ... import`` names (a relative one resolved against ``package``)."""
+    base = node.module or ""
+    if node.level:
+        anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
+        base = ".".join(anchor + ([base] if base else []))
+    return base
+
 def _modules() -> dict[str, Path]:
     out = {}
     for top, package in PACKAGE_DIRS.items():
@@ -72,10 +81,7 @@ def _imports(module: str) -> set[str]:
         if isinstance(node, ast.Import):
             names = [a.name for a in node.names]
         elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
-                base = ".".join(anchor + ([base] if base else []))
+            base = import_base(node, package)
             # `from pkg import name`: the submodule pkg.name where there is one, else pkg
             names = [f"{base}.{a.name}" if f"{base}.{a.name}" in MODULES else base for a in node.names]
         else:
@@ -183,10 +189,7 @@ def _kind_entry_imports(module: str, graph_layer=None) -> list[str]:
                 if a.asname and kind(a.name):
                     bound[a.asname] = a.name
         elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
-                base = ".".join(anchor + ([base] if base else []))
+            base = import_base(node, package)
             for a in node.names:
                 sub = f"{base}.{a.name}"
                 if sub in MODULES and kind(sub):
@@ -247,10 +250,7 @@ def _underscore_imports(module: str) -> list[str]:
                 if owner(a.name):
                     bound[a.asname or a.name.partition(".")[0]] = a.name if a.asname else a.name.partition(".")[0]
         elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                anchor = package.split(".")[:len(package.split(".")) - node.level + 1]
-                base = ".".join(anchor + ([base] if base else []))
+            base = import_base(node, package)
             for a in node.names:
                 if f"{base}.{a.name}" in MODULES:
                     bound[a.asname or a.name] = f"{base}.{a.name}"
