@@ -83,7 +83,7 @@ def load_recipe(preset_or_path):
     pups = pups_recipe.load_pups_preset(text)
     if pups is not None:
         return pups
-    return cellular.load_recipe(text, known=[n for n, _ in list_presets()])
+    return cellular.load_recipe(text, known=lambda: [n for n, _ in list_presets()])
 
 
 #: what :func:`_json_kind` returns for a file without a ``kind`` key
