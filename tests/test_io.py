@@ -193,8 +193,8 @@ def _umask():
 
 
 def _serial_png(bands, width, height, samples, depth) -> bytes:
-    """The PNG write_png made before it encoded on a thread: one zlib stream (level 6), filter
-    "up", IDAT chunks of about 1 MiB (the bytes a bake must keep)."""
+    """The PNG of one zlib stream compressed on one thread (level 6), filter "up", IDAT chunks of
+    about 1 MiB: what write_png gives for an image of one deflate block."""
     def chunk(tag, data):
         return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
 
@@ -216,39 +216,67 @@ def _serial_png(bands, width, height, samples, depth) -> bytes:
     return b"".join(out) + chunk(b"IDAT", bytes(pending)) + chunk(b"IEND", b"")
 
 
+def _png_pixels(data: bytes, width, height, samples, depth) -> np.ndarray:
+    """The pixels of a PNG of filter "up" on every row (zlib checks the stream's Adler-32)."""
+    at, idat = 8, bytearray()
+    while at < len(data):
+        n, tag = struct.unpack(">I4s", data[at:at + 8])
+        if tag == b"IDAT":
+            idat += data[at + 8:at + 8 + n]
+        at += 12 + n
+    size = depth // 8
+    rows = np.frombuffer(zlib.decompress(bytes(idat)), np.uint8).reshape(height, 1 + width * samples * size)
+    assert np.all(rows[:, 0] == 2)
+    raw = np.cumsum(rows[:, 1:], axis=0, dtype=np.uint8)           # "up", mod 256
+    raw = raw.view(">u2") if depth == 16 else raw
+    return raw.reshape((height, width, samples) if samples > 1 else (height, width))
+
+
 @pytest.mark.parametrize("samples,depth", [(3, 8), (4, 16), (1, 8)])
-def test_png_encodes_on_a_thread_while_the_next_band_is_made(tmp_path, monkeypatch, samples, depth):
-    """Each band is filtered and compressed on a thread of its own while the caller makes the next
-    one (a bake's GPU renders it), and the file has the bytes of the serial encoder."""
+def test_png_encodes_on_threads_while_the_next_band_is_made(tmp_path, monkeypatch, samples, depth):
+    """Each band is filtered on a thread of its own while the caller makes the next one (a bake's
+    GPU renders it) and compressed in deflate blocks on every core: one valid zlib stream of the
+    pixels, whose bytes depend neither on the bands nor on the cores, and those of one serial zlib
+    stream for an image of one block."""
     import threading
 
     rng = np.random.default_rng(samples + depth)
-    W, H, rows = 700, 2000, 300
+    W, H, rows = 1200 if samples == 1 else 700, 2000, 300
     top = 255 if depth == 8 else 65535
     img = rng.integers(0, top + 1, (H, W, samples) if samples > 1 else (H, W)).astype(
         np.uint8 if depth == 8 else np.uint16)
     img[::7] = img[0]                       # some runs, so that the stream has matches across bands
     bands = [img[i:i + rows] for i in range(0, H, rows)]
+    assert H * (1 + W * samples * depth // 8) > 2 * io.DEFLATE_BLOCK     # three blocks or more
     where = []
     real = zlib.compressobj
 
-    class Spy:
-        def __init__(self, level):
-            self.c = real(level)
+    def spy(*args):
+        c = real(*args)
 
-        def compress(self, data):
-            where.append(threading.get_ident())
-            return self.c.compress(data)
+        class Spy:
+            def compress(self, data):
+                where.append(threading.get_ident())
+                return c.compress(data)
 
-        def flush(self):
-            return self.c.flush()
+            def flush(self, mode=zlib.Z_FINISH):
+                return c.flush(mode)
+        return Spy()
 
-    monkeypatch.setattr(io.zlib, "compressobj", Spy)
+    monkeypatch.setattr(io.zlib, "compressobj", spy)
     path = tmp_path / "t.png"
     io.write_png(path, iter(bands), W, H, samples, depth)
-    assert where and threading.get_ident() not in where
-    assert path.read_bytes() == _serial_png(bands, W, H, samples, depth)
+    assert len(where) >= 3 and threading.get_ident() not in where
     monkeypatch.setattr(io.zlib, "compressobj", real)
+    data = path.read_bytes()
+    assert np.array_equal(_png_pixels(data, W, H, samples, depth), img)
+    other = tmp_path / "u.png"                          # other bands, one core: the same bytes
+    monkeypatch.setattr(io, "_cores", lambda: 1)
+    io.write_png(other, iter([img[i:i + 77] for i in range(0, H, 77)]), W, H, samples, depth)
+    assert other.read_bytes() == data
+    small = img[:40]                                    # one block: one serial zlib stream's bytes
+    io.write_png(other, iter([small[:25], small[25:]]), W, 40, samples, depth)
+    assert other.read_bytes() == _serial_png([small], W, 40, samples, depth)
 
     def failing():
         yield bands[0]
