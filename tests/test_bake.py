@@ -414,3 +414,32 @@ def test_gpu_preset_from_cli(ctx, tmp_path, capsys):
         assert im.size == (64, 48) and im.mode == "RGB"
         assert len(np.unique(np.asarray(im).reshape(-1, 3), axis=0)) > 16
     assert os.listdir(tmp_path) == ["flagstone.png"]
+
+
+@pytest.mark.parametrize("bits", [8, 16])
+def test_quantization_in_blocks_is_floor_of_the_clipped_value(bits, monkeypatch):
+    """8/16-bit files hold floor(clip(v, 0, 1) * top + 0.5) in float32, NaN as 0, +inf as top,
+    -inf as 0, whatever the shape or the blocks the quantiser works in (its ties included)."""
+    from cellgl.io import spec
+
+    top = (1 << bits) - 1
+    rng = np.random.default_rng(bits)
+    v = rng.normal(0.5, 0.45, (37, 29, 4)).astype(np.float32)
+    k = np.arange(top + 1, dtype=np.float32)
+    edges = np.concatenate([(k + 0.5) / top, np.nextafter((k + 0.5) / top, np.float32(0)),
+                            [np.nan, np.inf, -np.inf, -0.0, 0.0, 1.0, -1e30, 1e30]]).astype(np.float32)
+    v.reshape(-1)[:min(v.size, edges.size)] = edges[:v.size]
+
+    def want(x):
+        q = np.nan_to_num(np.array(x, np.float32), nan=0.0, posinf=1.0, neginf=0.0)
+        return np.floor(np.clip(q, 0, 1) * np.float32(top) + np.float32(0.5)).astype(
+            np.uint8 if bits == 8 else np.uint16)
+
+    for block in (1, 7, 1 << 16):
+        monkeypatch.setattr(spec, "_QUANTIZE_BLOCK", block)
+        for x in (v, v[..., :3], v[:, :, 0], np.float64(0.3), v[:0]):
+            got = spec._quantize(x, bits)
+            assert got.dtype == want(x).dtype and got.shape == np.shape(x)
+            assert np.array_equal(got, want(x)), (block, np.shape(x))
+    big = np.concatenate([edges, rng.normal(0.5, 0.5, 300).astype(np.float32)])   # every tie
+    assert np.array_equal(spec._quantize(big, bits), want(big))

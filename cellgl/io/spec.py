@@ -164,16 +164,35 @@ def parse_sets(sets: Iterable[str]) -> list[str]:
 # --------------------------------------------------------------------------------------------
 
 
+#: elements quantised at once by :func:`_quantize` (its float32 block stays in the cache)
+_QUANTIZE_BLOCK = 1 << 16
+
+
 def _quantize(v: np.ndarray, bits: int) -> np.ndarray:
-    """floor(clip(v, 0, 1) * top + 0.5) in float32 (NaN 0, +inf 1, -inf 0), in place in one copy."""
-    top = (1 << bits) - 1
-    q = np.array(v, np.float32)               # (a copy: the caller's array is left as it was)
-    np.nan_to_num(q, copy=False, nan=0.0, posinf=1.0, neginf=0.0)
-    np.clip(q, np.float32(0.0), np.float32(1.0), out=q)
-    q *= np.float32(top)
-    q += np.float32(0.5)
-    np.floor(q, out=q)
-    return q.astype(np.uint8 if bits == 8 else np.uint16)
+    """floor(clip(v, 0, 1) * top + 0.5) in float32 (NaN 0, +inf 1, -inf 0), in blocks of rows
+    that stay in the cache: ``fmax``/``fmin`` clip and send NaN to 0 (they return the number of a
+    NaN and a number), and the conversion to the unsigned type truncates, which is floor for the
+    values here (>= 0.5): the bits of clip, nan_to_num and floor, in two passes over memory."""
+    top = np.float32((1 << bits) - 1)
+    a = np.asarray(v)
+    out = np.empty(a.shape, np.uint8 if bits == 8 else np.uint16)
+    if a.ndim == 0 or a.size == 0:
+        a, out2 = a.reshape(1, -1), out.reshape(1, -1)
+    else:
+        out2 = out
+    per_row = max(1, a[0].size)
+    rows = max(1, _QUANTIZE_BLOCK // per_row)
+    buf = np.empty(min(len(a), rows) * per_row, np.float32)
+    for r0 in range(0, len(a), rows):
+        src = a[r0:r0 + rows]
+        q = buf[:src.size].reshape(src.shape)
+        q[...] = src                                # to float32 first, as the caller's values
+        np.fmax(q, np.float32(0.0), out=q)
+        np.fmin(q, np.float32(1.0), out=q)
+        q *= top
+        q += np.float32(0.5)
+        out2[r0:r0 + rows] = q                      # truncation toward 0: floor, q >= 0.5
+    return out
 
 
 def id_colors(ids: np.ndarray) -> np.ndarray:
