@@ -246,6 +246,17 @@ def test_view_modes(viewer, mode, tmp_path):
     _reset(viewer)
 
 
+def test_screenshot_never_creates_a_folder(viewer, tmp_path):
+    """The panel's screenshot (viewer.screenshot) follows the rule of every command's output: a
+    missing folder is named, not created; nothing is left behind."""
+    target = tmp_path / "missing" / "x.png"
+    with pytest.raises(ValueError, match="missing"):
+        viewer.screenshot(str(target))
+    assert not (tmp_path / "missing").exists()
+    path = viewer.screenshot(str(tmp_path / "x.png"))
+    assert os.listdir(tmp_path) == ["x.png"] and os.path.getsize(path) > 1000
+
+
 def test_saved_recipe_bakes_identically(viewer, tmp_path):
     """Edit, save from the viewer, bake with `cellgl bake`: the bake equals the view."""
     from PIL import Image

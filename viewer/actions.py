@@ -99,7 +99,10 @@ def draw(viewer) -> None:
     st.bake_size = max(16, min(16384, st.bake_size))
     imgui.same_line()
     if imgui.button("screenshot"):
-        viewer.screenshot(base + "_screenshot.png")
+        try:
+            viewer.screenshot(base + "_screenshot.png")
+        except Exception as exc:
+            _error(viewer, exc)
     if have_export():
         from cellgl.export.snippets import TARGETS
 

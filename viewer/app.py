@@ -381,10 +381,17 @@ class Viewer:
         return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
 
     def screenshot(self, path: str) -> str:
+        """Save the last frame to ``path`` (its extension picks the format), whole or not at all.
+        The folder must exist, as for every command's output (ValueError naming it otherwise: the
+        panel's button shows it as its status line)."""
         from PIL import Image
 
-        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        Image.fromarray(self.grab()).save(path)
+        from cellgl.io.formats import atomic_path
+        from cellgl.io.tempfiles import check_output
+
+        check_output(path)
+        with atomic_path(path) as tmp:
+            Image.fromarray(self.grab()).save(tmp)
         self.status = f"saved screenshot {path}"
         return path
 
