@@ -18,7 +18,6 @@ same pixels as a visible one.
 from __future__ import annotations
 
 import ctypes
-import os
 import time
 from dataclasses import dataclass, field
 
