@@ -114,13 +114,15 @@ def held(ctx) -> _Held:
 
 
 def drop(ctx) -> None:
-    """Forget ``ctx``: release what cellgl holds on it (while it is alive, made current here: it
-    must not be current on another thread) and its entry."""
+    """Forget ``ctx``: release what cellgl holds on it and its entry. The objects are released
+    with ``ctx`` made current on this thread (a program or buffer name means nothing, or another
+    object, in another context), so it must not be current on another thread; it stays current
+    here after."""
     with _lock:
         h = _registry.pop(id(ctx), None)
     if h is not None and h.ctx is ctx and _alive(ctx):
-        with ctx:                                      # its names mean nothing in another context
-            h.release()
+        ctx.mglo.__enter__()
+        h.release()
 
 
 def store(name: str, ctx) -> dict:

@@ -566,9 +566,8 @@ def load_recipe(preset_or_path, known=None):
     ``"worley-gallery:3"`` for a variant) or a recipe JSON file.
 
     Any recipe kind (PUPs too) loads through :func:`cellgl.recipes.load_recipe`, which passes the
-    names of every preset as ``known`` for the error (a list, or a function returning it: called
-    only for the error, since listing reads every preset file). Raises :class:`RecipeError` naming the known
-    presets if neither matches.
+    names of every preset as ``known`` (a list, or a function returning it, called only for the
+    error: listing reads every file). Raises :class:`RecipeError` naming them if neither matches.
     """
     if isinstance(preset_or_path, Recipe):
         return preset_or_path
