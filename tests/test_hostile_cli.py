@@ -139,9 +139,15 @@ def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
         return 0
 
     monkeypatch.setitem(cli._COMMANDS, "info", (cli._add_info, swallowing))
-    assert cli.main(["info"]) == 130
+    # Ctrl-C as a terminal gives it: a background job (or `nohup ... &`) inherits SIGINT ignored,
+    # and cellgl leaves an ignored signal ignored
+    was = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        assert cli.main(["info"]) == 130
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
+    finally:
+        signal.signal(signal.SIGINT, was)
     assert steps == []
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
     from cellgl import _interrupt
 
     assert _interrupt.pending == []                  # nothing left for a later bake

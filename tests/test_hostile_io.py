@@ -267,12 +267,20 @@ _SLOW = {"npy": ["--size", "4096x2048", "--tile", "64", "--channels", "F1"],
          "tif": ["--size", "256x256x128", "--tile", "16", "--channels", "F1", "--set", "dimension=3"]}
 
 
+def _terminal_signals():
+    """In the child: SIGINT, SIGTERM and SIGHUP as a terminal gives them (under `nohup` or as a
+    background job they are inherited ignored, and cellgl leaves an ignored signal ignored)."""
+    for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, signal.SIG_DFL)
+
+
 def _start_bake(directory: Path, fmt: str) -> subprocess.Popen:
     """A bake that takes seconds, started once its temporary files exist."""
     argv = [sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(directory / f"out.{fmt}"),
             "-q", *_SLOW[fmt]]
     p = subprocess.Popen(argv, cwd=REPO, env=dict(os.environ, PYTHONPATH=str(REPO)),
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=_terminal_signals)
     want = "spool" if fmt == "tif" else "part"
     deadline = time.monotonic() + 120
     while not any(want in n for n in os.listdir(directory)):
