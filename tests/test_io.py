@@ -271,7 +271,7 @@ def test_png_encodes_on_threads_while_the_next_band_is_made(tmp_path, monkeypatc
     data = path.read_bytes()
     assert np.array_equal(_png_pixels(data, W, H, samples, depth), img)
     other = tmp_path / "u.png"                          # other bands, one core: the same bytes
-    monkeypatch.setattr(io, "_cores", lambda: 1)
+    monkeypatch.setattr(io, "usable_cores", lambda: 1)
     io.write_png(other, iter([img[i:i + 77] for i in range(0, H, 77)]), W, H, samples, depth)
     assert other.read_bytes() == data
     small = img[:40]                                    # one block: one serial zlib stream's bytes

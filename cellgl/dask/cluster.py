@@ -32,8 +32,9 @@ def memory_bytes() -> int:
 def default_workers(per_task_bytes: int) -> int:
     """Worker processes for a local cluster: one per core, fewer if memory would not hold
     that many workers each rendering one block of ``per_task_bytes``."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    n = max(1, cores or 1)
+    from cellgl.io.formats import usable_cores
+
+    n = usable_cores()
     mem = memory_bytes()
     if mem:
         n = min(n, max(1, mem // 2 // (WORKER_BASE_BYTES + per_task_bytes)))

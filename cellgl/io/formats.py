@@ -40,6 +40,7 @@ __all__ = [
     "write_npy",
     "have_exr",
     "have_tiff",
+    "usable_cores",
 ]
 
 
@@ -173,7 +174,10 @@ class _Deflate:
             f.cancel()
 
 
-def _cores() -> int:
+def usable_cores() -> int:
+    """The CPUs this process may run on (its affinity where the OS has one; macOS and Windows:
+    every CPU): the width of the PNG's deflate pool, of a local Dask cluster, of the exports'
+    worker pool."""
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except (AttributeError, OSError):
@@ -206,11 +210,11 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     Every row uses PNG filter 2 ("up"), computed with NumPy per band; the stream is compressed
     with zlib level 6 in blocks of :data:`DEFLATE_BLOCK` filtered bytes on every core
     (:class:`_Deflate`: one zlib stream, each block with the 32 KiB before it as its dictionary)
-    and written in ``IDAT`` chunks of 1 MiB (the last one shorter). The filter and the hand-off of a band run on a
-    thread of their own while ``bands`` makes the next one (zlib and NumPy release the GIL): a
-    bake's encoding overlaps its rendering. The bytes depend only on the pixels, never on the
-    bands or the cores; an image of one block (about 1 MiB of rows) is byte for byte
-    ``zlib.compressobj(6)``'s.
+    and written in ``IDAT`` chunks of 1 MiB (the last one shorter). The filter and the hand-off
+    of a band run on a thread of their own while ``bands`` makes the next one (zlib and NumPy
+    release the GIL): a bake's encoding overlaps its rendering. The bytes depend only on the
+    pixels, never on the bands or the cores; an image of one block (about 1 MiB of rows) is byte
+    for byte ``zlib.compressobj(6)``'s.
     """
     from concurrent.futures import ThreadPoolExecutor      # (on first use: not at `import cellgl`)
 
@@ -220,7 +224,7 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
         raise ValueError(f"PNG samples per pixel {samples}: accepted 1, 2, 3, 4")
     dtype = np.dtype(">u2") if bit_depth == 16 else np.dtype(np.uint8)
     row_bytes = width * samples * dtype.itemsize
-    cores = _cores()
+    cores = usable_cores()
     state = {"prev": np.zeros(row_bytes, np.uint8), "pending": bytearray()}
     rows_done = 0
 

@@ -21,7 +21,6 @@ import base64
 import io
 import json
 import math
-import os
 import sys
 import time
 from pathlib import Path
@@ -150,8 +149,9 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     neighbours : bool
         Ship the variants one compile-time choice away from each preset (else only its own).
     jobs : int, optional
-        Processes exporting the variants (default: :func:`default_jobs`, the CPUs available;
-        1: in this process). The files are the same whatever the number.
+        Processes exporting the variants (default: the CPUs available,
+        :func:`cellgl.io.formats.usable_cores`; 1: in this process). The files are the same
+        whatever the number.
 
     Returns
     -------
@@ -239,8 +239,10 @@ class _Exports:
     ``spawn``, so no GL context crosses a fork; the exporter needs none), or here for one."""
 
     def __init__(self, todo, jobs):
+        from cellgl.io.formats import usable_cores
+
         self.items = list(todo)
-        self.jobs = max(1, min(int(jobs or default_jobs()), len(self.items)))
+        self.jobs = max(1, min(int(jobs or usable_cores()), len(self.items)))
         self.pool = None
 
     def __enter__(self):
@@ -256,14 +258,6 @@ class _Exports:
             (self.pool.close if exc[0] is None else self.pool.terminate)()
             self.pool.join()
         return False
-
-
-def default_jobs() -> int:
-    """Worker processes for the exports: the CPUs this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:          # macOS, Windows
-        return os.cpu_count() or 1
 
 
 def _write(path: Path, text: str, atomic_path) -> None:
