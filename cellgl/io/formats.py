@@ -141,7 +141,7 @@ class _Deflate:
         self.queue.append(self.pool.submit(_deflate_block, data, self.tail, self.level, last))
         self.tail = bytes(data[-_WINDOW:])
 
-    def _ready(self, wait: int) -> bytes:
+    def _ready(self, wait: int) -> bytearray:
         """The compressed blocks done, in order (waiting until at most ``wait`` are left)."""
         out = bytearray(b"\x78\x9c" if self.header else b"")
         self.header = False
@@ -149,21 +149,22 @@ class _Deflate:
             data, adler, n = self.queue.popleft().result()
             out += data
             self.adler = _adler32_combine(self.adler, adler, n)
-        return bytes(out)
+        return out
 
-    def compress(self, data) -> bytes:
+    def compress(self, data) -> bytearray:
         """Take ``data``; return what is compressed so far (keeping at most ``in_flight`` blocks)."""
         carry = self.carry
         carry += data.reshape(-1).data if isinstance(data, np.ndarray) else data
         if len(carry) > DEFLATE_BLOCK:       # (strictly: the last block is never empty)
             cut = (len(carry) - 1) // DEFLATE_BLOCK * DEFLATE_BLOCK
-            view = memoryview(bytes(carry[:cut]))
+            with memoryview(carry) as whole:  # one copy of the blocks (released before the del)
+                blocks = memoryview(bytes(whole[:cut]))
             del carry[:cut]
             for k in range(0, cut, DEFLATE_BLOCK):
-                self._submit(view[k:k + DEFLATE_BLOCK], False)
+                self._submit(blocks[k:k + DEFLATE_BLOCK], False)
         return self._ready(self.in_flight)
 
-    def flush(self) -> bytes:
+    def flush(self) -> bytearray:
         """The rest of the stream: the last block, then the Adler-32."""
         self._submit(bytes(self.carry), True)
         self.carry = bytearray()
@@ -278,7 +279,7 @@ def _write_idat(f, pending: bytearray, final: bool) -> None:
     and, ``final``, the rest: the chunks depend only on the stream."""
     done = len(pending) if final else len(pending) // _IDAT_SIZE * _IDAT_SIZE
     for k in range(0, done, _IDAT_SIZE):
-        f.write(_chunk(b"IDAT", bytes(pending[k:min(k + _IDAT_SIZE, done)])))
+        f.write(_chunk(b"IDAT", pending[k:min(k + _IDAT_SIZE, done)]))
     del pending[:done]
 
 
