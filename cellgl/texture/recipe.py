@@ -566,7 +566,7 @@ def load_recipe(preset_or_path, known=None):
     ``"worley-gallery:3"`` for a variant) or a recipe JSON file.
 
     Any recipe kind (PUPs too) loads through :func:`cellgl.recipes.load_recipe`, which passes the
-    names of every preset as ``known`` (a list, or a function returning it, called only for the
+    names of every preset through ``known`` (a function returning them, called only for the
     error: listing reads every file). Raises :class:`RecipeError` naming them if neither matches.
     """
     if isinstance(preset_or_path, Recipe):
@@ -578,7 +578,7 @@ def load_recipe(preset_or_path, known=None):
     name, _, variant = text.partition(":")
     file = preset_dir() / f"{name}.json"
     if not _is_file(file):
-        names = known() if callable(known) else known if known is not None else [n for n, _ in list_presets()]
+        names = known() if known is not None else [n for n, _ in list_presets()]
         shown = repr(text) if len(text) <= 80 else f"{text[:60]!r}... ({len(text)} characters)"
         raise RecipeError(f"unknown preset {shown}{suggest(name, names)}; accepted: a recipe .json "
                           "file or one of: " + ", ".join(names))
