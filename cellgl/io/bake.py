@@ -25,11 +25,13 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl.io import udim as udim_mod
+from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace
 from cellgl import _interrupt
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
 
-__all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
+__all__ = ["bake", "Baked", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
            "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
 
 
@@ -58,6 +60,10 @@ class _Plan:
     tile_w: int
     tile_h: int
     samples: int = 1       #: per pixel (an n x n grid; cellgl.texture.antialias)
+    #: this image is the window [ox, ox + width) x [oy, oy + height) of a larger virtual bake
+    #: (full_w x full_h; a UDIM tile, cellgl.io.udim): pixels rendered as that bake's
+    origin: tuple[int, int] = (0, 0)
+    full: tuple[int, int] | None = None
 
     def tiles(self) -> Iterator[tuple[int, int, int, int]]:
         """(x0, y0, w, h) row-major."""
@@ -295,9 +301,19 @@ def _check_tile(tile) -> int | None:
     return int(tile)
 
 
+class Baked(list):
+    """What :func:`bake` returns: the list of files written, plus ``colorspace``, the colour
+    space of the ``color`` channel in them (``"linear"``: scene-linear Rec.709, ``"srgb"``:
+    sRGB-encoded, None: no colour channel or ``.npy``) and ``udims``, the UDIM tile numbers
+    (empty for a single image)."""
+
+    colorspace: str | None = None
+    udims: tuple[int, ...] = ()
+
+
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
-         memory_budget=DEFAULT_BUDGET) -> list[Path]:
+         memory_budget=DEFAULT_BUDGET, colorspace=None, udim=None, udims=None) -> Baked:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -334,11 +350,20 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     memory_budget : int
         Bytes of working memory the bake aims to stay within beyond the process's baseline
         (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
+    colorspace : {"linear", "srgb"}, optional
+        The colour space of ``color`` in a float file (``.exr``, 32-bit ``.tif``): ``linear``
+        (default; scene-linear Rec.709, tagged) or ``srgb`` (sRGB-encoded, tagged). Integer
+        formats are always sRGB-encoded and refuse it (:mod:`cellgl.io.colour`).
+    udim, udims : str, optional
+        A UDIM set: ``udim="1001-1012"`` (numbers, ranges, comma lists in 1001..1100) or
+        ``udims="4x2"`` (columns x rows from 1001); ``path`` holds the token ``<UDIM>``. Tile
+        ``1001 + u + 10 v`` is the texture over ``[u, u+1) x [v, v+1)``, ``size`` pixels each
+        (:mod:`cellgl.io.udim`); the set lands whole.
 
     Returns
     -------
-    list of pathlib.Path
-        The files written.
+    Baked (a list of pathlib.Path)
+        The files written, with ``.colorspace`` and ``.udims``.
 
     Raises
     ------
@@ -348,6 +373,13 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     cellgl.texture.recipe.RecipeError
         Unknown preset or bad recipe value.
     """
+    template = path
+    try:
+        set_tiles = udim_mod.tiles_for(path, udim, udims)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
+    if set_tiles:
+        path = udim_mod.tile_path(os.fspath(path), set_tiles[0].number)
     path, ext = check_path(path)
     fmt = FORMATS[ext]
     if isinstance(size, str):
@@ -363,14 +395,23 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
     bits = check_bits(ext, bit_depth)
+    try:
+        space = check_colorspace(colorspace, ext, bits)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
+    if set_tiles and depth_slices is not None:
+        raise BakeError(f"--udim with a volume ({w}x{h}x{depth_slices}): UDIM sets are of 2D "
+                        f"images; accepted --size WxH")
     tile = _check_tile(tile)
     try:
         samples = antialias.check_samples(samples)
     except ValueError as exc:
         raise BakeError(f"--samples: {exc}") from None
-    outputs = []
-    for p, chs in output_paths(path, channels):
-        outputs.append(_Output(p, chs, tuple(encoding_of(c, ext, bits) for c in chs)))
+    outputs = []      # (UDIM tile or None, output)
+    for t in set_tiles or [None]:
+        where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)
+        for p, chs in output_paths(Path(where), channels):
+            outputs.append((t, _Output(p, chs, tuple(encoding_of(c, ext, bits, space) for c in chs))))
     if ext == ".exr" and not cio.have_exr():
         raise BakeError("writing .exr files needs the 'OpenEXR' package: "
                         "pip install 'cellgl[exr]'")
@@ -389,19 +430,33 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
                         f"(try --set dimension=3)")
-    for out in outputs:
+    full = None
+    if set_tiles:
+        try:
+            recipe = udim_mod.window_recipe(recipe, set_tiles)
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
+        _, _, cols, rows = udim_mod.bounds(set_tiles)
+        full = (cols * w, rows * h)
+    for _, out in outputs:
         _check_name(out.path)
-    _check_disk(path.parent, w, h, depth_slices, outputs, ext)
+    _check_disk(path.parent, w, h, depth_slices, [out for _, out in outputs], ext)
 
-    # All the files land together, or none does: each is rendered to its temporary file and
-    # they are renamed onto the outputs only once every one is complete.
-    with atomic_paths([out.path for out in outputs]) as tmps:
-        for out, tmp in zip(outputs, tmps):
+    # All the files land together, or none does (a UDIM set too): each is rendered to its
+    # temporary file and they are renamed onto the outputs only once every one is complete.
+    with atomic_paths([out.path for _, out in outputs]) as tmps:
+        for (t, out), tmp in zip(outputs, tmps):
             file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
             plan = dataclasses.replace(plan_tiles(w, h, depth_slices, ext, out.channels, tile, memory_budget,
-                                             file_bytes), samples=samples)
+                                                  file_bytes), samples=samples)
+            if t is not None:
+                plan = dataclasses.replace(plan, full=full,
+                                           origin=udim_mod.tile_origin(t, set_tiles, w, h))
             _bake_one(recipe, out, ext, plan, progress, tmp)
-    return [out.path for out in outputs]
+    done = Baked(out.path for _, out in outputs)
+    done.colorspace = space if "color" in channels else None
+    done.udims = tuple(t.number for t in set_tiles)
+    return done
 
 
 def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
@@ -427,9 +482,11 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: Progress) -> Iterator[
     from cellgl import recipes
 
     extra = {"samples": plan.samples} if plan.samples != 1 else {}
+    full_w, full_h = plan.full or (plan.width, plan.height)
+    ox, oy = plan.origin
     for x0, y0, tw, th in plan.tiles():
-        res = recipes.render(recipe, plan.width, plan.height, channels=out.channels,
-                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices, **extra)
+        res = recipes.render(recipe, full_w, full_h, channels=out.channels,
+                             x0=ox + x0, y0=oy + y0, tile_w=tw, tile_h=th, depth=plan.slices, **extra)
         enc = {}
         for e in out.encodings:
             a = e.encode(res[e.channel])
@@ -461,8 +518,13 @@ def _meta(recipe, out: _Output, plan: _Plan) -> str:
     except Exception:  # noqa: BLE001 - metadata is best effort
         rec = None
     size = [plan.width, plan.height] + ([plan.slices] if plan.slices else [])
-    return json.dumps({"generator": "cellgl", "recipe": rec, "size": size,
-                       "channels": list(out.channels)}, sort_keys=True, default=str)
+    meta = {"generator": "cellgl", "recipe": rec, "size": size, "channels": list(out.channels)}
+    spaces = {e.channel: COLORSPACES[e.colorspace].interop_id for e in out.encodings if e.colorspace}
+    if spaces:
+        meta["colorspace"] = spaces     # data channels: never colour, never listed
+    if plan.full is not None:
+        meta["window"] = {"origin": list(plan.origin), "of": list(plan.full)}   # a UDIM tile
+    return json.dumps(meta, sort_keys=True, default=str)
 
 
 def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: Path) -> None:
@@ -525,8 +587,13 @@ def _write_exr(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
                     res[name] = a[..., i]
         return res
 
+    attributes, chroma = {"cellgl": meta}, None
+    space = next((e.colorspace for e in out.encodings if e.colorspace), None)
+    if space is not None:       # the colour channels' space; the data channels are not colour
+        attributes["oiio:ColorSpace"] = attributes["colorInteropID"] = COLORSPACES[space].interop_id
+        chroma = REC709_CHROMATICITIES
     cio.write_exr(tmp, (split(b) for b in _bands(tiles, plan)), plan.width, plan.height,
-                  dtypes, attributes={"cellgl": meta})
+                  dtypes, attributes=attributes, chromaticities=chroma)
 
 
 def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:

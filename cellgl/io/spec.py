@@ -218,10 +218,17 @@ class Encoding:
     channel: str
     samples: int
     dtype: np.dtype
+    #: the colour space of ``color`` in the file (cellgl.io.colour.COLORSPACES); None for data
+    #: channels (never converted, never tagged) and for .npy
+    colorspace: str | None = None
 
     def encode(self, a: np.ndarray) -> np.ndarray:
         if self.channel == "color":
             a = np.asarray(a)[..., :3]
+            if self.colorspace == "linear":
+                from cellgl.io.colour import srgb_to_linear
+
+                return srgb_to_linear(a).astype(self.dtype)
         if self.channel == "id":
             if self.samples == 3:
                 return id_colors(a)
@@ -231,8 +238,9 @@ class Encoding:
         return np.asarray(a).astype(self.dtype, copy=False)
 
 
-def encoding_of(channel: str, ext: str, bits: int) -> Encoding:
-    """How ``channel`` is stored in a ``ext`` file of ``bits`` bits per sample."""
+def encoding_of(channel: str, ext: str, bits: int, colorspace: str | None = None) -> Encoding:
+    """How ``channel`` is stored in a ``ext`` file of ``bits`` bits per sample; ``colorspace``
+    (already checked: :func:`cellgl.io.colour.check_colorspace`) applies to ``color`` only."""
     fmt = FORMATS[ext]
     samples = CHANNELS[channel]
     if channel == "color":
@@ -248,10 +256,11 @@ def encoding_of(channel: str, ext: str, bits: int) -> Encoding:
             raise BakeError(f"--channels id with {ext}: ids are uint32, so --depth must be 32 "
                             f"(got {bits})")
         return Encoding(channel, 1, np.dtype(np.uint32))
+    space = colorspace if channel == "color" else None
     if fmt.stream == "band" and ext == ".exr":
-        return Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
+        return Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32), space)
     return Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
-                                                32: np.float32}[bits]))
+                                                32: np.float32}[bits]), space)
 
 
 #: EXR channel names per cellgl channel.
