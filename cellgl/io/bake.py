@@ -48,6 +48,7 @@ class _Output:
     path: Path
     channels: tuple[str, ...]
     encodings: tuple[Encoding, ...]
+    size: tuple | None = None   #: (W, H, D or None) of a mip level (cellgl.io.mips); None: the bake's
 
 
 @dataclass(frozen=True)
@@ -297,7 +298,7 @@ def _check_tile(tile) -> int | None:
 
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
-         memory_budget=DEFAULT_BUDGET) -> list[Path]:
+         memory_budget=DEFAULT_BUDGET, mips=False) -> list[Path]:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -334,6 +335,11 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     memory_budget : int
         Bytes of working memory the bake aims to stay within beyond the process's baseline
         (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
+    mips : bool
+        Also write the mip chain, every level rendered from the recipe at its own size
+        (:mod:`cellgl.io.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
+        the file ``<stem>_mip<k><ext>`` beside level 0 (the file without ``mips``, the same
+        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1.
 
     Returns
     -------
@@ -368,9 +374,13 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         samples = antialias.check_samples(samples)
     except ValueError as exc:
         raise BakeError(f"--samples: {exc}") from None
+    if not isinstance(mips, bool):
+        raise BakeError(f"mips={mips!r}: accepted True or False")
     outputs = []
     for p, chs in output_paths(path, channels):
         outputs.append(_Output(p, chs, tuple(encoding_of(c, ext, bits) for c in chs)))
+    if mips:
+        outputs = _mip_outputs(outputs, w, h, depth_slices)
     if ext == ".exr" and not cio.have_exr():
         raise BakeError("writing .exr files needs the 'OpenEXR' package: "
                         "pip install 'cellgl[exr]'")
@@ -398,10 +408,24 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     with atomic_paths([out.path for out in outputs]) as tmps:
         for out, tmp in zip(outputs, tmps):
             file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-            plan = dataclasses.replace(plan_tiles(w, h, depth_slices, ext, out.channels, tile, memory_budget,
+            ow, oh, od = out.size or (w, h, depth_slices)
+            plan = dataclasses.replace(plan_tiles(ow, oh, od, ext, out.channels, tile, memory_budget,
                                              file_bytes), samples=samples)
             _bake_one(recipe, out, ext, plan, progress, tmp)
     return [out.path for out in outputs]
+
+
+def _mip_outputs(outputs: list[_Output], w: int, h: int, d: int | None) -> list[_Output]:
+    """``outputs`` (level 0) followed by every further level's numbered file, per output."""
+    from cellgl.io.mips import level_path, mip_sizes
+
+    sizes = mip_sizes(w, h, d)
+    out = list(outputs)
+    for o in outputs:
+        for k, size in enumerate(sizes[1:], 1):
+            out.append(dataclasses.replace(o, path=level_path(o.path, k),
+                                           size=(size[0], size[1], size[2] if d is not None else None)))
+    return out
 
 
 def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
@@ -410,7 +434,8 @@ def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
         return
     need = 0
     for out in outputs:
-        px = w * h * (d or 1)
+        ow, oh, od = out.size or (w, h, d)
+        px = ow * oh * (od or 1)
         per = sum(e.samples * e.dtype.itemsize for e in out.encodings)
         need += px * per * (2 if (ext != ".npy" and d) else (1 if ext == ".npy" else 0))
     try:

@@ -64,6 +64,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
                    help="frames per second of an animated .webp/.gif (with --frames; default 24)")
+    p.add_argument("--mips", action="store_true",
+                   help="also write the mip chain, each level rendered at its own size (never "
+                        "downsampled): in the file for .dds/.ktx2, else FILE_mip1.png .. (1x1)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -86,6 +89,9 @@ def run_cli(args: argparse.Namespace) -> int:
     if args.fps is not None and (args.frames is None or ext not in (".webp", ".gif")):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
+    if getattr(args, "mips", False) and (args.frames is not None or ext == ".zarr"):
+        raise BakeError(f"--mips: for a single bake (.png, .exr, .tif, .npy: numbered files; "
+                        f".dds, .ktx2: in the file); not with {'--frames' if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
@@ -106,7 +112,7 @@ def run_cli(args: argparse.Namespace) -> int:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
-                     progress=not args.quiet, memory_budget=budget)
+                     progress=not args.quiet, memory_budget=budget, mips=args.mips)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None
