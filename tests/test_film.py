@@ -229,3 +229,93 @@ def test_gpu_udim_tile_1001_is_the_plain_bake_and_edges_join(ctx, tmp_path):
     assert seam.mean() < 3 * np.delete(inner, 47, axis=1).mean()
     inner_v = np.abs(np.diff(grid, axis=0))
     assert inner_v[47].mean() < 3 * np.delete(inner_v, 47, axis=0).mean()
+
+
+# --------------------------------------------------------------------------------------------
+# tiled, mip-mapped textures (.tx, --tiled --mips)
+# --------------------------------------------------------------------------------------------
+
+
+def _oiio_levels(path):
+    """(spec, [level arrays]) as OpenImageIO reads a file's MIP levels."""
+    oiio = pytest.importorskip("OpenImageIO")
+    inp = oiio.ImageInput.open(str(path))
+    assert inp is not None, oiio.geterror()
+    try:
+        spec0, levels, k = inp.spec(), [], 0
+        while inp.seek_subimage(0, k):
+            s = inp.spec()
+            assert (s.tile_width, s.tile_height) == (64, 64)
+            levels.append(inp.read_image(s.format.basetype == oiio.HALF and "half" or "float"))
+            k += 1
+        assert not inp.seek_subimage(1, 0)              # one image, its levels
+        return spec0, levels
+    finally:
+        inp.close()
+
+
+@pytest.mark.parametrize("name, kw", [("t.tx", {}), ("t.tif", {"tiled": True, "mips": True}),
+                                      ("t.exr", {"tiled": True, "mips": True, "bit_depth": 16})])
+def test_gpu_tiled_mips_are_renders_at_each_size(ctx, tmp_path, name, kw):
+    """Every level OpenImageIO reads is cellgl.render at that level's size (encoded: colour
+    scene-linear), 64 x 64 tiles, the chain down to 1 x 1 rounding up."""
+    pytest.importorskip("tifffile")
+    pytest.importorskip("OpenEXR")
+    from cellgl import recipes
+    from cellgl.io.mips import mip_sizes
+
+    got = B.bake("flagstone", tmp_path / name, size=(80, 48), progress=False, **kw)
+    spec, levels = _oiio_levels(got[0])
+    assert got.colorspace == "linear"
+    assert [lv.shape[:2] for lv in levels] == [(h, w) for w, h in mip_sizes(80, 48)]
+    assert spec.get_string_attribute("textureformat") == "Plain Texture"
+    half = name.endswith(".exr")
+    for (w, h), lv in zip(mip_sizes(80, 48), levels):
+        want = srgb_to_linear(recipes.render("flagstone", w, h)["color"][..., :3])
+        want = want.astype(np.float16 if half else np.float32)
+        assert np.array_equal(lv[..., :3].astype(want.dtype), want), (w, h)
+    if half:
+        assert spec.get_string_attribute("oiio:ColorSpace") == "lin_rec709_scene"
+
+
+def test_gpu_tiled_exr_level0_equals_the_scanline_bake(ctx, tmp_path):
+    pytest.importorskip("OpenEXR")
+    t = B.bake("flagstone", tmp_path / "t.exr", size=(70, 40), tiled=True, colorspace="srgb",
+               channels="color,height", progress=False)
+    s = B.bake("flagstone", tmp_path / "s.exr", size=(70, 40), colorspace="srgb",
+               channels="color,height", progress=False)
+    spec, levels = _oiio_levels(t[0])
+    assert len(levels) == 1 and list(spec.channelnames) == ["R", "G", "B", "height"]
+    assert spec.get_string_attribute("oiio:ColorSpace") == "srgb_rec709_scene"
+    ref = _read(s[0])
+    assert np.array_equal(levels[0], np.stack([ref[c] for c in ("R", "G", "B", "height")], -1))
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["-o", "a.png", "--tiled"], "--tiled with .png: accepted for .exr, .tif, .tiff, .tx"),
+    (["-o", "a.tif", "--tiled", "--size", "8x8x4"], "tiled textures are 2D"),
+    (["-o", "a.tx", "--size", "8x8x4"], "volumes are written to .npy or .tif only"),
+    (["-o", "a.exr", "--tiled", "--channels", "color,id"], "a tiled EXR here holds float channels only"),
+])
+def test_tiled_errors(fake, tmp_path, capsys, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["bake", "fake", *argv]) == 2
+    assert message in capsys.readouterr().err
+    assert not fake and not list(tmp_path.iterdir())
+
+
+def test_gpu_udim_tx_set(ctx, tmp_path):
+    """A UDIM set of .tx files: every tile mip-mapped, level k of each tile its crop of the
+    set's bake at level k's size (power-of-two sides: the crops line up)."""
+    pytest.importorskip("tifffile")
+    from cellgl.io import mips
+
+    got = B.bake("flagstone", tmp_path / "w.<UDIM>.tx", size=32, udims="2x1", colorspace="srgb",
+                 progress=False)
+    assert [p.name for p in got] == ["w.1001.tx", "w.1002.tx"]
+    whole = U.window_recipe(B.load_recipe_sets("flagstone", (), None), U.parse_udims("2x1"))
+    for k in range(mips.level_count(32, 32)):
+        lv = mips.render_level(whole, 64, 32, k)["color"][..., :3]
+        s = 32 >> k
+        for i, p in enumerate(got):
+            assert np.array_equal(_oiio_levels(p)[1][k], lv[:, i * s:(i + 1) * s]), (p.name, k)

@@ -16,8 +16,6 @@ import os
 import shutil
 import sys
 import dataclasses
-import threading
-import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,9 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl.io import texfile
 from cellgl.io import udim as udim_mod
 from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace
-from cellgl import _interrupt
+from cellgl.io.progress import Progress  # noqa: F401 - bake's progress bar, also cellgl.io.bake.Progress
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
 
@@ -50,6 +49,7 @@ class _Output:
     path: Path
     channels: tuple[str, ...]
     encodings: tuple[Encoding, ...]
+    size: tuple | None = None   #: (W, H, D or None) of a mip level (cellgl.io.mips); None: the bake's
 
 
 @dataclass(frozen=True)
@@ -112,124 +112,6 @@ def output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tupl
     if ext == ".exr" or len(channels) == 1:
         return [(path, channels)]
     return [(path.with_name(f"{path.stem}_{c}{path.suffix}"), (c,)) for c in channels]
-
-
-# --------------------------------------------------------------------------------------------
-# progress
-# --------------------------------------------------------------------------------------------
-
-
-class Progress:
-    """A progress bar on stderr. On a terminal one line redrawn in place (``\\r``, at most four
-    times a second); elsewhere (a log, a pipe) plain lines: one saying what started as soon as
-    the work begins, one at every tenth of the work, and one at least every
-    :data:`LOG_INTERVAL` seconds between them (from a timer thread, so a slow tile still shows
-    the bake is alive); nothing when not ``enabled`` (``--quiet``) or for a single step. Used
-    as ``with bar:`` the line is ended on leaving, with "interrupted" after Ctrl-C or a
-    terminating signal."""
-
-    #: most seconds between two lines in a log (stderr not a terminal)
-    LOG_INTERVAL = 5.0
-
-    def __init__(self, total: int, label: str, enabled: bool, stream=None, unit: str = "tiles"):
-        self.total, self.label, self.done, self.unit = total, label, 0, unit
-        self.enabled = enabled and total > 1
-        self.stream = stream or sys.stderr
-        try:
-            self.tty = self.stream.isatty()
-        except (AttributeError, ValueError, OSError):
-            self.tty = False
-        self.t0 = time.perf_counter()
-        self.last = -1.0
-        self.drawn = 0    # 0 nothing written, 1 a line in progress (terminal), 2 lines ended
-        self._lock = threading.Lock()
-        self._stop: threading.Event | None = None
-        self._logged = self.t0      # when the last log line was written
-
-    def _text(self) -> str:
-        secs = time.perf_counter() - self.t0
-        if not self.done:
-            return f"0/{self.total} {self.unit}, {secs:.0f} s"
-        eta = secs / self.done * (self.total - self.done)
-        return f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s"
-
-    def _log(self, text: str) -> None:
-        """One plain line (stderr not a terminal); never raises (a closed log ends the lines)."""
-        with self._lock:
-            self.drawn = 2      # first: a signal that lands in the write still ends the lines
-            self._logged = time.perf_counter()
-            try:
-                self.stream.write(f"{self.label}: {text}\n")
-                self.stream.flush()
-            except (OSError, ValueError):
-                return
-
-    def start(self) -> None:
-        """Say what started (stderr not a terminal) and keep a line coming every
-        :data:`LOG_INTERVAL` seconds until :meth:`close`."""
-        if not self.enabled or self.tty or self._stop is not None:
-            return
-        self._log(f"started, {self.total} {self.unit}")
-        self._stop = threading.Event()
-        threading.Thread(target=self._heartbeat, args=(self._stop,), daemon=True,
-                         name="cellgl-progress").start()
-
-    def _heartbeat(self, stop: threading.Event) -> None:
-        while not stop.wait(self.LOG_INTERVAL / 4):
-            if time.perf_counter() - self._logged >= self.LOG_INTERVAL and not stop.is_set():
-                self._log(self._text())
-
-    def step(self) -> None:
-        _interrupt.check()      # a Ctrl-C the first raise of which was swallowed
-        self.done += 1
-        if not self.enabled:
-            return
-        if self.tty:
-            now = time.perf_counter()
-            if self.done < self.total and now - self.last < 0.25:
-                return  # redraw at most four times a second, and always at the end
-            self.last = now
-            width = 30
-            fill = width * self.done // self.total
-            self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] {self._text()} ")
-            self.drawn = 1
-        else:
-            if 10 * self.done // self.total == 10 * (self.done - 1) // self.total:
-                return  # a line at every tenth, and at the end (the timer thread in between)
-            self._log(self._text())
-            return
-        self.stream.flush()
-
-    def close(self, exc: BaseException | None = None) -> None:
-        """End the line; say "interrupted" if ``exc`` is a Ctrl-C or a terminating signal."""
-        if self._stop is not None:
-            self._stop.set()
-            self._stop = None
-        if not self.enabled or not self.drawn:
-            return
-        # (a signal during an import can reach here as another exception; it is still pending)
-        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated" \
-            or bool(_interrupt.pending)
-        try:
-            if self.drawn == 1:
-                self.stream.write(" interrupted\n" if stopped else "\n")
-            elif stopped:
-                self._log(f"interrupted at {self.done}/{self.total} {self.unit}")
-            self.stream.flush()
-        except (OSError, ValueError):
-            pass
-        self.drawn = 0
-
-    def __enter__(self) -> Progress:
-        try:
-            self.start()
-        except BaseException as exc:    # a Ctrl-C right after the first line: still said
-            self.close(exc)
-            raise
-        return self
-
-    def __exit__(self, kind, exc, tb) -> None:
-        self.close(exc)
 
 
 # --------------------------------------------------------------------------------------------
@@ -313,7 +195,8 @@ class Baked(list):
 
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
-         memory_budget=DEFAULT_BUDGET, colorspace=None, udim=None, udims=None) -> Baked:
+         memory_budget=DEFAULT_BUDGET, mips=False, colorspace=None, udim=None, udims=None,
+         tiled=False) -> Baked:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -350,6 +233,11 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     memory_budget : int
         Bytes of working memory the bake aims to stay within beyond the process's baseline
         (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
+    mips : bool
+        Also write the mip chain, every level rendered from the recipe at its own size
+        (:mod:`cellgl.io.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
+        the file ``<stem>_mip<k><ext>`` beside level 0 (the file without ``mips``, the same
+        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1.
     colorspace : {"linear", "srgb"}, optional
         The colour space of ``color`` in a float file (``.exr``, 32-bit ``.tif``): ``linear``
         (default; scene-linear Rec.709, tagged) or ``srgb`` (sRGB-encoded, tagged). Integer
@@ -359,6 +247,10 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         ``udims="4x2"`` (columns x rows from 1001); ``path`` holds the token ``<UDIM>``. Tile
         ``1001 + u + 10 v`` is the texture over ``[u, u+1) x [v, v+1)``, ``size`` pixels each
         (:mod:`cellgl.io.udim`); the set lands whole.
+    tiled : bool
+        Write a tiled file (64 x 64 tiles) of an ``.exr`` or ``.tif``; with ``mips`` its levels
+        go inside it (OpenEXR MIPMAP_LEVELS, TIFF reduced-resolution pages) instead of numbered
+        files. A ``.tx`` is always tiled and mip-mapped (:mod:`cellgl.io.texfile`).
 
     Returns
     -------
@@ -407,15 +299,19 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         samples = antialias.check_samples(samples)
     except ValueError as exc:
         raise BakeError(f"--samples: {exc}") from None
+    if not isinstance(mips, bool) or not isinstance(tiled, bool):
+        raise BakeError(f"mips={mips!r}, tiled={tiled!r}: accepted True or False")
+    tiled, mips = texfile.check_tiled(ext, tiled, mips, channels, depth_slices)
     outputs = []      # (UDIM tile or None, output)
     for t in set_tiles or [None]:
         where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)
-        for p, chs in output_paths(Path(where), channels):
-            outputs.append((t, _Output(p, chs, tuple(encoding_of(c, ext, bits, space) for c in chs))))
+        level0 = [_Output(p, chs, tuple(encoding_of(c, ext, bits, space) for c in chs))
+                  for p, chs in output_paths(Path(where), channels)]
+        outputs += [(t, o) for o in (_mip_outputs(level0, w, h, depth_slices) if mips and not tiled else level0)]
     if ext == ".exr" and not cio.have_exr():
         raise BakeError("writing .exr files needs the 'OpenEXR' package: "
                         "pip install 'cellgl[exr]'")
-    if ext in (".tif", ".tiff") and not cio.have_tiff():
+    if ext in (".tif", ".tiff", ".tx") and not cio.have_tiff():
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
     memory_budget = check_budget(memory_budget)          # as --memory (issue 42 item 12)
@@ -430,14 +326,11 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
                         f"(try --set dimension=3)")
-    full = None
     if set_tiles:
         try:
             recipe = udim_mod.window_recipe(recipe, set_tiles)
         except ValueError as exc:
             raise BakeError(str(exc)) from None
-        _, _, cols, rows = udim_mod.bounds(set_tiles)
-        full = (cols * w, rows * h)
     for _, out in outputs:
         _check_name(out.path)
     _check_disk(path.parent, w, h, depth_slices, [out for _, out in outputs], ext)
@@ -447,16 +340,37 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     with atomic_paths([out.path for _, out in outputs]) as tmps:
         for (t, out), tmp in zip(outputs, tmps):
             file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-            plan = dataclasses.replace(plan_tiles(w, h, depth_slices, ext, out.channels, tile, memory_budget,
+            ow, oh, od = out.size or (w, h, depth_slices)
+            if tiled:
+                window = None if t is None else (t, set_tiles)
+                texfile.write_texture(tmp, recipe, out, ext, (w, h), mips=mips, samples=samples,
+                                      window=window, meta=_meta(recipe, out, _Plan(w, h, None, w, h)),
+                                      progress=progress)
+                continue
+            plan = dataclasses.replace(plan_tiles(ow, oh, od, ext, out.channels, tile, memory_budget,
                                                   file_bytes), samples=samples)
             if t is not None:
-                plan = dataclasses.replace(plan, full=full,
-                                           origin=udim_mod.tile_origin(t, set_tiles, w, h))
+                _, _, cols, rows = udim_mod.bounds(set_tiles)
+                plan = dataclasses.replace(plan, full=(cols * ow, rows * oh),
+                                           origin=udim_mod.tile_origin(t, set_tiles, ow, oh))
             _bake_one(recipe, out, ext, plan, progress, tmp)
     done = Baked(out.path for _, out in outputs)
     done.colorspace = space if "color" in channels else None
     done.udims = tuple(t.number for t in set_tiles)
     return done
+
+
+def _mip_outputs(outputs: list[_Output], w: int, h: int, d: int | None) -> list[_Output]:
+    """``outputs`` (level 0) followed by every further level's numbered file, per output."""
+    from cellgl.io.mips import level_path, mip_sizes
+
+    sizes = mip_sizes(w, h, d)
+    out = list(outputs)
+    for o in outputs:
+        for k, size in enumerate(sizes[1:], 1):
+            out.append(dataclasses.replace(o, path=level_path(o.path, k),
+                                           size=(size[0], size[1], size[2] if d is not None else None)))
+    return out
 
 
 def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
@@ -465,7 +379,8 @@ def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
         return
     need = 0
     for out in outputs:
-        px = w * h * (d or 1)
+        ow, oh, od = out.size or (w, h, d)
+        px = ow * oh * (od or 1)
         per = sum(e.samples * e.dtype.itemsize for e in out.encodings)
         need += px * per * (2 if (ext != ".npy" and d) else (1 if ext == ".npy" else 0))
     try:

@@ -74,6 +74,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "wall.<UDIM>.exr); tile 1001+u+10v is uv [u,u+1)x[v,v+1), --size each")
     p.add_argument("--udims", default=None, metavar="UxV",
                    help="a UDIM set of U columns by V rows from 1001 (as --udim)")
+    p.add_argument("--mips", action="store_true",
+                   help="also write the mip chain, each level rendered at its own size (never "
+                        "downsampled): in the file for .dds/.ktx2, else FILE_mip1.png .. (1x1)")
+    p.add_argument("--tiled", action="store_true",
+                   help="a tiled .exr/.tif (64x64 tiles); with --mips the levels go inside it, as "
+                        "in a .tx (always tiled and mip-mapped)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -96,10 +102,14 @@ def run_cli(args: argparse.Namespace) -> int:
     if args.fps is not None and (args.frames is None or ext not in (".webp", ".gif")):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
-    for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace)):
+    for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
+                        ("--tiled", args.tiled or None)):
         if value is not None and (args.frames is not None or ext == ".zarr"):
             raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
                             f"not with --frames or a .zarr output")
+    if getattr(args, "mips", False) and (args.frames is not None or ext == ".zarr"):
+        raise BakeError(f"--mips: for a single bake (.png, .exr, .tif, .npy: numbered files; "
+                        f".dds, .ktx2: in the file); not with {'--frames' if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
@@ -120,8 +130,8 @@ def run_cli(args: argparse.Namespace) -> int:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
-                     progress=not args.quiet, memory_budget=budget, colorspace=args.colorspace,
-                     udim=args.udim, udims=args.udims)
+                     progress=not args.quiet, memory_budget=budget, mips=args.mips,
+                     colorspace=args.colorspace, udim=args.udim, udims=args.udims, tiled=args.tiled)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None

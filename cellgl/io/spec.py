@@ -42,6 +42,8 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
+    # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.texfile)
+    ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
 }
 
 MAX_SIDE = 65536          #: largest width or height
@@ -252,7 +254,7 @@ def encoding_of(channel: str, ext: str, bits: int, colorspace: str | None = None
                                 f"colour preview, so --depth must be 8 (got {bits}); for raw "
                                 f"uint32 ids use .tif, .exr or .npy")
             return Encoding(channel, 3, np.dtype(np.uint8))
-        if ext in (".tif", ".tiff") and bits != 32:
+        if ext in (".tif", ".tiff", ".tx") and bits != 32:
             raise BakeError(f"--channels id with {ext}: ids are uint32, so --depth must be 32 "
                             f"(got {bits})")
         return Encoding(channel, 1, np.dtype(np.uint32))
