@@ -30,6 +30,7 @@ from cellgl.io.spec import BakeError, exr_names
 __all__ = ["TILE", "check_tiled", "write_texture", "TEXTURE_EXTS"]
 
 TILE = 64                                #: tile side of every tiled texture file
+_RENDER_TILE = 2048                      #: largest side one render call gets (as the bake's MAX_TILE)
 TEXTURE_EXTS = (".exr", ".tif", ".tiff", ".tx")
 #: an EXR attribute OpenImageIO 3.0 does not suppress, renamed in place to ``oiio:ColorSpace``
 #: after writing (same length: nothing in the file moves)
@@ -86,13 +87,12 @@ def _levels(recipe, w: int, h: int, mips: bool, channels, samples: int, window):
 def _window(recipe, fw, fh, x0, y0, w, h, channels, samples):
     """The ``w x h`` window at (x0, y0) of the ``fw x fh`` bake, in tiles of at most 2048."""
     from cellgl import recipes
-    from cellgl.io.mips import _TILE
 
     extra = {"samples": samples} if samples != 1 else {}
     out: dict[str, np.ndarray] = {}
-    for ty in range(0, h, _TILE):
-        for tx in range(0, w, _TILE):
-            tw, th = min(_TILE, w - tx), min(_TILE, h - ty)
+    for ty in range(0, h, _RENDER_TILE):
+        for tx in range(0, w, _RENDER_TILE):
+            tw, th = min(_RENDER_TILE, w - tx), min(_RENDER_TILE, h - ty)
             res = recipes.render(recipe, fw, fh, channels=tuple(channels), x0=x0 + tx, y0=y0 + ty,
                                  tile_w=tw, tile_h=th, **extra)
             for name, a in res.items():
