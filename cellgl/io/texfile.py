@@ -15,8 +15,8 @@ renderers read through OpenImageIO's texture system:
   (``AppendMIPLevel``), every channel asked for in one file, colour tagged as in
   :mod:`cellgl.io.colour`.
 
-A level is held whole in memory while it is written (level 0 of a 4096^2 RGB float bake: about
-0.5 GB with the render's own working memory), unlike the streamed single-level writers.
+A level is held whole in memory while it is written (a 4096^2 RGB float .tx peaks at about 0.7
+GiB with the render's own working memory), unlike the streamed single-level writers.
 """
 from __future__ import annotations
 
