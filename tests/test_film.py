@@ -97,6 +97,8 @@ def test_float_tiff_linear_integer_formats_srgb(fake, tmp_path):
     (["-o", "a.<UDIM>.png", "--udim", "1001", "--udims", "2x2"], "accepted one of them"),
     (["-o", "a.<UDIM>.npy", "--udim", "1001", "--size", "8x8x4"], "UDIM sets are of 2D images"),
     (["-o", "a.<UDIM>.png", "--udim", "1001", "--frames", "2"], "not with --frames or a .zarr output"),
+    (["-o", "a.<UDIM>.png", "--udim", "1001-1010", "--size", "8192"],
+     "10 columns of 8192 px make a bake 81920 px across; accepted at most 65536 (tiles of at most 6553 px"),
 ])
 def test_cli_errors_before_any_work(fake, tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
