@@ -321,3 +321,21 @@ def test_gpu_udim_tx_set(ctx, tmp_path):
         s = 32 >> k
         for i, p in enumerate(got):
             assert np.array_equal(_oiio_levels(p)[1][k], lv[:, i * s:(i + 1) * s]), (p.name, k)
+
+
+def test_udim_mips_are_crops_of_the_sets_levels(fake, tmp_path, monkeypatch):
+    """--udim with --mips (numbered files): level k of each tile is its crop of level k of the
+    set's bake (power-of-two sides)."""
+    from cellgl import recipes
+
+    monkeypatch.setattr(recipes, "load_recipe", lambda name: _udim_recipe())
+    got = B.bake("fake", tmp_path / "t.<UDIM>.npy", size=16, udims="2x1", mips=True, progress=False)
+    assert len(got) == 2 * 5
+    whole = B.bake(U.window_recipe(_udim_recipe(), U.parse_udims("2x1")), tmp_path / "w.npy",
+                   size=(32, 16), mips=True, progress=False)
+    for k in range(5):
+        big = np.load(whole[k])
+        s = 16 >> k
+        for i, n in enumerate((1001, 1002)):
+            name = f"t.{n}.npy" if k == 0 else f"t.{n}_mip{k}.npy"
+            assert np.array_equal(np.load(tmp_path / name), big[:, i * s:(i + 1) * s]), name
