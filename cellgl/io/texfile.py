@@ -12,7 +12,7 @@ renderers read through OpenImageIO's texture system:
   OpenImageIO reads the pages as MIP levels).
 * ``.exr``: a tiled OpenEXR file, ``MIPMAP_LEVELS`` with ``ROUND_UP`` (the chain of
   :func:`cellgl.io.mips.mip_sizes`), written by OpenImageIO's ``ImageOutput``
-  (``AppendMIPLevel``), every channel asked for in one file, colour tagged as in
+  (``AppendMIPLevel``; the wheel or Blender's copy, :func:`openimageio`), every channel asked for in one file, colour tagged as in
   :mod:`cellgl.io.colour`.
 
 A level is held whole in memory while it is written (a 4096^2 RGB float .tx peaks at about 0.7
@@ -27,7 +27,7 @@ import numpy as np
 
 from cellgl.io.spec import BakeError, exr_names
 
-__all__ = ["TILE", "check_tiled", "write_texture", "TEXTURE_EXTS"]
+__all__ = ["TILE", "check_tiled", "write_texture", "TEXTURE_EXTS", "openimageio"]
 
 TILE = 64                                #: tile side of every tiled texture file
 _RENDER_TILE = 2048                      #: largest side one render call gets (as the bake's MAX_TILE)
@@ -37,6 +37,40 @@ TEXTURE_EXTS = (".exr", ".tif", ".tiff", ".tx")
 _CS_STANDIN = b"cellgl:ColorSpc"
 _CS_NAME = b"oiio:ColorSpace"
 assert len(_CS_STANDIN) == len(_CS_NAME)
+
+
+def openimageio():
+    """The ``OpenImageIO`` module: an installed one (``pip install openimageio``), else the copy
+    inside Blender's ``bpy`` wheel (the ``[blender]`` extra; its folder is appended to
+    ``sys.path``, where Blender itself puts it), else None.
+
+    One environment must not hold both the ``openimageio`` wheel and ``bpy``: the wheel's module
+    shadows Blender's, and Blender's OSL script nodes then fail (``oslquery`` returns Blender's
+    ``TypeDesc``, which the other module cannot convert; checked with bpy 4.5 and openimageio
+    3.0.21). With ``bpy`` installed, cellgl uses Blender's copy.
+    """
+    import importlib.util
+    import sys
+
+    try:
+        import OpenImageIO
+        return OpenImageIO
+    except ImportError:
+        pass
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.origin:
+        return None
+    base = Path(spec.origin).parent
+    for folder in sorted(base.glob("*/python/lib/python3*/site-packages")):
+        if (folder / "OpenImageIO").is_dir():
+            if str(folder) not in sys.path:
+                sys.path.append(str(folder))
+            try:
+                import OpenImageIO
+                return OpenImageIO
+            except ImportError:
+                return None
+    return None
 
 
 def check_tiled(ext: str, tiled: bool, mips: bool, channels, depth_slices) -> tuple[bool, bool]:
@@ -55,12 +89,9 @@ def check_tiled(ext: str, tiled: bool, mips: bool, channels, depth_slices) -> tu
     if ext == ".exr" and "id" in channels:
         raise BakeError("--tiled .exr with --channels id: a tiled EXR here holds float "
                         "channels only; write ids to a .tif/.tx (uint32) or a scanline .exr")
-    if ext == ".exr":
-        try:
-            import OpenImageIO  # noqa: F401
-        except ImportError:
-            raise BakeError("a tiled .exr needs the 'openimageio' package: "
-                            "pip install 'cellgl[exr]'") from None
+    if ext == ".exr" and openimageio() is None:
+        raise BakeError("a tiled .exr needs OpenImageIO: pip install openimageio (or Blender's "
+                        "copy, pip install 'cellgl[blender]'; not both in one environment)")
     return True, mips
 
 
@@ -143,9 +174,9 @@ def _write_tiff(tmp, levels, out, meta, wrap, bar, mips) -> None:
 
 
 def _write_exr(tmp, levels, out, meta, wrap, bar, mips) -> None:
-    import OpenImageIO as oiio
-
     from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES
+
+    oiio = openimageio()
 
     names = [n for e in out.encodings for n in exr_names(e.channel)]
     half = all(e.dtype == np.float16 for e in out.encodings)
