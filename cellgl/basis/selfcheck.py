@@ -15,8 +15,8 @@ cellgl's version and the bytes of every shader and every module of ``cellgl/gl``
 ``cellgl/basis``; a later process on the same driver and code skips the check. A failure is never
 recorded; an unreadable or foreign record counts as none, whatever the file is (:func:`_recorded`:
 a regular file of at most :data:`RECORD_MAX` bytes, read without waiting and outside the GL
-section's signal deferral; its time stamp checked before `cellgl info` shows it). ``CELLGL_SHADER_CACHE=0`` keeps no
-records (every process checks).
+section's signal deferral; its time stamp checked before `cellgl info` shows it).
+``CELLGL_SHADER_CACHE=0`` keeps no records (every process checks).
 
 Cost: two shader variants, the first of which (3D, Poisson, Euclidean, n = 4, F, delta, id) is
 the one ``cellgl.cellular`` compiles by default, and 288 samples: the GPU takes milliseconds,

@@ -258,8 +258,9 @@ def summary() -> str:
         folder = cache_dir()
     except ValueError as exc:
         return str(exc)
+    off = os.environ.get(ENV_SWITCH, "").strip() == "0"
     head = (f"records in {str(folder)!r}" if folder is not None
-            else "no records (CELLGL_SHADER_CACHE=0)" if os.environ.get(ENV_SWITCH, "").strip() == "0"
+            else "no records (CELLGL_SHADER_CACHE=0)" if off
             else "no records (no usable cache folder)")
     done = _prepared.get("set") or {}
     drivers = (", ".join(f"{k}={v}" for k, v in done.items()) if done

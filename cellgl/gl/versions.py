@@ -139,8 +139,8 @@ def check_settings() -> None:
     if raw:
         raise ValueError(
             f"GLCONTEXT_GLVERSION={raw!r} is set: glcontext would ask that version at every rung "
-            f"of cellgl's version ladder ({', '.join(label(c) for c in LADDER)} core, newest first: "
-            "the driver's newest is taken) on some backends but not others; unset it")
+            f"of cellgl's version ladder ({', '.join(label(c) for c in LADDER)} core, newest "
+            "first: the driver's newest is taken) on some backends but not others; unset it")
 
 
 def glcontext_context(api: str, code: int, **settings):
