@@ -138,17 +138,20 @@ def _make(folder: Path, base: Path, owned: bool = False) -> str | None:
 
 def _places() -> list[tuple[Path, Path, bool]]:
     """(folder, the highest folder cellgl may make, owned) in the order tried."""
-    import platformdirs
-
     named = os.environ.get(ENV_DIR)
     if named:
         folder = Path(named).expanduser()
         return [(folder, folder, False)]
     places = []
     try:
+        import platformdirs     # a dependency; missing (a broken install): a note, not a failure
+
         base = Path(platformdirs.user_cache_dir())
         app = Path(platformdirs.user_cache_dir("cellgl", appauthor=False))
         places.append((app / "shaders", base, False))
+    except ImportError:
+        _note("the OS's cache folder skipped: platformdirs is not installed "
+              "(pip install platformdirs)")
     except (RuntimeError, KeyError, OSError):            # no home folder at all
         pass
     user = os.getuid() if hasattr(os, "getuid") else os.environ.get("USERNAME", "user")
