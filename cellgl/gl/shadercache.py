@@ -116,9 +116,9 @@ def _folder(folder: Path, owned: bool = False) -> str | None:
             return "it is not a folder"
         if owned and hasattr(os, "getuid") and st.st_uid != os.getuid():
             return "another user owns it"
-        probe = folder / f".cellgl-probe-{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
+        fd, probe = tempfile.mkstemp(prefix=".cellgl-probe-", dir=folder)   # a new name: no
+        os.close(fd)                                                          # FIFO waited on
+        os.unlink(probe)
         return None
     except OSError as exc:
         return exc.strerror or type(exc).__name__
