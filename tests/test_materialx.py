@@ -157,9 +157,7 @@ def test_basis_node_validates_and_generates(tmp_path):
     from cellgl.export.materialx_basis import basis_node
 
     nodes = [basis_node(2, "euclidean", "poisson")]
-    docs.write_files({docs.LIBRARY: docs.library_document(nodes),
-                      **{f"genglsl/{n.name}.glsl": n.glsl for n in nodes},
-                      **{f"genosl/{n.name}.osl": n.osl for n in nodes}}, tmp_path)
+    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
     doc = _read(tmp_path / docs.LIBRARY)
     assert doc.validate()[0]
     _check_library_matches_nodes(doc, nodes)
