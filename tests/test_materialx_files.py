@@ -228,3 +228,40 @@ def test_output_messages_are_those_of_bake(tmp_path, monkeypatch, capsys):
     assert main(["bake", "f1", "-o", ""]) == 2
     assert "output '' is an empty name; give a file name" in capsys.readouterr().err
     assert os.listdir(".") == ["afile"]          # nothing written into the current folder
+
+
+@pytest.fixture
+def small_tmpfs(tmp_path):
+    """A 256 KiB tmpfs (root only; skipped elsewhere)."""
+    import subprocess
+
+    if os.geteuid() != 0:
+        pytest.skip("mounting a tmpfs needs root")
+    mnt = tmp_path / "small"
+    mnt.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(mnt)], capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip()}")
+    try:
+        yield mnt
+    finally:
+        subprocess.run(["umount", "-l", str(mnt)], capture_output=True)
+
+
+def test_a_really_full_disk_leaves_the_previous_set_untouched(small_tmpfs, capsys):
+    import shutil
+
+    out = small_tmpfs / "mx"
+    export_materialx(out, ["f1"], basis=False)
+    before = _tree(out)
+    filler = small_tmpfs / "filler"
+    with open(filler, "wb") as f:       # leave 16 KiB: less than the new set needs
+        f.write(b"\0" * max(0, shutil.disk_usage(small_tmpfs).free - (16 << 10)))
+    rc, err = _cli(["flagstone", "-o", str(out)], capsys)
+    assert rc == 2 and "No space left on device" in err, err
+    assert _tree(out) == before
+    assert sorted(os.listdir(small_tmpfs)) == ["filler", "mx"]
+    _no_temporaries(small_tmpfs)
+    filler.unlink()
+    assert _cli(["hull", "-o", str(small_tmpfs / "new")], capsys)[0] == 2       # the basis too: > 256 KiB
+    assert sorted(os.listdir(small_tmpfs)) == ["mx"]

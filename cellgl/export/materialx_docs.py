@@ -131,12 +131,15 @@ def _usd_val(v, mxtype: str) -> str:
 
 def usd_stage(nodes: list[MxNode]) -> str:
     """``cellgl_materials.usda``: the example materials as UsdShade networks under
-    ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections)."""
+    ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections).
+    The stage's ``upAxis`` and ``metersPerUnit`` are USD's own fallbacks (Y, 0.01), authored
+    because USD's validators ask for them: the materials hold no lengths, so the stage means
+    what it meant without them."""
     from cellgl._version import __version__
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
            'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
-           '    defaultPrim = "cellgl"', ")", "", 'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
+           '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "", 'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
     for n in nodes:
         if not n.example:
             continue
