@@ -227,6 +227,11 @@ def test_output_messages_are_those_of_bake(tmp_path, monkeypatch, capsys):
     assert rc == 2 and "output '' is an empty name; give a directory name" in err, err
     assert main(["bake", "f1", "-o", ""]) == 2
     assert "output '' is an empty name; give a file name" in capsys.readouterr().err
+    # the neighbours: a snippet export, an animated bake, the playground site
+    for argv, what in ((["export", "f1", "-o", ""], "a file name"), (["bake", "f1", "--frames", "2", "-o", ""], "a file name"),
+                       (["playground", "-o", ""], "a directory name")):
+        assert main(argv) == 2, argv
+        assert f"output '' is an empty name; give {what}" in capsys.readouterr().err, argv
     assert os.listdir(".") == ["afile"]          # nothing written into the current folder
 
 
