@@ -79,6 +79,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
+    if not args.output:     # -o '': the one rule's message, not "'.': unknown extension"
+        from cellgl.io.tempfiles import check_output
+
+        try:
+            check_output(args.output)
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
     ext = Path(args.output).suffix.lower()
     if args.frames is not None and ext == ".zarr":
         raise BakeError(f"--frames {args.frames}: a .zarr bake writes one image; accepted for "
