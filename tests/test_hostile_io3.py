@@ -166,8 +166,8 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
     from cellgl.io.frames import bake_frames, frame_recipe
 
     r = recipes.load_recipe("caustics")
-    want = [np.round(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3], 0, 1)
-                     * 255).astype(np.uint8) for k in range(4)]
+    want = [np.floor(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3]
+                             .astype(np.float64), 0, 1) * 255 + 0.5).astype(np.uint8) for k in range(4)]
     for ext, fps, tol in ((".webp", 10, 0), (".gif", 25, 8)):
         (path,) = bake_frames(r, tmp_path / f"a{ext}", 4, fps=fps, size=(40, 24), tile=16)
         with Image.open(path) as im:
@@ -177,6 +177,59 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
                 assert np.abs(got - want[k]).max() <= tol, (ext, k)
                 assert frame.info.get("duration") == 1000 // fps, (ext, k, frame.info)
     assert sorted(os.listdir(tmp_path)) == ["a.gif", "a.webp"]
+
+
+def test_lossless_webp_frames_are_the_png_frames(ctx, tmp_path):
+    """Issue 48: one quantiser for every 8-bit output: the animated WebP's frames (lossless) are
+    the 8-bit PNG frames of the same bake, bit for bit (np.round's half to even in the one, a
+    half up in the other, had differed by 1 in 575 samples of a 256^2 frame)."""
+    import numpy as np
+    from PIL import Image, ImageSequence
+
+    from cellgl.io.frames import bake_frames
+
+    kw = dict(size=(96, 64), tile=32, sets=["seed=5"])
+    (webp,) = bake_frames("caustics", tmp_path / "a.webp", 3, **kw)
+    pngs = bake_frames("caustics", tmp_path / "a.png", 3, **kw)
+    with Image.open(webp) as im:
+        got = [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(im)]
+    want = [np.asarray(Image.open(p)) for p in pngs]
+    assert len(got) == len(want) == 3
+    for k, (a, b) in enumerate(zip(got, want)):
+        assert a.shape == b.shape == (64, 96, 3) and np.array_equal(a, b), (k, int((a != b).sum()))
+
+
+def test_animated_frames_quantise_every_half_as_the_png(tmp_path, monkeypatch):
+    """The same with a render of the values next to every half (k + 0.5) / 255, where rounding
+    rules differ: the WebP writer gets the PNG's 8-bit samples."""
+    import sys
+
+    import numpy as np
+    from PIL import Image, ImageSequence
+
+    from cellgl.io import frames
+
+    k = np.arange(256, dtype=np.float32)
+    halves = (k + 0.5) / np.float32(255)
+    vals = np.concatenate([halves, np.nextafter(halves, np.float32(0)),
+                           np.nextafter(halves, np.float32(1))]).astype(np.float32)
+
+    def fake(recipe, w, h, channels=("color",), x0=0, y0=0, tile_w=None, tile_h=None, **kw):
+        tw, th = tile_w or w, tile_h or h
+        yy, xx = np.mgrid[y0:y0 + th, x0:x0 + tw]
+        i = (yy * w + xx) * 3
+        rgb = np.stack([vals[(i + c) % vals.size] for c in range(3)], axis=-1)
+        return {"color": np.concatenate([rgb, np.ones_like(rgb[..., :1])], axis=-1)}
+
+    monkeypatch.setattr(sys.modules["cellgl.recipes"], "render", fake)
+    kw = dict(size=(32, 24), tile=16, sets=["orbit_radius=0.25"])
+    (webp,) = frames.bake_frames("flagstone", tmp_path / "a.webp", 2, **kw)
+    pngs = frames.bake_frames("flagstone", tmp_path / "a.png", 2, **kw)
+    want = np.asarray(Image.open(pngs[0]))
+    with Image.open(webp) as im:
+        for f in ImageSequence.Iterator(im):
+            a = np.asarray(f.convert("RGB"))
+            assert np.array_equal(a, want), int((a != want).sum())
 
 
 @pytest.mark.parametrize("out, size, words", [

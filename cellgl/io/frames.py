@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size
+from cellgl.io.spec import DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size, quantize
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
@@ -192,14 +192,15 @@ def _animated_size(path: Path, size, budget: int) -> tuple[int, int]:
 
 def _frame_rgb(recipe, w: int, h: int, plan) -> np.ndarray:
     """The colour of ``recipe`` at ``w x h`` as uint8 (h, w, 3), rendered tile by tile as
-    ``plan`` says (the same bits as a one-pass render)."""
+    ``plan`` says (the same bits as a one-pass render), quantised as every 8-bit output is
+    (:func:`cellgl.io.spec.quantize`): a lossless WebP frame holds the 8-bit PNG frame's bits."""
     from cellgl import recipes
 
     out = np.empty((h, w, 3), np.uint8)
     for x0, y0, tw, th in plan.tiles():
         rgb = recipes.render(recipe, w, h, channels=("color",), x0=x0, y0=y0, tile_w=tw,
                              tile_h=th)["color"][..., :3]
-        out[y0:y0 + th, x0:x0 + tw] = np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
+        out[y0:y0 + th, x0:x0 + tw] = quantize(rgb, 8)     # the PNG frames' bits
     return out
 
 
