@@ -63,7 +63,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
                         ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
-                   help="frames per second of an animated .webp/.gif (with --frames; default 24)")
+                   help="frames per second of an animated file (with --frames): .webp 1..95 "
+                        "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -120,18 +121,25 @@ def run_cli(args: argparse.Namespace) -> int:
 
 def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
-    from cellgl.io.frames import MAX_FPS, MAX_FRAMES, bake_frames
+    from cellgl.io.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
 
+    ext = Path(args.output).suffix.lower()
     try:
-        fps = 24.0 if args.fps is None else float(args.fps)
+        fps = None if args.fps is None else float(args.fps)
     except ValueError:
-        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
+        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS_OF.get(ext, MAX_FPS)}") from None
     paths = bake_frames(args.recipe, args.output, int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
                         size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                         tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
                         memory_budget=budget)
     if not args.quiet:
         total = sum(os.path.getsize(p) for p in paths)
+        rate = ""
+        if ext in ANIMATED:
+            from cellgl.io.frames import DEFAULT_FPS
+
+            delay, real = frame_delay(ext, DEFAULT_FPS[ext] if fps is None else fps)
+            rate = f", {real:.4g} fps: {delay} {'cs' if ext == '.gif' else 'ms'} a frame"
         print(f"wrote {len(paths)} file(s): {paths[0]}{' .. ' + str(paths[-1]) if len(paths) > 1 else ''} "
-              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s)", file=sys.stderr)
+              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s{rate})", file=sys.stderr)
     return 0
