@@ -263,7 +263,9 @@ def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
 # --------------------------------------------------------------------------------------------
 
 ERRORS = [
-    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy"),
+    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy (an image, or "
+                          "with --frames N a numbered sequence); .webp, .gif (one animated file, with "
+                          "--frames N); .zarr (a folder baked on Dask)"),
     (["-o", "{d}/a"], "unknown extension '(none)'"),
     (["-o", "{d}/a.png", "--channels", "albedo"], "'albedo': unknown channel; accepted color"),
     (["-o", "{d}/a.png", "--size", "0x5"], "width 0 is out of range; accepted 1..65536"),
@@ -285,6 +287,25 @@ ERRORS = [
     (["-o", "{d}/nodir/a.png"], "does not exist"),
     (["-o", "{d}"], "unknown extension"),
 ]
+
+
+def test_the_unknown_extension_error_lists_every_extension_bake_accepts(tmp_path):
+    """Issue 48: `-o a.jpg` listed .png .exr .tif .tiff .npy, not .zarr, .webp, .gif: the list
+    comes from one place (spec.FORMATS, ANIMATED, DISTRIBUTED), the help's too."""
+    from cellgl.io import spec
+    from cellgl.io.bake_cli import add_parser
+    import argparse
+
+    every = [*spec.FORMATS, *spec.ANIMATED, *spec.DISTRIBUTED]
+    assert {".png", ".exr", ".tif", ".tiff", ".npy", ".webp", ".gif", ".zarr"} <= set(every)
+    for out in ("a.jpg", "a", "a.PNGX"):
+        with pytest.raises(spec.BakeError) as e:
+            B.bake("flagstone", tmp_path / out, size=8, progress=False)
+        for ext in every:
+            assert f"{ext}," in str(e.value) or f"{ext} (" in str(e.value), (ext, str(e.value))
+    sub = argparse.ArgumentParser().add_subparsers()
+    helps = {a.dest: a.help for a in add_parser(sub)._actions}
+    assert spec.accepted_outputs() in helps["output"]
 
 
 @pytest.mark.parametrize("argv,message", ERRORS)

@@ -8,7 +8,8 @@ import time
 from pathlib import Path
 
 from cellgl.io.bake import bake
-from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, BakeError, int_arg
+from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, FORMATS, BakeError, accepted_list,
+                            accepted_outputs, int_arg)
 from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]
@@ -33,13 +34,14 @@ examples:
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Declare ``cellgl bake``'s arguments on a subparsers object."""
     p = sub.add_parser(
-        "bake", help="render a preset or recipe to .png/.exr/.tif/.npy (or .zarr on Dask)",
+        "bake", help=f"render a preset or recipe to {'/'.join(FORMATS)} (an animated "
+                     f"{'/'.join(ANIMATED)} with --frames, or {'/'.join(DISTRIBUTED)} on Dask)",
         description="Render a preset or recipe JSON to an image or volume file.",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
                    help="a preset name (cellgl presets) or a recipe .json file")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file: .png, .exr, .tif/.tiff or .npy; or a .zarr directory (Dask)")
+                   help=f"output file: {accepted_outputs()}")
     p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}", metavar="W[xH[xD]]",
                    help="pixels (default %(default)s); a third number bakes a volume of D slices")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
@@ -83,8 +85,8 @@ def run_cli(args: argparse.Namespace) -> int:
     ext = Path(args.output).suffix.lower()
     if args.frames is not None and ext == ".zarr":
         raise BakeError(f"--frames {args.frames}: a .zarr bake writes one image; accepted for "
-                        f"--frames: an animated .webp/.gif or a numbered {', '.join(FORMATS)} sequence")
-    if args.fps is not None and (args.frames is None or ext not in (".webp", ".gif")):
+                        f"--frames: an animated {'/'.join(ANIMATED)} or a numbered {', '.join(FORMATS)} sequence")
+    if args.fps is not None and (args.frames is None or ext not in ANIMATED):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
     if ext == ".zarr":
@@ -95,7 +97,7 @@ def run_cli(args: argparse.Namespace) -> int:
                         ("--threads", None if args.threads == "1" else args.threads)):
         if value is not None:
             raise BakeError(f"{flag} {value}: only for a distributed .zarr bake "
-                            f"(-o NAME.zarr); accepted outputs here: {', '.join(FORMATS)}")
+                            f"(-o NAME.zarr); accepted outputs here: {accepted_list((*FORMATS, *ANIMATED))}")
     budget = DEFAULT_BUDGET if args.memory is None else \
         int_arg("--memory", args.memory, 1, 1 << 20) << 20
     tile = None if args.tile is None else int_arg("--tile", args.tile, 16, 8192)

@@ -27,13 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size, quantize
+from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
+                            quantize)
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
-#: extensions written as one animated file
-ANIMATED = (".webp", ".gif")
 MAX_FRAMES = 10000          #: most frames of a sequence (four-digit numbers)
 #: an animated file's frame delay: milliseconds per unit of the format (WebP ms, GIF cs)
 DELAY_UNIT_MS = {".webp": 1, ".gif": 10}

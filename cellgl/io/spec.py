@@ -9,7 +9,8 @@ import numpy as np
 
 __all__ = ["BakeError", "CHANNELS", "FORMATS", "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS", "parse_size",
            "parse_channels", "id_colors", "Encoding", "accepted_list", "check_size", "encoding_of", "exr_names",
-           "int_arg", "parse_sets", "quantize"]
+           "int_arg", "parse_sets", "quantize", "ANIMATED", "DISTRIBUTED",
+           "accepted_outputs"]
 
 
 class BakeError(ValueError):
@@ -43,6 +44,20 @@ FORMATS: dict[str, _Format] = {
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
 }
+
+#: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.io.frames`)
+ANIMATED = (".webp", ".gif")
+#: extensions of a distributed bake: a Zarr folder written on Dask (:func:`cellgl.dask.bake_zarr`)
+DISTRIBUTED = (".zarr",)
+
+
+def accepted_outputs() -> str:
+    """Every output extension ``cellgl bake`` accepts, with what each needs: the one list its
+    errors and help give (from :data:`FORMATS`, :data:`ANIMATED`, :data:`DISTRIBUTED`)."""
+    return (f"{accepted_list(FORMATS)} (an image, or with --frames N a numbered sequence); "
+            f"{accepted_list(ANIMATED)} (one animated file, with --frames N); "
+            f"{accepted_list(DISTRIBUTED)} (a folder baked on Dask)")
+
 
 MAX_SIDE = 65536          #: largest width or height
 MAX_SLICES = 4096         #: largest volume depth (slices)
