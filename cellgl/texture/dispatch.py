@@ -112,9 +112,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
                                  pan_only=pan_only and pan is not None)
         elif recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
             texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
-        for name, value in (("u_loop_canary", 2), ("u_loop_probe", PROBE_PASSES)):
-            if name in prog:
-                prog[name].value = value
+        if "u_loop_probe" in prog:
+            prog["u_loop_probe"].value = PROBE_PASSES
         setup(prog)
 
     searches = _searches(recipe) * (int(supersample) ** 2 + 1 if supersample > 1 else 1)
