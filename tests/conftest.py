@@ -74,6 +74,20 @@ def _gl_error_check(request):
     assert after == "GL_NO_ERROR", f"test left a GL error behind: {after}"
 
 
+@pytest.fixture
+def compute(ctx):
+    """The session context, for a test that needs compute shaders (OpenGL 4.3): skips, saying
+    why, on a 3.3-4.2 context (softpipe, zink capped at 4.1, a Mac), where cellgl runs its
+    fragment path."""
+    from cellgl.gl.path import has_compute
+
+    if not has_compute(ctx):
+        pytest.skip(f"this OpenGL {ctx.version_code // 100}.{ctx.version_code % 100 // 10} context "
+                    f"({_renderer(ctx)!r}) has no compute shaders (OpenGL 4.3): cellgl runs its "
+                    "fragment path here")
+    return ctx
+
+
 def _renderer(gl) -> str:
     return str(gl.info.get("GL_RENDERER", ""))
 

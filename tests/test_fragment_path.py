@@ -48,16 +48,6 @@ FEATURES = ("edge", "edge_grad", "nsphere", "position", "color", "smooth_F1", "s
 
 
 @pytest.fixture
-def compute(ctx):
-    """The session context, which must have compute shaders to compare with."""
-    from cellgl.gl.path import has_compute
-
-    if not has_compute(ctx):
-        pytest.skip("the session context has no compute shaders to compare the fragment path with")
-    return ctx
-
-
-@pytest.fixture
 def both_paths(compute, same_bits):
     """The session context, with compute shaders and `precise` in the fragment entries too: the
     two paths must then give the same bits (docs/exactness.md; conftest.same_bits skips elsewhere)."""
