@@ -140,8 +140,9 @@ def _searches(recipe) -> int:
 def _check_cut(cut: int, count: int) -> None:
     if cut:
         raise LoopLimitError(
-            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa llvmpipe allows 65535 loop "
-            "passes per SIMD vector of samples): their values would be wrong, so none are returned. "
+            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa's llvmpipe, and lavapipe "
+            "under zink, allow 65535 loop passes per SIMD vector of samples): their values would be "
+            "wrong, so none are returned. "
             "Use fewer octaves, less supersampling or a smaller smoothness (docs/exactness.md)")
 
 
