@@ -236,12 +236,10 @@ def glsl_constant_block(recipe, prefix: str = "u_", material: bool = False) -> s
     so that :func:`glsl_params_from_uniforms` (same ``prefix``) reads them (``material``: the
     material section's too, for a program with ``CELL_TEX_MATERIAL`` 1)."""
     recipe = load_recipe(recipe)
-    vals = uniform_values(recipe)
+    vals = uniform_values(recipe, material=material)
     lines = []
     decls = uniform_decls("u_")
-    for cond, fields in _CONDITIONAL:
-        if cond == _MATERIAL_IF and not material:
-            continue
+    for _, fields in _CONDITIONAL:
         extra = uniform_decls("u_", fields)
         if all(n in vals for _, n, _ in extra):
             decls += extra
@@ -366,13 +364,14 @@ def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
     return out
 
 
-def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
+def uniform_values(recipe, pan=(0.0, 0.0), material: bool = False) -> dict:
     """``{"u_<name>": value}`` for every uniform the texture shaders read.
 
     Enums are passed as their index, bools as 0/1, arrays as lists (``u_thresholds``: 16 ints,
     ``u_ramp``: 16 (r, g, b, t) tuples, unused keys repeat the last; ``u_origin_cell``,
     ``u_noise_cell``: 8 int 4-tuples and ``u_origin_frac``, ``u_noise_frac``: 8 float
-    4-tuples, the split origins of :func:`lattice_origins`, with ``pan`` in uv).
+    4-tuples, the split origins of :func:`lattice_origins`, with ``pan`` in uv); ``material``:
+    with the material section's (``u_roughness``, ...: a program with ``CELL_TEX_MATERIAL`` 1).
     """
     recipe = load_recipe(recipe)
     v = recipe.values
@@ -392,7 +391,7 @@ def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     out["u_feature_frequency"] = antialias.feature_frequency(v)
     out["u_orbit_turn"] = domain.orbit_turn(v["orbit_phase"])
     out["u_axis_scale"] = domain.axis_scale(v)
-    for _, n, _, _ in _MATERIAL:
+    for _, n, _, _ in _MATERIAL if material else ():
         out["u_" + n] = v[n]
     out.update(pan_uniform_values(recipe, pan))
     from cellgl.texture.reference import octave_mean
@@ -466,7 +465,7 @@ def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False) -> Non
         from cellgl.texture.images import bind
 
         bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
-    values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan)
+    values = pan_uniform_values(recipe, pan) if pan_only else uniform_values(recipe, pan, material=True)
     for name, value in values.items():
         if name not in prog:
             continue
