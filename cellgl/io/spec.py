@@ -23,7 +23,7 @@ class BakeError(ValueError):
 
 #: Channels render() produces -> samples per pixel.
 CHANNELS: dict[str, int] = {"color": 4, "height": 1, "normal": 3, "id": 1,
-                            "F1": 1, "F2": 1, "F3": 1, "F4": 1}
+                            "F1": 1, "F2": 1, "F3": 1, "F4": 1, "roughness": 1, "ao": 1, "metallic": 1}
 
 
 @dataclass(frozen=True)
