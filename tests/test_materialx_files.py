@@ -92,6 +92,28 @@ def test_distinct_names_export_and_the_materials_validate(tmp_path):
         assert doc.validate() == (True, ""), name
 
 
+def test_names_of_materialx_s_library_are_refused(tmp_path):
+    """A recipe named `ND-lama` wrote the element ND_lama_surface, a nodedef of MaterialX's library."""
+    with pytest.raises(ExportError) as e:
+        export_materialx(tmp_path / "mx", [str(_recipe(tmp_path, "ND-lama"))], basis=False)
+    assert "recipe 'ND-lama': its materials' names would start with 'ND_'" in str(e.value)
+    assert "ND_lama_surface" in str(e.value) and not (tmp_path / "mx").exists()
+    export_materialx(tmp_path / "mx", [str(_recipe(tmp_path, "NDx-lama"))], basis=False)
+
+
+def test_the_library_prefixes_are_those_of_materialx():
+    """Every name of MaterialX's standard library with a '_' starts with one of the prefixes
+    the export refuses (a later MaterialX with another prefix fails here)."""
+    mx = pytest.importorskip("MaterialX")
+    from cellgl.export.materialx_docs import MX_LIBRARY_PREFIXES
+
+    lib = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+    heads = {e.getName().split("_")[0] for e in lib.getChildren() if "_" in e.getName()}
+    assert heads <= set(MX_LIBRARY_PREFIXES), heads - set(MX_LIBRARY_PREFIXES)
+    assert not any(e.getName().startswith(("M_", "cellgl")) for e in lib.getChildren())
+
+
 def test_documents_are_well_formed_xml(tmp_path):
     """The library's comment said `--target`: "--" is not allowed in an XML comment (MaterialX's
     own parser let it pass; a strict one refuses the file)."""

@@ -236,6 +236,9 @@ def code_files(node: MxNode) -> dict[str, str]:
     return {f"genglsl/{node.name}.glsl": node.glsl, f"genosl/{node.name}.osl": node.osl}
 
 
+#: the prefixes of the names in MaterialX's standard library (1.39: nodedefs, nodegraphs,
+#: implementations, unit definitions; tests/test_materialx_files.py checks the list is whole)
+MX_LIBRARY_PREFIXES = ("ND", "NG", "IM", "IMP", "IMPL", "UD")
 #: a top-level name of a node's code: every one carries the node's name (materialx.renamed)
 _CODE_NAME = re.compile(r"\b(?:cellgl|Cellgl)\w+")
 
@@ -263,10 +266,16 @@ def check_names(nodes: list[MxNode]) -> None:
     a recipe named as a basis node (``cellular2d-euclidean-poisson``), two recipes whose names
     differ only by ``-`` / ``_`` or by case, a recipe whose material's names are another's
     (``M`` and ``texture``: both give ``M_texture``) or whose code's names are another's
-    (``stone`` and ``stone-abs``: ``cellgl_stone_abs_vec3``)."""
+    (``stone`` and ``stone-abs``: ``cellgl_stone_abs_vec3``), and a recipe whose materials'
+    names could be those of MaterialX's standard library (``ND-lama``: ``ND_lama_surface``)."""
     seen: dict[tuple[str, str], tuple[int, str]] = {}
     for k, n in enumerate(nodes):
         who = f"recipe {n.example['recipe']!r}" if n.example else f"the basis node {n.name!r}"
+        head = _ex(n).split("_")[0]
+        if n.example and head in MX_LIBRARY_PREFIXES:
+            raise ExportError(f"{who}: its materials' names would start with {head + '_'!r}, as the names of "
+                              "MaterialX's standard library do (" + ", ".join(p + "_" for p in MX_LIBRARY_PREFIXES)
+                              + f"), and could be one of them ({_ex(n)}_surface); rename the recipe")
         for kind, key, name in _written_names(n):
             j, other = seen.setdefault((kind, key), (k, who))
             if j != k:
