@@ -100,9 +100,14 @@ def _check_documents(out):
 
 
 def _check_library_matches_nodes(doc, nodes):
+    from cellgl._version import __version__
+
     for n in nodes:
         nd = doc.getNodeDef(n.nodedef)
         assert nd is not None, n.nodedef
+        # versioned with cellgl's version, major.minor as MaterialX reads versions; the default
+        assert nd.getVersionString() == ".".join(__version__.split(".")[:2]) and nd.getDefaultVersion()
+        assert nd.getVersionIntegers() == tuple(int(x) for x in __version__.split(".")[:2])
         assert [i.getName() for i in nd.getInputs()] == [i.name for i in n.inputs]
         assert [o.getName() for o in nd.getOutputs()] == [o[0] for o in n.outputs]
         for target in ("genglsl", "genosl"):

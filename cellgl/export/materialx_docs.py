@@ -43,8 +43,19 @@ def _attrs(**kw) -> str:
     return "".join(f" {k}={quoteattr(str(v))}" for k, v in kw.items() if v is not None)
 
 
+def mx_version() -> str:
+    """The nodedefs' ``version``: cellgl's version as MaterialX writes versions, ``major.minor``
+    (two integers: MaterialX reads ``0.1.0`` as no version at all)."""
+    from cellgl._version import __version__
+
+    m = re.match(r"(\d+)\.(\d+)", __version__)
+    if not m:
+        raise ExportError(f"cellgl's version {__version__!r} has no major.minor for the nodedefs' version")
+    return f"{int(m.group(1))}.{int(m.group(2))}"
+
+
 def _nodedef(node: MxNode) -> list[str]:
-    out = [f"  <nodedef{_attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, doc=node.doc)}>"]
+    out = [f"  <nodedef{_attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, version=mx_version(), isdefaultversion='true', doc=node.doc)}>"]
     for i in node.inputs:
         a = dict(name=i.name, type=i.mxtype)
         if i.value is not None:
