@@ -180,6 +180,44 @@ def test_a_failed_re_export_leaves_the_previous_set_untouched(tmp_path, monkeypa
     _no_temporaries(tmp_path)
 
 
+def _lib_set(name: str) -> dict[str, str]:
+    """A small set: a library naming one code file."""
+    lib = (f'<?xml version="1.0"?>\n<materialx version="1.39">\n  <implementation name="IM_{name}" '
+           f'file="genglsl/cellgl_{name}.glsl" target="genglsl" />\n</materialx>\n')
+    return {materialx_files.LIBRARY: lib, f"genglsl/cellgl_{name}.glsl": f"// {name}\n"}
+
+
+def test_two_exports_into_one_folder_land_one_after_the_other(tmp_path, monkeypatch):
+    """The second export reads which files are the previous set once it holds the folder, so
+    the set it replaces is the one the first export wrote, not the one before (which left the
+    first export's code file behind)."""
+    import threading
+    import time
+
+    out = tmp_path / "mx"
+    materialx_files.write_set(_lib_set("x"), out)
+    real, inside, go = materialx_files._swap, threading.Event(), threading.Event()
+
+    def swap(*a):
+        if threading.current_thread().name == "first":
+            inside.set()
+            go.wait(30)
+        return real(*a)
+
+    monkeypatch.setattr(materialx_files, "_swap", swap)
+    first = threading.Thread(target=materialx_files.write_set, args=(_lib_set("a"), out), name="first")
+    second = threading.Thread(target=materialx_files.write_set, args=(_lib_set("b"), out), name="second")
+    first.start()
+    assert inside.wait(30)
+    second.start()
+    time.sleep(0.5)                 # the second one waits for the folder's lock
+    go.set()
+    first.join(30)
+    second.join(30)
+    assert set(_tree(out)) == set(_lib_set("b"))
+    _no_temporaries(tmp_path)
+
+
 def test_a_file_in_the_way_is_refused_before_any_work(tmp_path, capsys):
     """`mkdir mx; touch mx/genosl`: the library was written naming code files never written."""
     out = tmp_path / "mx"

@@ -138,7 +138,6 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
                     raise ExportError(f"output directory {str(root)!r} was made by another program during the "
                                       "export; nothing was written there: export again") from None
         return [root / r for r in rels]
-    old = previous_set(root)
     with scratch_dir(root / LIBRARY, "export") as tmp:
         new, aside = tmp / "new", tmp / "old"
         new.mkdir()
@@ -147,8 +146,8 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
             _fill(new, files)
         except OSError as exc:
             raise naming_destination_in(exc, new, root) from None
-        with commit_lock([root]):
-            _swap(root, new, aside, _order(rels), old)
+        with commit_lock([root]):       # another export into DIR: one set after the other
+            _swap(root, new, aside, _order(rels), previous_set(root))
     return [root / r for r in rels]
 
 
