@@ -17,7 +17,9 @@ other target is, except for the values that are node inputs: those stay variable
 target's sliders, :func:`cellgl.export.osl.exposed_params`). GLSL is printed by the exporter's
 GLSL printer, OSL by its OSL translator (:func:`cellgl.export.translate.to_osl`), from the one
 compiled tree. Every top-level name of a node's code carries the node's name, so that any number
-of cellgl nodes can share one shader.
+of cellgl nodes can share one shader (an export where two nodes' names would still meet is
+refused: :func:`cellgl.export.materialx_docs.check_names`). The GLSL has no array constructor
+(:func:`without_array_constructors`), so MaterialX's GenMsl and GenSlang can take it.
 
 Coordinates: MaterialX's ``texcoord`` has v = 0 at the bottom of an image; cellgl's bakes have
 v = 0 at the top row. The node evaluates cellgl at ``(u, 1 - v)``, so the node at ``texcoord``

@@ -55,7 +55,9 @@ def mx_version() -> str:
 
 
 def _nodedef(node: MxNode) -> list[str]:
-    out = [f"  <nodedef{_attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, version=mx_version(), isdefaultversion='true', doc=node.doc)}>"]
+    head = _attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, version=mx_version(),
+                  isdefaultversion="true", doc=node.doc)
+    out = [f"  <nodedef{head}>"]
     for i in node.inputs:
         a = dict(name=i.name, type=i.mxtype)
         if i.value is not None:
@@ -86,8 +88,9 @@ def library_document(nodes: list[MxNode]) -> str:
     """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``."""
     from cellgl._version import __version__
 
-    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target materialx: "
-             "nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
+    # no "--" in an XML comment (so not "--target")
+    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target "
+             "materialx: nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
     for n in nodes:
         lines += _nodedef(n)
     return "\n".join(lines) + "\n</materialx>\n"
@@ -150,7 +153,8 @@ def usd_stage(nodes: list[MxNode]) -> str:
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
            'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
-           '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "", 'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
+           '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "",
+           'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
     for n in nodes:
         if not n.example:
             continue
@@ -208,7 +212,9 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
     Returns
     -------
     list of pathlib.Path
-        The files written. Every node is compiled before the first file is written.
+        The files written. Every node is compiled and every name checked unique
+        (:func:`check_names`) before the first file is written; the set lands whole or not at
+        all, replacing the previous set of ``outdir`` (:mod:`cellgl.export.materialx_files`).
     """
     from cellgl.export.materialx import exportable_presets, preset_node
     from cellgl.recipes import load_recipe
