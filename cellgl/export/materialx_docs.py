@@ -19,7 +19,7 @@ import re
 from xml.sax.saxutils import quoteattr
 
 from cellgl.export.materialx import MxNode
-from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, write_set
+from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, check_places, write_set
 from cellgl.export.snippets import ExportError
 
 __all__ = ["export_materialx", "LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage",
@@ -220,7 +220,7 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
     from cellgl.recipes import load_recipe
     from cellgl.texture.recipe import RecipeError
 
-    check_dir(outdir)
+    check_places(check_dir(outdir))     # before the work: a file where genosl/ goes
     names = exportable_presets()[0] if recipes is None else list(recipes)
     nodes = []
     for rec in names:
