@@ -148,7 +148,10 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
         except OSError as exc:
             raise naming_destination_in(exc, new, root) from None
         with commit_lock([root]):       # another export into DIR: one set after the other
-            _swap(root, new, aside, _order(rels), previous_set(root))
+            try:
+                _swap(root, new, aside, _order(rels), previous_set(root))
+            except OSError as exc:      # name the output, not the hidden folder
+                raise naming_destination_in(naming_destination_in(exc, new, root), aside, root) from None
     return [root / r for r in rels]
 
 
