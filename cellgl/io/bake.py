@@ -36,7 +36,8 @@ __all__ = ["bake", "Baked", "BakeError", "parse_size", "parse_channels", "FORMAT
 
 from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
                             MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, accepted_list, check_size, Encoding,
-                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size)
+                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size,
+                            ANIMATED, accepted_outputs)
 
 
 # --------------------------------------------------------------------------------------------
@@ -157,9 +158,10 @@ def check_path(path) -> tuple[Path, str]:
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     if ext not in FORMATS:
-        animated = " (an animated .webp/.gif needs --frames N)" if ext in (".webp", ".gif") else ""
-        raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
-                        f"accepted {accepted_list(FORMATS)}{animated}")
+        animated = (f" (an animated {'/'.join(ANIMATED)} needs --frames N: "
+                    "cellgl.io.frames.bake_frames from Python)" if ext in ANIMATED else "")
+        raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}{animated}; "
+                        f"accepted {accepted_outputs()}")
     _check_name(path)
     try:
         check_output(path)      # the one rule of every command's output (cellgl.io.tempfiles)

@@ -8,7 +8,8 @@ import time
 from pathlib import Path
 
 from cellgl.io.bake import bake
-from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, BakeError, int_arg
+from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, FORMATS, BakeError, accepted_list,
+                            accepted_outputs, int_arg)
 from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]
@@ -37,13 +38,14 @@ examples:
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Declare ``cellgl bake``'s arguments on a subparsers object."""
     p = sub.add_parser(
-        "bake", help="render a preset or recipe to .png/.exr/.tif/.npy (or .zarr on Dask)",
+        "bake", help=f"render a preset or recipe to {'/'.join(FORMATS)} (an animated "
+                     f"{'/'.join(ANIMATED)} with --frames, or {'/'.join(DISTRIBUTED)} on Dask)",
         description="Render a preset or recipe JSON to an image or volume file.",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
                    help="a preset name (cellgl presets) or a recipe .json file")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file: .png, .exr, .tif/.tiff, .npy or .tx; or a .zarr directory (Dask)")
+                   help=f"output file: {accepted_outputs()}")
     p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}", metavar="W[xH[xD]]",
                    help="pixels (default %(default)s); a third number bakes a volume of D slices")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
@@ -67,7 +69,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
                         ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
-                   help="frames per second of an animated .webp/.gif (with --frames; default 24)")
+                   help="frames per second of an animated file (with --frames): .webp 1..95 "
+                        "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
     p.add_argument("--colorspace", default=None, metavar="NAME",
                    help="colour of a float file (.exr, 32-bit .tif): linear (default; scene-linear "
                         "Rec.709, tagged lin_rec709_scene) or srgb (sRGB-encoded, tagged); integer "
@@ -98,11 +101,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
+    if not args.output:     # -o '': the one rule's message, not "'.': unknown extension"
+        from cellgl.io.tempfiles import check_output
+
+        try:
+            check_output(args.output)
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
     ext = Path(args.output).suffix.lower()
     if args.frames is not None and ext == ".zarr":
         raise BakeError(f"--frames {args.frames}: a .zarr bake writes one image; accepted for "
-                        f"--frames: an animated .webp/.gif or a numbered {', '.join(FORMATS)} sequence")
-    if args.fps is not None and (args.frames is None or ext not in (".webp", ".gif")):
+                        f"--frames: an animated {'/'.join(ANIMATED)} or a numbered {', '.join(FORMATS)} sequence")
+    if args.fps is not None and (args.frames is None or ext not in ANIMATED):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
     for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
@@ -121,7 +131,7 @@ def run_cli(args: argparse.Namespace) -> int:
                         ("--threads", None if args.threads == "1" else args.threads)):
         if value is not None:
             raise BakeError(f"{flag} {value}: only for a distributed .zarr bake "
-                            f"(-o NAME.zarr); accepted outputs here: {', '.join(FORMATS)}")
+                            f"(-o NAME.zarr); accepted outputs here: {accepted_list((*FORMATS, *ANIMATED))}")
     budget = DEFAULT_BUDGET if args.memory is None else \
         int_arg("--memory", args.memory, 1, 1 << 20) << 20
     tile = None if args.tile is None else int_arg("--tile", args.tile, 16, 8192)
@@ -153,18 +163,25 @@ def run_cli(args: argparse.Namespace) -> int:
 
 def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
-    from cellgl.io.frames import MAX_FPS, MAX_FRAMES, bake_frames
+    from cellgl.io.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
 
+    ext = Path(args.output).suffix.lower()
     try:
-        fps = 24.0 if args.fps is None else float(args.fps)
+        fps = None if args.fps is None else float(args.fps)
     except ValueError:
-        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
+        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS_OF.get(ext, MAX_FPS)}") from None
     paths = bake_frames(args.recipe, args.output, int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
                         size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                         tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
                         memory_budget=budget)
     if not args.quiet:
         total = sum(os.path.getsize(p) for p in paths)
+        rate = ""
+        if ext in ANIMATED:
+            from cellgl.io.frames import DEFAULT_FPS
+
+            delay, real = frame_delay(ext, DEFAULT_FPS[ext] if fps is None else fps)
+            rate = f", {real:.4g} fps: {delay} {'cs' if ext == '.gif' else 'ms'} a frame"
         print(f"wrote {len(paths)} file(s): {paths[0]}{' .. ' + str(paths[-1]) if len(paths) > 1 else ''} "
-              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s)", file=sys.stderr)
+              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s{rate})", file=sys.stderr)
     return 0
