@@ -349,3 +349,26 @@ def test_udim_mips_are_crops_of_the_sets_levels(fake, tmp_path, monkeypatch):
         for i, n in enumerate((1001, 1002)):
             name = f"t.{n}.npy" if k == 0 else f"t.{n}_mip{k}.npy"
             assert np.array_equal(np.load(tmp_path / name), big[:, i * s:(i + 1) * s]), name
+
+
+@pytest.mark.slow
+def test_gpu_blender_reads_the_exr_as_linear(ctx, tmp_path):
+    """Blender (bpy, the [blender] extra) opens a cellgl EXR as "Linear Rec.709" by itself and
+    its pixels are the file's: the colour reaches Cycles unchanged (docs/bake.md)."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    pytest.importorskip("OpenEXR")
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("bpy is not installed (pip install 'cellgl[blender]')")
+    (p,) = B.bake("flagstone", tmp_path / "a.exr", size=(24, 16), progress=False)
+    code = ("import bpy, json, sys; img = bpy.data.images.load(sys.argv[1]); "
+            "print(json.dumps([img.colorspace_settings.name, list(img.size), list(img.pixels[:])]))")
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True,
+                         timeout=300, check=True).stdout.strip().splitlines()[-1]
+    name, size, px = json.loads(out)
+    assert name == "Linear Rec.709" and size == [24, 16]
+    rgba = np.array(px, np.float32).reshape(16, 24, 4)[::-1]          # Blender's rows: bottom first
+    e = _read(p)
+    assert np.allclose(rgba[..., :3], np.stack([e[c] for c in "RGB"], -1), rtol=0, atol=1e-6)
