@@ -372,3 +372,27 @@ def test_gpu_blender_reads_the_exr_as_linear(ctx, tmp_path):
     rgba = np.array(px, np.float32).reshape(16, 24, 4)[::-1]          # Blender's rows: bottom first
     e = _read(p)
     assert np.allclose(rgba[..., :3], np.stack([e[c] for c in "RGB"], -1), rtol=0, atol=1e-6)
+
+
+@pytest.mark.slow
+def test_gpu_blender_reads_a_tx_as_its_level_0(ctx, tmp_path):
+    """What Blender (Cycles' image loader) does with a .tx, as docs/bake.md says: a plain TIFF,
+    level 0 only, taken for sRGB; set to "Linear Rec.709" its pixels are the file's."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    pytest.importorskip("tifffile")
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("bpy is not installed (pip install 'cellgl[blender]')")
+    (p,) = B.bake("flagstone", tmp_path / "a.tx", size=(24, 16), progress=False)
+    code = ("import bpy, json, sys; img = bpy.data.images.load(sys.argv[1]); "
+            "first = [img.file_format, img.colorspace_settings.name, list(img.size)]; "
+            "img.colorspace_settings.name = 'Linear Rec.709'; img.reload(); "
+            "print(json.dumps(first + [list(img.pixels[:])]))")
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True,
+                         timeout=300, check=True).stdout.strip().splitlines()[-1]
+    fmt, name, size, px = json.loads(out)
+    assert (fmt, name, size) == ("TIFF", "sRGB", [24, 16])
+    rgba = np.array(px, np.float32).reshape(16, 24, 4)[::-1]
+    assert np.allclose(rgba[..., :3], _oiio_levels(p)[1][0], rtol=0, atol=1e-6)
