@@ -396,3 +396,16 @@ def test_gpu_blender_reads_a_tx_as_its_level_0(ctx, tmp_path):
     assert (fmt, name, size) == ("TIFF", "sRGB", [24, 16])
     rgba = np.array(px, np.float32).reshape(16, 24, 4)[::-1]
     assert np.allclose(rgba[..., :3], _oiio_levels(p)[1][0], rtol=0, atol=1e-6)
+
+
+def test_gpu_udim_tiles_are_crops_of_one_bake_bit_for_bit(ctx, tmp_path):
+    got = B.bake("flagstone", tmp_path / "t.<UDIM>.npy", size=(40, 24), udim="1001,1002,1012",
+                 channels="color,height", tile=16, progress=False)
+    whole = B.bake(U.window_recipe(B.load_recipe_sets("flagstone", (), None), U.parse_udim("1001,1002,1012")),
+                   tmp_path / "whole.npy", size=(80, 48), channels="color,height", progress=False)
+    for ch, w in zip(("color", "height"), whole):
+        big = np.load(w)
+        for n, (x, y) in ((1001, (0, 24)), (1002, (40, 24)), (1012, (40, 0))):
+            tile = np.load(tmp_path / f"t.{n}_{ch}.npy")
+            assert np.array_equal(tile, big[y:y + 24, x:x + 40]), (n, ch)
+    assert not (tmp_path / "t.1011_color.npy").exists()
