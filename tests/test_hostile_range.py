@@ -2,6 +2,7 @@
 or minutes of work (items 1-4, 9, 10, 12 and 13's API parts). Each test failed before its fix."""
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -191,12 +192,12 @@ def test_render_refuses_what_memory_cannot_hold(monkeypatch):
 
     monkeypatch.setattr(recipes, "memory_bytes", lambda: 16 << 30)
     with pytest.raises(ValueError, match=r"render 100000x100000 of 'f1' \(color, backend gpu\) needs about "
-                                         r"149 GiB \(16 bytes a pixel\), more than 50% of this machine's "
+                                         r"149 GiB \(about 16 bytes a pixel\), more than 50% of this machine's "
                                          r"16 GiB; render it in tiles .*cellgl.to_dask\(recipe, "
                                          r"\(100000, 100000\)\)") as e:
         cellgl.render("f1", 100000, 100000)
     assert "cellgl.io.bake.bake" not in str(e.value)          # past bake's 65536 a side
-    with pytest.raises(ValueError, match=r"needs about 13.4 GiB.*cellgl.io.bake.bake\(recipe, 'big.tif', "
+    with pytest.raises(ValueError, match=r"needs about 26.9 GiB \(about 32 bytes a pixel\).*cellgl.io.bake.bake\(recipe, 'big.tif', "
                                          r"size=\(30000, 30000\)\)"):
         cellgl.render("f1", 30000, 30000, channels=("F1", "F2", "F3", "F4"))
     with pytest.raises(ValueError, match=r"render 2048x1024x4 \(a tile of the 30000x30000 image\).*backend numpy"):
@@ -205,10 +206,60 @@ def test_render_refuses_what_memory_cannot_hold(monkeypatch):
         cellgl.render("pups-cow", 65536, 65536)
 
 
+def test_render_counts_the_gpu_paths_real_peak(monkeypatch):
+    """Issue 48: the guard counted 4 bytes a pixel for height (12 for normal) with no working
+    memory: render(r, 46341, 46341, channels=("height",)) passed it, then raised MemoryError for
+    32 GiB (the peak is 20 bytes a pixel read back, plus the GL buffers). Now one error, before
+    anything is allocated."""
+    from cellgl import recipes
+    from cellgl.texture import evaluation
+
+    def never(*a, **k):
+        raise AssertionError("render() went on past the memory guard")
+
+    monkeypatch.setattr(evaluation, "render", never)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 64 << 30)
+    for chans, gib, per_px in ((("height",), "40", 20), (("normal",), "56", 28),
+                               (("height", "normal"), "64", 32)):
+        with pytest.raises(ValueError, match=rf"render 46341x46341 of 'flagstone' \({', '.join(chans)}, backend "
+                                             rf"gpu\) needs about {gib}\.\d GiB \(about {per_px} bytes a pixel\), "
+                                             r"more than 50% of this machine's 64 GiB"):
+            recipes.render("flagstone", 46341, 46341, channels=chans)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 12 << 30)
+    with pytest.raises(ValueError, match=r"about 20 bytes a pixel"):
+        cellgl.render("flagstone", 20000, 20000, channels=("height",))    # 8 GB: 1.6 GB of results
+
+
+def test_the_gpu_peak_is_what_render_holds(ctx):
+    """gpu_bytes()'s host bytes a pixel are what the GPU path allocates per pixel (tracemalloc's
+    peak at two sizes, its fixed part taken out), for every kind of channel set."""
+    import tracemalloc
+
+    from cellgl import recipes
+
+    def peak(w, h, chans):
+        recipes.render("flagstone", w, h, channels=chans)          # compiled, its buffers made
+        tracemalloc.start()
+        try:
+            recipes.render("flagstone", w, h, channels=chans)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    for chans in (("color",), ("height",), ("normal",), ("id",), ("F1", "F3"),
+                  ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")):
+        # (both above the 1 MiB of fixed work the path also holds for a moment)
+        slope = (peak(960, 480, chans) - peak(640, 480, chans)) / ((960 - 640) * 480)
+        host, gl, buffers = recipes.gpu_bytes(chans)
+        assert abs(slope - host) < 1.0, (chans, slope, host)
+        assert gl >= 8 and buffers >= 2
+
+
 def test_render_tiles_within_memory_are_rendered(monkeypatch, ctx):
     from cellgl import recipes
 
-    monkeypatch.setattr(recipes, "memory_bytes", lambda: 4096 * 16 * 2)        # 4096 pixels of colour
+    # 4096 pixels of colour: 16 bytes each read back, 20 in the GL buffers (its block, the canary)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 4096 * 36 * 2)
     cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=64)
     with pytest.raises(ValueError, match="needs about"):
         cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=65)
@@ -344,3 +395,65 @@ def test_graph_lines_vectorised_are_the_same_bits(monkeypatch, sets, size):
             got = presets.draw_graph(p, w, h, **kw)
             assert got.dtype == want.dtype and got.shape == want.shape
             assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
+# ---------------------------------------------------------------- issue 48, item 21: booleans
+
+@pytest.mark.parametrize("recipe", ["flagstone", "pups-cow"])
+@pytest.mark.parametrize("args, kw, name", [
+    ((True, 4), {}, "width"), ((4, True), {}, "height"), ((8, 8), {"x0": True}, "x0"),
+    ((8, 8), {"y0": np.True_}, "y0"), ((8, 8), {"tile_w": True}, "tile_w"),
+    ((8, 8), {"tile_h": True}, "tile_h"), ((8, 8), {"x0": 1.0}, "x0"), ((8.0, 8), {}, "width"),
+    ((8, 8), {"x0": 8}, "x0"), ((8, 8), {"x0": 4, "tile_w": 5}, "tile_w")])
+def test_render_refuses_booleans_and_non_integers_as_sizes(recipe, args, kw, name):
+    """Issue 48: render(r, True, 4) rendered a 1-pixel-wide image (True is 1 to Python). Every
+    size and offset of every recipe kind's render is a whole number, not a boolean."""
+    with pytest.raises(ValueError, match=rf"^{name} must be an integer in \[\d+, \d+\], got "):
+        cellgl.render(recipe, *args, **kw)
+
+
+def test_booleans_are_not_sizes_counts_or_versions_anywhere(tmp_path):
+    """The same for a volume's depth, bake's size, slices and tile, measure_range's samples."""
+    from cellgl import texture
+    from cellgl.io.bake import bake
+    from cellgl.io.spec import BakeError
+
+    with pytest.raises(ValueError, match=r"^depth must be an integer in \[1, 4096\], got True"):
+        cellgl.render(cellgl.load_recipe("flagstone").replace(dimension=3), 8, 8, depth=True)
+    for kw, words in (({"size": True}, "width True is out of range"),
+                      ({"size": (8, np.True_)}, "height True is out of range"),
+                      ({"size": 8, "depth_slices": True}, "depth True (volume slices) is out of range"),
+                      ({"size": 16, "tile": True}, "--tile True: accepted multiples of 16")):
+        with pytest.raises(BakeError, match=re.escape(words)):
+            bake("flagstone", tmp_path / "a.npy", progress=False, **kw)
+    with pytest.raises(ValueError, match=r"samples must be an integer in \[2, 16777216\], got True"):
+        texture.measure_range("veins", samples=True)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"cellgl_recipe": True}, "cellgl_recipe: unsupported recipe version True; accepted: the whole number 1"),
+    ({"cellgl_recipe": 1.0}, "cellgl_recipe: unsupported recipe version 1.0"),
+    ({"cellgl_recipe": 2}, "cellgl_recipe: unsupported recipe version 2"),
+    ({"name": ""}, "name: empty name ''; accepted: one line of 1..64 printable characters, not blank"),
+    ({"name": "   "}, "name: empty name '   '")])
+@pytest.mark.parametrize("preset", ["flagstone", "pups-cow"])
+def test_recipe_versions_are_whole_numbers_and_names_are_not_empty(tmp_path, preset, change, words):
+    """Issue 48: a recipe file with "cellgl_recipe": true (or "name": "") was accepted."""
+    import json
+
+    from cellgl.texture.schema import RecipeError
+
+    d = cellgl.load_recipe(preset).to_dict()
+    d.update(change)
+    f = tmp_path / "r.json"
+    f.write_text(json.dumps(d))
+    with pytest.raises(RecipeError) as e:
+        cellgl.load_recipe(str(f))
+    assert words in str(e.value), str(e.value)
+    if "name" in change:
+        with pytest.raises(RecipeError, match="empty name"):
+            cellgl.load_recipe(preset).replace(name=change["name"])
+    d.update(cellgl_recipe=1, name="ok")
+    f.write_text(json.dumps(d))
+    assert cellgl.load_recipe(str(f)).name == "ok"

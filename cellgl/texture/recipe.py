@@ -35,7 +35,7 @@ from types import MappingProxyType
 
 from cellgl.basis.reference import minkowski_floor, minkowski_message
 from cellgl.texture import domain
-from cellgl.texture.schema import check_name_doc
+from cellgl.texture.schema import check_name_doc, check_version
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, coerce, value_error, suggest,  # noqa: F401
                                    check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
@@ -290,9 +290,7 @@ class Recipe:
             if k not in _TOP_KEYS:
                 raise RecipeError(f"{where}: unknown key {k!r}{suggest(str(k), _TOP_KEYS)}; "
                                   f"accepted: {', '.join(_TOP_KEYS)}")
-        version = d.get("cellgl_recipe", VERSION)
-        if version != VERSION:
-            raise value_error("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+        check_version(d.get("cellgl_recipe", VERSION))
         folder = base
         values, ramp, image, cimage = _read_groups(d, folder)
         for k in ("name", "doc"):
