@@ -457,3 +457,42 @@ def test_recipe_versions_are_whole_numbers_and_names_are_not_empty(tmp_path, pre
     d.update(cellgl_recipe=1, name="ok")
     f.write_text(json.dumps(d))
     assert cellgl.load_recipe(str(f)).name == "ok"
+
+
+# ---------------------------------------------------------------- issue 48, item 18: the loop-cut advice
+
+def test_the_loop_cut_advice_names_what_the_recipe_has():
+    """The driver-cut error advised "fewer octaves, less supersampling or a smaller smoothness" for
+    a sparse Minkowski flagstone that has none of those: the advice lists only what applies."""
+    from cellgl.texture.dispatch import lighter
+
+    sparse = cellgl.load_recipe("flagstone").set_from_strings(
+        ["metric=minkowski", "minkowski_p=0.5", "density=0.05", "min_points=0"])
+    ways = "; ".join(lighter(sparse))
+    assert "a larger basis.minkowski_p (it has 0.5" in ways and "basis.min_points 1 or more" in ways, ways
+    assert all(w not in ways for w in ("octaves", "supersampling", "smoothness")), ways
+    assert lighter(cellgl.load_recipe("flagstone")) == []
+    heavy = cellgl.load_recipe("f1").replace(smoothness=0.25, c_smooth=1.0, octaves=8.0, fractal="sum",
+                                             dimension=4)
+    ways = "; ".join(lighter(heavy, 4))
+    for w in ("fewer fractal.octaves (it has 8)", "less supersampling (it has 16 samples a pixel)",
+              "a smaller combination.smoothness (it has 0.25)", "a smaller basis.dimension"):
+        assert w in ways, ways
+    assert "minkowski" not in ways and "min_points" not in ways
+    # inactive settings are no lever: octaves without a fractal, min_points with jitter
+    assert lighter(cellgl.load_recipe("f1").replace(octaves=8.0, fractal="none", distribution="jitter",
+                                                    min_points=0)) == []
+
+
+@pytest.mark.slow
+def test_a_sparse_minkowski_recipe_cut_by_the_driver_gets_advice_that_fits(llvmpipe):
+    from cellgl.texture.dispatch import LoopLimitError
+
+    sparse = cellgl.load_recipe("flagstone").set_from_strings(
+        ["metric=minkowski", "minkowski_p=0.5", "density=0.05", "min_points=0"])
+    with pytest.raises(LoopLimitError) as e:
+        cellgl.render(sparse, 48, 48)
+    msg = str(e.value)
+    assert "Recipe 'flagstone' would need shorter searches: a larger basis.minkowski_p" in msg, msg
+    assert "octaves" not in msg and "supersampling" not in msg and "smoothness" not in msg
+    assert np.isfinite(cellgl.render(sparse.replace(min_points=1), 48, 48)["color"]).all()   # it serves
