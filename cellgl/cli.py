@@ -42,9 +42,12 @@ def _add_info(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def _fmt(value: object) -> str:
+    """One line of text: control characters (a driver's string, a file's) written as escapes."""
     if isinstance(value, (tuple, list)):
-        return " ".join(str(v) for v in value) or "none"
-    return "unknown" if value is None else str(value)
+        text = " ".join(str(v) for v in value) or "none"
+    else:
+        text = "unknown" if value is None else str(value)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -52,7 +55,10 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from cellgl.gl import context
 
     ctx = context.get_context(args.backend)
+    from cellgl.gl import shadercache
+
     info = context.context_info(ctx)
+    info["shader_cache"] = shadercache.summary()
     if args.json:
         print(json.dumps(info, indent=2))
     else:

@@ -485,7 +485,7 @@ def test_the_loop_cut_advice_names_what_the_recipe_has():
 
 
 @pytest.mark.slow
-def test_a_sparse_minkowski_recipe_cut_by_the_driver_gets_advice_that_fits(llvmpipe):
+def test_a_sparse_minkowski_recipe_cut_by_the_driver_gets_advice_that_fits(loop_limiter):
     from cellgl.texture.dispatch import LoopLimitError
 
     sparse = cellgl.load_recipe("flagstone").set_from_strings(

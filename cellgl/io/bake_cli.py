@@ -27,6 +27,7 @@ examples:
   cellgl bake crumple -o crumple.png --size 256 --samples 4
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
+  cellgl bake flagstone -o wall.<UDIM>.exr --udim 1001-1012 --size 1024
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
@@ -67,6 +68,21 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--fps", default=None, metavar="FPS",
                    help="frames per second of an animated file (with --frames): .webp 1..95 "
                         "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
+    p.add_argument("--colorspace", default=None, metavar="NAME",
+                   help="colour of a float file (.exr, 32-bit .tif): linear (default; scene-linear "
+                        "Rec.709, tagged lin_rec709_scene) or srgb (sRGB-encoded, tagged); integer "
+                        "formats are always sRGB-encoded")
+    p.add_argument("--udim", default=None, metavar="RANGE",
+                   help="a UDIM set: tiles such as 1001-1012 (1001..1100; -o holds <UDIM>, e.g. "
+                        "wall.<UDIM>.exr); tile 1001+u+10v is uv [u,u+1)x[v,v+1), --size each")
+    p.add_argument("--udims", default=None, metavar="UxV",
+                   help="a UDIM set of U columns by V rows from 1001 (as --udim)")
+    p.add_argument("--mips", action="store_true",
+                   help="also write the mip chain, each level rendered at its own size (never "
+                        "downsampled): in the file for .dds/.ktx2, else FILE_mip1.png .. (1x1)")
+    p.add_argument("--tiled", action="store_true",
+                   help="a tiled .exr/.tif (64x64 tiles); with --mips the levels go inside it, as "
+                        "in a .tx (always tiled and mip-mapped)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -82,6 +98,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
+    if not args.output:     # -o '': the one rule's message, not "'.': unknown extension"
+        from cellgl.io.tempfiles import check_output
+
+        try:
+            check_output(args.output)
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
     ext = Path(args.output).suffix.lower()
     if args.frames is not None and ext == ".zarr":
         raise BakeError(f"--frames {args.frames}: a .zarr bake writes one image; accepted for "
@@ -89,6 +112,14 @@ def run_cli(args: argparse.Namespace) -> int:
     if args.fps is not None and (args.frames is None or ext not in ANIMATED):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
+    for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
+                        ("--tiled", args.tiled or None)):
+        if value is not None and (args.frames is not None or ext == ".zarr"):
+            raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
+                            f"not with --frames or a .zarr output")
+    if getattr(args, "mips", False) and (args.frames is not None or ext == ".zarr"):
+        raise BakeError(f"--mips: for a single bake (.png, .exr, .tif, .npy: numbered files; "
+                        f".dds, .ktx2: in the file); not with {'--frames' if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
@@ -109,7 +140,8 @@ def run_cli(args: argparse.Namespace) -> int:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
-                     progress=not args.quiet, memory_budget=budget)
+                     progress=not args.quiet, memory_budget=budget, mips=args.mips,
+                     colorspace=args.colorspace, udim=args.udim, udims=args.udims, tiled=args.tiled)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None
@@ -118,6 +150,11 @@ def run_cli(args: argparse.Namespace) -> int:
         for p in paths:
             print(f"wrote {p} ({os.path.getsize(p) / 1024:.0f} KiB, {secs:.1f} s)",
                   file=sys.stderr)
+        if paths.colorspace:
+            from cellgl.io.colour import COLORSPACES
+
+            cs = COLORSPACES[paths.colorspace]
+            print(f"colour: {cs.ocio_name} ({cs.interop_id})", file=sys.stderr)
     return 0
 
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
                             quantize)
-from cellgl.io.tempfiles import check_output, commit_lock, human_size, scratch_dir
+from cellgl.io.tempfiles import check_output, commit_lock, human_size, naming_destination_in, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
@@ -173,23 +173,9 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
                 names += bake(frame_recipe(recipe, k, frames), target, size=size, channels=channels,
                               bit_depth=bit_depth, progress=progress and frames == 1, **bake_kw)
             except (BakeError, OSError) as exc:     # name the frame's file, not the hidden folder
-                raise _naming_output(exc, tmp, parent) from None
+                raise naming_destination_in(exc, tmp, parent) from None
             bar.step()
         return _move_all(names, parent)
-
-
-def _naming_output(exc: BaseException, tmp: Path, parent: Path) -> BaseException:
-    """``exc`` with the hidden folder ``tmp`` of the frames replaced by the output's ``parent``."""
-    def fix(text):
-        if text is None:
-            return None
-        text = str(text)
-        text = text.replace(str(tmp) + os.sep, "" if str(parent) == "." else str(parent) + os.sep)
-        return text.replace(str(tmp), str(parent))
-
-    if isinstance(exc, OSError):
-        return OSError(exc.errno, fix(exc.strerror or str(exc)), fix(exc.filename))
-    return type(exc)(fix(str(exc)))
 
 
 def _move_all(files: list[Path], parent: Path) -> list[Path]:

@@ -23,7 +23,7 @@ class BakeError(ValueError):
 
 #: Channels render() produces -> samples per pixel.
 CHANNELS: dict[str, int] = {"color": 4, "height": 1, "normal": 3, "id": 1,
-                            "F1": 1, "F2": 1, "F3": 1, "F4": 1}
+                            "F1": 1, "F2": 1, "F3": 1, "F4": 1, "roughness": 1, "ao": 1, "metallic": 1}
 
 
 @dataclass(frozen=True)
@@ -43,6 +43,8 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
+    # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.texfile)
+    ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
 }
 
 #: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.io.frames`)
@@ -246,10 +248,17 @@ class Encoding:
     channel: str
     samples: int
     dtype: np.dtype
+    #: the colour space of ``color`` in the file (cellgl.io.colour.COLORSPACES); None for data
+    #: channels (never converted, never tagged) and for .npy
+    colorspace: str | None = None
 
     def encode(self, a: np.ndarray) -> np.ndarray:
         if self.channel == "color":
             a = np.asarray(a)[..., :3]
+            if self.colorspace == "linear":
+                from cellgl.io.colour import srgb_to_linear
+
+                return srgb_to_linear(a).astype(self.dtype)
         if self.channel == "id":
             if self.samples == 3:
                 return id_colors(a)
@@ -259,8 +268,9 @@ class Encoding:
         return np.asarray(a).astype(self.dtype, copy=False)
 
 
-def encoding_of(channel: str, ext: str, bits: int) -> Encoding:
-    """How ``channel`` is stored in a ``ext`` file of ``bits`` bits per sample."""
+def encoding_of(channel: str, ext: str, bits: int, colorspace: str | None = None) -> Encoding:
+    """How ``channel`` is stored in a ``ext`` file of ``bits`` bits per sample; ``colorspace``
+    (already checked: :func:`cellgl.io.colour.check_colorspace`) applies to ``color`` only."""
     fmt = FORMATS[ext]
     samples = CHANNELS[channel]
     if channel == "color":
@@ -272,14 +282,15 @@ def encoding_of(channel: str, ext: str, bits: int) -> Encoding:
                                 f"colour preview, so --depth must be 8 (got {bits}); for raw "
                                 f"uint32 ids use .tif, .exr or .npy")
             return Encoding(channel, 3, np.dtype(np.uint8))
-        if ext in (".tif", ".tiff") and bits != 32:
+        if ext in (".tif", ".tiff", ".tx") and bits != 32:
             raise BakeError(f"--channels id with {ext}: ids are uint32, so --depth must be 32 "
                             f"(got {bits})")
         return Encoding(channel, 1, np.dtype(np.uint32))
+    space = colorspace if channel == "color" else None
     if fmt.stream == "band" and ext == ".exr":
-        return Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32))
+        return Encoding(channel, samples, np.dtype(np.float16 if bits == 16 else np.float32), space)
     return Encoding(channel, samples, np.dtype({8: np.uint8, 16: np.uint16,
-                                                32: np.float32}[bits]))
+                                                32: np.float32}[bits]), space)
 
 
 #: EXR channel names per cellgl channel.
