@@ -267,7 +267,7 @@ def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
 # --------------------------------------------------------------------------------------------
 
 ERRORS = [
-    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy (an image, or "
+    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy, .tx (an image, or "
                           "with --frames N a numbered sequence); .webp, .gif (one animated file, with "
                           "--frames N); .zarr (a folder baked on Dask)"),
     (["-o", "{d}/a"], "unknown extension '(none)'"),
