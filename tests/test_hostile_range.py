@@ -496,3 +496,13 @@ def test_a_sparse_minkowski_recipe_cut_by_the_driver_gets_advice_that_fits(loop_
     assert "Recipe 'flagstone' would need shorter searches: a larger basis.minkowski_p" in msg, msg
     assert "octaves" not in msg and "supersampling" not in msg and "smoothness" not in msg
     assert np.isfinite(cellgl.render(sparse.replace(min_points=1), 48, 48)["color"]).all()   # it serves
+
+
+@pytest.mark.parametrize("preset", ["flagstone", "pups-cow"])
+@pytest.mark.parametrize("key, value", [("name", True), ("name", 5), ("doc", None), ("name", "")])
+def test_names_and_docs_are_strings_in_python_too(preset, key, value):
+    """Recipe(name=True) / .replace(name=5) were made strings ('True', '5') without a word."""
+    from cellgl.texture.schema import RecipeError
+
+    with pytest.raises(RecipeError, match=rf"^{key}: "):
+        cellgl.load_recipe(preset).replace(**{key: value})

@@ -201,7 +201,7 @@ class PupsRecipe:
                                   f"{', '.join(used)}")
         self._values = {k: vals[k] for k in used if k != "image"}
         self.image = image
-        self.name, self.doc = check_name_doc(str(name), str(doc))
+        self.name, self.doc = check_name_doc(name, doc)
         if isinstance(outputs, str):
             outputs = [outputs]
         if not isinstance(outputs, (list, tuple)) or not outputs:

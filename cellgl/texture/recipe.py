@@ -128,7 +128,7 @@ class Recipe:
             if k not in PARAMS_BY_NAME:
                 raise RecipeError(f"{k}: unknown parameter{suggest(k, PARAMS_BY_NAME)}")
             vals[k] = coerce(PARAMS_BY_NAME[k], v, f"{PARAMS_BY_NAME[k].group}.{k}")
-        self.name, self.doc = check_name_doc(str(name), str(doc))
+        self.name, self.doc = check_name_doc(name, doc)
         self._values = vals
         self.ramp = _ramp(ramp, "color.ramp")
         self.outputs = _outputs(outputs, "outputs")
