@@ -33,7 +33,7 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
-from cellgl.basis.reference import minkowski_floor, minkowski_message
+from cellgl.basis.reference import minkowski_floor, minkowski_message, sparse_message
 from cellgl.texture import domain
 from cellgl.texture.schema import check_name_doc, check_version
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, coerce, value_error, suggest,  # noqa: F401
@@ -485,6 +485,8 @@ def _check(r: Recipe) -> None:
                           "accepted: seed 0")
     if v["metric"] == "minkowski" and v["minkowski_p"] < minkowski_floor(v["dimension"]):
         raise RecipeError(minkowski_message("basis.minkowski_p", v["minkowski_p"], v["dimension"], "basis.dimension"))
+    if why := sparse_message(v):           # min_points 0: the sample's own cell may be empty
+        raise RecipeError(why)
     if v["smooth"] == "exp" and v["smoothness"] > 0.25:
         raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
                           "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "
