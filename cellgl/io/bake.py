@@ -180,7 +180,7 @@ def _check_name(path: Path) -> None:
 def _check_tile(tile) -> int | None:
     if tile is None:
         return None
-    if not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
+    if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
         raise BakeError(f"--tile {tile}: accepted multiples of 16 in 16..8192")
     return int(tile)
 

@@ -99,11 +99,16 @@ def parse_size(text: str) -> tuple[int, int, int | None]:
     return w, h, d
 
 
+def _whole(v) -> bool:
+    """A whole number: a Python or NumPy integer, not a boolean (``True`` is not a size)."""
+    return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+
+
 def check_size(w: int, h: int, d: int | None, what: str) -> None:
     for name, v in (("width", w), ("height", h)):
-        if not isinstance(v, (int, np.integer)) or not 1 <= v <= MAX_SIDE:
+        if not _whole(v) or not 1 <= v <= MAX_SIDE:
             raise BakeError(f"{what}: {name} {v} is out of range; accepted 1..{MAX_SIDE}")
-    if d is not None and (not isinstance(d, (int, np.integer)) or not 1 <= d <= MAX_SLICES):
+    if d is not None and (not _whole(d) or not 1 <= d <= MAX_SLICES):
         raise BakeError(f"{what}: depth {d} (volume slices) is out of range; "
                         f"accepted 1..{MAX_SLICES}")
     n = w * h * (d or 1)
