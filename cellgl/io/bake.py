@@ -1,7 +1,8 @@
 """Bake a recipe (or a preset) to an image or volume file: :func:`bake` (``cellgl bake``, whose
 command line is :mod:`cellgl.io.bake_cli`).
 
-The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``). Output
+The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``; GPU
+textures ``.dds``/``.ktx2`` are :mod:`cellgl.io.gputex`'s). Output
 larger than one tile is rendered tile by tile and streamed to the file, so memory stays bounded;
 every pixel is rendered at the same uv as in a one-pass bake, so the two give the same bits.
 Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.md``.
@@ -25,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl.io import gputex
 from cellgl import _interrupt
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
@@ -298,7 +300,7 @@ def _check_tile(tile) -> int | None:
 
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
-         memory_budget=DEFAULT_BUDGET, mips=False) -> list[Path]:
+         memory_budget=DEFAULT_BUDGET, mips=False, compress=None, supercompression=None) -> list[Path]:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -339,7 +341,15 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         Also write the mip chain, every level rendered from the recipe at its own size
         (:mod:`cellgl.io.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
         the file ``<stem>_mip<k><ext>`` beside level 0 (the file without ``mips``, the same
-        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1.
+        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1; ``.dds``/``.ktx2`` hold the
+        levels in the file (``max(1, floor(W / 2^k))``, as those formats define them).
+    compress : str, optional
+        ``.dds``/``.ktx2`` only: the block format, ``bc1``, ``bc3``, ``bc4``, ``bc5``, ``bc7`` or
+        ``none`` for every channel, or per channel ``"color=bc1,height=none"``; default per
+        channel (colour BC7 sRGB, normal BC5, height BC4; F1..F4 and id are never compressed).
+        Refused where the channel cannot use it (:data:`cellgl.io.gputex.CHOICES`).
+    supercompression : {None, "zstd"}
+        ``.ktx2`` only: zstd supercompression of every level.
 
     Returns
     -------
@@ -368,7 +378,16 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
             raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
-    bits = check_bits(ext, bit_depth)
+    texture = ext in gputex.EXTS
+    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gputex)
+        tex_outputs = gputex.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
+                                          (w, h, depth_slices))
+    elif compress is not None or supercompression is not None:
+        flag = "--compress" if compress is not None else "--zstd"
+        raise BakeError(f"{flag}: only for GPU texture files (-o NAME.dds or NAME.ktx2); {ext} "
+                        f"holds plain samples")
+    else:
+        bits = check_bits(ext, bit_depth)
     tile = _check_tile(tile)
     try:
         samples = antialias.check_samples(samples)
@@ -377,7 +396,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     if not isinstance(mips, bool):
         raise BakeError(f"mips={mips!r}: accepted True or False")
     outputs = []
-    for p, chs in output_paths(path, channels):
+    for p, chs in ([] if texture else output_paths(path, channels)):
         outputs.append(_Output(p, chs, tuple(encoding_of(c, ext, bits) for c in chs)))
     if mips:
         outputs = _mip_outputs(outputs, w, h, depth_slices)
@@ -399,6 +418,14 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
                         f"(try --set dimension=3)")
+    if texture:
+        for o in tex_outputs:
+            _check_name(o.path)
+        return gputex.bake_texture(
+            recipe, tex_outputs, ext, (w, h, depth_slices), samples=samples, tile=tile, budget=memory_budget,
+            mip_chain=mips, supercompression=supercompression,
+            progress=lambda total, label, unit: Progress(total, label, progress, unit=unit),
+            meta=lambda c: _meta(recipe, _Output(path, (c,), ()), _Plan(w, h, depth_slices, 1, 1)))
     for out in outputs:
         _check_name(out.path)
     _check_disk(path.parent, w, h, depth_slices, outputs, ext)

@@ -18,12 +18,15 @@ _EPILOG = """\
 formats (from the extension) and --depth (bits per sample):
   .png  8 (default) or 16     .exr  16 (half) or 32 (float, default)
   .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
+  .dds, .ktx2  GPU textures, a format per channel (--compress; --depth: plain samples' bits)
 channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
   cellgl bake crumple -o crumple.png --size 256 --samples 4
+  cellgl bake flagstone -o f.dds --size 1024 --mips --channels color,normal   # BC7 sRGB, BC5
+  cellgl bake flagstone -o f.ktx2 --size 1024 --mips --zstd --compress bc1
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
@@ -39,7 +42,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
                    help="a preset name (cellgl presets) or a recipe .json file")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file: .png, .exr, .tif/.tiff or .npy; or a .zarr directory (Dask)")
+                   help="output file: .png, .exr, .tif/.tiff, .npy, .dds or .ktx2; or a .zarr directory (Dask)")
     p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}", metavar="W[xH[xD]]",
                    help="pixels (default %(default)s); a third number bakes a volume of D slices")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
@@ -67,6 +70,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--mips", action="store_true",
                    help="also write the mip chain, each level rendered at its own size (never "
                         "downsampled): in the file for .dds/.ktx2, else FILE_mip1.png .. (1x1)")
+    p.add_argument("--compress", default=None, metavar="FORMAT",
+                   help=".dds/.ktx2: bc1|bc3|bc4|bc5|bc7|none for every channel, or per channel "
+                        "color=bc1,height=none (default: color bc7 sRGB, normal bc5, height bc4; "
+                        "F1..F4 float, id R32_UINT, never compressed)")
+    p.add_argument("--zstd", action="store_true",
+                   help=".ktx2: zstd supercompression of every level")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -112,7 +121,8 @@ def run_cli(args: argparse.Namespace) -> int:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
-                     progress=not args.quiet, memory_budget=budget, mips=args.mips)
+                     progress=not args.quiet, memory_budget=budget, mips=args.mips,
+                     compress=args.compress, supercompression="zstd" if args.zstd else None)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None

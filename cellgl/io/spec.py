@@ -42,6 +42,10 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
+    # GPU textures (cellgl.io.gputex): the format is chosen per channel; --depth sets the bits of
+    # plain (uncompressed) samples, its default per channel; mip levels and volumes in the file
+    ".dds": _Format("DDS", (8, 16, 32), 8, True, "level"),
+    ".ktx2": _Format("KTX2", (8, 16, 32), 8, True, "level"),
 }
 
 MAX_SIDE = 65536          #: largest width or height
