@@ -514,7 +514,14 @@ def _meta(recipe, out: _Output, plan: _Plan) -> str:
         rec = None
     size = [plan.width, plan.height] + ([plan.slices] if plan.slices else [])
     return json.dumps({"generator": "cellgl", "recipe": rec, "size": size,
-                       "channels": list(out.channels)}, sort_keys=True, default=str)
+                       "channels": list(out.channels), "color_space": color_spaces(out.channels)},
+                      sort_keys=True, default=str)
+
+
+def color_spaces(channels) -> dict[str, str]:
+    """What each channel's samples are: ``"sRGB"`` (colour, display-encoded; PNGs carry an sRGB
+    chunk) or ``"data"`` (linear values, never tagged as colour)."""
+    return {c: "sRGB" if c == "color" else "data" for c in channels}
 
 
 def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: Path) -> None:
@@ -532,7 +539,7 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
             (e,) = out.encodings
             cio.write_png(tmp, (b[e.channel] for b in _bands(tiles, plan)), plan.width,
                           plan.height, e.samples, e.dtype.itemsize * 8,
-                          text={"Software": "cellgl", "cellgl": meta})
+                          text={"Software": "cellgl", "cellgl": meta}, srgb=e.channel == "color")
         elif ext == ".exr":
             _write_exr(tmp, tiles, out, plan, meta)
         elif ext == ".npy":
