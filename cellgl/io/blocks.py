@@ -5,8 +5,9 @@ wrapper of Bartosz Taudul's etcpak; BC1, BC3, BC4, BC5 and BC7), nothing here: t
 pads images to whole 4 x 4 blocks, cuts them into bands of block rows and runs the bands on a
 pool of worker processes. etcpak holds the GIL while it encodes (a thread beside it stalls), so
 the pool is of processes (``forkserver``: a clean interpreter that never held a GL context, forked
-per worker; a band travels as bytes), one per usable core (:func:`cellgl.io.formats.usable_cores`);
-work of a few bands or a single core is encoded in this process. Blocks are independent and the
+per worker; a band travels as bytes), one per usable core (:func:`cellgl.io.formats.usable_cores`),
+started on first use and kept for the process's later encodes; work of a few bands or a single
+core is encoded in this process. Blocks are independent and the
 block stream of a BCn texture is row-major by block rows, so the bands' bytes joined are the
 whole image's, bit for bit.
 
@@ -19,6 +20,7 @@ as the DDS and KTX2 specifications say), so the padding costs no precision at th
 from __future__ import annotations
 
 import multiprocessing
+import threading
 from concurrent.futures import ProcessPoolExecutor
 from collections.abc import Sequence
 
@@ -34,6 +36,28 @@ BLOCK_BYTES = {"bc1": 8, "bc3": 16, "bc4": 8, "bc5": 16, "bc7": 16}
 _BAND_ROWS = 64
 #: fewer block rows than this in all: encode here (a pool costs about 0.1 s to start)
 _POOL_MIN_ROWS = 2 * _BAND_ROWS
+
+
+_POOLS: dict[int, ProcessPoolExecutor] = {}
+_POOLS_LOCK = threading.Lock()
+
+
+def _pool(workers: int) -> ProcessPoolExecutor:
+    """The process pool of ``workers`` (started on first use, kept for the next encodes: its
+    start costs a few tenths of a second; shut down at exit; a broken one is replaced)."""
+    with _POOLS_LOCK:
+        pool = _POOLS.get(workers)
+        if pool is None or getattr(pool, "_broken", False):
+            pool = _POOLS[workers] = ProcessPoolExecutor(
+                workers, mp_context=multiprocessing.get_context("forkserver"), initializer=_worker_init)
+        return pool
+
+
+def _worker_init() -> None:
+    """A worker leaves Ctrl-C to the bake (which drops the bands not started), printing nothing."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def have_encoder() -> bool:
@@ -128,9 +152,14 @@ def encode_levels(fmt: str, images: Sequence[np.ndarray], workers: int | None = 
     if workers == 1 or len(flat) < 2 or total_rows < _POOL_MIN_ROWS:
         done = [_encode_band(*j) for j in flat]
     else:
-        ctx = multiprocessing.get_context("forkserver")
-        with ProcessPoolExecutor(min(workers, len(flat)), mp_context=ctx) as pool:
-            done = list(pool.map(_encode_band, *zip(*flat)))
+        pool = _pool(workers)
+        futures = [pool.submit(_encode_band, *j) for j in flat]
+        try:
+            done = [f.result() for f in futures]
+        except BaseException:       # Ctrl-C, a failed band: the bands not started are dropped
+            for f in futures:
+                f.cancel()
+            raise
     out, i = [], 0
     for js in jobs:
         out.append(b"".join(done[i:i + len(js)]))
