@@ -1,6 +1,6 @@
 """Colour is what it says (issue 45 item 5): a colour PNG carries an sRGB chunk (and the gAMA /
 cHRM the PNG specification pairs with it); data maps (height, normal, id, F1..F4) carry no colour
-chunk at all; the cellgl metadata names each channel's colour space."""
+chunk at all; the cellgl metadata names the colour channel's colour space, and no data channel's."""
 from __future__ import annotations
 
 import json
@@ -56,4 +56,7 @@ def test_bake_tags_colour_and_leaves_data_untagged(ctx, tmp_path):
         with Image.open(p) as im:
             assert im.info.get("cellgl") is not None
             meta = json.loads(im.info["cellgl"])
-        assert meta["color_space"] == {channel: "sRGB" if channel == "color" else "data"}
+        if channel == "color":
+            assert meta["colorspace"] == {"color": "srgb_rec709_scene"}
+        else:
+            assert "colorspace" not in meta          # data: never listed as colour

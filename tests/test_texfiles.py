@@ -397,3 +397,24 @@ def test_4096_bc7_with_mips(ctx, tmp_path):
         (w, h, z), blob = f["levels"][k]
         got = decode(f["dxgi"], (w, h, z), blob)[0, ..., :3]
         assert psnr(got, _reference(recipe, (w, h), "color")[0]) >= FLOORS[("bc7", "color")]
+
+
+def test_material_masks_are_bc4_or_plain(ctx, tmp_path):
+    recipe = load_recipe("flagstone")
+    paths = B.bake(recipe, tmp_path / "m.dds", size=(20, 12), channels=("roughness", "ao", "metallic"), mips=True,
+                   progress=False)
+    for p in paths:
+        channel = p.stem.split("_", 1)[1]
+        f = read(p)
+        assert DXGI[f["dxgi"]][0] == "BC4_UNORM"
+        for (w, h, z), blob in f["levels"]:
+            got = decode(f["dxgi"], (w, h, z), blob)[0, ..., 0]
+            assert psnr(got, _reference(recipe, (w, h), channel)[0]) >= FLOORS[("bc4", "height")]
+    plain = B.bake(recipe, tmp_path / "r.ktx2", size=(20, 12), channels=("roughness",), compress="none",
+                   progress=False)[0]
+    f = read(plain)
+    assert DXGI[f["dxgi"]][0] == "R8_UNORM"
+    assert np.array_equal(decode(f["dxgi"], (20, 12, 1), f["levels"][0][1])[0, ..., 0],
+                          _reference(recipe, (20, 12), "roughness")[0])
+    with pytest.raises(BakeError, match="--compress bc7 for ao: a mask is one channel"):
+        B.bake(recipe, tmp_path / "x.dds", size=8, channels=("ao",), compress="bc7", progress=False)

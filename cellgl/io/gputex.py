@@ -3,7 +3,8 @@
 Per channel the format a pipeline expects, chosen by default or by ``compress`` (``--compress``),
 refused where it makes no sense (:data:`CHOICES`): colour is sRGB (BC7, BC1 or BC3 blocks, or
 plain ``R8G8B8A8_SRGB``), the data maps linear (``UNORM``/float): normals BC5 (red and green:
-x and y; a reader rebuilds z), height BC4 (or plain 8/16-bit ``UNORM`` or float), ``F1``..``F4``
+x and y; a reader rebuilds z), height and the masks (roughness, ao, metallic) BC4 (or plain
+8/16-bit ``UNORM`` or float), ``F1``..``F4``
 plain floats (``R32_SFLOAT``, 16-bit ``R16_SFLOAT``), ``id`` ``R32_UINT`` (never compressed). The
 8- and 16-bit samples are the PNG bake's, bit for bit (cellgl.io.spec's encodings); the blocks
 come from etcpak on every core (cellgl.io.blocks); the containers are cellgl.io.containers.
@@ -42,12 +43,15 @@ CHOICES: dict[str, dict[str, object]] = {
     "normal": {"bc5": "BC5_UNORM", "bc7": "BC7_UNORM", "bc1": "BC1_UNORM", "bc3": "BC3_UNORM",
                "none": {8: "R8G8B8A8_UNORM"}},
     "height": {"bc4": "BC4_UNORM", "none": {16: "R16_UNORM", 8: "R8_UNORM", 32: "R32_SFLOAT"}},
+    **{m: {"bc4": "BC4_UNORM", "none": {8: "R8_UNORM", 16: "R16_UNORM", 32: "R32_SFLOAT"}}
+       for m in ("roughness", "ao", "metallic")},
     "id": {"none": {32: "R32_UINT"}},
     **{f: {"none": {32: "R32_SFLOAT", 16: "R16_SFLOAT"}} for f in ("F1", "F2", "F3", "F4")},
 }
 _WHY_NOT = {"color": "colour has three channels (BC4 holds one, BC5 two)",
             "normal": "a normal needs two channels at least (BC4 holds one)",
             "height": "height is one channel: BC4, or plain samples",
+            "roughness": "a mask is one channel: BC4, or plain samples",
             "id": "ids are exact uint32 values (R32_UINT); blocks would change them",
             "F1": "distances are floats (R32_SFLOAT/R16_SFLOAT); blocks hold 8-bit [0, 1] values"}
 
@@ -83,7 +87,7 @@ def parse_compress(compress, channels) -> dict[str, str]:
                         f"or CHANNEL=VALUE,... (e.g. color=bc1,height=none)")
     for c, v in per.items():
         if v not in CHOICES[c]:
-            why = _WHY_NOT.get(c if not c.startswith("F") else "F1", "")
+            why = _WHY_NOT.get("F1" if c.startswith("F") else "roughness" if c in ("ao", "metallic") else c, "")
             raise BakeError(f"--compress {v} for {c}: {why}; accepted for {c}: "
                             f"{accepted_list(CHOICES[c])} (default {next(iter(CHOICES[c]))}); "
                             f"per channel: --compress {c}=VALUE,...")

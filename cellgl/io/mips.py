@@ -27,10 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ROUNDINGS", "mip_sizes", "level_size", "level_count", "level_path", "render_level", "render_chain"]
+__all__ = ["ROUNDINGS", "RENDER_TILE", "mip_sizes", "level_size", "level_count", "level_path", "render_level",
+           "render_chain"]
 
 #: the largest tile side one render call of :func:`render_level` gets (as the bake's MAX_TILE)
-_TILE = 2048
+RENDER_TILE = 2048
 
 
 ROUNDINGS = ("up", "down")
@@ -108,7 +109,7 @@ def render_level(recipe, width: int, height: int, level: int, *, depth: int | No
     size = level_size(width, height, level, depth, rounding)
     w, h = size[0], size[1]
     d = size[2] if depth is not None else None
-    side = int(tile or _TILE)
+    side = int(tile or RENDER_TILE)
     extra = {"samples": samples} if samples != 1 else {}
     convert = dict(convert or {})
 

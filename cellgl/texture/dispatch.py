@@ -52,6 +52,7 @@ _OUTPUTS = {
     "F": (3, 4, 4, ("F1", "F2", "F3", "F4")),
     "grad": (4, 4, 8, ("grad", "value")),
     "id": (5, 1, 16, ("id",)),
+    "material": (8, 4, 32, ("roughness", "ao", "metallic")),
 }
 #: the search's loop passes the watchdog assumes for one search of a texture (the search stops at
 #: the ring cap; llvmpipe cuts and the canary refuses a vector past 65535)
@@ -83,7 +84,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=texture.LOCAL_SIZE, CELL_TEX_OUT=mask,
              CELL_TEX_SUPERSAMPLE=int(supersample))
     for name, (_, _, bit, _) in _OUTPUTS.items():
-        d[f"CELL_TEX_WANT_{name.upper()}"] = int(bool(mask & bit))
+        if name != "material" or mask & bit:       # (no new define in the programs without it)
+            d[f"CELL_TEX_WANT_{name.upper()}"] = int(bool(mask & bit))
     # No loop budget of the search's own (cellular.glsl): a texture invocation searches once per
     # octave and sub-sample and reports no per-sample flag; the canary reports the driver's.
     d["CELL_LOOP_BUDGET"] = 1 << 30
@@ -104,7 +106,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
         loops = np.empty((count, 1), np.int32)
         outputs.append(_runner.Output("loops", 10, loops))
     baked = BAKE_CONSTANTS and pan is None
-    files = {"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe)} if baked else None
+    files = ({"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe, bool(mask & 32))}
+             if baked else None)
 
     def prog_setup(prog):
         if not baked:
@@ -112,9 +115,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
                                  pan_only=pan_only and pan is not None)
         elif recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
             texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
-        for name, value in (("u_loop_canary", 2), ("u_loop_probe", PROBE_PASSES)):
-            if name in prog:
-                prog[name].value = value
+        if "u_loop_probe" in prog:
+            prog["u_loop_probe"].value = PROBE_PASSES
         setup(prog)
 
     searches = _searches(recipe) * (int(supersample) ** 2 + 1 if supersample > 1 else 1)
@@ -141,8 +143,9 @@ def _searches(recipe) -> int:
 def _check_cut(cut: int, count: int) -> None:
     if cut:
         raise LoopLimitError(
-            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa llvmpipe allows 65535 loop "
-            "passes per SIMD vector of samples): their values would be wrong, so none are returned. "
+            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa's llvmpipe, and lavapipe "
+            "under zink, allow 65535 loop passes per SIMD vector of samples): their values would be "
+            "wrong, so none are returned. "
             "Use fewer octaves, less supersampling or a smaller smoothness (docs/exactness.md)")
 
 
@@ -165,4 +168,6 @@ def _unpack(channels, out: dict, loops) -> dict:
             res[c] = out["grad"][:, :3].copy()
         elif c == "value":
             res[c] = out["grad"][:, 3].copy()
+        elif c in ("roughness", "ao", "metallic"):
+            res[c] = out["material"][:, ("roughness", "ao", "metallic").index(c)].copy()
     return res

@@ -192,14 +192,17 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
 
     Each pixel is band-limited to its footprint (the recipe's ``antialias``) and, with
     ``samples = n^2`` (1, 4, 9, ..., 64), averaged over the centres of an n x n grid of
-    sub-pixels (colour, height, normal; ``id``, ``F1``..``F4`` from the pixel centre); see
+    sub-pixels (colour, height, normal, roughness, ao, metallic; ``id``, ``F1``..``F4`` from the
+    pixel centre); see
     :mod:`cellgl.texture.antialias`.
 
     Returns
     -------
     dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
     float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
-    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
+    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32; ``roughness``, ``ao``, ``metallic``
+    (H, W) float32 in [0, 1] (the recipe's ``material`` section, :mod:`cellgl.texture.material`).
+    Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
     """
     recipe = load_recipe(recipe)
@@ -247,7 +250,7 @@ def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
     """NumPy twin of texture.comp's supersampling: the averaged channels at pixel centres ``pts``."""
     from cellgl.texture import reference as texture_reference
 
-    avg = [c for c in channels if c in ("color", "height", "normal")]
+    avg = [c for c in channels if c in ("color", "height", "normal", "roughness", "ao", "metallic")]
     if not avg:
         return {}
     n = antialias.grid_side(samples)

@@ -17,7 +17,7 @@ __all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "check_name_d
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
-CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")
+CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4", "roughness", "ao", "metallic")
 
 
 class RecipeError(ValueError):
