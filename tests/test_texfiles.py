@@ -362,6 +362,8 @@ def test_refusals_before_any_work(tmp_path):
         (dict(size=16385), "sides are at most 16384"),
         (dict(size="4096x16x16"), "volume texture's sides are at most 2048"),
         (dict(supercompression="zstd"), "zstd supercompression is a KTX2 feature"),
+        (dict(size=4096, memory_budget=64 << 20), "about 80 MB, more than --memory 64 MB; "
+                                                 "accepted --memory 80 or more"),
     ]
     for kw, msg in cases:
         with pytest.raises(BakeError, match=msg):

@@ -172,10 +172,24 @@ def _tile_side(channels, budget: int) -> int:
     return max(16, min(2048, math.isqrt(max(1, budget // 2) // per_px) // 16 * 16))
 
 
-def _level_bytes(out: TexOutput, a: np.ndarray, depth) -> bytes | list[np.ndarray]:
+def _level_bytes(out: TexOutput, a: np.ndarray, depth) -> bytes:
+    """One level's bytes in the file: plain samples, or the blocks of each slice (every core)."""
     if not out.fmt.compressed:
         return np.ascontiguousarray(a).tobytes()
-    return list(a) if depth is not None else [a]      # BCn: slice by slice
+    slices = list(a) if depth is not None else [a]
+    return b"".join(blocks.encode_levels(out.fmt.codec, slices, perceptual=out.fmt.srgb))
+
+
+def memory_need(outputs: list[TexOutput], chain) -> int:
+    """Bytes a bake holds beyond the render of one tile: level 0's samples of every output (at
+    most 4 a texel before block encoding) and every output's file bytes, all levels."""
+    w, h = chain[0][:2]
+    d = chain[0][2] if len(chain[0]) > 2 else 1
+    need = 0
+    for o in outputs:
+        need += w * h * d * (4 if o.fmt.compressed else o.fmt.nbytes)
+        need += sum(containers.level_bytes(o.fmt, *s) for s in chain)
+    return need
 
 
 def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: int, tile, budget: int,
@@ -183,29 +197,27 @@ def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: i
     """Render and write ``outputs`` (from :func:`plan_outputs`), all or none."""
     w, h, d = size
     chain = mips.mip_sizes(w, h, d, rounding="down") if mip_chain else [(w, h) + ((d,) if d else ())]
+    need = memory_need(outputs, chain)
+    if need > budget:
+        mb = -(-need // (1 << 20))
+        raise BakeError(f"size {w}x{h}{'' if d is None else f'x{d}'} to {ext}: the bake holds level 0's "
+                        f"samples and the files' bytes, about {mb} MB, more than --memory {budget >> 20} MB; "
+                        f"accepted --memory {mb} or more, fewer channels a bake, or a smaller --size")
     channels = tuple(o.channel for o in outputs)
     side = int(tile) if tile else _tile_side(channels, budget)
     with atomic_paths([o.path for o in outputs]) as tmps:
-        per_out: list[list] = [[] for _ in outputs]
-        bar = progress(len(chain), f"rendering {len(chain)} level(s) of {outputs[0].path.name}", unit="levels")
+        per_out: list[list[bytes]] = [[] for _ in outputs]
+        bar = progress(len(chain), f"baking {len(chain)} level(s) of {outputs[0].path.name}", unit="levels")
         with bar:
-            for k in range(len(chain)):
+            for k in range(len(chain)):     # one level's samples held at a time; blocks on every core
                 convert = {o.channel: (lambda a, o=o: _samples(o.fmt, o.channel, a)) for o in outputs}
                 res = mips.render_level(recipe, w, h, k, depth=d, channels=channels, samples=samples, tile=side,
                                         rounding="down", convert=convert)
                 for i, o in enumerate(outputs):
-                    per_out[i].append(_level_bytes(o, res[o.channel], d))
+                    per_out[i].append(_level_bytes(o, res.pop(o.channel), d))
+                del res
                 bar.step()
-        for o, levels, tmp in zip(outputs, per_out, tmps):
-            if o.fmt.compressed:
-                flat = [img for lv in levels for img in lv]
-                enc = blocks.encode_levels(o.fmt.codec, flat, perceptual=o.fmt.srgb)
-                data, i = [], 0
-                for lv in levels:
-                    data.append(b"".join(enc[i:i + len(lv)]))
-                    i += len(lv)
-            else:
-                data = levels
+        for o, data, tmp in zip(outputs, per_out, tmps):
             with open(tmp, "wb") as f:
                 if ext == ".dds":
                     containers.write_dds(f, o.fmt, w, h, d, data)
