@@ -242,6 +242,23 @@ def test_glcontexts_version_setting_is_refused(monkeypatch, clean_state):
     assert calls == []
 
 
+@pytest.mark.parametrize("name", ["GLCONTEXT_LINUX_LIBEGL", "GLCONTEXT_LINUX_LIBGL"])
+def test_a_glcontext_library_that_fails_is_no_silent_osmesa(monkeypatch, clean_state, name):
+    """One of glcontext's library settings that does not load: egl failed and cellgl ran on
+    OSMesa, on the CPU, without a word; now the error names the setting (issue 48, item 8's
+    neighbours)."""
+    calls = _native(monkeypatch, {})                   # every version: "not this version"
+    monkeypatch.setattr(platforms, "osmesa_library", lambda: "/usr/lib/libOSMesa.so.8")
+    monkeypatch.setattr(osmesa, "probe", lambda: pytest.fail("OSMesa was tried"))
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.setenv(name, "/nonexistent/lib.so")
+    with pytest.raises(context.ContextError) as info:
+        context.get_context()
+    assert f"  osmesa: skipped ({name}=/nonexistent/lib.so is set: glcontext's backends only)" \
+        in str(info.value).splitlines()
+    assert {api for api, *_ in calls} == {"egl"}
+
+
 def test_egl_devices_lists_this_machine():
     devices = platforms.egl_devices()
     if devices is None:

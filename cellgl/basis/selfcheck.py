@@ -155,7 +155,10 @@ def record_path(key: dict) -> Path | None:
     cache folder, or ``CELLGL_SHADER_CACHE=0``)."""
     from cellgl.gl import shadercache
 
-    folder = shadercache.cache_dir()
+    try:
+        folder = shadercache.cache_dir()
+    except ValueError:                       # a bad CELLGL_SHADER_CACHE: get_context says so
+        return None
     if folder is None:
         return None
     name = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:32]

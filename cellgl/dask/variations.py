@@ -15,6 +15,7 @@ import itertools
 import json
 import os
 import re
+import stat
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -120,15 +121,23 @@ def _sweep_task(item, job: _Job) -> int:
     return 1
 
 
+#: the most bytes of a sweep manifest read (one is a few KiB): a longer file is not this sweep's
+MAX_MANIFEST = 1 << 20
+
+
 def _check_manifest(outdir: Path, request: dict) -> bool:
     """Whether ``outdir`` already holds this sweep's manifest; raises if it holds another."""
     file = outdir / MANIFEST
-    if not file.exists():
+    if not os.path.lexists(file):
         return False
+    old = None       # anything but this sweep's manifest (not a regular file, too long, too deep)
     try:
-        old = json.loads(file.read_text())
-    except (OSError, ValueError):
-        old = None
+        fd = os.open(file, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with os.fdopen(fd, "rb") as f:
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                old = json.loads(f.read(MAX_MANIFEST + 1).decode("utf-8"))
+    except (OSError, ValueError, RecursionError):
+        pass
     if old != request:
         differ = [k for k in request if not isinstance(old, dict) or old.get(k) != request[k]]
         raise DaskError(f"{str(outdir)!r} holds another sweep ({MANIFEST}: not the same "

@@ -371,7 +371,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
         skipped = [b for b in platforms.platform_backends() if b not in candidates]
         note = ""
         if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip() and skipped:
-            reasons = {"glx": "DISPLAY not set", "osmesa": "libOSMesa not found"}
+            reasons = platforms.skip_reasons()
             note = "\n" + "\n".join(f"  {b}: skipped ({reasons.get(b, 'not tried')})"
                                     for b in skipped)
         settings = [f"{k}={os.environ[k]}" for k in osmesa.DRIVER_ENV if k in os.environ]

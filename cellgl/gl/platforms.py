@@ -211,9 +211,33 @@ def device_setting() -> int | None:
     return next(iter(found.values()), None)
 
 
+#: glcontext's own settings of the libraries its backends load (OSMesa, cellgl's own loader,
+#: reads none of them)
+GLCONTEXT_LIBRARIES = ("GLCONTEXT_LINUX_LIBEGL", "GLCONTEXT_LINUX_LIBGL", "GLCONTEXT_LINUX_LIBX11",
+                       "GLCONTEXT_WIN_LIBGL")
+
+
+def glcontext_setting() -> str | None:
+    """``"GLCONTEXT_LINUX_LIBEGL=/x"``: the first of glcontext's library settings that is set."""
+    for name in GLCONTEXT_LIBRARIES:
+        if os.environ.get(name):
+            return f"{name}={os.environ[name]}"
+    return None
+
+
+def skip_reasons() -> dict:
+    """Why a backend of the platform was not tried when none was named (for the error)."""
+    chosen = glcontext_setting()
+    return {"glx": "DISPLAY not set",
+            "osmesa": (f"{chosen} is set: glcontext's backends only" if chosen
+                       else "libOSMesa not found")}
+
+
 def device_backends(candidates: list[str], named: bool) -> list[str]:
     """``candidates`` (the backends to try; ``named``: chosen by the user), or with
-    ``CELLGL_DEVICE`` set only ``egl`` (the API that picks a device), the index checked.
+    ``CELLGL_DEVICE`` set only ``egl`` (the API that picks a device), the index checked; with one
+    of glcontext's library settings (:data:`GLCONTEXT_LIBRARIES`) set, not ``osmesa`` unless
+    named: a library that fails to load is an error, never a silent fall back to the CPU.
 
     Raises
     ------
@@ -221,6 +245,8 @@ def device_backends(candidates: list[str], named: bool) -> list[str]:
         A bad ``CELLGL_DEVICE`` (naming the devices), or one set beside another backend.
     """
     device = device_setting()
+    if not named and glcontext_setting() and len(candidates) > 1:
+        candidates = [c for c in candidates if c != "osmesa"]
     if device is None:
         return candidates
     own = platform_backends()

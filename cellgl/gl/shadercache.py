@@ -116,9 +116,9 @@ def _folder(folder: Path, owned: bool = False) -> str | None:
             return "it is not a folder"
         if owned and hasattr(os, "getuid") and st.st_uid != os.getuid():
             return "another user owns it"
-        probe = folder / f".cellgl-probe-{os.getpid()}"
-        probe.write_bytes(b"")
-        probe.unlink()
+        fd, probe = tempfile.mkstemp(prefix=".cellgl-probe-", dir=folder)   # a new name: no
+        os.close(fd)                                                          # FIFO waited on
+        os.unlink(probe)
         return None
     except OSError as exc:
         return exc.strerror or type(exc).__name__
@@ -138,17 +138,20 @@ def _make(folder: Path, base: Path, owned: bool = False) -> str | None:
 
 def _places() -> list[tuple[Path, Path, bool]]:
     """(folder, the highest folder cellgl may make, owned) in the order tried."""
-    import platformdirs
-
     named = os.environ.get(ENV_DIR)
     if named:
         folder = Path(named).expanduser()
         return [(folder, folder, False)]
     places = []
     try:
+        import platformdirs     # a dependency; missing (a broken install): a note, not a failure
+
         base = Path(platformdirs.user_cache_dir())
         app = Path(platformdirs.user_cache_dir("cellgl", appauthor=False))
         places.append((app / "shaders", base, False))
+    except ImportError:
+        _note("the OS's cache folder skipped: platformdirs is not installed "
+              "(pip install platformdirs)")
     except (RuntimeError, KeyError, OSError):            # no home folder at all
         pass
     user = os.getuid() if hasattr(os, "getuid") else os.environ.get("USERNAME", "user")
