@@ -35,7 +35,8 @@ DXGI = {71: ("BC1_UNORM", 4, 8, False), 72: ("BC1_UNORM_SRGB", 4, 8, True), 77: 
         61: ("R8_UNORM", 1, 1, False), 56: ("R16_UNORM", 1, 2, False), 54: ("R16_FLOAT", 1, 2, False),
         41: ("R32_FLOAT", 1, 4, False), 42: ("R32_UINT", 1, 4, False)}
 FOURCC = {b"DXT1": 71, b"DXT5": 77}
-#: VkFormat -> (DXGI equivalent, typeSize, KHR_DF_MODEL, [(channelType, bitOffset, bitLength-1)])
+#: VkFormat -> (DXGI equivalent, typeSize, KHR_DF_MODEL, [(channelType, bitOffset, bitLength-1)]);
+#: sampleLower/Upper: UNORM 0 and the largest code (BCn: 0xFFFFFFFF), floats -1.0f and 1.0f, UINT 0 and 1
 VK = {131: (71, 1, 128, [(0, 0, 63)]), 132: (72, 1, 128, [(0, 0, 63)]),
       137: (77, 1, 130, [(15, 0, 63), (0, 64, 63)]), 138: (78, 1, 130, [(15, 0, 63), (0, 64, 63)]),
       139: (80, 1, 131, [(0, 0, 63)]), 141: (83, 1, 132, [(0, 0, 63), (1, 64, 63)]),
@@ -120,6 +121,8 @@ def parse_ktx2(data: bytes) -> dict:
         lower, upper = struct.unpack_from("<II", data, o + 8)
         if ctype & 0x80:
             assert (lower, upper) == (0xBF800000, 0x3F800000)
+        elif vk == 98:                     # UINT: not normalised, the sample value 1 means 1.0
+            assert (lower, upper) == (0, 1)
         else:
             assert lower == 0 and upper == (2 ** (blen + 1) - 1 if blen < 32 and block == 1 else 0xFFFFFFFF)
     # key/value data

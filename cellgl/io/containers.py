@@ -97,7 +97,8 @@ TEX_FORMATS: dict[str, TexFormat] = {f.name: f for f in (
               type_size=2),
     TexFormat("R32_SFLOAT", 41, 100, 1, 4, False, None, 1, ((_FLOAT, 0, 32, _F_MINUS1, _F_PLUS1),),
               type_size=4),
-    TexFormat("R32_UINT", 42, 98, 1, 4, False, None, 1, ((0, 0, 32, 0, _U32),), type_size=4),
+    # an integer (not normalised) channel: sampleUpper is the value that means 1, so 1
+    TexFormat("R32_UINT", 42, 98, 1, 4, False, None, 1, ((0, 0, 32, 0, 1),), type_size=4),
 )}
 
 
