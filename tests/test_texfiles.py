@@ -61,11 +61,12 @@ def parse_dds(data: bytes) -> dict:
     caps, caps2 = struct.unpack_from("<II", data, 108)
     assert flags & 0x1007 == 0x1007                                    # CAPS HEIGHT WIDTH PIXELFORMAT
     assert caps & 0x1000                                               # DDSCAPS_TEXTURE
-    pos = 128
+    pos, array = 128, 1
     if fourcc == b"DX10":
         dxgi, dim, misc, array, _misc2 = struct.unpack_from("<5I", data, 128)
-        assert array == 1 and misc == 0
+        assert array >= 1 and misc == 0
         assert dim == (4 if caps2 & 0x200000 else 3)
+        assert array == 1 or not caps2 & 0x200000                        # no arrays of volumes
         pos = 148
     else:
         dxgi = FOURCC[fourcc]
@@ -79,22 +80,27 @@ def parse_dds(data: bytes) -> dict:
         assert flags & 0x80000 and pitch == _level_size(dxgi, width, height, 1)   # LINEARSIZE
     else:
         assert flags & 0x8 and pitch == width * nbytes                  # PITCH
-    levels = []
     d = depth if volume else 1
-    for k in range(nlev):
-        w, h, z = max(1, width >> k), max(1, height >> k), max(1, d >> k)
-        n = _level_size(dxgi, w, h, z)
-        levels.append(((w, h, z), data[pos:pos + n]))
-        pos += n
+    sizes = [(max(1, width >> k), max(1, height >> k), max(1, d >> k)) for k in range(nlev)]
+    per_level = [[] for _ in range(nlev)]
+    for _layer in range(array):               # DDS: each array element's whole chain in turn
+        for k, (w, h, z) in enumerate(sizes):
+            n = _level_size(dxgi, w, h, z)
+            per_level[k].append(data[pos:pos + n])
+            pos += n
     assert pos == len(data), "bytes after the last level"
-    return {"dxgi": dxgi, "width": width, "height": height, "depth": depth if volume else None, "levels": levels}
+    # levels as KTX2 holds them: level k = every layer's level k, layer after layer
+    levels = [(sizes[k], b"".join(per_level[k])) for k in range(nlev)]
+    return {"dxgi": dxgi, "width": width, "height": height, "depth": depth if volume else None, "levels": levels,
+            "layers": array}
 
 
 def parse_ktx2(data: bytes) -> dict:
     assert data[:12] == bytes([0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A])
     vk, type_size, w, h, d, layers, faces, nlev, scheme = struct.unpack_from("<9I", data, 12)
     dfd_off, dfd_len, kvd_off, kvd_len, sgd_off, sgd_len = struct.unpack_from("<4I2Q", data, 48)
-    assert (layers, faces) == (0, 1) and nlev >= 1 and scheme in (0, 2) and (sgd_off, sgd_len) == (0, 0)
+    assert faces == 1 and nlev >= 1 and scheme in (0, 2) and (sgd_off, sgd_len) == (0, 0)
+    assert layers == 0 or d == 0                                      # no arrays of volumes
     dxgi, want_type, model, samples = VK[vk]
     assert type_size == want_type
     index = [struct.unpack_from("<3Q", data, 80 + 24 * k) for k in range(nlev)]
@@ -150,11 +156,11 @@ def parse_ktx2(data: bytes) -> dict:
             import zstandard
 
             blob = zstandard.ZstdDecompressor().decompress(blob, max_output_size=raw)
-        assert raw == len(blob) == _level_size(dxgi, lw, lh, lz)
+        assert raw == len(blob) == _level_size(dxgi, lw, lh, lz) * max(1, layers)
         levels.append(((lw, lh, lz), blob))
     assert index[-1][0] >= end and max(o + n for o, n, _ in index) == len(data)
     return {"dxgi": dxgi, "width": w, "height": h, "depth": d or None, "levels": levels, "kv": kv,
-            "scheme": scheme}
+            "scheme": scheme, "layers": max(1, layers)}
 
 
 def decode(dxgi: int, size, blob: bytes) -> np.ndarray:
@@ -423,3 +429,38 @@ def test_material_masks_are_bc4_or_plain(ctx, tmp_path):
                           _reference(recipe, (20, 12), "roughness")[0])
     with pytest.raises(BakeError, match="--compress bc7 for ao: a mask is one channel"):
         B.bake(recipe, tmp_path / "x.dds", size=8, channels=("ao",), compress="bc7", progress=False)
+
+
+@pytest.mark.parametrize("ext", [".dds", ".ktx2"])
+def test_frames_are_an_array_texture_with_mips(ctx, tmp_path, ext):
+    from cellgl.io.frames import bake_frames, frame_recipe
+
+    recipe = load_recipe("caustics")
+    paths = bake_frames(recipe, tmp_path / f"c{ext}", 3, size=(20, 12), channels=("color", "height"),
+                        mips=True, compress="color=none,height=none")
+    assert sorted(p.name for p in paths) == [f"c_color{ext}", f"c_height{ext}"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"c_color{ext}", f"c_height{ext}"]
+    for p in paths:
+        channel = p.stem.split("_", 1)[1]
+        f = read(p)
+        assert f["layers"] == 3 and [s for s, _ in f["levels"]] == [(20, 12, 1), (10, 6, 1), (5, 3, 1),
+                                                                    (2, 1, 1), (1, 1, 1)]
+        for (w, h, z), blob in f["levels"]:
+            per = len(blob) // 3
+            for k in range(3):
+                got = decode(f["dxgi"], (w, h, z), blob[k * per:(k + 1) * per])[0]
+                res = cellgl.render(frame_recipe(recipe, k, 3), w, h, channels=(channel,))[channel]
+                if channel == "color":
+                    assert np.array_equal(got[..., :3], Encoding("color", 3, np.dtype(np.uint8)).encode(res))
+                else:
+                    assert np.array_equal(got[..., 0], Encoding("height", 1, np.dtype(np.uint16)).encode(res))
+    # block-compressed arrays too: DX10 header even for BC1 UNORM (the legacy one has no arraySize)
+    n = bake_frames(recipe, tmp_path / f"n{ext}", 2, size=8, channels=("normal",), compress="bc1")[0]
+    f = read(n)
+    assert f["layers"] == 2 and DXGI[f["dxgi"]][0] == "BC1_UNORM"
+    if ext == ".dds":
+        assert n.read_bytes()[84:88] == b"DX10"
+    with pytest.raises(BakeError, match="accepted 1..2048 layers of 2D textures"):
+        B.bake(recipe.replace(dimension=3), tmp_path / f"v{ext}", size="8x8x4", layers=[recipe], progress=False)
+    with pytest.raises(BakeError, match="layers: only for GPU texture files"):
+        B.bake(recipe, tmp_path / "x.png", size=8, layers=[recipe], progress=False)

@@ -200,7 +200,7 @@ class Baked(list):
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
          memory_budget=DEFAULT_BUDGET, mips=False, colorspace=None, udim=None, udims=None,
-         tiled=False, compress=None, supercompression=None) -> Baked:
+         tiled=False, compress=None, supercompression=None, layers=None) -> Baked:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -263,6 +263,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         compressed). Refused where the channel cannot use it (:data:`cellgl.io.gputex.CHOICES`).
     supercompression : {None, "zstd"}
         ``.ktx2`` only: zstd supercompression of every level.
+    layers : sequence of Recipe, optional
+        ``.dds``/``.ktx2`` only: an array texture, one 2D layer per recipe, rendered as given
+        (``recipe_or_name`` is checked as usual; ``cellgl.io.frames.bake_frames`` passes a loop's frames).
 
     Returns
     -------
@@ -302,13 +305,16 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gputex)
         tex_outputs = gputex.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
                                           (w, h, depth_slices))
+        if layers is not None and (depth_slices is not None or not 1 <= len(layers) <= 2048):
+            raise BakeError(f"an array texture of {len(layers)} layers{' of volumes' if depth_slices else ''}: "
+                            f"accepted 1..2048 layers of 2D textures (no API has arrays of 3D textures)")
         for flag, value in (("--udim", set_tiles), ("--tiled", tiled), ("--colorspace", colorspace)):
             if value:
                 raise BakeError(f"{flag} with {ext}: a GPU texture file is one 2D or 3D texture (its "
                                 f"colour always an sRGB format); accepted for .exr/.tif (and .png for --udim)")
         bits = 8
-    elif compress is not None or supercompression is not None:
-        flag = "--compress" if compress is not None else "--zstd"
+    elif compress is not None or supercompression is not None or layers is not None:
+        flag = "--compress" if compress is not None else "--zstd" if supercompression is not None else "layers"
         raise BakeError(f"{flag}: only for GPU texture files (-o NAME.dds or NAME.ktx2); {ext} "
                         f"holds plain samples")
     else:
@@ -357,7 +363,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
             _check_name(o.path)
         done = Baked(gputex.bake_texture(
             recipe, tex_outputs, ext, (w, h, depth_slices), samples=samples, tile=tile, budget=memory_budget,
-            mip_chain=mips, supercompression=supercompression,
+            mip_chain=mips, supercompression=supercompression, layers=layers,
             progress=lambda total, label, unit: Progress(total, label, progress, unit=unit),
             meta=lambda c: _meta(recipe, _Output(path, (c,), (encoding_of(c, ".png", 8, space),)),
                                  _Plan(w, h, depth_slices, 1, 1))))

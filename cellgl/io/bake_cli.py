@@ -67,7 +67,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         f"(default {DEFAULT_BUDGET >> 20})")
     p.add_argument("--frames", default=None, metavar="N",
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
-                        ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
+                        ".. FILE_<N-1>.png, one animated .webp/.gif, or one .dds/.ktx2 array texture "
+                        "(cellgl/io/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
                    help="frames per second of an animated file (with --frames): .webp 1..95 "
                         "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
@@ -126,9 +127,11 @@ def run_cli(args: argparse.Namespace) -> int:
         if value is not None and (args.frames is not None or ext == ".zarr"):
             raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
                             f"not with --frames or a .zarr output")
-    if getattr(args, "mips", False) and (args.frames is not None or ext == ".zarr"):
+    if getattr(args, "mips", False) and ((args.frames is not None and ext not in (".dds", ".ktx2"))
+                                         or ext == ".zarr"):
         raise BakeError(f"--mips: for a single bake (.png, .exr, .tif, .npy: numbered files; "
-                        f".dds, .ktx2: in the file); not with {'--frames' if args.frames is not None else '.zarr'}")
+                        f".dds, .ktx2: in the file, also an array of --frames); not with "
+                        f"{'--frames to ' + ext if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
@@ -168,6 +171,19 @@ def run_cli(args: argparse.Namespace) -> int:
     return 0
 
 
+def _texture_kw(args: argparse.Namespace) -> dict:
+    """--mips, --compress, --zstd for a loop baked as one .dds/.ktx2 array texture (bake refuses
+    --compress/--zstd for the other formats)."""
+    kw = {}
+    if args.mips:
+        kw["mips"] = True
+    if args.compress is not None:
+        kw["compress"] = args.compress
+    if args.zstd:
+        kw["supercompression"] = "zstd"
+    return kw
+
+
 def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
     from cellgl.io.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
@@ -180,7 +196,7 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     paths = bake_frames(args.recipe, args.output, int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
                         size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                         tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
-                        memory_budget=budget)
+                        memory_budget=budget, **_texture_kw(args))
     if not args.quiet:
         total = sum(os.path.getsize(p) for p in paths)
         rate = ""

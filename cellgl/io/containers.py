@@ -108,18 +108,23 @@ def level_bytes(fmt: TexFormat, width: int, height: int, depth: int = 1) -> int:
     return (-(-width // b)) * (-(-height // b)) * fmt.nbytes * depth
 
 
-def _check_levels(fmt: TexFormat, width: int, height: int, depth: int | None, levels: Sequence[bytes]) -> None:
+def _check_levels(fmt: TexFormat, width: int, height: int, depth: int | None, levels: Sequence[bytes],
+                  layers: int | None = None) -> None:
     d = depth or 1
     if not levels:
         raise ValueError("a texture needs at least one level")
+    if layers is not None and (depth is not None or not 1 <= layers <= 2048):
+        raise ValueError(f"an array of {layers} layers{' of volumes' if depth is not None else ''}: "
+                         f"accepted 1..2048 layers of 2D textures (no API has 3D texture arrays)")
     if len(levels) > max(width, height, d).bit_length():
         raise ValueError(f"{len(levels)} levels for a {width}x{height}x{d} texture: at most "
                          f"{max(width, height, d).bit_length()}")
     for k, data in enumerate(levels):
         w, h, z = max(1, width >> k), max(1, height >> k), max(1, d >> k)
-        if len(data) != level_bytes(fmt, w, h, z):
-            raise ValueError(f"level {k} ({w}x{h}x{z}) of {fmt.name}: {len(data)} bytes, expected "
-                             f"{level_bytes(fmt, w, h, z)}")
+        want = level_bytes(fmt, w, h, z) * (layers or 1)
+        if len(data) != want:
+            raise ValueError(f"level {k} ({w}x{h}x{z}{f', {layers} layers' if layers else ''}) of {fmt.name}: "
+                             f"{len(data)} bytes, expected {want}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -134,8 +139,9 @@ _DDPF_FOURCC = 0x4
 _DIMENSION_2D, _DIMENSION_3D = 3, 4
 
 
-def dds_bytes_header(fmt: TexFormat, width: int, height: int, depth: int | None, nlevels: int) -> bytes:
-    """``"DDS "``, DDS_HEADER and (unless a legacy FourCC) DDS_HEADER_DXT10."""
+def dds_bytes_header(fmt: TexFormat, width: int, height: int, depth: int | None, nlevels: int,
+                     layers: int | None = None) -> bytes:
+    """``"DDS "``, DDS_HEADER and (unless a legacy FourCC, never for an array) DDS_HEADER_DXT10."""
     flags = _DDSD_CAPS | _DDSD_HEIGHT | _DDSD_WIDTH | _DDSD_PIXELFORMAT
     flags |= _DDSD_LINEARSIZE if fmt.compressed else _DDSD_PITCH
     caps, caps2 = _DDSCAPS_TEXTURE, 0
@@ -147,24 +153,31 @@ def dds_bytes_header(fmt: TexFormat, width: int, height: int, depth: int | None,
         caps |= _DDSCAPS_COMPLEX
         caps2 |= _DDSCAPS2_VOLUME
     pitch = level_bytes(fmt, width, height) if fmt.compressed else width * fmt.nbytes
-    fourcc = fmt.fourcc or b"DX10"
+    legacy = fmt.fourcc if layers is None else None     # an array needs the DX10 header's arraySize
+    fourcc = legacy or b"DX10"
     pixelformat = struct.pack("<II4s5I", 32, _DDPF_FOURCC, fourcc, 0, 0, 0, 0, 0)
     header = struct.pack("<7I44x", 124, flags, height, width, pitch, depth or 0, nlevels) + pixelformat \
         + struct.pack("<4I4x", caps, caps2, 0, 0)
     assert len(header) == 124
     out = b"DDS " + header
-    if fmt.fourcc is None:
-        out += struct.pack("<5I", fmt.dxgi, _DIMENSION_3D if depth is not None else _DIMENSION_2D, 0, 1, 0)
+    if legacy is None:
+        out += struct.pack("<5I", fmt.dxgi, _DIMENSION_3D if depth is not None else _DIMENSION_2D, 0,
+                           layers or 1, 0)
     return out
 
 
-def write_dds(f, fmt: TexFormat, width: int, height: int, depth: int | None, levels: Sequence[bytes]) -> None:
+def write_dds(f, fmt: TexFormat, width: int, height: int, depth: int | None, levels: Sequence[bytes],
+              layers: int | None = None) -> None:
     """Write a DDS texture to the open binary file ``f``: ``levels[k]`` is level ``k``'s bytes
-    (every slice of a volume, ``depth`` not None), sized as :func:`level_bytes`."""
-    _check_levels(fmt, width, height, depth, levels)
-    f.write(dds_bytes_header(fmt, width, height, depth, len(levels)))
-    for data in levels:
-        f.write(data)
+    (every slice of a volume, ``depth`` not None), sized as :func:`level_bytes`. An array of
+    ``layers`` 2D textures: ``levels[k]`` holds every layer's level ``k``, layer after layer; the
+    file stores each layer's whole chain in turn (DDS's order)."""
+    _check_levels(fmt, width, height, depth, levels, layers)
+    f.write(dds_bytes_header(fmt, width, height, depth, len(levels), layers))
+    for a in range(layers or 1):
+        for data in levels:
+            per = len(data) // (layers or 1)
+            f.write(data[a * per:(a + 1) * per])
 
 
 # --------------------------------------------------------------------------------------------
@@ -201,12 +214,13 @@ def _kvd(pairs: dict[str, bytes]) -> bytes:
 
 def write_ktx2(f, fmt: TexFormat, width: int, height: int, depth: int | None, levels: Sequence[bytes], *,
                supercompression: str | None = None, zstd_level: int = 19, writer: str = "cellgl",
-               metadata: bytes | None = None) -> None:
-    """Write a KTX2 texture to the open binary file ``f`` (levels as :func:`write_dds`);
-    ``supercompression="zstd"`` compresses each level with zstd at ``zstd_level``."""
+               metadata: bytes | None = None, layers: int | None = None) -> None:
+    """Write a KTX2 texture to the open binary file ``f`` (levels as :func:`write_dds`; an array's
+    level holds its layers one after the other, as KTX2 stores them); ``supercompression="zstd"``
+    compresses each level with zstd at ``zstd_level``."""
     if supercompression not in _SUPERCOMPRESSION:
         raise ValueError(f"supercompression {supercompression!r}: accepted None or 'zstd'")
-    _check_levels(fmt, width, height, depth, levels)
+    _check_levels(fmt, width, height, depth, levels, layers)
     stored = list(levels)
     if supercompression == "zstd":
         import zstandard
@@ -228,7 +242,7 @@ def write_ktx2(f, fmt: TexFormat, width: int, height: int, depth: int | None, le
         end += -end % align
         offsets[k] = end
         end += len(stored[k])
-    head = KTX2_IDENTIFIER + struct.pack("<9I", fmt.vk, fmt.type_size, width, height, depth or 0, 0, 1, n,
+    head = KTX2_IDENTIFIER + struct.pack("<9I", fmt.vk, fmt.type_size, width, height, depth or 0, layers or 0, 1, n,
                                          _SUPERCOMPRESSION[supercompression])
     head += struct.pack("<4I2Q", dfd_off, len(dfd), kvd_off if kvd else 0, len(kvd), 0, 0)
     for k in range(n):

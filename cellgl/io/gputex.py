@@ -193,11 +193,15 @@ def memory_need(outputs: list[TexOutput], chain) -> int:
 
 
 def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: int, tile, budget: int,
-                 mip_chain: bool, supercompression, progress: Callable, meta: Callable) -> list[Path]:
-    """Render and write ``outputs`` (from :func:`plan_outputs`), all or none."""
+                 mip_chain: bool, supercompression, progress: Callable, meta: Callable,
+                 layers=None) -> list[Path]:
+    """Render and write ``outputs`` (from :func:`plan_outputs`), all or none; ``layers`` (recipes)
+    makes each file an array texture of one layer per recipe (``--frames``)."""
     w, h, d = size
+    recipes = [recipe] if layers is None else list(layers)
+    nlayers = None if layers is None else len(recipes)
     chain = mips.mip_sizes(w, h, d, rounding="down") if mip_chain else [(w, h) + ((d,) if d else ())]
-    need = memory_need(outputs, chain)
+    need = memory_need(outputs, chain) * len(recipes)
     if need > budget:
         mb = -(-need // (1 << 20))
         raise BakeError(f"size {w}x{h}{'' if d is None else f'x{d}'} to {ext}: the bake holds level 0's "
@@ -207,23 +211,29 @@ def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: i
     side = int(tile) if tile else _tile_side(channels, budget)
     with atomic_paths([o.path for o in outputs]) as tmps:
         per_out: list[list[bytes]] = [[] for _ in outputs]
-        bar = progress(len(chain), f"baking {len(chain)} level(s) of {outputs[0].path.name}", unit="levels")
+        what = f"{len(chain)} level(s)" + (f" x {nlayers} layers" if nlayers else "")
+        bar = progress(len(chain) * len(recipes), f"baking {what} of {outputs[0].path.name}", unit="levels")
         with bar:
             for k in range(len(chain)):     # one level's samples held at a time; blocks on every core
                 convert = {o.channel: (lambda a, o=o: _samples(o.fmt, o.channel, a)) for o in outputs}
-                res = mips.render_level(recipe, w, h, k, depth=d, channels=channels, samples=samples, tile=side,
-                                        rounding="down", convert=convert)
-                for i, o in enumerate(outputs):
-                    per_out[i].append(_level_bytes(o, res.pop(o.channel), d))
-                del res
-                bar.step()
+                parts: list[list[bytes]] = [[] for _ in outputs]
+                for r in recipes:
+                    res = mips.render_level(r, w, h, k, depth=d, channels=channels, samples=samples, tile=side,
+                                            rounding="down", convert=convert)
+                    for i, o in enumerate(outputs):
+                        parts[i].append(_level_bytes(o, res.pop(o.channel), d))
+                    del res
+                    bar.step()
+                for i in range(len(outputs)):
+                    per_out[i].append(b"".join(parts[i]))
         for o, data, tmp in zip(outputs, per_out, tmps):
             with open(tmp, "wb") as f:
                 if ext == ".dds":
-                    containers.write_dds(f, o.fmt, w, h, d, data)
+                    containers.write_dds(f, o.fmt, w, h, d, data, layers=nlayers)
                 else:
                     info = json.dumps({**json.loads(meta(o.channel)), "format": o.fmt.name,
-                                       "levels": len(data)}, sort_keys=True)
+                                       "levels": len(data), **({"layers": nlayers} if nlayers else {})},
+                                      sort_keys=True)
                     containers.write_ktx2(f, o.fmt, w, h, d, data, supercompression=supercompression,
-                                          writer="cellgl", metadata=info.encode() + b"\0")
+                                          writer="cellgl", metadata=info.encode() + b"\0", layers=nlayers)
     return [o.path for o in outputs]
