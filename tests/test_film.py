@@ -97,6 +97,8 @@ def test_float_tiff_linear_integer_formats_srgb(fake, tmp_path):
     (["-o", "a.<UDIM>.png", "--udim", "1001", "--udims", "2x2"], "accepted one of them"),
     (["-o", "a.<UDIM>.npy", "--udim", "1001", "--size", "8x8x4"], "UDIM sets are of 2D images"),
     (["-o", "a.<UDIM>.png", "--udim", "1001", "--frames", "2"], "not with --frames or a .zarr output"),
+    (["-o", "a.<UDIM>.png", "--udim", "1001-1010", "--size", "8192"],
+     "10 columns of 8192 px make a bake 81920 px across; accepted at most 65536 (tiles of at most 6553 px"),
 ])
 def test_cli_errors_before_any_work(fake, tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
@@ -198,7 +200,7 @@ def test_gpu_exr_colour_is_srgb_to_linear_of_the_png(ctx, tmp_path):
 
 def test_gpu_openimageio_reads_the_colour_space(ctx, tmp_path):
     pytest.importorskip("OpenEXR")
-    oiio = pytest.importorskip("OpenImageIO")
+    oiio = _oiio()
     for space in ("linear", "srgb"):
         (p,) = B.bake("flagstone", tmp_path / f"{space}.exr", size=16, colorspace=space,
                       channels="color,height", progress=False)
@@ -236,9 +238,19 @@ def test_gpu_udim_tile_1001_is_the_plain_bake_and_edges_join(ctx, tmp_path):
 # --------------------------------------------------------------------------------------------
 
 
+def _oiio():
+    """OpenImageIO, the reader the tests check against (the wheel or Blender's copy)."""
+    from cellgl.io.texfile import openimageio
+
+    oiio = openimageio()
+    if oiio is None:
+        pytest.skip("OpenImageIO is not installed (pip install openimageio, or bpy)")
+    return oiio
+
+
 def _oiio_levels(path):
     """(spec, [level arrays]) as OpenImageIO reads a file's MIP levels."""
-    oiio = pytest.importorskip("OpenImageIO")
+    oiio = _oiio()
     inp = oiio.ImageInput.open(str(path))
     assert inp is not None, oiio.geterror()
     try:
@@ -319,3 +331,81 @@ def test_gpu_udim_tx_set(ctx, tmp_path):
         s = 32 >> k
         for i, p in enumerate(got):
             assert np.array_equal(_oiio_levels(p)[1][k], lv[:, i * s:(i + 1) * s]), (p.name, k)
+
+
+def test_udim_mips_are_crops_of_the_sets_levels(fake, tmp_path, monkeypatch):
+    """--udim with --mips (numbered files): level k of each tile is its crop of level k of the
+    set's bake (power-of-two sides)."""
+    from cellgl import recipes
+
+    monkeypatch.setattr(recipes, "load_recipe", lambda name: _udim_recipe())
+    got = B.bake("fake", tmp_path / "t.<UDIM>.npy", size=16, udims="2x1", mips=True, progress=False)
+    assert len(got) == 2 * 5
+    whole = B.bake(U.window_recipe(_udim_recipe(), U.parse_udims("2x1")), tmp_path / "w.npy",
+                   size=(32, 16), mips=True, progress=False)
+    for k in range(5):
+        big = np.load(whole[k])
+        s = 16 >> k
+        for i, n in enumerate((1001, 1002)):
+            name = f"t.{n}.npy" if k == 0 else f"t.{n}_mip{k}.npy"
+            assert np.array_equal(np.load(tmp_path / name), big[:, i * s:(i + 1) * s]), name
+
+
+@pytest.mark.slow
+def test_gpu_blender_reads_the_exr_as_linear(ctx, tmp_path):
+    """Blender (bpy, the [blender] extra) opens a cellgl EXR as "Linear Rec.709" by itself and
+    its pixels are the file's: the colour reaches Cycles unchanged (docs/bake.md)."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    pytest.importorskip("OpenEXR")
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("bpy is not installed (pip install 'cellgl[blender]')")
+    (p,) = B.bake("flagstone", tmp_path / "a.exr", size=(24, 16), progress=False)
+    code = ("import bpy, json, sys; img = bpy.data.images.load(sys.argv[1]); "
+            "print(json.dumps([img.colorspace_settings.name, list(img.size), list(img.pixels[:])]))")
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True,
+                         timeout=300, check=True).stdout.strip().splitlines()[-1]
+    name, size, px = json.loads(out)
+    assert name == "Linear Rec.709" and size == [24, 16]
+    rgba = np.array(px, np.float32).reshape(16, 24, 4)[::-1]          # Blender's rows: bottom first
+    e = _read(p)
+    assert np.allclose(rgba[..., :3], np.stack([e[c] for c in "RGB"], -1), rtol=0, atol=1e-6)
+
+
+@pytest.mark.slow
+def test_gpu_blender_reads_a_tx_as_its_level_0(ctx, tmp_path):
+    """What Blender (Cycles' image loader) does with a .tx, as docs/bake.md says: a plain TIFF,
+    level 0 only, taken for sRGB; set to "Linear Rec.709" its pixels are the file's."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    pytest.importorskip("tifffile")
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("bpy is not installed (pip install 'cellgl[blender]')")
+    (p,) = B.bake("flagstone", tmp_path / "a.tx", size=(24, 16), progress=False)
+    code = ("import bpy, json, sys; img = bpy.data.images.load(sys.argv[1]); "
+            "first = [img.file_format, img.colorspace_settings.name, list(img.size)]; "
+            "img.colorspace_settings.name = 'Linear Rec.709'; img.reload(); "
+            "print(json.dumps(first + [list(img.pixels[:])]))")
+    out = subprocess.run([sys.executable, "-c", code, str(p)], capture_output=True, text=True,
+                         timeout=300, check=True).stdout.strip().splitlines()[-1]
+    fmt, name, size, px = json.loads(out)
+    assert (fmt, name, size) == ("TIFF", "sRGB", [24, 16])
+    rgba = np.array(px, np.float32).reshape(16, 24, 4)[::-1]
+    assert np.allclose(rgba[..., :3], _oiio_levels(p)[1][0], rtol=0, atol=1e-6)
+
+
+def test_gpu_udim_tiles_are_crops_of_one_bake_bit_for_bit(ctx, tmp_path):
+    got = B.bake("flagstone", tmp_path / "t.<UDIM>.npy", size=(40, 24), udim="1001,1002,1012",
+                 channels="color,height", tile=16, progress=False)
+    whole = B.bake(U.window_recipe(B.load_recipe_sets("flagstone", (), None), U.parse_udim("1001,1002,1012")),
+                   tmp_path / "whole.npy", size=(80, 48), channels="color,height", progress=False)
+    for ch, w in zip(("color", "height"), whole):
+        big = np.load(w)
+        for n, (x, y) in ((1001, (0, 24)), (1002, (40, 24)), (1012, (40, 0))):
+            tile = np.load(tmp_path / f"t.{n}_{ch}.npy")
+            assert np.array_equal(tile, big[y:y + 24, x:x + 40]), (n, ch)
+    assert not (tmp_path / "t.1011_color.npy").exists()

@@ -17,6 +17,24 @@ from cellgl.export.materialx_docs import export_materialx
 from cellgl.export.snippets import ExportError
 
 
+_BASIS: list = []
+
+
+@pytest.fixture(autouse=True)
+def _basis_once(monkeypatch):
+    """The basis nodes compiled once for the module (they are the same for every export)."""
+    from cellgl.export import materialx_basis
+
+    real = materialx_basis.basis_nodes
+
+    def cached():
+        if not _BASIS:
+            _BASIS.extend(real())
+        return list(_BASIS)
+
+    monkeypatch.setattr(materialx_basis, "basis_nodes", cached)
+
+
 def _recipe(tmp_path: Path, name: str, base: str = "f1") -> Path:
     from cellgl.recipes import load_recipe
 
@@ -92,6 +110,28 @@ def test_distinct_names_export_and_the_materials_validate(tmp_path):
         assert doc.validate() == (True, ""), name
 
 
+def test_names_of_materialx_s_library_are_refused(tmp_path):
+    """A recipe named `ND-lama` wrote the element ND_lama_surface, a nodedef of MaterialX's library."""
+    with pytest.raises(ExportError) as e:
+        export_materialx(tmp_path / "mx", [str(_recipe(tmp_path, "ND-lama"))], basis=False)
+    assert "recipe 'ND-lama': its materials' names would start with 'ND_'" in str(e.value)
+    assert "ND_lama_surface" in str(e.value) and not (tmp_path / "mx").exists()
+    export_materialx(tmp_path / "mx", [str(_recipe(tmp_path, "NDx-lama"))], basis=False)
+
+
+def test_the_library_prefixes_are_those_of_materialx():
+    """Every name of MaterialX's standard library with a '_' starts with one of the prefixes
+    the export refuses (a later MaterialX with another prefix fails here)."""
+    mx = pytest.importorskip("MaterialX")
+    from cellgl.export.materialx_docs import MX_LIBRARY_PREFIXES
+
+    lib = mx.createDocument()
+    mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+    heads = {e.getName().split("_")[0] for e in lib.getChildren() if "_" in e.getName()}
+    assert heads <= set(MX_LIBRARY_PREFIXES), heads - set(MX_LIBRARY_PREFIXES)
+    assert not any(e.getName().startswith(("M_", "cellgl")) for e in lib.getChildren())
+
+
 def test_documents_are_well_formed_xml(tmp_path):
     """The library's comment said `--target`: "--" is not allowed in an XML comment (MaterialX's
     own parser let it pass; a strict one refuses the file)."""
@@ -134,11 +174,12 @@ def test_a_failed_re_export_leaves_the_previous_set_untouched(tmp_path, monkeypa
     export_materialx(out, ["flagstone"], basis=False)
     (out / "notes.txt").write_text("mine")
     before = _tree(out)
-    for after in (0, 2, 5):         # fails writing the new set
+    for after in (0, 2, 4):         # fails writing the new set
         with monkeypatch.context() as m:
             _fail_on_write(m, after)
-            rc, err = _cli(["f1", "-o", str(out)], capsys)
-        assert rc == 2 and "No space left on device" in err
+            with pytest.raises(OSError) as e:
+                export_materialx(out, ["f1"], basis=False)
+        assert e.value.errno == errno.ENOSPC and str(out) in e.value.filename and ".cellgl-" not in str(e.value)
         assert _tree(out) == before
     real = os.replace
     for k in (0, 3, 7, 30):         # the (k+1)-th move fails (the previous set aside, the new one in): all undone
@@ -152,9 +193,48 @@ def test_a_failed_re_export_leaves_the_previous_set_untouched(tmp_path, monkeypa
 
         with monkeypatch.context() as m:
             m.setattr(materialx_files.os, "replace", replace)
-            with pytest.raises(OSError):
-                export_materialx(out, ["f1"])
+            with pytest.raises(OSError) as e:
+                export_materialx(out, ["f1"], basis=k == 30)
+        assert e.value.errno == errno.EIO and ".cellgl-" not in str(e.value), e.value
         assert _tree(out) == before
+    _no_temporaries(tmp_path)
+
+
+def _lib_set(name: str) -> dict[str, str]:
+    """A small set: a library naming one code file."""
+    lib = (f'<?xml version="1.0"?>\n<materialx version="1.39">\n  <implementation name="IM_{name}" '
+           f'file="genglsl/cellgl_{name}.glsl" target="genglsl" />\n</materialx>\n')
+    return {materialx_files.LIBRARY: lib, f"genglsl/cellgl_{name}.glsl": f"// {name}\n"}
+
+
+def test_two_exports_into_one_folder_land_one_after_the_other(tmp_path, monkeypatch):
+    """The second export reads which files are the previous set once it holds the folder, so
+    the set it replaces is the one the first export wrote, not the one before (which left the
+    first export's code file behind)."""
+    import threading
+    import time
+
+    out = tmp_path / "mx"
+    materialx_files.write_set(_lib_set("x"), out)
+    real, inside, go = materialx_files._swap, threading.Event(), threading.Event()
+
+    def swap(*a):
+        if threading.current_thread().name == "first":
+            inside.set()
+            go.wait(30)
+        return real(*a)
+
+    monkeypatch.setattr(materialx_files, "_swap", swap)
+    first = threading.Thread(target=materialx_files.write_set, args=(_lib_set("a"), out), name="first")
+    second = threading.Thread(target=materialx_files.write_set, args=(_lib_set("b"), out), name="second")
+    first.start()
+    assert inside.wait(30)
+    second.start()
+    time.sleep(0.5)                 # the second one waits for the folder's lock
+    go.set()
+    first.join(30)
+    second.join(30)
+    assert set(_tree(out)) == set(_lib_set("b"))
     _no_temporaries(tmp_path)
 
 

@@ -5,7 +5,8 @@ Each ``--set NAME=SPEC`` either fixes a parameter (``--set frequency=6``) or swe
 swept parameters give every combination. Each variation is one task that bakes one file (PNG by
 default; any ``cellgl bake`` format) with :func:`cellgl.io.bake.bake`, so it is written atomically;
 a variation whose files all exist is skipped, so a rerun finishes an interrupted sweep.
-``DIR/sweep.json`` records the request (recipe, sets, size, channels, format, cellgl version); a
+``DIR/sweep.json`` records the request (recipe, sets, size, channels, format, cellgl version,
+the files' colour space); a
 rerun into the same directory must make the same request.
 """
 
@@ -195,11 +196,16 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
     stem = re.sub(r"[^A-Za-z0-9.+-]+", "-", str(getattr(base, "name", "") or "recipe"))
     items = list(_variations(stem, axes, ext))
     job = _Job(base, str(outdir.resolve()), (w, h), channels, bit_depth, tileable)
-    _bake.check_bits(ext, bit_depth)
+    bits = _bake.check_bits(ext, bit_depth)
+    from cellgl.io.colour import COLORSPACES, default_colorspace
+
+    space = default_colorspace(ext, bits) if "color" in channels else None
     request = {"generator": "cellgl", "version": __version__, "recipe": base.to_dict(),
                "sets": list(sets), "size": [w, h], "channels": list(channels),
                "format": ext[1:], "depth": bit_depth, "tileable": tileable,
-               "variations": len(items)}
+               "variations": len(items),
+               # the colour channel's space in the files (cellgl.io.colour); None: no colour, .npy
+               "colorspace": COLORSPACES[space].interop_id if space else None}
     have = _check_manifest(outdir, request)
     t0 = time.perf_counter()
     bar = _bake.Progress(len(items), f"sweep {outdir.name}", progress, unit="files")

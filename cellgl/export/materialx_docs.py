@@ -19,7 +19,7 @@ import re
 from xml.sax.saxutils import quoteattr
 
 from cellgl.export.materialx import MxNode
-from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, write_set
+from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, check_places, write_set
 from cellgl.export.snippets import ExportError
 
 __all__ = ["export_materialx", "LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage",
@@ -43,8 +43,21 @@ def _attrs(**kw) -> str:
     return "".join(f" {k}={quoteattr(str(v))}" for k, v in kw.items() if v is not None)
 
 
+def mx_version() -> str:
+    """The nodedefs' ``version``: cellgl's version as MaterialX writes versions, ``major.minor``
+    (two integers: MaterialX reads ``0.1.0`` as no version at all)."""
+    from cellgl._version import __version__
+
+    m = re.match(r"(\d+)\.(\d+)", __version__)
+    if not m:
+        raise ExportError(f"cellgl's version {__version__!r} has no major.minor for the nodedefs' version")
+    return f"{int(m.group(1))}.{int(m.group(2))}"
+
+
 def _nodedef(node: MxNode) -> list[str]:
-    out = [f"  <nodedef{_attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, doc=node.doc)}>"]
+    head = _attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, version=mx_version(),
+                  isdefaultversion="true", doc=node.doc)
+    out = [f"  <nodedef{head}>"]
     for i in node.inputs:
         a = dict(name=i.name, type=i.mxtype)
         if i.value is not None:
@@ -75,8 +88,9 @@ def library_document(nodes: list[MxNode]) -> str:
     """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``."""
     from cellgl._version import __version__
 
-    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target materialx: "
-             "nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
+    # no "--" in an XML comment (so not "--target")
+    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target "
+             "materialx: nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
     for n in nodes:
         lines += _nodedef(n)
     return "\n".join(lines) + "\n</materialx>\n"
@@ -139,7 +153,8 @@ def usd_stage(nodes: list[MxNode]) -> str:
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
            'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
-           '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "", 'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
+           '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "",
+           'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
     for n in nodes:
         if not n.example:
             continue
@@ -197,13 +212,15 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
     Returns
     -------
     list of pathlib.Path
-        The files written. Every node is compiled before the first file is written.
+        The files written. Every node is compiled and every name checked unique
+        (:func:`check_names`) before the first file is written; the set lands whole or not at
+        all, replacing the previous set of ``outdir`` (:mod:`cellgl.export.materialx_files`).
     """
     from cellgl.export.materialx import exportable_presets, preset_node
     from cellgl.recipes import load_recipe
     from cellgl.texture.recipe import RecipeError
 
-    check_dir(outdir)
+    check_places(check_dir(outdir))     # before the work: a file where genosl/ goes
     names = exportable_presets()[0] if recipes is None else list(recipes)
     nodes = []
     for rec in names:
@@ -236,6 +253,9 @@ def code_files(node: MxNode) -> dict[str, str]:
     return {f"genglsl/{node.name}.glsl": node.glsl, f"genosl/{node.name}.osl": node.osl}
 
 
+#: the prefixes of the names in MaterialX's standard library (1.39: nodedefs, nodegraphs,
+#: implementations, unit definitions; tests/test_materialx_files.py checks the list is whole)
+MX_LIBRARY_PREFIXES = ("ND", "NG", "IM", "IMP", "IMPL", "UD")
 #: a top-level name of a node's code: every one carries the node's name (materialx.renamed)
 _CODE_NAME = re.compile(r"\b(?:cellgl|Cellgl)\w+")
 
@@ -263,10 +283,16 @@ def check_names(nodes: list[MxNode]) -> None:
     a recipe named as a basis node (``cellular2d-euclidean-poisson``), two recipes whose names
     differ only by ``-`` / ``_`` or by case, a recipe whose material's names are another's
     (``M`` and ``texture``: both give ``M_texture``) or whose code's names are another's
-    (``stone`` and ``stone-abs``: ``cellgl_stone_abs_vec3``)."""
+    (``stone`` and ``stone-abs``: ``cellgl_stone_abs_vec3``), and a recipe whose materials'
+    names could be those of MaterialX's standard library (``ND-lama``: ``ND_lama_surface``)."""
     seen: dict[tuple[str, str], tuple[int, str]] = {}
     for k, n in enumerate(nodes):
         who = f"recipe {n.example['recipe']!r}" if n.example else f"the basis node {n.name!r}"
+        head = _ex(n).split("_")[0]
+        if n.example and head in MX_LIBRARY_PREFIXES:
+            raise ExportError(f"{who}: its materials' names would start with {head + '_'!r}, as the names of "
+                              "MaterialX's standard library do (" + ", ".join(p + "_" for p in MX_LIBRARY_PREFIXES)
+                              + f"), and could be one of them ({_ex(n)}_surface); rename the recipe")
         for kind, key, name in _written_names(n):
             j, other = seen.setdefault((kind, key), (k, who))
             if j != k:

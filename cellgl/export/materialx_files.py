@@ -35,7 +35,7 @@ from cellgl.export.snippets import ExportError
 from cellgl.io.tempfiles import (check_output_dir, commit_lock, default_mode, naming_destination_in,
                                  scratch_dir)
 
-__all__ = ["LIBRARY", "MATERIALS", "USD", "CODE_DIRS", "check_dir", "previous_set", "write_set"]
+__all__ = ["LIBRARY", "MATERIALS", "USD", "CODE_DIRS", "check_dir", "check_places", "previous_set", "write_set"]
 
 LIBRARY = "cellgl_nodes.mtlx"
 MATERIALS = "cellgl_materials.mtlx"
@@ -101,10 +101,11 @@ def _order(rels) -> list[str]:
     return sorted(rels, key=lambda r: (rank.get(r, 0), r))
 
 
-def _check_places(root: Path, rels) -> None:
+def check_places(root: Path, rels=DOCUMENTS) -> None:
     """Refuse, before any work, a set that cannot land: a file where a code folder goes, a
-    folder where a file goes."""
-    for sub in sorted({Path(r).parent for r in rels} - {Path(".")}):
+    folder where one of ``rels`` goes."""
+    root = Path(root)
+    for sub in sorted(({Path(r).parent for r in rels} | {Path(d) for d in CODE_DIRS}) - {Path(".")}):
         p = root / sub
         if (p.exists() or p.is_symlink()) and not p.is_dir():
             raise ExportError(f"output {str(p)!r} is a file, not a directory: the export writes its code files "
@@ -121,7 +122,7 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
     not at all, removing the previous set's files that the new one has not (the module doc)."""
     root = check_dir(outdir)
     rels = list(files)
-    _check_places(root, rels)
+    check_places(root, rels)
     if not root.exists():
         with scratch_dir(root, "export") as tmp:
             try:
@@ -138,7 +139,6 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
                     raise ExportError(f"output directory {str(root)!r} was made by another program during the "
                                       "export; nothing was written there: export again") from None
         return [root / r for r in rels]
-    old = previous_set(root)
     with scratch_dir(root / LIBRARY, "export") as tmp:
         new, aside = tmp / "new", tmp / "old"
         new.mkdir()
@@ -147,8 +147,11 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
             _fill(new, files)
         except OSError as exc:
             raise naming_destination_in(exc, new, root) from None
-        with commit_lock([root]):
-            _swap(root, new, aside, _order(rels), old)
+        with commit_lock([root]):       # another export into DIR: one set after the other
+            try:
+                _swap(root, new, aside, _order(rels), previous_set(root))
+            except OSError as exc:      # name the output, not the hidden folder
+                raise naming_destination_in(naming_destination_in(exc, new, root), aside, root) from None
     return [root / r for r in rels]
 
 

@@ -326,6 +326,10 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     if set_tiles and depth_slices is not None:
         raise BakeError(f"--udim with a volume ({w}x{h}x{depth_slices}): UDIM sets are of 2D "
                         f"images; accepted --size WxH")
+    try:
+        udim_mod.check_extent(set_tiles, w, h, MAX_SIDE)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
     tile = _check_tile(tile)
     try:
         samples = antialias.check_samples(samples)

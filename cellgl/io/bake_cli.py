@@ -19,7 +19,10 @@ _EPILOG = """\
 formats (from the extension) and --depth (bits per sample):
   .png  8 (default) or 16     .exr  16 (half) or 32 (float, default)
   .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
+  .tx   as .tif, tiled and mip-mapped (every level rendered) for film renderers
   .dds, .ktx2  GPU textures, a format per channel (--compress; --depth: plain samples' bits)
+colour: float files hold scene-linear Rec.709 (--colorspace srgb: sRGB-encoded), tagged;
+  integer formats sRGB-encoded.
 channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 examples:
@@ -30,7 +33,7 @@ examples:
   cellgl bake flagstone -o f.ktx2 --size 1024 --mips --zstd --compress bc1
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
-  cellgl bake flagstone -o wall.<UDIM>.exr --udim 1001-1012 --size 1024
+  cellgl bake flagstone -o 'wall.<UDIM>.tx' --udim 1001-1012 --size 1024
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
@@ -78,7 +81,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "formats are always sRGB-encoded")
     p.add_argument("--udim", default=None, metavar="RANGE",
                    help="a UDIM set: tiles such as 1001-1012 (1001..1100; -o holds <UDIM>, e.g. "
-                        "wall.<UDIM>.exr); tile 1001+u+10v is uv [u,u+1)x[v,v+1), --size each")
+                        "'wall.<UDIM>.exr', quoted); tile 1001+u+10v is uv [u,u+1)x[v,v+1), --size each")
     p.add_argument("--udims", default=None, metavar="UxV",
                    help="a UDIM set of U columns by V rows from 1001 (as --udim)")
     p.add_argument("--mips", action="store_true",

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 __all__ = ["COLORSPACES", "ColourSpace", "REC709_CHROMATICITIES", "check_colorspace",
-           "srgb_to_linear", "linear_to_srgb", "default_colorspace"]
+           "srgb_to_linear", "encode_linear", "linear_to_srgb", "default_colorspace"]
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,24 @@ def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     """IEC 61966-2-1 sRGB decoding, exact piecewise form, in float64."""
     c = np.asarray(c, dtype=np.float64)
     return np.where(c <= 0.04045, c / 12.92, ((np.maximum(c, 0.04045) + 0.055) / 1.055) ** 2.4)
+
+
+#: elements decoded at once by :func:`encode_linear` (its float64 temporaries stay small)
+_BLOCK = 1 << 18
+
+
+def encode_linear(c: np.ndarray, dtype) -> np.ndarray:
+    """:func:`srgb_to_linear` of ``c`` rounded once to ``dtype``, a block of rows at a time (the
+    float64 work of a 4096^2 level would otherwise be several GB)."""
+    a = np.asarray(c)
+    out = np.empty(a.shape, dtype)
+    if a.ndim == 0 or a.size == 0:
+        out[...] = srgb_to_linear(a)
+        return out
+    rows = max(1, _BLOCK // max(1, a[0].size))
+    for r0 in range(0, len(a), rows):
+        out[r0:r0 + rows] = srgb_to_linear(a[r0:r0 + rows])
+    return out
 
 
 def linear_to_srgb(c: np.ndarray) -> np.ndarray:

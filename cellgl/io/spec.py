@@ -255,9 +255,9 @@ class Encoding:
         if self.channel == "color":
             a = np.asarray(a)[..., :3]
             if self.colorspace == "linear":
-                from cellgl.io.colour import srgb_to_linear
+                from cellgl.io.colour import encode_linear
 
-                return srgb_to_linear(a).astype(self.dtype)
+                return encode_linear(a, self.dtype)
         if self.channel == "id":
             if self.samples == 3:
                 return id_colors(a)

@@ -12,11 +12,11 @@ renderers read through OpenImageIO's texture system:
   OpenImageIO reads the pages as MIP levels).
 * ``.exr``: a tiled OpenEXR file, ``MIPMAP_LEVELS`` with ``ROUND_UP`` (the chain of
   :func:`cellgl.io.mips.mip_sizes`), written by OpenImageIO's ``ImageOutput``
-  (``AppendMIPLevel``), every channel asked for in one file, colour tagged as in
+  (``AppendMIPLevel``; the wheel or Blender's copy, :func:`openimageio`), every channel asked for in one file, colour tagged as in
   :mod:`cellgl.io.colour`.
 
-A level is held whole in memory while it is written (level 0 of a 4096^2 RGB float bake: about
-0.5 GB with the render's own working memory), unlike the streamed single-level writers.
+A level is held whole in memory while it is written (a 4096^2 RGB float .tx peaks at about 0.7
+GiB with the render's own working memory), unlike the streamed single-level writers.
 """
 from __future__ import annotations
 
@@ -27,15 +27,50 @@ import numpy as np
 
 from cellgl.io.spec import BakeError, exr_names
 
-__all__ = ["TILE", "check_tiled", "write_texture", "TEXTURE_EXTS"]
+__all__ = ["TILE", "check_tiled", "write_texture", "TEXTURE_EXTS", "openimageio"]
 
 TILE = 64                                #: tile side of every tiled texture file
+_RENDER_TILE = 2048                      #: largest side one render call gets (as the bake's MAX_TILE)
 TEXTURE_EXTS = (".exr", ".tif", ".tiff", ".tx")
 #: an EXR attribute OpenImageIO 3.0 does not suppress, renamed in place to ``oiio:ColorSpace``
 #: after writing (same length: nothing in the file moves)
 _CS_STANDIN = b"cellgl:ColorSpc"
 _CS_NAME = b"oiio:ColorSpace"
 assert len(_CS_STANDIN) == len(_CS_NAME)
+
+
+def openimageio():
+    """The ``OpenImageIO`` module: an installed one (``pip install openimageio``), else the copy
+    inside Blender's ``bpy`` wheel (the ``[blender]`` extra; its folder is appended to
+    ``sys.path``, where Blender itself puts it), else None.
+
+    One environment must not hold both the ``openimageio`` wheel and ``bpy``: the wheel's module
+    shadows Blender's, and Blender's OSL script nodes then fail (``oslquery`` returns Blender's
+    ``TypeDesc``, which the other module cannot convert; checked with bpy 4.5 and openimageio
+    3.0.21). With ``bpy`` installed, cellgl uses Blender's copy.
+    """
+    import importlib.util
+    import sys
+
+    try:
+        import OpenImageIO
+        return OpenImageIO
+    except ImportError:
+        pass
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.origin:
+        return None
+    base = Path(spec.origin).parent
+    for folder in sorted(base.glob("*/python/lib/python3*/site-packages")):
+        if (folder / "OpenImageIO").is_dir():
+            if str(folder) not in sys.path:
+                sys.path.append(str(folder))
+            try:
+                import OpenImageIO
+                return OpenImageIO
+            except ImportError:
+                return None
+    return None
 
 
 def check_tiled(ext: str, tiled: bool, mips: bool, channels, depth_slices) -> tuple[bool, bool]:
@@ -54,12 +89,9 @@ def check_tiled(ext: str, tiled: bool, mips: bool, channels, depth_slices) -> tu
     if ext == ".exr" and "id" in channels:
         raise BakeError("--tiled .exr with --channels id: a tiled EXR here holds float "
                         "channels only; write ids to a .tif/.tx (uint32) or a scanline .exr")
-    if ext == ".exr":
-        try:
-            import OpenImageIO  # noqa: F401
-        except ImportError:
-            raise BakeError("a tiled .exr needs the 'openimageio' package: "
-                            "pip install 'cellgl[exr]'") from None
+    if ext == ".exr" and openimageio() is None:
+        raise BakeError("a tiled .exr needs OpenImageIO: pip install openimageio (or Blender's "
+                        "copy, pip install 'cellgl[blender]'; not both in one environment)")
     return True, mips
 
 
@@ -86,13 +118,12 @@ def _levels(recipe, w: int, h: int, mips: bool, channels, samples: int, window):
 def _window(recipe, fw, fh, x0, y0, w, h, channels, samples):
     """The ``w x h`` window at (x0, y0) of the ``fw x fh`` bake, in tiles of at most 2048."""
     from cellgl import recipes
-    from cellgl.io.mips import RENDER_TILE
 
     extra = {"samples": samples} if samples != 1 else {}
     out: dict[str, np.ndarray] = {}
-    for ty in range(0, h, RENDER_TILE):
-        for tx in range(0, w, RENDER_TILE):
-            tw, th = min(RENDER_TILE, w - tx), min(RENDER_TILE, h - ty)
+    for ty in range(0, h, _RENDER_TILE):
+        for tx in range(0, w, _RENDER_TILE):
+            tw, th = min(_RENDER_TILE, w - tx), min(_RENDER_TILE, h - ty)
             res = recipes.render(recipe, fw, fh, channels=tuple(channels), x0=x0 + tx, y0=y0 + ty,
                                  tile_w=tw, tile_h=th, **extra)
             for name, a in res.items():
@@ -143,9 +174,9 @@ def _write_tiff(tmp, levels, out, meta, wrap, bar, mips) -> None:
 
 
 def _write_exr(tmp, levels, out, meta, wrap, bar, mips) -> None:
-    import OpenImageIO as oiio
-
     from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES
+
+    oiio = openimageio()
 
     names = [n for e in out.encodings for n in exr_names(e.channel)]
     half = all(e.dtype == np.float16 for e in out.encodings)

@@ -18,7 +18,7 @@ import re
 from dataclasses import dataclass
 
 __all__ = ["UDIM_TOKEN", "UdimTile", "parse_udim", "parse_udims", "window_recipe", "tile_path",
-           "tiles_for", "tile_origin", "bounds", "UdimError"]
+           "tiles_for", "tile_origin", "bounds", "check_extent", "UdimError"]
 
 UDIM_TOKEN = "<UDIM>"
 FIRST, LAST = 1001, 1100
@@ -76,6 +76,19 @@ def bounds(tiles: list[UdimTile]) -> tuple[int, int, int, int]:
     """(u_min, v_min, columns, rows) of the rectangle the tiles span."""
     us, vs = [t.u for t in tiles], [t.v for t in tiles]
     return min(us), min(vs), max(us) - min(us) + 1, max(vs) - min(vs) + 1
+
+
+def check_extent(tiles: list[UdimTile], w: int, h: int, max_side: int) -> None:
+    """:class:`UdimError` unless the set's virtual bake (columns x ``w`` by rows x ``h``) fits
+    ``max_side``, the largest side one render takes (nothing to check for no tiles)."""
+    if not tiles:
+        return
+    _, _, cols, rows = bounds(tiles)
+    for name, n, side in (("columns", cols, w), ("rows", rows, h)):
+        if n * side > max_side:
+            raise UdimError(f"--udim: {n} {name} of {side} px make a bake {n * side} px across; "
+                            f"accepted at most {max_side} (tiles of at most {max_side // n} px "
+                            f"for {n} {name})")
 
 
 def tile_origin(tile: UdimTile, tiles: list[UdimTile], w: int, h: int) -> tuple[int, int]:
