@@ -65,7 +65,7 @@ _MIN_TILE = 1024
 WIDTH = 1024
 #: sampler uniform -> texture unit: the storage words of each binding and the sample inputs
 SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
-            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3}
+            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3, "u_in8": 8}
 
 
 def tile_samples(cost: int, watchdog: bool = True) -> int:

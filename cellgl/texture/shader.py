@@ -44,7 +44,7 @@ from cellgl.texture.images import BINDING as CELL_IMAGE_BINDING
 from cellgl.basis.features import feature_max_ring
 from cellgl.basis.reference import MAX_POINTS, W96_DENSITY_ADJUSTMENT, max_ring_default, poisson_thresholds
 
-__all__ = ["defines", "uniform_values", "lattice_origins", "set_uniforms", "set_view", "glsl_struct_block",
+__all__ = ["defines", "uniform_values", "lattice_origins", "group_records", "group_octaves", "set_uniforms", "set_view", "glsl_struct_block",
            "glsl_uniform_block", "glsl_params_from_uniforms", "glsl_constant_block", "LOCAL_SIZE",
            "uniform_decls"]
 
@@ -320,7 +320,7 @@ def _density_kind(name: str) -> int:
     return 0 if name == "none" else KIND_CODES["ramp" if name.startswith("ramp") else name]
 
 
-def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
+def lattice_origins(recipe, pan=(0.0, 0.0), octaves: int = MAX_OCTAVES) -> dict:
     """The recipe's origin ``(offset_x, offset_y, offset_z, time)`` split per octave, as the GPU
     gets it: ``{"origin_cell", "noise_cell": int32 (MAX_OCTAVES, 4), "origin_frac",
     "noise_frac": float32 (MAX_OCTAVES, 4) in [0, 1), "warp_cell" int32 (4,), "warp_frac"
@@ -336,7 +336,7 @@ def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
     from cellgl.texture import reference as texture_reference
 
     recipe = load_recipe(recipe)
-    o = texture_reference.lattice_origins(recipe.values, pan)
+    o = texture_reference.lattice_origins(recipe.values, pan, octaves)
     out = {}
     for name in ("origin", "noise", "warp"):
         cell, frac = o[name + "_cell"], o[name + "_frac"].astype(np.float32)
@@ -346,6 +346,29 @@ def lattice_origins(recipe, pan=(0.0, 0.0)) -> dict:
         out[name + "_cell"] = ((cell + (1 << 31)) % (1 << 32) - (1 << 31)).astype(np.int32)
         out[name + "_frac"] = frac
     return out
+
+
+def group_octaves(recipe) -> int:
+    """The octaves whose origins a texture sample reads: 1 without a fractal, else ceil(octaves)."""
+    v = load_recipe(recipe).values
+    return 1 if v["fractal"] == "none" else int(math.ceil(float(v["octaves"])))
+
+
+def group_records(recipe, pans) -> np.ndarray:
+    """``shaders/lib/texture_groups.glsl``'s records for the groups of far points of
+    :func:`cellgl.texture.evaluate`, one group per whole part ``pans`` (G, 3) float64: each
+    group's :func:`lattice_origins` (the same split as a pan, so the same bits) of the
+    :func:`group_octaves` ``n`` octaves a sample reads, ``4 n + 2`` records a group
+    (origin_cell, origin_frac, noise_cell, noise_frac per octave, then warp_cell, warp_frac;
+    fractions as their float32 bits), (G * (4 n + 2), 4) uint32."""
+    n = group_octaves(recipe)
+    o = lattice_origins(recipe, np.asarray(pans, dtype=np.float64).reshape(-1, 3), n)
+    rec = np.empty((len(o["warp_cell"]), 4 * n + 2, 4), np.uint32)
+    for r, name in enumerate(("origin_cell", "origin_frac", "noise_cell", "noise_frac")):
+        rec[:, r:4 * n:4] = o[name].view(np.uint32)
+    rec[:, 4 * n] = o["warp_cell"].view(np.uint32)
+    rec[:, 4 * n + 1] = o["warp_frac"].view(np.uint32)
+    return rec.reshape(-1, 4)
 
 
 def uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
