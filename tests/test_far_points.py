@@ -45,7 +45,7 @@ def test_spread_points_run_in_one_pass_with_the_bits_of_a_pass_per_cell(ctx, mon
     for path in _paths(ctx):
         monkeypatch.setenv("CELLGL_PATH", path)
         calls = []
-        monkeypatch.setattr(dispatch, "run", lambda *a, **k: calls.append(k) or run(*a, **k))
+        monkeypatch.setattr(dispatch, "run", lambda *a, calls=calls, **k: calls.append(k) or run(*a, **k))
         got = cellgl.evaluate(r, pts, CHS, filter_width=fw)
         monkeypatch.setattr(dispatch, "run", run)
         assert len(calls) == 1 and calls[0]["groups"] is not None, (path, len(calls))
