@@ -67,7 +67,7 @@ def output_mask(channels) -> int:
 
 @gl_call
 def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersample: int = 1, pan=None,
-        pan_only: bool = False, probe: bool = False, groups=None) -> dict:
+        pan_only: bool = False, probe: bool = False, groups=None, footprint=None) -> dict:
     """Run the recipe's entry over ``count`` samples and return ``{channel: array}`` (flat, one row
     per sample). ``setup(prog)`` sets the entry's own uniforms (the image and tile of a grid, the
     filter width of points); ``points`` (count, 4) float32 (u, v, z, -): the samples when not a
@@ -77,7 +77,9 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     measurement build, adding ``"loops"``: the loop passes llvmpipe counted for each sample's SIMD
     vector (benchmarks/loop_budget.py); ``groups``: the records of
     :func:`cellgl.texture.shader.group_records` for points whose fourth component is their group
-    (far points in one pass, ``shaders/lib/texture_groups.glsl``). Raises :class:`LoopLimitError` if the driver cut any
+    (far points in one pass, ``shaders/lib/texture_groups.glsl``); ``footprint`` (du, dv, dz): the
+    largest of any sample, where no octave fades at it (:func:`cellgl.texture.antialias.fades`)
+    the pass carries octave mean 0 instead of measuring it (None: measured). Raises :class:`LoopLimitError` if the driver cut any
     sample's loops."""
     from cellgl.gl import runner as _runner
     from cellgl.texture import shader as texture
@@ -112,14 +114,17 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
         d["CELL_TEX_GROUP_OCTAVES"] = texture.group_octaves(recipe)
     # far points (a pan or groups) run with uniforms, as the viewer pans: the bits they always had
     baked = BAKE_CONSTANTS and pan is None and groups is None
-    files = {"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe)} if baked else None
+    from cellgl.texture.antialias import fades
+
+    mean = footprint is None or fades(recipe.values, footprint)
+    files = {"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe, mean)} if baked else None
 
     def prog_setup(prog):
         if not baked:
             texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan,
-                                 pan_only=pan_only and pan is not None)
+                                 pan_only=pan_only and pan is not None, mean=mean)
         elif recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
-            texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
+            texture.set_uniforms(prog, recipe, mean=mean)     # binds the density or cell image (no uniforms left)
         for name, value in (("u_loop_canary", 2), ("u_loop_probe", PROBE_PASSES)):
             if name in prog:
                 prog[name].value = value
