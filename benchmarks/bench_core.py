@@ -196,7 +196,7 @@ def cellgl_rows(pts_by_dim, ref_pts_by_dim, grid, cell_size, repeats, ref_repeat
                 continue
             s = 1.0 / cell_size
 
-            def gcall(shape, dist=dist, kw=kw):
+            def gcall(shape, dist=dist, kw=kw, s=s):
                 try:
                     r = cellgl.cellular_grid(shape, origin=(0.0, 0.0), spacing=(s, s), n=1,
                                              distribution=dist, jitter=1.0, seed=0,
@@ -266,7 +266,9 @@ def render(rows, markdown):
         out += ["| " + " | ".join(c.replace("|", "/") for c in b) + " |" for b in body]
         return "\n".join(out)
     w = [max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)]
-    line = lambda cells: "  ".join(c.ljust(w[i]) for i, c in enumerate(cells)).rstrip()
+
+    def line(cells):
+        return "  ".join(c.ljust(w[i]) for i, c in enumerate(cells)).rstrip()
     return "\n".join([line(head), line(["-" * x for x in w])] + [line(b) for b in body])
 
 

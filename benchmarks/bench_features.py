@@ -58,11 +58,12 @@ def feature_cost(quick: bool) -> None:
     rows = []
     for dim, side, spacing in ((2, 256 if quick else 512, 1 / 16), (3, 24 if quick else 48, 1 / 6)):
         shape = (side,) * dim
-        base = best(lambda: cellgl.cellular_grid(shape, spacing=spacing, n=1, outputs=("F",)))
+        base = best(lambda shape=shape, spacing=spacing: cellgl.cellular_grid(shape, spacing=spacing, n=1, outputs=("F",)))
         rows.append((dim, side, "F1", base, 1.0))
         for name, outs in (("edge", ("edge",)), ("smooth_F1 (k = 0.1)", ("smooth_F1",)),
                            ("nsphere", ("nsphere",)), ("all", ("edge", "smooth_F1", "nsphere"))):
-            t = best(lambda: cellgl.cellular_grid(shape, spacing=spacing, n=1, outputs=outs, smoothness=0.1))
+            t = best(lambda shape=shape, spacing=spacing, outs=outs: cellgl.cellular_grid(shape, spacing=spacing, n=1,
+                                                                                   outputs=outs, smoothness=0.1))
             rows.append((dim, side, name, t, t / base))
     print("| dim | grid | outputs | time (ms) | / F1 |")
     print("| --- | --- | --- | --- | --- |")
@@ -80,12 +81,12 @@ def smooth_cost(quick: bool) -> None:
     for dim, side, spacing in ((2, 256 if quick else 512, 1 / 16), (3, 24 if quick else 48, 1 / 6)):
         shape = (side,) * dim
         kw = dict(spacing=spacing, n=1, distribution="blender")
-        base = best(lambda: cellgl.cellular_grid(shape, outputs=("F",), **kw))
+        base = best(lambda shape=shape, kw=kw: cellgl.cellular_grid(shape, outputs=("F",), **kw))
         rows.append((dim, side, "F1", "", base))
         for mode, ks in (("exp", (0.05, 0.1, 0.25)), ("polynomial", (0.25, 0.5, 1.0))):
             for k in ks:
-                t = best(lambda: cellgl.cellular_grid(shape, outputs=("smooth_F1",), smoothness=k,
-                                                      smooth=mode, **kw))
+                t = best(lambda shape=shape, k=k, mode=mode, kw=kw: cellgl.cellular_grid(
+                    shape, outputs=("smooth_F1",), smoothness=k, smooth=mode, **kw))
                 rows.append((dim, side, f"smooth_F1 {mode}", k, t))
     print("| dim | grid | outputs | smoothness | time (ms) | / F1 |")
     print("| --- | --- | --- | --- | --- | --- |")

@@ -171,7 +171,7 @@ def rows_grid(S, repeats, fnl):
         origin = (0.5 / 64, 0.5 / 64, 0.37)[:dim]
         ref = fnl_rate(dim, S, repeats) if fnl else None
         for dist in ("jitter", "poisson"):
-            def call():
+            def call(shape=shape, origin=origin, dist=dist):
                 return np.asarray(cellgl.cellular_grid(shape, origin=origin, spacing=1 / 64, n=2,
                                                        distribution=dist, outputs=("F",)).F)
             r = timed(call, repeats)
@@ -255,7 +255,7 @@ def rows_snippet(S, repeats):
         prog["size"].value = (float(S), float(S))
         vao = ctx.vertex_array(prog, [])
 
-        def draw():
+        def draw(vao=vao):
             fbo.use()
             vao.render(mode=ctx.TRIANGLES, vertices=3)
             ctx.finish()

@@ -111,10 +111,10 @@ def main(argv=None) -> int:
         kwargs = {"samples": args.samples} if args.samples != 1 else {}
         spacing = recipe.get("frequency") / S     # the texture's octave-0 lattice step per pixel
 
-        def tex_fn():
+        def tex_fn(recipe=recipe, kwargs=kwargs):
             cellgl.render(recipe, S, S, **kwargs)
 
-        def basis_fn():
+        def basis_fn(shape=shape, spacing=spacing, kw=kw):
             cellgl.cellular_grid(shape, spacing=spacing, **kw)
 
         t_tex, t_basis, t_uni = best_times([tex_fn, basis_fn, _uniform_program(tex_fn)], args.repeats)

@@ -104,17 +104,19 @@ def main() -> int:
             pts = rng.uniform(0.0, 64.0, (N, d))
             coords = np.ascontiguousarray(pts.T, dtype=np.float32)
         f = fnl(a.n)
-        calls = {"FastNoiseLite": lambda: f.gen_from_coords(coords)}
+        calls = {"FastNoiseLite": lambda f=f, coords=coords: f.gen_from_coords(coords)}
         for dist in ("jitter", "poisson"):
             for cache in caches:
                 name = f"cellgl {dist}" + ("" if cache is None else f" cache {'on' if cache == '1' else 'off'}")
                 if a.grid:
-                    call = (lambda dist=dist, shape=shape, origin=origin, h=h: np.asarray(cellgl.cellular_grid(
-                        shape, origin=origin, spacing=h, n=a.n, distribution=dist, jitter=1.0, seed=0,
-                        outputs=("F",)).F))
+                    def call(dist=dist, shape=shape, origin=origin, h=h):
+                        return np.asarray(cellgl.cellular_grid(
+                            shape, origin=origin, spacing=h, n=a.n, distribution=dist, jitter=1.0, seed=0,
+                            outputs=("F",)).F)
                 else:
-                    call = (lambda dist=dist: np.asarray(cellgl.cellular(
-                        pts, n=a.n, distribution=dist, jitter=1.0, seed=0, outputs=("F",)).F))
+                    def call(dist=dist, pts=pts):
+                        return np.asarray(cellgl.cellular(
+                            pts, n=a.n, distribution=dist, jitter=1.0, seed=0, outputs=("F",)).F)
                 calls[name] = _with_cache(call, cache)
         for fn in calls.values():
             fn()                                     # warm-up (compiles the shaders)

@@ -41,7 +41,7 @@ def cases(quick: bool):
         if kw["distribution"] == "worley1996" and dim != 3:
             continue
         yield dim, dname, dict(kw, metric=metric), n, "F, delta, id, grad"
-    for dim, (dname, kw), (fname, outs) in itertools.product((2, 3, 4), DISTS.items(), FEATURES.items()):
+    for dim, (dname, kw), (fname, _outs) in itertools.product((2, 3, 4), DISTS.items(), FEATURES.items()):
         if kw["distribution"] == "worley1996" and dim != 3:
             continue
         yield dim, dname, dict(kw), 1, fname

@@ -9,8 +9,9 @@ from __future__ import annotations
 import importlib
 import importlib.util
 
-TYPE_CHECKING = False   # (not typing's: importing typing would slow the command's start)
 from cellgl._version import __version__
+
+TYPE_CHECKING = False   # (not typing's: importing typing would slow the command's start)
 
 
 class _SourceViewer:

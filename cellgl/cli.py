@@ -146,7 +146,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    for name, (add, run) in _COMMANDS.items():
+    for add, run in _COMMANDS.values():
         add(sub).set_defaults(_run=run)
     return parser
 

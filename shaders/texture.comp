@@ -8,6 +8,7 @@
 //                         4 F1..F4, 8 gradient + value, 16 id, 32 roughness + ao + metallic
 //                         (with CELL_TEX_MATERIAL 1: lib/texture_material.glsl)
 //   CELL_LOOP_PROBE       1: measure the driver's loop budget (cellgl/texture/dispatch.py)
+//   CELL_TEX_GROUPS       1: points carry a group index; its origins in storage buffer 8
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -25,8 +26,16 @@ uniform ivec2 u_origin;         // first pixel of the tile (x0, y0)
 uniform ivec2 u_tile;           // tile width, height
 uniform int u_depth;            // volume slices along z (0: one image at z = 0)
 #else
-layout(std430, binding = 0) readonly buffer Points { vec4 points[]; };   // (u, v, z, -)
+layout(std430, binding = 0) readonly buffer Points { vec4 points[]; };   // (u, v, z, group)
 uniform vec3 u_filter_width;    // footprint of every point in texture space (0: point samples)
+#ifndef CELL_TEX_GROUPS
+#define CELL_TEX_GROUPS 0
+#endif
+#if CELL_TEX_GROUPS             // far points: each group's origins (lib/texture_groups.glsl)
+layout(std430, binding = 11) readonly buffer Groups { uvec4 group_records[]; };
+#define CELL_TEX_GROUP_RECORD(k) group_records[k]
+#include "lib/texture_groups.glsl"
+#endif
 #endif
 layout(std430, binding = 1) writeonly buffer OutColor { vec4 out_color[]; };
 layout(std430, binding = 2) writeonly buffer OutAux { vec4 out_aux[]; };    // height, normal (0..1)
@@ -83,6 +92,9 @@ void main()
 #else
     vec3 p = points[i].xyz;
     vec3 duvz = u_filter_width;
+#if CELL_TEX_GROUPS
+    cell_texture_group(t, int(points[i].w));
+#endif
 #endif
     CELL_PRECISE vec4 local = cell_texture_local(p, t);
 #if CELL_TEX_GRID && CELL_TEX_SUPERSAMPLE > 1

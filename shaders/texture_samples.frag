@@ -21,8 +21,16 @@ uniform ivec2 u_origin;         // first pixel of the tile (x0, y0)
 uniform ivec2 u_tile;           // tile width, height
 uniform int u_depth;            // volume slices along z (0: one image at z = 0)
 #else
-uniform sampler2D u_in0;        // the points (u, v, z, -), sample i at texel (i mod width, i / width)
+uniform sampler2D u_in0;        // the points (u, v, z, group), sample i at texel (i mod width, i / width)
 uniform vec3 u_filter_width;    // footprint of every point in texture space (0: point samples)
+#ifndef CELL_TEX_GROUPS
+#define CELL_TEX_GROUPS 0
+#endif
+#if CELL_TEX_GROUPS             // far points: each group's origins (lib/texture_groups.glsl)
+uniform usampler2D u_in11;
+#define CELL_TEX_GROUP_RECORD(k) texelFetch(u_in11, CELL_STORAGE_TEXEL(k), 0)
+#include "lib/texture_groups.glsl"
+#endif
 #endif
 uniform usampler2D u_loop_canary;  // one texel: the canary's length, 2 (texture.comp; not a uniform a compiler can fold)
 
@@ -58,8 +66,12 @@ void main()
                   u_depth > 0 ? (float(k) + 0.5) / float(u_depth) : 0.0);
     vec3 duvz = vec3(1.0 / float(u_size.x), 1.0 / float(u_size.y), 0.0);
 #else
-    vec3 p = texelFetch(u_in0, xy, 0).xyz;
+    vec4 row = texelFetch(u_in0, xy, 0);
+    vec3 p = row.xyz;
     vec3 duvz = u_filter_width;
+#if CELL_TEX_GROUPS
+    cell_texture_group(t, int(row.w));
+#endif
 #endif
     CELL_PRECISE vec4 local = cell_texture_local(p, t);
 #if CELL_TEX_GRID && CELL_TEX_SUPERSAMPLE > 1

@@ -87,7 +87,7 @@ def check_file(path: Path) -> str | None:
                 if not channels:
                     return "EXR without channels"
                 for ch in channels.values():
-                    ch.pixels     # decodes
+                    _ = ch.pixels     # decodes
         elif ext == ".npy":
             import numpy as np
 

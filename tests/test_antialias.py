@@ -184,3 +184,41 @@ def test_octave_mean_is_the_mean_of_the_term(ctx):
         b = np.clip((val - r.get("range_lo")) / (r.get("range_hi") - r.get("range_lo")), 0, 1)
         term = np.abs(0.5 - b) if r.get("fractal") in ("qin", "qin_cube") else b
         assert abs(texture_reference.octave_mean(r) - term.mean()) < 0.02
+
+
+def test_a_render_that_fades_no_octave_measures_no_octave_mean(ctx, monkeypatch):
+    """The octave mean (NumPy, 4096 points) is measured only for a pass whose footprint fades an
+    octave: f1 at 64^2 (8 features across 64 pixels) and evaluate's point samples never read it,
+    and give the bits they gave with the mean measured; a fractal at 64^2 still measures it."""
+    import cellgl
+
+    calls = []
+    real = texture_reference._measure_mean
+    r = load_recipe("f1").replace(seed=424242)             # a basis no earlier test measured
+    pts = np.random.default_rng(1).uniform(-2.0, 2.0, (100, 2))
+
+    def counted(recipe):
+        calls.append(recipe.name)
+        return real(recipe)
+
+    monkeypatch.setattr(texture_reference, "_measure_mean", counted)
+    img = cellgl.render(r, 64, 64, channels=("color", "height", "normal"))
+    ev = cellgl.evaluate(r, pts, ("color", "grad"))
+    assert calls == []
+    assert not antialias.fades(r.values, (1 / 64, 1 / 64, 0.0))
+    assert antialias.fades(r.values, (1 / 4, 1 / 4, 0.0))
+    # the same bits as with the mean measured (every a_i = 1: term + 0 * mean)
+    monkeypatch.setattr(antialias, "fades", lambda values, duvz: True)
+    texture.shader._baked_uniforms_file.cache_clear()
+    img2 = cellgl.render(r, 64, 64, channels=("color", "height", "normal"))
+    ev2 = cellgl.evaluate(r, pts, ("color", "grad"))
+    assert len(calls) == 1
+    for a, b in ((img, img2), (ev, ev2)):
+        for k in a:
+            assert a[k].tobytes() == b[k].tobytes(), k
+    monkeypatch.undo()
+    monkeypatch.setattr(texture_reference, "_measure_mean", counted)
+    fractal = load_recipe("qin-cloud").replace(seed=424243)
+    assert antialias.fades(fractal.values, (1 / 64, 1 / 64, 0.0))
+    cellgl.render(fractal, 64, 64)
+    assert len(calls) == 2

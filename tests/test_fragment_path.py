@@ -142,7 +142,7 @@ def test_loop_probe_same_counts(compute, loop_limiter, monkeypatch):
     a, b = _both(monkeypatch, lambda: gpu.loop_probe(x, p, 1, ("smooth_F1",), 0.25))
     # the search's own count is the same code; the driver's count depends on how the samples
     # share SIMD vectors (a work group of 64 or a fragment tile), so only its cut is compared
-    for own, driver, flagged in (a, b):
+    for _own, driver, _flagged in (a, b):
         assert not np.any(driver >= gpu.DRIVER_LOOP_LIMIT - 3), "the default budget keeps inside the driver's"
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[2], b[2])
@@ -151,7 +151,7 @@ def test_loop_probe_same_counts(compute, loop_limiter, monkeypatch):
 def test_voronoi_same_bits(both_paths, monkeypatch):
     v = np.random.default_rng(6).uniform(-9.0, 9.0, (300, 3))
     for feature in ("F2", "smooth_F1", "distance_to_edge", "n_sphere_radius"):
-        a, b = _both(monkeypatch, lambda: cellgl.voronoi(v, 3, feature, detail=1.5))
+        a, b = _both(monkeypatch, lambda feature=feature: cellgl.voronoi(v, 3, feature, detail=1.5))
         for name in ("distance", "color", "position", "w", "radius", "exact"):
             x, y = getattr(a, name), getattr(b, name)
             assert (x is None and y is None) or np.asarray(x).tobytes() == np.asarray(y).tobytes(), (feature, name)
@@ -222,8 +222,8 @@ def test_pups_same_bits(both_paths, monkeypatch):
                         orientations=P.random_orientations(len(pos), seed=202), periodic=True)
     g = P.pups_graph(pts, 1.0)
     for mode, method in (("interpolate", "compute"), ("label", "compute"), ("weighted_sum", "raster")):
-        a, b = _both(monkeypatch, lambda: P.pups_evaluate(g, 161, 117, mode=mode, method=method,
-                                                          return_labels=mode == "label"))
+        a, b = _both(monkeypatch, lambda mode=mode, method=method: P.pups_evaluate(
+            g, 161, 117, mode=mode, method=method, return_labels=mode == "label"))
         a, b = (a, b) if isinstance(a, tuple) else ((a,), (b,))
         for x, y in zip(a, b):
             assert x.tobytes() == y.tobytes(), (mode, method)

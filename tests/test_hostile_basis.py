@@ -26,7 +26,7 @@ def test_grid_slabs_stay_within_the_group_limit(monkeypatch):
     step = 3 * dispatch.LOCAL_SIZE
     X, Y = step * 2 + 17, 3
     seen = np.zeros(X * Y, int)
-    for (x0, y0, z0, w, cols, rows), start, groups in dispatch.grid_slabs(X, Y, 1, 1, step):
+    for (x0, y0, _z0, _w, cols, rows), start, groups in dispatch.grid_slabs(X, Y, 1, 1, step):
         assert max(groups) <= 3 and cols <= step
         assert start == (y0 * X + x0)
         seen[start:start + cols * rows * groups[2]] += 1

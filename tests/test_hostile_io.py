@@ -5,7 +5,6 @@ Python traceback. Each test failed (or hung, or crashed) before its fix."""
 from __future__ import annotations
 
 import errno
-import json
 import multiprocessing
 import os
 import signal

@@ -5,7 +5,7 @@ import pytest
 
 from cellgl.recipes import load_recipe
 from cellgl.texture import params as P
-from cellgl.texture.recipe import Recipe, RecipeError
+from cellgl.texture.recipe import RecipeError
 from cellgl.texture import reference
 
 

@@ -19,7 +19,6 @@ import pytest
 
 from cellgl.export.materialx import exportable_presets, node_name, preset_node
 from cellgl.export.materialx_docs import export_materialx
-from cellgl.export.snippets import ExportError
 
 ROOT = Path(__file__).resolve().parents[1]
 SIZE = 64
@@ -240,7 +239,6 @@ float g(float x)
 
 def test_usd_stage_has_every_material_shader_and_typed_input(one):
     Usd = pytest.importorskip("pxr.Usd")
-    from pxr import Sdf, UsdShade
 
     stage = Usd.Stage.Open(str(one / "cellgl_materials.usda"))
     assert stage is not None
@@ -530,7 +528,7 @@ def test_renderglsl_basis_nodes_equal_cellular(full):
     u = (np.arange(32) + 0.5) / 32
     uu, vv = np.meshgrid(u, u)
     pts2 = 8.0 * np.stack([uu, 1.0 - vv], -1).reshape(-1, 2)     # row 0 at the top: v = 1 - y
-    for nd, dim, m, dist, vals, outs in cases:
+    for nd, dim, m, dist, vals, _outs in cases:
         pts = pts2 if dim == 2 else np.concatenate([pts2, np.full((len(pts2), 1), 0.3)], 1)
         kw = dict(metric=m, distribution=dist, seed=vals["seed"])
         kw.update(jitter=vals["jitter"]) if dist == "jitter" else kw.update(density=vals["density"])

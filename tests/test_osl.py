@@ -125,7 +125,7 @@ def test_osl_is_folded_but_for_exactly_its_sliders():
         assert [osl._pname(p.name) for p, _ in kept] == sliders
         for s in sliders:
             assert re.search(rf"\bcellgl_{s.rstrip('_')}\b", body), (name, s)       # each one is read
-        for typ, pname, _ in prog.uniforms:
+        for _typ, pname, _ in prog.uniforms:
             if pname not in [p.name for p, _ in kept]:      # folded in, or a named constant
                 assert not re.search(rf"[(,] *(?:float|int) cellgl_{pname}\b", body), (name, pname)
         assert "cellgl_texture_params_load" not in body and "CellglTextureParams" not in body

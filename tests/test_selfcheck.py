@@ -94,7 +94,6 @@ def test_a_wrong_compute_path_falls_back_with_one_warning(ctx, fresh, monkeypatc
     assert summary.startswith("compute: FAILED (3D poisson euclidean: ")
     assert "fragment: passed" in summary and "running fragment" in summary
     # the compute path was checked once, then the fragment path once: nothing runs again
-    n = len(selfcheck.CASES)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         pts = np.random.default_rng(3).uniform(-4, 4, (50, 3))

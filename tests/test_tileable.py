@@ -7,7 +7,6 @@ import subprocess
 import sys
 
 import numpy as np
-import pytest
 
 import cellgl
 from cellgl.recipes import load_recipe

@@ -58,6 +58,17 @@ def test_wheel_contains_shaders(wheel):
         assert any(n.startswith("cellgl/shaders/") and n.endswith(".comp") for n in names)
 
 
+def test_wheel_ships_the_licence(wheel):
+    """The MIT text itself (pyproject's license-files), not only the SPDX name in the metadata."""
+    z = zipfile.ZipFile(wheel)
+    lic = [n for n in z.namelist() if n.endswith(".dist-info/licenses/LICENSE")]
+    assert len(lic) == 1, [n for n in z.namelist() if "dist-info" in n]
+    assert z.read(lic[0]) == (REPO / "LICENSE").read_bytes()
+    meta = next(n for n in z.namelist() if n.endswith(".dist-info/METADATA"))
+    text = z.read(meta).decode()
+    assert "License-Expression: MIT" in text and "License-File: LICENSE" in text
+
+
 def test_wheel_ships_the_preset_images(wheel):
     """A preset's image (stained-glass's cell image) comes with it."""
     names = set(zipfile.ZipFile(wheel).namelist())

@@ -103,3 +103,22 @@ def test_platforms_workflow_structure():
     for step in smoke["steps"]:
         if "run" in step and "Windows" in step.get("if", "") or step.get("if") == "runner.os != 'Linux'":
             assert step.get("shell") == "bash", step.get("name")
+
+
+def test_lint_and_types_run_in_the_workflow_and_in_ci_run():
+    """ruff over the four folders and mypy (pyproject's files) run in the workflow's lint job and in
+    .ci/run before the tests, from the [dev] extra that .ci/setup installs."""
+    doc = _load(PLATFORMS)
+    steps = "\n".join(step.get("run", "") for step in doc["jobs"]["lint"]["steps"])
+    assert '-e ".[dev]"' in steps
+    assert re.search(r"^\s*ruff check cellgl viewer tests benchmarks$", steps, re.M), steps
+    assert re.search(r"^\s*mypy$", steps, re.M), steps
+    run = (REPO / ".ci" / "run").read_text()
+    lint = run.index("-m ruff check cellgl viewer tests benchmarks")
+    assert lint < run.index("-m mypy") < run.index("-m pytest")
+    assert "--junitxml=" in run
+    setup = (REPO / ".ci" / "setup").read_text()
+    assert re.search(r'-e "\.\[[^"]*\bdev\b[^"]*\]"', setup), "the [dev] extra is not installed"
+    tomllib = pytest.importorskip("tomllib")        # Python 3.11+
+    extras = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    assert {d.split(">")[0].split("=")[0] for d in extras["dev"]} >= {"ruff", "mypy"}

@@ -41,7 +41,7 @@ class Model:
         return [name for name, _ in list_presets()]
 
     @classmethod
-    def load(cls, name_or_path=None) -> "Model":
+    def load(cls, name_or_path=None) -> Model:
         return cls(cls._read(name_or_path))
 
     @classmethod

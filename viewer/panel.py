@@ -19,7 +19,7 @@ from __future__ import annotations
 from imgui_bundle import imgui
 
 from .modes import MODE_LABELS, MODES, PANEL_WIDTH
-from cellgl.texture.params import GROUPS, LINEAR, N_LINEAR, PRODUCTS
+from cellgl.texture.params import GROUPS, LINEAR, PRODUCTS
 
 __all__ = ["draw_panel", "param_widget"]
 

@@ -149,7 +149,7 @@ class DensityMap:
         L = np.arange(LEVELS) / (LEVELS - 1)
         return self.density_min * (self.density_max / self.density_min) ** L
 
-    def scaled(self, scale: float, offset=(0.0, 0.0, 0.0, 0.0)) -> "DensityMap":
+    def scaled(self, scale: float, offset=(0.0, 0.0, 0.0, 0.0)) -> DensityMap:
         """The same map seen from a lattice ``x' = scale * (x + offset)`` (an octave of a
         texture: its lattice is the basis lattice times lacunarity^i)."""
         o = tuple(offset) + (0.0,) * (4 - len(tuple(offset)))

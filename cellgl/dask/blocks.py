@@ -127,7 +127,7 @@ class Layout:
     chunk_h: int
 
     @classmethod
-    def make(cls, recipe, shape, chunks, channels) -> "Layout":
+    def make(cls, recipe, shape, chunks, channels) -> Layout:
         """Check and build. ``shape``: ``N`` or ``(height, width)``; ``chunks``: ``N`` or
         ``(rows, cols)``; ``channels``: names (see :data:`cellgl.io.spec.CHANNELS`)."""
         h, w = pair("shape", shape)

@@ -112,7 +112,7 @@ def _ordered(items: list) -> list:
         used = [n for n in uses(it) if n in by_name]
         for u in sorted(used, key=lambda n: min(pos[id(x)] for x in by_name[n])):
             for dep in by_name[u]:
-                visit(dep)
+                visit(dep)  # noqa: F821 (itself: `del visit` below breaks the cycle)
         busy.discard(id(it))
         done.add(id(it))
         out.append(it)

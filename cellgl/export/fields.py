@@ -246,6 +246,6 @@ def constant_fields(unit: S.Unit, ctx: Context) -> bool:
             _drop(st.fields, fd)
             gone.add(fd.name)
             for f, ids in reads.values():
-                f.body = parenthesise(transform(f.body, lambda n, ids=ids: clone(value) if id(n) in ids else n))
+                f.body = parenthesise(transform(f.body, lambda n, ids=ids, value=value: clone(value) if id(n) in ids else n))
             changed = True
     return changed

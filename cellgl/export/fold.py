@@ -393,7 +393,7 @@ def fold(unit: S.Unit, ctx: Context, passes) -> bool:
                 _FOLDED.clear()
             facts = [Facts(fn, genv, garrays, ctx)]
 
-            def apply(p):
+            def apply(p, fn=fn, facts=facts):         # this iteration's function (bound now)
                 if p(fn, facts[0]):
                     facts[0] = Facts(fn, genv, garrays, ctx)       # (the facts of the changed body)
                     return True

@@ -71,7 +71,7 @@ def exposed_params(prog, code: str):
               and x.value == S.Name("cellgl_" + x.target.name)}       # the loader's t.x = cellgl_x
     used = {x.name for x in nodes if isinstance(x, S.Member) and id(x) not in copies}
     out = []
-    for typ, name, value in prog.uniforms:
+    for _typ, name, value in prog.uniforms:
         p = PARAMS_BY_NAME.get(name)
         m = re.fullmatch(r"c(\d)(\d)?", name)              # a weight of F_i or of F_i F_j
         if p is None or name in EXPOSED_EXCLUDED or p.type not in ("float", "int", "bool") \

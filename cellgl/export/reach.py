@@ -158,12 +158,12 @@ def scalarise_struct(unit: S.Unit, struct: str, loader: str) -> bool:
         if f is load or f.body is None:
             continue
         names = holders[id(f)]
-        transform(f.body, lambda e: clone(fields[e.name][0]) if _is_field(e, names, fields) else e)
+        transform(f.body, lambda e, names=names: clone(fields[e.name][0]) if _is_field(e, names, fields) else e)
         if complete:
             for n in walk(f.body):
                 if isinstance(n, S.Call) and n.func in takes:
                     del n.args[takes[n.func]]
-            transform(f.body, lambda s: None if isinstance(s, S.Decl) and s.type == struct
+            transform(f.body, lambda s, names=names: None if isinstance(s, S.Decl) and s.type == struct
                       and all(d.name in names for d in s.declarators) else s)
     if not complete:
         sdef.fields[:] = [x for x in sdef.fields if x.name not in fields]

@@ -143,7 +143,8 @@ def copies(fn: S.Function, facts: Facts) -> bool:
                 continue
             name, old = x.name, d.name
             _drop(b.body, s)
-            transform(fn.body, lambda n: S.Name(name) if isinstance(n, S.Name) and n.name == old else n)
+            transform(fn.body, lambda n, name=name, old=old: S.Name(name) if isinstance(n, S.Name) and n.name == old
+                      else n)
             return True
     return False
 
@@ -360,7 +361,7 @@ def store_into_next(fn: S.Function, facts: Facts) -> bool:
             if not isinstance(a, ATOMS) and any(isinstance(p, (S.Member, S.Index)) and p.base is uses[0]
                                                 for p in walk(v)):
                 continue                     # (a + b).xy: kept
-            d.init = transform(v, lambda n: paren(a) if n is uses[0] else n)
+            d.init = transform(v, lambda n, a=a, uses=uses: paren(a) if n is uses[0] else n)
             s.trail = t.trail or s.trail
             if t.comments:
                 s.comments = s.comments + t.comments

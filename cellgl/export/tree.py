@@ -141,7 +141,7 @@ class Context:
     impure: set = field(default_factory=set)
     sites: dict = field(default_factory=dict)          # name -> [(Function, Call), ...]: every call
 
-    def refresh(self, unit: S.Unit) -> "Context":
+    def refresh(self, unit: S.Unit) -> Context:
         bodies = [it for it in unit.items if isinstance(it, S.Function) and it.body is not None]
         self.functions = {f.name: f for f in bodies}
         self.globals_ = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators}

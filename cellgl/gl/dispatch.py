@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
@@ -73,7 +73,8 @@ LOOP_CANARY_PASSES = 2
 CANARY_UNIT = 8
 #: sampler uniform -> texture unit: the storage words of each binding and the sample inputs
 SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
-            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3, "u_loop_canary": CANARY_UNIT}
+            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3, "u_in11": 11,
+            "u_loop_canary": CANARY_UNIT}
 
 
 def tile_samples(cost: int, watchdog: bool = True) -> int:

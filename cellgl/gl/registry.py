@@ -145,7 +145,7 @@ def clear_programs(run_current, last=lambda ctx: False) -> None:
             h.programs.clear()
             h.groups.clear()
             h.retired = []
-            if _alive(h.ctx) and not run_current(h.ctx, lambda: _release_programs(programs)):
+            if _alive(h.ctx) and not run_current(h.ctx, lambda programs=programs: _release_programs(programs)):
                 h.retired = programs
 
 

@@ -42,7 +42,7 @@ __all__ = ["Runner", "ComputeRunner", "FragmentRunner", "runner", "held", "drop"
            "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result", "tile_samples", "set_uniform"]
 
 
-def runner(ctx=None) -> "Runner":
+def runner(ctx=None) -> Runner:
     """The runner of ``ctx`` (default: cellgl's context) for the path
     :func:`cellgl.gl.path.gpu_path` gives it, made on first use and kept in the context's entry."""
     h = held(ctx if ctx is not None else context.get_context())
@@ -462,7 +462,7 @@ class ComputeRunner(Runner):
         if p.flag is None:
             return
         flag = objs[("storage", p.flag.binding)][1]
-        for k, (first, m, _, _) in enumerate(chunk):
+        for k, (first, _m, _, _) in enumerate(chunk):
             nbad = int(np.frombuffer(flag.read(4, offset=k * stride), dtype=np.uint32)[0])
             if p.flag.mode == "count":
                 res.cut += nbad

@@ -118,7 +118,7 @@ class PupsPoints:
         """Number of value channels (1 or 3)."""
         return self.values.shape[1]
 
-    def replace(self, **changes) -> "PupsPoints":
+    def replace(self, **changes) -> PupsPoints:
         """Return a validated copy with some fields replaced (as :func:`pups_points`)."""
         kw = dict(positions=self.positions, values=self.values, labels=self.labels,
                   orientations=self.orientations, domain=self.domain, periodic=self.periodic)

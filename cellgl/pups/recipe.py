@@ -258,7 +258,7 @@ class PupsRecipe:
     def __getitem__(self, name):
         return self.get(name)
 
-    def replace(self, **values) -> "PupsRecipe":
+    def replace(self, **values) -> PupsRecipe:
         """A copy with some values changed (also ``name=``, ``doc=``, ``outputs=``, ``image=``).
 
         Changing ``pattern`` keeps the values the new pattern shares and takes the new
@@ -278,7 +278,7 @@ class PupsRecipe:
         vals.update(values)
         return PupsRecipe(vals, name, doc, outputs)
 
-    def set_from_strings(self, items) -> "PupsRecipe":
+    def set_from_strings(self, items) -> PupsRecipe:
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe."""
         from cellgl.texture.recipe import parse_set_value
 
@@ -305,7 +305,7 @@ class PupsRecipe:
         except RecipeError as exc:
             raise RecipeError(f"--set {exc}") from None
 
-    def tileable(self) -> tuple["PupsRecipe", list[str]]:
+    def tileable(self) -> tuple[PupsRecipe, list[str]]:
         """PUPs point sets are periodic: the recipe already tiles (no change, no notes).
 
         A ``W x H`` render is seamless when ``max(W, H) / min(W, H)`` is an integer (one
@@ -322,7 +322,7 @@ class PupsRecipe:
                 "pups": g, "outputs": list(self.outputs)}
 
     @classmethod
-    def from_dict(cls, d, *, where: str = "recipe") -> "PupsRecipe":
+    def from_dict(cls, d, *, where: str = "recipe") -> PupsRecipe:
         """Validate a JSON-like dict (see the module doc); raises :class:`RecipeError`."""
         if not isinstance(d, dict):
             raise RecipeError(f"{where}: expected a JSON object, got {type(d).__name__}")
@@ -351,7 +351,7 @@ class PupsRecipe:
         return json.dumps(self.to_dict(), indent=2) + "\n"
 
     @classmethod
-    def load(cls, path) -> "PupsRecipe":
+    def load(cls, path) -> PupsRecipe:
         """Read a PUPs recipe JSON file; a relative ``pups.image`` is relative to the file's
         folder (as ``color.cell_image`` of a cellular recipe), stored absolute."""
         path = Path(path)

@@ -48,6 +48,20 @@ def smoothscale(w) -> np.ndarray:
     return 1.0 - x * x * (3.0 - 2.0 * x)
 
 
+def fades(values, duvz) -> bool:
+    """Whether a sample of footprint ``duvz`` (texture space; the largest of a pass) may fade an
+    octave (``a_i < 1``). If not, every ``a_i`` is exactly 1 (smoothstep below ``AA_LO`` is 0),
+    each term is ``1 term + 0 octave_mean``, and the octave mean is never needed: a GPU pass then
+    skips measuring it (:func:`cellgl.texture.reference.octave_mean`, NumPy) and carries 0.
+    Conservative: the float64 bound with a margin far above float32's rounding."""
+    f = float(values["frequency"])
+    d = [abs(float(c)) for c in duvz] + [0.0] * (3 - len(duvz))
+    r = max(d[0] * f, d[1] * f * float(values["aspect"]), d[2] * f)
+    n = 1 if values["fractal"] == "none" else math.ceil(float(values["octaves"]))
+    top = max(1.0, float(values["lacunarity"]) ** (n - 1))
+    return float(values["antialias"]) * feature_frequency(values) * r * top > AA_LO * (1.0 - 1e-4)
+
+
 def feature_frequency(values) -> float:
     """Feature points per basis unit along a line, ``dist_scale * density^(1/dim)``: the inverse
     of the mean spacing of an octave-0 feature (``density_max`` with a density map: the finest

@@ -39,6 +39,8 @@ class LoopLimitError(ValueError):
     the driver (the message names what in the recipe lengthens its searches: :func:`lighter`);
     the command line reports it as a user error."""
 
+#: storage buffer / texture unit of the far points' group records (texture.comp, texture_samples.frag)
+GROUPS_BINDING = 11
 #: baked programs kept (least recently used dropped)
 MAX_BAKED = 16
 #: False: compile with uniforms, as the viewer does (benchmarks/bench_texture.py --uniforms)
@@ -66,7 +68,7 @@ def output_mask(channels) -> int:
 
 @gl_call
 def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersample: int = 1, pan=None,
-        pan_only: bool = False, probe: bool = False) -> dict:
+        pan_only: bool = False, probe: bool = False, groups=None, footprint=None) -> dict:
     """Run the recipe's entry over ``count`` samples and return ``{channel: array}`` (flat, one row
     per sample). ``setup(prog)`` sets the entry's own uniforms (the image and tile of a grid, the
     filter width of points); ``points`` (count, 4) float32 (u, v, z, -): the samples when not a
@@ -74,7 +76,11 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     added to the samples' texture position in float64, through the split origins; ``pan_only``:
     the last call ran this recipe with the same channels (only the pan changed); ``probe``: the
     measurement build, adding ``"loops"``: the loop passes llvmpipe counted for each sample's SIMD
-    vector (benchmarks/loop_budget.py). Raises :class:`LoopLimitError` if the driver cut any
+    vector (benchmarks/loop_budget.py); ``groups``: the records of
+    :func:`cellgl.texture.shader.group_records` for points whose fourth component is their group
+    (far points in one pass, ``shaders/lib/texture_groups.glsl``); ``footprint`` (du, dv, dz): the
+    largest of any sample, where no octave fades at it (:func:`cellgl.texture.antialias.fades`)
+    the pass carries octave mean 0 instead of measuring it (None: measured). Raises :class:`LoopLimitError` if the driver cut any
     sample's loops."""
     from cellgl.gl import runner as _runner
     from cellgl.texture import shader as texture
@@ -105,16 +111,23 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
         d["CELL_LOOP_PROBE"] = 1
         loops = np.empty((count, 1), np.int32)
         outputs.append(_runner.Output("loops", 10, loops))
-    baked = BAKE_CONSTANTS and pan is None
-    files = ({"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe, bool(mask & 32))}
+    if groups is not None:
+        d["CELL_TEX_GROUPS"] = 1
+        d["CELL_TEX_GROUP_OCTAVES"] = texture.group_octaves(recipe)
+    # far points (a pan or groups) run with uniforms, as the viewer pans: the bits they always had
+    baked = BAKE_CONSTANTS and pan is None and groups is None
+    from cellgl.texture.antialias import fades
+
+    mean = footprint is None or fades(recipe.values, footprint)
+    files = ({"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe, bool(mask & 32), mean=mean)}
              if baked else None)
 
     def prog_setup(prog):
         if not baked:
             texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan,
-                                 pan_only=pan_only and pan is not None)
+                                 pan_only=pan_only and pan is not None, mean=mean)
         elif recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
-            texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
+            texture.set_uniforms(prog, recipe, mean=mean)     # binds the density or cell image (no uniforms left)
         if "u_loop_probe" in prog:
             prog["u_loop_probe"].value = PROBE_PASSES
         setup(prog)
@@ -122,6 +135,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     searches = _searches(recipe) * (int(supersample) ** 2 + 1 if supersample > 1 else 1)
     inputs = _runner.Index() if grid else _runner.Rows(np.ascontiguousarray(points, np.float32), 0)
     if count:
+        if groups is not None:
+            _runner.runner().bind_records(groups, GROUPS_BINDING)
         res = _runner.runner().run(_runner.Pass(
             "texture.comp", "texture_samples.frag", d, count, inputs, outputs, setup=prog_setup,
             flag=_runner.Flag("canary", 9, "count"), files=files,

@@ -100,15 +100,19 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     def run_points(local, **kw):
         p4 = np.zeros((len(local), 4), np.float32)
         p4[:, :3] = local
-        return dispatch.run(recipe, outputs, len(local), set_filter, grid=False, points=p4, **kw)
+        return dispatch.run(recipe, outputs, len(local), set_filter, grid=False, points=p4, footprint=duvz, **kw)
 
     # The shader adds the sample's texture position to the split origins in float32, which holds
-    # only the first few cells exactly. So points are grouped by their whole part (u, v, z) and each
-    # group goes with that whole part as a float64 pan of the origins (as the viewer pans) and its
-    # fraction as the position: a point at uv 1e9 is as exact as one at 0.5.
+    # only the first few cells exactly. So points go as their fraction, and the origins of their
+    # whole part (u, v, z) are split in float64 as for a pan (as the viewer pans): a point at uv 1e9
+    # is as exact as one at 0.5.
     whole = np.floor(pts)
     if not split_far or not whole.any():
         return run_points(pts)
+    v = recipe.values
+    if v["density_map"] == "none" and v["cell_color"] != "image":
+        return _far_points(recipe, outputs, pts, whole, set_filter, duvz)
+    # A density map or cell image placed per pan: a pass per whole part (such recipes only)
     order = np.lexsort(whole.T[::-1])           # points of one whole part next to each other
     ws = whole[order]
     starts = np.flatnonzero(np.concatenate([[True], np.any(ws[1:] != ws[:-1], axis=1), [True]]))
@@ -122,6 +126,34 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
         for k, a in res.items():
             out[k][idx] = a
     return out
+
+
+#: points of one far-point pass (their group index, below this, is exact in the float32 row)
+GROUP_POINTS = 1 << 22
+
+
+def _far_points(recipe, outputs, pts, whole, set_filter, duvz) -> dict:
+    """Points spread over many whole parts in one pass per :data:`GROUP_POINTS`: each point's
+    fraction and group index (its row's fourth component), and each group's origins split in
+    float64 as a pan (:func:`cellgl.texture.shader.group_records`, ``shaders/lib/
+    texture_groups.glsl``): the bits of a pass per whole part, without the passes."""
+    from cellgl.texture.shader import group_records
+
+    parts = []
+    for a in range(0, len(pts), GROUP_POINTS):
+        w = whole[a:a + GROUP_POINTS]
+        order = np.lexsort(w.T[::-1])           # points of one whole part next to each other
+        ws = w[order]
+        first = np.concatenate([[True], np.any(ws[1:] != ws[:-1], axis=1)])
+        p4 = np.empty((len(w), 4), np.float32)
+        p4[:, :3] = pts[a:a + GROUP_POINTS] - w
+        p4[order, 3] = np.cumsum(first) - 1     # each point's group
+        keys = ws[first]
+        parts.append(dispatch.run(recipe, outputs, len(w), set_filter, grid=False, points=p4,
+                                  groups=group_records(recipe, keys), footprint=duvz))
+    if len(parts) == 1:
+        return parts[0]
+    return {k: np.concatenate([p[k] for p in parts]) for k in parts[0]}
 
 
 #: |basis position| (cells of octave 0's lattice) an evaluated point may reach: what
@@ -235,7 +267,10 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
                 if name in prog:
                     prog[name].value = value
 
-        res = dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub)
+        # every pixel's footprint (sub-pixels: smaller): where no octave fades at it, the octave
+        # mean is never read and not measured (antialias.fades)
+        res = dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub,
+                           footprint=(1.0 / width, 1.0 / height, 0.0))
     lead = (D, th, tw) if depth else (th, tw)
     return _shape_out(res, lead)
 

@@ -165,7 +165,7 @@ class Recipe:
     def __getitem__(self, name):
         return self.get(name)
 
-    def replace(self, **values) -> "Recipe":
+    def replace(self, **values) -> Recipe:
         """A copy with some parameters changed (also ``ramp=``, ``name=``, ``doc=``, ``outputs=``,
         ``linear=``, ``products=``, ``density_image=``, ``cell_image=``); validated like
         :meth:`from_dict`."""
@@ -203,7 +203,7 @@ class Recipe:
         """The density image as float64 (h, w) in [0, 1] (row 0: v = 0), or None."""
         return None if self.density_image is None else density_pixels(self.density_image)
 
-    def tileable(self) -> tuple["Recipe", list[str]]:
+    def tileable(self) -> tuple[Recipe, list[str]]:
         """This recipe made seamless: ``tileable`` on, with the periods it needs made integers.
 
         A tileable texture repeats every ``frequency`` cells across and ``frequency * aspect``
@@ -234,7 +234,7 @@ class Recipe:
         changes.update(domain.tileable_changes(v, notes))
         return self.replace(**changes), notes
 
-    def set_from_strings(self, items) -> "Recipe":
+    def set_from_strings(self, items) -> Recipe:
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe.
 
         Values are parsed by the parameter's type: numbers, ``true``/``false``, enum names,
@@ -280,7 +280,7 @@ class Recipe:
         return d
 
     @classmethod
-    def from_dict(cls, d, *, where: str = "recipe", base=None) -> "Recipe":
+    def from_dict(cls, d, *, where: str = "recipe", base=None) -> Recipe:
         """Validate a JSON-like dict (see the module doc); raises :class:`RecipeError`.
         ``base``: the folder relative paths (``basis.density_image``) start from (default: the
         working directory; :meth:`load`: the recipe file's folder)."""
@@ -339,7 +339,7 @@ class Recipe:
         return json.dumps(d, indent=2) + "\n"
 
     @classmethod
-    def load(cls, path) -> "Recipe":
+    def load(cls, path) -> Recipe:
         """Read a recipe JSON file."""
         path = Path(path)
         d = read_json(path)

@@ -196,7 +196,7 @@ def _split(x: np.ndarray, period) -> tuple[np.ndarray, np.ndarray]:
     return cell, x - fl
 
 
-def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
+def lattice_origins(t: dict, pan=(0.0, 0.0), octaves: int = MAX_OCTAVES) -> dict:
     """The origin ``O = (offset_x, offset_y, offset_z, time)`` split per octave, in float64.
 
     The basis position of octave ``i`` is ``L^i (O + s)`` with ``L = lacunarity`` and ``s =
@@ -207,7 +207,7 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
 
     ``pan`` (du, dv) or (du, dv, dz) moves the view in texture space (the viewer's pan; the whole
     part of far points in :func:`cellgl.texture.evaluate`): ``O += (du f, dv f aspect, dz f, 0)``,
-    so a pan far away is exact too.
+    so a pan far away is exact too. Many pans (G, 3) give each array a leading axis of G.
 
     The warp noise's lattice (octave 0 only, :mod:`cellgl.texture.domain`) samples ``O warp_frequency``.
 
@@ -215,12 +215,14 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
     "noise_frac": float64 (MAX_OCTAVES, 4), "warp_cell": int64 (4,), "warp_frac": float64 (4,)}``.
     """
     f, dim = t["frequency"], t["dimension"]
-    O = np.array([t["offset_x"] + float(pan[0]) * f, t["offset_y"] + float(pan[1]) * f * t["aspect"],
-                  t["offset_z"] + _pan_z(pan) * f, t["time"]], dtype=np.float64)
-    O[dim:] = 0.0
+    p = np.asarray(pan, dtype=np.float64)          # (2,), (3,) or many: (G, 3) -> (G, ...) out
+    pz = p[..., 2] if p.shape[-1] > 2 else np.zeros(p.shape[:-1])
+    O = np.stack(np.broadcast_arrays(t["offset_x"] + p[..., 0] * f, t["offset_y"] + p[..., 1] * f * t["aspect"],
+                                     t["offset_z"] + pz * f, np.float64(t["time"])), axis=-1)
+    O[..., dim:] = 0.0
     ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
     out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
-    for i in range(MAX_OCTAVES):
+    for i in range(octaves):                       # the first ``octaves`` only, where asked
         k = float(t["lacunarity"]) ** i
         per = texture_period(t, i)
         c, fr = _split(O * k * ds, per)
@@ -229,7 +231,7 @@ def lattice_origins(t: dict, pan=(0.0, 0.0)) -> dict:
         c, fr = _split(O * k * t["noise_frequency"], per * int(round(t["noise_frequency"])))
         out["noise_cell"].append(c)
         out["noise_frac"].append(fr)
-    out = {k: np.array(v) for k, v in out.items()}
+    out = {k: np.stack(v, axis=-2) for k, v in out.items()}
     out["warp_cell"], out["warp_frac"] = _split(O * t["warp_frequency"],
                                                 texture_period(t, 0) * int(round(t["warp_frequency"])))
     return out

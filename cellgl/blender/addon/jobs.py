@@ -20,7 +20,7 @@ import bpy
 __all__ = ["Job", "JOBS", "start", "run_sync", "cancel_all", "poll"]
 
 #: running jobs by node group name
-JOBS: dict[str, "Job"] = {}
+JOBS: dict[str, Job] = {}
 #: the values (hash) whose bake failed, by node group name: Re-bake on Change does not retry them
 FAILED: dict[str, str] = {}
 
