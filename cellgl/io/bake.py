@@ -550,3 +550,14 @@ def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
                            rgb=rgb, description=meta)
         finally:
             del vol, page_tiles
+
+
+# --------------------------------------------------------------------------------------------
+# for writers of sets of maps (cellgl.io.material_sets): one file through the per-format writer
+# --------------------------------------------------------------------------------------------
+
+#: what one output file holds (its path, channels and their encodings)
+Output = _Output
+#: ``write_tiles(tmp, tiles, out, ext, plan, meta)``: write the tiles ``(x0, y0, {name: encoded})``
+#: of ``out`` into ``tmp`` with the writer of format ``ext``, as :func:`bake` does
+write_tiles = _write
