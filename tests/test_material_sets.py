@@ -157,3 +157,54 @@ def test_command_line(ctx, tmp_path):
     assert bad.returncode != 0 and "--channels color: not with --material" in bad.stderr
     bad = subprocess.run(run[:6] + ["nope"] + run[7:], capture_output=True, text=True, timeout=300)
     assert bad.returncode != 0 and "unknown engine preset; accepted: unreal, unity-hdrp" in bad.stderr
+
+
+_BLENDER_IMPORT = '''
+import json, sys
+import bpy
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.import_scene.gltf(filepath=sys.argv[-1])
+mat = next(m for m in bpy.data.materials if m.use_nodes and any(n.type == "BSDF_PRINCIPLED" for n in m.node_tree.nodes))
+bsdf = next(n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED")
+
+def source(sock):
+    """The image file feeding socket sock, and the nodes between (walking the links back)."""
+    for link in sock.links:
+        n = link.from_node
+        if n.type == "TEX_IMAGE":
+            return [n.image.filepath.replace("\\\\", "/").split("/")[-1], n.image.colorspace_settings.name]
+        for inp in n.inputs:
+            got = source(inp)
+            if got:
+                return got + [n.type + ":" + link.from_socket.name]
+    return None
+
+out = {k: source(bsdf.inputs[k]) for k in ("Base Color", "Roughness", "Metallic", "Normal")}
+for n in mat.node_tree.nodes:           # the importer's glTF Material Output group holds the occlusion
+    if n.type == "GROUP" and "Occlusion" in n.inputs:
+        out["Occlusion"] = source(n.inputs["Occlusion"])
+print("RESULT " + json.dumps(out))
+'''
+
+
+@pytest.mark.slow
+def test_blender_imports_the_gltf_with_every_texture_on_its_socket(ctx, tmp_path):
+    """Blender's own glTF importer (bpy, the [blender] extra) connects each map to the right input."""
+    import importlib.util
+
+    if importlib.util.find_spec("bpy") is None:
+        if os.environ.get("CELLGL_REQUIRE_BLENDER", "").strip().lower() in ("1", "true", "yes"):
+            pytest.fail("CELLGL_REQUIRE_BLENDER=1 but bpy (the [blender] extra) is not installed", pytrace=False)
+        pytest.skip("bpy (the [blender] extra) is not installed")
+    M.bake_material("flagstone", tmp_path / "g", "gltf", size=SIZE, progress=False)
+    proc = subprocess.run([sys.executable, "-c", _BLENDER_IMPORT, str(tmp_path / "g" / "flagstone.gltf")],
+                          capture_output=True, text=True, timeout=600)
+    line = next((ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT ")), None)
+    assert proc.returncode == 0 and line, (proc.stdout[-2000:], proc.stderr[-2000:])
+    got = json.loads(line[len("RESULT "):])
+    orm = "flagstone_occlusionRoughnessMetallic.png"
+    assert got == {"Base Color": ["flagstone_baseColor.png", "sRGB"],
+                   "Roughness": [orm, "Non-Color", "SEPARATE_COLOR:Green"],
+                   "Metallic": [orm, "Non-Color", "SEPARATE_COLOR:Blue"],
+                   "Normal": ["flagstone_normal.png", "Non-Color", "NORMAL_MAP:Normal"],
+                   "Occlusion": [orm, "Non-Color", "SEPARATE_COLOR:Red"]}, got
