@@ -312,7 +312,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     depth_slices : int, optional
         Bake a volume of this many slices, shape ``(D, H, W[, S])`` (``.npy`` and ``.tif`` only).
     channels : sequence of str
-        Any of ``color`` (RGB), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``. An ``.exr``
+        Any of ``color`` (RGB), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``, ``roughness``,
+        ``ao``, ``metallic`` (the recipe's ``material`` section). An ``.exr``
         holds them all; other formats write one file per channel, ``<stem>_<channel><ext>``,
         when more than one is asked for.
     bit_depth : {8, 16, 32}, optional
