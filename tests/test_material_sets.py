@@ -4,6 +4,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import shlex
 import subprocess
 import sys
 
@@ -153,6 +154,15 @@ def test_command_line(ctx, tmp_path):
     manifest = json.loads((tmp_path / "u" / "manifest.json").read_text())
     assert manifest["command"] == f"cellgl bake flagstone --material unreal -o {tmp_path / 'u'} --size 24x16"
     assert {f["file"] for f in manifest["files"]} == set(os.listdir(tmp_path / "u"))
+    # the manifest's command remakes the same maps (into another folder here)
+    words = shlex.split(manifest["command"].replace(str(tmp_path / "u"), str(tmp_path / "again")))
+    assert words[:2] == ["cellgl", "bake"]
+    again = subprocess.run([sys.executable, "-m", "cellgl", *words[1:], "-q"], capture_output=True, text=True,
+                           timeout=300)
+    assert again.returncode == 0, again.stderr
+    for f in manifest["files"]:
+        if f["file"].endswith(".png"):
+            assert (tmp_path / "again" / f["file"]).read_bytes() == (tmp_path / "u" / f["file"]).read_bytes()
     bad = subprocess.run(run[:-1] + ["--channels", "color"], capture_output=True, text=True, timeout=300)
     assert bad.returncode != 0 and "--channels color: not with --material" in bad.stderr
     bad = subprocess.run(run[:6] + ["nope"] + run[7:], capture_output=True, text=True, timeout=300)
@@ -208,3 +218,14 @@ def test_blender_imports_the_gltf_with_every_texture_on_its_socket(ctx, tmp_path
                    "Metallic": [orm, "Non-Color", "SEPARATE_COLOR:Blue"],
                    "Normal": ["flagstone_normal.png", "Non-Color", "NORMAL_MAP:Normal"],
                    "Occlusion": [orm, "Non-Color", "SEPARATE_COLOR:Red"]}, got
+
+
+def test_a_recipe_object_is_named_by_the_sets_recipe_json(ctx, tmp_path):
+    from cellgl.recipes import load_recipe
+
+    r = load_recipe("hull").set_from_strings(["seed=7"])
+    M.bake_material(r, tmp_path / "h", "godot", size=(16, 16), progress=False)
+    manifest = json.loads((tmp_path / "h" / "manifest.json").read_text())
+    assert manifest["command"].startswith(f"cellgl bake {tmp_path / 'h' / 'recipe.json'} --material godot ")
+    assert load_recipe(str(tmp_path / "h" / "recipe.json")) == r
+    assert manifest["recipe"] == r.to_dict()
