@@ -167,15 +167,18 @@ layout(std430, binding = 4) writeonly buffer OutId { uint out_id[]; };
 layout(std430, binding = 3) writeonly buffer OutDelta { CELL_VEC_T out_delta[]; };
 layout(std430, binding = 5) writeonly buffer OutGrad { CELL_VEC_T out_grad[]; };
 
-layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint inexact_index[]; };
+// The flag: how many samples were flagged, the canary's length (below; written by the
+// runner, cellgl/gl/runner.py), then their indices.
+layout(std430, binding = 6) buffer Inexact { uint inexact_count; uint loop_canary; uint inexact_index[]; };
 
-// The driver's own loop limit (docs/exactness.md). llvmpipe counts the loop
-// passes of a whole SIMD vector of invocations against one limiter; once it is
-// spent, every loop still to come runs exactly one pass. This loop of
-// u_loop_canary (= 2) passes therefore runs twice unless the limiter ran out
+// The driver's own loop limit (docs/exactness.md). llvmpipe (and lavapipe, under
+// zink) counts the loop passes of a whole SIMD vector of invocations against one
+// limiter; once it is spent, every loop still to come runs exactly one pass. This
+// loop of loop_canary (= 2) passes therefore runs twice unless the limiter ran out
 // somewhere in the invocation: then the sample is flagged, whatever the search's
-// own count said. (Its length is a uniform, so the compiler cannot unroll it.)
-uniform int u_loop_canary;
+// own count said. Its length is read from storage, never a constant or a uniform: a
+// compiler that folds uniforms into the shader (zink does) would unroll it, and an
+// unrolled loop never meets the limiter.
 #ifndef CELL_LOOP_PROBE
 #define CELL_LOOP_PROBE 0
 #endif
@@ -475,14 +478,15 @@ void main()
     }
 #endif
     int canary = 0;
-    for (int k = 0; k < u_loop_canary; k++) {
+    int canary_passes = int(loop_canary);
+    for (int k = 0; k < canary_passes; k++) {
         canary += 1;
     }
-    exact = exact && canary == u_loop_canary;
+    exact = exact && canary == canary_passes;
 #if CELL_FEATURES && CELL_FO_WALKS >= 0
     // CELL_WALKS_APART: which of the search and the walks were exact, and 16: the
     // canary ran whole (0..31, exact in a float; cellgl/basis/passes.py)
-    out_features[b + uint(CELL_FO_WALKS)] = float(x.walks | (canary == u_loop_canary ? 16 : 0));
+    out_features[b + uint(CELL_FO_WALKS)] = float(x.walks | (canary == canary_passes ? 16 : 0));
 #endif
 #if !CELL_GRID
     exact = exact && in_range;

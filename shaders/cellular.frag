@@ -76,7 +76,9 @@ uniform sampler2D u_in1;
 #endif
 #endif
 
-uniform int u_loop_canary;     // 2: the driver's loop limit (cellular.comp)
+// The canary's length (2; cellular.comp): one texel the runner binds, never a uniform a
+// compiler could fold into the shader and unroll (cellgl/gl/runner.py)
+uniform usampler2D u_loop_canary;
 #ifndef CELL_LOOP_PROBE
 #define CELL_LOOP_PROBE 0
 #endif
@@ -262,14 +264,15 @@ void main()
     }
 #endif
     int canary = 0;
-    for (int k = 0; k < u_loop_canary; k++) {
+    int canary_passes = int(texelFetch(u_loop_canary, ivec2(0, 0), 0).r);
+    for (int k = 0; k < canary_passes; k++) {
         canary += 1;
     }
-    exact = exact && canary == u_loop_canary;
+    exact = exact && canary == canary_passes;
 #if CELL_FEATURES && CELL_FO_WALKS >= 0
     // CELL_WALKS_APART: which of the search and the walks were exact, and 16: the
     // canary ran whole (0..31, exact in a float; cellgl/basis/passes.py)
-    row_features[CELL_FO_WALKS] = float(x.walks | (canary == u_loop_canary ? 16 : 0));
+    row_features[CELL_FO_WALKS] = float(x.walks | (canary == canary_passes ? 16 : 0));
 #endif
     o_exact = exact ? 1u : 0u;
 #if CELL_LOOP_PROBE

@@ -41,12 +41,13 @@ layout(std430, binding = 5) writeonly buffer OutId { uint out_id[]; };
 layout(std430, binding = 8) writeonly buffer OutMaterial { vec4 out_material[]; };   // roughness, ao, metallic, 0
 #endif
 
-// The driver's own loop limit (docs/exactness.md; as in cellular.comp): llvmpipe stops
-// every loop of a SIMD vector of invocations once 65535 loop passes were spent in it, and
-// then each loop still to come runs once. This loop of u_loop_canary (= 2) passes runs
-// twice unless that happened: otherwise the sample is counted, and cellgl raises.
-uniform int u_loop_canary;
-layout(std430, binding = 9) buffer LoopCut { uint loop_cut_count; };     // 6, 7: the cell and density images
+// The driver's own loop limit (docs/exactness.md; as in cellular.comp): llvmpipe (and
+// lavapipe, under zink) stops every loop of a SIMD vector of invocations once 65535 loop
+// passes were spent in it, and then each loop still to come runs once. This loop of
+// loop_canary (= 2) passes runs twice unless that happened: otherwise the sample is
+// counted, and cellgl raises. Its length is read from storage (written by the runner), so
+// no compiler can fold it and unroll the loop (zink folds uniforms into the shader).
+layout(std430, binding = 9) buffer LoopCut { uint loop_cut_count; uint loop_canary; };   // 6, 7: the cell and density images
 #ifndef CELL_LOOP_PROBE
 #define CELL_LOOP_PROBE 0
 #endif
@@ -160,10 +161,11 @@ void main()
     out_id[i] = c.id;
 #endif
     int canary = 0;
-    for (int k = 0; k < u_loop_canary; k++) {
+    int canary_passes = int(loop_canary);
+    for (int k = 0; k < canary_passes; k++) {
         canary += 1;
     }
-    if (canary != u_loop_canary) {
+    if (canary != canary_passes) {
         atomicAdd(loop_cut_count, 1u);
     }
 #if CELL_LOOP_PROBE

@@ -24,7 +24,7 @@ uniform int u_depth;            // volume slices along z (0: one image at z = 0)
 uniform sampler2D u_in0;        // the points (u, v, z, -), sample i at texel (i mod width, i / width)
 uniform vec3 u_filter_width;    // footprint of every point in texture space (0: point samples)
 #endif
-uniform int u_loop_canary;      // 2 (texture.comp)
+uniform usampler2D u_loop_canary;  // one texel: the canary's length, 2 (texture.comp; not a uniform a compiler can fold)
 
 #ifndef CELL_LOOP_PROBE
 #define CELL_LOOP_PROBE 0
@@ -126,10 +126,11 @@ void main()
     uint row_id[1] = uint[1](c.id);
 #endif
     int canary = 0;
-    for (int k = 0; k < u_loop_canary; k++) {
+    int canary_passes = int(texelFetch(u_loop_canary, ivec2(0, 0), 0).r);
+    for (int k = 0; k < canary_passes; k++) {
         canary += 1;
     }
-    o_canary = canary == u_loop_canary ? 1u : 0u;
+    o_canary = canary == canary_passes ? 1u : 0u;
 #if CELL_LOOP_PROBE
     int left = 0;
     for (int k = 0; k < u_loop_probe; k++) {

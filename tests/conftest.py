@@ -74,20 +74,85 @@ def _gl_error_check(request):
     assert after == "GL_NO_ERROR", f"test left a GL error behind: {after}"
 
 
+@pytest.fixture
+def compute(ctx):
+    """The session context, for a test that needs compute shaders (OpenGL 4.3): skips, saying
+    why, on a 3.3-4.2 context (softpipe, zink capped at 4.1, a Mac), where cellgl runs its
+    fragment path."""
+    from cellgl.gl.path import has_compute
+
+    if not has_compute(ctx):
+        pytest.skip(f"this OpenGL {ctx.version_code // 100}.{ctx.version_code % 100 // 10} context "
+                    f"({_renderer(ctx)!r}) has no compute shaders (OpenGL 4.3): cellgl runs its "
+                    "fragment path here")
+    return ctx
+
+
 def _renderer(gl) -> str:
     return str(gl.info.get("GL_RENDERER", ""))
 
 
+#: passes of the loop that :func:`driver_loop_limit` runs: past any known limiter (llvmpipe's and
+#: lavapipe's 65535), a few milliseconds where nothing cuts it
+_LIMIT_PROBE_PASSES = 1 << 17
+
+
+def driver_loop_limit(gl) -> int | None:
+    """How many passes this driver lets one loop of a fragment shader run, measured, not guessed
+    from the renderer's name (zink over lavapipe, OSMesa and the stand-in driver are llvmpipe
+    underneath, softpipe is not): a loop of 2^17 passes whose length is read from a texel (no
+    compiler can fold it and unroll the loop) counts its passes into a 1 x 1 integer target.
+    ``None``: the loop ran whole, the driver cuts nothing. Measured once per context."""
+    import numpy as np
+
+    key = ("cellgl_loop_limit", id(gl))
+    if key not in _MEASURED:
+        vs = "#version 330 core\nvoid main() { gl_Position = vec4(vec2(gl_VertexID & 1, gl_VertexID >> 1) * 4.0 - 1.0, 0.0, 1.0); }\n"
+        fs = ("#version 330 core\nuniform usampler2D u_n;\nout int o;\nvoid main() {\n"
+              "    int n = int(texelFetch(u_n, ivec2(0, 0), 0).r);\n    int c = 0;\n"
+              "    for (int k = 0; k < n; k++) { c += 1; }\n    o = c;\n}\n")
+        prog = gl.program(vertex_shader=vs, fragment_shader=fs)
+        tex = gl.texture((1, 1), 1, np.array([_LIMIT_PROBE_PASSES], np.uint32).tobytes(), dtype="u4")
+        tex.filter = (0x2600, 0x2600)               # GL_NEAREST: an integer texture is complete only so
+        target = gl.texture((1, 1), 1, dtype="i4")
+        fbo = gl.framebuffer(color_attachments=[target])
+        vao = gl.vertex_array(prog, [])
+        try:
+            fbo.use()
+            fbo.viewport = (0, 0, 1, 1)
+            tex.use(0)
+            prog["u_n"].value = 0
+            vao.render(mode=gl.TRIANGLES, vertices=3)
+            ran = int(np.frombuffer(fbo.read(components=1, dtype="i4"), np.int32)[0])
+        finally:
+            for o in (vao, tex, prog):
+                o.release()
+        # the framebuffer is kept (1 x 1, one per context): releasing the bound framebuffer makes
+        # moderngl bind the one bound before it, which cellgl's runner may have released since
+        _MEASURED[key] = None if ran >= _LIMIT_PROBE_PASSES else ran
+        _MEASURED[("cellgl_loop_limit_fbo", id(gl))] = (fbo, target)
+    return _MEASURED[key]
+
+
+_MEASURED: dict = {}
+
+
 @pytest.fixture
-def llvmpipe(ctx):
-    """For the tests of Mesa llvmpipe's own loop limiter (65535 loop passes per SIMD vector, then
-    every loop runs once: docs/exactness.md) and of the probe that measures it: elsewhere they
-    skip, saying why. No other driver has that limiter: nothing is cut there (so nothing to
-    catch), and the probe's loop of 2^30 passes would run in full."""
-    renderer = _renderer(ctx)
-    if "llvmpipe" not in renderer.lower():
-        pytest.skip(f"tests llvmpipe's loop limiter, which the driver here ({renderer!r}) does not have: "
-                    "its loops are never cut, and the probe loop would run all its 2^30 passes")
+def loop_limiter(ctx):
+    """For the tests of a driver's own loop limiter (llvmpipe's, and lavapipe's under zink: 65535
+    loop passes per SIMD vector, then every loop runs once: docs/exactness.md) and of the probe
+    that measures it. The driver is recognised by what it does (:func:`driver_loop_limit`), not by
+    its name. A driver that cuts no loop skips, saying why: nothing is cut there, so there is
+    nothing to catch (the cut tests that need no limiter hold everywhere)."""
+    from cellgl.basis import gpu
+
+    limit = driver_loop_limit(ctx)
+    if limit is None:
+        pytest.skip(f"the driver here ({_renderer(ctx)!r}) ran a loop of {_LIMIT_PROBE_PASSES} passes "
+                    "whole: it has no loop limiter, so there is no cut to catch")
+    if abs(limit - gpu.DRIVER_LOOP_LIMIT) > 4:
+        pytest.skip(f"the driver here ({_renderer(ctx)!r}) cuts loops after {limit} passes, not the "
+                    f"{gpu.DRIVER_LOOP_LIMIT} these tests (and gpu.loop_probe's count) are written for")
     return ctx
 
 

@@ -48,16 +48,6 @@ FEATURES = ("edge", "edge_grad", "nsphere", "position", "color", "smooth_F1", "s
 
 
 @pytest.fixture
-def compute(ctx):
-    """The session context, which must have compute shaders to compare with."""
-    from cellgl.gl.path import has_compute
-
-    if not has_compute(ctx):
-        pytest.skip("the session context has no compute shaders to compare the fragment path with")
-    return ctx
-
-
-@pytest.fixture
 def both_paths(compute, same_bits):
     """The session context, with compute shaders and `precise` in the fragment entries too: the
     two paths must then give the same bits (docs/exactness.md; conftest.same_bits skips elsewhere)."""
@@ -144,9 +134,9 @@ def test_polynomial_smooth_and_grids_same_bits(both_paths, monkeypatch):
     _same_result(a, b, "2D grid, wide rows, far, periodic")
 
 
-def test_loop_probe_same_counts(compute, llvmpipe, monkeypatch):
+def test_loop_probe_same_counts(compute, loop_limiter, monkeypatch):
     """The measurement build (gpu.loop_probe) on both paths: the search's own count and the flags
-    are the same code's; llvmpipe's count is what its limiter left (nothing elsewhere: skipped)."""
+    are the same code's; the driver's count is what its limiter left (no limiter: skipped)."""
     x = np.random.default_rng(6).uniform(-9.0, 9.0, (256, 4))
     p = core.make_params(4)
     a, b = _both(monkeypatch, lambda: gpu.loop_probe(x, p, 1, ("smooth_F1",), 0.25))
@@ -167,8 +157,8 @@ def test_voronoi_same_bits(both_paths, monkeypatch):
             assert (x is None and y is None) or np.asarray(x).tobytes() == np.asarray(y).tobytes(), (feature, name)
 
 
-def test_driver_cut_is_caught_on_the_fragment_path(compute, llvmpipe, monkeypatch):
-    """The budget lifted: llvmpipe's limiter cuts the loops of the heaviest vectors, the fragment
+def test_driver_cut_is_caught_on_the_fragment_path(compute, loop_limiter, monkeypatch):
+    """The budget lifted: the driver's limiter cuts the loops of the heaviest vectors, the fragment
     entry's canary flags exactly those, and what reaches the user is exact (the NumPy recompute)."""
     x = np.random.default_rng(7).uniform(-9.0, 9.0, (64, 3))
     p = core.make_params(3, metric="minkowski", minkowski_p=0.25)
@@ -176,7 +166,7 @@ def test_driver_cut_is_caught_on_the_fragment_path(compute, llvmpipe, monkeypatc
     own, driver, flagged = gpu.loop_probe(x, p, 1, ("smooth_F1",), 0.25, budget=10 ** 6)
     cut = driver >= gpu.DRIVER_LOOP_LIMIT - 3
     np.testing.assert_array_equal(flagged, cut)
-    assert cut.any(), "this case must make llvmpipe cut loops"
+    assert cut.any(), "this case must make the driver cut loops"
     orig = gpu.defines_for
     monkeypatch.setattr(gpu, "defines_for", lambda *a, **k: {**orig(*a, **k), "CELL_LOOP_BUDGET": 10 ** 6})
     kw = dict(metric="minkowski", minkowski_p=0.25, outputs=("smooth_F1",), smoothness=0.25)

@@ -166,8 +166,8 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
     from cellgl.io.frames import bake_frames, frame_recipe
 
     r = recipes.load_recipe("caustics")
-    want = [np.round(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3], 0, 1)
-                     * 255).astype(np.uint8) for k in range(4)]
+    want = [np.floor(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3]
+                             .astype(np.float64), 0, 1) * 255 + 0.5).astype(np.uint8) for k in range(4)]
     for ext, fps, tol in ((".webp", 10, 0), (".gif", 25, 8)):
         (path,) = bake_frames(r, tmp_path / f"a{ext}", 4, fps=fps, size=(40, 24), tile=16)
         with Image.open(path) as im:
@@ -177,6 +177,118 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
                 assert np.abs(got - want[k]).max() <= tol, (ext, k)
                 assert frame.info.get("duration") == 1000 // fps, (ext, k, frame.info)
     assert sorted(os.listdir(tmp_path)) == ["a.gif", "a.webp"]
+
+
+def test_lossless_webp_frames_are_the_png_frames(ctx, tmp_path):
+    """Issue 48: one quantiser for every 8-bit output: the animated WebP's frames (lossless) are
+    the 8-bit PNG frames of the same bake, bit for bit (np.round's half to even in the one, a
+    half up in the other, had differed by 1 in 575 samples of a 256^2 frame)."""
+    import numpy as np
+    from PIL import Image, ImageSequence
+
+    from cellgl.io.frames import bake_frames
+
+    kw = dict(size=(96, 64), tile=32, sets=["seed=5"])
+    (webp,) = bake_frames("caustics", tmp_path / "a.webp", 3, **kw)
+    pngs = bake_frames("caustics", tmp_path / "a.png", 3, **kw)
+    with Image.open(webp) as im:
+        got = [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(im)]
+    want = [np.asarray(Image.open(p)) for p in pngs]
+    assert len(got) == len(want) == 3
+    for k, (a, b) in enumerate(zip(got, want)):
+        assert a.shape == b.shape == (64, 96, 3) and np.array_equal(a, b), (k, int((a != b).sum()))
+
+
+def test_animated_frames_quantise_every_half_as_the_png(tmp_path, monkeypatch):
+    """The same with a render of the values next to every half (k + 0.5) / 255, where rounding
+    rules differ: the WebP writer gets the PNG's 8-bit samples."""
+    import sys
+
+    import numpy as np
+    from PIL import Image, ImageSequence
+
+    from cellgl.io import frames
+
+    k = np.arange(256, dtype=np.float32)
+    halves = (k + 0.5) / np.float32(255)
+    vals = np.concatenate([halves, np.nextafter(halves, np.float32(0)),
+                           np.nextafter(halves, np.float32(1))]).astype(np.float32)
+
+    def fake(recipe, w, h, channels=("color",), x0=0, y0=0, tile_w=None, tile_h=None, **kw):
+        tw, th = tile_w or w, tile_h or h
+        yy, xx = np.mgrid[y0:y0 + th, x0:x0 + tw]
+        i = (yy * w + xx) * 3
+        rgb = np.stack([vals[(i + c) % vals.size] for c in range(3)], axis=-1)
+        return {"color": np.concatenate([rgb, np.ones_like(rgb[..., :1])], axis=-1)}
+
+    monkeypatch.setattr(sys.modules["cellgl.recipes"], "render", fake)
+    kw = dict(size=(32, 24), tile=16, sets=["orbit_radius=0.25"])
+    (webp,) = frames.bake_frames("flagstone", tmp_path / "a.webp", 2, **kw)
+    pngs = frames.bake_frames("flagstone", tmp_path / "a.png", 2, **kw)
+    want = np.asarray(Image.open(pngs[0]))
+    with Image.open(webp) as im:
+        for f in ImageSequence.Iterator(im):
+            a = np.asarray(f.convert("RGB"))
+            assert np.array_equal(a, want), int((a != want).sum())
+
+
+@pytest.mark.parametrize("ext, fps, delay, real", [
+    (".gif", 50, 2, 50.0), (".gif", 25, 4, 25.0), (".gif", 24, 4, 25.0), (".gif", 30, 3, 100 / 3),
+    (".gif", 1, 100, 1.0), (".webp", 24, 42, 1000 / 42), (".webp", 95, 11, 1000 / 11),
+    (".webp", 1, 1000, 1.0)])
+def test_frame_delay_is_what_the_format_stores(ext, fps, delay, real):
+    from cellgl.io.frames import frame_delay
+
+    assert frame_delay(ext, fps) == (delay, pytest.approx(real))
+
+
+@pytest.mark.parametrize("ext, fps, words", [
+    (".gif", 120, ("--fps 120", "accepted for .gif a number in 1..50", "hundredths", "10 fps")),
+    (".gif", 60, ("--fps 60", "1..50")), (".gif", 51, ("--fps 51", "1..50")),
+    (".webp", 100, ("--fps 100", "accepted for .webp a number in 1..95", "10 ms or less")),
+    (".webp", 0.5, ("--fps 0.5", "1..95")), (".gif", float("nan"), ("--fps nan", "1..50")),
+    (".gif", True, ("--fps True", "1..50"))])
+def test_rates_an_animated_file_cannot_play_are_refused(tmp_path, ext, fps, words):
+    """Issue 48: a GIF stores hundredths of a second and browsers play a delay under 2 cs (a WebP's
+    <= 10 ms) at 10 fps: --fps 120 wrote a delay of 0, 60..100 one of 1 cs, all played at 10 fps."""
+    from cellgl.io.frames import bake_frames
+    from cellgl.io.spec import BakeError
+
+    with pytest.raises(BakeError) as e:
+        bake_frames("caustics", tmp_path / f"a{ext}", 2, fps=fps, size=(16, 16))
+    for w in words:
+        assert w in str(e.value), str(e.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_gif_rates_it_cannot_store_are_warned_with_the_real_rate(ctx, tmp_path):
+    """--fps 24 to a .gif wrote 4 cs (25 fps: a 48-frame loop lasted 1.92 s) without a word: the
+    file's delays are whole hundredths, the warning says the rate it plays at; the default for a
+    GIF is 25 (stored exactly), and a stored rate gives no warning."""
+    import warnings
+
+    from PIL import Image
+
+    r = _cli("bake", "caustics", "--frames", "2", "-o", tmp_path / "a.gif", "--size", "16", "--fps", "24")
+    assert r.returncode == 0, r.stderr
+    assert "cellgl: warning: --fps 24: an animated .gif stores a delay of 4 cs (40 ms) a frame, so it " \
+           "plays at 25 fps (the 2 frames last 0.08 s, not 0.08333 s)" in r.stderr, r.stderr
+    assert "25 fps: 4 cs a frame" in r.stderr
+    with Image.open(tmp_path / "a.gif") as im:
+        assert im.info["duration"] == 40
+    from cellgl.io.frames import bake_frames
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for ext, fps in ((".gif", None), (".gif", 20), (".webp", None), (".webp", 40)):
+            (p,) = bake_frames("caustics", tmp_path / f"b{fps}{ext}", 2, fps=fps, size=(16, 16))
+            with Image.open(p) as im:
+                im.load()
+                assert im.info["duration"] == {(".gif", None): 40, (".gif", 20): 50,
+                                               (".webp", None): 42, (".webp", 40): 25}[ext, fps]
+        warnings.simplefilter("always")
+    with pytest.warns(UserWarning, match=r"--fps 30: an animated \.gif stores a delay of 3 cs .* 33\.33 fps"):
+        bake_frames("caustics", tmp_path / "c.gif", 2, fps=30, size=(16, 16))
 
 
 @pytest.mark.parametrize("out, size, words", [

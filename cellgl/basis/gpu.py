@@ -93,7 +93,6 @@ def _set_params(prog, p: Params):
     _set(prog, "u_orbit_radius", float(p.orbit_radius))
     _set(prog, "u_orbit_turn", int(p.orbit_turn))
     _set(prog, "u_axis_scale", tuple(float(v) for v in p.axis_scale))
-    _set(prog, "u_loop_canary", 2)
     set_density(prog, p.density_map)
 
 

@@ -63,9 +63,17 @@ MAX_TILE = 1 << 20
 _MIN_TILE = 1024
 #: width of the fragment entries' render targets and sample-input textures, in samples
 WIDTH = 1024
+#: passes of the entries' loop canary (docs/exactness.md): a loop that runs this often unless the
+#: driver's loop limiter cut the invocation's loops. The runner hands the length to the entry in
+#: storage (compute: the word after the flag's counter; fragment: one texel on
+#: :data:`CANARY_UNIT`), never as a constant or a uniform, which a compiler may fold into the
+#: shader (zink inlines uniforms) and then unroll the loop past the limiter's reach.
+LOOP_CANARY_PASSES = 2
+#: the texture unit of the canary's length on the fragment path (``u_loop_canary``)
+CANARY_UNIT = 8
 #: sampler uniform -> texture unit: the storage words of each binding and the sample inputs
 SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
-            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3}
+            "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3, "u_loop_canary": CANARY_UNIT}
 
 
 def tile_samples(cost: int, watchdog: bool = True) -> int:

@@ -103,7 +103,9 @@ def held(ctx) -> _Held:
     if _pid != os.getpid():
         _after_fork_in_child()
     with _lock:
-        if len(_registry) > 1:
+        # (one entry, ``ctx``'s own: nothing else to look at; one of another context: it may be
+        # released, and the first call for ``ctx`` must sweep it too)
+        if len(_registry) > 1 or (_registry and id(ctx) not in _registry):
             for k, other in list(_registry.items()):   # released since: their objects went with them
                 if not _alive(other.ctx):
                     del _registry[k]

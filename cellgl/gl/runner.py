@@ -144,7 +144,7 @@ class Runner:
         read them: storage buffer ``binding`` or an R32UI texture on unit ``binding``."""
         data = np.ascontiguousarray(words, dtype=np.uint32).reshape(-1)
         raw = data.tobytes()
-        self._bind_words(data, raw, (hash(raw), len(raw)), binding, 1)
+        self._bind_words(data, raw, raw, binding, 1)    # matched by the bytes: a hash can collide
 
     def bind_records(self, records, binding: int) -> None:
         """Upload uint32 ``records`` (R, 4) (cached by content per binding) and bind them where the
@@ -154,7 +154,7 @@ class Runner:
         if not len(data):
             data = np.zeros((1, 4), np.uint32)
         raw = data.tobytes()
-        self._bind_words(data, raw, (hash(raw), len(raw)), binding, 4)
+        self._bind_words(data, raw, raw, binding, 4)
 
     def run(self, p: Pass) -> Result:  # pragma: no cover - each path's own
         raise NotImplementedError
@@ -168,6 +168,10 @@ def set_uniform(prog, name: str, value) -> None:
     u = prog.get(name, None)
     if u is not None:
         u.value = value
+
+
+#: the head of the flag's region on the compute path: the counter (0) and the canary's length
+_CANARY_HEADER = np.array([0, _d.LOOP_CANARY_PASSES], np.uint32).tobytes()
 
 
 class FragmentRunner(Runner):
@@ -232,6 +236,8 @@ class FragmentRunner(Runner):
             progs.append((prog, vao, draw_slots))
         if isinstance(inp, Grid):
             self._grid(inp, [q for q, _, _ in progs])
+        # the canary's length, one texel (never a uniform: a compiler may fold those and unroll)
+        self.bind_words(np.array([_d.LOOP_CANARY_PASSES], np.uint32), _d.CANARY_UNIT)
         by_name = {o.name: o.array for o in p.outputs}
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
         tile = tile_samples(p.cost, self.watchdog)
@@ -386,8 +392,9 @@ class ComputeRunner(Runner):
         sizes = [o.row_bytes for o in p.outputs]
         step = self._step(p, local)
         cap = max(step, CHUNK_BYTES // max(sizes + [4]) // step * step)
-        # the flag's region of each piece: a counter (and the list mode's indices), aligned
-        stride = -(-4 * (step + 1) // align) * align if p.flag and p.flag.mode == "list" else align
+        # the flag's region of each piece: a counter, the canary's length (and the list mode's
+        # indices), aligned
+        stride = -(-4 * (step + 2 if p.flag and p.flag.mode == "list" else 2) // align) * align
         chunk: list = []
         slots = 0
         for piece in self._pieces(p, local):
@@ -430,7 +437,8 @@ class ComputeRunner(Runner):
         if p.flag is not None:
             at = (len(chunk) - 1) * stride
             flag = objs[("storage", p.flag.binding)][1]
-            flag.write(b"\0\0\0\0", offset=at)
+            # the counter, 0, and the canary's length: storage, so no compiler folds it (_d)
+            flag.write(_CANARY_HEADER, offset=at)
             flag.bind_to_storage_buffer(p.flag.binding, offset=at, size=stride)
         if max(groups) > _d.MAX_GROUPS:  # GL drops such a dispatch: the buffers would stay unwritten
             raise RuntimeError(f"internal error: dispatch of {groups} work groups exceeds {_d.MAX_GROUPS}")
@@ -459,7 +467,7 @@ class ComputeRunner(Runner):
             if p.flag.mode == "count":
                 res.cut += nbad
             elif nbad:
-                idx = np.frombuffer(flag.read(4 * nbad, offset=k * stride + 4), dtype=np.uint32)
+                idx = np.frombuffer(flag.read(4 * nbad, offset=k * stride + 8), dtype=np.uint32)
                 res.flagged[first + idx.astype(np.int64)] = True
 
     def _pieces(self, p: Pass, local: int):

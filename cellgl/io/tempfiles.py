@@ -4,7 +4,8 @@ all together or not at all, with their disk space reserved up front.
 A temporary file lives next to its destination and is named
 ``.<stem>.cellgl-<pid>@<host>.<random>.<kind><ext>`` (``kind`` ``part`` for a file that becomes an
 output, ``spool`` for scratch data; a folder ``.<stem>.cellgl-<pid>@<host>.<random>.frames`` holds
-the frames of an animation until all are done), never more than 255 bytes whatever the destination's name (the
+the frames of an animation until all are done, ``.<stem>.cellgl-<pid>@<host>.<random>.export`` a
+MaterialX export's set of files until it is moved into place), never more than 255 bytes whatever the destination's name (the
 stem is shortened). A process killed mid-write (SIGKILL, a power cut) cannot delete its own; the
 next write into that directory on the same host removes those whose process is gone
 (:func:`sweep_stale`). SIGTERM and SIGHUP are turned into an exception by the command line, so they
@@ -24,12 +25,12 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 __all__ = ["atomic_paths", "commit_lock", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
-           "check_output", "check_output_dir", "NAME_MAX"]
+           "check_output", "check_output_dir", "default_mode", "naming_destination_in", "NAME_MAX"]
 
 NAME_MAX = 255  #: bytes in one file name on every common filesystem
 _EXT_MAX = 32   #: longest extension kept on a temporary name
 _HOST = re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:40] or "host"
-_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:(?:part|spool)(?:\..*)?|frames)$")
+_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:(?:part|spool)(?:\..*)?|frames|export)$")
 
 
 def human_size(n: int) -> str:
@@ -106,10 +107,11 @@ def _create(directory: Path, dest: Path, kind: str, ext: str | None = None) -> P
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(directory))
 
 
-def _default_mode() -> int:
+def default_mode(base: int = 0o666) -> int:
+    """``base`` less the process's umask: the mode a new file (0o666) or folder (0o777) gets."""
     umask = os.umask(0)
     os.umask(umask)
-    return 0o666 & ~umask
+    return base & ~umask
 
 
 @contextlib.contextmanager
@@ -164,7 +166,7 @@ def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> 
         for t in tmps:
             with open(t, "rb+") as f:
                 os.fsync(f.fileno())
-            os.chmod(t, _default_mode())
+            os.chmod(t, default_mode())
         with commit_lock(d.parent for d in dests):
             for t, d in zip(tmps, dests):
                 os.replace(t, d)
@@ -193,6 +195,22 @@ def _naming_destination(exc: OSError, tmps: Sequence[Path], dests: Sequence[Path
     if name == exc.filename and text == (exc.strerror or str(exc)):
         return None
     return OSError(exc.errno, text, name)
+
+
+def naming_destination_in(exc: BaseException, tmp: Path, dest: Path) -> BaseException:
+    """``exc`` (raised while writing into the hidden folder ``tmp``, which becomes or fills
+    ``dest``) with every mention of ``tmp`` replaced by ``dest``: the error names the output
+    the user gave, never the temporary folder."""
+    def fix(text):
+        if text is None:
+            return None
+        text = str(text)
+        text = text.replace(str(tmp) + os.sep, "" if str(dest) == "." else str(dest) + os.sep)
+        return text.replace(str(tmp), str(dest))
+
+    if isinstance(exc, OSError):
+        return OSError(exc.errno, fix(exc.strerror or str(exc)), fix(exc.filename))
+    return type(exc)(fix(str(exc)))
 
 
 @contextlib.contextmanager
@@ -277,11 +295,18 @@ def _folder_problem(folder: Path) -> str | None:
     return None
 
 
+def _not_empty(path, what: str) -> None:
+    """An empty output name (``-o ''``) is refused, never read as the current folder."""
+    if not os.fspath(path):
+        raise ValueError(f"output '' is an empty name; give {what}")
+
+
 def check_output(path: str | os.PathLike) -> Path:
     """``path`` as a destination a writer can create, else ValueError saying why (directory
     missing, a file where a directory should be, not writable, a directory given, a name
     longer than 255 bytes). Every command checks its output with this (or
     :func:`check_output_dir`) before its work starts: a missing folder is never created."""
+    _not_empty(path, "a file name")
     path = Path(os.fspath(path))
     parent = path.parent if str(path.parent) else Path(".")
     if len(os.fsencode(path.name)) > NAME_MAX:
@@ -298,6 +323,7 @@ def check_output(path: str | os.PathLike) -> Path:
 def check_output_dir(path: str | os.PathLike) -> Path:
     """``path`` as an output directory a command may fill: an existing directory, or a new one
     (created by the command) in an existing, writable directory; ValueError otherwise."""
+    _not_empty(path, "a directory name")
     path = Path(os.fspath(path))
     if path.is_dir():
         why = None if os.access(path, os.W_OK) else f"output directory {str(path)!r} is not writable"

@@ -115,9 +115,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
                                  pan_only=pan_only and pan is not None)
         elif recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
             texture.set_uniforms(prog, recipe)        # binds the density or cell image (no uniforms left)
-        for name, value in (("u_loop_canary", 2), ("u_loop_probe", PROBE_PASSES)):
-            if name in prog:
-                prog[name].value = value
+        if "u_loop_probe" in prog:
+            prog["u_loop_probe"].value = PROBE_PASSES
         setup(prog)
 
     searches = _searches(recipe) * (int(supersample) ** 2 + 1 if supersample > 1 else 1)
@@ -144,8 +143,9 @@ def _searches(recipe) -> int:
 def _check_cut(cut: int, count: int) -> None:
     if cut:
         raise LoopLimitError(
-            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa llvmpipe allows 65535 loop "
-            "passes per SIMD vector of samples): their values would be wrong, so none are returned. "
+            f"the GPU driver cut the loops of {cut} of {count} samples (Mesa's llvmpipe, and lavapipe "
+            "under zink, allow 65535 loop passes per SIMD vector of samples): their values would be "
+            "wrong, so none are returned. "
             "Use fewer octaves, less supersampling or a smaller smoothness (docs/exactness.md)")
 
 
