@@ -229,3 +229,29 @@ def test_a_recipe_object_is_named_by_the_sets_recipe_json(ctx, tmp_path):
     assert manifest["command"].startswith(f"cellgl bake {tmp_path / 'h' / 'recipe.json'} --material godot ")
     assert load_recipe(str(tmp_path / "h" / "recipe.json")) == r
     assert manifest["recipe"] == r.to_dict()
+
+
+def test_mips_are_each_level_rendered_at_its_size(ctx, tmp_path):
+    """--mips: every map's level k is the set baked at ceil(W / 2^k) x ceil(H / 2^k) (rendered, not
+    downsampled), as <map>_mip<k>.png; level 0 is the set without mips; the manifest lists them."""
+    from cellgl.io.mips import mip_sizes
+
+    paths = M.bake_material("flagstone", tmp_path / "m", "unreal", size=(20, 12), mips=True, progress=False)
+    plain = M.bake_material("flagstone", tmp_path / "p", "unreal", size=(20, 12), progress=False)
+    manifest = json.loads((tmp_path / "m" / "manifest.json").read_text())
+    sizes = mip_sizes(20, 12)
+    assert len(paths) == 4 * len(sizes) + 2 and sorted(os.listdir(tmp_path / "m")) == sorted(p.name for p in paths)
+    assert "--mips" in manifest["command"]
+    for entry in manifest["files"][:4]:
+        assert [lv["size"] for lv in entry["mips"]] == [list(s) for s in sizes]
+        for lv in entry["mips"]:
+            got = _read(tmp_path / "m" / lv["file"])
+            if lv["level"] == 0:
+                assert lv["file"] == entry["file"]
+                assert np.array_equal(got, _read(tmp_path / "p" / entry["file"]))
+            elif lv["level"] in (1, 3):
+                w, h = lv["size"]
+                ref = M.bake_material("flagstone", tmp_path / f"l{w}x{h}", "unreal", size=(w, h), progress=False)
+                assert np.array_equal(got, _read(next(p for p in ref if p.name == entry["file"])))
+            assert got.shape[:2] == (lv["size"][1], lv["size"][0])
+    assert {p.name for p in plain} <= {p.name for p in paths}

@@ -210,8 +210,7 @@ def _run_material(args: argparse.Namespace) -> int:
                         ("--workers", args.workers), ("--threads", None if args.threads == "1" else args.threads),
                         ("--udim", getattr(args, "udim", None)), ("--udims", getattr(args, "udims", None)),
                         ("--colorspace", getattr(args, "colorspace", None)),
-                        ("--tiled", getattr(args, "tiled", None) or None),
-                        ("--mips", getattr(args, "mips", None) or None)):
+                        ("--tiled", getattr(args, "tiled", None) or None)):
         if value is not None:
             raise BakeError(f"{flag} {value if not isinstance(value, list) else ','.join(value)}: not with "
                             f"--material (the engine preset chooses the maps, their channels and bit depths)")
@@ -220,7 +219,8 @@ def _run_material(args: argparse.Namespace) -> int:
     try:
         paths = bake_material(args.recipe, args.output, args.material, size=args.size, tileable=args.tileable,
                               sets=args.sets, samples=int_arg("--samples", args.samples, 1, MAX_SAMPLES),
-                              map_format=args.map_format or "png", progress=not args.quiet, memory_budget=budget)
+                              map_format=args.map_format or "png", mips=bool(getattr(args, "mips", False)),
+                              progress=not args.quiet, memory_budget=budget)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None

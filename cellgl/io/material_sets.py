@@ -185,7 +185,8 @@ def _tiles(recipe, m: MapSpec, enc: Encoding, plan, bar):
 
 
 def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE, tileable=None, sets=(),
-                  samples=1, map_format="png", progress=True, memory_budget=DEFAULT_BUDGET) -> list[Path]:
+                  samples=1, map_format="png", mips=False, progress=True,
+                  memory_budget=DEFAULT_BUDGET) -> list[Path]:
     """Bake the material set of an engine preset into ``directory``.
 
     Parameters
@@ -202,14 +203,18 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
         As :func:`cellgl.io.bake.bake` (2D sizes only).
     map_format : str
         The maps' format, one of :data:`MAP_FORMATS` (``png``).
+    mips : bool
+        Also every mip level of every map, each rendered at its own size (:mod:`cellgl.io.mips`:
+        level ``k`` is the set baked at ``ceil(W / 2^k) x ceil(H / 2^k)``, never downsampled), as
+        numbered files ``<map>_mip<k>.png`` beside level 0, down to 1 x 1.
     progress : bool
         A progress bar per map on stderr.
 
     Returns
     -------
     list of pathlib.Path
-        The files of the set, maps first, then ``recipe.json``, the ``.gltf`` (gltf) and
-        ``manifest.json``.
+        The files of the set, maps first (each followed by its levels with ``mips``), then
+        ``recipe.json``, the ``.gltf`` (gltf) and ``manifest.json``.
 
     Raises
     ------
@@ -237,19 +242,27 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
                         "metallic channel; accepted: a cellular texture recipe (cellgl presets)")
     recipe = base.replace(normal_convention=eng.normal)
     stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in base.name) or "material"
+    from cellgl.io.mips import level_path, mip_sizes
+
     names = [_file_name(eng, stem, m, ext) for m in eng.maps]
+    levels = mip_sizes(w, h) if mips else [(w, h)]
+    written = []
     with scratch_dir(out_dir, "frames") as tmp:
         for m, name in zip(eng.maps, names):
             enc = Encoding(m.suffix, m.samples(), np.dtype(np.uint8 if m.bits == 8 else np.uint16))
-            out = Output(out_dir / name, (m.suffix,), (enc,))
-            plan = plan_tiles(w, h, None, ext, m.channels(), None, memory_budget, m.samples() * m.bits // 8)
-            plan = dataclasses.replace(plan, samples=samples)
-            bar = Progress(plan.count, f"baking {name}", progress)
-            meta = json.dumps({"generator": "cellgl", "material": eng.name, "map": m.suffix,
-                               "samples": dict(m.letters()), "recipe": recipe.to_dict(), "size": [w, h]},
-                              sort_keys=True)
-            with bar:
-                write_tiles(tmp / name, _tiles(recipe, m, enc, plan, bar), out, ext, plan, meta)
+            for k, (lw, lh) in enumerate(levels):
+                file = level_path(name, k).name
+                out = Output(out_dir / file, (m.suffix,), (enc,))
+                plan = plan_tiles(lw, lh, None, ext, m.channels(), None, memory_budget,
+                                  m.samples() * m.bits // 8)
+                plan = dataclasses.replace(plan, samples=samples)
+                bar = Progress(plan.count, f"baking {file}", progress)
+                meta = json.dumps({"generator": "cellgl", "material": eng.name, "map": m.suffix, "level": k,
+                                   "samples": dict(m.letters()), "recipe": recipe.to_dict(), "size": [lw, lh]},
+                                  sort_keys=True)
+                with bar:
+                    write_tiles(tmp / file, _tiles(recipe, m, enc, plan, bar), out, ext, plan, meta)
+                written.append(file)
         extra = ["recipe.json"]
         (tmp / "recipe.json").write_text(base.to_json())
         if eng.name == "gltf":
@@ -257,10 +270,10 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
             (tmp / extra[-1]).write_text(json.dumps(_gltf(stem, dict(zip((m.suffix for m in eng.maps), names))),
                                                     indent=2) + "\n")
         extra.append("manifest.json")
-        command = _command(recipe_or_name, sets, tileable, eng, out_dir, (w, h), samples, fmt)
-        manifest = _manifest(eng, base, names, extra[:-1], (w, h), samples, fmt, command)
+        command = _command(recipe_or_name, sets, tileable, eng, out_dir, (w, h), samples, fmt, mips)
+        manifest = _manifest(eng, base, names, extra[:-1], levels, samples, fmt, command)
         (tmp / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
-        return _move_into_place(tmp, out_dir, names + extra)
+        return _move_into_place(tmp, out_dir, written + extra)
 
 
 def _move_into_place(tmp: Path, out_dir: Path, names: list[str]) -> list[Path]:
@@ -290,7 +303,7 @@ def _move_into_place(tmp: Path, out_dir: Path, names: list[str]) -> list[Path]:
     return [out_dir / n for n in names]
 
 
-def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, samples, fmt) -> str:
+def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, samples, fmt, mips) -> str:
     """The command line that bakes the set again (the recipe by its name or path; a recipe given
     as an object by the set's own recipe.json, its --set already applied)."""
     if isinstance(recipe_or_name, (str, os.PathLike)):
@@ -302,14 +315,18 @@ def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, s
     words += ["--material", eng.name, "-o", str(out_dir), "--size", f"{size[0]}x{size[1]}"]
     words += ["--samples", str(samples)] if samples != 1 else []
     words += ["--map-format", fmt] if fmt != "png" else []
+    words += ["--mips"] if mips else []
     return " ".join(shlex.quote(w) for w in words)
 
 
-def _manifest(eng: Engine, recipe, names, extra, size, samples, fmt, command) -> dict:
+def _manifest(eng: Engine, recipe, names, extra, levels, samples, fmt, command) -> dict:
     from cellgl._version import __version__
+    from cellgl.io.mips import level_path
 
     files = []
     for m, name in zip(eng.maps, names):
+        mip = {"mips": [{"level": k, "file": level_path(name, k).name, "size": list(s)}
+                        for k, s in enumerate(levels)]} if len(levels) > 1 else {}
         files.append({
             "file": name, "slot": m.slot, "format": fmt.upper(), "bit_depth": m.bits,
             "color_space": "sRGB" if m.srgb else "linear (data, not colour)",
@@ -317,6 +334,7 @@ def _manifest(eng: Engine, recipe, names, extra, size, samples, fmt, command) ->
             **({"normal_convention": eng.normal + (" (green down)" if eng.normal == "directx" else " (green up)")}
                if "normal" in m.layout else {}),
             "made_of": list(m.channels()),
+            **mip,
         })
     notes = {"recipe.json": "the recipe the maps were baked from (cellgl recipe JSON)",
              "manifest.json": "this file"}
@@ -324,7 +342,7 @@ def _manifest(eng: Engine, recipe, names, extra, size, samples, fmt, command) ->
         files.append({"file": n, "what": notes.get(n, "glTF 2.0 file: a quad whose material references the maps")})
     files.append({"file": "manifest.json", "what": notes["manifest.json"]})
     return {"generator": f"cellgl {__version__}", "material": eng.name, "engine": eng.title,
-            "normal_convention": eng.normal, "size": list(size), "samples_per_pixel": samples,
+            "normal_convention": eng.normal, "size": list(levels[0]), "samples_per_pixel": samples,
             "files": files, "recipe": recipe.to_dict(), "command": command,
             "exact": "each sample of a packed map equals the bake of its channel alone "
                      "(smoothness: the top value minus the quantised roughness)"}
