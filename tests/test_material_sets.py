@@ -255,3 +255,37 @@ def test_mips_are_each_level_rendered_at_its_size(ctx, tmp_path):
                 assert np.array_equal(got, _read(next(p for p in ref if p.name == entry["file"])))
             assert got.shape[:2] == (lv["size"][1], lv["size"][0])
     assert {p.name for p in plain} <= {p.name for p in paths}
+
+
+def _gltf_validator():
+    """Khronos' glTF-Validator (npm, installed by .ci/setup into .venv/gltf-validator) and node, or None."""
+    import shutil
+    from pathlib import Path
+
+    mod = Path(__file__).resolve().parents[1] / ".venv" / "gltf-validator" / "node_modules" / "gltf-validator"
+    node = shutil.which("node")
+    return (node, mod) if node and (mod / "index.js").is_file() else None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mips", [False, True])
+def test_khronos_gltf_validator_reports_no_issue(ctx, tmp_path, mips):
+    """The .gltf and the maps it references pass Khronos' glTF-Validator with no error, warning,
+    info or hint (at power-of-two sides: other sides get the validator's IMAGE_NPOT_DIMENSIONS info)."""
+    found = _gltf_validator()
+    if found is None:
+        pytest.skip("glTF-Validator (npm gltf-validator, .venv/gltf-validator) or node is not installed")
+    node, mod = found
+    M.bake_material("flagstone", tmp_path / "g", "gltf", size=(32, 16), mips=mips, progress=False)
+    script = os.path.join(os.path.dirname(__file__), "gltf_validate.js")
+    proc = subprocess.run([node, script, str(mod), str(tmp_path / "g" / "flagstone.gltf")], capture_output=True,
+                          text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    report = json.loads(proc.stdout)
+    issues = report["issues"]
+    assert (issues["numErrors"], issues["numWarnings"], issues["numInfos"], issues["numHints"]) == (0, 0, 0, 0), \
+        issues["messages"]
+    images = [r for r in report["info"]["resources"] if r["pointer"].startswith("/images/")]
+    assert [r["uri"] for r in images] == ["flagstone_baseColor.png", "flagstone_occlusionRoughnessMetallic.png",
+                                          "flagstone_normal.png"]
+    assert all(r["image"]["width"] == 32 and r["image"]["height"] == 16 for r in images)
