@@ -149,6 +149,7 @@ def run_cli(args: argparse.Namespace) -> int:
         else:
             rgb = np.zeros((height, width, 3), np.float32)
             rgb[..., : img.shape[2]] = img
-            write_png(tmp, [quantize(rgb, 8)], width, height, 3, 8)
+            write_png(tmp, [quantize(rgb, 8)], width, height, 3, 8,
+                      srgb=out == "color")   # colour is display-encoded; positions are data
     print(f"wrote {path} ({out}, {width}x{height})")
     return 0

@@ -267,9 +267,9 @@ def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
 # --------------------------------------------------------------------------------------------
 
 ERRORS = [
-    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy, .tx (an image, or "
-                          "with --frames N a numbered sequence); .webp, .gif (one animated file, with "
-                          "--frames N); .zarr (a folder baked on Dask)"),
+    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy, .tx, .dds, "
+                          ".ktx2 (an image, or with --frames N a numbered sequence); .webp, .gif (one "
+                          "animated file, with --frames N); .zarr (a folder baked on Dask)"),
     (["-o", "{d}/a"], "unknown extension '(none)'"),
     (["-o", "{d}/a.png", "--channels", "albedo"], "'albedo': unknown channel; accepted color"),
     (["-o", "{d}/a.png", "--size", "0x5"], "width 0 is out of range; accepted 1..65536"),

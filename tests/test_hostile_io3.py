@@ -232,6 +232,78 @@ def test_animated_frames_quantise_every_half_as_the_png(tmp_path, monkeypatch):
             assert np.array_equal(a, want), int((a != want).sum())
 
 
+#: holds a flock on the folder argv[1] until its standard input closes (or argv[2] seconds pass)
+_HOLD_LOCK = textwrap.dedent("""
+    import fcntl, os, select, sys
+    fd = os.open(sys.argv[1], os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    print("locked", flush=True)
+    select.select([sys.stdin], [], [], float(sys.argv[2]))
+""")
+
+
+def _holder(folder, seconds: float) -> subprocess.Popen:
+    p = subprocess.Popen([sys.executable, "-c", _HOLD_LOCK, str(folder), str(seconds)],
+                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "locked"
+    return p
+
+
+def test_a_bake_waiting_for_a_folder_lock_says_for_whom_and_times_out(tmp_path):
+    """Issue 48: `flock DIR sleep 25 & cellgl bake flagstone -o DIR/x.png` waited silently for
+    ever. It says that it waits and for whom (the pid from /proc/locks), and gives up after
+    $CELLGL_LOCK_WAIT seconds with one error; nothing is written, no temporary file is left."""
+    holder = _holder(tmp_path, 120)
+    try:
+        env = dict(ENV, CELLGL_LOCK_WAIT="0.5")
+        r = subprocess.run([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(tmp_path / "x.png"),
+                            "--size", "16", "-q"], cwd=REPO, capture_output=True, text=True, timeout=120, env=env)
+    finally:
+        holder.stdin.close()
+        holder.wait(30)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    who = f"process {holder.pid}" if os.path.exists("/proc/locks") else "another process"
+    assert f"cellgl: warning: waiting for the lock on folder '{tmp_path}', held by {who}" in r.stderr, r.stderr
+    assert f"cellgl: error: cannot write {tmp_path}: {who}" in r.stderr, r.stderr
+    assert "has held the lock on this folder for 0.5 s, so nothing was written" in r.stderr
+    assert "CELLGL_LOCK_WAIT=SECONDS" in r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_bake_waits_for_a_folder_lock_released_in_time(tmp_path):
+    """The lock let go while the bake waits (it said so): the bake goes on and lands whole."""
+    from cellgl.io.tempfiles import lock_holder
+
+    holder = _holder(tmp_path, 120)
+    try:
+        fd = os.open(tmp_path, os.O_RDONLY)
+        try:
+            if os.path.exists("/proc/locks"):
+                assert lock_holder(fd).startswith(f"process {holder.pid}")
+        finally:
+            os.close(fd)
+        bake = subprocess.Popen([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o",
+                                 str(tmp_path / "x.png"), "--size", "16", "-q"], cwd=REPO,
+                                stderr=subprocess.PIPE, text=True, env=ENV)
+        first = bake.stderr.readline()          # the bake is waiting now
+    finally:
+        holder.stdin.close()
+        holder.wait(30)
+    rest = bake.stderr.read()
+    assert bake.wait(120) == 0, first + rest
+    assert first.startswith(f"cellgl: warning: waiting for the lock on folder '{tmp_path}'"), first
+    assert rest == "" and os.listdir(tmp_path) == ["x.png"]
+
+
+@pytest.mark.parametrize("value", ["x", "-1", "nan", "1e9"])
+def test_a_bad_lock_wait_is_refused_before_the_work(tmp_path, value):
+    env = dict(ENV, CELLGL_LOCK_WAIT=value)
+    r = subprocess.run([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(tmp_path / "x.png"),
+                        "--size", "16"], cwd=REPO, capture_output=True, text=True, timeout=120, env=env)
+    _clean_error(r, f"CELLGL_LOCK_WAIT={value!r}: accepted seconds in 0..86400")
+    assert os.listdir(tmp_path) == []
+
+
 @pytest.mark.parametrize("ext, fps, delay, real", [
     (".gif", 50, 2, 50.0), (".gif", 25, 4, 25.0), (".gif", 24, 4, 25.0), (".gif", 30, 3, 100 / 3),
     (".gif", 1, 100, 1.0), (".webp", 24, 42, 1000 / 42), (".webp", 95, 11, 1000 / 11),

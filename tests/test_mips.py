@@ -124,3 +124,19 @@ def test_cli_mips_png(ctx, tmp_path):
     assert sorted(f.name for f in tmp_path.iterdir()) == ["f.png", "f_mip1.png", "f_mip2.png", "f_mip3.png"]
     assert [Image.open(tmp_path / n).size for n in ("f.png", "f_mip1.png", "f_mip2.png", "f_mip3.png")] \
         == [(8, 3), (4, 2), (2, 1), (1, 1)]
+
+
+def test_each_level_is_the_same_texture_as_its_parent(ctx):
+    """A level is a prefilter of the one above, not another picture: its texels follow the 2 x 2
+    averages of its parent's (the band limit fades whole octaves, so coarse levels depart from a
+    box filter: measured correlation 0.994 at 128^2, 0.95 at 64^2, 0.77 at 32^2; checked down to 64)."""
+    recipe = load_recipe("flagstone")
+    prev = None
+    for k, size, res in M.render_chain(recipe, 256, 256, channels=("height",)):
+        img = res["height"].astype(np.float64)
+        if prev is not None and size[0] >= 64:
+            box = prev.reshape(size[1], 2, size[0], 2).mean(axis=(1, 3))
+            assert np.corrcoef(box.ravel(), img.ravel())[0, 1] > 0.93, k
+            shifted = np.corrcoef(box[:, 2:].ravel(), img[:, :-2].ravel())[0, 1]
+            assert shifted < 0.5, k          # the test can fail: a shifted picture does not pass
+        prev = img

@@ -1,7 +1,8 @@
 """Bake a recipe (or a preset) to an image or volume file: :func:`bake` (``cellgl bake``, whose
 command line is :mod:`cellgl.io.bake_cli`).
 
-The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``). Output
+The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``; GPU
+textures ``.dds``/``.ktx2`` are :mod:`cellgl.io.gputex`'s). Output
 larger than one tile is rendered tile by tile and streamed to the file, so memory stays bounded;
 every pixel is rendered at the same uv as in a one-pass bake, so the two give the same bits.
 Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.md``.
@@ -23,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
+from cellgl.io import gputex
 from cellgl.io import texfile
 from cellgl.io import udim as udim_mod
 from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace
@@ -180,7 +182,7 @@ def _check_name(path: Path) -> None:
 def _check_tile(tile) -> int | None:
     if tile is None:
         return None
-    if not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
+    if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
         raise BakeError(f"--tile {tile}: accepted multiples of 16 in 16..8192")
     return int(tile)
 
@@ -198,7 +200,7 @@ class Baked(list):
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
          memory_budget=DEFAULT_BUDGET, mips=False, colorspace=None, udim=None, udims=None,
-         tiled=False) -> Baked:
+         tiled=False, compress=None, supercompression=None, layers=None) -> Baked:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -240,7 +242,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         Also write the mip chain, every level rendered from the recipe at its own size
         (:mod:`cellgl.io.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
         the file ``<stem>_mip<k><ext>`` beside level 0 (the file without ``mips``, the same
-        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1.
+        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1; ``.dds``/``.ktx2`` hold the
+        levels in the file (``max(1, floor(W / 2^k))``, as those formats define them).
     colorspace : {"linear", "srgb"}, optional
         The colour space of ``color`` in a float file (``.exr``, 32-bit ``.tif``): ``linear``
         (default; scene-linear Rec.709, tagged) or ``srgb`` (sRGB-encoded, tagged). Integer
@@ -254,6 +257,16 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         Write a tiled file (64 x 64 tiles) of an ``.exr`` or ``.tif``; with ``mips`` its levels
         go inside it (OpenEXR MIPMAP_LEVELS, TIFF reduced-resolution pages) instead of numbered
         files. A ``.tx`` is always tiled and mip-mapped (:mod:`cellgl.io.texfile`).
+    compress : str, optional
+        ``.dds``/``.ktx2`` only: the block format, ``bc1``, ``bc3``, ``bc4``, ``bc5``, ``bc7`` or
+        ``none`` for every channel, or per channel ``"color=bc1,height=none"``; default per
+        channel (colour BC7 sRGB, normal BC5, height and masks BC4; F1..F4 and id are never
+        compressed). Refused where the channel cannot use it (:data:`cellgl.io.gputex.CHOICES`).
+    supercompression : {None, "zstd"}
+        ``.ktx2`` only: zstd supercompression of every level.
+    layers : sequence of Recipe, optional
+        ``.dds``/``.ktx2`` only: an array texture, one 2D layer per recipe, rendered as given
+        (``recipe_or_name`` is checked as usual; ``cellgl.io.frames.bake_frames`` passes a loop's frames).
 
     Returns
     -------
@@ -289,7 +302,24 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
             raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
-    bits = check_bits(ext, bit_depth)
+    texture = ext in gputex.EXTS
+    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gputex)
+        tex_outputs = gputex.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
+                                          (w, h, depth_slices))
+        if layers is not None and (depth_slices is not None or not 1 <= len(layers) <= 2048):
+            raise BakeError(f"an array texture of {len(layers)} layers{' of volumes' if depth_slices else ''}: "
+                            f"accepted 1..2048 layers of 2D textures (no API has arrays of 3D textures)")
+        for flag, value in (("--udim", set_tiles), ("--tiled", tiled), ("--colorspace", colorspace)):
+            if value:
+                raise BakeError(f"{flag} with {ext}: a GPU texture file is one 2D or 3D texture (its "
+                                f"colour always an sRGB format); accepted for .exr/.tif (and .png for --udim)")
+        bits = 8
+    elif compress is not None or supercompression is not None or layers is not None:
+        flag = "--compress" if compress is not None else "--zstd" if supercompression is not None else "layers"
+        raise BakeError(f"{flag}: only for GPU texture files (-o NAME.dds or NAME.ktx2); {ext} "
+                        f"holds plain samples")
+    else:
+        bits = check_bits(ext, bit_depth)
     try:
         space = check_colorspace(colorspace, ext, bits)
     except ValueError as exc:
@@ -310,7 +340,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"mips={mips!r}, tiled={tiled!r}: accepted True or False")
     tiled, mips = texfile.check_tiled(ext, tiled, mips, channels, depth_slices)
     outputs = []      # (UDIM tile or None, output)
-    for t in set_tiles or [None]:
+    for t in ([] if texture else (set_tiles or [None])):
         where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)
         level0 = [_Output(p, chs, tuple(encoding_of(c, ext, bits, space) for c in chs))
                   for p, chs in output_paths(Path(where), channels)]
@@ -333,6 +363,17 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
                         f"(try --set dimension=3)")
+    if texture:
+        for o in tex_outputs:
+            _check_name(o.path)
+        done = Baked(gputex.bake_texture(
+            recipe, tex_outputs, ext, (w, h, depth_slices), samples=samples, tile=tile, budget=memory_budget,
+            mip_chain=mips, supercompression=supercompression, layers=layers,
+            progress=lambda total, label, unit: Progress(total, label, progress, unit=unit),
+            meta=lambda c: _meta(recipe, _Output(path, (c,), (encoding_of(c, ".png", 8, space),)),
+                                 _Plan(w, h, depth_slices, 1, 1))))
+        done.colorspace = space if "color" in channels else None
+        return done
     if set_tiles:
         try:
             recipe = udim_mod.window_recipe(recipe, set_tiles)
@@ -464,7 +505,7 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
             (e,) = out.encodings
             cio.write_png(tmp, (b[e.channel] for b in _bands(tiles, plan)), plan.width,
                           plan.height, e.samples, e.dtype.itemsize * 8,
-                          text={"Software": "cellgl", "cellgl": meta})
+                          text={"Software": "cellgl", "cellgl": meta}, srgb=e.channel == "color")
         elif ext == ".exr":
             _write_exr(tmp, tiles, out, plan, meta)
         elif ext == ".npy":

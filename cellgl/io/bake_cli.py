@@ -20,6 +20,7 @@ formats (from the extension) and --depth (bits per sample):
   .png  8 (default) or 16     .exr  16 (half) or 32 (float, default)
   .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
   .tx   as .tif, tiled and mip-mapped (every level rendered) for film renderers
+  .dds, .ktx2  GPU textures, a format per channel (--compress; --depth: plain samples' bits)
 colour: float files hold scene-linear Rec.709 (--colorspace srgb: sRGB-encoded), tagged;
   integer formats sRGB-encoded.
 channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4,
@@ -31,6 +32,8 @@ examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
   cellgl bake crumple -o crumple.png --size 256 --samples 4
+  cellgl bake flagstone -o f.dds --size 1024 --mips --channels color,normal   # BC7 sRGB, BC5
+  cellgl bake flagstone -o f.ktx2 --size 1024 --mips --zstd --compress bc1
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
   cellgl bake flagstone -o 'wall.<UDIM>.tx' --udim 1001-1012 --size 1024
@@ -77,7 +80,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         f"(default {DEFAULT_BUDGET >> 20})")
     p.add_argument("--frames", default=None, metavar="N",
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
-                        ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
+                        ".. FILE_<N-1>.png, one animated .webp/.gif, or one .dds/.ktx2 array texture "
+                        "(cellgl/io/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
                    help="frames per second of an animated file (with --frames): .webp 1..95 "
                         "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
@@ -93,6 +97,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--mips", action="store_true",
                    help="also write the mip chain, each level rendered at its own size (never "
                         "downsampled): in the file for .dds/.ktx2, else FILE_mip1.png .. (1x1)")
+    p.add_argument("--compress", default=None, metavar="FORMAT",
+                   help=".dds/.ktx2: bc1|bc3|bc4|bc5|bc7|none for every channel, or per channel "
+                        "color=bc1,height=none (default: color bc7 sRGB, normal bc5, height bc4; "
+                        "F1..F4 float, id R32_UINT, never compressed)")
+    p.add_argument("--zstd", action="store_true",
+                   help=".ktx2: zstd supercompression of every level")
     p.add_argument("--tiled", action="store_true",
                    help="a tiled .exr/.tif (64x64 tiles); with --mips the levels go inside it, as "
                         "in a .tx (always tiled and mip-mapped)")
@@ -134,9 +144,11 @@ def run_cli(args: argparse.Namespace) -> int:
         if value is not None and (args.frames is not None or ext == ".zarr"):
             raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
                             f"not with --frames or a .zarr output")
-    if getattr(args, "mips", False) and (args.frames is not None or ext == ".zarr"):
+    if getattr(args, "mips", False) and ((args.frames is not None and ext not in (".dds", ".ktx2"))
+                                         or ext == ".zarr"):
         raise BakeError(f"--mips: for a single bake (.png, .exr, .tif, .npy: numbered files; "
-                        f".dds, .ktx2: in the file); not with {'--frames' if args.frames is not None else '.zarr'}")
+                        f".dds, .ktx2: in the file, also an array of --frames); not with "
+                        f"{'--frames to ' + ext if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
@@ -158,7 +170,8 @@ def run_cli(args: argparse.Namespace) -> int:
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
                      progress=not args.quiet, memory_budget=budget, mips=args.mips,
-                     colorspace=args.colorspace, udim=args.udim, udims=args.udims, tiled=args.tiled)
+                     colorspace=args.colorspace, udim=args.udim, udims=args.udims, tiled=args.tiled,
+                     compress=args.compress, supercompression="zstd" if args.zstd else None)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None
@@ -175,6 +188,19 @@ def run_cli(args: argparse.Namespace) -> int:
     return 0
 
 
+def _texture_kw(args: argparse.Namespace) -> dict:
+    """--mips, --compress, --zstd for a loop baked as one .dds/.ktx2 array texture (bake refuses
+    --compress/--zstd for the other formats)."""
+    kw = {}
+    if args.mips:
+        kw["mips"] = True
+    if args.compress is not None:
+        kw["compress"] = args.compress
+    if args.zstd:
+        kw["supercompression"] = "zstd"
+    return kw
+
+
 def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
     from cellgl.io.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
@@ -187,7 +213,7 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     paths = bake_frames(args.recipe, args.output, int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
                         size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                         tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
-                        memory_budget=budget)
+                        memory_budget=budget, **_texture_kw(args))
     if not args.quiet:
         total = sum(os.path.getsize(p) for p in paths)
         rate = ""
@@ -210,7 +236,8 @@ def _run_material(args: argparse.Namespace) -> int:
                         ("--workers", args.workers), ("--threads", None if args.threads == "1" else args.threads),
                         ("--udim", getattr(args, "udim", None)), ("--udims", getattr(args, "udims", None)),
                         ("--colorspace", getattr(args, "colorspace", None)),
-                        ("--tiled", getattr(args, "tiled", None) or None)):
+                        ("--tiled", getattr(args, "tiled", None) or None),
+                        ("--compress", getattr(args, "compress", None)), ("--zstd", getattr(args, "zstd", None) or None)):
         if value is not None:
             raise BakeError(f"{flag} {value if not isinstance(value, list) else ','.join(value)}: not with "
                             f"--material (the engine preset chooses the maps, their channels and bit depths)")

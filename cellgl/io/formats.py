@@ -186,7 +186,8 @@ def usable_cores() -> int:
 
 
 def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, height: int,
-              samples: int, bit_depth: int, *, text: Mapping[str, str] | None = None) -> None:
+              samples: int, bit_depth: int, *, text: Mapping[str, str] | None = None,
+              srgb: bool = False) -> None:
     """Write a PNG from full-width bands of rows, never holding more than two bands.
 
     Parameters
@@ -205,6 +206,11 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     bit_depth : {8, 16}
     text : mapping of str to str, optional
         ``tEXt`` chunks (keyword -> Latin-1 text), e.g. the recipe as JSON.
+    srgb : bool
+        The samples are sRGB-encoded colour: an ``sRGB`` chunk (rendering intent perceptual) and,
+        as the PNG specification recommends for readers that know only those, the matching
+        ``gAMA`` (1/2.2) and ``cHRM`` (BT.709 primaries, D65). Without it (data: heights,
+        normals, distances) the file has no colour chunk at all.
 
     Notes
     -----
@@ -246,6 +252,8 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
         f.write(b"\x89PNG\r\n\x1a\n")
         f.write(_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth,
                                             _PNG_COLOR_TYPE[samples], 0, 0, 0)))
+        if srgb:
+            f.write(_SRGB_CHUNKS)
         for key, value in (text or {}).items():
             f.write(_chunk(b"tEXt", key.encode("latin-1") + b"\0" + value.encode("latin-1")))
         busy = None
@@ -272,6 +280,11 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
             raise
         _write_idat(f, state["pending"], final=True)
         f.write(_chunk(b"IEND", b""))
+
+
+#: sRGB (intent 0, perceptual), gAMA 45455 (1/2.2) and cHRM of sRGB: PNG 3rd edition, 11.3.2
+_SRGB_CHUNKS = (_chunk(b"sRGB", b"\0") + _chunk(b"gAMA", struct.pack(">I", 45455))
+                + _chunk(b"cHRM", struct.pack(">8I", 31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000)))
 
 
 def _write_idat(f, pending: bytearray, final: bool) -> None:

@@ -29,6 +29,7 @@ import numpy as np
 
 from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
                             quantize)
+from cellgl.io.gputex import EXTS as GPU_EXTS
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, naming_destination_in, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
@@ -114,6 +115,8 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
         Its ``orbit_radius`` must be > 0 (else nothing moves).
     path : str or PathLike
         ``name.webp`` / ``name.gif``: one animated, endlessly looping file (colour only).
+        ``name.dds`` / ``name.ktx2``: one array texture, a layer per frame (per channel
+        ``name_<channel>.dds`` when several are asked for; ``mips``, ``compress`` in ``bake_kw``).
         Otherwise (``.png``, ``.exr``, ``.tif``, ``.npy``) the sequence ``name_0000.png`` ..
         (per channel ``name_0000_<channel>.png`` when several are asked for).
     frames : int in 1..10000
@@ -161,6 +164,9 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
             import warnings
 
             warnings.warn(note, UserWarning, stacklevel=2)
+    if ext in GPU_EXTS:     # one array texture, a layer per frame (cellgl.io.gputex)
+        return bake(recipe, path, size=size, channels=channels, bit_depth=bit_depth, progress=progress,
+                    layers=[frame_recipe(recipe, k, frames) for k in range(frames)], **bake_kw)
     bar = Progress(frames, f"baking {path.name}", progress, unit="frames")
     # the folder is swept by a later bake if this one is killed
     with scratch_dir(path) as tmp, bar:

@@ -22,15 +22,16 @@ numbered files beside level 0: ``<name><ext>`` is level 0, ``<name>_mip<k><ext>`
 """
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ROUNDINGS", "mip_sizes", "level_size", "level_count", "level_path", "render_level", "render_chain"]
+__all__ = ["ROUNDINGS", "RENDER_TILE", "mip_sizes", "level_size", "level_count", "level_path", "render_level",
+           "render_chain"]
 
 #: the largest tile side one render call of :func:`render_level` gets (as the bake's MAX_TILE)
-_TILE = 2048
+RENDER_TILE = 2048
 
 
 ROUNDINGS = ("up", "down")
@@ -92,10 +93,14 @@ def _tiles(width: int, height: int, tile: int) -> Iterator[tuple[int, int, int, 
 
 def render_level(recipe, width: int, height: int, level: int, *, depth: int | None = None,
                  channels: Sequence[str] = ("color",), samples: int = 1, tile: int | None = None,
-                 backend: str = "gpu", rounding: str = "up") -> dict[str, np.ndarray]:
+                 backend: str = "gpu", rounding: str = "up",
+                 convert: Mapping[str, Callable[[np.ndarray], np.ndarray]] | None = None) -> dict[str, np.ndarray]:
     """Level ``level`` of the chain of a ``width x height`` (x ``depth``) bake, rendered from
     ``recipe`` at that level's size (:func:`level_size`) in tiles of ``tile`` pixels (default
     2048): ``{channel: array}`` as :func:`cellgl.render` gives them, the same bits.
+
+    ``convert`` maps a channel to a function applied to each tile's array as it is rendered (an
+    elementwise encoding, e.g. to the file's 8-bit samples), so only the converted level is held.
 
     ``recipe`` is what the bake renders (already made tileable, ``--set`` applied).
     """
@@ -104,14 +109,20 @@ def render_level(recipe, width: int, height: int, level: int, *, depth: int | No
     size = level_size(width, height, level, depth, rounding)
     w, h = size[0], size[1]
     d = size[2] if depth is not None else None
-    side = int(tile or _TILE)
+    side = int(tile or RENDER_TILE)
     extra = {"samples": samples} if samples != 1 else {}
+    convert = dict(convert or {})
+
+    def converted(res):
+        return {name: (convert[name](a) if name in convert else a) for name, a in res.items()}
+
     if w <= side and h <= side:
-        return recipes.render(recipe, w, h, channels=tuple(channels), depth=d, backend=backend, **extra)
+        return converted(recipes.render(recipe, w, h, channels=tuple(channels), depth=d, backend=backend,
+                                        **extra))
     out: dict[str, np.ndarray] = {}
     for x0, y0, tw, th in _tiles(w, h, side):
-        res = recipes.render(recipe, w, h, channels=tuple(channels), x0=x0, y0=y0, tile_w=tw, tile_h=th,
-                             depth=d, backend=backend, **extra)
+        res = converted(recipes.render(recipe, w, h, channels=tuple(channels), x0=x0, y0=y0, tile_w=tw,
+                                       tile_h=th, depth=d, backend=backend, **extra))
         for name, a in res.items():
             if name not in out:
                 lead = a.shape[:1] if d is not None else ()

@@ -45,6 +45,10 @@ FORMATS: dict[str, _Format] = {
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
     # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.texfile)
     ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
+    # GPU textures (cellgl.io.gputex): the format is chosen per channel; --depth sets the bits of
+    # plain (uncompressed) samples, its default per channel; mip levels and volumes in the file
+    ".dds": _Format("DDS", (8, 16, 32), 8, True, "level"),
+    ".ktx2": _Format("KTX2", (8, 16, 32), 8, True, "level"),
 }
 
 #: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.io.frames`)
@@ -99,11 +103,16 @@ def parse_size(text: str) -> tuple[int, int, int | None]:
     return w, h, d
 
 
+def _whole(v) -> bool:
+    """A whole number: a Python or NumPy integer, not a boolean (``True`` is not a size)."""
+    return isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_))
+
+
 def check_size(w: int, h: int, d: int | None, what: str) -> None:
     for name, v in (("width", w), ("height", h)):
-        if not isinstance(v, (int, np.integer)) or not 1 <= v <= MAX_SIDE:
+        if not _whole(v) or not 1 <= v <= MAX_SIDE:
             raise BakeError(f"{what}: {name} {v} is out of range; accepted 1..{MAX_SIDE}")
-    if d is not None and (not isinstance(d, (int, np.integer)) or not 1 <= d <= MAX_SLICES):
+    if d is not None and (not _whole(d) or not 1 <= d <= MAX_SLICES):
         raise BakeError(f"{what}: depth {d} (volume slices) is out of range; "
                         f"accepted 1..{MAX_SLICES}")
     n = w * h * (d or 1)
