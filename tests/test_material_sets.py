@@ -25,6 +25,18 @@ def _read(path) -> np.ndarray:
     return _read_png_raw(path)[0]
 
 
+def _chunks(path) -> list[bytes]:
+    """The chunk types of a PNG, in order."""
+    import struct
+
+    data, pos, out = open(path, "rb").read(), 8, []
+    while pos < len(data):
+        (n,) = struct.unpack(">I", data[pos:pos + 4])
+        out.append(data[pos + 4:pos + 8])
+        pos += 12 + n
+    return out
+
+
 def _alone(tmp_path, channel: str, bits: int, convention: str) -> np.ndarray:
     """The bake of one channel alone (what `cellgl bake --channels CHANNEL` writes)."""
     out = tmp_path / f"alone_{channel}_{bits}_{convention}.png"
@@ -47,7 +59,8 @@ def test_packed_samples_equal_the_channels_baked_alone(ctx, tmp_path, engine):
     for m, entry in zip(eng.maps, manifest["files"]):
         a = _read(out / entry["file"])
         assert entry["bit_depth"] == m.bits and a.dtype == (np.uint8 if m.bits == 8 else np.uint16)
-        assert entry["color_space"] == ("sRGB" if m.srgb else "linear (data, not colour)")
+        assert entry["color_space"].startswith("sRGB" if m.srgb else "linear (data, not colour")
+        assert (b"sRGB" in _chunks(out / entry["file"])) == m.srgb        # colour tagged, data maps not
         assert a.shape[:2] == (SIZE[1], SIZE[0])
         a = a.reshape(SIZE[1], SIZE[0], -1)
         assert a.shape[2] == m.samples() == len(entry["channels"])

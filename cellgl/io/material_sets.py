@@ -161,7 +161,7 @@ def _file_name(engine: Engine, stem: str, m: MapSpec, ext: str) -> str:
 
 
 def _tiles(recipe, m: MapSpec, enc: Encoding, plan, bar):
-    """``(x0, y0, {m.suffix: samples})`` of map ``m``, row-major tiles, each sample quantised as
+    """``(x0, y0, {enc.channel: samples})`` of map ``m``, row-major tiles, each sample quantised as
     the bake of its channel alone does."""
     from cellgl import recipes
 
@@ -181,7 +181,7 @@ def _tiles(recipe, m: MapSpec, enc: Encoding, plan, bar):
                 parts.append(q[s])
         a = parts[0] if len(parts) == 1 else np.dstack(parts)
         bar.step()
-        yield x0, y0, {m.suffix: np.ascontiguousarray(a)}
+        yield x0, y0, {enc.channel: np.ascontiguousarray(a)}
 
 
 def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE, tileable=None, sets=(),
@@ -249,10 +249,11 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
     written = []
     with scratch_dir(out_dir, "frames") as tmp:
         for m, name in zip(eng.maps, names):
-            enc = Encoding(m.suffix, m.samples(), np.dtype(np.uint8 if m.bits == 8 else np.uint16))
+            # (the colour map's encoding is named "color": the writer tags it sRGB, as a colour bake)
+            enc = Encoding("color" if m.srgb else m.suffix, m.samples(), np.dtype(np.uint8 if m.bits == 8 else np.uint16))
             for k, (lw, lh) in enumerate(levels):
                 file = level_path(name, k).name
-                out = Output(out_dir / file, (m.suffix,), (enc,))
+                out = Output(out_dir / file, (enc.channel,), (enc,))
                 plan = plan_tiles(lw, lh, None, ext, m.channels(), None, memory_budget,
                                   m.samples() * m.bits // 8)
                 plan = dataclasses.replace(plan, samples=samples)
@@ -329,7 +330,7 @@ def _manifest(eng: Engine, recipe, names, extra, levels, samples, fmt, command) 
                         for k, s in enumerate(levels)]} if len(levels) > 1 else {}
         files.append({
             "file": name, "slot": m.slot, "format": fmt.upper(), "bit_depth": m.bits,
-            "color_space": "sRGB" if m.srgb else "linear (data, not colour)",
+            "color_space": "sRGB (tagged: PNG sRGB chunk)" if m.srgb else "linear (data, not colour; untagged)",
             "channels": dict(m.letters()),
             **({"normal_convention": eng.normal + (" (green down)" if eng.normal == "directx" else " (green up)")}
                if "normal" in m.layout else {}),
