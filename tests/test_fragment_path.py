@@ -402,3 +402,17 @@ def test_outputs_past_the_draw_buffers_take_several_draws(ctx):
     assert len(passes) == -(-len(slots) // per) >= 2
     assert all(len(p) <= per for p in passes)
     assert sum(k for *_, k in slots) == sum(n for *_, n in layout)
+
+
+@pytest.mark.parametrize("name", ("flagstone", "hammered"))
+def test_material_channels_same_bits(both_paths, monkeypatch, name):
+    """roughness, ao and metallic (CELL_TEX_MATERIAL, the entries' material output) are the same
+    bits on both paths, alone, beside other channels and supersampled."""
+    def run():
+        res = dict(cellgl.render(name, 40, 24, channels=("roughness", "ao", "metallic", "color", "F1")))
+        res.update({"ss_" + k: v for k, v in cellgl.render(name, 16, 12, channels=("ao", "roughness"),
+                                                            samples=4).items()})
+        res["alone"] = cellgl.render(name, 40, 24, channels=("metallic",))["metallic"]
+        return res
+    a, b = _both(monkeypatch, run)
+    _same_dict(a, b, name)

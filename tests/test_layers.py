@@ -26,6 +26,7 @@ LAYERS = (
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
     ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.frames", "cellgl.io.udim", "cellgl.io.mips", "cellgl.io.texfile", "cellgl.io.gputex",
+                    "cellgl.io.material_sets",
                     "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
     ("viewer", ("cellgl.viewer",)),

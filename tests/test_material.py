@@ -161,3 +161,14 @@ def test_bake_writes_the_channels(ctx, tmp_path):
         got = np.asarray(Image.open(p))
         assert got.shape == (32, 48)
         assert np.abs(got / 65535.0 - ref[k]).max() <= 0.5 / 65535 + 1e-7, k
+
+
+def test_materialx_node_doc_does_not_list_the_material_section():
+    """The MaterialX node makes colour and height; its doc's list of fixed values leaves the material
+    section out (it is not the node's)."""
+    from cellgl.export.materialx import preset_node
+
+    node = preset_node(load_recipe("hammered"))
+    assert "frequency" in node.doc or "seed" in node.doc
+    assert "metallic" not in node.doc and "roughness" not in node.doc
+    assert not any(i.name in {p.name for p in P.PARAMS if p.group == "material"} for i in node.inputs)

@@ -406,6 +406,7 @@ INACTIVE_CASES = ({}, {"metric": "minkowski"}, {"distribution": "jitter"}, {"dis
 def test_inactive_parameters_are_greyed_as_python_says(page):
     """The page greys out (and disables) the parameters that change nothing, with the reason
     as tooltip: the rules of cellgl.texture.params.ACTIVE_WHEN, the same words as in Python."""
+    from cellgl.texture import params as P
     from cellgl.texture.params import inactive
 
     for name in PRESETS:
@@ -414,7 +415,9 @@ def test_inactive_parameters_are_greyed_as_python_says(page):
                             f"return {list(INACTIVE_CASES)!r}.map((c) => window.cellglPlayground.inactive(c)); }})()"
                       .replace("True", "true").replace("False", "false")))
         for case, page_says in zip(INACTIVE_CASES, got):
-            assert page_says == inactive({**values, **case}), (name, case)
+            python_says = {k: v for k, v in inactive({**values, **case}).items()
+                           if P.PARAMS_BY_NAME[k].group != "material"}    # the page has no material group
+            assert page_says == python_says, (name, case)
     ok(call(page, "window.cellglPlayground.select('f1')"))
     row = ok(call(page, """(() => { const r = document.getElementById("p-minkowski_p").closest(".param");
         return { cls: r.className, title: r.title, disabled: document.getElementById("p-minkowski_p").disabled }; })()"""))

@@ -392,3 +392,19 @@ def test_inactive_parameters_are_greyed_out(viewer):
     _drag(viewer, "minkowski_p", 0.25, 0.75)
     assert viewer.model.get("minkowski_p") != p0, "the live slider did not move"
     _reset(viewer)
+
+
+def test_material_channels_are_shown_as_baked(viewer):
+    """The channel combo's roughness / ao / metallic equal the bake's channel (8-bit)."""
+    _reset(viewer)
+    x, y, w, h = viewer.unit_square_rect()
+    for channel in ("roughness", "ao"):
+        viewer.channel = channel
+        _settle(viewer)
+        got = viewer.grab()[y:y + h, x:x + w].astype(int)
+        ref = cellgl.render(viewer.model.recipe, w, h, channels=(channel,))[channel]
+        ref = np.round(np.clip(ref, 0, 1) * 255).astype(int)
+        diff = np.abs(got - ref[..., None]).max(axis=-1)
+        assert np.mean(diff <= 2) > 0.99, (channel, diff.max())
+    viewer.channel = "color"
+    assert viewer.ctx.error == "GL_NO_ERROR"

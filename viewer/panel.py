@@ -27,6 +27,7 @@ _STRUCTURED = set(LINEAR) | set(PRODUCTS)
 _GROUP_TITLES = {
     "basis": "Basis", "combination": "Combination", "fractal": "Fractal", "domain": "Domain",
     "noise": "Noise", "mapping": "Mapping (height, bump)", "color": "Colour",
+    "material": "Material (roughness, ao, metallic channels)",
 }
 
 

@@ -271,6 +271,8 @@ def preset_node(recipe) -> MxNode:
                       osl="vector2")]
     fixed = []
     for p in PARAMS:
+        if p.group == "material":       # the roughness / ao / metallic channels: not this node's outputs
+            continue
         v = r.values[p.name]
         if p.compile_time or p.derived:
             if p.name not in off:

@@ -215,7 +215,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     depth_slices : int, optional
         Bake a volume of this many slices, shape ``(D, H, W[, S])`` (``.npy`` and ``.tif`` only).
     channels : sequence of str
-        Any of ``color`` (RGB), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``. An ``.exr``
+        Any of ``color`` (RGB), ``height``, ``normal`` (RGB), ``id``, ``F1``..``F4``, ``roughness``,
+        ``ao``, ``metallic`` (the recipe's ``material`` section). An ``.exr``
         holds them all; other formats write one file per channel, ``<stem>_<channel><ext>``,
         when more than one is asked for.
     bit_depth : {8, 16, 32}, optional
@@ -579,3 +580,14 @@ def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
                            rgb=rgb, description=meta)
         finally:
             del vol, page_tiles
+
+
+# --------------------------------------------------------------------------------------------
+# for writers of sets of maps (cellgl.io.material_sets): one file through the per-format writer
+# --------------------------------------------------------------------------------------------
+
+#: what one output file holds (its path, channels and their encodings)
+Output = _Output
+#: ``write_tiles(tmp, tiles, out, ext, plan, meta)``: write the tiles ``(x0, y0, {name: encoded})``
+#: of ``out`` into ``tmp`` with the writer of format ``ext``, as :func:`bake` does
+write_tiles = _write

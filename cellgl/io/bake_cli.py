@@ -23,8 +23,11 @@ formats (from the extension) and --depth (bits per sample):
   .dds, .ktx2  GPU textures, a format per channel (--compress; --depth: plain samples' bits)
 colour: float files hold scene-linear Rec.709 (--colorspace srgb: sRGB-encoded), tagged;
   integer formats sRGB-encoded.
-channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
+channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4,
+  roughness, ao, metallic (the recipe's material section).
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
+material sets (--material ENGINE -o DIR): the maps of an engine's standard material, packed as it
+  expects, with manifest.json: unreal, unity-hdrp, unity-urp, godot, gltf (+ a .gltf), blender.
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
@@ -34,6 +37,7 @@ examples:
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
   cellgl bake flagstone -o 'wall.<UDIM>.tx' --udim 1001-1012 --size 1024
+  cellgl bake flagstone --material unreal -o flagstone_unreal --size 2048
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
@@ -56,7 +60,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--tileable", action="store_true", default=None,
                    help="make the texture wrap around at its edges")
     p.add_argument("--channels", action="append", default=None, metavar="LIST",
-                   help="comma-separated: color, height, normal, id, F1..F4 (default color)")
+                   help="comma-separated: color, height, normal, id, F1..F4, roughness, ao, metallic "
+                        "(default color)")
+    p.add_argument("--material", default=None, metavar="ENGINE",
+                   help="bake the material set of an engine preset into the folder -o DIR: unreal, "
+                        "unity-hdrp, unity-urp, godot, gltf, blender (cellgl/io/material_sets.py)")
+    p.add_argument("--map-format", default=None, metavar="NAME",
+                   help="with --material: the maps' format (png, the default)")
     p.add_argument("--depth", default=None, metavar="BITS",
                    help="bits per sample: 8|16|32 (default per format, see below)")
     p.add_argument("--samples", default="1", metavar="N",
@@ -125,6 +135,10 @@ def run_cli(args: argparse.Namespace) -> int:
     if args.fps is not None and (args.frames is None or ext not in ANIMATED):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
+    if args.material is not None:
+        return _run_material(args)
+    if args.map_format is not None:
+        raise BakeError(f"--map-format {args.map_format}: only with --material ENGINE")
     for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
                         ("--tiled", args.tiled or None)):
         if value is not None and (args.frames is not None or ext == ".zarr"):
@@ -210,4 +224,35 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
             rate = f", {real:.4g} fps: {delay} {'cs' if ext == '.gif' else 'ms'} a frame"
         print(f"wrote {len(paths)} file(s): {paths[0]}{' .. ' + str(paths[-1]) if len(paths) > 1 else ''} "
               f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s{rate})", file=sys.stderr)
+    return 0
+
+
+def _run_material(args: argparse.Namespace) -> int:
+    """``cellgl bake --material ENGINE -o DIR``: a material set (cellgl.io.material_sets)."""
+    from cellgl.io.material_sets import bake_material
+
+    for flag, value in (("--channels", args.channels), ("--depth", args.depth), ("--frames", args.frames),
+                        ("--fps", args.fps), ("--tile", args.tile), ("--scheduler", args.scheduler),
+                        ("--workers", args.workers), ("--threads", None if args.threads == "1" else args.threads),
+                        ("--udim", getattr(args, "udim", None)), ("--udims", getattr(args, "udims", None)),
+                        ("--colorspace", getattr(args, "colorspace", None)),
+                        ("--tiled", getattr(args, "tiled", None) or None),
+                        ("--compress", getattr(args, "compress", None)), ("--zstd", getattr(args, "zstd", None) or None)):
+        if value is not None:
+            raise BakeError(f"{flag} {value if not isinstance(value, list) else ','.join(value)}: not with "
+                            f"--material (the engine preset chooses the maps, their channels and bit depths)")
+    budget = DEFAULT_BUDGET if args.memory is None else int_arg("--memory", args.memory, 1, 1 << 20) << 20
+    t0 = time.perf_counter()
+    try:
+        paths = bake_material(args.recipe, args.output, args.material, size=args.size, tileable=args.tileable,
+                              sets=args.sets, samples=int_arg("--samples", args.samples, 1, MAX_SAMPLES),
+                              map_format=args.map_format or "png", mips=bool(getattr(args, "mips", False)),
+                              progress=not args.quiet, memory_budget=budget)
+    except OSError as exc:
+        where = f" {exc.filename}" if exc.filename else ""
+        raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None
+    if not args.quiet:
+        total = sum(os.path.getsize(p) for p in paths)
+        print(f"wrote {len(paths)} files into {args.output}: {', '.join(p.name for p in paths)} "
+              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s)", file=sys.stderr)
     return 0

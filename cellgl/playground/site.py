@@ -67,6 +67,8 @@ DENSITY_FROZEN = ("density_map", "density_min", "density_max", "density_start", 
 def _param_table() -> list[dict]:
     out = []
     for p in P.PARAMS:
+        if p.group == "material":       # the page shows the colour; the material channels are bakes'
+            continue
         d = {"name": p.name, "type": p.type, "default": p.default, "lo": p.lo, "hi": p.hi, "doc": p.doc,
              "group": p.group, "compile_time": p.compile_time, "derived": p.derived}
         if p.choices:
