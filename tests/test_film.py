@@ -14,7 +14,10 @@ from cellgl import cli
 from cellgl.io import bake as B
 from cellgl.io import udim as U
 from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, linear_to_srgb, srgb_to_linear
-from test_bake import FakeRecipe, _fake_render, _read, fake  # noqa: F401 - fake is a fixture
+import test_bake
+from test_bake import FakeRecipe, _fake_render, _read
+
+fake = test_bake.fake     # a fixture: the tests take it as an argument
 
 # --------------------------------------------------------------------------------------------
 # colour
@@ -399,7 +402,7 @@ def test_gpu_blender_reads_a_tx_as_its_level_0(ctx, tmp_path):
 
 
 def test_gpu_udim_tiles_are_crops_of_one_bake_bit_for_bit(ctx, tmp_path):
-    got = B.bake("flagstone", tmp_path / "t.<UDIM>.npy", size=(40, 24), udim="1001,1002,1012",
+    B.bake("flagstone", tmp_path / "t.<UDIM>.npy", size=(40, 24), udim="1001,1002,1012",
                  channels="color,height", tile=16, progress=False)
     whole = B.bake(U.window_recipe(B.load_recipe_sets("flagstone", (), None), U.parse_udim("1001,1002,1012")),
                    tmp_path / "whole.npy", size=(80, 48), channels="color,height", progress=False)

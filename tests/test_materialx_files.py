@@ -185,7 +185,7 @@ def test_a_failed_re_export_leaves_the_previous_set_untouched(tmp_path, monkeypa
     for k in (0, 3, 7, 30):         # the (k+1)-th move fails (the previous set aside, the new one in): all undone
         calls = [0]
 
-        def replace(a, b, k=k):
+        def replace(a, b, k=k, calls=calls):
             calls[0] += 1
             if calls[0] == k + 1:
                 raise OSError(errno.EIO, "Input/output error", str(b))

@@ -133,7 +133,7 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
             with commit_lock([root.parent if str(root.parent) else "."]):
                 try:
                     os.rename(tmp, root)
-                except OSError as exc:
+                except OSError:
                     if not root.exists():
                         raise
                     raise ExportError(f"output directory {str(root)!r} was made by another program during the "

@@ -203,7 +203,7 @@ def _space(place: Path) -> str | None:
 
 def _point_drivers(folder: Path, done: dict) -> None:
     """``CELLGL_DRIVER_SHADER_CACHE=1``: each driver's cache into ``folder``, where usable."""
-    drivers = [("Mesa", "MESA_SHADER_CACHE_DIR", "mesa", {})]
+    drivers: list[tuple[str, str, str, dict[str, str]]] = [("Mesa", "MESA_SHADER_CACHE_DIR", "mesa", {})]
     if os.environ.get("__GL_SHADER_DISK_CACHE", "").strip() != "0":
         drivers.append(("NVIDIA", "__GL_SHADER_DISK_CACHE_PATH", "nvidia",
                         {"__GL_SHADER_DISK_CACHE": "1"}))
