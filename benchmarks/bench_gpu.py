@@ -217,7 +217,11 @@ def rows_render(S, repeats):
 
 
 def rows_bake(S, repeats):
-    out_png = os.path.join(tempfile.mkdtemp(prefix="cellgl-bench-"), "flagstone.png")
+    with tempfile.TemporaryDirectory(prefix="cellgl-bench-") as folder:     # gone afterwards
+        return _rows_bake(S, repeats, os.path.join(folder, "flagstone.png"))
+
+
+def _rows_bake(S, repeats, out_png):
     cmd = [sys.executable, "-m", "cellgl", "bake", "flagstone", "--size", str(S), "-o", out_png, "-q"]
     env = dict(os.environ, PYTHONPATH=_REPO + os.pathsep + os.environ.get("PYTHONPATH", ""))
     ts = []
@@ -286,15 +290,22 @@ print(json.dumps(dict(first=t1 - t0, second=t2 - t1)))
 
 
 def rows_compile():
-    """First call of one variant in a fresh process, less its second call."""
-    cache = tempfile.mkdtemp(prefix="cellgl-shader-cache-")
+    """First call of one variant in a fresh process, less its second call: the drivers' own
+    disk caches as they are by default (cellgl sets nothing), in an empty cache folder of their
+    own (XDG_CACHE_HOME; NVIDIA's may keep to ~/.nv), then warm, then every cache off."""
+    with tempfile.TemporaryDirectory(prefix="cellgl-shader-cache-") as cache:     # gone afterwards
+        return _rows_compile(cache)
+
+
+def _rows_compile(cache):
     base = {k: v for k, v in os.environ.items()
-            if not k.startswith(("MESA_SHADER_CACHE", "__GL_SHADER_DISK_CACHE", "CELLGL_SHADER_CACHE"))}
+            if not k.startswith(("MESA_SHADER_CACHE", "__GL_SHADER_DISK_CACHE", "CELLGL_SHADER_CACHE",
+                                 "CELLGL_DRIVER_SHADER_CACHE", "XDG_CACHE_HOME"))}
     base["PYTHONPATH"] = _REPO + os.pathsep + os.environ.get("PYTHONPATH", "")
-    runs = [("cold (empty cache)", dict(base, CELLGL_SHADER_CACHE_DIR=cache)),
-            ("warm (the same cache, a new process)", dict(base, CELLGL_SHADER_CACHE_DIR=cache)),
-            ("every disk cache off", dict(base, CELLGL_SHADER_CACHE="0", MESA_SHADER_CACHE_DISABLE="true",
-                                           __GL_SHADER_DISK_CACHE="0"))]
+    runs = [("cold (empty cache)", dict(base, XDG_CACHE_HOME=cache)),
+            ("warm (the same cache, a new process)", dict(base, XDG_CACHE_HOME=cache)),
+            ("every disk cache off", dict(base, XDG_CACHE_HOME=cache, CELLGL_SHADER_CACHE="0",
+                                           MESA_SHADER_CACHE_DISABLE="true", __GL_SHADER_DISK_CACHE="0"))]
     out = []
     for label, env in runs:
         p = subprocess.run([sys.executable, "-c", _COMPILE], capture_output=True, text=True, env=env, timeout=300)

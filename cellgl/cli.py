@@ -42,9 +42,12 @@ def _add_info(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def _fmt(value: object) -> str:
+    """One line of text: control characters (a driver's string, a file's) written as escapes."""
     if isinstance(value, (tuple, list)):
-        return " ".join(str(v) for v in value) or "none"
-    return "unknown" if value is None else str(value)
+        text = " ".join(str(v) for v in value) or "none"
+    else:
+        text = "unknown" if value is None else str(value)
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -52,7 +55,10 @@ def _cmd_info(args: argparse.Namespace) -> int:
     from cellgl.gl import context
 
     ctx = context.get_context(args.backend)
+    from cellgl.gl import shadercache
+
     info = context.context_info(ctx)
+    info["shader_cache"] = shadercache.summary()
     if args.json:
         print(json.dumps(info, indent=2))
     else:
@@ -120,8 +126,19 @@ _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
 }
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, but a help, version or usage text it cannot write is an error like any
+    command's output (argparse drops an ``OSError`` of the write: ``cellgl --help > /dev/full``
+    said nothing and exited 0). Every subcommand's parser is one too (``add_subparsers`` makes
+    them of the parser's class)."""
+
+    def _print_message(self, message, file=None):
+        if message:
+            (file or sys.stderr).write(message)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=PROG, description="Cellular texture basis functions on the GPU."
     )
     from cellgl._version import __version__
@@ -258,8 +275,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             args = build_parser().parse_args(argv)
             status = int(args._run(args) or 0)
             sys.stdout.flush()  # a full disk or a closed pipe shows here, not at exit
-        except SystemExit:
-            raise               # --help, usage errors (argparse)
+        except SystemExit as exc:   # --help, --version, usage errors (argparse)
+            if exc.code not in (0, None):
+                raise
+            try:                # what --help / --version wrote: a full disk shows here, not at exit
+                sys.stdout.flush()
+            except BaseException as flush_exc:  # noqa: BLE001 - as a command's own output
+                status = _status(flush_exc)
+            else:
+                raise
         except BaseException as exc:  # noqa: BLE001 - every outcome is an exit status
             status = _status(exc)
     _interrupt.pending.clear()

@@ -134,9 +134,42 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
 #: bytes of each channel's result, per pixel (float32; id uint32)
 _RESULT_BYTES = {"color": 16, "height": 4, "normal": 12, "id": 4, "F1": 4, "F2": 4, "F3": 4, "F4": 4}
 #: working bytes per pixel beyond the result (tracemalloc peaks at 128^2, llvmpipe, 2026-11-28):
-#: the GPU path reads back in chunks (16.5 bytes a pixel in all for colour), the NumPy path holds
-#: float64 intermediates for every pixel (f1 860, flagstone 2520), PUPs about 1000
-_WORK_BYTES = {"gpu": 0, "numpy": 2600, "pups": 1000}
+#: the NumPy path holds float64 intermediates for every pixel (f1 860, flagstone 2520), PUPs
+#: about 1000; the GPU path's: :func:`gpu_peak`
+_WORK_BYTES = {"numpy": 2600, "pups": 1000}
+
+
+def gpu_peak(channels, pixels: int) -> int:
+    """Bytes the GPU path of a cellular render of ``pixels`` holds at its peak, the result
+    included. :func:`cellgl.texture.dispatch.run` reads each output block back whole, one row a
+    pixel (colour RGBA 16 bytes; height and normal share one 16-byte block, cut out into copies of
+    4 and 12; id 4; F1..Fk k floats, each F a copy of its column when k > 1), and the GL storage
+    buffers hold a chunk of each block and the canary's 4 bytes a sample, at most
+    ``CHUNK_BYTES`` a buffer. Measured (ru_maxrss, llvmpipe, flagstone, 2026-12-07): height 40
+    bytes a pixel at 2048^2, 25 at 4096^2 (this gives 40 and 28); normal 37 at 3072^2 (42)."""
+    from cellgl.gl.dispatch import CHUNK_BYTES
+
+    host, gl, buffers = gpu_bytes(channels)
+    return pixels * host + min(pixels * gl, buffers * CHUNK_BYTES)
+
+
+def gpu_bytes(channels) -> tuple[int, int, int]:
+    """:func:`gpu_peak`'s parts: bytes a pixel on the host (blocks read back and channels cut
+    out of them), bytes a pixel in GL storage buffers, and how many buffers."""
+    c = set(channels)
+    blocks, copies, buffers = [], 0, 1                  # (the canary's flag buffer)
+    if "color" in c:
+        blocks.append(16)
+    if c & {"height", "normal"}:
+        blocks.append(16)
+        copies += 4 * ("height" in c) + 12 * ("normal" in c)
+    if "id" in c:
+        blocks.append(4)
+    fs = [int(x[1]) for x in c if x in ("F1", "F2", "F3", "F4")]
+    if fs:
+        blocks.append(4 * max(fs))
+        copies += 4 * len(fs) if max(fs) > 1 else 0
+    return sum(blocks) + copies, sum(blocks) + 4, len(blocks) + buffers
 #: share of the machine's memory one render() may ask for
 MEMORY_SHARE = 0.5
 
@@ -170,8 +203,10 @@ def check_memory(recipe, width, height, channels=("color",), *, x0=0, y0=0, tile
     tw = width - x0 if tile_w is None else tile_w
     th = height - y0 if tile_h is None else tile_h
     pixels = max(0, tw) * max(0, th) * (depth or 1)
-    work = _WORK_BYTES["pups" if is_pups(recipe) else ("numpy" if backend == "numpy" else "gpu")]
-    need = pixels * (per_px + work)
+    if not is_pups(recipe) and backend != "numpy":
+        need = gpu_peak(chans, pixels)
+    else:
+        need = pixels * (per_px + _WORK_BYTES["pups" if is_pups(recipe) else "numpy"])
     mem = memory_bytes()
     if not mem or need <= mem * MEMORY_SHARE:
         return
@@ -186,7 +221,7 @@ def check_memory(recipe, width, height, channels=("color",), *, x0=0, y0=0, tile
     ways.append(f"take it as a lazy array rendered block by block: cellgl.to_dask(recipe, ({height}, {width}))")
     raise ValueError(
         f"render {tile}{whole} of {recipe.name!r} ({', '.join(chans)}, backend {backend}) needs about "
-        f"{need / gib:.3g} GiB ({per_px + work} bytes a pixel), more than {MEMORY_SHARE:.0%} of this "
+        f"{need / gib:.3g} GiB (about {need / max(1, pixels):.0f} bytes a pixel), more than {MEMORY_SHARE:.0%} of this "
         f"machine's {mem / gib:.3g} GiB; " + "; or ".join(ways))
 
 

@@ -106,6 +106,7 @@ def sample_points(width: int, height: int, dimensions: int, z: float, w: float) 
 def run_cli(args: argparse.Namespace) -> int:
     import cellgl
     from cellgl.io.formats import atomic_path, write_png
+    from cellgl.io.spec import quantize
     from cellgl.io.tempfiles import check_output
 
     width, height = _size(args.size)
@@ -144,10 +145,11 @@ def run_cli(args: argparse.Namespace) -> int:
         if path.suffix.lower() == ".npy":
             np.save(tmp, img.astype(np.float32))
         elif img.ndim == 2:
-            write_png(tmp, [np.round(np.clip(img, 0, 1) * 65535).astype(np.uint16)], width, height, 1, 16)
+            write_png(tmp, [quantize(img, 16)], width, height, 1, 16)
         else:
             rgb = np.zeros((height, width, 3), np.float32)
             rgb[..., : img.shape[2]] = img
-            write_png(tmp, [np.round(np.clip(rgb, 0, 1) * 255).astype(np.uint8)], width, height, 3, 8)
+            write_png(tmp, [quantize(rgb, 8)], width, height, 3, 8,
+                      srgb=out == "color")   # colour is display-encoded; positions are data
     print(f"wrote {path} ({out}, {width}x{height})")
     return 0

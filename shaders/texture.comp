@@ -5,7 +5,8 @@
 // Macros (from cellgl/texture/dispatch.py): those of lib/texture.glsl, CELL_TEX_GRID, CELL_LOCAL_SIZE,
 //   CELL_TEX_SUPERSAMPLE  n: average an n x n grid of sub-pixel centres (grid only; 1: none)
 //   CELL_TEX_OUT          bit mask of the outputs written: 1 colour, 2 height + normal,
-//                         4 F1..F4, 8 gradient + value, 16 id
+//                         4 F1..F4, 8 gradient + value, 16 id, 32 roughness + ao + metallic
+//                         (with CELL_TEX_MATERIAL 1: lib/texture_material.glsl)
 //   CELL_LOOP_PROBE       1: measure the driver's loop budget (cellgl/texture/dispatch.py)
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
@@ -36,6 +37,9 @@ layout(std430, binding = 2) writeonly buffer OutAux { vec4 out_aux[]; };    // h
 layout(std430, binding = 3) writeonly buffer OutF { float out_F[]; };
 layout(std430, binding = 4) writeonly buffer OutGrad { vec4 out_grad[]; };  // dh/du, dh/dv, dh/dz, value
 layout(std430, binding = 5) writeonly buffer OutId { uint out_id[]; };
+#if CELL_TEX_MATERIAL
+layout(std430, binding = 8) writeonly buffer OutMaterial { vec4 out_material[]; };   // roughness, ao, metallic, 0
+#endif
 
 // The driver's own loop limit (docs/exactness.md; as in cellular.comp): llvmpipe (and
 // lavapipe, under zink) stops every loop of a SIMD vector of invocations once 65535 loop
@@ -90,6 +94,9 @@ void main()
     CELL_PRECISE vec4 color = vec4(0.0), grad = vec4(0.0);
     CELL_PRECISE float height = 0.0;
     CELL_PRECISE vec3 normal = vec3(0.0);
+#if CELL_TEX_WANT(32)
+    CELL_PRECISE vec3 material = vec3(0.0);
+#endif
     for (int sy = 0; sy < n; sy++)
     for (int sx = 0; sx < n; sx++) {
         CELL_PRECISE vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
@@ -99,12 +106,18 @@ void main()
         height += c.height;
         normal += c.normal;
         grad += c.grad;
+#if CELL_TEX_WANT(32)
+        material += cell_texture_material(c, t);
+#endif
     }
     float inv = 1.0 / float(n * n);
     color *= inv;
     height *= inv;
     grad *= inv;
     normal = normalize(normal);
+#if CELL_TEX_WANT(32)
+    material *= inv;
+#endif
 #if CELL_TEX_WANT(4 | 8 | 16)
     CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
 #endif
@@ -113,6 +126,12 @@ void main()
     CELL_PRECISE vec4 color = c.color, grad = c.grad;
     CELL_PRECISE float height = c.height;
     CELL_PRECISE vec3 normal = c.normal;
+#if CELL_TEX_WANT(32)
+    CELL_PRECISE vec3 material = cell_texture_material(c, t);
+#endif
+#endif
+#if CELL_TEX_WANT(32)
+    out_material[i] = vec4(material, 0.0);
 #endif
 #if CELL_TEX_WANT(1)
     out_color[i] = color;

@@ -6,7 +6,8 @@
 //   u_view     uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw (v = 0 at the top, as bakes);
 //              cellgl.texture.set_view puts the pan into the split origins (float64) and
 //              sets u_view.xy = 0, so a view far from the origin stays sharp
-//   u_channel  0 color, 1 height, 2 normal, 3 id (cell value), 4..7 F1..F4 (cellgl.texture.schema.CHANNELS)
+//   u_channel  0 color, 1 height, 2 normal, 3 id (cell value), 4..7 F1..F4, 8..10 roughness, ao,
+//              metallic (with CELL_TEX_MATERIAL 1) (cellgl.texture.schema.CHANNELS)
 
 #include "storage.glsl"   // storage words from textures (CELL_STORAGE_ROW_BITS: the fragment path)
 #include "lib/texture.glsl"
@@ -30,6 +31,10 @@ void main()
         frag_color = vec4(c.normal * 0.5 + 0.5, 1.0);
     } else if (u_channel == 3) {
         frag_color = vec4(vec3(cell_texture_cell_value(c.id)), 1.0);
+#if CELL_TEX_MATERIAL
+    } else if (u_channel >= 8) {
+        frag_color = vec4(vec3(cell_texture_material(c, t)[min(u_channel - 8, 2)]), 1.0);
+#endif
     } else if (u_channel >= 4) {
         frag_color = vec4(vec3(c.F[min(u_channel - 4, 3)]), 1.0);
     } else {

@@ -5,7 +5,7 @@
 // compute its texture-space point and footprint, call cell_texture_filtered() (once, or over a
 // grid of sub-pixels), write the channels asked for to render targets.
 // Macros (cellgl/texture/dispatch.py): those of texture.comp, CELL_FRAG_WIDTH,
-//   CELL_TEX_WANT_COLOR, _AUX, _F, _GRAD, _ID: the outputs written, and the runner's
+//   CELL_TEX_WANT_COLOR, _AUX, _F, _GRAD, _ID, _MATERIAL: the outputs written, and the runner's
 //   CELL_FRAG_DECL / CELL_FRAG_WRITE (location 0: 1 where the driver's loop limit left the sample
 //   alone, the canary).
 
@@ -36,6 +36,9 @@ uniform int u_loop_probe;       // texture.comp's probe: runs until llvmpipe's l
 // The outputs (cellgl/gl/dispatch.py): o_canary at location 0, then a render target per
 // row_<output> written (CELL_TEX_WANT_<OUTPUT>).
 CELL_FRAG_DECL
+#ifndef CELL_TEX_WANT_MATERIAL
+#define CELL_TEX_WANT_MATERIAL 0
+#endif
 
 void main()
 {
@@ -67,6 +70,9 @@ void main()
     CELL_PRECISE vec4 color = vec4(0.0), grad = vec4(0.0);
     CELL_PRECISE float height = 0.0;
     CELL_PRECISE vec3 normal = vec3(0.0);
+#if CELL_TEX_WANT_MATERIAL
+    CELL_PRECISE vec3 material = vec3(0.0);
+#endif
     for (int sy = 0; sy < n; sy++)
     for (int sx = 0; sx < n; sx++) {
         CELL_PRECISE vec2 off = (vec2(float(sx), float(sy)) + 0.5) / float(n) - 0.5;
@@ -76,12 +82,18 @@ void main()
         height += c.height;
         normal += c.normal;
         grad += c.grad;
+#if CELL_TEX_WANT_MATERIAL
+        material += cell_texture_material(c, t);
+#endif
     }
     float inv = 1.0 / float(n * n);
     color *= inv;
     height *= inv;
     grad *= inv;
     normal = normalize(normal);
+#if CELL_TEX_WANT_MATERIAL
+    material *= inv;
+#endif
 #if CELL_TEX_WANT_F || CELL_TEX_WANT_GRAD || CELL_TEX_WANT_ID
     CellTexel c = cell_texture_filtered(local, cell_texture_footprint(duvz, t), t);
 #endif
@@ -90,6 +102,12 @@ void main()
     CELL_PRECISE vec4 color = c.color, grad = c.grad;
     CELL_PRECISE float height = c.height;
     CELL_PRECISE vec3 normal = c.normal;
+#if CELL_TEX_WANT_MATERIAL
+    CELL_PRECISE vec3 material = cell_texture_material(c, t);
+#endif
+#endif
+#if CELL_TEX_WANT_MATERIAL
+    vec4 row_material = vec4(material, 0.0);
 #endif
 #if CELL_TEX_WANT_COLOR
     vec4 row_color = color;

@@ -88,6 +88,17 @@ uniform ivec4 u_density_info[CELL_TEX_OCTAVES];
 #if CELL_TEX_CELL_IMAGE
 uniform vec4 u_cell_image_info;
 #endif
+#if CELL_TEX_MATERIAL
+uniform float u_roughness;
+uniform float u_roughness_cell;
+uniform float u_roughness_edge;
+uniform float u_roughness_cavity;
+uniform float u_edge_width;
+uniform float u_ao_edge;
+uniform float u_ao_cavity;
+uniform float u_metallic;
+uniform float u_metallic_cell;
+#endif
 
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
 // The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image):
@@ -218,6 +229,17 @@ CellTextureParams cell_texture_params_load()
 #endif
 #if CELL_TEX_CELL_IMAGE
     t.cell_image_info = u_cell_image_info;
+#endif
+#if CELL_TEX_MATERIAL
+    t.roughness = u_roughness;
+    t.roughness_cell = u_roughness_cell;
+    t.roughness_edge = u_roughness_edge;
+    t.roughness_cavity = u_roughness_cavity;
+    t.edge_width = u_edge_width;
+    t.ao_edge = u_ao_edge;
+    t.ao_cavity = u_ao_cavity;
+    t.metallic = u_metallic;
+    t.metallic_cell = u_metallic_cell;
 #endif
     return t;
 }

@@ -136,6 +136,9 @@ def missing_outputs(folder: Path, commands: list[str]) -> list[str]:
             stem, ext = os.path.splitext(p.name)
             if p.parent.is_dir() and any(p.parent.glob(f"{stem}_*{ext}")):
                 continue       # several channels (<stem>_<channel><ext>) or frames (<stem>_0000<ext>)
+            if "<UDIM>" in p.name and p.parent.is_dir() and \
+                    any(p.parent.glob(p.name.replace("<UDIM>", "1[01][0-9][0-9]"))):
+                continue       # a UDIM set (wall.<UDIM>.tx: wall.1001.tx, ...)
             missing.append(f"{name} (from: {cmd.strip()})")
     return missing
 

@@ -179,7 +179,7 @@ def test_values_and_quantization(fake, tmp_path):
     (p,) = B.bake("fake", tmp_path / "h.png", size="33x20", channels="height", bit_depth=16,
                   progress=False)
     h = np.clip(ref["height"], 0, 1)
-    assert np.array_equal(_read(p), np.floor(h * 65535 + 0.5).astype(np.uint16))
+    assert np.array_equal(_read(p), np.floor(h.astype(np.float64) * 65535 + 0.5).astype(np.uint16))
     (p,) = B.bake("fake", tmp_path / "id.png", size=(33, 20), channels="id", progress=False)
     assert np.array_equal(_read(p), B.id_colors(ref["id"]))
     (p,) = B.bake("fake", tmp_path / "id.tif", size=(33, 20), channels="id", progress=False)
@@ -217,8 +217,12 @@ def test_volume_tiled_equals_one_pass(fake, tmp_path, ext):
     a, b = _read(one[0]), _read(tiled[0])
     assert a.shape == (3, 20, 40, 3) and _same(a, b)
     assert all(c[4] == 3 for c in fake)
-    ref = _fake_render([])(FakeRecipe(), 40, 20, channels=("color",), depth=3)["color"]
-    assert _same(a, ref[..., :3])
+    ref = _fake_render([])(FakeRecipe(), 40, 20, channels=("color",), depth=3)["color"][..., :3]
+    if ext == ".tif":       # a float TIFF holds scene-linear colour (cellgl.io.colour)
+        from cellgl.io.colour import srgb_to_linear
+
+        ref = srgb_to_linear(ref).astype(np.float32)
+    assert _same(a, ref)
     assert sorted(os.listdir(tmp_path)) == sorted([f"one{ext}", f"tiled{ext}"])  # no spool left
 
 
@@ -263,7 +267,9 @@ def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
 # --------------------------------------------------------------------------------------------
 
 ERRORS = [
-    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy"),
+    (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy, .tx, .dds, "
+                          ".ktx2 (an image, or with --frames N a numbered sequence); .webp, .gif (one "
+                          "animated file, with --frames N); .zarr (a folder baked on Dask)"),
     (["-o", "{d}/a"], "unknown extension '(none)'"),
     (["-o", "{d}/a.png", "--channels", "albedo"], "'albedo': unknown channel; accepted color"),
     (["-o", "{d}/a.png", "--size", "0x5"], "width 0 is out of range; accepted 1..65536"),
@@ -285,6 +291,25 @@ ERRORS = [
     (["-o", "{d}/nodir/a.png"], "does not exist"),
     (["-o", "{d}"], "unknown extension"),
 ]
+
+
+def test_the_unknown_extension_error_lists_every_extension_bake_accepts(tmp_path):
+    """Issue 48: `-o a.jpg` listed .png .exr .tif .tiff .npy, not .zarr, .webp, .gif: the list
+    comes from one place (spec.FORMATS, ANIMATED, DISTRIBUTED), the help's too."""
+    from cellgl.io import spec
+    from cellgl.io.bake_cli import add_parser
+    import argparse
+
+    every = [*spec.FORMATS, *spec.ANIMATED, *spec.DISTRIBUTED]
+    assert {".png", ".exr", ".tif", ".tiff", ".npy", ".webp", ".gif", ".zarr"} <= set(every)
+    for out in ("a.jpg", "a", "a.PNGX"):
+        with pytest.raises(spec.BakeError) as e:
+            B.bake("flagstone", tmp_path / out, size=8, progress=False)
+        for ext in every:
+            assert f"{ext}," in str(e.value) or f"{ext} (" in str(e.value), (ext, str(e.value))
+    sub = argparse.ArgumentParser().add_subparsers()
+    helps = {a.dest: a.help for a in add_parser(sub)._actions}
+    assert spec.accepted_outputs() in helps["output"]
 
 
 @pytest.mark.parametrize("argv,message", ERRORS)
@@ -352,20 +377,30 @@ def test_gpu_tiled_equals_one_pass(ctx, tmp_path):
 def test_gpu_formats(ctx, tmp_path):
     r = _recipe(octaves=2.0)
     ref = np.load(B.bake(r, tmp_path / "ref.npy", size=(40, 24), progress=False)[0])
-    want8 = np.floor(np.clip(ref, 0, 1) * 255 + 0.5).astype(np.uint8)
+    want8 = np.floor(np.clip(ref.astype(np.float64), 0, 1) * 255 + 0.5).astype(np.uint8)
     from PIL import Image
 
     (p,) = B.bake(r, tmp_path / "a.png", size=(40, 24), progress=False)
     assert np.array_equal(np.asarray(Image.open(p)), want8)
     (p,) = B.bake(r, tmp_path / "a16.png", size=(40, 24), bit_depth=16, progress=False)
-    assert np.array_equal(_read(p), np.floor(np.clip(ref, 0, 1) * 65535 + 0.5).astype(np.uint16))
+    assert np.array_equal(_read(p), np.floor(np.clip(ref.astype(np.float64), 0, 1) * 65535 + 0.5)
+                          .astype(np.uint16))
     if cio_has("tifffile"):
+        from cellgl.io.colour import srgb_to_linear
+
         (p,) = B.bake(r, tmp_path / "a.tif", size=(40, 24), tile=16, progress=False)
+        assert _same(_read(p), srgb_to_linear(ref).astype(np.float32))    # float: scene-linear
+        (p,) = B.bake(r, tmp_path / "s.tif", size=(40, 24), tile=16, colorspace="srgb", progress=False)
         assert _same(_read(p), ref)
     if cio_has("OpenEXR"):
-        (p,) = B.bake(r, tmp_path / "a.exr", size=(40, 24), bit_depth=16, progress=False)
+        from cellgl.io.colour import srgb_to_linear
+
+        (p,) = B.bake(r, tmp_path / "a.exr", size=(40, 24), bit_depth=16, colorspace="srgb", progress=False)
         got = _read(p)
         assert np.array_equal(np.stack([got[c] for c in "RGB"], -1), ref.astype(np.float16))
+        (p,) = B.bake(r, tmp_path / "l.exr", size=(40, 24), bit_depth=16, progress=False)
+        got = _read(p)
+        assert np.array_equal(np.stack([got[c] for c in "RGB"], -1), srgb_to_linear(ref).astype(np.float16))
 
 
 def cio_has(module):
@@ -416,10 +451,27 @@ def test_gpu_preset_from_cli(ctx, tmp_path, capsys):
     assert os.listdir(tmp_path) == ["flagstone.png"]
 
 
+def _nearest(x, top):
+    """round(clip(x, 0, 1) * top) of the exact product, in Python fractions (NaN 0, -inf 0,
+    +inf top): what an 8/16-bit sample holds."""
+    from fractions import Fraction
+
+    out = []
+    for v in np.asarray(x, np.float32).reshape(-1).tolist():
+        if v != v:
+            v = 0.0
+        p = Fraction(min(max(v, 0.0), 1.0)) * top
+        k = int(p)                                  # p >= 0: floor
+        out.append(k + (p - k >= Fraction(1, 2)))
+    return np.array(out).reshape(np.shape(x))
+
+
 @pytest.mark.parametrize("bits", [8, 16])
-def test_quantization_in_blocks_is_floor_of_the_clipped_value(bits, monkeypatch):
-    """8/16-bit files hold floor(clip(v, 0, 1) * top + 0.5) in float32, NaN as 0, +inf as top,
-    -inf as 0, whatever the shape or the blocks the quantiser works in (its ties included)."""
+def test_quantization_in_blocks_rounds_the_clipped_value_to_nearest(bits, monkeypatch):
+    """8/16-bit files hold round(clip(v, 0, 1) * top) of the exact product, NaN as 0, +inf as
+    top, -inf as 0, whatever the shape or the blocks the quantiser works in: every value just
+    below a half rounds down (float32's floor(v * top + 0.5) sent some up) and the nearest
+    float32 to each half."""
     from cellgl.io import spec
 
     top = (1 << bits) - 1
@@ -427,19 +479,20 @@ def test_quantization_in_blocks_is_floor_of_the_clipped_value(bits, monkeypatch)
     v = rng.normal(0.5, 0.45, (37, 29, 4)).astype(np.float32)
     k = np.arange(top + 1, dtype=np.float32)
     edges = np.concatenate([(k + 0.5) / top, np.nextafter((k + 0.5) / top, np.float32(0)),
+                            np.nextafter((k + 0.5) / top, np.float32(1)),
                             [np.nan, np.inf, -np.inf, -0.0, 0.0, 1.0, -1e30, 1e30]]).astype(np.float32)
     v.reshape(-1)[:min(v.size, edges.size)] = edges[:v.size]
-
-    def want(x):
-        q = np.nan_to_num(np.array(x, np.float32), nan=0.0, posinf=1.0, neginf=0.0)
-        return np.floor(np.clip(q, 0, 1) * np.float32(top) + np.float32(0.5)).astype(
-            np.uint8 if bits == 8 else np.uint16)
+    dtype = np.uint8 if bits == 8 else np.uint16
 
     for block in (1, 7, 1 << 16):
         monkeypatch.setattr(spec, "_QUANTIZE_BLOCK", block)
         for x in (v, v[..., :3], v[:, :, 0], np.float64(0.3), v[:0]):
-            got = spec._quantize(x, bits)
-            assert got.dtype == want(x).dtype and got.shape == np.shape(x)
-            assert np.array_equal(got, want(x)), (block, np.shape(x))
-    big = np.concatenate([edges, rng.normal(0.5, 0.5, 300).astype(np.float32)])   # every tie
-    assert np.array_equal(spec._quantize(big, bits), want(big))
+            got = spec.quantize(x, bits)
+            assert got.dtype == dtype and got.shape == np.shape(x)
+            assert np.array_equal(got, _nearest(x, top)), (block, np.shape(x))
+    big = np.concatenate([edges, rng.normal(0.5, 0.5, 300).astype(np.float32)])   # every half
+    assert np.array_equal(spec.quantize(big, bits), _nearest(big, top))
+    # the flagstone-like case of issue 48: many values, none a sample above the nearest integer
+    many = rng.random(200_000, dtype=np.float32)
+    q = spec.quantize(many, bits).astype(np.float64)
+    assert np.abs(q - many.astype(np.float64) * top).max() <= 0.5

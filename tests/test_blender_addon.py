@@ -77,7 +77,7 @@ def _installed_wheel(name: str, dest: Path, tag: str) -> Path:
 
 
 def offline_fetch(plat, tags, requirements, dest: Path):
-    """The injected fetcher: this venv's moderngl and glcontext as wheels for ``plat``."""
+    """The injected fetcher: this venv's moderngl, glcontext and platformdirs as wheels for ``plat``."""
     dest.mkdir(parents=True, exist_ok=True)
     tag = {"linux-x64": "cp311-cp311-manylinux_2_28_x86_64", "windows-x64": "cp311-cp311-win_amd64",
            "macos-arm64": "cp311-cp311-macosx_11_0_arm64", "macos-x64": "cp311-cp311-macosx_10_13_x86_64"}[plat]
@@ -96,7 +96,7 @@ def test_extension_zip_layout(zip_path):
     names = zipfile.ZipFile(zip_path).namelist()
     assert names[:2] == ["__init__.py", "blender_manifest.toml"]
     wheels = [n for n in names if n.startswith("wheels/")]
-    assert {w.split("/")[1].split("-")[0] for w in wheels} == {"cellgl", "moderngl", "glcontext"}
+    assert {w.split("/")[1].split("-")[0] for w in wheels} == {"cellgl", "moderngl", "glcontext", "platformdirs"}
     m = tomllib.loads(zipfile.ZipFile(zip_path).read("blender_manifest.toml").decode())
     assert m["schema_version"] == "1.0.0" and m["id"] == "cellgl" and m["type"] == "add-on"
     assert m["blender_version_min"] == "4.2.0" and m["license"] == ["SPDX:MIT"]
@@ -125,7 +125,7 @@ def test_extension_build_is_deterministic_and_atomic(zip_path, tmp_path):
     def no_wheels(plat, tags, reqs, dest):
         return []
 
-    with pytest.raises(RuntimeError, match="no wheel for moderngl>=5.10, glcontext>=3.0 on"):
+    with pytest.raises(RuntimeError, match="no wheel for moderngl>=5.10, glcontext>=3.0, platformdirs>=3 on"):
         extension.build_extension(tmp_path / "y.zip", platforms=[_local_platform()], fetch=no_wheels)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["again.zip"]
 

@@ -299,7 +299,9 @@ def test_sweep_bakes_each_variation(cluster, tmp_path, ctx):
         cbake.bake("polka", ref, size=48, progress=False,
                    sets=[f"seed={seed}", f"metric={metric}", "frequency=6"])
         assert (out / name).read_bytes() == ref.read_bytes()
-    assert json.loads((out / "sweep.json").read_text())["variations"] == 8
+    manifest = json.loads((out / "sweep.json").read_text())
+    assert manifest["variations"] == 8
+    assert manifest["colorspace"] == "srgb_rec709_scene"      # PNG colour: sRGB-encoded, said so
     # a rerun skips what is there and bakes what is missing
     (out / names[3]).unlink()
     again = sweep("polka", out, sets, size=48, scheduler=cluster, progress=False)

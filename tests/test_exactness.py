@@ -407,8 +407,12 @@ def test_texture_past_the_driver_limit_is_refused_or_exact(ctx):
     r = cellgl.load_recipe("f1").replace(smoothness=0.25, c_smooth=1.0, c1=0.0, octaves=8.0, fractal="sum")
     kw = dict(tile_w=16, tile_h=4, samples=16, channels=("height",))
     if driver_loop_limit(ctx) is not None:
-        with pytest.raises(LoopLimitError, match="cut the loops"):
+        with pytest.raises(LoopLimitError, match="cut the loops") as e:
             cellgl.render(r, 4096, 4096, **kw)
+        # the advice is the recipe's own (issue 48): what it has, nothing it has not
+        assert ("Recipe 'f1' would need shorter searches: fewer fractal.octaves (it has 8); or less "
+                "supersampling (it has 16 samples a pixel); or a smaller combination.smoothness (it has "
+                "0.25) (docs/exactness.md)") in str(e.value), str(e.value)
     else:
         got = cellgl.render(r, 4096, 4096, **kw)["height"]
         want = cellgl.render(r, 4096, 4096, backend="numpy", **kw)["height"]

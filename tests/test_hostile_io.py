@@ -448,6 +448,50 @@ def test_full_stdout(argv):
     _assert_clean_error(r, "cannot write to standard output: No space left on device")
 
 
+def _help_commands() -> list[list[str]]:
+    from cellgl.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    return [["--help"], ["--version"]] + [[name, "--help"] for name in sub.choices]
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
+def test_help_and_version_to_a_full_stdout_are_an_error():
+    """Issue 48: `cellgl --help > /dev/full` (and --version, every subcommand's --help) exited 0
+    with nothing said (argparse drops the write's OSError): the failed write is reported, exit 2,
+    as every command's output is."""
+    cmds = _help_commands()
+    assert len(cmds) > 10 and ["export", "--help"] in cmds
+    for argv in cmds:
+        with open("/dev/full", "w") as full:
+            r = _cli(*argv, stdout=full)
+        _assert_clean_error(r, "cannot write to standard output: No space left on device")
+        assert _cli(*argv).returncode == 0, argv
+
+
+def test_help_whose_flush_fails_is_an_error(monkeypatch, capsys):
+    """The same where the write is buffered and the flush fails (a file on a full disk): the flush
+    happens before the exit, and its error is reported."""
+    import errno
+    import io
+
+    from cellgl import cli
+
+    class Full(io.StringIO):
+        def flush(self):
+            if self.getvalue():
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+    for argv in (["--version"], ["bake", "--help"]):
+        monkeypatch.setattr(sys, "stdout", Full())
+        assert cli.main(argv) == 2
+        assert capsys.readouterr().err == "cellgl: error: cannot write to standard output: No space left on device\n"
+    monkeypatch.setattr(sys, "stdout", io.StringIO())
+    with pytest.raises(SystemExit) as e:
+        cli.main(["--version"])
+    assert e.value.code == 0 and sys.stdout.getvalue().startswith("cellgl ")
+
+
 def test_unexpected_exception_is_a_message_not_a_traceback(tmp_path):
     code = """
 import sys

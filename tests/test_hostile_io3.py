@@ -166,8 +166,8 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
     from cellgl.io.frames import bake_frames, frame_recipe
 
     r = recipes.load_recipe("caustics")
-    want = [np.round(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3], 0, 1)
-                     * 255).astype(np.uint8) for k in range(4)]
+    want = [np.floor(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3]
+                             .astype(np.float64), 0, 1) * 255 + 0.5).astype(np.uint8) for k in range(4)]
     for ext, fps, tol in ((".webp", 10, 0), (".gif", 25, 8)):
         (path,) = bake_frames(r, tmp_path / f"a{ext}", 4, fps=fps, size=(40, 24), tile=16)
         with Image.open(path) as im:
@@ -177,6 +177,190 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
                 assert np.abs(got - want[k]).max() <= tol, (ext, k)
                 assert frame.info.get("duration") == 1000 // fps, (ext, k, frame.info)
     assert sorted(os.listdir(tmp_path)) == ["a.gif", "a.webp"]
+
+
+def test_lossless_webp_frames_are_the_png_frames(ctx, tmp_path):
+    """Issue 48: one quantiser for every 8-bit output: the animated WebP's frames (lossless) are
+    the 8-bit PNG frames of the same bake, bit for bit (np.round's half to even in the one, a
+    half up in the other, had differed by 1 in 575 samples of a 256^2 frame)."""
+    import numpy as np
+    from PIL import Image, ImageSequence
+
+    from cellgl.io.frames import bake_frames
+
+    kw = dict(size=(96, 64), tile=32, sets=["seed=5"])
+    (webp,) = bake_frames("caustics", tmp_path / "a.webp", 3, **kw)
+    pngs = bake_frames("caustics", tmp_path / "a.png", 3, **kw)
+    with Image.open(webp) as im:
+        got = [np.asarray(f.convert("RGB")) for f in ImageSequence.Iterator(im)]
+    want = [np.asarray(Image.open(p)) for p in pngs]
+    assert len(got) == len(want) == 3
+    for k, (a, b) in enumerate(zip(got, want)):
+        assert a.shape == b.shape == (64, 96, 3) and np.array_equal(a, b), (k, int((a != b).sum()))
+
+
+def test_animated_frames_quantise_every_half_as_the_png(tmp_path, monkeypatch):
+    """The same with a render of the values next to every half (k + 0.5) / 255, where rounding
+    rules differ: the WebP writer gets the PNG's 8-bit samples."""
+    import sys
+
+    import numpy as np
+    from PIL import Image, ImageSequence
+
+    from cellgl.io import frames
+
+    k = np.arange(256, dtype=np.float32)
+    halves = (k + 0.5) / np.float32(255)
+    vals = np.concatenate([halves, np.nextafter(halves, np.float32(0)),
+                           np.nextafter(halves, np.float32(1))]).astype(np.float32)
+
+    def fake(recipe, w, h, channels=("color",), x0=0, y0=0, tile_w=None, tile_h=None, **kw):
+        tw, th = tile_w or w, tile_h or h
+        yy, xx = np.mgrid[y0:y0 + th, x0:x0 + tw]
+        i = (yy * w + xx) * 3
+        rgb = np.stack([vals[(i + c) % vals.size] for c in range(3)], axis=-1)
+        return {"color": np.concatenate([rgb, np.ones_like(rgb[..., :1])], axis=-1)}
+
+    monkeypatch.setattr(sys.modules["cellgl.recipes"], "render", fake)
+    kw = dict(size=(32, 24), tile=16, sets=["orbit_radius=0.25"])
+    (webp,) = frames.bake_frames("flagstone", tmp_path / "a.webp", 2, **kw)
+    pngs = frames.bake_frames("flagstone", tmp_path / "a.png", 2, **kw)
+    want = np.asarray(Image.open(pngs[0]))
+    with Image.open(webp) as im:
+        for f in ImageSequence.Iterator(im):
+            a = np.asarray(f.convert("RGB"))
+            assert np.array_equal(a, want), int((a != want).sum())
+
+
+#: holds a flock on the folder argv[1] until its standard input closes (or argv[2] seconds pass)
+_HOLD_LOCK = textwrap.dedent("""
+    import fcntl, os, select, sys
+    fd = os.open(sys.argv[1], os.O_RDONLY)
+    fcntl.flock(fd, fcntl.LOCK_EX)
+    print("locked", flush=True)
+    select.select([sys.stdin], [], [], float(sys.argv[2]))
+""")
+
+
+def _holder(folder, seconds: float) -> subprocess.Popen:
+    p = subprocess.Popen([sys.executable, "-c", _HOLD_LOCK, str(folder), str(seconds)],
+                         stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "locked"
+    return p
+
+
+def test_a_bake_waiting_for_a_folder_lock_says_for_whom_and_times_out(tmp_path):
+    """Issue 48: `flock DIR sleep 25 & cellgl bake flagstone -o DIR/x.png` waited silently for
+    ever. It says that it waits and for whom (the pid from /proc/locks), and gives up after
+    $CELLGL_LOCK_WAIT seconds with one error; nothing is written, no temporary file is left."""
+    holder = _holder(tmp_path, 120)
+    try:
+        env = dict(ENV, CELLGL_LOCK_WAIT="0.5")
+        r = subprocess.run([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(tmp_path / "x.png"),
+                            "--size", "16", "-q"], cwd=REPO, capture_output=True, text=True, timeout=120, env=env)
+    finally:
+        holder.stdin.close()
+        holder.wait(30)
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    who = f"process {holder.pid}" if os.path.exists("/proc/locks") else "another process"
+    assert f"cellgl: warning: waiting for the lock on folder '{tmp_path}', held by {who}" in r.stderr, r.stderr
+    assert f"cellgl: error: cannot write {tmp_path}: {who}" in r.stderr, r.stderr
+    assert "has held the lock on this folder for 0.5 s, so nothing was written" in r.stderr
+    assert "CELLGL_LOCK_WAIT=SECONDS" in r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_bake_waits_for_a_folder_lock_released_in_time(tmp_path):
+    """The lock let go while the bake waits (it said so): the bake goes on and lands whole."""
+    from cellgl.io.tempfiles import lock_holder
+
+    holder = _holder(tmp_path, 120)
+    try:
+        fd = os.open(tmp_path, os.O_RDONLY)
+        try:
+            if os.path.exists("/proc/locks"):
+                assert lock_holder(fd).startswith(f"process {holder.pid}")
+        finally:
+            os.close(fd)
+        bake = subprocess.Popen([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o",
+                                 str(tmp_path / "x.png"), "--size", "16", "-q"], cwd=REPO,
+                                stderr=subprocess.PIPE, text=True, env=ENV)
+        first = bake.stderr.readline()          # the bake is waiting now
+    finally:
+        holder.stdin.close()
+        holder.wait(30)
+    rest = bake.stderr.read()
+    assert bake.wait(120) == 0, first + rest
+    assert first.startswith(f"cellgl: warning: waiting for the lock on folder '{tmp_path}'"), first
+    assert rest == "" and os.listdir(tmp_path) == ["x.png"]
+
+
+@pytest.mark.parametrize("value", ["x", "-1", "nan", "1e9"])
+def test_a_bad_lock_wait_is_refused_before_the_work(tmp_path, value):
+    env = dict(ENV, CELLGL_LOCK_WAIT=value)
+    r = subprocess.run([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(tmp_path / "x.png"),
+                        "--size", "16"], cwd=REPO, capture_output=True, text=True, timeout=120, env=env)
+    _clean_error(r, f"CELLGL_LOCK_WAIT={value!r}: accepted seconds in 0..86400")
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("ext, fps, delay, real", [
+    (".gif", 50, 2, 50.0), (".gif", 25, 4, 25.0), (".gif", 24, 4, 25.0), (".gif", 30, 3, 100 / 3),
+    (".gif", 1, 100, 1.0), (".webp", 24, 42, 1000 / 42), (".webp", 95, 11, 1000 / 11),
+    (".webp", 1, 1000, 1.0)])
+def test_frame_delay_is_what_the_format_stores(ext, fps, delay, real):
+    from cellgl.io.frames import frame_delay
+
+    assert frame_delay(ext, fps) == (delay, pytest.approx(real))
+
+
+@pytest.mark.parametrize("ext, fps, words", [
+    (".gif", 120, ("--fps 120", "accepted for .gif a number in 1..50", "hundredths", "10 fps")),
+    (".gif", 60, ("--fps 60", "1..50")), (".gif", 51, ("--fps 51", "1..50")),
+    (".webp", 100, ("--fps 100", "accepted for .webp a number in 1..95", "10 ms or less")),
+    (".webp", 0.5, ("--fps 0.5", "1..95")), (".gif", float("nan"), ("--fps nan", "1..50")),
+    (".gif", True, ("--fps True", "1..50"))])
+def test_rates_an_animated_file_cannot_play_are_refused(tmp_path, ext, fps, words):
+    """Issue 48: a GIF stores hundredths of a second and browsers play a delay under 2 cs (a WebP's
+    <= 10 ms) at 10 fps: --fps 120 wrote a delay of 0, 60..100 one of 1 cs, all played at 10 fps."""
+    from cellgl.io.frames import bake_frames
+    from cellgl.io.spec import BakeError
+
+    with pytest.raises(BakeError) as e:
+        bake_frames("caustics", tmp_path / f"a{ext}", 2, fps=fps, size=(16, 16))
+    for w in words:
+        assert w in str(e.value), str(e.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_gif_rates_it_cannot_store_are_warned_with_the_real_rate(ctx, tmp_path):
+    """--fps 24 to a .gif wrote 4 cs (25 fps: a 48-frame loop lasted 1.92 s) without a word: the
+    file's delays are whole hundredths, the warning says the rate it plays at; the default for a
+    GIF is 25 (stored exactly), and a stored rate gives no warning."""
+    import warnings
+
+    from PIL import Image
+
+    r = _cli("bake", "caustics", "--frames", "2", "-o", tmp_path / "a.gif", "--size", "16", "--fps", "24")
+    assert r.returncode == 0, r.stderr
+    assert "cellgl: warning: --fps 24: an animated .gif stores a delay of 4 cs (40 ms) a frame, so it " \
+           "plays at 25 fps (the 2 frames last 0.08 s, not 0.08333 s)" in r.stderr, r.stderr
+    assert "25 fps: 4 cs a frame" in r.stderr
+    with Image.open(tmp_path / "a.gif") as im:
+        assert im.info["duration"] == 40
+    from cellgl.io.frames import bake_frames
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for ext, fps in ((".gif", None), (".gif", 20), (".webp", None), (".webp", 40)):
+            (p,) = bake_frames("caustics", tmp_path / f"b{fps}{ext}", 2, fps=fps, size=(16, 16))
+            with Image.open(p) as im:
+                im.load()
+                assert im.info["duration"] == {(".gif", None): 40, (".gif", 20): 50,
+                                               (".webp", None): 42, (".webp", 40): 25}[ext, fps]
+        warnings.simplefilter("always")
+    with pytest.warns(UserWarning, match=r"--fps 30: an animated \.gif stores a delay of 3 cs .* 33\.33 fps"):
+        bake_frames("caustics", tmp_path / "c.gif", 2, fps=30, size=(16, 16))
 
 
 @pytest.mark.parametrize("out, size, words", [

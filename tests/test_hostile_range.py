@@ -2,6 +2,7 @@
 or minutes of work (items 1-4, 9, 10, 12 and 13's API parts). Each test failed before its fix."""
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -191,12 +192,12 @@ def test_render_refuses_what_memory_cannot_hold(monkeypatch):
 
     monkeypatch.setattr(recipes, "memory_bytes", lambda: 16 << 30)
     with pytest.raises(ValueError, match=r"render 100000x100000 of 'f1' \(color, backend gpu\) needs about "
-                                         r"149 GiB \(16 bytes a pixel\), more than 50% of this machine's "
+                                         r"149 GiB \(about 16 bytes a pixel\), more than 50% of this machine's "
                                          r"16 GiB; render it in tiles .*cellgl.to_dask\(recipe, "
                                          r"\(100000, 100000\)\)") as e:
         cellgl.render("f1", 100000, 100000)
     assert "cellgl.io.bake.bake" not in str(e.value)          # past bake's 65536 a side
-    with pytest.raises(ValueError, match=r"needs about 13.4 GiB.*cellgl.io.bake.bake\(recipe, 'big.tif', "
+    with pytest.raises(ValueError, match=r"needs about 26.9 GiB \(about 32 bytes a pixel\).*cellgl.io.bake.bake\(recipe, 'big.tif', "
                                          r"size=\(30000, 30000\)\)"):
         cellgl.render("f1", 30000, 30000, channels=("F1", "F2", "F3", "F4"))
     with pytest.raises(ValueError, match=r"render 2048x1024x4 \(a tile of the 30000x30000 image\).*backend numpy"):
@@ -205,10 +206,60 @@ def test_render_refuses_what_memory_cannot_hold(monkeypatch):
         cellgl.render("pups-cow", 65536, 65536)
 
 
+def test_render_counts_the_gpu_paths_real_peak(monkeypatch):
+    """Issue 48: the guard counted 4 bytes a pixel for height (12 for normal) with no working
+    memory: render(r, 46341, 46341, channels=("height",)) passed it, then raised MemoryError for
+    32 GiB (the peak is 20 bytes a pixel read back, plus the GL buffers). Now one error, before
+    anything is allocated."""
+    from cellgl import recipes
+    from cellgl.texture import evaluation
+
+    def never(*a, **k):
+        raise AssertionError("render() went on past the memory guard")
+
+    monkeypatch.setattr(evaluation, "render", never)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 64 << 30)
+    for chans, gib, per_px in ((("height",), "40", 20), (("normal",), "56", 28),
+                               (("height", "normal"), "64", 32)):
+        with pytest.raises(ValueError, match=rf"render 46341x46341 of 'flagstone' \({', '.join(chans)}, backend "
+                                             rf"gpu\) needs about {gib}\.\d GiB \(about {per_px} bytes a pixel\), "
+                                             r"more than 50% of this machine's 64 GiB"):
+            recipes.render("flagstone", 46341, 46341, channels=chans)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 12 << 30)
+    with pytest.raises(ValueError, match=r"about 20 bytes a pixel"):
+        cellgl.render("flagstone", 20000, 20000, channels=("height",))    # 8 GB: 1.6 GB of results
+
+
+def test_the_gpu_peak_is_what_render_holds(ctx):
+    """gpu_bytes()'s host bytes a pixel are what the GPU path allocates per pixel (tracemalloc's
+    peak at two sizes, its fixed part taken out), for every kind of channel set."""
+    import tracemalloc
+
+    from cellgl import recipes
+
+    def peak(w, h, chans):
+        recipes.render("flagstone", w, h, channels=chans)          # compiled, its buffers made
+        tracemalloc.start()
+        try:
+            recipes.render("flagstone", w, h, channels=chans)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    for chans in (("color",), ("height",), ("normal",), ("id",), ("F1", "F3"),
+                  ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")):
+        # (both above the 1 MiB of fixed work the path also holds for a moment)
+        slope = (peak(960, 480, chans) - peak(640, 480, chans)) / ((960 - 640) * 480)
+        host, gl, buffers = recipes.gpu_bytes(chans)
+        assert abs(slope - host) < 1.0, (chans, slope, host)
+        assert gl >= 8 and buffers >= 2
+
+
 def test_render_tiles_within_memory_are_rendered(monkeypatch, ctx):
     from cellgl import recipes
 
-    monkeypatch.setattr(recipes, "memory_bytes", lambda: 4096 * 16 * 2)        # 4096 pixels of colour
+    # 4096 pixels of colour: 16 bytes each read back, 20 in the GL buffers (its block, the canary)
+    monkeypatch.setattr(recipes, "memory_bytes", lambda: 4096 * 36 * 2)
     cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=64)
     with pytest.raises(ValueError, match="needs about"):
         cellgl.render("f1", 100000, 100000, tile_w=64, tile_h=65)
@@ -344,3 +395,139 @@ def test_graph_lines_vectorised_are_the_same_bits(monkeypatch, sets, size):
             got = presets.draw_graph(p, w, h, **kw)
             assert got.dtype == want.dtype and got.shape == want.shape
             assert np.array_equal(got.view(np.uint32), want.view(np.uint32))
+
+
+# ---------------------------------------------------------------- issue 48, item 21: booleans
+
+@pytest.mark.parametrize("recipe", ["flagstone", "pups-cow"])
+@pytest.mark.parametrize("args, kw, name", [
+    ((True, 4), {}, "width"), ((4, True), {}, "height"), ((8, 8), {"x0": True}, "x0"),
+    ((8, 8), {"y0": np.True_}, "y0"), ((8, 8), {"tile_w": True}, "tile_w"),
+    ((8, 8), {"tile_h": True}, "tile_h"), ((8, 8), {"x0": 1.0}, "x0"), ((8.0, 8), {}, "width"),
+    ((8, 8), {"x0": 8}, "x0"), ((8, 8), {"x0": 4, "tile_w": 5}, "tile_w")])
+def test_render_refuses_booleans_and_non_integers_as_sizes(recipe, args, kw, name):
+    """Issue 48: render(r, True, 4) rendered a 1-pixel-wide image (True is 1 to Python). Every
+    size and offset of every recipe kind's render is a whole number, not a boolean."""
+    with pytest.raises(ValueError, match=rf"^{name} must be an integer in \[\d+, \d+\], got "):
+        cellgl.render(recipe, *args, **kw)
+
+
+def test_booleans_are_not_sizes_counts_or_versions_anywhere(tmp_path):
+    """The same for a volume's depth, bake's size, slices and tile, measure_range's samples."""
+    from cellgl import texture
+    from cellgl.io.bake import bake
+    from cellgl.io.spec import BakeError
+
+    with pytest.raises(ValueError, match=r"^depth must be an integer in \[1, 4096\], got True"):
+        cellgl.render(cellgl.load_recipe("flagstone").replace(dimension=3), 8, 8, depth=True)
+    for kw, words in (({"size": True}, "width True is out of range"),
+                      ({"size": (8, np.True_)}, "height True is out of range"),
+                      ({"size": 8, "depth_slices": True}, "depth True (volume slices) is out of range"),
+                      ({"size": 16, "tile": True}, "--tile True: accepted multiples of 16")):
+        with pytest.raises(BakeError, match=re.escape(words)):
+            bake("flagstone", tmp_path / "a.npy", progress=False, **kw)
+    with pytest.raises(ValueError, match=r"samples must be an integer in \[2, 16777216\], got True"):
+        texture.measure_range("veins", samples=True)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("change, words", [
+    ({"cellgl_recipe": True}, "cellgl_recipe: unsupported recipe version True; accepted: the whole number 1"),
+    ({"cellgl_recipe": 1.0}, "cellgl_recipe: unsupported recipe version 1.0"),
+    ({"cellgl_recipe": 2}, "cellgl_recipe: unsupported recipe version 2"),
+    ({"name": ""}, "name: empty name ''; accepted: one line of 1..64 printable characters, not blank"),
+    ({"name": "   "}, "name: empty name '   '")])
+@pytest.mark.parametrize("preset", ["flagstone", "pups-cow"])
+def test_recipe_versions_are_whole_numbers_and_names_are_not_empty(tmp_path, preset, change, words):
+    """Issue 48: a recipe file with "cellgl_recipe": true (or "name": "") was accepted."""
+    import json
+
+    from cellgl.texture.schema import RecipeError
+
+    d = cellgl.load_recipe(preset).to_dict()
+    d.update(change)
+    f = tmp_path / "r.json"
+    f.write_text(json.dumps(d))
+    with pytest.raises(RecipeError) as e:
+        cellgl.load_recipe(str(f))
+    assert words in str(e.value), str(e.value)
+    if "name" in change:
+        with pytest.raises(RecipeError, match="empty name"):
+            cellgl.load_recipe(preset).replace(name=change["name"])
+    d.update(cellgl_recipe=1, name="ok")
+    f.write_text(json.dumps(d))
+    assert cellgl.load_recipe(str(f)).name == "ok"
+
+
+# ---------------------------------------------------------------- issue 48, item 18: the loop-cut advice
+
+def test_a_sparse_recipe_the_search_cannot_prove_is_refused_when_checked():
+    """Issue 48: --set metric=minkowski --set minkowski_p=0.5 --set density=0.05 --set min_points=0
+    passed the Minkowski floor (which counts on a point in every cell), then was refused at bake
+    time with advice that did not fit. Its own cell is empty for 95% of the samples, and a point a
+    ring away can lie 18 cells off, beyond the 12 rings searched: refused when checked, saying
+    why and what would do."""
+    import math
+
+    from cellgl.basis.reference import SPARSE_RISK, sparse_message
+    from cellgl.texture.schema import RecipeError
+
+    base = cellgl.load_recipe("flagstone")
+    with pytest.raises(RecipeError) as e:
+        base.set_from_strings(["metric=minkowski", "minkowski_p=0.5", "density=0.05", "min_points=0"])
+    msg = str(e.value)
+    for w in ("basis.min_points: 0 with basis.density 0.05, metric minkowski (minkowski_p 0.5) in 3D cannot "
+              "be exact", "about 0.95 of the samples", "accepted: basis.min_points 1 (a point in every cell), "
+              "or basis.density 13.816 or more, or basis.minkowski_p 1 or more at this density"):
+        assert w in msg, msg
+    # each way out it names is accepted; a point in every cell, or a denser or Euclidean basis, too
+    for ok in (dict(min_points=1), dict(minkowski_p=1.0), dict(density=13.816),
+               dict(metric="euclidean")):
+        base.replace(**{**dict(metric="minkowski", minkowski_p=0.5, density=0.05, min_points=0), **ok})
+    # the rule: refused exactly where exp(-density (2k + 1)^dim) passes SPARSE_RISK
+    for dim, metric, p, density, refused in ((2, "euclidean", 3.0, 0.05, False), (4, "euclidean", 3.0, 0.05, False),
+                                             (3, "manhattan", 3.0, 0.05, False), (4, "manhattan", 3.0, 3.0, True),
+                                             (4, "chebyshev", 3.0, 0.05, False), (2, "minkowski", 0.5, 0.115, False),
+                                             (2, "minkowski", 0.5, 0.1, True), (3, "minkowski", 0.75, 0.05, True)):
+        v = dict(distribution="poisson", min_points=0, density_map="none", dimension=dim, metric=metric,
+                 minkowski_p=p, density=density)
+        assert (sparse_message(v) is not None) == refused, v
+    assert math.exp(-0.115 * 11 ** 2) <= SPARSE_RISK < math.exp(-0.114 * 11 ** 2)
+    assert sparse_message(dict(v, min_points=1)) is None and sparse_message(dict(v, distribution="jitter")) is None
+
+
+def test_the_loop_cut_advice_names_what_the_recipe_has():
+    """The driver-cut error advised "fewer octaves, less supersampling or a smaller smoothness" for
+    a recipe that has none of those: the advice lists only what applies."""
+    from types import SimpleNamespace
+
+    from cellgl.texture.dispatch import lighter
+
+    minkowski = cellgl.load_recipe("flagstone").replace(metric="minkowski", minkowski_p=0.5, density=0.05)
+    ways = "; ".join(lighter(minkowski))
+    assert "a larger basis.minkowski_p (it has 0.5: a point k cells away along every axis lies 3^(1/0.5) k = 9 k" in ways
+    assert all(w not in ways for w in ("octaves", "supersampling", "smoothness", "min_points")), ways
+    sparse = SimpleNamespace(values=dict(cellgl.load_recipe("f1").values, min_points=0, density=0.3))
+    assert "basis.min_points 1 or more, or a larger basis.density (it has min_points 0 and density 0.3" in \
+        "; ".join(lighter(sparse))
+    assert lighter(cellgl.load_recipe("flagstone")) == []
+    heavy = cellgl.load_recipe("f1").replace(smoothness=0.25, c_smooth=1.0, octaves=8.0, fractal="sum",
+                                             dimension=4)
+    ways = "; ".join(lighter(heavy, 4))
+    for w in ("fewer fractal.octaves (it has 8)", "less supersampling (it has 16 samples a pixel)",
+              "a smaller combination.smoothness (it has 0.25)", "a smaller basis.dimension"):
+        assert w in ways, ways
+    assert "minkowski" not in ways and "min_points" not in ways
+    # inactive settings are no lever: octaves without a fractal, min_points with jitter
+    assert lighter(cellgl.load_recipe("f1").replace(octaves=8.0, fractal="none", distribution="jitter",
+                                                    min_points=0)) == []
+
+
+@pytest.mark.parametrize("preset", ["flagstone", "pups-cow"])
+@pytest.mark.parametrize("key, value", [("name", True), ("name", 5), ("doc", None), ("name", "")])
+def test_names_and_docs_are_strings_in_python_too(preset, key, value):
+    """Recipe(name=True) / .replace(name=5) were made strings ('True', '5') without a word."""
+    from cellgl.texture.schema import RecipeError
+
+    with pytest.raises(RecipeError, match=rf"^{key}: "):
+        cellgl.load_recipe(preset).replace(**{key: value})

@@ -25,7 +25,7 @@ LAYERS = (
     ("texture", ("cellgl.texture",)),
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
-    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.frames",
+    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.frames", "cellgl.io.udim", "cellgl.io.mips", "cellgl.io.texfile", "cellgl.io.gputex",
                     "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
     ("viewer", ("cellgl.viewer",)),

@@ -100,9 +100,14 @@ def _check_documents(out):
 
 
 def _check_library_matches_nodes(doc, nodes):
+    from cellgl._version import __version__
+
     for n in nodes:
         nd = doc.getNodeDef(n.nodedef)
         assert nd is not None, n.nodedef
+        # versioned with cellgl's version, major.minor as MaterialX reads versions; the default
+        assert nd.getVersionString() == ".".join(__version__.split(".")[:2]) and nd.getDefaultVersion()
+        assert nd.getVersionIntegers() == tuple(int(x) for x in __version__.split(".")[:2])
         assert [i.getName() for i in nd.getInputs()] == [i.name for i in n.inputs]
         assert [o.getName() for o in nd.getOutputs()] == [o[0] for o in n.outputs]
         for target in ("genglsl", "genosl"):
@@ -157,9 +162,7 @@ def test_basis_node_validates_and_generates(tmp_path):
     from cellgl.export.materialx_basis import basis_node
 
     nodes = [basis_node(2, "euclidean", "poisson")]
-    docs.write_files({docs.LIBRARY: docs.library_document(nodes),
-                      **{f"genglsl/{n.name}.glsl": n.glsl for n in nodes},
-                      **{f"genosl/{n.name}.osl": n.osl for n in nodes}}, tmp_path)
+    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
     doc = _read(tmp_path / docs.LIBRARY)
     assert doc.validate()[0]
     _check_library_matches_nodes(doc, nodes)
@@ -176,6 +179,65 @@ def test_basis_node_validates_and_generates(tmp_path):
         assert "cellglmx_cellular2d_euclidean_poisson(" in src
 
 
+#: a GLSL array constructor (``float[8](...)``): no syntax in Metal or Slang, into which GenMsl
+#: and GenSlang pass a genglsl implementation's code
+_ARRAY_CONSTRUCTOR = r"\b\w+\[\w*\]\s*\("
+
+
+def test_genmsl_and_genslang_get_no_array_constructors(one, tmp_path):
+    """Issue 46 item 5: the genglsl code had `float[16](...)`, which GenMsl and GenSlang copy
+    into Metal and Slang shaders. Generated here (nothing compiles Metal or Slang here)."""
+    import re
+
+    from MaterialX import PyMaterialXGenShader as mxg
+    g = {}
+    for mod, cls in (("PyMaterialXGenMsl", "MslShaderGenerator"), ("PyMaterialXGenSlang", "SlangShaderGenerator")):
+        g[mod] = getattr(pytest.importorskip(f"MaterialX.{mod}"), cls).create()
+    doc = _read(one / "cellgl_materials.mtlx")
+    from cellgl.export import materialx_docs as docs
+    from cellgl.export.materialx_basis import basis_node
+
+    nodes = [basis_node(2, "euclidean", "poisson")]
+    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
+    basis = _read(tmp_path / docs.LIBRARY)
+    for gen in g.values():
+        m = doc.getMaterialNodes()[0]
+        src = gen.generate(m.getName(), m, _context(gen, one)).getSourceCode(mxg.PIXEL_STAGE)
+        assert "cellglmx_flagstone(" in src and "cellgl_flagstone_init_arrays();" in src
+        assert not re.findall(_ARRAY_CONSTRUCTOR, src)
+        o = _output_graph(basis, "ND_cellgl_cellular2d_euclidean_poisson", "f1", "float")
+        src = gen.generate("f1", o, _context(gen, tmp_path)).getSourceCode(mxg.PIXEL_STAGE)
+        assert "cellglmx_cellular2d_euclidean_poisson(" in src and not re.findall(_ARRAY_CONSTRUCTOR, src)
+
+
+def test_array_constructors_become_element_by_element_values():
+    from cellgl.export.materialx import without_array_constructors
+
+    code = """const vec4 k_ramp[2] = vec4[2](vec4(0.5, 1.0, f(1, 2), 0.0), vec4(1.0));
+float g(float x)
+{
+    if (x > 0.0) {
+        float lin[3] = float[3](x,
+            2.0 * x, min(x, 1.0));   // a comment, {
+        return lin[2] + k_ramp[1].x;
+    }
+    return 0.0;
+}
+"""
+    text, call = without_array_constructors(code, "k_init")
+    assert call == "    k_init();"
+    assert text.startswith("vec4 k_ramp[2];     // set by k_init()\n")
+    assert "        float lin[3];\n        lin[0] = x;\n        lin[1] = 2.0 * x;\n        lin[2] = min(x, 1.0);   // a" in text
+    assert text.endswith("void k_init()\n{\n    k_ramp[0] = vec4(0.5, 1.0, f(1, 2), 0.0);\n    k_ramp[1] = vec4(1.0);\n}\n")
+    assert without_array_constructors("float a = 1.0;\n", "k_init") == ("float a = 1.0;\n", "")
+    # what it does not know stays (a constructor of another size, one in a comment); the braces
+    # before a later declaration still count
+    odd = "void f()\n{\n    float b[2] = float[3](1.0, 2.0, 3.0);\n}\n// int c[1] = int[1](0);\nconst int d[1] = int[1](7);\n"
+    text, call = without_array_constructors(odd, "k_init")
+    assert "float b[2] = float[3](1.0, 2.0, 3.0);" in text and "// int c[1] = int[1](0);" in text
+    assert "int d[1];     // set by k_init()" in text and "    d[0] = 7;" in text and call
+
+
 def test_usd_stage_has_every_material_shader_and_typed_input(one):
     Usd = pytest.importorskip("pxr.Usd")
     from pxr import Sdf, UsdShade
@@ -183,6 +245,32 @@ def test_usd_stage_has_every_material_shader_and_typed_input(one):
     stage = Usd.Stage.Open(str(one / "cellgl_materials.usda"))
     assert stage is not None
     _check_stage(stage, [preset_node("flagstone")])
+    _validate_stage(stage)
+
+
+def _validate_stage(stage):
+    """usd-core's own validators (pxr.UsdValidation: every one registered, 30 in usd-core 26.11)
+    find nothing, but that a shader's id is no node of usd-core's shader registry (Sdr) where
+    it is a MaterialX nodedef: usd-core's wheel has no UsdMtlx plugin, so its registry knows
+    none of them (_check_stage checks each is a nodedef of MaterialX's libraries or of
+    cellgl_nodes.mtlx). The stage's upAxis and metersPerUnit are USD's fallbacks, authored."""
+    V = pytest.importorskip("pxr.UsdValidation")
+    from pxr import UsdGeom, UsdShade
+
+    assert stage.HasAuthoredMetadata("upAxis") and stage.HasAuthoredMetadata("metersPerUnit")
+    assert UsdGeom.GetStageUpAxis(stage) == UsdGeom.Tokens.y and UsdGeom.GetStageMetersPerUnit(stage) == 0.01
+    validators = V.ValidationRegistry().GetOrLoadAllValidators()
+    assert len(validators) >= 20
+    lib = _stdlib()
+    errors = []
+    for e in V.ValidationContext(validators).Validate(stage):
+        if e.GetName() == "MissingShaderIdInRegistry":
+            prim = e.GetSites()[0].GetProperty().GetPrim()
+            sid = UsdShade.Shader(prim).GetIdAttr().Get()
+            if sid.startswith("ND_cellgl_") or lib.getNodeDef(sid) is not None:
+                continue
+        errors.append((e.GetName(), e.GetMessage()))
+    assert not errors, errors
 
 
 def _check_stage(stage, nodes):
@@ -306,6 +394,7 @@ def test_usd_stage_of_every_preset(full):
     stage = Usd.Stage.Open(str(full / "cellgl_materials.usda"))
     names, _ = exportable_presets()
     _check_stage(stage, [preset_node(n) for n in names])
+    _validate_stage(stage)
 
 
 def _render_script(out, names, size, kind="preset"):

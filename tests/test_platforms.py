@@ -201,6 +201,64 @@ def test_device_and_glcontexts_own_setting_must_agree(monkeypatch, clean_state):
         platforms.device_setting()
 
 
+@pytest.mark.parametrize("value, message", [
+    ("5", r"^GLCONTEXT_DEVICE_INDEX=5 is not an EGL device of this machine; accepted values: "
+          r"0\.\.1 \(0: NVIDIA A; 1: NVIDIA B\)$"),
+    ("x", r"^GLCONTEXT_DEVICE_INDEX='x' is not an EGL device index; accepted values: 0\.\.1"),
+    (" ", r"^GLCONTEXT_DEVICE_INDEX=' ' is not an EGL device index"),
+])
+def test_glcontexts_device_setting_is_checked_as_cellgls(monkeypatch, clean_state, value, message):
+    """glcontext's own GLCONTEXT_DEVICE_INDEX (issue 48, item 8): a device that is not there, or
+    not a number, is refused in one line, never a silent fall back to OSMesa."""
+    calls = _native(monkeypatch, {450: 450})
+    monkeypatch.setattr(platforms, "egl_devices", lambda: ["NVIDIA A", "NVIDIA B"])
+    monkeypatch.setenv("GLCONTEXT_DEVICE_INDEX", value)
+    with pytest.raises(ValueError, match=message):
+        context.get_context()
+    assert calls == []
+
+
+def test_glcontexts_device_setting_picks_the_device_and_only_egl(monkeypatch, clean_state):
+    calls = _native(monkeypatch, {450: 450})
+    monkeypatch.setattr(platforms, "egl_devices", lambda: ["NVIDIA A", "NVIDIA B"])
+    monkeypatch.setenv("GLCONTEXT_DEVICE_INDEX", "1")
+    ctx = context.get_context()
+    assert context.backend_name(ctx) == "egl"
+    assert calls[-1] == ("egl", 450, {"device_index": 1})
+    assert platforms.device_line(platforms.device_setting()) == "1 of 2: NVIDIA B"
+    monkeypatch.setenv("CELLGL_BACKEND", "osmesa")
+    with pytest.raises(ValueError, match=r"^GLCONTEXT_DEVICE_INDEX=1 picks an EGL device, but the "
+                       r"backend is osmesa on Linux: unset GLCONTEXT_DEVICE_INDEX or set "):
+        context.get_context()
+
+
+def test_glcontexts_version_setting_is_refused(monkeypatch, clean_state):
+    """GLCONTEXT_GLVERSION would make every rung of the ladder ask one version on glcontext's
+    backends only (the ladder would report versions never asked): refused in one line."""
+    calls = _native(monkeypatch, {450: 450})
+    monkeypatch.setenv("GLCONTEXT_GLVERSION", "460")
+    with pytest.raises(ValueError, match=r"^GLCONTEXT_GLVERSION='460' is set: .*; unset it$"):
+        context.get_context()
+    assert calls == []
+
+
+@pytest.mark.parametrize("name", ["GLCONTEXT_LINUX_LIBEGL", "GLCONTEXT_LINUX_LIBGL"])
+def test_a_glcontext_library_that_fails_is_no_silent_osmesa(monkeypatch, clean_state, name):
+    """One of glcontext's library settings that does not load: egl failed and cellgl ran on
+    OSMesa, on the CPU, without a word; now the error names the setting (issue 48, item 8's
+    neighbours)."""
+    calls = _native(monkeypatch, {})                   # every version: "not this version"
+    monkeypatch.setattr(platforms, "osmesa_library", lambda: "/usr/lib/libOSMesa.so.8")
+    monkeypatch.setattr(osmesa, "probe", lambda: pytest.fail("OSMesa was tried"))
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.setenv(name, "/nonexistent/lib.so")
+    with pytest.raises(context.ContextError) as info:
+        context.get_context()
+    assert f"  osmesa: skipped ({name}=/nonexistent/lib.so is set: glcontext's backends only)" \
+        in str(info.value).splitlines()
+    assert {api for api, *_ in calls} == {"egl"}
+
+
 def test_egl_devices_lists_this_machine():
     devices = platforms.egl_devices()
     if devices is None:

@@ -353,3 +353,25 @@ def test_work_group_defines_stay_off_the_fragment_path(ctx, monkeypatch):
     monkeypatch.setenv("CELLGL_CELL_CACHE", "1")
     on = cellgl.cellular_grid((150, 3), **kw)
     assert on.F.tobytes() == off.F.tobytes() and on.id.tobytes() == off.id.tobytes()
+
+
+@pytest.mark.parametrize("rows", [1, 4])
+def test_storage_words_are_matched_by_their_bytes_not_a_hash(ctx, monkeypatch, rows):
+    """Storage words were kept by (hash(raw), len(raw)): two contents of one length whose hashes
+    collide reused the stale buffer, a silently wrong answer (issue 48, item 23). Every hash made
+    to collide here: the second upload must still be the one bound."""
+    monkeypatch.setattr(runner, "hash", lambda raw: 0, raising=False)
+    r = runner.runner(ctx)
+    a = np.arange(12 * rows, dtype=np.uint32)
+    a = a.reshape(-1, rows) if rows > 1 else a
+    b = a[::-1].copy()
+    bind = r.bind_records if rows > 1 else r.bind_words
+    objs = r.held.objects
+    try:
+        with context.current():
+            bind(a, 7)
+            bind(b, 7)
+            got = np.frombuffer(objs[("words", 7)][1].read(), np.uint32)[:b.size]
+        assert (got == b.reshape(-1)).all()
+    finally:
+        registry.release_object(objs.pop(("words", 7), (None, None))[1])

@@ -145,7 +145,7 @@ class Viewer:
                 glfw.window_hint(glfw.COCOA_RETINA_FRAMEBUFFER, False)
                 glfw.window_hint(glfw.CONTEXT_CREATION_API, glfw.EGL_CONTEXT_API if api == "egl"
                                  else glfw.NATIVE_CONTEXT_API)
-                shadercache.prepare_environment()   # the drivers' shader disk caches, before a driver loads
+                shadercache.prepare_environment()   # before a driver loads (docs/performance.md)
                 self.window = glfw.create_window(w, h, f"cellgl view: {self.model.name}", None, None)
                 if self.window:
                     return api

@@ -361,6 +361,52 @@ def minkowski_message(name: str, p: float, dim: int, dim_name: str) -> str:
             + ")")
 
 
+#: the largest share of samples a recipe may leave with no point the search can prove nearest
+#: (:func:`sparse_message`): one in a million
+SPARSE_RISK = 1e-6
+
+
+def _reach(metric: str, p: float, dim: int) -> float:
+    """How many cells away (in the metric) a point one cell away along every axis lies."""
+    return {"euclidean": math.sqrt(dim), "manhattan": float(dim), "chebyshev": 1.0}.get(metric) \
+        or dim ** (1.0 / p)
+
+
+def sparse_message(v) -> str | None:
+    """Why a texture recipe's sparse Poisson cells (``min_points`` 0, no density map) cannot be
+    exact, or None. :func:`minkowski_floor` counts on a point in the sample's own cell; with
+    ``min_points`` 0 a cell is empty with chance ``exp(-density)``, so the F1 point may lie in
+    ring ``k`` of cells around it, up to ``reach (k + 1)`` away (``reach`` = dim^(1/p), or dim,
+    sqrt(dim), 1), and the search proves it only while that is within its ``R`` rings
+    (:func:`max_ring_default`): the sample is left unproven (a texture has no fallback: its value
+    may be wrong) when the ``(2k + 1)^dim`` cells within ring ``k = floor(R / reach) - 1`` are all
+    empty, chance ``exp(-density (2k + 1)^dim)``. Refused above :data:`SPARSE_RISK`."""
+    if v["distribution"] != "poisson" or v["min_points"] > 0 or v["density_map"] != "none":
+        return None
+    dim, density, metric, p = v["dimension"], v["density"], v["metric"], v["minkowski_p"]
+    rings, reach = max_ring_default(dim), _reach(metric, p, dim)
+    k = math.floor(rings / reach + 1e-12) - 1
+    risk = 1.0 if k < 0 else math.exp(-density * (2 * k + 1) ** dim)
+    if risk <= SPARSE_RISK:
+        return None
+    need = -math.log(SPARSE_RISK) / density          # cells that must hold a point, at this density
+    k_need = max(0, math.ceil(((need ** (1.0 / dim)) - 1.0) / 2.0 - 1e-12))
+    ways = ["basis.min_points 1 (a point in every cell)"]
+    if k >= 0 and -math.log(SPARSE_RISK) / (2 * k + 1) ** dim <= 16.0:
+        ways.append(f"basis.density {math.ceil(-math.log(SPARSE_RISK) / (2 * k + 1) ** dim * 1000) / 1000:g} "
+                    "or more")
+    if metric == "minkowski" and rings / (k_need + 1) > 1.0:
+        p_need = math.ceil(math.log(dim) / math.log(rings / (k_need + 1)) * 1000) / 1000
+        if p_need <= 64.0:
+            ways.append(f"basis.minkowski_p {p_need:g} or more at this density")
+    what = f"metric {metric}" + (f" (minkowski_p {p:g})" if metric == "minkowski" else "")
+    return (f"basis.min_points: 0 with basis.density {density:g}, {what} in {dim}D cannot be exact: "
+            f"cells may be empty, a point k rings of cells away can lie {reach:.3g} (k + 1) cells away, "
+            f"and the search visits {rings} rings, so it proves only points within {max(k, 0)} ring(s) "
+            f"of the sample's cell; about {risk:.2g} of the samples have none there (at most "
+            f"{SPARSE_RISK:g} accepted); accepted: " + ", or ".join(ways))
+
+
 def _box_distance(o: np.ndarray, f: np.ndarray, p: Params) -> np.ndarray:
     g = np.where(o > 0, o - f, np.where(o < 0, -o - 1 + f, 0.0))
     return metric_length(g * np.asarray(p.axis_scale), p)

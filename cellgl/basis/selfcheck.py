@@ -13,8 +13,10 @@ A pass is recorded on disk (:func:`record_path`: in the shader cache's folder,
 :mod:`cellgl.gl.shadercache`), keyed by the driver (GL_VENDOR, GL_RENDERER, GL_VERSION), the path,
 cellgl's version and the bytes of every shader and every module of ``cellgl/gl`` and
 ``cellgl/basis``; a later process on the same driver and code skips the check. A failure is never
-recorded; an unreadable or foreign record counts as none. ``CELLGL_SHADER_CACHE=0`` keeps no
-records (every process checks).
+recorded; an unreadable or foreign record counts as none, whatever the file is (:func:`_recorded`:
+a regular file of at most :data:`RECORD_MAX` bytes, read without waiting and outside the GL
+section's signal deferral; its time stamp checked before `cellgl info` shows it).
+``CELLGL_SHADER_CACHE=0`` keeps no records (every process checks).
 
 Cost: two shader variants, the first of which (3D, Poisson, Euclidean, n = 4, F, delta, id) is
 the one ``cellgl.cellular`` compiles by default, and 288 samples: the GPU takes milliseconds,
@@ -28,6 +30,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
+import stat
+import tempfile
 import time
 import warnings
 from pathlib import Path
@@ -164,21 +169,62 @@ def record_path(key: dict) -> Path | None:
     cache folder, or ``CELLGL_SHADER_CACHE=0``)."""
     from cellgl.gl import shadercache
 
-    folder = shadercache.cache_dir()
+    try:
+        folder = shadercache.cache_dir()
+    except ValueError:                       # a bad CELLGL_SHADER_CACHE: get_context says so
+        return None
     if folder is None:
         return None
     name = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:32]
     return folder / "selfcheck" / f"{name}.json"
 
 
-def _recorded(key: dict) -> str | None:
-    """When ``key``'s pass was recorded (its record read back and equal), else None."""
-    where = record_path(key)
+#: the most bytes a record may have (one is about 700): a longer file is no record
+RECORD_MAX = 16384
+#: what a record's ``passed`` holds (anything else, a forged line or escape, is no record)
+_STAMP = re.compile(r"[0-9]{4}-[0-9]{2}-[0-9]{2} [0-9]{2}:[0-9]{2}:[0-9]{2}")
+
+
+def _read_record(where: Path) -> bytes | None:
+    """The bytes of the record file ``where``, or None unless it is a regular file (not a link,
+    a FIFO, a device) of at most :data:`RECORD_MAX` bytes: opened without following a link and
+    without waiting (a FIFO), read at most that much."""
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOFOLLOW", 0) | \
+        getattr(os, "O_NOCTTY", 0) | getattr(os, "O_BINARY", 0)
     try:
-        rec = json.loads(where.read_text(encoding="utf-8")) if where is not None else None
-    except (OSError, ValueError):            # none yet, unreadable, or not JSON: check again
+        fd = os.open(where, flags)
+    except OSError:                          # none yet, a link, unreadable
         return None
-    if isinstance(rec, dict) and rec.get("key") == key and isinstance(rec.get("passed"), str):
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > RECORD_MAX:
+            return None
+        data = os.read(fd, RECORD_MAX + 1)
+    except OSError:
+        return None
+    finally:
+        os.close(fd)
+    return data if len(data) <= RECORD_MAX else None
+
+
+def _recorded(key: dict) -> str | None:
+    """When ``key``'s pass was recorded (its record read back and equal), else None: any file
+    that is not such a record (unreadable, not a regular file, too long, not JSON, nested too
+    deep, another key, a ``passed`` that is not a time stamp) counts as none. No signal waits
+    for the read (:func:`cellgl.gl.context.interruptible`)."""
+    from cellgl.gl import context
+
+    with context.interruptible():
+        where = record_path(key)
+        data = _read_record(where) if where is not None else None
+    if data is None:
+        return None
+    try:
+        rec = json.loads(data.decode("utf-8"))
+    except (ValueError, RecursionError):     # not UTF-8, not JSON, too deep: check again
+        return None
+    if isinstance(rec, dict) and rec.get("key") == key and isinstance(rec.get("passed"), str) \
+            and _STAMP.fullmatch(rec["passed"]):
         return rec["passed"]
     return None
 
@@ -186,20 +232,25 @@ def _recorded(key: dict) -> str | None:
 def _record(key: dict) -> None:
     """Record a pass of ``key`` (written whole or not at all; a folder that refuses it is no
     error: the next process checks again)."""
-    where = record_path(key)
-    if where is None:
-        return
-    tmp = where.with_name(f".{where.name}.{os.getpid()}.tmp")
-    try:
-        where.parent.mkdir(parents=True, exist_ok=True)
-        tmp.write_text(json.dumps({"key": key, "passed": time.strftime("%Y-%m-%d %H:%M:%S")}),
-                       encoding="utf-8")
-        os.replace(tmp, where)
-    except OSError:
+    from cellgl.gl import context
+
+    with context.interruptible():
+        where = record_path(key)
+        if where is None:
+            return
+        tmp = None
         try:
-            tmp.unlink()
+            where.parent.mkdir(exist_ok=True)
+            fd, tmp = tempfile.mkstemp(prefix=f".{where.name}.", suffix=".tmp", dir=where.parent)
+            with os.fdopen(fd, "w", encoding="utf-8") as f:
+                f.write(json.dumps({"key": key, "passed": time.strftime("%Y-%m-%d %H:%M:%S")}))
+            os.replace(tmp, where)
         except OSError:
-            pass
+            try:
+                if tmp is not None:
+                    os.unlink(tmp)
+            except OSError:
+                pass
 
 
 def check(ctx, path: str) -> str | None:

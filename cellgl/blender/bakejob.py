@@ -59,7 +59,7 @@ def recipe_for(preset: str, sets=(), tileable: bool = False):
 
 def bake_recipe(job: dict) -> dict:
     """The arrays of a ``recipe`` job (see the module)."""
-    from cellgl.io.spec import id_colors
+    from cellgl.io.spec import id_colors, quantize
     from cellgl.recipes import render
 
     size = _check_size(job.get("size"))
@@ -78,7 +78,7 @@ def bake_recipe(job: dict) -> dict:
     ids = ids.astype(np.uint32)
 
     def byte(a):
-        return np.round(np.clip(a, 0.0, 1.0) * 255.0).astype(np.uint8)
+        return quantize(a, 8)          # as every 8-bit output of cellgl
 
     data = np.stack([height.astype(np.float32), (ids & 0xFFFF).astype(np.float32),
                      (ids >> 16).astype(np.float32)], axis=-1)

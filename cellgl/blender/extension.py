@@ -2,7 +2,8 @@
 
 The zip holds ``blender_manifest.toml``, the add-on's ``__init__.py`` (it registers
 :mod:`cellgl.blender.addon`, which comes in the cellgl wheel) and ``wheels/``: cellgl itself
-(built from this source tree), ``moderngl`` and ``glcontext`` for each platform. Blender ships
+(built from this source tree), ``moderngl`` and ``glcontext`` for each platform, and
+``platformdirs`` (pure Python: where the known-answer check's records go). Blender ships
 NumPy; the bake path imports neither Pillow nor SciPy (cellgl's other dependencies, used by PUPs
 and image-driven recipes, which have no OSL export and are not in the Add menu), so they are not
 bundled (tests/test_blender_addon.py checks the bake's imports).
@@ -33,7 +34,7 @@ PLATFORMS = {
     "macos-x64": ("macosx_10_13_x86_64",),
 }
 #: the wheels cellgl's bake needs beside itself and Blender's NumPy
-REQUIREMENTS = ("moderngl>=5.10", "glcontext>=3.0")
+REQUIREMENTS = ("moderngl>=5.10", "glcontext>=3.0", "platformdirs>=3")
 PYTHON_VERSION = "3.11"             # Blender 4.2 - 4.5 (and 5.0's 3.11 builds)
 _ZIP_TIME = (1980, 1, 1, 0, 0, 0)
 

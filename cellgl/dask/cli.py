@@ -73,13 +73,20 @@ def check_scheduler(scheduler: str | None) -> None:
     if st.st_size > MAX_SCHEDULER_FILE:
         raise DaskError(f"{what}: {st.st_size} bytes; a scheduler file holds a few hundred "
                         f"(accepted at most {MAX_SCHEDULER_FILE})")
-    try:
-        with open(scheduler, "rb") as f:
+    try:    # without waiting (a FIFO swapped in since the stat), and checked again once open
+        fd = os.open(scheduler,
+                     os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with os.fdopen(fd, "rb") as f:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                raise DaskError(f"{what}: not a regular file; accepted: the JSON file a Dask "
+                                "scheduler writes (--scheduler-file)")
             info = json.loads(f.read(MAX_SCHEDULER_FILE + 1).decode("utf-8"))
     except OSError as exc:
         raise DaskError(f"{what}: cannot read it: {exc.strerror or exc}") from None
     except (UnicodeDecodeError, ValueError) as exc:
         raise DaskError(f"{what}: not a Dask scheduler file (not valid JSON: {exc})") from None
+    except RecursionError:
+        raise DaskError(f"{what}: not a Dask scheduler file (JSON nested too deeply)") from None
     address = info.get("address") if isinstance(info, dict) else None
     if not isinstance(address, str) or not address:
         raise DaskError(f"{what}: not a Dask scheduler file (no \"address\" string in it); "

@@ -5,7 +5,8 @@ Each ``--set NAME=SPEC`` either fixes a parameter (``--set frequency=6``) or swe
 swept parameters give every combination. Each variation is one task that bakes one file (PNG by
 default; any ``cellgl bake`` format) with :func:`cellgl.io.bake.bake`, so it is written atomically;
 a variation whose files all exist is skipped, so a rerun finishes an interrupted sweep.
-``DIR/sweep.json`` records the request (recipe, sets, size, channels, format, cellgl version); a
+``DIR/sweep.json`` records the request (recipe, sets, size, channels, format, cellgl version,
+the files' colour space); a
 rerun into the same directory must make the same request.
 """
 
@@ -15,6 +16,7 @@ import itertools
 import json
 import os
 import re
+import stat
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -120,15 +122,23 @@ def _sweep_task(item, job: _Job) -> int:
     return 1
 
 
+#: the most bytes of a sweep manifest read (one is a few KiB): a longer file is not this sweep's
+MAX_MANIFEST = 1 << 20
+
+
 def _check_manifest(outdir: Path, request: dict) -> bool:
     """Whether ``outdir`` already holds this sweep's manifest; raises if it holds another."""
     file = outdir / MANIFEST
-    if not file.exists():
+    if not os.path.lexists(file):
         return False
+    old = None       # anything but this sweep's manifest (not a regular file, too long, too deep)
     try:
-        old = json.loads(file.read_text())
-    except (OSError, ValueError):
-        old = None
+        fd = os.open(file, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_BINARY", 0))
+        with os.fdopen(fd, "rb") as f:
+            if stat.S_ISREG(os.fstat(fd).st_mode):
+                old = json.loads(f.read(MAX_MANIFEST + 1).decode("utf-8"))
+    except (OSError, ValueError, RecursionError):
+        pass
     if old != request:
         differ = [k for k in request if not isinstance(old, dict) or old.get(k) != request[k]]
         raise DaskError(f"{str(outdir)!r} holds another sweep ({MANIFEST}: not the same "
@@ -186,11 +196,16 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
     stem = re.sub(r"[^A-Za-z0-9.+-]+", "-", str(getattr(base, "name", "") or "recipe"))
     items = list(_variations(stem, axes, ext))
     job = _Job(base, str(outdir.resolve()), (w, h), channels, bit_depth, tileable)
-    _bake.check_bits(ext, bit_depth)
+    bits = _bake.check_bits(ext, bit_depth)
+    from cellgl.io.colour import COLORSPACES, default_colorspace
+
+    space = default_colorspace(ext, bits) if "color" in channels else None
     request = {"generator": "cellgl", "version": __version__, "recipe": base.to_dict(),
                "sets": list(sets), "size": [w, h], "channels": list(channels),
                "format": ext[1:], "depth": bit_depth, "tileable": tileable,
-               "variations": len(items)}
+               "variations": len(items),
+               # the colour channel's space in the files (cellgl.io.colour); None: no colour, .npy
+               "colorspace": COLORSPACES[space].interop_id if space else None}
     have = _check_manifest(outdir, request)
     t0 = time.perf_counter()
     bar = _bake.Progress(len(items), f"sweep {outdir.name}", progress, unit="files")

@@ -76,6 +76,7 @@ def run_cli(args) -> int:
     if args.basis is not None and (args.uniforms or args.sets):
         raise ExportError("--uniforms and --set apply to recipes, not to --basis snippets")
     if args.output is not None:  # before the work: a missing or read-only directory, a long name
+        check_output(args.output)       # as given: -o '' is an empty name, not the current folder
         check_output(os.path.abspath(args.output))
     if args.basis is not None:
         text = basis_export(args.basis, args.dim, args.target, **{k: getattr(args, k) for k in DEFAULTS})

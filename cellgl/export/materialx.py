@@ -17,7 +17,9 @@ other target is, except for the values that are node inputs: those stay variable
 target's sliders, :func:`cellgl.export.osl.exposed_params`). GLSL is printed by the exporter's
 GLSL printer, OSL by its OSL translator (:func:`cellgl.export.translate.to_osl`), from the one
 compiled tree. Every top-level name of a node's code carries the node's name, so that any number
-of cellgl nodes can share one shader.
+of cellgl nodes can share one shader (an export where two nodes' names would still meet is
+refused: :func:`cellgl.export.materialx_docs.check_names`). The GLSL has no array constructor
+(:func:`without_array_constructors`), so MaterialX's GenMsl and GenSlang can take it.
 
 Coordinates: MaterialX's ``texcoord`` has v = 0 at the bottom of an image; cellgl's bakes have
 v = 0 at the top row. The node evaluates cellgl at ``(u, 1 - v)``, so the node at ``texcoord``
@@ -190,11 +192,12 @@ def renamed(code: str, name: str) -> str:
     return re.sub(r"\bCellgl(?=\w)", "Cellgl" + camel, code)
 
 
-def _wrapper_glsl(node: MxNode, entry: str, vars_: list[str]) -> str:
-    """The node's GLSL function: set the code's variables from the inputs, then call ``entry``."""
+def _wrapper_glsl(node: MxNode, entry: str, vars_: list[str], first: str = "") -> str:
+    """The node's GLSL function: run ``first`` (the arrays' values), set the code's variables
+    from the inputs, then call ``entry``."""
     args = [f"{i.glsl} in_{i.name}" for i in node.inputs] + [f"out {o[2]} out_{o[0]}" for o in node.outputs]
     lines = [f"// MaterialX implementation of {node.nodedef} (genglsl).",
-             f"void {node.function}({', '.join(args)})", "{"]
+             f"void {node.function}({', '.join(args)})", "{"] + ([first] if first else [])
     for i in node.inputs:
         if i.var is not None and i.var in vars_:
             val = f"(in_{i.name} ? 1 : 0)" if i.glsl == "bool" else f"in_{i.name}"
@@ -288,13 +291,75 @@ def preset_node(recipe) -> MxNode:
     node = MxNode(name, "texture2d", _node_doc(r, fixed), inputs, outs,
                   example={"recipe": r.name, "outputs": [o[0] for o in outs]})
     entry = "cellgl_mx_texture"
-    node.glsl = (_library_head(r, "GLSL") + private_globals(renamed(code, name)) + "\n"
-                 + _wrapper_glsl(node, renamed(entry, name), kept))
+    glsl, first = without_array_constructors(private_globals(renamed(code, name)), name + "_init_arrays")
+    node.glsl = (_library_head(r, "GLSL") + glsl + "\n" + _wrapper_glsl(node, renamed(entry, name), kept, first))
     passed: dict = {}
     osl = to_osl(code, params=kept, passed=passed)
     node.osl = (_library_head(r, "OSL") + renamed(osl, name) + "\n"
                 + _wrapper_osl(node, renamed(entry, name), passed.get(entry, [])))
     return node
+
+
+_ARRAY_DECL = re.compile(r"(?:const\s+)?(\w+)\s+(\w+)\[(\w+)\]\s*=\s*(\w+)\[(\w+)\]\(")
+
+
+def _close(code: str, i: int) -> int:
+    """The index of the ``)`` that closes the ``(`` just before ``code[i]``."""
+    depth = 1
+    while depth:
+        c = code[i]
+        depth += (c == "(") - (c == ")")
+        i += 1
+    return i - 1
+
+
+def _split_args(text: str) -> list[str]:
+    """``text`` split at its top-level commas, each part stripped."""
+    out, depth, start = [], 0, 0
+    for k, c in enumerate(text):
+        depth += (c in "([") - (c in ")]")
+        if c == "," and depth == 0:
+            out.append(text[start:k].strip())
+            start = k + 1
+    out.append(text[start:].strip())
+    return out
+
+
+def without_array_constructors(code: str, init: str) -> tuple[str, str]:
+    """``code`` with no GLSL array constructor (``float[8](a, b, ...)``), which MaterialX's
+    GenMsl and GenSlang pass through into Metal and Slang, where it is no syntax: a local
+    array declared with one is declared alone and set element by element; a global constant
+    one becomes a private global set by the function ``init``, which the result appends. Also
+    returns the statement that calls ``init`` ("" where there is none), which the node's
+    function runs first. The values are the same, so are the results."""
+    out, pos, counted, depth, sets = [], 0, 0, 0, []
+    for m in _ARRAY_DECL.finditer(code):
+        if m.start() < pos or "//" in code[code.rfind("\n", 0, m.start()) + 1:m.start()]:
+            continue                        # inside a rewritten declaration, or a comment
+        between = re.sub(r"//[^\n]*", "", code[counted:m.start()])
+        depth += between.count("{") - between.count("}")
+        counted = m.start()
+        typ, name, n, typ2, n2 = m.groups()
+        end = _close(code, m.end())
+        if typ2 != typ or n2 != n or not code[end + 1:].lstrip().startswith(";"):
+            continue                        # not a declaration this pass knows: left as it is
+        args = _split_args(code[m.end():end])
+        semi = code.index(";", end)
+        out.append(code[pos:m.start()])
+        if depth == 0:
+            out.append(f"{typ} {name}[{n}];     // set by {init}()")
+            sets += [f"    {name}[{k}] = {a};" for k, a in enumerate(args)]
+        else:
+            indent = code[code.rfind("\n", 0, m.start()) + 1:m.start()]
+            out.append(f"{typ} {name}[{n}];" + "".join(f"\n{indent}{name}[{k}] = {a};" for k, a in enumerate(args)))
+        pos = counted = semi + 1
+    out.append(code[pos:])
+    text = "".join(out)
+    if not sets:
+        return text, ""
+    text += (f"\n// the values of the global arrays (GenMsl and GenSlang take no array constructor)\n"
+             f"void {init}()\n{{\n" + "\n".join(sets) + "\n}\n")
+    return text, f"    {init}();"
 
 
 def private_globals(code: str) -> str:

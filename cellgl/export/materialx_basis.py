@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from cellgl.export.materialx import MxInput, MxNode, compiled, renamed, private_globals
+from cellgl.export.materialx import MxInput, MxNode, compiled, private_globals, renamed, without_array_constructors
 
 __all__ = ["basis_nodes", "basis_node", "BASIS_METRICS", "BASIS_DISTRIBUTIONS", "float32_thresholds"]
 
@@ -151,14 +151,15 @@ def basis_node(dim: int, metric: str, distribution: str) -> MxNode:
     entry = renamed("cellgl_mx_cellular", name)
     # GLSL
     args = [f"{i.glsl} in_{i.name}" for i in inputs] + [f"out {o[2]} out_{o[0]}" for o in outs]
-    sets = []
+    glsl, first = without_array_constructors(private_globals(renamed(code, name)), name + "_init_arrays")
+    sets = [first] if first else []
     for i in inputs:
         if i.var in kept:
             val = f"uint(in_{i.name})" if i.name == "seed" else f"in_{i.name}"
             sets.append(f"    {renamed(i.var, name)} = {val};")
     call = ", ".join(["in_position"] + [f"out_{o[0]}" for o in outs])
     node.glsl = (f"// cellgl: MaterialX node {name} (GLSL), compiled by `cellgl export --target materialx`.\n"
-                 + private_globals(renamed(code, name)) + f"\n// MaterialX implementation of {node.nodedef} "
+                 + glsl + f"\n// MaterialX implementation of {node.nodedef} "
                  f"(genglsl).\nvoid {node.function}({', '.join(args)})\n{{\n" + "\n".join(sets)
                  + f"\n    {entry}({call});\n}}\n")
     # OSL: vectors are the translation's structs; the variables are passed as parameters

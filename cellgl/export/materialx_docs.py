@@ -9,22 +9,22 @@ neither MaterialX nor USD; tests/test_materialx.py checks the files with both):
   normal is the node's normal through ``normalmap``), which includes the library;
 * ``cellgl_materials.usda``: the same materials as UsdShade networks, each shader's
   ``info:id`` a nodedef name (as Houdini and Omniverse write MaterialX into USD).
+
+Every name the export writes is unique (:func:`check_names`, else the export is refused), and
+the set lands whole or not at all (:mod:`cellgl.export.materialx_files`).
 """
 from __future__ import annotations
 
-import os
-from pathlib import Path
+import re
 from xml.sax.saxutils import quoteattr
 
 from cellgl.export.materialx import MxNode
+from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, check_places, write_set
 from cellgl.export.snippets import ExportError
 
 __all__ = ["export_materialx", "LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage",
-           "write_files", "check_dir"]
+           "set_files", "check_names", "write_set", "check_dir"]
 
-LIBRARY = "cellgl_nodes.mtlx"
-MATERIALS = "cellgl_materials.mtlx"
-USD = "cellgl_materials.usda"
 _HEAD = '<?xml version="1.0"?>\n<materialx version="1.39">\n'
 
 
@@ -43,8 +43,21 @@ def _attrs(**kw) -> str:
     return "".join(f" {k}={quoteattr(str(v))}" for k, v in kw.items() if v is not None)
 
 
+def mx_version() -> str:
+    """The nodedefs' ``version``: cellgl's version as MaterialX writes versions, ``major.minor``
+    (two integers: MaterialX reads ``0.1.0`` as no version at all)."""
+    from cellgl._version import __version__
+
+    m = re.match(r"(\d+)\.(\d+)", __version__)
+    if not m:
+        raise ExportError(f"cellgl's version {__version__!r} has no major.minor for the nodedefs' version")
+    return f"{int(m.group(1))}.{int(m.group(2))}"
+
+
 def _nodedef(node: MxNode) -> list[str]:
-    out = [f"  <nodedef{_attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, doc=node.doc)}>"]
+    head = _attrs(name=node.nodedef, node=node.name, nodegroup=node.nodegroup, version=mx_version(),
+                  isdefaultversion="true", doc=node.doc)
+    out = [f"  <nodedef{head}>"]
     for i in node.inputs:
         a = dict(name=i.name, type=i.mxtype)
         if i.value is not None:
@@ -75,8 +88,9 @@ def library_document(nodes: list[MxNode]) -> str:
     """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``."""
     from cellgl._version import __version__
 
-    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library (cellgl export --target materialx): "
-             "nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
+    # no "--" in an XML comment (so not "--target")
+    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target "
+             "materialx: nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
     for n in nodes:
         lines += _nodedef(n)
     return "\n".join(lines) + "\n</materialx>\n"
@@ -131,12 +145,16 @@ def _usd_val(v, mxtype: str) -> str:
 
 def usd_stage(nodes: list[MxNode]) -> str:
     """``cellgl_materials.usda``: the example materials as UsdShade networks under
-    ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections)."""
+    ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections).
+    The stage's ``upAxis`` and ``metersPerUnit`` are USD's own fallbacks (Y, 0.01), authored
+    because USD's validators ask for them: the materials hold no lengths, so the stage means
+    what it meant without them."""
     from cellgl._version import __version__
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
            'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
-           '    defaultPrim = "cellgl"', ")", "", 'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
+           '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "",
+           'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
     for n in nodes:
         if not n.example:
             continue
@@ -173,38 +191,6 @@ def usd_stage(nodes: list[MxNode]) -> str:
     return "\n".join(out)
 
 
-def check_dir(path) -> Path:
-    """``path`` as the output directory: an existing directory, or a new one in an existing,
-    writable parent; one clear error otherwise (a file, a missing parent)."""
-    p = Path(os.fspath(path))
-    if p.exists() and not p.is_dir():
-        raise ExportError(f"output {str(p)!r} is a file; --target materialx writes a directory of files "
-                          "(the node library, the implementations, the materials): give a directory")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not p.exists() and not parent.is_dir():
-        raise ExportError(f"output directory {str(p)!r}: its parent {str(parent)!r} does not exist")
-    if not os.access(p if p.exists() else parent, os.W_OK):
-        raise ExportError(f"output directory {str(p)!r} is not writable")
-    return p
-
-
-def write_files(files: dict[str, str], outdir) -> list[Path]:
-    """Write ``{relative path: text}`` under ``outdir`` (created), each file atomically (a
-    temporary name, then renamed): a failure leaves no half-written file."""
-    from cellgl.io.formats import atomic_path
-
-    root = check_dir(outdir)
-    root.mkdir(exist_ok=True)
-    written = []
-    for rel, text in files.items():
-        dest = root / rel
-        dest.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_path(str(dest)) as tmp:
-            Path(tmp).write_text(text, encoding="utf-8", newline="\n")
-        written.append(dest)
-    return written
-
-
 # ------------------------------------------------------------------------------ the export
 
 
@@ -226,33 +212,90 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
     Returns
     -------
     list of pathlib.Path
-        The files written. Every node is compiled before the first file is written.
+        The files written. Every node is compiled and every name checked unique
+        (:func:`check_names`) before the first file is written; the set lands whole or not at
+        all, replacing the previous set of ``outdir`` (:mod:`cellgl.export.materialx_files`).
     """
     from cellgl.export.materialx import exportable_presets, preset_node
     from cellgl.recipes import load_recipe
     from cellgl.texture.recipe import RecipeError
 
-    check_dir(outdir)
+    check_places(check_dir(outdir))     # before the work: a file where genosl/ goes
     names = exportable_presets()[0] if recipes is None else list(recipes)
-    nodes, seen = [], {}
+    nodes = []
     for rec in names:
         try:
             r = load_recipe(rec)
         except (RecipeError, OSError) as exc:
             raise ExportError(str(exc)) from None
-        node = preset_node(r)
-        if node.name in seen:
-            raise ExportError(f"recipes {seen[node.name]!r} and {r.name!r} give the same MaterialX node name "
-                              f"{node.name!r}; rename one")
-        seen[node.name] = r.name
-        nodes.append(node)
+        nodes.append(preset_node(r))
     if basis:
         from cellgl.export.materialx_basis import basis_nodes
 
         nodes = basis_nodes() + nodes
-    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes),
-             USD: usd_stage(nodes)}
+    if not nodes:
+        raise ExportError("nothing to export: no recipe given and basis=False")
+    return write_set(set_files(nodes), outdir)
+
+
+def set_files(nodes: list[MxNode]) -> dict[str, str]:
+    """``{relative path: text}``: every file of the export of ``nodes``, their names checked
+    (:func:`check_names`)."""
+    check_names(nodes)
+    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes), USD: usd_stage(nodes)}
     for n in nodes:
-        files[f"genglsl/{n.name}.glsl"] = n.glsl
-        files[f"genosl/{n.name}.osl"] = n.osl
-    return write_files(files, outdir)
+        files.update(code_files(n))
+    return files
+
+
+def code_files(node: MxNode) -> dict[str, str]:
+    """The implementations' source files of ``node``, by their path in the set."""
+    return {f"genglsl/{node.name}.glsl": node.glsl, f"genosl/{node.name}.osl": node.osl}
+
+
+#: the prefixes of the names in MaterialX's standard library (1.39: nodedefs, nodegraphs,
+#: implementations, unit definitions; tests/test_materialx_files.py checks the list is whole)
+MX_LIBRARY_PREFIXES = ("ND", "NG", "IM", "IMP", "IMPL", "UD")
+#: a top-level name of a node's code: every one carries the node's name (materialx.renamed)
+_CODE_NAME = re.compile(r"\b(?:cellgl|Cellgl)\w+")
+
+
+def _written_names(node: MxNode):
+    """``(kind, key, name)`` of every name the export writes for ``node``: the elements of both
+    documents (one namespace: the materials include the library), its code files (compared
+    without case: macOS and Windows file systems ignore it) and its code's top-level names
+    (any number of nodes share one shader)."""
+    from xml.etree import ElementTree
+
+    for doc in (library_document([node]), materials_document([node])):
+        for el in ElementTree.fromstring(doc):
+            if el.get("name"):
+                yield "MaterialX element", el.get("name"), el.get("name")
+    for rel in code_files(node):
+        yield "file", rel.lower(), rel
+    for code in (node.glsl, node.osl):
+        for name in set(_CODE_NAME.findall(re.sub(r"//[^\n]*", "", code))):
+            yield "shader code name", name, name
+
+
+def check_names(nodes: list[MxNode]) -> None:
+    """Refuse (:class:`ExportError`) an export in which two nodes would write the same name:
+    a recipe named as a basis node (``cellular2d-euclidean-poisson``), two recipes whose names
+    differ only by ``-`` / ``_`` or by case, a recipe whose material's names are another's
+    (``M`` and ``texture``: both give ``M_texture``) or whose code's names are another's
+    (``stone`` and ``stone-abs``: ``cellgl_stone_abs_vec3``), and a recipe whose materials'
+    names could be those of MaterialX's standard library (``ND-lama``: ``ND_lama_surface``)."""
+    seen: dict[tuple[str, str], tuple[int, str]] = {}
+    for k, n in enumerate(nodes):
+        who = f"recipe {n.example['recipe']!r}" if n.example else f"the basis node {n.name!r}"
+        head = _ex(n).split("_")[0]
+        if n.example and head in MX_LIBRARY_PREFIXES:
+            raise ExportError(f"{who}: its materials' names would start with {head + '_'!r}, as the names of "
+                              "MaterialX's standard library do (" + ", ".join(p + "_" for p in MX_LIBRARY_PREFIXES)
+                              + f"), and could be one of them ({_ex(n)}_surface); rename the recipe")
+        for kind, key, name in _written_names(n):
+            j, other = seen.setdefault((kind, key), (k, who))
+            if j != k:
+                raise ExportError(f"{other} and {who} would both write the {kind} {name!r} (every name of the "
+                                  "export must be unique); rename the recipe (its \"name\" field, or export it "
+                                  "alone)")

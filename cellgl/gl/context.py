@@ -240,6 +240,20 @@ path.set_guard(section)   # the known-answer checks (cellgl.gl.path) run holding
 
 
 @contextlib.contextmanager
+def interruptible():
+    """A stretch of a cellgl call without GL work (a file of its own read or written): a signal
+    the CLI turns into an exception raises here at once, not deferred to the call's end."""
+    depth = getattr(_tls, "depth", 0)
+    _tls.depth = 0
+    try:
+        if deferred and threading.current_thread() is threading.main_thread():
+            deferred.pop()()
+        yield
+    finally:
+        _tls.depth = depth
+
+
+@contextlib.contextmanager
 def current(backend: str | None = None):
     """``with current() as ctx:``: the context (as :func:`get_context`) current on this thread,
     with the process's GL lock held, for GL work of your own while other threads use cellgl.
@@ -333,6 +347,8 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 raise _unknown_backend(backend)
             candidates = [_check_name(backend, "backend argument")]
 
+        shadercache.prepare_environment()   # before a driver loads; a bad setting: one line
+        versions.check_settings()
         candidates = platforms.device_backends(
             candidates, backend is not None or bool(os.environ.get("CELLGL_BACKEND", "").strip()))
         errors = []
@@ -355,7 +371,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
         skipped = [b for b in platforms.platform_backends() if b not in candidates]
         note = ""
         if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip() and skipped:
-            reasons = {"glx": "DISPLAY not set", "osmesa": "libOSMesa not found"}
+            reasons = platforms.skip_reasons()
             note = "\n" + "\n".join(f"  {b}: skipped ({reasons.get(b, 'not tried')})"
                                     for b in skipped)
         settings = [f"{k}={os.environ[k]}" for k in osmesa.DRIVER_ENV if k in os.environ]

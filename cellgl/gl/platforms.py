@@ -174,35 +174,75 @@ def _range(devices: list[str] | None) -> str:
     return f"0..{len(devices) - 1} ({listing})"
 
 
+#: the variables that name an EGL device: cellgl's, and glcontext's own (read by its EGL backend)
+DEVICE_VARS = ("CELLGL_DEVICE", "GLCONTEXT_DEVICE_INDEX")
+
+
+def device_variable() -> str:
+    """``"CELLGL_DEVICE=1"``: the variable (and value) that names the device, for messages."""
+    for name in DEVICE_VARS:
+        if os.environ.get(name, ""):
+            return f"{name}={os.environ[name].strip()}"
+    return "CELLGL_DEVICE"
+
+
 def device_setting() -> int | None:
-    """The EGL device index named by ``CELLGL_DEVICE`` (None when unset or empty).
+    """The EGL device index named by ``CELLGL_DEVICE`` or glcontext's ``GLCONTEXT_DEVICE_INDEX``
+    (None when both are unset or empty).
 
     Raises
     ------
     ValueError
-        Not a whole number from 0, or ``GLCONTEXT_DEVICE_INDEX`` (glcontext's own setting,
-        which would win) names another device; the message names the accepted values.
+        Either is not a whole number from 0, or they name different devices; the message names
+        the variable and the accepted values.
     """
-    raw = os.environ.get("CELLGL_DEVICE", "").strip()
-    if not raw:
-        return None
-    try:
-        index = int(raw, 10)
-    except ValueError:
-        index = -1
-    if index < 0:
-        raise ValueError(f"CELLGL_DEVICE={os.environ['CELLGL_DEVICE']!r} is not an EGL device "
-                         f"index; accepted values: {_range(egl_devices())}")
-    other = os.environ.get("GLCONTEXT_DEVICE_INDEX", "").strip()
-    if other and other != str(index):
-        raise ValueError(f"CELLGL_DEVICE={index} and GLCONTEXT_DEVICE_INDEX={other} name "
-                         "different EGL devices; unset one of them")
-    return index
+    found = {}
+    for name in DEVICE_VARS:
+        raw = os.environ.get(name, "")
+        if not raw:
+            continue
+        try:
+            index = int(raw.strip(), 10)
+        except ValueError:
+            index = -1
+        if index < 0:
+            raise ValueError(f"{name}={raw!r} is not an EGL device index; accepted values: "
+                             f"{_range(egl_devices())}")
+        found[name] = index
+    if len(set(found.values())) > 1:
+        raise ValueError(f"CELLGL_DEVICE={found['CELLGL_DEVICE']} and GLCONTEXT_DEVICE_INDEX="
+                         f"{found['GLCONTEXT_DEVICE_INDEX']} name different EGL devices; unset "
+                         "one of them")
+    return next(iter(found.values()), None)
+
+
+#: glcontext's own settings of the libraries its backends load (OSMesa, cellgl's own loader,
+#: reads none of them)
+GLCONTEXT_LIBRARIES = ("GLCONTEXT_LINUX_LIBEGL", "GLCONTEXT_LINUX_LIBGL", "GLCONTEXT_LINUX_LIBX11",
+                       "GLCONTEXT_WIN_LIBGL")
+
+
+def glcontext_setting() -> str | None:
+    """``"GLCONTEXT_LINUX_LIBEGL=/x"``: the first of glcontext's library settings that is set."""
+    for name in GLCONTEXT_LIBRARIES:
+        if os.environ.get(name):
+            return f"{name}={os.environ[name]}"
+    return None
+
+
+def skip_reasons() -> dict:
+    """Why a backend of the platform was not tried when none was named (for the error)."""
+    chosen = glcontext_setting()
+    return {"glx": "DISPLAY not set",
+            "osmesa": (f"{chosen} is set: glcontext's backends only" if chosen
+                       else "libOSMesa not found")}
 
 
 def device_backends(candidates: list[str], named: bool) -> list[str]:
     """``candidates`` (the backends to try; ``named``: chosen by the user), or with
-    ``CELLGL_DEVICE`` set only ``egl`` (the API that picks a device), the index checked.
+    ``CELLGL_DEVICE`` set only ``egl`` (the API that picks a device), the index checked; with one
+    of glcontext's library settings (:data:`GLCONTEXT_LIBRARIES`) set, not ``osmesa`` unless
+    named: a library that fails to load is an error, never a silent fall back to the CPU.
 
     Raises
     ------
@@ -210,13 +250,16 @@ def device_backends(candidates: list[str], named: bool) -> list[str]:
         A bad ``CELLGL_DEVICE`` (naming the devices), or one set beside another backend.
     """
     device = device_setting()
+    if not named and glcontext_setting() and len(candidates) > 1:
+        candidates = [c for c in candidates if c != "osmesa"]
     if device is None:
         return candidates
     own = platform_backends()
     if named and candidates != ["egl"] or "egl" not in own:
+        var = device_variable()
         raise ValueError(
-            f"CELLGL_DEVICE={device} picks an EGL device, but the backend is "
-            f"{candidates[0] if named else own[0]} on {platform_name()}: unset CELLGL_DEVICE"
+            f"{var} picks an EGL device, but the backend is "
+            f"{candidates[0] if named else own[0]} on {platform_name()}: unset {var.split('=')[0]}"
             + (" or set CELLGL_BACKEND=egl" if "egl" in own else ""))
     check_device(device)
     return ["egl"]
@@ -239,7 +282,8 @@ def check_device(index: int) -> None:
     """Raise ValueError when ``index`` is not one of this machine's EGL devices (naming them)."""
     devices = egl_devices()
     if devices is not None and index >= len(devices):
-        raise ValueError(f"CELLGL_DEVICE={index} is not an EGL device of this machine; "
+        raise ValueError(f"{device_variable().split('=')[0]}={index} is not an EGL device of "
+                         "this machine; "
                          f"accepted values: {_range(devices)}")
 
 

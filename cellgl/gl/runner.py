@@ -144,7 +144,7 @@ class Runner:
         read them: storage buffer ``binding`` or an R32UI texture on unit ``binding``."""
         data = np.ascontiguousarray(words, dtype=np.uint32).reshape(-1)
         raw = data.tobytes()
-        self._bind_words(data, raw, (hash(raw), len(raw)), binding, 1)
+        self._bind_words(data, raw, raw, binding, 1)    # matched by the bytes: a hash can collide
 
     def bind_records(self, records, binding: int) -> None:
         """Upload uint32 ``records`` (R, 4) (cached by content per binding) and bind them where the
@@ -154,7 +154,7 @@ class Runner:
         if not len(data):
             data = np.zeros((1, 4), np.uint32)
         raw = data.tobytes()
-        self._bind_words(data, raw, (hash(raw), len(raw)), binding, 4)
+        self._bind_words(data, raw, raw, binding, 4)
 
     def run(self, p: Pass) -> Result:  # pragma: no cover - each path's own
         raise NotImplementedError

@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections import deque
 
 __all__ = ["LADDER", "MINIMUM", "LadderError", "label", "major_minor", "climb", "wrap_loader",
-           "glcontext_context", "describe"]
+           "glcontext_context", "describe", "check_settings"]
 
 #: moderngl version codes asked for, newest first (core profile).
 LADDER = (460, 450, 430, 410, 330)
@@ -123,6 +123,26 @@ def wrap_loader(loader, minimum: int = MINIMUM, mode: str = "standalone"):
     return ctx
 
 
+def check_settings() -> None:
+    """Refuse glcontext's ``GLCONTEXT_GLVERSION``: it replaces the version asked at every rung
+    (on EGL, GLX and WGL, not on cellgl's own OSMesa loader), so the ladder would not be what
+    it reports, and a version the driver lacks would fall through to another backend unsaid.
+
+    Raises
+    ------
+    ValueError
+        ``GLCONTEXT_GLVERSION`` is set (one line naming it and what to do).
+    """
+    import os
+
+    raw = os.environ.get("GLCONTEXT_GLVERSION", "")
+    if raw:
+        raise ValueError(
+            f"GLCONTEXT_GLVERSION={raw!r} is set: glcontext would ask that version at every rung "
+            f"of cellgl's version ladder ({', '.join(label(c) for c in LADDER)} core, newest "
+            "first: the driver's newest is taken) on some backends but not others; unset it")
+
+
 def glcontext_context(api: str, code: int, **settings):
     """A standalone context from glcontext's backend for ``api`` asking for version ``code``
     core: ``"egl"`` (its EGL backend; ``device_index`` picks the EGL device), or ``"native"``
@@ -130,7 +150,8 @@ def glcontext_context(api: str, code: int, **settings):
     driver gives from 3.3 up is accepted (a driver may give more than asked; CGL gives 4.1).
 
     Note: glcontext lets ``GLCONTEXT_GLVERSION`` replace the version asked (every rung then asks
-    the same) and ``GLCONTEXT_DEVICE_INDEX`` the device.
+    the same: :func:`check_settings` refuses it) and ``GLCONTEXT_DEVICE_INDEX`` the device (checked
+    as ``CELLGL_DEVICE`` is: :func:`cellgl.gl.platforms.device_setting`).
     """
     import glcontext
 

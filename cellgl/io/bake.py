@@ -1,7 +1,8 @@
 """Bake a recipe (or a preset) to an image or volume file: :func:`bake` (``cellgl bake``, whose
 command line is :mod:`cellgl.io.bake_cli`).
 
-The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``). Output
+The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``; GPU
+textures ``.dds``/``.ktx2`` are :mod:`cellgl.io.gputex`'s). Output
 larger than one tile is rendered tile by tile and streamed to the file, so memory stays bounded;
 every pixel is rendered at the same uv as in a one-pass bake, so the two give the same bits.
 Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.md``.
@@ -16,8 +17,6 @@ import os
 import shutil
 import sys
 import dataclasses
-import threading
-import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,17 +24,22 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
-from cellgl import _interrupt
+from cellgl.io import gputex
+from cellgl.io import texfile
+from cellgl.io import udim as udim_mod
+from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace
+from cellgl.io.progress import Progress  # noqa: F401 - bake's progress bar, also cellgl.io.bake.Progress
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
 
-__all__ = ["bake", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
+__all__ = ["bake", "Baked", "BakeError", "parse_size", "parse_channels", "FORMATS", "CHANNELS",
            "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
 
 
 from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
                             MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, accepted_list, check_size, Encoding,
-                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size)
+                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size,
+                            ANIMATED, accepted_outputs)
 
 
 # --------------------------------------------------------------------------------------------
@@ -48,6 +52,7 @@ class _Output:
     path: Path
     channels: tuple[str, ...]
     encodings: tuple[Encoding, ...]
+    size: tuple | None = None   #: (W, H, D or None) of a mip level (cellgl.io.mips); None: the bake's
 
 
 @dataclass(frozen=True)
@@ -58,6 +63,10 @@ class _Plan:
     tile_w: int
     tile_h: int
     samples: int = 1       #: per pixel (an n x n grid; cellgl.texture.antialias)
+    #: this image is the window [ox, ox + width) x [oy, oy + height) of a larger virtual bake
+    #: (full_w x full_h; a UDIM tile, cellgl.io.udim): pixels rendered as that bake's
+    origin: tuple[int, int] = (0, 0)
+    full: tuple[int, int] | None = None
 
     def tiles(self) -> Iterator[tuple[int, int, int, int]]:
         """(x0, y0, w, h) row-major."""
@@ -109,124 +118,6 @@ def output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tupl
 
 
 # --------------------------------------------------------------------------------------------
-# progress
-# --------------------------------------------------------------------------------------------
-
-
-class Progress:
-    """A progress bar on stderr. On a terminal one line redrawn in place (``\\r``, at most four
-    times a second); elsewhere (a log, a pipe) plain lines: one saying what started as soon as
-    the work begins, one at every tenth of the work, and one at least every
-    :data:`LOG_INTERVAL` seconds between them (from a timer thread, so a slow tile still shows
-    the bake is alive); nothing when not ``enabled`` (``--quiet``) or for a single step. Used
-    as ``with bar:`` the line is ended on leaving, with "interrupted" after Ctrl-C or a
-    terminating signal."""
-
-    #: most seconds between two lines in a log (stderr not a terminal)
-    LOG_INTERVAL = 5.0
-
-    def __init__(self, total: int, label: str, enabled: bool, stream=None, unit: str = "tiles"):
-        self.total, self.label, self.done, self.unit = total, label, 0, unit
-        self.enabled = enabled and total > 1
-        self.stream = stream or sys.stderr
-        try:
-            self.tty = self.stream.isatty()
-        except (AttributeError, ValueError, OSError):
-            self.tty = False
-        self.t0 = time.perf_counter()
-        self.last = -1.0
-        self.drawn = 0    # 0 nothing written, 1 a line in progress (terminal), 2 lines ended
-        self._lock = threading.Lock()
-        self._stop: threading.Event | None = None
-        self._logged = self.t0      # when the last log line was written
-
-    def _text(self) -> str:
-        secs = time.perf_counter() - self.t0
-        if not self.done:
-            return f"0/{self.total} {self.unit}, {secs:.0f} s"
-        eta = secs / self.done * (self.total - self.done)
-        return f"{self.done}/{self.total} {self.unit}, {secs:.0f} s, eta {eta:.0f} s"
-
-    def _log(self, text: str) -> None:
-        """One plain line (stderr not a terminal); never raises (a closed log ends the lines)."""
-        with self._lock:
-            self.drawn = 2      # first: a signal that lands in the write still ends the lines
-            self._logged = time.perf_counter()
-            try:
-                self.stream.write(f"{self.label}: {text}\n")
-                self.stream.flush()
-            except (OSError, ValueError):
-                return
-
-    def start(self) -> None:
-        """Say what started (stderr not a terminal) and keep a line coming every
-        :data:`LOG_INTERVAL` seconds until :meth:`close`."""
-        if not self.enabled or self.tty or self._stop is not None:
-            return
-        self._log(f"started, {self.total} {self.unit}")
-        self._stop = threading.Event()
-        threading.Thread(target=self._heartbeat, args=(self._stop,), daemon=True,
-                         name="cellgl-progress").start()
-
-    def _heartbeat(self, stop: threading.Event) -> None:
-        while not stop.wait(self.LOG_INTERVAL / 4):
-            if time.perf_counter() - self._logged >= self.LOG_INTERVAL and not stop.is_set():
-                self._log(self._text())
-
-    def step(self) -> None:
-        _interrupt.check()      # a Ctrl-C the first raise of which was swallowed
-        self.done += 1
-        if not self.enabled:
-            return
-        if self.tty:
-            now = time.perf_counter()
-            if self.done < self.total and now - self.last < 0.25:
-                return  # redraw at most four times a second, and always at the end
-            self.last = now
-            width = 30
-            fill = width * self.done // self.total
-            self.stream.write(f"\r{self.label} [{'#' * fill}{'.' * (width - fill)}] {self._text()} ")
-            self.drawn = 1
-        else:
-            if 10 * self.done // self.total == 10 * (self.done - 1) // self.total:
-                return  # a line at every tenth, and at the end (the timer thread in between)
-            self._log(self._text())
-            return
-        self.stream.flush()
-
-    def close(self, exc: BaseException | None = None) -> None:
-        """End the line; say "interrupted" if ``exc`` is a Ctrl-C or a terminating signal."""
-        if self._stop is not None:
-            self._stop.set()
-            self._stop = None
-        if not self.enabled or not self.drawn:
-            return
-        # (a signal during an import can reach here as another exception; it is still pending)
-        stopped = isinstance(exc, KeyboardInterrupt) or type(exc).__name__ == "Terminated" \
-            or bool(_interrupt.pending)
-        try:
-            if self.drawn == 1:
-                self.stream.write(" interrupted\n" if stopped else "\n")
-            elif stopped:
-                self._log(f"interrupted at {self.done}/{self.total} {self.unit}")
-            self.stream.flush()
-        except (OSError, ValueError):
-            pass
-        self.drawn = 0
-
-    def __enter__(self) -> Progress:
-        try:
-            self.start()
-        except BaseException as exc:    # a Ctrl-C right after the first line: still said
-            self.close(exc)
-            raise
-        return self
-
-    def __exit__(self, kind, exc, tb) -> None:
-        self.close(exc)
-
-
-# --------------------------------------------------------------------------------------------
 # the bake
 # --------------------------------------------------------------------------------------------
 
@@ -269,9 +160,10 @@ def check_path(path) -> tuple[Path, str]:
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
     if ext not in FORMATS:
-        animated = " (an animated .webp/.gif needs --frames N)" if ext in (".webp", ".gif") else ""
-        raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}; "
-                        f"accepted {accepted_list(FORMATS)}{animated}")
+        animated = (f" (an animated {'/'.join(ANIMATED)} needs --frames N: "
+                    "cellgl.io.frames.bake_frames from Python)" if ext in ANIMATED else "")
+        raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}{animated}; "
+                        f"accepted {accepted_outputs()}")
     _check_name(path)
     try:
         check_output(path)      # the one rule of every command's output (cellgl.io.tempfiles)
@@ -290,14 +182,25 @@ def _check_name(path: Path) -> None:
 def _check_tile(tile) -> int | None:
     if tile is None:
         return None
-    if not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
+    if isinstance(tile, bool) or not isinstance(tile, (int, np.integer)) or not 16 <= tile <= 8192 or tile % 16:
         raise BakeError(f"--tile {tile}: accepted multiples of 16 in 16..8192")
     return int(tile)
 
 
+class Baked(list):
+    """What :func:`bake` returns: the list of files written, plus ``colorspace``, the colour
+    space of the ``color`` channel in them (``"linear"``: scene-linear Rec.709, ``"srgb"``:
+    sRGB-encoded, None: no colour channel or ``.npy``) and ``udims``, the UDIM tile numbers
+    (empty for a single image)."""
+
+    colorspace: str | None = None
+    udims: tuple[int, ...] = ()
+
+
 def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels=("color",),
          bit_depth=None, tileable=None, sets=(), tile=None, samples=1, progress=True,
-         memory_budget=DEFAULT_BUDGET) -> list[Path]:
+         memory_budget=DEFAULT_BUDGET, mips=False, colorspace=None, udim=None, udims=None,
+         tiled=False, compress=None, supercompression=None, layers=None) -> Baked:
     """Render a recipe to a file, tile by tile, atomically.
 
     Parameters
@@ -334,11 +237,40 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     memory_budget : int
         Bytes of working memory the bake aims to stay within beyond the process's baseline
         (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
+    mips : bool
+        Also write the mip chain, every level rendered from the recipe at its own size
+        (:mod:`cellgl.io.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
+        the file ``<stem>_mip<k><ext>`` beside level 0 (the file without ``mips``, the same
+        bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1; ``.dds``/``.ktx2`` hold the
+        levels in the file (``max(1, floor(W / 2^k))``, as those formats define them).
+    colorspace : {"linear", "srgb"}, optional
+        The colour space of ``color`` in a float file (``.exr``, 32-bit ``.tif``): ``linear``
+        (default; scene-linear Rec.709, tagged) or ``srgb`` (sRGB-encoded, tagged). Integer
+        formats are always sRGB-encoded and refuse it (:mod:`cellgl.io.colour`).
+    udim, udims : str, optional
+        A UDIM set: ``udim="1001-1012"`` (numbers, ranges, comma lists in 1001..1100) or
+        ``udims="4x2"`` (columns x rows from 1001); ``path`` holds the token ``<UDIM>``. Tile
+        ``1001 + u + 10 v`` is the texture over ``[u, u+1) x [v, v+1)``, ``size`` pixels each
+        (:mod:`cellgl.io.udim`); the set lands whole.
+    tiled : bool
+        Write a tiled file (64 x 64 tiles) of an ``.exr`` or ``.tif``; with ``mips`` its levels
+        go inside it (OpenEXR MIPMAP_LEVELS, TIFF reduced-resolution pages) instead of numbered
+        files. A ``.tx`` is always tiled and mip-mapped (:mod:`cellgl.io.texfile`).
+    compress : str, optional
+        ``.dds``/``.ktx2`` only: the block format, ``bc1``, ``bc3``, ``bc4``, ``bc5``, ``bc7`` or
+        ``none`` for every channel, or per channel ``"color=bc1,height=none"``; default per
+        channel (colour BC7 sRGB, normal BC5, height and masks BC4; F1..F4 and id are never
+        compressed). Refused where the channel cannot use it (:data:`cellgl.io.gputex.CHOICES`).
+    supercompression : {None, "zstd"}
+        ``.ktx2`` only: zstd supercompression of every level.
+    layers : sequence of Recipe, optional
+        ``.dds``/``.ktx2`` only: an array texture, one 2D layer per recipe, rendered as given
+        (``recipe_or_name`` is checked as usual; ``cellgl.io.frames.bake_frames`` passes a loop's frames).
 
     Returns
     -------
-    list of pathlib.Path
-        The files written.
+    Baked (a list of pathlib.Path)
+        The files written, with ``.colorspace`` and ``.udims``.
 
     Raises
     ------
@@ -348,6 +280,13 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     cellgl.texture.recipe.RecipeError
         Unknown preset or bad recipe value.
     """
+    template = path
+    try:
+        set_tiles = udim_mod.tiles_for(path, udim, udims)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
+    if set_tiles:
+        path = udim_mod.tile_path(os.fspath(path), set_tiles[0].number)
     path, ext = check_path(path)
     fmt = FORMATS[ext]
     if isinstance(size, str):
@@ -362,19 +301,53 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
             raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
-    bits = check_bits(ext, bit_depth)
+    texture = ext in gputex.EXTS
+    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gputex)
+        tex_outputs = gputex.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
+                                          (w, h, depth_slices))
+        if layers is not None and (depth_slices is not None or not 1 <= len(layers) <= 2048):
+            raise BakeError(f"an array texture of {len(layers)} layers{' of volumes' if depth_slices else ''}: "
+                            f"accepted 1..2048 layers of 2D textures (no API has arrays of 3D textures)")
+        for flag, value in (("--udim", set_tiles), ("--tiled", tiled), ("--colorspace", colorspace)):
+            if value:
+                raise BakeError(f"{flag} with {ext}: a GPU texture file is one 2D or 3D texture (its "
+                                f"colour always an sRGB format); accepted for .exr/.tif (and .png for --udim)")
+        bits = 8
+    elif compress is not None or supercompression is not None or layers is not None:
+        flag = "--compress" if compress is not None else "--zstd" if supercompression is not None else "layers"
+        raise BakeError(f"{flag}: only for GPU texture files (-o NAME.dds or NAME.ktx2); {ext} "
+                        f"holds plain samples")
+    else:
+        bits = check_bits(ext, bit_depth)
+    try:
+        space = check_colorspace(colorspace, ext, bits)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
+    if set_tiles and depth_slices is not None:
+        raise BakeError(f"--udim with a volume ({w}x{h}x{depth_slices}): UDIM sets are of 2D "
+                        f"images; accepted --size WxH")
+    try:
+        udim_mod.check_extent(set_tiles, w, h, MAX_SIDE)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
     tile = _check_tile(tile)
     try:
         samples = antialias.check_samples(samples)
     except ValueError as exc:
         raise BakeError(f"--samples: {exc}") from None
-    outputs = []
-    for p, chs in output_paths(path, channels):
-        outputs.append(_Output(p, chs, tuple(encoding_of(c, ext, bits) for c in chs)))
+    if not isinstance(mips, bool) or not isinstance(tiled, bool):
+        raise BakeError(f"mips={mips!r}, tiled={tiled!r}: accepted True or False")
+    tiled, mips = texfile.check_tiled(ext, tiled, mips, channels, depth_slices)
+    outputs = []      # (UDIM tile or None, output)
+    for t in ([] if texture else (set_tiles or [None])):
+        where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)
+        level0 = [_Output(p, chs, tuple(encoding_of(c, ext, bits, space) for c in chs))
+                  for p, chs in output_paths(Path(where), channels)]
+        outputs += [(t, o) for o in (_mip_outputs(level0, w, h, depth_slices) if mips and not tiled else level0)]
     if ext == ".exr" and not cio.have_exr():
         raise BakeError("writing .exr files needs the 'OpenEXR' package: "
                         "pip install 'cellgl[exr]'")
-    if ext in (".tif", ".tiff") and not cio.have_tiff():
+    if ext in (".tif", ".tiff", ".tx") and not cio.have_tiff():
         raise BakeError("writing .tif files needs the 'tifffile' package: "
                         "pip install 'cellgl[tiff]'")
     memory_budget = check_budget(memory_budget)          # as --memory (issue 42 item 12)
@@ -389,19 +362,62 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) needs a solid recipe: "
                         f"basis.dimension 3 or 4, got {recipe.get('dimension')} "
                         f"(try --set dimension=3)")
-    for out in outputs:
+    if texture:
+        for o in tex_outputs:
+            _check_name(o.path)
+        done = Baked(gputex.bake_texture(
+            recipe, tex_outputs, ext, (w, h, depth_slices), samples=samples, tile=tile, budget=memory_budget,
+            mip_chain=mips, supercompression=supercompression, layers=layers,
+            progress=lambda total, label, unit: Progress(total, label, progress, unit=unit),
+            meta=lambda c: _meta(recipe, _Output(path, (c,), (encoding_of(c, ".png", 8, space),)),
+                                 _Plan(w, h, depth_slices, 1, 1))))
+        done.colorspace = space if "color" in channels else None
+        return done
+    if set_tiles:
+        try:
+            recipe = udim_mod.window_recipe(recipe, set_tiles)
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
+    for _, out in outputs:
         _check_name(out.path)
-    _check_disk(path.parent, w, h, depth_slices, outputs, ext)
+    _check_disk(path.parent, w, h, depth_slices, [out for _, out in outputs], ext)
 
-    # All the files land together, or none does: each is rendered to its temporary file and
-    # they are renamed onto the outputs only once every one is complete.
-    with atomic_paths([out.path for out in outputs]) as tmps:
-        for out, tmp in zip(outputs, tmps):
+    # All the files land together, or none does (a UDIM set too): each is rendered to its
+    # temporary file and they are renamed onto the outputs only once every one is complete.
+    with atomic_paths([out.path for _, out in outputs]) as tmps:
+        for (t, out), tmp in zip(outputs, tmps):
             file_bytes = sum(e.samples * e.dtype.itemsize for e in out.encodings)
-            plan = dataclasses.replace(plan_tiles(w, h, depth_slices, ext, out.channels, tile, memory_budget,
-                                             file_bytes), samples=samples)
+            ow, oh, od = out.size or (w, h, depth_slices)
+            if tiled:
+                window = None if t is None else (t, set_tiles)
+                texfile.write_texture(tmp, recipe, out, ext, (w, h), mips=mips, samples=samples,
+                                      window=window, meta=_meta(recipe, out, _Plan(w, h, None, w, h)),
+                                      progress=progress)
+                continue
+            plan = dataclasses.replace(plan_tiles(ow, oh, od, ext, out.channels, tile, memory_budget,
+                                                  file_bytes), samples=samples)
+            if t is not None:
+                _, _, cols, rows = udim_mod.bounds(set_tiles)
+                plan = dataclasses.replace(plan, full=(cols * ow, rows * oh),
+                                           origin=udim_mod.tile_origin(t, set_tiles, ow, oh))
             _bake_one(recipe, out, ext, plan, progress, tmp)
-    return [out.path for out in outputs]
+    done = Baked(out.path for _, out in outputs)
+    done.colorspace = space if "color" in channels else None
+    done.udims = tuple(t.number for t in set_tiles)
+    return done
+
+
+def _mip_outputs(outputs: list[_Output], w: int, h: int, d: int | None) -> list[_Output]:
+    """``outputs`` (level 0) followed by every further level's numbered file, per output."""
+    from cellgl.io.mips import level_path, mip_sizes
+
+    sizes = mip_sizes(w, h, d)
+    out = list(outputs)
+    for o in outputs:
+        for k, size in enumerate(sizes[1:], 1):
+            out.append(dataclasses.replace(o, path=level_path(o.path, k),
+                                           size=(size[0], size[1], size[2] if d is not None else None)))
+    return out
 
 
 def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
@@ -410,7 +426,8 @@ def _check_disk(directory: Path, w, h, d, outputs, ext) -> None:
         return
     need = 0
     for out in outputs:
-        px = w * h * (d or 1)
+        ow, oh, od = out.size or (w, h, d)
+        px = ow * oh * (od or 1)
         per = sum(e.samples * e.dtype.itemsize for e in out.encodings)
         need += px * per * (2 if (ext != ".npy" and d) else (1 if ext == ".npy" else 0))
     try:
@@ -427,9 +444,11 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: Progress) -> Iterator[
     from cellgl import recipes
 
     extra = {"samples": plan.samples} if plan.samples != 1 else {}
+    full_w, full_h = plan.full or (plan.width, plan.height)
+    ox, oy = plan.origin
     for x0, y0, tw, th in plan.tiles():
-        res = recipes.render(recipe, plan.width, plan.height, channels=out.channels,
-                             x0=x0, y0=y0, tile_w=tw, tile_h=th, depth=plan.slices, **extra)
+        res = recipes.render(recipe, full_w, full_h, channels=out.channels,
+                             x0=ox + x0, y0=oy + y0, tile_w=tw, tile_h=th, depth=plan.slices, **extra)
         enc = {}
         for e in out.encodings:
             a = e.encode(res[e.channel])
@@ -461,8 +480,13 @@ def _meta(recipe, out: _Output, plan: _Plan) -> str:
     except Exception:  # noqa: BLE001 - metadata is best effort
         rec = None
     size = [plan.width, plan.height] + ([plan.slices] if plan.slices else [])
-    return json.dumps({"generator": "cellgl", "recipe": rec, "size": size,
-                       "channels": list(out.channels)}, sort_keys=True, default=str)
+    meta = {"generator": "cellgl", "recipe": rec, "size": size, "channels": list(out.channels)}
+    spaces = {e.channel: COLORSPACES[e.colorspace].interop_id for e in out.encodings if e.colorspace}
+    if spaces:
+        meta["colorspace"] = spaces     # data channels: never colour, never listed
+    if plan.full is not None:
+        meta["window"] = {"origin": list(plan.origin), "of": list(plan.full)}   # a UDIM tile
+    return json.dumps(meta, sort_keys=True, default=str)
 
 
 def _bake_one(recipe, out: _Output, ext: str, plan: _Plan, progress: bool, tmp: Path) -> None:
@@ -480,7 +504,7 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
             (e,) = out.encodings
             cio.write_png(tmp, (b[e.channel] for b in _bands(tiles, plan)), plan.width,
                           plan.height, e.samples, e.dtype.itemsize * 8,
-                          text={"Software": "cellgl", "cellgl": meta})
+                          text={"Software": "cellgl", "cellgl": meta}, srgb=e.channel == "color")
         elif ext == ".exr":
             _write_exr(tmp, tiles, out, plan, meta)
         elif ext == ".npy":
@@ -525,8 +549,13 @@ def _write_exr(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
                     res[name] = a[..., i]
         return res
 
+    attributes, chroma = {"cellgl": meta}, None
+    space = next((e.colorspace for e in out.encodings if e.colorspace), None)
+    if space is not None:       # the colour channels' space; the data channels are not colour
+        attributes["oiio:ColorSpace"] = attributes["colorInteropID"] = COLORSPACES[space].interop_id
+        chroma = REC709_CHROMATICITIES
     cio.write_exr(tmp, (split(b) for b in _bands(tiles, plan)), plan.width, plan.height,
-                  dtypes, attributes={"cellgl": meta})
+                  dtypes, attributes=attributes, chromaticities=chroma)
 
 
 def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:

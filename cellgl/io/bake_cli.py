@@ -8,7 +8,8 @@ import time
 from pathlib import Path
 
 from cellgl.io.bake import bake
-from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, BakeError, int_arg
+from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, FORMATS, BakeError, accepted_list,
+                            accepted_outputs, int_arg)
 from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]
@@ -18,14 +19,21 @@ _EPILOG = """\
 formats (from the extension) and --depth (bits per sample):
   .png  8 (default) or 16     .exr  16 (half) or 32 (float, default)
   .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
+  .tx   as .tif, tiled and mip-mapped (every level rendered) for film renderers
+  .dds, .ktx2  GPU textures, a format per channel (--compress; --depth: plain samples' bits)
+colour: float files hold scene-linear Rec.709 (--colorspace srgb: sRGB-encoded), tagged;
+  integer formats sRGB-encoded.
 channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4.
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
   cellgl bake crumple -o crumple.png --size 256 --samples 4
+  cellgl bake flagstone -o f.dds --size 1024 --mips --channels color,normal   # BC7 sRGB, BC5
+  cellgl bake flagstone -o f.ktx2 --size 1024 --mips --zstd --compress bc1
   cellgl bake my_recipe.json -o big.tif --size 16384x16384 --tileable
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
+  cellgl bake flagstone -o 'wall.<UDIM>.tx' --udim 1001-1012 --size 1024
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
@@ -33,13 +41,14 @@ examples:
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Declare ``cellgl bake``'s arguments on a subparsers object."""
     p = sub.add_parser(
-        "bake", help="render a preset or recipe to .png/.exr/.tif/.npy (or .zarr on Dask)",
+        "bake", help=f"render a preset or recipe to {'/'.join(FORMATS)} (an animated "
+                     f"{'/'.join(ANIMATED)} with --frames, or {'/'.join(DISTRIBUTED)} on Dask)",
         description="Render a preset or recipe JSON to an image or volume file.",
         epilog=_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("recipe", metavar="PRESET_OR_RECIPE",
                    help="a preset name (cellgl presets) or a recipe .json file")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="output file: .png, .exr, .tif/.tiff or .npy; or a .zarr directory (Dask)")
+                   help=f"output file: {accepted_outputs()}")
     p.add_argument("--size", default=f"{DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]}", metavar="W[xH[xD]]",
                    help="pixels (default %(default)s); a third number bakes a volume of D slices")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
@@ -61,9 +70,32 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         f"(default {DEFAULT_BUDGET >> 20})")
     p.add_argument("--frames", default=None, metavar="N",
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
-                        ".. FILE_<N-1>.png, or one animated .webp/.gif (cellgl/io/frames.py)")
+                        ".. FILE_<N-1>.png, one animated .webp/.gif, or one .dds/.ktx2 array texture "
+                        "(cellgl/io/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
-                   help="frames per second of an animated .webp/.gif (with --frames; default 24)")
+                   help="frames per second of an animated file (with --frames): .webp 1..95 "
+                        "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
+    p.add_argument("--colorspace", default=None, metavar="NAME",
+                   help="colour of a float file (.exr, 32-bit .tif): linear (default; scene-linear "
+                        "Rec.709, tagged lin_rec709_scene) or srgb (sRGB-encoded, tagged); integer "
+                        "formats are always sRGB-encoded")
+    p.add_argument("--udim", default=None, metavar="RANGE",
+                   help="a UDIM set: tiles such as 1001-1012 (1001..1100; -o holds <UDIM>, e.g. "
+                        "'wall.<UDIM>.exr', quoted); tile 1001+u+10v is uv [u,u+1)x[v,v+1), --size each")
+    p.add_argument("--udims", default=None, metavar="UxV",
+                   help="a UDIM set of U columns by V rows from 1001 (as --udim)")
+    p.add_argument("--mips", action="store_true",
+                   help="also write the mip chain, each level rendered at its own size (never "
+                        "downsampled): in the file for .dds/.ktx2, else FILE_mip1.png .. (1x1)")
+    p.add_argument("--compress", default=None, metavar="FORMAT",
+                   help=".dds/.ktx2: bc1|bc3|bc4|bc5|bc7|none for every channel, or per channel "
+                        "color=bc1,height=none (default: color bc7 sRGB, normal bc5, height bc4; "
+                        "F1..F4 float, id R32_UINT, never compressed)")
+    p.add_argument("--zstd", action="store_true",
+                   help=".ktx2: zstd supercompression of every level")
+    p.add_argument("--tiled", action="store_true",
+                   help="a tiled .exr/.tif (64x64 tiles); with --mips the levels go inside it, as "
+                        "in a .tx (always tiled and mip-mapped)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar, no summary")
     g = p.add_argument_group("distributed (.zarr output; needs pip install 'cellgl[dask]', "
                              "see docs/scale.md)")
@@ -79,13 +111,30 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl bake`` from parsed arguments; errors are raised as BakeError (ValueError)."""
+    if not args.output:     # -o '': the one rule's message, not "'.': unknown extension"
+        from cellgl.io.tempfiles import check_output
+
+        try:
+            check_output(args.output)
+        except ValueError as exc:
+            raise BakeError(str(exc)) from None
     ext = Path(args.output).suffix.lower()
     if args.frames is not None and ext == ".zarr":
         raise BakeError(f"--frames {args.frames}: a .zarr bake writes one image; accepted for "
-                        f"--frames: an animated .webp/.gif or a numbered {', '.join(FORMATS)} sequence")
-    if args.fps is not None and (args.frames is None or ext not in (".webp", ".gif")):
+                        f"--frames: an animated {'/'.join(ANIMATED)} or a numbered {', '.join(FORMATS)} sequence")
+    if args.fps is not None and (args.frames is None or ext not in ANIMATED):
         raise BakeError(f"--fps {args.fps}: only for an animated file (--frames N -o NAME.webp "
                         f"or NAME.gif); a numbered sequence or a single image has no frame rate")
+    for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
+                        ("--tiled", args.tiled or None)):
+        if value is not None and (args.frames is not None or ext == ".zarr"):
+            raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
+                            f"not with --frames or a .zarr output")
+    if getattr(args, "mips", False) and ((args.frames is not None and ext not in (".dds", ".ktx2"))
+                                         or ext == ".zarr"):
+        raise BakeError(f"--mips: for a single bake (.png, .exr, .tif, .npy: numbered files; "
+                        f".dds, .ktx2: in the file, also an array of --frames); not with "
+                        f"{'--frames to ' + ext if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
         from cellgl.dask.cli import run_zarr_bake
 
@@ -94,7 +143,7 @@ def run_cli(args: argparse.Namespace) -> int:
                         ("--threads", None if args.threads == "1" else args.threads)):
         if value is not None:
             raise BakeError(f"{flag} {value}: only for a distributed .zarr bake "
-                            f"(-o NAME.zarr); accepted outputs here: {', '.join(FORMATS)}")
+                            f"(-o NAME.zarr); accepted outputs here: {accepted_list((*FORMATS, *ANIMATED))}")
     budget = DEFAULT_BUDGET if args.memory is None else \
         int_arg("--memory", args.memory, 1, 1 << 20) << 20
     tile = None if args.tile is None else int_arg("--tile", args.tile, 16, 8192)
@@ -106,7 +155,9 @@ def run_cli(args: argparse.Namespace) -> int:
         paths = bake(args.recipe, args.output, size=args.size,
                      channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                      tileable=args.tileable, sets=args.sets, tile=tile, samples=samples,
-                     progress=not args.quiet, memory_budget=budget)
+                     progress=not args.quiet, memory_budget=budget, mips=args.mips,
+                     colorspace=args.colorspace, udim=args.udim, udims=args.udims, tiled=args.tiled,
+                     compress=args.compress, supercompression="zstd" if args.zstd else None)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""
         raise BakeError(f"cannot write{where}: {exc.strerror or exc}") from None
@@ -115,23 +166,48 @@ def run_cli(args: argparse.Namespace) -> int:
         for p in paths:
             print(f"wrote {p} ({os.path.getsize(p) / 1024:.0f} KiB, {secs:.1f} s)",
                   file=sys.stderr)
+        if paths.colorspace:
+            from cellgl.io.colour import COLORSPACES
+
+            cs = COLORSPACES[paths.colorspace]
+            print(f"colour: {cs.ocio_name} ({cs.interop_id})", file=sys.stderr)
     return 0
+
+
+def _texture_kw(args: argparse.Namespace) -> dict:
+    """--mips, --compress, --zstd for a loop baked as one .dds/.ktx2 array texture (bake refuses
+    --compress/--zstd for the other formats)."""
+    kw = {}
+    if args.mips:
+        kw["mips"] = True
+    if args.compress is not None:
+        kw["compress"] = args.compress
+    if args.zstd:
+        kw["supercompression"] = "zstd"
+    return kw
 
 
 def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
     """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
-    from cellgl.io.frames import MAX_FPS, MAX_FRAMES, bake_frames
+    from cellgl.io.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
 
+    ext = Path(args.output).suffix.lower()
     try:
-        fps = 24.0 if args.fps is None else float(args.fps)
+        fps = None if args.fps is None else float(args.fps)
     except ValueError:
-        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS}") from None
+        raise BakeError(f"--fps {args.fps!r}: accepted a number in 1..{MAX_FPS_OF.get(ext, MAX_FPS)}") from None
     paths = bake_frames(args.recipe, args.output, int_arg("--frames", args.frames, 1, MAX_FRAMES), fps=fps,
                         size=args.size, channels=tuple(args.channels or ("color",)), bit_depth=args.depth,
                         tileable=args.tileable, sets=args.sets, tile=tile, progress=not args.quiet,
-                        memory_budget=budget)
+                        memory_budget=budget, **_texture_kw(args))
     if not args.quiet:
         total = sum(os.path.getsize(p) for p in paths)
+        rate = ""
+        if ext in ANIMATED:
+            from cellgl.io.frames import DEFAULT_FPS
+
+            delay, real = frame_delay(ext, DEFAULT_FPS[ext] if fps is None else fps)
+            rate = f", {real:.4g} fps: {delay} {'cs' if ext == '.gif' else 'ms'} a frame"
         print(f"wrote {len(paths)} file(s): {paths[0]}{' .. ' + str(paths[-1]) if len(paths) > 1 else ''} "
-              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s)", file=sys.stderr)
+              f"({total / 1024:.0f} KiB, {time.perf_counter() - t0:.1f} s{rate})", file=sys.stderr)
     return 0

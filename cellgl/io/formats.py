@@ -186,7 +186,8 @@ def usable_cores() -> int:
 
 
 def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, height: int,
-              samples: int, bit_depth: int, *, text: Mapping[str, str] | None = None) -> None:
+              samples: int, bit_depth: int, *, text: Mapping[str, str] | None = None,
+              srgb: bool = False) -> None:
     """Write a PNG from full-width bands of rows, never holding more than two bands.
 
     Parameters
@@ -205,6 +206,11 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     bit_depth : {8, 16}
     text : mapping of str to str, optional
         ``tEXt`` chunks (keyword -> Latin-1 text), e.g. the recipe as JSON.
+    srgb : bool
+        The samples are sRGB-encoded colour: an ``sRGB`` chunk (rendering intent perceptual) and,
+        as the PNG specification recommends for readers that know only those, the matching
+        ``gAMA`` (1/2.2) and ``cHRM`` (BT.709 primaries, D65). Without it (data: heights,
+        normals, distances) the file has no colour chunk at all.
 
     Notes
     -----
@@ -246,6 +252,8 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
         f.write(b"\x89PNG\r\n\x1a\n")
         f.write(_chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, bit_depth,
                                             _PNG_COLOR_TYPE[samples], 0, 0, 0)))
+        if srgb:
+            f.write(_SRGB_CHUNKS)
         for key, value in (text or {}).items():
             f.write(_chunk(b"tEXt", key.encode("latin-1") + b"\0" + value.encode("latin-1")))
         busy = None
@@ -272,6 +280,11 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
             raise
         _write_idat(f, state["pending"], final=True)
         f.write(_chunk(b"IEND", b""))
+
+
+#: sRGB (intent 0, perceptual), gAMA 45455 (1/2.2) and cHRM of sRGB: PNG 3rd edition, 11.3.2
+_SRGB_CHUNKS = (_chunk(b"sRGB", b"\0") + _chunk(b"gAMA", struct.pack(">I", 45455))
+                + _chunk(b"cHRM", struct.pack(">8I", 31270, 32900, 64000, 33000, 30000, 60000, 15000, 6000)))
 
 
 def _write_idat(f, pending: bytearray, final: bool) -> None:
@@ -314,7 +327,8 @@ _EXR_TYPES = {np.dtype(np.float16): "HALF", np.dtype(np.float32): "FLOAT",
 
 def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]], width: int,
               height: int, channels: Mapping[str, np.dtype | str], *,
-              attributes: Mapping[str, str] | None = None) -> None:
+              attributes: Mapping[str, str] | None = None,
+              chromaticities: Sequence[tuple[float, float]] | None = None) -> None:
     """Write a ZIP-compressed scanline OpenEXR file band by band.
 
     Parameters
@@ -329,6 +343,8 @@ def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]]
         Channel name -> ``float16`` (HALF), ``float32`` (FLOAT) or ``uint32`` (UINT).
     attributes : mapping of str to str, optional
         Extra string attributes in the header (e.g. ``cellgl_recipe``).
+    chromaticities : four (x, y) pairs, optional
+        The standard ``chromaticities`` attribute: CIE xy of red, green, blue and white.
 
     Notes
     -----
@@ -367,6 +383,8 @@ def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]]
         header["compression"] = Imath.Compression(Imath.Compression.ZIP_COMPRESSION)
         for key, value in attributes.items():
             header[key] = value.encode("utf-8")
+        if chromaticities is not None:  # a placeholder the size of the attribute (see _patch_chromaticities)
+            header["chromaticities"] = _CHROMA_PLACEHOLDER
         out = OpenEXR.OutputFile(str(path), header)
         try:
             for band in bands:
@@ -374,6 +392,8 @@ def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]]
                 out.writePixels({k: a.tobytes() for k, a in arrays.items()}, n)
         finally:
             out.close()
+        if chromaticities is not None:
+            _patch_chromaticities(path, chromaticities)
     else:  # pragma: no cover - a future OpenEXR without the old API
         parts = {name: [] for name in chans}
         for band in bands:
@@ -382,12 +402,39 @@ def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]]
                 parts[k].append(a)
         header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
         header.update(attributes)
+        if chromaticities is not None:
+            header["chromaticities"] = tuple(float(c) for xy in chromaticities for c in xy)
         data = {k: np.concatenate(v) if v else np.zeros((0, width), chans[k])
                 for k, v in parts.items()}
         with OpenEXR.File(header, data) as f:
             f.write(str(path))
     if rows_done != height:
         raise ValueError(f"EXR got {rows_done} rows, expected {height}")
+
+
+#: a string attribute exactly as long as a ``chromaticities`` one (OpenEXR's file layout: name,
+#: type name, int32 size, value; "string" + 4 + 40 bytes = "chromaticities" + 4 + 32 bytes)
+_CHROMA_PLACEHOLDER = b"cellgl-chromaticities-placeholder-000000"
+_CHROMA_STRING = b"chromaticities\0string\0" + struct.pack("<i", 40) + _CHROMA_PLACEHOLDER
+
+
+def _patch_chromaticities(path, chromaticities) -> None:
+    """Turn the placeholder string attribute ``chromaticities`` into the standard attribute of
+    type ``chromaticities`` (8 float32: red, green, blue, white xy), in place.
+
+    The legacy ``OpenEXR.OutputFile`` API, the one that streams scanlines, writes zeros for an
+    ``Imath.Chromaticities`` (OpenEXR 3.5); the header is a documented fixed layout
+    (openexr.com, "OpenEXR File Layout") and both attributes are 51 bytes after the name, so
+    nothing else in the file moves. Checked by OpenEXR's and OpenImageIO's readers in the tests.
+    """
+    with open(path, "r+b") as f:
+        head = f.read(1 << 20)
+        at = head.find(_CHROMA_STRING)
+        if at < 0 or head.find(_CHROMA_STRING, at + 1) >= 0:
+            raise ValueError(f"EXR {path}: the chromaticities placeholder was not found once")
+        values = [float(c) for xy in chromaticities for c in xy]
+        f.seek(at + len(b"chromaticities\0"))
+        f.write(b"chromaticities\0" + struct.pack("<i", 32) + struct.pack("<8f", *values))
 
 
 # --------------------------------------------------------------------------------------------

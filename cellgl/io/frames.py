@@ -27,15 +27,23 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size
-from cellgl.io.tempfiles import check_output, commit_lock, human_size, scratch_dir
+from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
+                            quantize)
+from cellgl.io.gputex import EXTS as GPU_EXTS
+from cellgl.io.tempfiles import check_output, commit_lock, human_size, naming_destination_in, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
 
-#: extensions written as one animated file
-ANIMATED = (".webp", ".gif")
 MAX_FRAMES = 10000          #: most frames of a sequence (four-digit numbers)
-MAX_FPS = 120
+#: an animated file's frame delay: milliseconds per unit of the format (WebP ms, GIF cs)
+DELAY_UNIT_MS = {".webp": 1, ".gif": 10}
+#: browsers (Firefox, Chromium) play a frame delay of 10 ms or less at 100 ms (10 fps): the
+#: highest rate a file can play at is the one whose delay is the shortest above that
+MAX_FPS_OF = {".webp": 95, ".gif": 50}
+MAX_FPS = max(MAX_FPS_OF.values())
+DEFAULT_FPS = {".webp": 24.0, ".gif": 25.0}  #: a GIF cannot store 24 fps (4 cs: 25 fps)
+#: an asked rate the file's delay misses by more than this (relative) is warned of
+FPS_TOLERANCE = 0.01
 
 
 def frame_recipe(recipe, k: int, frames: int):
@@ -43,10 +51,46 @@ def frame_recipe(recipe, k: int, frames: int):
     return recipe.replace(orbit_phase=recipe.get("orbit_phase") + k / frames)
 
 
+def frame_delay(ext: str, fps) -> tuple[int, float]:
+    """The delay an animated ``ext`` file stores for ``fps`` (in its units: WebP milliseconds,
+    GIF hundredths of a second, the nearest to ``1 / fps``) and the rate it plays at.
+
+    Raises
+    ------
+    BakeError
+        ``fps`` is not a number in 1..``MAX_FPS_OF[ext]``: a faster rate would need a delay of
+        10 ms or less, which browsers play at 10 fps (a GIF's 0 or 1 cs, a WebP's <= 10 ms).
+    """
+    most = MAX_FPS_OF[ext]
+    if isinstance(fps, bool) or not isinstance(fps, (int, float, np.number)) or not 1 <= fps <= most:
+        why = ("a GIF stores each frame's delay in hundredths of a second and browsers play a delay "
+               "under 2 (0.02 s) at 10 fps, so 50 fps is its fastest (rates 100/n: 50, 33.3, 25, 20, ...)"
+               if ext == ".gif" else "browsers play a frame delay of 10 ms or less at 10 fps")
+        raise BakeError(f"--fps {fps!r}: accepted for {ext} a number in 1..{most} ({why})")
+    unit = DELAY_UNIT_MS[ext]
+    delay = max(1, int(round(1000.0 / unit / float(fps))))
+    return delay, 1000.0 / (unit * delay)
+
+
+def _rate_note(ext: str, fps, frames: int) -> str | None:
+    """A warning when the rate ``ext`` can store misses ``fps`` by more than ``FPS_TOLERANCE``."""
+    delay, real = frame_delay(ext, fps)
+    if abs(real - fps) <= FPS_TOLERANCE * fps:
+        return None
+    what = f"{delay} cs ({delay * 10} ms)" if ext == ".gif" else f"{delay} ms"
+    exact = ("rates a GIF stores exactly: 100/n, e.g. 50, 25, 20, 12.5, 10" if ext == ".gif"
+             else "rates a WebP stores exactly: 1000/n, e.g. 50, 40, 25, 20")
+    return (f"--fps {fps:g}: an animated {ext} stores a delay of {what} a frame, so it plays at "
+            f"{real:.4g} fps (the {frames} frames last {frames / real:.4g} s, not "
+            f"{frames / fps:.4g} s); {exact}")
+
+
 def _check(frames, fps, recipe, ext, channels):
     if isinstance(frames, bool) or not isinstance(frames, (int, np.integer)) or not 1 <= frames <= MAX_FRAMES:
         raise BakeError(f"--frames {frames!r}: accepted a whole number in 1..{MAX_FRAMES}")
-    if isinstance(fps, bool) or not isinstance(fps, (int, float, np.number)) or not 1 <= fps <= MAX_FPS:
+    if ext in ANIMATED:
+        frame_delay(ext, fps)
+    elif isinstance(fps, bool) or not isinstance(fps, (int, float, np.number)) or not 1 <= fps <= MAX_FPS:
         raise BakeError(f"--fps {fps!r}: accepted a number in 1..{MAX_FPS}")
     if getattr(recipe, "kind", None) == "pups":
         raise BakeError(f"--frames: {recipe.name} is a PUPs recipe, which has no orbit animation; "
@@ -60,7 +104,7 @@ def _check(frames, fps, recipe, ext, channels):
                         "(.png, .exr, .tif, .npy)")
 
 
-def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(256, 256),
+def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, size=(256, 256),
                 channels=("color",), bit_depth=None, tileable=None, sets=(), progress=False,
                 **bake_kw) -> list[Path]:
     """Bake a loop of ``frames`` frames of an orbiting recipe.
@@ -71,11 +115,17 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
         Its ``orbit_radius`` must be > 0 (else nothing moves).
     path : str or PathLike
         ``name.webp`` / ``name.gif``: one animated, endlessly looping file (colour only).
+        ``name.dds`` / ``name.ktx2``: one array texture, a layer per frame (per channel
+        ``name_<channel>.dds`` when several are asked for; ``mips``, ``compress`` in ``bake_kw``).
         Otherwise (``.png``, ``.exr``, ``.tif``, ``.npy``) the sequence ``name_0000.png`` ..
         (per channel ``name_0000_<channel>.png`` when several are asked for).
     frames : int in 1..10000
-    fps : float in [1, 120]
-        Frames per second of an animated file.
+    fps : float, optional
+        Frames per second of an animated file: 1..95 for ``.webp`` (default 24), 1..50 for
+        ``.gif`` (default 25). The file stores a delay per frame (WebP in milliseconds, GIF in
+        hundredths of a second), the nearest to ``1 / fps``; where the rate that plays misses
+        ``fps`` by more than 1% (GIF 24 fps: 4 cs, 25 fps) a ``UserWarning`` says the real rate.
+        Faster rates are refused: browsers play a delay of 10 ms or less at 10 fps.
     size, channels, bit_depth, tileable, sets, bake_kw :
         as :func:`cellgl.io.bake.bake` (``size`` default 256 x 256).
 
@@ -104,9 +154,19 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
         except ValueError as exc:
             raise BakeError(str(exc)) from None
     recipe = load_recipe_sets(recipe_or_name, sets, tileable)
+    if fps is None:
+        fps = DEFAULT_FPS.get(ext, 24.0)
     _check(frames, fps, recipe, ext, channels)
     if ext in ANIMATED:
         w, h = _animated_size(path, size, bake_kw.get("memory_budget", DEFAULT_BUDGET))
+        note = _rate_note(ext, fps, frames)
+        if note:
+            import warnings
+
+            warnings.warn(note, UserWarning, stacklevel=2)
+    if ext in GPU_EXTS:     # one array texture, a layer per frame (cellgl.io.gputex)
+        return bake(recipe, path, size=size, channels=channels, bit_depth=bit_depth, progress=progress,
+                    layers=[frame_recipe(recipe, k, frames) for k in range(frames)], **bake_kw)
     bar = Progress(frames, f"baking {path.name}", progress, unit="frames")
     # the folder is swept by a later bake if this one is killed
     with scratch_dir(path) as tmp, bar:
@@ -119,23 +179,9 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float = 24.0, size=(2
                 names += bake(frame_recipe(recipe, k, frames), target, size=size, channels=channels,
                               bit_depth=bit_depth, progress=progress and frames == 1, **bake_kw)
             except (BakeError, OSError) as exc:     # name the frame's file, not the hidden folder
-                raise _naming_output(exc, tmp, parent) from None
+                raise naming_destination_in(exc, tmp, parent) from None
             bar.step()
         return _move_all(names, parent)
-
-
-def _naming_output(exc: BaseException, tmp: Path, parent: Path) -> BaseException:
-    """``exc`` with the hidden folder ``tmp`` of the frames replaced by the output's ``parent``."""
-    def fix(text):
-        if text is None:
-            return None
-        text = str(text)
-        text = text.replace(str(tmp) + os.sep, "" if str(parent) == "." else str(parent) + os.sep)
-        return text.replace(str(tmp), str(parent))
-
-    if isinstance(exc, OSError):
-        return OSError(exc.errno, fix(exc.strerror or str(exc)), fix(exc.filename))
-    return type(exc)(fix(str(exc)))
 
 
 def _move_all(files: list[Path], parent: Path) -> list[Path]:
@@ -192,14 +238,15 @@ def _animated_size(path: Path, size, budget: int) -> tuple[int, int]:
 
 def _frame_rgb(recipe, w: int, h: int, plan) -> np.ndarray:
     """The colour of ``recipe`` at ``w x h`` as uint8 (h, w, 3), rendered tile by tile as
-    ``plan`` says (the same bits as a one-pass render)."""
+    ``plan`` says (the same bits as a one-pass render), quantised as every 8-bit output is
+    (:func:`cellgl.io.spec.quantize`): a lossless WebP frame holds the 8-bit PNG frame's bits."""
     from cellgl import recipes
 
     out = np.empty((h, w, 3), np.uint8)
     for x0, y0, tw, th in plan.tiles():
         rgb = recipes.render(recipe, w, h, channels=("color",), x0=x0, y0=y0, tile_w=tw,
                              tile_h=th)["color"][..., :3]
-        out[y0:y0 + th, x0:x0 + tw] = np.round(np.clip(rgb, 0.0, 1.0) * 255.0).astype(np.uint8)
+        out[y0:y0 + th, x0:x0 + tw] = quantize(rgb, 8)     # the PNG frames' bits
     return out
 
 
@@ -211,8 +258,9 @@ def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bake
     w, h = size
     budget = bake_kw.get("memory_budget", DEFAULT_BUDGET)
     plan = plan_tiles(w, h, None, ".png", ("color",), bake_kw.get("tile"), budget // 2, 3)
-    duration = int(round(1000.0 / fps))
     ext = path.suffix.lower()
+    delay, _ = frame_delay(ext, fps)
+    duration = delay * DELAY_UNIT_MS[ext]          # ms (a GIF's: whole hundredths)
     part = tmp / f"{path.stem}{path.suffix}"
 
     def images():
@@ -233,8 +281,8 @@ def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bake
 
 def _write_gif(f, frames, w: int, h: int, duration: int) -> None:
     """An endlessly looping GIF89a of the uint8 RGB ``frames``, each with its own palette
-    (Pillow's adaptive one, as its GIF writer makes) and shown ``duration`` ms, written frame
-    by frame."""
+    (Pillow's adaptive one, as its GIF writer makes) and shown ``duration`` ms (a multiple of
+    10: Pillow stores ``duration // 10`` hundredths), written frame by frame."""
     from PIL import GifImagePlugin, Image
 
     f.write(b"GIF89a" + struct.pack("<HHBBB", w, h, 0, 0, 0))   # no global colour table

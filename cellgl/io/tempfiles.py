@@ -4,7 +4,8 @@ all together or not at all, with their disk space reserved up front.
 A temporary file lives next to its destination and is named
 ``.<stem>.cellgl-<pid>@<host>.<random>.<kind><ext>`` (``kind`` ``part`` for a file that becomes an
 output, ``spool`` for scratch data; a folder ``.<stem>.cellgl-<pid>@<host>.<random>.frames`` holds
-the frames of an animation until all are done), never more than 255 bytes whatever the destination's name (the
+the frames of an animation until all are done, ``.<stem>.cellgl-<pid>@<host>.<random>.export`` a
+MaterialX export's set of files until it is moved into place), never more than 255 bytes whatever the destination's name (the
 stem is shortened). A process killed mid-write (SIGKILL, a power cut) cannot delete its own; the
 next write into that directory on the same host removes those whose process is gone
 (:func:`sweep_stale`). SIGTERM and SIGHUP are turned into an exception by the command line, so they
@@ -24,12 +25,13 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 __all__ = ["atomic_paths", "commit_lock", "scratch_path", "scratch_dir", "sweep_stale", "reserve", "temp_name", "human_size",
-           "check_output", "check_output_dir", "NAME_MAX"]
+           "check_output", "check_output_dir", "default_mode", "naming_destination_in", "NAME_MAX",
+           "lock_wait", "lock_holder", "LOCK_WAIT_ENV"]
 
 NAME_MAX = 255  #: bytes in one file name on every common filesystem
 _EXT_MAX = 32   #: longest extension kept on a temporary name
 _HOST = re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:40] or "host"
-_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:(?:part|spool)(?:\..*)?|frames)$")
+_TEMP = re.compile(r"^\..*\.cellgl-(\d+)@([A-Za-z0-9-]*)\.[0-9a-f]{8}\.(?:(?:part|spool)(?:\..*)?|frames|export)$")
 
 
 def human_size(n: int) -> str:
@@ -106,10 +108,96 @@ def _create(directory: Path, dest: Path, kind: str, ext: str | None = None) -> P
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(directory))
 
 
-def _default_mode() -> int:
+def default_mode(base: int = 0o666) -> int:
+    """``base`` less the process's umask: the mode a new file (0o666) or folder (0o777) gets."""
     umask = os.umask(0)
     os.umask(umask)
-    return 0o666 & ~umask
+    return base & ~umask
+
+
+#: how long a commit waits for another process's lock on its output folder, in seconds:
+#: ``$CELLGL_LOCK_WAIT``, 0..86400, default 60 (cellgl holds it for milliseconds, the renames)
+LOCK_WAIT_ENV, LOCK_WAIT = "CELLGL_LOCK_WAIT", 60.0
+#: how often a waiting commit tries the lock again, in seconds
+_LOCK_POLL = 0.05
+
+
+def lock_wait() -> float:
+    """``$CELLGL_LOCK_WAIT`` checked (seconds in 0..86400; unset or empty: :data:`LOCK_WAIT`);
+    ValueError naming the value otherwise. :func:`check_output` asks it before a command's work."""
+    import math
+
+    text = os.environ.get(LOCK_WAIT_ENV, "").strip()
+    if not text:
+        return LOCK_WAIT
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not 0.0 <= value <= 86400.0:                     # NaN fails too
+        raise ValueError(f"{LOCK_WAIT_ENV}={text!r}: accepted seconds in 0..86400 (how long a write "
+                         f"waits for another process's lock on its output folder; default {LOCK_WAIT:g})")
+    return value
+
+
+def lock_holder(fd: int) -> str:
+    """Who holds a ``flock`` on the file open as ``fd``: ``"process 1234 (flock)"`` from Linux's
+    ``/proc/locks`` (read at most 1 MiB) and ``/proc/<pid>/comm``; ``"another process"`` where
+    that is not known (another OS, another PID namespace)."""
+    try:
+        st = os.fstat(fd)
+        key = f"{os.major(st.st_dev):02x}:{os.minor(st.st_dev):02x}:{st.st_ino}"
+        with open("/proc/locks", "rb") as f:
+            text = f.read(1 << 20).decode("ascii", "replace")
+    except (OSError, ValueError, AttributeError):
+        return "another process"
+    for line in text.splitlines():
+        fields = line.split()
+        if len(fields) >= 6 and fields[1] == "FLOCK" and fields[5] == key and fields[4].isdigit():
+            pid = int(fields[4])
+            if pid <= 0 or pid == os.getpid():
+                break
+            try:
+                with open(f"/proc/{pid}/comm", "rb") as f:
+                    comm = f.read(64).decode("utf-8", "replace").strip()
+            except OSError:
+                comm = ""
+            comm = "".join(c for c in comm if c.isprintable())
+            return f"process {pid}" + (f" ({comm})" if comm else "")
+    return "another process"
+
+
+def _lock(fd: int, directory: str, fcntl) -> None:
+    """``flock(fd, LOCK_EX)``, waiting at most :func:`lock_wait` seconds for another holder (said
+    once, as a warning naming it); TimeoutError naming the folder and the holder after that."""
+    import time
+    import warnings
+
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        return
+    except BlockingIOError:
+        pass
+    except OSError:                                 # a filesystem without locks
+        return
+    wait = lock_wait()
+    who = lock_holder(fd)
+    warnings.warn(f"waiting for the lock on folder {directory!r}, held by {who}; giving up after "
+                  f"{wait:g} s (${LOCK_WAIT_ENV})", UserWarning, stacklevel=4)
+    deadline = time.monotonic() + wait
+    while True:
+        time.sleep(min(_LOCK_POLL, max(0.0, deadline - time.monotonic())))
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            return
+        except BlockingIOError:
+            if time.monotonic() >= deadline:
+                break
+        except OSError:
+            return
+    raise TimeoutError(errno.ETIMEDOUT, f"{lock_holder(fd)} has held the lock on this folder for "
+                       f"{wait:g} s, so nothing was written; run again when it is done, or set "
+                       f"{LOCK_WAIT_ENV}=SECONDS (0..86400) to wait longer", directory)
 
 
 @contextlib.contextmanager
@@ -118,8 +206,11 @@ def commit_lock(directories) -> Iterator[None]:
     lock file is left behind) while the block runs: two writers that commit sets of files into
     the same folder (``<stem>_color.png``, ``<stem>_F1.png``, ...) rename one whole set after the
     other, never interleaved, so the last writer's set is the one that stays, complete. Held
-    only for the renames (milliseconds); waits while another writer holds it. Where the
-    platform or the filesystem has no ``flock`` (Windows) the block runs unlocked."""
+    only for the renames (milliseconds). While another process holds it (another cellgl's
+    commit, or anything that ``flock``s the folder) a ``UserWarning`` says that it waits and for
+    whom; after ``$CELLGL_LOCK_WAIT`` seconds (default 60) it gives up with TimeoutError naming
+    the folder and the holder. Where the platform or the filesystem has no ``flock`` (Windows)
+    the block runs unlocked."""
     try:
         import fcntl
     except ImportError:         # pragma: no cover - Windows
@@ -133,8 +224,7 @@ def commit_lock(directories) -> Iterator[None]:
             except OSError:
                 continue
             fds.append(fd)
-            with contextlib.suppress(OSError):      # a filesystem without locks
-                fcntl.flock(fd, fcntl.LOCK_EX)
+            _lock(fd, d, fcntl)
         yield
     finally:
         for fd in fds:
@@ -164,7 +254,7 @@ def atomic_paths(paths: Sequence[str | os.PathLike], ext: str | None = None) -> 
         for t in tmps:
             with open(t, "rb+") as f:
                 os.fsync(f.fileno())
-            os.chmod(t, _default_mode())
+            os.chmod(t, default_mode())
         with commit_lock(d.parent for d in dests):
             for t, d in zip(tmps, dests):
                 os.replace(t, d)
@@ -193,6 +283,22 @@ def _naming_destination(exc: OSError, tmps: Sequence[Path], dests: Sequence[Path
     if name == exc.filename and text == (exc.strerror or str(exc)):
         return None
     return OSError(exc.errno, text, name)
+
+
+def naming_destination_in(exc: BaseException, tmp: Path, dest: Path) -> BaseException:
+    """``exc`` (raised while writing into the hidden folder ``tmp``, which becomes or fills
+    ``dest``) with every mention of ``tmp`` replaced by ``dest``: the error names the output
+    the user gave, never the temporary folder."""
+    def fix(text):
+        if text is None:
+            return None
+        text = str(text)
+        text = text.replace(str(tmp) + os.sep, "" if str(dest) == "." else str(dest) + os.sep)
+        return text.replace(str(tmp), str(dest))
+
+    if isinstance(exc, OSError):
+        return OSError(exc.errno, fix(exc.strerror or str(exc)), fix(exc.filename))
+    return type(exc)(fix(str(exc)))
 
 
 @contextlib.contextmanager
@@ -277,13 +383,21 @@ def _folder_problem(folder: Path) -> str | None:
     return None
 
 
+def _not_empty(path, what: str) -> None:
+    """An empty output name (``-o ''``) is refused, never read as the current folder."""
+    if not os.fspath(path):
+        raise ValueError(f"output '' is an empty name; give {what}")
+
+
 def check_output(path: str | os.PathLike) -> Path:
     """``path`` as a destination a writer can create, else ValueError saying why (directory
     missing, a file where a directory should be, not writable, a directory given, a name
     longer than 255 bytes). Every command checks its output with this (or
     :func:`check_output_dir`) before its work starts: a missing folder is never created."""
+    _not_empty(path, "a file name")
     path = Path(os.fspath(path))
     parent = path.parent if str(path.parent) else Path(".")
+    lock_wait()                 # a bad $CELLGL_LOCK_WAIT is refused before the work, not after
     if len(os.fsencode(path.name)) > NAME_MAX:
         raise ValueError(f"output file name {path.name[:40]!r}... is {len(os.fsencode(path.name))} "
                          f"bytes long; accepted at most {NAME_MAX}")
@@ -298,7 +412,9 @@ def check_output(path: str | os.PathLike) -> Path:
 def check_output_dir(path: str | os.PathLike) -> Path:
     """``path`` as an output directory a command may fill: an existing directory, or a new one
     (created by the command) in an existing, writable directory; ValueError otherwise."""
+    _not_empty(path, "a directory name")
     path = Path(os.fspath(path))
+    lock_wait()
     if path.is_dir():
         why = None if os.access(path, os.W_OK) else f"output directory {str(path)!r} is not writable"
     elif path.exists() or path.is_symlink():

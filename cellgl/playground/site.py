@@ -31,6 +31,7 @@ from cellgl._version import __version__
 from cellgl.basis.population import MAX_POINTS, W96_DENSITY_ADJUSTMENT
 from cellgl.basis.reference import max_ring_default
 from cellgl.export.compiler import collector_paused
+from cellgl.io.spec import quantize
 from cellgl.playground import variants as V
 from cellgl.recipes import is_path, is_pups, list_presets, load_recipe, render
 from cellgl.texture.schema import RecipeError
@@ -81,7 +82,7 @@ def _thumb(r) -> str:
     from PIL import Image
 
     rgba = render(r, THUMB, THUMB)["color"]
-    img = Image.fromarray((np.clip(rgba[..., :3], 0, 1) * 255 + 0.5).astype(np.uint8), "RGB")
+    img = Image.fromarray(quantize(rgba[..., :3], 8), "RGB")
     buf = io.BytesIO()
     img.save(buf, "PNG", optimize=True)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()

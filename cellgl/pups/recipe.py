@@ -30,7 +30,7 @@ from types import MappingProxyType
 import numpy as np
 
 from cellgl.texture.params import Param
-from cellgl.texture.schema import (VERSION, RecipeError, coerce, value_error, suggest, check_name_doc, parse_value,
+from cellgl.texture.schema import (VERSION, RecipeError, coerce, value_error, suggest, check_name_doc, check_version, parse_value,
                                    read_json)
 
 __all__ = ["PupsRecipe", "PUPS_PARAMS", "PUPS_PARAMS_BY_NAME", "PUPS_CHANNELS", "PATTERNS",
@@ -201,7 +201,7 @@ class PupsRecipe:
                                   f"{', '.join(used)}")
         self._values = {k: vals[k] for k in used if k != "image"}
         self.image = image
-        self.name, self.doc = check_name_doc(str(name), str(doc))
+        self.name, self.doc = check_name_doc(name, doc)
         if isinstance(outputs, str):
             outputs = [outputs]
         if not isinstance(outputs, (list, tuple)) or not outputs:
@@ -333,9 +333,7 @@ class PupsRecipe:
                                   f"accepted in a PUPs recipe: {', '.join(keys)}")
         if d.get("kind") != "pups":
             raise value_error("kind", d.get("kind"), "'pups'", "not a PUPs recipe:")
-        version = d.get("cellgl_recipe", VERSION)
-        if version != VERSION:
-            raise value_error("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+        check_version(d.get("cellgl_recipe", VERSION))
         for k in ("name", "doc"):
             if k in d and not isinstance(d[k], str):
                 raise value_error(k, d[k], "a string", "expected a string, got")
@@ -542,21 +540,14 @@ def render(recipe: PupsRecipe, width: int, height: int, *, channels=("color",), 
     from cellgl.pups.synthesis import pups_evaluate
     from cellgl.pups.presets import draw_graph, evaluate_scene
 
-    from cellgl.texture.schema import check_channels
+    from cellgl.texture.schema import check_channels, check_tile
 
     channels = check_channels(channels, PUPS_CHANNELS, "channel {!r} is not available for PUPs recipes")
     if depth is not None:
         raise ValueError("depth (a volume) is not available for PUPs recipes: they are 2D")
     if backend not in ("gpu", "numpy"):
         raise ValueError(f"unknown backend {backend!r}; accepted: gpu, numpy")
-    for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 1 or v > MAX_SIDE:
-            raise ValueError(f"{name} must be an integer in [1, {MAX_SIDE}], got {v!r}")
-    tw = width - x0 if tile_w is None else tile_w
-    th = height - y0 if tile_h is None else tile_h
-    if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):
-        raise ValueError(f"tile [{x0}, {x0 + tw}) x [{y0}, {y0 + th}) lies outside the "
-                         f"{width}x{height} image")
+    tw, th = check_tile(width, height, x0, y0, tile_w, tile_h, max_side=MAX_SIDE)
     if tw > 16384 or th > 16384:
         raise ValueError(f"a PUPs render pass is at most 16384 x 16384 pixels, got {tw}x{th}; "
                          "render it in tiles (cellgl bake does)")

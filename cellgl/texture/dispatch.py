@@ -36,8 +36,8 @@ PROBE_PASSES = 1 << 17
 class LoopLimitError(ValueError):
     """The driver cut the loops of some samples (llvmpipe's 65535 loop passes per SIMD vector):
     their values would be wrong, so none are returned. A ValueError: the request is too heavy for
-    the driver (fewer octaves, less supersampling or a smaller smoothness serve it); the command
-    line reports it as a user error."""
+    the driver (the message names what in the recipe lengthens its searches: :func:`lighter`);
+    the command line reports it as a user error."""
 
 #: baked programs kept (least recently used dropped)
 MAX_BAKED = 16
@@ -52,6 +52,7 @@ _OUTPUTS = {
     "F": (3, 4, 4, ("F1", "F2", "F3", "F4")),
     "grad": (4, 4, 8, ("grad", "value")),
     "id": (5, 1, 16, ("id",)),
+    "material": (8, 4, 32, ("roughness", "ao", "metallic")),
 }
 #: the search's loop passes the watchdog assumes for one search of a texture (the search stops at
 #: the ring cap; llvmpipe cuts and the canary refuses a vector past 65535)
@@ -83,7 +84,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     d.update(CELL_TEX_GRID=int(grid), CELL_LOCAL_SIZE=texture.LOCAL_SIZE, CELL_TEX_OUT=mask,
              CELL_TEX_SUPERSAMPLE=int(supersample))
     for name, (_, _, bit, _) in _OUTPUTS.items():
-        d[f"CELL_TEX_WANT_{name.upper()}"] = int(bool(mask & bit))
+        if name != "material" or mask & bit:       # (no new define in the programs without it)
+            d[f"CELL_TEX_WANT_{name.upper()}"] = int(bool(mask & bit))
     # No loop budget of the search's own (cellular.glsl): a texture invocation searches once per
     # octave and sub-sample and reports no per-sample flag; the canary reports the driver's.
     d["CELL_LOOP_BUDGET"] = 1 << 30
@@ -104,7 +106,8 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
         loops = np.empty((count, 1), np.int32)
         outputs.append(_runner.Output("loops", 10, loops))
     baked = BAKE_CONSTANTS and pan is None
-    files = {"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe)} if baked else None
+    files = ({"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe, bool(mask & 32))}
+             if baked else None)
 
     def prog_setup(prog):
         if not baked:
@@ -124,7 +127,7 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
             flag=_runner.Flag("canary", 9, "count"), files=files,
             cost=searches * SEARCH_PASSES + (PROBE_PASSES if probe else 0),
             lru=("texture.baked", MAX_BAKED) if baked else None))
-        _check_cut(res.cut, count)
+        _check_cut(res.cut, count, recipe, supersample)
     if loops is not None:
         loops = DRIVER_LOOP_LIMIT - 2 - loops[:, 0].astype(np.int64)
     return _unpack(channels, out, loops)
@@ -137,13 +140,52 @@ def _searches(recipe) -> int:
     return 2 * max(1, octaves)
 
 
-def _check_cut(cut: int, count: int) -> None:
+def lighter(recipe, supersample: int = 1) -> list[str]:
+    """What would shorten the searches of ``recipe``'s samples, among what it has (the advice of
+    :class:`LoopLimitError`): fewer octaves, less supersampling, a smaller smoothness, a larger
+    Minkowski exponent (below 1 a point k cells away along every axis lies dim^(1/p) k away), a
+    point in every cell (sparse cells leave a sample's nearest point many cells away), lighter
+    feature walks, fewer points per cell, fewer dimensions: only those that apply."""
+    from cellgl.texture.params import inactive
+
+    v = recipe.values
+    off = inactive(v)
+    dim = v["dimension"]
+    ways = []
+    if "octaves" not in off and v["octaves"] > 1:
+        ways.append(f"fewer fractal.octaves (it has {v['octaves']:g})")
+    if supersample > 1:
+        ways.append(f"less supersampling (it has {supersample * supersample} samples a pixel)")
+    if "smoothness" not in off and v["smoothness"] > 0:
+        ways.append(f"a smaller combination.smoothness (it has {v['smoothness']:g})")
+    if v["metric"] == "minkowski" and v["minkowski_p"] < 1:
+        p = v["minkowski_p"]
+        ways.append(f"a larger basis.minkowski_p (it has {p:g}: a point k cells away along every axis lies "
+                    f"{dim}^(1/{p:g}) k = {dim ** (1 / p):.3g} k away, so the search reaches that much further)")
+    if "min_points" not in off and v["min_points"] == 0:
+        ways.append(f"basis.min_points 1 or more, or a larger basis.density (it has min_points 0 and density "
+                    f"{v['density']:g}: cells are left empty, so a sample's nearest point can lie many cells away)")
+    walks = [t for t in ("c_edge", "c_nsphere") if t not in off and v[t] != 0]
+    if walks:
+        ways.append(" and ".join(f"combination.{t} 0" for t in walks) + " (their walks go past F1)")
+    if "density" not in off and v["distribution"] == "poisson" and v["density"] > 8:
+        ways.append(f"a smaller basis.density (it has {v['density']:g} points a cell)")
+    if dim == 4:
+        ways.append("a smaller basis.dimension (4D searches visit the most cells)")
+    return ways
+
+
+def _check_cut(cut: int, count: int, recipe=None, supersample: int = 1) -> None:
     if cut:
+        ways = lighter(recipe, supersample) if recipe is not None else []
+        advice = ("; or ".join(ways) if ways else
+                  "fewer octaves, less supersampling or a smaller smoothness, where the recipe has them")
         raise LoopLimitError(
             f"the GPU driver cut the loops of {cut} of {count} samples (Mesa's llvmpipe, and lavapipe "
             "under zink, allow 65535 loop passes per SIMD vector of samples): their values would be "
             "wrong, so none are returned. "
-            "Use fewer octaves, less supersampling or a smaller smoothness (docs/exactness.md)")
+            + (f"Recipe {recipe.name!r} would need shorter searches: " if recipe is not None else "Use ")
+            + advice + " (docs/exactness.md)")
 
 
 def _unpack(channels, out: dict, loops) -> dict:
@@ -165,4 +207,6 @@ def _unpack(channels, out: dict, loops) -> dict:
             res[c] = out["grad"][:, :3].copy()
         elif c == "value":
             res[c] = out["grad"][:, 3].copy()
+        elif c in ("roughness", "ao", "metallic"):
+            res[c] = out["material"][:, ("roughness", "ao", "metallic").index(c)].copy()
     return res

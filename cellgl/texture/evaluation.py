@@ -15,6 +15,7 @@ from cellgl.basis.arrays import real_array
 from cellgl.gl.threads import gl_call
 from cellgl.texture import antialias, dispatch
 from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
+from cellgl.texture.schema import check_tile, whole_number
 from cellgl.texture.shader import defines, set_view
 
 __all__ = ["evaluate", "render", "render_fragment", "measure_range", "point_range", "check_points", "OUTPUTS",
@@ -192,32 +193,28 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
 
     Each pixel is band-limited to its footprint (the recipe's ``antialias``) and, with
     ``samples = n^2`` (1, 4, 9, ..., 64), averaged over the centres of an n x n grid of
-    sub-pixels (colour, height, normal; ``id``, ``F1``..``F4`` from the pixel centre); see
+    sub-pixels (colour, height, normal, roughness, ao, metallic; ``id``, ``F1``..``F4`` from the
+    pixel centre); see
     :mod:`cellgl.texture.antialias`.
 
     Returns
     -------
     dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
     float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
-    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
+    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32; ``roughness``, ``ao``, ``metallic``
+    (H, W) float32 in [0, 1] (the recipe's ``material`` section, :mod:`cellgl.texture.material`).
+    Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
     """
     recipe = load_recipe(recipe)
     channels = check_channels(channels)
     _backend(backend)
     n_sub = antialias.grid_side(samples)
-    for name, v in (("width", width), ("height", height)):
-        if not isinstance(v, (int, np.integer)) or v < 1 or v > MAX_SIDE:
-            raise ValueError(f"{name} must be an integer in [1, {MAX_SIDE}], got {v!r}")
-    tw = width - x0 if tile_w is None else tile_w
-    th = height - y0 if tile_h is None else tile_h
-    if not (0 <= x0 and tw >= 1 and x0 + tw <= width and 0 <= y0 and th >= 1 and y0 + th <= height):
-        raise ValueError(f"tile [{x0}, {x0 + tw}) x [{y0}, {y0 + th}) lies outside the {width}x{height} image")
+    tw, th = check_tile(width, height, x0, y0, tile_w, tile_h, max_side=MAX_SIDE)
     if depth is not None:
         if recipe.get("dimension") < 3:
             raise ValueError("depth (a volume) needs a solid recipe: basis.dimension 3 or 4, got 2")
-        if not isinstance(depth, (int, np.integer)) or depth < 1 or depth > 4096:
-            raise ValueError(f"depth must be an integer in [1, 4096], got {depth!r}")
+        whole_number("depth", depth, 1, 4096)
     D = depth or 1
     if backend == "numpy":
         from cellgl.texture import reference as texture_reference
@@ -247,7 +244,7 @@ def _supersample_reference(recipe, pts, channels, duvz, samples) -> dict:
     """NumPy twin of texture.comp's supersampling: the averaged channels at pixel centres ``pts``."""
     from cellgl.texture import reference as texture_reference
 
-    avg = [c for c in channels if c in ("color", "height", "normal")]
+    avg = [c for c in channels if c in ("color", "height", "normal", "roughness", "ao", "metallic")]
     if not avg:
         return {}
     n = antialias.grid_side(samples)
@@ -312,7 +309,8 @@ def measure_range(recipe, samples: int = 65536, *, lo_pct: float = 0.5, hi_pct: 
     texture's own uv square instead (frequency, aspect and the map as the recipe has them).
     """
     recipe = load_recipe(recipe)
-    rng = np.random.default_rng(seed)
+    samples = whole_number("samples", samples, 2, 1 << 24)      # (a range needs two)
+    rng = np.random.default_rng(whole_number("seed", seed, 0, (1 << 63) - 1))
     dim = recipe.get("dimension")
     if recipe.values["density_map"] != "none":
         probe = recipe.replace(fractal="none")

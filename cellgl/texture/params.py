@@ -27,7 +27,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 __all__ = ["Param", "PARAMS", "PARAMS_BY_NAME", "GROUPS", "LINEAR", "PRODUCTS", "N_LINEAR",
-           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES", "DENSITY_MAPS", "ACTIVE_WHEN", "inactive"]
+           "MAX_RAMP_KEYS", "FRACTAL_MODES", "RAMP_MODES", "DENSITY_MAPS", "ACTIVE_WHEN", "inactive",
+           "MATERIAL_CHANNELS"]
 
 N_LINEAR = 8            #: linear coefficients c1..c8 (F1..F8)
 N_PRODUCT = 4           #: product coefficients c_ij for i, j <= 4
@@ -48,7 +49,9 @@ METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
 CELL_COLORS = ("ramp", "image")
 
 #: recipe JSON sections, in order
-GROUPS = ("basis", "combination", "fractal", "domain", "noise", "mapping", "color")
+GROUPS = ("basis", "combination", "fractal", "domain", "noise", "mapping", "color", "material")
+#: the channels of the material section (cellgl.texture.schema.CHANNELS; lib/texture_material.glsl)
+MATERIAL_CHANNELS = ("roughness", "ao", "metallic")
 
 
 @dataclass(frozen=True)
@@ -224,6 +227,26 @@ PARAMS: tuple[Param, ...] = (
           "value) or image (color.cell_image sampled at the cell's feature point: mosaic, stained glass; "
           "colour = mix(ramp(height), image, cell_mix))", "color", choices=CELL_COLORS, compile_time=True),
     Param("shade", "float", 0.0, 0.0, 1.0, "colour *= mix(1, height, shade) (grout of flagstones)", "color"),
+    # ---- material: the roughness, ao and metallic channels (lib/texture_material.glsl), from the
+    # cell value k (as cell_mix's: the F1 ID), the edge mask e = 1 - smoothstep(0, edge_width,
+    # F2 - F1) (octave 0) and the cavity c = 1 - height; each clamped to [0, 1]
+    Param("roughness", "float", 0.5, 0.0, 1.0, "roughness channel: roughness + roughness_cell (k - 0.5) "
+          "+ roughness_edge e + roughness_cavity c (the stone faces' roughness)", "material"),
+    Param("roughness_cell", "float", 0.0, -1.0, 1.0, "roughness per cell: times (cell value - 0.5)",
+          "material"),
+    Param("roughness_edge", "float", 0.0, -1.0, 1.0, "roughness at cell borders (grout): times the edge "
+          "mask", "material"),
+    Param("roughness_cavity", "float", 0.0, -1.0, 1.0, "roughness in cavities: times 1 - height",
+          "material"),
+    Param("edge_width", "float", 0.1, 0.001, 4.0, "edge mask 1 - smoothstep(0, edge_width, F2 - F1): "
+          "1 on a cell border, 0 from edge_width cells (F2 - F1 at octave 0) inside", "material"),
+    Param("ao_edge", "float", 0.0, 0.0, 1.0, "ambient occlusion channel: 1 - ao_edge e - ao_cavity c "
+          "(darker in the grout ...)", "material"),
+    Param("ao_cavity", "float", 0.0, 0.0, 1.0, "... and in the cavities of the height)", "material"),
+    Param("metallic", "float", 0.0, 0.0, 1.0, "metallic channel: metallic + metallic_cell (k - 0.5) "
+          "(a constant unless metallic_cell is set)", "material"),
+    Param("metallic_cell", "float", 0.0, -1.0, 1.0, "metallic per cell: times (cell value - 0.5)",
+          "material"),
 )
 
 PARAMS_BY_NAME: dict[str, Param] = {p.name: p for p in PARAMS}
@@ -281,6 +304,7 @@ ACTIVE_WHEN: dict[str, tuple] = {
     "noise_frequency": (_nonzero("c_noise", "noise_color"),),
     "noise_octaves": (_nonzero("noise_color"),),
     "cell_color": ((("cell_mix", ">", 0),),),
+    "edge_width": (_nonzero("roughness_edge", "ao_edge"),),
 }
 
 
@@ -357,6 +381,8 @@ def markdown_table() -> str:
         default = str(p.default).lower() if isinstance(p.default, bool) else p.default
         kind = "#define" if p.compile_time else (_DERIVED_UNIFORM.get(p.name, "u_density_*") if p.derived
                                                  else f"u_{p.name}")
+        if p.group == "material":
+            kind += " (with CELL_TEX_MATERIAL)"
         doc = doc.replace("|", "\\|")
         lines.append(f"| {p.group} | `{name}` | {p.type} | `{default}` | {p.range_text()} | {kind} | {doc} |")
     return "\n".join(lines) + "\n"

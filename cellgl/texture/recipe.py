@@ -33,9 +33,9 @@ import os
 from pathlib import Path
 from types import MappingProxyType
 
-from cellgl.basis.reference import minkowski_floor, minkowski_message
+from cellgl.basis.reference import minkowski_floor, minkowski_message, sparse_message
 from cellgl.texture import domain
-from cellgl.texture.schema import check_name_doc
+from cellgl.texture.schema import check_name_doc, check_version
 from cellgl.texture.schema import (CHANNELS, VERSION, RecipeError, coerce, value_error, suggest,  # noqa: F401
                                    check_channels, parse_value, read_json)
 from cellgl.texture.params import (DEFAULT_RAMP, GROUPS, LINEAR, MAX_RAMP_KEYS, N_LINEAR, PARAMS, PARAMS_BY_NAME,
@@ -128,7 +128,7 @@ class Recipe:
             if k not in PARAMS_BY_NAME:
                 raise RecipeError(f"{k}: unknown parameter{suggest(k, PARAMS_BY_NAME)}")
             vals[k] = coerce(PARAMS_BY_NAME[k], v, f"{PARAMS_BY_NAME[k].group}.{k}")
-        self.name, self.doc = check_name_doc(str(name), str(doc))
+        self.name, self.doc = check_name_doc(name, doc)
         self._values = vals
         self.ramp = _ramp(ramp, "color.ramp")
         self.outputs = _outputs(outputs, "outputs")
@@ -290,9 +290,7 @@ class Recipe:
             if k not in _TOP_KEYS:
                 raise RecipeError(f"{where}: unknown key {k!r}{suggest(str(k), _TOP_KEYS)}; "
                                   f"accepted: {', '.join(_TOP_KEYS)}")
-        version = d.get("cellgl_recipe", VERSION)
-        if version != VERSION:
-            raise value_error("cellgl_recipe", version, str(VERSION), "unsupported recipe version")
+        check_version(d.get("cellgl_recipe", VERSION))
         folder = base
         values, ramp, image, cimage = _read_groups(d, folder)
         for k in ("name", "doc"):
@@ -487,6 +485,8 @@ def _check(r: Recipe) -> None:
                           "accepted: seed 0")
     if v["metric"] == "minkowski" and v["minkowski_p"] < minkowski_floor(v["dimension"]):
         raise RecipeError(minkowski_message("basis.minkowski_p", v["minkowski_p"], v["dimension"], "basis.dimension"))
+    if why := sparse_message(v):           # min_points 0: the sample's own cell may be empty
+        raise RecipeError(why)
     if v["smooth"] == "exp" and v["smoothness"] > 0.25:
         raise RecipeError(f"combination.smoothness: {v['smoothness']!r} exceeds 0.25 with combination.smooth "
                           "'exp' (its walk reaches F1 + 16 smoothness); accepted: [0, 0.25], or smooth "

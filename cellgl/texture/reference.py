@@ -19,6 +19,7 @@ from cellgl.texture import domain
 from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.texture.antialias import feature_frequency, smoothscale
+from cellgl.texture.material import MATERIAL_CHANNELS, material
 from cellgl.texture.params import LINEAR, PARAMS
 from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, add_u32, mul_u32, hash_u32, u16
 
@@ -524,9 +525,11 @@ def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
     for c in outputs:
         if c in ("F1", "F2", "F3", "F4"):
             n = max(n, int(c[1]))
+    mat = [c for c in outputs if c in MATERIAL_CHANNELS]
+    n = max(n, 2) if mat else n             # the edge mask reads F2 - F1 (shader.defines)
     o = texture_at(pts, recipe, n, duvz=duvz)
     t = texture_values(recipe)
-    res = {}
+    res = {c: a.astype(np.float32) for c, a in material(o, t).items() if c in mat} if mat else {}
     for c in outputs:
         if c == "color":
             res[c] = o["color"].astype(np.float32)

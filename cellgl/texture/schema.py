@@ -10,14 +10,16 @@ import difflib
 import math
 import numbers
 
+import numpy as np
+
 from cellgl.texture.params import Param
 
-__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "check_name_doc", "parse_value", "read_json",
+__all__ = ["RecipeError", "VERSION", "CHANNELS", "check_channels", "check_name_doc", "check_version", "check_tile", "whole_number", "parse_value", "read_json",
            "MAX_NAME", "MAX_DOC", "MAX_RECIPE_BYTES", "coerce", "value_error", "suggest"]
 
 VERSION = 1
 #: channels a recipe can produce (``outputs``; ``cellgl.render(channels=...)``)
-CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4")
+CHANNELS = ("color", "height", "normal", "id", "F1", "F2", "F3", "F4", "roughness", "ao", "metallic")
 
 
 class RecipeError(ValueError):
@@ -95,12 +97,25 @@ MAX_NAME = 64
 MAX_DOC = 4096
 
 
+def check_version(version) -> int:
+    """A recipe file's ``cellgl_recipe``, checked: the whole number :data:`VERSION` (``true``,
+    which Python counts as 1, and ``1.0`` are not versions)."""
+    if type(version) is not int or version != VERSION:
+        raise value_error("cellgl_recipe", version, f"the whole number {VERSION}",
+                          "unsupported recipe version")
+    return version
+
+
 def check_name_doc(name, doc) -> tuple[str, str]:
-    """A recipe's ``name`` and ``doc``, checked: strings, the name one line of at most
-    :data:`MAX_NAME` characters, the doc at most :data:`MAX_DOC`; RecipeError otherwise."""
+    """A recipe's ``name`` and ``doc``, checked: strings, the name one line of 1 to
+    :data:`MAX_NAME` characters, not blank, the doc at most :data:`MAX_DOC`; RecipeError
+    otherwise."""
     for key, value in (("name", name), ("doc", doc)):
         if not isinstance(value, str):
             raise value_error(key, value, "a string", "expected a string, got")
+    if not name.strip():
+        raise value_error("name", name, f"one line of 1..{MAX_NAME} printable characters, not blank "
+                          "(it names files, shader functions and page entries)", "empty name")
     if len(name) > MAX_NAME:
         raise RecipeError(f"name: {len(name)} characters ({_shown(name[:24])}...); accepted: at most "
                           f"{MAX_NAME} characters")
@@ -224,3 +239,26 @@ def check_channels(channels, allowed=CHANNELS, unknown: str = "unknown channel {
         if c not in allowed:
             raise ValueError(f"{unknown.format(c)}; accepted: {', '.join(allowed)}")
     return channels
+
+
+def whole_number(name: str, value, lo: int, hi: int) -> int:
+    """``value`` checked to be a whole number (a Python or NumPy integer, not a boolean: ``True``
+    is not a size) in ``lo..hi``; ValueError naming ``name``, the value and the range."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+            or not lo <= value <= hi:
+        raise ValueError(f"{name} must be an integer in [{lo}, {hi}], got {_shown(value)}")
+    return int(value)
+
+
+def check_tile(width, height, x0=0, y0=0, tile_w=None, tile_h=None, *, max_side: int) -> tuple[int, int]:
+    """A render's image and tile arguments checked (every recipe kind's ``render``): ``width``
+    and ``height`` whole numbers in 1..``max_side``, the tile ``[x0, x0 + tile_w) x [y0, y0 +
+    tile_h)`` whole numbers inside the image (``tile_w``/``tile_h`` None: to the image's edge).
+    Returns the tile's ``(tile_w, tile_h)``."""
+    width = whole_number("width", width, 1, max_side)
+    height = whole_number("height", height, 1, max_side)
+    x0 = whole_number("x0", x0, 0, width - 1)
+    y0 = whole_number("y0", y0, 0, height - 1)
+    tw = width - x0 if tile_w is None else whole_number("tile_w", tile_w, 1, width - x0)
+    th = height - y0 if tile_h is None else whole_number("tile_h", tile_h, 1, height - y0)
+    return tw, th

@@ -296,6 +296,7 @@ vec4 cell_texture_warp(vec4 s, CellTextureParams t, out vec4 j0, out vec4 j1, ou
 }
 
 #include "texture_image.glsl"
+#include "texture_material.glsl"
 
 // The band-limit factor a of an octave whose features are w feature spacings per pixel
 // (see the header): 1 while they are two pixels apart or more, 0 from one pixel down.

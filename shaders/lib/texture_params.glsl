@@ -4,6 +4,9 @@
 // The run-time parameters of a texture (one field per non-compile-time table
 // entry, same name) and the CELL_TEX_* enum values.
 
+#ifndef CELL_TEX_MATERIAL
+#define CELL_TEX_MATERIAL 0
+#endif
 #define CELL_TEX_FRACTAL_NONE 0
 #define CELL_TEX_FRACTAL_SUM 1
 #define CELL_TEX_FRACTAL_QIN 2
@@ -102,5 +105,16 @@ struct CellTextureParams {
 #endif
 #if CELL_TEX_CELL_IMAGE
     vec4 cell_image_info;       // cell_color image: (u, v) of the view's pan, width, height
+#endif
+#if CELL_TEX_MATERIAL
+    float roughness;            // roughness channel: roughness + roughness_cell (k - 0.5) + roughness_edge e + roughness_cavity c (the stone faces' roughness)
+    float roughness_cell;       // roughness per cell: times (cell value - 0.5)
+    float roughness_edge;       // roughness at cell borders (grout): times the edge mask
+    float roughness_cavity;     // roughness in cavities: times 1 - height
+    float edge_width;           // edge mask 1 - smoothstep(0, edge_width, F2 - F1): 1 on a cell border, 0 from edge_width cells (F2 - F1 at octave 0) inside
+    float ao_edge;              // ambient occlusion channel: 1 - ao_edge e - ao_cavity c (darker in the grout ...)
+    float ao_cavity;            // ... and in the cavities of the height)
+    float metallic;             // metallic channel: metallic + metallic_cell (k - 0.5) (a constant unless metallic_cell is set)
+    float metallic_cell;        // metallic per cell: times (cell value - 0.5)
 #endif
 };

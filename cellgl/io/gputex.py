@@ -1,0 +1,239 @@
+"""GPU texture bakes: ``.dds`` and ``.ktx2`` (:func:`cellgl.io.bake.bake` hands them here).
+
+Per channel the format a pipeline expects, chosen by default or by ``compress`` (``--compress``),
+refused where it makes no sense (:data:`CHOICES`): colour is sRGB (BC7, BC1 or BC3 blocks, or
+plain ``R8G8B8A8_SRGB``), the data maps linear (``UNORM``/float): normals BC5 (red and green:
+x and y; a reader rebuilds z), height and the masks (roughness, ao, metallic) BC4 (or plain
+8/16-bit ``UNORM`` or float), ``F1``..``F4``
+plain floats (``R32_SFLOAT``, 16-bit ``R16_SFLOAT``), ``id`` ``R32_UINT`` (never compressed). The
+8- and 16-bit samples are the PNG bake's, bit for bit (cellgl.io.spec's encodings); the blocks
+come from etcpak on every core (cellgl.io.blocks); the containers are cellgl.io.containers.
+
+With ``mips`` every level is rendered from the recipe at its own size (cellgl.io.mips,
+``rounding="down"``: the levels DDS and KTX2 define) and stored in the file. Volumes
+(``--size WxHxD``) are 3D textures, their mip levels halving the depth too. See docs/bake.md
+("GPU texture files").
+"""
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from cellgl.io import blocks, containers, mips
+from cellgl.io.spec import RENDER_BYTES_PER_PIXEL, BakeError, Encoding, accepted_list
+from cellgl.io.tempfiles import atomic_paths
+
+__all__ = ["EXTS", "CHOICES", "COMPRESS", "MAX_SIDE_2D", "MAX_SIDE_3D", "TexOutput", "plan_outputs", "bake_texture"]
+
+EXTS = (".dds", ".ktx2")
+#: the --compress values
+COMPRESS = ("bc1", "bc3", "bc4", "bc5", "bc7", "none")
+#: largest side of a 2D texture and of a volume (Direct3D 11/12's limits, which every desktop GPU
+#: meets; Vulkan and OpenGL devices advertise at least as much on desktop)
+MAX_SIDE_2D, MAX_SIDE_3D = 16384, 2048
+
+#: channel -> {compress: format or {bits: format}}; the first key is the default
+CHOICES: dict[str, dict[str, object]] = {
+    "color": {"bc7": "BC7_SRGB", "bc1": "BC1_SRGB", "bc3": "BC3_SRGB", "none": {8: "R8G8B8A8_SRGB"}},
+    "normal": {"bc5": "BC5_UNORM", "bc7": "BC7_UNORM", "bc1": "BC1_UNORM", "bc3": "BC3_UNORM",
+               "none": {8: "R8G8B8A8_UNORM"}},
+    "height": {"bc4": "BC4_UNORM", "none": {16: "R16_UNORM", 8: "R8_UNORM", 32: "R32_SFLOAT"}},
+    **{m: {"bc4": "BC4_UNORM", "none": {8: "R8_UNORM", 16: "R16_UNORM", 32: "R32_SFLOAT"}}
+       for m in ("roughness", "ao", "metallic")},
+    "id": {"none": {32: "R32_UINT"}},
+    **{f: {"none": {32: "R32_SFLOAT", 16: "R16_SFLOAT"}} for f in ("F1", "F2", "F3", "F4")},
+}
+_WHY_NOT = {"color": "colour has three channels (BC4 holds one, BC5 two)",
+            "normal": "a normal needs two channels at least (BC4 holds one)",
+            "height": "height is one channel: BC4, or plain samples",
+            "roughness": "a mask is one channel: BC4, or plain samples",
+            "id": "ids are exact uint32 values (R32_UINT); blocks would change them",
+            "F1": "distances are floats (R32_SFLOAT/R16_SFLOAT); blocks hold 8-bit [0, 1] values"}
+
+
+@dataclass(frozen=True)
+class TexOutput:
+    path: Path
+    channel: str
+    fmt: containers.TexFormat
+
+
+def parse_compress(compress, channels) -> dict[str, str]:
+    """``compress`` (``None``, ``"bc7"`` for every channel, or ``"color=bc1,height=none"``) ->
+    {channel: compress name}, each checked against :data:`CHOICES`."""
+    out = {c: next(iter(CHOICES[c])) for c in channels}
+    if compress is None:
+        return out
+    text = str(compress).strip().lower()
+    parts = [p.strip() for p in text.split(",") if p.strip()]
+    per = {}
+    for p in parts:
+        name, eq, value = p.rpartition("=")
+        chan = next((c for c in channels if c.lower() == name), None) if eq else None
+        if eq and chan is None:
+            raise BakeError(f"--compress {compress!r}: {name!r} is not a channel of this bake; "
+                            f"accepted {accepted_list(channels)}")
+        if value not in COMPRESS:
+            raise BakeError(f"--compress {value!r}: accepted {accepted_list(COMPRESS)}")
+        for c in ([chan] if eq else channels):
+            per[c] = value
+    if not parts:
+        raise BakeError(f"--compress {compress!r}: accepted {accepted_list(COMPRESS)}, "
+                        f"or CHANNEL=VALUE,... (e.g. color=bc1,height=none)")
+    for c, v in per.items():
+        if v not in CHOICES[c]:
+            why = _WHY_NOT.get("F1" if c.startswith("F") else "roughness" if c in ("ao", "metallic") else c, "")
+            raise BakeError(f"--compress {v} for {c}: {why}; accepted for {c}: "
+                            f"{accepted_list(CHOICES[c])} (default {next(iter(CHOICES[c]))}); "
+                            f"per channel: --compress {c}=VALUE,...")
+        out[c] = v
+    return out
+
+
+def _format(channel: str, choice: str, bits) -> containers.TexFormat:
+    entry = CHOICES[channel][choice]
+    if isinstance(entry, str):
+        if bits is not None and bits != 8:
+            raise BakeError(f"--depth {bits} for {channel} in {choice.upper()} blocks: blocks hold "
+                            f"8-bit samples; accepted --depth 8 (or none), or --compress {channel}=none "
+                            f"for plain samples")
+        return containers.TEX_FORMATS[entry]
+    if bits is None:
+        bits = next(iter(entry))
+    if bits not in entry:
+        raise BakeError(f"--depth {bits} for plain {channel} samples: accepted {accepted_list(entry)} "
+                        f"({', '.join(entry.values())})")
+    return containers.TEX_FORMATS[entry[bits]]
+
+
+def _bits(bit_depth):
+    if bit_depth is None:
+        return None
+    try:
+        bits = int(str(bit_depth).strip())
+    except ValueError:
+        bits = None
+    if bits not in (8, 16, 32):
+        raise BakeError(f"--depth {bit_depth}: accepted 8, 16 or 32 (bits of the plain samples of "
+                        f".dds/.ktx2; the default is per channel)")
+    return bits
+
+
+def plan_outputs(path: Path, ext: str, channels, compress, bit_depth, supercompression, size) -> list[TexOutput]:
+    """The files of a ``.dds``/``.ktx2`` bake and their formats; every refusal before any work."""
+    w, h, d = size
+    if supercompression not in (None, "zstd"):
+        raise BakeError(f"supercompression {supercompression!r}: accepted 'zstd' (or none)")
+    if supercompression and ext != ".ktx2":
+        raise BakeError(f"--zstd: zstd supercompression is a KTX2 feature; {ext} files hold "
+                        f"the blocks as they are (accepted with -o NAME.ktx2)")
+    side = MAX_SIDE_3D if d is not None else MAX_SIDE_2D
+    if max(w, h, d or 1) > side:
+        raise BakeError(f"size {w}x{h}{'' if d is None else f'x{d}'} for {ext}: a "
+                        f"{'volume' if d is not None else '2D'} texture's sides are at most {side} "
+                        f"(the GPUs' limit); accepted 1..{side}")
+    if supercompression:
+        try:
+            import zstandard  # noqa: F401
+        except ImportError:
+            raise BakeError("--zstd needs the 'zstandard' package: pip install zstandard") from None
+    bits = _bits(bit_depth)
+    per = parse_compress(compress, channels)
+    fmts = {c: _format(c, per[c], bits) for c in channels}
+    if any(f.compressed for f in fmts.values()) and not blocks.have_encoder():
+        raise BakeError("block-compressed .dds/.ktx2 need the 'etcpak' package: pip install 'cellgl[gpu]' "
+                        "(or --compress none)")
+    if len(channels) == 1:
+        return [TexOutput(path, channels[0], fmts[channels[0]])]
+    return [TexOutput(path.with_name(f"{path.stem}_{c}{path.suffix}"), c, fmts[c]) for c in channels]
+
+
+def _samples(fmt: containers.TexFormat, channel: str, a: np.ndarray) -> np.ndarray:
+    """One tile of render() output as the format's samples (the PNG bake's 8/16-bit bits)."""
+    if fmt.name == "R32_UINT":
+        return np.asarray(a).astype(np.uint32, copy=False)
+    if fmt.name in ("R32_SFLOAT", "R16_SFLOAT"):
+        return np.asarray(a).astype(np.float32 if fmt.name == "R32_SFLOAT" else np.float16)
+    bits = 16 if fmt.name == "R16_UNORM" else 8
+    samples = 3 if channel in ("color", "normal") else 1
+    q = Encoding(channel, samples, np.dtype(np.uint8 if bits == 8 else np.uint16)).encode(a)
+    if samples == 3 and (fmt.codec in ("bc3", "bc7") or not fmt.compressed):
+        q = np.concatenate([q, np.full(q.shape[:-1] + (1,), 255, np.uint8)], axis=-1)   # opaque alpha
+    return q
+
+
+def _tile_side(channels, budget: int) -> int:
+    per_px = RENDER_BYTES_PER_PIXEL * (1 + len(channels)) // 2 + 16 * len(channels)
+    return max(16, min(2048, math.isqrt(max(1, budget // 2) // per_px) // 16 * 16))
+
+
+def _level_bytes(out: TexOutput, a: np.ndarray, depth) -> bytes:
+    """One level's bytes in the file: plain samples, or the blocks of each slice (every core)."""
+    if not out.fmt.compressed:
+        return np.ascontiguousarray(a).tobytes()
+    slices = list(a) if depth is not None else [a]
+    return b"".join(blocks.encode_levels(out.fmt.codec, slices, perceptual=out.fmt.srgb))
+
+
+def memory_need(outputs: list[TexOutput], chain) -> int:
+    """Bytes a bake holds beyond the render of one tile: level 0's samples of every output (at
+    most 4 a texel before block encoding) and every output's file bytes, all levels."""
+    w, h = chain[0][:2]
+    d = chain[0][2] if len(chain[0]) > 2 else 1
+    need = 0
+    for o in outputs:
+        need += w * h * d * (4 if o.fmt.compressed else o.fmt.nbytes)
+        need += sum(containers.level_bytes(o.fmt, *s) for s in chain)
+    return need
+
+
+def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: int, tile, budget: int,
+                 mip_chain: bool, supercompression, progress: Callable, meta: Callable,
+                 layers=None) -> list[Path]:
+    """Render and write ``outputs`` (from :func:`plan_outputs`), all or none; ``layers`` (recipes)
+    makes each file an array texture of one layer per recipe (``--frames``)."""
+    w, h, d = size
+    recipes = [recipe] if layers is None else list(layers)
+    nlayers = None if layers is None else len(recipes)
+    chain = mips.mip_sizes(w, h, d, rounding="down") if mip_chain else [(w, h) + ((d,) if d else ())]
+    need = memory_need(outputs, chain) * len(recipes)
+    if need > budget:
+        mb = -(-need // (1 << 20))
+        raise BakeError(f"size {w}x{h}{'' if d is None else f'x{d}'} to {ext}: the bake holds level 0's "
+                        f"samples and the files' bytes, about {mb} MB, more than --memory {budget >> 20} MB; "
+                        f"accepted --memory {mb} or more, fewer channels a bake, or a smaller --size")
+    channels = tuple(o.channel for o in outputs)
+    side = int(tile) if tile else _tile_side(channels, budget)
+    with atomic_paths([o.path for o in outputs]) as tmps:
+        per_out: list[list[bytes]] = [[] for _ in outputs]
+        what = f"{len(chain)} level(s)" + (f" x {nlayers} layers" if nlayers else "")
+        bar = progress(len(chain) * len(recipes), f"baking {what} of {outputs[0].path.name}", unit="levels")
+        with bar:
+            for k in range(len(chain)):     # one level's samples held at a time; blocks on every core
+                convert = {o.channel: (lambda a, o=o: _samples(o.fmt, o.channel, a)) for o in outputs}
+                parts: list[list[bytes]] = [[] for _ in outputs]
+                for r in recipes:
+                    res = mips.render_level(r, w, h, k, depth=d, channels=channels, samples=samples, tile=side,
+                                            rounding="down", convert=convert)
+                    for i, o in enumerate(outputs):
+                        parts[i].append(_level_bytes(o, res.pop(o.channel), d))
+                    del res
+                    bar.step()
+                for i in range(len(outputs)):
+                    per_out[i].append(b"".join(parts[i]))
+        for o, data, tmp in zip(outputs, per_out, tmps):
+            with open(tmp, "wb") as f:
+                if ext == ".dds":
+                    containers.write_dds(f, o.fmt, w, h, d, data, layers=nlayers)
+                else:
+                    info = json.dumps({**json.loads(meta(o.channel)), "format": o.fmt.name,
+                                       "levels": len(data), **({"layers": nlayers} if nlayers else {})},
+                                      sort_keys=True)
+                    containers.write_ktx2(f, o.fmt, w, h, d, data, supercompression=supercompression,
+                                          writer="cellgl", metadata=info.encode() + b"\0", layers=nlayers)
+    return [o.path for o in outputs]
