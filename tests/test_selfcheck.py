@@ -103,6 +103,25 @@ def test_a_wrong_compute_path_falls_back_with_one_warning(ctx, fresh, monkeypatc
     assert np.all(np.abs(got.F - ref.F.astype(np.float64)) <= selfcheck.eps(ref.F))
 
 
+def test_a_path_that_flags_everything_fails_though_the_fallback_is_right(ctx, fresh, monkeypatch):
+    """A path whose every sample comes back flagged inexact gets the NumPy fallback's answers from
+    ``cellular``: right, but not the path's. The check fails it (issue 50: softpipe with its
+    rasteriser off passed the check once, its flag target's stale memory saying "inexact")."""
+    from cellgl.basis import gpu
+
+    real = gpu.search_points
+
+    def flags_everything(*args, **kwargs):
+        out, exact = real(*args, **kwargs)
+        return out, np.zeros_like(exact)
+    monkeypatch.setattr(gpu, "search_points", flags_everything)
+    for p in ("compute", "fragment") if path.has_compute(ctx) else ("fragment",):
+        monkeypatch.setenv("CELLGL_PATH", p)
+        path.forget(ctx)
+        with pytest.raises(path.PathError, match=r"the GPU flagged 160 of 160 samples, which it must search exactly"):
+            path.gpu_path(ctx)
+
+
 def test_a_second_context_with_the_same_driver_warns_no_more(ctx, fresh, monkeypatch):
     _needs_compute(ctx)
     _break(monkeypatch, ctx, {"compute"})

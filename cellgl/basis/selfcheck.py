@@ -83,6 +83,18 @@ def gpu_cellular(points, n, **kw):
     return cellular(points, n, backend="gpu", **kw)
 
 
+def gpu_flags(points, n, outputs, **kw) -> np.ndarray:
+    """The path's own exact flags for the samples, before the NumPy fallback replaces what it
+    flagged (the same entry and variant as :func:`gpu_cellular`'s). The check's cases are easy (the
+    default density, n <= 4): a conformant driver flags none of them. A path whose flags (or
+    searches) are broken must not pass on the fallback's answers: softpipe with its rasteriser
+    off (``SOFTPIPE_DEBUG=no_rast``) writes nothing, and where the flag target's stale memory said
+    "inexact" everywhere the fallback's answers passed the check (issue 50)."""
+    from cellgl.basis import core, gpu
+
+    return gpu.search_points(points, core.make_params(points.shape[1], **kw), n, outputs)[1]
+
+
 def reference_cellular(points, n, **kw):
     """The NumPy reference's answer."""
     from cellgl.basis.core import cellular
@@ -127,7 +139,13 @@ def run_cases() -> tuple[str | None, int]:
             warnings.simplefilter("ignore")     # inexact-sample warnings: the answer is what counts
             got = gpu_cellular(pts, n, outputs=outputs, **kw)
             ref = reference_cellular(pts, n + 1, outputs=("F", "id"), **kw)
+            exact = gpu_flags(pts, n, outputs, **kw)
         what = compare(name, got, ref, n)
+        if not exact.all():
+            what = (f"{what}; " if what else f"{name}: ") + (
+                f"the GPU flagged {int(np.size(exact) - np.count_nonzero(exact))} of {len(pts)} "
+                "samples, which it must search exactly (its flags or its searches are broken; "
+                "the NumPy fallback's answers for them do not count)")
         count += len(pts)
         if what:
             return what, count
