@@ -152,9 +152,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _user_errors() -> tuple[type[BaseException], ...]:
-    """ValueError and cellgl's GL errors (those of modules loaded: this imports nothing)."""
+    """ValueError and cellgl's GL errors (those of modules loaded: this imports nothing): no
+    context, a shader that does not compile, a driver the known-answer check refuses (PathError:
+    its message names the driver and what to do; not cellgl's fault, so not an internal error)."""
     errors: list[type[BaseException]] = [ValueError]
-    for module, name in (("cellgl.gl.context", "ContextError"), ("cellgl.gl.glsl", "ShaderError")):
+    for module, name in (("cellgl.gl.context", "ContextError"), ("cellgl.gl.glsl", "ShaderError"),
+                         ("cellgl.gl.path", "PathError")):
         if module in sys.modules:
             errors.append(getattr(sys.modules[module], name))
     return tuple(errors)

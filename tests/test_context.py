@@ -238,6 +238,27 @@ def test_cli_error_is_one_line_exit_2():
     assert "Traceback" not in r.stderr
 
 
+def test_a_driver_the_check_refuses_is_a_clear_error(ctx, monkeypatch, capsys, tmp_path):
+    """A driver whose every path fails the known-answer check (softpipe with its rasteriser off,
+    SOFTPIPE_DEBUG=no_rast, in docs/platforms.md's table) is the driver's fault, not cellgl's:
+    the command line prints PathError's message (the driver, what differed, what to do) as one
+    line, exit status 2, never "internal error" (issue 50)."""
+    from cellgl import cli
+    from cellgl.gl import path
+
+    msg = ("cellgl's known-answer check failed on this driver (Mesa / softpipe / 3.3): the "
+           "fragment path: ...; this OpenGL 3.3 context has no other path")
+
+    def refuse(*args, **kwargs):
+        raise path.PathError(msg)
+    monkeypatch.setattr(path, "gpu_path", refuse)
+    out = tmp_path / "f.png"
+    assert cli.main(["bake", "flagstone", "--size", "16", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err == f"cellgl: error: {msg}\n", err
+    assert not out.exists()
+
+
 def test_context_survives_another_library_taking_current(ctx):
     """wgpu's GL backend, a GLFW window or another moderngl context may make their own context
     current; cellgl's API calls must still work (they used to fail with 'cannot create program')."""

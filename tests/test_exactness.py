@@ -396,13 +396,20 @@ def test_sparse_poisson_is_served_exactly(ctx, dim):
 # ------------------------------------------------------------------ textures and PUPs
 
 
-def test_texture_past_the_driver_limit_is_refused_or_exact(ctx):
+@pytest.mark.parametrize("forced", ["", "fragment"])
+def test_texture_past_the_driver_limit_is_refused_or_exact(ctx, monkeypatch, forced):
     """issue 50's reproducer: smooth F1 at k = 0.25, 8 octaves, 16 samples per pixel, far past
     65535 loop passes per SIMD vector. On a driver that cuts loops (llvmpipe; lavapipe under zink,
     where the canary was unrolled and 64 of 64 pixels came back wrong) it is refused with
     LoopLimitError; on one that cuts nothing its pixels are the NumPy reference's. Never wrong
-    pixels. A shipped smooth preset is served."""
+    pixels, on the context's path and on the fragment path (its canary's length is a texel). A
+    shipped smooth preset is served."""
+    from cellgl.gl.path import has_compute
     from cellgl.texture.dispatch import LoopLimitError
+
+    if forced and not has_compute(ctx):
+        pytest.skip("the fragment path is this context's own: the case without CELLGL_PATH runs it")
+    monkeypatch.setenv("CELLGL_PATH", forced)
 
     r = cellgl.load_recipe("f1").replace(smoothness=0.25, c_smooth=1.0, c1=0.0, octaves=8.0, fractal="sum")
     kw = dict(tile_w=16, tile_h=4, samples=16, channels=("height",))

@@ -266,6 +266,26 @@ def test_egl_devices_lists_this_machine():
     assert all(isinstance(d, str) and d for d in devices)
 
 
+def test_the_mesa_software_device_names_the_driver_that_runs(monkeypatch):
+    """Mesa's software EGL device runs llvmpipe, softpipe or zink, as GALLIUM_DRIVER picks: the
+    device line names the renderer that runs, never llvmpipe by default (issue 50: softpipe and
+    zink were reported as llvmpipe)."""
+    monkeypatch.setattr(platforms, "egl_devices", lambda: ["NVIDIA CUDA device", platforms.MESA_SOFTWARE])
+    assert platforms.device_line(1, "softpipe") == "1 of 2: Mesa software renderer (softpipe)"
+    assert platforms.device_line(1, "zink (llvmpipe (LLVM 15.0.6, 256 bits))").endswith(
+        "Mesa software renderer (zink (llvmpipe (LLVM 15.0.6, 256 bits)))")
+    assert platforms.device_line(0, "NVIDIA H200/PCIe/SSE2") == "0 of 2: NVIDIA CUDA device"
+    assert "llvmpipe" not in platforms.device_line(1)
+
+
+def test_info_names_the_renderer_on_mesas_software_device(ctx):
+    from cellgl.gl import context
+
+    line = context.context_info(ctx)["egl_device"]
+    if platforms.MESA_SOFTWARE in line:
+        assert line.endswith(f"{platforms.MESA_SOFTWARE} ({ctx.info['GL_RENDERER']})"), line
+
+
 @pytest.mark.parametrize("plat, name, own", [("darwin", "wgl", "cgl"), ("darwin", "egl", "cgl"),
                                              ("win32", "cgl", "wgl"), ("linux", "wgl", "egl")])
 def test_another_platforms_backend_is_a_clear_error(monkeypatch, clean_state, plat, name, own):

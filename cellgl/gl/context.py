@@ -477,7 +477,7 @@ def _device_info(ctx: moderngl.Context) -> str:
     backend = _backend_of.get(id(ctx))
     if backend != "egl" or "egl-surfaceless" in _opened:
         return f"n/a (the {backend or 'attached'} context has no device choice)"
-    return platforms.device_line(platforms.device_setting() or 0)
+    return platforms.device_line(platforms.device_setting() or 0, ctx.info.get("GL_RENDERER"))
 
 
 def check_gl_error(ctx: moderngl.Context | None = None) -> None:

@@ -114,6 +114,11 @@ _EGL_DRM_DEVICE_FILE_EXT = 0x3233
 _EGL_RENDERER_EXT = 0x335F
 
 
+#: the name of Mesa's software EGL device: the driver behind it is llvmpipe, softpipe or zink, as
+#: ``GALLIUM_DRIVER`` picks (docs/platforms.md), so the device alone does not name it
+MESA_SOFTWARE = "Mesa software renderer"
+
+
 def egl_devices() -> list[str] | None:
     """One line per EGL device (``eglQueryDevicesEXT``, in the order of glcontext's
     ``device_index``): its name where the driver tells it, else its DRM node or kind. None when
@@ -153,7 +158,7 @@ def egl_devices() -> list[str] | None:
         if "EGL_EXT_device_drm" in ext:
             parts += [v for v in (get(devices[i], _EGL_DRM_DEVICE_FILE_EXT),) if v]
         if "EGL_MESA_device_software" in ext:
-            parts.append("Mesa software renderer (llvmpipe)")
+            parts.append(MESA_SOFTWARE)     # which of Mesa's drivers: GALLIUM_DRIVER picks
         if "EGL_NV_device_cuda" in ext:
             parts.append("NVIDIA CUDA device")
         out.append(", ".join(dict.fromkeys(parts)) or "EGL device")
@@ -260,12 +265,17 @@ def device_backends(candidates: list[str], named: bool) -> list[str]:
     return ["egl"]
 
 
-def device_line(index: int) -> str:
-    """``"0 of 2: NVIDIA ..."``: device ``index`` among this machine's EGL devices."""
+def device_line(index: int, renderer: str | None = None) -> str:
+    """``"0 of 2: NVIDIA ..."``: device ``index`` among this machine's EGL devices. ``renderer``
+    (the context's ``GL_RENDERER``) is added to Mesa's software device, which says nothing of
+    the driver that runs (``"0 of 1: Mesa software renderer (softpipe)"``)."""
     devices = egl_devices()
     if not devices or index >= len(devices):
         return str(index)
-    return f"{index} of {len(devices)}: {devices[index]}"
+    name = devices[index]
+    if renderer and name.endswith(MESA_SOFTWARE):
+        name = f"{name} ({renderer})"
+    return f"{index} of {len(devices)}: {name}"
 
 
 def check_device(index: int) -> None:
