@@ -172,8 +172,8 @@ def test_bad_arguments():
         texture.render(Recipe(), 8, 8, channels=("colour",))
     with pytest.raises(ValueError, match="points must have shape"):
         texture.evaluate(Recipe(), np.zeros((3, 5)))
-    with pytest.raises(ValueError, match="outside the 8x8 image"):
-        texture.render(Recipe(), 8, 8, x0=4, tile_w=5)
+    with pytest.raises(ValueError, match=r"tile_w must be an integer in \[1, 4\], got 5"):
+        texture.render(Recipe(), 8, 8, x0=4, tile_w=5)      # past the 8x8 image's right edge
     with pytest.raises(ValueError, match="backend"):
         texture.render(Recipe(), 8, 8, backend="cuda")
 
