@@ -9,7 +9,7 @@ from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
 from cellgl.dask.zarr_bake import bake_zarr
 from cellgl.io.spec import DEFAULT_SIZE, int_arg
-from cellgl.io.tempfiles import check_output_dir
+from cellgl.io.tempfiles import check_output_dir, env_seconds
 
 __all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
 
@@ -22,20 +22,11 @@ SCHEDULER_WAIT_ENV, SCHEDULER_WAIT = "CELLGL_SCHEDULER_WAIT", 20.0
 
 
 def _scheduler_wait() -> float:
-    import math
-    import os
-
-    text = os.environ.get(SCHEDULER_WAIT_ENV, "").strip()
-    if not text:
-        return SCHEDULER_WAIT
     try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not 0.0 <= value <= 3600.0:                      # NaN fails too
-        raise DaskError(f"{SCHEDULER_WAIT_ENV}={text!r}: accepted seconds in 0..3600 "
-                        f"(default {SCHEDULER_WAIT:g})")
-    return value
+        return env_seconds(SCHEDULER_WAIT_ENV, SCHEDULER_WAIT, 3600.0,
+                           "how long to wait for a scheduler file's scheduler")
+    except ValueError as exc:
+        raise DaskError(str(exc)) from None
 
 
 def check_scheduler(scheduler: str | None) -> None:

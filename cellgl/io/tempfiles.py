@@ -122,22 +122,28 @@ LOCK_WAIT_ENV, LOCK_WAIT = "CELLGL_LOCK_WAIT", 60.0
 _LOCK_POLL = 0.05
 
 
-def lock_wait() -> float:
-    """``$CELLGL_LOCK_WAIT`` checked (seconds in 0..86400; unset or empty: :data:`LOCK_WAIT`);
-    ValueError naming the value otherwise. :func:`check_output` asks it before a command's work."""
+def env_seconds(name: str, default: float, top: float, what: str) -> float:
+    """``$name`` as seconds in 0..``top`` (unset or empty: ``default``); ValueError naming the
+    value, the accepted range, ``what`` it sets and the default otherwise (NaN and inf fail)."""
     import math
 
-    text = os.environ.get(LOCK_WAIT_ENV, "").strip()
+    text = os.environ.get(name, "").strip()
     if not text:
-        return LOCK_WAIT
+        return default
     try:
         value = float(text)
     except ValueError:
         value = math.nan
-    if not 0.0 <= value <= 86400.0:                     # NaN fails too
-        raise ValueError(f"{LOCK_WAIT_ENV}={text!r}: accepted seconds in 0..86400 (how long a write "
-                         f"waits for another process's lock on its output folder; default {LOCK_WAIT:g})")
+    if not 0.0 <= value <= top:                         # NaN fails too
+        raise ValueError(f"{name}={text!r}: accepted seconds in 0..{top:g} ({what}; default {default:g})")
     return value
+
+
+def lock_wait() -> float:
+    """``$CELLGL_LOCK_WAIT`` checked (seconds in 0..86400; unset or empty: :data:`LOCK_WAIT`);
+    ValueError naming the value otherwise. :func:`check_output` asks it before a command's work."""
+    return env_seconds(LOCK_WAIT_ENV, LOCK_WAIT, 86400.0,
+                       "how long a write waits for another process's lock on its output folder")
 
 
 def lock_holder(fd: int) -> str:
