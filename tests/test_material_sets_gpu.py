@@ -154,6 +154,12 @@ def test_gltf_refuses_block_maps_and_zstd_needs_ktx2(tmp_path):
         M.bake_material("flagstone", tmp_path / "x", "unreal", size=SIZE, map_format="bmp")
     with pytest.raises(BakeError, match="a 2D texture's sides are at most 16384"):
         M.bake_material("flagstone", tmp_path / "x", "unreal", size=(16385, 4), map_format="ktx2")
+    # every level of the biggest map (RGB(A) samples) and its blocks, over the budget: refused up front
+    with pytest.raises(BakeError, match=r"size 4096x4096 to dds: a map \(T_<name>_BC.dds\) holds its 13 level\(s\)' "
+                                        r"samples and its file's bytes, about 86 MB, more than --memory 64 MB; "
+                                        r"accepted --memory 86 or more"):
+        M.bake_material("flagstone", tmp_path / "x", "unreal", size=4096, map_format="dds", mips=True,
+                        memory_budget=64 << 20)
     assert os.listdir(tmp_path) == []
 
 

@@ -280,6 +280,8 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
 
     names = [_file_name(eng, stem, m, ext) for m in eng.maps]
     levels = mip_sizes(w, h, rounding="up" if fmt == "png" else "down") if mips else [(w, h)]
+    if fmt != "png":
+        _check_memory(eng, fmt, levels, memory_budget)
     written = []
     with scratch_dir(out_dir, "frames") as tmp:
         for m, name in zip(eng.maps, names):
@@ -347,6 +349,25 @@ def _check_gpu(eng: Engine, fmt: str, supercompression, w: int, h: int) -> None:
             import zstandard  # noqa: F401
         except ImportError:
             raise BakeError("--zstd needs the 'zstandard' package: pip install zstandard") from None
+
+
+def _check_memory(eng: Engine, fmt: str, levels, budget: int) -> None:
+    """A ``.dds``/``.ktx2`` map holds every level's packed samples and its file's bytes at once
+    (one map at a time): refused beyond ``budget``, as a ``.dds``/``.ktx2`` bake is."""
+    from cellgl.io.containers import level_bytes
+
+    def need(m: MapSpec) -> int:
+        tf = gpu_format(m)
+        per_texel = m.samples() * (1 if tf.compressed else m.bits // 8)
+        return sum(lw * lh * per_texel + level_bytes(tf, lw, lh) for lw, lh in levels)
+
+    worst = max(eng.maps, key=need)
+    if need(worst) > budget:
+        mb = -(-need(worst) // (1 << 20))
+        w, h = levels[0]
+        raise BakeError(f"size {w}x{h} to {fmt}: a map ({_file_name(eng, '<name>', worst, '.' + fmt)}) holds "
+                        f"its {len(levels)} level(s)' samples and its file's bytes, about {mb} MB, more than "
+                        f"--memory {budget >> 20} MB; accepted --memory {mb} or more, or a smaller --size")
 
 
 def _stored(m: MapSpec) -> list[tuple[str, str]]:
