@@ -27,7 +27,8 @@ channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), 
   roughness, ao, metallic (the recipe's material section).
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 material sets (--material ENGINE -o DIR): the maps of an engine's standard material, packed as it
-  expects, with manifest.json: unreal, unity-hdrp, unity-urp, godot, gltf (+ a .gltf), blender.
+  expects, with manifest.json: unreal, unity-hdrp, unity-urp, godot, gltf (+ a .gltf), blender;
+  PNG, or --map-format dds|ktx2 (BC7 sRGB colour, BC5 normal, BC7 packed maps, BC4, R16 height).
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
@@ -38,6 +39,7 @@ examples:
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
   cellgl bake flagstone -o 'wall.<UDIM>.tx' --udim 1001-1012 --size 1024
   cellgl bake flagstone --material unreal -o flagstone_unreal --size 2048
+  cellgl bake flagstone --material unreal -o unreal_dds --size 2048 --map-format dds --mips
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
