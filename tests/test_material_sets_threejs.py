@@ -39,11 +39,13 @@ def _png(url: str) -> np.ndarray:
 
 @pytest.fixture
 def browser(tmp_path):
-    from test_playground import CHROMIUM, DRIVER, FLAGS
+    from test_playground import CHROMIUM, DRIVER, FLAGS, REQUIRE
 
     if not (THREE / "build" / "three.module.js").is_file():
         pytest.skip("three.js (npm three, .venv/three) is not installed")
     if CHROMIUM is None or DRIVER is None:
+        if REQUIRE:
+            pytest.fail("chromium and chromium-driver are required (CELLGL_REQUIRE_GPU=1); .ci/setup installs them")
         pytest.skip("no chromium / chromedriver (apt install chromium chromium-driver)")
     try:
         from selenium import webdriver
