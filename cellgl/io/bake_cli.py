@@ -27,7 +27,8 @@ channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), 
   roughness, ao, metallic (the recipe's material section).
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 material sets (--material ENGINE -o DIR): the maps of an engine's standard material, packed as it
-  expects, with manifest.json: unreal, unity-hdrp, unity-urp, godot, gltf (+ a .gltf), blender.
+  expects, with manifest.json: unreal, unity-hdrp, unity-urp, godot, gltf (+ a .gltf), blender;
+  PNG, or --map-format dds|ktx2 (BC7 sRGB colour, BC5 normal, BC7 packed maps, BC4, R16 height).
 examples:
   cellgl bake flagstone -o flagstone.png
   cellgl bake flagstone -o flagstone.exr --size 2048 --channels color,height,normal
@@ -38,6 +39,7 @@ examples:
   cellgl bake flagstone -o vol.npy --size 64x64x64 --channels F1
   cellgl bake flagstone -o 'wall.<UDIM>.tx' --udim 1001-1012 --size 1024
   cellgl bake flagstone --material unreal -o flagstone_unreal --size 2048
+  cellgl bake flagstone --material unreal -o unreal_dds --size 2048 --map-format dds --mips
   cellgl bake mountains -o terrain.zarr --size 262144 --channels height   # Dask, resumable
 """
 
@@ -66,7 +68,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="bake the material set of an engine preset into the folder -o DIR: unreal, "
                         "unity-hdrp, unity-urp, godot, gltf, blender (cellgl/io/material_sets.py)")
     p.add_argument("--map-format", default=None, metavar="NAME",
-                   help="with --material: the maps' format (png, the default)")
+                   help="with --material: the maps' format: png (the default), dds or ktx2 (each map one GPU "
+                        "texture file, with --mips its levels inside; not for gltf)")
     p.add_argument("--depth", default=None, metavar="BITS",
                    help="bits per sample: 8|16|32 (default per format, see below)")
     p.add_argument("--samples", default="1", metavar="N",
@@ -237,7 +240,7 @@ def _run_material(args: argparse.Namespace) -> int:
                         ("--udim", getattr(args, "udim", None)), ("--udims", getattr(args, "udims", None)),
                         ("--colorspace", getattr(args, "colorspace", None)),
                         ("--tiled", getattr(args, "tiled", None) or None),
-                        ("--compress", getattr(args, "compress", None)), ("--zstd", getattr(args, "zstd", None) or None)):
+                        ("--compress", getattr(args, "compress", None))):
         if value is not None:
             raise BakeError(f"{flag} {value if not isinstance(value, list) else ','.join(value)}: not with "
                             f"--material (the engine preset chooses the maps, their channels and bit depths)")
@@ -247,6 +250,7 @@ def _run_material(args: argparse.Namespace) -> int:
         paths = bake_material(args.recipe, args.output, args.material, size=args.size, tileable=args.tileable,
                               sets=args.sets, samples=int_arg("--samples", args.samples, 1, MAX_SAMPLES),
                               map_format=args.map_format or "png", mips=bool(getattr(args, "mips", False)),
+                              supercompression="zstd" if getattr(args, "zstd", False) else None,
                               progress=not args.quiet, memory_budget=budget)
     except OSError as exc:
         where = f" {exc.filename}" if exc.filename else ""

@@ -28,7 +28,8 @@ from cellgl.io import blocks, containers, mips
 from cellgl.io.spec import RENDER_BYTES_PER_PIXEL, BakeError, Encoding, accepted_list
 from cellgl.io.tempfiles import atomic_paths
 
-__all__ = ["EXTS", "CHOICES", "COMPRESS", "MAX_SIDE_2D", "MAX_SIDE_3D", "TexOutput", "plan_outputs", "bake_texture"]
+__all__ = ["EXTS", "CHOICES", "COMPRESS", "MAX_SIDE_2D", "MAX_SIDE_3D", "TexOutput", "plan_outputs", "bake_texture",
+           "packed_levels", "write_container"]
 
 EXTS = (".dds", ".ktx2")
 #: the --compress values
@@ -227,13 +228,41 @@ def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: i
                 for i in range(len(outputs)):
                     per_out[i].append(b"".join(parts[i]))
         for o, data, tmp in zip(outputs, per_out, tmps):
+            info = json.dumps({**json.loads(meta(o.channel)), "format": o.fmt.name,
+                               "levels": len(data), **({"layers": nlayers} if nlayers else {})}, sort_keys=True)
             with open(tmp, "wb") as f:
-                if ext == ".dds":
-                    containers.write_dds(f, o.fmt, w, h, d, data, layers=nlayers)
-                else:
-                    info = json.dumps({**json.loads(meta(o.channel)), "format": o.fmt.name,
-                                       "levels": len(data), **({"layers": nlayers} if nlayers else {})},
-                                      sort_keys=True)
-                    containers.write_ktx2(f, o.fmt, w, h, d, data, supercompression=supercompression,
-                                          writer="cellgl", metadata=info.encode() + b"\0", layers=nlayers)
+                write_container(f, ext, o.fmt, (w, h, d), data, supercompression=supercompression,
+                                metadata=info, layers=nlayers)
     return [o.path for o in outputs]
+
+
+def write_container(f, ext: str, fmt: containers.TexFormat, size, levels, *, supercompression=None,
+                    metadata: str | None = None, layers=None) -> None:
+    """Write ``levels`` (each level's bytes, :func:`packed_levels`) as a ``.dds`` or ``.ktx2``
+    (``metadata``: the KTX2 ``cellgl`` key's JSON; DDS has no place for it)."""
+    w, h, d = size
+    if ext == ".dds":
+        containers.write_dds(f, fmt, w, h, d, levels, layers=layers)
+    else:
+        containers.write_ktx2(f, fmt, w, h, d, levels, supercompression=supercompression, writer="cellgl",
+                              metadata=None if metadata is None else metadata.encode() + b"\0", layers=layers)
+
+
+def packed_levels(fmt: containers.TexFormat, images) -> list[bytes]:
+    """The file bytes of each level of an image packed by the caller (a material set's map:
+    ``(h, w)`` or ``(h, w, S)`` samples as they are, not render channels): uint8 samples for the
+    block formats (BC4 keeps R, BC5 R and G, BC1/BC3/BC7 RGB(A), a missing alpha opaque; every
+    level's blocks at once on every core, :func:`cellgl.io.blocks.encode_levels`), or exactly the
+    plain format's samples (``R16_UNORM``: ``(h, w)`` uint16, ...) stored as they are."""
+    images = list(images)
+    if fmt.compressed:
+        return blocks.encode_levels(fmt.codec, images, perceptual=fmt.srgb)
+    want = {"R8_UNORM": (np.uint8, 1), "R16_UNORM": (np.uint16, 1), "R8G8B8A8_UNORM": (np.uint8, 4),
+            "R8G8B8A8_SRGB": (np.uint8, 4), "R16_SFLOAT": (np.float16, 1), "R32_SFLOAT": (np.float32, 1),
+            "R32_UINT": (np.uint32, 1)}[fmt.name]
+    for a in images:
+        n = a.shape[2] if a.ndim == 3 else 1
+        if a.dtype != want[0] or n != want[1] or a.ndim not in (2, 3):
+            raise ValueError(f"{fmt.name} holds {want[1]} {np.dtype(want[0])} sample(s) a texel; got {a.dtype} "
+                             f"{a.shape}")
+    return [np.ascontiguousarray(a).tobytes() for a in images]

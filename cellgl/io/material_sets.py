@@ -8,8 +8,17 @@ green down, for Unreal; OpenGL for the others: the recipe's ``normal_convention`
 bit depths and colour spaces. Every sample of a packed map is the same value the bake of that
 channel alone writes (:func:`cellgl.io.spec.encoding_of` quantises both), bit for bit;
 smoothness is ``top - roughness`` of the quantised roughness (255 - r at 8 bits), so it too is
-exact. Each map goes through the bake's writer of its format (:func:`cellgl.io.bake.write_tiles`,
+exact. Each PNG map goes through the bake's writer of its format (:func:`cellgl.io.bake.write_tiles`,
 chosen by the extension), tile by tile, memory bounded as a bake.
+
+``map_format="dds"``/``"ktx2"`` writes each map as one GPU texture file with its whole mip chain
+(:func:`gpu_format`: colour ``BC7_SRGB``, normals ``BC5_UNORM`` (x and y; readers rebuild z),
+packed maps (ORM, mask, metallic-smoothness) ``BC7_UNORM``, 8-bit single masks ``BC4_UNORM``,
+16-bit height ``R16_UNORM``): every level is the packed map of the set rendered at that level's
+size (``max(1, floor(W / 2^k))``, the levels DDS and KTX2 define), never downsampled, each sample
+the PNG set's bits at that size (8 bits for the block formats); the blocks come from
+:func:`cellgl.io.gputex.packed_levels` (etcpak on every core), the container from
+:func:`cellgl.io.gputex.write_container`.
 
 The whole set (maps, ``manifest.json``, ``recipe.json`` and, for ``gltf``, a ``.gltf`` whose
 material references the maps) is written into a hidden folder beside ``DIR`` and moved into place
@@ -35,7 +44,7 @@ from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, BakeError, Encoding, ch
 from cellgl.io.tempfiles import check_output_dir, commit_lock, scratch_dir
 from cellgl.texture import antialias
 
-__all__ = ["ENGINES", "MAP_FORMATS", "MapSpec", "Engine", "bake_material"]
+__all__ = ["ENGINES", "MAP_FORMATS", "MapSpec", "Engine", "bake_material", "gpu_format"]
 
 
 @dataclass(frozen=True)
@@ -133,9 +142,27 @@ ENGINES: dict[str, Engine] = {e.name: e for e in (
                        ("ao",)))),
 )}
 
-#: formats a set's maps may be written in (name -> extension): the bake's writers that hold
-#: integer 1..4-sample images (DDS/KTX2 join here when the bake writes them)
-MAP_FORMATS = {"png": ".png"}
+#: formats a set's maps may be written in (name -> extension): PNG (one file a level) or a GPU
+#: texture file holding every level (:func:`gpu_format`)
+MAP_FORMATS = {"png": ".png", "dds": ".dds", "ktx2": ".ktx2"}
+
+
+def gpu_format(m: MapSpec):
+    """The texel format of map ``m`` in a ``.dds``/``.ktx2`` set (a cellgl.io.containers.TexFormat):
+    colour ``BC7_SRGB``; a normal ``BC5_UNORM`` (x, y); a packed map (ORM, mask, ...) ``BC7_UNORM``
+    (linear: its samples are data); one 8-bit sample ``BC4_UNORM``; one 16-bit sample (height)
+    ``R16_UNORM``, its bits kept."""
+    from cellgl.io.containers import TEX_FORMATS
+
+    if m.srgb:
+        name = "BC7_SRGB"
+    elif m.layout == ("normal",):
+        name = "BC5_UNORM"
+    elif m.samples() == 1:
+        name = "R16_UNORM" if m.bits == 16 else "BC4_UNORM"
+    else:
+        name = "BC7_UNORM"
+    return TEX_FORMATS[name]
 
 
 def _engine(name) -> Engine:
@@ -165,12 +192,13 @@ def _tiles(recipe, m: MapSpec, enc: Encoding, plan, bar):
     the bake of its channel alone does."""
     from cellgl import recipes
 
-    top = (1 << m.bits) - 1
+    bits = 8 * enc.dtype.itemsize       # m.bits, or 8 where a block format holds the map
+    top = (1 << bits) - 1
     extra = {"samples": plan.samples} if plan.samples != 1 else {}
     for x0, y0, tw, th in plan.tiles():
         res = recipes.render(recipe, plan.width, plan.height, channels=m.channels(), x0=x0, y0=y0,
                              tile_w=tw, tile_h=th, **extra)
-        q = {c: encoding_of(c, ".png", m.bits).encode(res[c]) for c in m.channels()}
+        q = {c: encoding_of(c, ".png", bits).encode(res[c]) for c in m.channels()}
         parts = []
         for s in m.layout:
             if s == "1":
@@ -185,7 +213,7 @@ def _tiles(recipe, m: MapSpec, enc: Encoding, plan, bar):
 
 
 def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE, tileable=None, sets=(),
-                  samples=1, map_format="png", mips=False, progress=True,
+                  samples=1, map_format="png", mips=False, supercompression=None, progress=True,
                   memory_budget=DEFAULT_BUDGET) -> list[Path]:
     """Bake the material set of an engine preset into ``directory``.
 
@@ -202,11 +230,16 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
     size, tileable, sets, samples, memory_budget :
         As :func:`cellgl.io.bake.bake` (2D sizes only).
     map_format : str
-        The maps' format, one of :data:`MAP_FORMATS` (``png``).
+        The maps' format, one of :data:`MAP_FORMATS`: ``png`` (the default), ``dds`` or ``ktx2``
+        (each map one GPU texture file in its :func:`gpu_format`; not for ``gltf``, whose KTX2
+        images need Basis Universal data: KHR_texture_basisu).
     mips : bool
         Also every mip level of every map, each rendered at its own size (:mod:`cellgl.io.mips`:
         level ``k`` is the set baked at ``ceil(W / 2^k) x ceil(H / 2^k)``, never downsampled), as
-        numbered files ``<map>_mip<k>.png`` beside level 0, down to 1 x 1.
+        numbered files ``<map>_mip<k>.png`` beside level 0, down to 1 x 1; in a ``.dds``/``.ktx2``
+        map, inside the file (level ``k`` ``max(1, floor(W / 2^k))`` wide, as those formats define).
+    supercompression : None or "zstd"
+        ``ktx2`` only: zstd supercompression of every level (``--zstd``).
     progress : bool
         A progress bar per map on stderr.
 
@@ -228,6 +261,7 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
         raise BakeError(f"--material {eng.name}: map format {map_format!r}; accepted: {', '.join(MAP_FORMATS)}")
     ext = MAP_FORMATS[fmt]
     w, h = _size(size)
+    _check_gpu(eng, fmt, supercompression, w, h)
     try:
         samples = antialias.check_samples(samples)
         out_dir = check_output_dir(directory)
@@ -245,10 +279,20 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
     from cellgl.io.mips import level_path, mip_sizes
 
     names = [_file_name(eng, stem, m, ext) for m in eng.maps]
-    levels = mip_sizes(w, h) if mips else [(w, h)]
+    levels = mip_sizes(w, h, rounding="up" if fmt == "png" else "down") if mips else [(w, h)]
+    if fmt != "png":
+        _check_memory(eng, fmt, levels, memory_budget)
     written = []
     with scratch_dir(out_dir, "frames") as tmp:
         for m, name in zip(eng.maps, names):
+            if fmt != "png":
+                meta = {"generator": "cellgl", "material": eng.name, "map": m.suffix, "format": gpu_format(m).name,
+                        "levels": len(levels), "samples": dict(_stored(m)), "recipe": recipe.to_dict(),
+                        "size": [w, h]}
+                _write_gpu_map(tmp / name, recipe, m, ext, levels, samples, memory_budget, progress,
+                               json.dumps(meta, sort_keys=True), supercompression)
+                written.append(name)
+                continue
             # (the colour map's encoding is named "color": the writer tags it sRGB, as a colour bake)
             enc = Encoding("color" if m.srgb else m.suffix, m.samples(), np.dtype(np.uint8 if m.bits == 8 else np.uint16))
             for k, (lw, lh) in enumerate(levels):
@@ -271,10 +315,94 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
             (tmp / extra[-1]).write_text(json.dumps(_gltf(stem, dict(zip((m.suffix for m in eng.maps), names))),
                                                     indent=2) + "\n")
         extra.append("manifest.json")
-        command = _command(recipe_or_name, sets, tileable, eng, out_dir, (w, h), samples, fmt, mips)
+        command = _command(recipe_or_name, sets, tileable, eng, out_dir, (w, h), samples, fmt, mips,
+                           supercompression)
         manifest = _manifest(eng, base, names, extra[:-1], levels, samples, fmt, command)
         (tmp / "manifest.json").write_text(json.dumps(manifest, indent=2) + "\n")
         return _move_into_place(tmp, out_dir, written + extra)
+
+
+def _check_gpu(eng: Engine, fmt: str, supercompression, w: int, h: int) -> None:
+    """Refusals of a ``.dds``/``.ktx2`` set (and ``--zstd``), before any work."""
+    from cellgl.io import blocks, gputex
+
+    if supercompression not in (None, "zstd"):
+        raise BakeError(f"supercompression {supercompression!r}: accepted 'zstd' (or none)")
+    if supercompression and fmt != "ktx2":
+        raise BakeError(f"--zstd with --map-format {fmt}: zstd supercompression is a KTX2 feature; "
+                        f"accepted with --map-format ktx2")
+    if fmt == "png":
+        return
+    if eng.name == "gltf":
+        raise BakeError(f"--material gltf --map-format {fmt}: a glTF 2.0 image is PNG or JPEG; KTX2 only "
+                        f"through KHR_texture_basisu, which holds Basis Universal (ETC1S/UASTC) data, not "
+                        f"the BCn blocks cellgl writes (DDS only through MSFT_texture_dds); accepted for "
+                        f"gltf: --map-format png")
+    if max(w, h) > gputex.MAX_SIDE_2D:
+        raise BakeError(f"size {w}x{h} for {fmt}: a 2D texture's sides are at most {gputex.MAX_SIDE_2D} "
+                        f"(the GPUs' limit); accepted 1..{gputex.MAX_SIDE_2D}")
+    if not blocks.have_encoder():
+        raise BakeError(f"--map-format {fmt} needs the 'etcpak' package (block encoding): pip install "
+                        f"'cellgl[gpu]' (or --map-format png)")
+    if supercompression:
+        try:
+            import zstandard  # noqa: F401
+        except ImportError:
+            raise BakeError("--zstd needs the 'zstandard' package: pip install zstandard") from None
+
+
+def _check_memory(eng: Engine, fmt: str, levels, budget: int) -> None:
+    """A ``.dds``/``.ktx2`` map holds every level's packed samples and its file's bytes at once
+    (one map at a time): refused beyond ``budget``, as a ``.dds``/``.ktx2`` bake is."""
+    from cellgl.io.containers import level_bytes
+
+    def need(m: MapSpec) -> int:
+        tf = gpu_format(m)
+        per_texel = m.samples() * (1 if tf.compressed else m.bits // 8)
+        return sum(lw * lh * per_texel + level_bytes(tf, lw, lh) for lw, lh in levels)
+
+    worst = max(eng.maps, key=need)
+    if need(worst) > budget:
+        mb = -(-need(worst) // (1 << 20))
+        w, h = levels[0]
+        raise BakeError(f"size {w}x{h} to {fmt}: a map ({_file_name(eng, '<name>', worst, '.' + fmt)}) holds "
+                        f"its {len(levels)} level(s)' samples and its file's bytes, about {mb} MB, more than "
+                        f"--memory {budget >> 20} MB; accepted --memory {mb} or more, or a smaller --size")
+
+
+def _stored(m: MapSpec) -> list[tuple[str, str]]:
+    """(sample letter, what it holds) of map ``m`` as its GPU format stores it (BC5: x, y only)."""
+    if gpu_format(m).name == "BC5_UNORM":
+        return [("R", "normal x (right)"), ("G", "normal y")]
+    letters = m.letters()
+    return [("R", letters[0][1])] if len(letters) == 1 else letters
+
+
+def _write_gpu_map(path: Path, recipe, m: MapSpec, ext: str, levels, samples: int, budget: int, progress: bool,
+                   meta: str, supercompression) -> None:
+    """Map ``m`` as one ``.dds``/``.ktx2`` at ``path``: each level the packed map rendered at that
+    level's size (the PNG set's samples at that size, 8-bit for block formats), then every
+    level's blocks at once on every core (cellgl.io.gputex.packed_levels)."""
+    from cellgl.io import gputex
+
+    fmt = gpu_format(m)
+    bits = m.bits if not fmt.compressed else 8
+    enc = Encoding("color" if m.srgb else m.suffix, m.samples(), np.dtype(np.uint8 if bits == 8 else np.uint16))
+    plans = [dataclasses.replace(plan_tiles(lw, lh, None, ".png", m.channels(), None, budget,
+                                            m.samples() * bits // 8), samples=samples) for lw, lh in levels]
+    images = []
+    with Progress(sum(p.count for p in plans), f"baking {path.name} ({len(levels)} level(s))", progress) as bar:
+        for plan in plans:
+            a = np.empty((plan.height, plan.width) + ((m.samples(),) if m.samples() > 1 else ()), enc.dtype)
+            for x0, y0, tile in _tiles(recipe, m, enc, plan, bar):
+                t = tile[enc.channel]
+                a[y0:y0 + t.shape[0], x0:x0 + t.shape[1]] = t
+            images.append(a)
+    data = gputex.packed_levels(fmt, images)
+    del images
+    with open(path, "wb") as f:
+        gputex.write_container(f, ext, fmt, (levels[0][0], levels[0][1], None), data,
+                               supercompression=supercompression, metadata=meta)
 
 
 def _move_into_place(tmp: Path, out_dir: Path, names: list[str]) -> list[Path]:
@@ -304,7 +432,8 @@ def _move_into_place(tmp: Path, out_dir: Path, names: list[str]) -> list[Path]:
     return [out_dir / n for n in names]
 
 
-def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, samples, fmt, mips) -> str:
+def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, samples, fmt, mips,
+             supercompression=None) -> str:
     """The command line that bakes the set again (the recipe by its name or path; a recipe given
     as an object by the set's own recipe.json, its --set already applied)."""
     if isinstance(recipe_or_name, (str, os.PathLike)):
@@ -317,6 +446,7 @@ def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, s
     words += ["--samples", str(samples)] if samples != 1 else []
     words += ["--map-format", fmt] if fmt != "png" else []
     words += ["--mips"] if mips else []
+    words += ["--zstd"] if supercompression else []
     return " ".join(shlex.quote(w) for w in words)
 
 
@@ -326,12 +456,24 @@ def _manifest(eng: Engine, recipe, names, extra, levels, samples, fmt, command) 
 
     files = []
     for m, name in zip(eng.maps, names):
-        mip = {"mips": [{"level": k, "file": level_path(name, k).name, "size": list(s)}
-                        for k, s in enumerate(levels)]} if len(levels) > 1 else {}
+        if fmt == "png":
+            mip = {"mips": [{"level": k, "file": level_path(name, k).name, "size": list(s)}
+                            for k, s in enumerate(levels)]} if len(levels) > 1 else {}
+            bits, letters = m.bits, m.letters()
+            space = "sRGB (tagged: PNG sRGB chunk)" if m.srgb else "linear (data, not colour; untagged)"
+        else:
+            tf = gpu_format(m)
+            mip = {"texel_format": tf.name, "levels": [{"level": k, "size": list(s)} for k, s in enumerate(levels)]}
+            bits, letters = (8 if tf.compressed else m.bits), _stored(m)
+            tag = " (KTX2 transfer function sRGB)" if fmt == "ktx2" else ""
+            space = (f"sRGB ({tf.name}{tag})" if m.srgb else
+                     f"linear (data, not colour; {tf.name}{' (KTX2 transfer function linear)' if tag else ''})")
+            if tf.name == "BC5_UNORM":
+                mip["note"] = "BC5 stores x and y; z = sqrt(1 - x^2 - y^2) (the engines' normal-map sampling rebuilds it)"
         files.append({
-            "file": name, "slot": m.slot, "format": fmt.upper(), "bit_depth": m.bits,
-            "color_space": "sRGB (tagged: PNG sRGB chunk)" if m.srgb else "linear (data, not colour; untagged)",
-            "channels": dict(m.letters()),
+            "file": name, "slot": m.slot, "format": fmt.upper(), "bit_depth": bits,
+            "color_space": space,
+            "channels": dict(letters),
             **({"normal_convention": eng.normal + (" (green down)" if eng.normal == "directx" else " (green up)")}
                if "normal" in m.layout else {}),
             "made_of": list(m.channels()),
@@ -346,7 +488,8 @@ def _manifest(eng: Engine, recipe, names, extra, levels, samples, fmt, command) 
             "normal_convention": eng.normal, "size": list(levels[0]), "samples_per_pixel": samples,
             "files": files, "recipe": recipe.to_dict(), "command": command,
             "exact": "each sample of a packed map equals the bake of its channel alone "
-                     "(smoothness: the top value minus the quantised roughness)"}
+                     "(smoothness: the top value minus the quantised roughness)"
+                     + ("" if fmt == "png" else "; in the block formats, before block encoding (BCn is lossy)")}
 
 
 def _gltf(stem: str, maps: dict[str, str]) -> dict:
