@@ -156,6 +156,35 @@ def test_one_preset_validates_and_generates_glsl_and_osl(one):
     assert (one / "genosl" / "cellgl_flagstone.osl").read_text().count("void cellglmx_flagstone(") == 1
 
 
+def test_single_output_variants_beside_the_multi_output_node(one):
+    """Issue 46 item 5: hosts that mishandle multi-output nodes (Hydra, several DCCs) get one
+    nodedef per output, ND_cellgl_<preset>_<type> of the same node, picked by the instance's
+    type, with the multi-output node's inputs and defaults and one output `out` (a node graph
+    around the multi-output node implements it, so GenGlsl and GenOsl call the node's code)."""
+    from MaterialX import PyMaterialXGenShader as mxg
+    from MaterialX import PyMaterialXGenGlsl as gg, PyMaterialXGenOsl as go
+
+    doc = _read(one / "cellgl_nodes.mtlx")
+    assert doc.validate()[0]
+    multi = doc.getNodeDef("ND_cellgl_flagstone")
+    for mxtype, output in (("color3", "color"), ("float", "height"), ("vector3", "normal")):
+        nd = doc.getNodeDef(f"ND_cellgl_flagstone_{mxtype}")
+        assert nd is not None and nd.getNodeString() == "cellgl_flagstone" and nd.getDefaultVersion()
+        assert [(o.getName(), o.getType()) for o in nd.getOutputs()] == [("out", mxtype)]
+        assert [(i.getName(), i.getType(), i.getValueString()) for i in nd.getInputs()] == \
+            [(i.getName(), i.getType(), i.getValueString()) for i in multi.getInputs()]
+        ng = doc.getNodeGraph(f"NG_cellgl_flagstone_{mxtype}")
+        assert ng.getNodeDef().getName() == nd.getName()
+        assert ng.getOutput("out").getOutputString() == output
+        node = doc.addNode("cellgl_flagstone", f"single_{mxtype}", mxtype)
+        assert node.getNodeDef().getName() == nd.getName()          # chosen by the type
+    for gen in (gg.GlslShaderGenerator.create(), go.OslShaderGenerator.create()):
+        o = doc.addOutput(f"o_{gen.getTarget()}", "color3")
+        o.setNodeName("single_color3")
+        src = gen.generate("single", o, _context(gen, one)).getSourceCode(mxg.PIXEL_STAGE)
+        assert "cellglmx_flagstone(" in src
+
+
 def test_basis_node_validates_and_generates(tmp_path):
     from cellgl.export import materialx_docs as docs
     from cellgl.export.materialx_basis import basis_node
@@ -490,8 +519,13 @@ def _diff255(got, want):
 def test_renderglsl_renders_the_bake(one, tmp_path):
     """RenderGlsl renders the node's colour (a flat quad, the texture space) as `cellgl bake`
     writes it: within 2/255 per channel (footprint 1/64: the bake's band limit at 64 x 64)."""
-    got = _render_glsl(one, [("ND_cellgl_flagstone", "color", "color3", [("footprint", (1 / SIZE, 1 / SIZE))])])
-    assert _diff255(got["ND_cellgl_flagstone", "color"], _bake("flagstone", tmp_path)) <= 2
+    fp = [("footprint", (1 / SIZE, 1 / SIZE))]
+    got = _render_glsl(one, [("ND_cellgl_flagstone", "color", "color3", fp),
+                             ("ND_cellgl_flagstone_color3", "out", "color3", fp)])
+    want = _bake("flagstone", tmp_path)
+    assert _diff255(got["ND_cellgl_flagstone", "color"], want) <= 2
+    # the single-output variant (issue 46 item 5) renders the same colour
+    assert _diff255(got["ND_cellgl_flagstone_color3", "out"], want) <= 2
 
 
 @pytest.mark.slow

@@ -84,15 +84,49 @@ def _nodedef(node: MxNode) -> list[str]:
     return out
 
 
+def single_outputs(node: MxNode) -> list[tuple[str, str, str]]:
+    """``(nodedef, nodegraph, output)`` of the single-output variants of a texture node: one
+    per output, the nodedef ``ND_<node>_<type>`` of the same node (``cellgl_flagstone``, type
+    ``color3`` / ``float`` / ``vector3``: the types differ, so MaterialX picks the variant by the
+    instance's type) with one output ``out``, implemented by a node graph around the
+    multi-output node (so every target's code is the multi-output node's). The basis nodes have
+    none (their outputs share types)."""
+    if not node.example:
+        return []
+    return [(f"ND_{node.name}_{mxtype}", f"NG_{node.name}_{mxtype}", name) for name, mxtype, *_ in node.outputs]
+
+
+def _single_output(node: MxNode) -> list[str]:
+    out = []
+    types = {o[0]: (o[1], o[4]) for o in node.outputs}
+    for nd, ng, output in single_outputs(node):
+        mxtype, doc = types[output]
+        head = _attrs(name=nd, node=node.name, nodegroup=node.nodegroup, version=mx_version(),
+                      isdefaultversion="true", doc=f"the {output} output alone of {node.nodedef} (a single-output "
+                      "node, for hosts that mishandle multi-output ones): " + node.doc)
+        out.append(f"  <nodedef{head}>")
+        for line in _nodedef(node)[1:]:
+            if line.startswith("    <input"):
+                out.append(line)
+        out += [f"    <output{_attrs(name='out', type=mxtype, doc=doc)} />", "  </nodedef>",
+                f"  <nodegraph{_attrs(name=ng, nodedef=nd)}>",
+                f"    <{node.name} name=\"multi\" type=\"multioutput\">"]
+        out += [f"      <input{_attrs(name=i.name, type=i.mxtype, interfacename=i.name)} />" for i in node.inputs]
+        out += [f"    </{node.name}>", f"    <output{_attrs(name='out', type=mxtype, nodename='multi', output=output)} />",
+                "  </nodegraph>"]
+    return out
+
+
 def library_document(nodes: list[MxNode]) -> str:
-    """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``."""
+    """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``, and the texture
+    nodes' single-output variants (:func:`single_outputs`)."""
     from cellgl._version import __version__
 
     # no "--" in an XML comment (so not "--target")
     lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target "
              "materialx: nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
     for n in nodes:
-        lines += _nodedef(n)
+        lines += _nodedef(n) + _single_output(n)
     return "\n".join(lines) + "\n</materialx>\n"
 
 
