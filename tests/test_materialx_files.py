@@ -274,6 +274,56 @@ def test_a_new_export_replaces_the_previous_set_and_keeps_the_users_files(tmp_pa
     _no_temporaries(tmp_path)
 
 
+def test_baked_maps_land_with_the_set_and_go_with_it(tmp_path, monkeypatch):
+    """Issue 46 item 5: --bake-maps writes the baked materials' maps into textures/ as part of
+    the set: a failed re-export leaves them, a new export removes those the previous
+    materials named (every tile of a <UDIM> name) and nothing else there."""
+    out = tmp_path / "mx"
+    written = export_materialx(out, ["flagstone"], basis=False, bake_maps=8, udim="1001-1002")
+    maps = {f"textures/cellgl_flagstone_{c}.{k}.png" for c in ("color", "normal") for k in (1001, 1002)}
+    assert maps <= {p.relative_to(out).as_posix() for p in written}
+    assert all(_tree(out)[m].startswith(b"\x89PNG") for m in maps)
+    (out / "textures" / "mine.png").write_bytes(b"mine")
+    before = _tree(out)
+    real = os.replace
+    calls = [0]
+
+    def replace(a, b):
+        calls[0] += 1
+        if calls[0] == 4:
+            raise OSError(errno.EIO, "Input/output error", str(b))
+        return real(a, b)
+
+    with monkeypatch.context() as m:
+        m.setattr(materialx_files.os, "replace", replace)
+        with pytest.raises(OSError):
+            export_materialx(out, ["f1"], basis=False, bake_maps=8)
+    assert _tree(out) == before
+    export_materialx(out, ["f1"], basis=False, bake_maps=8)
+    assert sorted(p.name for p in (out / "textures").iterdir()) == ["cellgl_f1_color.png", "mine.png"]
+    export_materialx(out, ["f1"], basis=False)      # no maps: the previous ones go
+    assert sorted(p.name for p in (out / "textures").iterdir()) == ["mine.png"]
+    (out / "textures" / "mine.png").unlink()
+    export_materialx(out, ["f1"], basis=False, bake_maps=4)
+    export_materialx(out, ["f1"], basis=False)
+    assert not (out / "textures").exists()          # emptied by the export: gone
+    _no_temporaries(tmp_path)
+
+
+def test_bake_maps_and_udim_bad_input(tmp_path, capsys):
+    for args, msg in ((["--bake-maps", "0"], "--bake-maps 0: width 0 is out of range; accepted 1..65536"),
+                      (["--bake-maps", "8x8"], "--bake-maps '8x8': give one side in pixels, 1..65536"),
+                      (["--udim", "1001-1200"], "accepted tile numbers 1001..1100")):
+        rc, err = _cli(["f1", "-o", str(tmp_path / "mx"), *args], capsys)
+        assert rc == 2 and msg in err, err
+        assert not (tmp_path / "mx").exists()
+    from cellgl.cli import main
+
+    assert main(["export", "f1", "--udim", "1001", "-o", str(tmp_path / "f1.glsl")]) == 2
+    assert "--bake-maps and --udim are options of --target materialx" in capsys.readouterr().err
+    assert not (tmp_path / "f1.glsl").exists()
+
+
 def test_an_emptied_code_folder_goes_and_a_users_one_stays(tmp_path):
     out = tmp_path / "mx"
     export_materialx(out, ["f1"], basis=False)

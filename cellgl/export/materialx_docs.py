@@ -134,8 +134,13 @@ def _ex(node: MxNode) -> str:
     return node.name[len("cellgl_"):]
 
 
-def materials_document(nodes: list[MxNode]) -> str:
-    """``cellgl_materials.mtlx``: one example material per texture node of ``nodes``."""
+def materials_document(nodes: list[MxNode], udim: str | None = None) -> str:
+    """``cellgl_materials.mtlx``: two example materials per texture node of ``nodes``: the
+    procedural ``M_<preset>`` and ``M_<preset>_baked``, which reads the bake's maps (``<UDIM>``
+    in their names with ``udim``: :mod:`cellgl.export.materialx_baked`). The document's colour
+    space is ``lin_rec709`` (the images' ``srgb_texture`` converts to it)."""
+    from cellgl.export.materialx_baked import mtlx_lines
+
     lines = [_HEAD.rstrip("\n"), f'  <xi:include href="{LIBRARY}" />']
     for n in nodes:
         if not n.example:
@@ -159,8 +164,10 @@ def materials_document(nodes: list[MxNode]) -> str:
                   f'  <surfacematerial name="M_{e}" type="material">',
                   f'    <input name="surfaceshader" type="surfaceshader" nodename="{e}_surface" />',
                   "  </surfacematerial>"]
+        lines += mtlx_lines(n, udim)
     return "\n".join(lines).replace('<materialx version="1.39">',
-                                    '<materialx version="1.39" xmlns:xi="http://www.w3.org/2001/XInclude">') \
+                                    '<materialx version="1.39" colorspace="lin_rec709" '
+                                    'xmlns:xi="http://www.w3.org/2001/XInclude">') \
         + "\n</materialx>\n"
 
 
@@ -177,13 +184,15 @@ def _usd_val(v, mxtype: str) -> str:
     return _val(v, mxtype)
 
 
-def usd_stage(nodes: list[MxNode]) -> str:
+def usd_stage(nodes: list[MxNode], udim: str | None = None) -> str:
     """``cellgl_materials.usda``: the example materials as UsdShade networks under
     ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections).
     The stage's ``upAxis`` and ``metersPerUnit`` are USD's own fallbacks (Y, 0.01), authored
     because USD's validators ask for them: the materials hold no lengths, so the stage means
-    what it meant without them."""
+    what it meant without them. Each ``M_<preset>_baked`` is a ``UsdPreviewSurface`` network
+    reading the bake's maps (:func:`cellgl.export.materialx_baked.usd_lines`)."""
     from cellgl._version import __version__
+    from cellgl.export.materialx_baked import usd_lines
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
            'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
@@ -220,7 +229,8 @@ def usd_stage(nodes: list[MxNode]) -> str:
                 "                float inputs:specular_roughness = 0.5"]
         if normal:
             out.append(f"                float3 inputs:geometry_normal.connect = <{path}/{e}_normalmap.outputs:out>")
-        out += ["                token outputs:out", "            }", "        }"]
+        out += ["                token outputs:out", "            }", "        }", ""]
+        out += usd_lines(n, udim)
     out += ["    }", "}", ""]
     return "\n".join(out)
 
@@ -228,7 +238,7 @@ def usd_stage(nodes: list[MxNode]) -> str:
 # ------------------------------------------------------------------------------ the export
 
 
-def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
+def export_materialx(outdir, recipes=None, *, basis: bool = True, bake_maps=None, udim=None) -> list:
     """Write the MaterialX node library, the example materials and their USD stage to
     ``outdir`` (this module's files).
 
@@ -242,6 +252,14 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
         that is not a valid MaterialX name is refused with :class:`ExportError`.
     basis : bool
         Include the cellular basis nodes (:mod:`cellgl.export.materialx_basis`).
+    bake_maps : int, optional
+        Also bake the maps the ``M_<preset>_baked`` materials read, ``bake_maps`` pixels square
+        (1..65536; a tile each in a UDIM set), into ``textures/`` of the set
+        (:mod:`cellgl.export.materialx_baked`). Without it the materials name the files and
+        ``cellgl bake`` writes them.
+    udim : str, optional
+        A UDIM range as ``cellgl bake --udim`` takes it (``"1001-1004"``): the baked materials
+        read ``<UDIM>`` file names, and ``bake_maps`` bakes each tile.
 
     Returns
     -------
@@ -254,7 +272,10 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
     from cellgl.recipes import load_recipe
     from cellgl.texture.recipe import RecipeError
 
+    from cellgl.export.materialx_baked import bake_maps as bake, check_options
+
     check_places(check_dir(outdir))     # before the work: a file where genosl/ goes
+    size, udim = check_options(bake_maps, udim)
     names = exportable_presets()[0] if recipes is None else list(recipes)
     nodes = []
     for rec in names:
@@ -269,14 +290,18 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
         nodes = basis_nodes() + nodes
     if not nodes:
         raise ExportError("nothing to export: no recipe given and basis=False")
-    return write_set(set_files(nodes), outdir)
+    files = set_files(nodes, udim)       # the names checked before the bake
+    if size is not None:
+        files.update(bake(nodes, size, udim))
+    return write_set(files, outdir)
 
 
-def set_files(nodes: list[MxNode]) -> dict[str, str]:
-    """``{relative path: text}``: every file of the export of ``nodes``, their names checked
-    (:func:`check_names`)."""
+def set_files(nodes: list[MxNode], udim: str | None = None) -> dict[str, str]:
+    """``{relative path: text}``: every file of the export of ``nodes`` but the baked maps,
+    their names checked (:func:`check_names`)."""
     check_names(nodes)
-    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes), USD: usd_stage(nodes)}
+    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes, udim),
+             USD: usd_stage(nodes, udim)}
     for n in nodes:
         files.update(code_files(n))
     return files
@@ -305,7 +330,9 @@ def _written_names(node: MxNode):
         for el in ElementTree.fromstring(doc):
             if el.get("name"):
                 yield "MaterialX element", el.get("name"), el.get("name")
-    for rel in code_files(node):
+    from cellgl.export.materialx_baked import maps
+
+    for rel in [*code_files(node), *(maps(node).values() if node.example else ())]:
         yield "file", rel.lower(), rel
     for code in (node.glsl, node.osl):
         for name in set(_CODE_NAME.findall(re.sub(r"//[^\n]*", "", code))):

@@ -9,8 +9,12 @@ What the export owns in ``DIR`` (and nothing else there is read, moved or delete
   ``file`` attributes, where they have the form ``genglsl/cellgl_<name>.glsl`` or
   ``genosl/cellgl_<name>.osl`` (so a hand-edited library cannot make the export delete a
   file of any other name), and the code files of the new set;
-* the folders ``genglsl/`` and ``genosl/`` are created when missing and removed only when the
-  export emptied them.
+* the baked maps the previous ``cellgl_materials.mtlx`` names in its image nodes' ``file``
+  inputs, where they have the form ``textures/cellgl_<name>_<channel>[.<UDIM>].png``
+  (:data:`cellgl.export.materialx_baked.TEXTURE_FILE`; a ``<UDIM>`` name: its tiles), and the
+  maps of the new set (``--bake-maps``);
+* the folders ``genglsl/``, ``genosl/`` and ``textures/`` are created when missing and removed
+  only when the export emptied them.
 
 The new set is written into a hidden temporary folder first (named as
 :mod:`cellgl.io.tempfiles` names its temporary folders, so a later run sweeps it if this one is
@@ -41,7 +45,7 @@ LIBRARY = "cellgl_nodes.mtlx"
 MATERIALS = "cellgl_materials.mtlx"
 USD = "cellgl_materials.usda"
 DOCUMENTS = (LIBRARY, MATERIALS, USD)
-CODE_DIRS = ("genglsl", "genosl")
+CODE_DIRS = ("genglsl", "genosl", "textures")
 #: a code file of the set, as the library names it
 CODE_FILE = re.compile(r"(?:genglsl/cellgl_[A-Za-z0-9_]+\.glsl|genosl/cellgl_[A-Za-z0-9_]+\.osl)")
 #: the most of a previous library read to find its code files (the full library is ~50 KiB)
@@ -81,6 +85,32 @@ def previous_set(root: Path) -> set[str]:
             p = root / f
             if p.is_symlink() or p.is_file():
                 have.add(f)
+    return have | _previous_maps(root)
+
+
+def _previous_maps(root: Path) -> set[str]:
+    """The baked maps (``textures/cellgl_<name>_<channel>[.<tile>].png``) that the previous
+    ``cellgl_materials.mtlx`` names in its image nodes' ``file`` inputs, those that exist (a
+    ``<UDIM>`` name: its tiles 1001..1100)."""
+    from xml.etree import ElementTree
+
+    from cellgl.export.materialx_baked import TEXTURE_FILE
+
+    have: set[str] = set()
+    doc = root / MATERIALS
+    try:
+        if not doc.is_file() or doc.stat().st_size > _LIBRARY_MAX:
+            return have
+        tree = ElementTree.parse(doc)
+    except (OSError, ElementTree.ParseError, RecursionError, ValueError):
+        return have
+    for el in tree.getroot().iter("input"):
+        f = el.get("value")
+        if el.get("type") != "filename" or not f or not TEXTURE_FILE.fullmatch(f):
+            continue
+        for rel in ([f.replace("<UDIM>", str(k)) for k in range(1001, 1101)] if "<UDIM>" in f else [f]):
+            if (root / rel).is_symlink() or (root / rel).is_file():
+                have.add(rel)
     return have
 
 
@@ -89,6 +119,12 @@ def _fill(folder: Path, files: dict[str, str]) -> None:
     for rel, text in files.items():
         dest = folder / rel
         dest.parent.mkdir(exist_ok=True)
+        if isinstance(text, bytes):     # a baked map
+            with open(dest, "wb") as f:
+                f.write(text)
+                f.flush()
+                os.fsync(f.fileno())
+            continue
         with open(dest, "w", encoding="utf-8", newline="\n") as f:
             f.write(text)
             f.flush()
