@@ -432,6 +432,32 @@ def test_baked_material_of_a_udim_set(tmp_path):
     _validate_stage(stage)
 
 
+def test_blender_imports_the_baked_material_and_not_the_procedural_one(one):
+    """Blender's USD importer (bpy 4.5) makes M_<preset>_baked a Principled BSDF reading the
+    colour map as sRGB and the normal map as Non-Color through a Normal Map node; the
+    procedural M_<preset> (a MaterialX network of cellgl nodes) it does not import at all."""
+    _need_bpy()
+    code = ("import bpy, json\n"
+            f"bpy.ops.wm.usd_import(filepath={str(one / 'cellgl_materials.usda')!r}, import_all_materials=True)\n"
+            "out = {}\n"
+            "for m in bpy.data.materials:\n"
+            "    if m.use_nodes:\n"
+            "        out[m.name] = {'images': {n.image.filepath: n.image.colorspace_settings.name for n in m.node_tree.nodes"
+            " if n.type == 'TEX_IMAGE' and n.image}, 'links': sorted(f'{l.from_node.type}>{l.to_node.type}:{l.to_socket.name}'"
+            " for l in m.node_tree.links)}\n"
+            "print('RESULT' + json.dumps(out))\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    line = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT")]
+    assert proc.returncode == 0 and line, (proc.stdout[-2000:], proc.stderr[-2000:])
+    mats = json.loads(line[0][len("RESULT"):])
+    assert "M_flagstone" not in mats
+    baked = mats["M_flagstone_baked"]
+    assert baked["images"] == {str(one / "textures" / "cellgl_flagstone_color.png"): "sRGB",
+                               str(one / "textures" / "cellgl_flagstone_normal.png"): "Non-Color"}
+    assert {"TEX_IMAGE>BSDF_PRINCIPLED:Base Color", "TEX_IMAGE>NORMAL_MAP:Color",
+            "NORMAL_MAP>BSDF_PRINCIPLED:Normal"} <= set(baked["links"])
+
+
 # ------------------------------------------------------------------------------ bad input
 
 
