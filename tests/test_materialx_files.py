@@ -299,6 +299,12 @@ def test_baked_maps_land_with_the_set_and_go_with_it(tmp_path, monkeypatch):
         with pytest.raises(OSError):
             export_materialx(out, ["f1"], basis=False, bake_maps=8)
     assert _tree(out) == before
+    with monkeypatch.context() as m:          # the disk fills up while a map is copied in
+        _fail_on_write(m, 6)
+        with pytest.raises(OSError) as e:
+            export_materialx(out, ["flagstone"], basis=False, bake_maps=8)
+    assert e.value.errno == errno.ENOSPC and e.value.filename.endswith("textures/cellgl_flagstone_normal.png")
+    assert _tree(out) == before
     export_materialx(out, ["f1"], basis=False, bake_maps=8)
     assert sorted(p.name for p in (out / "textures").iterdir()) == ["cellgl_f1_color.png", "mine.png"]
     export_materialx(out, ["f1"], basis=False)      # no maps: the previous ones go

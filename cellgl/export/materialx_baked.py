@@ -24,9 +24,7 @@ the materials name the files and ``cellgl bake`` writes them (the command is in 
 """
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -140,29 +138,25 @@ def usd_lines(node: MxNode, udim: str | None = None) -> list[str]:
     return out
 
 
-def bake_maps(nodes: list[MxNode], size: int, udim: str | None = None) -> dict[str, bytes]:
-    """``{relative path: bytes}``: the maps of every texture node's baked material, baked by
-    :func:`cellgl.io.bake.bake` (``size`` x ``size`` pixels, a tile each with ``udim``) into a
-    temporary folder and read back, so that they land with the rest of the set
-    (:func:`cellgl.export.materialx_files.write_set`). A preset's recipe is the node's, as
-    exported (its ``--set`` values included)."""
+def bake_maps(nodes: list[MxNode], size: int, udim: str | None, folder) -> dict[str, Path]:
+    """``{relative path in the set: file}``: the maps of every texture node's baked material,
+    baked by :func:`cellgl.io.bake.bake` (``size`` x ``size`` pixels, a tile each with
+    ``udim``) into ``folder`` (a temporary folder the caller removes), which
+    :func:`cellgl.export.materialx_files.write_set` copies into the set, so that they land with
+    the rest of it (streamed file to file: no map is held in memory). A preset's recipe is the
+    node's, as exported (its ``--set`` values included)."""
     from cellgl.io.bake import bake
     from cellgl.io.udim import UDIM_TOKEN
 
-    out: dict[str, bytes] = {}
-    with tempfile.TemporaryDirectory(prefix="cellgl-maps-") as tmp:
-        for n in nodes:
-            if not n.example:
-                continue
-            for c, rel in maps(n, udim).items():
-                dest = Path(tmp) / Path(rel).name
-                done = bake(n.example["recipe_obj"], str(dest), size=size, channels=(c,), udim=udim,
-                            progress=False)
-                for p in done:
-                    name = Path(rel).name
-                    if udim:
-                        number = re.search(r"\.(\d{4})\.png$", p.name).group(1)
-                        name = name.replace(UDIM_TOKEN, number)
-                    out[f"{TEXTURES}/{name}"] = Path(p).read_bytes()
-                    os.unlink(p)
+    out: dict[str, Path] = {}
+    for n in nodes:
+        if not n.example:
+            continue
+        for c, rel in maps(n, udim).items():
+            dest = Path(folder) / Path(rel).name
+            for p in bake(n.example["recipe_obj"], str(dest), size=size, channels=(c,), udim=udim, progress=False):
+                name = Path(rel).name
+                if udim:
+                    name = name.replace(UDIM_TOKEN, re.search(r"\.(\d{4})\.png$", Path(p).name).group(1))
+                out[f"{TEXTURES}/{name}"] = Path(p)
     return out

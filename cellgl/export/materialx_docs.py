@@ -291,9 +291,13 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True, bake_maps=None
     if not nodes:
         raise ExportError("nothing to export: no recipe given and basis=False")
     files = set_files(nodes, udim)       # the names checked before the bake
-    if size is not None:
-        files.update(bake(nodes, size, udim))
-    return write_set(files, outdir)
+    if size is None:
+        return write_set(files, outdir)
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="cellgl-maps-") as tmp:
+        files.update(bake(nodes, size, udim, tmp))
+        return write_set(files, outdir)
 
 
 def set_files(nodes: list[MxNode], udim: str | None = None) -> dict[str, str]:

@@ -33,6 +33,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import shutil
 from pathlib import Path
 
 from cellgl.export.snippets import ExportError
@@ -119,9 +120,9 @@ def _fill(folder: Path, files: dict[str, str]) -> None:
     for rel, text in files.items():
         dest = folder / rel
         dest.parent.mkdir(exist_ok=True)
-        if isinstance(text, bytes):     # a baked map
-            with open(dest, "wb") as f:
-                f.write(text)
+        if isinstance(text, Path):      # a baked map: copied (streamed) from where it was baked
+            with open(text, "rb") as src, open(dest, "wb") as f:
+                shutil.copyfileobj(src, f, 1 << 20)
                 f.flush()
                 os.fsync(f.fileno())
             continue
@@ -153,9 +154,10 @@ def check_places(root: Path, rels=DOCUMENTS) -> None:
                               "move the directory away")
 
 
-def write_set(files: dict[str, str], outdir) -> list[Path]:
-    """Write ``{relative path: text}`` as the set of ``outdir`` (created if missing), whole or
-    not at all, removing the previous set's files that the new one has not (the module doc)."""
+def write_set(files: dict, outdir) -> list[Path]:
+    """Write ``{relative path: text, or a file (a Path) to copy}`` as the set of ``outdir``
+    (created if missing), whole or not at all, removing the previous set's files that the new
+    one has not (the module doc)."""
     root = check_dir(outdir)
     rels = list(files)
     check_places(root, rels)
