@@ -92,11 +92,29 @@ def full(tmp_path_factory):
 
 
 def _check_documents(out):
-    for name in ("cellgl_nodes.mtlx", "cellgl_materials.mtlx"):
+    for name in ("cellgl_defs.mtlx", "cellgl_materials.mtlx"):
         doc = _read(out / name)
         ok, msg = doc.validate()
         assert ok, (name, msg)
+    # definitions apart from implementations, one implementation document per target
+    from xml.etree import ElementTree
+
+    assert {e.tag for e in ElementTree.parse(out / "cellgl_defs.mtlx").getroot()} <= {"nodedef", "nodegraph"}
+    for target in ("genglsl", "genosl"):
+        impls = list(ElementTree.parse(out / f"cellgl_{target}_impl.mtlx").getroot())
+        assert impls and {(e.tag, e.get("target")) for e in impls} == {("implementation", target)}
     return _read(out / "cellgl_materials.mtlx")
+
+
+def _read_library(folder):
+    """The node library of ``folder`` (its definitions and both implementation documents) in
+    one document, with the standard libraries imported."""
+    mx = _mx()
+    doc = mx.createDocument()
+    for name in ("cellgl_defs.mtlx", "cellgl_genglsl_impl.mtlx", "cellgl_genosl_impl.mtlx"):
+        mx.readFromXmlFile(doc, str(Path(folder) / name))
+    doc.importLibrary(_stdlib())
+    return doc
 
 
 def _check_library_matches_nodes(doc, nodes):
@@ -173,7 +191,7 @@ def test_single_output_variants_beside_the_multi_output_node(one):
     from MaterialX import PyMaterialXGenShader as mxg
     from MaterialX import PyMaterialXGenGlsl as gg, PyMaterialXGenOsl as go
 
-    doc = _read(one / "cellgl_nodes.mtlx")
+    doc = _read_library(one)
     assert doc.validate()[0]
     multi = doc.getNodeDef("ND_cellgl_flagstone")
     for mxtype, output in (("color3", "color"), ("float", "height"), ("vector3", "normal")):
@@ -199,8 +217,8 @@ def test_basis_node_validates_and_generates(tmp_path):
     from cellgl.export.materialx_basis import basis_node
 
     nodes = [basis_node(2, "euclidean", "poisson")]
-    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
-    doc = _read(tmp_path / docs.LIBRARY)
+    docs.write_set({**docs.library_documents(nodes), **docs.code_files(nodes[0])}, tmp_path)
+    doc = _read_library(tmp_path)
     assert doc.validate()[0]
     _check_library_matches_nodes(doc, nodes)
     for lang in ("glsl", "osl"):
@@ -235,8 +253,8 @@ def test_genmsl_and_genslang_get_no_array_constructors(one, tmp_path):
     from cellgl.export.materialx_basis import basis_node
 
     nodes = [basis_node(2, "euclidean", "poisson")]
-    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
-    basis = _read(tmp_path / docs.LIBRARY)
+    docs.write_set({**docs.library_documents(nodes), **docs.code_files(nodes[0])}, tmp_path)
+    basis = _read_library(tmp_path)
     for gen in g.values():
         m = doc.getMaterialNodes()[0]
         src = gen.generate(m.getName(), m, _context(gen, one)).getSourceCode(mxg.PIXEL_STAGE)
@@ -289,7 +307,7 @@ def _validate_stage(stage, maps_missing=False):
     find nothing, but that a shader's id is no node of usd-core's shader registry (Sdr) where
     it is a MaterialX nodedef: usd-core's wheel has no UsdMtlx plugin, so its registry knows
     none of them (_check_stage checks each is a nodedef of MaterialX's libraries or of
-    cellgl_nodes.mtlx). The stage's upAxis and metersPerUnit are USD's fallbacks, authored.
+    cellgl_defs.mtlx). The stage's upAxis and metersPerUnit are USD's fallbacks, authored.
     ``maps_missing``: an export without --bake-maps, whose baked materials name maps nobody has
     baked yet: usd-core reports each (UnresolvableDependency, and InvalidFile for a normal map,
     whose file NormalMapTextureValidator opens), and those only are allowed. A <UDIM> normal
@@ -561,7 +579,8 @@ sys_out = {str(out)!r}
 lib = mx.createDocument()
 mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
 doc = mx.createDocument()
-mx.readFromXmlFile(doc, sys_out + "/cellgl_nodes.mtlx")
+for name in ("cellgl_defs.mtlx", "cellgl_genglsl_impl.mtlx", "cellgl_genosl_impl.mtlx"):
+    mx.readFromXmlFile(doc, sys_out + "/" + name)
 doc.importLibrary(lib)
 gen = g.GlslShaderGenerator.create()
 ctx = mxg.GenContext(gen)
@@ -742,7 +761,7 @@ def _genosl_for_cycles(out, nodedef, footprint):
     from MaterialX import PyMaterialXGenOsl as g
     from MaterialX import PyMaterialXGenShader as mxg
 
-    doc = _read(out / "cellgl_nodes.mtlx")
+    doc = _read_library(out)
     gen = g.OslShaderGenerator.create()
     o = _output_graph(doc, nodedef, "color", "color3", [("footprint", mx.Vector2(*footprint))])
     src = gen.generate("cellgl_mx", o, _context(gen, out)).getSourceCode(mxg.PIXEL_STAGE)

@@ -1,12 +1,15 @@
 """The files of ``cellgl export --target materialx -o DIR``, written as text (exporting needs
 neither MaterialX nor USD; tests/test_materialx.py checks the files with both):
 
-* ``cellgl_nodes.mtlx``: the node library, every nodedef (the basis, each texture preset) and
-  its implementations (``genglsl``, ``genosl``), whose sources lie in ``genglsl/`` and
-  ``genosl/`` next to it;
-* ``cellgl_materials.mtlx``: one example material per preset (``surfacematerial`` of an
+* the node library, definitions apart from implementations as MaterialX's own libraries keep
+  them (:func:`library_documents`): ``cellgl_defs.mtlx``, every nodedef (the basis, each
+  texture preset and its single-output variants), and ``cellgl_genglsl_impl.mtlx`` /
+  ``cellgl_genosl_impl.mtlx``, their implementations, whose sources lie in ``genglsl/`` and
+  ``genosl/`` next to them;
+* ``cellgl_materials.mtlx``: two example materials per preset (``surfacematerial`` of an
   ``open_pbr_surface`` whose base colour is the node's colour, converted from sRGB, and whose
-  normal is the node's normal through ``normalmap``), which includes the library;
+  normal is the node's normal through ``normalmap``; and the same reading the bake's maps:
+  :mod:`cellgl.export.materialx_baked`), which includes the library;
 * ``cellgl_materials.usda``: the same materials as UsdShade networks, each shader's
   ``info:id`` a nodedef name (as Houdini and Omniverse write MaterialX into USD).
 
@@ -19,10 +22,11 @@ import re
 from xml.sax.saxutils import quoteattr
 
 from cellgl.export.materialx import MxNode
-from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, check_places, write_set
+from cellgl.export.materialx_files import (DEFS, IMPLS, LIBRARIES, MATERIALS, USD, check_dir, check_places,
+                                           write_set)
 from cellgl.export.snippets import ExportError
 
-__all__ = ["export_materialx", "LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage",
+__all__ = ["export_materialx", "DEFS", "IMPLS", "LIBRARIES", "MATERIALS", "USD", "library_documents", "materials_document", "usd_stage",
            "set_files", "check_names", "write_set", "check_dir"]
 
 _HEAD = '<?xml version="1.0"?>\n<materialx version="1.39">\n'
@@ -79,9 +83,14 @@ def _nodedef(node: MxNode) -> list[str]:
     for name, mxtype, _, _, doc in node.outputs:
         out.append(f"    <output{_attrs(name=name, type=mxtype, doc=doc)} />")
     out.append("  </nodedef>")
-    for target, ext in (("genglsl", "glsl"), ("genosl", "osl")):
-        out.append(f"  <implementation{_attrs(name=f'IM_{node.name}_{target}', nodedef=node.nodedef, file=f'{target}/{node.name}.{ext}', function=node.function, target=target)} />")
     return out
+
+
+def _implementation(node: MxNode, target: str) -> str:
+    ext = {"genglsl": "glsl", "genosl": "osl"}[target]
+    a = _attrs(name=f"IM_{node.name}_{target}", nodedef=node.nodedef, file=f"{target}/{node.name}.{ext}",
+               function=node.function, target=target)
+    return f"  <implementation{a} />"
 
 
 def single_outputs(node: MxNode) -> list[tuple[str, str, str]]:
@@ -117,17 +126,27 @@ def _single_output(node: MxNode) -> list[str]:
     return out
 
 
-def library_document(nodes: list[MxNode]) -> str:
-    """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``, and the texture
-    nodes' single-output variants (:func:`single_outputs`)."""
+def library_documents(nodes: list[MxNode]) -> dict[str, str]:
+    """The node library of ``nodes``, as MaterialX's own libraries keep theirs: ``{name: text}``
+    of ``cellgl_defs.mtlx`` (the nodedefs, and the texture nodes' single-output variants with
+    the node graphs that implement them: :func:`single_outputs`) and one implementation document
+    per target, ``cellgl_genglsl_impl.mtlx`` and ``cellgl_genosl_impl.mtlx`` (their code in
+    ``genglsl/`` and ``genosl/``). A document that reads all three (as the materials'
+    ``xi:include`` do) has the whole library."""
     from cellgl._version import __version__
 
     # no "--" in an XML comment (so not "--target")
-    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target "
-             "materialx: nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
+    head = f"  <!-- cellgl {__version__} node library, written by cellgl export with the target materialx: "
+    defs = [_HEAD.rstrip("\n"), head + "the definitions (their implementations: " + ", ".join(IMPLS.values())
+            + "). -->"]
     for n in nodes:
-        lines += _nodedef(n) + _single_output(n)
-    return "\n".join(lines) + "\n</materialx>\n"
+        defs += _nodedef(n) + _single_output(n)
+    out = {DEFS: "\n".join(defs) + "\n</materialx>\n"}
+    for target, name in IMPLS.items():
+        lines = [_HEAD.rstrip("\n"), head + f"the {target} implementations of the nodedefs of {DEFS}, their code in "
+                 f"{target}/. -->"] + [_implementation(n, target) for n in nodes]
+        out[name] = "\n".join(lines) + "\n</materialx>\n"
+    return out
 
 
 def _ex(node: MxNode) -> str:
@@ -141,7 +160,7 @@ def materials_document(nodes: list[MxNode], udim: str | None = None) -> str:
     space is ``lin_rec709`` (the images' ``srgb_texture`` converts to it)."""
     from cellgl.export.materialx_baked import mtlx_lines
 
-    lines = [_HEAD.rstrip("\n"), f'  <xi:include href="{LIBRARY}" />']
+    lines = [_HEAD.rstrip("\n")] + [f'  <xi:include href="{name}" />' for name in LIBRARIES]
     for n in nodes:
         if not n.example:
             continue
@@ -195,7 +214,7 @@ def usd_stage(nodes: list[MxNode], udim: str | None = None) -> str:
     from cellgl.export.materialx_baked import usd_lines
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
-           'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
+           'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_defs.mtlx defines the cellgl_* ones)"',
            '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "",
            'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
     for n in nodes:
@@ -304,7 +323,7 @@ def set_files(nodes: list[MxNode], udim: str | None = None) -> dict[str, str]:
     """``{relative path: text}``: every file of the export of ``nodes`` but the baked maps,
     their names checked (:func:`check_names`)."""
     check_names(nodes)
-    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes, udim),
+    files = {**library_documents(nodes), MATERIALS: materials_document(nodes, udim),
              USD: usd_stage(nodes, udim)}
     for n in nodes:
         files.update(code_files(n))
@@ -330,7 +349,7 @@ def _written_names(node: MxNode):
     (any number of nodes share one shader)."""
     from xml.etree import ElementTree
 
-    for doc in (library_document([node]), materials_document([node])):
+    for doc in (*library_documents([node]).values(), materials_document([node])):
         for el in ElementTree.fromstring(doc):
             if el.get("name"):
                 yield "MaterialX element", el.get("name"), el.get("name")

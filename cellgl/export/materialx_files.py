@@ -3,12 +3,15 @@ not at all.
 
 What the export owns in ``DIR`` (and nothing else there is read, moved or deleted):
 
-* the three documents ``cellgl_nodes.mtlx``, ``cellgl_materials.mtlx`` and
-  ``cellgl_materials.usda``;
-* the code files the previous ``cellgl_nodes.mtlx`` names in its implementations'
-  ``file`` attributes, where they have the form ``genglsl/cellgl_<name>.glsl`` or
-  ``genosl/cellgl_<name>.osl`` (so a hand-edited library cannot make the export delete a
-  file of any other name), and the code files of the new set;
+* the documents: the node library, ``cellgl_defs.mtlx`` (the definitions) and one
+  implementation document per target, ``cellgl_genglsl_impl.mtlx`` and
+  ``cellgl_genosl_impl.mtlx`` (:data:`LIBRARIES`); ``cellgl_materials.mtlx`` and
+  ``cellgl_materials.usda``; and ``cellgl_nodes.mtlx``, the one-file library of earlier
+  versions, which an export removes (its nodedefs would meet the new ones);
+* the code files the previous implementation documents (and a previous ``cellgl_nodes.mtlx``)
+  name in their implementations' ``file`` attributes, where they have the form
+  ``genglsl/cellgl_<name>.glsl`` or ``genosl/cellgl_<name>.osl`` (so a hand-edited library
+  cannot make the export delete a file of any other name), and the code files of the new set;
 * the baked maps the previous ``cellgl_materials.mtlx`` names in its image nodes' ``file``
   inputs, where they have the form ``textures/cellgl_<name>_<channel>[.<UDIM>].png``
   (:data:`cellgl.export.materialx_baked.TEXTURE_FILE`; a ``<UDIM>`` name: its tiles), and the
@@ -40,12 +43,20 @@ from cellgl.export.snippets import ExportError
 from cellgl.io.tempfiles import (check_output_dir, commit_lock, default_mode, naming_destination_in,
                                  scratch_dir)
 
-__all__ = ["LIBRARY", "MATERIALS", "USD", "CODE_DIRS", "check_dir", "check_places", "previous_set", "write_set"]
+__all__ = ["DEFS", "IMPLS", "LIBRARIES", "MATERIALS", "USD", "CODE_DIRS", "check_dir", "check_places",
+           "previous_set", "write_set"]
 
-LIBRARY = "cellgl_nodes.mtlx"
+#: the node library: the definitions (nodedefs, and the node graphs that implement the
+#: single-output variants), then one implementation document per target, as MaterialX's own
+#: libraries keep them (``stdlib_defs.mtlx``, ``stdlib_genglsl_impl.mtlx``, ...)
+DEFS = "cellgl_defs.mtlx"
+IMPLS = {"genglsl": "cellgl_genglsl_impl.mtlx", "genosl": "cellgl_genosl_impl.mtlx"}
+LIBRARIES = (DEFS, *IMPLS.values())
+#: the one-file library of earlier versions (definitions and implementations together)
+LEGACY_LIBRARY = "cellgl_nodes.mtlx"
 MATERIALS = "cellgl_materials.mtlx"
 USD = "cellgl_materials.usda"
-DOCUMENTS = (LIBRARY, MATERIALS, USD)
+DOCUMENTS = (*LIBRARIES, MATERIALS, USD, LEGACY_LIBRARY)
 CODE_DIRS = ("genglsl", "genosl", "textures")
 #: a code file of the set, as the library names it
 CODE_FILE = re.compile(r"(?:genglsl/cellgl_[A-Za-z0-9_]+\.glsl|genosl/cellgl_[A-Za-z0-9_]+\.osl)")
@@ -69,23 +80,25 @@ def check_dir(path) -> Path:
 
 def previous_set(root: Path) -> set[str]:
     """The files (relative paths) of the set an earlier export wrote in ``root``: the documents
-    there, and the code files its ``cellgl_nodes.mtlx`` names (see the module doc)."""
+    there, the code files its implementation documents name, the maps its materials name
+    (see the module doc)."""
     from xml.etree import ElementTree
 
     have = {d for d in DOCUMENTS if (root / d).is_file() or (root / d).is_symlink()}
-    lib = root / LIBRARY
-    try:
-        if not lib.is_file() or lib.stat().st_size > _LIBRARY_MAX:
-            return have
-        tree = ElementTree.parse(lib)
-    except (OSError, ElementTree.ParseError, RecursionError, ValueError):
-        return have                     # not a library cellgl can read: only the documents
-    for el in tree.getroot():
-        f = el.get("file")
-        if el.tag == "implementation" and f and CODE_FILE.fullmatch(f):
-            p = root / f
-            if p.is_symlink() or p.is_file():
-                have.add(f)
+    for name in (*IMPLS.values(), LEGACY_LIBRARY):
+        lib = root / name
+        try:
+            if not lib.is_file() or lib.stat().st_size > _LIBRARY_MAX:
+                continue
+            tree = ElementTree.parse(lib)
+        except (OSError, ElementTree.ParseError, RecursionError, ValueError):
+            continue                    # not a library cellgl can read: only the documents
+        for el in tree.getroot():
+            f = el.get("file")
+            if el.tag == "implementation" and f and CODE_FILE.fullmatch(f):
+                p = root / f
+                if p.is_symlink() or p.is_file():
+                    have.add(f)
     return have | _previous_maps(root)
 
 
@@ -133,8 +146,9 @@ def _fill(folder: Path, files: dict[str, str]) -> None:
 
 
 def _order(rels) -> list[str]:
-    """The order the new files move in: code files, then the USD stage, the materials, the library."""
-    rank = {USD: 1, MATERIALS: 2, LIBRARY: 3}
+    """The order the new files move in: code files and maps, then the USD stage, the materials,
+    the implementation documents, the definitions."""
+    rank = {USD: 1, MATERIALS: 2, **{i: 3 for i in IMPLS.values()}, DEFS: 4}
     return sorted(rels, key=lambda r: (rank.get(r, 0), r))
 
 
@@ -177,7 +191,7 @@ def write_set(files: dict, outdir) -> list[Path]:
                     raise ExportError(f"output directory {str(root)!r} was made by another program during the "
                                       "export; nothing was written there: export again") from None
         return [root / r for r in rels]
-    with scratch_dir(root / LIBRARY, "export") as tmp:
+    with scratch_dir(root / DEFS, "export") as tmp:
         new, aside = tmp / "new", tmp / "old"
         new.mkdir()
         aside.mkdir()
