@@ -72,10 +72,11 @@ def _output_graph(doc, nodedef, output, mxtype, values=()):
 
 @pytest.fixture(scope="module")
 def one(tmp_path_factory):
-    """The library of one preset (flagstone: colour, height, normal) and no basis nodes."""
+    """The library of one preset (flagstone: colour, height, normal) and no basis nodes, with
+    the maps of its baked material (SIZE x SIZE)."""
     _mx()
     out = tmp_path_factory.mktemp("mx-one")
-    export_materialx(out, ["flagstone"], basis=False)
+    export_materialx(out, ["flagstone"], basis=False, bake_maps=SIZE)
     return out
 
 
@@ -91,11 +92,29 @@ def full(tmp_path_factory):
 
 
 def _check_documents(out):
-    for name in ("cellgl_nodes.mtlx", "cellgl_materials.mtlx"):
+    for name in ("cellgl_defs.mtlx", "cellgl_materials.mtlx"):
         doc = _read(out / name)
         ok, msg = doc.validate()
         assert ok, (name, msg)
+    # definitions apart from implementations, one implementation document per target
+    from xml.etree import ElementTree
+
+    assert {e.tag for e in ElementTree.parse(out / "cellgl_defs.mtlx").getroot()} <= {"nodedef", "nodegraph"}
+    for target in ("genglsl", "genosl"):
+        impls = list(ElementTree.parse(out / f"cellgl_{target}_impl.mtlx").getroot())
+        assert impls and {(e.tag, e.get("target")) for e in impls} == {("implementation", target)}
     return _read(out / "cellgl_materials.mtlx")
+
+
+def _read_library(folder):
+    """The node library of ``folder`` (its definitions and both implementation documents) in
+    one document, with the standard libraries imported."""
+    mx = _mx()
+    doc = mx.createDocument()
+    for name in ("cellgl_defs.mtlx", "cellgl_genglsl_impl.mtlx", "cellgl_genosl_impl.mtlx"):
+        mx.readFromXmlFile(doc, str(Path(folder) / name))
+    doc.importLibrary(_stdlib())
+    return doc
 
 
 def _check_library_matches_nodes(doc, nodes):
@@ -125,12 +144,20 @@ def _generate_all(doc, out, lang):
     ctx = _context(gen, out)
     mats = [m for m in doc.getMaterialNodes()]
     assert mats
+    procedural = 0
     for m in mats:
         shader = gen.generate(m.getName(), m, ctx)
         src = shader.getSourceCode(mxg.PIXEL_STAGE)
+        if m.getName().endswith("_baked"):      # image nodes reading the maps, no cellgl code
+            node = m.getName()[2:-len("_baked")]
+            assert doc.getNode(m.getName()[:-len("_baked")]) is not None and "cellglmx_" not in src
+            assert f"{node}_baked_color_file" in src, m.getName()
+            continue
         node = m.getName()[2:]
         assert f"cellglmx_{node}(" in src, m.getName()     # the node's function is called
-    return len(mats)
+        procedural += 1
+    assert len(mats) == 2 * procedural                      # M_<preset> and M_<preset>_baked
+    return procedural
 
 
 def test_one_preset_validates_and_generates_glsl_and_osl(one):
@@ -156,13 +183,42 @@ def test_one_preset_validates_and_generates_glsl_and_osl(one):
     assert (one / "genosl" / "cellgl_flagstone.osl").read_text().count("void cellglmx_flagstone(") == 1
 
 
+def test_single_output_variants_beside_the_multi_output_node(one):
+    """Issue 46 item 5: hosts that mishandle multi-output nodes (Hydra, several DCCs) get one
+    nodedef per output, ND_cellgl_<preset>_<type> of the same node, picked by the instance's
+    type, with the multi-output node's inputs and defaults and one output `out` (a node graph
+    around the multi-output node implements it, so GenGlsl and GenOsl call the node's code)."""
+    from MaterialX import PyMaterialXGenShader as mxg
+    from MaterialX import PyMaterialXGenGlsl as gg, PyMaterialXGenOsl as go
+
+    doc = _read_library(one)
+    assert doc.validate()[0]
+    multi = doc.getNodeDef("ND_cellgl_flagstone")
+    for mxtype, output in (("color3", "color"), ("float", "height"), ("vector3", "normal")):
+        nd = doc.getNodeDef(f"ND_cellgl_flagstone_{mxtype}")
+        assert nd is not None and nd.getNodeString() == "cellgl_flagstone" and nd.getDefaultVersion()
+        assert [(o.getName(), o.getType()) for o in nd.getOutputs()] == [("out", mxtype)]
+        assert [(i.getName(), i.getType(), i.getValueString()) for i in nd.getInputs()] == \
+            [(i.getName(), i.getType(), i.getValueString()) for i in multi.getInputs()]
+        ng = doc.getNodeGraph(f"NG_cellgl_flagstone_{mxtype}")
+        assert ng.getNodeDef().getName() == nd.getName()
+        assert ng.getOutput("out").getOutputString() == output
+        node = doc.addNode("cellgl_flagstone", f"single_{mxtype}", mxtype)
+        assert node.getNodeDef().getName() == nd.getName()          # chosen by the type
+    for gen in (gg.GlslShaderGenerator.create(), go.OslShaderGenerator.create()):
+        o = doc.addOutput(f"o_{gen.getTarget()}", "color3")
+        o.setNodeName("single_color3")
+        src = gen.generate("single", o, _context(gen, one)).getSourceCode(mxg.PIXEL_STAGE)
+        assert "cellglmx_flagstone(" in src
+
+
 def test_basis_node_validates_and_generates(tmp_path):
     from cellgl.export import materialx_docs as docs
     from cellgl.export.materialx_basis import basis_node
 
     nodes = [basis_node(2, "euclidean", "poisson")]
-    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
-    doc = _read(tmp_path / docs.LIBRARY)
+    docs.write_set({**docs.library_documents(nodes), **docs.code_files(nodes[0])}, tmp_path)
+    doc = _read_library(tmp_path)
     assert doc.validate()[0]
     _check_library_matches_nodes(doc, nodes)
     for lang in ("glsl", "osl"):
@@ -197,8 +253,8 @@ def test_genmsl_and_genslang_get_no_array_constructors(one, tmp_path):
     from cellgl.export.materialx_basis import basis_node
 
     nodes = [basis_node(2, "euclidean", "poisson")]
-    docs.write_set({docs.LIBRARY: docs.library_document(nodes), **docs.code_files(nodes[0])}, tmp_path)
-    basis = _read(tmp_path / docs.LIBRARY)
+    docs.write_set({**docs.library_documents(nodes), **docs.code_files(nodes[0])}, tmp_path)
+    basis = _read_library(tmp_path)
     for gen in g.values():
         m = doc.getMaterialNodes()[0]
         src = gen.generate(m.getName(), m, _context(gen, one)).getSourceCode(mxg.PIXEL_STAGE)
@@ -246,12 +302,16 @@ def test_usd_stage_has_every_material_shader_and_typed_input(one):
     _validate_stage(stage)
 
 
-def _validate_stage(stage):
+def _validate_stage(stage, maps_missing=False):
     """usd-core's own validators (pxr.UsdValidation: every one registered, 30 in usd-core 26.11)
     find nothing, but that a shader's id is no node of usd-core's shader registry (Sdr) where
     it is a MaterialX nodedef: usd-core's wheel has no UsdMtlx plugin, so its registry knows
     none of them (_check_stage checks each is a nodedef of MaterialX's libraries or of
-    cellgl_nodes.mtlx). The stage's upAxis and metersPerUnit are USD's fallbacks, authored."""
+    cellgl_defs.mtlx). The stage's upAxis and metersPerUnit are USD's fallbacks, authored.
+    ``maps_missing``: an export without --bake-maps, whose baked materials name maps nobody has
+    baked yet: usd-core reports each (UnresolvableDependency, and InvalidFile for a normal map,
+    whose file NormalMapTextureValidator opens), and those only are allowed. A <UDIM> normal
+    map is InvalidFile too: that validator does not expand the token (it opens the name)."""
     V = pytest.importorskip("pxr.UsdValidation")
     from pxr import UsdGeom, UsdShade
 
@@ -267,6 +327,11 @@ def _validate_stage(stage):
             sid = UsdShade.Shader(prim).GetIdAttr().Get()
             if sid.startswith("ND_cellgl_") or lib.getNodeDef(sid) is not None:
                 continue
+        msg = e.GetMessage()
+        if e.GetName() == "InvalidFile" and "_normal.<UDIM>.png@" in msg:
+            continue
+        if maps_missing and e.GetName() in ("UnresolvableDependency", "InvalidFile") and "/textures/cellgl_" in msg:
+            continue
         errors.append((e.GetName(), e.GetMessage()))
     assert not errors, errors
 
@@ -301,6 +366,114 @@ def _check_stage(stage, nodes):
             assert sid == n.nodedef or lib.getNodeDef(sid) is not None, sid
         base = UsdShade.Shader(stage.GetPrimAtPath(f"/cellgl/Materials/M_{e}/{e}_surface")).GetInput("base_color")
         assert base.GetConnectedSources()[0][0].source.GetPath().name == f"{e}_linear"
+
+
+# ------------------------------------------------------------------------------ baked materials
+
+
+def _png(path):
+    from PIL import Image
+
+    return np.asarray(Image.open(path).convert("RGB"), np.int16)
+
+
+def _color_managed(gen):
+    from MaterialX import PyMaterialXGenShader as mxg
+
+    cms = mxg.DefaultColorManagementSystem.create(gen.getTarget())
+    cms.loadLibrary(_stdlib())
+    gen.setColorManagementSystem(cms)
+    return gen
+
+
+def test_baked_material_reads_the_bakes_maps_with_their_colour_spaces(one, tmp_path):
+    """Issue 46 item 5: M_<preset>_baked beside M_<preset>, for renderers that do not run a node
+    library's code: MaterialX image nodes and a UsdPreviewSurface network reading the maps the
+    export baked (--bake-maps: the colour sRGB-encoded and tagged so, the normal map raw)."""
+    from MaterialX import PyMaterialXGenShader as mxg
+    from MaterialX import PyMaterialXGenGlsl as gg, PyMaterialXGenOsl as go
+
+    doc = _read(one / "cellgl_materials.mtlx")
+    assert doc.validate()[0] and doc.getColorSpace() == "lin_rec709"
+    color = doc.getNode("flagstone_baked_color").getInput("file")
+    normal = doc.getNode("flagstone_baked_normal").getInput("file")
+    assert color.getValueString() == "textures/cellgl_flagstone_color.png" and color.getColorSpace() == "srgb_texture"
+    assert normal.getValueString() == "textures/cellgl_flagstone_normal.png" and normal.getColorSpace() == ""
+    # the maps are the bake's, at the size asked for
+    from cellgl.io.bake import bake
+
+    assert np.array_equal(_png(one / "textures" / "cellgl_flagstone_color.png"), _bake("flagstone", tmp_path))
+    bake("flagstone", str(tmp_path / "n.png"), size=SIZE, channels=("normal",), progress=False)
+    assert np.array_equal(_png(one / "textures" / "cellgl_flagstone_normal.png"), _png(tmp_path / "n.png"))
+    # with colour management the generators convert the colour from sRGB, not the normal map
+    for gen in (gg.GlslShaderGenerator.create(), go.OslShaderGenerator.create()):
+        m = doc.getNode("M_flagstone_baked")
+        src = _color_managed(gen).generate("baked", m, _context(gen, one)).getSourceCode(mxg.PIXEL_STAGE)
+        assert "NG_srgb_texture_to_lin_rec709_color3(flagstone_baked_color_out" in src
+        assert "flagstone_baked_normal_out_cm" not in src and "cellglmx_" not in src
+    Usd = pytest.importorskip("pxr.Usd")
+    from pxr import UsdShade
+
+    stage = Usd.Stage.Open(str(one / "cellgl_materials.usda"))
+    mat = UsdShade.Material(stage.GetPrimAtPath("/cellgl/Materials/M_flagstone_baked"))
+    surf = mat.GetSurfaceOutput().GetConnectedSources()[0][0].source
+    assert UsdShade.Shader(surf.GetPrim()).GetIdAttr().Get() == "UsdPreviewSurface"
+    for c, space in (("color", "sRGB"), ("normal", "raw")):
+        tex = UsdShade.Shader(stage.GetPrimAtPath(f"/cellgl/Materials/M_flagstone_baked/flagstone_{c}"))
+        assert tex.GetIdAttr().Get() == "UsdUVTexture" and tex.GetInput("sourceColorSpace").Get() == space
+        assert Path(tex.GetInput("file").Get().resolvedPath) == one / "textures" / f"cellgl_flagstone_{c}.png"
+    _validate_stage(stage)          # the maps exist: nothing to report
+
+
+def test_baked_material_of_a_udim_set(tmp_path):
+    """--udim: the baked materials read <UDIM> names; --bake-maps bakes one map per tile, as
+    `cellgl bake --udim` does (tile 1001 is the plain bake)."""
+    out = tmp_path / "mx"
+    export_materialx(out, ["flagstone"], basis=False, bake_maps=16, udim="1001-1002,1011")
+    tiles = sorted(p.name for p in (out / "textures").iterdir())
+    assert tiles == [f"cellgl_flagstone_{c}.{k}.png" for c in ("color", "normal") for k in (1001, 1002, 1011)]
+    from xml.etree import ElementTree
+
+    ElementTree.parse(out / "cellgl_materials.mtlx")            # well-formed: the token's < escaped
+    doc = _read(out / "cellgl_materials.mtlx")
+    assert doc.validate()[0]
+    assert doc.getNode("flagstone_baked_color").getInputValue("file") == "textures/cellgl_flagstone_color.<UDIM>.png"
+    assert np.array_equal(_png(out / "textures" / "cellgl_flagstone_color.1001.png"), _bake("flagstone", tmp_path, 16))
+    assert not np.array_equal(_png(out / "textures" / "cellgl_flagstone_color.1002.png"),
+                              _png(out / "textures" / "cellgl_flagstone_color.1001.png"))
+    Usd = pytest.importorskip("pxr.Usd")
+    stage = Usd.Stage.Open(str(out / "cellgl_materials.usda"))
+    from pxr import UsdShade
+
+    tex = UsdShade.Shader(stage.GetPrimAtPath("/cellgl/Materials/M_flagstone_baked/flagstone_color"))
+    assert tex.GetInput("file").Get().path == "./textures/cellgl_flagstone_color.<UDIM>.png"
+    _validate_stage(stage)
+
+
+def test_blender_imports_the_baked_material_and_not_the_procedural_one(one):
+    """Blender's USD importer (bpy 4.5) makes M_<preset>_baked a Principled BSDF reading the
+    colour map as sRGB and the normal map as Non-Color through a Normal Map node; the
+    procedural M_<preset> (a MaterialX network of cellgl nodes) it does not import at all."""
+    _need_bpy()
+    code = ("import bpy, json\n"
+            f"bpy.ops.wm.usd_import(filepath={str(one / 'cellgl_materials.usda')!r}, import_all_materials=True)\n"
+            "out = {}\n"
+            "for m in bpy.data.materials:\n"
+            "    if m.use_nodes:\n"
+            "        out[m.name] = {'images': {n.image.filepath: n.image.colorspace_settings.name for n in m.node_tree.nodes"
+            " if n.type == 'TEX_IMAGE' and n.image}, 'links': sorted(f'{l.from_node.type}>{l.to_node.type}:{l.to_socket.name}'"
+            " for l in m.node_tree.links)}\n"
+            "print('RESULT' + json.dumps(out))\n")
+    proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    line = [ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT")]
+    assert proc.returncode == 0 and line, (proc.stdout[-2000:], proc.stderr[-2000:])
+    mats = json.loads(line[0][len("RESULT"):])
+    assert "M_flagstone" not in mats
+    baked = mats["M_flagstone_baked"]
+    assert baked["images"] == {str(one / "textures" / "cellgl_flagstone_color.png"): "sRGB",
+                               str(one / "textures" / "cellgl_flagstone_normal.png"): "Non-Color"}
+    assert {"TEX_IMAGE>BSDF_PRINCIPLED:Base Color", "TEX_IMAGE>NORMAL_MAP:Color",
+            "NORMAL_MAP>BSDF_PRINCIPLED:Normal"} <= set(baked["links"])
 
 
 # ------------------------------------------------------------------------------ bad input
@@ -392,7 +565,7 @@ def test_usd_stage_of_every_preset(full):
     stage = Usd.Stage.Open(str(full / "cellgl_materials.usda"))
     names, _ = exportable_presets()
     _check_stage(stage, [preset_node(n) for n in names])
-    _validate_stage(stage)
+    _validate_stage(stage, maps_missing=True)
 
 
 def _render_script(out, names, size, kind="preset"):
@@ -406,7 +579,8 @@ sys_out = {str(out)!r}
 lib = mx.createDocument()
 mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
 doc = mx.createDocument()
-mx.readFromXmlFile(doc, sys_out + "/cellgl_nodes.mtlx")
+for name in ("cellgl_defs.mtlx", "cellgl_genglsl_impl.mtlx", "cellgl_genosl_impl.mtlx"):
+    mx.readFromXmlFile(doc, sys_out + "/" + name)
 doc.importLibrary(lib)
 gen = g.GlslShaderGenerator.create()
 ctx = mxg.GenContext(gen)
@@ -490,8 +664,13 @@ def _diff255(got, want):
 def test_renderglsl_renders_the_bake(one, tmp_path):
     """RenderGlsl renders the node's colour (a flat quad, the texture space) as `cellgl bake`
     writes it: within 2/255 per channel (footprint 1/64: the bake's band limit at 64 x 64)."""
-    got = _render_glsl(one, [("ND_cellgl_flagstone", "color", "color3", [("footprint", (1 / SIZE, 1 / SIZE))])])
-    assert _diff255(got["ND_cellgl_flagstone", "color"], _bake("flagstone", tmp_path)) <= 2
+    fp = [("footprint", (1 / SIZE, 1 / SIZE))]
+    got = _render_glsl(one, [("ND_cellgl_flagstone", "color", "color3", fp),
+                             ("ND_cellgl_flagstone_color3", "out", "color3", fp)])
+    want = _bake("flagstone", tmp_path)
+    assert _diff255(got["ND_cellgl_flagstone", "color"], want) <= 2
+    # the single-output variant (issue 46 item 5) renders the same colour
+    assert _diff255(got["ND_cellgl_flagstone_color3", "out"], want) <= 2
 
 
 @pytest.mark.slow
@@ -582,7 +761,7 @@ def _genosl_for_cycles(out, nodedef, footprint):
     from MaterialX import PyMaterialXGenOsl as g
     from MaterialX import PyMaterialXGenShader as mxg
 
-    doc = _read(out / "cellgl_nodes.mtlx")
+    doc = _read_library(out)
     gen = g.OslShaderGenerator.create()
     o = _output_graph(doc, nodedef, "color", "color3", [("footprint", mx.Vector2(*footprint))])
     src = gen.generate("cellgl_mx", o, _context(gen, out)).getSourceCode(mxg.PIXEL_STAGE)

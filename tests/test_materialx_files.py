@@ -103,7 +103,7 @@ def test_distinct_names_export_and_the_materials_validate(tmp_path):
     export_materialx(out, [str(_recipe(tmp_path, "stone")), str(_recipe(tmp_path, "stone-dark")), "flagstone"])
     lib = mx.createDocument()
     mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
-    for name in (materialx_files.LIBRARY, materialx_files.MATERIALS):
+    for name in (materialx_files.DEFS, materialx_files.MATERIALS):
         doc = mx.createDocument()
         mx.readFromXmlFile(doc, str(out / name))
         doc.importLibrary(lib)
@@ -138,7 +138,7 @@ def test_documents_are_well_formed_xml(tmp_path):
     from xml.etree import ElementTree
 
     export_materialx(tmp_path, ["f1"], basis=False)
-    for name in (materialx_files.LIBRARY, materialx_files.MATERIALS):
+    for name in (*materialx_files.LIBRARIES, materialx_files.MATERIALS):
         ElementTree.parse(tmp_path / name)
 
 
@@ -162,7 +162,7 @@ def _fail_on_write(monkeypatch, after: int):
 
 
 def test_a_failed_export_into_a_new_folder_leaves_nothing(tmp_path, monkeypatch, capsys):
-    _fail_on_write(monkeypatch, 3)
+    _fail_on_write(monkeypatch, 5)          # the five documents, then a code file
     rc, err = _cli(["f1", "-o", str(tmp_path / "mx")], capsys)
     assert rc == 2 and "No space left on device" in err, err
     assert str(tmp_path / "mx" / "genglsl") in err and ".cellgl-" not in err      # names the output
@@ -204,7 +204,7 @@ def _lib_set(name: str) -> dict[str, str]:
     """A small set: a library naming one code file."""
     lib = (f'<?xml version="1.0"?>\n<materialx version="1.39">\n  <implementation name="IM_{name}" '
            f'file="genglsl/cellgl_{name}.glsl" target="genglsl" />\n</materialx>\n')
-    return {materialx_files.LIBRARY: lib, f"genglsl/cellgl_{name}.glsl": f"// {name}\n"}
+    return {materialx_files.IMPLS["genglsl"]: lib, f"genglsl/cellgl_{name}.glsl": f"// {name}\n"}
 
 
 def test_two_exports_into_one_folder_land_one_after_the_other(tmp_path, monkeypatch):
@@ -247,10 +247,10 @@ def test_a_file_in_the_way_is_refused_before_any_work(tmp_path, capsys):
     assert rc == 2 and f"output {str(out / 'genosl')!r} is a file, not a directory" in err, err
     assert _tree(out) == {"genosl": b"a file"}
     (out / "genosl").unlink()
-    (out / "cellgl_nodes.mtlx").mkdir()
+    (out / "cellgl_defs.mtlx").mkdir()
     rc, err = _cli(["f1", "-o", str(out)], capsys)
     assert rc == 2 and "is a directory" in err
-    assert sorted(os.listdir(out)) == ["cellgl_nodes.mtlx"]
+    assert sorted(os.listdir(out)) == ["cellgl_defs.mtlx"]
 
 
 def test_a_new_export_replaces_the_previous_set_and_keeps_the_users_files(tmp_path):
@@ -262,24 +262,99 @@ def test_a_new_export_replaces_the_previous_set_and_keeps_the_users_files(tmp_pa
     (out / "genglsl" / "cellgl_by_hand.glsl").write_text("mine: the library does not name it")
     written = export_materialx(out, ["hull"], basis=False)
     new = {p.relative_to(out).as_posix() for p in written}
-    assert new == {"cellgl_nodes.mtlx", "cellgl_materials.mtlx", "cellgl_materials.usda",
-                   "genglsl/cellgl_hull.glsl", "genosl/cellgl_hull.osl"}
+    assert new == {"cellgl_defs.mtlx", "cellgl_genglsl_impl.mtlx", "cellgl_genosl_impl.mtlx", "cellgl_materials.mtlx",
+                   "cellgl_materials.usda", "genglsl/cellgl_hull.glsl", "genosl/cellgl_hull.osl"}
     assert set(_tree(out)) == new | {"notes.txt", "genglsl/mine.glsl", "genglsl/cellgl_by_hand.glsl"}
     assert "flagstone" not in (out / "cellgl_materials.usda").read_text()
     # a library that names a file of another form deletes nothing of that name
-    lib = out / "cellgl_nodes.mtlx"
+    lib = out / "cellgl_genosl_impl.mtlx"
     lib.write_text(lib.read_text().replace("genosl/cellgl_hull.osl", "notes.txt"))
     export_materialx(out, ["f1"], basis=False)
     assert (out / "notes.txt").read_text() == "mine"
     _no_temporaries(tmp_path)
 
 
+def test_baked_maps_land_with_the_set_and_go_with_it(tmp_path, monkeypatch):
+    """Issue 46 item 5: --bake-maps writes the baked materials' maps into textures/ as part of
+    the set: a failed re-export leaves them, a new export removes those the previous
+    materials named (every tile of a <UDIM> name) and nothing else there."""
+    out = tmp_path / "mx"
+    written = export_materialx(out, ["flagstone"], basis=False, bake_maps=8, udim="1001-1002")
+    maps = {f"textures/cellgl_flagstone_{c}.{k}.png" for c in ("color", "normal") for k in (1001, 1002)}
+    assert maps <= {p.relative_to(out).as_posix() for p in written}
+    assert all(_tree(out)[m].startswith(b"\x89PNG") for m in maps)
+    (out / "textures" / "mine.png").write_bytes(b"mine")
+    before = _tree(out)
+    real = os.replace
+    calls = [0]
+
+    def replace(a, b):
+        calls[0] += 1
+        if calls[0] == 4:
+            raise OSError(errno.EIO, "Input/output error", str(b))
+        return real(a, b)
+
+    with monkeypatch.context() as m:
+        m.setattr(materialx_files.os, "replace", replace)
+        with pytest.raises(OSError):
+            export_materialx(out, ["f1"], basis=False, bake_maps=8)
+    assert _tree(out) == before
+    with monkeypatch.context() as m:          # the disk fills up while a map is copied in
+        _fail_on_write(m, 8)                # 5 documents, 2 code files, then the maps
+        with pytest.raises(OSError) as e:
+            export_materialx(out, ["flagstone"], basis=False, bake_maps=8)
+    assert e.value.errno == errno.ENOSPC and e.value.filename.endswith("textures/cellgl_flagstone_normal.png")
+    assert _tree(out) == before
+    export_materialx(out, ["f1"], basis=False, bake_maps=8)
+    assert sorted(p.name for p in (out / "textures").iterdir()) == ["cellgl_f1_color.png", "mine.png"]
+    export_materialx(out, ["f1"], basis=False)      # no maps: the previous ones go
+    assert sorted(p.name for p in (out / "textures").iterdir()) == ["mine.png"]
+    (out / "textures" / "mine.png").unlink()
+    export_materialx(out, ["f1"], basis=False, bake_maps=4)
+    export_materialx(out, ["f1"], basis=False)
+    assert not (out / "textures").exists()          # emptied by the export: gone
+    _no_temporaries(tmp_path)
+
+
+def test_bake_maps_and_udim_bad_input(tmp_path, capsys):
+    for args, msg in ((["--bake-maps", "0"], "--bake-maps 0: width 0 is out of range; accepted 1..65536"),
+                      (["--bake-maps", "8x8"], "--bake-maps '8x8': give one side in pixels, 1..65536"),
+                      (["--udim", "1001-1200"], "accepted tile numbers 1001..1100")):
+        rc, err = _cli(["f1", "-o", str(tmp_path / "mx"), *args], capsys)
+        assert rc == 2 and msg in err, err
+        assert not (tmp_path / "mx").exists()
+    from cellgl.cli import main
+
+    assert main(["export", "f1", "--udim", "1001", "-o", str(tmp_path / "f1.glsl")]) == 2
+    assert "--bake-maps and --udim are options of --target materialx" in capsys.readouterr().err
+    assert not (tmp_path / "f1.glsl").exists()
+
+
 def test_an_emptied_code_folder_goes_and_a_users_one_stays(tmp_path):
     out = tmp_path / "mx"
     export_materialx(out, ["f1"], basis=False)
-    files = materialx_files.write_set({materialx_files.LIBRARY: "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\" />\n"}, out)
-    assert [p.name for p in files] == ["cellgl_nodes.mtlx"]
-    assert sorted(os.listdir(out)) == ["cellgl_nodes.mtlx"]       # genglsl/, genosl/ emptied and gone
+    files = materialx_files.write_set({materialx_files.DEFS: "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\" />\n"}, out)
+    assert [p.name for p in files] == ["cellgl_defs.mtlx"]
+    assert sorted(os.listdir(out)) == ["cellgl_defs.mtlx"]       # genglsl/, genosl/ emptied and gone
+
+
+def test_the_one_file_library_of_earlier_versions_goes(tmp_path):
+    """Issue 46 item 5: the library is now definitions apart from implementations; an export
+    over a set of an earlier version removes its cellgl_nodes.mtlx (whose nodedefs would meet
+    the new ones) and the code files it names, and nothing else."""
+    out = tmp_path / "mx"
+    out.mkdir()
+    (out / "genglsl").mkdir()
+    (out / "cellgl_nodes.mtlx").write_text(
+        '<?xml version="1.0"?>\n<materialx version="1.39">\n  <nodedef name="ND_cellgl_old" node="cellgl_old" />\n'
+        '  <implementation name="IM_cellgl_old_genglsl" nodedef="ND_cellgl_old" file="genglsl/cellgl_old.glsl" '
+        'target="genglsl" />\n</materialx>\n')
+    (out / "genglsl" / "cellgl_old.glsl").write_text("// old")
+    (out / "genglsl" / "mine.glsl").write_text("mine")
+    export_materialx(out, ["f1"], basis=False)
+    assert set(_tree(out)) == {"cellgl_defs.mtlx", "cellgl_genglsl_impl.mtlx", "cellgl_genosl_impl.mtlx",
+                               "cellgl_materials.mtlx", "cellgl_materials.usda", "genglsl/cellgl_f1.glsl",
+                               "genosl/cellgl_f1.osl", "genglsl/mine.glsl"}
 
 
 def test_a_stale_temporary_folder_of_a_killed_export_is_swept(tmp_path):

@@ -47,6 +47,12 @@ def add_parser(sub):
                    "exportable preset, or the one given; docs/materialx.md)")
     p.add_argument("-o", "--output", metavar="FILE", default=None,
                    help="write to FILE (atomically) instead of standard output (materialx: a directory)")
+    p.add_argument("--bake-maps", dest="bake_maps", default=None, metavar="SIZE",
+                   help="materialx: also bake the maps the M_<preset>_baked materials read (SIZE x SIZE "
+                   "PNG, colour and normal) into DIR/textures/")
+    p.add_argument("--udim", default=None, metavar="RANGE",
+                   help="materialx: the baked materials read a UDIM set, <UDIM> in the maps' names "
+                   "(e.g. 1001-1004, as cellgl bake --udim); with --bake-maps, a tile per number")
     p.add_argument("--uniforms", action="store_true",
                    help="declare the recipe's run-time values as cellgl_<name> uniforms instead of "
                    "constants")
@@ -68,6 +74,8 @@ def run_cli(args) -> int:
     if str(args.target).strip().lower() == "materialx":
         return _run_materialx(args)
     check_target(args.target)
+    if getattr(args, "bake_maps", None) is not None or getattr(args, "udim", None) is not None:
+        raise ExportError("--bake-maps and --udim are options of --target materialx (its baked materials)")
     if args.basis is None and args.recipe is None:
         raise ExportError("nothing to export: give a preset name (`cellgl presets` lists them), a "
                           "recipe .json file, or --basis NAME (one of: " + ", ".join(BASES) + ")")
@@ -118,6 +126,6 @@ def _run_materialx(args) -> int:
             raise ExportError(str(exc)) from None
     elif args.sets:
         raise ExportError("--set needs a preset or recipe to set it on")
-    for path in export_materialx(args.output, recipes):
+    for path in export_materialx(args.output, recipes, bake_maps=args.bake_maps, udim=args.udim):
         print(path)
     return 0

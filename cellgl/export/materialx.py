@@ -291,7 +291,7 @@ def preset_node(recipe) -> MxNode:
     # multi-output node, connected by output name), the normal where the preset gives one
     outs = [o for o in TEXTURE_OUTPUTS if o[0] != "normal" or o[0] in r.outputs]
     node = MxNode(name, "texture2d", _node_doc(r, fixed), inputs, outs,
-                  example={"recipe": r.name, "outputs": [o[0] for o in outs]})
+                  example={"recipe": r.name, "outputs": [o[0] for o in outs], "recipe_obj": r})
     entry = "cellgl_mx_texture"
     glsl, first = without_array_constructors(private_globals(renamed(code, name)), name + "_init_arrays")
     node.glsl = (_library_head(r, "GLSL") + glsl + "\n" + _wrapper_glsl(node, renamed(entry, name), kept, first))

@@ -1,12 +1,15 @@
 """The files of ``cellgl export --target materialx -o DIR``, written as text (exporting needs
 neither MaterialX nor USD; tests/test_materialx.py checks the files with both):
 
-* ``cellgl_nodes.mtlx``: the node library, every nodedef (the basis, each texture preset) and
-  its implementations (``genglsl``, ``genosl``), whose sources lie in ``genglsl/`` and
-  ``genosl/`` next to it;
-* ``cellgl_materials.mtlx``: one example material per preset (``surfacematerial`` of an
+* the node library, definitions apart from implementations as MaterialX's own libraries keep
+  them (:func:`library_documents`): ``cellgl_defs.mtlx``, every nodedef (the basis, each
+  texture preset and its single-output variants), and ``cellgl_genglsl_impl.mtlx`` /
+  ``cellgl_genosl_impl.mtlx``, their implementations, whose sources lie in ``genglsl/`` and
+  ``genosl/`` next to them;
+* ``cellgl_materials.mtlx``: two example materials per preset (``surfacematerial`` of an
   ``open_pbr_surface`` whose base colour is the node's colour, converted from sRGB, and whose
-  normal is the node's normal through ``normalmap``), which includes the library;
+  normal is the node's normal through ``normalmap``; and the same reading the bake's maps:
+  :mod:`cellgl.export.materialx_baked`), which includes the library;
 * ``cellgl_materials.usda``: the same materials as UsdShade networks, each shader's
   ``info:id`` a nodedef name (as Houdini and Omniverse write MaterialX into USD).
 
@@ -19,10 +22,11 @@ import re
 from xml.sax.saxutils import quoteattr
 
 from cellgl.export.materialx import MxNode
-from cellgl.export.materialx_files import LIBRARY, MATERIALS, USD, check_dir, check_places, write_set
+from cellgl.export.materialx_files import (DEFS, IMPLS, LIBRARIES, MATERIALS, USD, check_dir, check_places,
+                                           write_set)
 from cellgl.export.snippets import ExportError
 
-__all__ = ["export_materialx", "LIBRARY", "MATERIALS", "USD", "library_document", "materials_document", "usd_stage",
+__all__ = ["export_materialx", "DEFS", "IMPLS", "LIBRARIES", "MATERIALS", "USD", "library_documents", "materials_document", "usd_stage",
            "set_files", "check_names", "write_set", "check_dir"]
 
 _HEAD = '<?xml version="1.0"?>\n<materialx version="1.39">\n'
@@ -79,30 +83,84 @@ def _nodedef(node: MxNode) -> list[str]:
     for name, mxtype, _, _, doc in node.outputs:
         out.append(f"    <output{_attrs(name=name, type=mxtype, doc=doc)} />")
     out.append("  </nodedef>")
-    for target, ext in (("genglsl", "glsl"), ("genosl", "osl")):
-        out.append(f"  <implementation{_attrs(name=f'IM_{node.name}_{target}', nodedef=node.nodedef, file=f'{target}/{node.name}.{ext}', function=node.function, target=target)} />")
     return out
 
 
-def library_document(nodes: list[MxNode]) -> str:
-    """``cellgl_nodes.mtlx``: the nodedefs and implementations of ``nodes``."""
+def _implementation(node: MxNode, target: str) -> str:
+    ext = {"genglsl": "glsl", "genosl": "osl"}[target]
+    a = _attrs(name=f"IM_{node.name}_{target}", nodedef=node.nodedef, file=f"{target}/{node.name}.{ext}",
+               function=node.function, target=target)
+    return f"  <implementation{a} />"
+
+
+def single_outputs(node: MxNode) -> list[tuple[str, str, str]]:
+    """``(nodedef, nodegraph, output)`` of the single-output variants of a texture node: one
+    per output, the nodedef ``ND_<node>_<type>`` of the same node (``cellgl_flagstone``, type
+    ``color3`` / ``float`` / ``vector3``: the types differ, so MaterialX picks the variant by the
+    instance's type) with one output ``out``, implemented by a node graph around the
+    multi-output node (so every target's code is the multi-output node's). The basis nodes have
+    none (their outputs share types)."""
+    if not node.example:
+        return []
+    return [(f"ND_{node.name}_{mxtype}", f"NG_{node.name}_{mxtype}", name) for name, mxtype, *_ in node.outputs]
+
+
+def _single_output(node: MxNode) -> list[str]:
+    out = []
+    types = {o[0]: (o[1], o[4]) for o in node.outputs}
+    for nd, ng, output in single_outputs(node):
+        mxtype, doc = types[output]
+        head = _attrs(name=nd, node=node.name, nodegroup=node.nodegroup, version=mx_version(),
+                      isdefaultversion="true", doc=f"the {output} output alone of {node.nodedef} (a single-output "
+                      "node, for hosts that mishandle multi-output ones): " + node.doc)
+        out.append(f"  <nodedef{head}>")
+        for line in _nodedef(node)[1:]:
+            if line.startswith("    <input"):
+                out.append(line)
+        out += [f"    <output{_attrs(name='out', type=mxtype, doc=doc)} />", "  </nodedef>",
+                f"  <nodegraph{_attrs(name=ng, nodedef=nd)}>",
+                f"    <{node.name} name=\"multi\" type=\"multioutput\">"]
+        out += [f"      <input{_attrs(name=i.name, type=i.mxtype, interfacename=i.name)} />" for i in node.inputs]
+        out += [f"    </{node.name}>", f"    <output{_attrs(name='out', type=mxtype, nodename='multi', output=output)} />",
+                "  </nodegraph>"]
+    return out
+
+
+def library_documents(nodes: list[MxNode]) -> dict[str, str]:
+    """The node library of ``nodes``, as MaterialX's own libraries keep theirs: ``{name: text}``
+    of ``cellgl_defs.mtlx`` (the nodedefs, and the texture nodes' single-output variants with
+    the node graphs that implement them: :func:`single_outputs`) and one implementation document
+    per target, ``cellgl_genglsl_impl.mtlx`` and ``cellgl_genosl_impl.mtlx`` (their code in
+    ``genglsl/`` and ``genosl/``). A document that reads all three (as the materials'
+    ``xi:include`` do) has the whole library."""
     from cellgl._version import __version__
 
     # no "--" in an XML comment (so not "--target")
-    lines = [_HEAD.rstrip("\n"), f"  <!-- cellgl {__version__} node library, written by cellgl export with the target "
-             "materialx: nodedefs, and their genglsl / genosl implementations in genglsl/ and genosl/. -->"]
+    head = f"  <!-- cellgl {__version__} node library, written by cellgl export with the target materialx: "
+    defs = [_HEAD.rstrip("\n"), head + "the definitions (their implementations: " + ", ".join(IMPLS.values())
+            + "). -->"]
     for n in nodes:
-        lines += _nodedef(n)
-    return "\n".join(lines) + "\n</materialx>\n"
+        defs += _nodedef(n) + _single_output(n)
+    out = {DEFS: "\n".join(defs) + "\n</materialx>\n"}
+    for target, name in IMPLS.items():
+        lines = [_HEAD.rstrip("\n"), head + f"the {target} implementations of the nodedefs of {DEFS}, their code in "
+                 f"{target}/. -->"] + [_implementation(n, target) for n in nodes]
+        out[name] = "\n".join(lines) + "\n</materialx>\n"
+    return out
 
 
 def _ex(node: MxNode) -> str:
     return node.name[len("cellgl_"):]
 
 
-def materials_document(nodes: list[MxNode]) -> str:
-    """``cellgl_materials.mtlx``: one example material per texture node of ``nodes``."""
-    lines = [_HEAD.rstrip("\n"), f'  <xi:include href="{LIBRARY}" />']
+def materials_document(nodes: list[MxNode], udim: str | None = None) -> str:
+    """``cellgl_materials.mtlx``: two example materials per texture node of ``nodes``: the
+    procedural ``M_<preset>`` and ``M_<preset>_baked``, which reads the bake's maps (``<UDIM>``
+    in their names with ``udim``: :mod:`cellgl.export.materialx_baked`). The document's colour
+    space is ``lin_rec709`` (the images' ``srgb_texture`` converts to it)."""
+    from cellgl.export.materialx_baked import mtlx_lines
+
+    lines = [_HEAD.rstrip("\n")] + [f'  <xi:include href="{name}" />' for name in LIBRARIES]
     for n in nodes:
         if not n.example:
             continue
@@ -125,8 +183,10 @@ def materials_document(nodes: list[MxNode]) -> str:
                   f'  <surfacematerial name="M_{e}" type="material">',
                   f'    <input name="surfaceshader" type="surfaceshader" nodename="{e}_surface" />',
                   "  </surfacematerial>"]
+        lines += mtlx_lines(n, udim)
     return "\n".join(lines).replace('<materialx version="1.39">',
-                                    '<materialx version="1.39" xmlns:xi="http://www.w3.org/2001/XInclude">') \
+                                    '<materialx version="1.39" colorspace="lin_rec709" '
+                                    'xmlns:xi="http://www.w3.org/2001/XInclude">') \
         + "\n</materialx>\n"
 
 
@@ -143,16 +203,18 @@ def _usd_val(v, mxtype: str) -> str:
     return _val(v, mxtype)
 
 
-def usd_stage(nodes: list[MxNode]) -> str:
+def usd_stage(nodes: list[MxNode], udim: str | None = None) -> str:
     """``cellgl_materials.usda``: the example materials as UsdShade networks under
     ``/cellgl/Materials`` (each shader's ``info:id`` a nodedef; typed inputs, connections).
     The stage's ``upAxis`` and ``metersPerUnit`` are USD's own fallbacks (Y, 0.01), authored
     because USD's validators ask for them: the materials hold no lengths, so the stage means
-    what it meant without them."""
+    what it meant without them. Each ``M_<preset>_baked`` is a ``UsdPreviewSurface`` network
+    reading the bake's maps (:func:`cellgl.export.materialx_baked.usd_lines`)."""
     from cellgl._version import __version__
+    from cellgl.export.materialx_baked import usd_lines
 
     out = ["#usda 1.0", "(", f'    doc = "cellgl {__version__}: the example materials of cellgl_materials.mtlx '
-           'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_nodes.mtlx defines the cellgl_* ones)"',
+           'as UsdShade networks (info:id: MaterialX nodedefs; cellgl_defs.mtlx defines the cellgl_* ones)"',
            '    defaultPrim = "cellgl"', "    metersPerUnit = 0.01", '    upAxis = "Y"', ")", "",
            'def Scope "cellgl"', "{", '    def Scope "Materials"', "    {"]
     for n in nodes:
@@ -186,7 +248,8 @@ def usd_stage(nodes: list[MxNode]) -> str:
                 "                float inputs:specular_roughness = 0.5"]
         if normal:
             out.append(f"                float3 inputs:geometry_normal.connect = <{path}/{e}_normalmap.outputs:out>")
-        out += ["                token outputs:out", "            }", "        }"]
+        out += ["                token outputs:out", "            }", "        }", ""]
+        out += usd_lines(n, udim)
     out += ["    }", "}", ""]
     return "\n".join(out)
 
@@ -194,7 +257,7 @@ def usd_stage(nodes: list[MxNode]) -> str:
 # ------------------------------------------------------------------------------ the export
 
 
-def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
+def export_materialx(outdir, recipes=None, *, basis: bool = True, bake_maps=None, udim=None) -> list:
     """Write the MaterialX node library, the example materials and their USD stage to
     ``outdir`` (this module's files).
 
@@ -208,6 +271,14 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
         that is not a valid MaterialX name is refused with :class:`ExportError`.
     basis : bool
         Include the cellular basis nodes (:mod:`cellgl.export.materialx_basis`).
+    bake_maps : int, optional
+        Also bake the maps the ``M_<preset>_baked`` materials read, ``bake_maps`` pixels square
+        (1..65536; a tile each in a UDIM set), into ``textures/`` of the set
+        (:mod:`cellgl.export.materialx_baked`). Without it the materials name the files and
+        ``cellgl bake`` writes them.
+    udim : str, optional
+        A UDIM range as ``cellgl bake --udim`` takes it (``"1001-1004"``): the baked materials
+        read ``<UDIM>`` file names, and ``bake_maps`` bakes each tile.
 
     Returns
     -------
@@ -220,7 +291,10 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
     from cellgl.recipes import load_recipe
     from cellgl.texture.recipe import RecipeError
 
+    from cellgl.export.materialx_baked import bake_maps as bake, check_options
+
     check_places(check_dir(outdir))     # before the work: a file where genosl/ goes
+    size, udim = check_options(bake_maps, udim)
     names = exportable_presets()[0] if recipes is None else list(recipes)
     nodes = []
     for rec in names:
@@ -235,14 +309,22 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True) -> list:
         nodes = basis_nodes() + nodes
     if not nodes:
         raise ExportError("nothing to export: no recipe given and basis=False")
-    return write_set(set_files(nodes), outdir)
+    files = set_files(nodes, udim)       # the names checked before the bake
+    if size is None:
+        return write_set(files, outdir)
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="cellgl-maps-") as tmp:
+        files.update(bake(nodes, size, udim, tmp))
+        return write_set(files, outdir)
 
 
-def set_files(nodes: list[MxNode]) -> dict[str, str]:
-    """``{relative path: text}``: every file of the export of ``nodes``, their names checked
-    (:func:`check_names`)."""
+def set_files(nodes: list[MxNode], udim: str | None = None) -> dict[str, str]:
+    """``{relative path: text}``: every file of the export of ``nodes`` but the baked maps,
+    their names checked (:func:`check_names`)."""
     check_names(nodes)
-    files = {LIBRARY: library_document(nodes), MATERIALS: materials_document(nodes), USD: usd_stage(nodes)}
+    files = {**library_documents(nodes), MATERIALS: materials_document(nodes, udim),
+             USD: usd_stage(nodes, udim)}
     for n in nodes:
         files.update(code_files(n))
     return files
@@ -267,11 +349,13 @@ def _written_names(node: MxNode):
     (any number of nodes share one shader)."""
     from xml.etree import ElementTree
 
-    for doc in (library_document([node]), materials_document([node])):
+    for doc in (*library_documents([node]).values(), materials_document([node])):
         for el in ElementTree.fromstring(doc):
             if el.get("name"):
                 yield "MaterialX element", el.get("name"), el.get("name")
-    for rel in code_files(node):
+    from cellgl.export.materialx_baked import maps
+
+    for rel in [*code_files(node), *(maps(node).values() if node.example else ())]:
         yield "file", rel.lower(), rel
     for code in (node.glsl, node.osl):
         for name in set(_CODE_NAME.findall(re.sub(r"//[^\n]*", "", code))):

@@ -3,14 +3,21 @@ not at all.
 
 What the export owns in ``DIR`` (and nothing else there is read, moved or deleted):
 
-* the three documents ``cellgl_nodes.mtlx``, ``cellgl_materials.mtlx`` and
-  ``cellgl_materials.usda``;
-* the code files the previous ``cellgl_nodes.mtlx`` names in its implementations'
-  ``file`` attributes, where they have the form ``genglsl/cellgl_<name>.glsl`` or
-  ``genosl/cellgl_<name>.osl`` (so a hand-edited library cannot make the export delete a
-  file of any other name), and the code files of the new set;
-* the folders ``genglsl/`` and ``genosl/`` are created when missing and removed only when the
-  export emptied them.
+* the documents: the node library, ``cellgl_defs.mtlx`` (the definitions) and one
+  implementation document per target, ``cellgl_genglsl_impl.mtlx`` and
+  ``cellgl_genosl_impl.mtlx`` (:data:`LIBRARIES`); ``cellgl_materials.mtlx`` and
+  ``cellgl_materials.usda``; and ``cellgl_nodes.mtlx``, the one-file library of earlier
+  versions, which an export removes (its nodedefs would meet the new ones);
+* the code files the previous implementation documents (and a previous ``cellgl_nodes.mtlx``)
+  name in their implementations' ``file`` attributes, where they have the form
+  ``genglsl/cellgl_<name>.glsl`` or ``genosl/cellgl_<name>.osl`` (so a hand-edited library
+  cannot make the export delete a file of any other name), and the code files of the new set;
+* the baked maps the previous ``cellgl_materials.mtlx`` names in its image nodes' ``file``
+  inputs, where they have the form ``textures/cellgl_<name>_<channel>[.<UDIM>].png``
+  (:data:`cellgl.export.materialx_baked.TEXTURE_FILE`; a ``<UDIM>`` name: its tiles), and the
+  maps of the new set (``--bake-maps``);
+* the folders ``genglsl/``, ``genosl/`` and ``textures/`` are created when missing and removed
+  only when the export emptied them.
 
 The new set is written into a hidden temporary folder first (named as
 :mod:`cellgl.io.tempfiles` names its temporary folders, so a later run sweeps it if this one is
@@ -29,19 +36,28 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import shutil
 from pathlib import Path
 
 from cellgl.export.snippets import ExportError
 from cellgl.io.tempfiles import (check_output_dir, commit_lock, default_mode, naming_destination_in,
                                  scratch_dir)
 
-__all__ = ["LIBRARY", "MATERIALS", "USD", "CODE_DIRS", "check_dir", "check_places", "previous_set", "write_set"]
+__all__ = ["DEFS", "IMPLS", "LIBRARIES", "MATERIALS", "USD", "CODE_DIRS", "check_dir", "check_places",
+           "previous_set", "write_set"]
 
-LIBRARY = "cellgl_nodes.mtlx"
+#: the node library: the definitions (nodedefs, and the node graphs that implement the
+#: single-output variants), then one implementation document per target, as MaterialX's own
+#: libraries keep them (``stdlib_defs.mtlx``, ``stdlib_genglsl_impl.mtlx``, ...)
+DEFS = "cellgl_defs.mtlx"
+IMPLS = {"genglsl": "cellgl_genglsl_impl.mtlx", "genosl": "cellgl_genosl_impl.mtlx"}
+LIBRARIES = (DEFS, *IMPLS.values())
+#: the one-file library of earlier versions (definitions and implementations together)
+LEGACY_LIBRARY = "cellgl_nodes.mtlx"
 MATERIALS = "cellgl_materials.mtlx"
 USD = "cellgl_materials.usda"
-DOCUMENTS = (LIBRARY, MATERIALS, USD)
-CODE_DIRS = ("genglsl", "genosl")
+DOCUMENTS = (*LIBRARIES, MATERIALS, USD, LEGACY_LIBRARY)
+CODE_DIRS = ("genglsl", "genosl", "textures")
 #: a code file of the set, as the library names it
 CODE_FILE = re.compile(r"(?:genglsl/cellgl_[A-Za-z0-9_]+\.glsl|genosl/cellgl_[A-Za-z0-9_]+\.osl)")
 #: the most of a previous library read to find its code files (the full library is ~50 KiB)
@@ -64,23 +80,51 @@ def check_dir(path) -> Path:
 
 def previous_set(root: Path) -> set[str]:
     """The files (relative paths) of the set an earlier export wrote in ``root``: the documents
-    there, and the code files its ``cellgl_nodes.mtlx`` names (see the module doc)."""
+    there, the code files its implementation documents name, the maps its materials name
+    (see the module doc)."""
     from xml.etree import ElementTree
 
     have = {d for d in DOCUMENTS if (root / d).is_file() or (root / d).is_symlink()}
-    lib = root / LIBRARY
+    for name in (*IMPLS.values(), LEGACY_LIBRARY):
+        lib = root / name
+        try:
+            if not lib.is_file() or lib.stat().st_size > _LIBRARY_MAX:
+                continue
+            tree = ElementTree.parse(lib)
+        except (OSError, ElementTree.ParseError, RecursionError, ValueError):
+            continue                    # not a library cellgl can read: only the documents
+        for el in tree.getroot():
+            f = el.get("file")
+            if el.tag == "implementation" and f and CODE_FILE.fullmatch(f):
+                p = root / f
+                if p.is_symlink() or p.is_file():
+                    have.add(f)
+    return have | _previous_maps(root)
+
+
+def _previous_maps(root: Path) -> set[str]:
+    """The baked maps (``textures/cellgl_<name>_<channel>[.<tile>].png``) that the previous
+    ``cellgl_materials.mtlx`` names in its image nodes' ``file`` inputs, those that exist (a
+    ``<UDIM>`` name: its tiles 1001..1100)."""
+    from xml.etree import ElementTree
+
+    from cellgl.export.materialx_baked import TEXTURE_FILE
+
+    have: set[str] = set()
+    doc = root / MATERIALS
     try:
-        if not lib.is_file() or lib.stat().st_size > _LIBRARY_MAX:
+        if not doc.is_file() or doc.stat().st_size > _LIBRARY_MAX:
             return have
-        tree = ElementTree.parse(lib)
+        tree = ElementTree.parse(doc)
     except (OSError, ElementTree.ParseError, RecursionError, ValueError):
-        return have                     # not a library cellgl can read: only the documents
-    for el in tree.getroot():
-        f = el.get("file")
-        if el.tag == "implementation" and f and CODE_FILE.fullmatch(f):
-            p = root / f
-            if p.is_symlink() or p.is_file():
-                have.add(f)
+        return have
+    for el in tree.getroot().iter("input"):
+        f = el.get("value")
+        if el.get("type") != "filename" or not f or not TEXTURE_FILE.fullmatch(f):
+            continue
+        for rel in ([f.replace("<UDIM>", str(k)) for k in range(1001, 1101)] if "<UDIM>" in f else [f]):
+            if (root / rel).is_symlink() or (root / rel).is_file():
+                have.add(rel)
     return have
 
 
@@ -89,6 +133,12 @@ def _fill(folder: Path, files: dict[str, str]) -> None:
     for rel, text in files.items():
         dest = folder / rel
         dest.parent.mkdir(exist_ok=True)
+        if isinstance(text, Path):      # a baked map: copied (streamed) from where it was baked
+            with open(text, "rb") as src, open(dest, "wb") as f:
+                shutil.copyfileobj(src, f, 1 << 20)
+                f.flush()
+                os.fsync(f.fileno())
+            continue
         with open(dest, "w", encoding="utf-8", newline="\n") as f:
             f.write(text)
             f.flush()
@@ -96,8 +146,9 @@ def _fill(folder: Path, files: dict[str, str]) -> None:
 
 
 def _order(rels) -> list[str]:
-    """The order the new files move in: code files, then the USD stage, the materials, the library."""
-    rank = {USD: 1, MATERIALS: 2, LIBRARY: 3}
+    """The order the new files move in: code files and maps, then the USD stage, the materials,
+    the implementation documents, the definitions."""
+    rank = {USD: 1, MATERIALS: 2, **{i: 3 for i in IMPLS.values()}, DEFS: 4}
     return sorted(rels, key=lambda r: (rank.get(r, 0), r))
 
 
@@ -117,9 +168,10 @@ def check_places(root: Path, rels=DOCUMENTS) -> None:
                               "move the directory away")
 
 
-def write_set(files: dict[str, str], outdir) -> list[Path]:
-    """Write ``{relative path: text}`` as the set of ``outdir`` (created if missing), whole or
-    not at all, removing the previous set's files that the new one has not (the module doc)."""
+def write_set(files: dict, outdir) -> list[Path]:
+    """Write ``{relative path: text, or a file (a Path) to copy}`` as the set of ``outdir``
+    (created if missing), whole or not at all, removing the previous set's files that the new
+    one has not (the module doc)."""
     root = check_dir(outdir)
     rels = list(files)
     check_places(root, rels)
@@ -139,7 +191,7 @@ def write_set(files: dict[str, str], outdir) -> list[Path]:
                     raise ExportError(f"output directory {str(root)!r} was made by another program during the "
                                       "export; nothing was written there: export again") from None
         return [root / r for r in rels]
-    with scratch_dir(root / LIBRARY, "export") as tmp:
+    with scratch_dir(root / DEFS, "export") as tmp:
         new, aside = tmp / "new", tmp / "old"
         new.mkdir()
         aside.mkdir()
