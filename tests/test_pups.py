@@ -220,18 +220,6 @@ def test_gpu_is_deterministic(ctx):
     assert a.tobytes() == b.tobytes()
 
 
-def test_fragment_path_matches_compute(ctx):
-    g = _graph(0.1, seed=3, channels=3)
-    pk = P.pups_pack(g, 120, 90)
-    for mode in (P.PupsMode.INTERPOLATE, P.PupsMode.LABEL):
-        f = G._evaluate_fragment(pk, mode, 0.5)
-        a, la = (P.pups_evaluate(g, 120, 90, mode="label", return_labels=True)
-                 if mode == P.PupsMode.LABEL else (P.pups_evaluate(g, 120, 90), None))
-        np.testing.assert_allclose(f[..., :3], a, atol=1e-6)
-        if la is not None:
-            np.testing.assert_array_equal(f[..., 3].astype(np.int32), la)
-
-
 @pytest.mark.parametrize("periodic", [True, False])
 @pytest.mark.parametrize("channels", [1, 3])
 @pytest.mark.parametrize("mode", ["interpolate", "weighted_sum"])

@@ -6,7 +6,6 @@ import time
 
 import numpy as np
 
-from cellgl.gl.path import STORAGE_ROW_BITS
 from cellgl.gl.targets import float_target
 
 from cellgl.pups.graph import PupsGraph
@@ -133,36 +132,6 @@ def evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: di
     t3 = time.perf_counter()
     timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=0.0)
     return vals, labs
-
-
-def _evaluate_fragment(packed: PupsPacked, mode: PupsMode, epsilon: float):
-    """The viewer's path: ``shaders/pups.frag`` into an RGBA32F target.
-
-    Returns float32 (H, W, 4): rgb value, alpha the label as a float.
-    """
-    from cellgl.gl import runner as R
-
-    r = R.runner(_context())
-    prog, vao = r.entry("pups.frag", {"CELL_PUPS_MODE": int(mode)})
-    _check_budget(packed, False)
-    w, h = packed.width, packed.height
-    for unit, words in zip((0, 1), _cell_stream(packed)):
-        words = np.ascontiguousarray(words, np.uint32).reshape(-1, 4)
-        r.input_texture(unit, words if len(words) else np.zeros((1, 4), np.uint32), 1 << STORAGE_ROW_BITS)
-    fbo, tex = float_target(R.store("pups.fragment", r.ctx), r.ctx, w, h)["objects"]
-    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
-                    ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
-                    ("u_epsilon", epsilon)):
-        if name in prog:
-            prog[name] = v
-    fbo.use()
-    fbo.viewport = (0, 0, w, h)
-    vao.render(mode=r.ctx.TRIANGLES, vertices=3)
-    out = np.empty((h, w, 4), np.float32)
-    fbo.read_into(out, components=4, dtype="f4")
-    return out
-
-
 
 
 def _raster_polygons(packed: PupsPacked):
