@@ -76,7 +76,6 @@ _lock = threading.RLock()
 _contexts: dict[str, moderngl.Context] = {}      # the shared context of each backend
 _default_backend: str | None = None
 _backend_of: dict[int, str] = {}
-_programs: dict[tuple, object] = {}
 #: id(ctx) -> (ctx, ident of the thread it is current on), as far as cellgl made it so
 _bound: dict[int, tuple[moderngl.Context, int]] = {}
 #: thread-private contexts (see get_context) not in use: backend -> contexts, reused
@@ -201,10 +200,10 @@ def _after_fork_in_child() -> None:
     global _lock, _tls, _bound, _default_backend, _pid
     if _pid == os.getpid():
         return
-    _orphans.append((dict(_contexts), dict(_programs), _bound, _spare.copy(), _tls))
+    _orphans.append((dict(_contexts), _bound, _spare.copy(), _tls))
     _tainted.update(_opened)
     _opened.clear()
-    for table in (_contexts, _programs, _backend_of, _spare, _private, osmesa.probed):
+    for table in (_contexts, _backend_of, _spare, _private, osmesa.probed):
         table.clear()
     _bound, _default_backend = {}, None
     deferred.clear()

@@ -91,8 +91,6 @@ def selfcheck_enabled() -> bool:
 
 #: fn(ctx, path) -> None when ``path`` gives right answers on ``ctx``, else what differed
 _hooks: list = []
-#: fn(ctx, old, new): a context's path changed (set_path) or was forgotten (new None)
-_listeners: list = []
 #: the GL lock's section (cellgl.gl.context sets it): the checks run inside it
 _guard = contextlib.nullcontext
 #: driver strings already warned about (one warning per driver and process)
@@ -107,13 +105,6 @@ def on_first_use(fn) -> None:
     keeps one."""
     if fn not in _hooks:
         _hooks.append(fn)
-
-
-def on_change(fn) -> None:
-    """Register ``fn(ctx, old, new)``, called when :func:`set_path` or :func:`forget` changes
-    the path of a context (for those who keep GPU objects made for one path)."""
-    if fn not in _listeners:
-        _listeners.append(fn)
 
 
 def set_guard(section) -> None:
@@ -146,23 +137,13 @@ def set_path(ctx, path: str, why: str) -> None:
     if path == "compute" and not has_compute(ctx):
         raise ValueError(f"this OpenGL {_version(ctx)} context has no compute shaders (OpenGL 4.3)")
     st = _state(ctx)
-    old = st["override"] or _natural(ctx)
     st["override"], st["why"] = path, why
-    if old != path:
-        for fn in list(_listeners):
-            fn(ctx, old, path)
 
 
 def forget(ctx) -> None:
     """Drop the override and the check results of ``ctx`` (tests; a driver update in place)."""
-    st = getattr(ctx, "_cellgl_path", None)
-    if st is None:
-        return
-    old = st["override"]
-    del ctx._cellgl_path
-    if old is not None:
-        for fn in list(_listeners):
-            fn(ctx, old, None)
+    if getattr(ctx, "_cellgl_path", None) is not None:
+        del ctx._cellgl_path
 
 
 def note(ctx, path: str, text: str) -> None:
