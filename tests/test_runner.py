@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import re
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -56,9 +55,7 @@ def test_no_module_keeps_gpu_objects_by_context_id():
 
 
 def test_one_program_cache(ctx):
-    """Compute entries, fragment entries and vertex + fragment programs share the context's cache;
-    clear_program_cache empties it."""
-    context.clear_program_cache()
+    """Compute entries, fragment entries and vertex + fragment programs share the context's cache."""
     x = np.random.default_rng(0).uniform(-3, 3, (50, 2))
     cellgl.cellular(x, 1)
     cellgl.render("flagstone", 8, 8)
@@ -72,62 +69,6 @@ def test_one_program_cache(ctx):
 
     render_fragment("flagstone", 8, 8)                     # the viewer's vertex + fragment program
     assert any(k[0] == "program" for k in programs)
-    context.clear_program_cache()
-    assert not registry.held(ctx).programs
-
-
-def test_clearing_programs_releases_each_with_its_own_context_current(ctx):
-    """A program name means nothing (or another program) in another context: clearing the cache
-    while this context is current must not delete a second context's names here. A context
-    current on another thread releases its own on its next call, on that thread."""
-    x = np.random.default_rng(1).uniform(-3, 3, (40, 3))
-    context.get_context()                                  # current on this thread: others go private
-    cellgl.cellular(x, 1)
-    ready, cleared, errors = threading.Event(), threading.Event(), []
-
-    def calls():
-        for n in range(1, 5):                              # more programs than this context holds
-            for metric in ("euclidean", "manhattan"):
-                cellgl.cellular(x, n, metric=metric)
-        cellgl.render("flagstone", 8, 8)
-
-    def hold():                                            # keeps its private context current
-        try:
-            calls()
-            mine = context.get_context()
-            errors.append(("mine", mine is not ctx, len(registry.held(mine).programs)))
-            ready.set()
-            cleared.wait(60)
-            errors.append(("retired", len(registry.held(mine).retired)))
-            cellgl.cellular(x, 2)                          # releases the retired ones, here
-            errors.append(("after", len(registry.held(mine).retired), mine.error))
-        finally:
-            ready.set()
-
-    t = threading.Thread(target=hold)
-    t.start()
-    assert ready.wait(120)
-    context.get_context()
-    n_here = len(registry.held(ctx).programs)
-    context.clear_program_cache()
-    assert ctx.error == "GL_NO_ERROR"
-    cleared.set()
-    t.join(120)
-    assert errors[0][0] == "mine" and errors[0][1] and errors[0][2] > n_here, errors
-    assert errors[1][1] > 0, errors                        # kept for its own thread ...
-    assert errors[2][1:] == (0, "GL_NO_ERROR"), errors     # ... and released there cleanly
-    cellgl.cellular(x, 1)                                  # this context recompiles and works
-    assert ctx.error == "GL_NO_ERROR"
-
-    spare = []                                             # a finished thread's context: current
-    t = threading.Thread(target=lambda: (calls(), spare.append(context.get_context())))
-    t.start()                                              # nowhere, entered here to release
-    t.join(120)
-    assert spare and spare[0] is not ctx and registry.held(spare[0]).programs
-    context.clear_program_cache()
-    assert ctx.error == "GL_NO_ERROR"                      # this one is current again
-    assert not registry.held(spare[0]).programs and not registry.held(spare[0]).retired
-    context.get_context()
 
 
 class _Obj:

@@ -591,23 +591,3 @@ def _program_error(vertex, fragment, exc, vs, fs) -> glsl.ShaderError:
     err = glsl.ShaderError(f"compiling {vertex} + {fragment}: {message.strip()}")
     err.sources = [vs, fs]
     return err
-
-
-def clear_program_cache() -> None:
-    """Forget compiled programs (e.g. after editing shader files), releasing each context's with
-    that context current; one current on another thread releases its own on its next call."""
-    with _lock:
-        me = threading.get_ident()
-        here = {k for k, (_, t) in _bound.items() if t == me}
-
-        def run_current(ctx, release) -> bool:
-            owner = _bound.get(id(ctx))
-            if owner is not None and owner[1] != me:
-                return False
-            _current(ctx)
-            release()
-            if id(ctx) not in here:      # e.g. a finished thread's spare: current nowhere again
-                _release(ctx)
-            return True
-
-        registry.clear_programs(run_current, last=lambda ctx: id(ctx) in here)

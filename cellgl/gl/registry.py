@@ -15,7 +15,7 @@ import threading
 from collections import OrderedDict
 from dataclasses import dataclass, field
 
-__all__ = ["held", "cached", "drop", "store", "clear_programs", "program_key"]
+__all__ = ["held", "cached", "drop", "store", "program_key"]
 
 
 @dataclass
@@ -27,14 +27,10 @@ class _Held:
     objects: dict = field(default_factory=dict)        # key -> (content key, GL object)
     stores: dict = field(default_factory=dict)         # name -> dict a module keeps (float targets)
     runners: dict = field(default_factory=dict)        # path -> Runner
-    #: programs forgotten while the context was current on another thread: released on its next
-    #: :func:`cached` (a program name means nothing, or another program, in another context)
-    retired: list = field(default_factory=list)
 
     def release(self) -> None:
         """Release every GL object held (the context must be current and alive)."""
-        _release_programs(list(self.programs.values()) + self.retired)
-        self.retired.clear()
+        _release_programs(list(self.programs.values()))
         for _, obj in self.objects.values():
             release_object(obj)
         for s in self.stores.values():
@@ -133,31 +129,12 @@ def store(name: str, ctx) -> dict:
     return held(ctx).stores.setdefault(name, {})
 
 
-def clear_programs(run_current, last=lambda ctx: False) -> None:
-    """Forget every context's programs (after editing shader files). ``run_current(ctx, fn)``
-    calls ``fn()`` with ``ctx`` current on this thread and returns True, or returns False when it
-    cannot (``ctx`` is current on another thread: its programs are then released on its next
-    :func:`cached`, on its own thread). A program name means nothing, or another program, in any
-    other context. Contexts for which ``last(ctx)`` holds go last (they stay current after)."""
-    with _lock:
-        for h in sorted(_registry.values(), key=lambda h: bool(last(h.ctx))):
-            programs = list(h.programs.values()) + h.retired
-            h.programs.clear()
-            h.groups.clear()
-            h.retired = []
-            if _alive(h.ctx) and not run_current(h.ctx, lambda programs=programs: _release_programs(programs)):
-                h.retired = programs
-
-
 def cached(ctx, key, make, lru: tuple | None = None):
     """``(program, vertex array or None)`` under ``key`` in ``ctx``'s one program cache, made by
     ``make()`` once; ``lru`` (name, size): kept among the group's last ``size`` (older ones
     released with their vertex arrays)."""
     h = held(ctx)
     with _lock:
-        if h.retired:                                  # the caller made ``ctx`` current
-            _release_programs(h.retired)
-            h.retired.clear()
         got = h.programs.get(key)
         if got is None:
             got = h.programs[key] = make()
