@@ -31,7 +31,8 @@ LOOP_BUDGET = 6144
 PROBE_PASSES = 1 << 17
 
 
-#: llvmpipe's loop limiter (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
+#: llvmpipe's loop limiter per SIMD vector (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS;
+#: docs/exactness.md); the one definition: texture/dispatch.py and pups/gpu.py import it
 DRIVER_LOOP_LIMIT = 65535
 
 

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from cellgl.basis.gpu import DRIVER_LOOP_LIMIT
 from cellgl.gl.targets import float_target
 
 from cellgl.pups.graph import PupsGraph
@@ -61,8 +62,6 @@ def _cell_stream(packed: PupsPacked):
                    packed.axes_scaled)
 
 
-#: llvmpipe's loop limiter per SIMD vector (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
-DRIVER_LOOP_LIMIT = 65535
 #: invocations of one llvmpipe SIMD vector (AVX2: 8 x 32 bit; the bound assumes they all differ)
 SIMD_LANES = 8
 

@@ -23,14 +23,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from cellgl.basis.gpu import DRIVER_LOOP_LIMIT, PROBE_PASSES
 from cellgl.gl.threads import gl_call
 
 __all__ = ["MAX_BAKED", "LoopLimitError", "run", "output_mask"]
-
-#: llvmpipe's loop limiter (Mesa gallivm LP_MAX_TGSI_LOOP_ITERATIONS; docs/exactness.md)
-DRIVER_LOOP_LIMIT = 65535
-#: passes of the loop probe's counting loop: past llvmpipe's limiter, bounded elsewhere
-PROBE_PASSES = 1 << 17
 
 
 class LoopLimitError(ValueError):
