@@ -68,7 +68,55 @@ def test_context_is_core_33_or_newer(ctx):
     assert context.get_context() is ctx
     from cellgl.gl import path
 
-    assert path.has_compute(ctx) == (ctx.version_code >= 430)
+    info = ctx.info
+    enough = ctx.version_code >= 430 and min(
+        info["GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS"],
+        info["GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS"]) >= path.storage_bindings_needed()
+    assert path.has_compute(ctx) == enough
+
+
+class _Limits:
+    """A stand-in context: a version and the two shader-storage limits (nothing else is read)."""
+
+    def __init__(self, version_code, bindings, blocks):
+        self.version_code = version_code
+        self.info = {"GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS": bindings,
+                     "GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS": blocks}
+
+
+def test_storage_bindings_needed_is_the_highest_binding_of_the_shaders():
+    import re
+
+    from cellgl.gl import path
+    from cellgl.gl.glsl import shader_dir
+
+    found = [int(b) for f in shader_dir().rglob("*.comp")
+             for b in re.findall(r"binding\s*=\s*(\d+)\s*\)\s*(?:readonly\s+|writeonly\s+)?buffer",
+                                 f.read_text())]
+    assert found and path.storage_bindings_needed() == max(found) + 1
+    assert path.storage_bindings_needed() > 8         # past OpenGL 4.3's guaranteed minimum
+
+
+@pytest.mark.parametrize("bindings, blocks", [(8, 8), (80, 8), (8, 80)])
+def test_a_context_at_the_storage_minimum_runs_the_fragment_path(monkeypatch, bindings, blocks):
+    """OpenGL 4.3 guarantees 8 shader-storage bindings and 8 blocks in a compute shader; cellgl's
+    compute entries use more, so such a conformant context must not be sent down the compute
+    path (its programs would fail to link): the fragment path, and a forced compute refused
+    naming the limit."""
+    from cellgl.gl import path
+
+    small = _Limits(460, bindings, blocks)
+    assert not path.has_compute(small)
+    why = path.compute_missing(small)
+    assert "8" in why and str(path.storage_bindings_needed()) in why and "fragment path" in why
+    monkeypatch.setenv("CELLGL_PATH", "compute")
+    with pytest.raises(ValueError, match=r"CELLGL_PATH=compute, but this OpenGL 4\.6 context offers GL_MAX_"):
+        path.gpu_path(small)
+    with pytest.raises(ValueError, match="GL_MAX_"):
+        path.set_path(small, "compute", "test")
+    assert path.has_compute(_Limits(460, 96, 96))
+    assert path.compute_missing(_Limits(410, 96, 96)) == \
+        "this OpenGL 4.1 context has no compute shaders (OpenGL 4.3)"
 
 
 def test_context_info_keys(ctx):

@@ -20,7 +20,9 @@ differed; when both fail (or the failing path was forced with ``CELLGL_PATH``),
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
+import re
 import threading
 import time
 import warnings
@@ -46,9 +48,49 @@ COMPUTE_GL = 430
 STORAGE_ROW_BITS = 12
 
 
+@functools.lru_cache(maxsize=1)
+def storage_bindings_needed() -> int:
+    """1 + the highest shader-storage ``binding`` of the compute entries (``shaders/**/*.comp``
+    and ``*.glsl``): the bindings, and blocks in one compute shader, a context must offer.
+    OpenGL 4.3 guarantees only 8 of each (``GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS``,
+    ``GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS``); desktop drivers give 16-96."""
+    from cellgl.gl.glsl import shader_dir
+
+    top = -1
+    for f in sorted(shader_dir().rglob("*")):
+        if f.suffix in (".comp", ".glsl"):
+            for m in _STORAGE_BINDING.finditer(f.read_text(encoding="utf-8")):
+                top = max(top, int(m.group(1)))
+    return top + 1
+
+
+_STORAGE_BINDING = re.compile(r"layout\s*\(\s*std430\s*,\s*binding\s*=\s*(\d+)\s*\)")
+
+
+def compute_missing(ctx) -> str | None:
+    """Why ``ctx`` (a moderngl context) cannot run cellgl's compute entries, or None when it can:
+    OpenGL 4.3, and the shader-storage bindings and compute blocks they use
+    (:func:`storage_bindings_needed`; a context whose limits cannot be read counts as enough)."""
+    if ctx.version_code < COMPUTE_GL:
+        return f"this OpenGL {_version(ctx)} context has no compute shaders (OpenGL 4.3)"
+    try:
+        info = ctx.info
+        limits = {k: int(info[k]) for k in ("GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS",
+                                             "GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS")}
+    except Exception:  # noqa: BLE001 - a stand-in context without limits
+        return None
+    need = storage_bindings_needed()
+    short = [f"{k} {v}" for k, v in limits.items() if v < need]
+    if short:
+        return (f"this OpenGL {_version(ctx)} context offers {', '.join(short)}; cellgl's compute "
+                f"entries use {need} (the fragment path needs none)")
+    return None
+
+
 def has_compute(ctx) -> bool:
-    """True when ``ctx`` (a moderngl context) runs compute shaders."""
-    return ctx.version_code >= COMPUTE_GL
+    """True when ``ctx`` (a moderngl context) runs cellgl's compute entries
+    (:func:`compute_missing`)."""
+    return compute_missing(ctx) is None
 
 
 def forced_path() -> str | None:
@@ -134,8 +176,9 @@ def set_path(ctx, path: str, why: str) -> None:
     """
     if path not in PATHS:
         raise ValueError(f"unknown GPU path {path!r}; accepted values: {', '.join(PATHS)}")
-    if path == "compute" and not has_compute(ctx):
-        raise ValueError(f"this OpenGL {_version(ctx)} context has no compute shaders (OpenGL 4.3)")
+    missing = compute_missing(ctx) if path == "compute" else None
+    if missing:
+        raise ValueError(missing)
     st = _state(ctx)
     st["override"], st["why"] = path, why
 
@@ -184,11 +227,10 @@ def gpu_path(ctx) -> str:
         failing path is forced by ``CELLGL_PATH``): every call on this context raises it.
     """
     forced = forced_path()
-    if forced == "compute" and not has_compute(ctx):
-        raise ValueError(
-            f"CELLGL_PATH=compute, but this OpenGL {_version(ctx)} context has no compute shaders "
-            "(OpenGL 4.3); unset CELLGL_PATH or set CELLGL_PATH=fragment"
-        )
+    missing = compute_missing(ctx) if forced == "compute" else None
+    if missing:
+        raise ValueError(f"CELLGL_PATH=compute, but {missing}; unset CELLGL_PATH or set "
+                         "CELLGL_PATH=fragment")
     st = _state(ctx)
     chosen = forced or st["override"] or _natural(ctx)
     if chosen in st["results"] and st["results"][chosen] is None:
