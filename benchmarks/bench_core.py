@@ -47,6 +47,24 @@ def best_time(fn, repeats: int, warmup=None) -> float:
     return best
 
 
+def best_times(rows: dict, repeats: int) -> dict:
+    """Best wall time of each of ``rows`` (name -> fn) over ``repeats`` rounds, the rows taken in
+    turn within each round, so that a change of the machine's load falls on every row alike (a
+    side-by-side comparison); warm-ups are the caller's."""
+    best = {k: float("inf") for k in rows}
+    for _ in range(repeats):
+        for k, fn in rows.items():
+            t0 = time.perf_counter()
+            fn()
+            best[k] = min(best[k], time.perf_counter() - t0)
+    return best
+
+
+def seconds_table(best: dict) -> str:
+    """``best`` (name -> seconds) as a markdown table."""
+    return "\n".join(["| what | seconds |", "| --- | ---: |"] + [f"| {k} | {v:.2f} |" for k, v in best.items()])
+
+
 @dataclass
 class Row:
     library: str

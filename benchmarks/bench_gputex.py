@@ -24,11 +24,13 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 
 _REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if _REPO not in sys.path:
     sys.path.insert(0, _REPO)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from bench_core import best_times, seconds_table  # noqa: E402 - after the path is set
 
 
 def main(argv=None) -> int:
@@ -56,21 +58,14 @@ def main(argv=None) -> int:
             "encoder": lambda: blocks.encode_levels("bc7", levels),
             "encoder, 1 core": lambda: blocks.encode_levels("bc7", levels, workers=1),
         }
-        best = {k: float("inf") for k in rows}
         for fn in rows.values():        # warm-up: shaders, the pool's first start
             fn()
-        for _ in range(args.repeats):
-            for k, fn in rows.items():
-                t0 = time.perf_counter()
-                fn()
-                best[k] = min(best[k], time.perf_counter() - t0)
+        best = best_times(rows, args.repeats)
         size = os.path.getsize(os.path.join(d, "x.dds"))
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"{args.preset} {s}^2, chain {len(levels)} levels ({px / 1e6:.2f} Mpx), {usable_cores()} cores, "
           f"load {load:.1f}, best of {args.repeats}; dds {size / 2**20:.2f} MiB")
-    print("| what | seconds |\n| --- | ---: |")
-    for k, v in best.items():
-        print(f"| {k} | {v:.2f} |")
+    print(seconds_table(best))
     own = best["dds BC7 + mips"] - best["encoder"]
     print(f"| cellgl's own work in the dds bake (dds - encoder) | {own:.2f} |")
     print(f"\nown work / png: {own / best['png (level 0, no mips)']:.2f}x (issue 45: <= 1.5x); "

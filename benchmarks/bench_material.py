@@ -27,11 +27,13 @@ import argparse
 import os
 import sys
 import tempfile
-import time
 
 _REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if _REPO not in sys.path:
     sys.path.insert(0, _REPO)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from bench_core import best_times, seconds_table  # noqa: E402 - after the path is set
 
 
 def main(argv=None) -> int:
@@ -80,21 +82,14 @@ def main(argv=None) -> int:
 
         rows = {"png set (level 0, no mips)": png, "dds set (BC7/BC5/R16, every mip level)": dds,
                 "encoder (same pixels, every core)": encoder, "encoder, 1 core": lambda: encoder(1)}
-        best = {k: float("inf") for k in rows}
-        for _ in range(args.repeats):
-            for k, fn in rows.items():
-                t0 = time.perf_counter()
-                fn()
-                best[k] = min(best[k], time.perf_counter() - t0)
+        best = best_times(rows, args.repeats)
         mib = {f: sum(os.path.getsize(os.path.join(d, f, n)) for n in os.listdir(os.path.join(d, f))) / 2 ** 20
                for f in ("png", "dds")}
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"{args.preset} --material {args.engine} {s}^2: {len(captured)} block-encoded maps, "
           f"{px / 1e6:.2f} Mpx through the encoder; {usable_cores()} cores, load {load:.1f}, best of "
           f"{args.repeats}; png set {mib['png']:.2f} MiB, dds set {mib['dds']:.2f} MiB")
-    print("| what | seconds |\n| --- | ---: |")
-    for k, v in best.items():
-        print(f"| {k} | {v:.2f} |")
+    print(seconds_table(best))
     own = best["dds set (BC7/BC5/R16, every mip level)"] - best["encoder (same pixels, every core)"]
     print(f"| cellgl's own work in the dds set (dds - encoder) | {own:.2f} |")
     print(f"\ndds set / png set: {best['dds set (BC7/BC5/R16, every mip level)'] / best['png set (level 0, no mips)']:.2f}x; "
