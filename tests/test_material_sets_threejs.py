@@ -39,26 +39,11 @@ def _png(url: str) -> np.ndarray:
 
 @pytest.fixture
 def browser(tmp_path):
-    from test_playground import CHROMIUM, DRIVER, FLAGS, REQUIRE
+    from test_playground import start_chromium
 
     if not (THREE / "build" / "three.module.js").is_file():
         pytest.skip("three.js (npm three, .venv/three) is not installed")
-    if CHROMIUM is None or DRIVER is None:
-        if REQUIRE:
-            pytest.fail("chromium and chromium-driver are required (CELLGL_REQUIRE_GPU=1); .ci/setup installs them")
-        pytest.skip("no chromium / chromedriver (apt install chromium chromium-driver)")
-    try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.service import Service
-    except ImportError:
-        pytest.skip("no selenium")
-    opts = webdriver.ChromeOptions()
-    opts.binary_location = CHROMIUM
-    for f in FLAGS:
-        opts.add_argument(f)
-    opts.add_argument(f"--user-data-dir={tmp_path / 'chromium-profile'}")
-    driver = webdriver.Chrome(options=opts, service=Service(DRIVER))
-    driver.set_script_timeout(240)
+    driver = start_chromium(tmp_path / "chromium-profile")
     try:
         yield driver
     finally:

@@ -65,8 +65,10 @@ def site(tmp_path_factory):
     return out
 
 
-@pytest.fixture(scope="module")
-def page(site, tmp_path_factory):
+def start_chromium(profile: Path, *, browser_log: bool = False):
+    """Headless Chromium under selenium (:data:`FLAGS`, a fresh ``profile`` folder, 240 s for a
+    script; ``browser_log``: the page's console kept). Without chromium, chromedriver or selenium
+    the test skips, or fails where CI requires them (``CELLGL_REQUIRE_GPU``). The caller quits it."""
     if CHROMIUM is None or DRIVER is None:
         if REQUIRE:
             pytest.fail("chromium and chromium-driver are required (CELLGL_REQUIRE_GPU=1); .ci/setup installs them")
@@ -82,10 +84,17 @@ def page(site, tmp_path_factory):
     opts.binary_location = CHROMIUM
     for f in FLAGS:
         opts.add_argument(f)
-    opts.add_argument(f"--user-data-dir={tmp_path_factory.mktemp('chromium-profile')}")
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    opts.add_argument(f"--user-data-dir={profile}")
+    if browser_log:
+        opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
     driver = webdriver.Chrome(options=opts, service=Service(DRIVER))
     driver.set_script_timeout(240)
+    return driver
+
+
+@pytest.fixture(scope="module")
+def page(site, tmp_path_factory):
+    driver = start_chromium(tmp_path_factory.mktemp("chromium-profile"), browser_log=True)
     try:
         driver.get((site / "index.html").as_uri() + f"?size={SIZE}")
         driver.execute_async_script("arguments[arguments.length - 1](window.cellglPlayground.idle())")
