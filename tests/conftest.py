@@ -7,6 +7,9 @@ that uses ``ctx`` has the GL error state checked before and after it.
 
 from __future__ import annotations
 
+import os
+import subprocess
+
 import pytest
 
 from xvfb import require_gpu
@@ -190,3 +193,29 @@ def same_bits(ctx):
         pytest.skip(f"no `precise` in the fragment entries on {_renderer(ctx)!r} (GLSL 3.30 without "
                     "GL_ARB_gpu_shader5): bit-identity between entries is not promised there")
     return ctx
+
+
+@pytest.fixture
+def tmpfs(tmp_path):
+    """``tmpfs(size, name)``: a fresh tmpfs of ``size`` (mount's ``size=``, e.g. ``"64k"``) at
+    ``tmp_path / name``, unmounted after the test: a real full disk. Root only; skipped elsewhere
+    or where the mount is refused."""
+    mounted = []
+
+    def mount(size: str, name: str = "tmpfs"):
+        if os.geteuid() != 0:
+            pytest.skip("mounting a tmpfs needs root")
+        mnt = tmp_path / name
+        mnt.mkdir()
+        r = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(mnt)],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            pytest.skip(f"cannot mount a tmpfs here: {r.stderr.strip()}")
+        mounted.append(mnt)
+        return mnt
+
+    try:
+        yield mount
+    finally:
+        for mnt in mounted:
+            subprocess.run(["umount", "-l", str(mnt)], capture_output=True)
