@@ -275,10 +275,14 @@ def test_emulated_context_runs_the_fragment_path(mesa, env_name):
 
 
 #: the exactness matrix's subset for the default run (every dimension, metric, the distributions,
-#: features, period, far samples, the loop budget); the slow test runs a larger one
-QUICK_MATRIX = ("(basis_matrix and (2-poisson-period-5e8 or 3-worley1996-free-0 or 4-jitter-period-0 "
-                "or 2-blender-free-0 or 3-sparse-period-5e8)) or (features_matrix and 3-poisson-0.25) "
-                "or tiny_budget_on_a_grid or reproducer_nsphere or (promised_bound and 3-euclidean)")
+#: features, period, far samples, the loop budget), in parts that `pytest -n` can spread; the
+#: slow test runs a larger one
+QUICK_MATRIX = {
+    "basis": ("basis_matrix and (2-poisson-period-5e8 or 3-worley1996-free-0 or 4-jitter-period-0 "
+              "or 2-blender-free-0 or 3-sparse-period-5e8)"),
+    "walks": "(features_matrix and 3-poisson-0.25) or tiny_budget_on_a_grid or (promised_bound and 3-euclidean)",
+    "reproducer": "reproducer_nsphere",
+}
 FULL_MATRIX = ("(basis_matrix and (free-0 or period-5e8)) or (features_matrix and 0.25) or stretch_and_density "
                "or grid_matrix or tiny_budget or reproducer_nsphere or sparse_poisson")
 
@@ -291,11 +295,12 @@ def _matrix(env_name: str, selection: str) -> None:
     assert " passed" in tail and "failed" not in tail, tail
 
 
+@pytest.mark.parametrize("part", list(QUICK_MATRIX))
 @pytest.mark.parametrize("env_name", ["gl41", "gl33-plain", pytest.param("gl33", marks=pytest.mark.slow)])
-def test_exactness_matrix_without_compute(mesa, env_name):
+def test_exactness_matrix_without_compute(mesa, env_name, part):
     """The brute-force matrix (and the reference's bound) on contexts without compute shaders,
     one of them without `precise`: the promise against the reference holds on every driver."""
-    _matrix(env_name, QUICK_MATRIX)
+    _matrix(env_name, QUICK_MATRIX[part])
 
 
 @pytest.mark.slow
