@@ -344,6 +344,8 @@ def _table_labels() -> list[str]:
     """The rows of docs/engines.md's size table (the parameters of test_docs_table_is_current:
     read at collection, so without running the table's script)."""
     text = (ROOT / "docs" / "engines.md").read_text(encoding="utf-8")
+    if "<!-- snippet-sizes:begin -->" not in text:
+        return []                    # test_docs_table_has_every_target_and_snippet says so
     body = text.split("<!-- snippet-sizes:begin -->", 1)[1].split("<!-- snippet-sizes:end -->", 1)[0]
     return [line.strip().strip("|").split("|")[0].strip() for line in body.strip().splitlines()[2:]]
 
