@@ -255,7 +255,8 @@ def texture_period(t: dict, octave: int) -> np.ndarray:
     if not t["tileable"]:
         return np.zeros(4, dtype=np.int64)
     m = int(round(t["lacunarity"])) ** octave
-    return np.array([int(round(t["frequency"])) * m, int(round(t["frequency"] * t["aspect"])) * m, 0, 0],
+    pz = int(round(t["frequency"])) * m if t["dimension"] >= 3 else 0      # solid: seamless in depth too
+    return np.array([int(round(t["frequency"])) * m, int(round(t["frequency"] * t["aspect"])) * m, pz, 0],
                     dtype=np.int64)
 
 
