@@ -44,7 +44,7 @@ REC709_CHROMATICITIES = ((0.64, 0.33), (0.30, 0.60), (0.15, 0.06), (0.3127, 0.32
 
 def float_format(ext: str, bits: int) -> bool:
     """Whether an ``ext`` file of ``bits`` bits per sample stores floats (colour: a choice)."""
-    return ext == ".exr" or (ext in (".tif", ".tiff", ".tx") and bits == 32)
+    return ext in (".exr", ".vdb") or (ext in (".tif", ".tiff", ".tx") and bits == 32)
 
 
 def default_colorspace(ext: str, bits: int) -> str | None:

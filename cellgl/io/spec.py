@@ -43,6 +43,8 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
+    # an OpenVDB volume, a float grid per sample (cellgl.io.vdb); volumes only
+    ".vdb": _Format("OpenVDB", (32,), 32, True, "piece"),
     # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.texfile)
     ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
     # GPU textures (cellgl.io.gputex): the format is chosen per channel; --depth sets the bits of
