@@ -73,7 +73,7 @@ def _bundled_path() -> str | None:
 def binding():
     """The ``openvdb`` module: ``import openvdb``, else the ``bpy`` wheel's (registered as
     ``openvdb`` so a later ``import openvdb`` gets the same one). Raises :class:`VdbUnavailable`."""
-    if "openvdb" in sys.modules:
+    if sys.modules.get("openvdb") is not None:
         return sys.modules["openvdb"]
     try:
         return importlib.import_module("openvdb")
