@@ -23,7 +23,8 @@ class BakeError(ValueError):
 
 #: Channels render() produces -> samples per pixel.
 CHANNELS: dict[str, int] = {"color": 4, "height": 1, "normal": 3, "id": 1,
-                            "F1": 1, "F2": 1, "F3": 1, "F4": 1, "roughness": 1, "ao": 1, "metallic": 1}
+                            "F1": 1, "F2": 1, "F3": 1, "F4": 1, "roughness": 1, "ao": 1, "metallic": 1,
+                            "cloud": 4}
 
 
 @dataclass(frozen=True)
@@ -300,7 +301,8 @@ def encoding_of(channel: str, ext: str, bits: int, colorspace: str | None = None
 
 
 #: EXR channel names per cellgl channel.
-_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B")}
+_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B"),
+              "cloud": ("cloud.R", "cloud.G", "cloud.B", "cloud.A")}
 
 
 def exr_names(channel: str) -> tuple[str, ...]:

@@ -27,7 +27,9 @@ __all__ = ["evaluate", "render", "render_fragment", "measure_range", "point_rang
 MAX_SIDE = 1 << 20
 #: what :func:`evaluate` can return: the render channels plus the height gradient in texture
 #: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
-OUTPUTS = CHANNELS + ("grad", "value")
+OUTPUTS = CHANNELS + ("grad", "value", "cloud")
+#: what :func:`render` can return: the channels, and ``cloud`` (RGBA, :mod:`cellgl.texture.cloud`)
+RENDER_CHANNELS = CHANNELS + ("cloud",)
 
 
 def _backend(backend):
@@ -84,6 +86,11 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     65,536 points spread over 10^6 unit squares would otherwise cost a dispatch each)."""
     recipe = load_recipe(recipe)
     outputs = check_channels(outputs, OUTPUTS)
+    if "cloud" in outputs:      # four heights packed (cellgl.texture.cloud)
+        from cellgl.texture import cloud
+
+        return cloud.with_cloud(lambda r, chs: _evaluate(r, points, chs, backend, filter_width, split_far),
+                                recipe, outputs)
     _backend(backend)
     pts = _points(points)
     duvz = _filter_width(filter_width)
@@ -239,7 +246,13 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
     """
     recipe = load_recipe(recipe)
-    channels = check_channels(channels)
+    channels = check_channels(channels, RENDER_CHANNELS)
+    if "cloud" in channels:     # four heights packed (cellgl.texture.cloud)
+        from cellgl.texture import cloud
+
+        return cloud.with_cloud(lambda r, chs: render(r, width, height, channels=chs, x0=x0, y0=y0, tile_w=tile_w,
+                                                      tile_h=tile_h, depth=depth, backend=backend, samples=samples),
+                                recipe, channels)
     _backend(backend)
     n_sub = antialias.grid_side(samples)
     tw, th = check_tile(width, height, x0, y0, tile_w, tile_h, max_side=MAX_SIDE)
