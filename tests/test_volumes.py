@@ -152,3 +152,70 @@ def test_gpu_vdb_reads_back_as_the_numpy_bake(ctx, tmp_path):
                progress=False)
         assert np.array_equal(grids[c], np.load(tmp_path / f"f_{c}.npy")), c
         np.testing.assert_allclose(grids[c], ref[c], atol=2e-4, err_msg=c)
+
+
+# --------------------------------------------------------------------------------------------
+# the cloud channel (cellgl.texture.cloud)
+# --------------------------------------------------------------------------------------------
+
+from cellgl.texture import cloud  # noqa: E402
+
+CLOUD_BASE = Recipe().replace(dimension=3, frequency=2.0, distribution="jitter", seed=7, tileable=True)
+
+
+def test_cloud_packs_perlin_worley_and_three_worley_octaves():
+    """R = W(1) + P (1 - W(1)), G/B/A the Worley fBm heights at f, 2f, 4f (NumPy path)."""
+    p, w1, w2, w4 = cloud.cloud_recipes(CLOUD_BASE)
+    assert [r.get("frequency") for r in (p, w1, w2, w4)] == [2.0, 2.0, 4.0, 8.0]
+    assert w1.get("invert") and w1.get("fractal") == "sum" and p.get("c_noise") == 1.0 and p.get("c1") == 0.0
+    assert all(r.get("tileable") and r.get("distribution") == "jitter" for r in (p, w1, w2, w4))
+    got = texture.render(CLOUD_BASE, 10, 8, depth=3, channels=("cloud", "F1"), backend="numpy")
+    assert list(got) == ["cloud", "F1"] and got["cloud"].shape == (3, 8, 10, 4)
+    assert got["cloud"].dtype == np.float32
+    h = [texture.render(r, 10, 8, depth=3, channels=("height",), backend="numpy")["height"].astype(np.float64)
+         for r in (p, w1, w2, w4)]
+    want = np.stack([h[1] + h[0] * (1 - h[1]), h[1], h[2], h[3]], axis=-1).astype(np.float32)
+    assert np.array_equal(got["cloud"], want)
+    assert 0.0 <= got["cloud"].min() and got["cloud"].max() <= 1.0
+    assert np.all(got["cloud"][..., 0] >= got["cloud"][..., 1])        # Perlin remapped onto [W, 1]
+
+
+def test_cloud_gpu_matches_numpy_and_tiles(ctx):
+    g = texture.render(CLOUD_BASE, 12, 10, depth=4, channels=("cloud",))["cloud"]
+    n = texture.render(CLOUD_BASE, 12, 10, depth=4, channels=("cloud",), backend="numpy")["cloud"]
+    np.testing.assert_allclose(g, n, atol=4e-4)     # R: the heights' 2e-4 twice
+    half = texture.render(CLOUD_BASE, 12, 10, depth=4, channels=("cloud",), x0=6, y0=5, tile_w=6, tile_h=5)
+    assert np.array_equal(half["cloud"], g[:, 5:, 6:])
+    pts = np.array([[0.1, 0.2, 0.3], [0.7, 0.05, 0.9]])
+    for shift in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)):    # period 1 along u, v and z
+        a = texture.evaluate(CLOUD_BASE, pts, ("cloud",))["cloud"]
+        b = texture.evaluate(CLOUD_BASE, pts + np.array(shift), ("cloud",))["cloud"]
+        np.testing.assert_allclose(a, b, atol=1e-5, err_msg=str(shift))
+
+
+def test_cloud_channel_is_data_of_four_named_samples():
+    """Four samples a voxel, never a colour space: EXR channels and VDB grids cloud.R..A."""
+    from cellgl.io import spec
+
+    assert spec.CHANNELS["cloud"] == 4 and spec.exr_names("cloud") == ("cloud.R", "cloud.G", "cloud.B", "cloud.A")
+    assert spec.encoding_of("cloud", ".exr", 32, "linear").colorspace is None
+    assert vdb.grid_names("cloud", 4) == ("cloud.R", "cloud.G", "cloud.B", "cloud.A")
+
+
+@needs_vdb
+def test_gpu_cloud_volume_bakes_to_vdb_and_tif_alike(ctx, tmp_path):
+    sets = ["dimension=3", "distribution=jitter", "frequency=2"]
+    kw = dict(size="16x12x4", channels=("cloud",), sets=sets, tileable=True, progress=False)
+    out = B.bake("f1", tmp_path / "c.vdb", **kw)
+    assert out.colorspace is None
+    B.bake("f1", tmp_path / "c.tif", **kw)
+    import tifffile
+
+    tif = tifffile.imread(tmp_path / "c.tif")
+    grids, _, gmeta = vdb.read_vdb(tmp_path / "c.vdb")
+    assert tif.shape == (4, 12, 16, 4)
+    assert np.array_equal(np.stack([grids[f"cloud.{s}"] for s in "RGBA"], axis=-1), tif)
+    assert all("colorspace" not in m for m in gmeta.values())
+    ref = texture.render(B.load_recipe_sets("f1", sets, True), 16, 12, depth=4, channels=("cloud",),
+                         backend="numpy")["cloud"]
+    np.testing.assert_allclose(tif, ref, atol=4e-4)

@@ -144,7 +144,7 @@ def run_cli(args: argparse.Namespace) -> int:
         raise BakeError(f"--map-format {args.map_format}: only with --material ENGINE")
     for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
                         ("--tiled", args.tiled or None)):
-        if value is not None and (args.frames is not None or ext == ".zarr"):
+        if value is not None and (args.frames is not None or (ext == ".zarr" and flag != "--colorspace")):
             raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
                             f"not with --frames or a .zarr output")
     if getattr(args, "mips", False) and ((args.frames is not None and ext not in (".dds", ".ktx2"))
