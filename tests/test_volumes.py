@@ -1,12 +1,21 @@
-"""Volumes that tile in depth (issue 46 item 4): `--tileable` wraps a solid recipe along z."""
+"""Volumes for film (issue 46 item 4): `--tileable` wraps a solid recipe along z, `.vdb` output
+through OpenVDB's binding, the packed `cloud` channel."""
 from __future__ import annotations
+
+import sys
 
 import numpy as np
 import pytest
 
-from cellgl import texture
+import test_bake
+from cellgl import cli, texture
+from cellgl.io import bake as B
+from cellgl.io import vdb
 from cellgl.recipes import load_recipe
+from cellgl.texture import cloud
 from cellgl.texture.recipe import Recipe
+
+fake = test_bake.fake     # a fixture (the stand-in renderer): the tests take it as an argument
 
 CHS = ("height", "F1", "F2", "id")
 
@@ -69,11 +78,6 @@ def test_flat_recipes_keep_their_period():
 # OpenVDB output (cellgl.io.vdb)
 # --------------------------------------------------------------------------------------------
 
-from cellgl import cli  # noqa: E402
-from cellgl.io import bake as B  # noqa: E402
-from cellgl.io import vdb  # noqa: E402
-from test_bake import fake  # noqa: E402,F401 - the stand-in renderer fixture
-
 needs_vdb = pytest.mark.skipif(not vdb.have_vdb(), reason="no OpenVDB binding (cellgl[blender])")
 
 
@@ -125,8 +129,6 @@ def test_vdb_errors_before_any_work(fake, tmp_path, capsys, monkeypatch, argv, m
 
 def test_vdb_without_the_binding_is_one_clear_error(fake, tmp_path, capsys, monkeypatch):
     """No `import openvdb` and no bpy wheel to take it from: the bake says what to install."""
-    import sys
-
     monkeypatch.setitem(sys.modules, "openvdb", None)          # import openvdb fails
     monkeypatch.setattr(vdb, "_bundled_path", lambda: None)
     monkeypatch.chdir(tmp_path)
@@ -158,14 +160,12 @@ def test_gpu_vdb_reads_back_as_the_numpy_bake(ctx, tmp_path):
 # the cloud channel (cellgl.texture.cloud)
 # --------------------------------------------------------------------------------------------
 
-from cellgl.texture import cloud  # noqa: E402
-
 CLOUD_BASE = Recipe().replace(dimension=3, frequency=2.0, distribution="jitter", seed=7, tileable=True)
 
 
 def test_cloud_packs_perlin_worley_and_three_worley_octaves():
     """R = W(1) + P (1 - W(1)), G/B/A the Worley fBm heights at f, 2f, 4f (NumPy path)."""
-    p, w1, w2, w4 = cloud.cloud_recipes(CLOUD_BASE)
+    p, w1, w2, w4 = cloud.cloud_recipes(CLOUD_BASE, texture.measure_range)
     assert [r.get("frequency") for r in (p, w1, w2, w4)] == [2.0, 2.0, 4.0, 8.0]
     assert w1.get("invert") and w1.get("fractal") == "sum" and p.get("c_noise") == 1.0 and p.get("c1") == 0.0
     assert all(r.get("tileable") and r.get("distribution") == "jitter" for r in (p, w1, w2, w4))

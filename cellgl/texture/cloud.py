@@ -47,30 +47,31 @@ _RESET = ("combination", "fractal", "mapping")
 
 
 @functools.lru_cache(maxsize=64)
-def _measured(probe_json: str) -> tuple[float, float]:
+def _measured(measure, probe_json: str) -> tuple[float, float]:
     """The combination's range (NumPy: the same on either backend), once per recipe."""
-    from cellgl.texture.evaluation import measure_range
     from cellgl.texture.recipe import Recipe
 
-    return measure_range(Recipe.from_dict(json.loads(probe_json)), samples=4096, backend="numpy")
+    return measure(Recipe.from_dict(json.loads(probe_json)), samples=4096, backend="numpy")
 
 
-def _fbm(recipe, **combination):
+def _fbm(recipe, measure, **combination):
     """``recipe`` with its combination, fractal and mapping reset to this fBm's."""
     r = recipe.replace(**{p.name: p.default for p in PARAMS if p.group in _RESET and not p.derived})
     r = r.replace(**combination)
-    lo, hi = _measured(json.dumps(r.to_dict(), sort_keys=True))
+    lo, hi = _measured(measure, json.dumps(r.to_dict(), sort_keys=True))
     return r.replace(range_lo=lo, range_hi=hi, fractal="sum", octaves=3.0, lacunarity=2.0, gain=0.5)
 
 
-def cloud_recipes(recipe) -> tuple:
-    """The four derived recipes whose heights make the channel: ``(P, W(1), W(2), W(4))``."""
+def cloud_recipes(recipe, measure) -> tuple:
+    """The four derived recipes whose heights make the channel: ``(P, W(1), W(2), W(4))``;
+    ``measure`` is :func:`cellgl.texture.measure_range` (passed in: this module sits below
+    :mod:`cellgl.texture.evaluation`, which calls it)."""
     from cellgl.texture.recipe import load_recipe
 
     recipe = load_recipe(recipe)
     f, seed = float(recipe.get("frequency")), int(recipe.get("seed"))
-    perlin = _fbm(recipe, c1=0.0, c_noise=1.0)
-    worley = _fbm(recipe, c1=1.0)
+    perlin = _fbm(recipe, measure, c1=0.0, c_noise=1.0)
+    worley = _fbm(recipe, measure, c1=1.0)
     layers = [worley.replace(invert=True, frequency=f * k, seed=(seed + k) & 0xFFFFFFFF) for k in MULTIPLES]
     return (perlin, *layers)
 
@@ -81,10 +82,10 @@ def pack(heights) -> np.ndarray:
     return np.stack([w1 + p * (1.0 - w1), w1, w2, w4], axis=-1).astype(np.float32)
 
 
-def with_cloud(fn, recipe, channels: tuple) -> dict:
+def with_cloud(fn, recipe, channels: tuple, measure) -> dict:
     """``fn(recipe, channels)`` (a render or an evaluation) with ``cloud`` among ``channels``:
     the others from ``recipe`` as asked, ``cloud`` packed from the derived recipes' heights."""
     rest = tuple(c for c in channels if c != CLOUD)
     got = fn(recipe, rest) if rest else {}
-    got[CLOUD] = pack([fn(r, ("height",))["height"] for r in cloud_recipes(recipe)])
+    got[CLOUD] = pack([fn(r, ("height",))["height"] for r in cloud_recipes(recipe, measure)])
     return {c: got[c] for c in channels}

@@ -90,7 +90,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
         from cellgl.texture import cloud
 
         return cloud.with_cloud(lambda r, chs: _evaluate(r, points, chs, backend, filter_width, split_far),
-                                recipe, outputs)
+                                recipe, outputs, measure_range)
     _backend(backend)
     pts = _points(points)
     duvz = _filter_width(filter_width)
@@ -252,7 +252,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
 
         return cloud.with_cloud(lambda r, chs: render(r, width, height, channels=chs, x0=x0, y0=y0, tile_w=tile_w,
                                                       tile_h=tile_h, depth=depth, backend=backend, samples=samples),
-                                recipe, channels)
+                                recipe, channels, measure_range)
     _backend(backend)
     n_sub = antialias.grid_side(samples)
     tw, th = check_tile(width, height, x0, y0, tile_w, tile_h, max_side=MAX_SIDE)
