@@ -44,14 +44,14 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
-    # an OpenVDB volume, a float grid per sample (cellgl.io.vdb); volumes only
-    ".vdb": _Format("OpenVDB", (32,), 32, True, "piece"),
     # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.texfile)
     ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
     # GPU textures (cellgl.io.gputex): the format is chosen per channel; --depth sets the bits of
     # plain (uncompressed) samples, its default per channel; mip levels and volumes in the file
     ".dds": _Format("DDS", (8, 16, 32), 8, True, "level"),
     ".ktx2": _Format("KTX2", (8, 16, 32), 8, True, "level"),
+    # an OpenVDB volume, a float grid per sample (cellgl.io.vdb); volumes only
+    ".vdb": _Format("OpenVDB", (32,), 32, True, "piece"),
 }
 
 #: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.io.frames`)
