@@ -219,3 +219,37 @@ def test_gpu_cloud_volume_bakes_to_vdb_and_tif_alike(ctx, tmp_path):
     ref = texture.render(B.load_recipe_sets("f1", sets, True), 16, 12, depth=4, channels=("cloud",),
                          backend="numpy")["cloud"]
     np.testing.assert_allclose(tif, ref, atol=4e-4)
+
+
+def _have_bpy() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("bpy") is not None
+
+
+@needs_vdb
+@pytest.mark.skipif(not _have_bpy(), reason="Blender's bpy (cellgl[blender]) is not installed")
+def test_blender_reads_the_vdb_grids_and_transform(tmp_path):
+    """Blender's own volume reader (a Volume datablock on the file, in a child process) finds
+    every grid as a float grid with the texture-space transform the file states."""
+    import json
+    import subprocess
+
+    vdb.write_vdb(tmp_path / "b.vdb", (16, 8, 4), {"F1": (1, np.float32), "color": (3, np.float32)},
+                  [(0, 0, {"F1": np.full((4, 8, 16), 0.5, np.float32),
+                           "color": np.full((4, 8, 16, 3), 0.25, np.float32)})],
+                  metadata='{"size": [16, 8, 4]}', colorspaces={"color": "lin_rec709_scene"})
+    script = ("import bpy, json, sys\n"
+              "v = bpy.data.volumes.new('v'); v.filepath = sys.argv[1]\n"
+              "assert v.grids.load(), v.grids.error_message\n"
+              "print(json.dumps({g.name: [g.data_type, g.load(), [list(r) for r in g.matrix_object]] "
+              "for g in v.grids}))\n")
+    p = subprocess.run([sys.executable, "-c", script, str(tmp_path / "b.vdb")], capture_output=True,
+                       text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    grids = json.loads(p.stdout.strip().splitlines()[-1])
+    assert sorted(grids) == ["F1", "color.B", "color.G", "color.R"]
+    want = [[1 / 16, 0, 0, 0.5 / 16], [0, 1 / 8, 0, 0.5 / 8], [0, 0, 1 / 4, 0.5 / 4], [0, 0, 0, 1]]
+    for name, (kind, loaded, matrix) in grids.items():
+        assert kind == "FLOAT" and loaded, name
+        np.testing.assert_allclose(matrix, want, atol=1e-7, err_msg=name)
