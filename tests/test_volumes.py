@@ -26,10 +26,18 @@ def _solid(**kw):
     return r.tileable()[0]
 
 
-@pytest.mark.parametrize("backend", ["gpu", "numpy"])
-def test_tileable_volume_repeats_in_depth_bit_for_bit(ctx, backend):
+@pytest.mark.parametrize("backend", ["compute", "fragment", "numpy"])
+def test_tileable_volume_repeats_in_depth_bit_for_bit(ctx, monkeypatch, backend):
     """Slice D (the volume moved one period, frequency cells, along z) is slice 0 again, and so
-    on: the same bits on either path; without the wrap in z (the old behaviour) they differ."""
+    on: the same bits on each GPU path and in the NumPy reference; without the wrap in z (the
+    old behaviour) they differ."""
+    from cellgl.gl.path import has_compute
+
+    if backend == "compute" and not has_compute(ctx):
+        pytest.skip("no compute path on this context (the fragment path runs)")
+    if backend != "numpy":
+        monkeypatch.setenv("CELLGL_PATH", backend)
+        backend = "gpu"
     r = _solid(warp_amount=0.3)
     w, h, d = 8, 6, 4
     a = texture.render(r, w, h, channels=CHS, depth=d, backend=backend)
@@ -54,8 +62,15 @@ def test_tileable_volume_is_seamless_across_its_depth(ctx):
         np.testing.assert_allclose(b[k], np.roll(a[k], -d // 2, axis=0), atol=2e-5, err_msg=k)
 
 
-def test_tileable_volume_gpu_matches_numpy(ctx):
-    """Within the texture test's bound (tests/test_texture.py::assert_gpu_matches_numpy), 4D too."""
+@pytest.mark.parametrize("path", ["compute", "fragment"])
+def test_tileable_volume_gpu_matches_numpy(ctx, monkeypatch, path):
+    """Within the texture test's bound (tests/test_texture.py::assert_gpu_matches_numpy), 4D too,
+    on either GPU path."""
+    from cellgl.gl.path import has_compute
+
+    if path == "compute" and not has_compute(ctx):
+        pytest.skip("no compute path on this context (the fragment path runs)")
+    monkeypatch.setenv("CELLGL_PATH", path)
     for r in (_solid(warp_amount=0.3), _solid().replace(dimension=4, time=0.7)):
         g = texture.render(r, 8, 6, channels=CHS, depth=4)
         n = texture.render(r, 8, 6, channels=CHS, depth=4, backend="numpy")
