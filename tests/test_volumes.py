@@ -268,3 +268,17 @@ def test_blender_reads_the_vdb_grids_and_transform(tmp_path):
     for name, (kind, loaded, matrix) in grids.items():
         assert kind == "FLOAT" and loaded, name
         np.testing.assert_allclose(matrix, want, atol=1e-7, err_msg=name)
+
+
+@pytest.mark.parametrize("sets, message", [
+    (["distribution=worley1996"], "domain.tileable: not available with basis.distribution 'worley1996'"),
+    (["density_map=ramp_x"], "domain.tileable: not available with basis.density_map 'ramp_x'"),
+])
+def test_tileable_volume_of_a_recipe_that_cannot_repeat_is_refused(tmp_path, capsys, sets, message):
+    """A volume that could not be periodic in depth (nor in x, y): one error, nothing written."""
+    argv = ["bake", "f1", "-o", str(tmp_path / "v.vdb"), "--size", "8x8x4", "--tileable", "--set", "dimension=3"]
+    for s in sets:
+        argv += ["--set", s]
+    assert cli.main(argv) == 2
+    assert message in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
