@@ -510,8 +510,11 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
                           text={"Software": "cellgl", "cellgl": meta}, srgb=e.channel == "color")
         elif ext == ".exr":
             _write_exr(tmp, tiles, out, plan, meta)
-        elif ext == ".vdb":
-            _write_vdb(tmp, tiles, out, plan, meta)
+        elif ext == ".vdb":     # a grid per sample (cellgl.io.vdb)
+            from cellgl.io import vdb
+            vdb.write_vdb(tmp, (plan.width, plan.height, plan.slices), {e.channel: (e.samples, e.dtype) for e in
+                          out.encodings}, tiles, metadata=meta, colorspaces={e.channel: COLORSPACES[
+                              e.colorspace].interop_id for e in out.encodings if e.colorspace})
         elif ext == ".npy":
             (e,) = out.encodings
             cio.write_npy(tmp, _npy_pieces(tiles, e, plan), _shape(e, plan), e.dtype)
@@ -573,14 +576,6 @@ def _check_vdb(w, h, d) -> None:
         vdb.require()
     except vdb.VdbUnavailable as exc:
         raise BakeError(str(exc)) from None
-
-
-def _write_vdb(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
-    from cellgl.io import vdb
-
-    spaces = {e.channel: COLORSPACES[e.colorspace].interop_id for e in out.encodings if e.colorspace}
-    vdb.write_vdb(tmp, (plan.width, plan.height, plan.slices), {e.channel: (e.samples, e.dtype) for e in out.encodings},
-                  tiles, metadata=meta, colorspaces=spaces)
 
 
 def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
