@@ -282,3 +282,20 @@ def test_tileable_volume_of_a_recipe_that_cannot_repeat_is_refused(tmp_path, cap
     assert cli.main(argv) == 2
     assert message in capsys.readouterr().err
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("ext", [".dds", ".ktx2"])
+def test_gpu_cloud_3d_texture_is_rgba8_of_the_npy(ctx, tmp_path, ext):
+    """The packed noise as cloud renderers load it: a 3D R8G8B8A8_UNORM texture (data, not sRGB)
+    whose voxels are the .npy bake's four samples quantised as every 8-bit file's."""
+    from test_texfiles import DXGI, decode, read
+
+    from cellgl.io.spec import quantize
+
+    kw = dict(size="8x6x4", channels=("cloud",), sets=["dimension=3", "frequency=2"], tileable=True, progress=False)
+    B.bake("f1", tmp_path / f"c{ext}", **kw)
+    B.bake("f1", tmp_path / "c.npy", **kw)
+    f = read(tmp_path / f"c{ext}")
+    assert DXGI[f["dxgi"]][0] == "R8G8B8A8_UNORM" and f["depth"] == 4
+    (size, blob), = f["levels"]
+    assert np.array_equal(decode(f["dxgi"], size, blob), quantize(np.load(tmp_path / "c.npy"), 8))
