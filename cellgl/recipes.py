@@ -112,7 +112,9 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     -------
     dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
     float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
-    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
+    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32; ``roughness``, ``ao``, ``metallic``
+    (H, W) float32; ``cloud`` (H, W, 4) float32 (packed cloud noise, :mod:`cellgl.texture.cloud`).
+    Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z. PUPs
     recipes give ``color`` and ``height``.
 

@@ -241,8 +241,9 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
     float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
     ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32; ``roughness``, ``ao``, ``metallic``
-    (H, W) float32 in [0, 1] (the recipe's ``material`` section, :mod:`cellgl.texture.material`).
-    Row 0 is the top of the image. With
+    (H, W) float32 in [0, 1] (the recipe's ``material`` section, :mod:`cellgl.texture.material`);
+    ``cloud`` (H, W, 4) float32 in [0, 1], packed cloud noise from the recipe's basis and domain
+    (:mod:`cellgl.texture.cloud`). Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
     """
     recipe = load_recipe(recipe)
