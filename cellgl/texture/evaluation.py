@@ -66,7 +66,8 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
         Any of ``color`` (N, 4) float32, ``height`` (N,) float32, ``normal`` (N, 3) float32
         in [0, 1] encoding, ``id`` (N,) uint32, ``F1``..``F4`` (N,) float32 (octave 0),
         ``grad`` (N, 3) float32 (dh/du, dh/dv, dh/dz, analytic), ``value`` (N,) float32 (the
-        combination before normalisation, octave 0).
+        combination before normalisation, octave 0), ``cloud`` (N, 4) float32 (packed cloud
+        noise, :mod:`cellgl.texture.cloud`).
     backend : {"gpu", "numpy"}
     filter_width : float or (du, dv) or (du, dv, dz)
         The footprint of every point in texture space (e.g. ``1 / W`` for the pixels of a
