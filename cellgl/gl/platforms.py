@@ -33,6 +33,7 @@ import ctypes
 import ctypes.util
 import os
 import sys
+from typing import Any
 
 from cellgl.gl import versions
 
@@ -88,11 +89,12 @@ def osmesa_library() -> str | None:
     return ctypes.util.find_library("OSMesa") or ctypes.util.find_library("osmesa")
 
 
-def create_native(backend: str):
+def create_native(backend: str) -> tuple[Any, list[tuple[int, str | None]]]:
     """A new standalone context of the platform's own backend ``glx``, ``wgl`` or ``cgl``
     (glcontext's default backend there), current on this thread: the first rung of
     :data:`cellgl.gl.versions.LADDER` the driver gives (CGL ignores the version asked: 4.1 core,
-    or 3.2 core on old Macs, refused below 3.3).
+    or 3.2 core on old Macs, refused below 3.3), with the rungs tried
+    (:func:`cellgl.gl.versions.climb`).
 
     Raises
     ------
