@@ -565,8 +565,9 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
         except moderngl.Error as exc:
             raise _program_error(vertex, fragment, exc, vs, fs) from None
         for unit in (5, 6, 7):   # the storage bindings read from textures (storage.glsl)
-            if f"u_storage_{unit}" in prog:
-                prog[f"u_storage_{unit}"].value = unit
+            u = prog.get(f"u_storage_{unit}", None)
+            if isinstance(u, moderngl.Uniform):
+                u.value = unit
         return prog, None
     with _lock:
         return registry.cached(ctx, registry.program_key("program", vertex, fragment, defines=defines), make)[0]

@@ -40,7 +40,7 @@ def create(loader: Any, require: int, *, standalone: bool = True) -> Any:
     """
     import moderngl
 
-    store = moderngl._store
+    store = moderngl._store   # type: ignore[attr-defined]  # (not in moderngl's stubs: private)
     before = store.default_context
     settings: dict[str, Any] = {"context": loader}
     try:

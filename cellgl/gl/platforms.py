@@ -314,7 +314,7 @@ def install_hint() -> str:
 def _gl_library():
     """The platform's OpenGL library (Windows' opengl32, macOS' OpenGL framework), or None."""
     try:
-        if platform() == "win32":
+        if sys.platform.startswith("win"):     # (as platform() says "win32"; mypy reads this form)
             return ctypes.WinDLL(os.environ.get("GLCONTEXT_WIN_LIBGL") or "opengl32")
         if platform() == "darwin":
             return ctypes.CDLL("/System/Library/Frameworks/OpenGL.framework/OpenGL")

@@ -16,7 +16,8 @@ viewer's GLFW window (``viewer/app.py``).
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, TypeVar
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 from cellgl.gl import moderngl_seam, registry
 
