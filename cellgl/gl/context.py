@@ -208,8 +208,7 @@ def _after_fork_in_child() -> None:
     _opened.clear()
     for table in (_contexts, _spare, osmesa.probed):
         table.clear()
-    _default_backend = None
-    registry._after_fork_in_child()   # (its own at-fork hook, unless fork skipped the hooks)
+    _default_backend = None   # (the contexts' states: cellgl.gl.registry forgets them itself)
     deferred.clear()
     _lock, _tls, _pid = threading.RLock(), threading.local(), os.getpid()
 
