@@ -29,6 +29,7 @@ in a way that could disagree with the test that holds the rules.
 from __future__ import annotations
 
 import ast
+import functools
 import sys
 from collections import Counter, defaultdict
 from pathlib import Path
@@ -127,8 +128,9 @@ def layers_picture() -> list[str]:
     return out
 
 
-#: the members of a moderngl context (methods and settable state), lower-case names only
+@functools.lru_cache(maxsize=1)
 def _context_api() -> frozenset[str]:
+    """The members of a moderngl context (methods and settable state): its lower-case names."""
     import moderngl
     return frozenset(n for n in dir(moderngl.Context) if n[:1].islower())
 
@@ -147,8 +149,15 @@ def moderngl_uses(module: str, api: frozenset[str] | None = None) -> list[str]:
     ``moderngl.Context`` it calls or sets on a name ending in ``ctx`` (``ctx.vertex_array(...)``,
     ``self.ctx.viewport = ...``) as ``ctx.<member>``."""
     api = _context_api() if api is None else api
-    path = TL.MODULES[module]
-    tree = ast.parse(path.read_text(), str(path))
+    text = TL.MODULES[module].read_text()
+    if "moderngl" not in text and "ctx" not in text:        # the cheap answer for most modules
+        return []
+    return list(_uses(text, api))
+
+
+@functools.lru_cache(maxsize=512)
+def _uses(text: str, api: frozenset[str]) -> tuple[str, ...]:
+    tree = ast.parse(text)
     hits = set()
     for node in ast.walk(tree):
         if isinstance(node, ast.Import) and any(a.name.split(".")[0] == "moderngl" for a in node.names):
@@ -164,7 +173,7 @@ def moderngl_uses(module: str, api: frozenset[str] | None = None) -> list[str]:
                 for e in (t.elts if isinstance(t, ast.Tuple) else [t]):
                     if isinstance(e, ast.Attribute) and e.attr in api and _receiver(e.value).endswith("ctx"):
                         hits.add(f"ctx.{e.attr}")
-    return sorted(hits)
+    return tuple(sorted(hits))
 
 
 def runner_classes() -> list[tuple[str, str, str]]:
