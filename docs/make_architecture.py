@@ -176,12 +176,20 @@ def _uses(text: str, api: frozenset[str]) -> tuple[str, ...]:
     return tuple(sorted(hits))
 
 
+def gl_layer() -> int:
+    """The index in ``LAYERS`` of the GL layer (named :data:`GL`)."""
+    found = [i for i, (name, _) in enumerate(TL.LAYERS) if name == GL]
+    if not found:
+        raise SystemExit(f"tests/test_layers.py's LAYERS has no layer named {GL!r} (docs/make_architecture.py's GL)")
+    return found[0]
+
+
 def runner_classes() -> list[tuple[str, str, str]]:
     """(module, class, path) of every class in the GL layer that subclasses ``Runner``, with the
     string its class body gives ``path`` (``""`` where none)."""
     out = []
     for m in sorted(TL.MODULES):
-        if TL.LAYERS[_layer(m)][0] != GL:
+        if _layer(m) != gl_layer():
             continue
         tree = ast.parse(TL.MODULES[m].read_text())
         for node in tree.body:
@@ -201,8 +209,9 @@ def runner_classes() -> list[tuple[str, str, str]]:
 def seam_picture() -> tuple[list[str], dict[str, list[str]]]:
     """The seam's Mermaid block, and the modules outside ``gl/`` that talk to moderngl (module ->
     what they do)."""
-    assert SEAM in TL.MODULES, f"{SEAM} (make_architecture.SEAM) is no module any more: name the seam"
-    gl = [i for i, (name, _) in enumerate(TL.LAYERS) if name == GL][0]
+    if SEAM not in TL.MODULES:
+        raise SystemExit(f"{SEAM} (docs/make_architecture.py's SEAM) is no module any more: name the seam there")
+    gl = gl_layer()
     api = _context_api()
     callers = defaultdict(list)                     # layer -> modules above gl importing gl
     edges = []

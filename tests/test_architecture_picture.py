@@ -18,6 +18,7 @@ DOC = ROOT / "docs" / "architecture.md"
 
 def _generator():
     spec = importlib.util.spec_from_file_location("make_architecture", ROOT / "docs" / "make_architecture.py")
+    assert spec is not None and spec.loader is not None
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
@@ -65,20 +66,21 @@ def test_the_arrows_count_the_imports_between_layers():
     assert [(int(i), name) for i, name, _ in titles] == [(i + 1, name) for i, (name, _) in
                                                           reversed(list(enumerate(TL.LAYERS)))]
     assert sum(int(n) for *_, n in titles) == len(TL.MODULES)
-    rooms = sum((ms for i in range(len(TL.LAYERS)) for _, ms in MA._rooms(i)), [])
+    rooms: list[str] = sum((ms for i in range(len(TL.LAYERS)) for _, ms in MA._rooms(i)), [])
     assert sorted(rooms) == sorted(TL.MODULES)
 
 
 def test_the_seam_shows_every_import_into_gl_and_the_runner_of_each_path():
     block, _ = MA.seam_picture()
     text = "\n".join(block)
-    gl = [i for i, (name, _) in enumerate(TL.LAYERS) if name == "gl"][0]
+    gl = MA.gl_layer()
     want = {(m, d) for m, deps in TL.GRAPH.items() for d in deps if TL._layer(d) == gl < TL._layer(m)}
     got = set(re.findall(r"^  (m_\w+) --> (m_\w+)$", text, re.M))
     assert {(MA._id(m), MA._id(d)) for m, d in want} <= got
     assert f"{MA._id(MA.SEAM)}[[" in text and f"class {MA._id(MA.SEAM)} seam" in text
     paths = {path for _, _, path in MA.runner_classes()}
-    assert paths == {"compute", "fragment"}, paths
+    assert paths == {"compute", "fragment"}, \
+        f"the runner classes (subclasses of Runner in gl/, with a class attribute path) give {paths}"
     for m, cls, path in MA.runner_classes():
         assert f"-.->|{path}| {MA._id(m)}_{cls}" in text
 
