@@ -18,7 +18,8 @@ Two Mermaid ``flowchart`` blocks (GitHub renders them), between the markers:
 * **The seam**: every module above ``gl/`` that imports a ``gl/`` module, grouped by layer, with an
   arrow to each ``gl/`` module it imports; :data:`SEAM` (the one module meant to dispatch and
   draw) and the runner classes that subclass its ``Runner`` (one per GPU path, named by their
-  ``path`` attribute); the ``gl/`` modules the seam imports. A module outside ``gl/`` that talks
+  ``path`` attribute, wherever in ``gl/`` they live); the ``gl/`` modules the seam and those
+  classes' modules import. A module outside ``gl/`` that talks
   to moderngl itself (imports it, or calls or sets a member of ``moderngl.Context`` on a name
   ``ctx``: :func:`moderngl_uses`) is drawn red and listed under the picture.
 
@@ -203,7 +204,7 @@ def runner_classes() -> list[tuple[str, str, str]]:
                         and isinstance(st.value, ast.Constant) and isinstance(st.value.value, str)):
                     path = st.value.value
             out.append((m, node.name, path))
-    return out
+    return sorted(out)
 
 
 def seam_picture() -> tuple[list[str], dict[str, list[str]]]:
@@ -222,9 +223,11 @@ def seam_picture() -> tuple[list[str], dict[str, list[str]]]:
         if into:
             callers[_layer(m)].append(m)
             edges += [(m, d) for d in into]
-    seam_deps = sorted(d for d in TL.GRAPH[SEAM] if _layer(d) == gl)
     classes = runner_classes()
-    gl_nodes = sorted({d for _, d in edges} | {SEAM} | set(seam_deps))
+    # the seam and the modules its runner classes live in, with what each imports in gl/
+    behind = sorted({SEAM} | {m for m, _, _ in classes})
+    seam_deps = [(m, d) for m in behind for d in sorted(TL.GRAPH[m]) if _layer(d) == gl]
+    gl_nodes = sorted({d for _, d in edges} | set(behind) | {d for _, d in seam_deps})
     direct = {m: uses for m in sorted(TL.MODULES) if _layer(m) != gl and (uses := moderngl_uses(m, api))}
 
     out = ["```mermaid", "flowchart LR"]
@@ -239,10 +242,10 @@ def seam_picture() -> tuple[list[str], dict[str, list[str]]]:
         shape = ('[["', '"]]') if m == SEAM else ('["', '"]')
         out.append(f"    {_id(m)}{shape[0]}{_short(m)}{shape[1]}")
     for m, cls, path in classes:
-        out.append(f'    {_id(m)}_{cls}(["{cls}: {path or "?"} path"])')
+        out.append(f'    {_id(m)}_{cls}(["{cls}<br>{_short(m)}: {path or "?"} path"])')
     out.append("  end")
     out += [f"  {_id(m)} --> {_id(d)}" for m, d in edges]
-    out += [f"  {_id(SEAM)} --> {_id(d)}" for d in seam_deps]
+    out += [f"  {_id(m)} --> {_id(d)}" for m, d in seam_deps]
     out += [f"  {_id(SEAM)} -.->|{path or '?'}| {_id(m)}_{cls}" for m, cls, path in classes]
     out.append("  classDef seam fill:#cfe8ff,stroke:#0366d6,stroke-width:3px")
     out.append("  classDef direct stroke:#d00,stroke-width:3px")

@@ -85,6 +85,24 @@ def test_the_seam_shows_every_import_into_gl_and_the_runner_of_each_path():
         assert f"-.->|{path}| {MA._id(m)}_{cls}" in text
 
 
+def test_the_runner_classes_are_found_wherever_they_live_in_gl(tmp_path, monkeypatch):
+    """A path's runner moved into a module of its own (``gl/compute.py``) is drawn from there,
+    with what that module imports in gl/."""
+    src = tmp_path / "compute.py"
+    src.write_text("from cellgl.gl import runner as R\n"
+                   "class ComputeRunner(R.Runner):\n    path = 'compute'\n"
+                   "class Helper:\n    path = 'not a runner'\n")
+    monkeypatch.setitem(TL.MODULES, "cellgl.gl.compute", src)
+    monkeypatch.setitem(TL.GRAPH, "cellgl.gl.compute", {"cellgl.gl.dispatch", "cellgl.gl.registry"})
+    monkeypatch.setitem(TL.GRAPH, MA.SEAM, TL.GRAPH[MA.SEAM] | {"cellgl.gl.compute"})
+    assert ("cellgl.gl.compute", "ComputeRunner", "compute") in MA.runner_classes()
+    assert not any(cls == "Helper" for _, cls, _ in MA.runner_classes())
+    text = "\n".join(MA.seam_picture()[0])
+    assert 'm_cellgl_gl_compute_ComputeRunner(["ComputeRunner<br>gl.compute: compute path"])' in text
+    assert "m_cellgl_gl_runner --> m_cellgl_gl_compute" in text
+    assert "m_cellgl_gl_compute --> m_cellgl_gl_registry" in text
+
+
 def test_a_module_that_talks_to_moderngl_is_found(tmp_path, monkeypatch):
     """What counts as talking to moderngl: importing it, calling or setting a member of a
     moderngl context on a name ending in ``ctx``; not a member moderngl's context lacks."""
