@@ -128,6 +128,25 @@ def test_a_released_context_drops_its_entry(ctx):
         another.release()
 
 
+def test_a_render_target_is_kept_in_its_contexts_store_only(ctx):
+    """gl/targets.py keeps a float target in a store of the context's state; handed another
+    context's store it refuses (one clear error), never draws into a foreign framebuffer."""
+    from cellgl.gl.targets import float_target
+
+    other = context._create(context.backend_name(ctx) or "egl")    # current here; released below
+    try:
+        cache = registry.store("test.targets", other)
+        fbo, tex = float_target(cache, other, 4, 2)["objects"]
+        assert float_target(cache, other, 4, 2)["objects"] == (fbo, tex)   # kept while the size stays
+        with pytest.raises(ValueError, match="another context's render target"):
+            float_target(cache, ctx, 4, 2)
+        assert float_target(cache, other, 8, 2)["objects"][0] is not fbo    # a new size: new objects
+        assert moderngl_seam.released(fbo) and moderngl_seam.released(tex)
+    finally:
+        other.release()
+        context.get_context()
+
+
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork on this platform")
 def test_a_forked_child_starts_with_an_empty_registry(ctx):
     cellgl.cellular(np.zeros((4, 2)), 1)

@@ -5,7 +5,8 @@ whatever is asked (llvmpipe: 4.5); NVIDIA's EGL and GLX give exactly the version
 3.3 given: no compute shaders). So cellgl asks for the newest first and walks down,
 :data:`LADDER`: 4.6, 4.5, 4.3 (compute shaders: the compute path), 4.1 (macOS), 3.3 core (the
 least the fragment path runs on). The first rung a driver accepts wins; what each refused rung
-said is kept for the one error message when none works.
+said is kept for the one error message when none works, and with a context made in its state
+(:class:`cellgl.gl.registry.ContextState`, ``ladder``: `cellgl info`'s ``gl_ladder``).
 
 Every way cellgl makes a context climbs this ladder: EGL, GLX, WGL and CGL through glcontext
 (:func:`glcontext_context`; glcontext's CGL backend ignores the version and gives 4.1 core),
