@@ -122,11 +122,6 @@ def _check_name(name: str, origin: str) -> str:
     return key
 
 
-def _version_error(exc: Exception) -> str:
-    text = str(exc).strip() or type(exc).__name__
-    return text.splitlines()[0] if text else text
-
-
 def _current(ctx: moderngl.Context) -> moderngl.Context:
     """Make ``ctx`` the thread's current context and return it.
 
@@ -358,7 +353,7 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 try:
                     ctx = _create(name)
                 except Exception as exc:  # each backend fails in its own way
-                    errors.append(f"  {name}: {_version_error(exc)}")
+                    errors.append(f"  {name}: {versions.first_line(exc)}")
                     continue
                 _contexts[name] = ctx
                 registry.held(ctx).backend = name

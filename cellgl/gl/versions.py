@@ -22,7 +22,7 @@ from typing import Any, TypeVar
 
 from cellgl.gl import moderngl_seam, registry
 
-__all__ = ["LADDER", "MINIMUM", "LadderError", "label", "major_minor", "climb",
+__all__ = ["LADDER", "MINIMUM", "LadderError", "label", "major_minor", "first_line", "climb",
            "glcontext_context", "describe", "check_settings"]
 
 T = TypeVar("T")
@@ -43,7 +43,9 @@ def major_minor(code: int) -> tuple[int, int]:
     return code // 100, code % 100 // 10
 
 
-def _first_line(exc: BaseException) -> str:
+def first_line(exc: BaseException) -> str:
+    """The first line of what ``exc`` says (its type's name when it says nothing): one line of
+    an error message per failed rung or backend."""
     text = str(exc).strip() or type(exc).__name__
     return text.splitlines()[0]
 
@@ -80,7 +82,7 @@ def climb(make: Callable[[int], T], what: str = "",
         try:
             ctx = make(code)
         except Exception as exc:  # noqa: BLE001 - glcontext raises bare Exception
-            attempts.append((code, _first_line(exc)))
+            attempts.append((code, first_line(exc)))
             continue
         attempts.append((code, None))
         return ctx, attempts
