@@ -39,15 +39,18 @@ def test_the_layers_above_never_ask_for_the_path():
     assert not bad, "\n".join(bad)
 
 
-def test_no_module_keeps_gpu_objects_by_context_id():
+def test_no_table_by_context_id_and_nothing_stuck_on_moderngl_objects():
     """Everything cellgl knows of a context lives in its state (gl/registry.py, reached from the
     context object), never in a table keyed by id(ctx) (an id is reused once a context is gone)
-    nor in attributes stuck on moderngl's object."""
+    nor in attributes set on moderngl's objects; moderngl's internals (``mglo``) are touched only
+    by gl/moderngl_seam.py."""
     bad = []
     for path in sorted((ROOT / "cellgl").rglob("*.py")):
+        rel = path.relative_to(ROOT).as_posix()
         for k, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
-            if re.search(r"\bid\(ctx\)|\._cellgl_|\bctx\._\w+\s*=[^=]|\bmglo\.", line):
-                bad.append(f"{path.relative_to(ROOT).as_posix()}:{k}: {line.strip()}")
+            if re.search(r"\bid\(ctx\)|\._cellgl_|\bctx\._\w+\s*=[^=]", line) or \
+                    (rel != "cellgl/gl/moderngl_seam.py" and re.search(r"\bmglo\b", line)):
+                bad.append(f"{rel}:{k}: {line.strip()}")
     assert not bad, "\n".join(bad)
 
 
