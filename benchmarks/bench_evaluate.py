@@ -9,7 +9,7 @@ Rows (median of ``--repeats`` calls after a warm-up call, seconds, end to end):
   fall in about 8,600 distinct whole uv cells (the count is printed); ``x one cell`` is the ratio
   (issue 47's goal: at most 2);
 * ``octave mean, first render``: the time ``cellgl.render(PRESET, 64, 64)`` spends measuring the
-  antialias's octave mean (NumPy, ``cellgl.texture.reference._measure_mean``) right after the
+  antialias's octave mean (NumPy, ``cellgl.texture.reference.measure_mean``) right after the
   recipe's seed changed (a new basis: the mean is not known yet); 0 where the render does not
   measure it (no octave fades at its footprint). Beside it, the whole first render (it compiles
   the new recipe's program too, unless the driver's shader cache has it).
@@ -68,7 +68,7 @@ def main(argv=None) -> int:
 
     seeds = iter(range(1000, 1000 + 10 * (a.repeats + 1)))
     spent = []
-    measure = reference._measure_mean
+    measure = reference.measure_mean
 
     def timed_measure(r):
         t0 = time.perf_counter()
@@ -77,7 +77,7 @@ def main(argv=None) -> int:
         finally:
             spent.append(time.perf_counter() - t0)
 
-    reference._measure_mean = timed_measure
+    reference.measure_mean = timed_measure
 
     def first_render():
         spent.clear()
@@ -87,7 +87,7 @@ def main(argv=None) -> int:
 
     first_render()
     rows = [first_render() for _ in range(a.repeats)]
-    reference._measure_mean = measure
+    reference.measure_mean = measure
     t_mean = statistics.median(m for m, _ in rows)
     t_first = statistics.median(t for _, t in rows)
     from cellgl.gl.context import get_context

@@ -1,0 +1,132 @@
+"""The octave mean carried for the presets (cellgl/texture/octave_means.json) and measured once per
+process for any other basis (cellgl.texture.means); the one bounded cache policy (cellgl._cache)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from cellgl import _cache
+from cellgl.texture import means
+from cellgl.texture import reference as texture_reference
+from cellgl.texture.params import PARAMS
+from cellgl.texture.recipe import RecipeError, load_recipe
+
+
+@pytest.fixture
+def counted(monkeypatch):
+    """The recipes the NumPy measurement runs for (the process cache emptied first)."""
+    calls = []
+    real = texture_reference.measure_mean
+
+    def count(recipe):
+        calls.append(recipe)
+        return real(recipe)
+
+    monkeypatch.setattr(texture_reference, "measure_mean", count)
+    means._MEASURED.clear()
+    yield calls
+    means._MEASURED.clear()
+
+
+def test_the_table_holds_every_preset_measured_now():
+    """Every preset and variant measured again gives the stored bits (a change to the reference
+    that moves a mean fails here: rewrite the table with python -m cellgl.texture)."""
+    stored = json.loads(means.TABLE.read_text())
+    assert stored["samples"] == means.SAMPLES and stored["rng_seed"] == means.RNG_SEED
+    assert "octave mean" in stored["about"]
+    assert json.loads(means.table_text(means.table(texture_reference.measure_mean))) == stored
+
+
+def test_a_preset_runs_no_numpy_measurement(counted):
+    names = []
+    for name, r in means._recipes():
+        m = texture_reference.octave_mean(r)
+        assert m == means._carried()[means.key_digest(means.mean_key(r))]
+        names.append(name)
+    assert counted == [] and len(names) >= 31
+
+
+def test_a_changed_seed_is_measured_once_with_the_bits_of_a_fresh_measurement(counted):
+    base = load_recipe("qin-cloud")
+    r = base.replace(seed=5)                    # what --set seed=5 makes: another key
+    assert means.key_digest(means.mean_key(r)) not in means._carried()
+    first = texture_reference.octave_mean(r)
+    assert len(counted) == 1
+    assert texture_reference.octave_mean(r) == first and texture_reference.octave_mean(base.replace(seed=5)) == first
+    assert len(counted) == 1
+    assert first == texture_reference.measure_mean(r)
+    assert first != texture_reference.octave_mean(base)
+
+
+def test_a_stale_table_is_not_read(counted, monkeypatch, tmp_path):
+    """A table written with other measurement constants is ignored: the mean is measured."""
+    table = tmp_path / "octave_means.json"
+    doc = json.loads(means.TABLE.read_text())
+    doc["samples"] = means.SAMPLES // 2
+    table.write_text(json.dumps(doc))
+    monkeypatch.setattr(means, "TABLE", table)
+    monkeypatch.setattr(means, "_TABLE", {})
+    monkeypatch.setattr(means, "_TABLE_READ", [])
+    assert texture_reference.octave_mean(load_recipe("f1")) == 0.37648868560791016
+    assert len(counted) == 1
+
+
+def _other(p, v):
+    """Another value of parameter ``p`` (current value ``v``), or None."""
+    if p.type == "bool":
+        return not v
+    if p.type == "enum":
+        return next(c for c in p.choices if c != v)
+    if p.type == "color":
+        return [1.0 - c for c in v]
+    if p.type == "int":
+        return int(v) + 1 if v + 1 <= p.hi else int(v) - 1
+    step = 0.37 * (p.hi - p.lo) if p.hi - p.lo < 8 else 1.3
+    return v + step if v + step <= p.hi else v - step
+
+
+@pytest.mark.parametrize("preset", ["f1", "density"])
+def test_the_key_names_every_value_the_measurement_reads(preset):
+    """Change each parameter outside the key in turn: the measured mean does not move (else a
+    process would keep the first recipe's mean for the second: the noise frequency, with noise
+    in the combination, was missing; fails before)."""
+    base = load_recipe(preset).replace(c_noise=0.4)
+    key = means.mean_key(base)
+    m0 = texture_reference.measure_mean(base)
+    moved = []
+    for p in PARAMS:
+        other = _other(p, base.values[p.name])
+        try:
+            r = base.replace(**{p.name: other})
+        except RecipeError:
+            continue
+        if means.mean_key(r) == key and texture_reference.measure_mean(r) != m0:
+            moved.append(p.name)
+    assert moved == []
+
+
+def test_a_render_of_a_fading_preset_measures_nothing(ctx, counted):
+    import cellgl
+    from cellgl.texture import antialias
+
+    r = load_recipe("qin-cloud")
+    assert antialias.fades(r.values, (1 / 64, 1 / 64, 0.0))
+    img = cellgl.render(r, 64, 64)["color"]
+    assert counted == [] and np.isfinite(img).all()
+
+
+def test_bounded_drops_the_least_recently_used():
+    c = _cache.Bounded("test entries", 2)
+    c.put("a", 1)
+    c.put("b", 2)
+    assert c.get("a") == 1                     # a is now the most recent
+    c.put("c", 3)
+    assert "b" not in c and c.get("a") == 1 and c.get("c") == 3 and len(c) == 2
+    assert c.get("b", "none") == "none"
+    assert c in _cache.caches() and means._MEASURED in _cache.caches()
+    _cache.clear()
+    assert len(c) == 0
+    with pytest.raises(ValueError, match="size must be an int >= 1, got 0"):
+        _cache.Bounded("nothing", 0)
