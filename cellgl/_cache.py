@@ -4,7 +4,16 @@ A cache of derived values (an octave mean, a folded function, a compiled snippet
 scene) is a :class:`Bounded`: a mapping of at most ``size`` entries that drops the entry read or
 written longest ago when a new one would pass the bound. Every cache says what it holds
 (``about``) and its bound, and :func:`clear` empties them all (tests, a long-running host that
-wants its memory back). :func:`caches` lists them.
+wants its memory back). :func:`caches` lists them. A cache keyed by a function's own (hashable)
+arguments is ``functools.lru_cache(maxsize=N)`` instead: the same policy, bounded and least
+recently used first (``cache_clear`` empties it).
+
+The bounds, by what an entry costs and how many a process meets: 256 octave means
+(:mod:`cellgl.texture.means`), 4096 folded function bodies (:mod:`cellgl.export.fold`), 64
+compiled snippet units (:mod:`cellgl.export.snippets`), 20,000 token splits of GLSL texts
+(:mod:`cellgl.export.translate.tokens`), 4 PUPs scenes and 4 scaled layers (:mod:`cellgl.pups.recipe`:
+each holds a whole point set). Each used to have its own rule (the first in dropped, or all
+dropped at once past the bound, one of them at first unbounded); now one.
 
 Why not ``functools.lru_cache``: the caches here are looked up by a key computed from an object
 (a recipe, a syntax tree) that is not itself the key or is not hashable, and some hold values
