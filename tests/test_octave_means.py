@@ -60,12 +60,17 @@ def test_a_changed_seed_is_measured_once_with_the_bits_of_a_fresh_measurement(co
     assert first != texture_reference.octave_mean(base)
 
 
-def test_a_stale_table_is_not_read(counted, monkeypatch, tmp_path):
-    """A table written with other measurement constants is ignored: the mean is measured."""
+@pytest.mark.parametrize("content", ["other samples", "not json", "a list", "no means", "missing"])
+def test_a_stale_or_broken_table_is_not_read(counted, monkeypatch, tmp_path, content):
+    """A table written with other measurement constants, or no table at all, is ignored: the
+    mean is measured (the same bits), never an error."""
     table = tmp_path / "octave_means.json"
     doc = json.loads(means.TABLE.read_text())
     doc["samples"] = means.SAMPLES // 2
-    table.write_text(json.dumps(doc))
+    text = {"other samples": json.dumps(doc), "not json": "{\"samples\": 40", "a list": "[1, 2]",
+            "no means": json.dumps({"samples": means.SAMPLES, "rng_seed": means.RNG_SEED})}
+    if content != "missing":
+        table.write_text(text[content])
     monkeypatch.setattr(means, "TABLE", table)
     monkeypatch.setattr(means, "_TABLE", {})
     monkeypatch.setattr(means, "_TABLE_READ", [])
