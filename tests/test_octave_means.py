@@ -135,3 +135,23 @@ def test_bounded_drops_the_least_recently_used():
     assert len(c) == 0
     with pytest.raises(ValueError, match="size must be an int >= 1, got 0"):
         _cache.Bounded("nothing", 0)
+
+
+def test_density_images_of_the_same_bytes_and_other_sizes_are_other_keys(counted, tmp_path):
+    """A 2 x 8 and a 4 x 4 density image of the same pixel bytes place points differently; the
+    key names the size too (it named only the bytes: the second kept the first's mean; fails
+    before)."""
+    from PIL import Image
+
+    px = (np.arange(16, dtype=np.uint8) * 17)
+    recipes = []
+    for shape in ((2, 8), (4, 4)):
+        path = tmp_path / f"d{shape[0]}x{shape[1]}.png"
+        Image.fromarray(px.reshape(shape)).save(path)
+        recipes.append(load_recipe("veins").replace(density_map="image", density_image=str(path),
+                                                    density_min=0.5, density_max=10.0))
+    a, b = recipes
+    assert a.density_pixels().tobytes() == b.density_pixels().tobytes()
+    assert means.mean_key(a) != means.mean_key(b)
+    assert texture_reference.octave_mean(a) != texture_reference.octave_mean(b)
+    assert counted == [a, b]
