@@ -36,7 +36,12 @@ def test_the_table_holds_every_preset_measured_now():
     stored = json.loads(means.TABLE.read_text())
     assert stored["samples"] == means.SAMPLES and stored["rng_seed"] == means.RNG_SEED
     assert "octave mean" in stored["about"]
-    assert json.loads(means.table_text(means.table(texture_reference.measure_mean))) == stored
+    now = json.loads(means.table_text(means.table(texture_reference.measure_mean)))
+    moved = sorted(", ".join(e["presets"]) for d, e in now["means"].items() if stored["means"].get(d) != e)
+    gone = sorted(", ".join(e["presets"]) for d, e in stored["means"].items() if d not in now["means"])
+    assert not moved and not gone, (f"cellgl/texture/octave_means.json is out of date (new or moved: "
+                                    f"{moved}; no longer a preset's: {gone}): run python -m cellgl.texture")
+    assert now == stored
 
 
 def test_a_preset_runs_no_numpy_measurement(counted):
