@@ -53,6 +53,15 @@ def test_a_preset_runs_no_numpy_measurement(counted):
     assert counted == [] and len(names) >= 31
 
 
+def test_a_preset_with_values_outside_the_basis_changed_still_runs_no_measurement(counted):
+    """--set frequency/octaves/gain/lacunarity/antialias/colours: the same basis, the same key."""
+    r = load_recipe("qin-cloud")
+    changed = r.replace(frequency=11.0, octaves=3.0, gain=0.6, lacunarity=2.5, antialias=2.0,
+                        offset_x=1e5, bump=0.3, fractal="sum")
+    assert texture_reference.octave_mean(changed) == texture_reference.octave_mean(r)
+    assert counted == []
+
+
 def test_a_changed_seed_is_measured_once_with_the_bits_of_a_fresh_measurement(counted):
     base = load_recipe("qin-cloud")
     r = base.replace(seed=5)                    # what --set seed=5 makes: another key
