@@ -12,7 +12,9 @@ The bounds, by what an entry costs and how many a process meets: 256 octave mean
 (:mod:`cellgl.texture.means`), 4096 folded function bodies (:mod:`cellgl.export.fold`), 64
 compiled snippet units (:mod:`cellgl.export.snippets`), 20,000 token splits of GLSL texts
 (:mod:`cellgl.export.translate.tokens`), 4 PUPs scenes and 4 scaled layers (:mod:`cellgl.pups.recipe`:
-each holds a whole point set). Each used to have its own rule (the first in dropped, or all
+each holds a whole point set), 8 decoded density and cell images (:mod:`cellgl.texture.images`).
+The GL objects kept per context are not process caches: they live and go with their context
+(:mod:`cellgl.gl.registry`). Each used to have its own rule (the first in dropped, or all
 dropped at once past the bound, one of them at first unbounded); now one.
 
 Why not ``functools.lru_cache``: the caches here are looked up by a key computed from an object

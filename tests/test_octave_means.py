@@ -169,3 +169,15 @@ def test_density_images_of_the_same_bytes_and_other_sizes_are_other_keys(counted
     assert means.mean_key(a) != means.mean_key(b)
     assert texture_reference.octave_mean(a) != texture_reference.octave_mean(b)
     assert counted == [a, b]
+
+
+def test_the_process_caches_are_one_bounded_policy():
+    from cellgl.export import fold, snippets
+    from cellgl.export.translate import tokens
+    from cellgl.pups import recipe as pups_recipe
+    from cellgl.texture import images
+
+    kept = (means._MEASURED, fold._FOLDED, snippets._CODE_CACHE, tokens._SPLITS, pups_recipe._SCENES,
+            pups_recipe._SCALED, images._IMAGES)
+    for c in kept:
+        assert isinstance(c, _cache.Bounded) and c in _cache.caches() and c.size >= 4, c
