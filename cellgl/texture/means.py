@@ -60,7 +60,7 @@ def mean_key(recipe) -> tuple:
     where the combination adds noise, and with a density map the domain values that place it
     (and the map image's size and pixels: 2 x 8 and 4 x 4 pixels of the same bytes differ)."""
     v = recipe.values
-    key = tuple((p.name, v[p.name]) for p in PARAMS if p.group in _GROUPS)
+    key: tuple = tuple((p.name, v[p.name]) for p in PARAMS if p.group in _GROUPS)
     key += (("qin", v["fractal"] in ("qin", "qin_cube")),)
     if v["c_noise"] != 0.0:
         key += (("noise_frequency", v["noise_frequency"]),)
