@@ -40,8 +40,9 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
 
-    from cellgl.io import bake as B
-    from cellgl.io import blocks, gputex, mips
+    from cellgl.bake import core as B
+    from cellgl.bake import gputex, mips
+    from cellgl.io import blocks
     from cellgl.io.formats import usable_cores
     from cellgl.recipes import load_recipe
 

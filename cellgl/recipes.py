@@ -117,7 +117,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     recipes give ``color`` and ``height``.
 
     A tile that would need more than half the machine's memory (:func:`check_memory`) raises
-    ValueError up front, saying how to tile it (tiles, ``cellgl.io.bake.bake``, ``cellgl.to_dask``).
+    ValueError up front, saying how to tile it (tiles, ``cellgl.bake.core.bake``, ``cellgl.to_dask``).
     """
     recipe = load_recipe(recipe)
     check_memory(recipe, width, height, channels, x0=x0, y0=y0, tile_w=tile_w, tile_h=tile_h, depth=depth,
@@ -215,7 +215,7 @@ def check_memory(recipe, width, height, channels=("color",), *, x0=0, y0=0, tile
     whole = "" if (tw, th) == (width, height) else f" (a tile of the {width}x{height} image)"
     ways = ["render it in tiles (x0, y0, tile_w, tile_h: each tile equals those pixels of the whole render)"]
     if width <= 65536 and height <= 65536 and width * height <= 1 << 32 and not depth:   # cellgl.io.spec's limits
-        ways.append(f"bake it to a file tile by tile within a memory budget (cellgl.io.bake.bake(recipe, "
+        ways.append(f"bake it to a file tile by tile within a memory budget (cellgl.bake.core.bake(recipe, "
                     f"'big.tif', size=({width}, {height})), or `cellgl bake NAME -o big.tif --size "
                     f"{width}x{height}`)")
     ways.append(f"take it as a lazy array rendered block by block: cellgl.to_dask(recipe, ({height}, {width}))")

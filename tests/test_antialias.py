@@ -13,7 +13,7 @@ import pytest
 
 from cellgl import texture
 from cellgl.gl import glsl
-from cellgl.io import bake
+from cellgl.bake import core as bake
 from cellgl.texture import antialias
 from cellgl.texture import dispatch as texture_dispatch
 from cellgl.texture import reference as texture_reference

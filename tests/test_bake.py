@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from cellgl.io import bake as B
+from cellgl.bake import core as B
 from cellgl import cli
 
 # --------------------------------------------------------------------------------------------
@@ -297,7 +297,7 @@ def test_the_unknown_extension_error_lists_every_extension_bake_accepts(tmp_path
     """Issue 48: `-o a.jpg` listed .png .exr .tif .tiff .npy, not .zarr, .webp, .gif: the list
     comes from one place (spec.FORMATS, ANIMATED, DISTRIBUTED), the help's too."""
     from cellgl.io import spec
-    from cellgl.io.bake_cli import add_parser
+    from cellgl.cli.bake import add_parser
     import argparse
 
     every = [*spec.FORMATS, *spec.ANIMATED, *spec.DISTRIBUTED]

@@ -124,7 +124,7 @@ def test_in_process_main_returns_130_on_ctrl_c(monkeypatch, tmp_path):
 def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
     """A Ctrl-C that hit a C extension's import was printed by it and swallowed: the bake went
     on to the end (exit 130 then, the outputs complete). The next tile or frame raises it again."""
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     steps = []
 
@@ -204,7 +204,7 @@ class _Stream:
 
 
 def test_progress_off_a_terminal_is_plain_lines():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=False)
     with Progress(40, "baking x.png", True, stream=s) as bar:
@@ -218,7 +218,7 @@ def test_progress_off_a_terminal_is_plain_lines():
 
 @pytest.mark.parametrize("tty", [True, False])
 def test_progress_says_interrupted(tty):
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=tty)
     with pytest.raises(KeyboardInterrupt):
@@ -234,7 +234,7 @@ def test_progress_says_interrupted(tty):
 
 
 def test_quiet_progress_writes_nothing():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=False)
     with pytest.raises(KeyboardInterrupt):

@@ -169,7 +169,7 @@ def test_a_scheduler_file_written_while_waiting_is_taken(tmp_path, monkeypatch):
     import threading
 
     pytest.importorskip("distributed")
-    from cellgl.dask import cli as dcli
+    from cellgl.cli import dask as dcli
     from cellgl.dask.blocks import DaskError
 
     f = tmp_path / "sched.json"
@@ -243,7 +243,7 @@ def test_pups_image_resolves_against_the_recipe_folder(ctx, tmp_path):
 # --------------------------------------------------------------------------------------------
 
 def test_progress_in_a_log_starts_at_once_and_keeps_coming():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     class Log:
         def __init__(self):

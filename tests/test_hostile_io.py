@@ -183,7 +183,7 @@ def test_misconfigured_driver_is_an_error_not_a_segfault(backend):
 
 
 def _bake(path, **kw):
-    from cellgl.io import bake as B
+    from cellgl.bake import core as B
 
     kw.setdefault("size", (32, 32))
     kw.setdefault("progress", False)

@@ -18,19 +18,16 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Each entry is a module or a package prefix (every module under it).
 #: docs/architecture.md's table is the same map: row ``# = index + 1`` names every module of the layer.
 LAYERS = (
-    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl.io", "cellgl.io.formats", "cellgl.io.tempfiles",
-               "cellgl.presets")),
+    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl.io", "cellgl.presets")),
     ("gl", ("cellgl.gl",)),
     ("basis", ("cellgl.basis",)),
     ("texture", ("cellgl.texture",)),
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
-    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.frames", "cellgl.io.udim", "cellgl.io.mips", "cellgl.io.texfile", "cellgl.io.gputex",
-                    "cellgl.io.material_sets",
-                    "cellgl.dask", "cellgl.blender")),
+    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.bake", "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
     ("viewer", ("cellgl.viewer",)),
-    ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli", "cellgl.voronoi_cli")),
+    ("cli", ("cellgl.cli", "cellgl.__main__")),
 )
 
 
@@ -123,7 +120,7 @@ def _doc_rows() -> dict[int, str]:
 
 
 def _on_map(module: str, row: str) -> bool:
-    """Whether a row of the map names ``module``: its file (``cellgl/io/bake.py``), a package its
+    """Whether a row of the map names ``module``: its file (``cellgl/bake/core.py``), a package its
     folder (``cellgl/blender/addon/`` or ``addon/``), a module of a folder its name (```bake```)."""
     path = MODULES[module].relative_to(ROOT).as_posix()
     last = module.rpartition(".")[2]
@@ -286,11 +283,11 @@ def test_no_underscore_name_crosses_modules():
 def test_the_underscore_check_sees_both_spellings(tmp_path, monkeypatch):
     src = tmp_path / "m.py"
     src.write_text("from cellgl.texture.schema import _coerce, RecipeError\n"
-                   "from cellgl.io import bake as B\n"
+                   "from cellgl.bake import core as B\n"
                    "import cellgl.io.spec as S\n"
                    "def f():\n    return B._load, S.check, B.__name__, B.bake\n")
     monkeypatch.setitem(MODULES, "cellgl.io.fake", src)
-    assert _underscore_imports("cellgl.io.fake") == ["cellgl.io.fake: cellgl.io.bake._load",
+    assert _underscore_imports("cellgl.io.fake") == ["cellgl.io.fake: cellgl.bake.core._load",
                                                       "cellgl.io.fake: cellgl.texture.schema._coerce"]
 
 

@@ -151,7 +151,7 @@ def test_viewer_shader_shows_the_channels(ctx):
 def test_bake_writes_the_channels(ctx, tmp_path):
     from PIL import Image
 
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     paths = bake("flagstone", tmp_path / "f.png", size=(48, 32), channels=["roughness", "ao", "metallic"],
                  bit_depth=16)

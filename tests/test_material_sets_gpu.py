@@ -14,9 +14,9 @@ import sys
 import numpy as np
 import pytest
 
-from cellgl.io import gputex
-from cellgl.io import material_sets as M
-from cellgl.io.bake import bake
+from cellgl.bake import gputex
+from cellgl.bake import material_sets as M
+from cellgl.bake.core import bake
 from cellgl.io.spec import BakeError
 
 pytest.importorskip("texture2ddecoder")

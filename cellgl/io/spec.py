@@ -1,5 +1,5 @@
 """What a bake can produce: formats, size limits, size and channel arguments, and how each
-channel is encoded in each format (:mod:`cellgl.io.bake` writes them)."""
+channel is encoded in each format (:mod:`cellgl.bake.core` writes them)."""
 from __future__ import annotations
 
 from collections.abc import Iterable
@@ -43,15 +43,15 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
-    # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.texfile)
+    # a tiled, mip-mapped TIFF as maketx writes it (cellgl.bake.texfile)
     ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
-    # GPU textures (cellgl.io.gputex): the format is chosen per channel; --depth sets the bits of
+    # GPU textures (cellgl.bake.gputex): the format is chosen per channel; --depth sets the bits of
     # plain (uncompressed) samples, its default per channel; mip levels and volumes in the file
     ".dds": _Format("DDS", (8, 16, 32), 8, True, "level"),
     ".ktx2": _Format("KTX2", (8, 16, 32), 8, True, "level"),
 }
 
-#: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.io.frames`)
+#: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.bake.frames`)
 ANIMATED = (".webp", ".gif")
 #: extensions of a distributed bake: a Zarr folder written on Dask (:func:`cellgl.dask.bake_zarr`)
 DISTRIBUTED = (".zarr",)

@@ -1,4 +1,4 @@
-"""GPU texture bakes: ``.dds`` and ``.ktx2`` (:func:`cellgl.io.bake.bake` hands them here).
+"""GPU texture bakes: ``.dds`` and ``.ktx2`` (:func:`cellgl.bake.core.bake` hands them here).
 
 Per channel the format a pipeline expects, chosen by default or by ``compress`` (``--compress``),
 refused where it makes no sense (:data:`CHOICES`): colour is sRGB (BC7, BC1 or BC3 blocks, or
@@ -9,7 +9,7 @@ plain floats (``R32_SFLOAT``, 16-bit ``R16_SFLOAT``), ``id`` ``R32_UINT`` (never
 8- and 16-bit samples are the PNG bake's, bit for bit (cellgl.io.spec's encodings); the blocks
 come from etcpak on every core (cellgl.io.blocks); the containers are cellgl.io.containers.
 
-With ``mips`` every level is rendered from the recipe at its own size (cellgl.io.mips,
+With ``mips`` every level is rendered from the recipe at its own size (cellgl.bake.mips,
 ``rounding="down"``: the levels DDS and KTX2 define) and stored in the file. Volumes
 (``--size WxHxD``) are 3D textures, their mip levels halving the depth too. See docs/bake.md
 ("GPU texture files").
@@ -24,7 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io import blocks, containers, mips
+from cellgl.bake import mips
+from cellgl.io import blocks, containers
 from cellgl.io.spec import RENDER_BYTES_PER_PIXEL, BakeError, Encoding, accepted_list
 from cellgl.io.tempfiles import atomic_paths
 

@@ -108,17 +108,17 @@ def _lazy(module: str, name: str) -> Callable:
 # --------------------------------------------------------------------------------------------
 
 #: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
-#: cellgl/io/bake_cli.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/snippets.py
-#: (docs/engines.md), cellgl/recipes.py (docs/textures.md), cellgl/dask/cli.py (docs/scale.md),
-#: cellgl/voronoi_cli.py and cellgl/blender/extension.py (docs/blender.md), cellgl/playground/site.py (docs/playground.md).
+#: cellgl/cli/bake.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/snippets.py
+#: (docs/engines.md), cellgl/recipes.py (docs/textures.md), cellgl/cli/dask.py (docs/scale.md),
+#: cellgl/cli/voronoi.py and cellgl/blender/extension.py (docs/blender.md), cellgl/playground/site.py (docs/playground.md).
 _COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
     "info": (_add_info, _cmd_info),
-    "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
+    "bake": (_lazy("cellgl.cli.bake", "add_parser"), _lazy("cellgl.cli.bake", "run_cli")),
     "view": (_add_view, _run_view),
-    "export": (_lazy("cellgl.export.cli", "add_parser"), _lazy("cellgl.export.cli", "run_cli")),
+    "export": (_lazy("cellgl.cli.export", "add_parser"), _lazy("cellgl.cli.export", "run_cli")),
     "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
-    "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
-    "voronoi": (_lazy("cellgl.voronoi_cli", "add_parser"), _lazy("cellgl.voronoi_cli", "run_cli")),
+    "sweep": (_lazy("cellgl.cli.dask", "add_sweep_parser"), _lazy("cellgl.cli.dask", "run_sweep")),
+    "voronoi": (_lazy("cellgl.cli.voronoi", "add_parser"), _lazy("cellgl.cli.voronoi", "run_cli")),
     "blender": (_lazy("cellgl.blender.scene", "add_parser"), _lazy("cellgl.blender.scene", "run_cli")),
     "blender-extension": (_lazy("cellgl.blender.extension", "add_parser"),
                           _lazy("cellgl.blender.extension", "run_cli")),

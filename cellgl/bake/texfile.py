@@ -2,7 +2,7 @@
 ``.tif`` (docs/bake.md, "Film pipelines").
 
 The levels are cellgl's own, each rendered from the recipe at its level's size by the one mip
-chain implementation, :mod:`cellgl.io.mips` (never downsampled: no ``maketx`` /
+chain implementation, :mod:`cellgl.bake.mips` (never downsampled: no ``maketx`` /
 ``ImageBufAlgo.make_texture`` filtering); this module only lays them into the containers
 renderers read through OpenImageIO's texture system:
 
@@ -11,7 +11,7 @@ renderers read through OpenImageIO's texture system:
   "Plain Texture" and ``wrapmodes`` tags, as ``maketx`` writes them (written by ``tifffile``;
   OpenImageIO reads the pages as MIP levels).
 * ``.exr``: a tiled OpenEXR file, ``MIPMAP_LEVELS`` with ``ROUND_UP`` (the chain of
-  :func:`cellgl.io.mips.mip_sizes`), written by OpenImageIO's ``ImageOutput``
+  :func:`cellgl.bake.mips.mip_sizes`), written by OpenImageIO's ``ImageOutput``
   (``AppendMIPLevel``; the wheel or Blender's copy, :func:`openimageio`), every channel asked for in one file, colour tagged as in
   :mod:`cellgl.io.colour`.
 
@@ -97,16 +97,16 @@ def check_tiled(ext: str, tiled: bool, mips: bool, channels, depth_slices) -> tu
 
 def _levels(recipe, w: int, h: int, mips: bool, channels, samples: int, window):
     """``(k, {channel: array})`` of every level (level 0 only without ``mips``), rendered by
-    :mod:`cellgl.io.mips`; a UDIM tile (``window`` = (tile, tiles)) is its crop of the set's
+    :mod:`cellgl.bake.mips`; a UDIM tile (``window`` = (tile, tiles)) is its crop of the set's
     virtual bake at the level's size."""
-    from cellgl.io import mips as mip_mod
+    from cellgl.bake import mips as mip_mod
 
     count = mip_mod.level_count(w, h) if mips else 1
     for k in range(count):
         if window is None:
             yield k, mip_mod.render_level(recipe, w, h, k, channels=channels, samples=samples)
             continue
-        from cellgl.io import udim as udim_mod
+        from cellgl.bake import udim as udim_mod
 
         t, tiles = window
         lw, lh = mip_mod.level_size(w, h, k)
@@ -135,12 +135,12 @@ def _window(recipe, fw, fh, x0, y0, w, h, channels, samples):
 
 def write_texture(tmp: Path, recipe, out, ext: str, size: tuple[int, int], *, mips: bool,
                   samples: int = 1, window=None, meta: str = "", progress: bool = False) -> None:
-    """Render ``out`` (a :class:`cellgl.io.bake._Output`) level by level into the tiled file
+    """Render ``out`` (a :class:`cellgl.bake.core._Output`) level by level into the tiled file
     ``tmp`` (its temporary path; the bake moves it into place)."""
     from cellgl.io.progress import Progress
 
     w, h = size
-    from cellgl.io import mips as mip_mod
+    from cellgl.bake import mips as mip_mod
 
     bar = Progress(mip_mod.level_count(w, h) if mips else 1, f"baking {out.path.name}", progress,
                    unit="levels")
