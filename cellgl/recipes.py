@@ -13,7 +13,7 @@ from pathlib import Path
 
 from cellgl.pups import recipe as pups_recipe
 from cellgl.pups.recipe import PupsRecipe
-from cellgl.texture import recipe as cellular
+from cellgl.texture import presets as cellular
 from cellgl.texture import evaluation as cellular_render
 from cellgl.texture.params import PARAMS
 from cellgl.texture.recipe import Recipe

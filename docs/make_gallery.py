@@ -22,7 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cellgl.io import formats as cio  # noqa: E402
 from cellgl.bake.core import bake  # noqa: E402
-from cellgl.texture.recipe import list_presets, load_recipe  # noqa: E402
+from cellgl.texture.presets import list_presets, load_recipe  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 

@@ -17,7 +17,7 @@ from cellgl.bake import core as bake
 from cellgl.texture import antialias
 from cellgl.texture import dispatch as texture_dispatch
 from cellgl.texture import reference as texture_reference
-from cellgl.texture.recipe import load_recipe
+from cellgl.texture.presets import load_recipe
 from test_exactness import f_bound, near_ties      # tests/ is on sys.path under pytest
 
 CHANNELS = ("color", "height", "normal")

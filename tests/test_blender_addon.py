@@ -236,7 +236,7 @@ def test_addon_operators_headless(installed_run):
     # flagstone is Euclidean: its OSL shader folds Minkowski p away (no slider that does nothing);
     # an input the table calls inactive at the current values is greyed in the panel
     assert "Minkowski p" not in r["group_inputs"] and "Frequency" in r["group_inputs"]
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
 
     dead = params.inactive(load_recipe("flagstone").values)
     assert "minkowski_p" in dead and "frequency" not in dead

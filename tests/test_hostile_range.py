@@ -28,7 +28,7 @@ def test_evaluate_refuses_what_it_cannot_resolve(request, backend, x):
 
 
 def test_evaluate_range_follows_frequency_aspect_and_offset():
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
     from cellgl.texture.evaluation import point_range
 
     r = load_recipe("f1").replace(frequency=4.0, aspect=2.0, offset_x=1e8, dimension=3)
@@ -115,7 +115,7 @@ def test_minkowski_floor_is_the_search_cap():
 
 def test_recipe_refuses_minkowski_below_the_floor():
     """bake ran 32 s, then blamed the driver and advised fewer octaves; now the recipe is refused."""
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
     from cellgl.texture.schema import RecipeError
 
     r = load_recipe("f1")

@@ -103,7 +103,7 @@ def test_other_programs_text_unchanged():
 def test_every_texture_preset_has_a_material_and_grout_is_rougher_and_darker(ctx):
     names = [n for n, _ in list_presets(kind="cellular")]
     for name in names:
-        from cellgl.texture.recipe import preset_dir
+        from cellgl.texture.presets import preset_dir
         import json
 
         section = json.loads((preset_dir() / f"{name}.json").read_text()).get("material")

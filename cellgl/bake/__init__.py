@@ -5,8 +5,8 @@
 :mod:`~cellgl.bake.mips` renders mip chains level by level, :mod:`~cellgl.bake.texfile` lays them
 into tiled ``.tx``/``.exr``/``.tif`` files, :mod:`~cellgl.bake.gputex` into ``.dds``/``.ktx2``;
 :mod:`~cellgl.bake.udim` bakes UDIM sets, :mod:`~cellgl.bake.frames` loopable animations,
-:mod:`~cellgl.bake.material_sets` an engine's material maps. Until 0.2.0 these were
-``cellgl.io.bake``, ``cellgl.io.mips``, ... (CHANGELOG.md).
+:mod:`~cellgl.bake.material_sets` an engine's material maps. Until 0.2.0 they lived in
+:mod:`cellgl.io` (CHANGELOG.md lists each old path).
 """
 from __future__ import annotations
 
