@@ -44,7 +44,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=2)
     args = ap.parse_args(argv)
 
-    from cellgl.bake import gputex
+    from cellgl.io import gpu_textures
     from cellgl.io import blocks
     from cellgl.bake import material_sets as M
     from cellgl.io.formats import usable_cores
@@ -53,7 +53,7 @@ def main(argv=None) -> int:
     recipe = load_recipe(args.preset)
     s = args.size
     captured = []
-    real = gputex.packed_levels
+    real = gpu_textures.packed_levels
 
     def spy(fmt, images):
         images = list(images)
@@ -70,11 +70,11 @@ def main(argv=None) -> int:
                                    mips=True, progress=False)
 
         png(64), dds(64)                      # warm-up: shaders, the encoder pool's first start
-        gputex.packed_levels = spy
+        gpu_textures.packed_levels = spy
         try:
             dds()                             # the pixels the encoder rows encode
         finally:
-            gputex.packed_levels = real
+            gpu_textures.packed_levels = real
         px = sum(a.shape[0] * a.shape[1] for _, images in captured for a in images)
 
         def encoder(workers=None):

@@ -243,7 +243,7 @@ def test_gpu_udim_tile_1001_is_the_plain_bake_and_edges_join(ctx, tmp_path):
 
 def _oiio():
     """OpenImageIO, the reader the tests check against (the wheel or Blender's copy)."""
-    from cellgl.bake.texfile import openimageio
+    from cellgl.io.tiled import openimageio
 
     oiio = openimageio()
     if oiio is None:

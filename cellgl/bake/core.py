@@ -26,6 +26,8 @@ import numpy as np
 from cellgl.io import formats as cio
 from cellgl.bake import gputex
 from cellgl.bake import texfile
+from cellgl.io import gpu_textures
+from cellgl.io.tiled import check_tiled
 from cellgl.bake import udim as udim_mod
 from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace
 from cellgl.io.progress import Progress  # noqa: F401 - bake's progress bar, also cellgl.bake.core.Progress
@@ -261,7 +263,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         ``.dds``/``.ktx2`` only: the block format, ``bc1``, ``bc3``, ``bc4``, ``bc5``, ``bc7`` or
         ``none`` for every channel, or per channel ``"color=bc1,height=none"``; default per
         channel (colour BC7 sRGB, normal BC5, height and masks BC4; F1..F4 and id are never
-        compressed). Refused where the channel cannot use it (:data:`cellgl.bake.gputex.CHOICES`).
+        compressed). Refused where the channel cannot use it (:data:`cellgl.io.gpu_textures.CHOICES`).
     supercompression : {None, "zstd"}
         ``.ktx2`` only: zstd supercompression of every level.
     layers : sequence of Recipe, optional
@@ -302,9 +304,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
             raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
-    texture = ext in gputex.EXTS
+    texture = ext in gpu_textures.EXTS
     if texture:     # GPU textures: a format per channel, every refusal now (cellgl.bake.gputex)
-        tex_outputs = gputex.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
+        tex_outputs = gpu_textures.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
                                           (w, h, depth_slices))
         if layers is not None and (depth_slices is not None or not 1 <= len(layers) <= 2048):
             raise BakeError(f"an array texture of {len(layers)} layers{' of volumes' if depth_slices else ''}: "
@@ -338,7 +340,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"--samples: {exc}") from None
     if not isinstance(mips, bool) or not isinstance(tiled, bool):
         raise BakeError(f"mips={mips!r}, tiled={tiled!r}: accepted True or False")
-    tiled, mips = texfile.check_tiled(ext, tiled, mips, channels, depth_slices)
+    tiled, mips = check_tiled(ext, tiled, mips, channels, depth_slices)
     outputs = []      # (UDIM tile or None, output)
     for t in ([] if texture else (set_tiles or [None])):
         where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)

@@ -29,7 +29,7 @@ import numpy as np
 
 from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
                             quantize)
-from cellgl.bake.gputex import EXTS as GPU_EXTS
+from cellgl.io.gpu_textures import EXTS as GPU_EXTS
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, naming_destination_in, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]

@@ -17,8 +17,8 @@ packed maps (ORM, mask, metallic-smoothness) ``BC7_UNORM``, 8-bit single masks `
 16-bit height ``R16_UNORM``): every level is the packed map of the set rendered at that level's
 size (``max(1, floor(W / 2^k))``, the levels DDS and KTX2 define), never downsampled, each sample
 the PNG set's bits at that size (8 bits for the block formats); the blocks come from
-:func:`cellgl.bake.gputex.packed_levels` (etcpak on every core), the container from
-:func:`cellgl.bake.gputex.write_container`.
+:func:`cellgl.io.gpu_textures.packed_levels` (etcpak on every core), the container from
+:func:`cellgl.io.gpu_textures.write_container`.
 
 The whole set (maps, ``manifest.json``, ``recipe.json`` and, for ``gltf``, a ``.gltf`` whose
 material references the maps) is written into a hidden folder beside ``DIR`` and moved into place
@@ -324,7 +324,7 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
 
 def _check_gpu(eng: Engine, fmt: str, supercompression, w: int, h: int) -> None:
     """Refusals of a ``.dds``/``.ktx2`` set (and ``--zstd``), before any work."""
-    from cellgl.bake import gputex
+    from cellgl.io import gpu_textures
     from cellgl.io import blocks
 
     if supercompression not in (None, "zstd"):
@@ -339,9 +339,9 @@ def _check_gpu(eng: Engine, fmt: str, supercompression, w: int, h: int) -> None:
                         f"through KHR_texture_basisu, which holds Basis Universal (ETC1S/UASTC) data, not "
                         f"the BCn blocks cellgl writes (DDS only through MSFT_texture_dds); accepted for "
                         f"gltf: --map-format png")
-    if max(w, h) > gputex.MAX_SIDE_2D:
-        raise BakeError(f"size {w}x{h} for {fmt}: a 2D texture's sides are at most {gputex.MAX_SIDE_2D} "
-                        f"(the GPUs' limit); accepted 1..{gputex.MAX_SIDE_2D}")
+    if max(w, h) > gpu_textures.MAX_SIDE_2D:
+        raise BakeError(f"size {w}x{h} for {fmt}: a 2D texture's sides are at most {gpu_textures.MAX_SIDE_2D} "
+                        f"(the GPUs' limit); accepted 1..{gpu_textures.MAX_SIDE_2D}")
     if not blocks.have_encoder():
         raise BakeError(f"--map-format {fmt} needs the 'etcpak' package (block encoding): pip install "
                         f"'cellgl[gpu]' (or --map-format png)")
@@ -383,8 +383,8 @@ def _write_gpu_map(path: Path, recipe, m: MapSpec, ext: str, levels, samples: in
                    meta: str, supercompression) -> None:
     """Map ``m`` as one ``.dds``/``.ktx2`` at ``path``: each level the packed map rendered at that
     level's size (the PNG set's samples at that size, 8-bit for block formats), then every
-    level's blocks at once on every core (cellgl.bake.gputex.packed_levels)."""
-    from cellgl.bake import gputex
+    level's blocks at once on every core (cellgl.io.gpu_textures.packed_levels)."""
+    from cellgl.io import gpu_textures
 
     fmt = gpu_format(m)
     bits = m.bits if not fmt.compressed else 8
@@ -399,10 +399,10 @@ def _write_gpu_map(path: Path, recipe, m: MapSpec, ext: str, levels, samples: in
                 t = tile[enc.channel]
                 a[y0:y0 + t.shape[0], x0:x0 + t.shape[1]] = t
             images.append(a)
-    data = gputex.packed_levels(fmt, images)
+    data = gpu_textures.packed_levels(fmt, images)
     del images
     with open(path, "wb") as f:
-        gputex.write_container(f, ext, fmt, (levels[0][0], levels[0][1], None), data,
+        gpu_textures.write_container(f, ext, fmt, (levels[0][0], levels[0][1], None), data,
                                supercompression=supercompression, metadata=meta)
 
 

@@ -43,9 +43,9 @@ FORMATS: dict[str, _Format] = {
     ".tif": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".tiff": _Format("TIFF", (8, 16, 32), 32, True, "tile"),
     ".npy": _Format("NumPy", (32,), 32, True, "piece"),
-    # a tiled, mip-mapped TIFF as maketx writes it (cellgl.bake.texfile)
+    # a tiled, mip-mapped TIFF as maketx writes it (cellgl.io.tiled)
     ".tx": _Format("TIFF texture", (8, 16, 32), 32, False, "tile"),
-    # GPU textures (cellgl.bake.gputex): the format is chosen per channel; --depth sets the bits of
+    # GPU textures (cellgl.io.gpu_textures): the format is chosen per channel; --depth sets the bits of
     # plain (uncompressed) samples, its default per channel; mip levels and volumes in the file
     ".dds": _Format("DDS", (8, 16, 32), 8, True, "level"),
     ".ktx2": _Format("KTX2", (8, 16, 32), 8, True, "level"),
