@@ -305,7 +305,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
                             f"written to .npy or .tif only")
     channels = parse_channels(channels)
     texture = ext in gpu_textures.EXTS
-    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.bake.gputex)
+    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gpu_textures)
         tex_outputs = gpu_textures.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
                                           (w, h, depth_slices))
         if layers is not None and (depth_slices is not None or not 1 <= len(layers) <= 2048):

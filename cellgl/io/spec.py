@@ -1,5 +1,11 @@
-"""What a bake can produce: formats, size limits, size and channel arguments, and how each
-channel is encoded in each format (:mod:`cellgl.bake.core` writes them)."""
+"""What an output can hold: formats, size limits, size and channel arguments, and how each
+channel is encoded in each format (the writers of :mod:`cellgl.io` store them, :mod:`cellgl.bake`
+renders recipes into them).
+
+The files layer's vocabulary: it imports nothing of cellgl above :mod:`cellgl.io` and knows no
+recipe (a channel is a name and a sample count; ``--set`` items are checked for their
+``NAME=VALUE`` shape only, their meaning is the recipe's), so the bake, the Dask front end and
+the command line above read it, and the writers beside it use its encodings."""
 from __future__ import annotations
 
 from collections.abc import Iterable
