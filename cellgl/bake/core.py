@@ -38,10 +38,10 @@ __all__ = ["bake", "Baked", "BakeError", "parse_size", "parse_channels", "FORMAT
            "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
 
 
-from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
-                            MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, accepted_list, check_size, Encoding,
-                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size,
-                            ANIMATED, accepted_outputs)
+from cellgl.bake.request import (DEFAULT_BUDGET, DEFAULT_SIZE, MAX_TILE, RENDER_BYTES_PER_PIXEL,  # noqa: F401
+                                 parse_sets, check_budget, parse_channels, parse_size, ANIMATED, accepted_outputs)
+from cellgl.io.spec import (CHANNELS, FORMATS, MAX_SIDE, MAX_SLICES, MAX_VOXELS, BakeError,  # noqa: F401
+                            accepted_list, check_size, Encoding, encoding_of, exr_names, id_colors)
 
 
 # --------------------------------------------------------------------------------------------

@@ -27,8 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
-                            quantize)
+from cellgl.bake.request import ANIMATED, DEFAULT_BUDGET, parse_channels, parse_size
+from cellgl.io.spec import BakeError, check_size, quantize
 from cellgl.io.gpu_textures import EXTS as GPU_EXTS
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, naming_destination_in, scratch_dir
 

@@ -15,7 +15,8 @@ from pathlib import Path
 
 from cellgl.bake import mips
 from cellgl.io.gpu_textures import TexOutput, level_data, memory_need, texel_samples, write_container
-from cellgl.io.spec import RENDER_BYTES_PER_PIXEL, BakeError
+from cellgl.bake.request import RENDER_BYTES_PER_PIXEL
+from cellgl.io.spec import BakeError
 from cellgl.io.tempfiles import atomic_paths
 
 __all__ = ["bake_texture"]

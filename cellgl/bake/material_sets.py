@@ -40,7 +40,8 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.bake.core import Output, Progress, load_recipe_sets, plan_tiles, write_tiles
-from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, BakeError, Encoding, check_size, encoding_of, parse_size
+from cellgl.bake.request import DEFAULT_BUDGET, DEFAULT_SIZE, parse_size
+from cellgl.io.spec import BakeError, Encoding, check_size, encoding_of
 from cellgl.io.tempfiles import check_output_dir, commit_lock, scratch_dir
 from cellgl.texture import antialias
 
@@ -267,7 +268,7 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
         out_dir = check_output_dir(directory)
     except ValueError as exc:
         raise BakeError(str(exc)) from None
-    from cellgl.io.spec import check_budget
+    from cellgl.bake.request import check_budget
 
     memory_budget = check_budget(memory_budget)
     base = load_recipe_sets(recipe_or_name, sets, tileable)

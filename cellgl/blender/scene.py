@@ -42,7 +42,7 @@ def osl_text(recipe) -> tuple[str, str]:
 
 def _check_size(size) -> int:
     if size is None:
-        from cellgl.io.spec import DEFAULT_SIZE
+        from cellgl.bake.request import DEFAULT_SIZE
 
         return DEFAULT_SIZE[0]
     if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size <= 16384:

@@ -8,8 +8,8 @@ import time
 from pathlib import Path
 
 from cellgl.bake.core import bake
-from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, FORMATS, BakeError, accepted_list,
-                            accepted_outputs, int_arg)
+from cellgl.bake.request import ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, accepted_outputs, int_arg
+from cellgl.io.spec import FORMATS, BakeError, accepted_list
 from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]

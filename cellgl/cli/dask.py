@@ -8,7 +8,7 @@ import errno
 from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
 from cellgl.dask.zarr_bake import bake_zarr
-from cellgl.io.spec import DEFAULT_SIZE, int_arg
+from cellgl.bake.request import DEFAULT_SIZE, int_arg
 from cellgl.io.tempfiles import check_output_dir, env_seconds
 
 __all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
