@@ -55,7 +55,7 @@ def main_refuses(capsys, argv, *words: str) -> str:
 
 def bake(path, **kw):
     """``io.bake`` of flagstone, 32 x 32 and quiet unless said otherwise."""
-    from cellgl.io import bake as B
+    from cellgl.bake import core as B
 
     kw.setdefault("size", (32, 32))
     kw.setdefault("progress", False)

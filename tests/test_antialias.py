@@ -13,11 +13,11 @@ import pytest
 
 from cellgl import texture
 from cellgl.gl import glsl
-from cellgl.io import bake
+from cellgl.bake import core as bake
 from cellgl.texture import antialias
 from cellgl.texture import dispatch as texture_dispatch
 from cellgl.texture import reference as texture_reference
-from cellgl.texture.recipe import load_recipe
+from cellgl.texture.presets import load_recipe
 from compare import (assert_close_but_share, assert_F_within_bound, assert_ids_equal_but_ties, octave_sum,
                      texture_near_ties)
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl.io import bake as cbake
+from cellgl.bake import core as cbake
 from cellgl import texture
 from compare import assert_render_matches
 from test_texture import RECIPES as TEXTURE_RECIPES     # tests/ is on sys.path under pytest

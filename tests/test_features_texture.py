@@ -11,7 +11,8 @@ import cellgl
 from cellgl import export
 from cellgl.recipes import load_recipe
 from cellgl.texture import images as cell_image
-from cellgl.texture.recipe import Recipe, RecipeError, preset_dir
+from cellgl.texture.presets import preset_dir
+from cellgl.texture.recipe import Recipe, RecipeError
 from compare import assert_close_but_share
 
 IMAGE = str(preset_dir() / "images" / "sunset.png")

@@ -211,7 +211,7 @@ def test_pups_same_bits(both_paths, monkeypatch):
 
 
 def test_bake_bytes_equal(both_paths, monkeypatch, tmp_path):
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     def run(path):
         out = tmp_path / path
@@ -311,7 +311,7 @@ def test_full_exactness_matrix_without_compute(mesa, env_name):
 
 _RENDERS = """
 import sys, numpy as np, cellgl
-from cellgl.io.bake import bake
+from cellgl.bake.core import bake
 out = {}
 for name in sys.argv[2:]:
     chans = ("color", "height") if name.startswith("pups-") else %r
@@ -344,7 +344,7 @@ def test_renders_without_compute_equal_the_compute_path(both_paths, mesa, monkey
         chans = ("color", "height") if name.startswith("pups-") else RENDER_CHANNELS
         for k, v in cellgl.render(name, 40, 24, channels=chans).items():
             want[name + "/" + k] = v
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
     for f in bake("flagstone", tmp_path / "c" / "f.png", size=(96, 64), channels=("color", "height"), tile=32,
                   progress=False):
         want["bake/" + f.name] = np.frombuffer(f.read_bytes(), np.uint8)

@@ -101,7 +101,7 @@ class _Stream:
 
 
 def test_progress_off_a_terminal_is_plain_lines():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=False)
     with Progress(40, "baking x.png", True, stream=s) as bar:
@@ -115,7 +115,7 @@ def test_progress_off_a_terminal_is_plain_lines():
 
 @pytest.mark.parametrize("tty", [True, False])
 def test_progress_says_interrupted(tty):
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=tty)
     with pytest.raises(KeyboardInterrupt):
@@ -131,7 +131,7 @@ def test_progress_says_interrupted(tty):
 
 
 def test_quiet_progress_writes_nothing():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=False)
     with pytest.raises(KeyboardInterrupt):
@@ -146,7 +146,7 @@ def test_quiet_progress_writes_nothing():
 # --------------------------------------------------------------------------------------------
 
 def test_progress_in_a_log_starts_at_once_and_keeps_coming():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     class Log:
         def __init__(self):
@@ -352,7 +352,7 @@ def test_a_scheduler_file_written_while_waiting_is_taken(tmp_path, monkeypatch):
     import threading
 
     pytest.importorskip("distributed")
-    from cellgl.dask import cli as dcli
+    from cellgl.cli import dask as dcli
     from cellgl.dask.blocks import DaskError
 
     f = tmp_path / "sched.json"

@@ -369,7 +369,7 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
     from PIL import Image, ImageSequence
 
     from cellgl import recipes
-    from cellgl.io.frames import bake_frames, frame_recipe
+    from cellgl.bake.frames import bake_frames, frame_recipe
 
     r = recipes.load_recipe("caustics")
     want = [np.floor(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3]
@@ -392,7 +392,7 @@ def test_lossless_webp_frames_are_the_png_frames(ctx, tmp_path):
     import numpy as np
     from PIL import Image, ImageSequence
 
-    from cellgl.io.frames import bake_frames
+    from cellgl.bake.frames import bake_frames
 
     kw = dict(size=(96, 64), tile=32, sets=["seed=5"])
     (webp,) = bake_frames("caustics", tmp_path / "a.webp", 3, **kw)
@@ -413,7 +413,7 @@ def test_animated_frames_quantise_every_half_as_the_png(tmp_path, monkeypatch):
     import numpy as np
     from PIL import Image, ImageSequence
 
-    from cellgl.io import frames
+    from cellgl.bake import frames
 
     k = np.arange(256, dtype=np.float32)
     halves = (k + 0.5) / np.float32(255)
@@ -515,7 +515,7 @@ def test_a_bad_lock_wait_is_refused_before_the_work(tmp_path, value):
     (".gif", 1, 100, 1.0), (".webp", 24, 42, 1000 / 42), (".webp", 95, 11, 1000 / 11),
     (".webp", 1, 1000, 1.0)])
 def test_frame_delay_is_what_the_format_stores(ext, fps, delay, real):
-    from cellgl.io.frames import frame_delay
+    from cellgl.bake.frames import frame_delay
 
     assert frame_delay(ext, fps) == (delay, pytest.approx(real))
 
@@ -529,7 +529,7 @@ def test_frame_delay_is_what_the_format_stores(ext, fps, delay, real):
 def test_rates_an_animated_file_cannot_play_are_refused(tmp_path, ext, fps, words):
     """Issue 48: a GIF stores hundredths of a second and browsers play a delay under 2 cs (a WebP's
     <= 10 ms) at 10 fps: --fps 120 wrote a delay of 0, 60..100 one of 1 cs, all played at 10 fps."""
-    from cellgl.io.frames import bake_frames
+    from cellgl.bake.frames import bake_frames
     from cellgl.io.spec import BakeError
 
     with pytest.raises(BakeError) as e:
@@ -554,7 +554,7 @@ def test_gif_rates_it_cannot_store_are_warned_with_the_real_rate(ctx, tmp_path):
     assert "25 fps: 4 cs a frame" in r.stderr
     with Image.open(tmp_path / "a.gif") as im:
         assert im.info["duration"] == 40
-    from cellgl.io.frames import bake_frames
+    from cellgl.bake.frames import bake_frames
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")

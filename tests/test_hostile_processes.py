@@ -266,7 +266,7 @@ def test_in_process_main_returns_130_on_ctrl_c(monkeypatch, tmp_path):
 def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
     """A Ctrl-C that hit a C extension's import was printed by it and swallowed: the bake went
     on to the end (exit 130 then, the outputs complete). The next tile or frame raises it again."""
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     steps = []
 

@@ -35,7 +35,7 @@ def test_evaluate_refuses_what_it_cannot_resolve(request, backend, x):
 
 
 def test_evaluate_range_follows_frequency_aspect_and_offset():
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
     from cellgl.texture.evaluation import point_range
 
     r = load_recipe("f1").replace(frequency=4.0, aspect=2.0, offset_x=1e8, dimension=3)
@@ -122,7 +122,7 @@ def test_minkowski_floor_is_the_search_cap():
 
 def test_recipe_refuses_minkowski_below_the_floor():
     """bake ran 32 s, then blamed the driver and advised fewer octaves; now the recipe is refused."""
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
     from cellgl.texture.schema import RecipeError
 
     r = load_recipe("f1")
@@ -203,8 +203,8 @@ def test_render_refuses_what_memory_cannot_hold(monkeypatch):
                                          r"16 GiB; render it in tiles .*cellgl.to_dask\(recipe, "
                                          r"\(100000, 100000\)\)") as e:
         cellgl.render("f1", 100000, 100000)
-    assert "cellgl.io.bake.bake" not in str(e.value)          # past bake's 65536 a side
-    with pytest.raises(ValueError, match=r"needs about 26.9 GiB \(about 32 bytes a pixel\).*cellgl.io.bake.bake\(recipe, 'big.tif', "
+    assert "cellgl.bake.core.bake" not in str(e.value)          # past bake's 65536 a side
+    with pytest.raises(ValueError, match=r"needs about 26.9 GiB \(about 32 bytes a pixel\).*cellgl.bake.core.bake\(recipe, 'big.tif', "
                                          r"size=\(30000, 30000\)\)"):
         cellgl.render("f1", 30000, 30000, channels=("F1", "F2", "F3", "F4"))
     with pytest.raises(ValueError, match=r"render 2048x1024x4 \(a tile of the 30000x30000 image\).*backend numpy"):
@@ -279,7 +279,7 @@ def test_render_tiles_within_memory_are_rendered(monkeypatch, ctx):
 @pytest.mark.parametrize("budget", [-1, 0, (1 << 20) - 1, True, 2.5e8, (1 << 40) + 1])
 def test_bake_memory_budget_is_checked_as_memory_is(tmp_path, budget):
     """bake(..., memory_budget=-1) was accepted and split a 16x16 bake into 16 tiles."""
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     with pytest.raises(ValueError, match=r"memory_budget .*: accepted a whole number of bytes in "
                                          r"1048576..1099511627776 \(1 MiB..1 TiB; the command line's --memory"):
@@ -289,7 +289,7 @@ def test_bake_memory_budget_is_checked_as_memory_is(tmp_path, budget):
 
 def test_bake_sets_as_a_string_is_named(tmp_path):
     """bake(sets="seed=3") said "--set 's'" (the string read letter by letter)."""
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     with pytest.raises(ValueError, match=r"sets='seed=3': expected a list of NAME=VALUE strings, e.g. "
                                          r"sets=\['seed=3'\]"):
@@ -309,7 +309,7 @@ def test_variant_of_a_preset_without_variants():
 
 def test_pups_volume_bake_names_pups(tmp_path):
     """'bake pups-cow --size 16x16x4' blamed pups.dimension, which the user never set."""
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     with pytest.raises(ValueError, match=r"volume bake \(16x16x4\): pups-cow is a PUPs recipe, which makes 2D "
                                          r"images only; accepted: --size WxH") as e:
@@ -422,7 +422,7 @@ def test_render_refuses_booleans_and_non_integers_as_sizes(recipe, args, kw, nam
 def test_booleans_are_not_sizes_counts_or_versions_anywhere(tmp_path):
     """The same for a volume's depth, bake's size, slices and tile, measure_range's samples."""
     from cellgl import texture
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
     from cellgl.io.spec import BakeError
 
     with pytest.raises(ValueError, match=r"^depth must be an integer in \[1, 4096\], got True"):

@@ -103,7 +103,7 @@ def test_other_programs_text_unchanged():
 def test_every_texture_preset_has_a_material_and_grout_is_rougher_and_darker(ctx):
     names = [n for n, _ in list_presets(kind="cellular")]
     for name in names:
-        from cellgl.texture.recipe import preset_dir
+        from cellgl.texture.presets import preset_dir
         import json
 
         section = json.loads((preset_dir() / f"{name}.json").read_text()).get("material")
@@ -151,7 +151,7 @@ def test_viewer_shader_shows_the_channels(ctx):
 def test_bake_writes_the_channels(ctx, tmp_path):
     from PIL import Image
 
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     paths = bake("flagstone", tmp_path / "f.png", size=(48, 32), channels=["roughness", "ao", "metallic"],
                  bit_depth=16)
