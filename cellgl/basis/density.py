@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -153,7 +154,7 @@ class DensityMap:
         """The same map seen from a lattice ``x' = scale * (x + offset)`` (an octave of a
         texture: its lattice is the basis lattice times lacunarity^i)."""
         o = tuple(offset) + (0.0,) * (4 - len(tuple(offset)))
-        kw = dict(kind=self.kind, density_min=self.density_min, density_max=self.density_max)
+        kw: dict[str, Any] = dict(kind=self.kind, density_min=self.density_min, density_max=self.density_max)
         if self.kind == "ramp":
             return DensityMap(**kw, axis=self.axis, start=scale * (self.start + o[self.axis]),
                               end=scale * (self.end + o[self.axis]))
@@ -241,6 +242,7 @@ def encode(dm: DensityMap, dim: int) -> DensityEncoding:
         for a, c in enumerate(dm.center):
             specs[a] = _affine(c - dm.radius, c + dm.radius, -float(RADIAL_R), float(RADIAL_R))
     else:
+        assert dm.image is not None     # __post_init__ checked it for kind "image"
         h, w = dm.image.shape
         x0, y0, x1, y1 = dm.rect
         specs[0] = _affine(x0, x1, 0.0, float(w))
@@ -268,6 +270,7 @@ def levels_reference(cells: np.ndarray, enc: DensityEncoding) -> np.ndarray:
         d2 = (ec * ec).sum(axis=1)
         k = np.arange(1, LEVELS)
         return (d2[:, None] >= ((2 * k - 1) * RADIAL_UNIT) ** 2).sum(axis=1).astype(np.int64)
+    assert enc.levels is not None   # kind "image" carries its levels
     w, h = enc.size
     tx = np.clip(e[:, 0], 0, w - 1)
     ty = np.clip(e[:, 1], 0, h - 1)

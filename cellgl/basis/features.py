@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import functools
 import itertools
+from typing import Any
 
 import numpy as np
 
@@ -404,7 +405,7 @@ def features(cells, f, p: ref.Params, F, D, I, exact, outputs, smoothness: float
     N = len(cells)
     d1 = np.array(D[:, 0], dtype=np.float64)
     d1[:, p.dim:] = 0.0
-    w = dict(on=on, around=False, d1=d1, id1=np.asarray(I[:, 0]).astype(np.uint64),
+    w: dict[str, Any] = dict(on=on, around=False, d1=d1, id1=np.asarray(I[:, 0]).astype(np.uint64),
              F1=np.asarray(F[:, 0], dtype=np.float64), k=float(smoothness),
              edge=np.full(N, BIG), edge_n=np.zeros((N, 4)), wsum=np.zeros(N), wdelta=np.zeros((N, 4)),
              wgrad=np.zeros((N, 4)), wattr=np.zeros((N, 4)), found=np.zeros(N, dtype=bool),
@@ -466,7 +467,7 @@ def check(outputs, metric, smoothness, smooth: str = "exp") -> float:
         raise ValueError(f"unknown smooth {smooth!r}; expected one of: {', '.join(SMOOTH_MODES)}")
     top = SMOOTHNESS_MAX_POLY if smooth == "polynomial" else SMOOTHNESS_MAX
     if isinstance(smoothness, bool) or not isinstance(smoothness, numbers.Real) \
-            or not math.isfinite(smoothness) or not 0.0 <= smoothness <= top:
+            or not math.isfinite(smoothness) or not 0.0 <= float(smoothness) <= top:
         raise ValueError(f"smoothness must be a number in [0, {top}] (cells) with smooth={smooth!r}, "
                          f"got {smoothness!r}")
     return float(smoothness)

@@ -65,7 +65,9 @@ def worley1996_table() -> np.ndarray:
         from cellgl.gl import glsl
 
         text = (glsl.shader_dir() / "lib" / "points.glsl").read_text()
-        body = re.search(r"_cell_w96_table\[256\]\s*=\s*int\[256\]\(([^)]*)\)", text).group(1)
+        found = re.search(r"_cell_w96_table\[256\]\s*=\s*int\[256\]\(([^)]*)\)", text)
+        assert found is not None, "points.glsl lost _cell_w96_table[256]"
+        body = found.group(1)
         _W96_TABLE = np.array([int(v) for v in body.replace("\n", " ").split(",")], dtype=np.int64)
         assert _W96_TABLE.shape == (256,)
     return _W96_TABLE
@@ -118,20 +120,20 @@ def jenkins_hash(*words):
     """lookup3 hash of 1..4 uint32 words (arrays broadcast), as Blender hashes a cell's float bits;
     uint64 values < 2^32 (computed in uint32 arithmetic, which wraps as lookup3's does)."""
     n = len(words)
-    words = [np.asarray(as_u32(x)).astype(np.uint32) for x in words]
+    u = [np.asarray(as_u32(x)).astype(np.uint32) for x in words]
     init = np.asarray(0xDEADBEEF + (n << 2) + 13, dtype=np.uint32)
     a = b = c = init
     with np.errstate(over="ignore"):
         if n == 4:
-            a, b, c = a + words[0], b + words[1], c + words[2]
+            a, b, c = a + u[0], b + u[1], c + u[2]
             a, b, c = _jenkins_mix(a, b, c)
-            a = a + words[3]
+            a = a + u[3]
         else:
-            a = a + words[0]
+            a = a + u[0]
             if n >= 2:
-                b = b + words[1]
+                b = b + u[1]
             if n >= 3:
-                c = c + words[2]
+                c = c + u[2]
         c = _jenkins_final(a, b, c)
     return np.asarray(c).astype(np.uint64)
 

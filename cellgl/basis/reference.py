@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cellgl.basis.density import levels_reference
+from cellgl.basis.density import DensityEncoding, levels_reference
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.basis.population import (BIG, M32, MAX_POINTS, W96_DENSITY_ADJUSTMENT, add_u32, mul_u32, as_u32,  # noqa: F401
                                      blender_id, blender_point, hash_u32, poisson_thresholds, u16,
@@ -38,7 +38,7 @@ class Params:
     seed: int = 0
     period: tuple[int, int, int, int] = (0, 0, 0, 0)
     #: spatially varying density (:class:`cellgl.basis.density.DensityEncoding`), poisson only
-    density_map: object = None
+    density_map: DensityEncoding | None = None
     #: loopable animation (CELL_ORBIT): radius of each point's circle in cells, [0, 0.5]
     orbit_radius: float = 0.0
     #: ... and the time as a fraction of the loop times 2^32, modulo 2^32 (:func:`orbit_turn`)
@@ -76,7 +76,8 @@ def axis_scale(stretch, dim: int) -> tuple[float, float, float, float]:
     if all(x == 1.0 for x in s):
         return (1.0, 1.0, 1.0, 1.0)
     g = math.exp(sum(math.log(x) for x in s) / dim)
-    return tuple([g / x for x in s] + [1.0] * (4 - dim))
+    w = [g / x for x in s] + [1.0] * (4 - dim)
+    return (w[0], w[1], w[2], w[3])
 
 
 def orbit_turn(phase: float) -> int:
@@ -130,6 +131,7 @@ def _w96_step(state):
 
 def density_level(cells: np.ndarray, p: Params) -> np.ndarray:
     """``cell_density_level``: the density level (0..15) of each (wrapped) cell (N, 4) int64."""
+    assert p.density_map is not None, "density_level needs Params.density_map"
     return levels_reference(cells, p.density_map)
 
 
@@ -143,6 +145,7 @@ def point_count(state: np.ndarray, p: Params, cells: np.ndarray | None = None):
         return state, np.ones(len(state), dtype=np.int64)
     u = state
     if p.density_map is not None:
+        assert cells is not None, "a density map picks its rows by cell: pass cells"
         t = p.density_map.thresholds.astype(np.uint64)[density_level(cells, p)]     # (N, 16)
     else:
         t = p.thresholds.astype(np.uint64)[None, :]  # (loop order irrelevant: a count)
@@ -551,6 +554,6 @@ def feature_points(cells: np.ndarray, p: Params):
         which.append(has)
     if not pos:
         return np.zeros((0, p.dim)), np.zeros(0, np.uint32), np.zeros(0, np.int64)
-    which = np.concatenate(which)
-    order = np.lexsort((np.concatenate([np.full(len(h), k) for k, h in enumerate(pos)]), which))
-    return (np.concatenate(pos)[order], np.concatenate(ids)[order].astype(np.uint32), which[order])
+    rows = np.concatenate(which)
+    order = np.lexsort((np.concatenate([np.full(len(h), k) for k, h in enumerate(pos)]), rows))
+    return (np.concatenate(pos)[order], np.concatenate(ids)[order].astype(np.uint32), rows[order])

@@ -165,8 +165,10 @@ def _octave(coord, dim, feature, kw, backend, smoothness):
     r = core.cellular(coord, n=n, outputs=outs, smoothness=smoothness, smooth="polynomial",
                       backend=backend, **kw)
     if feature == "smooth_F1":
+        assert r.smooth_F1 is not None and r.smooth_color is not None    # requested in outs
         return (r.smooth_F1.astype(np.float64), r.smooth_color.astype(np.float64),
                 r.smooth_position, r.exact)
+    assert r.F is not None and r.delta is not None and r.id is not None  # requested in outs
     k = n - 1
     pos = coord + r.delta[:, k].astype(np.float64)
     if kw["distribution"] == Distribution.BLENDER:
@@ -318,7 +320,7 @@ def voronoi(points, dimensions=3, feature="F1", metric="euclidean", exponent=0.5
     kw = dict(distribution=dist, jitter=randomness, metric=Metric.EUCLIDEAN if euclid else metric,
               minkowski_p=exponent, **basis)
     f32 = np.float32
-    out = dict(distance=None, color=None, position=None, w=None, radius=None)
+    out: dict[str, np.ndarray | None] = dict(distance=None, color=None, position=None, w=None, radius=None)
 
     if feature == "n_sphere_radius":              # no fractal in the node
         if dimensions == 1:
@@ -345,6 +347,7 @@ def voronoi(points, dimensions=3, feature="F1", metric="euclidean", exponent=0.5
                 e = _edge_1d(c, randomness)[0]
             else:
                 r = core.cellular(c, n=1, outputs=("edge",), backend=backend, **kw)
+                assert r.edge is not None                   # requested in outputs
                 e, exact = r.edge.astype(np.float64), exact & r.exact
             if zero:
                 dist_v, max_amp = e, 1.0
