@@ -25,10 +25,10 @@ def check_ramp(value, path: str) -> tuple:
     accepted = f"a list of 1..{MAX_RAMP_KEYS} keys [t, r, g, b], t ascending in [0, 1], r, g, b in [0, 1]"
     if not isinstance(value, (list, tuple)) or not 1 <= len(value) <= MAX_RAMP_KEYS:
         raise value_error(path, value, accepted, "expected a colour ramp, got")
-    keys = []
+    keys: list[tuple[float, ...]] = []
     for k, key in enumerate(value):
         ok = isinstance(key, (list, tuple)) and len(key) == 4 and all(
-            isinstance(c, numbers.Real) and not isinstance(c, bool) and math.isfinite(c) and 0.0 <= c <= 1.0
+            isinstance(c, numbers.Real) and not isinstance(c, bool) and math.isfinite(c) and 0.0 <= float(c) <= 1.0
             for c in key)
         if not ok:
             raise value_error(f"{path}[{k}]", key, accepted, "bad ramp key")

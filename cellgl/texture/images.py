@@ -51,9 +51,9 @@ def resolve(value, path: str, kind: str, base=None):
     p = Path(value).expanduser()
     if not p.is_absolute():
         p = Path(base or ".") / p
-    p = str(p.resolve())
-    (density_pixels if kind == "density" else cell_pixels)(p, path)
-    return p
+    file = str(p.resolve())
+    (density_pixels if kind == "density" else cell_pixels)(file, path)
+    return file
 
 
 def _read(file: str, path: str, kind: str, convert):
@@ -66,7 +66,7 @@ def _read(file: str, path: str, kind: str, convert):
     key = (file, st.st_mtime_ns, st.st_size, kind)
     img = _IMAGES.get(key)
     if img is None:
-        size = None
+        size = (0, 0)                               # set from the header before _TooLarge
         try:
             from PIL import Image
 

@@ -84,7 +84,7 @@ class Param:
     def range_text(self) -> str:
         """The accepted values, as error messages and docs print them."""
         if self.type == "enum":
-            return "one of: " + ", ".join(self.choices)
+            return "one of: " + ", ".join(self.choices or ())
         if self.type == "bool":
             return "true or false"
         if self.type == "color":

@@ -221,17 +221,17 @@ def lattice_origins(t: dict, pan=(0.0, 0.0), octaves: int = MAX_OCTAVES) -> dict
                                      t["offset_z"] + pz * f, np.float64(t["time"])), axis=-1)
     O[..., dim:] = 0.0
     ds = W96_DENSITY_ADJUSTMENT if t["distribution"] == "worley1996" else 1.0
-    out = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
+    stacks: dict[str, list[np.ndarray]] = {k: [] for k in ("origin_cell", "origin_frac", "noise_cell", "noise_frac")}
     for i in range(octaves):                       # the first ``octaves`` only, where asked
         k = float(t["lacunarity"]) ** i
         per = texture_period(t, i)
         c, fr = _split(O * k * ds, per)
-        out["origin_cell"].append(c)
-        out["origin_frac"].append(fr)
+        stacks["origin_cell"].append(c)
+        stacks["origin_frac"].append(fr)
         c, fr = _split(O * k * t["noise_frequency"], per * int(round(t["noise_frequency"])))
-        out["noise_cell"].append(c)
-        out["noise_frac"].append(fr)
-    out = {k: np.stack(v, axis=-2) for k, v in out.items()}
+        stacks["noise_cell"].append(c)
+        stacks["noise_frac"].append(fr)
+    out = {k: np.stack(v, axis=-2) for k, v in stacks.items()}
     out["warp_cell"], out["warp_frac"] = _split(O * t["warp_frequency"],
                                                 texture_period(t, 0) * int(round(t["warp_frequency"])))
     return out
@@ -263,12 +263,13 @@ def texture_period(t: dict, octave: int) -> np.ndarray:
 def _basis(t: dict, octave: int) -> ref.Params:
     """``_cell_tex_basis``."""
     enc = t.get("density_enc")
+    per = texture_period(t, octave)                 # (4,) int64
     return ref.Params(density_map=None if enc is None else enc[octave],
                       dim=t["dimension"], metric=Metric[t["metric"].upper()],
                       distribution=Distribution[t["distribution"].upper()], density=t["density"],
                       jitter=t["jitter"], min_points=t["min_points"], max_points=t["max_points"],
                       minkowski_p=t["minkowski_p"], seed=(t["seed"] + 1013 * octave) & M32,
-                      period=tuple(int(c) for c in texture_period(t, octave)),
+                      period=(int(per[0]), int(per[1]), int(per[2]), int(per[3])),
                       axis_scale=domain.axis_scale(t), orbit_radius=float(t["orbit_radius"]),
                       orbit_turn=domain.orbit_turn(t["orbit_phase"]))
 
@@ -347,9 +348,9 @@ def texture_ramp(x: np.ndarray, t: dict, ramp) -> np.ndarray:
     if t["ramp_mode"] == "spline" and n >= 4:
         spans = n - 3
         s = np.clip(x, 0.0, 1.0) * spans
-        k = np.minimum(s.astype(np.int64), spans - 1)
-        s = (s - k)[:, None]
-        p0, p1, p2, p3 = col[k], col[k + 1], col[k + 2], col[k + 3]
+        j = np.minimum(s.astype(np.int64), spans - 1)
+        s = (s - j)[:, None]
+        p0, p1, p2, p3 = col[j], col[j + 1], col[j + 2], col[j + 3]
         return 0.5 * ((((-p0 + 3 * p1 - 3 * p2 + p3) * s + (2 * p0 - 5 * p1 + 4 * p2 - p3)) * s
                        + (p2 - p0)) * s + 2 * p1)
     out = np.repeat(col[-1][None], len(x), axis=0)

@@ -159,6 +159,7 @@ def suggest(name: str, names) -> str:
 def coerce(p: Param, value, path: str):
     """Validate one parameter value (already parsed from JSON) and return it normalised."""
     if p.type == "float":
+        assert p.lo is not None and p.hi is not None    # every number parameter has its range
         if isinstance(value, bool) or not isinstance(value, numbers.Real):
             raise value_error(path, value, p.range_text(), "expected a number, got")
         try:
@@ -169,11 +170,12 @@ def coerce(p: Param, value, path: str):
             raise value_error(path, value, p.range_text(), "out of range:")
         return v
     if p.type == "int":
+        assert p.lo is not None and p.hi is not None
         if isinstance(value, float) and value.is_integer():
             value = int(value)
         if isinstance(value, bool) or not isinstance(value, numbers.Integral):
             raise value_error(path, value, "an integer in " + p.range_text(), "expected an integer, got")
-        if value < p.lo or value > p.hi:
+        if int(value) < p.lo or int(value) > p.hi:
             raise value_error(path, value, "an integer in " + p.range_text(), "out of range:")
         return int(value)
     if p.type == "bool":
@@ -182,12 +184,13 @@ def coerce(p: Param, value, path: str):
         return value
     if p.type == "enum":
         key = value.strip().lower().replace("-", "_") if isinstance(value, str) else None
+        assert p.choices is not None                    # every enum parameter names its choices
         if key not in p.choices:
             raise value_error(path, value, p.range_text(), "unknown choice")
         return key
     if p.type == "color":
         ok = isinstance(value, (list, tuple)) and len(value) == 3 and all(
-            isinstance(c, numbers.Real) and not isinstance(c, bool) and 0.0 <= c <= 1.0 for c in value)
+            isinstance(c, numbers.Real) and not isinstance(c, bool) and 0.0 <= float(c) <= 1.0 for c in value)
         if not ok:
             raise value_error(path, value, p.range_text(), "expected a colour, got")
         return tuple(float(c) for c in value)
