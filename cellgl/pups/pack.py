@@ -76,7 +76,7 @@ class PupsPacked:
     cell_items: np.ndarray
     cell_masks: np.ndarray
     timings: dict = field(default_factory=dict)
-    stream: tuple = None
+    stream: tuple | None = None
 
 
 def pups_pack(graph: PupsGraph, width, height, *, tile=None, grid=True) -> PupsPacked:
@@ -261,9 +261,9 @@ def _cull(inst, cell, gw, tile, width, height, positions, axis_begin, axis_count
     mask[many] = np.uint32(0xFFFFFFFF)
     inv = np.empty_like(perm)
     inv[perm] = np.arange(n)
-    kp = perm[np.concatenate(kp)] if kp else np.zeros(0, dtype=np.int64)
-    return (sep[inv], mask[inv], kp, np.concatenate(ks) if ks else kp,
-            np.concatenate(ka) if ka else kp)
+    kept = perm[np.concatenate(kp)] if kp else np.zeros(0, dtype=np.int64)
+    return (sep[inv], mask[inv], kept, np.concatenate(ks) if ks else kept,
+            np.concatenate(ka) if ka else kept)
 
 
 def candidate_stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axis, npairs_total, pos,

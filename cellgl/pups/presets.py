@@ -35,6 +35,7 @@ from __future__ import annotations
 import copy
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -46,10 +47,10 @@ from cellgl.pups.synthesis import pups_evaluate
 __all__ = ["PUPS_PRESETS", "KIND_DEFAULTS", "build_pups", "build_scene", "evaluate_scene",
            "PupsScene", "PupsLayer", "reference_image", "REFINE_WORKING_SIZE", "pups_presets", "pups_render"]
 
-_COMMON = {"radius": 0.06, "axis_factor": 1.0, "epsilon": 0.5, "orientation": "random",
+_COMMON: dict[str, Any] = {"radius": 0.06, "axis_factor": 1.0, "epsilon": 0.5, "orientation": "random",
            "tilt": 0.0}
 
-KIND_DEFAULTS = {
+KIND_DEFAULTS: dict[str, dict[str, Any]] = {
     "noise": {**_COMMON, "radius": 0.1, "fold": False},
     "octaves": {**_COMMON, "radius": 0.1, "octaves": 4, "fold": False},
     "cells": {**_COMMON, "group": "point", "cluster_sizes": [3, 4]},
@@ -63,7 +64,7 @@ KIND_DEFAULTS = {
     "graph": {**_COMMON, "radius": 0.12, "line_width": 1.5},
 }
 
-PUPS_PRESETS = {
+PUPS_PRESETS: dict[str, dict[str, Any]] = {
     "pups-weight": {"kind": "weight", "figure": "1a",
                     "description": "Weight of one control point (brighter: more weight)."},
     "pups-weight-isolines": {"kind": "weight", "contours": 10, "figure": "1b",
@@ -280,7 +281,7 @@ class PupsScene:
     params: dict
     layers: tuple
     contours: int = 0
-    lines: object = None
+    lines: tuple | None = None
 
     @property
     def channels(self) -> int:

@@ -25,6 +25,7 @@ import os
 import tempfile
 from pathlib import Path
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 
@@ -125,7 +126,7 @@ def _from_preset_dict(d: dict) -> dict:
 def _to_preset_dict(values: dict) -> dict:
     """The parameter dict :func:`cellgl.pups.presets.build_scene` takes."""
     pattern = values["pattern"]
-    d = {"kind": _kind(pattern)}
+    d: dict[str, Any] = {"kind": _kind(pattern)}
     for name in params_for(pattern):
         if name in ("pattern", "seed", "image"):
             continue
@@ -358,8 +359,8 @@ class PupsRecipe:
         d = read_json(path)
         g = d.get("pups") if isinstance(d, dict) else None
         image = g.get("image") if isinstance(g, dict) else None
-        if isinstance(image, str) and image.strip() and not image.startswith("builtin:") \
-                and not Path(image).expanduser().is_absolute():
+        if isinstance(d, dict) and isinstance(g, dict) and isinstance(image, str) and image.strip() \
+                and not image.startswith("builtin:") and not Path(image).expanduser().is_absolute():
             d = {**d, "pups": {**g, "image": str(path.resolve().parent / Path(image).expanduser())}}
         try:
             return cls.from_dict(d)
@@ -583,8 +584,8 @@ def markdown_table() -> str:
     lines = ["| group | name | type | default | accepted | patterns | doc |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
     for p in PUPS_PARAMS:
-        pats = [k for k in PATTERNS if p.name in params_for(k)]
-        pats = "all" if len(pats) == len(PATTERNS) else ", ".join(pats)
+        used = [k for k in PATTERNS if p.name in params_for(k)]
+        pats = "all" if len(used) == len(PATTERNS) else ", ".join(used)
         default = str(p.default).lower() if isinstance(p.default, bool) else p.default
         if isinstance(default, tuple):
             default = list(default)
