@@ -26,6 +26,7 @@ import struct
 import zlib
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -88,7 +89,7 @@ _PNG_COLOR_TYPE = {1: 0, 2: 4, 3: 2, 4: 6}  # samples per pixel -> PNG colour ty
 _IDAT_SIZE = 1 << 20
 
 
-def _chunk(tag: bytes, data: bytes) -> bytes:
+def _chunk(tag: bytes, data: bytes | bytearray) -> bytes:
     return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data))
 
 
@@ -134,7 +135,7 @@ class _Deflate:
         self.carry = bytearray()
         self.tail = b""
         self.adler = 1
-        self.queue = deque()
+        self.queue: deque = deque()
         self.header = True
 
     def _submit(self, data, last: bool) -> None:
@@ -232,7 +233,7 @@ def write_png(path: str | os.PathLike, bands: Iterable[np.ndarray], width: int, 
     dtype = np.dtype(">u2") if bit_depth == 16 else np.dtype(np.uint8)
     row_bytes = width * samples * dtype.itemsize
     cores = usable_cores()
-    state = {"prev": np.zeros(row_bytes, np.uint8), "pending": bytearray()}
+    state: dict[str, Any] = {"prev": np.zeros(row_bytes, np.uint8), "pending": bytearray()}
     rows_done = 0
 
     def encode(f, comp, band: np.ndarray) -> None:
@@ -370,6 +371,7 @@ def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]]
                                  f"expected (rows, {width})")
             n = a.shape[0]
             out[name] = a
+        assert n is not None        # chans is not empty (OpenEXR refuses a header without channels)
         rows_done += n
         return n, out
 
@@ -395,7 +397,7 @@ def write_exr(path: str | os.PathLike, bands: Iterable[Mapping[str, np.ndarray]]
         if chromaticities is not None:
             _patch_chromaticities(path, chromaticities)
     else:  # pragma: no cover - a future OpenEXR without the old API
-        parts = {name: [] for name in chans}
+        parts: dict[str, list[np.ndarray]] = {name: [] for name in chans}
         for band in bands:
             _, arrays = checked(band)
             for k, a in arrays.items():
@@ -480,7 +482,7 @@ def write_tiff(path: str | os.PathLike, tiles: Iterable[np.ndarray], shape: Sequ
     if th % 16 or tw % 16 or th <= 0 or tw <= 0:
         raise ValueError(f"TIFF tile {th}x{tw}: both sides must be positive multiples of 16")
     shape = tuple(int(s) for s in shape)
-    kwargs = dict(photometric="rgb" if rgb else "minisblack", compression="zlib",
+    kwargs: dict[str, Any] = dict(photometric="rgb" if rgb else "minisblack", compression="zlib",
                   metadata=None)
     if rgb and shape[-1] == 4:
         kwargs["extrasamples"] = ("unassalpha",)

@@ -36,7 +36,7 @@ COMPRESS = ("bc1", "bc3", "bc4", "bc5", "bc7", "none")
 MAX_SIDE_2D, MAX_SIDE_3D = 16384, 2048
 
 #: channel -> {compress: format or {bits: format}}; the first key is the default
-CHOICES: dict[str, dict[str, object]] = {
+CHOICES: dict[str, dict[str, str | dict[int, str]]] = {
     "color": {"bc7": "BC7_SRGB", "bc1": "BC1_SRGB", "bc3": "BC3_SRGB", "none": {8: "R8G8B8A8_SRGB"}},
     "normal": {"bc5": "BC5_UNORM", "bc7": "BC7_UNORM", "bc1": "BC1_UNORM", "bc3": "BC3_UNORM",
                "none": {8: "R8G8B8A8_UNORM"}},
@@ -72,7 +72,7 @@ def parse_compress(compress, channels) -> dict[str, str]:
         return out
     text = str(compress).strip().lower()
     parts = [p.strip() for p in text.split(",") if p.strip()]
-    per = {}
+    per: dict[str, str] = {}
     for p in parts:
         name, eq, value = p.rpartition("=")
         chan = next((c for c in channels if c.lower() == name), None) if eq else None
@@ -81,7 +81,7 @@ def parse_compress(compress, channels) -> dict[str, str]:
                             f"accepted {accepted_list(channels)}")
         if value not in COMPRESS:
             raise BakeError(f"--compress {value!r}: accepted {accepted_list(COMPRESS)}")
-        for c in ([chan] if eq else channels):
+        for c in (channels if chan is None else [chan]):     # (eq and no channel: refused above)
             per[c] = value
     if not parts:
         raise BakeError(f"--compress {compress!r}: accepted {accepted_list(COMPRESS)}, "
@@ -173,6 +173,7 @@ def level_data(out: TexOutput, a: np.ndarray, depth) -> bytes:
     if not out.fmt.compressed:
         return np.ascontiguousarray(a).tobytes()
     slices = list(a) if depth is not None else [a]
+    assert out.fmt.codec is not None            # every block format names its encoder
     return b"".join(blocks.encode_levels(out.fmt.codec, slices, perceptual=out.fmt.srgb))
 
 
@@ -208,6 +209,7 @@ def packed_levels(fmt: containers.TexFormat, images) -> list[bytes]:
     plain format's samples (``R16_UNORM``: ``(h, w)`` uint16, ...) stored as they are."""
     images = list(images)
     if fmt.compressed:
+        assert fmt.codec is not None
         return blocks.encode_levels(fmt.codec, images, perceptual=fmt.srgb)
     want = {"R8_UNORM": (np.uint8, 1), "R16_UNORM": (np.uint16, 1), "R8G8B8A8_UNORM": (np.uint8, 4),
             "R8G8B8A8_SRGB": (np.uint8, 4), "R16_SFLOAT": (np.float16, 1), "R32_SFLOAT": (np.float32, 1),

@@ -75,9 +75,9 @@ def _alive(pid: int) -> bool:
 def sweep_stale(directory: str | os.PathLike) -> list[Path]:
     """Remove cellgl's temporary files in ``directory`` left by processes of this host that no
     longer run (a bake killed with SIGKILL); returns the paths removed. Never raises."""
-    removed = []
+    removed: list[Path] = []
     try:
-        entries = list(os.scandir(directory))
+        entries = list(os.scandir(os.fspath(directory)))
     except OSError:
         return removed
     for entry in entries:

@@ -84,6 +84,8 @@ def binding():
         raise VdbUnavailable(_HOW)
     try:
         spec = importlib.util.spec_from_file_location("openvdb", path)
+        if spec is None or spec.loader is None:
+            raise ImportError("no module loader for this file")
         mod = importlib.util.module_from_spec(spec)
         spec.loader.exec_module(mod)
     except (ImportError, OSError) as exc:
