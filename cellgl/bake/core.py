@@ -20,6 +20,7 @@ import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -344,7 +345,8 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"mips={mips!r}, tiled={tiled!r}: accepted True or False")
     tiled, mips = check_tiled(ext, tiled, mips, channels, depth_slices)
     outputs = []      # (UDIM tile or None, output)
-    for t in ([] if texture else (set_tiles or [None])):
+    per_tile: list[udim_mod.UdimTile | None] = [] if texture else [*set_tiles] if set_tiles else [None]
+    for t in per_tile:
         where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)
         level0 = [_Output(p, chs, tuple(encoding_of(c, ext, bits, space) for c in chs))
                   for p, chs in output_paths(Path(where), channels)]
@@ -448,7 +450,7 @@ def _render_tiles(recipe, out: _Output, plan: _Plan, bar: Progress) -> Iterator[
     """Yield (x0, y0, {channel: encoded array}) row-major; arrays (h, w[, S]) or (D, h, w[, S])."""
     from cellgl import recipes
 
-    extra = {"samples": plan.samples} if plan.samples != 1 else {}
+    extra: dict[str, Any] = {"samples": plan.samples} if plan.samples != 1 else {}
     full_w, full_h = plan.full or (plan.width, plan.height)
     ox, oy = plan.origin
     for x0, y0, tw, th in plan.tiles():
@@ -514,6 +516,7 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
             _write_exr(tmp, tiles, out, plan, meta)
         elif ext == ".vdb":     # a grid per sample (cellgl.io.vdb)
             from cellgl.io import vdb
+            assert plan.slices is not None      # a .vdb bake is a volume (_check_vdb)
             vdb.write_vdb(tmp, (plan.width, plan.height, plan.slices), {e.channel: (e.samples, e.dtype) for e in
                           out.encodings}, tiles, metadata=meta, colorspaces={e.channel: COLORSPACES[
                               e.colorspace].interop_id for e in out.encodings if e.colorspace})

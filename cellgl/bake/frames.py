@@ -172,7 +172,7 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
     with scratch_dir(path) as tmp, bar:
         if ext in ANIMATED:
             return [_animated(recipe, path, tmp, frames, fps, (w, h), bake_kw, bar)]
-        names = []
+        names: list[Path] = []
         for k in range(frames):
             target = tmp / f"{path.stem}_{k:04d}{path.suffix}"
             try:

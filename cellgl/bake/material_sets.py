@@ -36,6 +36,7 @@ import dataclasses
 import shlex
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -287,11 +288,11 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
     with scratch_dir(out_dir, "frames") as tmp:
         for m, name in zip(eng.maps, names):
             if fmt != "png":
-                meta = {"generator": "cellgl", "material": eng.name, "map": m.suffix, "format": gpu_format(m).name,
-                        "levels": len(levels), "samples": dict(_stored(m)), "recipe": recipe.to_dict(),
-                        "size": [w, h]}
+                about = {"generator": "cellgl", "material": eng.name, "map": m.suffix, "format": gpu_format(m).name,
+                         "levels": len(levels), "samples": dict(_stored(m)), "recipe": recipe.to_dict(),
+                         "size": [w, h]}
                 _write_gpu_map(tmp / name, recipe, m, ext, levels, samples, memory_budget, progress,
-                               json.dumps(meta, sort_keys=True), supercompression)
+                               json.dumps(about, sort_keys=True), supercompression)
                 written.append(name)
                 continue
             # (the colour map's encoding is named "color": the writer tags it sRGB, as a colour bake)
@@ -458,6 +459,7 @@ def _manifest(eng: Engine, recipe, names, extra, levels, samples, fmt, command) 
 
     files = []
     for m, name in zip(eng.maps, names):
+        mip: dict[str, Any]
         if fmt == "png":
             mip = {"mips": [{"level": k, "file": level_path(name, k).name, "size": list(s)}
                             for k, s in enumerate(levels)]} if len(levels) > 1 else {}

@@ -99,7 +99,7 @@ def check_budget(budget) -> int:
     import numbers
 
     if isinstance(budget, bool) or not isinstance(budget, numbers.Integral) \
-            or not MIN_BUDGET <= budget <= MAX_BUDGET:
+            or not MIN_BUDGET <= int(budget) <= MAX_BUDGET:
         raise BakeError(f"memory_budget {budget!r}: accepted a whole number of bytes in {MIN_BUDGET}.."
                         f"{MAX_BUDGET} (1 MiB..1 TiB; the command line's --memory 1..{MAX_BUDGET >> 20} MB)")
     return int(budget)

@@ -196,7 +196,7 @@ def run_cli(args: argparse.Namespace) -> int:
 def _texture_kw(args: argparse.Namespace) -> dict:
     """--mips, --compress, --zstd for a loop baked as one .dds/.ktx2 array texture (bake refuses
     --compress/--zstd for the other formats)."""
-    kw = {}
+    kw: dict[str, object] = {}
     if args.mips:
         kw["mips"] = True
     if args.compress is not None:

@@ -20,12 +20,17 @@ import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from cellgl import recipes
 from cellgl.bake import core as _bake
 from cellgl.recipes import MAX_SIDE  # 2**20: float32 uv keeps pixels apart there
+
+if TYPE_CHECKING:
+    from cellgl.pups.recipe import PupsRecipe
+    from cellgl.texture.recipe import Recipe
 
 __all__ = ["DaskError", "Layout", "to_dask", "on_gl_thread", "render_block", "require",
            "MAX_SIDE", "MAX_CHUNK", "DEFAULT_CHUNK"]
@@ -119,7 +124,7 @@ def dtype(channel: str) -> np.dtype:
 class Layout:
     """A ``width x height`` image of ``recipe`` cut into ``chunk_h x chunk_w`` blocks."""
 
-    recipe: object
+    recipe: Recipe | PupsRecipe
     width: int
     height: int
     channels: tuple[str, ...]
@@ -235,6 +240,7 @@ def to_dask(recipe, shape, chunks=DEFAULT_CHUNK, channels="color", *, sets=(), t
     layout = Layout.make(load(recipe, sets, tileable), shape, chunks, channels)
     if single and len(layout.channels) != 1:
         single = False  # "height,normal"
+    rkey: dict | str
     try:
         rkey = layout.recipe.to_dict()
     except Exception:  # noqa: BLE001 - any recipe object that pickles will do

@@ -60,7 +60,7 @@ def checksum(arrays: dict[str, np.ndarray]) -> int:
     for name in sorted(arrays):
         a = np.ascontiguousarray(arrays[name])
         h.update(f"{name}:{a.dtype.str}:{a.shape};".encode())
-        h.update(memoryview(a).cast("B"))
+        h.update(a.data.cast("B"))          # (a.data: memoryview(a))
     return int.from_bytes(h.digest(), "little") | 1
 
 
