@@ -65,7 +65,7 @@ def bake_recipe(job: dict) -> dict:
     size = _check_size(job.get("size"))
     r = recipe_for(job["recipe"], job.get("sets", ()), bool(job.get("tileable")))
     chans = ("color", "height", "normal", "id")
-    parts = {c: [] for c in chans}
+    parts: dict[str, list[np.ndarray]] = {c: [] for c in chans}
     rows = -(-size // BANDS)
     _progress(0.0)
     for y0 in range(0, size, rows):

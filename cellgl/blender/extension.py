@@ -174,8 +174,8 @@ def build_extension(output, *, platforms=tuple(PLATFORMS), fetch=pip_fetch, cach
     bad = [p for p in platforms if p not in PLATFORMS]
     if bad or not platforms:
         raise ValueError(f"platform {bad[0] if bad else '(none)'!r} is unknown; accepted: {', '.join(PLATFORMS)}")
-    with tempfile.TemporaryDirectory(prefix="cellgl-ext-") as tmp:
-        tmp = Path(tmp)
+    with tempfile.TemporaryDirectory(prefix="cellgl-ext-") as tmp_name:
+        tmp = Path(tmp_name)
         files: dict[str, Path] = {}
         own = cellgl_wheel(tmp / "own")
         files[f"wheels/{own.name}"] = own

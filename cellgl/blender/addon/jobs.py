@@ -45,6 +45,7 @@ class Job:
         self._err = threading.Thread(target=self._read_err, daemon=True)
         self._out.start()
         self._err.start()
+        assert self.proc.stdin is not None          # (stdin, stdout, stderr: PIPE)
         try:
             self.proc.stdin.write(json.dumps(job).encode())
             self.proc.stdin.close()
@@ -52,9 +53,11 @@ class Job:
             self.error = f"the bake process did not start: {exc}"
 
     def _read_out(self):
+        assert self.proc.stdout is not None
         self.data = self.proc.stdout.read()
 
     def _read_err(self):
+        assert self.proc.stderr is not None
         for raw in self.proc.stderr:
             line = raw.decode("utf-8", "replace").rstrip()
             if line.startswith("cellgl-progress "):
