@@ -21,7 +21,9 @@ import base64
 import io
 import json
 import math
+import numbers
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -71,7 +73,7 @@ def _param_table() -> list[dict]:
              "group": p.group, "compile_time": p.compile_time, "derived": p.derived}
         if p.choices:
             d["choices"] = list(p.choices)
-        if p.lo is not None:
+        if p.lo is not None and p.hi is not None:   # (a number has both bounds, the others none)
             lo, hi = SOFT.get(p.name, (p.lo, p.hi))
             d["soft"] = [max(lo, p.lo), min(hi, p.hi)]
         out.append(d)
@@ -99,6 +101,12 @@ def _mean_points() -> dict:
     return out
 
 
+def _number(v: object) -> float:
+    """``v``, a number (a uniform's value, a parameter's bound), as mypy sees it."""
+    assert isinstance(v, numbers.Real), v
+    return float(v)
+
+
 def _preset_entry(r, source: str, thumbs: bool) -> dict:
     prog = V.texture_program(r, uniforms=True)
     vals = {k: v for k, v in r.values.items()}
@@ -107,7 +115,7 @@ def _preset_entry(r, source: str, thumbs: bool) -> dict:
         fixed = {n: v for _, n, v in prog.uniforms if n.startswith("density_")}
     return {"name": r.name, "source": source, "doc": r.doc, "values": vals, "ramp": [list(k) for k in r.ramp],
             "variant": V.variant_id(V.variant_key(prog.defines)), "fixed_uniforms": fixed,
-            "octave_mean": float(dict((n, v) for _, n, v in prog.uniforms)["octave_mean"]),
+            "octave_mean": float(_number(dict((n, v) for _, n, v in prog.uniforms)["octave_mean"])),
             "thumb": _thumb(r) if thumbs else None}
 
 
@@ -167,7 +175,9 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     else:
         names = list(dict.fromkeys(str(n) for n in presets))     # a name given twice: once
         _check_names(names)
-    refused, recipes, sources = {}, {}, {}
+    refused: dict[str, str] = {}
+    recipes: dict[str, Any] = {}
+    sources: dict[str, str] = {}
     for name in names:
         r = load_recipe(name)
         if r.name in sources:
@@ -185,7 +195,7 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
     if not recipes:
         raise ValueError("no preset to show: " + "; ".join(f"{n}: {why}" for n, why in refused.items())
                          + " (accepted: cellular texture presets, `cellgl presets`)")
-    todo = {}           # variant key -> the first recipe that needs it (its defines: no export yet)
+    todo: dict[str, Any] = {}           # variant key -> the first recipe that needs it (its defines: no export yet)
     for r in recipes.values():
         for n in (V.neighbours(r) if neighbours else [r]):
             todo.setdefault(V.variant_key(texture.defines(n)), n)
@@ -211,7 +221,7 @@ def build_site(out_dir, presets=None, *, thumbs: bool = True, neighbours: bool =
             "variants": vids, "key_macros": list(V.KEY_MACROS), "density_frozen": list(DENSITY_FROZEN),
             "active_when": P.ACTIVE_WHEN,
             "consts": {"max_points": MAX_POINTS, "w96": W96_DENSITY_ADJUSTMENT,
-                       "max_octaves": int(math.ceil(P.PARAMS_BY_NAME["octaves"].hi)),
+                       "max_octaves": int(math.ceil(_number(P.PARAMS_BY_NAME["octaves"].hi))),
                        "ramp_keys": P.MAX_RAMP_KEYS, "mean_samples": MEAN_SAMPLES,
                        # CELL_MAX_RING of isotropic cells per dimension (the page scales it by
                        # the stretch ratio as cellgl.basis.reference.max_ring_default does)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import replace
+from typing import Any
 
 from cellgl.export.reach import reached
 from cellgl.export.snippets import ExportError, compiled_unit, entry_points, export_program, texture_program
@@ -58,10 +59,10 @@ def variant_id(key: str) -> str:
 def _tries(r):
     """Recipes one compile-time choice away from ``r`` (some may be refused)."""
     v = r.values
-    out = []
-    for m in PARAMS_BY_NAME["metric"].choices:
+    out: list[dict[str, Any]] = []
+    for m in PARAMS_BY_NAME["metric"].choices or ():       # (an enum always has its choices)
         out.append(dict(metric=m))
-    for d in PARAMS_BY_NAME["distribution"].choices:
+    for d in PARAMS_BY_NAME["distribution"].choices or ():
         out.append(dict(distribution=d, seed=0) if d == "blender" else dict(distribution=d))
     out.append(dict(tileable=not v["tileable"]))
     for n in range(1, 5):               # n = 1..4: zero the coefficients past n, make c_n count
@@ -108,7 +109,7 @@ def variant_texts(recipe) -> dict:
     entries = entry_points(prog)
     live = replace(prog, entry=prog.entry + PROBE_ENTRY)
     unit = compiled_unit(live, entries=(*entries, "cellgl_playground_probe"))
-    out = {"key": variant_key(prog.defines), "live": _body(export_program(live, "gles", uniforms=True, code=unit))}
+    out: dict[str, object] = {"key": variant_key(prog.defines), "live": _body(export_program(live, "gles", uniforms=True, code=unit))}
     unit.items[:] = reached(unit.items, entries)
     for t in ("gles", "godot", "hlsl"):
         out[t] = _body(export_program(prog, t, uniforms=True, code=unit))
