@@ -228,7 +228,9 @@ def constant_fields(unit: S.Unit, ctx: Context) -> bool:
                           and s.expr.target.base.name == var and literal(s.expr.value, False)), None)
             if store is None:
                 continue
-            reads, ok = {}, True
+            assert isinstance(store.expr, S.Assign)     # (picked above: an assignment)
+            reads: dict[int, tuple[S.Function, set[int]]] = {}
+            ok = True
             for f, n in members.get(fd.name, ()):
                 if n is store.expr.target:
                     continue

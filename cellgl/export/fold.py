@@ -64,7 +64,8 @@ class Facts:
         self.order = pos, last
         self.params = {p.name: p for p in fn.params}
         self.types = {p.name: None if p.size is not None else p.type for p in fn.params}
-        self.blocks, self.in_loops, decls, names = [], set(), [], [p.name for p in fn.params]
+        self.in_loops: set[int] = set()
+        self.blocks, decls, names = [], [], [p.name for p in fn.params]
         for n in self.nodes:
             if type(n) is S.Block:
                 self.blocks.append(n)
@@ -78,7 +79,7 @@ class Facts:
         self.declared = Counter(names)
         self.once = {k for k, v in self.declared.items() if v == 1}
         self.env = {k: v for k, v in genv.items() if k not in self.declared}
-        self.constants = self.env, {}
+        self.constants: tuple[dict, dict] = self.env, {}
         stored = {n for n, uses in self.occ.items() if any(role != "read" for _, role in uses)}
         for node in decls:
             for d in node.declarators:
@@ -334,7 +335,8 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
         body = loop.body.body if isinstance(loop.body, S.Block) else [loop.body]
         if len(body) != 1 or var in writes(loop.body, ctx):
             continue
-        s, holder = body[0], None
+        s = body[0]
+        holder: S.If | S.Ternary | None = None
         if isinstance(s, S.If) and s.other is None:
             holder = s
         elif isinstance(s, S.ExprStmt) and isinstance(s.expr, S.Assign) and s.expr.op == "+=":
@@ -359,6 +361,7 @@ def loop_ranges(fn: S.Function, facts: Facts) -> bool:
         for p in rest[1:]:
             e = S.Binary("&&", e, p)
         holder.cond = S.Paren(e) if isinstance(c, S.Paren) else e
+        assert isinstance(loop.init, S.Decl) and isinstance(loop.cond, S.Binary)     # (_counter matched them)
         loop.init.declarators[0].init = literal(("int", new_lo))
         loop.cond.right = literal(("int", max(new_lo, new_hi)))
         changed = True
@@ -383,12 +386,12 @@ def fold(unit: S.Unit, ctx: Context, passes) -> bool:
         nodes = walk(fn.body)
         used = sorted({n.name for n in nodes if type(n) is S.Name})
         callees = sorted({n.func for n in nodes if type(n) is S.Call})
-        key = (tuple(p.__name__ for p in passes), tuple((k, genv.get(k), garrays[None].get(k)) for k in used),
+        facts_key = (tuple(p.__name__ for p in passes), tuple((k, genv.get(k), garrays[None].get(k)) for k in used),
                tuple((k, tuple(garrays[k][1])) for k in used if k in garrays),
                tuple((c, c in ctx.impure, c in ctx.functions and tuple(p.mode for p in ctx.functions[c].params))
                      for c in callees))
         text = "\n".join(item_glsl(fn))
-        key = (text,) + key
+        key = (text,) + facts_key
         hit = _FOLDED.get(key, _MISSING)
         if hit is _MISSING:
             facts = [Facts(fn, genv, garrays, ctx)]

@@ -157,6 +157,8 @@ def bake_maps(nodes: list[MxNode], size: int, udim: str | None, folder) -> dict[
             for p in bake(n.example["recipe_obj"], str(dest), size=size, channels=(c,), udim=udim, progress=False):
                 name = Path(rel).name
                 if udim:
-                    name = name.replace(UDIM_TOKEN, re.search(r"\.(\d{4})\.png$", Path(p).name).group(1))
+                    tile = re.search(r"\.(\d{4})\.png$", Path(p).name)
+                    assert tile is not None, p                  # bake names each tile NAME.1001.png
+                    name = name.replace(UDIM_TOKEN, tile.group(1))
                 out[f"{TEXTURES}/{name}"] = Path(p)
     return out

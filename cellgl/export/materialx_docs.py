@@ -19,6 +19,7 @@ the set lands whole or not at all (:mod:`cellgl.export.materialx_files`).
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from cellgl.export.materialx import MxNode
@@ -309,7 +310,7 @@ def export_materialx(outdir, recipes=None, *, basis: bool = True, bake_maps=None
         nodes = basis_nodes() + nodes
     if not nodes:
         raise ExportError("nothing to export: no recipe given and basis=False")
-    files = set_files(nodes, udim)       # the names checked before the bake
+    files: dict[str, str | Path] = dict(set_files(nodes, udim))      # the names checked before the bake
     if size is None:
         return write_set(files, outdir)
     import tempfile

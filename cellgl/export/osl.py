@@ -250,7 +250,9 @@ def _basis_outputs(prog) -> list[str]:
 
 
 def _basis_return(prog) -> str:
-    return re.match(r"\s*(\w+)", prog.signatures[0]).group(1)
+    m = re.match(r"\s*(\w+)", prog.signatures[0])
+    assert m is not None, prog.signatures[0]            # a signature starts with its return type
+    return m.group(1)
 
 
 def basis_signature(prog) -> str:

@@ -86,7 +86,7 @@ class Glsl:
     # ---------------------------------------------------------------- statements
     @staticmethod
     def comments(com: list, ind: str) -> list[str]:
-        out = []
+        out: list[str] = []
         for c in com:
             out += [ind + ln.strip() if ln.strip() else "" for ln in c.split("\n")] if c else [""]
         return out
@@ -362,7 +362,8 @@ def _wrap(line: str, width: int) -> list[str]:
 def _fill(line: str, cuts: list, width: int, ind: int, shallow: bool) -> list[str]:
     """``line`` broken at ``cuts`` as late as fits, at the outermost depth that has a break that
     fits (not ``shallow``: or one deeper)."""
-    out, start, prefix = [], 0, 0
+    out: list[str] = []
+    start, prefix = 0, 0
     while len(line) - start + prefix > width:
         fit = [c for c in cuts if start < c[0] and c[0] - start + prefix <= width + 1]
         if not fit:

@@ -87,7 +87,8 @@ def _loader_fields(load: S.Function, constants: set[str]) -> dict[str, tuple[obj
     """``{field: (value, loader statement)}`` of the fields the loader sets from globals and
     literals only: ``p.f = cellgl_f;``, ``p.f = ivec4(0);``, and the copy of a global array
     ``for (int k = 0; ...) { p.f[k] = cellgl_f[k]; }``."""
-    out = {}
+    out: dict[str, tuple[object, object]] = {}
+    assert load.body is not None                # (scalarise_struct picks a loader with a body)
     for st in load.body.body:
         match st:
             case S.For(init=S.Decl(declarators=[S.Declarator(name=k)]),
@@ -121,6 +122,7 @@ def scalarise_struct(unit: S.Unit, struct: str, loader: str) -> bool:
     sdef = next((it for it in unit.items if isinstance(it, S.Struct) and it.name == struct), None)
     if load is None or sdef is None:
         return False
+    assert load.body is not None                # (picked with a body)
     constants = {d.name for it in unit.items if isinstance(it, S.Global) for d in it.declarators} | {"true", "false"}
     fields = _loader_fields(load, constants)
     if not fields:

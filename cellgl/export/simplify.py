@@ -189,6 +189,7 @@ def merge_declarations(fn: S.Function, facts: Facts) -> bool:
             if isinstance(t, S.ExprStmt) and isinstance(t.expr, S.Assign) and t.expr.op == "=" \
                     and isinstance(t.expr.target, S.Name) and t.expr.target.name == d.name \
                     and not _mentions(t.expr.value, d.name):
+                assert j is not None                    # (t is b.body[j])
                 b.body[j] = S.Decl(s.type, [S.Declarator(d.name, None, t.expr.value)], False,
                                    s.comments + t.comments, t.trail)
                 del b.body[k]

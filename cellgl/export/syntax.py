@@ -211,7 +211,7 @@ class Function:  # body None: a prototype
     ret: str
     name: str
     params: list
-    body: object
+    body: Block | None
     comments: list = field(default_factory=list)
 
 
@@ -326,7 +326,7 @@ class _Parser:
 
     # top level
     def unit(self) -> Unit:
-        out = []
+        out: list[Struct | Function | Global] = []
         while self.i < len(self.toks):
             com = self.comments()
             if self.peek() == "struct":

@@ -58,7 +58,7 @@ def _walk(n, add):
 
 def walk(node) -> list:
     """``node`` and every node below it, pre-order (parents before children)."""
-    out = []
+    out: list = []
     _walk(node, out.append)
     return out
 
@@ -94,7 +94,7 @@ def transform(node, fn):
 def clone(node):
     """A deep copy of ``node`` (comments included)."""
     t = type(node)
-    new = t.__new__(t)
+    new = object.__new__(t)     # (the node classes are plain dataclasses: no __new__ of their own)
     d = new.__dict__
     for k, v in node.__dict__.items():
         if type(v) is list:
@@ -172,7 +172,7 @@ def writes(node, ctx: Context | None = None) -> set[str]:
     """The variables stored into anywhere below ``node`` (or in the list of nodes :func:`walk`
     gave): assignment targets, ``++``/``--`` operands, declared names, and (with ``ctx``) the
     arguments passed to ``out``/``inout`` parameters of the module's functions."""
-    out = set()
+    out: set[str | None] = set()
     for n in node if type(node) is list else walk(node):
         t = type(n)
         if t is S.Assign:
@@ -185,8 +185,7 @@ def writes(node, ctx: Context | None = None) -> set[str]:
             for k in ctx.out_positions(n.func):
                 if k < len(n.args):
                     out.add(root_name(n.args[k]))
-    out.discard(None)
-    return out
+    return {name for name in out if name is not None}
 
 
 def settle(passes, apply, max_rounds: int, failure: str) -> bool:
@@ -194,7 +193,8 @@ def settle(passes, apply, max_rounds: int, failure: str) -> bool:
     pass has run once since the last change (from there on they would see the same tree and facts
     again); whether any changed. Raises :class:`TranslateError` with ``failure`` and the passes
     still changing after ``max_rounds`` rounds (a pass undoes another)."""
-    quiet, recent, changed = 0, [], False
+    recent: list[str] = []
+    quiet, changed = 0, False
     for run in range(max_rounds * len(passes)):
         p = passes[run % len(passes)]
         if apply(p):
@@ -270,7 +270,7 @@ def _scan(n, role, nodes, last, occ, ctx):
     elif t is S.Call:
         modes = _out_modes(n, ctx)
         for k, a in enumerate(n.args):
-            _scan(a, {"out": "store", "inout": "update"}.get(modes.get(k)), nodes, last, occ, ctx)
+            _scan(a, {"out": "store", "inout": "update"}.get(modes.get(k, "in")), nodes, last, occ, ctx)
     else:
         for c in children(n):
             _scan(c, None, nodes, last, occ, ctx)

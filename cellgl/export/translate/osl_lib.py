@@ -4,6 +4,9 @@ access, built-ins) and for unsigned 32-bit arithmetic on OSL's signed ``int``; e
 generated once, when the translation first needs it."""
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 from cellgl.export.printer import RELATIONAL
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.values import value
@@ -37,6 +40,13 @@ _VECS = {f"{k}vec{n}": (c, n) for k, c in (("", "float"), ("i", "int"), ("u", "u
 vec_type = _VECS.get
 
 
+def vec_of(t: str) -> tuple[str, int]:
+    """:func:`vec_type` of ``t``, a GLSL vector type."""
+    v = _VECS.get(t)
+    assert v is not None, t
+    return v
+
+
 def int_literal(v: int) -> str:
     """A 32-bit pattern as an OSL int literal (OSL's lexer has no unsigned or > 2^31 - 1)."""
     v &= 0xFFFFFFFF
@@ -63,6 +73,7 @@ class OslLib:
 
     helpers: dict
     structs: dict
+    ex: Callable[[Any], tuple[str, Any]]        #: the tree walker's expression translator
 
     def osl_type(self, t: str) -> str:
         v = vec_type(t)
@@ -188,7 +199,7 @@ class OslLib:
     def vec_binary(self, op: str, ta: str, tb: str) -> tuple[str, str]:
         """Name and result type of the generated component-wise ``op`` on ``ta``, ``tb``."""
         va, vb = vec_type(ta), vec_type(tb)
-        comp, n = va or vb
+        comp, n = va or vec_of(tb)
         rt = ("b" if op in COMPARISONS else {"float": "", "int": "i", "uint": "u", "bool": "b"}[comp]) + f"vec{n}"
         name = f"cellgl_{_OPNAME[op]}_{ta}_{tb}"
         self.gen(name, rt, [(ta, "a"), (tb, "b")], lambda: self.returns(rt, [
@@ -209,12 +220,12 @@ class OslLib:
         return (t, str(v[1])), f"[{v[1]}]"
 
     def vec_get(self, t: str) -> str:
-        comp, n = vec_type(t)
+        comp, n = vec_of(t)
         body = " ".join(f"if (i == {j}) return a.{c};" for j, c in enumerate(XYZW[:n - 1]))
         return self.gen(f"cellgl_get_{t}", comp, [(t, "a"), ("int", "i")], f"{body} return a.{XYZW[n - 1]};")
 
     def vec_set(self, t: str) -> str:
-        comp, n = vec_type(t)
+        comp, n = vec_of(t)
         ot, oc = self.osl_type(t), self.osl_type(comp)
         name = f"cellgl_set_{t}"
         body = " else ".join(f"if (i == {j}) a.{c} = x;" for j, c in enumerate(XYZW[:n - 1]))
@@ -223,7 +234,7 @@ class OslLib:
     def any_all(self, fn: str, bt: str) -> str:
         j = " || " if fn == "any" else " && "
         return self.gen(f"cellgl_{fn}_{bt}", "int", [(bt, "a")],
-                        f"return {j.join(f'a.{c}' for c in XYZW[:vec_type(bt)[1]])};")
+                        f"return {j.join(f'a.{c}' for c in XYZW[:vec_of(bt)[1]])};")
 
     def call_builtin(self, fn: str, args: list):
         ev = [self.ex(a) for a in args]
@@ -281,6 +292,6 @@ class OslLib:
             name = self.gen(f"cellgl_{fn}_" + "_".join(types), vt, [(t, f"a{j}") for j, t in enumerate(types)],
                             lambda: self.returns(vt, [f"{osl}(" + ", ".join(f"a{j}.{c}" if vec_type(t) else f"a{j}"
                                                                            for j, t in enumerate(types)) + ")"
-                                                      for c in XYZW[:vec_type(vt)[1]]]))
+                                                      for c in XYZW[:vec_of(vt)[1]]]))
             return f"{name}({', '.join(ss)})", vt
         raise TranslateError(f"OSL translation: function {fn!r} has no OSL translation")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import operator
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from functools import lru_cache
 
 from cellgl.export import syntax as S
@@ -77,7 +77,7 @@ _BINARY = {
     ">>": operator.rshift, "+": operator.add, "-": operator.sub, "*": operator.mul, "/": _cdiv,
     "%": lambda v, w: v - w * _cdiv(v, w),
 }
-_UNARY = {"!": operator.not_, "-": operator.neg, "+": operator.pos, "~": operator.invert}
+_UNARY: dict[str, Callable[[int], int]] = {"!": operator.not_, "-": operator.neg, "+": operator.pos, "~": operator.invert}
 
 
 def _expand(tokens: list[str], macros: Mapping[str, str], where: str, depth: int = 0) -> list[str]:
