@@ -22,10 +22,12 @@ Anything outside the subset raises :class:`TranslateError` naming the construct.
 """
 from __future__ import annotations
 
+from typing import Any
+
 from cellgl.export import syntax as S
 from cellgl.export.printer import Glsl, trail_comment
 from cellgl.export.translate.osl_lib import (COMPARISONS, OSL_RESERVED, SWIZZLE, XYZW, OslLib, int_literal,
-                                             same_type, vec_type)
+                                             same_type, vec_of, vec_type)
 from cellgl.export.translate.tokens import TranslateError
 from cellgl.export.translate.wgsl import assigned
 from cellgl.export.tree import walk
@@ -60,7 +62,7 @@ class _Osl(OslLib, Glsl):
         raise TranslateError(f"OSL translation: unknown name {name!r}")
 
     # ------------------------------------------------------------------ helpers
-    def ex(self, x) -> tuple[str, object]:
+    def ex(self, x) -> tuple[str, Any]:     # (its type: a GLSL type name, or (element, size) of an array)
         if isinstance(x, S.Num):
             t, hexa = x.text, x.text.lower().startswith("0x")
             if hexa or t[-1] in "uU":
@@ -82,7 +84,7 @@ class _Osl(OslLib, Glsl):
             if not struct and not v:
                 raise TranslateError(f"OSL translation: member {x.name!r} of a {t}")
             if struct or len(x.name) == 1:
-                m, mt = (self.name(x.name), self.structs[t][x.name]) if struct else (XYZW[SWIZZLE[x.name]], v[0])
+                m, mt = (self.name(x.name), self.structs[t][x.name]) if struct else (XYZW[SWIZZLE[x.name]], vec_of(t)[0])
                 if not isinstance(x.base.inner if isinstance(x.base, S.Paren) else x.base, (S.Call, S.Ctor)):
                     return f"{s}.{m}", mt
                 # OSL has no member access on a call's result: a getter
@@ -109,8 +111,8 @@ class _Osl(OslLib, Glsl):
             if vec_type(t):
                 if x.op != "-":
                     raise TranslateError(f"OSL translation: unary {x.op!r} on a {t}")
-                name, rt = self.vec_binary("-", vec_type(t)[0], t)
-                return f"{name}({'0' if vec_type(t)[0] != 'float' else '0.0'}, {s})", t
+                name, rt = self.vec_binary("-", vec_of(t)[0], t)
+                return f"{name}({'0' if vec_of(t)[0] != 'float' else '0.0'}, {s})", t
             return f"{x.op}{s}", t
         if isinstance(x, S.IncDec):
             s, t = self.ex(x.operand)
@@ -167,7 +169,7 @@ class _Osl(OslLib, Glsl):
                 idx, _ = self.ex(lhs.index)
                 val = rhs if op == "=" else S.Binary(op[:-1], S.Index(lhs.base, lhs.index), S.Paren(rhs))
                 v, tv = self.ex(val)
-                return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, vec_type(bt)[0])})"
+                return f"{self.vec_set(bt)}({base}, {idx}, {self.coerce(v, tv, vec_of(bt)[0])})"
         a, ta = self.ex(lhs)
         if op == "=":
             return f"{a} = {self.conv_to(rhs, ta)}"
@@ -177,7 +179,8 @@ class _Osl(OslLib, Glsl):
             return f"{a} = {self.binary(base_op, lhs, S.Paren(rhs))[0]}"
         return f"{a} {op} {self.ex(rhs)[0]}"
 
-    def ctor(self, t: str, args: list):
+    # (another signature than Glsl.ctor(e): that hook is called by Glsl.expr only, which .expr replaces)
+    def ctor(self, t: str, args: list):  # type: ignore[override]
         ev = [self.ex(a) for a in args]
         if t in ("float", "int", "uint", "bool"):
             if len(ev) != 1:
@@ -195,7 +198,7 @@ class _Osl(OslLib, Glsl):
         types = [st for _, st in ev]
 
         def code():
-            comps = []
+            comps: list[tuple[str, Any]] = []
             for j, st in enumerate(types):
                 sv = vec_type(st)
                 comps += [(f"a{j}.{c}", sv[0]) for c in XYZW[:sv[1]]] if sv else [(f"a{j}", st)]
