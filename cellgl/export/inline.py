@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import textwrap
 from collections import Counter
+from typing import Any
 
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, statement_glsl
@@ -136,7 +137,7 @@ def statement_lists(node):
     return [(n.body, s) for n in walk(node) if isinstance(n, S.Block) for s in n.body]
 
 
-def defined_once(unit: S.Unit) -> dict:
+def defined_once(unit: S.Unit) -> dict[str, S.Function]:
     """``{name: function}`` of the functions with a body and no other definition or prototype."""
     count = Counter(it.name for it in unit.items if isinstance(it, S.Function))
     return {it.name: it for it in unit.items if isinstance(it, S.Function) and it.body is not None
@@ -256,8 +257,8 @@ def inline_once(unit: S.Unit, ctx: Context) -> bool:
     failed: set = set()         # (callee, caller) that would not inline (until the caller changes)
     while True:
         for f in unit.items:
-            sites = index.get(getattr(f, "name", None), [])
-            if not (sites and once.get(f.name) is f and f.name not in keep and len(sites) == 1
+            sites: list[tuple[S.Function, S.Call]] = index.get(getattr(f, "name", None), [])
+            if not (sites and isinstance(f, S.Function) and once.get(f.name) is f and f.name not in keep and len(sites) == 1
                     and sites[0][0] is not f and (id(f), id(sites[0][0])) not in failed):
                 continue
             if not _inline_call(f, *sites[0], ctx):
@@ -339,9 +340,10 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     if any(isinstance(n, S.Jump) and n.kind == "discard" for n in walk(f.body)) \
             or any(p.size is not None for p in f.params) or len(call.args) != len(f.params):
         return False
+    assert f.body is not None               # (inline_once picks functions with a body)
     body = list(f.body.body)
     rets = [n for n in walk(f.body) if isinstance(n, S.Return)]
-    ret = None
+    ret: Any = None                         # the returned expression (a node), if any
     if f.ret == "void":
         if body and isinstance(body[-1], S.Return) and body[-1].value is None:
             body = body[:-1]
@@ -435,14 +437,14 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     arg_names = {n for a in subst.values() for n in names(a)}
     taken = caller_names | body_ids | arg_names
     loop_vars = _loop_vars(walk(block)) - {p.name for p, _ in prelude} - (caller_declared - _loop_vars(everything))
-    outer_loops = None
+    outer_loops: set[str] | None = None     # (computed at the first loop variable that needs it)
     for d in sorted(declared):
         if d in rename:
             continue
         if d in loop_vars and d not in arg_names and outer_loops is None:
             outer_loops = {v.name for n in everything if isinstance(n, S.For) and isinstance(n.init, S.Decl)
                            and any(x is stmt for x in walk(n.body)) for v in n.init.declarators}
-        if d in caller_names and not (d in loop_vars and d not in arg_names and d not in outer_loops):
+        if d in caller_names and not (d in loop_vars and d not in arg_names and d not in (outer_loops or ())):
             k = 2
             while f"{d}{k}" in taken:
                 k += 1
@@ -451,7 +453,7 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
     if form == "decl" and target in (body_ids - set(rename)) and not any(
             isinstance(a, S.Name) and a.name == target for a in subst.values()):
         return False
-    new = [S.Decl(p.type, [S.Declarator(rename.get(p.name, p.name), init=clone(_bare(a)))]) for p, a in prelude]
+    new: list = [S.Decl(p.type, [S.Declarator(rename.get(p.name, p.name), init=clone(_bare(a)))]) for p, a in prelude]
     new += substitute(block, subst, rename).body
     if ret is not None:
         r = substitute(S.Return(ret), subst, rename).value
@@ -469,7 +471,7 @@ def _inline_call(f: S.Function, caller: S.Function, call: S.Call, ctx: Context) 
             text = first_sentence("\n".join(c for c in f.comments if c), 116)
             head.append("\n".join("// " + ln for ln in textwrap.wrap(text, 113)))
         new[0].comments = head + list(new[0].comments)
-        if not hoist and getattr(stmt, "trail", "") and hasattr(new[-1], "trail") and not new[-1].trail:
+        if not hoist and getattr(stmt, "trail", None) and hasattr(new[-1], "trail") and not new[-1].trail:
             new[-1].trail = stmt.trail
     k = next(i for i, s in enumerate(lst) if s is stmt)
     if hoist:
