@@ -57,7 +57,7 @@ def parse_size(text: str) -> tuple[int, int, int | None]:
     return w, h, d
 
 
-def int_arg(flag: str, text, lo: int, hi: int) -> int:
+def int_arg(flag: str, text: object, lo: int, hi: int) -> int:
     """A command line whole number ``text`` for ``flag``, checked to lie in ``lo..hi``."""
     try:
         v = int(str(text).strip())
@@ -94,7 +94,7 @@ def parse_channels(values: str | Iterable[str]) -> tuple[str, ...]:
 MIN_BUDGET, MAX_BUDGET = 1 << 20, 1 << 40
 
 
-def check_budget(budget) -> int:
+def check_budget(budget: object) -> int:
     """``bake(..., memory_budget=)`` checked as ``--memory`` is: whole bytes in 1 MiB..1 TiB."""
     import numbers
 

@@ -35,7 +35,7 @@ class DensityMapKind(IntEnum):
     IMAGE = 3    #: a grayscale image over a lattice rectangle (read from a storage buffer)
 
 
-def parse_enum(enum: type[IntEnum], value, what: str) -> IntEnum:
+def parse_enum(enum: type[IntEnum], value: object, what: str) -> IntEnum:
     """Return the member of ``enum`` named by ``value`` (a name, or a member).
 
     Raises ``ValueError`` naming the accepted names otherwise.

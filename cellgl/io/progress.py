@@ -121,5 +121,5 @@ class Progress:
             raise
         return self
 
-    def __exit__(self, kind, exc, tb) -> None:
+    def __exit__(self, kind: object, exc: BaseException | None, tb: object) -> None:
         self.close(exc)
