@@ -154,6 +154,18 @@ def test_vdb_without_the_binding_is_one_clear_error(fake, tmp_path, capsys, monk
     assert not vdb.have_vdb()
 
 
+def test_vdb_binding_file_without_a_loader_is_one_clear_error(tmp_path, monkeypatch):
+    """A bundled binding path Python has no loader for (not an extension module): VdbUnavailable
+    naming the file, not an AttributeError from importlib."""
+    bogus = tmp_path / "openvdb.txt"
+    bogus.write_text("not a module")
+    monkeypatch.setitem(sys.modules, "openvdb", None)          # import openvdb fails
+    monkeypatch.setattr(vdb, "_bundled_path", lambda: str(bogus))
+    with pytest.raises(vdb.VdbUnavailable, match=r"openvdb\.txt would not load"):
+        vdb.binding()
+    assert sys.modules["openvdb"] is None
+
+
 @needs_vdb
 def test_gpu_vdb_reads_back_as_the_numpy_bake(ctx, tmp_path):
     """A tileable solid recipe baked to .vdb on the GPU, read back by the OpenVDB binding: the
