@@ -5,6 +5,9 @@
   samples' input (:class:`Positions`, :class:`Grid`, :class:`Rows`, :class:`Index`,
   :class:`Image`), its outputs (:class:`Output`: a destination array each) and its flag
   (:class:`Flag`), with the worst loop passes one sample may spend (its ``cost``).
+* **A draw** (:class:`Draw`): a raster or full-screen draw of a vertex + fragment program into
+  a render target of the runner (PUPs' raster path, the viewer), its :class:`Vertices` and
+  :class:`Sampler` textures.
 * **Tiles** (:func:`tile_samples`): the watchdog's bound on the samples of one dispatch or draw.
 * **The fragment path's layout.** Fragment (x, y) of a :data:`WIDTH`-wide target is sample
   ``y * WIDTH + x``. Each output's components are spread over render targets of at most 4
@@ -27,6 +30,7 @@ import numpy as np
 from cellgl.gl.path import STORAGE_ROW_BITS
 
 __all__ = ["has_watchdog", "Pass", "Output", "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result",
+           "Draw", "Vertices", "Sampler",
            "tile_samples", "forced_tile", "slots", "draw_buffers", "split_points", "axis_tables",
            "grid_slabs", "pass_defines", "read_rows", "WIDTH", "CHUNK", "LOCAL_SIZE", "SAMPLE_ROW_BITS",
            "STORAGE_ROW_BITS", "SLOW_PASSES_PER_S", "DISPATCH_SECONDS", "MAX_TILE", "MAX_TARGETS"]
@@ -192,6 +196,9 @@ class Image:
     height: int
     local: tuple = (8, 8)
     align: int = 8
+    #: the bands' alignment where the pass runs grouped (:attr:`Pass.group_defines`): e.g. whole
+    #: grid cells of PUPs per work group (None: ``align``)
+    group_align: int | None = None
 
 
 @dataclass
@@ -211,8 +218,56 @@ class Pass:
     #: keep the program in a least-recently-used group (name, size) instead of for good
     lru: tuple | None = None
     #: defines for where invocations run in work groups (the compute path; e.g. a work group's
-    #: shared cell cache), left out elsewhere
+    #: shared cell cache), left out elsewhere: the pass's "group samples if you can"
     group_defines: dict | None = None
+    #: called before the pass runs with whether it runs grouped (``group_defines`` applied): a
+    #: pass may refuse what the ungrouped or the grouped layout cannot do (e.g. PUPs' loop budget)
+    check: Callable | None = None
+    #: uniforms the runner sets (:func:`cellgl.gl.runner.set_uniforms`; after ``setup``)
+    uniforms: dict | None = None
+
+
+@dataclass
+class Vertices:
+    """The vertices of a :class:`Draw`: ``array`` (V, k) float32 rows in moderngl's ``layout``
+    (e.g. ``"2f 4f 4f"``) for the attributes ``names``; ``indices`` uint32 (3 T,): triangles (None:
+    the vertices in order). The runner keeps the buffers under ``key`` (one set per key, grown and
+    rewritten by the next draw of the key)."""
+    array: np.ndarray
+    layout: str
+    names: tuple
+    indices: np.ndarray | None = None
+    key: str = "draw"
+
+
+@dataclass
+class Sampler:
+    """A texture a :class:`Draw` samples: ``texture`` (made by the runner: :meth:`Runner.image`,
+    a :class:`Target`'s), ``linear`` filtering (else nearest), ``repeat`` (else clamp)."""
+    texture: object
+    linear: bool = False
+    repeat: bool = False
+
+
+@dataclass
+class Draw:
+    """A raster or full-screen draw of the vertex + fragment program ``vertex``, ``fragment``
+    (``shaders/``, with ``defines``) into ``target`` (a :class:`Target` of the runner):
+    ``vertices`` (None: one triangle over the whole viewport, ``gl_VertexID`` 0..2), the
+    ``uniforms`` the runner sets, ``textures`` (unit -> :class:`Sampler`), the ``viewport``
+    (default: the whole target), ``clear`` (RGBA, and depth 1 where the target has a depth
+    buffer) before it, ``blend`` (``"add"``: ONE, ONE, FUNC_ADD; None: off), ``depth_test``."""
+    vertex: str
+    fragment: str
+    target: object
+    defines: dict | None = None
+    uniforms: dict | None = None
+    vertices: Vertices | None = None
+    textures: dict | None = None
+    viewport: tuple | None = None
+    clear: tuple | None = None
+    blend: str | None = None
+    depth_test: bool = False
 
 
 @dataclass

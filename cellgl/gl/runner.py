@@ -33,13 +33,15 @@ from cellgl.gl import dispatch as _d
 from cellgl.gl import registry
 from cellgl.gl.dispatch import (CHUNK_BYTES, KIND, STORAGE_BLOCK_MAX, STORAGE_BLOCK_MIN, TEXTURE_ROWS_MAX, CHUNK,
                                 LOCAL_SIZE, MAX_TARGETS, SAMPLE_ROW_BITS, SAMPLERS, STORAGE_ROW_BITS, WIDTH,
-                                Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, kind_of,
+                                Draw, Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows,
+                                Sampler, Vertices, kind_of,
                                 target_comps, axis_tables, draw_buffers, grid_slabs, pass_defines,
                                 read_rows, slots, split_points, tile_samples)
 from cellgl.gl.registry import release_object, drop, held, store
 
 __all__ = ["Runner", "ComputeRunner", "FragmentRunner", "runner", "held", "drop", "store", "Pass", "Output",
-           "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result", "tile_samples", "set_uniform"]
+           "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result", "tile_samples", "set_uniform",
+           "set_uniforms", "Draw", "Vertices", "Sampler", "Target"]
 
 
 def runner(ctx=None) -> Runner:
@@ -76,8 +78,24 @@ class Runner:
         return context.compute_program(name, defines, ctx=self.ctx, files=files, lru=lru)
 
     def program(self, vertex: str, fragment: str, defines=None):
-        """A vertex + fragment program of ``shaders/`` (:func:`cellgl.gl.context.program`)."""
-        return context.program(vertex, fragment, defines, ctx=self.ctx)
+        """A vertex + fragment program of ``shaders/`` with this path's ``#define``s
+        (:meth:`path_defines`) and sampler units, in the context's one cache."""
+        return self._program(vertex, fragment, defines)[0]
+
+    def _program(self, vertex: str, fragment: str, defines=None):
+        """``(program, empty vertex array)``: :meth:`program` and what draws it full-screen."""
+        d = {**(defines or {}), **self.path_defines()}
+        prog, vao = context.program_entry(vertex, fragment, d, ctx=self.ctx)
+        self._samplers(prog)
+        return prog, vao
+
+    def path_defines(self) -> dict:
+        """The ``#define``s this path adds to every vertex + fragment program (the storage words'
+        layout, ``shaders/storage.glsl``)."""
+        return {}
+
+    def _samplers(self, prog) -> None:
+        """Point the storage words' samplers at their units (the fragment path)."""
 
     def entry(self, fragment: str, defines=None, *, files=None, lru=None):
         """``(program, vertex array)``: the fragment entry ``shaders/<fragment>`` with
@@ -159,15 +177,176 @@ class Runner:
     def run(self, p: Pass) -> Result:  # pragma: no cover - each path's own
         raise NotImplementedError
 
+    def grouped(self, p: Pass) -> bool:
+        """Whether ``p`` runs grouped here: it asks to (``group_defines``) and this path runs
+        invocations in work groups aligned to the samples (:attr:`groups`)."""
+        return self.groups and p.group_defines is not None
+
+    def _prepare(self, p: Pass, prog) -> None:
+        """The pass's own setup and uniforms on ``prog``."""
+        if p.setup is not None:
+            p.setup(prog)
+        set_uniforms(prog, p.uniforms)
+
+    # -- draws ----------------------------------------------------------------------------------
+
+    def target(self, key: str, size, formats=(("f4", 4),), depth: bool = False, linear: bool = False) -> Target:
+        """A render target ``size`` (w, h) kept under ``key``: one texture per ``formats`` entry
+        (dtype ``"f4"``/``"u1"``..., components), a depth buffer with ``depth``; remade (the old one
+        released after the new one is bound) when the size or formats change."""
+        size = (max(1, int(size[0])), max(1, int(size[1])))
+
+        def make():
+            texs = [self.ctx.texture(size, c, dtype=dt) for dt, c in formats]
+            for t in texs:
+                t.filter = _FILTERS[linear]
+            rb = self.ctx.depth_renderbuffer(size) if depth else None
+            fbo = self.ctx.framebuffer(texs, rb)
+            fbo.use()            # bound before the old one goes (moderngl restores the last binding)
+            return Target(fbo, texs, rb, size, formats)
+        return self._object(("target", key), (size, tuple(formats), depth), make)
+
+    def image(self, key: str, array: np.ndarray) -> object:
+        """A float32 (h, w, c) ``array`` (c in 1..4) as a texture kept under ``key`` (rewritten;
+        remade when the shape changes); row 0 at texture coordinate t = 0."""
+        a = np.ascontiguousarray(array, np.float32)
+        h, w, c = a.shape
+        tex = self._object(("image", key), (w, h, c), lambda: self.ctx.texture((w, h), c, dtype="f4"))
+        tex.write(a)
+        return tex
+
+    def release(self, key: str) -> None:
+        """Release what is kept under ``key`` (:meth:`target`, :meth:`image`, a draw's vertices)."""
+        for k in [k for k in self.held.objects if isinstance(k, tuple) and k[1:2] == (key,)]:
+            release_object(self.held.objects.pop(k)[1])
+
+    def read(self, target: Target, dest: np.ndarray | None = None, attachment: int = 0,
+             viewport=None) -> np.ndarray:
+        """Read ``attachment`` of ``target`` (``viewport`` (x, y, w, h): a part, default all) into
+        ``dest`` ((h, w, c) of the attachment's dtype, C-contiguous; row 0 the bottom row) and
+        return it; ``dest`` None: an array kept with the target (overwritten by the next read)."""
+        dt, comps = target.formats[attachment]
+        if dest is None:
+            w, h = target.size if viewport is None else viewport[2:]
+            got = target.arrays.get((attachment, w, h))
+            if got is None:
+                got = target.arrays[(attachment, w, h)] = np.empty((h, w, comps), np.dtype(dt))
+            dest = got
+        target.fbo.read_into(dest, viewport=viewport, components=dest.shape[-1], attachment=attachment,
+                             dtype=dt, alignment=1)
+        return dest
+
+    def finish(self) -> None:
+        """Wait for the GPU (a draw's time measured to its end)."""
+        self.ctx.finish()
+
+    def draw(self, d: Draw):
+        """Draw ``d`` (:class:`cellgl.gl.dispatch.Draw`); returns the program it drew with."""
+        prog, vao = self._program(d.vertex, d.fragment, d.defines)
+        set_uniforms(prog, d.uniforms)
+        for unit, smp in (d.textures or {}).items():
+            smp.texture.filter = _FILTERS[smp.linear]
+            smp.texture.repeat_x = smp.texture.repeat_y = smp.repeat
+            smp.texture.use(unit)
+        count = 3
+        if d.vertices is not None:
+            vao, count = self._vertices(prog, d.vertices)
+        t = d.target
+        t.fbo.use()
+        t.fbo.viewport = d.viewport if d.viewport is not None else (0, 0, *t.size)
+        if d.clear is not None:
+            t.fbo.clear(*d.clear, depth=1.0)           # the whole target
+        ctx = self.ctx
+        flags = (ctx.DEPTH_TEST if d.depth_test else 0) | (ctx.BLEND if d.blend else 0)
+        ctx.enable_only(flags)
+        if d.blend == "add":
+            ctx.blend_func = ctx.ONE, ctx.ONE
+            ctx.blend_equation = ctx.FUNC_ADD
+        elif d.blend is not None:
+            raise ValueError(f"unknown blend {d.blend!r}; accepted: 'add' or None")
+        try:
+            if count:
+                vao.render(mode=ctx.TRIANGLES, vertices=count)
+        finally:
+            ctx.enable_only(ctx.NOTHING)
+        return prog
+
+    def _vertices(self, prog, v: Vertices):
+        """The vertex array of ``v`` for ``prog``: buffers kept under ``v.key`` (grown when too
+        small), the array remade when the program or layout changes. Returns (array, count)."""
+        data = np.ascontiguousarray(v.array, dtype="<f4")
+        idx = None if v.indices is None else np.ascontiguousarray(v.indices, dtype="<u4")
+        key = ("vertices", v.key)
+        got = self.held.objects.get(key)
+        kept = got[1] if got is not None else None
+        if (kept is None or kept.prog is not prog or kept.layout != (v.layout, tuple(v.names))
+                or kept.vbo.size < max(4, data.nbytes) or (idx is not None) != (kept.ibo is not None)
+                or (idx is not None and kept.ibo.size < max(4, idx.nbytes))):
+            release_object(kept)
+            vbo = self.ctx.buffer(reserve=max(64, data.nbytes + data.nbytes // 4))
+            ibo = None if idx is None else self.ctx.buffer(reserve=max(64, idx.nbytes + idx.nbytes // 4))
+            vao = self.ctx.vertex_array(prog, [(vbo, v.layout, *v.names)], index_buffer=ibo,
+                                        index_element_size=4)
+            kept = _Vertices(prog, (v.layout, tuple(v.names)), vbo, ibo, vao)
+            self.held.objects[key] = (None, kept)
+        if data.nbytes:
+            kept.vbo.write(data)
+        if idx is not None and idx.nbytes:
+            kept.ibo.write(idx)
+        return kept.vao, int(idx.size if idx is not None else len(data))
+
     def _bind_words(self, data, raw, content, binding, comps):  # pragma: no cover
         raise NotImplementedError
 
 
 def set_uniform(prog, name: str, value) -> None:
-    """Set ``prog[name]`` where the compiler kept it (``name in prog`` walks every member)."""
+    """Set ``prog[name]`` where the compiler kept it (``name in prog`` would walk every member):
+    a number or tuple as its value; an array (a NumPy array of the uniform's type, one row per
+    element) written whole, cut to the elements the compiler kept (it may trim an array to the
+    entries in use). The one way cellgl sets a uniform."""
     u = prog.get(name, None)
-    if u is not None:
+    if u is None:
+        return
+    if isinstance(value, np.ndarray):
+        n = getattr(u, "array_length", 1)
+        a = np.ascontiguousarray(value if value.ndim else value.reshape(1))
+        u.write(a[:n].tobytes())
+    else:
         u.value = value
+
+
+def set_uniforms(prog, values) -> None:
+    """:func:`set_uniform` for each ``name: value`` of ``values`` (None: none)."""
+    for name, value in (values or {}).items():
+        set_uniform(prog, name, value)
+
+
+_FILTERS = {False: (0x2600, 0x2600), True: (0x2601, 0x2601)}     # GL_NEAREST, GL_LINEAR
+
+
+class Target:
+    """A render target of a :class:`Runner` (:meth:`Runner.target`): its framebuffer ``fbo``, its
+    colour ``textures`` and their ``formats``, its ``depth`` buffer (or None) and ``size`` (w, h)."""
+
+    def __init__(self, fbo, textures, depth, size, formats):
+        self.fbo, self.textures, self.depth, self.size = fbo, list(textures), depth, tuple(size)
+        self.formats = tuple(formats)     # (dtype, components) per colour attachment
+        self.arrays: dict = {}            # read-back arrays kept (Runner.read)
+
+    def release(self) -> None:
+        for o in [self.fbo, *self.textures, self.depth]:
+            release_object(o)
+
+
+class _Vertices:
+    """A draw's kept vertex buffers and their vertex array for one program."""
+
+    def __init__(self, prog, layout, vbo, ibo, vao):
+        self.prog, self.layout, self.vbo, self.ibo, self.vao = prog, layout, vbo, ibo, vao
+
+    def release(self) -> None:
+        for o in (self.vao, self.vbo, self.ibo):
+            release_object(o)
 
 
 #: the head of the flag's region on the compute path: the counter (0) and the canary's length
@@ -180,6 +359,14 @@ class FragmentRunner(Runner):
     path = "fragment"
 
     # -- programs and objects -------------------------------------------------------------------
+
+    def path_defines(self) -> dict:
+        # storage words in textures (shaders/storage.glsl: defined, the textures' row bits)
+        return {"CELL_STORAGE_ROW_BITS": STORAGE_ROW_BITS}
+
+    def _samplers(self, prog) -> None:
+        for name, unit in SAMPLERS.items():
+            set_uniform(prog, name, unit)
 
     def _bind_words(self, data, raw, content, binding, comps):
         width = 1 << STORAGE_ROW_BITS
@@ -218,6 +405,8 @@ class FragmentRunner(Runner):
     # -- running a pass -------------------------------------------------------------------------
 
     def run(self, p: Pass) -> Result:
+        if p.check is not None:
+            p.check(False)
         layout = [(o.name, kind_of(o.array), o.array.shape[1]) for o in p.outputs]
         per = draw_buffers(self.ctx) - (1 if p.flag is not None else 0)
         all_slots = slots(layout)
@@ -231,8 +420,7 @@ class FragmentRunner(Runner):
             d = dict(base)
             d.update(pass_defines(p.flag, draw_slots))
             prog, vao = self.entry(p.fragment, d, files=p.files, lru=p.lru)
-            if p.setup is not None:
-                p.setup(prog)
+            self._prepare(p, prog)
             progs.append((prog, vao, draw_slots))
         if isinstance(inp, Grid):
             self._grid(inp, [q for q, _, _ in progs])
@@ -373,13 +561,15 @@ class ComputeRunner(Runner):
     def run(self, p: Pass) -> Result:
         """Dispatch ``p`` in tiles (the watchdog's); the tiles of a chunk write ranges of one
         buffer per output, read back once per chunk straight into the destination arrays."""
+        grouped = self.grouped(p)
+        if p.check is not None:
+            p.check(grouped)
         d = dict(p.defines)
-        d.update(p.group_defines or {})
+        d.update(p.group_defines if grouped else {})
         d.setdefault("CELL_LOCAL_SIZE", LOCAL_SIZE)
         local = int(d["CELL_LOCAL_SIZE"])
         prog = self.compute_program(p.compute, d, files=p.files, lru=p.lru)
-        if p.setup is not None:
-            p.setup(prog)
+        self._prepare(p, prog)
         inp = p.inputs
         if isinstance(inp, Positions):
             set_uniform(prog, "u_scale", float(inp.scale))
@@ -482,7 +672,8 @@ class ComputeRunner(Runner):
         if isinstance(inp, Image):
             w, h = inp.width, inp.height
             lx, ly = inp.local
-            rows = max(inp.align, (step // max(1, w)) // inp.align * inp.align)
+            align = inp.group_align if self.grouped(p) and inp.group_align else inp.align
+            rows = max(align, (step // max(1, w)) // align * align)
             for y0 in range(0, h, rows):
                 r = min(rows, h - y0)
                 yield y0 * w, r * w, (-(-w // lx), -(-r // ly), 1), (("u_row0", y0),)

@@ -44,7 +44,8 @@ from cellgl.texture.images import BINDING as CELL_IMAGE_BINDING
 from cellgl.basis.features import feature_max_ring
 from cellgl.basis.reference import MAX_POINTS, W96_DENSITY_ADJUSTMENT, max_ring_default, poisson_thresholds
 
-__all__ = ["defines", "uniform_values", "lattice_origins", "group_records", "group_octaves", "set_uniforms", "set_view", "glsl_struct_block",
+__all__ = ["defines", "uniform_values", "lattice_origins", "group_records", "group_octaves", "set_uniforms", "set_view",
+           "recipe_uniforms", "view_uniforms", "glsl_struct_block",
            "glsl_uniform_block", "glsl_params_from_uniforms", "glsl_constant_block", "LOCAL_SIZE",
            "uniform_decls"]
 
@@ -176,27 +177,22 @@ def glsl_params_from_uniforms(prefix: str = "u_", function: str = "cell_texture_
 
 
 _DENSITY_IMAGE_HOOK = f"""
+// The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image)
+// and the cell image as r | g << 8 | b << 16 per texel (row-major, row 0 at v = 0;
+// cellgl.texture.images.bind): words of storage bindings {DENSITY_IMAGE_BINDING} and {CELL_IMAGE_BINDING} (storage.glsl), read by
+// the hooks lib/points.glsl and lib/texture.glsl declare.
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
-// The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image):
-// the hook lib/points.glsl declares.
-#ifdef CELL_STORAGE_ROW_BITS
-// (the fragment path: the words in a texture on unit {DENSITY_IMAGE_BINDING}, shaders/storage.glsl)
-uint cell_density_image_level(int index) {{ return cell_storage_word(u_storage_{DENSITY_IMAGE_BINDING}, index); }}
-#else
-layout(std430, binding = {DENSITY_IMAGE_BINDING}) readonly buffer CellDensityImage {{ uint u_density_image[]; }};
-uint cell_density_image_level(int index) {{ return u_density_image[index]; }}
+#define CELL_STORAGE_WORDS_{DENSITY_IMAGE_BINDING}
 #endif
-#endif
-
 #if CELL_TEX_CELL_IMAGE
-// The cell image as r | g << 8 | b << 16 per texel, row-major, row 0 at v = 0
-// (cellgl.texture.images.bind): the hook lib/texture.glsl declares.
-#ifdef CELL_STORAGE_ROW_BITS
-uint cell_texture_image_texel(int index) {{ return cell_storage_word(u_storage_{CELL_IMAGE_BINDING}, index); }}
-#else
-layout(std430, binding = {CELL_IMAGE_BINDING}) readonly buffer CellImage {{ uint u_cell_image[]; }};
-uint cell_texture_image_texel(int index) {{ return u_cell_image[index]; }}
+#define CELL_STORAGE_WORDS_{CELL_IMAGE_BINDING}
 #endif
+#include "storage.glsl"
+#if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
+uint cell_density_image_level(int index) {{ return cell_storage_word_{DENSITY_IMAGE_BINDING}(index); }}
+#endif
+#if CELL_TEX_CELL_IMAGE
+uint cell_texture_image_texel(int index) {{ return cell_storage_word_{CELL_IMAGE_BINDING}(index); }}
 #endif
 """
 
@@ -476,47 +472,57 @@ _UNIFORM_DTYPES = {"u_thresholds": np.uint32, "u_origin_cell": np.int32, "u_nois
                    "u_density_thresholds": np.uint32, "u_density_axis": np.int32, "u_density_info": np.int32}
 
 
-def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False, mean: bool = True) -> None:
-    """Set every ``u_<param>`` uniform of ``prog`` (compute or fragment) from the recipe.
+def recipe_uniforms(recipe, pan=(0.0, 0.0), *, pan_only: bool = False, mean: bool = True, ctx=None) -> dict:
+    """Every ``u_<param>`` uniform of the texture programs for the recipe, as the runner sets them
+    (:func:`cellgl.gl.runner.set_uniforms`: arrays as NumPy arrays of the uniform's type), with
+    the recipe's density or cell image bound on ``ctx`` (default: cellgl's context) where its
+    programs read it.
 
-    Uniforms the compiler removed are skipped. ``pan`` (du, dv): shift the view by this much
-    in uv, exactly (it goes into the split origins in float64, see :func:`set_view`).
-    ``pan_only``: set only those that depend on ``pan`` (the rest were set for this recipe).
-    ``mean``: as :func:`uniform_values`.
+    ``pan`` (du, dv): shift the view by this much in uv, exactly (it goes into the split origins
+    in float64, see :func:`view_uniforms`). ``pan_only``: only those that depend on ``pan`` (the
+    rest were set for this recipe). ``mean``: as :func:`uniform_values`.
     """
     recipe = load_recipe(recipe)
     if recipe.values["density_map"] == "image":
         from cellgl.basis.gpu import bind_density_image
 
-        bind_density_image(density_encodings(recipe, pan)[0].levels, ctx=getattr(prog, "ctx", None))
+        bind_density_image(density_encodings(recipe, pan)[0].levels, ctx=ctx)
     if recipe.values["cell_color"] == "image":
         from cellgl.texture.images import bind
 
-        bind(recipe.cell_pixels(), ctx=getattr(prog, "ctx", None))
+        bind(recipe.cell_pixels(), ctx=ctx)
     values = (pan_uniform_values(recipe, pan) if pan_only
               else uniform_values(recipe, pan, material=True, mean=mean))
-    for name, value in values.items():
-        if name not in prog:
-            continue
-        u = prog[name]
-        if isinstance(value, list):
-            n = getattr(u, "array_length", len(value))
-            u.write(np.asarray(value[:n], dtype=_UNIFORM_DTYPES.get(name, np.float32)).tobytes())
-        else:
-            u.value = value
+    return {name: np.asarray(v, dtype=_UNIFORM_DTYPES.get(name, np.float32)) if isinstance(v, list) else v
+            for name, v in values.items()}
 
 
-def set_view(prog, recipe, uv0, extent) -> None:
-    """The fragment entry's view: show ``uv = uv0 + (s, t) * extent`` over the viewport.
+def set_uniforms(prog, recipe, pan=(0.0, 0.0), *, pan_only: bool = False, mean: bool = True) -> None:
+    """Set every ``u_<param>`` uniform of ``prog`` (compute or fragment) from the recipe
+    (:func:`recipe_uniforms` on ``prog``'s context; uniforms the compiler removed are skipped)."""
+    from cellgl.gl.runner import set_uniforms as _set
+
+    _set(prog, recipe_uniforms(recipe, pan, pan_only=pan_only, mean=mean, ctx=getattr(prog, "ctx", None)))
+
+
+def view_uniforms(recipe, uv0, extent, ctx=None) -> dict:
+    """The fragment entry's uniforms to show ``uv = uv0 + (s, t) * extent`` over the viewport.
 
     ``shaders/texture.frag`` computes ``uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw`` in
     float32; a pan far away would lose precision there, so ``uv0`` goes into the split origins
-    (float64, :func:`lattice_origins`) and ``u_view = (0, 0, extent)``. Sets every recipe
-    uniform too (as :func:`set_uniforms`).
+    (float64, :func:`lattice_origins`) and ``u_view = (0, 0, extent)``. With every recipe
+    uniform (as :func:`recipe_uniforms`, images bound on ``ctx``).
     """
-    set_uniforms(prog, recipe, pan=(float(uv0[0]), float(uv0[1])))
-    if "u_view" in prog:
-        prog["u_view"].value = (0.0, 0.0, float(extent[0]), float(extent[1]))
+    out = recipe_uniforms(recipe, pan=(float(uv0[0]), float(uv0[1])), ctx=ctx)
+    out["u_view"] = (0.0, 0.0, float(extent[0]), float(extent[1]))
+    return out
+
+
+def set_view(prog, recipe, uv0, extent) -> None:
+    """Set :func:`view_uniforms` on ``prog``."""
+    from cellgl.gl.runner import set_uniforms as _set
+
+    _set(prog, view_uniforms(recipe, uv0, extent, ctx=getattr(prog, "ctx", None)))
 
 
 # ------------------------------------------------------------------------------ GPU evaluation
