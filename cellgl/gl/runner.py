@@ -192,7 +192,8 @@ class Runner:
 
     def target(self, key: str, size, formats=(("f4", 4),), depth: bool = False, linear: bool = False) -> Target:
         """A render target ``size`` (w, h) kept under ``key``: one texture per ``formats`` entry
-        (dtype ``"f4"``/``"u1"``..., components), a depth buffer with ``depth``; remade (the old one
+        (moderngl's dtype: ``"f1"`` normalised bytes, ``"f4"``, ``"u4"``...; components), a depth
+        buffer with ``depth``; remade (the old one
         released after the new one is bound) when the size or formats change."""
         size = (max(1, int(size[0])), max(1, int(size[1])))
 
@@ -230,7 +231,7 @@ class Runner:
             w, h = target.size if viewport is None else viewport[2:]
             got = target.arrays.get((attachment, w, h))
             if got is None:
-                got = target.arrays[(attachment, w, h)] = np.empty((h, w, comps), np.dtype(dt))
+                got = target.arrays[(attachment, w, h)] = np.empty((h, w, comps), _NUMPY[dt])
             dest = got
         target.fbo.read_into(dest, viewport=viewport, components=dest.shape[-1], attachment=attachment,
                              dtype=dt, alignment=1)
@@ -301,16 +302,15 @@ class Runner:
 
 def set_uniform(prog, name: str, value) -> None:
     """Set ``prog[name]`` where the compiler kept it (``name in prog`` would walk every member):
-    a number or tuple as its value; an array (a NumPy array of the uniform's type, one row per
-    element) written whole, cut to the elements the compiler kept (it may trim an array to the
-    entries in use). The one way cellgl sets a uniform."""
+    a number or tuple as its value; a NumPy array of the uniform's scalar type (one row per
+    element; a matrix column-major) written whole, cut to the elements the compiler kept (it may
+    trim an array to the entries in use). The one way cellgl sets a uniform."""
     u = prog.get(name, None)
     if u is None:
         return
-    if isinstance(value, np.ndarray):
-        n = getattr(u, "array_length", 1)
-        a = np.ascontiguousarray(value if value.ndim else value.reshape(1))
-        u.write(a[:n].tobytes())
+    if isinstance(value, np.ndarray):     # the elements kept, each of u.dimension scalars
+        a = np.ascontiguousarray(value).reshape(-1)
+        u.write(a[: getattr(u, "array_length", 1) * getattr(u, "dimension", a.size)].tobytes())
     else:
         u.value = value
 
@@ -322,6 +322,8 @@ def set_uniforms(prog, values) -> None:
 
 
 _FILTERS = {False: (0x2600, 0x2600), True: (0x2601, 0x2601)}     # GL_NEAREST, GL_LINEAR
+#: moderngl's texture dtypes (f1: normalised bytes; u1, u4, i4: integers) as NumPy's
+_NUMPY = {"f1": np.uint8, "u1": np.uint8, "f2": np.float16, "f4": np.float32, "u4": np.uint32, "i4": np.int32}
 
 
 class Target:
