@@ -74,10 +74,7 @@ def _buffers(outputs) -> tuple[str, ...]:
     return basis + (("features",) if any(_features.flags(outputs).values()) else ())
 
 
-def _set(prog, name, value):
-    u = prog.get(name, None)          # (``name in prog`` walks every member)
-    if u is not None:
-        u.value = value
+_set = _runner.set_uniform
 
 
 def _set_params(prog, p: Params):
@@ -85,9 +82,7 @@ def _set_params(prog, p: Params):
     _set(prog, "u_jitter", float(p.jitter))
     _set(prog, "u_min_points", int(p.min_points))
     _set(prog, "u_max_points", int(p.max_points))
-    if "u_thresholds" in prog:
-        u = prog["u_thresholds"]         # the compiler may trim the array to the entries in use
-        u.write(p.thresholds[: getattr(u, "array_length", len(p.thresholds))].astype(np.uint32).tobytes())
+    _set(prog, "u_thresholds", p.thresholds.astype(np.uint32))     # (cut to the entries the compiler kept)
     _set(prog, "u_period", tuple(int(v) for v in p.period))
     _set(prog, "u_minkowski_p", float(p.minkowski_p))
     _set(prog, "u_out_scale", float(1.0 / p.scale))
@@ -102,11 +97,8 @@ def set_density(prog, enc) -> None:
     :class:`cellgl.basis.density.DensityEncoding` and bind its image levels to storage buffer 7."""
     if enc is None:
         return
-    if "u_density_thresholds" in prog:
-        prog["u_density_thresholds"].write(enc.thresholds.astype(np.uint32).tobytes())
-    if "u_density_axis" in prog:
-        u = prog["u_density_axis"]       # the compiler may trim the array to the axes in use
-        u.write(enc.axes[: getattr(u, "array_length", 4)].astype(np.int32).tobytes())
+    _set(prog, "u_density_thresholds", enc.thresholds.astype(np.uint32))
+    _set(prog, "u_density_axis", enc.axes.astype(np.int32))       # (cut to the axes the compiler kept)
     _set(prog, "u_density_info", enc.info)
     bind_density_image(enc.levels)
 

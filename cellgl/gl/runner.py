@@ -27,16 +27,19 @@ from collections import OrderedDict
 
 import numpy as np
 
+from cellgl.gl import compute as _comp
 from cellgl.gl import context, glsl
-from cellgl.gl import path as _path
 from cellgl.gl import dispatch as _d
+from cellgl.gl import fragment as _frag
 from cellgl.gl import registry
-from cellgl.gl.dispatch import (CHUNK_BYTES, KIND, STORAGE_BLOCK_MAX, STORAGE_BLOCK_MIN, TEXTURE_ROWS_MAX, CHUNK,
-                                LOCAL_SIZE, MAX_TARGETS, SAMPLE_ROW_BITS, SAMPLERS, STORAGE_ROW_BITS, WIDTH,
-                                Draw, Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows,
-                                Sampler, Vertices, kind_of,
-                                target_comps, axis_tables, draw_buffers, grid_slabs, pass_defines,
-                                read_rows, slots, split_points, tile_samples)
+from cellgl.gl.compute import (CHUNK_BYTES, LOCAL_SIZE, SAMPLE_ROW_BITS, STORAGE_BLOCK_MAX, STORAGE_BLOCK_MIN,
+                               TEXTURE_ROWS_MAX, grid_slabs)
+from cellgl.gl.dispatch import (Draw, Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, Sampler,
+                                Vertices, tile_samples)
+from cellgl.gl.fragment import (CHUNK, KIND, MAX_TARGETS, SAMPLERS, STORAGE_ROW_BITS, WIDTH, axis_tables,
+                                draw_buffers, kind_of, pass_defines, read_rows, slots, split_points, target_comps)
+from cellgl.gl.draws import FILTERS, Drawing, Target, set_uniform, set_uniforms
+from cellgl.gl.path import gpu_path
 from cellgl.gl.registry import release_object, drop, held, store
 
 __all__ = ["Runner", "ComputeRunner", "FragmentRunner", "runner", "held", "drop", "store", "Pass", "Output",
@@ -48,15 +51,16 @@ def runner(ctx=None) -> Runner:
     """The runner of ``ctx`` (default: cellgl's context) for the path
     :func:`cellgl.gl.path.gpu_path` gives it, made on first use and kept in the context's entry."""
     h = held(ctx if ctx is not None else context.get_context())
-    kind = _path.gpu_path(h.ctx)
+    kind = gpu_path(h.ctx)
     r = h.runners.get(kind)
     if r is None:
         r = h.runners[kind] = (ComputeRunner if kind == "compute" else FragmentRunner)(h)
     return r
 
 
-class Runner:
-    """The runner of one context and path; see the module's doc."""
+class Runner(Drawing):
+    """The runner of one context and path; see the module's doc (draws, render targets and the
+    objects it keeps: :class:`cellgl.gl.draws.Drawing`)."""
 
     path = ""
     #: whether invocations run in work groups of :attr:`Image.local` aligned to the image (an
@@ -102,7 +106,7 @@ class Runner:
         ``tiles.vert``, ``defines`` and generated ``files``, in the context's one cache."""
         d = dict(defines or {})
         d.setdefault("CELL_FRAG_WIDTH", WIDTH)
-        d.setdefault("CELL_STORAGE_ROW_BITS", _path.STORAGE_ROW_BITS)
+        d.setdefault("CELL_STORAGE_ROW_BITS", STORAGE_ROW_BITS)
         key = registry.program_key("fragment", fragment, defines=d, files=files)
 
         def make():
@@ -123,17 +127,6 @@ class Runner:
 
     # -- objects --------------------------------------------------------------------------------
 
-    def _object(self, key, content, make):
-        """The GL object under ``key``, remade (the old one released) when ``content`` changed."""
-        objs = self.held.objects
-        got = objs.get(key)
-        if got is None or got[0] != content:
-            obj = make()
-            if got is not None:
-                release_object(got[1])
-            objs[key] = got = (content, obj)
-        return got[1]
-
     def input_texture(self, unit: int, array: np.ndarray, width: int = WIDTH):
         """Upload ``array`` (count, c) of int32, uint32 or float32 to texture unit ``unit``: sample
         j at texel (j % width, j // width), c components; kept and grown across calls."""
@@ -146,7 +139,7 @@ class Runner:
         if tex is None or tex.height < rows or tex.width != width or tex.components != comps or tex.dtype != dtype:
             release_object(tex)
             tex = self.ctx.texture((width, max(rows, 8)), comps, dtype=dtype)
-            tex.filter = (0x2600, 0x2600)
+            tex.filter = FILTERS[False]
             objs[("input", unit)] = (None, tex)
         full, tail = divmod(count, width)
         a = np.ascontiguousarray(array)
@@ -188,168 +181,6 @@ class Runner:
             p.setup(prog)
         set_uniforms(prog, p.uniforms)
 
-    # -- draws ----------------------------------------------------------------------------------
-
-    def target(self, key: str, size, formats=(("f4", 4),), depth: bool = False, linear: bool = False) -> Target:
-        """A render target ``size`` (w, h) kept under ``key``: one texture per ``formats`` entry
-        (moderngl's dtype: ``"f1"`` normalised bytes, ``"f4"``, ``"u4"``...; components), a depth
-        buffer with ``depth``; remade (the old one
-        released after the new one is bound) when the size or formats change."""
-        size = (max(1, int(size[0])), max(1, int(size[1])))
-
-        def make():
-            texs = [self.ctx.texture(size, c, dtype=dt) for dt, c in formats]
-            for t in texs:
-                t.filter = _FILTERS[linear]
-            rb = self.ctx.depth_renderbuffer(size) if depth else None
-            fbo = self.ctx.framebuffer(texs, rb)
-            fbo.use()            # bound before the old one goes (moderngl restores the last binding)
-            return Target(fbo, texs, rb, size, formats)
-        return self._object(("target", key), (size, tuple(formats), depth), make)
-
-    def image(self, key: str, array: np.ndarray) -> object:
-        """A float32 (h, w, c) ``array`` (c in 1..4) as a texture kept under ``key`` (rewritten;
-        remade when the shape changes); row 0 at texture coordinate t = 0."""
-        a = np.ascontiguousarray(array, np.float32)
-        h, w, c = a.shape
-        tex = self._object(("image", key), (w, h, c), lambda: self.ctx.texture((w, h), c, dtype="f4"))
-        tex.write(a)
-        return tex
-
-    def release(self, key: str) -> None:
-        """Release what is kept under ``key`` (:meth:`target`, :meth:`image`, a draw's vertices)."""
-        for k in [k for k in self.held.objects if isinstance(k, tuple) and k[1:2] == (key,)]:
-            release_object(self.held.objects.pop(k)[1])
-
-    def read(self, target: Target, dest: np.ndarray | None = None, attachment: int = 0,
-             viewport=None) -> np.ndarray:
-        """Read ``attachment`` of ``target`` (``viewport`` (x, y, w, h): a part, default all) into
-        ``dest`` ((h, w, c) of the attachment's dtype, C-contiguous; row 0 the bottom row) and
-        return it; ``dest`` None: an array kept with the target (overwritten by the next read)."""
-        dt, comps = target.formats[attachment]
-        if dest is None:
-            w, h = target.size if viewport is None else viewport[2:]
-            got = target.arrays.get((attachment, w, h))
-            if got is None:
-                got = target.arrays[(attachment, w, h)] = np.empty((h, w, comps), _NUMPY[dt])
-            dest = got
-        target.fbo.read_into(dest, viewport=viewport, components=dest.shape[-1], attachment=attachment,
-                             dtype=dt, alignment=1)
-        return dest
-
-    def finish(self) -> None:
-        """Wait for the GPU (a draw's time measured to its end)."""
-        self.ctx.finish()
-
-    def draw(self, d: Draw):
-        """Draw ``d`` (:class:`cellgl.gl.dispatch.Draw`); returns the program it drew with."""
-        prog, vao = self._program(d.vertex, d.fragment, d.defines)
-        set_uniforms(prog, d.uniforms)
-        for unit, smp in (d.textures or {}).items():
-            smp.texture.filter = _FILTERS[smp.linear]
-            smp.texture.repeat_x = smp.texture.repeat_y = smp.repeat
-            smp.texture.use(unit)
-        count = 3
-        if d.vertices is not None:
-            vao, count = self._vertices(prog, d.vertices)
-        t = d.target
-        t.fbo.use()
-        t.fbo.viewport = d.viewport if d.viewport is not None else (0, 0, *t.size)
-        if d.clear is not None:
-            t.fbo.clear(*d.clear, depth=1.0)           # the whole target
-        ctx = self.ctx
-        flags = (ctx.DEPTH_TEST if d.depth_test else 0) | (ctx.BLEND if d.blend else 0)
-        ctx.enable_only(flags)
-        if d.blend == "add":
-            ctx.blend_func = ctx.ONE, ctx.ONE
-            ctx.blend_equation = ctx.FUNC_ADD
-        elif d.blend is not None:
-            raise ValueError(f"unknown blend {d.blend!r}; accepted: 'add' or None")
-        try:
-            if count:
-                vao.render(mode=ctx.TRIANGLES, vertices=count)
-        finally:
-            ctx.enable_only(ctx.NOTHING)
-        return prog
-
-    def _vertices(self, prog, v: Vertices):
-        """The vertex array of ``v`` for ``prog``: buffers kept under ``v.key`` (grown when too
-        small), the array remade when the program or layout changes. Returns (array, count)."""
-        data = np.ascontiguousarray(v.array, dtype="<f4")
-        idx = None if v.indices is None else np.ascontiguousarray(v.indices, dtype="<u4")
-        key = ("vertices", v.key)
-        got = self.held.objects.get(key)
-        kept = got[1] if got is not None else None
-        if (kept is None or kept.prog is not prog or kept.layout != (v.layout, tuple(v.names))
-                or kept.vbo.size < max(4, data.nbytes) or (idx is not None) != (kept.ibo is not None)
-                or (idx is not None and kept.ibo.size < max(4, idx.nbytes))):
-            release_object(kept)
-            vbo = self.ctx.buffer(reserve=max(64, data.nbytes + data.nbytes // 4))
-            ibo = None if idx is None else self.ctx.buffer(reserve=max(64, idx.nbytes + idx.nbytes // 4))
-            vao = self.ctx.vertex_array(prog, [(vbo, v.layout, *v.names)], index_buffer=ibo,
-                                        index_element_size=4)
-            kept = _Vertices(prog, (v.layout, tuple(v.names)), vbo, ibo, vao)
-            self.held.objects[key] = (None, kept)
-        if data.nbytes:
-            kept.vbo.write(data)
-        if idx is not None and idx.nbytes:
-            kept.ibo.write(idx)
-        return kept.vao, int(idx.size if idx is not None else len(data))
-
-    def _bind_words(self, data, raw, content, binding, comps):  # pragma: no cover
-        raise NotImplementedError
-
-
-def set_uniform(prog, name: str, value) -> None:
-    """Set ``prog[name]`` where the compiler kept it (``name in prog`` would walk every member):
-    a number or tuple as its value; a NumPy array of the uniform's scalar type (one row per
-    element; a matrix column-major) written whole, cut to the elements the compiler kept (it may
-    trim an array to the entries in use). The one way cellgl sets a uniform."""
-    u = prog.get(name, None)
-    if u is None:
-        return
-    if isinstance(value, np.ndarray):     # the elements kept, each of u.dimension scalars
-        a = np.ascontiguousarray(value).reshape(-1)
-        u.write(a[: getattr(u, "array_length", 1) * getattr(u, "dimension", a.size)].tobytes())
-    else:
-        u.value = value
-
-
-def set_uniforms(prog, values) -> None:
-    """:func:`set_uniform` for each ``name: value`` of ``values`` (None: none)."""
-    for name, value in (values or {}).items():
-        set_uniform(prog, name, value)
-
-
-_FILTERS = {False: (0x2600, 0x2600), True: (0x2601, 0x2601)}     # GL_NEAREST, GL_LINEAR
-#: moderngl's texture dtypes (f1: normalised bytes; u1, u4, i4: integers) as NumPy's
-_NUMPY = {"f1": np.uint8, "u1": np.uint8, "f2": np.float16, "f4": np.float32, "u4": np.uint32, "i4": np.int32}
-
-
-class Target:
-    """A render target of a :class:`Runner` (:meth:`Runner.target`): its framebuffer ``fbo``, its
-    colour ``textures`` and their ``formats``, its ``depth`` buffer (or None) and ``size`` (w, h)."""
-
-    def __init__(self, fbo, textures, depth, size, formats):
-        self.fbo, self.textures, self.depth, self.size = fbo, list(textures), depth, tuple(size)
-        self.formats = tuple(formats)     # (dtype, components) per colour attachment
-        self.arrays: dict = {}            # read-back arrays kept (Runner.read)
-
-    def release(self) -> None:
-        for o in [self.fbo, *self.textures, self.depth]:
-            release_object(o)
-
-
-class _Vertices:
-    """A draw's kept vertex buffers and their vertex array for one program."""
-
-    def __init__(self, prog, layout, vbo, ibo, vao):
-        self.prog, self.layout, self.vbo, self.ibo, self.vao = prog, layout, vbo, ibo, vao
-
-    def release(self) -> None:
-        for o in (self.vao, self.vbo, self.ibo):
-            release_object(o)
-
 
 #: the head of the flag's region on the compute path: the counter (0) and the canary's length
 _CANARY_HEADER = np.array([0, _d.LOOP_CANARY_PASSES], np.uint32).tobytes()
@@ -379,7 +210,7 @@ class FragmentRunner(Runner):
             padded = np.zeros(rows * width * comps, np.uint32)
             padded[:data.size] = data.reshape(-1)
             tex = self.ctx.texture((width, rows), comps, padded.tobytes(), dtype="u4")
-            tex.filter = (0x2600, 0x2600)          # GL_NEAREST: an integer texture is complete only so
+            tex.filter = FILTERS[False]          # nearest: an integer texture is complete only so
             return tex
         self._object(("words", binding), (content, comps), make).use(binding)
 
@@ -443,7 +274,7 @@ class FragmentRunner(Runner):
                 rows = -(-m // WIDTH)
                 fbo = self._target(formats, rows)
                 fbo.use()
-                for viewport in _tiles(rows, tile):
+                for viewport in _frag.tiles(rows, tile):
                     fbo.viewport = viewport
                     vao.render(mode=self.ctx.TRIANGLES, vertices=3)
                 att = 0
@@ -502,19 +333,6 @@ class FragmentRunner(Runner):
 # ---------------------------------------------------------------------------------------------
 # The compute path
 # ---------------------------------------------------------------------------------------------
-
-def _tiles(rows: int, tile: int):
-    """The viewports of the draws over ``rows`` rows of WIDTH samples, at most ``tile`` samples
-    each: whole rows, or (a tile under a row) runs of one row."""
-    if tile >= WIDTH:
-        step = tile // WIDTH
-        for r0 in range(0, rows, step):
-            yield (0, r0, WIDTH, min(step, rows - r0))
-        return
-    for r in range(rows):
-        for x0 in range(0, WIDTH, tile):
-            yield (x0, r, min(tile, WIDTH - x0), 1)
-
 
 class ComputeRunner(Runner):
     """OpenGL 4.3: dispatches of the ``*.comp`` entry, outputs in storage buffers."""
@@ -672,42 +490,31 @@ class ComputeRunner(Runner):
                 yield start, slab[4] * slab[5] * groups[2], groups, (("u_slab", slab[:4]), ("u_slab_size", slab[4:]))
             return
         if isinstance(inp, Image):
-            w, h = inp.width, inp.height
-            lx, ly = inp.local
             align = inp.group_align if self.grouped(p) and inp.group_align else inp.align
-            rows = max(align, (step // max(1, w)) // align * align)
-            for y0 in range(0, h, rows):
-                r = min(rows, h - y0)
-                yield y0 * w, r * w, (-(-w // lx), -(-r // ly), 1), (("u_row0", y0),)
+            yield from _comp.image_bands(inp.width, inp.height, inp.local,
+                                         max(align, (step // max(1, inp.width)) // align * align))
             return
         for first in range(0, p.count, step):
             m = min(step, p.count - first)
             yield first, m, (-(-m // local), 1, 1), ()
 
     def _upload_positions(self, prog, pts: np.ndarray) -> None:
-        """float64 positions (m, d) as the 32-bit words of an RGBA32UI texture
-        2^SAMPLE_ROW_BITS texels wide on unit 0 (``u_samples``), d / 2 texels per sample, no padding
-        between samples; kept and grown across calls."""
-        words = np.ascontiguousarray(pts, dtype=np.float64).reshape(-1).view(np.uint32)
+        """float64 positions (m, d) on unit 0 (``u_samples``) as :func:`cellgl.gl.compute.
+        sample_words` lays them out; the texture kept and grown across calls."""
+        full, rest = _comp.sample_words(pts)
         width = 1 << SAMPLE_ROW_BITS
-        rows, tail = divmod(words.size, 4 * width)
-        if rows + 1 > TEXTURE_ROWS_MAX:
-            raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
-                               f"{TEXTURE_ROWS_MAX} rows of {width}")
+        rows = full.size // (4 * width)
         objs = self.held.objects
         got = objs.get("samples")
         tex = got[1] if got is not None else None
         if tex is None or tex.height < rows + 1:
             release_object(tex)
             tex = self.ctx.texture((width, min(TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
-            tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
+            tex.filter = FILTERS[False]         # an integer texture is complete only so
             objs["samples"] = (None, tex)
         if rows:
-            tex.write(words[: rows * width * 4], viewport=(0, 0, width, rows))
-        if tail:
-            rest = words[rows * width * 4:]
-            if tail % 4:                         # 3D, an odd count: the last texel is half a sample
-                rest = np.concatenate([rest, np.zeros(4 - tail % 4, np.uint32)])
+            tex.write(full, viewport=(0, 0, width, rows))
+        if rest.size:
             tex.write(rest, viewport=(0, rows, rest.size // 4, 1))
         tex.use(0)
         set_uniform(prog, "u_samples", 0)
