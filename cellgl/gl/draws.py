@@ -46,6 +46,10 @@ FILTERS = {False: (0x2600, 0x2600), True: (0x2601, 0x2601)}
 _NUMPY = {"f1": np.uint8, "u1": np.uint8, "f2": np.float16, "f4": np.float32, "u4": np.uint32, "i4": np.int32}
 
 
+#: the target bound while a bound one is released (:meth:`Drawing.release`)
+_PARKED = "gl.parked"
+
+
 class Target:
     """A render target of a runner (:meth:`Drawing.target`): its framebuffer ``fbo``, its
     colour ``textures`` and their ``formats``, its ``depth`` buffer (or None) and ``size`` (w, h)."""
@@ -113,8 +117,13 @@ class Drawing:
         return tex
 
     def release(self, key: str) -> None:
-        """Release what is kept under ``key`` (:meth:`target`, :meth:`image`, a draw's vertices)."""
+        """Release what is kept under ``key`` (:meth:`target`, :meth:`image`, a draw's vertices).
+        A bound target is unbound first (a 1 x 1 target bound instead): moderngl rebinds the last
+        framebuffer after a read, and a released one is GL_INVALID_OPERATION."""
         for k in [k for k in self.held.objects if isinstance(k, tuple) and k[1:2] == (key,)]:
+            obj = self.held.objects[k][1]
+            if isinstance(obj, Target) and key != _PARKED and getattr(self.ctx, "fbo", None) is obj.fbo:
+                self.target(_PARKED, (1, 1)).fbo.use()
             release_object(self.held.objects.pop(k)[1])
 
     def read(self, target: Target, dest: np.ndarray | None = None, attachment: int = 0,
