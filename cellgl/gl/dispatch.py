@@ -21,6 +21,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -223,7 +224,7 @@ class Vertices:
 class Sampler:
     """A texture a :class:`Draw` samples: ``texture`` (made by the runner: :meth:`Runner.image`,
     a :class:`Target`'s), ``linear`` filtering (else nearest), ``repeat`` (else clamp)."""
-    texture: object
+    texture: Any
     linear: bool = False
     repeat: bool = False
 
@@ -238,7 +239,7 @@ class Draw:
     buffer) before it, ``blend`` (``"add"``: ONE, ONE, FUNC_ADD; None: off), ``depth_test``."""
     vertex: str
     fragment: str
-    target: object
+    target: Any
     defines: dict | None = None
     uniforms: dict | None = None
     vertices: Vertices | None = None

@@ -11,6 +11,8 @@ a GL object or sets a uniform itself (:func:`set_uniform`, the one way).
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from cellgl.gl.dispatch import Draw, Vertices
@@ -78,6 +80,12 @@ class _Vertices:
 class Drawing:
     """What a runner keeps on its context (``self.ctx``, registry entry ``self.held``) and how it
     draws; :meth:`_program` (the path's vertex + fragment programs) is the runner's."""
+
+    ctx: Any
+    held: Any
+
+    def _program(self, vertex: str, fragment: str, defines=None) -> tuple:  # pragma: no cover
+        raise NotImplementedError
 
     def _object(self, key, content, make):
         """The GL object under ``key``, remade (the old one released) when ``content`` changed."""

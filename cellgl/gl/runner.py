@@ -1,25 +1,29 @@
-"""The seam between cellgl's two GPU paths: one :class:`Runner` per context.
+"""The seam between cellgl's two GPU paths: one :class:`Runner` per context, the only code that
+dispatches or draws.
 
 The layers above (``basis/``, ``texture/``, ``pups/``) describe a pass (:class:`Pass`: the entry of
-each path, its ``#define``s, a uniform setter, the samples' input, the outputs and their
-destination arrays, the flag) and hand it to ``runner(ctx).run(pass)``; they never ask which path
-runs. The runner of a context is chosen by :func:`cellgl.gl.path.gpu_path` (compute from OpenGL 4.3,
-else fragment; ``CELLGL_PATH`` forces one):
+each path, its ``#define``s and uniforms, the samples' input, the outputs and their destination
+arrays, the flag, the path choices it would like: ``group_defines``, ``check``) and hand it to
+``runner(ctx).run(pass)``; they never ask which path runs. The runner of a context is chosen by
+:func:`cellgl.gl.path.gpu_path` (compute from OpenGL 4.3, else fragment; ``CELLGL_PATH`` forces one):
 
 * :class:`ComputeRunner` dispatches the ``*.comp`` entry: inputs in storage buffers and textures,
-  each output a storage buffer at its binding, read back straight into the destination array;
+  each output a storage buffer at its binding, read back straight into the destination array
+  (the layout: :mod:`cellgl.gl.compute`);
 * :class:`FragmentRunner` draws the fragment entry over a render target
   ``WIDTH`` samples wide: inputs in textures, each output a tightly packed render target (R, RG or
-  RGBA of its kind: float, uint or int), location 0 the flag.
+  RGBA of its kind: float, uint or int), location 0 the flag (the layout: :mod:`cellgl.gl.fragment`).
 
 Both tile the work so that no dispatch or draw runs longer than about a second on the slowest GPU
-cellgl supports (:func:`tile_samples`; docs/architecture.md, "The seam").
+cellgl supports (:func:`tile_samples`; docs/architecture.md, "The seam"). Raster and full-screen
+draws (:class:`Draw`: PUPs' raster path, ``render_fragment``, the viewer) run through
+:meth:`Runner.draw` (:mod:`cellgl.gl.draws`), with the path's programs (:meth:`Runner.program`).
 
-What a pass is, and the layouts of both paths, are :mod:`cellgl.gl.dispatch`'s. Everything a
-context holds for cellgl, programs (the ONE cache: compute entries, fragment entries and the vertex
-+ fragment programs of the viewer), storage words, sample inputs, render targets and vertex arrays,
-lives in one registry entry per context (:mod:`cellgl.gl.registry`): dropped with the context and,
-without touching the parent's driver objects, in a forked child.
+What a pass and a draw are: :mod:`cellgl.gl.dispatch`. Everything a context holds for cellgl,
+programs (the ONE cache: compute entries, fragment entries and the vertex + fragment programs of
+the draws), storage words, sample inputs, render targets and vertex buffers, lives in one registry
+entry per context (:mod:`cellgl.gl.registry`): dropped with the context and, without touching the
+parent's driver objects, in a forked child.
 """
 from __future__ import annotations
 
@@ -119,9 +123,7 @@ class Runner(Drawing):
                                        f"{glsl.map_error(str(exc), fs).strip()}")
                 err.sources = [vs, fs]
                 raise err from None
-            for name, unit in SAMPLERS.items():
-                if name in prog:
-                    prog[name].value = unit
+            set_uniforms(prog, SAMPLERS)
             return prog, self.ctx.vertex_array(prog, [])
         return registry.cached(self.ctx, key, make, lru)
 
