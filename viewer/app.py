@@ -374,10 +374,7 @@ class Viewer:
     def grab(self) -> np.ndarray:
         """The last frame as uint8 (H, W, 3), top row first."""
         self._take_context()        # a cellgl call since the frame may have taken it
-        fbo = self.renderer.frame_fbo
-        w, h = fbo.size
-        data = fbo.read(components=3, alignment=1)
-        return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+        return self.renderer.grab()
 
     def screenshot(self, path: str) -> str:
         """Save the last frame to ``path`` (its extension picks the format), whole or not at all.

@@ -73,6 +73,12 @@ class Renderer:
             self.frame_fbo = self.runner.target("viewer.frame", size, (("f1", 4),), depth=True).fbo
             self._frame_size = size
 
+    def grab(self) -> np.ndarray:
+        """The last frame as uint8 (H, W, 3), top row first."""
+        t = self.runner.target("viewer.frame", self._frame_size, (("f1", 4),), depth=True)
+        w, h = t.size
+        return self.runner.read(t, np.empty((h, w, 3), np.uint8))[::-1].copy()
+
     def _target(self, name: str, size, position: bool = False) -> runner.Target:
         """A colour texture + framebuffer (+ a float position texture and depth for the 3D view)."""
         t = self.runner.target("viewer." + name, size, (("f1", 4),) + ((("f4", 4),) if position else ()),
