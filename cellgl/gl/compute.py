@@ -28,6 +28,7 @@ STORAGE_BLOCK_MAX = 128 << 20
 #: one buffer; docs/performance.md)
 CHUNK_BYTES = 64 << 20
 
+
 def grid_slabs(X: int, Y: int, Z: int, W: int, step: int, local: int = LOCAL_SIZE):
     """The dispatches of an X x Y x Z x W grid (x fastest), each contiguous in the output and within
     :data:`MAX_GROUPS` work groups on every axis: yields ``((x0, y0, z0, w, cols, rows), first

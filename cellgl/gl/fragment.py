@@ -30,9 +30,6 @@ CANARY_UNIT = 8
 SAMPLERS = {"u_storage_5": 5, "u_storage_6": 6, "u_storage_7": 7,
             "u_in0": 0, "u_in1": 1, "u_in2": 2, "u_in3": 3, "u_in11": 11,
             "u_loop_canary": CANARY_UNIT}
-
-
-
 #: samples per upload and read-back (one render-target set; a multiple of WIDTH)
 CHUNK = 1 << 19
 #: render-target sets kept per context (least recently used released)
