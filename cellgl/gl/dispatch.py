@@ -190,6 +190,8 @@ class Pass:
     count: int
     inputs: object
     outputs: list
+    #: ``setup(prog)``, run on the program before its ``uniforms`` are set: a caller's own work on
+    #: the program (the library's passes carry ``uniforms`` only)
     setup: Callable | None = None
     flag: Flag | None = None
     files: dict | None = None
@@ -203,7 +205,8 @@ class Pass:
     #: called before the pass runs with whether it runs grouped (``group_defines`` applied): a
     #: pass may refuse what the ungrouped or the grouped layout cannot do (e.g. PUPs' loop budget)
     check: Callable | None = None
-    #: uniforms the runner sets (:func:`cellgl.gl.runner.set_uniforms`; after ``setup``)
+    #: the entry's uniforms, name -> value, which the runner sets (:func:`cellgl.gl.draws.set_uniform`:
+    #: where the compiler kept them; NumPy arrays cut to the elements kept)
     uniforms: dict | None = None
 
 
