@@ -96,11 +96,16 @@ def density_uniforms(enc) -> dict:
             "u_density_axis": enc.axes.astype(np.int32), "u_density_info": enc.info}
 
 
+#: the density image's storage binding (``cell_density_image_level`` of the entries and of
+#: shaders/texture_uniforms.glsl reads its words there)
+DENSITY_IMAGE_BINDING = 7
+
+
 def bind_density_image(levels, ctx=None) -> None:
     """Upload (cached by content, one buffer per context) and bind density-image levels (uint32)
     to storage buffer 7 of ``ctx`` (default: cellgl's context; the viewer passes its window's)."""
     if levels is not None:
-        bind_storage(levels, 7, ctx)
+        bind_storage(levels, DENSITY_IMAGE_BINDING, ctx)
 
 
 def bind_storage(words, binding: int, ctx=None) -> None:

@@ -43,6 +43,7 @@ from cellgl.texture.params import (FRACTAL_MODES, MATERIAL_CHANNELS, MAX_RAMP_KE
 from cellgl.texture.recipe import RecipeError, load_recipe, needed_n
 from cellgl.texture.images import BINDING as CELL_IMAGE_BINDING
 from cellgl.basis.features import feature_max_ring
+from cellgl.basis.gpu import DENSITY_IMAGE_BINDING
 from cellgl.basis.reference import MAX_POINTS, W96_DENSITY_ADJUSTMENT, max_ring_default, poisson_thresholds
 
 __all__ = ["defines", "uniform_values", "lattice_origins", "group_records", "group_octaves", "set_uniforms", "set_view",
@@ -87,8 +88,6 @@ _DERIVED_DENSITY = (
      "octave i, lattice axis a at 4 i + a: (o, n, m, b) of cell_density_level"),
     ("ivec4", "density_info", "[CELL_TEX_OCTAVES]", "octave i: (shift, image width, image height, 0)"),
 )
-#: the density image's storage buffer binding (cellgl.basis.gpu.bind_density_image)
-DENSITY_IMAGE_BINDING = 7
 #: derived fields of a cell image (cellgl.texture.images), present only under this condition
 _CELL_IMAGE_IF = "#if CELL_TEX_CELL_IMAGE"
 _DERIVED_CELL_IMAGE = (
