@@ -112,7 +112,9 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     -------
     dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
     float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
-    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32. Row 0 is the top of the image. With
+    ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32; ``roughness``, ``ao``, ``metallic``
+    (H, W) float32; ``cloud`` (H, W, 4) float32 (packed cloud noise, :mod:`cellgl.texture.cloud`).
+    Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z. PUPs
     recipes give ``color`` and ``height``.
 
@@ -132,7 +134,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
 
 
 #: bytes of each channel's result, per pixel (float32; id uint32)
-_RESULT_BYTES = {"color": 16, "height": 4, "normal": 12, "id": 4, "F1": 4, "F2": 4, "F3": 4, "F4": 4}
+_RESULT_BYTES = {"color": 16, "height": 4, "normal": 12, "id": 4, "F1": 4, "F2": 4, "F3": 4, "F4": 4, "cloud": 16}
 #: working bytes per pixel beyond the result (tracemalloc peaks at 128^2, llvmpipe, 2026-11-28):
 #: the NumPy path holds float64 intermediates for every pixel (f1 860, flagstone 2520), PUPs
 #: about 1000; the GPU path's: :func:`gpu_peak`
@@ -169,6 +171,9 @@ def gpu_bytes(channels) -> tuple[int, int, int]:
     if fs:
         blocks.append(4 * max(fs))
         copies += 4 * len(fs) if max(fs) > 1 else 0
+    if "cloud" in c:        # four height renders, one at a time (one block), kept; packed in float64
+        blocks.append(16)
+        copies += 4 * 4 + 5 * 8 * 4 + 16
     return sum(blocks) + copies, sum(blocks) + 4, len(blocks) + buffers
 #: share of the machine's memory one render() may ask for
 MEMORY_SHARE = 0.5

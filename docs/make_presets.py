@@ -3,7 +3,8 @@
 Each preset is declared here as a partial recipe; the script measures the range of its
 combination once (:func:`cellgl.texture.measure_range`, Worley's "empirically determining the
 range ... only done once for each combination, after which it was simply hard-wired") and
-writes the full recipe. Run from the repository root::
+writes the full recipe, then the table of every preset's octave mean
+(``cellgl/texture/octave_means.json``, :mod:`cellgl.texture.means`). Run from the repository root::
 
     PYTHONPATH=. python docs/make_presets.py [NAME ...]
 """
@@ -16,6 +17,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cellgl.texture.recipe import Recipe, preset_dir  # noqa: E402
 from cellgl.texture import measure_range  # noqa: E402
+from cellgl.texture.means import write_table  # noqa: E402
+from cellgl.texture.reference import measure_mean  # noqa: E402
 
 GREY = [[0.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]]
 # Qin 2000, section 4.1: the 13-key blue marble spline.
@@ -283,6 +286,7 @@ def main(argv) -> int:
         r.save(preset_dir() / f"{name}.json")
         print(f"{name}: range [{r.get('range_lo')}, {r.get('range_hi')}]"
               + (f", {len(r.variants)} variants" if r.variants else ""))
+    print(f"wrote {write_table(measure_mean)} (the presets' octave means)")
     return 0
 
 

@@ -193,7 +193,7 @@ def test_a_render_that_fades_no_octave_measures_no_octave_mean(ctx, monkeypatch)
     import cellgl
 
     calls = []
-    real = texture_reference._measure_mean
+    real = texture_reference.measure_mean
     r = load_recipe("f1").replace(seed=424242)             # a basis no earlier test measured
     pts = np.random.default_rng(1).uniform(-2.0, 2.0, (100, 2))
 
@@ -201,7 +201,7 @@ def test_a_render_that_fades_no_octave_measures_no_octave_mean(ctx, monkeypatch)
         calls.append(recipe.name)
         return real(recipe)
 
-    monkeypatch.setattr(texture_reference, "_measure_mean", counted)
+    monkeypatch.setattr(texture_reference, "measure_mean", counted)
     img = cellgl.render(r, 64, 64, channels=("color", "height", "normal"))
     ev = cellgl.evaluate(r, pts, ("color", "grad"))
     assert calls == []
@@ -217,7 +217,7 @@ def test_a_render_that_fades_no_octave_measures_no_octave_mean(ctx, monkeypatch)
         for k in a:
             assert a[k].tobytes() == b[k].tobytes(), k
     monkeypatch.undo()
-    monkeypatch.setattr(texture_reference, "_measure_mean", counted)
+    monkeypatch.setattr(texture_reference, "measure_mean", counted)
     fractal = load_recipe("qin-cloud").replace(seed=424243)
     assert antialias.fades(fractal.values, (1 / 64, 1 / 64, 0.0))
     cellgl.render(fractal, 64, 64)

@@ -268,7 +268,7 @@ def test_set_and_tileable_reach_the_recipe(fake, tmp_path, monkeypatch):
 
 ERRORS = [
     (["-o", "{d}/a.jpg"], "unknown extension '.jpg'; accepted .png, .exr, .tif, .tiff, .npy, .tx, .dds, "
-                          ".ktx2 (an image, or with --frames N a numbered sequence); .webp, .gif (one "
+                          ".ktx2, .vdb (an image, or with --frames N a numbered sequence); .webp, .gif (one "
                           "animated file, with --frames N); .zarr (a folder baked on Dask)"),
     (["-o", "{d}/a"], "unknown extension '(none)'"),
     (["-o", "{d}/a.png", "--channels", "albedo"], "'albedo': unknown channel; accepted color"),

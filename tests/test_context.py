@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from cellgl.gl import context
-from cellgl.gl import glsl, platforms
+from cellgl.gl import glsl, moderngl_seam, platforms, registry, versions
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -320,7 +320,7 @@ def test_context_survives_another_library_taking_current(ctx):
     want = cellgl.cellular(pts, 2, outputs=("F",)).F
     other = moderngl.create_context(standalone=True, backend="egl", require=330)
     try:
-        other.mglo.__enter__()
+        moderngl_seam.make_current(other)
         got = cellgl.cellular(pts, 2, outputs=("F",)).F
         assert got.tobytes() == want.tobytes()
         prog = context.get_context().program(
@@ -329,4 +329,79 @@ def test_context_survives_another_library_taking_current(ctx):
         prog.release()
     finally:
         other.release()
+        context.get_context()
+
+
+# --------------------------------------------------------------------------------------------
+# one state per context; what cellgl needs of moderngl beyond its public API
+# --------------------------------------------------------------------------------------------
+
+
+def test_one_state_holds_what_cellgl_knows_of_a_context(ctx):
+    st = registry.held(ctx)
+    assert registry.held(ctx) is st and registry.peek(ctx) is st and st.ctx is ctx
+    assert st.backend == context.backend_name(ctx) in context.BACKENDS
+    assert st.ladder and st.ladder[-1] == (st.ladder[-1][0], None)   # the rung that gave it
+    assert not st.private
+    from cellgl.gl import path
+
+    path.gpu_path(ctx)
+    assert st.path.results                          # the known-answer check's record
+    with context.current() as c:
+        assert c is ctx and st.thread is not None
+    # nothing stuck on moderngl's object; its user slot (extra) left to the user
+    assert ctx.extra is None and not [k for k in vars(ctx) if "cellgl" in k]
+
+
+def test_moderngl_still_has_what_the_seam_uses(ctx, monkeypatch):
+    """cellgl.gl.moderngl_seam is the one place that uses moderngl beyond its public API: this
+    fails when a moderngl release drops what it relies on."""
+    import moderngl
+
+    assert moderngl_seam.missing(ctx) == []
+    other = context._create(context.backend_name(ctx) or "egl")
+    assert not moderngl_seam.released(other)
+    other.release()
+    assert moderngl_seam.released(other)            # how a released context is recognised
+    context.get_context()                           # the session's context current again
+    monkeypatch.delattr(moderngl._store, "default_context")
+    assert moderngl_seam.missing(ctx) == ["_store.default_context"]   # the check can fail
+
+
+def test_cellgl_leaves_the_default_moderngl_context_alone(ctx, monkeypatch):
+    """moderngl.create_context makes each new context moderngl's default (what a later plain
+    moderngl.create_context() returns instead of the caller's window): cellgl's stay out of it."""
+    import moderngl
+
+    mine = object()
+    monkeypatch.setattr(moderngl._store, "default_context", mine)
+    other = context._create(context.backend_name(ctx) or "egl")
+    try:
+        assert moderngl._store.default_context is mine
+        assert versions.describe(other).endswith(f"got {versions.label(other.version_code)}")
+    finally:
+        other.release()
+        context.get_context()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="an EGL context to attach to")
+def test_attach_to_the_current_egl_context(ctx):
+    """The viewer's path: a moderngl context over the EGL context current on this thread (a
+    window's), its default framebuffer as screen; not climbed, no backend of cellgl's."""
+    import glcontext
+    import moderngl
+
+    if context.backend_name(ctx) != "egl":
+        pytest.skip("the session's context is not EGL")
+    before = moderngl._store.default_context
+    window = glcontext.get_backend_by_name("egl")(mode="standalone", glversion=330)
+    try:
+        window.__enter__()
+        w = context.attach_current(context.REQUIRED_GL, "egl")
+        assert w.version_code >= 330 and w.screen is not None and w.fbo is not None
+        assert versions.describe(w).startswith("not climbed")
+        assert context.backend_name(w) is None
+        assert moderngl._store.default_context is before
+    finally:
+        window.release()
         context.get_context()

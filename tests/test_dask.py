@@ -27,6 +27,7 @@ zarr = pytest.importorskip("zarr")
 
 from cellgl.dask import DaskError, bake_zarr, sweep, to_dask  # noqa: E402
 from cellgl.dask.zarr_bake import CHECKSUMS  # noqa: E402
+from cellgl.io.colour import encode_linear  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 BIG = 4096          # the issue's bake: 4096^2 float32 heights, 64 MiB
@@ -233,9 +234,39 @@ def test_zarr_bake_partial_chunks_and_channels(cluster, tmp_path, ctx):
     recipe, _ = cellgl.load_recipe("flagstone").set_from_strings(["seed=5"]).tileable()
     ref = cellgl.render(recipe, 100, 70, channels=("color", "id"))
     assert g["color"].shape == (70, 100, 4) and g["color"].chunks == (32, 32, 4)
-    assert np.array_equal(g["color"][:], ref["color"]) and np.array_equal(g["id"][:], ref["id"])
+    lin = encode_linear(ref["color"][..., :3], np.float32)      # colour scene-linear (issue 46)
+    assert np.array_equal(g["color"][..., :3], lin) and np.array_equal(g["color"][..., 3], ref["color"][..., 3])
+    assert np.array_equal(g["id"][:], ref["id"])
     assert g["id"].dtype == np.uint32 and g[CHECKSUMS].shape == (3, 4)
     assert g.attrs["cellgl"]["recipe"]["domain"]["tileable"] is True
+
+
+def test_zarr_colour_is_linear_and_tagged_data_untouched(tmp_path, ctx):
+    """As the EXR (issue 46 item 1): colour RGB scene-linear Rec.709 by default, the array tagged
+    with its colour space; alpha and the data arrays as rendered, untagged; ``srgb`` keeps the
+    encoding and says so; a resume in the other space is another bake."""
+    out = tmp_path / "c.zarr"
+    bake_zarr("flagstone", out, size="40x24", channels="color,height", chunk=16, workers=1, progress=False)
+    g = zarr.open_group(str(out), mode="r")
+    ref = cellgl.render("flagstone", 40, 24, channels=("color", "height"))
+    assert np.array_equal(g["color"][..., :3], encode_linear(ref["color"][..., :3], np.float32))
+    assert np.array_equal(g["color"][..., 3], ref["color"][..., 3])
+    assert np.array_equal(g["height"][:], ref["height"])
+    attrs = dict(g["color"].attrs)
+    assert attrs["colorInteropID"] == "lin_rec709_scene" and attrs["colorspace"] == "Linear Rec.709 (sRGB)"
+    assert attrs["chromaticities"]["white"] == [0.3127, 0.3290]
+    assert "colorInteropID" not in g["height"].attrs and "colorspace" not in g["height"].attrs
+    assert g.attrs["cellgl"]["colorspace"] == {"color": "lin_rec709_scene"}
+    with pytest.raises(DaskError, match=r"not the same colorspace"):
+        bake_zarr("flagstone", out, size="40x24", channels="color,height", chunk=16, workers=1,
+                  progress=False, colorspace="srgb")
+    s = tmp_path / "s.zarr"
+    bake_zarr("flagstone", s, size="40x24", channels="color", chunk=16, workers=1, progress=False,
+              colorspace="srgb")
+    g = zarr.open_group(str(s), mode="r")
+    assert np.array_equal(g["color"][:], ref["color"])
+    assert g["color"].attrs["colorInteropID"] == "srgb_rec709_scene"
+    assert g.attrs["cellgl"]["colorspace"] == {"color": "srgb_rec709_scene"}
 
 
 def test_zarr_bake_refuses_another_request(tmp_path):
@@ -256,6 +287,7 @@ def test_zarr_bake_refuses_another_request(tmp_path):
     (["--depth", "16"], "--depth 16: a .zarr bake stores float32"),
     (["--memory", "64"], "--memory: not used by a .zarr bake"),
     (["--workers", "0"], "--workers 0: out of range; accepted 1..1024"),
+    (["--colorspace", "acescg"], "--colorspace 'acescg': unknown colour space; accepted linear, srgb"),
 ])
 def test_zarr_bake_cli_errors(tmp_path, capsys, args, words):
     from cellgl.cli import main

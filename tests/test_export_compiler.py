@@ -533,6 +533,7 @@ VARIATIONS = [
     ("f1", ["fractal=qin_cube", "octaves=2", "light=0.5"]),
     ("f1", ["fractal=min", "octaves=3"]),
     ("f1", ["tileable=true", "frequency=4"]),
+    ("f1", ["tileable=true", "frequency=2", "dimension=3"]),      # the lattice wraps in z too
     ("f1", ["density_map=radial"]),
     ("f1", ["stretch_x=2.0"]),
     ("f1", ["orbit_radius=0.2", "distribution=jitter"]),

@@ -87,7 +87,7 @@ def test_threads_share_one_context_in_a_fresh_process():
     (get_context()) makes the others fall back to private contexts, still correct."""
     code = """
 import threading, numpy as np
-from cellgl.gl import context
+from cellgl.gl import context, registry
 from cellgl import texture
 def h(): return texture.render("flagstone", 24, 16, channels=("height",))["height"]
 res = []
@@ -97,14 +97,14 @@ ts = [threading.Thread(target=lambda: res.append(h())) for _ in range(4)]
 [t.start() for t in ts]; [t.join() for t in ts]
 assert len(res) == 5 and all((r == want).all() for r in res), "threads disagree"
 assert (h() == want).all()
-assert not context._private, "calls alone should share the one context"
+assert not any(st.private for _, st in registry.states()), "calls alone should share the one context"
 with context.current() as c:
     c.buffer(reserve=16).release()
 ctx = context.get_context()            # held by the main thread outside a call
 ts = [threading.Thread(target=lambda: res.append(h())) for _ in range(2)]
 [t.start() for t in ts]; [t.join() for t in ts]
 assert len(res) == 7 and all((r == want).all() for r in res), "fallback threads disagree"
-assert context._private, "expected private contexts while the main thread holds the shared one"
+assert any(st.private for _, st in registry.states()), "expected private contexts while the main thread holds the shared one"
 ctx.buffer(reserve=16).release()
 print("ok")
 """

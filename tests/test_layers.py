@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Each entry is a module or a package prefix (every module under it).
 #: docs/architecture.md's table is the same map: row ``# = index + 1`` names every module of the layer.
 LAYERS = (
-    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl.io", "cellgl.io.formats", "cellgl.io.tempfiles",
+    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl._cache", "cellgl.io", "cellgl.io.formats", "cellgl.io.tempfiles",
                "cellgl.presets")),
     ("gl", ("cellgl.gl",)),
     ("basis", ("cellgl.basis",)),

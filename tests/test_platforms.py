@@ -6,13 +6,21 @@ calls glcontext's default backend: WGL on Windows, CGL on macOS), and the EGL de
 from __future__ import annotations
 
 import sys
+import weakref
 
 import pytest
 
-from cellgl.gl import context, osmesa, platforms, versions
+from cellgl.gl import context, osmesa, platforms, registry, versions
 
 
-class _FakeMglo:
+class _FakeContext:
+    """What moderngl.create_context returns, as far as get_context looks at it (a live context:
+    an ``mglo`` that is no ``moderngl.InvalidObject``, cellgl.gl.moderngl_seam.released)."""
+
+    def __init__(self, version_code: int):
+        self.version_code = version_code
+        self.mglo = object()
+
     def __enter__(self):
         return self
 
@@ -20,21 +28,14 @@ class _FakeMglo:
         return None
 
 
-class _FakeContext:
-    """What moderngl.create_context returns, as far as get_context looks at it."""
-
-    def __init__(self, version_code: int):
-        self.version_code = version_code
-        self.mglo = _FakeMglo()
-
-
 @pytest.fixture
 def clean_state(monkeypatch):
     """get_context's process state, fresh and restored afterwards (the session's context and
-    its bookkeeping stay untouched)."""
-    for name, value in (("_contexts", {}), ("_backend_of", {}), ("_bound", {}), ("_opened", set()),
-                        ("_spare", {}), ("_private", set()), ("_default_backend", None)):
+    its state stay untouched)."""
+    for name, value in (("_contexts", {}), ("_opened", set()), ("_spare", {}),
+                        ("_default_backend", None)):
         monkeypatch.setattr(context, name, value)
+    monkeypatch.setattr(registry, "_states", weakref.WeakKeyDictionary())
     monkeypatch.delenv("CELLGL_BACKEND", raising=False)
     monkeypatch.delenv("CELLGL_PATH", raising=False)
     monkeypatch.delenv("CELLGL_DEVICE", raising=False)

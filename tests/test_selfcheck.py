@@ -13,7 +13,7 @@ from conftest import _check_paths
 
 import cellgl
 from cellgl.basis import selfcheck
-from cellgl.gl import path
+from cellgl.gl import path, registry
 
 
 @pytest.fixture
@@ -243,7 +243,8 @@ def test_a_context_cellgl_does_not_compute_on_is_not_checked(ctx, fresh):
     other = Window()
     assert selfcheck.check(other, "compute") is None
     assert fresh == []                                   # no GPU work for it
-    assert other._cellgl_path["notes"]["compute"].startswith("not checked")
+    assert registry.peek(other).path.notes["compute"].startswith("not checked")
+    assert "_cellgl_path" not in vars(other)             # nothing stuck on the context
 
 
 def test_a_pass_is_recorded_per_driver_and_code(tmp_path):

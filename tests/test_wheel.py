@@ -77,6 +77,14 @@ def test_wheel_ships_the_preset_images(wheel):
     assert images and all(f"cellgl/presets/images/{n}" in names for n in images)
 
 
+def test_wheel_ships_the_octave_means(wheel):
+    """The presets' octave means (cellgl.texture.means): without them every preset's render
+    would measure its mean with NumPy again."""
+    z = zipfile.ZipFile(wheel)
+    table = REPO / "cellgl" / "texture" / "octave_means.json"
+    assert z.read("cellgl/texture/octave_means.json") == table.read_bytes()
+
+
 def test_wheel_installs_the_viewer_inside_cellgl(wheel):
     """The source folder viewer/ is the package cellgl.viewer: no top-level `viewer` in
     site-packages, where another package of that name would collide (issue 42)."""

@@ -274,7 +274,8 @@ class Viewer:
         self.renderer.draw(self, (vx, h - vy - vh, vw, vh), (w, h), interacting)
         self.renderer.frame_fbo.use()
         imgui.backends.opengl3_render_draw_data(imgui.get_draw_data())
-        self.renderer.present((w, h))
+        # the finished frame to the window's own framebuffer (window code: the window's screen)
+        self.ctx.copy_framebuffer(self.ctx.screen, self.renderer.frame_fbo)
         glfw.swap_buffers(self.window)
         if glfw.window_should_close(self.window):
             self._should_close = True

@@ -269,7 +269,3 @@ class Renderer:
                                      textures={0: runner.Sampler(tex, linear=linear, repeat=repeat)},
                                      viewport=tuple(viewport), clear=(0.06, 0.06, 0.07, 1.0)))
         frame.fbo.viewport = (0, 0, *window_size)
-
-    def present(self, window_size) -> None:
-        """Copy the finished frame to the window's default framebuffer."""
-        self.ctx.copy_framebuffer(self.ctx.screen, self.frame_fbo)

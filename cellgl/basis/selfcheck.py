@@ -36,6 +36,7 @@ import tempfile
 import time
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -61,7 +62,7 @@ def eps(F):
 
 #: (name, dimension, keyword arguments of cellgl.cellular, n, outputs, samples near the origin,
 #: samples far from it (around 1e5 cells, where the float64 split of the position matters))
-CASES = (
+CASES: tuple[tuple[str, int, dict[str, Any], int, tuple[str, ...], int, int], ...] = (
     ("3D poisson euclidean", 3, dict(distribution="poisson", metric="euclidean"), 4,
      ("F", "delta", "id"), 128, 32),
     ("2D jitter manhattan", 2, dict(distribution="jitter", metric="manhattan", jitter=0.8, seed=39),

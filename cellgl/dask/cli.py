@@ -101,7 +101,7 @@ def run_zarr_bake(args: argparse.Namespace) -> int:
     bake_zarr(args.recipe, args.output, size=args.size,
               channels=tuple(args.channels or ("color",)), chunk=chunk, sets=args.sets,
               tileable=args.tileable, scheduler=args.scheduler, workers=workers,
-              threads=threads, progress=not args.quiet)
+              threads=threads, progress=not args.quiet, colorspace=getattr(args, "colorspace", None))
     return 0
 
 

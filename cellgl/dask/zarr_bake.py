@@ -10,7 +10,16 @@ Layout of ``out.zarr`` (a Zarr v3 group):
     ``(rows, cols)`` uint64, one element (and one stored chunk) per image chunk: a checksum of
     that chunk's data in every channel, written after the data. 0 means not written yet.
 attributes ``cellgl``
-    generator, cellgl version, the recipe (JSON form), size, channels and chunk.
+    generator, cellgl version, the recipe (JSON form), size, channels, chunk and, with
+    ``color``, ``colorspace`` ``{"color": id}``.
+
+Colour, as every float file of cellgl (:mod:`cellgl.io.colour`): the ``color`` array's RGB is
+scene-linear Rec.709 by default (the exact sRGB decoding of the render's sRGB-encoded colour,
+rounded to float32 once; alpha as rendered), or sRGB-encoded with ``colorspace="srgb"``, and
+the array's attributes say which: ``colorInteropID`` (``lin_rec709_scene`` /
+``srgb_rec709_scene``), ``colorspace`` (OCIO's name) and ``chromaticities`` (Rec.709 primaries,
+D65 white). Data arrays (height, normal, id, F1..F4, ...) are as rendered and carry no colour
+attribute. (:func:`cellgl.to_dask` is an array of :func:`cellgl.render`'s values, sRGB-encoded.)
 
 Each chunk is one task: the worker renders it, writes it into every channel array, then writes
 its checksum. A rerun of the same bake finds the group, checks that it was made by the same
@@ -36,6 +45,7 @@ from cellgl.io import bake as _bake
 from cellgl.dask.blocks import (DEFAULT_CHUNK, MAX_CHUNK, MAX_SIDE, DaskError, Layout, dtype, load, pair,
                      render_block, require, samples)
 from cellgl.dask.cluster import cluster_client, log, map_tasks
+from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace, encode_linear
 
 __all__ = ["bake_zarr", "checksum", "CHECKSUMS"]
 
@@ -73,10 +83,32 @@ def _parse_size(size) -> tuple[int, int]:
     return int(w), int(h)
 
 
-def _meta(layout: Layout, chunk: int) -> dict:
-    return {"generator": "cellgl", "version": __version__, "recipe": layout.recipe.to_dict(),
+def _meta(layout: Layout, chunk: int, space: str | None) -> dict:
+    meta = {"generator": "cellgl", "version": __version__, "recipe": layout.recipe.to_dict(),
             "size": [layout.width, layout.height], "channels": list(layout.channels),
             "chunk": chunk}
+    if space is not None and "color" in layout.channels:
+        meta["colorspace"] = {"color": COLORSPACES[space].interop_id}
+    return meta
+
+
+def _colour_attributes(interop_id: str) -> dict:
+    """The ``color`` array's attributes: what its RGB holds (as the EXR's header says it)."""
+    cs = next(c for c in COLORSPACES.values() if c.interop_id == interop_id)
+    r, g, b, w = REC709_CHROMATICITIES
+    return {"colorInteropID": cs.interop_id, "colorspace": cs.ocio_name,
+            "chromaticities": {"red": r, "green": g, "blue": b, "white": w}}
+
+
+def _encode(res: dict, meta_json: str) -> dict:
+    """A rendered chunk as the group stores it: ``color``'s RGB decoded to linear where the
+    bake's colour space is linear (alpha as rendered); every other channel as rendered."""
+    space = json.loads(meta_json).get("colorspace", {}).get("color")
+    if "color" in res and space == COLORSPACES["linear"].interop_id:
+        c = np.array(res["color"], dtype=np.float32)
+        c[..., :3] = encode_linear(c[..., :3], np.float32)
+        res = {**res, "color": c}
+    return res
 
 
 def _create(path: Path, layout: Layout, meta: dict) -> None:
@@ -88,8 +120,10 @@ def _create(path: Path, layout: Layout, meta: dict) -> None:
         for c in layout.channels:
             shape = layout.shape(c)
             chunks = (layout.chunk_h, layout.chunk_w) + shape[2:]
+            spaces = meta.get("colorspace", {})
             root.create_array(c, shape=shape, chunks=chunks, dtype=dtype(c), fill_value=0,
-                              dimension_names=("y", "x", "sample")[:len(shape)])
+                              dimension_names=("y", "x", "sample")[:len(shape)],
+                              attributes=_colour_attributes(spaces[c]) if c in spaces else None)
         root.create_array(CHECKSUMS, shape=layout.grid, chunks=(1, 1), dtype=np.uint64,
                           fill_value=0, compressors=None, dimension_names=("row", "col"))
         os.rename(tmp, path)
@@ -139,7 +173,7 @@ def _chunk_task(ij, layout: Layout, path: str, meta_json: str) -> int:
             return 0
     except Exception:  # noqa: BLE001 - a damaged chunk or checksum file: render it again
         pass
-    res = render_block(layout, i, j)
+    res = _encode(render_block(layout, i, j), meta_json)
     for c in layout.channels:
         root[c][where] = res[c]
     sums[i, j] = np.uint64(checksum(res))
@@ -148,7 +182,7 @@ def _chunk_task(ij, layout: Layout, path: str, meta_json: str) -> int:
 
 def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color",),
               chunk=DEFAULT_CHUNK, sets=(), tileable=None, scheduler=None, workers=None,
-              threads=1, progress=True) -> dict:
+              threads=1, progress=True, colorspace=None) -> dict:
     """Bake a recipe to a Zarr v3 group on a Dask cluster, chunk by chunk, resumably.
 
     Parameters
@@ -173,6 +207,9 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
         ``threads`` threads each.
     progress : bool
         Progress bar and summary on stderr.
+    colorspace : {"linear", "srgb"}, optional
+        The ``color`` array's RGB: scene-linear Rec.709 (default) or sRGB-encoded, tagged
+        either way (as ``cellgl bake --colorspace`` for float files; module docstring).
 
     Returns
     -------
@@ -193,8 +230,12 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
         raise DaskError(f"chunk {chunk!r} is out of range; accepted a whole number in "
                         f"16..{MAX_CHUNK}")
     w, h = _parse_size(size)
+    try:
+        space = check_colorspace(colorspace, ".zarr", 32)
+    except ValueError as exc:
+        raise DaskError(str(exc)) from None
     layout = Layout.make(load(recipe_or_name, sets, tileable), (h, w), chunk, channels)
-    meta = _meta(layout, int(chunk))
+    meta = _meta(layout, int(chunk), space)
     t0 = time.perf_counter()
     resume = path.exists()
     if resume:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from collections import Counter
 
+from cellgl._cache import Bounded
 from cellgl.export.translate.tokens import TranslateError  # noqa: F401  (first: the parser)
 from cellgl.export import syntax as S
 from cellgl.export.printer import expr_glsl, item_glsl
@@ -388,9 +389,8 @@ def fold(unit: S.Unit, ctx: Context, passes) -> bool:
                      for c in callees))
         text = "\n".join(item_glsl(fn))
         key = (text,) + key
-        if key not in _FOLDED:
-            if len(_FOLDED) > 4096:
-                _FOLDED.clear()
+        hit = _FOLDED.get(key, _MISSING)
+        if hit is _MISSING:
             facts = [Facts(fn, genv, garrays, ctx)]
 
             def apply(p, fn=fn, facts=facts):         # this iteration's function (bound now)
@@ -401,17 +401,20 @@ def fold(unit: S.Unit, ctx: Context, passes) -> bool:
             folded = settle(passes, apply, MAX_ROUNDS, f"the folding passes did not settle on {fn.name} in "
                             f"{MAX_ROUNDS} rounds")
             body = clone(fn.body) if folded else None
-            _FOLDED[key] = None if body is None or "\n".join(item_glsl(fn)) == text else body
-            changed = changed or _FOLDED[key] is not None
-        elif _FOLDED[key] is not None:
-            fn.body = clone(_FOLDED[key])
+            hit = None if body is None or "\n".join(item_glsl(fn)) == text else body
+            _FOLDED.put(key, hit)
+            changed = changed or hit is not None
+        elif hit is not None:
+            fn.body = clone(hit)
             changed = True
     return changed
 
 
 #: ``{(function text, passes, what it reads of the globals and callees): folded body (None:
 #: unchanged)}``: the driver's rounds, and a process's exports, fold most functions again unchanged
-_FOLDED: dict = {}
+#: (bounded: cellgl._cache's policy)
+_FOLDED = Bounded("folded function bodies (cellgl.export.fold)", 4096)
+_MISSING = object()
 
 #: rounds of the passes on one function after which :func:`fold` gives up
 MAX_ROUNDS = 64

@@ -22,6 +22,7 @@ import shlex
 import textwrap
 from dataclasses import dataclass, field
 
+from cellgl._cache import Bounded
 from cellgl._version import __version__
 from cellgl.gl import glsl
 from cellgl.export import compiler, translate
@@ -135,14 +136,14 @@ def library_code(prog: Program, fold: bool = True, tree: bool = False):
     itself (to print, not to change). Cached per program: the targets of one recipe share it."""
     key = (tuple(prog.files), tuple(sorted((k, str(v)) for k, v in prog.defines.items())), prog.params,
            prog.entry, tuple(prog.entries), fold)
-    if key not in _CODE_CACHE:
-        if len(_CODE_CACHE) > 64:
-            _CODE_CACHE.clear()
-        _CODE_CACHE[key] = compiled_unit(prog, fold)
-    return _CODE_CACHE[key] if tree else code_text(_CODE_CACHE[key])
+    unit = _CODE_CACHE.get(key)
+    if unit is None:
+        unit = compiled_unit(prog, fold)
+        _CODE_CACHE.put(key, unit)
+    return unit if tree else code_text(unit)
 
 
-_CODE_CACHE: dict = {}
+_CODE_CACHE = Bounded("compiled snippet units (cellgl.export.snippets.library_code)", 64)
 
 
 def specialised_code(prog: Program) -> str:

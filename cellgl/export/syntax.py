@@ -17,7 +17,6 @@ each library text once.
 """
 from __future__ import annotations
 
-from ast import literal_eval
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -28,59 +27,211 @@ from cellgl.export.translate.tokens import GLSL_TYPES, TranslateError, split_tok
 # nodes
 # --------------------------------------------------------------------------------------------
 
-#: the node classes (dataclasses), one per line: its name, then its fields in source order (the
-#: order a walk visits them) as ``name[:type][=default]``: no type: a node, or None where it may
-#: be absent; ``=[]``: a fresh list. ``comments``: the comment lines above the node; ``trail``: the
-#: ``//`` comment after it on its line (a Block's: after its opening brace); ``same_line``: written
-#: on the line of the statement before it.
-_NODES = """
-Num         text:str                                # as written: 1.0, 0x9e3779b9u, 3e-5
-Name        name:str
-Call        func:str args:list
-Ctor        type:str args:list                      # vec4(...), CellglResult(...)
-ArrayCtor   type:str size args:list                 # float[3](a, b, c)
-Unary       op:str operand                          # - + ! ~
-IncDec      op:str operand postfix:bool             # ++ --
-Binary      op:str left right
-Assign      op:str target value                     # = += -= ...
-Ternary     cond then other
-Index       base index
-Member      base name:str
-Paren       inner
-Declarator  name:str size=None init=None            # size: an array's size expression
-Block       body:list comments:list=[] trail:str=""
-Decl        type:str declarators:list const:bool=False comments:list=[] trail:str="" same_line:bool=False
-ExprStmt    expr comments:list=[] trail:str="" same_line:bool=False
-If          cond then other=None comments:list=[]
-For         init cond step body comments:list=[]    # init: a Decl, an ExprStmt or None
-While       cond body comments:list=[]
-Return      value=None comments:list=[]
-Jump        kind:str comments:list=[]               # break continue discard
-Field       type:str name:str size=None comments:list=[] trail:str=""
-Struct      name:str fields:list comments:list=[]
-Param       mode:str type:str name:str size=None const:bool=False           # mode: in out inout
-Function    ret:str name:str params:list body comments:list=[]              # body None: a prototype
-Global      quals:list type:str declarators:list comments:list=[]  # quals: const, uniform (no precision ones)
-Unit        items:list trailing:list=[]                     # trailing: the comments after the last item
-"""
+#: The node classes, written out so type checkers and editors see them. Each class's fields are in
+#: source order (the order a walk visits them); a field typed ``object`` is a node, or None where it
+#: may be absent; a ``list`` defaults to a fresh list. ``comments``: the comment lines above the node;
+#: ``trail``: the ``//`` comment after it on its line (a Block's: after its opening brace);
+#: ``same_line``: written on the line of the statement before it.
+
+@dataclass
+class Num:  # as written: 1.0, 0x9e3779b9u, 3e-5
+    text: str
 
 
-def _node_class(line: str) -> type:
-    """The dataclass of a line of :data:`_NODES`."""
-    name, *specs = line.split("#")[0].split()
-    ns: dict = {"__module__": __name__, "__qualname__": name, "__annotations__": {}}
-    for spec in specs:
-        decl, _, default = spec.partition("=")
-        fname, _, typ = decl.partition(":")
-        ns["__annotations__"][fname] = typ or "object"
-        if default:
-            ns[fname] = field(default_factory=list) if default == "[]" else literal_eval(default)
-    return dataclass(type(name, (), ns))
+@dataclass
+class Name:
+    name: str
 
 
-(Num, Name, Call, Ctor, ArrayCtor, Unary, IncDec, Binary, Assign, Ternary, Index, Member, Paren, Declarator,
- Block, Decl, ExprStmt, If, For, While, Return, Jump, Field, Struct, Param, Function, Global,
- Unit) = NODE_CLASSES = tuple(map(_node_class, _NODES.strip().split("\n")))
+@dataclass
+class Call:
+    func: str
+    args: list
+
+
+@dataclass
+class Ctor:  # vec4(...), CellglResult(...)
+    type: str
+    args: list
+
+
+@dataclass
+class ArrayCtor:  # float[3](a, b, c)
+    type: str
+    size: object
+    args: list
+
+
+@dataclass
+class Unary:  # - + ! ~
+    op: str
+    operand: object
+
+
+@dataclass
+class IncDec:  # ++ --
+    op: str
+    operand: object
+    postfix: bool
+
+
+@dataclass
+class Binary:
+    op: str
+    left: object
+    right: object
+
+
+@dataclass
+class Assign:  # = += -= ...
+    op: str
+    target: object
+    value: object
+
+
+@dataclass
+class Ternary:
+    cond: object
+    then: object
+    other: object
+
+
+@dataclass
+class Index:
+    base: object
+    index: object
+
+
+@dataclass
+class Member:
+    base: object
+    name: str
+
+
+@dataclass
+class Paren:
+    inner: object
+
+
+@dataclass
+class Declarator:  # size: an array's size expression
+    name: str
+    size: object = None
+    init: object = None
+
+
+@dataclass
+class Block:
+    body: list
+    comments: list = field(default_factory=list)
+    trail: str = ""
+
+
+@dataclass
+class Decl:
+    type: str
+    declarators: list
+    const: bool = False
+    comments: list = field(default_factory=list)
+    trail: str = ""
+    same_line: bool = False
+
+
+@dataclass
+class ExprStmt:
+    expr: object
+    comments: list = field(default_factory=list)
+    trail: str = ""
+    same_line: bool = False
+
+
+@dataclass
+class If:
+    cond: object
+    then: object
+    other: object = None
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class For:  # init: a Decl, an ExprStmt or None
+    init: object
+    cond: object
+    step: object
+    body: object
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class While:
+    cond: object
+    body: object
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Return:
+    value: object = None
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Jump:  # break continue discard
+    kind: str
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Field:
+    type: str
+    name: str
+    size: object = None
+    comments: list = field(default_factory=list)
+    trail: str = ""
+
+
+@dataclass
+class Struct:
+    name: str
+    fields: list
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Param:  # mode: in out inout
+    mode: str
+    type: str
+    name: str
+    size: object = None
+    const: bool = False
+
+
+@dataclass
+class Function:  # body None: a prototype
+    ret: str
+    name: str
+    params: list
+    body: object
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Global:  # quals: const, uniform (no precision ones)
+    quals: list
+    type: str
+    declarators: list
+    comments: list = field(default_factory=list)
+
+
+@dataclass
+class Unit:  # trailing: the comments after the last item
+    items: list
+    trailing: list = field(default_factory=list)
+
+
+NODE_CLASSES = (Num, Name, Call, Ctor, ArrayCtor, Unary, IncDec, Binary, Assign, Ternary, Index,
+                Member, Paren, Declarator, Block, Decl, ExprStmt, If, For, While, Return, Jump,
+                Field, Struct, Param, Function, Global, Unit)
 
 __all__ = ["parse", "parsed_library", "NODE_CLASSES", *(c.__name__ for c in NODE_CLASSES)]
 

@@ -1,14 +1,17 @@
 """How each backend makes a context (the context-creation half of :mod:`cellgl.gl.context`):
 every one climbs :data:`cellgl.gl.versions.LADDER`, on a display whose driver threads exist in
-this process (see :mod:`cellgl.gl.surfaceless`)."""
+this process (see :mod:`cellgl.gl.surfaceless`), each rung one ``moderngl.create_context`` call
+(:func:`cellgl.gl.moderngl_seam.create`); what the ladder did is kept in the context's state
+(:class:`cellgl.gl.registry.ContextState`, ``ladder``), with the backend's name."""
 
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import moderngl
 
-from cellgl.gl import osmesa, platforms, versions
+from cellgl.gl import moderngl_seam, osmesa, platforms, registry, versions
 
 __all__ = ["ContextError", "create", "context_from_loader", "from_loader", "FORKED"]
 
@@ -17,13 +20,21 @@ class ContextError(RuntimeError):
     """No usable OpenGL context (3.3 core or later) could be created."""
 
 
-def context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
-    """Wrap a loader object (None: glcontext's default backend) in a moderngl.Context
-    (:func:`cellgl.gl.versions.wrap_loader`; too old a context is a ContextError)."""
+def context_from_loader(loader: Any, require: int, *, standalone: bool = True) -> moderngl.Context:
+    """A moderngl.Context over a loader object (``load_opengl_function``, ``release``,
+    ``__enter__``/``__exit__``: glcontext's or cellgl's own); ``standalone=False``: over the
+    context current on this thread (a window's). Too old a context is a ContextError (the
+    loader of a standalone one released)."""
     try:
-        return versions.wrap_loader(loader, require, mode)
+        return moderngl_seam.create(loader, require, standalone=standalone)
     except ValueError as exc:
-        raise ContextError(str(exc)) from None
+        raise ContextError(f"OpenGL {versions.label(require)} core required ({exc})") from None
+
+
+def _climbed(made: tuple[moderngl.Context, list]) -> moderngl.Context:
+    ctx, ladder = made
+    registry.held(ctx).ladder = ladder
+    return ctx
 
 
 def create(backend: str, tainted: set, opened: set) -> moderngl.Context:
@@ -39,7 +50,8 @@ def create(backend: str, tainted: set, opened: set) -> moderngl.Context:
             device = platforms.device_setting()
             settings = {} if device is None else {"device_index": device}
             opened.add("egl")
-            return versions.climb(lambda code: versions.glcontext_context("egl", code, **settings))
+            return _climbed(versions.climb(
+                lambda code: versions.glcontext_context("egl", code, **settings)))
         if "egl-surfaceless" not in tainted:
             from cellgl.gl.surfaceless import SurfacelessEGLLoader
 
@@ -53,14 +65,14 @@ def create(backend: str, tainted: set, opened: set) -> moderngl.Context:
             raise ContextError("DISPLAY is not set")
         opened.add("glx")
         # glcontext's default backend on Linux is X11/GLX.
-        return platforms.create_native("glx")
+        return _climbed(platforms.create_native("glx"))
     if backend == "osmesa":
         library = osmesa.probe()
         opened.add("osmesa")
         return from_loader(osmesa.OSMesaLoader(library=library))
     if backend in ("wgl", "cgl"):
         opened.add(backend)
-        return platforms.create_native(backend)
+        return _climbed(platforms.create_native(backend))
     raise ValueError(f"unknown OpenGL backend {backend!r}")
 
 
@@ -69,11 +81,9 @@ FORKED = ("this process was forked from one that had already used every display 
           "start it with multiprocessing's 'spawn' or 'forkserver' method instead")
 
 
-def from_loader(loader) -> moderngl.Context:
+def from_loader(loader: Any) -> moderngl.Context:
     """A context over one of cellgl's loaders (OSMesa, surfaceless EGL), which climbed the
     ladder itself (``loader.ladder``)."""
-    ctx = context_from_loader(loader, versions.MINIMUM)
-    ctx._cellgl_ladder = getattr(loader, "ladder", None)
-    return ctx
+    return _climbed((context_from_loader(loader, versions.MINIMUM), loader.ladder))
 
 

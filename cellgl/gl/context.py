@@ -48,7 +48,7 @@ from collections.abc import Mapping
 
 import moderngl
 
-from cellgl.gl import backends, glsl, osmesa, path, platforms, registry, shadercache, versions
+from cellgl.gl import backends, glsl, moderngl_seam, osmesa, path, platforms, registry, shadercache, versions
 from cellgl.gl.backends import ContextError
 from cellgl.gl.osmesa import OSMesaLoader  # noqa: F401 - public here before it moved
 
@@ -72,15 +72,14 @@ BACKENDS = platforms.ALL_BACKENDS
 REQUIRED_GL = versions.MINIMUM
 
 
+# What cellgl knows of each context (its backend, the thread it is current on, whether it is a
+# thread's private one) is in the context's state (cellgl.gl.registry.ContextState); here only
+# what belongs to the process: the shared context of each backend, the spare private ones.
 _lock = threading.RLock()
 _contexts: dict[str, moderngl.Context] = {}      # the shared context of each backend
 _default_backend: str | None = None
-_backend_of: dict[int, str] = {}
-#: id(ctx) -> (ctx, ident of the thread it is current on), as far as cellgl made it so
-_bound: dict[int, tuple[moderngl.Context, int]] = {}
 #: thread-private contexts (see get_context) not in use: backend -> contexts, reused
 _spare: dict[str, list] = {}
-_private: set[int] = set()
 _tls = threading.local()   # depth (nesting of current()), guard, private: backend -> ctx
 _pid = os.getpid()
 #: displays opened in this process / in a process it was forked from (their threads are gone)
@@ -104,10 +103,6 @@ def _create(backend: str) -> moderngl.Context:
     return backends.create(backend, _tainted, _opened)
 
 
-def _context_from_loader(loader, require: int, mode: str = "standalone") -> moderngl.Context:
-    return backends.context_from_loader(loader, require, mode)
-
-
 def _unknown_backend(name: object) -> ValueError:
     return ValueError(
         f"unknown OpenGL backend {name!r}; accepted values: {', '.join(BACKENDS)}"
@@ -127,11 +122,6 @@ def _check_name(name: str, origin: str) -> str:
     return key
 
 
-def _version_error(exc: Exception) -> str:
-    text = str(exc).strip() or type(exc).__name__
-    return text.splitlines()[0] if text else text
-
-
 def _current(ctx: moderngl.Context) -> moderngl.Context:
     """Make ``ctx`` the thread's current context and return it.
 
@@ -139,8 +129,8 @@ def _current(ctx: moderngl.Context) -> moderngl.Context:
     context) may have made its own context current since; GL calls would then go to that one,
     or fail ("cannot create program"). Making ours current again is cheap when it already is.
     """
-    ctx.mglo.__enter__()
-    _bound[id(ctx)] = (ctx, threading.get_ident())
+    moderngl_seam.make_current(ctx)
+    registry.held(ctx).thread = threading.get_ident()
     if getattr(_tls, "guard", None) is None:
         _tls.guard = _ThreadGuard()
     return ctx
@@ -148,8 +138,16 @@ def _current(ctx: moderngl.Context) -> moderngl.Context:
 
 def _release(ctx: moderngl.Context) -> None:
     """Make ``ctx`` current on no thread (so that another thread can make it current)."""
-    ctx.mglo.__exit__(None, None, None)
-    _bound.pop(id(ctx), None)
+    moderngl_seam.release_current(ctx)
+    st = registry.peek(ctx)
+    if st is not None:
+        st.thread = None
+
+
+def _bound_here() -> list[tuple[moderngl.Context, registry.ContextState]]:
+    """The contexts cellgl made current on this thread (and still holds so), with their states."""
+    me = threading.get_ident()
+    return [(ctx, st) for ctx, st in registry.states() if st.thread == me]
 
 
 class _ThreadGuard:
@@ -164,11 +162,11 @@ class _ThreadGuard:
         if os.getpid() != self.pid:  # the copy in a forked child: its contexts are not ours
             return
         try:
-            for ctx, ident in list(_bound.values()):
-                if ident == self.ident:
+            for ctx, st in registry.states():
+                if st.thread == self.ident:
                     _release(ctx)
-                    if id(ctx) in _private:
-                        _spare.setdefault(_backend_of[id(ctx)], []).append(ctx)
+                    if st.private and st.backend is not None:
+                        _spare.setdefault(st.backend, []).append(ctx)
         except Exception:  # noqa: BLE001 - interpreter shutdown
             pass
 
@@ -182,13 +180,13 @@ def _take(shared: moderngl.Context, name: str) -> moderngl.Context:
         private = _tls.private = {}
     if name in private:
         return _current(private[name])
-    owner = _bound.get(id(shared))
-    if owner is None or owner[1] == threading.get_ident():
+    owner = registry.held(shared).thread
+    if owner is None or owner == threading.get_ident():
         return _current(shared)
     spare = _spare.get(name)
     ctx = spare.pop() if spare else _create(name)
-    _backend_of[id(ctx)] = name
-    _private.add(id(ctx))
+    st = registry.held(ctx)
+    st.backend, st.private = name, True
     private[name] = ctx
     return _current(ctx)
 
@@ -197,15 +195,15 @@ def _after_fork_in_child() -> None:
     """In a forked child: forget the parent's GL state (keeping it alive: releasing it would
     wait for driver threads that do not exist here) and the lock (another thread may have held
     it at fork time); the next get_context() opens a display of its own."""
-    global _lock, _tls, _bound, _default_backend, _pid
+    global _lock, _tls, _default_backend, _pid
     if _pid == os.getpid():
         return
-    _orphans.append((dict(_contexts), _bound, _spare.copy(), _tls))
+    _orphans.append((dict(_contexts), _spare.copy(), _tls))
     _tainted.update(_opened)
     _opened.clear()
-    for table in (_contexts, _backend_of, _spare, _private, osmesa.probed):
+    for table in (_contexts, _spare, osmesa.probed):
         table.clear()
-    _bound, _default_backend = {}, None
+    _default_backend = None   # (the contexts' states: cellgl.gl.registry forgets them itself)
     deferred.clear()
     _lock, _tls, _pid = threading.RLock(), threading.local(), os.getpid()
 
@@ -220,16 +218,15 @@ def section():
     current during it (those current here before stay so)."""
     with _lock:
         depth = getattr(_tls, "depth", 0)
-        me = threading.get_ident()
-        before = {k for k, (_, t) in _bound.items() if t == me} if depth == 0 else set()
+        before = [ctx for ctx, _ in _bound_here()] if depth == 0 else []
         _tls.depth = depth + 1
         try:
             yield
         finally:
             _tls.depth = depth
             if depth == 0:
-                for k, (ctx, t) in list(_bound.items()):
-                    if t == me and k not in before and k not in _private:
+                for ctx, st in _bound_here():
+                    if not st.private and not any(ctx is b for b in before):
                         _release(ctx)
                 if deferred and threading.current_thread() is threading.main_thread():
                     deferred.pop()()
@@ -282,11 +279,13 @@ def attach_current(require: int = REQUIRED_GL, api: str = "native") -> moderngl.
     of the platform's own API (glcontext's default backend detects it)."""
     if api == "egl":
         return attach_current_egl(require)
-    ctx = _context_from_loader(None, require, mode="detect")
-    ctx._screen = ctx.detect_framebuffer(0)
-    ctx.fbo = ctx.detect_framebuffer()
-    ctx.mglo.fbo = ctx.fbo.mglo
-    return ctx
+    import glcontext
+
+    try:   # glcontext's default backend, detecting the current context
+        loader = glcontext.default_backend()(mode="detect", glversion=require)
+    except Exception as exc:  # noqa: BLE001 - glcontext raises bare Exception
+        raise ContextError(f"could not attach to the OpenGL context current on this thread: {exc}") from None
+    return backends.context_from_loader(loader, require, standalone=False)
 
 
 def attach_current_egl(require: int = REQUIRED_GL) -> moderngl.Context:
@@ -295,11 +294,7 @@ def attach_current_egl(require: int = REQUIRED_GL) -> moderngl.Context:
         loader = platforms.CurrentEGLLoader()
     except RuntimeError as exc:
         raise ContextError(str(exc)) from None
-    ctx = _context_from_loader(loader, require)
-    ctx._screen = ctx.detect_framebuffer(0)
-    ctx.fbo = ctx.detect_framebuffer()
-    ctx.mglo.fbo = ctx.fbo.mglo
-    return ctx
+    return backends.context_from_loader(loader, require, standalone=False)
 
 
 def get_context(backend: str | None = None) -> moderngl.Context:
@@ -358,10 +353,10 @@ def get_context(backend: str | None = None) -> moderngl.Context:
                 try:
                     ctx = _create(name)
                 except Exception as exc:  # each backend fails in its own way
-                    errors.append(f"  {name}: {_version_error(exc)}")
+                    errors.append(f"  {name}: {versions.first_line(exc)}")
                     continue
                 _contexts[name] = ctx
-                _backend_of[id(ctx)] = name
+                registry.held(ctx).backend = name
                 _current(ctx)  # created current on this thread
             if backend is None and not os.environ.get("CELLGL_BACKEND", "").strip():
                 _default_backend = name
@@ -402,8 +397,8 @@ def computes_on(ctx: moderngl.Context) -> bool:
 
 def backend_name(ctx: moderngl.Context | None = None) -> str | None:
     """Return the backend name a context made by :func:`get_context` came from."""
-    ctx = ctx if ctx is not None else get_context()
-    return _backend_of.get(id(ctx))
+    st = registry.peek(ctx if ctx is not None else get_context())
+    return st.backend if st is not None else None
 
 
 # --------------------------------------------------------------------------------------------
@@ -414,7 +409,7 @@ _GL_MAX_COMPUTE_SHARED_MEMORY_SIZE = 0x8262
 
 
 def get_integer(ctx: moderngl.Context, pname: int) -> int | None:
-    addr = platforms.get_proc(_backend_of.get(id(ctx)), "glGetIntegerv")
+    addr = platforms.get_proc(backend_name(ctx), "glGetIntegerv")
     if not addr:
         return None
     proto = ctypes.CFUNCTYPE(None, ctypes.c_uint, ctypes.POINTER(ctypes.c_int))
@@ -448,7 +443,7 @@ def context_info(ctx: moderngl.Context | None = None) -> dict:
 def _info(ctx: moderngl.Context) -> dict:
     info = ctx.info
     return {
-        "backend": _backend_of.get(id(ctx)),
+        "backend": backend_name(ctx),
         "path": _path_or_why(ctx),
         "GL_VENDOR": info.get("GL_VENDOR"),
         "GL_RENDERER": info.get("GL_RENDERER"),
@@ -473,7 +468,7 @@ def _path_or_why(ctx: moderngl.Context) -> str:
 
 
 def _device_info(ctx: moderngl.Context) -> str:
-    backend = _backend_of.get(id(ctx))
+    backend = backend_name(ctx)
     if backend != "egl" or "egl-surfaceless" in _opened:
         return f"n/a (the {backend or 'attached'} context has no device choice)"
     return platforms.device_line(platforms.device_setting() or 0, ctx.info.get("GL_RENDERER"))

@@ -81,8 +81,12 @@ class Drawing:
     """What a runner keeps on its context (``self.ctx``, registry entry ``self.held``) and how it
     draws; :meth:`_program` (the path's vertex + fragment programs) is the runner's."""
 
-    ctx: Any
     held: Any
+
+    @property
+    def ctx(self) -> Any:
+        """The context (through its state's weak reference: a runner never keeps it alive)."""
+        return self.held.ctx
 
     def _program(self, vertex: str, fragment: str, defines=None) -> tuple:  # pragma: no cover
         raise NotImplementedError

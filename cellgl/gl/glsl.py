@@ -78,6 +78,9 @@ _PRECISE_RE = re.compile(r"\bCELL_PRECISE\b")
 class ShaderError(RuntimeError):
     """A shader could not be loaded, resolved or compiled."""
 
+    #: the resolved sources that failed to compile (set where compiling failed)
+    sources: list[Source]
+
 
 class Source:
     """Resolved shader text with a map back to the original files.

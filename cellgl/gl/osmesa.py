@@ -61,7 +61,7 @@ class OSMesaLoader:
         self._ctx = None
         ladder = versions.LADDER if version is None else (version,)
         try:
-            handle = versions.climb(self._create, ladder=ladder)
+            handle, tried = versions.climb(self._create, ladder=ladder)
         except versions.LadderError as exc:
             raise OSMesaError(
                 f"OSMesa ({path}) could not create a core profile context ({exc}); cellgl needs "
@@ -70,7 +70,7 @@ class OSMesaLoader:
             ) from None
         self._ctx = handle.value
         #: the rungs tried: (version code, error or None) (cellgl.gl.versions.describe)
-        self.ladder = handle._cellgl_ladder
+        self.ladder = tried
         self._width, self._height = width, height
         self._buffer = ctypes.create_string_buffer(width * height * 4)
         self.make_current()

@@ -27,6 +27,8 @@ import threading
 import time
 import warnings
 
+from cellgl.gl import registry
+
 #: Accepted values of ``CELLGL_PATH``.
 PATHS = ("compute", "fragment")
 
@@ -155,14 +157,9 @@ def set_guard(section) -> None:
     _guard = section
 
 
-def _state(ctx) -> dict:
-    st = getattr(ctx, "_cellgl_path", None)
-    if st is None:
-        # override: the path set_path chose; results: path -> None (passed) or what differed;
-        # notes: path -> text for `cellgl info`; running: the thread running the checks
-        st = {"override": None, "why": None, "results": {}, "notes": {}, "running": None}
-        ctx._cellgl_path = st
-    return st
+def _state(ctx) -> registry.PathState:
+    """The path's record in the context's state (:class:`cellgl.gl.registry.ContextState`)."""
+    return registry.held(ctx).path
 
 
 def set_path(ctx, path: str, why: str) -> None:
@@ -180,18 +177,19 @@ def set_path(ctx, path: str, why: str) -> None:
     if missing:
         raise ValueError(missing)
     st = _state(ctx)
-    st["override"], st["why"] = path, why
+    st.override, st.why = path, why
 
 
 def forget(ctx) -> None:
     """Drop the override and the check results of ``ctx`` (tests; a driver update in place)."""
-    if getattr(ctx, "_cellgl_path", None) is not None:
-        del ctx._cellgl_path
+    st = registry.peek(ctx)
+    if st is not None:
+        st.path = registry.PathState()
 
 
 def note(ctx, path: str, text: str) -> None:
     """Keep ``text`` (what a check found) for :func:`check_summary`."""
-    _state(ctx)["notes"][path] = text
+    _state(ctx).notes[path] = text
 
 
 def _version(ctx) -> str:
@@ -232,27 +230,27 @@ def gpu_path(ctx) -> str:
         raise ValueError(f"CELLGL_PATH=compute, but {missing}; unset CELLGL_PATH or set "
                          "CELLGL_PATH=fragment")
     st = _state(ctx)
-    chosen = forced or st["override"] or _natural(ctx)
-    if chosen in st["results"] and st["results"][chosen] is None:
+    chosen = forced or st.override or _natural(ctx)
+    if chosen in st.results and st.results[chosen] is None:
         return chosen
-    if st["running"] == threading.get_ident():   # a check's own GPU work
+    if st.running == threading.get_ident():   # a check's own GPU work
         return chosen
     if not _hooks or not selfcheck_enabled():
         return chosen
     with _guard():
-        if chosen not in st["results"]:
-            st["running"] = threading.get_ident()
+        if chosen not in st.results:
+            st.running = threading.get_ident()
             try:
                 chosen = _first_use(ctx, st, chosen, forced)
             finally:
-                st["running"] = None
-    return _verdict(ctx, st, forced or st["override"] or _natural(ctx), forced)
+                st.running = None
+    return _verdict(ctx, st, forced or st.override or _natural(ctx), forced)
 
 
-def _check(ctx, st: dict, path: str) -> str | None:
+def _check(ctx, st: registry.PathState, path: str) -> str | None:
     """Run the checks on ``path`` (as the context's path meanwhile); keep the result."""
-    saved = st["override"]
-    st["override"] = path
+    saved = st.override
+    st.override = path
     try:
         what = None
         for fn in list(_hooks):
@@ -263,12 +261,12 @@ def _check(ctx, st: dict, path: str) -> str | None:
             if what:
                 break
     finally:
-        st["override"] = saved
-    st["results"][path] = what or None
+        st.override = saved
+    st.results[path] = what or None
     return what or None
 
 
-def _first_use(ctx, st: dict, chosen: str, forced: str | None) -> str:
+def _first_use(ctx, st: registry.PathState, chosen: str, forced: str | None) -> str:
     started = time.perf_counter()
     what = _check(ctx, st, chosen)
     if what is None or forced:
@@ -276,9 +274,9 @@ def _first_use(ctx, st: dict, chosen: str, forced: str | None) -> str:
     other = "fragment" if chosen == "compute" else "compute"
     if other == "compute" and not has_compute(ctx):
         return chosen
-    if other not in st["results"]:
+    if other not in st.results:
         _check(ctx, st, other)
-    if st["results"][other] is None:
+    if st.results[other] is None:
         set_path(ctx, other, f"the {chosen} path failed its known-answer check: {what}")
         name = driver(ctx)
         if name not in _warned:
@@ -293,8 +291,8 @@ def _first_use(ctx, st: dict, chosen: str, forced: str | None) -> str:
     return chosen
 
 
-def _verdict(ctx, st: dict, chosen: str, forced: str | None) -> str:
-    what = st["results"].get(chosen)
+def _verdict(ctx, st: registry.PathState, chosen: str, forced: str | None) -> str:
+    what = st.results.get(chosen)
     if what is None:
         return chosen
     name = driver(ctx)
@@ -304,7 +302,7 @@ def _verdict(ctx, st: dict, chosen: str, forced: str | None) -> str:
             f"in cellgl's known-answer check: {what}. Unset CELLGL_PATH (cellgl then runs a path "
             "that passes), or set CELLGL_SELFCHECK=0 to skip the check")
     other = "fragment" if chosen == "compute" else "compute"
-    tail = (f"the {other} path failed too: {st['results'][other]}" if st["results"].get(other)
+    tail = (f"the {other} path failed too: {st.results[other]}" if st.results.get(other)
             else f"this OpenGL {_version(ctx)} context has no other path")
     raise PathError(
         f"cellgl's known-answer check failed on this driver ({name}): the {chosen} path: {what}; "
@@ -323,13 +321,14 @@ def check_summary(ctx) -> str:
         return "off (CELLGL_SELFCHECK=0)"
     if not _hooks:
         return "not registered (import cellgl.basis to register the known-answer check)"
-    st = getattr(ctx, "_cellgl_path", None)
-    if not st or not st["results"]:
+    held = registry.peek(ctx)
+    st = held.path if held is not None else None
+    if st is None or not st.results:
         return "not run yet (it runs on the first GPU call)"
     parts = []
-    for path, what in st["results"].items():
-        text = st["notes"].get(path, "passed") if what is None else f"FAILED ({what})"
+    for path, what in st.results.items():
+        text = st.notes.get(path, "passed") if what is None else f"FAILED ({what})"
         parts.append(f"{path}: {text}")
-    if st["override"]:
-        parts.append(f"running {st['override']}: {st['why']}")
+    if st.override:
+        parts.append(f"running {st.override}: {st.why}")
     return "; ".join(parts)

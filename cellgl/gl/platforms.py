@@ -33,6 +33,7 @@ import ctypes
 import ctypes.util
 import os
 import sys
+from typing import Any
 
 from cellgl.gl import versions
 
@@ -88,11 +89,12 @@ def osmesa_library() -> str | None:
     return ctypes.util.find_library("OSMesa") or ctypes.util.find_library("osmesa")
 
 
-def create_native(backend: str):
+def create_native(backend: str) -> tuple[Any, list[tuple[int, str | None]]]:
     """A new standalone context of the platform's own backend ``glx``, ``wgl`` or ``cgl``
     (glcontext's default backend there), current on this thread: the first rung of
     :data:`cellgl.gl.versions.LADDER` the driver gives (CGL ignores the version asked: 4.1 core,
-    or 3.2 core on old Macs, refused below 3.3).
+    or 3.2 core on old Macs, refused below 3.3), with the rungs tried
+    (:func:`cellgl.gl.versions.climb`).
 
     Raises
     ------
@@ -312,7 +314,7 @@ def install_hint() -> str:
 def _gl_library():
     """The platform's OpenGL library (Windows' opengl32, macOS' OpenGL framework), or None."""
     try:
-        if platform() == "win32":
+        if sys.platform.startswith("win"):     # (as platform() says "win32"; mypy reads this form)
             return ctypes.WinDLL(os.environ.get("GLCONTEXT_WIN_LIBGL") or "opengl32")
         if platform() == "darwin":
             return ctypes.CDLL("/System/Library/Frameworks/OpenGL.framework/OpenGL")

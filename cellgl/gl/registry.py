@@ -1,32 +1,80 @@
-"""Everything cellgl keeps on a GL context, in one registry (the seam: :mod:`cellgl.gl.runner`).
+"""Everything cellgl knows about a GL context, in one object per context: :class:`ContextState`.
 
-Per context one entry (:func:`held`): its programs (the ONE program cache: compute entries,
-fragment entries with their vertex arrays, vertex + fragment programs; :func:`cached`, with
-least-recently-used groups for programs made per recipe), its GPU objects (storage words, sample
-inputs, storage buffers), the stores modules keep their own objects in (:func:`store`: float render
-targets) and its runners. An entry is dropped with its context (:func:`drop`, or found released on
-the next call: its objects went with it) and, without touching the parent's driver objects, in a
-forked child (they are kept alive there, never released: the driver's threads are gone).
+What a context's state holds: the backend it came from, the thread cellgl made it current on,
+whether it is a thread's private context (:mod:`cellgl.gl.context`), the version ladder's record
+(:mod:`cellgl.gl.versions`), the GPU path's override and known-answer results
+(:mod:`cellgl.gl.path`), its programs (the ONE program cache: compute entries, fragment entries
+with their vertex arrays, vertex + fragment programs; :func:`cached`, with least-recently-used
+groups for programs made per recipe), its GPU objects (storage words, sample inputs, storage
+buffers), the stores modules keep their own objects in (:func:`store`: render targets,
+:mod:`cellgl.gl.targets`) and its runners (:mod:`cellgl.gl.runner`).
+
+How a context reaches its state: a :class:`weakref.WeakKeyDictionary` keyed by the
+``moderngl.Context`` itself (:func:`held`; :func:`peek` without making one). Not moderngl's
+public slot ``Context.extra``: moderngl documents it as the user's data, and cellgl hands its
+contexts to users (:func:`cellgl.gl.context.get_context`) and works on theirs (``ctx=``, the
+viewer's window), so cellgl taking the slot would overwrite theirs or be overwritten. Keyed by
+the object, not by its ``id()``: an id is reused by the next object once a context is gone, and a
+new context would inherit a dead one's programs. The mapping itself never keeps a context
+alive; the GL objects in a state do (each moderngl object refers to its context), so a state
+goes when its context is released (found so on the next call: :func:`held` sweeps), when cellgl
+drops it (:func:`drop`), or in a forked child (kept alive there, never released: the parent's
+driver threads do not exist in the child, and releasing would hang).
 """
 from __future__ import annotations
 
 import os
 import threading
+import weakref
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
-__all__ = ["held", "cached", "drop", "store", "program_key"]
+from cellgl.gl import moderngl_seam
+
+__all__ = ["ContextState", "PathState", "held", "peek", "states", "cached", "drop", "store",
+           "program_key", "release_object"]
 
 
-@dataclass
-class _Held:
-    """Everything cellgl keeps on one context."""
-    ctx: object
+@dataclass(eq=False)
+class PathState:
+    """The GPU path's record on one context (:mod:`cellgl.gl.path`)."""
+    #: the path :func:`cellgl.gl.path.set_path` chose, and why (one line for `cellgl info`)
+    override: str | None = None
+    why: str | None = None
+    #: path -> None (its known-answer check passed) or what differed
+    results: dict[str, str | None] = field(default_factory=dict)
+    #: path -> what the check found, for `cellgl info`
+    notes: dict[str, str] = field(default_factory=dict)
+    #: the thread running the checks (their own GPU work runs the path under check)
+    running: int | None = None
+
+
+@dataclass(eq=False)
+class ContextState:
+    """Everything cellgl knows about one context; see the module's doc."""
+    ref: weakref.ReferenceType
+    #: the backend the context came from (cellgl.gl.context.get_context); None: not cellgl's
+    backend: str | None = None
+    #: whether it is a thread's private context (made while the shared one was held elsewhere)
+    private: bool = False
+    #: ident of the thread cellgl made it current on (None: current on no thread as far as
+    #: cellgl made it so)
+    thread: int | None = None
+    #: the rungs of the version ladder tried: (version code, error or None); None: not climbed
+    ladder: list[tuple[int, str | None]] | None = None
+    path: PathState = field(default_factory=PathState)
     programs: dict = field(default_factory=dict)       # key -> (program, vertex array or None)
     groups: dict = field(default_factory=dict)         # lru name -> OrderedDict of keys
     objects: dict = field(default_factory=dict)        # key -> (content key, GL object)
-    stores: dict = field(default_factory=dict)         # name -> dict a module keeps (float targets)
+    stores: dict = field(default_factory=dict)         # name -> dict a module keeps (targets)
     runners: dict = field(default_factory=dict)        # path -> Runner
+
+    @property
+    def ctx(self) -> Any:
+        """The context (None once it has been garbage collected)."""
+        return self.ref()
 
     def release(self) -> None:
         """Release every GL object held (the context must be current and alive)."""
@@ -39,6 +87,7 @@ class _Held:
         self.groups.clear()
         self.objects.clear()
         self.stores.clear()
+        self.runners.clear()
 
 
 def release_object(obj) -> None:
@@ -63,73 +112,87 @@ def _release_all(value) -> None:
     elif isinstance(value, (list, tuple)):
         for v in value:
             _release_all(v)
-    elif hasattr(value, "mglo") and hasattr(value, "release"):
+    elif callable(getattr(value, "release", None)):
         release_object(value)
 
 
 _lock = threading.RLock()
-_registry: dict[int, _Held] = {}
+_states: weakref.WeakKeyDictionary[Any, ContextState] = weakref.WeakKeyDictionary()
 _pid = os.getpid()
-#: a forked child's inherited entries: kept alive, never released (the parent's driver threads
+#: a forked child's inherited states: kept alive, never released (the parent's driver threads
 #: do not exist here; releasing would hang)
 _orphans: list = []
 
 
 def _after_fork_in_child() -> None:
-    global _lock, _pid
+    global _lock, _states, _pid
     if _pid == os.getpid():
         return
-    _orphans.append(dict(_registry))
-    _registry.clear()
-    _lock, _pid = threading.RLock(), os.getpid()
+    _orphans.append(list(_states.items()))
+    _states, _lock, _pid = weakref.WeakKeyDictionary(), threading.RLock(), os.getpid()
 
 
 if hasattr(os, "register_at_fork"):
     os.register_at_fork(after_in_child=_after_fork_in_child)
 
 
-def _alive(ctx) -> bool:
-    mglo = getattr(ctx, "mglo", None)
-    return mglo is not None and type(mglo).__name__ != "InvalidObject"
+def _sweep() -> None:
+    """Forget the states of contexts released since (their objects went with them)."""
+    for ctx in [c for c in list(_states.keys()) if moderngl_seam.released(c)]:
+        _states.pop(ctx, None)
 
 
-def held(ctx) -> _Held:
-    """The registry entry of ``ctx``, made on first use. Entries of contexts released since are
-    dropped on the way (their objects went with them)."""
+def held(ctx) -> ContextState:
+    """The state of ``ctx``, made on first use. States of contexts released since are dropped
+    on the way (their objects went with them)."""
     if _pid != os.getpid():
         _after_fork_in_child()
     with _lock:
-        # (one entry, ``ctx``'s own: nothing else to look at; one of another context: it may be
+        st = _states.get(ctx)
+        # (one state, ``ctx``'s own: nothing else to look at; one of another context: it may be
         # released, and the first call for ``ctx`` must sweep it too)
-        if len(_registry) > 1 or (_registry and id(ctx) not in _registry):
-            for k, other in list(_registry.items()):   # released since: their objects went with them
-                if not _alive(other.ctx):
-                    del _registry[k]
-        h = _registry.get(id(ctx))
-        if h is None or h.ctx is not ctx:
-            h = _registry[id(ctx)] = _Held(ctx)
-        return h
+        if len(_states) > 1 or (_states and st is None):
+            _sweep()
+        if st is None:
+            st = _states[ctx] = ContextState(weakref.ref(ctx))
+        return st
+
+
+def peek(ctx) -> ContextState | None:
+    """The state of ``ctx`` if cellgl has one, without making one."""
+    if _pid != os.getpid():
+        _after_fork_in_child()
+    with _lock:
+        return _states.get(ctx)
+
+
+def states() -> list[tuple[Any, ContextState]]:
+    """Every (context, state) cellgl knows of in this process, a snapshot."""
+    if _pid != os.getpid():
+        _after_fork_in_child()
+    with _lock:
+        return list(_states.items())
 
 
 def drop(ctx) -> None:
-    """Forget ``ctx``: release what cellgl holds on it and its entry. The objects are released
+    """Forget ``ctx``: release what cellgl holds on it and its state. The objects are released
     with ``ctx`` made current on this thread (a program or buffer name means nothing, or another
     object, in another context), so it must not be current on another thread; it stays current
     here after."""
     with _lock:
-        h = _registry.pop(id(ctx), None)
-    if h is not None and h.ctx is ctx and _alive(ctx):
-        ctx.mglo.__enter__()
-        h.release()
+        st = _states.pop(ctx, None)
+    if st is not None and not moderngl_seam.released(ctx):
+        moderngl_seam.make_current(ctx)
+        st.release()
 
 
 def store(name: str, ctx) -> dict:
-    """A dict kept on ``ctx`` for a module's own GL objects (e.g. its float targets): dropped and
-    released with the context's entry."""
+    """A dict kept on ``ctx`` for a module's own GL objects (e.g. its render targets): dropped
+    and released with the context's state."""
     return held(ctx).stores.setdefault(name, {})
 
 
-def cached(ctx, key, make, lru: tuple | None = None):
+def cached(ctx, key, make: Callable[[], tuple], lru: tuple[str, int] | None = None) -> tuple:
     """``(program, vertex array or None)`` under ``key`` in ``ctx``'s one program cache, made by
     ``make()`` once; ``lru`` (name, size): kept among the group's last ``size`` (older ones
     released with their vertex arrays)."""

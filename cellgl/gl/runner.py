@@ -73,7 +73,6 @@ class Runner(Drawing):
 
     def __init__(self, h):
         self.held = h
-        self.ctx = h.ctx
         #: whether a GPU watchdog can reset the device (tiles: :func:`cellgl.gl.dispatch.tile_samples`)
         self.watchdog = _d.has_watchdog(self.ctx)
 

@@ -83,12 +83,12 @@ class SurfacelessEGLLoader:
         self._cfg = cfg
         ladder = versions.LADDER if version is None else (version,)
         try:
-            handle = versions.climb(self._create, ladder=ladder)
+            handle, tried = versions.climb(self._create, ladder=ladder)
         except versions.LadderError as exc:
             raise RuntimeError(f"eglCreateContext(surfaceless): {exc}") from None
         self._ctx = handle.value
         #: the rungs tried: (version code, error or None) (cellgl.gl.versions.describe)
-        self.ladder = handle._cellgl_ladder
+        self.ladder = tried
         self.__enter__()
 
     def _create(self, code: int) -> ctypes.c_void_p:

@@ -5,7 +5,8 @@ whatever is asked (llvmpipe: 4.5); NVIDIA's EGL and GLX give exactly the version
 3.3 given: no compute shaders). So cellgl asks for the newest first and walks down,
 :data:`LADDER`: 4.6, 4.5, 4.3 (compute shaders: the compute path), 4.1 (macOS), 3.3 core (the
 least the fragment path runs on). The first rung a driver accepts wins; what each refused rung
-said is kept for the one error message when none works.
+said is kept for the one error message when none works, and with a context made in its state
+(:class:`cellgl.gl.registry.ContextState`, ``ladder``: `cellgl info`'s ``gl_ladder``).
 
 Every way cellgl makes a context climbs this ladder: EGL, GLX, WGL and CGL through glcontext
 (:func:`glcontext_context`; glcontext's CGL backend ignores the version and gives 4.1 core),
@@ -15,10 +16,16 @@ viewer's GLFW window (``viewer/app.py``).
 
 from __future__ import annotations
 
-from collections import deque
+import os
+from collections.abc import Callable
+from typing import Any, TypeVar
 
-__all__ = ["LADDER", "MINIMUM", "LadderError", "label", "major_minor", "climb", "wrap_loader",
+from cellgl.gl import moderngl_seam, registry
+
+__all__ = ["LADDER", "MINIMUM", "LadderError", "label", "major_minor", "first_line", "climb",
            "glcontext_context", "describe", "check_settings"]
+
+T = TypeVar("T")
 
 #: moderngl version codes asked for, newest first (core profile).
 LADDER = (460, 450, 430, 410, 330)
@@ -36,7 +43,9 @@ def major_minor(code: int) -> tuple[int, int]:
     return code // 100, code % 100 // 10
 
 
-def _first_line(exc: BaseException) -> str:
+def first_line(exc: BaseException) -> str:
+    """The first line of what ``exc`` says (its type's name when it says nothing): one line of
+    an error message per failed rung or backend."""
     text = str(exc).strip() or type(exc).__name__
     return text.splitlines()[0]
 
@@ -50,11 +59,18 @@ class LadderError(RuntimeError):
         super().__init__(f"{what}: {tried}" if what else tried)
 
 
-def climb(make, what: str = "", ladder=LADDER):
+def climb(make: Callable[[int], T], what: str = "",
+          ladder: tuple[int, ...] = LADDER) -> tuple[T, list[tuple[int, str | None]]]:
     """Ask ``make(code)`` for each version code of ``ladder`` in turn; the first context it
     returns wins. ``make`` raises when the driver refuses that version (any exception: each API
-    fails in its own way). The context gets ``_cellgl_ladder``: the list of (code, error or None)
-    of the rungs tried (:func:`describe`).
+    fails in its own way).
+
+    Returns
+    -------
+    (context, attempts)
+        What ``make`` returned, and the rungs tried: (version code, error or None) in order.
+        Kept in the context's state (:class:`cellgl.gl.registry.ContextState`, ``ladder``) for
+        :func:`describe`.
 
     Raises
     ------
@@ -66,21 +82,18 @@ def climb(make, what: str = "", ladder=LADDER):
         try:
             ctx = make(code)
         except Exception as exc:  # noqa: BLE001 - glcontext raises bare Exception
-            attempts.append((code, _first_line(exc)))
+            attempts.append((code, first_line(exc)))
             continue
         attempts.append((code, None))
-        try:
-            ctx._cellgl_ladder = attempts
-        except AttributeError:  # a stand-in object without attributes (tests)
-            pass
-        return ctx
-    raise LadderError(what, attempts)
+        return ctx, attempts
+    raise LadderError(what, [(code, why or "") for code, why in attempts])
 
 
 def describe(ctx) -> str:
     """What the ladder did for ``ctx``: ``"4.6 refused (eglCreateContext failed (0x3009)), 4.5
     asked, got 4.5"``; ``"not climbed"`` for a context cellgl did not make (a window's)."""
-    attempts = getattr(ctx, "_cellgl_ladder", None)
+    st = registry.peek(ctx)
+    attempts = st.ladder if st is not None else None
     if not attempts:
         return "not climbed (a context cellgl attached to, not one it made)"
     parts = [f"{label(code)} refused ({why})" for code, why in attempts if why is not None]
@@ -88,39 +101,6 @@ def describe(ctx) -> str:
     got = getattr(ctx, "version_code", None)
     parts.append(f"{label(asked)} asked, got {label(got) if got else 'unknown'}")
     return ", ".join(parts)
-
-
-def wrap_loader(loader, minimum: int = MINIMUM, mode: str = "standalone"):
-    """A moderngl.Context over a loader object (``load_opengl_function``, ``release``,
-    ``__enter__``/``__exit__``: glcontext's or cellgl's own; None: glcontext's default backend
-    detecting the current context), refused below ``minimum`` (moderngl 5.10+ internals).
-
-    A standalone context's loader is released when the context cannot be made or is too old.
-    """
-    import moderngl
-
-    ctx = moderngl.Context.__new__(moderngl.Context)
-    settings = {"context": loader} if loader is not None else {}
-    try:
-        ctx.mglo, ctx.version_code = moderngl.mgl.create_context(glversion=minimum, mode=mode,
-                                                                 **settings)
-    except Exception:
-        if loader is not None:
-            loader.release()
-        raise
-    ctx._info = None
-    ctx._extensions = None
-    ctx.extra = None
-    ctx._gc_mode = None
-    ctx._objects = deque()
-    ctx._screen = None
-    ctx.fbo = None
-    if ctx.version_code < minimum:
-        got = ctx.version_code
-        if mode == "standalone":   # ours; a detected one (a window's) belongs to its owner
-            ctx.release()
-        raise ValueError(f"OpenGL {label(minimum)} required, got {label(got)}")
-    return ctx
 
 
 def check_settings() -> None:
@@ -133,8 +113,6 @@ def check_settings() -> None:
     ValueError
         ``GLCONTEXT_GLVERSION`` is set (one line naming it and what to do).
     """
-    import os
-
     raw = os.environ.get("GLCONTEXT_GLVERSION", "")
     if raw:
         raise ValueError(
@@ -143,11 +121,13 @@ def check_settings() -> None:
             "first: the driver's newest is taken) on some backends but not others; unset it")
 
 
-def glcontext_context(api: str, code: int, **settings):
-    """A standalone context from glcontext's backend for ``api`` asking for version ``code``
-    core: ``"egl"`` (its EGL backend; ``device_index`` picks the EGL device), or ``"native"``
-    (its default backend: GLX on Linux, WGL on Windows, CGL on macOS). Whatever version the
-    driver gives from 3.3 up is accepted (a driver may give more than asked; CGL gives 4.1).
+def glcontext_context(api: str, code: int, **settings: Any) -> Any:
+    """A standalone moderngl context from glcontext's backend for ``api`` asking for version
+    ``code`` core: ``"egl"`` (its EGL backend; ``device_index`` picks the EGL device), or
+    ``"native"`` (its default backend: GLX on Linux, WGL on Windows, CGL on macOS), made by
+    ``moderngl.create_context(context=loader)`` (:func:`cellgl.gl.moderngl_seam.create`).
+    Whatever version the driver gives from 3.3 up is accepted (a driver may give more than
+    asked; CGL gives 4.1); below it the loader is released and ValueError raised.
 
     Note: glcontext lets ``GLCONTEXT_GLVERSION`` replace the version asked (every rung then asks
     the same: :func:`check_settings` refuses it) and ``GLCONTEXT_DEVICE_INDEX`` the device (checked
@@ -156,5 +136,4 @@ def glcontext_context(api: str, code: int, **settings):
     import glcontext
 
     create = glcontext.get_backend_by_name("egl") if api == "egl" else glcontext.default_backend()
-    loader = create(mode="standalone", glversion=code, **settings)
-    return wrap_loader(loader)
+    return moderngl_seam.create(create(mode="standalone", glversion=code, **settings), MINIMUM)

@@ -112,7 +112,7 @@ def plan_tiles(width, height, slices, ext, channels, tile, budget, file_bytes) -
 
 def output_paths(path: Path, channels: tuple[str, ...]) -> list[tuple[Path, tuple[str, ...]]]:
     ext = path.suffix.lower()
-    if ext == ".exr" or len(channels) == 1:
+    if ext in (".exr", ".vdb") or len(channels) == 1:
         return [(path, channels)]
     return [(path.with_name(f"{path.stem}_{c}{path.suffix}"), (c,)) for c in channels]
 
@@ -152,7 +152,7 @@ def check_bits(ext: str, bit_depth) -> int:
         bits = None
     if bits not in fmt.depths or str(bit_depth).strip() != str(bits):
         raise BakeError(f"--depth {bit_depth}: {ext} accepts {accepted_list(fmt.depths)} bits "
-                        f"(8|16|32 overall: .png 8/16, .tif 8/16/32, .exr 16/32, .npy 32)")
+                        f"(8|16|32 overall: .png 8/16, .tif 8/16/32, .exr 16/32, .npy 32, .vdb 32)")
     return bits
 
 
@@ -300,7 +300,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         check_size(w, h, depth_slices, f"size {w}x{h}x{depth_slices}")
         if not fmt.volume:
             raise BakeError(f"volume bake ({w}x{h}x{depth_slices}) to {ext}: volumes are "
-                            f"written to .npy or .tif only")
+                            f"written to .npy or .tif only, and to .vdb (OpenVDB)")
+    if ext == ".vdb":           # before any work: a volume, and the binding (cellgl.io.vdb)
+        _check_vdb(w, h, depth_slices)
     channels = parse_channels(channels)
     texture = ext in gputex.EXTS
     if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gputex)
@@ -508,6 +510,11 @@ def _write(tmp: Path, tiles, out: _Output, ext: str, plan: _Plan, meta: str) -> 
                           text={"Software": "cellgl", "cellgl": meta}, srgb=e.channel == "color")
         elif ext == ".exr":
             _write_exr(tmp, tiles, out, plan, meta)
+        elif ext == ".vdb":     # a grid per sample (cellgl.io.vdb)
+            from cellgl.io import vdb
+            vdb.write_vdb(tmp, (plan.width, plan.height, plan.slices), {e.channel: (e.samples, e.dtype) for e in
+                          out.encodings}, tiles, metadata=meta, colorspaces={e.channel: COLORSPACES[
+                              e.colorspace].interop_id for e in out.encodings if e.colorspace})
         elif ext == ".npy":
             (e,) = out.encodings
             cio.write_npy(tmp, _npy_pieces(tiles, e, plan), _shape(e, plan), e.dtype)
@@ -557,6 +564,18 @@ def _write_exr(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
         chroma = REC709_CHROMATICITIES
     cio.write_exr(tmp, (split(b) for b in _bands(tiles, plan)), plan.width, plan.height,
                   dtypes, attributes=attributes, chromaticities=chroma)
+
+
+def _check_vdb(w, h, d) -> None:
+    from cellgl.io import vdb
+
+    if d is None:
+        raise BakeError(f"a .vdb holds a volume, not a {w}x{h} image: accepted --size WxHxD "
+                        f"(a solid recipe); 2D bakes go to .exr, .tif, .png or .npy")
+    try:
+        vdb.require()
+    except vdb.VdbUnavailable as exc:
+        raise BakeError(str(exc)) from None
 
 
 def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:

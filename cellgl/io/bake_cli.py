@@ -21,10 +21,12 @@ formats (from the extension) and --depth (bits per sample):
   .tif  8, 16 or 32 (float, default; tiled)     .npy  32 (float32)
   .tx   as .tif, tiled and mip-mapped (every level rendered) for film renderers
   .dds, .ktx2  GPU textures, a format per channel (--compress; --depth: plain samples' bits)
+  .vdb  OpenVDB volume (--size WxHxD), a float grid per sample (needs OpenVDB's binding)
 colour: float files hold scene-linear Rec.709 (--colorspace srgb: sRGB-encoded), tagged;
   integer formats sRGB-encoded.
 channels: color (RGB), height, normal (RGB), id (uint32; false colour in .png), F1..F4,
-  roughness, ao, metallic (the recipe's material section).
+  roughness, ao, metallic (the recipe's material section), cloud (RGBA cloud noise:
+  Perlin-Worley, Worley fBm at 1, 2, 4 x frequency).
   An .exr holds every channel asked for; other formats write <stem>_<channel><ext> each.
 material sets (--material ENGINE -o DIR): the maps of an engine's standard material, packed as it
   expects, with manifest.json: unreal, unity-hdrp, unity-urp, godot, gltf (+ a .gltf), blender;
@@ -60,10 +62,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
                    help="override a recipe parameter (repeatable)")
     p.add_argument("--tileable", action="store_true", default=None,
-                   help="make the texture wrap around at its edges")
+                   help="make the texture wrap around at its edges (a volume in depth too)")
     p.add_argument("--channels", action="append", default=None, metavar="LIST",
-                   help="comma-separated: color, height, normal, id, F1..F4, roughness, ao, metallic "
-                        "(default color)")
+                   help="comma-separated: color, height, normal, id, F1..F4, roughness, ao, metallic, "
+                        "cloud (default color)")
     p.add_argument("--material", default=None, metavar="ENGINE",
                    help="bake the material set of an engine preset into the folder -o DIR: unreal, "
                         "unity-hdrp, unity-urp, godot, gltf, blender (cellgl/io/material_sets.py)")
@@ -89,7 +91,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="frames per second of an animated file (with --frames): .webp 1..95 "
                         "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
     p.add_argument("--colorspace", default=None, metavar="NAME",
-                   help="colour of a float file (.exr, 32-bit .tif): linear (default; scene-linear "
+                   help="colour of a float file (.exr, 32-bit .tif, .vdb, .zarr): linear (default; scene-linear "
                         "Rec.709, tagged lin_rec709_scene) or srgb (sRGB-encoded, tagged); integer "
                         "formats are always sRGB-encoded")
     p.add_argument("--udim", default=None, metavar="RANGE",
@@ -144,7 +146,7 @@ def run_cli(args: argparse.Namespace) -> int:
         raise BakeError(f"--map-format {args.map_format}: only with --material ENGINE")
     for flag, value in (("--udim", args.udim), ("--udims", args.udims), ("--colorspace", args.colorspace),
                         ("--tiled", args.tiled or None)):
-        if value is not None and (args.frames is not None or ext == ".zarr"):
+        if value is not None and (args.frames is not None or (ext == ".zarr" and flag != "--colorspace")):
             raise BakeError(f"{flag} {value}: only for a single bake to {', '.join(FORMATS)}; "
                             f"not with --frames or a .zarr output")
     if getattr(args, "mips", False) and ((args.frames is not None and ext not in (".dds", ".ktx2"))

@@ -44,7 +44,7 @@ REC709_CHROMATICITIES = ((0.64, 0.33), (0.30, 0.60), (0.15, 0.06), (0.3127, 0.32
 
 def float_format(ext: str, bits: int) -> bool:
     """Whether an ``ext`` file of ``bits`` bits per sample stores floats (colour: a choice)."""
-    return ext == ".exr" or (ext in (".tif", ".tiff", ".tx") and bits == 32)
+    return ext in (".exr", ".vdb", ".zarr") or (ext in (".tif", ".tiff", ".tx") and bits == 32)
 
 
 def default_colorspace(ext: str, bits: int) -> str | None:
@@ -70,7 +70,7 @@ def check_colorspace(value, ext: str, bits: int) -> str | None:
     if not float_format(ext, bits):
         what = ".npy (render()'s values as they are)" if ext == ".npy" else \
             f"{ext} at {bits} bits (an integer display format: always sRGB-encoded)"
-        raise ValueError(f"--colorspace {value}: only for float files (.exr, 32-bit .tif); "
+        raise ValueError(f"--colorspace {value}: only for float files (.exr, 32-bit .tif, .vdb, .zarr); "
                          f"{what} takes no --colorspace")
     return name
 

@@ -48,13 +48,16 @@ CHOICES: dict[str, dict[str, object]] = {
        for m in ("roughness", "ao", "metallic")},
     "id": {"none": {32: "R32_UINT"}},
     **{f: {"none": {32: "R32_SFLOAT", 16: "R16_SFLOAT"}} for f in ("F1", "F2", "F3", "F4")},
+    # four noises (cellgl.texture.cloud), RGBA8 as the cloud renderers sample them; data, not sRGB
+    "cloud": {"none": {8: "R8G8B8A8_UNORM"}},
 }
 _WHY_NOT = {"color": "colour has three channels (BC4 holds one, BC5 two)",
             "normal": "a normal needs two channels at least (BC4 holds one)",
             "height": "height is one channel: BC4, or plain samples",
             "roughness": "a mask is one channel: BC4, or plain samples",
             "id": "ids are exact uint32 values (R32_UINT); blocks would change them",
-            "F1": "distances are floats (R32_SFLOAT/R16_SFLOAT); blocks hold 8-bit [0, 1] values"}
+            "F1": "distances are floats (R32_SFLOAT/R16_SFLOAT); blocks hold 8-bit [0, 1] values",
+            "cloud": "four independent noises: blocks would blur one into another (BC7 shares its endpoints)"}
 
 
 @dataclass(frozen=True)
@@ -161,7 +164,7 @@ def _samples(fmt: containers.TexFormat, channel: str, a: np.ndarray) -> np.ndarr
     if fmt.name in ("R32_SFLOAT", "R16_SFLOAT"):
         return np.asarray(a).astype(np.float32 if fmt.name == "R32_SFLOAT" else np.float16)
     bits = 16 if fmt.name == "R16_UNORM" else 8
-    samples = 3 if channel in ("color", "normal") else 1
+    samples = 3 if channel in ("color", "normal") else 4 if channel == "cloud" else 1
     q = Encoding(channel, samples, np.dtype(np.uint8 if bits == 8 else np.uint16)).encode(a)
     if samples == 3 and (fmt.codec in ("bc3", "bc7") or not fmt.compressed):
         q = np.concatenate([q, np.full(q.shape[:-1] + (1,), 255, np.uint8)], axis=-1)   # opaque alpha

@@ -23,7 +23,8 @@ class BakeError(ValueError):
 
 #: Channels render() produces -> samples per pixel.
 CHANNELS: dict[str, int] = {"color": 4, "height": 1, "normal": 3, "id": 1,
-                            "F1": 1, "F2": 1, "F3": 1, "F4": 1, "roughness": 1, "ao": 1, "metallic": 1}
+                            "F1": 1, "F2": 1, "F3": 1, "F4": 1, "roughness": 1, "ao": 1, "metallic": 1,
+                            "cloud": 4}
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,8 @@ FORMATS: dict[str, _Format] = {
     # plain (uncompressed) samples, its default per channel; mip levels and volumes in the file
     ".dds": _Format("DDS", (8, 16, 32), 8, True, "level"),
     ".ktx2": _Format("KTX2", (8, 16, 32), 8, True, "level"),
+    # an OpenVDB volume, a float grid per sample (cellgl.io.vdb); volumes only
+    ".vdb": _Format("OpenVDB", (32,), 32, True, "piece"),
 }
 
 #: extensions of one animated file that loops (``--frames N``, :mod:`cellgl.io.frames`)
@@ -298,7 +301,8 @@ def encoding_of(channel: str, ext: str, bits: int, colorspace: str | None = None
 
 
 #: EXR channel names per cellgl channel.
-_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B")}
+_EXR_NAMES = {"color": ("R", "G", "B"), "normal": ("normal.R", "normal.G", "normal.B"),
+              "cloud": ("cloud.R", "cloud.G", "cloud.B", "cloud.A")}
 
 
 def exr_names(channel: str) -> tuple[str, ...]:

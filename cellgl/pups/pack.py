@@ -306,5 +306,3 @@ def candidate_stream(cell_offsets, cell_of, slot, kept_pair, kept_slot, kept_axi
     cells[:ncell, 2] = pairs
     return cells, rec
 
-
-# The old name cellgl/pups/gpu.py still imports (renamed after the runner/speed merges)

@@ -23,12 +23,12 @@ import copy
 import json
 import os
 import tempfile
-from collections import OrderedDict
 from pathlib import Path
 from types import MappingProxyType
 
 import numpy as np
 
+from cellgl._cache import Bounded
 from cellgl.texture.params import Param
 from cellgl.texture.schema import (VERSION, RecipeError, coerce, value_error, suggest, check_name_doc, check_version, parse_value,
                                    read_json)
@@ -423,19 +423,16 @@ def load_pups_preset(name: str) -> PupsRecipe | None:
 
 # ---------------------------------------------------------------------- rendering
 
-_SCENES: OrderedDict = OrderedDict()     # (recipe json, backend) -> PupsScene
-_SCALED: OrderedDict = OrderedDict()     # (id(scene), period) -> scaled layer data
-_CACHE = 4
+_SCENES = Bounded("PUPs scenes by (recipe json, seed, backend) (cellgl.pups.recipe)", 4)
+#: (id(graph), period) -> scaled layer data (each holds its graph: the id is not reused meanwhile)
+_SCALED = Bounded("PUPs layers scaled to a period (cellgl.pups.recipe)", 4)
 
 
-def _cached(cache: OrderedDict, key, make):
-    if key in cache:
-        cache.move_to_end(key)
-        return cache[key]
-    value = make()
-    cache[key] = value
-    while len(cache) > _CACHE:
-        cache.popitem(last=False)
+def _cached(cache: Bounded, key, make):
+    value = cache.get(key)
+    if value is None:
+        value = make()
+        cache.put(key, value)
     return value
 
 

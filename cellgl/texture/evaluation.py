@@ -27,7 +27,9 @@ __all__ = ["evaluate", "render", "render_fragment", "measure_range", "point_rang
 MAX_SIDE = 1 << 20
 #: what :func:`evaluate` can return: the render channels plus the height gradient in texture
 #: space (dh/du, dh/dv, dh/dz) and the raw combination value at octave 0
-OUTPUTS = CHANNELS + ("grad", "value")
+OUTPUTS = CHANNELS + ("grad", "value", "cloud")
+#: what :func:`render` can return: the channels, and ``cloud`` (RGBA, :mod:`cellgl.texture.cloud`)
+RENDER_CHANNELS = CHANNELS + ("cloud",)
 
 
 def _backend(backend):
@@ -64,7 +66,8 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
         Any of ``color`` (N, 4) float32, ``height`` (N,) float32, ``normal`` (N, 3) float32
         in [0, 1] encoding, ``id`` (N,) uint32, ``F1``..``F4`` (N,) float32 (octave 0),
         ``grad`` (N, 3) float32 (dh/du, dh/dv, dh/dz, analytic), ``value`` (N,) float32 (the
-        combination before normalisation, octave 0).
+        combination before normalisation, octave 0), ``cloud`` (N, 4) float32 (packed cloud
+        noise, :mod:`cellgl.texture.cloud`).
     backend : {"gpu", "numpy"}
     filter_width : float or (du, dv) or (du, dv, dz)
         The footprint of every point in texture space (e.g. ``1 / W`` for the pixels of a
@@ -84,6 +87,11 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
     65,536 points spread over 10^6 unit squares would otherwise cost a dispatch each)."""
     recipe = load_recipe(recipe)
     outputs = check_channels(outputs, OUTPUTS)
+    if "cloud" in outputs:      # four heights packed (cellgl.texture.cloud)
+        from cellgl.texture import cloud
+
+        return cloud.with_cloud(lambda r, chs: _evaluate(r, points, chs, backend, filter_width, split_far),
+                                recipe, outputs, measure_range)
     _backend(backend)
     pts = _points(points)
     duvz = _filter_width(filter_width)
@@ -232,12 +240,19 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     dict channel -> ndarray: ``color`` (H, W, 4) float32 in [0, 1]; ``height`` (H, W)
     float32; ``normal`` (H, W, 3) float32 in [0, 1] (green per ``normal_convention``);
     ``id`` (H, W) uint32; ``F1``..``F4`` (H, W) float32; ``roughness``, ``ao``, ``metallic``
-    (H, W) float32 in [0, 1] (the recipe's ``material`` section, :mod:`cellgl.texture.material`).
-    Row 0 is the top of the image. With
+    (H, W) float32 in [0, 1] (the recipe's ``material`` section, :mod:`cellgl.texture.material`);
+    ``cloud`` (H, W, 4) float32 in [0, 1], packed cloud noise from the recipe's basis and domain
+    (:mod:`cellgl.texture.cloud`). Row 0 is the top of the image. With
     ``depth=D`` (3D/4D recipes) every array gains a leading axis of D slices along z.
     """
     recipe = load_recipe(recipe)
-    channels = check_channels(channels)
+    channels = check_channels(channels, RENDER_CHANNELS)
+    if "cloud" in channels:     # four heights packed (cellgl.texture.cloud)
+        from cellgl.texture import cloud
+
+        return cloud.with_cloud(lambda r, chs: render(r, width, height, channels=chs, x0=x0, y0=y0, tile_w=tile_w,
+                                                      tile_h=tile_h, depth=depth, backend=backend, samples=samples),
+                                recipe, channels, measure_range)
     _backend(backend)
     n_sub = antialias.grid_side(samples)
     tw, th = check_tile(width, height, x0, y0, tile_w, tile_h, max_side=MAX_SIDE)

@@ -16,12 +16,15 @@ from pathlib import Path
 
 import numpy as np
 
+from cellgl._cache import Bounded
+
 __all__ = ["BINDING", "MAX_SIDE", "ImageError", "resolve", "density_pixels", "cell_pixels", "pack", "sample",
            "bind"]
 
 BINDING = 6          #: storage buffer of the packed cell image (texture.comp and texture.frag)
 MAX_SIDE = 4096      #: largest side of a density or cell image (cellgl.basis.density.MAX_IMAGE_SIDE)
-_cache: dict = {}
+#: decoded images by (file, modification time, size, kind) (cellgl._cache's policy)
+_IMAGES = Bounded("decoded density and cell images (cellgl.texture.images)", 8)
 
 
 class _TooLarge(Exception):
@@ -61,7 +64,7 @@ def _read(file: str, path: str, kind: str, convert):
     except OSError as exc:
         raise ImageError(f"{path}: cannot read {what} {file!r}: {exc.strerror or exc}") from None
     key = (file, st.st_mtime_ns, st.st_size, kind)
-    img = _cache.get(key)
+    img = _IMAGES.get(key)
     if img is None:
         size = None
         try:
@@ -82,9 +85,8 @@ def _read(file: str, path: str, kind: str, convert):
         except Exception as exc:  # noqa: BLE001 - Pillow raises many kinds
             raise ImageError(f"{path}: cannot read {what} {file!r} as an image: {exc}") from None
         a.setflags(write=False)
-        if len(_cache) > 8:
-            _cache.clear()
-        img = _cache[key] = a
+        _IMAGES.put(key, a)
+        img = a
     return img
 
 

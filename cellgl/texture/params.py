@@ -193,8 +193,8 @@ PARAMS: tuple[Param, ...] = (
     Param("offset_y", "float", 0.0, -1e9, 1e9, "shift of the basis along y, in cells", "domain"),
     Param("offset_z", "float", 0.5, -1e9, 1e9, "z of the image plane in cells (3D and 4D bases)", "domain"),
     Param("time", "float", 0.0, -1e9, 1e9, "4th coordinate in cells (4D bases: animation)", "domain"),
-    Param("tileable", "bool", False, None, None, "seamless in u and v: the basis (and noise) repeat every "
-          "frequency cells", "domain", compile_time=True),
+    Param("tileable", "bool", False, None, None, "seamless in u and v (and in z for basis.dimension 3 "
+          "and 4: a volume tiles in depth): the basis (and noise) repeat every frequency cells", "domain", compile_time=True),
     Param("warp_amount", "float", 0.0, 0.0, 8.0, "domain warp: the sample moves by up to about this many "
           "cells along each axis, by fractal gradient noise, before the basis", "domain"),
     Param("warp_frequency", "float", 1.0, 0.01, 64.0, "domain warp: noise lattice cells per basis cell "

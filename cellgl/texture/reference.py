@@ -20,7 +20,7 @@ from cellgl.basis import reference as ref
 from cellgl.basis.enums import Distribution, Metric
 from cellgl.texture.antialias import feature_frequency, smoothscale
 from cellgl.texture.material import MATERIAL_CHANNELS, material
-from cellgl.texture.params import LINEAR, PARAMS
+from cellgl.texture.params import LINEAR
 from cellgl.basis.reference import W96_DENSITY_ADJUSTMENT, add_u32, mul_u32, hash_u32, u16
 
 M32 = 0xFFFFFFFF
@@ -255,7 +255,8 @@ def texture_period(t: dict, octave: int) -> np.ndarray:
     if not t["tileable"]:
         return np.zeros(4, dtype=np.int64)
     m = int(round(t["lacunarity"])) ** octave
-    return np.array([int(round(t["frequency"])) * m, int(round(t["frequency"] * t["aspect"])) * m, 0, 0],
+    pz = int(round(t["frequency"])) * m if t["dimension"] >= 3 else 0      # solid: seamless in depth too
+    return np.array([int(round(t["frequency"])) * m, int(round(t["frequency"] * t["aspect"])) * m, pz, 0],
                     dtype=np.int64)
 
 
@@ -553,49 +554,22 @@ def evaluate(recipe, pts: np.ndarray, outputs, duvz=(0.0, 0.0, 0.0)) -> dict:
 
 # --------------------------------------------------------------------------- band limit
 
-#: points the octave mean is measured at (fixed, so the mean is the same bits every run)
-_MEAN_SAMPLES = 4096
-#: the recipe values the octave mean depends on (the basis and the combination)
-_MEAN_GROUPS = ("basis", "combination")
-
-
 def octave_mean(recipe) -> float:
-    """The mean over the plane of one octave's fractal term, ``b`` (fractal ``none`` and ``sum``)
-    or ``|0.5 - b|`` (``qin``, ``qin_cube``), with ``b = clamp((v - range_lo) / (range_hi -
-    range_lo), 0, 1)``: what a band-limited octave fades to.
+    """The octave mean of ``recipe``: :func:`cellgl.texture.means.octave_mean` (carried for the
+    presets, else measured once per process with :func:`measure_mean`)."""
+    from cellgl.texture.means import octave_mean as mean
 
-    Measured with this reference at 4096 fixed points (as :func:`cellgl.texture.measure_range`
-    places them: a 1000-cell square in 2D, 100-cell cube in 3D/4D, or the texture's uv square with
-    a density map), rounded to float32, cached per basis and combination.
-    """
-    v = recipe.values
-    key = tuple((p.name, v[p.name]) for p in PARAMS if p.group in _MEAN_GROUPS)
-    key += (v["fractal"] in ("qin", "qin_cube"),)
-    if v["density_map"] != "none":
-        key += (v["frequency"], v["aspect"], v["offset_x"], v["offset_y"], v["offset_z"], v["time"])
-        if v["density_map"] == "image":
-            key += (recipe.density_pixels().tobytes(),)
-    return _octave_mean(key, recipe)
+    return mean(recipe, measure_mean)
 
 
-#: measured means by key (the oldest dropped past 256 entries)
-_MEANS: dict = {}
-
-
-def _octave_mean(key, recipe) -> float:
-    hit = _MEANS.get(key)
-    if hit is None:
-        hit = _MEANS[key] = _measure_mean(recipe)
-        if len(_MEANS) > 256:
-            _MEANS.pop(next(iter(_MEANS)))
-    return hit
-
-
-def _measure_mean(recipe) -> float:
+def measure_mean(recipe) -> float:
+    """The octave mean measured: this reference at :data:`cellgl.texture.means.SAMPLES` fixed
+    points, rounded to float32 (what defines the mean; :mod:`cellgl.texture.means` keeps it)."""
+    from cellgl.texture.means import RNG_SEED, SAMPLES as _MEAN_SAMPLES
     from cellgl.texture.recipe import needed_n
 
     v = recipe.values
-    rng = np.random.default_rng(20001)
+    rng = np.random.default_rng(RNG_SEED)
     dim = int(v["dimension"])
     pts = np.zeros((_MEAN_SAMPLES, 3))
     if v["density_map"] != "none":

@@ -116,7 +116,7 @@ void cell_texture_lattice(ivec4 origin_cell, vec4 origin_frac, vec4 s, out ivec4
     f = q - fl;
 }
 
-// Lattice period of octave `octave` (cells per texture repeat), 0 where not tileable.
+// Lattice period of octave `octave` (cells per repeat; z too for solid bases), 0 where not tileable.
 ivec4 cell_texture_period(CellTextureParams t, int octave)
 {
 #if CELL_PERIODIC
@@ -124,7 +124,8 @@ ivec4 cell_texture_period(CellTextureParams t, int octave)
     for (int i = 0; i < octave; i++) {
         m *= int(round(t.lacunarity));
     }
-    return ivec4(int(round(t.frequency)) * m, int(round(t.frequency * t.aspect)) * m, 0, 0);
+    int f = int(round(t.frequency)) * m;
+    return ivec4(f, int(round(t.frequency * t.aspect)) * m, CELL_DIM >= 3 ? f : 0, 0);
 #else
     return ivec4(0);
 #endif

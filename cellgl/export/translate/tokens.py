@@ -4,6 +4,8 @@ from __future__ import annotations
 import os
 import re
 
+from cellgl._cache import Bounded
+
 
 class TranslateError(ValueError):
     """The shader text uses a construct the exporter cannot specialise or translate."""
@@ -30,13 +32,11 @@ def split_tokens(text: str) -> list[tuple[str, str]]:
         if sum(len(t) for _, t in split) != len(text):      # a character no token matches
             pos = len(os.path.commonprefix([text, "".join(t for _, t in split)]))
             raise TranslateError(f"line {text.count(chr(10), 0, pos) + 1}: unexpected character {text[pos]!r}")
-        if len(_SPLITS) >= 20000:
-            _SPLITS.clear()
-        _SPLITS[text] = split
+        _SPLITS.put(text, split)
     return split
 
 
-_SPLITS: dict[str, list[tuple[str, str]]] = {}
+_SPLITS = Bounded("GLSL texts split into tokens (cellgl.export.translate.tokens)", 20000)
 
 
 GLSL_TYPES = ({"void", "bool", "int", "uint", "float", "mat2", "mat3", "mat4"}

@@ -65,7 +65,7 @@
   function texturePeriod(v, octave) {
     if (!v.tileable) return [0, 0, 0, 0];
     const m = Math.pow(pyRound(v.lacunarity), octave);
-    return [pyRound(v.frequency) * m, pyRound(v.frequency * v.aspect) * m, 0, 0];
+    return [pyRound(v.frequency) * m, pyRound(v.frequency * v.aspect) * m, v.dimension >= 3 ? pyRound(v.frequency) * m : 0, 0];
   }
   // cellgl.texture.reference._split + shader.lattice_origins (float32 fraction, int32 cell)
   function split(x, per) {
