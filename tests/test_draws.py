@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import cellgl
 from cellgl.gl import dispatch, glsl, runner
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -160,12 +161,32 @@ def test_raster_draws_keep_their_buffers(ctx):
     assert big.shape[:2] == (48, 64) and small.shape[:2] == (30, 40)
 
 
-def test_a_draw_names_a_blend_it_does_not_know(ctx):
+def _f1(monkeypatch):
+    monkeypatch.setenv("CELLGL_PATH", "fragment")       # a pass that draws
+    return cellgl.render("flagstone", 16, 8, channels=("F1",))["F1"].tobytes()
+
+
+def test_a_draw_names_a_blend_it_does_not_know(ctx, monkeypatch):
+    """Refused before any GL state changed: a pass drawn after it is not blended."""
+    before = _f1(monkeypatch)
     r = runner.runner(ctx)
     t = r.target("test.blend", (4, 4))
+    r.draw(runner.Draw("viewer_blit.vert", "viewer_blit.frag", t, blend="add"))    # (ONE, ONE) set
     with pytest.raises(ValueError, match="unknown blend 'max'; accepted: 'add' or None"):
         r.draw(runner.Draw("viewer_blit.vert", "viewer_blit.frag", t, blend="max"))
     r.release("test.blend")
+    assert _f1(monkeypatch) == before
+
+
+def test_a_pass_runs_with_no_blend_left_by_a_draw(ctx, monkeypatch):
+    """A fragment-path pass draws with blending and depth test off, whatever was left on."""
+    before = _f1(monkeypatch)
+    ctx.enable(ctx.BLEND)
+    ctx.blend_func = ctx.ONE, ctx.ONE
+    try:
+        assert _f1(monkeypatch) == before
+    finally:
+        ctx.disable(ctx.BLEND)
 
 
 def test_uniform_arrays_are_cut_to_what_the_compiler_kept(ctx):

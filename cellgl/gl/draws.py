@@ -160,6 +160,8 @@ class Drawing:
 
     def draw(self, d: Draw):
         """Draw ``d`` (:class:`cellgl.gl.dispatch.Draw`); returns the program it drew with."""
+        if d.blend not in (None, "add"):
+            raise ValueError(f"unknown blend {d.blend!r}; accepted: 'add' or None")
         prog, vao = self._program(d.vertex, d.fragment, d.defines)
         set_uniforms(prog, d.uniforms)
         for unit, smp in (d.textures or {}).items():
@@ -176,13 +178,11 @@ class Drawing:
             t.fbo.clear(*d.clear, depth=1.0)           # the whole target
         ctx = self.ctx
         flags = (ctx.DEPTH_TEST if d.depth_test else 0) | (ctx.BLEND if d.blend else 0)
-        ctx.enable_only(flags)
-        if d.blend == "add":
-            ctx.blend_func = ctx.ONE, ctx.ONE
-            ctx.blend_equation = ctx.FUNC_ADD
-        elif d.blend is not None:
-            raise ValueError(f"unknown blend {d.blend!r}; accepted: 'add' or None")
         try:
+            ctx.enable_only(flags)
+            if d.blend == "add":
+                ctx.blend_func = ctx.ONE, ctx.ONE
+                ctx.blend_equation = ctx.FUNC_ADD
             if count:
                 vao.render(mode=ctx.TRIANGLES, vertices=count)
         finally:

@@ -261,6 +261,7 @@ class FragmentRunner(Runner):
         # the canary's length, one texel (never a uniform: a compiler may fold those and unroll)
         self.bind_words(np.array([_d.LOOP_CANARY_PASSES], np.uint32), _d.CANARY_UNIT)
         by_name = {o.name: o.array for o in p.outputs}
+        self.ctx.enable_only(self.ctx.NOTHING)     # no blend or depth test left by another draw
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
         tile = tile_samples(p.cost, self.watchdog)
         chunk = max(CHUNK, tile // WIDTH * WIDTH)
