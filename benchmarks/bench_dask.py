@@ -28,7 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import dask  # noqa: E402
 import distributed  # noqa: E402
 
-from cellgl.io import bake as cbake  # noqa: E402
+from cellgl.bake import core as cbake  # noqa: E402
 from cellgl.dask import bake_zarr  # noqa: E402
 
 

@@ -35,7 +35,7 @@ if _REPO not in sys.path:
 import numpy as np  # noqa: E402
 
 import cellgl  # noqa: E402
-from cellgl.texture.recipe import load_recipe  # noqa: E402
+from cellgl.texture.presets import load_recipe  # noqa: E402
 
 
 def _median(fn, repeats: int) -> float:

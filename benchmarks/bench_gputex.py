@@ -40,15 +40,17 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args(argv)
 
-    from cellgl.io import bake as B
-    from cellgl.io import blocks, gputex, mips
+    from cellgl.bake import core as B
+    from cellgl.bake import mips
+    from cellgl.io import gpu_textures
+    from cellgl.io import blocks
     from cellgl.io.formats import usable_cores
     from cellgl.recipes import load_recipe
 
     recipe = load_recipe(args.preset)
     s = args.size
-    fmt = gputex.containers.TEX_FORMATS["BC7_SRGB"]
-    levels = [gputex._samples(fmt, "color", res["color"])
+    fmt = gpu_textures.containers.TEX_FORMATS["BC7_SRGB"]
+    levels = [gpu_textures.texel_samples(fmt, "color", res["color"])
               for _, _, res in mips.render_chain(recipe, s, s, rounding="down")]
     px = sum(a.shape[0] * a.shape[1] for a in levels)
     with tempfile.TemporaryDirectory() as d:

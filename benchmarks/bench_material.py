@@ -8,7 +8,7 @@ interleaved (A, B, C, D, A, ...), best of K, after a warm-up at 64^2 (shaders, t
 * ``png set``: ``bake_material(preset, DIR, engine, size=S)``: every map as PNG, level 0 only;
 * ``dds set``: ``bake_material(..., map_format="dds", mips=True)``: every level of every map
   rendered at its own size and packed, BC7 sRGB colour, BC5 normal, BC7 linear ORM, R16 height
-  (``cellgl.io.material_sets.gpu_format``), the blocks on every core, the containers written;
+  (``cellgl.bake.material_sets.gpu_format``), the blocks on every core, the containers written;
 * ``encoder``: ``cellgl.io.blocks.encode_levels`` of each block-format map's levels, on the very
   pixels the dds set encodes (captured from one dds bake beforehand), on every core, and on one
   (``encoder, 1 core``).
@@ -44,15 +44,16 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=2)
     args = ap.parse_args(argv)
 
-    from cellgl.io import blocks, gputex
-    from cellgl.io import material_sets as M
+    from cellgl.io import gpu_textures
+    from cellgl.io import blocks
+    from cellgl.bake import material_sets as M
     from cellgl.io.formats import usable_cores
     from cellgl.recipes import load_recipe
 
     recipe = load_recipe(args.preset)
     s = args.size
     captured = []
-    real = gputex.packed_levels
+    real = gpu_textures.packed_levels
 
     def spy(fmt, images):
         images = list(images)
@@ -69,11 +70,11 @@ def main(argv=None) -> int:
                                    mips=True, progress=False)
 
         png(64), dds(64)                      # warm-up: shaders, the encoder pool's first start
-        gputex.packed_levels = spy
+        gpu_textures.packed_levels = spy
         try:
             dds()                             # the pixels the encoder rows encode
         finally:
-            gputex.packed_levels = real
+            gpu_textures.packed_levels = real
         px = sum(a.shape[0] * a.shape[1] for _, images in captured for a in images)
 
         def encoder(workers=None):

@@ -1,4 +1,4 @@
-"""A signal the command line received, raised again where long loops step (cellgl.io.bake's
+"""A signal the command line received, raised again where long loops step (cellgl.bake.core's
 progress bars, every tile and frame): the first KeyboardInterrupt can be swallowed (a C
 extension's import has printed it and gone on), and the work must still stop.
 

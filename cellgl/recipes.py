@@ -13,7 +13,7 @@ from pathlib import Path
 
 from cellgl.pups import recipe as pups_recipe
 from cellgl.pups.recipe import PupsRecipe
-from cellgl.texture import recipe as cellular
+from cellgl.texture import presets as cellular
 from cellgl.texture import evaluation as cellular_render
 from cellgl.texture.params import PARAMS
 from cellgl.texture.recipe import Recipe
@@ -119,7 +119,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
     recipes give ``color`` and ``height``.
 
     A tile that would need more than half the machine's memory (:func:`check_memory`) raises
-    ValueError up front, saying how to tile it (tiles, ``cellgl.io.bake.bake``, ``cellgl.to_dask``).
+    ValueError up front, saying how to tile it (tiles, ``cellgl.bake.core.bake``, ``cellgl.to_dask``).
     """
     recipe = load_recipe(recipe)
     check_memory(recipe, width, height, channels, x0=x0, y0=y0, tile_w=tile_w, tile_h=tile_h, depth=depth,
@@ -220,7 +220,7 @@ def check_memory(recipe, width, height, channels=("color",), *, x0=0, y0=0, tile
     whole = "" if (tw, th) == (width, height) else f" (a tile of the {width}x{height} image)"
     ways = ["render it in tiles (x0, y0, tile_w, tile_h: each tile equals those pixels of the whole render)"]
     if width <= 65536 and height <= 65536 and width * height <= 1 << 32 and not depth:   # cellgl.io.spec's limits
-        ways.append(f"bake it to a file tile by tile within a memory budget (cellgl.io.bake.bake(recipe, "
+        ways.append(f"bake it to a file tile by tile within a memory budget (cellgl.bake.core.bake(recipe, "
                     f"'big.tif', size=({width}, {height})), or `cellgl bake NAME -o big.tif --size "
                     f"{width}x{height}`)")
     ways.append(f"take it as a lazy array rendered block by block: cellgl.to_dask(recipe, ({height}, {width}))")
@@ -241,40 +241,7 @@ def evaluate(recipe, points, outputs=("color",), backend: str = "gpu", *, filter
     return cellular_render.evaluate(recipe, points, outputs, backend, filter_width=filter_width)
 
 
-# ---------------------------------------------------------------------- CLI: cellgl presets
-
-def add_presets_parser(sub):
-    """Declare ``cellgl presets [NAME] [--params] [--variants]``."""
-    p = sub.add_parser("presets", help="list the texture presets (or show one recipe as JSON)")
-    p.add_argument("name", nargs="?", help="show this preset's recipe JSON (NAME or NAME:VARIANT)")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="with NAME: change a parameter before printing (repeatable)")
-    p.add_argument("--variants", action="store_true", help="also list each preset's variants")
-    p.add_argument("--params", action="store_true", help="list the recipe parameters (name, type, range, doc)")
-    return p
-
-
-def run_presets_cli(args) -> int:
-    """Run ``cellgl presets``."""
-    if args.set and (args.params or not args.name):
-        raise RecipeError(f"--set {args.set[0]}: changes the recipe printed for a preset; accepted "
-                          "only with NAME (cellgl presets NAME --set ...), not with a listing")
-    if args.params:
-        for prm in PARAMS:
-            print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")
-        print("\nPUPs recipes (pups-* presets; which patterns use each: docs/pups.md):")
-        for prm in pups_recipe.PUPS_PARAMS:
-            print(f"{prm.name:18s} {prm.type:5s} {str(prm.default):10s} {prm.range_text():28s} {prm.doc}")
-        return 0
-    if args.name:
-        recipe = load_recipe(args.name).set_from_strings(args.set)
-        print(recipe.to_json(), end="")
-        return 0
-    presets = list_presets()
-    width = max((len(n) for n, _ in presets), default=0)
-    for name, doc in presets:
-        print(f"{name:{width}s}  {doc}")
-        if args.variants:
-            for k, v in enumerate(load_recipe(name).variants):
-                print(f"{'':{width}s}    {name}:{k}  {v.doc}")
-    return 0
+def parameter_tables() -> dict[str, tuple]:
+    """The parameter table of each recipe kind: ``{"cellular": PARAMS, "pups": PUPS_PARAMS}``
+    (``cellgl presets --params``; one recipe's own rows: :func:`parameters`)."""
+    return {"cellular": PARAMS, "pups": pups_recipe.PUPS_PARAMS}

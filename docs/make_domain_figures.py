@@ -20,7 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from cellgl import recipes  # noqa: E402
 from cellgl.io import formats as cio  # noqa: E402
 from cellgl.io.spec import id_colors  # noqa: E402
-from cellgl.io.frames import bake_frames  # noqa: E402
+from cellgl.bake.frames import bake_frames  # noqa: E402
 
 OUT = Path(__file__).resolve().parent / "gallery"
 SIZE = 256

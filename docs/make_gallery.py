@@ -2,7 +2,7 @@
 
 Usage: python docs/make_gallery.py [--size 256] [--columns 8] [--no-variants] [--out DIR] [names...]
 
-A preset's variants (``worley-gallery:3``) are baked too, to ``<name>-<variant>.png``. Each image is made with :func:`cellgl.io.bake.bake` (what ``cellgl bake NAME -o NAME.png`` does), so
+A preset's variants (``worley-gallery:3``) are baked too, to ``<name>-<variant>.png``. Each image is made with :func:`cellgl.bake.core.bake` (what ``cellgl bake NAME -o NAME.png`` does), so
 the gallery shows exactly what the command line gives. The contact sheet
 (``contact_sheet.png``, shown in the README) lays the images out in a grid with each preset's
 name under it.
@@ -21,8 +21,8 @@ from PIL import Image, ImageDraw, ImageFont
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from cellgl.io import formats as cio  # noqa: E402
-from cellgl.io.bake import bake  # noqa: E402
-from cellgl.texture.recipe import list_presets, load_recipe  # noqa: E402
+from cellgl.bake.core import bake  # noqa: E402
+from cellgl.texture.presets import list_presets, load_recipe  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 

@@ -15,7 +15,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from cellgl.texture.recipe import Recipe, preset_dir  # noqa: E402
+from cellgl.texture.presets import preset_dir  # noqa: E402
+from cellgl.texture.recipe import Recipe  # noqa: E402
 from cellgl.texture import measure_range  # noqa: E402
 from cellgl.texture.means import write_table  # noqa: E402
 from cellgl.texture.reference import measure_mean  # noqa: E402

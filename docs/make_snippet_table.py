@@ -34,29 +34,48 @@ def presets() -> list[str]:
     return out
 
 
-def table() -> str:
+def cell(text: str) -> str:
+    """One cell: lines / kilobytes."""
+    return f"{len(text.splitlines())} / {len(text.encode()) / 1000:.1f}k"
+
+
+def rows() -> list:
+    """(label, make) per row: ``make(target)`` is the snippet's text, None where the target
+    refuses it (``--basis`` for OSL)."""
     from cellgl.export import snippets
     from cellgl.export.basis import BASES, basis_export
 
-    targets = list(snippets.TARGETS)
+    def basis(b: str, t: str):
+        try:
+            return basis_export(b, 3, t)
+        except snippets.ExportError:         # --basis is refused for some targets (OSL)
+            return None
+
+    out = [(name, lambda t, name=name: snippets.export(name, t)) for name in presets()]
+    out += [(f"`--basis {b} --dim 3`", lambda t, b=b: basis(b, t)) for b in BASES]
+    return out
+
+
+def row(make, targets: list[str]) -> list[str]:
+    """One row's cells, a target each (tests/test_export_compiler.py checks each row on its own,
+    so that pytest -n spreads them)."""
+    return ["-" if (text := make(t)) is None else cell(text) for t in targets]
+
+
+def format_table(labels: list[str], targets: list[str], cells: list[list[str]]) -> str:
+    """The Markdown table: a row per label, a column per target."""
     head = "| snippet | " + " | ".join(f"`{t}`" for t in targets) + " |"
     rule = "| --- | " + " | ".join("---:" for _ in targets) + " |"
-    rows = []
+    body = [f"| {label} | " + " | ".join(r) + " |" for label, r in zip(labels, cells)]
+    return "\n".join([head, rule, *body])
 
-    def cell(text: str) -> str:
-        return f"{len(text.splitlines())} / {len(text.encode()) / 1000:.1f}k"
 
-    for name in presets():
-        rows.append(f"| {name} | " + " | ".join(cell(snippets.export(name, t)) for t in targets) + " |")
-    def basis_cell(b: str, t: str) -> str:
-        try:
-            return cell(basis_export(b, 3, t))
-        except snippets.ExportError:         # --basis is refused for some targets (OSL)
-            return "-"
+def table() -> str:
+    from cellgl.export import snippets
 
-    for b in BASES:
-        rows.append(f"| `--basis {b} --dim 3` | " + " | ".join(basis_cell(b, t) for t in targets) + " |")
-    return "\n".join([head, rule, *rows])
+    targets = list(snippets.TARGETS)
+    made = rows()
+    return format_table([label for label, _ in made], targets, [row(make, targets) for _, make in made])
 
 
 def main(argv=None) -> int:

@@ -13,26 +13,15 @@ import pytest
 
 from cellgl import texture
 from cellgl.gl import glsl
-from cellgl.io import bake
+from cellgl.bake import core as bake
 from cellgl.texture import antialias
 from cellgl.texture import dispatch as texture_dispatch
 from cellgl.texture import reference as texture_reference
-from cellgl.texture.recipe import load_recipe
-from test_exactness import f_bound, near_ties      # tests/ is on sys.path under pytest
+from cellgl.texture.presets import load_recipe
+from compare import (assert_close_but_share, assert_F_within_bound, assert_ids_equal_but_ties, octave_sum,
+                     texture_near_ties)
 
 CHANNELS = ("color", "height", "normal")
-
-
-def _close_but_ties(gpu, ref, c, atol, tie=None, share=0.01):
-    """Channel c within atol at every pixel but those of a near-tie (docs/exactness.md): at
-    octave 0 (``tie``, from the reference's F1 and F2: excluded) and in a finer octave or a
-    sub-sample, which the outputs do not show (at most ``share`` of the pixels)."""
-    d = np.abs(gpu[c].astype(np.float64) - ref[c])
-    d = d.reshape(d.shape[0], d.shape[1], -1).max(axis=-1)
-    bad = d > atol
-    if tie is not None:
-        bad &= ~tie
-    assert bad.mean() <= share, (c, float(bad.mean()), float(d.max()))
 
 
 def test_glsl_thresholds_are_the_python_ones():
@@ -49,13 +38,14 @@ def test_band_limited_render_matches_reference(ctx, name):
     r = load_recipe(name)
     gpu = texture.render(r, 24, 20, channels=CHANNELS + ("id", "F1", "F2"))
     ref = texture.render(r, 24, 20, channels=CHANNELS + ("id", "F1", "F2"), backend="numpy")
-    S = 1.0 + r.get("frequency") * max(1.0, r.get("aspect"))
-    tie = near_ties(np.stack([ref["F1"].ravel(), ref["F2"].ravel()], axis=1), S).reshape(20, 24)
+    S = octave_sum(r)
+    tie = texture_near_ties(ref, S)
     assert tie.mean() < 0.02
-    assert np.all(np.abs(gpu["F1"].astype(np.float64) - ref["F1"]) <= f_bound(ref["F1"], S))
+    assert_F_within_bound(gpu["F1"], ref["F1"], S)
+    # a finer octave's or a sub-sample's near-ties, which the outputs do not show: 1 % of pixels
     for c in CHANNELS:
-        _close_but_ties(gpu, ref, c, 2e-5, tie)
-    np.testing.assert_array_equal(gpu["id"][~tie], ref["id"][~tie])
+        assert_close_but_share(gpu[c].astype(np.float64), ref[c], 2e-5, share=0.01, tie=tie, what=c)
+    assert_ids_equal_but_ties(gpu["id"], ref["id"], tie)
     # ... and the band limit did something here.
     off = texture.render(r.replace(antialias=0.0), 24, 20)["color"]
     assert np.abs(off - gpu["color"]).max() > 0.05
@@ -67,7 +57,7 @@ def test_supersampled_render_matches_reference(ctx, name):
     gpu = texture.render(r, 20, 16, channels=CHANNELS, samples=4)
     ref = texture.render(r, 20, 16, channels=CHANNELS, samples=4, backend="numpy")
     for c in CHANNELS:
-        _close_but_ties(gpu, ref, c, 2e-5)
+        assert_close_but_share(gpu[c].astype(np.float64), ref[c], 2e-5, share=0.01, what=c)
 
 
 def test_supersampling_is_a_box_filter_of_a_finer_render(ctx):
@@ -137,7 +127,7 @@ def test_viewer_fragment_path_is_band_limited_like_the_bake(ctx):
     r = load_recipe("crumple")
     frag = texture.render_fragment(r, 32, 24)
     comp = texture.render(r, 32, 24)["color"]
-    assert np.all(np.abs(frag - comp) < 2e-3, axis=-1).mean() > 0.98
+    assert_close_but_share(frag, comp, 2e-3, share=0.02)
 
 
 def test_baked_program_matches_the_uniform_program(ctx):

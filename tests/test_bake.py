@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from cellgl.io import bake as B
+from cellgl.bake import core as B
 from cellgl import cli
 
 # --------------------------------------------------------------------------------------------
@@ -296,11 +296,12 @@ ERRORS = [
 def test_the_unknown_extension_error_lists_every_extension_bake_accepts(tmp_path):
     """Issue 48: `-o a.jpg` listed .png .exr .tif .tiff .npy, not .zarr, .webp, .gif: the list
     comes from one place (spec.FORMATS, ANIMATED, DISTRIBUTED), the help's too."""
+    from cellgl.bake import request
     from cellgl.io import spec
-    from cellgl.io.bake_cli import add_parser
+    from cellgl.cli.bake import add_parser
     import argparse
 
-    every = [*spec.FORMATS, *spec.ANIMATED, *spec.DISTRIBUTED]
+    every = [*spec.FORMATS, *request.ANIMATED, *request.DISTRIBUTED]
     assert {".png", ".exr", ".tif", ".tiff", ".npy", ".webp", ".gif", ".zarr"} <= set(every)
     for out in ("a.jpg", "a", "a.PNGX"):
         with pytest.raises(spec.BakeError) as e:
@@ -309,7 +310,7 @@ def test_the_unknown_extension_error_lists_every_extension_bake_accepts(tmp_path
             assert f"{ext}," in str(e.value) or f"{ext} (" in str(e.value), (ext, str(e.value))
     sub = argparse.ArgumentParser().add_subparsers()
     helps = {a.dest: a.help for a in add_parser(sub)._actions}
-    assert spec.accepted_outputs() in helps["output"]
+    assert request.accepted_outputs() in helps["output"]
 
 
 @pytest.mark.parametrize("argv,message", ERRORS)

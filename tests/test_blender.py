@@ -86,7 +86,7 @@ def cycles_renders(tmp_path_factory):
 
 @pytest.mark.slow
 def test_cycles_renders_every_exportable_preset_as_the_bake(cycles_renders, tmp_path):
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     out, names = cycles_renders
     bad = []

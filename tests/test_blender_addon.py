@@ -171,7 +171,7 @@ def _compare(out: Path, name: str, tags, size: int = SIZE) -> list[str]:
     """Each branch's render of ``name`` against ``cellgl bake``: colour within 2/255, the same IDs
     and cell colours; returns the failures."""
     import cellgl
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
     from cellgl.io.spec import id_colors
 
     png = out / f"bake-{name}.png"
@@ -236,7 +236,7 @@ def test_addon_operators_headless(installed_run):
     # flagstone is Euclidean: its OSL shader folds Minkowski p away (no slider that does nothing);
     # an input the table calls inactive at the current values is greyed in the panel
     assert "Minkowski p" not in r["group_inputs"] and "Frequency" in r["group_inputs"]
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
 
     dead = params.inactive(load_recipe("flagstone").values)
     assert "minkowski_p" in dead and "frequency" not in dead
@@ -311,7 +311,7 @@ def test_addon_eevee_renders_the_image_branch(tmp_path):
     measured once; Cycles' lookups of the Linear image are exact)."""
     _need_bpy()
     import cellgl
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
     from cellgl.io.spec import id_colors
 
     _drive(tmp_path, [64, "veins", "--eevee"], timeout=1800)

@@ -9,7 +9,7 @@ import zlib
 
 from PIL import Image
 
-from cellgl.io import bake as B
+from cellgl.bake import core as B
 from cellgl.io.formats import write_png
 
 import numpy as np

@@ -10,6 +10,7 @@ import pytest
 
 import cellgl
 from cellgl.basis import reference
+from compare import assert_basis_matches, assert_same_bits
 
 #: The 256-entry population table of the reference program published with Worley's 1996 chapter
 #: (a fact of the paper, row by row; see tests/data/README.md), kept with the tests.
@@ -30,22 +31,6 @@ def _pts(dim, n=800, lo=-6.0, hi=6.0, seed=1):
     return np.random.default_rng(seed).uniform(lo, hi, (n, dim))
 
 
-def _assert_same(a, b, rtol=2e-5, atol=2e-6, F_next=None):
-    """F to float32 tolerance; IDs exactly except where two distances tie.
-
-    ``F_next`` (N,) is the reference's F_{n+1}, so a tie between F_n and the
-    first point left out also counts as a tie.
-    """
-    np.testing.assert_allclose(a.F, b.F, rtol=rtol, atol=atol)
-    diff = a.id != b.id
-    if diff.any():
-        F = b.F.astype(np.float64)
-        nxt = np.full(len(F), 1e9) if F_next is None else F_next.astype(np.float64)
-        gaps = np.minimum(np.abs(np.diff(F, axis=1, prepend=-1.0)),
-                          np.abs(np.diff(F, axis=1, append=nxt[:, None])))
-        assert np.all(gaps[diff] < 1e-4), f"{diff.sum()} ID mismatches away from ties"
-
-
 @pytest.mark.parametrize("dim,metric,dist", CASES)
 def test_gpu_matches_reference(ctx, dim, metric, dist):
     pts = _pts(dim)
@@ -54,7 +39,7 @@ def test_gpu_matches_reference(ctx, dim, metric, dist):
     r5 = cellgl.cellular(pts, 5, backend="numpy", **kw)
     r = cellgl.CellularResult(F=r5.F[:, :4], delta=r5.delta[:, :4], id=r5.id[:, :4], grad=r5.grad[:, :4],
                               exact=r5.exact)
-    _assert_same(g, r, F_next=r5.F[:, 4])
+    assert_basis_matches(g, r, F_next=r5.F[:, 4])
     # Deltas and gradients agree wherever the same point was found (ties may swap points).
     same = g.id == r.id
     np.testing.assert_allclose(g.delta[same], r.delta[same], atol=1e-5)
@@ -213,15 +198,14 @@ def test_periodic_wrap(ctx, dim):
     np.testing.assert_allclose(a.F, b.F, atol=1e-5)
     np.testing.assert_array_equal(a.id, b.id)
     r = cellgl.cellular(pts, 4, period=period, outputs=("F", "id"), backend="numpy")
-    _assert_same(a, r)
+    assert_basis_matches(a, r)
 
 
 def test_deterministic_and_seeded(ctx):
     pts = _pts(3, n=3000)
     a = cellgl.cellular(pts, 4)
     b = cellgl.cellular(pts, 4)
-    assert a.F.tobytes() == b.F.tobytes() and a.id.tobytes() == b.id.tobytes()
-    assert a.delta.tobytes() == b.delta.tobytes()
+    assert_same_bits(a, b, "two runs", fields=("F", "id", "delta"))
     c = cellgl.cellular(pts, 4, seed=12345)
     assert np.mean(c.id == a.id) < 0.01
 
@@ -236,7 +220,7 @@ def test_far_from_origin_is_as_accurate(ctx, where):
         pts = _pts(3, n=1000, lo=0, hi=4) + 1e6
         g = cellgl.cellular(pts, 2, outputs=("F", "id"))
         r = cellgl.cellular(pts, 2, outputs=("F", "id"), backend="numpy")
-        _assert_same(g, r)
+        assert_basis_matches(g, r)
         return
     n_x = 30000
     r = cellgl.cellular_grid((1, n_x), spacing=(0.3711, 1.0), n=2, outputs=("F",))
@@ -255,7 +239,7 @@ def test_grid_matches_points(ctx):
     assert g.F.shape == shape + (3,)
     np.testing.assert_allclose(g.F.reshape(-1, 3), p.F, atol=2e-5)
     r = cellgl.cellular_grid(shape, origin=origin, spacing=spacing, n=3, outputs=("F", "id"), backend="numpy")
-    _assert_same(g, r)
+    assert_basis_matches(g, r)
     v = cellgl.cellular_grid((4, 5, 6), spacing=0.3, n=2, outputs=("F",))
     assert v.F.shape == (4, 5, 6, 2)
 
@@ -390,4 +374,4 @@ def test_grid_in_slabs_equals_one_pass(ctx, monkeypatch, shape):
     one = cellgl.cellular_grid(shape, **kw)
     monkeypatch.setenv("CELLGL_TILE_SAMPLES", "64")
     many = cellgl.cellular_grid(shape, **kw)
-    assert one.F.tobytes() == many.F.tobytes() and one.id.tobytes() == many.id.tobytes()
+    assert_same_bits(one, many, "slabs", fields=("F", "id"))

@@ -13,7 +13,7 @@ import pytest
 pytest.importorskip("dask", reason="the cellgl[dask] extra is not installed")
 
 from cellgl.dask import DaskError  # noqa: E402
-from cellgl.dask import cli as dcli  # noqa: E402
+from cellgl.cli import dask as dcli  # noqa: E402
 from cellgl.dask import variations  # noqa: E402
 
 DEEP = "[" * 100000 + "]" * 100000

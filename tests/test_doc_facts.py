@@ -21,7 +21,7 @@ def _doc_pattern(name: str) -> re.Pattern:
 def test_bake_md_names_the_volume_spool_as_the_bake_does(ctx, tmp_path, monkeypatch):
     """A `.tif` volume bake spools through a temporary file named as docs/bake.md says."""
     pytest.importorskip("tifffile")
-    from cellgl.io import bake as B
+    from cellgl.bake import core as B
 
     doc = (ROOT / "docs" / "bake.md").read_text()
     m = re.search(r"the volume TIFF spool\s*\(`([^`]+)`", doc)

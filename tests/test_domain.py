@@ -10,7 +10,7 @@ import pytest
 import cellgl
 from cellgl import cli, texture
 from cellgl.basis import reference
-from cellgl.io.frames import bake_frames
+from cellgl.bake.frames import bake_frames
 from cellgl.recipes import load_recipe
 from cellgl.texture.recipe import Recipe, RecipeError
 from cellgl.texture.reference import texture_at

@@ -18,6 +18,8 @@ import pytest
 
 import cellgl
 from cellgl.basis import core, gpu
+from compare import (TOL, assert_F_within_bound, assert_ids_equal_but_ties, assert_never_wrong_while_exact,
+                     assert_same_bits, near_ties)
 from conftest import driver_loop_limit
 
 METRICS = ("euclidean", "manhattan", "chebyshev", "minkowski")
@@ -31,29 +33,6 @@ DISTS = {
 #: cells of margin around the sample box holding every point that can matter
 REACH = {2: 9, 3: 8, 4: 7}
 SPAN = 1.5          #: the samples fill [base, base + SPAN)^d
-TOL = 2e-4          #: "wrong while flagged exact": far above any rounding (f_bound), far below a wrong point
-
-#: the float32 unit roundoff
-U32 = 2.0 ** -24
-
-
-def f_bound(F, S=1.0):
-    """docs/exactness.md, "What is promised": the largest |F_gpu - F_reference| a conformant driver
-    may give for a Euclidean (or Manhattan, Chebyshev) distance F in cells, when the float32
-    fraction the search starts from came from a float32 sum of magnitude S (1: a position split
-    in float64, as cellular does; a texture's lattice sum at octave 0 otherwise)."""
-    return U32 * (18.0 * np.asarray(F, np.float64) + 2.0 * S + 4.0)
-
-
-def near_ties(F_ref, S=1.0):
-    """Samples (rows of the reference's F1..Fn) where two consecutive distances lie within twice
-    f_bound of each other: there a conformant driver may order the two points either way, so
-    their IDs may swap (docs/exactness.md)."""
-    F_ref = np.asarray(F_ref, np.float64).reshape(len(F_ref), -1)
-    if F_ref.shape[1] < 2:
-        return np.zeros(len(F_ref), bool)
-    gap = np.diff(F_ref, axis=1)
-    return np.any(gap <= 2.0 * f_bound(F_ref[:, 1:], S), axis=1)
 
 
 def _distances(diff: np.ndarray, metric: str, p: float = 3.0) -> np.ndarray:
@@ -109,16 +88,6 @@ def _brute(rel: np.ndarray, pts: np.ndarray, n: int, metric: str, k: float = 0.0
     return dict(F=np.array(F), edge=np.array(edge), nsphere=np.array(nsphere), smooth_F1=np.array(smooth))
 
 
-def _check(name, got, want, exact, limit=None, reach=None):
-    """Zero samples wrong while flagged exact; every sample exact (the fallback served them)."""
-    assert exact.all(), f"{name}: {(~exact).sum()} samples flagged inexact"
-    if reach is not None:        # the brute force itself must have seen every point that matters
-        assert np.all((want.max(axis=-1) if want.ndim > 1 else want) < reach), f"{name}: block too small"
-    err = np.abs(np.asarray(got, np.float64) - want)
-    bad = (err > TOL).reshape(len(err), -1).any(1) & exact
-    assert not bad.any(), f"{name}: {bad.sum()} samples wrong while flagged exact (max error {err.max():.3g})"
-
-
 MAGNITUDES = (0.0, -30001.0, 499999999.0)
 
 
@@ -140,7 +109,7 @@ def test_basis_matrix(ctx, dim, dist, periodic, base):
         want = _brute(rel, pts, 8, metric)
         n = 8 if metric != "chebyshev" else 3          # n below 8 too
         r = cellgl.cellular(x, n, outputs=("F",), **mkw)
-        _check(f"{dim}D {dist} {metric} period={periodic} base={base}", r.F, want["F"][:, :n], r.exact,
+        assert_never_wrong_while_exact(f"{dim}D {dist} {metric} period={periodic} base={base}", r.F, want["F"][:, :n], r.exact,
                reach=reach)
 
 
@@ -157,10 +126,8 @@ def test_reference_within_the_promised_bound(ctx, dim, metric):
         r = cellgl.cellular(x, 4, metric=metric, outputs=("F", "id"), **kw)
         ref = cellgl.cellular(x, 4, metric=metric, outputs=("F", "id"), backend="numpy", **kw)
         assert r.exact.all()
-        err = np.abs(r.F.astype(np.float64) - ref.F)
-        assert np.all(err <= f_bound(ref.F)), (base, kw, float((err / f_bound(ref.F)).max()))
-        tie = near_ties(ref.F)
-        assert np.array_equal(r.id[~tie], ref.id[~tie]), (base, kw, int((r.id != ref.id).any(1).sum()))
+        assert_F_within_bound(r.F, ref.F, what=(base, kw))
+        assert_ids_equal_but_ties(r.id, ref.id, near_ties(ref.F), (base, kw))
 
 
 @pytest.mark.parametrize("smoothness", [0.05, 0.25])
@@ -177,9 +144,9 @@ def test_features_matrix(ctx, dim, dist, smoothness):
     assert np.all(want["F"][:, 0] + 16 * smoothness < reach), "block too small for smooth F1"
     r = cellgl.cellular(x, 1, outputs=("edge", "nsphere", "smooth_F1"), smoothness=smoothness, **kw)
     name = f"{dim}D {dist} k={smoothness}"
-    _check(name + " edge", r.edge, want["edge"], r.exact)
-    _check(name + " nsphere", r.nsphere, want["nsphere"], r.exact)
-    _check(name + " smooth_F1", r.smooth_F1, want["smooth_F1"], r.exact)
+    assert_never_wrong_while_exact(name + " edge", r.edge, want["edge"], r.exact)
+    assert_never_wrong_while_exact(name + " nsphere", r.nsphere, want["nsphere"], r.exact)
+    assert_never_wrong_while_exact(name + " smooth_F1", r.smooth_F1, want["smooth_F1"], r.exact)
 
 
 @pytest.mark.parametrize("metric", ["manhattan", "minkowski"])
@@ -188,7 +155,7 @@ def test_smooth_other_metrics_at_the_largest_smoothness(ctx, metric):
     pts, reach = _block(3, 77.0, {})
     want = _brute(rel, pts, 1, metric, 0.25)
     r = cellgl.cellular(x, 1, metric=metric, outputs=("smooth_F1",), smoothness=0.25)
-    _check(f"smooth {metric}", r.smooth_F1, want["smooth_F1"], r.exact)
+    assert_never_wrong_while_exact(f"smooth {metric}", r.smooth_F1, want["smooth_F1"], r.exact)
 
 
 @pytest.mark.parametrize("dim", [2, 3, 4])
@@ -202,13 +169,13 @@ def test_stretch_and_density_map(ctx, dim):
     pts, reach = _block(dim, base, {})
     want = np.sort([_distances((pts - xi) * w, "euclidean") for xi in rel], axis=1)[:, :8]
     r = cellgl.cellular(x, 8, stretch=list(s), outputs=("F",))
-    _check(f"{dim}D stretch", r.F, want, r.exact, reach=reach * w.min())
+    assert_never_wrong_while_exact(f"{dim}D stretch", r.F, want, r.exact, reach=reach * w.min())
     dm = cellgl.DensityMap("ramp", axis=0, start=base - 3, end=base + 3, density_min=0.2, density_max=12.0)
     kw = dict(density_map=dm, min_points=0, max_points=16)
     pts, reach = _block(dim, base, kw)
     want = _brute(rel, pts, 8, "euclidean")
     r = cellgl.cellular(x, 8, outputs=("F",), **kw)
-    _check(f"{dim}D density map", r.F, want["F"], r.exact, reach=reach)
+    assert_never_wrong_while_exact(f"{dim}D density map", r.F, want["F"], r.exact, reach=reach)
 
 
 def test_grid_matrix_far_and_periodic(ctx):
@@ -220,8 +187,8 @@ def test_grid_matrix_far_and_periodic(ctx):
     rel = np.stack([xs.ravel() * 0.25, ys.ravel() * 0.25], 1)
     pts, reach = _block(2, base, dict(period=(5, 7)))
     want = _brute(rel, pts, 8, "euclidean")
-    _check("grid F", g.F.reshape(-1, 8), want["F"], g.exact.ravel(), reach=reach)
-    _check("grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
+    assert_never_wrong_while_exact("grid F", g.F.reshape(-1, 8), want["F"], g.exact.ravel(), reach=reach)
+    assert_never_wrong_while_exact("grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
 
 
 @pytest.mark.parametrize("dim", [2, 3, 4])
@@ -246,8 +213,7 @@ def test_grid_cell_cache_gives_the_same_bits(same_bits, monkeypatch, dim):
         monkeypatch.setenv("CELLGL_CELL_CACHE", "0")
         assert gpu.cell_cache_defines(p, spacing) == {}
         off = cellgl.cellular_grid(shape, **kw)
-        for k in ("F", "delta", "id", "exact"):
-            assert np.array_equal(getattr(on, k), getattr(off, k)), (dist, spacing, period, k)
+        assert_same_bits(on, off, (dist, spacing, period), fields=("F", "delta", "id", "exact"))
 
 
 @pytest.mark.parametrize("dim", [2, 3, 4])
@@ -270,8 +236,7 @@ def test_plain_walker_gives_the_same_bits(same_bits, monkeypatch, dim):
             monkeypatch.setattr(gpu, "defines_for",
                                 lambda *a, t=tuned, **k: {**orig(*a, **k), "CELL_WALK_TUNED": t})
             got[tuned] = cellgl.cellular(x, 3, **kw)
-        for k in outputs + ("exact",):
-            assert np.array_equal(getattr(got[1], k), getattr(got[0], k)), (dist, period, k)
+        assert_same_bits(got[1], got[0], (dist, period), fields=outputs + ("exact",))
 
 
 # ------------------------------------------------------------------ the loop budget
@@ -300,10 +265,10 @@ def test_tiny_budget_flags_then_recomputes_never_wrong(ctx, monkeypatch, outputs
         assert np.all(np.abs(raw["F"][ok] - want["F"][ok]) < TOL), "wrong while flagged exact"
     r = cellgl.cellular(x, 4, outputs=outputs, smoothness=0.1)
     if "F" in outputs:
-        _check("tiny budget F", r.F, want["F"], r.exact)
+        assert_never_wrong_while_exact("tiny budget F", r.F, want["F"], r.exact)
     else:
-        _check("tiny budget nsphere", r.nsphere, want["nsphere"], r.exact)
-        _check("tiny budget smooth", r.smooth_F1, want["smooth_F1"], r.exact)
+        assert_never_wrong_while_exact("tiny budget nsphere", r.nsphere, want["nsphere"], r.exact)
+        assert_never_wrong_while_exact("tiny budget smooth", r.smooth_F1, want["smooth_F1"], r.exact)
 
 
 def test_tiny_budget_on_a_grid(ctx, monkeypatch):
@@ -318,8 +283,8 @@ def test_tiny_budget_on_a_grid(ctx, monkeypatch):
     assert rel.max() <= SPAN
     pts, reach = _block(3, base, {})
     want = _brute(rel, pts, 4, "euclidean")
-    _check("tiny budget grid F", g.F.reshape(-1, 4), want["F"], g.exact.ravel(), reach=reach)
-    _check("tiny budget grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
+    assert_never_wrong_while_exact("tiny budget grid F", g.F.reshape(-1, 4), want["F"], g.exact.ravel(), reach=reach)
+    assert_never_wrong_while_exact("tiny budget grid edge", g.edge.ravel(), want["edge"], g.exact.ravel())
 
 
 def test_driver_cut_is_caught_by_the_canary(loop_limiter, monkeypatch):
@@ -381,8 +346,7 @@ def test_reproducer_period_far_from_the_origin(ctx, dist, period, mag):
     a = cellgl.cellular(X, 2, distribution=dist, jitter=0.7, period=period, outputs=("F", "id"))
     b = cellgl.cellular(np.stack([X[:, 0] % period[0], X[:, 1] % period[1]], 1), 2, distribution=dist,
                         jitter=0.7, period=period, outputs=("F", "id"))
-    np.testing.assert_array_equal(a.F, b.F)
-    np.testing.assert_array_equal(a.id, b.id)
+    assert_same_bits(a, b, mag, fields=("F", "id"))
 
 
 @pytest.mark.parametrize("dim", [2, 3, 4])

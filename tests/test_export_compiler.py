@@ -5,7 +5,6 @@ the GPU: GLSL with ModernGL, WGSL / HLSL as wgpu compute shaders)."""
 from __future__ import annotations
 
 import re
-import subprocess
 import sys
 from pathlib import Path
 
@@ -316,10 +315,54 @@ def test_every_basis_fits(target):
             assert n <= BASIS_LIMIT, (b, dim, n)
 
 
-def test_docs_table_is_current():
-    res = subprocess.run([sys.executable, str(ROOT / "docs" / "make_snippet_table.py"), "--check"],
-                         capture_output=True, text=True, timeout=900)
-    assert res.returncode == 0, res.stdout + res.stderr
+def _snippet_table():
+    """docs/make_snippet_table.py as a module, and docs/engines.md's table: (its text, its cells)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_snippet_table", ROOT / "docs" / "make_snippet_table.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    doc = Path(mod.DOC).read_text(encoding="utf-8")
+    assert mod.BEGIN in doc and mod.END in doc, "docs/engines.md: the snippet-sizes markers are gone"
+    text = doc.split(mod.BEGIN, 1)[1].split(mod.END, 1)[0].strip("\n")
+    return mod, text, [[c.strip() for c in line.strip().strip("|").split("|")] for line in text.splitlines()]
+
+
+def test_docs_table_has_every_target_and_snippet():
+    """docs/engines.md's size table is make_snippet_table's layout, with a column per target and
+    a row per snippet; test_docs_table_is_current checks the cells, a row each (together:
+    ``python docs/make_snippet_table.py --check``)."""
+    mod, text, cells = _snippet_table()
+    targets = list(export.TARGETS)
+    labels = [label for label, _ in mod.rows()]
+    assert cells[0] == ["snippet"] + [f"`{t}`" for t in targets]
+    assert [r[0] for r in cells[2:]] == labels
+    assert mod.format_table(labels, targets, [r[1:] for r in cells[2:]]) == text
+
+
+def _table_labels() -> list[str]:
+    """The rows of docs/engines.md's size table (the parameters of test_docs_table_is_current:
+    read at collection, so without running the table's script)."""
+    text = (ROOT / "docs" / "engines.md").read_text(encoding="utf-8")
+    if "<!-- snippet-sizes:begin -->" not in text:
+        return []                    # test_docs_table_has_every_target_and_snippet says so
+    body = text.split("<!-- snippet-sizes:begin -->", 1)[1].split("<!-- snippet-sizes:end -->", 1)[0]
+    return [line.strip().strip("|").split("|")[0].strip() for line in body.strip().splitlines()[2:]]
+
+
+@pytest.mark.parametrize("label", _table_labels(), ids=lambda label: label.strip("`"))
+def test_docs_table_is_current(label):
+    """One row of docs/engines.md's size table is what ``cellgl export`` writes now (after a
+    change: ``python docs/make_snippet_table.py``); a row the table no longer needs, or lacks,
+    fails test_docs_table_has_every_target_and_snippet."""
+    mod, _, cells = _snippet_table()
+    make = dict(mod.rows()).get(label)
+    if make is None:
+        pytest.fail(f"docs/engines.md's size table has a row {label!r} that cellgl no longer exports: "
+                    "run python docs/make_snippet_table.py")
+    got = next(r[1:] for r in cells[2:] if r[0] == label)
+    assert got == mod.row(make, [t.strip("`") for t in cells[0][1:]]), \
+        f"docs/engines.md's row {label} is out of date: run python docs/make_snippet_table.py"
 
 
 # --------------------------------------------------------------------------------------------

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from cellgl import cli
-from cellgl.io import bake as B
-from cellgl.io import udim as U
+from cellgl.bake import core as B
+from cellgl.bake import udim as U
 from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, linear_to_srgb, srgb_to_linear
 import test_bake
 from test_bake import FakeRecipe, _fake_render, _read
@@ -243,7 +243,7 @@ def test_gpu_udim_tile_1001_is_the_plain_bake_and_edges_join(ctx, tmp_path):
 
 def _oiio():
     """OpenImageIO, the reader the tests check against (the wheel or Blender's copy)."""
-    from cellgl.io.texfile import openimageio
+    from cellgl.io.tiled import openimageio
 
     oiio = openimageio()
     if oiio is None:
@@ -277,7 +277,7 @@ def test_gpu_tiled_mips_are_renders_at_each_size(ctx, tmp_path, name, kw):
     pytest.importorskip("tifffile")
     pytest.importorskip("OpenEXR")
     from cellgl import recipes
-    from cellgl.io.mips import mip_sizes
+    from cellgl.bake.mips import mip_sizes
 
     got = B.bake("flagstone", tmp_path / name, size=(80, 48), progress=False, **kw)
     spec, levels = _oiio_levels(got[0])
@@ -323,7 +323,7 @@ def test_gpu_udim_tx_set(ctx, tmp_path):
     """A UDIM set of .tx files: every tile mip-mapped, level k of each tile its crop of the
     set's bake at level k's size (power-of-two sides: the crops line up)."""
     pytest.importorskip("tifffile")
-    from cellgl.io import mips
+    from cellgl.bake import mips
 
     got = B.bake("flagstone", tmp_path / "w.<UDIM>.tx", size=32, udims="2x1", colorspace="srgb",
                  progress=False)

@@ -25,6 +25,7 @@ import pytest
 
 import cellgl
 from cellgl.basis import core, gpu
+from compare import assert_same_bits
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,22 +75,6 @@ def _both(monkeypatch, fn):
     return out
 
 
-def _same_result(a, b, what):
-    for name in FIELDS:
-        x, y = getattr(a, name, None), getattr(b, name, None)
-        if x is None and y is None:
-            continue
-        x, y = np.asarray(x), np.asarray(y)
-        assert x.shape == y.shape and x.dtype == y.dtype, f"{what}: {name} {x.shape} vs {y.shape}"
-        assert x.tobytes() == y.tobytes(), f"{what}: {name} differs at {np.argwhere(x != y)[:4].tolist()}"
-
-
-def _same_dict(a: dict, b: dict, what):
-    assert a.keys() == b.keys(), what
-    for k in a:
-        assert np.asarray(a[k]).tobytes() == np.asarray(b[k]).tobytes(), f"{what}: {k} differs"
-
-
 # (dim, keywords, outputs, n): every dimension, distribution, metric, feature, and period,
 # stretch, orbit, density maps, far positions, n = 1 and 8 (several draws: more outputs than
 # draw buffers)
@@ -119,19 +104,19 @@ def test_cellular_same_bits(both_paths, monkeypatch, case):
     x = np.random.default_rng(case).uniform(-20.0, 20.0, (300, dim))
     x[:8] += 5e8 if dim == 2 else 3e4                # far from the origin too
     a, b = _both(monkeypatch, lambda: cellgl.cellular(x, n, outputs=outputs, **kw))
-    _same_result(a, b, f"case {case}")
+    assert_same_bits(a, b, f"case {case}", fields=FIELDS)
 
 
 def test_polynomial_smooth_and_grids_same_bits(both_paths, monkeypatch):
     x = np.random.default_rng(5).uniform(-9.0, 9.0, (200, 3))
     a, b = _both(monkeypatch, lambda: cellgl.cellular(x, 1, outputs=("smooth_F1",), smooth="polynomial"))
-    _same_result(a, b, "polynomial smooth")
+    assert_same_bits(a, b, "polynomial smooth", fields=FIELDS)
     a, b = _both(monkeypatch, lambda: cellgl.cellular_grid(
         (7, 5, 4, 3), origin=(1e5, -3.3, 2.0, 9.0), spacing=0.37, n=4, outputs=BASIS + FEATURES))
-    _same_result(a, b, "4D grid")
+    assert_same_bits(a, b, "4D grid", fields=FIELDS)
     a, b = _both(monkeypatch, lambda: cellgl.cellular_grid(
         (1500, 3), origin=(499999999.0, 0.5), spacing=0.013, n=2, period=(5, 7)))
-    _same_result(a, b, "2D grid, wide rows, far, periodic")
+    assert_same_bits(a, b, "2D grid, wide rows, far, periodic", fields=FIELDS)
 
 
 def test_loop_probe_same_counts(compute, loop_limiter, monkeypatch):
@@ -152,9 +137,7 @@ def test_voronoi_same_bits(both_paths, monkeypatch):
     v = np.random.default_rng(6).uniform(-9.0, 9.0, (300, 3))
     for feature in ("F2", "smooth_F1", "distance_to_edge", "n_sphere_radius"):
         a, b = _both(monkeypatch, lambda feature=feature: cellgl.voronoi(v, 3, feature, detail=1.5))
-        for name in ("distance", "color", "position", "w", "radius", "exact"):
-            x, y = getattr(a, name), getattr(b, name)
-            assert (x is None and y is None) or np.asarray(x).tobytes() == np.asarray(y).tobytes(), (feature, name)
+        assert_same_bits(a, b, feature, fields=("distance", "color", "position", "w", "radius", "exact"))
 
 
 def test_driver_cut_is_caught_on_the_fragment_path(compute, loop_limiter, monkeypatch):
@@ -196,7 +179,7 @@ def _texture_case(monkeypatch, name):
         res.update({"ev_" + k: v for k, v in ev.items()})
         return res
     a, b = _both(monkeypatch, run)
-    _same_dict(a, b, name)
+    assert_same_bits(a, b, name)
 
 
 @pytest.mark.parametrize("name", QUICK_PRESETS)
@@ -215,7 +198,7 @@ def test_pups_same_bits(both_paths, monkeypatch):
     from cellgl import pups as P
 
     a, b = _both(monkeypatch, lambda: cellgl.render("pups-cow", 96, 80, channels=("color", "height")))
-    _same_dict(a, b, "pups-cow")
+    assert_same_bits(a, b, "pups-cow")
     pos = P.poisson_disk(0.09, seed=2, periodic=True)
     rng = np.random.default_rng(102)
     pts = P.pups_points(pos, rng.random((len(pos), 3)),
@@ -224,13 +207,11 @@ def test_pups_same_bits(both_paths, monkeypatch):
     for mode, method in (("interpolate", "compute"), ("label", "compute"), ("weighted_sum", "raster")):
         a, b = _both(monkeypatch, lambda mode=mode, method=method: P.pups_evaluate(
             g, 161, 117, mode=mode, method=method, return_labels=mode == "label"))
-        a, b = (a, b) if isinstance(a, tuple) else ((a,), (b,))
-        for x, y in zip(a, b):
-            assert x.tobytes() == y.tobytes(), (mode, method)
+        assert_same_bits(a, b, (mode, method))
 
 
 def test_bake_bytes_equal(both_paths, monkeypatch, tmp_path):
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     def run(path):
         out = tmp_path / path
@@ -240,7 +221,7 @@ def test_bake_bytes_equal(both_paths, monkeypatch, tmp_path):
         files += bake("pups-cells", out / "p.exr", size=(64, 48), progress=False)
         return {f.name: f.read_bytes() for f in files}
     a, b = _both(monkeypatch, lambda: run(os.environ["CELLGL_PATH"]))
-    _same_dict(a, b, "bake files")
+    assert_same_bits(a, b, "bake files")
 
 
 def test_to_dask_blocks_same_bits(both_paths, monkeypatch):
@@ -248,7 +229,7 @@ def test_to_dask_blocks_same_bits(both_paths, monkeypatch):
     from cellgl.dask import to_dask
 
     a, b = _both(monkeypatch, lambda: np.asarray(to_dask("veins", (40, 56), chunks=24).compute()))
-    assert a.tobytes() == b.tobytes()
+    assert_same_bits(a, b, "dask blocks")
 
 
 def test_forced_fragment_draws_in_tiles(both_paths, monkeypatch):
@@ -258,7 +239,7 @@ def test_forced_fragment_draws_in_tiles(both_paths, monkeypatch):
     monkeypatch.setenv("CELLGL_TILE_SAMPLES", str(4 * dispatch.WIDTH))
     x = np.random.default_rng(8).uniform(-50.0, 50.0, (10 * dispatch.WIDTH + 77, 2))
     a, b = _both(monkeypatch, lambda: cellgl.cellular(x, 2, outputs=("F", "id")))
-    _same_result(a, b, "tiled draws")
+    assert_same_bits(a, b, "tiled draws", fields=FIELDS)
 
 
 # ------------------------------------------------------------------ contexts without compute
@@ -294,10 +275,14 @@ def test_emulated_context_runs_the_fragment_path(mesa, env_name):
 
 
 #: the exactness matrix's subset for the default run (every dimension, metric, the distributions,
-#: features, period, far samples, the loop budget); the slow test runs a larger one
-QUICK_MATRIX = ("(basis_matrix and (2-poisson-period-5e8 or 3-worley1996-free-0 or 4-jitter-period-0 "
-                "or 2-blender-free-0 or 3-sparse-period-5e8)) or (features_matrix and 3-poisson-0.25) "
-                "or tiny_budget_on_a_grid or reproducer_nsphere or (promised_bound and 3-euclidean)")
+#: features, period, far samples, the loop budget), in parts that `pytest -n` can spread; the
+#: slow test runs a larger one
+QUICK_MATRIX = {
+    "basis": ("basis_matrix and (2-poisson-period-5e8 or 3-worley1996-free-0 or 4-jitter-period-0 "
+              "or 2-blender-free-0 or 3-sparse-period-5e8)"),
+    "walks": "(features_matrix and 3-poisson-0.25) or tiny_budget_on_a_grid or (promised_bound and 3-euclidean)",
+    "reproducer": "reproducer_nsphere",
+}
 FULL_MATRIX = ("(basis_matrix and (free-0 or period-5e8)) or (features_matrix and 0.25) or stretch_and_density "
                "or grid_matrix or tiny_budget or reproducer_nsphere or sparse_poisson")
 
@@ -310,11 +295,12 @@ def _matrix(env_name: str, selection: str) -> None:
     assert " passed" in tail and "failed" not in tail, tail
 
 
+@pytest.mark.parametrize("part", list(QUICK_MATRIX))
 @pytest.mark.parametrize("env_name", ["gl41", "gl33-plain", pytest.param("gl33", marks=pytest.mark.slow)])
-def test_exactness_matrix_without_compute(mesa, env_name):
+def test_exactness_matrix_without_compute(mesa, env_name, part):
     """The brute-force matrix (and the reference's bound) on contexts without compute shaders,
     one of them without `precise`: the promise against the reference holds on every driver."""
-    _matrix(env_name, QUICK_MATRIX)
+    _matrix(env_name, QUICK_MATRIX[part])
 
 
 @pytest.mark.slow
@@ -325,7 +311,7 @@ def test_full_exactness_matrix_without_compute(mesa, env_name):
 
 _RENDERS = """
 import sys, numpy as np, cellgl
-from cellgl.io.bake import bake
+from cellgl.bake.core import bake
 out = {}
 for name in sys.argv[2:]:
     chans = ("color", "height") if name.startswith("pups-") else %r
@@ -358,7 +344,7 @@ def test_renders_without_compute_equal_the_compute_path(both_paths, mesa, monkey
         chans = ("color", "height") if name.startswith("pups-") else RENDER_CHANNELS
         for k, v in cellgl.render(name, 40, 24, channels=chans).items():
             want[name + "/" + k] = v
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
     for f in bake("flagstone", tmp_path / "c" / "f.png", size=(96, 64), channels=("color", "height"), tile=32,
                   progress=False):
         want["bake/" + f.name] = np.frombuffer(f.read_bytes(), np.uint8)
@@ -368,7 +354,7 @@ def test_renders_without_compute_equal_the_compute_path(both_paths, mesa, monkey
         want["cellular/" + k] = getattr(res, k)
     assert sorted(got) == sorted(want)
     for k in want:
-        assert np.asarray(want[k]).tobytes() == got[k].tobytes(), k
+        assert_same_bits(np.asarray(want[k]), got[k], k)
 
 
 def test_cell_counts_same_bits(compute, monkeypatch):
@@ -415,4 +401,4 @@ def test_material_channels_same_bits(both_paths, monkeypatch, name):
         res["alone"] = cellgl.render(name, 40, 24, channels=("metallic",))["metallic"]
         return res
     a, b = _both(monkeypatch, run)
-    _same_dict(a, b, name)
+    assert_same_bits(a, b, name)

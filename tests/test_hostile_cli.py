@@ -1,158 +1,55 @@
-"""The command line as a new user and a hostile tester met it (issue 33): Ctrl-C at any moment,
-a missing extra, warnings, progress lines in logs, options that meant two things, help text
-and error messages that named the wrong thing. Each test failed before its fix."""
+"""The command line as a new user and a hostile tester met it (issues 10, 33, 42): options that meant
+two things or did nothing, help text and error messages that named the wrong thing, a missing
+extra, warnings, progress lines in logs, a scheduler file waited on for ever. Each test failed (or hung) before its fix."""
 
 from __future__ import annotations
 
+import json
 import os
-import random
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
 from cellgl import cli
+from hostile import ENV, REPO
+from hostile import cli as _cli
+from hostile import main_refuses as _main_refuses
+from hostile import python as _python
+from hostile import refused as _refused
 
-REPO = Path(__file__).resolve().parent.parent
-ENV = dict(os.environ, PYTHONPATH=str(REPO))
 
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["--version"])
+    assert exc.value.code == 0
+    from cellgl._version import __version__
 
-def _cli(*args, cwd=REPO, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "cellgl", *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=timeout, env=ENV)
+    assert capsys.readouterr().out.strip() == f"cellgl {__version__}"
 
 
 # --------------------------------------------------------------------------------------------
-# 1. Ctrl-C during a frames bake: exit 130, nothing left behind, every time
+# item 12: options that did nothing are refused
 # --------------------------------------------------------------------------------------------
 
-#: 1024^2: the bake lasts well past the latest signal (3 s) on a quiet 2-core machine (5.3 s
-#: measured; 256^2 had got down to 1.5 s, so most signals came after the last frame)
-_FRAMES = ["bake", "caustics", "--frames", "48", "-o", "sub/fr.png", "--size", "1024"]
+def test_frames_with_zarr_is_refused(capsys, tmp_path):
+    _main_refuses(capsys, ["bake", "caustics", "-o", tmp_path / "t.zarr", "--frames", "2", "--size", "16"],
+                  "--frames 2", ".zarr", ".webp/.gif")
+    assert not (tmp_path / "t.zarr").exists()
 
 
-def _default_sigint():
-    """In the child: SIGINT as a terminal gives it (a background job inherits it ignored)."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
+@pytest.mark.parametrize("out, extra", [("a.png", []), ("f.png", ["--frames", "2"])])
+def test_fps_without_an_animation_is_refused(capsys, tmp_path, out, extra):
+    _main_refuses(capsys, ["bake", "caustics", "-o", tmp_path / out, "--size", "16", "--fps", "12", *extra],
+                  "--fps 12", "--frames N", ".webp")
+    assert os.listdir(tmp_path) == []
 
 
-def _interrupt_frames(tmp: Path, delay: float) -> tuple[int, str, list[str]]:
-    """Start the frames bake in ``tmp``, send SIGINT after ``delay`` s; (status, stderr, what
-    is left in the output folder)."""
-    (tmp / "sub").mkdir(exist_ok=True)
-    p = subprocess.Popen([sys.executable, "-m", "cellgl", *_FRAMES], cwd=tmp, env=ENV,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         preexec_fn=_default_sigint)
-    time.sleep(delay)
-    p.send_signal(signal.SIGINT)
-    _, err = p.communicate(timeout=300)
-    return p.returncode, err, sorted(os.listdir(tmp / "sub"))
-
-
-_STARTUP = 0.4     #: seconds the interpreter is given to reach cellgl's code (measured: < 0.1)
-
-
-def _interrupt_loop(tmp_path: Path, runs: int, seed: int) -> None:
-    rng = random.Random(seed)
-    statuses = []
-    for i in range(runs):
-        # from cellgl's first line (its imports, the parser) to well into the frames; a bake
-        # that finished before the signal must have written all 48 frames and nothing else.
-        # (The first ~50-100 ms are the interpreter's own start-up, its site import, before any
-        # cellgl code runs: a Ctrl-C there is Python's, "Fatal Python error: init_import_site".)
-        delay = rng.choice([rng.uniform(_STARTUP, 0.8), rng.uniform(0.8, 3.0)])
-        d = tmp_path / f"run{i}"
-        d.mkdir()
-        status, err, left = _interrupt_frames(d, delay)
-        statuses.append(status)
-        assert "Traceback" not in err, (i, delay, err[-2000:])
-        if status in (0, -signal.SIGINT):
-            # done before the signal, or the signal landed as the process ended, after every
-            # frame was written (a shell reports a death by SIGINT as 130 too): the whole output
-            assert len(left) == 48 and not any(n.startswith(".") for n in left), (i, delay, left)
-            continue
-        assert status == 130, (i, delay, status, err[-2000:])
-        assert left == [], (i, delay, left)
-    assert statuses.count(130) >= runs // 2, statuses      # most signals came mid-bake
-
-
-def test_ctrl_c_in_a_frames_bake_exits_130_and_leaves_nothing(ctx, tmp_path):
-    """It exited 139 (a segfault in libpython at exit) in 3 of 80 tries, and left
-    .fr.*.frames/ with finished frames and a 0-byte .part.png; during start-up, a traceback."""
-    _interrupt_loop(tmp_path, 4, seed=33)
-
-
-@pytest.mark.slow
-def test_ctrl_c_in_a_frames_bake_fifty_times(ctx, tmp_path):
-    _interrupt_loop(tmp_path, 50, seed=3301)
-
-
-def test_a_later_bake_sweeps_the_frames_folder_of_a_killed_one(ctx, tmp_path):
-    """SIGKILL leaves the frames folder; it carries pid and host, so the next bake removes it."""
-    sub = tmp_path / "sub"
-    sub.mkdir()
-    p = subprocess.Popen([sys.executable, "-m", "cellgl", *_FRAMES], cwd=tmp_path, env=ENV,
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    deadline = time.monotonic() + 120
-    while not any(n.endswith(".frames") for n in os.listdir(sub)):
-        assert p.poll() is None and time.monotonic() < deadline, "the bake ended before its folder"
-        time.sleep(0.05)
-    time.sleep(0.5)
-    p.kill()
-    p.communicate(timeout=60)
-    (stale,) = [n for n in os.listdir(sub) if n.endswith(".frames")]
-    assert stale.startswith(".fr.cellgl-")
-    r = _cli("bake", "caustics", "--frames", "2", "-o", "sub/fr.png", "--size", "16", "-q",
-             cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
-    assert sorted(os.listdir(sub)) == ["fr_0000.png", "fr_0001.png"]
-
-
-def test_in_process_main_returns_130_on_ctrl_c(monkeypatch, tmp_path):
-    """Called from Python (a list of arguments) main returns the status; only the program
-    leaves with os._exit."""
-    def interrupted(args):
-        raise KeyboardInterrupt
-
-    monkeypatch.setitem(cli._COMMANDS, "info", (cli._add_info, interrupted))
-    assert cli.main(["info"]) == 130
-
-
-def test_a_swallowed_ctrl_c_still_stops_the_bake(monkeypatch):
-    """A Ctrl-C that hit a C extension's import was printed by it and swallowed: the bake went
-    on to the end (exit 130 then, the outputs complete). The next tile or frame raises it again."""
-    from cellgl.io.bake import Progress
-
-    steps = []
-
-    def swallowing(args):
-        try:
-            signal.raise_signal(signal.SIGINT)       # the CLI's handler raises KeyboardInterrupt
-            time.sleep(0.01)
-        except KeyboardInterrupt:
-            pass                                     # ... which something swallows
-        bar = Progress(10, "baking x.png", False)
-        for _ in range(10):
-            bar.step()
-            steps.append(1)
-        return 0
-
-    monkeypatch.setitem(cli._COMMANDS, "info", (cli._add_info, swallowing))
-    # Ctrl-C as a terminal gives it: a background job (or `nohup ... &`) inherits SIGINT ignored,
-    # and cellgl leaves an ignored signal ignored
-    was = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        assert cli.main(["info"]) == 130
-        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # restored
-    finally:
-        signal.signal(signal.SIGINT, was)
-    assert steps == []
-    from cellgl import _interrupt
-
-    assert _interrupt.pending == []                  # nothing left for a later bake
+@pytest.mark.parametrize("extra", [[], ["--params"]])
+def test_presets_set_without_a_name_is_refused(capsys, extra):
+    _main_refuses(capsys, ["presets", "--set", "seed=1", *extra], "--set seed=1", "NAME")
 
 
 # --------------------------------------------------------------------------------------------
@@ -204,7 +101,7 @@ class _Stream:
 
 
 def test_progress_off_a_terminal_is_plain_lines():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=False)
     with Progress(40, "baking x.png", True, stream=s) as bar:
@@ -218,7 +115,7 @@ def test_progress_off_a_terminal_is_plain_lines():
 
 @pytest.mark.parametrize("tty", [True, False])
 def test_progress_says_interrupted(tty):
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=tty)
     with pytest.raises(KeyboardInterrupt):
@@ -234,7 +131,7 @@ def test_progress_says_interrupted(tty):
 
 
 def test_quiet_progress_writes_nothing():
-    from cellgl.io.bake import Progress
+    from cellgl.bake.core import Progress
 
     s = _Stream(tty=False)
     with pytest.raises(KeyboardInterrupt):
@@ -245,140 +142,53 @@ def test_quiet_progress_writes_nothing():
 
 
 # --------------------------------------------------------------------------------------------
-# 2. any recipe name becomes a valid identifier in every export target
+# item 17: a log hears at once, and every few seconds
 # --------------------------------------------------------------------------------------------
 
-NAMES = ["été", "中文纹理", "Текстура", "float", "shader", "return", "3d-cells", "gl_Position",
-         "a__b", "__", "", "x" * 300, "naïve café\nvoid main() {}", "struct", "fn", "let"]
+def test_progress_in_a_log_starts_at_once_and_keeps_coming():
+    from cellgl.bake.core import Progress
 
-#: keywords and reserved words of the targets a name could collide with (a sample of each)
-KEYWORDS = {"float", "int", "uint", "bool", "void", "return", "if", "else", "for", "while",
-            "struct", "in", "out", "inout", "uniform", "const", "shader", "surface", "volume",
-            "displacement", "color", "point", "normal", "vector", "matrix", "string", "closure",
-            "output", "fn", "let", "var", "loop", "switch", "texture", "sampler", "half",
-            "precision", "highp", "discard", "break", "continue", "true", "false", "main"}
+    class Log:
+        def __init__(self):
+            self.lines = []
 
+        def write(self, text):
+            self.lines.append((time.perf_counter(), text))
 
-@pytest.mark.parametrize("name", NAMES)
-def test_a_recipe_name_becomes_a_valid_identifier(name):
-    import re
+        def flush(self):
+            pass
 
-    from cellgl.export.names import IDENT_MAX, identifier
+        def isatty(self):
+            return False
 
-    ident = identifier(name)
-    assert re.fullmatch(r"[A-Za-z][A-Za-z0-9_]*", ident), ident
-    assert "__" not in ident and not ident.startswith("gl_") and len(ident) <= IDENT_MAX
-    assert ident.lower() not in KEYWORDS
-    assert identifier(name) == ident                         # the same name, the same identifier
-
-
-def test_different_scripts_stay_different():
-    from cellgl.export.names import identifier
-
-    assert identifier("été") == "cellgl_ete"
-    assert len({identifier(n) for n in ("中文", "中国", "Текстура", "Текстуры", "x" * 300, "x" * 301)}) == 6
-
-
-def _named(name: str):
-    from cellgl.recipes import load_recipe
-
-    r = load_recipe("flagstone")
-    r.name = name
-    return r
+    log = Log()
+    bar = Progress(100, "baking x.png", True, stream=log)
+    bar.LOG_INTERVAL = 0.2
+    with bar:
+        assert [t for _, t in log.lines] == ["baking x.png: started, 100 tiles\n"]
+        time.sleep(1.0)        # a slow first tile: no tenth done yet
+        n = len(log.lines)
+        assert n >= 3, log.lines
+        assert all(t.startswith("baking x.png: 0/100 tiles, ") for _, t in log.lines[1:]), log.lines
+        bar.step()
+    time.sleep(0.5)
+    assert len(log.lines) == n, "a line after the bar was closed"
+    gaps = [b - a for (a, _), (b, _) in zip(log.lines, log.lines[1:n])]
+    assert max(gaps) < 0.6, gaps
 
 
-@pytest.mark.parametrize("target", ["glsl", "gles", "shadertoy", "godot", "godotinc", "hlsl",
-                                    "unreal", "wgsl", "osl"])
-def test_snippets_of_hostile_names_compile(tmp_path, target):
-    """`shader cellgl_été(` (OSL) compiled nowhere; a newline in a name ended the header's
-    comment and put the rest in the code."""
-    from test_export import compile_snippet
-
-    from cellgl.export import export
-
-    for name in ("été", "中文", "float", "7up\nvoid x() {}"):
-        text = export(_named(name), target)
-        assert all("void x() {}" not in line or line.lstrip().startswith(("//", "#")) for line in
-                   text.splitlines()), name
-        compile_snippet(tmp_path, target, text)
-
-
-def test_blender_scene_of_a_recipe_named_ete(tmp_path):
-    """`cellgl blender recipe.json` with "name": "été" ended in an OSL compilation failure."""
-    pytest.importorskip("bpy")
-    import json
-
-    from cellgl.recipes import load_recipe
-
-    d = load_recipe("flagstone").to_dict()
-    d["name"] = "été"
-    (tmp_path / "recipe.json").write_text(json.dumps(d))
-    r = _cli("blender", "recipe.json", "-o", "scene.blend", "--size", "16", cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
-    assert (tmp_path / "scene.blend").stat().st_size > 0
-
-
-# --------------------------------------------------------------------------------------------
-# 5. the header's Regenerate command writes the same snippet, byte for byte
-# --------------------------------------------------------------------------------------------
-
-
-def _regenerate(text: str, cwd: Path) -> str:
-    import shlex
-
-    first = text.splitlines()[0]
-    command = first.split("Regenerate (do not edit): ", 1)[1]
-    words = shlex.split(command)
-    assert words[:2] == ["cellgl", "export"], command
-    r = _cli(*words[1:], cwd=cwd)
-    assert r.returncode == 0, (command, r.stderr)
-    return r.stdout
-
-
-@pytest.mark.parametrize("argv", [
-    ["flagstone", "--target", "gles"],
-    ["flagstone", "--set", "seed=7", "--set", "basis.density=2.5", "--target", "gles"],
-    ["flagstone", "--set", "seed=7", "--uniforms"],
-    ["flagstone", "--no-fold", "--target", "hlsl"],
-    ["my recipe.json", "--target", "wgsl"],
-    ["my recipe.json", "--set", "seed=3", "--target", "osl"],
-    ["--basis", "f1f2", "--dim", "3", "--metric", "manhattan", "--seed", "5", "--density", "2.0"],
-    ["--basis", "edge", "--distribution", "jitter", "--jitter", "0.5", "--target", "wgsl"],
-])
-def test_regenerate_command_reproduces_the_snippet(tmp_path, argv):
-    """`cellgl export flagstone --set seed=7 --target gles` said `... flagstone --target gles`
-    (seed 0), and a recipe file's path was dropped."""
-    import json
-
-    from cellgl.recipes import load_recipe
-
-    d = load_recipe("flagstone").to_dict()
-    d["name"] = "mine"
-    d["basis"]["seed"] = 11
-    (tmp_path / "my recipe.json").write_text(json.dumps(d))
-    r = _cli("export", *argv, cwd=tmp_path)
-    assert r.returncode == 0, r.stderr
-    assert _regenerate(r.stdout, tmp_path) == r.stdout
-
-
-def test_regenerate_command_of_a_recipe_object(tmp_path):
-    """From Python: a preset changed in code gets its --set list; any other recipe object gets
-    RECIPE.json, the header's Recipe line saved."""
-    import json
-
-    from cellgl.export import export
-    from cellgl.recipes import load_recipe
-
-    r = load_recipe("flagstone").replace(seed=7, jitter=0.5)
-    text = export(r, "gles")
-    assert "--set seed=7" in text.splitlines()[0]
-    assert _regenerate(text, tmp_path) == text
-    other = _named("été")
-    text = export(other, "glsl")
-    recipe_line = next(line for line in text.splitlines() if line.startswith("// Recipe: "))
-    (tmp_path / "RECIPE.json").write_text(recipe_line[len("// Recipe: "):])
-    assert json.loads((tmp_path / "RECIPE.json").read_text())["name"] == "été"
-    assert _regenerate(text, tmp_path) == text
+def test_ctrl_c_before_the_first_tenth_leaves_log_lines(ctx, tmp_path):
+    p = subprocess.Popen([sys.executable, "-m", "cellgl", "bake", "f1", "-o", str(tmp_path / "a.png"),
+                          "--size", "4096", "--tile", "16"], cwd=REPO, env=ENV,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    first = p.stderr.readline()          # at once, long before a tenth of 65536 tiles
+    p.send_signal(signal.SIGINT)
+    _, rest = p.communicate(timeout=120)
+    assert first == "baking a.png: started, 65536 tiles\n", (first, rest)
+    assert p.returncode == 130, rest
+    assert rest.rstrip().splitlines()[-1].startswith("baking a.png: interrupted at "), rest
+    assert os.listdir(tmp_path) == []
 
 
 # --------------------------------------------------------------------------------------------
@@ -497,48 +307,69 @@ def test_export_without_an_argument_says_what_to_give(capsys):
     assert "nothing to export" in err and "not both" not in err and "cellgl presets" in err
 
 
+def test_unexpected_exception_is_a_message_not_a_traceback(tmp_path):
+    code = """
+import sys
+from cellgl import cli, recipes
+def boom(*a, **k): raise TypeError("something unforeseen")
+recipes.load_recipe = boom
+sys.exit(cli.main(["presets", "flagstone"]))
+"""
+    r = _python(code)
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert "cellgl: error: internal error: TypeError: something unforeseen" in r.stderr
+    r = _python(code, CELLGL_DEBUG="1")
+    assert r.returncode == 1 and "Traceback" in r.stderr
+
+
 # --------------------------------------------------------------------------------------------
-# 4. distribution="blender" beyond 2^24 cells: Blender's hash repeats; a warning, and jitter
+# item 6: a scheduler file that is not there is said at once
 # --------------------------------------------------------------------------------------------
 
+@pytest.mark.parametrize("case", ["missing", "not json", "no address", "fifo"])
+def test_a_bad_scheduler_file_is_refused_at_once(tmp_path, case):
+    pytest.importorskip("distributed")
+    f = tmp_path / "sched.json"
+    if case == "not json":
+        f.write_text("{tcp://")
+    elif case == "no address":
+        f.write_text(json.dumps({"id": "Scheduler-1"}))
+    elif case == "fifo":
+        os.mkfifo(f)
+    words = {"missing": "no such file", "not json": "not valid JSON", "no address": '"address"',
+             "fifo": "not a regular file"}[case]
+    for argv in (["bake", "mountains", "-o", tmp_path / "t.zarr", "--size", "64"],
+                 ["sweep", "f1", "--set", "seed=0..1", "-o", tmp_path / "sw", "--size", "16"]):
+        r = _cli(*argv, "--scheduler", f, timeout=60,     # it waited for ever
+                 env={**ENV, "CELLGL_SCHEDULER_WAIT": "1"})
+        _refused(r, f"--scheduler {f}", words)
+    assert sorted(os.listdir(tmp_path)) == ([] if case == "missing" else ["sched.json"])
 
-def _image_colours(x0: float, distribution: str) -> int:
-    import warnings
 
-    import numpy as np
+def test_a_scheduler_file_written_while_waiting_is_taken(tmp_path, monkeypatch):
+    """`dask scheduler --scheduler-file F &` then `cellgl bake ... --scheduler F` at once
+    (docs/scale.md): the file comes a few seconds later, and is waited for, within a bound."""
+    import threading
 
-    import cellgl
+    pytest.importorskip("distributed")
+    from cellgl.cli import dask as dcli
+    from cellgl.dask.blocks import DaskError
 
-    u = (np.arange(64) + 0.5) / 64 * 8.0
-    pts = np.stack(np.meshgrid(x0 + u, u), -1).reshape(-1, 2)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        r = cellgl.voronoi(pts, dimensions=2, distribution=distribution, backend="numpy")
-    return len(np.unique(r.color, axis=0))
-
-
-def test_blender_points_repeat_far_out_and_warn(ctx):
-    import numpy as np
-
-    import cellgl
-    from cellgl.basis.population import BLENDER_HASH_LIMIT
-
-    near, far = _image_colours(0.0, "blender"), _image_colours(1e7, "blender")
-    assert near > 3 * far                    # the repeat is real (and Blender's): the warning's reason
-    assert _image_colours(1e7, "jitter") > near / 2              # the exact alternative does not
-    inside = np.array([[BLENDER_HASH_LIMIT / 5 - 1.0, 0.5, 0.5]])   # Scale 5: just inside
-    with __import__("warnings").catch_warnings():
-        __import__("warnings").simplefilter("error", RuntimeWarning)
-        cellgl.voronoi(inside, backend="numpy")
-        cellgl.voronoi(inside * 50, distribution="jitter", backend="numpy")
-    for pts, dims in ((inside * 2, 3), (np.array([1e7]), 1)):
-        with pytest.warns(RuntimeWarning, match=r"beyond 2\^24 .* distribution 'jitter'"):
-            cellgl.voronoi(pts, dimensions=dims, backend="numpy")
-    with pytest.warns(RuntimeWarning, match=r"beyond 2\^24"):
-        cellgl.cellular(np.array([[2.0 ** 25, 0.5]]), n=1, distribution="blender", backend="numpy")
-    with pytest.warns(RuntimeWarning, match=r"beyond 2\^24"):
-        cellgl.cellular_grid((2, 2), origin=(2.0 ** 25, 0.0), n=1, distribution="blender",
-                             backend="numpy")
+    f = tmp_path / "sched.json"
+    later = threading.Timer(0.5, lambda: f.write_text(json.dumps({"address": "tcp://127.0.0.1:1"})))
+    later.start()
+    try:
+        monkeypatch.setenv("CELLGL_SCHEDULER_WAIT", "30")
+        dcli.check_scheduler(str(f))
+    finally:
+        later.cancel()
+    monkeypatch.setenv("CELLGL_SCHEDULER_WAIT", "0.3")
+    with pytest.raises(DaskError, match=r"no such file.*waited 0.3 s"):
+        dcli.check_scheduler(str(tmp_path / "never.json"))
+    for bad in ("-1", "nan", "4000", "soon"):
+        monkeypatch.setenv("CELLGL_SCHEDULER_WAIT", bad)
+        with pytest.raises(DaskError, match=r"CELLGL_SCHEDULER_WAIT=.*accepted seconds in 0..3600"):
+            dcli.check_scheduler(str(f))
 
 
 def test_every_option_with_a_default_says_it():

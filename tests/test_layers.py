@@ -18,19 +18,16 @@ ROOT = Path(__file__).resolve().parents[1]
 #: Each entry is a module or a package prefix (every module under it).
 #: docs/architecture.md's table is the same map: row ``# = index + 1`` names every module of the layer.
 LAYERS = (
-    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl._cache", "cellgl.io", "cellgl.io.formats", "cellgl.io.tempfiles",
-               "cellgl.presets")),
+    ("files", ("cellgl._version", "cellgl._interrupt", "cellgl._cache", "cellgl.io", "cellgl.presets")),
     ("gl", ("cellgl.gl",)),
     ("basis", ("cellgl.basis",)),
     ("texture", ("cellgl.texture",)),
     ("pups", ("cellgl.pups",)),
     ("recipes", ("cellgl.recipes",)),
-    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.io.spec", "cellgl.io.bake", "cellgl.io.frames", "cellgl.io.udim", "cellgl.io.mips", "cellgl.io.texfile", "cellgl.io.gputex",
-                    "cellgl.io.material_sets",
-                    "cellgl.dask", "cellgl.blender")),
+    ("front ends", ("cellgl.export", "cellgl.playground", "cellgl.bake", "cellgl.dask", "cellgl.blender")),
     ("public API", ("cellgl",)),
     ("viewer", ("cellgl.viewer",)),
-    ("cli", ("cellgl.cli", "cellgl.io.bake_cli", "cellgl.__main__", "cellgl.dask.cli", "cellgl.voronoi_cli")),
+    ("cli", ("cellgl.cli", "cellgl.__main__")),
 )
 
 
@@ -123,7 +120,7 @@ def _doc_rows() -> dict[int, str]:
 
 
 def _on_map(module: str, row: str) -> bool:
-    """Whether a row of the map names ``module``: its file (``cellgl/io/bake.py``), a package its
+    """Whether a row of the map names ``module``: its file (``cellgl/bake/core.py``), a package its
     folder (``cellgl/blender/addon/`` or ``addon/``), a module of a folder its name (```bake```)."""
     path = MODULES[module].relative_to(ROOT).as_posix()
     last = module.rpartition(".")[2]
@@ -286,11 +283,11 @@ def test_no_underscore_name_crosses_modules():
 def test_the_underscore_check_sees_both_spellings(tmp_path, monkeypatch):
     src = tmp_path / "m.py"
     src.write_text("from cellgl.texture.schema import _coerce, RecipeError\n"
-                   "from cellgl.io import bake as B\n"
+                   "from cellgl.bake import core as B\n"
                    "import cellgl.io.spec as S\n"
                    "def f():\n    return B._load, S.check, B.__name__, B.bake\n")
     monkeypatch.setitem(MODULES, "cellgl.io.fake", src)
-    assert _underscore_imports("cellgl.io.fake") == ["cellgl.io.fake: cellgl.io.bake._load",
+    assert _underscore_imports("cellgl.io.fake") == ["cellgl.io.fake: cellgl.bake.core._load",
                                                       "cellgl.io.fake: cellgl.texture.schema._coerce"]
 
 
@@ -343,10 +340,59 @@ def test_each_module_imports_alone(chunk):
     assert not failed, "modules that do not import alone:\n" + "\n".join(failed)
 
 
+#: lines past which a module is an alarm, not a target. The largest modules that each do one job
+#: are about 600 lines (texture/reference.py, pups/presets.py, bake/core.py: the NumPy twin of one
+#: shader, a table of presets, one bake); past 800 a module has, every time it was looked at here,
+#: been doing two jobs. Reaching the number asks for a split by idea (docs/architecture.md, "Rooms
+#: by idea"), never for trimming lines to fit: a cap that tight was a target, and commits trimmed
+#: to it. The number says nothing of a smaller module: texture/recipe.py did five jobs in 620
+#: lines (review finds those).
+MODULE_ALARM = 800
+#: the same alarm for a shaders/lib file (its functions have their own cap below): the largest
+#: single-idea files are about 500 lines (feature_walk.glsl, texture.glsl)
+GLSL_ALARM = 650
+
+
 def test_modules_stay_small():
-    """No module past ~600 lines (the house rule; split by idea, not by count)."""
-    big = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > 620}
-    assert not big, f"modules over 620 lines: {big}"
+    """No module past MODULE_ALARM lines: the alarm that a module does two jobs (split it by idea,
+    do not trim it)."""
+    big = {m: n for m, p in MODULES.items() if (n := len(p.read_text().splitlines())) > MODULE_ALARM}
+    assert not big, f"modules over {MODULE_ALARM} lines (the alarm of a module doing two jobs: " \
+        f"split each by idea, see MODULE_ALARM): {big}"
+
+
+#: the argparse parsers below the command line's floor: the viewer's own program
+#: (``python -m cellgl.viewer``) declares its arguments in the viewer, which `cellgl view` reuses
+PARSERS_BELOW_THE_CLI = {"cellgl.viewer.cli"}
+
+
+def _declares_a_parser(module: str) -> bool:
+    tree = ast.parse(MODULES[module].read_text())
+    return any(isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute)
+               and n.func.attr in ("add_argument", "add_parser", "add_subparsers", "ArgumentParser")
+               or isinstance(n, ast.Call) and isinstance(n.func, ast.Name) and n.func.id == "ArgumentParser"
+               for n in ast.walk(tree))
+
+
+def test_command_line_parsers_are_on_the_top_floor():
+    """Every command's arguments are declared in the cli layer (cellgl/cli/), which loads the
+    commands' modules by import statements, never by a module name in a string."""
+    top = [i for i, (name, _) in enumerate(LAYERS) if name == "cli"][0]
+    below = {m for m in MODULES if _layer(m) < top and _declares_a_parser(m)}
+    assert below == PARSERS_BELOW_THE_CLI, f"argparse parsers below the command line: {below - PARSERS_BELOW_THE_CLI}" \
+        f"; gone from the list: {PARSERS_BELOW_THE_CLI - below}"
+    strings = [m for m in MODULES if _layer(m) == top and "import_module" in MODULES[m].read_text()]
+    assert not strings, f"command modules loaded by name (importlib.import_module): {strings}"
+    assert all(f"cellgl.cli.{c}" in GRAPH["cellgl.cli"] for c in ("bake", "export", "presets", "dask", "voronoi",
+                                                                  "blender", "playground"))
+
+
+def test_the_parser_check_can_fail(tmp_path, monkeypatch):
+    src = tmp_path / "m.py"
+    src.write_text("def add_parser(sub):\n    p = sub.add_parser('x')\n    p.add_argument('--y')\n")
+    monkeypatch.setitem(MODULES, "cellgl.recipes", src)
+    with pytest.raises(AssertionError, match="parsers below the command line: {'cellgl.recipes'}"):
+        test_command_line_parsers_are_on_the_top_floor()
 
 
 # --------------------------------------------------------------------------------------------
@@ -385,9 +431,10 @@ def _glsl_header(text: str) -> str:
 
 
 def test_glsl_library_files_stay_small():
-    """No shaders/lib file past 500 lines, no function past ~80 (beside the Python cap)."""
-    big = {p.name: n for p in LIB.glob("*.glsl") if (n := len(p.read_text().splitlines())) > 500}
-    assert not big, f"shaders/lib files over 500 lines: {big}"
+    """No shaders/lib file past GLSL_ALARM lines (the alarm of two jobs, as MODULE_ALARM), no
+    function past ~80."""
+    big = {p.name: n for p in LIB.glob("*.glsl") if (n := len(p.read_text().splitlines())) > GLSL_ALARM}
+    assert not big, f"shaders/lib files over {GLSL_ALARM} lines (split by idea): {big}"
     long = {f"{p.name}:{name}": n for p in LIB.glob("*.glsl") for name, n in _glsl_functions(p.read_text())
             if n > LONG_FUNCTIONS.get(name, 80)}
     assert not long, f"shaders/lib functions over 80 lines: {long}"

@@ -11,8 +11,8 @@ import sys
 import numpy as np
 import pytest
 
-from cellgl.io import material_sets as M
-from cellgl.io.bake import bake
+from cellgl.bake import material_sets as M
+from cellgl.bake.core import bake
 from cellgl.io.spec import BakeError
 
 SIZE = (40, 28)
@@ -247,7 +247,7 @@ def test_a_recipe_object_is_named_by_the_sets_recipe_json(ctx, tmp_path):
 def test_mips_are_each_level_rendered_at_its_size(ctx, tmp_path):
     """--mips: every map's level k is the set baked at ceil(W / 2^k) x ceil(H / 2^k) (rendered, not
     downsampled), as <map>_mip<k>.png; level 0 is the set without mips; the manifest lists them."""
-    from cellgl.io.mips import mip_sizes
+    from cellgl.bake.mips import mip_sizes
 
     paths = M.bake_material("flagstone", tmp_path / "m", "unreal", size=(20, 12), mips=True, progress=False)
     plain = M.bake_material("flagstone", tmp_path / "p", "unreal", size=(20, 12), progress=False)

@@ -14,9 +14,9 @@ import sys
 import numpy as np
 import pytest
 
-from cellgl.io import gputex
-from cellgl.io import material_sets as M
-from cellgl.io.bake import bake
+from cellgl.io import gpu_textures
+from cellgl.bake import material_sets as M
+from cellgl.bake.core import bake
 from cellgl.io.spec import BakeError
 
 pytest.importorskip("texture2ddecoder")
@@ -78,16 +78,16 @@ def _packed_from_alone(alone, m: M.MapSpec, convention: str, w: int, h: int, bit
 
 
 def _capture(monkeypatch):
-    """Record the images gputex.packed_levels gets: the packed maps before block encoding."""
+    """Record the images gpu_textures.packed_levels gets: the packed maps before block encoding."""
     seen = []
-    real = gputex.packed_levels
+    real = gpu_textures.packed_levels
 
     def spy(fmt, images):
         images = list(images)
         seen.append((fmt.name, [a.copy() for a in images]))
         return real(fmt, images)
 
-    monkeypatch.setattr(gputex, "packed_levels", spy)
+    monkeypatch.setattr(gpu_textures, "packed_levels", spy)
     return seen
 
 
@@ -169,7 +169,7 @@ def test_a_failed_gpu_set_leaves_the_folder_as_it_was(ctx, tmp_path, monkeypatch
     if existing:
         out.mkdir()
         (out / "T_flagstone_BC.dds").write_bytes(b"old")
-    real, calls = gputex.packed_levels, []
+    real, calls = gpu_textures.packed_levels, []
 
     def failing(fmt, images):
         calls.append(fmt)
@@ -177,7 +177,7 @@ def test_a_failed_gpu_set_leaves_the_folder_as_it_was(ctx, tmp_path, monkeypatch
             raise OSError(28, "No space left on device")
         return real(fmt, images)
 
-    monkeypatch.setattr(gputex, "packed_levels", failing)
+    monkeypatch.setattr(gpu_textures, "packed_levels", failing)
     with pytest.raises(OSError):
         M.bake_material("flagstone", out, "unreal", size=SIZE, map_format="dds", mips=True, progress=False)
     assert len(calls) == 3

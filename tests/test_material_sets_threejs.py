@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cellgl.io import material_sets as M
+from cellgl.bake import material_sets as M
 
 ROOT = Path(__file__).resolve().parents[1]
 THREE = ROOT / ".venv" / "three" / "node_modules" / "three"
@@ -87,7 +87,7 @@ def test_threejs_renders_the_gltf_set_as_the_same_maps_by_hand(ctx, tmp_path, br
     # and the normal map lights the slopes as the height says (OpenGL convention, glTF's): the
     # light comes from the upper left, so the normal map brightens where height rises to the right
     # and down the image (measured correlation 0.40; the map's green flipped, DirectX, gives -0.07)
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     bake("flagstone", tmp_path / "height.png", size=SIZE, channels=["height"], bit_depth=16, progress=False)
     rows, cols = np.gradient(np.asarray(Image.open(tmp_path / "height.png")).astype(float))

@@ -400,7 +400,7 @@ def test_baked_material_reads_the_bakes_maps_with_their_colour_spaces(one, tmp_p
     assert color.getValueString() == "textures/cellgl_flagstone_color.png" and color.getColorSpace() == "srgb_texture"
     assert normal.getValueString() == "textures/cellgl_flagstone_normal.png" and normal.getColorSpace() == ""
     # the maps are the bake's, at the size asked for
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     assert np.array_equal(_png(one / "textures" / "cellgl_flagstone_color.png"), _bake("flagstone", tmp_path))
     bake("flagstone", str(tmp_path / "n.png"), size=SIZE, channels=("normal",), progress=False)
@@ -650,7 +650,7 @@ def _render_glsl(out, jobs, size=SIZE):
 def _bake(name, tmp_path, size=SIZE):
     from PIL import Image
 
-    from cellgl.io.bake import bake
+    from cellgl.bake.core import bake
 
     png = tmp_path / f"{name}.png"
     bake(name, str(png), size=size)

@@ -1,4 +1,4 @@
-"""Mip chains (cellgl.io.mips, ``bake(..., mips=True)``, ``--mips``): every level rendered from the
+"""Mip chains (cellgl.bake.mips, ``bake(..., mips=True)``, ``--mips``): every level rendered from the
 recipe at its own size, level 0 the bake without mips, tileable seamless at every level."""
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import pytest
 from PIL import Image
 
 import cellgl
-from cellgl.io import bake as B
-from cellgl.io import mips as M
+from cellgl.bake import core as B
+from cellgl.bake import mips as M
 from cellgl.io.spec import encoding_of
 from cellgl.recipes import load_recipe
 

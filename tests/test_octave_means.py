@@ -11,7 +11,8 @@ from cellgl import _cache
 from cellgl.texture import means
 from cellgl.texture import reference as texture_reference
 from cellgl.texture.params import PARAMS
-from cellgl.texture.recipe import RecipeError, load_recipe
+from cellgl.texture.presets import load_recipe
+from cellgl.texture.recipe import RecipeError
 
 
 @pytest.fixture

@@ -122,7 +122,7 @@ def pixels(b64: str) -> np.ndarray:
 def bake(tmp_path, name, sets=(), stem="bake") -> np.ndarray:
     from PIL import Image
 
-    from cellgl.io.bake import bake as bake_file
+    from cellgl.bake.core import bake as bake_file
 
     path = tmp_path / f"{stem}.png"
     bake_file(name, path, size=(SIZE, SIZE), sets=list(sets), progress=False)

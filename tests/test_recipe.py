@@ -208,3 +208,20 @@ def test_recipes_answers_what_depends_on_the_kind():
     assert recipes.max_side("flagstone") == MAX_SIDE == recipes.MAX_SIDE == 1 << 20
     assert recipes.max_side(cow) == 1 << 16
     assert recipes.is_path("a/b.json") and not recipes.is_path("flagstone")
+
+
+def test_the_recipe_rooms_keep_one_api():
+    """texture/recipe.py's split (fields, recipe_json, recipe, presets) keeps the names users
+    reach for, and with_variants gives a copy (the original keeps its variants)."""
+    import cellgl.texture
+    from cellgl.texture import presets, recipe_json
+
+    assert cellgl.texture.Recipe is cellgl.Recipe is Recipe and cellgl.texture.RecipeError is RecipeError
+    base = presets.load_recipe("worley-gallery")
+    assert base.variants and presets.load_recipe("worley-gallery:1") == base.variants[1]
+    bare = base.with_variants(())
+    assert bare.variants == () and len(base.variants) > 1 and bare == base     # equality ignores variants
+    again = Recipe.from_dict(json.loads(base.to_json()))
+    assert again.variants == base.variants
+    assert recipe_json.to_dict(base) == base.to_dict()
+    assert recipe_json.set_changes(["basis.seed=5", "ramp=[[0, 1, 1, 1]]"]) == {"seed": 5, "ramp": [[0, 1, 1, 1]]}

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import cellgl
-from cellgl.io import bake as B
+from cellgl.bake import core as B
 from cellgl.io import blocks
 from cellgl.io.spec import BakeError, Encoding
 from cellgl.recipes import load_recipe
@@ -433,7 +433,7 @@ def test_material_masks_are_bc4_or_plain(ctx, tmp_path):
 
 @pytest.mark.parametrize("ext", [".dds", ".ktx2"])
 def test_frames_are_an_array_texture_with_mips(ctx, tmp_path, ext):
-    from cellgl.io.frames import bake_frames, frame_recipe
+    from cellgl.bake.frames import bake_frames, frame_recipe
 
     recipe = load_recipe("caustics")
     paths = bake_frames(recipe, tmp_path / f"c{ext}", 3, size=(20, 12), channels=("color", "height"),

@@ -15,7 +15,8 @@ from cellgl.texture.recipe import Recipe
 from cellgl.recipes import load_recipe
 from cellgl.texture.reference import texture_values, texture_period
 from test_texture import RECIPES as TEXTURE_RECIPES     # tests/ is on sys.path under pytest
-from test_exactness import f_bound, near_ties
+from compare import (assert_close_but_share, assert_F_within_bound, assert_ids_equal_but_ties, id_ties, octave_sum,
+                     texture_near_ties)
 
 FAR = 1e6 + 0.3
 
@@ -43,7 +44,7 @@ def _errors(r) -> tuple[dict, float]:
     ties in a 24 x 20 image)."""
     g = texture.render(r, 24, 20, channels=CHS)
     n = texture.render(r, 24, 20, channels=CHS, backend="numpy")
-    tie = np.abs(n["F2"] - n["F1"]) < 1e-4
+    tie = id_ties(n)
     err = {}
     for k in ("color", "height", "normal", "F1", "F2"):
         d = np.abs(g[k] - n[k])
@@ -100,11 +101,11 @@ def test_evaluate_far_away(ctx, preset, where):
     g = cellgl.evaluate(r, pts, chs)
     n = cellgl.evaluate(r, pts, chs, backend="numpy")
     rec = load_recipe(r) if isinstance(r, str) else r
-    S = 1.0 + rec.get("frequency") * max(1.0, rec.get("aspect"))
-    tie = near_ties(np.stack([n["F1"], n["F2"]], axis=1), S)
+    S = octave_sum(rec)
+    tie = texture_near_ties(n, S)
     assert tie.mean() < 0.01
-    assert (g["id"] == n["id"])[~tie].all()
-    assert np.all(np.abs(g["F1"].astype(np.float64) - n["F1"]) <= f_bound(n["F1"], S))
+    assert_ids_equal_but_ties(g["id"], n["id"], tie)
+    assert_F_within_bound(g["F1"], n["F1"], S)
     if "color" in chs:
         np.testing.assert_allclose(g["color"][~tie], n["color"][~tie], atol=5e-5)
 
@@ -117,7 +118,7 @@ def test_far_image_is_a_shifted_copy(ctx):
         a = texture.render(r, 32, 32, channels=("color", "id", "F1", "F2"))
         b = texture.render(r.replace(offset_x=origin + r.get("frequency") / 4), 32, 32,
                            channels=("color", "id", "F1", "F2"))
-        tie = np.abs(a["F2"] - a["F1"])[:, 8:] < 1e-4
+        tie = id_ties(a)[:, 8:]
         assert np.array_equal(a["id"][:, 8:][~tie], b["id"][:, :-8][~tie])
         close = np.all(np.abs(a["color"][:, 8:] - b["color"][:, :-8]) < 2e-4, axis=-1)
         assert close.mean() > 0.99, (origin, close.mean())
@@ -160,13 +161,12 @@ def test_viewer_pan_far_away_stays_sharp(ctx):
     frag = texture.render_fragment(r, 32, 24, view=(u0, v0, 1.0, 1.0))
     ref = texture.render(r.replace(offset_x=u0 * f, offset_y=v0 * f * r.get("aspect")), 32, 24,
                          backend="numpy")["color"]
-    close = np.all(np.abs(frag - ref) < 2e-3, axis=-1)
-    assert close.mean() > 0.98      # as test_fragment_matches_compute at the origin
+    assert_close_but_share(frag, ref, 2e-3, share=0.02)      # as test_fragment_matches_compute at the origin
     # the same view near the origin agrees just as well
     near = texture.render_fragment(r, 32, 24, view=(0.0371, 0.013, 1.0, 1.0))
     ref0 = texture.render(r.replace(offset_x=0.0371 * f, offset_y=0.013 * f * r.get("aspect")), 32, 24,
                           backend="numpy")["color"]
-    assert np.all(np.abs(near - ref0) < 2e-3, axis=-1).mean() > 0.98
+    assert_close_but_share(near, ref0, 2e-3, share=0.02)
 
 
 def test_exported_snippet_far_away_reproduces_the_bake(ctx):
@@ -183,7 +183,6 @@ def test_exported_snippet_far_away_reproduces_the_bake(ctx):
     bake = texture.render(r, 64, 48, channels=("color", "F1", "F2"))
     # an exported snippet carries no `precise` (docs/exactness.md): pixels at a near-tie of the
     # two nearest points may take the other one
-    S = 1.0 + r.get("frequency") * max(1.0, r.get("aspect"))
-    tie = near_ties(np.stack([bake["F1"].ravel(), bake["F2"].ravel()], axis=1), S).reshape(48, 64)
+    tie = texture_near_ties(bake, octave_sum(r))
     assert tie.mean() < 0.01
     np.testing.assert_allclose(got[~tie], bake["color"][~tie], rtol=0, atol=2e-5)

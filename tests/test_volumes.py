@@ -9,7 +9,7 @@ import pytest
 
 import test_bake
 from cellgl import cli, texture
-from cellgl.io import bake as B
+from cellgl.bake import core as B
 from cellgl.io import vdb
 from cellgl.recipes import load_recipe
 from cellgl.texture import cloud

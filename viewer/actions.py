@@ -2,7 +2,7 @@
 
 Each action is a plain function of the viewer (tests call them directly); :func:`draw` puts
 them in the panel. Bake and export go through the same public functions as the command line
-(``cellgl.io.bake.bake``, ``cellgl.export.export``), never through a copy of their code.
+(``cellgl.bake.core.bake``, ``cellgl.export.export``), never through a copy of their code.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ def save_recipe(viewer, path: str) -> str:
 
 def bake(viewer, path: str, size=1024, **kw) -> list:
     """``cellgl bake`` of the current recipe (same function, same pixels)."""
-    from cellgl.io.bake import bake as _bake
+    from cellgl.bake.core import bake as _bake
 
     out = _bake(viewer.model.recipe, path, size=size, progress=False, **kw)
     viewer.status = "baked " + ", ".join(str(p) for p in out)

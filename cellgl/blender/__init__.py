@@ -20,7 +20,7 @@ def __getattr__(name):
         from cellgl.blender import runtime
 
         return getattr(runtime, name)
-    if name in ("write_blend", "build_scene", "add_parser", "run_cli", "render_scene", "render_outputs",
+    if name in ("write_blend", "build_scene", "render_scene", "render_outputs",
                 "set_recipe", "set_script"):
         from cellgl.blender import scene
 

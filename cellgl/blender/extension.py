@@ -24,7 +24,7 @@ import zipfile
 from pathlib import Path
 
 __all__ = ["PLATFORMS", "REQUIREMENTS", "build_extension", "manifest_text", "pip_fetch", "cellgl_wheel",
-           "validate", "add_parser", "run_cli"]
+           "validate"]
 
 #: Blender's platform names -> pip's platform tags (pip also takes older tags of each)
 PLATFORMS = {
@@ -228,39 +228,3 @@ def validate(path) -> str:
     if proc.returncode:
         raise RuntimeError(f"Blender's extension validator rejected {path}: {out}")
     return out
-
-
-# ----------------------------------------------------------------------------- CLI
-
-def add_parser(sub):
-    """Declare ``cellgl blender-extension``."""
-    p = sub.add_parser(
-        "blender-extension", help="build the Blender extension zip (Blender 4.2+)",
-        description="Build the Blender extension (Shader Editor > Add > cellgl, a sidebar panel, GPU "
-        "bakes): blender_manifest.toml, the add-on and the wheels it needs for each platform, fetched "
-        "with pip download (network). Install it in Blender: Edit > Preferences > Get Extensions > "
-        "Install from Disk. See docs/blender.md.")
-    p.add_argument("-o", "--output", metavar="FILE.zip", required=True, help="the zip to write")
-    p.add_argument("--platform", dest="platforms", action="append", choices=list(PLATFORMS),
-                   help="a platform to bundle wheels for (repeatable; default: all four)")
-    p.add_argument("--cache", metavar="DIR", help="keep the downloaded wheels here (per platform) "
-                   "and reuse them")
-    p.add_argument("--validate", action="store_true",
-                   help="then run Blender's extension validator on the zip (needs the bpy module)")
-    return p
-
-
-def run_cli(args) -> int:
-    """Run ``cellgl blender-extension``; returns the exit status."""
-    try:
-        path = build_extension(args.output, platforms=args.platforms or tuple(PLATFORMS), cache=args.cache)
-    except RuntimeError as exc:
-        raise ValueError(str(exc)) from None
-    size = path.stat().st_size / 2**20
-    print(f"wrote {path} ({size:.1f} MiB)")
-    if args.validate:
-        try:
-            print(validate(path))
-        except RuntimeError as exc:
-            raise ValueError(str(exc)) from None
-    return 0

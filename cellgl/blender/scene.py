@@ -23,8 +23,7 @@ import sys
 from cellgl.blender.runtime import compile_script_node, import_bpy
 
 __all__ = ["build_scene", "write_blend", "render_scene", "render_outputs", "set_recipe", "set_script",
-           "add_parser",
-           "run_cli", "CYCLES_SAMPLE_OFFSET"]
+           "CYCLES_SAMPLE_OFFSET"]
 
 #: where Cycles 4.5 puts the first (only) sample of a pixel with a box filter of width 0.01,
 #: right of and above the pixel centre, in pixels (measured: rendering P; about 0.5 / 1023, half a
@@ -33,7 +32,7 @@ __all__ = ["build_scene", "write_blend", "render_scene", "render_outputs", "set_
 CYCLES_SAMPLE_OFFSET = 0.0004886
 
 
-def _osl_text(recipe) -> tuple[str, str]:
+def osl_text(recipe) -> tuple[str, str]:
     from cellgl.export.snippets import export
     from cellgl.recipes import load_recipe
 
@@ -43,7 +42,7 @@ def _osl_text(recipe) -> tuple[str, str]:
 
 def _check_size(size) -> int:
     if size is None:
-        from cellgl.io.spec import DEFAULT_SIZE
+        from cellgl.bake.request import DEFAULT_SIZE
 
         return DEFAULT_SIZE[0]
     if isinstance(size, bool) or not isinstance(size, int) or not 1 <= size <= 16384:
@@ -133,7 +132,7 @@ def build_scene(recipe, size: int | None = None):
 def set_recipe(scene, recipe) -> None:
     """Put ``recipe``'s OSL export into the scene's Script node (recompiled, outputs rewired),
     keeping everything else: one scene renders many recipes."""
-    name, text = _osl_text(recipe)
+    name, text = osl_text(recipe)
     set_script(scene, text, name)
 
 
@@ -253,41 +252,3 @@ def render_outputs(recipes, size: int, outdir) -> list[str]:
         links.new(script.outputs["Color"], emit.inputs["Color"])
         names.append(r.name)
     return names
-
-
-# --------------------------------------------------------------------------------------------
-# command line: cellgl blender PRESET -o FILE.blend [--size N]
-# --------------------------------------------------------------------------------------------
-
-
-def add_parser(sub):
-    """Declare ``cellgl blender`` on the CLI's subparsers."""
-    p = sub.add_parser(
-        "blender", help="write a Blender scene (.blend) rendering a recipe's OSL export in Cycles",
-        description="Write a .blend whose render (as is, N x N) is the image `cellgl bake RECIPE "
-        "--size N` writes: a plane with the OSL export in a Script node, an orthographic camera. "
-        "Needs the [blender] extra (bpy 4.5). See docs/engines.md.")
-    p.add_argument("recipe", metavar="PRESET_OR_RECIPE", help="a preset name or a recipe JSON file")
-    p.add_argument("-o", "--output", metavar="FILE.blend", required=True, help="the .blend to write")
-    p.add_argument("--size", type=int, default=None, metavar="N",
-                   help="render resolution N x N (default: the bake's default, 512)")
-    p.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
-                   help="override a recipe parameter (repeatable)")
-    return p
-
-
-def run_cli(args) -> int:
-    """Run ``cellgl blender``; returns the exit status."""
-    from cellgl.recipes import load_recipe
-
-    from cellgl.blender.runtime import BlenderMissing
-
-    r = load_recipe(args.recipe)
-    if args.sets:
-        r = r.set_from_strings(list(args.sets))
-    _osl_text(r)                    # refusals (PUPs, image-driven recipes) before Blender loads
-    try:
-        write_blend(r, args.output, size=args.size)
-    except BlenderMissing as exc:
-        raise ValueError(str(exc)) from None
-    return 0

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cellgl import recipes
-from cellgl.io import bake as _bake
+from cellgl.bake import core as _bake
 from cellgl.recipes import MAX_SIDE  # 2**20: float32 uv keeps pixels apart there
 
 __all__ = ["DaskError", "Layout", "to_dask", "on_gl_thread", "render_block", "require",

@@ -3,7 +3,7 @@
 Each ``--set NAME=SPEC`` either fixes a parameter (``--set frequency=6``) or sweeps it:
 ``A..B`` (whole numbers, both ends included), ``A..B:STEP``, or alternatives ``a|b|c``. Several
 swept parameters give every combination. Each variation is one task that bakes one file (PNG by
-default; any ``cellgl bake`` format) with :func:`cellgl.io.bake.bake`, so it is written atomically;
+default; any ``cellgl bake`` format) with :func:`cellgl.bake.core.bake`, so it is written atomically;
 a variation whose files all exist is skipped, so a rerun finishes an interrupted sweep.
 ``DIR/sweep.json`` records the request (recipe, sets, size, channels, format, cellgl version,
 the files' colour space); a
@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from cellgl._version import __version__
-from cellgl.io import bake as _bake
+from cellgl.bake import core as _bake
 from cellgl.io import formats as cio
 from cellgl.dask.blocks import DaskError, load, on_gl_thread, pair, require
 from cellgl.dask.cluster import cluster_client, log, map_tasks
@@ -162,7 +162,7 @@ def sweep(recipe_or_name, outdir, sets, *, size=_bake.DEFAULT_SIZE, channels=("c
         ``NAME=VALUE`` (fixed), ``NAME=A..B[:STEP]`` (whole numbers, inclusive) or
         ``NAME=a|b|c``; every combination of the swept ones is baked.
     size, channels, bit_depth, tileable
-        As :func:`cellgl.io.bake.bake` (size at most 65536 a side).
+        As :func:`cellgl.bake.core.bake` (size at most 65536 a side).
     fmt : str
         ``png`` (default), ``exr``, ``tif`` or ``npy``.
     scheduler, workers, threads

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from cellgl._version import __version__
-from cellgl.io import bake as _bake
+from cellgl.bake import core as _bake
 from cellgl.dask.blocks import (DEFAULT_CHUNK, MAX_CHUNK, MAX_SIDE, DaskError, Layout, dtype, load, pair,
                      render_block, require, samples)
 from cellgl.dask.cluster import cluster_client, log, map_tasks
@@ -199,7 +199,7 @@ def bake_zarr(recipe_or_name, path, *, size=_bake.DEFAULT_SIZE, channels=("color
     chunk : int
         Chunk side in pixels, 16..4096 (default 1024); one chunk is one task and one render.
     sets, tileable
-        Recipe overrides, as :func:`cellgl.io.bake.bake`.
+        Recipe overrides, as :func:`cellgl.bake.core.bake`.
     scheduler : str, optional
         A Dask scheduler address (``tcp://host:8786``) or scheduler file (``*.json``). Its
         workers must import cellgl and reach ``path`` (a shared file system). Default: a local

@@ -13,7 +13,7 @@ the documents:
 
 With a UDIM set (``udim="1001-1004"``) the names carry MaterialX's and USD's ``<UDIM>`` token:
 ``textures/cellgl_<preset>_color.<UDIM>.png``, one file per tile as ``cellgl bake --udim`` writes
-them (:mod:`cellgl.io.udim`).
+them (:mod:`cellgl.bake.udim`).
 
 In ``cellgl_materials.mtlx`` the baked material is ``image`` nodes (``normalmap`` decoding the
 normal map) into the same ``open_pbr_surface``; in ``cellgl_materials.usda`` it is
@@ -50,7 +50,7 @@ def maps(node: MxNode, udim: str | None = None) -> dict[str, str]:
 def check_options(size, udim) -> tuple[int | None, str | None]:
     """``(size or None, udim or None)`` checked before any work: a side in 1..65536, a UDIM
     range as ``cellgl bake --udim`` takes it; one clear error otherwise."""
-    from cellgl.io import udim as udim_mod
+    from cellgl.bake import udim as udim_mod
     from cellgl.io.spec import BakeError, check_size
 
     side = None
@@ -140,13 +140,13 @@ def usd_lines(node: MxNode, udim: str | None = None) -> list[str]:
 
 def bake_maps(nodes: list[MxNode], size: int, udim: str | None, folder) -> dict[str, Path]:
     """``{relative path in the set: file}``: the maps of every texture node's baked material,
-    baked by :func:`cellgl.io.bake.bake` (``size`` x ``size`` pixels, a tile each with
+    baked by :func:`cellgl.bake.core.bake` (``size`` x ``size`` pixels, a tile each with
     ``udim``) into ``folder`` (a temporary folder the caller removes), which
     :func:`cellgl.export.materialx_files.write_set` copies into the set, so that they land with
     the rest of it (streamed file to file: no map is held in memory). A preset's recipe is the
     node's, as exported (its ``--set`` values included)."""
-    from cellgl.io.bake import bake
-    from cellgl.io.udim import UDIM_TOKEN
+    from cellgl.bake.core import bake
+    from cellgl.bake.udim import UDIM_TOKEN
 
     out: dict[str, Path] = {}
     for n in nodes:

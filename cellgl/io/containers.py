@@ -24,7 +24,7 @@ the file was made) and the levels, smallest first, each aligned to ``lcm(texel b
 With ``zstd`` each level is compressed on its own (supercompression scheme 2, the ``zstandard``
 package) and ``bytesPlane0`` is 0, as the specification asks of supercompressed files.
 
-Level sizes are those both formats define: ``max(1, floor(W / 2^k))`` (``cellgl.io.mips``'s
+Level sizes are those both formats define: ``max(1, floor(W / 2^k))`` (``cellgl.bake.mips``'s
 ``rounding="down"``). Integers are little-endian.
 """
 from __future__ import annotations

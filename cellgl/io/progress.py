@@ -1,5 +1,5 @@
 """The progress bar of long commands (``cellgl bake``, sweeps, Dask bakes, frames) on stderr:
-:class:`Progress` (also reachable as ``cellgl.io.bake.Progress``)."""
+:class:`Progress` (also reachable as ``cellgl.bake.core.Progress``)."""
 
 from __future__ import annotations
 

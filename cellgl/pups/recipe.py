@@ -280,7 +280,7 @@ class PupsRecipe:
 
     def set_from_strings(self, items) -> PupsRecipe:
         """Apply ``["name=value", ...]`` (the CLI's ``--set``); returns a new recipe."""
-        from cellgl.texture.recipe import parse_set_value
+        from cellgl.texture.recipe_json import parse_set_value
 
         changes = {}
         for item in items:

@@ -66,7 +66,7 @@ def cloud_recipes(recipe, measure) -> tuple:
     """The four derived recipes whose heights make the channel: ``(P, W(1), W(2), W(4))``;
     ``measure`` is :func:`cellgl.texture.measure_range` (passed in: this module sits below
     :mod:`cellgl.texture.evaluation`, which calls it)."""
-    from cellgl.texture.recipe import load_recipe
+    from cellgl.texture.presets import load_recipe
 
     recipe = load_recipe(recipe)
     f, seed = float(recipe.get("frequency")), int(recipe.get("seed"))

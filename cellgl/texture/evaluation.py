@@ -14,7 +14,8 @@ import numpy as np
 from cellgl.basis.arrays import real_array
 from cellgl.gl.threads import gl_call
 from cellgl.texture import antialias, dispatch
-from cellgl.texture.recipe import CHANNELS, check_channels, load_recipe
+from cellgl.texture.presets import load_recipe
+from cellgl.texture.recipe import CHANNELS, check_channels
 from cellgl.texture.schema import check_tile, whole_number
 from cellgl.texture.shader import defines, view_uniforms
 

@@ -124,7 +124,7 @@ def octave_mean(recipe, measure: Callable[[Any], float]) -> float:
 
 def _recipes():
     """Every preset and preset variant, as ``(name, recipe)``."""
-    from cellgl.texture.recipe import list_presets, load_recipe
+    from cellgl.texture.presets import list_presets, load_recipe
 
     for name, _ in list_presets():
         r = load_recipe(name)

@@ -40,7 +40,8 @@ from cellgl.basis.enums import Distribution, Metric, glsl_defines
 from cellgl.texture import antialias
 from cellgl.texture.params import (FRACTAL_MODES, MATERIAL_CHANNELS, MAX_RAMP_KEYS, NORMAL_CONVENTIONS, PARAMS,
                                    PARAMS_BY_NAME, RAMP_MODES)
-from cellgl.texture.recipe import RecipeError, load_recipe, needed_n
+from cellgl.texture.presets import load_recipe
+from cellgl.texture.recipe import RecipeError, needed_n
 from cellgl.texture.images import BINDING as CELL_IMAGE_BINDING
 from cellgl.basis.features import feature_max_ring
 from cellgl.basis.gpu import DENSITY_IMAGE_BINDING

@@ -1,9 +1,12 @@
-"""Files and processes as a hostile tester met them (issue 42, third round): concurrent bakes of
-one stem, recipe "files" that are devices or FIFOs, animations whose memory grew with every
-frame, a full disk. Each test failed (or hung) before its fix."""
+"""Output files as a hostile user met them (issues 10, 42, 48): a full disk or a full stdout, a
+bake failing half-way, concurrent bakes of one stem and their folder lock, missing or read-only
+folders, names past 255 bytes, animations whose memory grew with every frame and whose rates or
+sizes the format cannot hold. Each test failed (or hung) before its fix: an output lands whole
+or not at all, and a refusal is one message naming the file."""
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import subprocess
@@ -13,24 +16,103 @@ from pathlib import Path
 
 import pytest
 
-REPO = Path(__file__).resolve().parent.parent
-ENV = dict(os.environ, PYTHONPATH=str(REPO))
+from cellgl import cli
+from hostile import ENV, REPO
+from hostile import bake as _bake
+from hostile import cli as _cli
+from hostile import main_refuses as _main_refuses
+from hostile import one_line_error as _assert_clean_error
+from hostile import python as _python
+from hostile import refused as _refused
 
 
-def _cli(*args, cwd=REPO, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "cellgl", *args], cwd=cwd, capture_output=True,
-                          text=True, timeout=timeout, env=ENV)
+# --------------------------------------------------------------------------------------------
+# a full disk
+# --------------------------------------------------------------------------------------------
 
 
-def _python(code: str, *args, timeout: float = 300) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-c", code, *map(str, args)], cwd=REPO,
-                          capture_output=True, text=True, timeout=timeout, env=ENV)
+def test_npy_bake_reserves_its_space_and_reports_enospc(ctx, tmp_path, monkeypatch):
+    """The .npy memory map wrote into a sparse file: a disk filling up mid-bake was a SIGBUS
+    (exit 135, no message). Its blocks are reserved first; ENOSPC is a message naming the file
+    and the size needed, and nothing is left behind."""
+    from cellgl.io.spec import BakeError
+
+    calls = []
+
+    def full(fd, offset, length):
+        calls.append(length)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "posix_fallocate", full)
+    with pytest.raises(BakeError) as info:
+        _bake(tmp_path / "vol.npy", channels=("F1",))
+    msg = str(info.value)
+    assert str(tmp_path / "vol.npy") in msg and "No space left on device" in msg
+    assert "needs 4.1 KiB" in msg, msg          # 32 * 32 float32 + the 128-byte header
+    assert calls == [32 * 32 * 4 + 128]
+    assert os.listdir(tmp_path) == []
 
 
-def _clean_error(r: subprocess.CompletedProcess, *words: str) -> None:
-    assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
-    assert "Traceback" not in r.stderr and "internal error" not in r.stderr, r.stderr[-2000:]
-    assert all(w in r.stderr for w in words), r.stderr
+def test_free_space_check_gives_a_readable_size(ctx, tmp_path, monkeypatch):
+    """The up-front check said "needs about 0.0 GiB" for anything under 50 MiB."""
+    import shutil
+
+    from cellgl.io.spec import BakeError
+
+    monkeypatch.setattr(shutil, "disk_usage", lambda p: shutil._ntuple_diskusage(1 << 20, 1 << 20, 1000))
+    with pytest.raises(BakeError, match=r"needs about 16\.0 KiB, 1000 B free"):
+        _bake(tmp_path / "a.npy", size=(64, 64), channels=("F1",))
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.fixture
+def tiny_tmpfs(tmpfs):
+    """A 64 KiB tmpfs (root only; skipped elsewhere)."""
+    return tmpfs("64k", "tiny")
+
+
+def test_npy_bake_on_a_really_full_disk(tiny_tmpfs):
+    """The real thing: a 256 KiB .npy on a 64 KiB tmpfs, the free-space check fooled (as when
+    another process fills the disk during the bake): an error, not a SIGBUS."""
+    code = f"""
+import shutil, sys
+shutil.disk_usage = lambda p: shutil._ntuple_diskusage(1 << 40, 0, 1 << 40)
+from cellgl import cli
+sys.exit(cli.main(["bake", "flagstone", "-o", {str(tiny_tmpfs / "big.npy")!r}, "--size", "256x256",
+                   "--channels", "F1", "-q"]))
+"""
+    r = _python(code)
+    assert r.returncode == 2, (r.returncode, r.stderr[-1500:])
+    assert "cellgl: error: cannot write" in r.stderr and "No space left on device" in r.stderr
+    assert "needs 256.1 KiB" in r.stderr
+    assert os.listdir(tiny_tmpfs) == []
+
+
+# --------------------------------------------------------------------------------------------
+# several files land together or not at all
+# --------------------------------------------------------------------------------------------
+
+
+def test_multi_channel_bake_is_all_or_nothing(ctx, tmp_path, monkeypatch):
+    """A bake failing on its second channel left the first channel's file."""
+    recipes = sys.modules["cellgl.recipes"]
+    render = recipes.render
+
+    def failing(*a, **kw):
+        if "height" in kw.get("channels", ()):
+            raise RuntimeError("the GPU fell over")
+        return render(*a, **kw)
+
+    monkeypatch.setattr(recipes, "render", failing)
+    old = tmp_path / "tex_color.png"
+    old.write_bytes(b"previous")
+    with pytest.raises(RuntimeError, match="fell over"):
+        _bake(tmp_path / "tex.png", channels=("color", "height"))
+    assert sorted(os.listdir(tmp_path)) == ["tex_color.png"]
+    assert old.read_bytes() == b"previous"
+    monkeypatch.setattr(recipes, "render", render)
+    paths = _bake(tmp_path / "tex.png", channels=("color", "height"))
+    assert sorted(p.name for p in paths) == sorted(os.listdir(tmp_path))
 
 
 # --------------------------------------------------------------------------------------------
@@ -93,35 +175,159 @@ def test_concurrent_multichannel_bakes_of_one_stem_land_as_whole_sets(ctx, tmp_p
 
 
 # --------------------------------------------------------------------------------------------
-# item 8: a recipe "file" that never ends, or never starts
+# item 13 (command line): messages that named the wrong thing
 # --------------------------------------------------------------------------------------------
 
-def _limit_memory():
-    import resource
+def test_output_under_a_regular_file_names_the_file(capsys, tmp_path):
+    (tmp_path / "afile").write_text("x")
+    err = _main_refuses(capsys, ["bake", "f1", "-o", tmp_path / "afile" / "a.png", "--size", "16"],
+                        f"'{tmp_path / 'afile'}' is a file, not a directory")
+    assert "does not exist" not in err
 
-    resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))    # it read /dev/zero until MemoryError
+
+@pytest.mark.parametrize("ext", [".webp", ".gif"])
+def test_an_animated_extension_without_frames_names_frames(capsys, tmp_path, ext):
+    _main_refuses(capsys, ["bake", "caustics", "-o", tmp_path / f"a{ext}", "--size", "16"],
+                  f"unknown extension '{ext}'", "--frames N")
 
 
-@pytest.mark.parametrize("case", ["/dev/zero", "fifo", "big"])
-def test_a_recipe_is_read_only_from_a_small_regular_file(tmp_path, case):
-    from cellgl.texture.schema import MAX_RECIPE_BYTES
+# --------------------------------------------------------------------------------------------
+# item 14: one output rule for every command, checked before the work
+# --------------------------------------------------------------------------------------------
 
-    if case == "fifo":
-        src = tmp_path / "r.json"
-        os.mkfifo(src)                                   # no writer: open() blocked for ever
-        words = ("not a regular file",)
-    elif case == "big":
-        src = tmp_path / "r.json"
-        src.write_bytes(b"{" + b" " * MAX_RECIPE_BYTES + b"}")
-        words = ("larger than 1024 KiB", f"at most {MAX_RECIPE_BYTES} bytes")
+#: every command that writes, as (argv before the output, the output's name, argv after)
+_WRITERS = {
+    "bake": (["bake", "f1", "-o"], "a.png", ["--size", "16"]),
+    "frames": (["bake", "caustics", "--frames", "2", "-o"], "a.gif", ["--size", "16"]),
+    "export": (["export", "f1", "-o"], "a.glsl", []),
+    "voronoi": (["voronoi", "--size", "16", "-o"], "a.png", []),
+    "playground": (["playground", "--preset", "f1", "--no-thumbnails", "-j", "1", "-o"], "site", []),
+    "view": (["view", "flagstone", "--screenshot"], "a.png", []),
+    "blender-extension": (["blender-extension", "-o"], "a.zip", []),
+    "zarr": (["bake", "f1", "-o"], "t.zarr", ["--size", "16"]),
+    "sweep": (["sweep", "f1", "--set", "seed=0..1", "--size", "16", "-o"], "sw", []),
+}
+
+
+@pytest.mark.parametrize("command", list(_WRITERS))
+@pytest.mark.parametrize("case", ["missing", "file"])
+def test_every_command_refuses_a_missing_or_file_parent(tmp_path, command, case):
+    before, name, after = _WRITERS[command]
+    if command == "view":
+        for module in cli.VIEWER_EXTRA:     # without them: the message says how to install them
+            pytest.importorskip(module)
+    if command in ("zarr", "sweep"):
+        pytest.importorskip("distributed")
+    (tmp_path / "afile").write_text("x")
+    parent = tmp_path / "nothere" / "deeper" if case == "missing" else tmp_path / "afile"
+    env = {k: v for k, v in ENV.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    r = _cli(*before, parent / name, *after, env=env, timeout=120)
+    why = f"output directory '{parent}' does not exist" if case == "missing" \
+        else f"'{parent}' is a file, not a directory"
+    _refused(r, why)
+    assert sorted(os.listdir(tmp_path)) == ["afile"], "a folder was created"
+
+
+def test_blender_extension_checks_its_folder_before_building(monkeypatch, capsys, tmp_path):
+    """A read-only folder was found only after 3.6 s of building the wheel."""
+    from cellgl.blender import extension
+
+    def built(*_):
+        raise AssertionError("the build started before the output folder was checked")
+
+    monkeypatch.setattr(extension, "cellgl_wheel", built)
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode, **kw: False if Path(p) == tmp_path and mode == os.W_OK
+                        else real(p, mode, **kw))
+    _main_refuses(capsys, ["blender-extension", "-o", tmp_path / "x.zip"], "is not writable")
+
+
+def test_hostile_names_and_paths(tmp_path):
+    long = "a" * 300
+    _assert_clean_error(_cli("presets", long), "unknown preset", "(300 characters)")
+    _assert_clean_error(_cli("bake", long, "-o", str(tmp_path / "x.png")), "unknown preset")
+    _assert_clean_error(_cli("export", "flagstone", "-o", str(tmp_path / "no" / "dir" / "x.glsl")),
+                        "does not exist")
+    _assert_clean_error(_cli("export", "flagstone", "-o", str(tmp_path)), "is a directory")
+    _assert_clean_error(_cli("export", "flagstone", "-o", str(tmp_path / (long + ".glsl"))),
+                        "bytes long; accepted at most 255")
+    _assert_clean_error(_cli("bake", "flagstone", "-o", str(tmp_path / (long + ".png"))),
+                        "bytes long; accepted at most 255")
+    assert os.listdir(tmp_path) == []
+
+
+def test_export_to_a_read_only_directory(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    if os.geteuid() == 0:  # root writes through permissions: use a read-only mount
+        r = subprocess.run(["mount", "-t", "tmpfs", "-o", "ro,size=16k", "tmpfs", str(ro)],
+                           capture_output=True, text=True)
+        if r.returncode != 0:
+            pytest.skip(f"cannot mount a read-only tmpfs: {r.stderr.strip()}")
     else:
-        src = Path(case)
-        words = ("not a regular file",)
-    r = subprocess.run([sys.executable, "-m", "cellgl", "bake", str(src), "-o", str(tmp_path / "a.png"),
-                        "--size", "16"], cwd=REPO, env=ENV, capture_output=True, text=True, timeout=60,
-                       preexec_fn=_limit_memory)
-    _clean_error(r, f"recipe '{src}'", *words)
-    assert sorted(os.listdir(tmp_path)) == ([] if case == "/dev/zero" else ["r.json"])
+        ro.chmod(0o555)
+    try:
+        _assert_clean_error(_cli("export", "flagstone", "-o", str(ro / "x.glsl")), "not writable")
+    finally:
+        if os.geteuid() == 0:
+            subprocess.run(["umount", "-l", str(ro)], capture_output=True)
+        ro.chmod(0o755)
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
+@pytest.mark.parametrize("argv", [["presets"], ["presets", "flagstone"], ["presets", "--params"],
+                                  ["export", "flagstone"]])
+def test_full_stdout(argv):
+    with open("/dev/full", "w") as full:
+        r = _cli(*argv, stdout=full)
+    _assert_clean_error(r, "cannot write to standard output: No space left on device")
+
+
+def _help_commands() -> list[list[str]]:
+    from cellgl.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    return [["--help"], ["--version"]] + [[name, "--help"] for name in sub.choices]
+
+
+def test_the_help_sweep_has_every_command():
+    cmds = _help_commands()
+    assert len(cmds) > 10 and ["export", "--help"] in cmds
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="no /dev/full")
+@pytest.mark.parametrize("argv", _help_commands(), ids=" ".join)
+def test_help_and_version_to_a_full_stdout_are_an_error(argv):
+    """Issue 48: `cellgl --help > /dev/full` (and --version, every subcommand's --help) exited 0
+    with nothing said (argparse drops the write's OSError): the failed write is reported, exit 2,
+    as every command's output is."""
+    with open("/dev/full", "w") as full:
+        r = _cli(*argv, stdout=full)
+    _assert_clean_error(r, "cannot write to standard output: No space left on device")
+    assert _cli(*argv).returncode == 0, argv
+
+
+def test_help_whose_flush_fails_is_an_error(monkeypatch, capsys):
+    """The same where the write is buffered and the flush fails (a file on a full disk): the flush
+    happens before the exit, and its error is reported."""
+    import errno
+    import io
+
+    from cellgl import cli
+
+    class Full(io.StringIO):
+        def flush(self):
+            if self.getvalue():
+                raise OSError(errno.ENOSPC, "No space left on device")
+
+    for argv in (["--version"], ["bake", "--help"]):
+        monkeypatch.setattr(sys, "stdout", Full())
+        assert cli.main(argv) == 2
+        assert capsys.readouterr().err == "cellgl: error: cannot write to standard output: No space left on device\n"
+    monkeypatch.setattr(sys, "stdout", io.StringIO())
+    with pytest.raises(SystemExit) as e:
+        cli.main(["--version"])
+    assert e.value.code == 0 and sys.stdout.getvalue().startswith("cellgl ")
 
 
 # --------------------------------------------------------------------------------------------
@@ -163,7 +369,7 @@ def test_animated_files_hold_every_frame_and_loop(ctx, tmp_path):
     from PIL import Image, ImageSequence
 
     from cellgl import recipes
-    from cellgl.io.frames import bake_frames, frame_recipe
+    from cellgl.bake.frames import bake_frames, frame_recipe
 
     r = recipes.load_recipe("caustics")
     want = [np.floor(np.clip(recipes.render(frame_recipe(r, k, 4), 40, 24)["color"][..., :3]
@@ -186,7 +392,7 @@ def test_lossless_webp_frames_are_the_png_frames(ctx, tmp_path):
     import numpy as np
     from PIL import Image, ImageSequence
 
-    from cellgl.io.frames import bake_frames
+    from cellgl.bake.frames import bake_frames
 
     kw = dict(size=(96, 64), tile=32, sets=["seed=5"])
     (webp,) = bake_frames("caustics", tmp_path / "a.webp", 3, **kw)
@@ -207,7 +413,7 @@ def test_animated_frames_quantise_every_half_as_the_png(tmp_path, monkeypatch):
     import numpy as np
     from PIL import Image, ImageSequence
 
-    from cellgl.io import frames
+    from cellgl.bake import frames
 
     k = np.arange(256, dtype=np.float32)
     halves = (k + 0.5) / np.float32(255)
@@ -300,7 +506,7 @@ def test_a_bad_lock_wait_is_refused_before_the_work(tmp_path, value):
     env = dict(ENV, CELLGL_LOCK_WAIT=value)
     r = subprocess.run([sys.executable, "-m", "cellgl", "bake", "flagstone", "-o", str(tmp_path / "x.png"),
                         "--size", "16"], cwd=REPO, capture_output=True, text=True, timeout=120, env=env)
-    _clean_error(r, f"CELLGL_LOCK_WAIT={value!r}: accepted seconds in 0..86400")
+    _refused(r, f"CELLGL_LOCK_WAIT={value!r}: accepted seconds in 0..86400")
     assert os.listdir(tmp_path) == []
 
 
@@ -309,7 +515,7 @@ def test_a_bad_lock_wait_is_refused_before_the_work(tmp_path, value):
     (".gif", 1, 100, 1.0), (".webp", 24, 42, 1000 / 42), (".webp", 95, 11, 1000 / 11),
     (".webp", 1, 1000, 1.0)])
 def test_frame_delay_is_what_the_format_stores(ext, fps, delay, real):
-    from cellgl.io.frames import frame_delay
+    from cellgl.bake.frames import frame_delay
 
     assert frame_delay(ext, fps) == (delay, pytest.approx(real))
 
@@ -323,7 +529,7 @@ def test_frame_delay_is_what_the_format_stores(ext, fps, delay, real):
 def test_rates_an_animated_file_cannot_play_are_refused(tmp_path, ext, fps, words):
     """Issue 48: a GIF stores hundredths of a second and browsers play a delay under 2 cs (a WebP's
     <= 10 ms) at 10 fps: --fps 120 wrote a delay of 0, 60..100 one of 1 cs, all played at 10 fps."""
-    from cellgl.io.frames import bake_frames
+    from cellgl.bake.frames import bake_frames
     from cellgl.io.spec import BakeError
 
     with pytest.raises(BakeError) as e:
@@ -348,7 +554,7 @@ def test_gif_rates_it_cannot_store_are_warned_with_the_real_rate(ctx, tmp_path):
     assert "25 fps: 4 cs a frame" in r.stderr
     with Image.open(tmp_path / "a.gif") as im:
         assert im.info["duration"] == 40
-    from cellgl.io.frames import bake_frames
+    from cellgl.bake.frames import bake_frames
 
     with warnings.catch_warnings():
         warnings.simplefilter("error")
@@ -370,7 +576,7 @@ def test_gif_rates_it_cannot_store_are_warned_with_the_real_rate(ctx, tmp_path):
 ])
 def test_animated_sizes_beyond_the_format_or_memory_are_refused_up_front(tmp_path, out, size, words):
     r = _cli("bake", "caustics", "--frames", "2", "-o", tmp_path / out, "--size", size, timeout=120)
-    _clean_error(r, *words)
+    _refused(r, *words)
     assert os.listdir(tmp_path) == []
 
 
@@ -398,6 +604,6 @@ def test_a_full_disk_names_the_output(ctx, tmp_path, argv, named):
     if argv[2].endswith(".exr") or "a.exr" in argv[3]:
         pytest.importorskip("OpenEXR")
     r = _python(_SMALL_DISK, *[a.format(d=tmp_path) for a in argv])
-    _clean_error(r, named.format(d=tmp_path), "File too large")
+    _refused(r, named.format(d=tmp_path), "File too large")
     assert ".cellgl-" not in r.stderr and "standard output" not in r.stderr, r.stderr
     assert os.listdir(tmp_path) == []

@@ -1,19 +1,16 @@
-"""Tiled, mip-mapped texture files for film renderers: ``.tx`` and ``--tiled [--mips]`` ``.exr`` /
-``.tif`` (docs/bake.md, "Film pipelines").
-
-The levels are cellgl's own, each rendered from the recipe at its level's size by the one mip
-chain implementation, :mod:`cellgl.io.mips` (never downsampled: no ``maketx`` /
-``ImageBufAlgo.make_texture`` filtering); this module only lays them into the containers
-renderers read through OpenImageIO's texture system:
+"""Tiled, mip-mapped texture files for film renderers, from levels in memory: ``.tx`` and
+``--tiled [--mips]`` ``.exr`` / ``.tif`` (docs/bake.md, "Film pipelines"; the bake renders the
+levels, :mod:`cellgl.bake.texfile`). Nothing here knows of recipes or GL; this module lays the
+levels it is given into the containers renderers read through OpenImageIO's texture system:
 
 * ``.tx`` and ``.tif``: a tiled TIFF (64 x 64 tiles, zlib), level 0 the first page, level ``k``
   the next pages marked reduced-resolution (``NewSubfileType`` 1), Pixar's ``textureformat``
   "Plain Texture" and ``wrapmodes`` tags, as ``maketx`` writes them (written by ``tifffile``;
-  OpenImageIO reads the pages as MIP levels).
+  OpenImageIO reads the pages as MIP levels): :func:`write_tiff_levels`.
 * ``.exr``: a tiled OpenEXR file, ``MIPMAP_LEVELS`` with ``ROUND_UP`` (the chain of
-  :func:`cellgl.io.mips.mip_sizes`), written by OpenImageIO's ``ImageOutput``
-  (``AppendMIPLevel``; the wheel or Blender's copy, :func:`openimageio`), every channel asked for in one file, colour tagged as in
-  :mod:`cellgl.io.colour`.
+  :func:`cellgl.bake.mips.mip_sizes`), written by OpenImageIO's ``ImageOutput``
+  (``AppendMIPLevel``; the wheel or Blender's copy, :func:`openimageio`), every channel asked for
+  in one file, colour tagged as in :mod:`cellgl.io.colour`: :func:`write_exr_levels`.
 
 A level is held whole in memory while it is written (a 4096^2 RGB float .tx peaks at about 0.7
 GiB with the render's own working memory), unlike the streamed single-level writers.
@@ -27,10 +24,9 @@ import numpy as np
 
 from cellgl.io.spec import BakeError, exr_names
 
-__all__ = ["TILE", "check_tiled", "write_texture", "TEXTURE_EXTS", "openimageio"]
+__all__ = ["TILE", "TEXTURE_EXTS", "check_tiled", "openimageio", "write_tiff_levels", "write_exr_levels"]
 
 TILE = 64                                #: tile side of every tiled texture file
-_RENDER_TILE = 2048                      #: largest side one render call gets (as the bake's MAX_TILE)
 TEXTURE_EXTS = (".exr", ".tif", ".tiff", ".tx")
 #: an EXR attribute OpenImageIO 3.0 does not suppress, renamed in place to ``oiio:ColorSpace``
 #: after writing (same length: nothing in the file moves)
@@ -95,99 +91,49 @@ def check_tiled(ext: str, tiled: bool, mips: bool, channels, depth_slices) -> tu
     return True, mips
 
 
-def _levels(recipe, w: int, h: int, mips: bool, channels, samples: int, window):
-    """``(k, {channel: array})`` of every level (level 0 only without ``mips``), rendered by
-    :mod:`cellgl.io.mips`; a UDIM tile (``window`` = (tile, tiles)) is its crop of the set's
-    virtual bake at the level's size."""
-    from cellgl.io import mips as mip_mod
-
-    count = mip_mod.level_count(w, h) if mips else 1
-    for k in range(count):
-        if window is None:
-            yield k, mip_mod.render_level(recipe, w, h, k, channels=channels, samples=samples)
-            continue
-        from cellgl.io import udim as udim_mod
-
-        t, tiles = window
-        lw, lh = mip_mod.level_size(w, h, k)
-        _, _, cols, rows = udim_mod.bounds(tiles)
-        x0, y0 = udim_mod.tile_origin(t, tiles, lw, lh)
-        yield k, _window(recipe, cols * lw, rows * lh, x0, y0, lw, lh, channels, samples)
+def _encoded(encodings, res):
+    return {e.channel: e.encode(res[e.channel]) for e in encodings}
 
 
-def _window(recipe, fw, fh, x0, y0, w, h, channels, samples):
-    """The ``w x h`` window at (x0, y0) of the ``fw x fh`` bake, in tiles of at most 2048."""
-    from cellgl import recipes
-
-    extra = {"samples": samples} if samples != 1 else {}
-    out: dict[str, np.ndarray] = {}
-    for ty in range(0, h, _RENDER_TILE):
-        for tx in range(0, w, _RENDER_TILE):
-            tw, th = min(_RENDER_TILE, w - tx), min(_RENDER_TILE, h - ty)
-            res = recipes.render(recipe, fw, fh, channels=tuple(channels), x0=x0 + tx, y0=y0 + ty,
-                                 tile_w=tw, tile_h=th, **extra)
-            for name, a in res.items():
-                if name not in out:
-                    out[name] = np.empty((h, w) + a.shape[2:], a.dtype)
-                out[name][ty:ty + th, tx:tx + tw] = a
-    return out
-
-
-def write_texture(tmp: Path, recipe, out, ext: str, size: tuple[int, int], *, mips: bool,
-                  samples: int = 1, window=None, meta: str = "", progress: bool = False) -> None:
-    """Render ``out`` (a :class:`cellgl.io.bake._Output`) level by level into the tiled file
-    ``tmp`` (its temporary path; the bake moves it into place)."""
-    from cellgl.io.progress import Progress
-
-    w, h = size
-    from cellgl.io import mips as mip_mod
-
-    bar = Progress(mip_mod.level_count(w, h) if mips else 1, f"baking {out.path.name}", progress,
-                   unit="levels")
-    wrap = "periodic,periodic" if recipe.get("tileable") else "clamp,clamp"
-    levels = _levels(recipe, w, h, mips, out.channels, samples, window)
-    with bar:
-        if ext == ".exr":
-            _write_exr(tmp, levels, out, meta, wrap, bar, mips)
-        else:
-            _write_tiff(tmp, levels, out, meta, wrap, bar, mips)
-
-
-def _encoded(out, res):
-    return {e.channel: e.encode(res[e.channel]) for e in out.encodings}
-
-
-def _write_tiff(tmp, levels, out, meta, wrap, bar, mips) -> None:
+def write_tiff_levels(tmp, levels, encodings, meta: str, wrap: str, bar, mips: bool) -> None:
+    """A tiled TIFF ``tmp`` of ``levels`` (``(k, {channel: array})`` in level order, each level's
+    arrays as render() gives them, encoded by the one :class:`~cellgl.io.spec.Encoding` in
+    ``encodings``): level 0 the first page, level ``k`` a reduced-resolution page; ``meta`` the
+    description, ``wrap`` Pixar's wrapmodes, ``mips`` the "Plain Texture" tag; ``bar.step()`` a
+    level."""
     import tifffile
 
-    (e,) = out.encodings
+    (e,) = encodings
     rgb = e.samples in (3, 4)
     tags = [(33302, "s", 0, "Plain Texture", True)] if mips else []      # Pixar textureformat
     tags.append((33303, "s", 0, wrap, True))                                # Pixar wrapmodes
     with tifffile.TiffWriter(os.fspath(tmp)) as tw:
         for k, res in levels:
-            a = _encoded(out, res)[e.channel]
+            a = _encoded(encodings, res)[e.channel]
             tw.write(a, tile=(TILE, TILE), photometric="rgb" if rgb else "minisblack",
                      compression="zlib", subfiletype=1 if k else 0, metadata=None, extratags=tags,
                      description=meta if k == 0 else None)
             bar.step()
 
 
-def _write_exr(tmp, levels, out, meta, wrap, bar, mips) -> None:
+def write_exr_levels(tmp, levels, encodings, meta: str, wrap: str, bar, mips: bool) -> None:
+    """A tiled OpenEXR ``tmp`` of ``levels`` (as :func:`write_tiff_levels`), every encoding's
+    channels in one file, MIP levels rounded up, colour tagged (:mod:`cellgl.io.colour`); written
+    by OpenImageIO (:func:`openimageio`)."""
     from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES
 
     oiio = openimageio()
 
-    names = [n for e in out.encodings for n in exr_names(e.channel)]
-    half = all(e.dtype == np.float16 for e in out.encodings)
-    space = next((e.colorspace for e in out.encodings if e.colorspace), None)
+    names = [n for e in encodings for n in exr_names(e.channel)]
+    half = all(e.dtype == np.float16 for e in encodings)
+    space = next((e.colorspace for e in encodings if e.colorspace), None)
     o = oiio.ImageOutput.create(os.fspath(tmp))
     if o is None:
         raise OSError(f"OpenImageIO cannot write {tmp}: {oiio.geterror()}")
     try:
         for k, res in levels:
-            enc = _encoded(out, res)
-            planes = [enc[e.channel].reshape(enc[e.channel].shape[:2] + (-1,)) for e in out.encodings]
+            enc = _encoded(encodings, res)
+            planes = [enc[e.channel].reshape(enc[e.channel].shape[:2] + (-1,)) for e in encodings]
             data = np.ascontiguousarray(np.concatenate(planes, axis=-1))
             spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "half" if half else "float")
             spec.channelnames = tuple(names)

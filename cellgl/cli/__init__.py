@@ -1,14 +1,15 @@
 """Command line interface: ``cellgl <command> ...`` (also ``python -m cellgl``).
 
 Each subcommand is a pair of functions: one declares its arguments on the subparsers, one runs
-it (``args -> int``); they live with the command's code and are registered in ``_COMMANDS``.
+it (``args -> int``); they live in this package's modules (``bake``, ``export``, ``presets``,
+``dask``, ``voronoi``, ``blender``, ``playground``; ``info`` and ``view`` here), the command line's
+floor above the library (tests/test_layers.py), and are registered in :func:`_commands`.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib
 import json
 import os
 import signal
@@ -86,44 +87,49 @@ VIEWER_EXTRA = ("imgui_bundle", "glfw")
 def _run_view(args: argparse.Namespace) -> int:
     """``cellgl view``; without the [viewer] extra, one line saying how to install it."""
     try:
-        importlib.import_module("cellgl.viewer.app")
+        import cellgl.viewer.app  # noqa: F401 - the GUI's modules: fails without the extra
     except ModuleNotFoundError as exc:
         if (exc.name or "").partition(".")[0] not in VIEWER_EXTRA:
             raise
         raise ValueError(f"cellgl view needs the viewer extra (no module {exc.name!r}): "
                          "pip install 'cellgl[viewer]'") from None
-    return importlib.import_module("cellgl.viewer.cli").run(args)
+    from cellgl.viewer import cli as viewer_cli
 
-
-def _lazy(module: str, name: str) -> Callable:
-    """``module.name``, imported when first called (a command's dependencies load only when it runs)."""
-    def call(*args):
-        return getattr(importlib.import_module(module), name)(*args)
-
-    return call
+    return viewer_cli.run(args)
 
 
 # --------------------------------------------------------------------------------------------
 # registry and entry point
 # --------------------------------------------------------------------------------------------
 
-#: name -> (add its arguments to the subparsers, run it). Each command's code lives in its module:
-#: cellgl/io/bake_cli.py (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/snippets.py
-#: (docs/engines.md), cellgl/recipes.py (docs/textures.md), cellgl/dask/cli.py (docs/scale.md),
-#: cellgl/voronoi_cli.py and cellgl/blender/extension.py (docs/blender.md), cellgl/playground/site.py (docs/playground.md).
-_COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {
-    "info": (_add_info, _cmd_info),
-    "bake": (_lazy("cellgl.io.bake_cli", "add_parser"), _lazy("cellgl.io.bake_cli", "run_cli")),
-    "view": (_add_view, _run_view),
-    "export": (_lazy("cellgl.export.cli", "add_parser"), _lazy("cellgl.export.cli", "run_cli")),
-    "presets": (_lazy("cellgl.recipes", "add_presets_parser"), _lazy("cellgl.recipes", "run_presets_cli")),
-    "sweep": (_lazy("cellgl.dask.cli", "add_sweep_parser"), _lazy("cellgl.dask.cli", "run_sweep")),
-    "voronoi": (_lazy("cellgl.voronoi_cli", "add_parser"), _lazy("cellgl.voronoi_cli", "run_cli")),
-    "blender": (_lazy("cellgl.blender.scene", "add_parser"), _lazy("cellgl.blender.scene", "run_cli")),
-    "blender-extension": (_lazy("cellgl.blender.extension", "add_parser"),
-                          _lazy("cellgl.blender.extension", "run_cli")),
-    "playground": (_lazy("cellgl.playground.site", "add_parser"), _lazy("cellgl.playground.site", "run_cli")),
-}
+
+def _commands() -> dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]]:
+    """name -> (add its arguments to the subparsers, run it), in the order ``--help`` lists them.
+    Each command's parser and runner is a module of this package (the command line's floor:
+    tests/test_layers.py), imported here when the parser is built, so that ``import cellgl.cli``
+    loads the standard library only; the commands' code is below, in the library: cellgl/bake/
+    (docs/bake.md), viewer/ (docs/viewer.md), cellgl/export/ (docs/engines.md), cellgl/recipes.py
+    (docs/textures.md), cellgl/dask/ (docs/scale.md), cellgl/basis/voronoi.py and cellgl/blender/
+    (docs/blender.md), cellgl/playground/ (docs/playground.md)."""
+    from cellgl.cli import bake, blender, dask, export, playground, presets, voronoi
+
+    return {
+        "info": (_add_info, _cmd_info),
+        "bake": (bake.add_parser, bake.run_cli),
+        "view": (_add_view, _run_view),
+        "export": (export.add_parser, export.run_cli),
+        "presets": (presets.add_parser, presets.run_cli),
+        "sweep": (dask.add_sweep_parser, dask.run_sweep),
+        "voronoi": (voronoi.add_parser, voronoi.run_cli),
+        "blender": (blender.add_parser, blender.run_cli),
+        "blender-extension": (blender.add_extension_parser, blender.run_extension_cli),
+        "playground": (playground.add_parser, playground.run_cli),
+    }
+
+
+#: the commands :func:`build_parser` declares (filled from :func:`_commands` there; an entry set
+#: before, by a test, is kept)
+_COMMANDS: dict[str, tuple[Callable, Callable[[argparse.Namespace], int]]] = {}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -146,6 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
+    for name, command in _commands().items():
+        _COMMANDS.setdefault(name, command)
     for add, run in _COMMANDS.values():
         add(sub).set_defaults(_run=run)
     return parser

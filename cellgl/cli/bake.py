@@ -1,4 +1,4 @@
-"""Command line of ``cellgl bake`` (docs/bake.md): arguments, then :func:`cellgl.io.bake.bake`."""
+"""Command line of ``cellgl bake`` (docs/bake.md): arguments, then :func:`cellgl.bake.core.bake`."""
 from __future__ import annotations
 
 import argparse
@@ -7,9 +7,9 @@ import sys
 import time
 from pathlib import Path
 
-from cellgl.io.bake import bake
-from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, FORMATS, BakeError, accepted_list,
-                            accepted_outputs, int_arg)
+from cellgl.bake.core import bake
+from cellgl.bake.request import ANIMATED, DEFAULT_BUDGET, DISTRIBUTED, DEFAULT_SIZE, accepted_outputs, int_arg
+from cellgl.io.spec import FORMATS, BakeError, accepted_list
 from cellgl.texture.antialias import MAX_SAMPLES
 
 __all__ = ["add_parser", "run_cli"]
@@ -68,7 +68,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "cloud (default color)")
     p.add_argument("--material", default=None, metavar="ENGINE",
                    help="bake the material set of an engine preset into the folder -o DIR: unreal, "
-                        "unity-hdrp, unity-urp, godot, gltf, blender (cellgl/io/material_sets.py)")
+                        "unity-hdrp, unity-urp, godot, gltf, blender (cellgl/bake/material_sets.py)")
     p.add_argument("--map-format", default=None, metavar="NAME",
                    help="with --material: the maps' format: png (the default), dds or ktx2 (each map one GPU "
                         "texture file, with --mips its levels inside; not for gltf)")
@@ -86,7 +86,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--frames", default=None, metavar="N",
                    help="a loop of N frames of an orbiting recipe (orbit_phase + k/N): FILE_0000.png "
                         ".. FILE_<N-1>.png, one animated .webp/.gif, or one .dds/.ktx2 array texture "
-                        "(cellgl/io/frames.py)")
+                        "(cellgl/bake/frames.py)")
     p.add_argument("--fps", default=None, metavar="FPS",
                    help="frames per second of an animated file (with --frames): .webp 1..95 "
                         "(default 24), .gif 1..50 (default 25; it stores 100/n exactly)")
@@ -155,7 +155,7 @@ def run_cli(args: argparse.Namespace) -> int:
                         f".dds, .ktx2: in the file, also an array of --frames); not with "
                         f"{'--frames to ' + ext if args.frames is not None else '.zarr'}")
     if ext == ".zarr":
-        from cellgl.dask.cli import run_zarr_bake
+        from cellgl.cli.dask import run_zarr_bake
 
         return run_zarr_bake(args)
     for flag, value in (("--scheduler", args.scheduler), ("--workers", args.workers),
@@ -207,8 +207,8 @@ def _texture_kw(args: argparse.Namespace) -> dict:
 
 
 def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
-    """``cellgl bake --frames N``: a loop (cellgl.io.frames.bake_frames)."""
-    from cellgl.io.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
+    """``cellgl bake --frames N``: a loop (cellgl.bake.frames.bake_frames)."""
+    from cellgl.bake.frames import ANIMATED, MAX_FPS, MAX_FPS_OF, MAX_FRAMES, bake_frames, frame_delay
 
     ext = Path(args.output).suffix.lower()
     try:
@@ -223,7 +223,7 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
         total = sum(os.path.getsize(p) for p in paths)
         rate = ""
         if ext in ANIMATED:
-            from cellgl.io.frames import DEFAULT_FPS
+            from cellgl.bake.frames import DEFAULT_FPS
 
             delay, real = frame_delay(ext, DEFAULT_FPS[ext] if fps is None else fps)
             rate = f", {real:.4g} fps: {delay} {'cs' if ext == '.gif' else 'ms'} a frame"
@@ -233,8 +233,8 @@ def _run_frames(args: argparse.Namespace, tile, budget: int, t0: float) -> int:
 
 
 def _run_material(args: argparse.Namespace) -> int:
-    """``cellgl bake --material ENGINE -o DIR``: a material set (cellgl.io.material_sets)."""
-    from cellgl.io.material_sets import bake_material
+    """``cellgl bake --material ENGINE -o DIR``: a material set (cellgl.bake.material_sets)."""
+    from cellgl.bake.material_sets import bake_material
 
     for flag, value in (("--channels", args.channels), ("--depth", args.depth), ("--frames", args.frames),
                         ("--fps", args.fps), ("--tile", args.tile), ("--scheduler", args.scheduler),

@@ -1,8 +1,8 @@
 """Bake a recipe (or a preset) to an image or volume file: :func:`bake` (``cellgl bake``, whose
-command line is :mod:`cellgl.io.bake_cli`).
+command line is :mod:`cellgl.cli.bake`).
 
 The format comes from the extension (``.png``, ``.exr``, ``.tif``/``.tiff``, ``.npy``; GPU
-textures ``.dds``/``.ktx2`` are :mod:`cellgl.io.gputex`'s). Output
+textures ``.dds``/``.ktx2`` are :mod:`cellgl.bake.gputex`'s). Output
 larger than one tile is rendered tile by tile and streamed to the file, so memory stays bounded;
 every pixel is rendered at the same uv as in a one-pass bake, so the two give the same bits.
 Files are written atomically (temporary file + ``os.replace``). See ``docs/bake.md``.
@@ -24,11 +24,13 @@ from pathlib import Path
 import numpy as np
 
 from cellgl.io import formats as cio
-from cellgl.io import gputex
-from cellgl.io import texfile
-from cellgl.io import udim as udim_mod
+from cellgl.bake import gputex
+from cellgl.bake import texfile
+from cellgl.io import gpu_textures
+from cellgl.io.tiled import check_tiled
+from cellgl.bake import udim as udim_mod
 from cellgl.io.colour import COLORSPACES, REC709_CHROMATICITIES, check_colorspace
-from cellgl.io.progress import Progress  # noqa: F401 - bake's progress bar, also cellgl.io.bake.Progress
+from cellgl.io.progress import Progress  # noqa: F401 - bake's progress bar, also cellgl.bake.core.Progress
 from cellgl.io.tempfiles import NAME_MAX, atomic_paths, check_output, human_size
 from cellgl.texture import antialias
 
@@ -36,10 +38,10 @@ __all__ = ["bake", "Baked", "BakeError", "parse_size", "parse_channels", "FORMAT
            "MAX_SIDE", "MAX_SLICES", "MAX_VOXELS"]
 
 
-from cellgl.io.spec import (CHANNELS, DEFAULT_BUDGET, DEFAULT_SIZE, FORMATS, MAX_SIDE, MAX_SLICES,  # noqa: F401
-                            MAX_TILE, MAX_VOXELS, RENDER_BYTES_PER_PIXEL, BakeError, accepted_list, check_size, Encoding,
-                            encoding_of, exr_names, parse_sets, check_budget, id_colors, parse_channels, parse_size,
-                            ANIMATED, accepted_outputs)
+from cellgl.bake.request import (DEFAULT_BUDGET, DEFAULT_SIZE, MAX_TILE, RENDER_BYTES_PER_PIXEL,  # noqa: F401
+                                 parse_sets, check_budget, parse_channels, parse_size, ANIMATED, accepted_outputs)
+from cellgl.io.spec import (CHANNELS, FORMATS, MAX_SIDE, MAX_SLICES, MAX_VOXELS, BakeError,  # noqa: F401
+                            accepted_list, check_size, Encoding, encoding_of, exr_names, id_colors)
 
 
 # --------------------------------------------------------------------------------------------
@@ -52,7 +54,7 @@ class _Output:
     path: Path
     channels: tuple[str, ...]
     encodings: tuple[Encoding, ...]
-    size: tuple | None = None   #: (W, H, D or None) of a mip level (cellgl.io.mips); None: the bake's
+    size: tuple | None = None   #: (W, H, D or None) of a mip level (cellgl.bake.mips); None: the bake's
 
 
 @dataclass(frozen=True)
@@ -64,7 +66,7 @@ class _Plan:
     tile_h: int
     samples: int = 1       #: per pixel (an n x n grid; cellgl.texture.antialias)
     #: this image is the window [ox, ox + width) x [oy, oy + height) of a larger virtual bake
-    #: (full_w x full_h; a UDIM tile, cellgl.io.udim): pixels rendered as that bake's
+    #: (full_w x full_h; a UDIM tile, cellgl.bake.udim): pixels rendered as that bake's
     origin: tuple[int, int] = (0, 0)
     full: tuple[int, int] | None = None
 
@@ -161,7 +163,7 @@ def check_path(path) -> tuple[Path, str]:
     ext = path.suffix.lower()
     if ext not in FORMATS:
         animated = (f" (an animated {'/'.join(ANIMATED)} needs --frames N: "
-                    "cellgl.io.frames.bake_frames from Python)" if ext in ANIMATED else "")
+                    "cellgl.bake.frames.bake_frames from Python)" if ext in ANIMATED else "")
         raise BakeError(f"output {str(path)!r}: unknown extension {ext or '(none)'!r}{animated}; "
                         f"accepted {accepted_outputs()}")
     _check_name(path)
@@ -240,7 +242,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         (render of one tile, plus one band of rows for PNG/EXR); sets the tile size.
     mips : bool
         Also write the mip chain, every level rendered from the recipe at its own size
-        (:mod:`cellgl.io.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
+        (:mod:`cellgl.bake.mips`): level ``k`` of a ``.png``/``.exr``/``.tif``/``.npy`` bake is
         the file ``<stem>_mip<k><ext>`` beside level 0 (the file without ``mips``, the same
         bits), ``ceil(W / 2^k) x ceil(H / 2^k)``, down to 1 x 1; ``.dds``/``.ktx2`` hold the
         levels in the file (``max(1, floor(W / 2^k))``, as those formats define them).
@@ -252,21 +254,21 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         A UDIM set: ``udim="1001-1012"`` (numbers, ranges, comma lists in 1001..1100) or
         ``udims="4x2"`` (columns x rows from 1001); ``path`` holds the token ``<UDIM>``. Tile
         ``1001 + u + 10 v`` is the texture over ``[u, u+1) x [v, v+1)``, ``size`` pixels each
-        (:mod:`cellgl.io.udim`); the set lands whole.
+        (:mod:`cellgl.bake.udim`); the set lands whole.
     tiled : bool
         Write a tiled file (64 x 64 tiles) of an ``.exr`` or ``.tif``; with ``mips`` its levels
         go inside it (OpenEXR MIPMAP_LEVELS, TIFF reduced-resolution pages) instead of numbered
-        files. A ``.tx`` is always tiled and mip-mapped (:mod:`cellgl.io.texfile`).
+        files. A ``.tx`` is always tiled and mip-mapped (:mod:`cellgl.bake.texfile`).
     compress : str, optional
         ``.dds``/``.ktx2`` only: the block format, ``bc1``, ``bc3``, ``bc4``, ``bc5``, ``bc7`` or
         ``none`` for every channel, or per channel ``"color=bc1,height=none"``; default per
         channel (colour BC7 sRGB, normal BC5, height and masks BC4; F1..F4 and id are never
-        compressed). Refused where the channel cannot use it (:data:`cellgl.io.gputex.CHOICES`).
+        compressed). Refused where the channel cannot use it (:data:`cellgl.io.gpu_textures.CHOICES`).
     supercompression : {None, "zstd"}
         ``.ktx2`` only: zstd supercompression of every level.
     layers : sequence of Recipe, optional
         ``.dds``/``.ktx2`` only: an array texture, one 2D layer per recipe, rendered as given
-        (``recipe_or_name`` is checked as usual; ``cellgl.io.frames.bake_frames`` passes a loop's frames).
+        (``recipe_or_name`` is checked as usual; ``cellgl.bake.frames.bake_frames`` passes a loop's frames).
 
     Returns
     -------
@@ -304,9 +306,9 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
     if ext == ".vdb":           # before any work: a volume, and the binding (cellgl.io.vdb)
         _check_vdb(w, h, depth_slices)
     channels = parse_channels(channels)
-    texture = ext in gputex.EXTS
-    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gputex)
-        tex_outputs = gputex.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
+    texture = ext in gpu_textures.EXTS
+    if texture:     # GPU textures: a format per channel, every refusal now (cellgl.io.gpu_textures)
+        tex_outputs = gpu_textures.plan_outputs(path, ext, channels, compress, bit_depth, supercompression,
                                           (w, h, depth_slices))
         if layers is not None and (depth_slices is not None or not 1 <= len(layers) <= 2048):
             raise BakeError(f"an array texture of {len(layers)} layers{' of volumes' if depth_slices else ''}: "
@@ -340,7 +342,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
         raise BakeError(f"--samples: {exc}") from None
     if not isinstance(mips, bool) or not isinstance(tiled, bool):
         raise BakeError(f"mips={mips!r}, tiled={tiled!r}: accepted True or False")
-    tiled, mips = texfile.check_tiled(ext, tiled, mips, channels, depth_slices)
+    tiled, mips = check_tiled(ext, tiled, mips, channels, depth_slices)
     outputs = []      # (UDIM tile or None, output)
     for t in ([] if texture else (set_tiles or [None])):
         where = path if t is None else udim_mod.tile_path(os.fspath(template), t.number)
@@ -412,7 +414,7 @@ def bake(recipe_or_name, path, *, size=DEFAULT_SIZE, depth_slices=None, channels
 
 def _mip_outputs(outputs: list[_Output], w: int, h: int, d: int | None) -> list[_Output]:
     """``outputs`` (level 0) followed by every further level's numbered file, per output."""
-    from cellgl.io.mips import level_path, mip_sizes
+    from cellgl.bake.mips import level_path, mip_sizes
 
     sizes = mip_sizes(w, h, d)
     out = list(outputs)
@@ -602,7 +604,7 @@ def _write_tiff(tmp, tiles, out: _Output, plan: _Plan, meta: str) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# for writers of sets of maps (cellgl.io.material_sets): one file through the per-format writer
+# for writers of sets of maps (cellgl.bake.material_sets): one file through the per-format writer
 # --------------------------------------------------------------------------------------------
 
 #: what one output file holds (its path, channels and their encodings)

@@ -1,4 +1,6 @@
-"""GPU texture bakes: ``.dds`` and ``.ktx2`` (:func:`cellgl.io.bake.bake` hands them here).
+"""GPU texture files, ``.dds`` and ``.ktx2``, from arrays: the format each channel takes, a level's
+samples and blocks, the file (:func:`cellgl.bake.gputex.bake_texture` renders a recipe into them;
+``cellgl bake -o X.dds``).
 
 Per channel the format a pipeline expects, chosen by default or by ``compress`` (``--compress``),
 refused where it makes no sense (:data:`CHOICES`): colour is sRGB (BC7, BC1 or BC3 blocks, or
@@ -9,27 +11,22 @@ plain floats (``R32_SFLOAT``, 16-bit ``R16_SFLOAT``), ``id`` ``R32_UINT`` (never
 8- and 16-bit samples are the PNG bake's, bit for bit (cellgl.io.spec's encodings); the blocks
 come from etcpak on every core (cellgl.io.blocks); the containers are cellgl.io.containers.
 
-With ``mips`` every level is rendered from the recipe at its own size (cellgl.io.mips,
-``rounding="down"``: the levels DDS and KTX2 define) and stored in the file. Volumes
-(``--size WxHxD``) are 3D textures, their mip levels halving the depth too. See docs/bake.md
-("GPU texture files").
+A file holds every mip level it is given (DDS and KTX2 define the chain with ``rounding="down"``,
+:func:`cellgl.bake.mips.mip_sizes`), volumes as 3D textures (their levels halving the depth too)
+and array layers. Nothing here knows of recipes or GL. See docs/bake.md ("GPU texture files").
 """
 from __future__ import annotations
 
-import json
-import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from cellgl.io import blocks, containers, mips
-from cellgl.io.spec import RENDER_BYTES_PER_PIXEL, BakeError, Encoding, accepted_list
-from cellgl.io.tempfiles import atomic_paths
+from cellgl.io import blocks, containers
+from cellgl.io.spec import BakeError, Encoding, accepted_list
 
-__all__ = ["EXTS", "CHOICES", "COMPRESS", "MAX_SIDE_2D", "MAX_SIDE_3D", "TexOutput", "plan_outputs", "bake_texture",
-           "packed_levels", "write_container"]
+__all__ = ["EXTS", "CHOICES", "COMPRESS", "MAX_SIDE_2D", "MAX_SIDE_3D", "TexOutput", "plan_outputs", "parse_compress",
+           "texel_samples", "level_data", "memory_need", "packed_levels", "write_container"]
 
 EXTS = (".dds", ".ktx2")
 #: the --compress values
@@ -157,7 +154,7 @@ def plan_outputs(path: Path, ext: str, channels, compress, bit_depth, supercompr
     return [TexOutput(path.with_name(f"{path.stem}_{c}{path.suffix}"), c, fmts[c]) for c in channels]
 
 
-def _samples(fmt: containers.TexFormat, channel: str, a: np.ndarray) -> np.ndarray:
+def texel_samples(fmt: containers.TexFormat, channel: str, a: np.ndarray) -> np.ndarray:
     """One tile of render() output as the format's samples (the PNG bake's 8/16-bit bits)."""
     if fmt.name == "R32_UINT":
         return np.asarray(a).astype(np.uint32, copy=False)
@@ -171,12 +168,7 @@ def _samples(fmt: containers.TexFormat, channel: str, a: np.ndarray) -> np.ndarr
     return q
 
 
-def _tile_side(channels, budget: int) -> int:
-    per_px = RENDER_BYTES_PER_PIXEL * (1 + len(channels)) // 2 + 16 * len(channels)
-    return max(16, min(2048, math.isqrt(max(1, budget // 2) // per_px) // 16 * 16))
-
-
-def _level_bytes(out: TexOutput, a: np.ndarray, depth) -> bytes:
+def level_data(out: TexOutput, a: np.ndarray, depth) -> bytes:
     """One level's bytes in the file: plain samples, or the blocks of each slice (every core)."""
     if not out.fmt.compressed:
         return np.ascontiguousarray(a).tobytes()
@@ -194,49 +186,6 @@ def memory_need(outputs: list[TexOutput], chain) -> int:
         need += w * h * d * (4 if o.fmt.compressed else o.fmt.nbytes)
         need += sum(containers.level_bytes(o.fmt, *s) for s in chain)
     return need
-
-
-def bake_texture(recipe, outputs: list[TexOutput], ext: str, size, *, samples: int, tile, budget: int,
-                 mip_chain: bool, supercompression, progress: Callable, meta: Callable,
-                 layers=None) -> list[Path]:
-    """Render and write ``outputs`` (from :func:`plan_outputs`), all or none; ``layers`` (recipes)
-    makes each file an array texture of one layer per recipe (``--frames``)."""
-    w, h, d = size
-    recipes = [recipe] if layers is None else list(layers)
-    nlayers = None if layers is None else len(recipes)
-    chain = mips.mip_sizes(w, h, d, rounding="down") if mip_chain else [(w, h) + ((d,) if d else ())]
-    need = memory_need(outputs, chain) * len(recipes)
-    if need > budget:
-        mb = -(-need // (1 << 20))
-        raise BakeError(f"size {w}x{h}{'' if d is None else f'x{d}'} to {ext}: the bake holds level 0's "
-                        f"samples and the files' bytes, about {mb} MB, more than --memory {budget >> 20} MB; "
-                        f"accepted --memory {mb} or more, fewer channels a bake, or a smaller --size")
-    channels = tuple(o.channel for o in outputs)
-    side = int(tile) if tile else _tile_side(channels, budget)
-    with atomic_paths([o.path for o in outputs]) as tmps:
-        per_out: list[list[bytes]] = [[] for _ in outputs]
-        what = f"{len(chain)} level(s)" + (f" x {nlayers} layers" if nlayers else "")
-        bar = progress(len(chain) * len(recipes), f"baking {what} of {outputs[0].path.name}", unit="levels")
-        with bar:
-            for k in range(len(chain)):     # one level's samples held at a time; blocks on every core
-                convert = {o.channel: (lambda a, o=o: _samples(o.fmt, o.channel, a)) for o in outputs}
-                parts: list[list[bytes]] = [[] for _ in outputs]
-                for r in recipes:
-                    res = mips.render_level(r, w, h, k, depth=d, channels=channels, samples=samples, tile=side,
-                                            rounding="down", convert=convert)
-                    for i, o in enumerate(outputs):
-                        parts[i].append(_level_bytes(o, res.pop(o.channel), d))
-                    del res
-                    bar.step()
-                for i in range(len(outputs)):
-                    per_out[i].append(b"".join(parts[i]))
-        for o, data, tmp in zip(outputs, per_out, tmps):
-            info = json.dumps({**json.loads(meta(o.channel)), "format": o.fmt.name,
-                               "levels": len(data), **({"layers": nlayers} if nlayers else {})}, sort_keys=True)
-            with open(tmp, "wb") as f:
-                write_container(f, ext, o.fmt, (w, h, d), data, supercompression=supercompression,
-                                metadata=info, layers=nlayers)
-    return [o.path for o in outputs]
 
 
 def write_container(f, ext: str, fmt: containers.TexFormat, size, levels, *, supercompression=None,

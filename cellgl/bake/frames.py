@@ -4,7 +4,7 @@ A recipe whose feature points orbit (``orbit_radius > 0``, :mod:`cellgl.texture.
 ``k`` of ``N`` is the recipe at ``orbit_phase + k / N``, and frame ``N`` would be frame 0 again,
 bit for bit (the phase reaches the shaders as an integer turn modulo 2^32). The frames are
 written as a numbered sequence ``<stem>_0000<ext> .. <stem>_<N-1><ext>`` (any format
-:func:`cellgl.io.bake.bake` writes, every channel it writes) or, for ``.webp`` and ``.gif``, as
+:func:`cellgl.bake.core.bake` writes, every channel it writes) or, for ``.webp`` and ``.gif``, as
 one animated file that loops forever (colour only; WebP lossless).
 
 An animated file is written as its frames are rendered, one at a time (this module writes the
@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.spec import (ANIMATED, DEFAULT_BUDGET, BakeError, check_size, parse_channels, parse_size,
-                            quantize)
-from cellgl.io.gputex import EXTS as GPU_EXTS
+from cellgl.bake.request import ANIMATED, DEFAULT_BUDGET, parse_channels, parse_size
+from cellgl.io.spec import BakeError, check_size, quantize
+from cellgl.io.gpu_textures import EXTS as GPU_EXTS
 from cellgl.io.tempfiles import check_output, commit_lock, human_size, naming_destination_in, scratch_dir
 
 __all__ = ["bake_frames", "ANIMATED", "MAX_FRAMES", "frame_recipe"]
@@ -127,7 +127,7 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
         ``fps`` by more than 1% (GIF 24 fps: 4 cs, 25 fps) a ``UserWarning`` says the real rate.
         Faster rates are refused: browsers play a delay of 10 ms or less at 10 fps.
     size, channels, bit_depth, tileable, sets, bake_kw :
-        as :func:`cellgl.io.bake.bake` (``size`` default 256 x 256).
+        as :func:`cellgl.bake.core.bake` (``size`` default 256 x 256).
 
     Returns
     -------
@@ -140,7 +140,7 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
         Bad frame count, fps, extension or channels, or a recipe that does not move. Nothing
         is written.
     """
-    from cellgl.io.bake import check_path, load_recipe_sets, Progress, bake
+    from cellgl.bake.core import check_path, load_recipe_sets, Progress, bake
 
     path = Path(os.fspath(path))
     ext = path.suffix.lower()
@@ -164,7 +164,7 @@ def bake_frames(recipe_or_name, path, frames: int, *, fps: float | None = None, 
             import warnings
 
             warnings.warn(note, UserWarning, stacklevel=2)
-    if ext in GPU_EXTS:     # one array texture, a layer per frame (cellgl.io.gputex)
+    if ext in GPU_EXTS:     # one array texture, a layer per frame (cellgl.bake.gputex)
         return bake(recipe, path, size=size, channels=channels, bit_depth=bit_depth, progress=progress,
                     layers=[frame_recipe(recipe, k, frames) for k in range(frames)], **bake_kw)
     bar = Progress(frames, f"baking {path.name}", progress, unit="frames")
@@ -253,7 +253,7 @@ def _frame_rgb(recipe, w: int, h: int, plan) -> np.ndarray:
 def _animated(recipe, path: Path, tmp: Path, frames: int, fps: float, size, bake_kw, bar) -> Path:
     """Render and encode one frame at a time, appending each to the file as it comes: memory
     holds one frame, whatever the number of frames."""
-    from cellgl.io.bake import plan_tiles
+    from cellgl.bake.core import plan_tiles
 
     w, h = size
     budget = bake_kw.get("memory_budget", DEFAULT_BUDGET)

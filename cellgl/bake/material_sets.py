@@ -8,7 +8,7 @@ green down, for Unreal; OpenGL for the others: the recipe's ``normal_convention`
 bit depths and colour spaces. Every sample of a packed map is the same value the bake of that
 channel alone writes (:func:`cellgl.io.spec.encoding_of` quantises both), bit for bit;
 smoothness is ``top - roughness`` of the quantised roughness (255 - r at 8 bits), so it too is
-exact. Each PNG map goes through the bake's writer of its format (:func:`cellgl.io.bake.write_tiles`,
+exact. Each PNG map goes through the bake's writer of its format (:func:`cellgl.bake.core.write_tiles`,
 chosen by the extension), tile by tile, memory bounded as a bake.
 
 ``map_format="dds"``/``"ktx2"`` writes each map as one GPU texture file with its whole mip chain
@@ -17,8 +17,8 @@ packed maps (ORM, mask, metallic-smoothness) ``BC7_UNORM``, 8-bit single masks `
 16-bit height ``R16_UNORM``): every level is the packed map of the set rendered at that level's
 size (``max(1, floor(W / 2^k))``, the levels DDS and KTX2 define), never downsampled, each sample
 the PNG set's bits at that size (8 bits for the block formats); the blocks come from
-:func:`cellgl.io.gputex.packed_levels` (etcpak on every core), the container from
-:func:`cellgl.io.gputex.write_container`.
+:func:`cellgl.io.gpu_textures.packed_levels` (etcpak on every core), the container from
+:func:`cellgl.io.gpu_textures.write_container`.
 
 The whole set (maps, ``manifest.json``, ``recipe.json`` and, for ``gltf``, a ``.gltf`` whose
 material references the maps) is written into a hidden folder beside ``DIR`` and moved into place
@@ -39,8 +39,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cellgl.io.bake import Output, Progress, load_recipe_sets, plan_tiles, write_tiles
-from cellgl.io.spec import DEFAULT_BUDGET, DEFAULT_SIZE, BakeError, Encoding, check_size, encoding_of, parse_size
+from cellgl.bake.core import Output, Progress, load_recipe_sets, plan_tiles, write_tiles
+from cellgl.bake.request import DEFAULT_BUDGET, DEFAULT_SIZE, parse_size
+from cellgl.io.spec import BakeError, Encoding, check_size, encoding_of
 from cellgl.io.tempfiles import check_output_dir, commit_lock, scratch_dir
 from cellgl.texture import antialias
 
@@ -228,13 +229,13 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
         One of :data:`ENGINES`: ``unreal``, ``unity-hdrp``, ``unity-urp``, ``godot``, ``gltf``,
         ``blender``.
     size, tileable, sets, samples, memory_budget :
-        As :func:`cellgl.io.bake.bake` (2D sizes only).
+        As :func:`cellgl.bake.core.bake` (2D sizes only).
     map_format : str
         The maps' format, one of :data:`MAP_FORMATS`: ``png`` (the default), ``dds`` or ``ktx2``
         (each map one GPU texture file in its :func:`gpu_format`; not for ``gltf``, whose KTX2
         images need Basis Universal data: KHR_texture_basisu).
     mips : bool
-        Also every mip level of every map, each rendered at its own size (:mod:`cellgl.io.mips`:
+        Also every mip level of every map, each rendered at its own size (:mod:`cellgl.bake.mips`:
         level ``k`` is the set baked at ``ceil(W / 2^k) x ceil(H / 2^k)``, never downsampled), as
         numbered files ``<map>_mip<k>.png`` beside level 0, down to 1 x 1; in a ``.dds``/``.ktx2``
         map, inside the file (level ``k`` ``max(1, floor(W / 2^k))`` wide, as those formats define).
@@ -267,7 +268,7 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
         out_dir = check_output_dir(directory)
     except ValueError as exc:
         raise BakeError(str(exc)) from None
-    from cellgl.io.spec import check_budget
+    from cellgl.bake.request import check_budget
 
     memory_budget = check_budget(memory_budget)
     base = load_recipe_sets(recipe_or_name, sets, tileable)
@@ -276,7 +277,7 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
                         "metallic channel; accepted: a cellular texture recipe (cellgl presets)")
     recipe = base.replace(normal_convention=eng.normal)
     stem = "".join(c if c.isalnum() or c in "-_" else "_" for c in base.name) or "material"
-    from cellgl.io.mips import level_path, mip_sizes
+    from cellgl.bake.mips import level_path, mip_sizes
 
     names = [_file_name(eng, stem, m, ext) for m in eng.maps]
     levels = mip_sizes(w, h, rounding="up" if fmt == "png" else "down") if mips else [(w, h)]
@@ -324,7 +325,8 @@ def bake_material(recipe_or_name, directory, engine="gltf", *, size=DEFAULT_SIZE
 
 def _check_gpu(eng: Engine, fmt: str, supercompression, w: int, h: int) -> None:
     """Refusals of a ``.dds``/``.ktx2`` set (and ``--zstd``), before any work."""
-    from cellgl.io import blocks, gputex
+    from cellgl.io import gpu_textures
+    from cellgl.io import blocks
 
     if supercompression not in (None, "zstd"):
         raise BakeError(f"supercompression {supercompression!r}: accepted 'zstd' (or none)")
@@ -338,9 +340,9 @@ def _check_gpu(eng: Engine, fmt: str, supercompression, w: int, h: int) -> None:
                         f"through KHR_texture_basisu, which holds Basis Universal (ETC1S/UASTC) data, not "
                         f"the BCn blocks cellgl writes (DDS only through MSFT_texture_dds); accepted for "
                         f"gltf: --map-format png")
-    if max(w, h) > gputex.MAX_SIDE_2D:
-        raise BakeError(f"size {w}x{h} for {fmt}: a 2D texture's sides are at most {gputex.MAX_SIDE_2D} "
-                        f"(the GPUs' limit); accepted 1..{gputex.MAX_SIDE_2D}")
+    if max(w, h) > gpu_textures.MAX_SIDE_2D:
+        raise BakeError(f"size {w}x{h} for {fmt}: a 2D texture's sides are at most {gpu_textures.MAX_SIDE_2D} "
+                        f"(the GPUs' limit); accepted 1..{gpu_textures.MAX_SIDE_2D}")
     if not blocks.have_encoder():
         raise BakeError(f"--map-format {fmt} needs the 'etcpak' package (block encoding): pip install "
                         f"'cellgl[gpu]' (or --map-format png)")
@@ -382,8 +384,8 @@ def _write_gpu_map(path: Path, recipe, m: MapSpec, ext: str, levels, samples: in
                    meta: str, supercompression) -> None:
     """Map ``m`` as one ``.dds``/``.ktx2`` at ``path``: each level the packed map rendered at that
     level's size (the PNG set's samples at that size, 8-bit for block formats), then every
-    level's blocks at once on every core (cellgl.io.gputex.packed_levels)."""
-    from cellgl.io import gputex
+    level's blocks at once on every core (cellgl.io.gpu_textures.packed_levels)."""
+    from cellgl.io import gpu_textures
 
     fmt = gpu_format(m)
     bits = m.bits if not fmt.compressed else 8
@@ -398,10 +400,10 @@ def _write_gpu_map(path: Path, recipe, m: MapSpec, ext: str, levels, samples: in
                 t = tile[enc.channel]
                 a[y0:y0 + t.shape[0], x0:x0 + t.shape[1]] = t
             images.append(a)
-    data = gputex.packed_levels(fmt, images)
+    data = gpu_textures.packed_levels(fmt, images)
     del images
     with open(path, "wb") as f:
-        gputex.write_container(f, ext, fmt, (levels[0][0], levels[0][1], None), data,
+        gpu_textures.write_container(f, ext, fmt, (levels[0][0], levels[0][1], None), data,
                                supercompression=supercompression, metadata=meta)
 
 
@@ -452,7 +454,7 @@ def _command(recipe_or_name, sets, tileable, eng: Engine, out_dir: Path, size, s
 
 def _manifest(eng: Engine, recipe, names, extra, levels, samples, fmt, command) -> dict:
     from cellgl._version import __version__
-    from cellgl.io.mips import level_path
+    from cellgl.bake.mips import level_path
 
     files = []
     for m, name in zip(eng.maps, names):

@@ -1,5 +1,5 @@
 """Command line of the Dask front end: ``cellgl sweep`` and the ``.zarr`` branch of
-``cellgl bake`` (its arguments are declared by :mod:`cellgl.io.bake_cli`). docs/scale.md."""
+``cellgl bake`` (its arguments are declared by :mod:`cellgl.cli.bake`). docs/scale.md."""
 from __future__ import annotations
 
 import argparse
@@ -8,7 +8,7 @@ import errno
 from cellgl.dask.blocks import DEFAULT_CHUNK, MAX_CHUNK, DaskError
 from cellgl.dask.variations import sweep
 from cellgl.dask.zarr_bake import bake_zarr
-from cellgl.io.spec import DEFAULT_SIZE, int_arg
+from cellgl.bake.request import DEFAULT_SIZE, int_arg
 from cellgl.io.tempfiles import check_output_dir, env_seconds
 
 __all__ = ["add_sweep_parser", "check_scheduler", "run_sweep", "run_zarr_bake"]
@@ -85,7 +85,7 @@ def check_scheduler(scheduler: str | None) -> None:
 
 
 def run_zarr_bake(args: argparse.Namespace) -> int:
-    """``cellgl bake ... -o out.zarr`` (called by :func:`cellgl.io.bake_cli.run_cli`)."""
+    """``cellgl bake ... -o out.zarr`` (called by :func:`cellgl.cli.bake.run_cli`)."""
     if args.depth not in (None, "32"):
         raise DaskError(f"--depth {args.depth}: a .zarr bake stores float32 (ids uint32), "
                         f"as rendered; accepted 32")
