@@ -19,7 +19,7 @@ uniform ivec4 u_density_axis[4];
 uniform ivec4 u_density_info;
 #endif
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
-uint cell_density_image_level(int index) { return cell_storage_word(u_storage_7, index); }
+uint cell_density_image_level(int index) { return cell_storage_word_7(index); }
 #endif
 
 uniform isampler2D u_in0;      // the cells (RGBA32I)

@@ -8,7 +8,7 @@
 //                         4 F1..F4, 8 gradient + value, 16 id, 32 roughness + ao + metallic
 //                         (with CELL_TEX_MATERIAL 1: lib/texture_material.glsl)
 //   CELL_LOOP_PROBE       1: measure the driver's loop budget (cellgl/texture/dispatch.py)
-//   CELL_TEX_GROUPS       1: points carry a group index; its origins in storage buffer 8
+//   CELL_TEX_GROUPS       1: points carry a group index; its origins in storage buffer 11
 
 layout(local_size_x = CELL_LOCAL_SIZE) in;
 
@@ -32,8 +32,6 @@ uniform vec3 u_filter_width;    // footprint of every point in texture space (0:
 #define CELL_TEX_GROUPS 0
 #endif
 #if CELL_TEX_GROUPS             // far points: each group's origins (lib/texture_groups.glsl)
-layout(std430, binding = 11) readonly buffer Groups { uvec4 group_records[]; };
-#define CELL_TEX_GROUP_RECORD(k) group_records[k]
 #include "lib/texture_groups.glsl"
 #endif
 #endif

@@ -9,7 +9,6 @@
 //   u_channel  0 color, 1 height, 2 normal, 3 id (cell value), 4..7 F1..F4, 8..10 roughness, ao,
 //              metallic (with CELL_TEX_MATERIAL 1) (cellgl.texture.schema.CHANNELS)
 
-#include "storage.glsl"   // storage words from textures (CELL_STORAGE_ROW_BITS: the fragment path)
 #include "lib/texture.glsl"
 #include "texture_uniforms.glsl"
 

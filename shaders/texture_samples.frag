@@ -9,7 +9,6 @@
 //   CELL_FRAG_DECL / CELL_FRAG_WRITE (location 0: 1 where the driver's loop limit left the sample
 //   alone, the canary).
 
-#include "storage.glsl"
 #include "lib/texture.glsl"
 #include "texture_uniforms.glsl"
 
@@ -27,8 +26,6 @@ uniform vec3 u_filter_width;    // footprint of every point in texture space (0:
 #define CELL_TEX_GROUPS 0
 #endif
 #if CELL_TEX_GROUPS             // far points: each group's origins (lib/texture_groups.glsl)
-uniform usampler2D u_in11;
-#define CELL_TEX_GROUP_RECORD(k) texelFetch(u_in11, CELL_STORAGE_TEXEL(k), 0)
 #include "lib/texture_groups.glsl"
 #endif
 #endif

@@ -100,27 +100,22 @@ uniform float u_metallic;
 uniform float u_metallic_cell;
 #endif
 
+// The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image)
+// and the cell image as r | g << 8 | b << 16 per texel (row-major, row 0 at v = 0;
+// cellgl.texture.images.bind): words of storage bindings 7 and 6 (storage.glsl), read by
+// the hooks lib/points.glsl and lib/texture.glsl declare.
 #if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
-// The density image's levels (0..15, row-major, row 0 at v = 0; cellgl.basis.gpu.bind_density_image):
-// the hook lib/points.glsl declares.
-#ifdef CELL_STORAGE_ROW_BITS
-// (the fragment path: the words in a texture on unit 7, shaders/storage.glsl)
-uint cell_density_image_level(int index) { return cell_storage_word(u_storage_7, index); }
-#else
-layout(std430, binding = 7) readonly buffer CellDensityImage { uint u_density_image[]; };
-uint cell_density_image_level(int index) { return u_density_image[index]; }
+#define CELL_STORAGE_WORDS_7
 #endif
-#endif
-
 #if CELL_TEX_CELL_IMAGE
-// The cell image as r | g << 8 | b << 16 per texel, row-major, row 0 at v = 0
-// (cellgl.texture.images.bind): the hook lib/texture.glsl declares.
-#ifdef CELL_STORAGE_ROW_BITS
-uint cell_texture_image_texel(int index) { return cell_storage_word(u_storage_6, index); }
-#else
-layout(std430, binding = 6) readonly buffer CellImage { uint u_cell_image[]; };
-uint cell_texture_image_texel(int index) { return u_cell_image[index]; }
+#define CELL_STORAGE_WORDS_6
 #endif
+#include "storage.glsl"
+#if CELL_DENSITY_MAP == CELL_DMAP_IMAGE
+uint cell_density_image_level(int index) { return cell_storage_word_7(index); }
+#endif
+#if CELL_TEX_CELL_IMAGE
+uint cell_texture_image_texel(int index) { return cell_storage_word_6(index); }
 #endif
 
 CellTextureParams cell_texture_params_load()

@@ -11,7 +11,6 @@
 // Outputs: colour, and the object-space position (w = 1 on the object) for the viewer's
 // readout under the cursor.
 
-#include "storage.glsl"   // storage words from textures (CELL_STORAGE_ROW_BITS: the fragment path)
 #include "lib/texture.glsl"
 #include "texture_uniforms.glsl"
 

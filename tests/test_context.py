@@ -90,7 +90,7 @@ def test_storage_bindings_needed_is_the_highest_binding_of_the_shaders():
     from cellgl.gl import path
     from cellgl.gl.glsl import shader_dir
 
-    found = [int(b) for f in shader_dir().rglob("*.comp")
+    found = [int(b) for f in shader_dir().rglob("*") if f.suffix in (".comp", ".glsl")
              for b in re.findall(r"binding\s*=\s*(\d+)\s*\)\s*(?:readonly\s+|writeonly\s+)?buffer",
                                  f.read_text())]
     assert found and path.storage_bindings_needed() == max(found) + 1

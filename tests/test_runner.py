@@ -131,20 +131,18 @@ def test_a_released_context_drops_its_entry(ctx):
         another.release()
 
 
-def test_a_render_target_is_kept_in_its_contexts_store_only(ctx):
-    """gl/targets.py keeps a float target in a store of the context's state; handed another
-    context's store it refuses (one clear error), never draws into a foreign framebuffer."""
-    from cellgl.gl.targets import float_target
-
+def test_a_render_target_is_kept_in_its_contexts_state_only(ctx):
+    """A runner keeps its render targets in its own context's state (Runner.target): kept while
+    the size stays, remade (the old ones released) on a new size, never another context's."""
     other = context._create(context.backend_name(ctx) or "egl")    # current here; released below
     try:
-        cache = registry.store("test.targets", other)
-        fbo, tex = float_target(cache, other, 4, 2)["objects"]
-        assert float_target(cache, other, 4, 2)["objects"] == (fbo, tex)   # kept while the size stays
-        with pytest.raises(ValueError, match="another context's render target"):
-            float_target(cache, ctx, 4, 2)
-        assert float_target(cache, other, 8, 2)["objects"][0] is not fbo    # a new size: new objects
-        assert moderngl_seam.released(fbo) and moderngl_seam.released(tex)
+        t = runner.runner(other).target("test.targets", (4, 2))
+        assert runner.runner(other).target("test.targets", (4, 2)) is t       # kept while the size stays
+        assert t.fbo.ctx is other and all(x.ctx is other for x in t.textures)
+        assert ("target", "test.targets") not in registry.held(ctx).objects
+        t2 = runner.runner(other).target("test.targets", (8, 2))
+        assert t2 is not t and t2.size == (8, 2)                             # a new size: new objects
+        assert moderngl_seam.released(t.fbo) and moderngl_seam.released(t.textures[0])
     finally:
         other.release()
         context.get_context()

@@ -274,7 +274,8 @@ class Viewer:
         self.renderer.draw(self, (vx, h - vy - vh, vw, vh), (w, h), interacting)
         self.renderer.frame_fbo.use()
         imgui.backends.opengl3_render_draw_data(imgui.get_draw_data())
-        self.renderer.present((w, h))
+        # the finished frame to the window's own framebuffer (window code: the window's screen)
+        self.ctx.copy_framebuffer(self.ctx.screen, self.renderer.frame_fbo)
         glfw.swap_buffers(self.window)
         if glfw.window_should_close(self.window):
             self._should_close = True
@@ -374,10 +375,7 @@ class Viewer:
     def grab(self) -> np.ndarray:
         """The last frame as uint8 (H, W, 3), top row first."""
         self._take_context()        # a cellgl call since the frame may have taken it
-        fbo = self.renderer.frame_fbo
-        w, h = fbo.size
-        data = fbo.read(components=3, alignment=1)
-        return np.frombuffer(data, np.uint8).reshape(h, w, 3)[::-1].copy()
+        return self.renderer.grab()
 
     def screenshot(self, path: str) -> str:
         """Save the last frame to ``path`` (its extension picks the format), whole or not at all.

@@ -7,14 +7,14 @@ accepted change bumps :attr:`Model.version`, which the renderer uses to decide w
 Rendering uses the shared texture library only: the 2D program is ``fullscreen.vert`` +
 ``texture.frag`` (the texture engine's own viewer entry, panned and zoomed by its ``u_view``) and the 3D program ``viewer_object.*``, which
 includes ``lib/texture.glsl``; compile-time macros and uniforms come from
-:func:`cellgl.texture.defines` and :func:`cellgl.texture.set_uniforms`.
+:func:`cellgl.texture.defines` and :func:`cellgl.texture.shader.recipe_uniforms`, drawn by the
+window context's runner (:mod:`cellgl.viewer.render`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from cellgl.gl import context
 from cellgl.texture.params import inactive
 from cellgl.recipes import is_pups as pups_recipe, list_presets, load_recipe, parameters
 from cellgl.texture.recipe import Recipe
@@ -124,31 +124,13 @@ class Model:
         self.version += 1
 
     # ----------------------------------------------------------------------------------------
-    # GL
+    # the 3D view
 
-    def _object_recipe(self) -> Recipe:
+    def object_recipe(self) -> Recipe:
         """The recipe as the 3D view evaluates it: a solid texture needs at least 3 dimensions."""
         if int(self.recipe.get("dimension")) < 3:
             return self.recipe.replace(dimension=3)
         return self.recipe
-
-    def program_2d(self, ctx, channel: str = "color"):
-        """``fullscreen.vert`` + ``texture.frag``: the texture engine's own viewer entry."""
-        from cellgl import texture
-
-        return context.program("fullscreen.vert", "texture.frag", texture.defines(self.recipe, (channel,)),
-                               ctx=ctx)
-
-    def program_object(self, ctx):
-        from cellgl import texture
-
-        return context.program("viewer_object.vert", "viewer_object.frag",
-                               texture.defines(self._object_recipe()), ctx=ctx)
-
-    def set_uniforms(self, prog, object_view: bool = False) -> None:
-        from cellgl import texture
-
-        texture.set_uniforms(prog, self._object_recipe() if object_view else self.recipe)
 
     # ----------------------------------------------------------------------------------------
     # readouts: the basis at the point under the cursor, from the same parameters

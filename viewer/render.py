@@ -6,7 +6,8 @@ the frame. While the user drags a slider or the view, it is rendered at 1/2 or 1
 (chosen from the measured cost of the last full-resolution render) and upscaled; once input
 stops the next frame renders at full resolution ("refine").
 
-Programs come from :func:`cellgl.gl.context.program`, which caches them by their ``#define``s: a
+Every target, texture and draw goes through the window context's runner
+(:meth:`cellgl.gl.runner.Runner.draw`), whose program cache keys programs by their ``#define``s: a
 shader is compiled only when a compile-time parameter changes.
 """
 
@@ -16,7 +17,7 @@ import time
 
 import numpy as np
 
-from cellgl.gl import context
+from cellgl.gl import runner
 
 from . import meshes
 
@@ -28,24 +29,23 @@ INTERACTIVE_BUDGET = 0.05
 SCALES = (1, 2, 4)
 
 
-def _mat(m: np.ndarray) -> bytes:
-    """A float64 4x4 (column vectors) as the column-major float32 bytes GLSL expects."""
-    return np.ascontiguousarray(m.T, dtype=np.float32).tobytes()
+def _mat(m: np.ndarray) -> np.ndarray:
+    """A float64 4x4 (column vectors) as the column-major float32 GLSL expects (rows of m.T)."""
+    return np.ascontiguousarray(m.T, dtype=np.float32)
 
 
 class Renderer:
     def __init__(self, ctx, model, take_context=lambda: None):
         self.ctx = ctx
         self.model = model
+        #: the window context's runner: every target, texture and draw of the viewer is its
+        self.runner = runner.runner(ctx)
         # Makes the window's context current again after a cellgl API call (which makes
         # cellgl's headless context current).
         self.take_context = take_context
-        self.vao_empty = ctx.vertex_array(context.program("viewer_blit.vert", "viewer_blit.frag", ctx=ctx), [])
-        self.blit = context.program("viewer_blit.vert", "viewer_blit.frag", ctx=ctx)
         self.frame_fbo = None
         self._frame_size = None
-        self._targets: dict[str, tuple] = {}
-        self._meshes: dict[str, tuple] = {}
+        self._targets: dict[str, runner.Target] = {}
         self._key = None
         self._scale = 1
         self.needs_refine = False
@@ -57,64 +57,34 @@ class Renderer:
         self.budget = None      # seconds per interactive frame (None: INTERACTIVE_BUDGET)
         self.render_ms = 0.0
         self._pups_key = None
+        self._pups_src = None
 
     def release(self) -> None:
-        for objects in self._targets.values():
-            # (tex, fbo, *extra): the framebuffer first, then its attachments; ("pups_src"): (tex,)
-            for o in (objects[1:2] + objects[:1] + objects[2:]):
-                o.release()
-        for vbo, ibo, vao in self._meshes.values():
-            vao.release()
-            vbo.release()
-            ibo.release()
-        if self.frame_fbo is not None:
-            self.frame_fbo.release()
+        for key in ("frame", "view", "tile", "object", "pups_src", "mesh"):
+            self.runner.release("viewer." + key)
+        self._targets.clear()
+        self.frame_fbo = None
 
     # ----------------------------------------------------------------------------------------
     # targets
 
     def _frame(self, size) -> None:
         if self._frame_size != size:
-            if self.frame_fbo is not None:
-                self.frame_fbo.release()
-            self.frame_fbo = self.ctx.simple_framebuffer(size, components=4)
+            self.frame_fbo = self.runner.target("viewer.frame", size, (("f1", 4),), depth=True).fbo
             self._frame_size = size
 
-    def _target(self, name: str, size, position: bool = False):
-        """A colour texture + framebuffer (+ position texture and depth for the 3D view)."""
-        size = (max(1, int(size[0])), max(1, int(size[1])))
-        old = self._targets.get(name)
-        if old is not None and old[0].size == size:
-            return old
-        if old is not None:
-            for o in old:
-                o.release()
-        tex = self.ctx.texture(size, 4)
-        tex.filter = (0x2601, 0x2601)  # GL_LINEAR: the reduced preview is upscaled smoothly
-        attachments = [tex]
-        extra = []
-        if position:
-            pos = self.ctx.texture(size, 4, dtype="f4")
-            pos.filter = (0x2600, 0x2600)
-            depth = self.ctx.depth_renderbuffer(size)
-            attachments.append(pos)
-            extra = [pos, depth]
-            fbo = self.ctx.framebuffer(attachments, depth)
-        else:
-            fbo = self.ctx.framebuffer(attachments)
-        entry = (tex, fbo, *extra)
-        self._targets[name] = entry
-        return entry
+    def grab(self) -> np.ndarray:
+        """The last frame as uint8 (H, W, 3), top row first."""
+        t = self.runner.target("viewer.frame", self._frame_size, (("f1", 4),), depth=True)
+        w, h = t.size
+        return self.runner.read(t, np.empty((h, w, 3), np.uint8))[::-1].copy()
 
-    def _mesh(self, prog, shape: str):
-        key = (shape, prog.glo)
-        if key not in self._meshes:
-            verts, idx = meshes.mesh(shape)
-            vbo = self.ctx.buffer(verts.tobytes())
-            ibo = self.ctx.buffer(idx.tobytes())
-            vao = self.ctx.vertex_array(prog, [(vbo, "3f 3f", "in_position", "in_normal")], ibo)
-            self._meshes[key] = (vbo, ibo, vao)
-        return self._meshes[key][2]
+    def _target(self, name: str, size, position: bool = False) -> runner.Target:
+        """A colour texture + framebuffer (+ a float position texture and depth for the 3D view)."""
+        t = self.runner.target("viewer." + name, size, (("f1", 4),) + ((("f4", 4),) if position else ()),
+                               depth=position)
+        self._targets[name] = t
+        return t
 
     def _note_program(self, prog) -> None:
         if prog.glo not in self._programs_seen:
@@ -155,7 +125,7 @@ class Renderer:
             t0 = time.perf_counter()
             self._render_view(viewer, mode, vw // scale if scale > 1 else vw,
                               vh // scale if scale > 1 else vh, vw, vh)
-            self.ctx.finish()
+            self.runner.finish()
             dt = time.perf_counter() - t0
             if scale == 1:
                 self.full_cost = dt / max(1e-6, vw * vh / 1e6)
@@ -179,34 +149,26 @@ class Renderer:
             side = max(8, min(full_w, full_h) // 3)
             if w != full_w:
                 side = max(8, side * w // full_w)
-            tex, fbo = self._target("tile", (side, side))[:2]
-            self._render_texture(fbo, (0.0, 0.0), (1.0, 1.0), viewer.channel)
+            self._render_texture(self._target("tile", (side, side)), (0.0, 0.0), (1.0, 1.0), viewer.channel)
         else:
-            tex, fbo = self._target("view", (w, h))[:2]
             # Same pixel -> uv mapping as the full-resolution view (pixel centres scale along).
             uv0, ext = viewer.panzoom.window(full_w, full_h)
-            self._render_texture(fbo, uv0, ext, viewer.channel)
+            self._render_texture(self._target("view", (w, h)), uv0, ext, viewer.channel)
 
-    def _render_texture(self, fbo, uv0, ext, channel: str = "color") -> None:
+    def _render_texture(self, target, uv0, ext, channel: str = "color") -> None:
+        from cellgl.texture import shader as texture
         from cellgl.texture.recipe import CHANNELS
 
-        prog = self.model.program_2d(self.ctx, channel)
-        self._note_program(prog)
-        self.model.set_uniforms(prog)
         # texture.frag: uv = u_view.xy + (v_uv.x, 1 - v_uv.y) * u_view.zw, v = 0 at the top. The
         # pan uv0 goes into the split origins in float64 and u_view.xy = 0, so a view panned far
-        # from the origin stays as sharp as at it (cellgl.texture.set_view).
-        from cellgl.texture import shader as texture
-
-        texture.set_view(prog, self.model.recipe, uv0, ext)
-        if "u_channel" in prog:
-            prog["u_channel"].value = CHANNELS.index(channel)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 1.0)
-        self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND | self.ctx.CULL_FACE)
-        vao = self.ctx.vertex_array(prog, [])
-        vao.render(mode=self.ctx.TRIANGLES, vertices=3)
-        vao.release()
+        # from the origin stays as sharp as at it (cellgl.texture.view_uniforms).
+        recipe = self.model.recipe
+        uniforms = texture.view_uniforms(recipe, uv0, ext, ctx=self.ctx)
+        uniforms["u_channel"] = CHANNELS.index(channel)
+        prog = self.runner.draw(runner.Draw("fullscreen.vert", "texture.frag", target,
+                                            texture.defines(recipe, (channel,)), uniforms=uniforms,
+                                            clear=(0.0, 0.0, 0.0, 1.0)))
+        self._note_program(prog)
 
     def _pups_texture(self, side: int, channel: str):
         """The PUPs recipe baked at ``side x side`` (one period of its point set) by
@@ -216,22 +178,14 @@ class Renderer:
         from cellgl import recipes
 
         key = (self.model.version, side, channel)
-        old = self._targets.get("pups_src")
-        if old is not None and self._pups_key == key:
-            return old[0]
+        if self._pups_src is not None and self._pups_key == key:
+            return self._pups_src
         res = recipes.render(self.model.recipe, side, side, channels=(channel,))[channel]
         self.take_context()
         rgba = res if res.ndim == 3 else np.dstack([res, res, res, np.ones_like(res)])
-        if old is not None:
-            for o in old:
-                o.release()
-        tex = self.ctx.texture((side, side), 4, np.ascontiguousarray(rgba, np.float32).tobytes(),
-                               dtype="f4")
-        tex.filter = (0x2600, 0x2600)
-        tex.repeat_x = tex.repeat_y = True
-        self._targets["pups_src"] = (tex,)
+        self._pups_src = self.runner.image("viewer.pups_src", rgba)
         self._pups_key = key
-        return tex
+        return self._pups_src
 
     def _render_pups(self, viewer, mode, w, h, full_w, full_h) -> None:
         """PUPs recipes (2D only): the bake's pixels, panned and zoomed like the 2D view.
@@ -245,94 +199,73 @@ class Renderer:
             src = self._pups_texture(side, channel)
             if w != full_w:
                 side = max(8, side * w // full_w)
-            tex, fbo = self._target("tile", (side, side))[:2]
+            target = self._target("tile", (side, side))
             uv0, ext = (0.0, 0.0), (1.0, 1.0)
         else:
             n = max(1, min(full_w, full_h))
             src = self._pups_texture(n, channel)
-            tex, fbo = self._target("view", (w, h))[:2]
+            target = self._target("view", (w, h))
             uv0, ext = viewer.panzoom.window(full_w, full_h)
-        fbo.use()
-        fbo.clear(0.0, 0.0, 0.0, 1.0)
-        self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND | self.ctx.CULL_FACE)
         # viewer_blit: tex coord = u_offset + p * u_scale, p in [0, 1] with p.y = 0 at the
         # bottom; the view shows uv = uv0 + (p.x, 1 - p.y) * ext, texture t = v.
-        self.blit["u_offset"].value = (float(uv0[0]), float(uv0[1] + ext[1]))
-        self.blit["u_scale"].value = (float(ext[0]), -float(ext[1]))
-        self.blit["u_grid"].value = 0.0
-        src.use(0)
-        self.blit["u_tex"].value = 0
-        self.vao_empty.render(mode=self.ctx.TRIANGLES, vertices=3)
+        self.runner.draw(runner.Draw(
+            "viewer_blit.vert", "viewer_blit.frag", target, clear=(0.0, 0.0, 0.0, 1.0),
+            uniforms={"u_offset": (float(uv0[0]), float(uv0[1] + ext[1])),
+                      "u_scale": (float(ext[0]), -float(ext[1])), "u_grid": 0.0, "u_tex": 0},
+            textures={0: runner.Sampler(src, linear=False, repeat=True)}))
 
     def _render_object(self, viewer, w, h) -> None:
-        tex, fbo, pos, depth = self._target("object", (w, h), position=True)
-        prog = self.model.program_object(self.ctx)
-        self._note_program(prog)
-        self.model.set_uniforms(prog, object_view=True)
-        view, proj = viewer.orbit.matrices(w / h)
+        from cellgl.texture import shader as texture
+
         from .model import OBJECT_SCALE
 
-        prog["u_object_scale"].value = OBJECT_SCALE
-        model = np.eye(4)
-        prog["u_model"].write(_mat(model))
-        prog["u_view"].write(_mat(view))
-        prog["u_proj"].write(_mat(proj))
-        if "u_eye" in prog:
-            prog["u_eye"].value = tuple(float(v) for v in viewer.orbit.eye())
-        if "u_bump_view" in prog:
-            prog["u_bump_view"].value = float(viewer.bump_view)
-        fbo.use()
-        fbo.clear(0.11, 0.12, 0.14, 1.0, depth=1.0)
+        target = self._target("object", (w, h), position=True)
+        recipe = self.model.object_recipe()
+        view, proj = viewer.orbit.matrices(w / h)
+        uniforms = texture.recipe_uniforms(recipe, ctx=self.ctx)
+        uniforms.update(u_object_scale=OBJECT_SCALE, u_model=_mat(np.eye(4)), u_view=_mat(view),
+                        u_proj=_mat(proj), u_eye=tuple(float(v) for v in viewer.orbit.eye()),
+                        u_bump_view=float(viewer.bump_view))
+        verts, idx = meshes.mesh(viewer.shape)
         # The position attachment is cleared to w = 0: "no object here" for the readout.
-        self.ctx.enable(self.ctx.DEPTH_TEST)
-        self.ctx.disable(self.ctx.BLEND | self.ctx.CULL_FACE)
-        self._mesh(prog, viewer.shape).render()
-        self.ctx.disable(self.ctx.DEPTH_TEST)
+        prog = self.runner.draw(runner.Draw(
+            "viewer_object.vert", "viewer_object.frag", target, texture.defines(recipe), uniforms=uniforms,
+            vertices=runner.Vertices(verts, "3f 3f", ("in_position", "in_normal"), idx, key="viewer.mesh"),
+            clear=(0.11, 0.12, 0.14, 1.0), depth_test=True))
+        self._note_program(prog)
 
     def object_position_at(self, x: int, y: int):
         """Object-space position under view pixel (x, y) (GL, y up, full resolution), or None."""
         t = self._targets.get("object")
         if t is None or self._key is None or self._key[0] != "3d":
             return None
-        tex, fbo, pos, depth = t
         s = self.last_scale
         px, py = int(x) // s, int(y) // s
-        if not (0 <= px < pos.size[0] and 0 <= py < pos.size[1]):
+        if not (0 <= px < t.size[0] and 0 <= py < t.size[1]):
             return None
-        data = np.frombuffer(fbo.read(viewport=(px, py, 1, 1), components=4, attachment=1, dtype="f4"),
-                             np.float32)
+        data = self.runner.read(t, attachment=1, viewport=(px, py, 1, 1))[0, 0]
         return data[:3].astype(float) if data[3] > 0.5 else None
 
     def _compose(self, viewer, mode, viewport, window_size) -> None:
-        self.frame_fbo.use()
-        self.ctx.viewport = (0, 0, *window_size)
-        self.frame_fbo.clear(0.06, 0.06, 0.07, 1.0)
-        self.ctx.viewport = viewport
-        self.ctx.disable(self.ctx.DEPTH_TEST | self.ctx.BLEND | self.ctx.CULL_FACE)
         name = {"3d": "object", "tiled": "tile"}.get(mode, "view")
-        tex = self._targets[name][0]
-        nearest = self.last_scale == 1
-        tex.filter = (0x2600, 0x2600) if nearest else (0x2601, 0x2601)
+        tex = self._targets[name].textures[0]
+        linear = self.last_scale != 1
+        repeat = False
         if mode == "tiled":
             vw, vh = viewport[2:]
-            tex.repeat_x = tex.repeat_y = True
+            repeat = True
             # 3 tiles along the shorter side, square tiles.
             side = min(vw, vh) / 3.0
             sx, sy = vw / side, vh / side
-            self.blit["u_scale"].value = (sx, sy)
             # A tile corner at the view's top-left corner (texture rows run top down).
-            self.blit["u_offset"].value = (0.0, float(np.ceil(sy) - sy))
-            self.blit["u_grid"].value = 0.004 if viewer.tile_borders else 0.0
-            tex.filter = (0x2601, 0x2601) if abs(side - tex.size[0]) > 0.5 else (0x2600, 0x2600)
+            uniforms = {"u_scale": (sx, sy), "u_offset": (0.0, float(np.ceil(sy) - sy)),
+                        "u_grid": 0.004 if viewer.tile_borders else 0.0}
+            linear = abs(side - tex.size[0]) > 0.5
         else:
-            self.blit["u_scale"].value = (1.0, 1.0)
-            self.blit["u_offset"].value = (0.0, 0.0)
-            self.blit["u_grid"].value = 0.0
-        tex.use(0)
-        self.blit["u_tex"].value = 0
-        self.vao_empty.render(mode=self.ctx.TRIANGLES, vertices=3)
-        self.ctx.viewport = (0, 0, *window_size)
-
-    def present(self, window_size) -> None:
-        """Copy the finished frame to the window's default framebuffer."""
-        self.ctx.copy_framebuffer(self.ctx.screen, self.frame_fbo)
+            uniforms = {"u_scale": (1.0, 1.0), "u_offset": (0.0, 0.0), "u_grid": 0.0}
+        uniforms["u_tex"] = 0
+        frame = self.runner.target("viewer.frame", window_size, (("f1", 4),), depth=True)
+        self.runner.draw(runner.Draw("viewer_blit.vert", "viewer_blit.frag", frame, uniforms=uniforms,
+                                     textures={0: runner.Sampler(tex, linear=linear, repeat=repeat)},
+                                     viewport=tuple(viewport), clear=(0.06, 0.06, 0.07, 1.0)))
+        frame.fbo.viewport = (0, 0, *window_size)

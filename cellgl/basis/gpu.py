@@ -74,48 +74,38 @@ def _buffers(outputs) -> tuple[str, ...]:
     return basis + (("features",) if any(_features.flags(outputs).values()) else ())
 
 
-def _set(prog, name, value):
-    u = prog.get(name, None)          # (``name in prog`` walks every member)
-    if u is not None:
-        u.value = value
+def params_uniforms(p: Params) -> dict:
+    """The uniforms of the basis entries for ``p``, as the runner sets them (a pass's
+    ``uniforms``; arrays cut to the entries the compiler kept), the density image bound."""
+    u = {"u_seed": int(p.seed), "u_jitter": float(p.jitter), "u_min_points": int(p.min_points),
+         "u_max_points": int(p.max_points), "u_thresholds": p.thresholds.astype(np.uint32),
+         "u_period": tuple(int(v) for v in p.period), "u_minkowski_p": float(p.minkowski_p),
+         "u_out_scale": float(1.0 / p.scale), "u_orbit_radius": float(p.orbit_radius),
+         "u_orbit_turn": int(p.orbit_turn), "u_axis_scale": tuple(float(v) for v in p.axis_scale)}
+    u.update(density_uniforms(p.density_map))
+    return u
 
 
-def _set_params(prog, p: Params):
-    _set(prog, "u_seed", int(p.seed))
-    _set(prog, "u_jitter", float(p.jitter))
-    _set(prog, "u_min_points", int(p.min_points))
-    _set(prog, "u_max_points", int(p.max_points))
-    if "u_thresholds" in prog:
-        u = prog["u_thresholds"]         # the compiler may trim the array to the entries in use
-        u.write(p.thresholds[: getattr(u, "array_length", len(p.thresholds))].astype(np.uint32).tobytes())
-    _set(prog, "u_period", tuple(int(v) for v in p.period))
-    _set(prog, "u_minkowski_p", float(p.minkowski_p))
-    _set(prog, "u_out_scale", float(1.0 / p.scale))
-    _set(prog, "u_orbit_radius", float(p.orbit_radius))
-    _set(prog, "u_orbit_turn", int(p.orbit_turn))
-    _set(prog, "u_axis_scale", tuple(float(v) for v in p.axis_scale))
-    set_density(prog, p.density_map)
-
-
-def set_density(prog, enc) -> None:
-    """Set the density-map uniforms of ``prog`` (``u_density_*``) from a
-    :class:`cellgl.basis.density.DensityEncoding` and bind its image levels to storage buffer 7."""
+def density_uniforms(enc) -> dict:
+    """The density-map uniforms (``u_density_*``) of a :class:`cellgl.basis.density.DensityEncoding`
+    (None: none), its image levels bound to storage binding 7."""
     if enc is None:
-        return
-    if "u_density_thresholds" in prog:
-        prog["u_density_thresholds"].write(enc.thresholds.astype(np.uint32).tobytes())
-    if "u_density_axis" in prog:
-        u = prog["u_density_axis"]       # the compiler may trim the array to the axes in use
-        u.write(enc.axes[: getattr(u, "array_length", 4)].astype(np.int32).tobytes())
-    _set(prog, "u_density_info", enc.info)
+        return {}
     bind_density_image(enc.levels)
+    return {"u_density_thresholds": enc.thresholds.astype(np.uint32),
+            "u_density_axis": enc.axes.astype(np.int32), "u_density_info": enc.info}
+
+
+#: the density image's storage binding (``cell_density_image_level`` of the entries and of
+#: shaders/texture_uniforms.glsl reads its words there)
+DENSITY_IMAGE_BINDING = 7
 
 
 def bind_density_image(levels, ctx=None) -> None:
     """Upload (cached by content, one buffer per context) and bind density-image levels (uint32)
     to storage buffer 7 of ``ctx`` (default: cellgl's context; the viewer passes its window's)."""
     if levels is not None:
-        bind_storage(levels, 7, ctx)
+        bind_storage(levels, DENSITY_IMAGE_BINDING, ctx)
 
 
 def bind_storage(words, binding: int, ctx=None) -> None:
@@ -150,7 +140,7 @@ def cell_counts(cells: np.ndarray, p: Params) -> tuple[np.ndarray, np.ndarray]:
     out = np.empty((len(cells), 2), np.int32)
     if len(cells):
         _runner.runner().run(Pass("cell_counts.comp", "cell_counts.frag", d, len(cells), Rows(cells, 0),
-                                  [Output("count", 2, out)], setup=lambda prog: _set_params(prog, p),
+                                  [Output("count", 2, out)], uniforms=params_uniforms(p),
                                   cost=64))
     out = out.astype(np.int64)
     return out[:, 0], out[:, 1]
@@ -172,16 +162,14 @@ def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra
          group=None) -> np.ndarray:
     """Run cellular.* with defines ``d`` (and ``group``: those of a work group's cell cache) over
     ``N`` samples of ``inputs`` into ``out``; returns exact (N,) bool."""
-    def setup(prog):
-        _set_params(prog, p)
-        _set(prog, "u_smoothness", float(smoothness))
-        _set(prog, "u_loop_probe", PROBE_PASSES)
     outputs = [Output(name, _BINDING[name], a.reshape(N, -1)) for name, a in out.items()]
     outputs += [Output(name, _BINDING[name], a) for name, a in (extra or {}).items()]
     if not N:
         return np.ones(0, bool)
+    uniforms = params_uniforms(p)
+    uniforms.update(u_smoothness=float(smoothness), u_loop_probe=PROBE_PASSES)
     res = _runner.runner().run(Pass("cellular.comp", "cellular.frag", d, N, inputs, outputs,
-                                    setup=setup, flag=_FLAG, cost=_cost(d), group_defines=group))
+                                    uniforms=uniforms, flag=_FLAG, cost=_cost(d), group_defines=group))
     return np.logical_not(res.flagged, out=res.flagged)     # in place: no second (N,) array
 
 

@@ -541,14 +541,18 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
     """Compile and link (once, cached) a vertex + fragment program from ``shaders/``.
 
     See :func:`compute_program` for ``defines``, ``ctx`` and errors. The files' ``#version``
-    is lowered to :func:`glsl_version` of ``ctx``; where the fragment path runs
-    (:func:`cellgl.gl.path.gpu_path`) ``CELL_STORAGE_ROW_BITS`` is defined and the samplers
-    ``u_storage_<binding>`` are set to their units: such programs read storage words from
-    textures (``shaders/storage.glsl``, :meth:`cellgl.gl.runner.Runner.bind_words`).
+    is lowered to :func:`glsl_version` of ``ctx``. The ``#define``s are used as given: what a
+    GPU path adds (the storage words' layout) is the runner's
+    (:meth:`cellgl.gl.runner.Runner.program`, which draws with them).
     """
+    return program_entry(vertex, fragment, defines, ctx=ctx)[0]
+
+
+def program_entry(vertex: str, fragment: str, defines: Mapping | None = None, *,
+                  ctx: moderngl.Context | None = None) -> tuple:
+    """``(program, vertex array)``: :func:`program` and an empty vertex array of it (a
+    full-screen draw's: ``gl_VertexID`` only), made and kept together in the context's cache."""
     ctx = ctx if ctx is not None else get_context()
-    if path.gpu_path(ctx) == "fragment":
-        defines = {**(defines or {}), "CELL_STORAGE_ROW_BITS": path.STORAGE_ROW_BITS}
 
     def make():
         version = glsl_version(ctx)
@@ -558,13 +562,9 @@ def program(vertex: str, fragment: str, defines: Mapping | None = None, *,
             prog = ctx.program(vertex_shader=vs.text, fragment_shader=fs.text)
         except moderngl.Error as exc:
             raise _program_error(vertex, fragment, exc, vs, fs) from None
-        for unit in (5, 6, 7):   # the storage bindings read from textures (storage.glsl)
-            u = prog.get(f"u_storage_{unit}", None)
-            if isinstance(u, moderngl.Uniform):
-                u.value = unit
-        return prog, None
+        return prog, ctx.vertex_array(prog, [])
     with _lock:
-        return registry.cached(ctx, registry.program_key("program", vertex, fragment, defines=defines), make)[0]
+        return registry.cached(ctx, registry.program_key("program", vertex, fragment, defines=defines), make)
 
 
 def glsl_version(ctx: moderngl.Context) -> int:

@@ -6,8 +6,9 @@ whether it is a thread's private context (:mod:`cellgl.gl.context`), the version
 (:mod:`cellgl.gl.path`), its programs (the ONE program cache: compute entries, fragment entries
 with their vertex arrays, vertex + fragment programs; :func:`cached`, with least-recently-used
 groups for programs made per recipe), its GPU objects (storage words, sample inputs, storage
-buffers), the stores modules keep their own objects in (:func:`store`: render targets,
-:mod:`cellgl.gl.targets`) and its runners (:mod:`cellgl.gl.runner`).
+buffers, render targets and draws' vertex buffers: :mod:`cellgl.gl.draws`), the stores modules
+keep their own objects in (:func:`store`: the fragment path's target sets) and its runners
+(:mod:`cellgl.gl.runner`).
 
 How a context reaches its state: a :class:`weakref.WeakKeyDictionary` keyed by the
 ``moderngl.Context`` itself (:func:`held`; :func:`peek` without making one). Not moderngl's

@@ -1,25 +1,29 @@
-"""The seam between cellgl's two GPU paths: one :class:`Runner` per context.
+"""The seam between cellgl's two GPU paths: one :class:`Runner` per context, the only code that
+dispatches or draws.
 
 The layers above (``basis/``, ``texture/``, ``pups/``) describe a pass (:class:`Pass`: the entry of
-each path, its ``#define``s, a uniform setter, the samples' input, the outputs and their
-destination arrays, the flag) and hand it to ``runner(ctx).run(pass)``; they never ask which path
-runs. The runner of a context is chosen by :func:`cellgl.gl.path.gpu_path` (compute from OpenGL 4.3,
-else fragment; ``CELLGL_PATH`` forces one):
+each path, its ``#define``s and uniforms, the samples' input, the outputs and their destination
+arrays, the flag, the path choices it would like: ``group_defines``, ``check``) and hand it to
+``runner(ctx).run(pass)``; they never ask which path runs. The runner of a context is chosen by
+:func:`cellgl.gl.path.gpu_path` (compute from OpenGL 4.3, else fragment; ``CELLGL_PATH`` forces one):
 
 * :class:`ComputeRunner` dispatches the ``*.comp`` entry: inputs in storage buffers and textures,
-  each output a storage buffer at its binding, read back straight into the destination array;
+  each output a storage buffer at its binding, read back straight into the destination array
+  (the layout: :mod:`cellgl.gl.compute`);
 * :class:`FragmentRunner` draws the fragment entry over a render target
   ``WIDTH`` samples wide: inputs in textures, each output a tightly packed render target (R, RG or
-  RGBA of its kind: float, uint or int), location 0 the flag.
+  RGBA of its kind: float, uint or int), location 0 the flag (the layout: :mod:`cellgl.gl.fragment`).
 
 Both tile the work so that no dispatch or draw runs longer than about a second on the slowest GPU
-cellgl supports (:func:`tile_samples`; docs/architecture.md, "The seam").
+cellgl supports (:func:`tile_samples`; docs/architecture.md, "The seam"). Raster and full-screen
+draws (:class:`Draw`: PUPs' raster path, ``render_fragment``, the viewer) run through
+:meth:`Runner.draw` (:mod:`cellgl.gl.draws`), with the path's programs (:meth:`Runner.program`).
 
-What a pass is, and the layouts of both paths, are :mod:`cellgl.gl.dispatch`'s. Everything a
-context holds for cellgl, programs (the ONE cache: compute entries, fragment entries and the vertex
-+ fragment programs of the viewer), storage words, sample inputs, render targets and vertex arrays,
-lives in one registry entry per context (:mod:`cellgl.gl.registry`): dropped with the context and,
-without touching the parent's driver objects, in a forked child.
+What a pass and a draw are: :mod:`cellgl.gl.dispatch`. Everything a context holds for cellgl,
+programs (the ONE cache: compute entries, fragment entries and the vertex + fragment programs of
+the draws), storage words, sample inputs, render targets and vertex buffers, lives in one registry
+entry per context (:mod:`cellgl.gl.registry`): dropped with the context and, without touching the
+parent's driver objects, in a forked child.
 """
 from __future__ import annotations
 
@@ -27,34 +31,40 @@ from collections import OrderedDict
 
 import numpy as np
 
+from cellgl.gl import compute as _comp
 from cellgl.gl import context, glsl
-from cellgl.gl import path as _path
 from cellgl.gl import dispatch as _d
+from cellgl.gl import fragment as _frag
+from cellgl.gl import path as _path
 from cellgl.gl import registry
-from cellgl.gl.dispatch import (CHUNK_BYTES, KIND, STORAGE_BLOCK_MAX, STORAGE_BLOCK_MIN, TEXTURE_ROWS_MAX, CHUNK,
-                                LOCAL_SIZE, MAX_TARGETS, SAMPLE_ROW_BITS, SAMPLERS, STORAGE_ROW_BITS, WIDTH,
-                                Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, kind_of,
-                                target_comps, axis_tables, draw_buffers, grid_slabs, pass_defines,
-                                read_rows, slots, split_points, tile_samples)
+from cellgl.gl.compute import (CHUNK_BYTES, LOCAL_SIZE, SAMPLE_ROW_BITS, STORAGE_BLOCK_MAX, STORAGE_BLOCK_MIN,
+                               TEXTURE_ROWS_MAX, grid_slabs)
+from cellgl.gl.dispatch import (Draw, Flag, Grid, Image, Index, Output, Pass, Positions, Result, Rows, Sampler,
+                                Vertices, tile_samples)
+from cellgl.gl.fragment import (CHUNK, KIND, MAX_TARGETS, SAMPLERS, STORAGE_ROW_BITS, WIDTH, axis_tables,
+                                draw_buffers, kind_of, pass_defines, read_rows, slots, split_points, target_comps)
+from cellgl.gl.draws import FILTERS, Drawing, Target, set_uniform, set_uniforms
 from cellgl.gl.registry import release_object, drop, held, store
 
 __all__ = ["Runner", "ComputeRunner", "FragmentRunner", "runner", "held", "drop", "store", "Pass", "Output",
-           "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result", "tile_samples", "set_uniform"]
+           "Flag", "Positions", "Grid", "Rows", "Index", "Image", "Result", "tile_samples", "set_uniform",
+           "set_uniforms", "Draw", "Vertices", "Sampler", "Target"]
 
 
 def runner(ctx=None) -> Runner:
     """The runner of ``ctx`` (default: cellgl's context) for the path
     :func:`cellgl.gl.path.gpu_path` gives it, made on first use and kept in the context's entry."""
     h = held(ctx if ctx is not None else context.get_context())
-    kind = _path.gpu_path(h.ctx)
+    kind = _path.gpu_path(h.ctx)   # (looked up on the module: tests stand in for it)
     r = h.runners.get(kind)
     if r is None:
         r = h.runners[kind] = (ComputeRunner if kind == "compute" else FragmentRunner)(h)
     return r
 
 
-class Runner:
-    """The runner of one context and path; see the module's doc."""
+class Runner(Drawing):
+    """The runner of one context and path; see the module's doc (draws, render targets and the
+    objects it keeps: :class:`cellgl.gl.draws.Drawing`)."""
 
     path = ""
     #: whether invocations run in work groups of :attr:`Image.local` aligned to the image (an
@@ -63,7 +73,6 @@ class Runner:
 
     def __init__(self, h):
         self.held = h
-        self.ctx = h.ctx
         #: whether a GPU watchdog can reset the device (tiles: :func:`cellgl.gl.dispatch.tile_samples`)
         self.watchdog = _d.has_watchdog(self.ctx)
 
@@ -76,15 +85,31 @@ class Runner:
         return context.compute_program(name, defines, ctx=self.ctx, files=files, lru=lru)
 
     def program(self, vertex: str, fragment: str, defines=None):
-        """A vertex + fragment program of ``shaders/`` (:func:`cellgl.gl.context.program`)."""
-        return context.program(vertex, fragment, defines, ctx=self.ctx)
+        """A vertex + fragment program of ``shaders/`` with this path's ``#define``s
+        (:meth:`path_defines`) and sampler units, in the context's one cache."""
+        return self._program(vertex, fragment, defines)[0]
+
+    def _program(self, vertex: str, fragment: str, defines=None):
+        """``(program, empty vertex array)``: :meth:`program` and what draws it full-screen."""
+        d = {**(defines or {}), **self.path_defines()}
+        prog, vao = context.program_entry(vertex, fragment, d, ctx=self.ctx)
+        self._samplers(prog)
+        return prog, vao
+
+    def path_defines(self) -> dict:
+        """The ``#define``s this path adds to every vertex + fragment program (the storage words'
+        layout, ``shaders/storage.glsl``)."""
+        return {}
+
+    def _samplers(self, prog) -> None:
+        """Point the storage words' samplers at their units (the fragment path)."""
 
     def entry(self, fragment: str, defines=None, *, files=None, lru=None):
         """``(program, vertex array)``: the fragment entry ``shaders/<fragment>`` with
         ``tiles.vert``, ``defines`` and generated ``files``, in the context's one cache."""
         d = dict(defines or {})
         d.setdefault("CELL_FRAG_WIDTH", WIDTH)
-        d.setdefault("CELL_STORAGE_ROW_BITS", _path.STORAGE_ROW_BITS)
+        d.setdefault("CELL_STORAGE_ROW_BITS", STORAGE_ROW_BITS)
         key = registry.program_key("fragment", fragment, defines=d, files=files)
 
         def make():
@@ -97,24 +122,11 @@ class Runner:
                                        f"{glsl.map_error(str(exc), fs).strip()}")
                 err.sources = [vs, fs]
                 raise err from None
-            for name, unit in SAMPLERS.items():
-                if name in prog:
-                    prog[name].value = unit
+            set_uniforms(prog, SAMPLERS)
             return prog, self.ctx.vertex_array(prog, [])
         return registry.cached(self.ctx, key, make, lru)
 
     # -- objects --------------------------------------------------------------------------------
-
-    def _object(self, key, content, make):
-        """The GL object under ``key``, remade (the old one released) when ``content`` changed."""
-        objs = self.held.objects
-        got = objs.get(key)
-        if got is None or got[0] != content:
-            obj = make()
-            if got is not None:
-                release_object(got[1])
-            objs[key] = got = (content, obj)
-        return got[1]
 
     def input_texture(self, unit: int, array: np.ndarray, width: int = WIDTH):
         """Upload ``array`` (count, c) of int32, uint32 or float32 to texture unit ``unit``: sample
@@ -128,7 +140,7 @@ class Runner:
         if tex is None or tex.height < rows or tex.width != width or tex.components != comps or tex.dtype != dtype:
             release_object(tex)
             tex = self.ctx.texture((width, max(rows, 8)), comps, dtype=dtype)
-            tex.filter = (0x2600, 0x2600)
+            tex.filter = FILTERS[False]
             objs[("input", unit)] = (None, tex)
         full, tail = divmod(count, width)
         a = np.ascontiguousarray(array)
@@ -159,15 +171,16 @@ class Runner:
     def run(self, p: Pass) -> Result:  # pragma: no cover - each path's own
         raise NotImplementedError
 
-    def _bind_words(self, data, raw, content, binding, comps):  # pragma: no cover
-        raise NotImplementedError
+    def grouped(self, p: Pass) -> bool:
+        """Whether ``p`` runs grouped here: it asks to (``group_defines``) and this path runs
+        invocations in work groups aligned to the samples (:attr:`groups`)."""
+        return self.groups and p.group_defines is not None
 
-
-def set_uniform(prog, name: str, value) -> None:
-    """Set ``prog[name]`` where the compiler kept it (``name in prog`` walks every member)."""
-    u = prog.get(name, None)
-    if u is not None:
-        u.value = value
+    def _prepare(self, p: Pass, prog) -> None:
+        """The pass's own setup and uniforms on ``prog``."""
+        if p.setup is not None:
+            p.setup(prog)
+        set_uniforms(prog, p.uniforms)
 
 
 #: the head of the flag's region on the compute path: the counter (0) and the canary's length
@@ -181,6 +194,14 @@ class FragmentRunner(Runner):
 
     # -- programs and objects -------------------------------------------------------------------
 
+    def path_defines(self) -> dict:
+        # storage words in textures (shaders/storage.glsl: defined, the textures' row bits)
+        return {"CELL_STORAGE_ROW_BITS": STORAGE_ROW_BITS}
+
+    def _samplers(self, prog) -> None:
+        for name, unit in SAMPLERS.items():
+            set_uniform(prog, name, unit)
+
     def _bind_words(self, data, raw, content, binding, comps):
         width = 1 << STORAGE_ROW_BITS
 
@@ -190,7 +211,7 @@ class FragmentRunner(Runner):
             padded = np.zeros(rows * width * comps, np.uint32)
             padded[:data.size] = data.reshape(-1)
             tex = self.ctx.texture((width, rows), comps, padded.tobytes(), dtype="u4")
-            tex.filter = (0x2600, 0x2600)          # GL_NEAREST: an integer texture is complete only so
+            tex.filter = FILTERS[False]          # nearest: an integer texture is complete only so
             return tex
         self._object(("words", binding), (content, comps), make).use(binding)
 
@@ -218,6 +239,8 @@ class FragmentRunner(Runner):
     # -- running a pass -------------------------------------------------------------------------
 
     def run(self, p: Pass) -> Result:
+        if p.check is not None:
+            p.check(False)
         layout = [(o.name, kind_of(o.array), o.array.shape[1]) for o in p.outputs]
         per = draw_buffers(self.ctx) - (1 if p.flag is not None else 0)
         all_slots = slots(layout)
@@ -231,14 +254,14 @@ class FragmentRunner(Runner):
             d = dict(base)
             d.update(pass_defines(p.flag, draw_slots))
             prog, vao = self.entry(p.fragment, d, files=p.files, lru=p.lru)
-            if p.setup is not None:
-                p.setup(prog)
+            self._prepare(p, prog)
             progs.append((prog, vao, draw_slots))
         if isinstance(inp, Grid):
             self._grid(inp, [q for q, _, _ in progs])
         # the canary's length, one texel (never a uniform: a compiler may fold those and unroll)
         self.bind_words(np.array([_d.LOOP_CANARY_PASSES], np.uint32), _d.CANARY_UNIT)
         by_name = {o.name: o.array for o in p.outputs}
+        self.ctx.enable_only(self.ctx.NOTHING)     # no blend or depth test left by another draw
         res = Result(flagged=np.zeros(p.count, bool) if p.flag and p.flag.mode == "list" else None)
         tile = tile_samples(p.cost, self.watchdog)
         chunk = max(CHUNK, tile // WIDTH * WIDTH)
@@ -253,7 +276,7 @@ class FragmentRunner(Runner):
                 rows = -(-m // WIDTH)
                 fbo = self._target(formats, rows)
                 fbo.use()
-                for viewport in _tiles(rows, tile):
+                for viewport in _frag.tiles(rows, tile):
                     fbo.viewport = viewport
                     vao.render(mode=self.ctx.TRIANGLES, vertices=3)
                 att = 0
@@ -313,19 +336,6 @@ class FragmentRunner(Runner):
 # The compute path
 # ---------------------------------------------------------------------------------------------
 
-def _tiles(rows: int, tile: int):
-    """The viewports of the draws over ``rows`` rows of WIDTH samples, at most ``tile`` samples
-    each: whole rows, or (a tile under a row) runs of one row."""
-    if tile >= WIDTH:
-        step = tile // WIDTH
-        for r0 in range(0, rows, step):
-            yield (0, r0, WIDTH, min(step, rows - r0))
-        return
-    for r in range(rows):
-        for x0 in range(0, WIDTH, tile):
-            yield (x0, r, min(tile, WIDTH - x0), 1)
-
-
 class ComputeRunner(Runner):
     """OpenGL 4.3: dispatches of the ``*.comp`` entry, outputs in storage buffers."""
 
@@ -373,13 +383,15 @@ class ComputeRunner(Runner):
     def run(self, p: Pass) -> Result:
         """Dispatch ``p`` in tiles (the watchdog's); the tiles of a chunk write ranges of one
         buffer per output, read back once per chunk straight into the destination arrays."""
+        grouped = self.grouped(p)
+        if p.check is not None:
+            p.check(grouped)
         d = dict(p.defines)
-        d.update(p.group_defines or {})
+        d.update(p.group_defines if grouped else {})
         d.setdefault("CELL_LOCAL_SIZE", LOCAL_SIZE)
         local = int(d["CELL_LOCAL_SIZE"])
         prog = self.compute_program(p.compute, d, files=p.files, lru=p.lru)
-        if p.setup is not None:
-            p.setup(prog)
+        self._prepare(p, prog)
         inp = p.inputs
         if isinstance(inp, Positions):
             set_uniform(prog, "u_scale", float(inp.scale))
@@ -480,41 +492,31 @@ class ComputeRunner(Runner):
                 yield start, slab[4] * slab[5] * groups[2], groups, (("u_slab", slab[:4]), ("u_slab_size", slab[4:]))
             return
         if isinstance(inp, Image):
-            w, h = inp.width, inp.height
-            lx, ly = inp.local
-            rows = max(inp.align, (step // max(1, w)) // inp.align * inp.align)
-            for y0 in range(0, h, rows):
-                r = min(rows, h - y0)
-                yield y0 * w, r * w, (-(-w // lx), -(-r // ly), 1), (("u_row0", y0),)
+            align = inp.group_align if self.grouped(p) and inp.group_align else inp.align
+            yield from _comp.image_bands(inp.width, inp.height, inp.local,
+                                         max(align, (step // max(1, inp.width)) // align * align))
             return
         for first in range(0, p.count, step):
             m = min(step, p.count - first)
             yield first, m, (-(-m // local), 1, 1), ()
 
     def _upload_positions(self, prog, pts: np.ndarray) -> None:
-        """float64 positions (m, d) as the 32-bit words of an RGBA32UI texture
-        2^SAMPLE_ROW_BITS texels wide on unit 0 (``u_samples``), d / 2 texels per sample, no padding
-        between samples; kept and grown across calls."""
-        words = np.ascontiguousarray(pts, dtype=np.float64).reshape(-1).view(np.uint32)
+        """float64 positions (m, d) on unit 0 (``u_samples``) as :func:`cellgl.gl.compute.
+        sample_words` lays them out; the texture kept and grown across calls."""
+        full, rest = _comp.sample_words(pts)
         width = 1 << SAMPLE_ROW_BITS
-        rows, tail = divmod(words.size, 4 * width)
-        if rows + 1 > TEXTURE_ROWS_MAX:
-            raise RuntimeError(f"internal error: {words.size // 4} texels of positions need more than "
-                               f"{TEXTURE_ROWS_MAX} rows of {width}")
+        rows = full.size // (4 * width)
         objs = self.held.objects
         got = objs.get("samples")
         tex = got[1] if got is not None else None
         if tex is None or tex.height < rows + 1:
             release_object(tex)
             tex = self.ctx.texture((width, min(TEXTURE_ROWS_MAX, max(rows + 1, (rows + 1) * 5 // 4))), 4, dtype="u4")
-            tex.filter = (0x2600, 0x2600)        # GL_NEAREST: an integer texture is complete only so
+            tex.filter = FILTERS[False]         # an integer texture is complete only so
             objs["samples"] = (None, tex)
         if rows:
-            tex.write(words[: rows * width * 4], viewport=(0, 0, width, rows))
-        if tail:
-            rest = words[rows * width * 4:]
-            if tail % 4:                         # 3D, an odd count: the last texel is half a sample
-                rest = np.concatenate([rest, np.zeros(4 - tail % 4, np.uint32)])
+            tex.write(full, viewport=(0, 0, width, rows))
+        if rest.size:
             tex.write(rest, viewport=(0, rows, rest.size // 4, 1))
         tex.use(0)
         set_uniform(prog, "u_samples", 0)

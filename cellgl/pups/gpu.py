@@ -7,7 +7,6 @@ import time
 import numpy as np
 
 from cellgl.basis.gpu import DRIVER_LOOP_LIMIT
-from cellgl.gl.targets import float_target
 
 from cellgl.pups.graph import PupsGraph
 from cellgl.pups.pack import PupsPacked, candidate_stream
@@ -92,9 +91,10 @@ def evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: di
     """PUPs over the pixel grid (``shaders/pups.comp`` / ``pups_samples.frag``) on the context's
     runner (:mod:`cellgl.gl.runner`): the candidate grid as records (storage buffers or RGBA32UI
     textures), the values in a float output, the labels (mode ``label``) in an int one. Where the
-    runner runs work groups and the grid cells are whole groups (``CELL_PUPS_GROUP_CELLS``), a group
-    stays in one grid cell; otherwise the lanes of a SIMD vector may lie in different cells: the
-    loop budget is checked for that."""
+    grid cells are whole work groups the pass asks to group them (``CELL_PUPS_GROUP_CELLS``: a
+    group stays in one grid cell); the runner does where its path runs work groups. Otherwise the
+    lanes of a SIMD vector may lie in different cells: the loop budget is checked for whichever
+    layout runs (:func:`_check_budget`)."""
     from cellgl.gl import runner as R
 
     t0 = time.perf_counter()
@@ -102,32 +102,26 @@ def evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: di
     c = packed.values.shape[1]
     w, h = packed.width, packed.height
     labels = mode == PupsMode.LABEL
-    group_cells = r.groups and packed.tile % _LOCAL[0] == 0 and packed.tile % _LOCAL[1] == 0
+    can_group = packed.tile % _LOCAL[0] == 0 and packed.tile % _LOCAL[1] == 0
     defines = {"CELL_PUPS_CHANNELS": c, "CELL_PUPS_MODE": int(mode)}
-    if group_cells:
-        defines["CELL_PUPS_GROUP_CELLS"] = 1
-    _check_budget(packed, group_cells)
     cells, rec = _cell_stream(packed)
     t1 = time.perf_counter()
-    r.bind_records(cells, 0)
-    r.bind_records(rec, 1)
     vals = np.empty((h, w, c), np.float32)
     labs = np.empty((h, w), np.int32) if labels else None
     outputs = [R.Output("values", 2, vals.reshape(w * h, c))]
     if labels:
         outputs.append(R.Output("labels", 3, labs.reshape(w * h, 1)))
-
-    def setup(prog):
-        for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
-                        ("u_tile", packed.tile), ("u_grid_w", packed.grid_shape[1]),
-                        ("u_epsilon", epsilon), ("u_tile_groups", packed.tile // _LOCAL[0])):
-            if name in prog:
-                prog[name] = v
+    uniforms = {"u_size": (w, h), "u_origin": packed.origin, "u_pixel": packed.pixel, "u_tile": packed.tile,
+                "u_grid_w": packed.grid_shape[1], "u_epsilon": epsilon, "u_tile_groups": packed.tile // _LOCAL[0]}
+    p = R.Pass("pups.comp", "pups_samples.frag", defines, w * h,
+               R.Image(w, h, _LOCAL, _LOCAL[1], group_align=packed.tile if can_group else None), outputs,
+               uniforms=uniforms, cost=max(1, loop_budget(packed, False) // SIMD_LANES),
+               group_defines={"CELL_PUPS_GROUP_CELLS": 1} if can_group else None,
+               check=lambda grouped: _check_budget(packed, grouped))
+    r.bind_records(cells, 0)
+    r.bind_records(rec, 1)
     t2 = time.perf_counter()
-    if w * h:
-        r.run(R.Pass("pups.comp", "pups_samples.frag", defines, w * h,
-                     R.Image(w, h, _LOCAL, packed.tile if group_cells else _LOCAL[1]), outputs,
-                     setup=setup, cost=max(1, loop_budget(packed, False) // SIMD_LANES)))
+    r.run(p)          # (checks the loop budget first, also of an empty image)
     t3 = time.perf_counter()
     timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=0.0)
     return vals, labs
@@ -244,17 +238,15 @@ def evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings:
     the division (interpolate) is done here. Modes ``interpolate`` and ``weighted_sum``, at
     most :func:`_raster_pairs_limit` axis pairs per point (see :func:`raster_applies`).
     """
-    from cellgl.gl.context import program
-    from cellgl.gl.runner import store
+    from cellgl.gl import runner as R
+
     t0 = time.perf_counter()
     ctx = _context()
-    import moderngl
     w, h = packed.width, packed.height
     k, corners, nv = _raster_polygons(packed)
     pairs = (int(packed.axis_count[k].max()) + 1) // 2 if k.size else 0
     if pairs > _raster_pairs_limit(ctx):
         raise ValueError("too many axes per point for method='raster'")
-    prog = program("pups_raster.vert", "pups_raster.frag", {"CELL_PUPS_RASTER_PAIRS": pairs})
     # the polygons' vertices, each with its instance's data; fan triangles (0, v, v + 1)
     n = k.size
     vmax = corners.shape[1]
@@ -283,34 +275,21 @@ def evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings:
     base = first[tri_inst]
     idx = np.stack([base, base + tri_v, base + tri_v + 1], axis=1).astype("<u4").reshape(-1)
     t1 = time.perf_counter()
-    vbuf = ctx.buffer(vert.tobytes() if vert.size else b"\0" * (4 * nf))
-    ibuf = ctx.buffer(idx.tobytes() if idx.size else b"\0" * 4)
-    target = float_target(store("pups.raster", ctx), ctx, w, h)
-    fbo, tex = target["objects"]
-    # the readback array is kept too: reading into pages already mapped saves ~10 ms at 1000^2
-    acc = target.setdefault("acc", np.empty((h, w, 4), dtype=np.float32))
+    r = R.runner(ctx)
+    target = r.target("pups.raster", (w, h))
     fmt = "2f 4f 4f" + (f" {4 * pairs}f" if pairs else "")
-    names = ["in_corner", "in_point", "in_value"] + (["in_axes"] if pairs else [])
-    vao = ctx.vertex_array(prog, [(vbuf, fmt, *names)], index_buffer=ibuf, index_element_size=4)
-    for name, v in (("u_size", (w, h)), ("u_origin", packed.origin), ("u_pixel", packed.pixel),
-                    ("u_epsilon", epsilon)):
-        if name in prog:
-            prog[name] = v
+    names = ("in_corner", "in_point", "in_value") + (("in_axes",) if pairs else ())
+    draw = R.Draw("pups_raster.vert", "pups_raster.frag", target, {"CELL_PUPS_RASTER_PAIRS": pairs},
+                  uniforms={"u_size": (w, h), "u_origin": packed.origin, "u_pixel": packed.pixel,
+                            "u_epsilon": epsilon},
+                  vertices=R.Vertices(vert, fmt, names, idx, key="pups.raster"),
+                  clear=(0.0, 0.0, 0.0, 0.0), blend="add")
     t2 = time.perf_counter()
-    fbo.use()
-    fbo.viewport = (0, 0, w, h)
-    fbo.clear(0.0, 0.0, 0.0, 0.0)
-    ctx.enable(moderngl.BLEND)
-    ctx.blend_func = moderngl.ONE, moderngl.ONE
-    ctx.blend_equation = moderngl.FUNC_ADD
-    try:
-        if idx.size:
-            vao.render(mode=moderngl.TRIANGLES, vertices=int(idx.size))
-        ctx.finish()
-    finally:
-        ctx.disable(moderngl.BLEND)
+    r.draw(draw)
+    r.finish()
     t3 = time.perf_counter()
-    fbo.read_into(acc, components=4, dtype="f4")
+    # into the target's kept array: reading into pages already mapped saves ~10 ms at 1000^2
+    acc = r.read(target)
     c = packed.values.shape[1]
     if mode == PupsMode.WEIGHTED_SUM:
         vals = acc[..., :c].copy()
@@ -320,8 +299,6 @@ def evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings:
         with np.errstate(divide="ignore", invalid="ignore"):
             vals = acc[..., :c] / wsum
         vals[wsum[..., 0] == 0] = 0
-    for o in (vao, vbuf, ibuf):
-        o.release()
     t4 = time.perf_counter()
     timings.update(pack=t1 - t0, upload=t2 - t1, gpu=t3 - t2, readback=t4 - t3)
     return vals, None

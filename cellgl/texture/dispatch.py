@@ -63,11 +63,11 @@ def output_mask(channels) -> int:
 
 
 @gl_call
-def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersample: int = 1, pan=None,
+def run(recipe, channels, count: int, uniforms, *, grid: bool, points=None, supersample: int = 1, pan=None,
         pan_only: bool = False, probe: bool = False, groups=None, footprint=None) -> dict:
     """Run the recipe's entry over ``count`` samples and return ``{channel: array}`` (flat, one row
-    per sample). ``setup(prog)`` sets the entry's own uniforms (the image and tile of a grid, the
-    filter width of points); ``points`` (count, 4) float32 (u, v, z, -): the samples when not a
+    per sample). ``uniforms``: the entry's own (the image and tile of a grid, the filter width of
+    points; a dict the runner sets, or a callable ``setup(prog)`` run first); ``points`` (count, 4) float32 (u, v, z, -): the samples when not a
     ``grid``; ``supersample``: n of the n x n sub-pixel grid (grid only); ``pan`` (du, dv, dz):
     added to the samples' texture position in float64, through the split origins; ``pan_only``:
     the last call ran this recipe with the same channels (only the pan changed); ``probe``: the
@@ -118,23 +118,23 @@ def run(recipe, channels, count: int, setup, *, grid: bool, points=None, supersa
     files = ({"texture_uniforms.glsl": texture.glsl_baked_uniforms_file(recipe, bool(mask & 32), mean=mean)}
              if baked else None)
 
-    def prog_setup(prog):
-        if not baked:
-            texture.set_uniforms(prog, recipe, pan=(0.0, 0.0) if pan is None else pan,
-                                 pan_only=pan_only and pan is not None, mean=mean)
-        elif recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
-            texture.set_uniforms(prog, recipe, mean=mean)     # binds the density or cell image (no uniforms left)
-        if "u_loop_probe" in prog:
-            prog["u_loop_probe"].value = PROBE_PASSES
-        setup(prog)
-
     searches = _searches(recipe) * (int(supersample) ** 2 + 1 if supersample > 1 else 1)
     inputs = _runner.Index() if grid else _runner.Rows(np.ascontiguousarray(points, np.float32), 0)
     if count:
+        if not baked:
+            values = texture.recipe_uniforms(recipe, pan=(0.0, 0.0) if pan is None else pan,
+                                             pan_only=pan_only and pan is not None, mean=mean)
+        else:
+            values = {}
+            if recipe.values["density_map"] == "image" or recipe.values["cell_color"] == "image":
+                texture.recipe_uniforms(recipe, pan_only=True)    # binds the density or cell image
+        values["u_loop_probe"] = PROBE_PASSES
+        values.update(uniforms if isinstance(uniforms, dict) else {})
         if groups is not None:
             _runner.runner().bind_records(groups, GROUPS_BINDING)
         res = _runner.runner().run(_runner.Pass(
-            "texture.comp", "texture_samples.frag", d, count, inputs, outputs, setup=prog_setup,
+            "texture.comp", "texture_samples.frag", d, count, inputs, outputs,
+            setup=None if isinstance(uniforms, dict) else uniforms, uniforms=values,
             flag=_runner.Flag("canary", 9, "count"), files=files,
             cost=searches * SEARCH_PASSES + (PROBE_PASSES if probe else 0),
             lru=("texture.baked", MAX_BAKED) if baked else None))

@@ -17,7 +17,7 @@ from cellgl.texture import antialias, dispatch
 from cellgl.texture.presets import load_recipe
 from cellgl.texture.recipe import CHANNELS, check_channels
 from cellgl.texture.schema import check_tile, whole_number
-from cellgl.texture.shader import defines, set_view
+from cellgl.texture.shader import defines, view_uniforms
 
 __all__ = ["evaluate", "render", "render_fragment", "measure_range", "point_range", "check_points", "OUTPUTS",
            "MAX_SIDE", "POINT_LIMIT"]
@@ -102,14 +102,12 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
 
         return texture_reference.evaluate(recipe, pts, outputs, duvz)
 
-    def set_filter(prog):
-        if "u_filter_width" in prog:
-            prog["u_filter_width"].value = tuple(float(c) for c in duvz)
+    filter_uniforms = {"u_filter_width": tuple(float(c) for c in duvz)}
 
     def run_points(local, **kw):
         p4 = np.zeros((len(local), 4), np.float32)
         p4[:, :3] = local
-        return dispatch.run(recipe, outputs, len(local), set_filter, grid=False, points=p4, footprint=duvz, **kw)
+        return dispatch.run(recipe, outputs, len(local), filter_uniforms, grid=False, points=p4, footprint=duvz, **kw)
 
     # The shader adds the sample's texture position to the split origins in float32, which holds
     # only the first few cells exactly. So points go as their fraction, and the origins of their
@@ -120,7 +118,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
         return run_points(pts)
     v = recipe.values
     if v["density_map"] == "none" and v["cell_color"] != "image":
-        return _far_points(recipe, outputs, pts, whole, set_filter, duvz)
+        return _far_points(recipe, outputs, pts, whole, filter_uniforms, duvz)
     # A density map or cell image placed per pan: a pass per whole part (such recipes only)
     order = np.lexsort(whole.T[::-1])           # points of one whole part next to each other
     ws = whole[order]
@@ -141,7 +139,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
 GROUP_POINTS = 1 << 22
 
 
-def _far_points(recipe, outputs, pts, whole, set_filter, duvz) -> dict:
+def _far_points(recipe, outputs, pts, whole, filter_uniforms, duvz) -> dict:
     """Points spread over many whole parts in one pass per :data:`GROUP_POINTS`: each point's
     fraction and group index (its row's fourth component), and each group's origins split in
     float64 as a pan (:func:`cellgl.texture.shader.group_records`, ``shaders/lib/
@@ -158,7 +156,7 @@ def _far_points(recipe, outputs, pts, whole, set_filter, duvz) -> dict:
         p4[:, :3] = pts[a:a + GROUP_POINTS] - w
         p4[order, 3] = np.cumsum(first) - 1     # each point's group
         keys = ws[first]
-        parts.append(dispatch.run(recipe, outputs, len(w), set_filter, grid=False, points=p4,
+        parts.append(dispatch.run(recipe, outputs, len(w), filter_uniforms, grid=False, points=p4,
                                   groups=group_records(recipe, keys), footprint=duvz))
     if len(parts) == 1:
         return parts[0]
@@ -277,12 +275,7 @@ def render(recipe, width: int, height: int, *, channels=("color",), x0: int = 0,
         if n_sub > 1:
             res.update(_supersample_reference(recipe, pts, channels, duvz, samples))
     else:
-        def setup(prog):
-            for name, value in (("u_size", (width, height)), ("u_origin", (x0, y0)),
-                                ("u_tile", (tw, th)), ("u_depth", int(depth or 0))):
-                if name in prog:
-                    prog[name].value = value
-
+        setup = {"u_size": (width, height), "u_origin": (x0, y0), "u_tile": (tw, th), "u_depth": int(depth or 0)}
         # every pixel's footprint (sub-pixels: smaller): where no octave fades at it, the octave
         # mean is never read and not measured (antialias.fades)
         res = dispatch.run(recipe, channels, tw * th * D, setup, grid=True, supersample=n_sub,
@@ -321,27 +314,20 @@ def render_fragment(recipe, width: int, height: int, channel: str = "color", *,
     read back with row 0 at the top (for tests; the viewer draws to its window instead).
 
     ``view`` (u0, v0, du, dv): the target shows ``uv = (u0, v0) + (s, t) * (du, dv)``, ``s, t``
-    in [0, 1] (set by :func:`set_view`: the pan goes into the split origins). Fragment uniforms
+    in [0, 1] (:func:`cellgl.texture.shader.view_uniforms`: the pan goes into the split origins). Fragment uniforms
     besides the recipe's: ``u_view`` (vec4: uv = xy + (v_uv.x, 1 - v_uv.y) * zw) and
     ``u_channel`` (index into :data:`cellgl.texture.recipe.CHANNELS`).
     """
     from cellgl.gl import context, runner
-    from cellgl.gl.targets import float_target
 
     recipe = load_recipe(recipe)
     ctx = context.get_context()
-    prog = context.program("fullscreen.vert", "texture.frag", defines(recipe, (channel,)))
-    set_view(prog, recipe, view[:2], view[2:])
-    if "u_channel" in prog:
-        prog["u_channel"].value = CHANNELS.index(channel)
-    fbo, tex = float_target(runner.store("texture.render_fragment", ctx), ctx, width, height)["objects"]
-    fbo.use()
-    fbo.viewport = (0, 0, width, height)
-    vao = ctx.vertex_array(prog, [])
-    vao.render(mode=ctx.TRIANGLES, vertices=3)
-    data = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32).reshape(height, width, 4)
-    vao.release()
-    return data[::-1].copy()
+    r = runner.runner(ctx)
+    uniforms = view_uniforms(recipe, view[:2], view[2:], ctx=ctx)
+    uniforms["u_channel"] = CHANNELS.index(channel)
+    target = r.target("texture.render_fragment", (width, height))
+    r.draw(runner.Draw("fullscreen.vert", "texture.frag", target, defines(recipe, (channel,)), uniforms=uniforms))
+    return r.read(target)[::-1].copy()
 
 
 # ------------------------------------------------------------------------------ normalisation

@@ -8,9 +8,12 @@
 // the warp lattice's cell and fraction. They replace the uniforms' (pan 0): the same values, so
 // the same bits, as a pass per group panned by its whole part. CELL_TEX_GROUP_OCTAVES: the
 // octaves a sample reads (cellgl.texture.shader.group_octaves; the others are never read).
-// The entry defines CELL_TEX_GROUP_RECORD(k): the uvec4 record k (a storage buffer on the
-// compute path, an RGBA32UI texture on the fragment path).
+// The records are storage binding 11's (../storage.glsl: a storage buffer or a texture, as the
+// path has them; cellgl.texture.dispatch.GROUPS_BINDING).
 
+#define CELL_STORAGE_RECORDS_11
+#include "../storage.glsl"
+#define CELL_TEX_GROUP_RECORD(k) cell_storage_record_11(k)
 #define CELL_TEX_GROUP_RECORDS (4 * CELL_TEX_GROUP_OCTAVES + 2)
 
 void cell_texture_group(inout CellTextureParams t, int g)
