@@ -117,7 +117,7 @@ examples:
 """
 
 
-def add_sweep_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+def add_sweep_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
     """Declare ``cellgl sweep``'s arguments on a subparsers object."""
     p = sub.add_parser(
         "sweep", help="bake many variations of a recipe (--set seed=0..9999) on Dask",

@@ -2,13 +2,14 @@
 (docs/playground.md; :mod:`cellgl.playground.site` writes it)."""
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 
 __all__ = ["add_parser", "run_cli"]
 
 
-def add_parser(sub):
+def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> argparse.ArgumentParser:
     """Declare ``cellgl playground`` on the CLI's subparsers."""
     p = sub.add_parser(
         "playground", help="write a static web page to try every texture preset in the browser",
@@ -25,7 +26,7 @@ def add_parser(sub):
     return p
 
 
-def run_cli(args) -> int:
+def run_cli(args: argparse.Namespace) -> int:
     """Run ``cellgl playground``; returns the exit status."""
     from cellgl.io.tempfiles import check_output_dir
     from cellgl.playground.site import build_site
