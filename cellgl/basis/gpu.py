@@ -170,7 +170,9 @@ def _run(d: dict, p: Params, smoothness: float, inputs, N: int, out: dict, extra
     uniforms.update(u_smoothness=float(smoothness), u_loop_probe=PROBE_PASSES)
     res = _runner.runner().run(Pass("cellular.comp", "cellular.frag", d, N, inputs, outputs,
                                     uniforms=uniforms, flag=_FLAG, cost=_cost(d), group_defines=group))
-    return np.logical_not(res.flagged, out=res.flagged)     # in place: no second (N,) array
+    flagged = res.flagged
+    assert flagged is not None              # _FLAG is a "list" flag
+    return np.logical_not(flagged, out=flagged)     # in place: no second (N,) array
 
 
 @gl_call

@@ -286,6 +286,7 @@ class FragmentRunner(Runner):
                     if p.flag.mode == "count":
                         res.cut += m - int(np.count_nonzero(flags))
                     else:
+                        assert res.flagged is not None          # a "list" flag: made above
                         np.logical_or(res.flagged[first:first + m], flags[:, 0] == 0,
                                       out=res.flagged[first:first + m])
                     att = 1
@@ -299,6 +300,7 @@ class FragmentRunner(Runner):
                         read_rows(fbo, k_att, tmp, KIND[kind][0])
                         dest[:, c0:c0 + k] = tmp[:, :k]
             if ok is not None:
+                assert res.flagged is not None, "points split on the CPU need a 'list' flag to report them"
                 res.flagged[first:first + m] |= ~ok
         return res
 
@@ -387,7 +389,7 @@ class ComputeRunner(Runner):
         if p.check is not None:
             p.check(grouped)
         d = dict(p.defines)
-        d.update(p.group_defines if grouped else {})
+        d.update((p.group_defines or {}) if grouped else {})
         d.setdefault("CELL_LOCAL_SIZE", LOCAL_SIZE)
         local = int(d["CELL_LOCAL_SIZE"])
         prog = self.compute_program(p.compute, d, files=p.files, lru=p.lru)
@@ -479,6 +481,7 @@ class ComputeRunner(Runner):
             if p.flag.mode == "count":
                 res.cut += nbad
             elif nbad:
+                assert res.flagged is not None          # a "list" flag: made by the caller
                 idx = np.frombuffer(flag.read(4 * nbad, offset=k * stride + 8), dtype=np.uint32)
                 res.flagged[first + idx.astype(np.int64)] = True
 

@@ -109,7 +109,7 @@ def evaluate_gpu(packed: PupsPacked, mode: PupsMode, epsilon: float, timings: di
     vals = np.empty((h, w, c), np.float32)
     labs = np.empty((h, w), np.int32) if labels else None
     outputs = [R.Output("values", 2, vals.reshape(w * h, c))]
-    if labels:
+    if labs is not None:
         outputs.append(R.Output("labels", 3, labs.reshape(w * h, 1)))
     uniforms = {"u_size": (w, h), "u_origin": packed.origin, "u_pixel": packed.pixel, "u_tile": packed.tile,
                 "u_grid_w": packed.grid_shape[1], "u_epsilon": epsilon, "u_tile_groups": packed.tile // _LOCAL[0]}
@@ -275,8 +275,8 @@ def evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings:
     base = first[tri_inst]
     idx = np.stack([base, base + tri_v, base + tri_v + 1], axis=1).astype("<u4").reshape(-1)
     t1 = time.perf_counter()
-    r = R.runner(ctx)
-    target = r.target("pups.raster", (w, h))
+    run = R.runner(ctx)
+    target = run.target("pups.raster", (w, h))
     fmt = "2f 4f 4f" + (f" {4 * pairs}f" if pairs else "")
     names = ("in_corner", "in_point", "in_value") + (("in_axes",) if pairs else ())
     draw = R.Draw("pups_raster.vert", "pups_raster.frag", target, {"CELL_PUPS_RASTER_PAIRS": pairs},
@@ -285,11 +285,11 @@ def evaluate_raster(packed: PupsPacked, mode: PupsMode, epsilon: float, timings:
                   vertices=R.Vertices(vert, fmt, names, idx, key="pups.raster"),
                   clear=(0.0, 0.0, 0.0, 0.0), blend="add")
     t2 = time.perf_counter()
-    r.draw(draw)
-    r.finish()
+    run.draw(draw)
+    run.finish()
     t3 = time.perf_counter()
     # into the target's kept array: reading into pages already mapped saves ~10 ms at 1000^2
-    acc = r.read(target)
+    acc = run.read(target)
     c = packed.values.shape[1]
     if mode == PupsMode.WEIGHTED_SUM:
         vals = acc[..., :c].copy()

@@ -132,6 +132,7 @@ def _evaluate(recipe, points, outputs, backend, filter_width, split_far: bool = 
             out = {k: np.empty((len(pts),) + a.shape[1:], a.dtype) for k, a in res.items()}
         for k, a in res.items():
             out[k][idx] = a
+    assert out is not None                  # at least one group: pts is not empty here
     return out
 
 

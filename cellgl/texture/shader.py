@@ -59,7 +59,9 @@ _ENUMS = (("CELL_TEX_FRACTAL_", FRACTAL_MODES), ("CELL_TEX_RAMP_", RAMP_MODES),
           ("CELL_TEX_NORMAL_", NORMAL_CONVENTIONS))
 
 #: most fractal octaves (the table's bound on ``octaves``): the length of the origin arrays
-MAX_OCTAVES = int(math.ceil(PARAMS_BY_NAME["octaves"].hi))
+_OCTAVES_HI = PARAMS_BY_NAME["octaves"].hi
+assert _OCTAVES_HI is not None                  # the table bounds every float parameter
+MAX_OCTAVES = int(math.ceil(_OCTAVES_HI))
 
 #: fields of CellTextureParams that are not table parameters (computed on the CPU)
 _DERIVED = (
@@ -429,7 +431,7 @@ def pan_uniform_values(recipe, pan=(0.0, 0.0)) -> dict:
     recipe = load_recipe(recipe)
     out = {}
     for k, a in lattice_origins(recipe, pan).items():
-        rows = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in np.atleast_2d(a)]
+        rows: list = [tuple(int(c) if a.dtype == np.int32 else float(c) for c in row) for row in np.atleast_2d(a)]
         out["u_" + k] = rows if a.ndim == 2 else rows[0]
     encs = density_encodings(recipe, pan)
     if encs is not None:
