@@ -110,7 +110,8 @@ class Viewer:
         try:
             api = self._open_window(w, h, hidden, errors)
         finally:
-            glfw.set_error_callback(None)     # back to pyGLFW's default reporting
+            # back to pyGLFW's default reporting: its code takes None for that, its stub omits it
+            glfw.set_error_callback(None)  # type: ignore[arg-type]
         self._take_context()
         glfw.swap_interval(1 if vsync and not hidden else 0)
         self.ctx = context.attach_current(context.REQUIRED_GL, api)
@@ -165,6 +166,7 @@ class Viewer:
         io.config_flags |= imgui.ConfigFlags_.nav_enable_keyboard.value
         imgui.style_colors_dark()
         addr = ctypes.cast(self.window, ctypes.c_void_p).value
+        assert addr is not None, "the window is open (_open_window returns only with one)"
         imgui.backends.glfw_init_for_opengl(addr, True)
         imgui.backends.opengl3_init("#version 330")
 
@@ -178,7 +180,7 @@ class Viewer:
         imgui.destroy_context(self.imgui_ctx)
         self.ctx.release()
         glfw.destroy_window(self.window)
-        self.window = None
+        del self.window      # no window now: close() again finds none (the getattr above)
         glfw.terminate()
 
     def __enter__(self):
@@ -272,10 +274,12 @@ class Viewer:
             self.panzoom.fit(vw, vh)
         interacting = imgui.is_any_item_active() or self._view_drag or (self.mode == "anim" and self.playing)
         self.renderer.draw(self, (vx, h - vy - vh, vw, vh), (w, h), interacting)
-        self.renderer.frame_fbo.use()
+        frame_fbo = self.renderer.frame_fbo
+        assert frame_fbo is not None, "Renderer.draw made the frame's framebuffer (_frame)"
+        frame_fbo.use()
         imgui.backends.opengl3_render_draw_data(imgui.get_draw_data())
         # the finished frame to the window's own framebuffer (window code: the window's screen)
-        self.ctx.copy_framebuffer(self.ctx.screen, self.renderer.frame_fbo)
+        self.ctx.copy_framebuffer(self.ctx.screen, frame_fbo)
         glfw.swap_buffers(self.window)
         if glfw.window_should_close(self.window):
             self._should_close = True

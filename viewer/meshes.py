@@ -7,6 +7,8 @@ normal per vertex, ``indices`` uint32 (M, 3) counter-clockwise triangles. Object
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 __all__ = ["SHAPES", "mesh", "sphere", "torus", "cube", "plane"]
@@ -30,7 +32,8 @@ def sphere(segments: int = 96, rings: int = 48) -> tuple[np.ndarray, np.ndarray]
     return np.hstack([n, n]).astype(np.float32), _grid_indices(segments, rings)[:, ::-1].copy()
 
 
-def torus(major: int = 96, minor: int = 48, r_major: float = 0.7, r_minor: float = 0.3):
+def torus(major: int = 96, minor: int = 48, r_major: float = 0.7,
+          r_minor: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
     """Torus around the y axis, outer radius 1."""
     u = np.linspace(0.0, 2.0 * np.pi, major + 1)
     v = np.linspace(0.0, 2.0 * np.pi, minor + 1)
@@ -70,7 +73,7 @@ def cube(divisions: int = 1) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack(verts).astype(np.float32), np.vstack(idx).astype(np.uint32)
 
 
-SHAPES = {"sphere": sphere, "torus": torus, "cube": cube, "plane": plane}
+SHAPES: dict[str, Callable[[], tuple[np.ndarray, np.ndarray]]] = {"sphere": sphere, "torus": torus, "cube": cube, "plane": plane}
 
 
 def mesh(name: str) -> tuple[np.ndarray, np.ndarray]:

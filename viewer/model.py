@@ -175,6 +175,7 @@ class Model:
                             period=period, outputs=("F", "id"), density_map=self._density_map(),
                             stretch=[1.0 / w for w in texture_domain.axis_scale(v)[: len(x)]],
                             orbit_radius=v["orbit_radius"], orbit_phase=v["orbit_phase"])
+        assert r.F is not None and r.id is not None, "outputs=(\"F\", \"id\") asked for both"
         return {"F": [float(f) for f in r.F[0]], "id": int(r.id[0, 0]), "pos": tuple(float(c) for c in x)}
 
     def _density_map(self):

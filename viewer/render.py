@@ -104,13 +104,15 @@ class Renderer:
                 return s
         return SCALES[-1]
 
-    def draw(self, viewer, viewport, window_size, interacting: bool) -> None:
-        """Render the view (if needed) and copy it into ``viewport`` (x, y, w, h; GL, y up)."""
+    def draw(self, viewer, viewport, window_size, interacting: bool) -> bool:
+        """Render the view (if needed) and copy it into ``viewport`` (x, y, w, h; GL, y up).
+        True when the view was rendered anew (not only copied)."""
         self._frame(window_size)
         vx, vy, vw, vh = viewport
         mode = viewer.mode
         scale = self._choose_scale(interacting, vw, vh)
-        key = (mode, self.model.version, vw, vh, scale)
+        # what the view shows: the mode's own state is appended to the common part
+        key: tuple = (mode, self.model.version, vw, vh, scale)
         if mode == "3d":
             o = viewer.orbit
             key += (viewer.shape, o.yaw, o.pitch, o.distance, viewer.bump_view)
