@@ -124,15 +124,22 @@ def test_lint_and_types_run_in_the_workflow_and_in_ci_run():
     assert {d.split(">")[0].split("=")[0] for d in extras["dev"]} >= {"ruff", "mypy"}
 
 
-def test_mypy_checks_all_of_cellgl_and_its_module_lists_name_real_modules():
-    """pyproject's [tool.mypy] checks cellgl/ whole; every module its overrides name (skipped,
-    strict) exists, so a renamed or deleted module cannot leave a stale entry (or a skipped
-    module's new name go unchecked), and no module is both skipped and strict."""
+def test_mypy_checks_all_of_cellgl_and_the_viewer_and_its_module_lists_name_real_modules():
+    """pyproject's [tool.mypy] checks cellgl/ and viewer/ whole (the viewer, installed as
+    cellgl.viewer through package-dir, as the package `viewer`: mypy names modules by path, so
+    nothing may skip it under either name); every module its overrides name (skipped, strict)
+    exists, so a renamed or deleted module cannot leave a stale entry (or a skipped module's new
+    name go unchecked), and no module is both skipped and strict."""
     tomllib = pytest.importorskip("tomllib")        # Python 3.11+
     conf = tomllib.loads((REPO / "pyproject.toml").read_text())["tool"]["mypy"]
-    assert conf["files"] == ["cellgl"]
-    ours = [o for o in conf["overrides"] if any(m.startswith("cellgl.") and m != "cellgl.viewer"
-                                                 and not m.startswith("cellgl.viewer.") for m in o["module"])]
+    assert conf["files"] == ["cellgl", "viewer"]
+    assert (REPO / "viewer" / "__init__.py").is_file() and not (REPO / "__init__.py").exists()
+    skips_viewer = [m for o in conf["overrides"] if o.get("ignore_errors") for m in o["module"]
+                    if m.split(".")[0] == "viewer" or m.startswith("cellgl.viewer")]
+    assert not skips_viewer, skips_viewer
+    ours = [o for o in conf["overrides"] if any((m.startswith("cellgl.") or m.split(".")[0] == "viewer")
+                                                 and m != "cellgl.viewer" and not m.startswith("cellgl.viewer.")
+                                                 for m in o["module"])]
     skipped = {m for o in ours if o.get("ignore_errors") for m in o["module"]}
     strict = {m for o in ours if o.get("disallow_untyped_defs") for m in o["module"]}
     assert skipped and strict and not skipped & strict
