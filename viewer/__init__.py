@@ -4,10 +4,14 @@
 GUI libraries (imgui-bundle, glfw) are imported lazily, by :mod:`cellgl.viewer.app`.
 """
 
+from __future__ import annotations
+
+from collections.abc import Sequence
+
 __all__ = ["main"]
 
 
-def main(argv=None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     from .cli import main as _main
 
     return _main(argv)
