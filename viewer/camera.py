@@ -6,8 +6,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 __all__ = ["PanZoom", "Orbit", "perspective", "look_at"]
+
+#: a float64 array: a 4x4 matrix (column vectors) or a 3-vector
+Float64Array = npt.NDArray[np.float64]
 
 
 @dataclass
@@ -57,7 +61,7 @@ class PanZoom:
         self.zoom *= factor
 
 
-def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> np.ndarray:
+def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> Float64Array:
     f = 1.0 / math.tan(math.radians(fovy_deg) / 2.0)
     m = np.zeros((4, 4))
     m[0, 0] = f / aspect
@@ -68,7 +72,7 @@ def perspective(fovy_deg: float, aspect: float, near: float, far: float) -> np.n
     return m
 
 
-def look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
+def look_at(eye: npt.ArrayLike, target: npt.ArrayLike, up: npt.ArrayLike = (0.0, 1.0, 0.0)) -> Float64Array:
     eye, target, up = (np.asarray(v, float) for v in (eye, target, up))
     f = target - eye
     f /= np.linalg.norm(f)
@@ -90,7 +94,7 @@ class Orbit:
     distance: float = 3.6
     fovy: float = 40.0
 
-    def eye(self) -> np.ndarray:
+    def eye(self) -> Float64Array:
         y, p = math.radians(self.yaw), math.radians(self.pitch)
         return self.distance * np.array([math.cos(p) * math.sin(y), math.sin(p), math.cos(p) * math.cos(y)])
 
@@ -102,7 +106,7 @@ class Orbit:
     def dolly(self, wheel: float) -> None:
         self.distance = max(1.3, min(20.0, self.distance * (0.9 ** wheel)))
 
-    def matrices(self, aspect: float) -> tuple[np.ndarray, np.ndarray]:
+    def matrices(self, aspect: float) -> tuple[Float64Array, Float64Array]:
         """(view, projection), float64 4x4, column vectors."""
         fovy = self.fovy
         if aspect < 1.0:  # narrow view: keep the horizontal field of view

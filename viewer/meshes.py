@@ -10,19 +10,25 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import numpy.typing as npt
 
-__all__ = ["SHAPES", "mesh", "sphere", "torus", "cube", "plane"]
+__all__ = ["SHAPES", "Mesh", "mesh", "sphere", "torus", "cube", "plane"]
+
+#: (vertices float32 (N, 6), indices uint32 (M, 3)), as the module docstring says
+Mesh = tuple[npt.NDArray[np.float32], npt.NDArray[np.uint32]]
 
 
-def _grid_indices(nu: int, nv: int) -> np.ndarray:
+def _grid_indices(nu: int, nv: int) -> npt.NDArray[np.uint32]:
     """Two triangles per quad of an (nu + 1) x (nv + 1) vertex grid, u fastest."""
     i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="xy")
     a = (j * (nu + 1) + i).ravel()
     b, c, d = a + 1, a + nu + 1, a + nu + 2
-    return np.stack([np.stack([a, b, d], 1), np.stack([a, d, c], 1)], 1).reshape(-1, 3).astype(np.uint32)
+    # (quads, 2 triangles, 3 corners); numpy 1.x's stubs type np.stack of these Any
+    tris: npt.NDArray[np.intp] = np.stack([np.stack([a, b, d], 1), np.stack([a, d, c], 1)], 1)
+    return tris.reshape(-1, 3).astype(np.uint32)
 
 
-def sphere(segments: int = 96, rings: int = 48) -> tuple[np.ndarray, np.ndarray]:
+def sphere(segments: int = 96, rings: int = 48) -> Mesh:
     """Unit UV sphere."""
     u = np.linspace(0.0, 2.0 * np.pi, segments + 1)
     v = np.linspace(0.0, np.pi, rings + 1)
@@ -33,7 +39,7 @@ def sphere(segments: int = 96, rings: int = 48) -> tuple[np.ndarray, np.ndarray]
 
 
 def torus(major: int = 96, minor: int = 48, r_major: float = 0.7,
-          r_minor: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+          r_minor: float = 0.3) -> Mesh:
     """Torus around the y axis, outer radius 1."""
     u = np.linspace(0.0, 2.0 * np.pi, major + 1)
     v = np.linspace(0.0, 2.0 * np.pi, minor + 1)
@@ -44,7 +50,7 @@ def torus(major: int = 96, minor: int = 48, r_major: float = 0.7,
     return np.hstack([p.reshape(-1, 3), n.reshape(-1, 3)]).astype(np.float32), _grid_indices(major, minor)
 
 
-def plane(divisions: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def plane(divisions: int = 1) -> Mesh:
     """Square [-1, 1]^2 in the xz plane (y = 0), facing +y."""
     t = np.linspace(-1.0, 1.0, divisions + 1)
     xx, zz = np.meshgrid(t, -t, indexing="xy")
@@ -53,7 +59,7 @@ def plane(divisions: int = 1) -> tuple[np.ndarray, np.ndarray]:
     return np.hstack([p, n]).astype(np.float32), _grid_indices(divisions, divisions)
 
 
-def cube(divisions: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def cube(divisions: int = 1) -> Mesh:
     """Cube [-1, 1]^3 with flat faces (separate vertices per face)."""
     pv, pi = plane(divisions)
     verts, idx = [], []
@@ -73,10 +79,10 @@ def cube(divisions: int = 1) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack(verts).astype(np.float32), np.vstack(idx).astype(np.uint32)
 
 
-SHAPES: dict[str, Callable[[], tuple[np.ndarray, np.ndarray]]] = {"sphere": sphere, "torus": torus, "cube": cube, "plane": plane}
+SHAPES: dict[str, Callable[[], Mesh]] = {"sphere": sphere, "torus": torus, "cube": cube, "plane": plane}
 
 
-def mesh(name: str) -> tuple[np.ndarray, np.ndarray]:
+def mesh(name: str) -> Mesh:
     """The mesh called ``name`` (one of :data:`SHAPES`)."""
     try:
         return SHAPES[name]()
