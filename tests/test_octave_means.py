@@ -182,3 +182,20 @@ def test_the_process_caches_are_one_bounded_policy():
             pups_recipe._SCALED, images._IMAGES)
     for c in kept:
         assert isinstance(c, _cache.Bounded) and c in _cache.caches() and c.size >= 4, c
+
+
+def test_the_rewritten_table_lands_whole_with_the_usual_permissions(tmp_path, monkeypatch):
+    """``python -m cellgl.texture`` rewrites the packaged table: it lands by rename, readable as
+    any file the user makes (0o666 less the umask; a bare mkstemp left it 0o600), nothing else
+    left in the folder."""
+    import os
+
+    monkeypatch.setattr(means, "TABLE", tmp_path / "octave_means.json")
+    old = os.umask(0o022)
+    try:
+        path = means.write_table(lambda r: 0.5)
+    finally:
+        os.umask(old)
+    assert os.stat(path).st_mode & 0o777 == 0o644
+    assert os.listdir(tmp_path) == ["octave_means.json"]
+    assert json.loads(path.read_text())["samples"] == means.SAMPLES

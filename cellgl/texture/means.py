@@ -29,8 +29,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -153,15 +151,11 @@ def table_text(means: dict) -> str:
 
 
 def write_table(measure: Callable[[Any], float]) -> Path:
-    """Measure every preset's mean and rewrite :data:`TABLE` (written whole: a new file renamed
-    over the old); ``python -m cellgl.texture`` runs it."""
+    """Measure every preset's mean and rewrite :data:`TABLE` (written whole, with the usual
+    permissions: :func:`cellgl.io.formats.atomic_path`); ``python -m cellgl.texture`` runs it."""
+    from cellgl.io.formats import atomic_path
+
     text = table_text(table(measure))
-    fd, tmp = tempfile.mkstemp(prefix=".octave_means-", dir=TABLE.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, TABLE)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+    with atomic_path(TABLE) as tmp:
+        tmp.write_text(text, encoding="utf-8")
     return TABLE
