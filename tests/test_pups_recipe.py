@@ -29,6 +29,21 @@ def test_every_preset_round_trips(tmp_path):
         assert load_recipe(str(path)) == r
 
 
+@pytest.mark.parametrize("name", ["flagstone", "pups-cells"])
+def test_a_saved_recipe_of_either_kind_lands_whole_with_the_usual_permissions(tmp_path, name):
+    """Both recipe kinds save through the one atomic writer: the file is renamed into place,
+    readable as any file the user makes (0o666 less the umask; the PUPs save made it 0o600),
+    nothing else left beside it."""
+    old = os.umask(0o022)
+    try:
+        load_recipe(name).save(tmp_path / "r.json")
+    finally:
+        os.umask(old)
+    assert os.stat(tmp_path / "r.json").st_mode & 0o777 == 0o644
+    assert os.listdir(tmp_path) == ["r.json"]
+    assert load_recipe(str(tmp_path / "r.json")) == load_recipe(name)
+
+
 def test_table_is_derived_from_the_kinds():
     from cellgl.pups.presets import KIND_DEFAULTS
 

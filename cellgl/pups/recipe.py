@@ -21,8 +21,6 @@ from __future__ import annotations
 
 import copy
 import json
-import os
-import tempfile
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -368,19 +366,12 @@ class PupsRecipe:
             raise RecipeError(f"{path}: {exc}") from None
 
     def save(self, path) -> None:
-        """Write the recipe as JSON, atomically (temp file + os.replace)."""
-        path = Path(path)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-        try:
-            with os.fdopen(fd, "w") as f:
-                f.write(self.to_json())
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        """Write the recipe as JSON, atomically (as a texture recipe's save:
+        :func:`cellgl.io.formats.atomic_path`)."""
+        from cellgl.io.formats import atomic_path
+
+        with atomic_path(path) as tmp:
+            tmp.write_text(self.to_json())
 
     def preset_params(self) -> dict:
         """The parameter dict of :mod:`cellgl.pups.presets` (``kind`` + parameters)."""
