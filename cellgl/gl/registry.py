@@ -126,6 +126,8 @@ _orphans: list = []
 
 
 def _after_fork_in_child() -> None:
+    """In a forked child (also one a C library forked, past ``register_at_fork``): set the
+    parent's states aside; elsewhere nothing."""
     global _lock, _states, _pid
     if _pid == os.getpid():
         return
@@ -146,8 +148,7 @@ def _sweep() -> None:
 def held(ctx) -> ContextState:
     """The state of ``ctx``, made on first use. States of contexts released since are dropped
     on the way (their objects went with them)."""
-    if _pid != os.getpid():
-        _after_fork_in_child()
+    _after_fork_in_child()
     with _lock:
         st = _states.get(ctx)
         # (one state, ``ctx``'s own: nothing else to look at; one of another context: it may be
@@ -161,16 +162,14 @@ def held(ctx) -> ContextState:
 
 def peek(ctx) -> ContextState | None:
     """The state of ``ctx`` if cellgl has one, without making one."""
-    if _pid != os.getpid():
-        _after_fork_in_child()
+    _after_fork_in_child()
     with _lock:
         return _states.get(ctx)
 
 
 def states() -> list[tuple[Any, ContextState]]:
     """Every (context, state) cellgl knows of in this process, a snapshot."""
-    if _pid != os.getpid():
-        _after_fork_in_child()
+    _after_fork_in_child()
     with _lock:
         return list(_states.items())
 
