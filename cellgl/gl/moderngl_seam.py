@@ -42,9 +42,8 @@ def create(loader: Any, require: int, *, standalone: bool = True) -> Any:
 
     store = moderngl._store   # type: ignore[attr-defined]  # (not in moderngl's stubs: private)
     before = store.default_context
-    settings: dict[str, Any] = {"context": loader}
     try:
-        return moderngl.create_context(standalone=standalone, require=require, **settings)
+        return moderngl.create_context(standalone=standalone, require=require, context=loader)
     except Exception:
         if standalone:
             loader.release()
